@@ -1,0 +1,1 @@
+//! atmosphere (to be written)

@@ -1,0 +1,1 @@
+//! bake (to be written)

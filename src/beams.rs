@@ -1,0 +1,1 @@
+//! beams (to be written)

@@ -1,0 +1,423 @@
+//! Sparse voxel grid: the in-memory form of one OpenVDB grid.
+//!
+//! OpenVDB stores a grid as a 5-4-3 tree (root -> 32^3 internal -> 16^3 internal
+//! -> 8^3 leaves). For a fog volume with no tiles, the only data are the leaves,
+//! so we keep an equivalent *keyed map of leaves*: a `Vec<Leaf<T>>` plus a hash
+//! index by leaf origin. The VDB writer (`crate::vdb::write`) regroups leaves
+//! into the 5-4-3 hierarchy, sorted the way OpenVDB's `std::map` orders them.
+//!
+//! Conventions (OpenVDB's, and what Cycles uses; see
+//! `../shared/notes/cycles-conventions.md`):
+//! - voxel (i, j, k) is centred at the *index point* (i, j, k): world position
+//!   `voxel_size * (i, j, k) + translation`, no half-voxel offset;
+//! - inactive voxels read as the background value;
+//! - sampling is trilinear between the eight surrounding voxel centres, so a
+//!   single active voxel influences exactly one voxel around its centre.
+//!
+//! The grid knows nothing of the bake, the file format or the renderer.
+
+use glam::{DVec3, IVec3};
+use std::collections::HashMap;
+
+/// log2 of the leaf edge length (OpenVDB `LeafNode::LOG2DIM`).
+pub const LEAF_LOG2DIM: u32 = 3;
+/// Leaf edge length in voxels (OpenVDB `LeafNode::DIM`).
+pub const LEAF_DIM: i32 = 1 << LEAF_LOG2DIM;
+/// Voxels per leaf (OpenVDB `LeafNode::NUM_VALUES`).
+pub const LEAF_NUM_VALUES: usize = 1 << (3 * LEAF_LOG2DIM);
+/// 64-bit words in a leaf's value mask.
+pub const LEAF_MASK_WORDS: usize = LEAF_NUM_VALUES / 64;
+
+/// Offset of a voxel inside its leaf: `((x&7)<<6)|((y&7)<<3)|(z&7)` (OpenVDB
+/// `LeafNode::coordToOffset`; x is the slowest axis).
+#[inline]
+pub fn leaf_offset(ijk: IVec3) -> usize {
+    let m = LEAF_DIM - 1;
+    (((ijk.x & m) << (2 * LEAF_LOG2DIM)) | ((ijk.y & m) << LEAF_LOG2DIM) | (ijk.z & m)) as usize
+}
+
+/// The inverse of [`leaf_offset`], relative to the leaf origin.
+#[inline]
+pub fn offset_to_local(n: usize) -> IVec3 {
+    let n = n as i32;
+    let m = LEAF_DIM - 1;
+    IVec3::new(n >> (2 * LEAF_LOG2DIM), (n >> LEAF_LOG2DIM) & m, n & m)
+}
+
+/// Origin of the leaf holding voxel `ijk` (floor-aligned, so it can be negative).
+#[inline]
+pub fn leaf_origin(ijk: IVec3) -> IVec3 {
+    IVec3::new(ijk.x & !(LEAF_DIM - 1), ijk.y & !(LEAF_DIM - 1), ijk.z & !(LEAF_DIM - 1))
+}
+
+/// A voxel value type: `f32` (density) or `[f32; 3]` (emission).
+pub trait VoxelValue: Copy + PartialEq + Send + Sync + std::fmt::Debug + 'static {
+    /// Number of `f32` components.
+    const COMPONENTS: usize;
+    const ZERO: Self;
+    /// OpenVDB tree type name, e.g. `Tree_float_5_4_3`.
+    const TREE_TYPE: &'static str;
+    fn components(&self) -> [f32; 3];
+    fn from_components(c: &[f32]) -> Self;
+    fn is_finite(&self) -> bool {
+        self.components()[..Self::COMPONENTS].iter().all(|c| c.is_finite())
+    }
+    /// a + (b - a) * t, componentwise.
+    fn lerp(a: Self, b: Self, t: f64) -> Self;
+}
+
+impl VoxelValue for f32 {
+    const COMPONENTS: usize = 1;
+    const ZERO: Self = 0.0;
+    const TREE_TYPE: &'static str = "Tree_float_5_4_3";
+    fn components(&self) -> [f32; 3] {
+        [*self, 0.0, 0.0]
+    }
+    fn from_components(c: &[f32]) -> Self {
+        c[0]
+    }
+    #[inline]
+    fn lerp(a: Self, b: Self, t: f64) -> Self {
+        (a as f64 + (b as f64 - a as f64) * t) as f32
+    }
+}
+
+impl VoxelValue for [f32; 3] {
+    const COMPONENTS: usize = 3;
+    const ZERO: Self = [0.0; 3];
+    const TREE_TYPE: &'static str = "Tree_vec3s_5_4_3";
+    fn components(&self) -> [f32; 3] {
+        *self
+    }
+    fn from_components(c: &[f32]) -> Self {
+        [c[0], c[1], c[2]]
+    }
+    #[inline]
+    fn lerp(a: Self, b: Self, t: f64) -> Self {
+        std::array::from_fn(|i| (a[i] as f64 + (b[i] as f64 - a[i] as f64) * t) as f32)
+    }
+}
+
+/// Index-to-world map: uniform scale then translation (OpenVDB
+/// `UniformScaleTranslateMap`): `world = voxel_size * ijk + translation`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub voxel_size: f64,
+    pub translation: DVec3,
+}
+
+impl Transform {
+    pub fn new(voxel_size: f64, translation: DVec3) -> Self {
+        Self { voxel_size, translation }
+    }
+    #[inline]
+    pub fn index_to_world(&self, ijk: DVec3) -> DVec3 {
+        ijk * self.voxel_size + self.translation
+    }
+    #[inline]
+    pub fn world_to_index(&self, p: DVec3) -> DVec3 {
+        (p - self.translation) / self.voxel_size
+    }
+}
+
+/// An 8^3 block of voxels with its active mask. Inactive voxels hold the
+/// grid's background value.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Leaf<T> {
+    /// Index coordinates of voxel (0,0,0) of this leaf; multiples of 8.
+    pub origin: IVec3,
+    /// Active mask: bit `n` of the leaf is word `n >> 6`, bit `n & 63`.
+    pub mask: [u64; LEAF_MASK_WORDS],
+    /// Values in [`leaf_offset`] order.
+    pub values: Box<[T; LEAF_NUM_VALUES]>,
+}
+
+impl<T: VoxelValue> Leaf<T> {
+    pub fn new(origin: IVec3, background: T) -> Self {
+        debug_assert_eq!(origin, leaf_origin(origin));
+        Self { origin, mask: [0; LEAF_MASK_WORDS], values: Box::new([background; LEAF_NUM_VALUES]) }
+    }
+    #[inline]
+    pub fn is_active(&self, n: usize) -> bool {
+        self.mask[n >> 6] >> (n & 63) & 1 == 1
+    }
+    #[inline]
+    pub fn set_active(&mut self, n: usize, on: bool) {
+        if on {
+            self.mask[n >> 6] |= 1 << (n & 63);
+        } else {
+            self.mask[n >> 6] &= !(1 << (n & 63));
+        }
+    }
+    pub fn active_count(&self) -> u64 {
+        self.mask.iter().map(|w| w.count_ones() as u64).sum()
+    }
+    /// Active voxels as (global index, value), in offset order.
+    pub fn iter_active(&self) -> impl Iterator<Item = (IVec3, T)> + '_ {
+        (0..LEAF_NUM_VALUES)
+            .filter(|&n| self.is_active(n))
+            .map(|n| (self.origin + offset_to_local(n), self.values[n]))
+    }
+}
+
+/// A sparse grid of `T` with a name, a background value and a transform.
+#[derive(Clone, Debug)]
+pub struct Grid<T> {
+    pub name: String,
+    pub background: T,
+    pub transform: Transform,
+    leaves: Vec<Leaf<T>>,
+    index: HashMap<IVec3, u32>,
+}
+
+impl<T: VoxelValue> PartialEq for Grid<T> {
+    /// Two grids are equal when they hold the same active voxels with the same
+    /// values, background, name and transform (leaf order does not matter).
+    fn eq(&self, other: &Self) -> bool {
+        if self.name != other.name
+            || self.background != other.background
+            || self.transform != other.transform
+            || self.leaves.len() != other.leaves.len()
+        {
+            return false;
+        }
+        self.leaves.iter().all(|l| other.leaf(l.origin) == Some(l))
+    }
+}
+
+impl<T: VoxelValue> Grid<T> {
+    pub fn new(name: impl Into<String>, background: T, transform: Transform) -> Self {
+        Self { name: name.into(), background, transform, leaves: Vec::new(), index: HashMap::new() }
+    }
+
+    pub fn leaves(&self) -> &[Leaf<T>] {
+        &self.leaves
+    }
+    pub fn leaf_count(&self) -> usize {
+        self.leaves.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.active_voxel_count() == 0
+    }
+
+    /// The leaf with this origin, if stored.
+    #[inline]
+    pub fn leaf(&self, origin: IVec3) -> Option<&Leaf<T>> {
+        self.index.get(&origin).map(|&i| &self.leaves[i as usize])
+    }
+
+    /// Adds a whole leaf. A leaf at the same origin is replaced. A leaf with no
+    /// active voxel is not stored (the grid stays sparse).
+    pub fn insert_leaf(&mut self, leaf: Leaf<T>) {
+        if leaf.active_count() == 0 {
+            if let Some(i) = self.index.remove(&leaf.origin) {
+                self.remove_slot(i as usize);
+            }
+            return;
+        }
+        match self.index.get(&leaf.origin) {
+            Some(&i) => self.leaves[i as usize] = leaf,
+            None => {
+                self.index.insert(leaf.origin, self.leaves.len() as u32);
+                self.leaves.push(leaf);
+            }
+        }
+    }
+
+    fn remove_slot(&mut self, i: usize) {
+        self.leaves.swap_remove(i);
+        if i < self.leaves.len() {
+            self.index.insert(self.leaves[i].origin, i as u32);
+        }
+    }
+
+    /// Removes every leaf for which `keep` returns false.
+    pub fn retain_leaves(&mut self, mut keep: impl FnMut(&Leaf<T>) -> bool) {
+        self.leaves.retain(|l| keep(l));
+        self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
+    }
+
+    /// Sets voxel `ijk` to `value` and marks it active.
+    pub fn set(&mut self, ijk: IVec3, value: T) {
+        let origin = leaf_origin(ijk);
+        let i = match self.index.get(&origin) {
+            Some(&i) => i as usize,
+            None => {
+                self.index.insert(origin, self.leaves.len() as u32);
+                self.leaves.push(Leaf::new(origin, self.background));
+                self.leaves.len() - 1
+            }
+        };
+        let leaf = &mut self.leaves[i];
+        let n = leaf_offset(ijk);
+        leaf.values[n] = value;
+        leaf.set_active(n, true);
+    }
+
+    /// Value of voxel `ijk`: its stored value if active, else the background.
+    #[inline]
+    pub fn get(&self, ijk: IVec3) -> T {
+        match self.leaf(leaf_origin(ijk)) {
+            Some(l) => {
+                let n = leaf_offset(ijk);
+                if l.is_active(n) {
+                    l.values[n]
+                } else {
+                    self.background
+                }
+            }
+            None => self.background,
+        }
+    }
+
+    pub fn is_active(&self, ijk: IVec3) -> bool {
+        self.leaf(leaf_origin(ijk)).is_some_and(|l| l.is_active(leaf_offset(ijk)))
+    }
+
+    pub fn active_voxel_count(&self) -> u64 {
+        self.leaves.iter().map(Leaf::active_count).sum()
+    }
+
+    /// Inclusive index-space bounding box of the active voxels
+    /// (OpenVDB's `file_bbox_min/max`), or `None` when nothing is active.
+    pub fn index_bbox(&self) -> Option<(IVec3, IVec3)> {
+        let mut bb: Option<(IVec3, IVec3)> = None;
+        for leaf in &self.leaves {
+            for n in 0..LEAF_NUM_VALUES {
+                if leaf.is_active(n) {
+                    let p = leaf.origin + offset_to_local(n);
+                    bb = Some(match bb {
+                        None => (p, p),
+                        Some((lo, hi)) => (lo.min(p), hi.max(p)),
+                    });
+                }
+            }
+        }
+        bb
+    }
+
+    /// Active voxels as (index, value), leaf by leaf.
+    pub fn iter_active(&self) -> impl Iterator<Item = (IVec3, T)> + '_ {
+        self.leaves.iter().flat_map(Leaf::iter_active)
+    }
+
+    /// Trilinear interpolation at a continuous *index-space* point, voxel
+    /// centres at integer coordinates.
+    pub fn sample_index(&self, u: DVec3) -> T {
+        let base = u.floor();
+        let f = u - base;
+        let i0 = base.as_ivec3();
+        let v = |dx: i32, dy: i32, dz: i32| self.get(i0 + IVec3::new(dx, dy, dz));
+        let x00 = T::lerp(v(0, 0, 0), v(1, 0, 0), f.x);
+        let x10 = T::lerp(v(0, 1, 0), v(1, 1, 0), f.x);
+        let x01 = T::lerp(v(0, 0, 1), v(1, 0, 1), f.x);
+        let x11 = T::lerp(v(0, 1, 1), v(1, 1, 1), f.x);
+        let y0 = T::lerp(x00, x10, f.y);
+        let y1 = T::lerp(x01, x11, f.y);
+        T::lerp(y0, y1, f.z)
+    }
+
+    /// Trilinear interpolation at a world position.
+    pub fn sample_world(&self, p: DVec3) -> T {
+        self.sample_index(self.transform.world_to_index(p))
+    }
+
+    /// The first active voxel whose value is NaN or infinite, if any.
+    pub fn first_non_finite(&self) -> Option<(IVec3, T)> {
+        self.iter_active().find(|(_, v)| !v.is_finite())
+    }
+
+    /// Sorts leaves by origin (x, then y, then z) so iteration order is
+    /// independent of insertion order.
+    pub fn sort_leaves(&mut self) {
+        self.leaves.sort_by_key(|l| (l.origin.x, l.origin.y, l.origin.z));
+        self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn leaf_offset_round_trips_and_matches_openvdb_order() {
+        for n in 0..LEAF_NUM_VALUES {
+            assert_eq!(leaf_offset(offset_to_local(n)), n);
+        }
+        // x is the slowest axis: (1,0,0) -> 64, (0,1,0) -> 8, (0,0,1) -> 1.
+        assert_eq!(leaf_offset(IVec3::new(1, 0, 0)), 64);
+        assert_eq!(leaf_offset(IVec3::new(0, 1, 0)), 8);
+        assert_eq!(leaf_offset(IVec3::new(0, 0, 1)), 1);
+        // Negative coordinates wrap into their floor-aligned leaf.
+        assert_eq!(leaf_origin(IVec3::new(-1, -8, -9)), IVec3::new(-8, -8, -16));
+        assert_eq!(leaf_offset(IVec3::new(-1, 0, 0)), 7 << 6);
+    }
+
+    #[test]
+    fn set_get_and_background() {
+        let mut g = Grid::new("density", 0.0f32, Transform::new(1.0, DVec3::ZERO));
+        g.set(IVec3::new(-3, 5, 17), 2.5);
+        assert_eq!(g.get(IVec3::new(-3, 5, 17)), 2.5);
+        assert_eq!(g.get(IVec3::new(-3, 5, 16)), 0.0);
+        assert!(!g.is_active(IVec3::new(-3, 5, 16)));
+        assert_eq!(g.active_voxel_count(), 1);
+        assert_eq!(g.leaf_count(), 1);
+        assert_eq!(g.index_bbox(), Some((IVec3::new(-3, 5, 17), IVec3::new(-3, 5, 17))));
+    }
+
+    #[test]
+    fn single_voxel_trilinear_footprint_is_one_voxel_wide() {
+        let s = 0.5;
+        let t = DVec3::new(10.0, -2.0, 3.0);
+        let mut g = Grid::new("density", 0.0f32, Transform::new(s, t));
+        g.set(IVec3::new(4, 4, 4), 1.0);
+        let c = t + DVec3::splat(4.0 * s);
+        assert_eq!(g.sample_world(c), 1.0);
+        // Half a voxel away along x: the tent function gives 1/2.
+        assert!((g.sample_world(c + DVec3::new(0.5 * s, 0.0, 0.0)) - 0.5).abs() < 1e-6);
+        // A full voxel away (or more) it is exactly zero.
+        assert_eq!(g.sample_world(c + DVec3::new(s, 0.0, 0.0)), 0.0);
+        assert_eq!(g.sample_world(c - DVec3::new(0.0, 1.01 * s, 0.0)), 0.0);
+        // Separable: product of tents.
+        let v = g.sample_world(c + DVec3::new(0.25 * s, -0.5 * s, 0.75 * s));
+        assert!((v - 0.75 * 0.5 * 0.25).abs() < 1e-6);
+    }
+
+    #[test]
+    fn trilinear_reproduces_linear_fields_exactly() {
+        let mut g = Grid::new("e", [0.0f32; 3], Transform::new(1.0, DVec3::ZERO));
+        let f = |p: IVec3| [p.x as f32 * 0.5 + 1.0, p.y as f32 - 2.0 * p.z as f32, 3.0];
+        for x in -4..12 {
+            for y in -4..12 {
+                for z in -4..12 {
+                    g.set(IVec3::new(x, y, z), f(IVec3::new(x, y, z)));
+                }
+            }
+        }
+        let u = DVec3::new(2.3, -1.7, 5.9);
+        let v = g.sample_index(u);
+        let expect = [u.x * 0.5 + 1.0, u.y - 2.0 * u.z, 3.0];
+        for c in 0..3 {
+            assert!((v[c] as f64 - expect[c]).abs() < 1e-5, "{v:?} vs {expect:?}");
+        }
+    }
+
+    #[test]
+    fn empty_leaves_are_not_stored_and_equality_ignores_order() {
+        let tr = Transform::new(1.0, DVec3::ZERO);
+        let mut a = Grid::new("d", 0.0f32, tr);
+        a.insert_leaf(Leaf::new(IVec3::ZERO, 0.0));
+        assert_eq!(a.leaf_count(), 0);
+        let mut b = a.clone();
+        a.set(IVec3::new(1, 2, 3), 1.0);
+        a.set(IVec3::new(100, 2, 3), 2.0);
+        b.set(IVec3::new(100, 2, 3), 2.0);
+        b.set(IVec3::new(1, 2, 3), 1.0);
+        assert_eq!(a, b);
+        b.set(IVec3::new(1, 2, 3), 1.5);
+        assert_ne!(a, b);
+        a.retain_leaves(|l| l.origin.x > 50);
+        assert_eq!(a.active_voxel_count(), 1);
+        assert_eq!(a.get(IVec3::new(100, 2, 3)), 2.0);
+    }
+}

@@ -1,0 +1,20 @@
+//! `aurora`: physically plausible aurora baked into sparse OpenVDB volumes.
+//!
+//! The data flows one way (see `docs/ARCHITECTURE.md`):
+//! scene -> footprint -> beams -> photons -> grids -> files (vdb, usd),
+//! and the renderer reads grids only.
+//!
+//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`) know nothing of
+//! the stages above them.
+
+pub mod atmosphere;
+pub mod bake;
+pub mod beams;
+pub mod footprint;
+pub mod grid;
+pub mod photons;
+pub mod render;
+pub mod scene;
+pub mod spectrum;
+pub mod usd;
+pub mod vdb;

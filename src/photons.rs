@@ -1,0 +1,1 @@
+//! photons (to be written)

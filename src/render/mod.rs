@@ -1,0 +1,1 @@
+//! Reference raymarcher (to be written)

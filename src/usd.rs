@@ -1,0 +1,1 @@
+//! usd (to be written)

@@ -1,0 +1,3 @@
+//! OpenVDB file I/O.
+pub mod read;
+pub mod write;

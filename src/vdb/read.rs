@@ -1,0 +1,1 @@
+//! VDB reader (to be written)

@@ -1,0 +1,1 @@
+//! VDB writer (to be written)
