@@ -13,6 +13,7 @@ pub mod beams;
 pub mod footprint;
 pub mod grid;
 pub mod photons;
+pub mod progress;
 pub mod render;
 pub mod scene;
 pub mod spectrum;
