@@ -9,9 +9,11 @@
 
 pub mod atmosphere;
 pub mod bake;
+pub mod bench;
 pub mod beams;
 pub mod footprint;
 pub mod grid;
+// pub mod outputs;
 pub mod photons;
 pub mod progress;
 pub mod render;

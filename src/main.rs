@@ -1,1 +1,292 @@
-fn main(){}
+//! `aurora`: the command line. A thin layer over the library: it parses
+//! arguments, maps errors to exit codes in one place, draws progress bars and
+//! composes the library's stages (bake -> files, files -> render).
+//!
+//! Exit status: 0 on success, 2 for bad input (scene file, arguments, an
+//! unreadable VDB), 1 for anything else.
+
+use anyhow::{Context, Result};
+use aurora::progress::{NoProgress, Progress};
+use aurora::scene::{Scene, SceneError};
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+#[derive(Parser)]
+#[command(name = "aurora", version, about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
+    long_about = "Bake physically plausible aurora into sparse OpenVDB volumes (an `emission` vec3 grid and a \
+`density` float grid) for Blender Cycles, Houdini or a USD pipeline, and render them with a reference raymarcher.\n\n\
+SCENE is a TOML scene file or the name of a built-in preset (default, seed2014); `aurora scene default` prints one to edit. \
+Units are kilometres, z up.")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(clap::Args)]
+struct Common {
+    /// Worker threads (default: all cores). Output is identical for any count.
+    #[arg(long, value_name = "N")]
+    threads: Option<usize>,
+    /// No progress bars or summary on stderr.
+    #[arg(long, short)]
+    quiet: bool,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Bake a scene into DIR/aurora.vdb, DIR/aurora.usda and DIR/bake.json.
+    Bake {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Output folder (created if missing).
+        #[arg(long, default_value = "aurora-out", value_name = "DIR")]
+        out: PathBuf,
+        /// Override the scene's seed.
+        #[arg(long, value_name = "N")]
+        seed: Option<u64>,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Render a scene with the reference raymarcher to linear OpenEXR (and an optional PNG preview).
+    ///
+    /// Without --vdb the scene is baked first, in memory. With --vdb the file is rendered,
+    /// whoever wrote it: a float `density` grid gives extinction, a vec3 `emission` grid emission
+    /// (a float `emission` grid counts as grey). The scene's [camera], [render], [volume],
+    /// [background] and [terrain] sections set up the picture.
+    Render {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Render this VDB instead of baking the scene.
+        #[arg(long, value_name = "FILE.vdb")]
+        vdb: Option<PathBuf>,
+        /// Output image (linear Rec.709 RGBA, A = volume coverage 1 - T).
+        #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr")]
+        out: PathBuf,
+        /// Also write an sRGB PNG preview (exposure from [render] exposure).
+        #[arg(long, value_name = "PREVIEW.png")]
+        png: Option<PathBuf>,
+        /// Override [render] spp.
+        #[arg(long, value_name = "N")]
+        spp: Option<usize>,
+        /// Override the scene's seed.
+        #[arg(long, value_name = "N")]
+        seed: Option<u64>,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// Print a built-in scene as TOML, to copy and edit.
+    Scene {
+        /// Preset name.
+        #[arg(default_value = "default", value_parser = clap::builder::PossibleValuesParser::new(aurora::scene::presets::NAMES))]
+        name: String,
+    },
+    /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
+    Footprint {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Output folder: footprint-<N>.png per curtain.
+        #[arg(long, default_value = "aurora-out", value_name = "DIR")]
+        out: PathBuf,
+    },
+    /// Write the scene's terrain as an OBJ mesh (km, z up), exactly the triangles `aurora render` traces.
+    Terrain {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        #[arg(long, default_value = "terrain.obj", value_name = "FILE.obj")]
+        out: PathBuf,
+    },
+}
+
+/// An error that is the user's input: exit status 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+struct InputError(String);
+
+fn main() {
+    let cli = Cli::parse();
+    let code = match run(cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            let input = e.downcast_ref::<InputError>().is_some() || e.downcast_ref::<SceneError>().is_some();
+            eprintln!("aurora: error: {e:#}");
+            if input {
+                2
+            } else {
+                1
+            }
+        }
+    };
+    std::process::exit(code);
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Bake { scene, out, seed, common } => {
+            let mut scene = load_scene(&scene)?;
+            if let Some(s) = seed {
+                scene.seed = s;
+            }
+            with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet))
+        }
+        Command::Render { scene, vdb, out, png, spp, seed, common } => {
+            let mut scene = load_scene(&scene)?;
+            if let Some(s) = seed {
+                scene.seed = s;
+            }
+            if let Some(n) = spp {
+                if n == 0 {
+                    return Err(InputError("--spp must be at least 1".into()).into());
+                }
+                scene.render.spp = n;
+            }
+            with_threads(common.threads, || render_cmd(&scene, vdb.as_deref(), &out, png.as_deref(), common.quiet))
+        }
+        Command::Scene { name } => {
+            let s = aurora::scene::presets::by_name(&name).expect("clap checked the name");
+            print!("{}", scene_header(&name));
+            print!("{}", s.to_toml());
+            Ok(())
+        }
+        Command::Footprint { scene, out } => {
+            let scene = load_scene(&scene)?;
+            std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+            for (i, fp) in aurora::bake::footprints(&scene).iter().enumerate() {
+                let path = out.join(format!("footprint-{i}.png"));
+                fp.write_png(&path).with_context(|| format!("cannot write {}", path.display()))?;
+                eprintln!("wrote {}", path.display());
+            }
+            Ok(())
+        }
+        Command::Terrain { scene, out } => {
+            let scene = load_scene(&scene)?;
+            let hf = aurora::render::terrain::Heightfield::from_scene(&scene.terrain, scene_dir(&scene))
+                .map_err(|e| InputError(e.to_string()))?;
+            aurora::render::terrain::write_obj(&out, &hf).with_context(|| format!("cannot write {}", out.display()))?;
+            eprintln!("wrote {}", out.display());
+            Ok(())
+        }
+    }
+}
+
+fn scene_dir(_scene: &Scene) -> &Path {
+    Path::new(".")
+}
+
+fn scene_header(name: &str) -> String {
+    format!(
+        "# aurora scene `{name}`. Units: kilometres, z up (x east, y north).\n\
+         # Bake: aurora bake FILE.toml --out DIR    Render: aurora render FILE.toml --out image.exr\n\
+         # Every key is optional; unknown keys are errors. See README.md for each key's meaning.\n\n"
+    )
+}
+
+fn load_scene(arg: &str) -> Result<Scene> {
+    Ok(Scene::load(arg)?)
+}
+
+fn with_threads<T>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T>
+where
+    T: Send,
+{
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        if n == 0 {
+            return Err(InputError("--threads must be at least 1".into()).into());
+        }
+        b = b.num_threads(n);
+    }
+    let pool = b.build().context("cannot start the thread pool")?;
+    pool.install(f)
+}
+
+fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    let bake = aurora::bake::bake(scene, progress)?;
+    let report = aurora::bake::write_outputs(scene, &bake, out)?;
+    if !quiet {
+        eprintln!("{}", report.summary());
+    }
+    Ok(())
+}
+
+fn render_cmd(scene: &Scene, vdb: Option<&Path>, out: &Path, png: Option<&Path>, quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    let settings = aurora::render::RenderSettings::from_scene(scene);
+    let (density, emission);
+    match vdb {
+        Some(path) => {
+            let file = aurora::vdb::read::read_vdb(path).map_err(|e| InputError(e.to_string()))?;
+            let v = aurora::render::VolumeGrids::from_vdb(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+            density = v.density;
+            emission = v.emission;
+        }
+        None => {
+            let bake = aurora::bake::bake(scene, progress)?;
+            density = Some(bake.density);
+            emission = Some(bake.emission);
+        }
+    }
+    let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
+    let image = aurora::render::render(&settings, &volume, progress)?;
+    aurora::render::film::write_exr(out, &image).with_context(|| format!("cannot write {}", out.display()))?;
+    if let Some(p) = png {
+        aurora::render::film::write_png(p, &image, scene.render.exposure)
+            .with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    if !quiet {
+        eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());
+        eprintln!("{}", image.stats.summary());
+    }
+    Ok(())
+}
+
+/// indicatif progress bars on stderr, one per stage.
+struct Bars {
+    bar: Mutex<Option<ProgressBar>>,
+    hidden: bool,
+}
+
+impl Bars {
+    fn new(hidden: bool) -> Self {
+        Self { bar: Mutex::new(None), hidden }
+    }
+}
+
+impl Progress for Bars {
+    fn start(&self, stage: &str, total: u64) {
+        if self.hidden {
+            return;
+        }
+        let pb = if total > 0 {
+            ProgressBar::new(total).with_style(
+                ProgressStyle::with_template("{prefix:>12} [{bar:30}] {percent:>3}% {elapsed_precise} eta {eta}")
+                    .expect("valid template")
+                    .progress_chars("=> "),
+            )
+        } else {
+            ProgressBar::new_spinner()
+        };
+        pb.set_prefix(stage.to_string());
+        if let Some(old) = self.bar.lock().expect("progress lock").replace(pb) {
+            old.finish_and_clear();
+        }
+    }
+    fn inc(&self, n: u64) {
+        if let Some(b) = self.bar.lock().expect("progress lock").as_ref() {
+            b.inc(n);
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = self.bar.lock().expect("progress lock").take() {
+            b.finish_and_clear();
+        }
+    }
+}

@@ -1,0 +1,338 @@
+//! Speed-against-accuracy records, their Pareto front, and the charts.
+//!
+//! A [`Measurement`] is one run of one method at one setting: wall time and
+//! error against a converged reference of the same quantity. Runs are kept as
+//! CSV (`bench.csv`) and drawn per study as time (x, log) against error
+//! (y, log), one curve per method, the Pareto front drawn over them.
+
+use plotters::prelude::*;
+use std::path::Path;
+
+/// One run of one method at one setting.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Measurement {
+    /// What is being swept, e.g. "photon count".
+    pub study: String,
+    /// The curve it belongs to, e.g. "kd-tree gather".
+    pub method: String,
+    /// The swept parameter's name and value, e.g. ("beams", 20000).
+    pub param_name: String,
+    pub param: f64,
+    /// Wall time, seconds.
+    pub seconds: f64,
+    /// Error against the reference (relative RMS unless `metric` says otherwise).
+    pub error: f64,
+    pub metric: String,
+}
+
+/// Indices of the points on the Pareto front of (time, error), both to be
+/// minimised: no other point is at least as good in both and better in one.
+/// Returned in ascending time.
+pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
+    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
+    idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
+    let mut front = Vec::new();
+    let mut best = f64::INFINITY;
+    for i in idx {
+        if points[i].1 < best {
+            best = points[i].1;
+            front.push(i);
+        }
+    }
+    front
+}
+
+/// `bench.csv`: one row per measurement, plus a Pareto flag within its study.
+pub fn to_csv(ms: &[Measurement]) -> String {
+    let mut s = String::from("study,method,param_name,param,seconds,error,metric,pareto\n");
+    let on_front = front_flags(ms);
+    for (m, p) in ms.iter().zip(on_front) {
+        s += &format!(
+            "{},{},{},{},{:.6},{:.6e},{},{}\n",
+            csv_field(&m.study),
+            csv_field(&m.method),
+            csv_field(&m.param_name),
+            m.param,
+            m.seconds,
+            m.error,
+            csv_field(&m.metric),
+            p as u8
+        );
+    }
+    s
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// For each measurement, whether it is on its study's Pareto front.
+pub fn front_flags(ms: &[Measurement]) -> Vec<bool> {
+    let mut flags = vec![false; ms.len()];
+    let mut studies: Vec<&str> = ms.iter().map(|m| m.study.as_str()).collect();
+    studies.dedup();
+    studies.sort();
+    studies.dedup();
+    for st in studies {
+        let ids: Vec<usize> = (0..ms.len()).filter(|&i| ms[i].study == st).collect();
+        let pts: Vec<(f64, f64)> = ids.iter().map(|&i| (ms[i].seconds, ms[i].error)).collect();
+        for k in pareto_front(&pts) {
+            flags[ids[k]] = true;
+        }
+    }
+    flags
+}
+
+/// Registers DejaVu Sans (Debian's fonts-dejavu-core) for chart text.
+fn ensure_font() -> Result<(), ChartError> {
+    static ONCE: std::sync::OnceLock<Result<(), String>> = std::sync::OnceLock::new();
+    ONCE.get_or_init(|| {
+        const CANDIDATES: &[&str] = &[
+            "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+            "/usr/share/fonts/TTF/DejaVuSans.ttf",
+            "/usr/share/fonts/dejavu/DejaVuSans.ttf",
+        ];
+        for p in CANDIDATES {
+            if let Ok(bytes) = std::fs::read(p) {
+                // The font table wants 'static bytes: leak one small file once.
+                let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
+                return plotters::style::register_font("sans-serif", FontStyle::Normal, bytes)
+                    .map_err(|_| format!("{p} is not a usable font"));
+            }
+        }
+        Err("no DejaVuSans.ttf found (apt-get install fonts-dejavu-core)".to_string())
+    })
+    .clone()
+    .map_err(ChartError::Font)
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ChartError {
+    #[error("chart font: {0}")]
+    Font(String),
+    #[error("drawing {path}: {message}")]
+    Draw { path: String, message: String },
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(148, 103, 189),
+    RGBColor(255, 127, 14),
+    RGBColor(23, 190, 207),
+];
+
+/// Draws one study (all measurements with `study`) to `stem.png` and `stem.svg`.
+pub fn draw_study(ms: &[Measurement], study: &str, stem: &Path) -> Result<(), ChartError> {
+    ensure_font()?;
+    let png = stem.with_extension("png");
+    let svg = stem.with_extension("svg");
+    let err = |p: &Path, e: String| ChartError::Draw { path: p.display().to_string(), message: e };
+    {
+        let root = BitMapBackend::new(&png, (900, 600)).into_drawing_area();
+        draw_on(root, ms, study).map_err(|e| err(&png, e))?;
+    }
+    {
+        let root = SVGBackend::new(&svg, (900, 600)).into_drawing_area();
+        draw_on(root, ms, study).map_err(|e| err(&svg, e))?;
+    }
+    Ok(())
+}
+
+fn draw_on<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, ms: &[Measurement], study: &str) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let sel: Vec<&Measurement> =
+        ms.iter().filter(|m| m.study == study && m.seconds > 0.0 && m.error > 0.0 && m.error.is_finite()).collect();
+    root.fill(&WHITE).map_err(|e| e.to_string())?;
+    if sel.is_empty() {
+        return Err(format!("study '{study}' has no finite positive measurements"));
+    }
+    let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for m in &sel {
+        t0 = t0.min(m.seconds);
+        t1 = t1.max(m.seconds);
+        e0 = e0.min(m.error);
+        e1 = e1.max(m.error);
+    }
+    // Pad a little in log space so end points are not on the frame.
+    let (t0, t1) = (t0 / 1.5, t1 * 1.5);
+    let (e0, e1) = (e0 / 1.5, e1 * 1.5);
+    let metric = sel[0].metric.clone();
+    let mut chart = ChartBuilder::on(&root)
+        .caption(format!("{study}: time against error"), ("sans-serif", 24))
+        .margin(15)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_label_formatter(&|x| sig(*x))
+        .y_label_formatter(&|y| sig(*y))
+        .x_desc("wall time (s)")
+        .y_desc(format!("error ({metric})"))
+        .label_style(("sans-serif", 14))
+        .axis_desc_style(("sans-serif", 16))
+        .draw()
+        .map_err(|e| e.to_string())?;
+
+    let mut methods: Vec<&str> = Vec::new();
+    for m in &sel {
+        if !methods.contains(&m.method.as_str()) {
+            methods.push(&m.method);
+        }
+    }
+    for (k, method) in methods.iter().enumerate() {
+        let color = PALETTE[k % PALETTE.len()];
+        let mut pts: Vec<&&Measurement> = sel.iter().filter(|m| m.method == *method).collect();
+        pts.sort_by(|a, b| a.param.total_cmp(&b.param));
+        let series: Vec<(f64, f64)> = pts.iter().map(|m| (m.seconds, m.error)).collect();
+        chart
+            .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
+            .map_err(|e| e.to_string())?
+            .label(method.to_string())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        chart.draw_series(series.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(|e| e.to_string())?;
+        // Label each point with its parameter value.
+        chart
+            .draw_series(pts.iter().map(|m| {
+                EmptyElement::at((m.seconds, m.error))
+                    + Text::new(short_num(m.param), (6, -14), ("sans-serif", 12).into_font().color(&color))
+            }))
+            .map_err(|e| e.to_string())?;
+    }
+    // The Pareto front over all methods of this study.
+    let all: Vec<(f64, f64)> = sel.iter().map(|m| (m.seconds, m.error)).collect();
+    let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|i| all[i]).collect();
+    chart
+        .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(1)))
+        .map_err(|e| e.to_string())?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
+    chart.draw_series(front.iter().map(|&p| Circle::new(p, 8, BLACK.stroke_width(1)))).map_err(|e| e.to_string())?;
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(|e| e.to_string())?;
+    root.present().map_err(|e| e.to_string())?;
+    Ok(())
+}
+
+/// A tick label with three significant digits.
+fn sig(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    if x.abs() >= 1e-3 && x.abs() < 1e5 {
+        format!("{x:.digits$}")
+    } else {
+        format!("{x:.1e}")
+    }
+}
+
+fn short_num(x: f64) -> String {
+    if x.abs() >= 1000.0 && x == x.trunc() {
+        format!("{}k", x / 1000.0)
+    } else if x == x.trunc() {
+        format!("{x}")
+    } else {
+        format!("{x:.3}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Oracle: a point is on the front iff no other point dominates it.
+    #[test]
+    fn pareto_front_matches_brute_force() {
+        let mut state = 12345u64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % 1000) as f64 / 10.0
+        };
+        for _ in 0..50 {
+            let pts: Vec<(f64, f64)> = (0..30).map(|_| (rnd(), rnd())).collect();
+            let mut fast = pareto_front(&pts);
+            fast.sort();
+            let mut brute: Vec<usize> = (0..pts.len())
+                .filter(|&i| {
+                    !(0..pts.len()).any(|j| {
+                        j != i
+                            && pts[j].0 <= pts[i].0
+                            && pts[j].1 <= pts[i].1
+                            && (pts[j].0 < pts[i].0 || pts[j].1 < pts[i].1)
+                    })
+                })
+                .collect();
+            // Exact duplicates: keep the first only, as the sweep does.
+            brute.dedup_by(|a, b| pts[*a] == pts[*b]);
+            let mut seen = Vec::new();
+            brute.retain(|&i| {
+                let dup = seen.contains(&pts[i]);
+                seen.push(pts[i]);
+                !dup
+            });
+            brute.sort();
+            assert_eq!(fast, brute, "{pts:?}");
+        }
+    }
+
+    #[test]
+    fn csv_marks_front_per_study() {
+        let m = |study: &str, s: f64, e: f64| Measurement {
+            study: study.into(),
+            method: "m".into(),
+            param_name: "p".into(),
+            param: 1.0,
+            seconds: s,
+            error: e,
+            metric: "rel".into(),
+        };
+        let ms = vec![m("a", 1.0, 1.0), m("a", 2.0, 2.0), m("b", 2.0, 2.0)];
+        assert_eq!(front_flags(&ms), vec![true, false, true]);
+        let csv = to_csv(&ms);
+        assert_eq!(csv.lines().count(), 4);
+        assert!(csv.lines().nth(2).unwrap().ends_with(",0"));
+    }
+
+    #[test]
+    fn chart_files_are_written() {
+        let dir = std::env::temp_dir().join(format!("aurora-chart-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let ms: Vec<Measurement> = (1..6)
+            .map(|k| Measurement {
+                study: "demo".into(),
+                method: if k % 2 == 0 { "a".into() } else { "b".into() },
+                param_name: "n".into(),
+                param: k as f64,
+                seconds: 0.1 * k as f64,
+                error: 1.0 / k as f64,
+                metric: "rel".into(),
+            })
+            .collect();
+        draw_study(&ms, "demo", &dir.join("demo")).unwrap();
+        let png = std::fs::read(dir.join("demo.png")).unwrap();
+        assert_eq!(&png[1..4], b"PNG");
+        let svg = std::fs::read_to_string(dir.join("demo.svg")).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("Pareto front"));
+        if std::env::var_os("AURORA_KEEP_CHART").is_none() {
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+}

@@ -1,0 +1,2 @@
+//! `aurora bench`: speed against accuracy for every method choice.
+pub mod chart;

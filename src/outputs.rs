@@ -1,0 +1,130 @@
+//! What `aurora bake` leaves on disk: `aurora.vdb` (both grids), `aurora.usda`
+//! (a UsdVol stage pointing at it) and `bake.json` (counts, bounds, timings).
+//!
+//! Every file is written to a temporary name in the output folder and renamed,
+//! so an interrupted or failed bake never leaves a half-written file.
+
+use crate::bake::Bake;
+use crate::scene::Scene;
+use crate::usd;
+use crate::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+pub const VDB_NAME: &str = "aurora.vdb";
+pub const USDA_NAME: &str = "aurora.usda";
+pub const JSON_NAME: &str = "bake.json";
+
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("cannot create output folder {path}: {source}")]
+    CreateDir { path: PathBuf, source: std::io::Error },
+    #[error("cannot write {path}: {message}")]
+    Write { path: PathBuf, message: String },
+}
+
+/// What was written, and the report that went into `bake.json`.
+pub struct BakeReport {
+    pub vdb: PathBuf,
+    pub usda: PathBuf,
+    pub json_path: PathBuf,
+    pub json: serde_json::Value,
+}
+
+impl BakeReport {
+    /// A few lines for the terminal.
+    pub fn summary(&self) -> String {
+        let j = &self.json;
+        format!(
+            "wrote {} ({} bytes), {} and {}\n{} beams, {} photons, {} active voxels in {} leaves, voxel {} km, bake {:.2} s",
+            self.vdb.display(),
+            j["files"]["vdb_bytes"],
+            self.usda.display(),
+            self.json_path.display(),
+            j["stats"]["beams"],
+            j["stats"]["photons"],
+            j["stats"]["active_voxels"],
+            j["stats"]["leaves"],
+            j["stats"]["voxel_size_km"],
+            j["total_seconds"].as_f64().unwrap_or(0.0),
+        )
+    }
+}
+
+/// Grid metadata that identifies the bake inside the VDB.
+pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
+    vec![
+        ("aurora_units".into(), MetaValue::String("km".into())),
+        ("aurora_seed".into(), MetaValue::Int64(scene.seed as i64)),
+        ("aurora_scene_hash".into(), MetaValue::String(format!("{:016x}", scene.hash()))),
+        (
+            "aurora_emission_units".into(),
+            MetaValue::String("linear Rec.709 radiance per km; Y = 1 for 1 kR of OI 557.7 nm per km".into()),
+        ),
+        ("aurora_density_units".into(), MetaValue::String("extinction per km".into())),
+    ]
+}
+
+/// The VDB write options the scene asks for.
+pub fn write_options(scene: &Scene) -> WriteOptions {
+    WriteOptions {
+        compression: scene.grid.compression,
+        half: if scene.grid.half_emission { vec!["emission".to_string()] } else { vec![] },
+        metadata: vdb_metadata(scene),
+    }
+}
+
+/// Writes the three files into `out` (created if missing).
+pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
+    std::fs::create_dir_all(out).map_err(|source| OutputError::CreateDir { path: out.to_path_buf(), source })?;
+    let vdb_path = out.join(VDB_NAME);
+    let t0 = Instant::now();
+    let stats = write_vdb(
+        &vdb_path,
+        &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)],
+        &write_options(scene),
+    )
+    .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
+    let vdb_seconds = t0.elapsed().as_secs_f64();
+
+    let usda_path = out.join(USDA_NAME);
+    usd::write_usda(&usda_path, VDB_NAME, &[("density", "float"), ("emission", "float3")], 1000.0)
+        .map_err(|e| OutputError::Write { path: usda_path.clone(), message: e.to_string() })?;
+
+    let json_path = out.join(JSON_NAME);
+    let total: f64 = bake.stats.total_seconds() + vdb_seconds;
+    let report = json!({
+        "aurora_version": env!("CARGO_PKG_VERSION"),
+        "scene_hash": format!("{:016x}", scene.hash()),
+        "seed": scene.seed,
+        "units": "km",
+        "threads": rayon::current_num_threads(),
+        "stats": bake.stats,
+        "files": {
+            "vdb": VDB_NAME,
+            "vdb_bytes": stats.bytes,
+            "vdb_write_seconds": vdb_seconds,
+            "usda": USDA_NAME,
+            "compression": scene.grid.compression,
+            "half_emission": scene.grid.half_emission,
+        },
+        "total_seconds": total,
+    });
+    let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
+    write_atomic(&json_path, text.as_bytes())
+        .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
+    Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
