@@ -92,7 +92,8 @@ mod tests {
         let b = vec![[1.0, 1.0, 1.0, 1.0], [0.001, 0.001, 0.001, 1.0]];
         let a = vec![[1.02, 1.02, 1.02, 1.0], [0.5, 0.5, 0.5, 1.0]];
         let (mean, flux) = image_rel_error(&a, &b, 0.01);
-        assert!((mean - 0.02).abs() < 1e-9);
-        assert!((flux - 1.52 / 1.001).abs() < 1e-9);
+        // f32 inputs: 1.02 is stored to about 1e-7 relative.
+        assert!((mean - 0.02).abs() < 1e-6);
+        assert!((flux - 1.52 / 1.001).abs() < 1e-6);
     }
 }
