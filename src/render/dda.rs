@@ -5,7 +5,7 @@
 //! pbrt-v4's `DDAMajorantIterator`, we run one DDA per tree level: the root
 //! (4096-voxel cells, looked up in a hash map; or, with at most
 //! [`ROOT_LIST_MAX`] root nodes, a sorted list of the ray's spans through
-//! them), super nodes (128-voxel
+//! them), each clipped to the box its dual leaves occupy, super nodes (128-voxel
 //! blocks), blocks (8-voxel dual leaves) and, inside an occupied dual leaf,
 //! its 8^3 dual cells. A level only descends into occupied children, so the
 //! cost of a ray is a few steps per 4096 voxels of empty space plus the work
@@ -190,12 +190,12 @@ impl<'a> LeafWalker<'a> {
         let root = match clipped {
             None => RootWalk::Done,
             Some((a, b)) if field.root.len() <= ROOT_LIST_MAX => {
-                let size = 1 << SUPER_VOXELS_LOG2;
                 let mut list: Vec<(f64, f64, u32, IVec3)> = field
                     .root
                     .iter()
                     .filter_map(|(&c, &si)| {
-                        let (p, q) = ray.clip(c * size, (c + IVec3::ONE) * size, a, b)?;
+                        let (lo, hi) = field.super_bounds[si as usize];
+                        let (p, q) = ray.clip(lo, hi, a, b)?;
                         Some((p, q, si, c))
                     })
                     .collect();
@@ -254,8 +254,12 @@ impl Iterator for LeafWalker<'_> {
                 RootWalk::Dda(root) => {
                     let (c, t0, t1) = root.current()?;
                     root.advance(&self.ray);
-                    match f.root.get(&c) {
-                        Some(&si) => (c, t0, t1, si),
+                    let clipped = f.root.get(&c).and_then(|&si| {
+                        let (lo, hi) = f.super_bounds[si as usize];
+                        self.ray.clip(lo, hi, t0, t1).map(|(p, q)| (c, p, q, si))
+                    });
+                    match clipped {
+                        Some(x) => x,
                         None => {
                             self.steps += 1;
                             continue;

@@ -117,6 +117,9 @@ pub struct Field {
     pub(crate) blocks: Vec<Box<[u32; BLOCK_SLOTS]>>,
     pub(crate) supers: Vec<Box<[u32; SUPER_SLOTS]>>,
     pub(crate) root: HashMap<IVec3, u32>,
+    /// Per super node: the index-space box of its dual leaves (voxel units),
+    /// so a ray is clipped to what is occupied, not to the node's 4096^3.
+    pub(crate) super_bounds: Vec<(IVec3, IVec3)>,
     /// Index-space box covered by the dual leaves, in voxel units: `[lo, hi]`.
     pub lo: IVec3,
     pub hi: IVec3,
@@ -284,6 +287,7 @@ impl Field {
         let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
         let mut supers: Vec<Box<[u32; SUPER_SLOTS]>> = Vec::new();
         let mut root: HashMap<IVec3, u32> = HashMap::new();
+        let mut super_bounds: Vec<(IVec3, IVec3)> = Vec::new();
         let (mut lo, mut hi) = (IVec3::MAX, IVec3::MIN);
         for (i, &k) in keys.iter().enumerate() {
             lo = lo.min(k);
@@ -292,8 +296,11 @@ impl Field {
             let s = shr(b, SUPER_LOG2);
             let si = *root.entry(s).or_insert_with(|| {
                 supers.push(Box::new([NONE; SUPER_SLOTS]));
+                super_bounds.push((IVec3::MAX, IVec3::MIN));
                 (supers.len() - 1) as u32
             });
+            let sb = &mut super_bounds[si as usize];
+            *sb = (sb.0.min(k * LEAF_DIM), sb.1.max((k + IVec3::ONE) * LEAF_DIM));
             let sup = &mut supers[si as usize];
             let bs = slot(b, SUPER_LOG2);
             if sup[bs] == NONE {
@@ -312,7 +319,7 @@ impl Field {
                 shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
             )
         };
-        Field { transform, channels, keys, values, mask_first, mask_any, blocks, supers, root, lo, hi, root_lo, root_hi }
+        Field { transform, channels, keys, values, mask_first, mask_any, blocks, supers, root, super_bounds, lo, hi, root_lo, root_hi }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -329,7 +336,7 @@ impl Field {
             + self.keys.len() * (12 + 128)
             + self.blocks.len() * BLOCK_SLOTS * 4
             + self.supers.len() * SUPER_SLOTS * 4
-            + self.root.len() * 24
+            + self.root.len() * (24 + 24)
     }
 
     /// Index of the dual leaf with key `k`, if stored.
