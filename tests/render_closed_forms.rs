@@ -323,3 +323,33 @@ fn single_voxel_footprint_is_exactly_one_voxel() {
     let r = radiance_along_ray(&medium, c + DVec3::new(0.5 * (1.0 - 1e-3), 0.0, -3.0), DVec3::Z, f64::INFINITY, Integration::Exact, 0.5);
     assert!(rel(r.tau, 3.0 * 0.5 * 1e-3, 0.0) < 1e-9, "{}", r.tau);
 }
+
+#[test]
+fn rays_in_planes_shared_by_leaves_and_nodes_count_once() {
+    // A voxel at a corner shared by 8 leaves, blocks and super nodes (index
+    // (0,0,0) and (4096,-4096,128)), seen along z through its centre and
+    // along lines in its voxel-centre planes: tau = v h (1-|dx|)(1-|dy|)
+    // exactly as for an interior voxel, never counted twice. Tolerance 1e-10:
+    // local coordinates are differences of index coordinates up to 4096,
+    // each rounded to 4096 * 2^-52 = 9e-13.
+    for centre in [IVec3::ZERO, IVec3::new(4096, -4096, 128)] {
+        let t = Transform::new(0.5, DVec3::new(0.3, -0.2, 0.1));
+        let mut g = Grid::new("density", 0.0f32, t);
+        g.set(centre, 2.0);
+        let medium = Medium::new(Some(&g), None, 1.0, 1.0).unwrap();
+        let c = t.index_to_world(centre.as_dvec3());
+        for (dx, dy) in [(0.0, 0.0), (0.5, 0.0), (0.0, -0.25), (0.75, 0.5)] {
+            let o = c + DVec3::new(dx, dy, -3.0) * 0.5;
+            let r = radiance_along_ray(&medium, o, DVec3::Z, f64::INFINITY, Integration::Exact, 0.5);
+            let want = 2.0 * 0.5 * (1.0 - f64::abs(dx)) * (1.0 - f64::abs(dy));
+            assert!(rel(r.tau, want, 0.0) < 1e-10, "centre {centre} offset ({dx},{dy}): tau {} vs {want}", r.tau);
+            // The same along x and y.
+            let o = c + DVec3::new(-3.0, dx, dy) * 0.5;
+            let r = radiance_along_ray(&medium, o, DVec3::X, f64::INFINITY, Integration::Exact, 0.5);
+            assert!(rel(r.tau, want, 0.0) < 1e-10, "centre {centre} along x offset ({dx},{dy}): tau {}", r.tau);
+            let o = c + DVec3::new(dy, 3.0, dx) * 0.5;
+            let r = radiance_along_ray(&medium, o, -DVec3::Y, f64::INFINITY, Integration::Exact, 0.5);
+            assert!(rel(r.tau, want, 0.0) < 1e-10, "centre {centre} along -y offset ({dx},{dy}): tau {}", r.tau);
+        }
+    }
+}

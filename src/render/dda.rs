@@ -59,11 +59,22 @@ impl IndexRay {
     /// The ray's parameter range inside the index box `[lo, hi]`, within
     /// `[t0, t1]` (slab test), or None.
     pub fn clip(&self, lo: IVec3, hi: IVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        self.clip_impl(lo, hi, t0, t1, false)
+    }
+
+    /// As [`IndexRay::clip`], but a ray parallel to an axis must lie in
+    /// `[lo, hi)` along it: boxes that tile space then never both claim a
+    /// ray lying exactly in their shared face.
+    pub fn clip_half_open(&self, lo: IVec3, hi: IVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        self.clip_impl(lo, hi, t0, t1, true)
+    }
+
+    fn clip_impl(&self, lo: IVec3, hi: IVec3, t0: f64, t1: f64, half_open: bool) -> Option<(f64, f64)> {
         let (mut a, mut b) = (t0, t1);
         let (lo, hi) = (lo.as_dvec3().to_array(), hi.as_dvec3().to_array());
         for k in 0..3 {
             if self.d[k] == 0.0 {
-                if self.o[k] < lo[k] || self.o[k] > hi[k] {
+                if self.o[k] < lo[k] || self.o[k] > hi[k] || (half_open && self.o[k] == hi[k]) {
                     return None;
                 }
             } else {
@@ -194,8 +205,12 @@ impl<'a> LeafWalker<'a> {
                     .root
                     .iter()
                     .filter_map(|(&c, &si)| {
+                        // Half-open: a ray in the face shared by two super
+                        // nodes belongs to one of them only (the upper, as
+                        // the DDA's floor would choose; the shared plane's
+                        // values are in both, so either is right).
                         let (lo, hi) = field.super_bounds[si as usize];
-                        let (p, q) = ray.clip(lo, hi, a, b)?;
+                        let (p, q) = ray.clip_half_open(lo, hi, a, b)?;
                         Some((p, q, si, c))
                     })
                     .collect();
