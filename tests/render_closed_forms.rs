@@ -171,12 +171,18 @@ fn check_image(s: &RenderSettings, vol: &Volume, f: impl Fn(f64) -> ([f64; 3], f
 fn homogeneous_box_transmittance_is_exp_of_optical_depth() {
     let d = density_box(SIGMA);
     let vol = Volume { density: Some(&d), emission: None };
-    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())] {
+    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())]
+    {
         s.background.radiance = [1.0; 3];
-        let n = check_image(&s, &vol, |path| {
-            let t = (-(SIGMA as f64) * path).exp();
-            ([t; 3], t)
-        }, name);
+        let n = check_image(
+            &s,
+            &vol,
+            |path| {
+                let t = (-(SIGMA as f64) * path).exp();
+                ([t; 3], t)
+            },
+            name,
+        );
         assert!(n >= 200, "{name}: only {n} pixels crossed the box with a closed form");
     }
 }
@@ -200,15 +206,21 @@ fn emission_with_absorption_same_shape_closed_form() {
     let e = emission_box(E);
     let vol = Volume { density: Some(&d), emission: Some(&e) };
     let b = 0.3;
-    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())] {
+    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())]
+    {
         s.background.radiance = [b; 3];
         s.volume.density_scale = 1.25; // sigma_t = 1.25 * 0.8 = 1.0 per km
         s.volume.emission_scale = 2.0;
         let st = 1.25 * sigma as f64;
-        let n = check_image(&s, &vol, |path| {
-            let t = (-st * path).exp();
-            (E.map(|e| 2.0 * e as f64 / st * (1.0 - t) + b * t), t)
-        }, name);
+        let n = check_image(
+            &s,
+            &vol,
+            |path| {
+                let t = (-st * path).exp();
+                (E.map(|e| 2.0 * e as f64 / st * (1.0 - t) + b * t), t)
+            },
+            name,
+        );
         assert!(n >= 200, "{name}: {n}");
     }
 }
@@ -320,7 +332,14 @@ fn single_voxel_footprint_is_exactly_one_voxel() {
         assert_eq!(r.transmittance(), 1.0, "offset {off:?}");
     }
     // ... and a hair inside: tau = 3 h * 1e-3.
-    let r = radiance_along_ray(&medium, c + DVec3::new(0.5 * (1.0 - 1e-3), 0.0, -3.0), DVec3::Z, f64::INFINITY, Integration::Exact, 0.5);
+    let r = radiance_along_ray(
+        &medium,
+        c + DVec3::new(0.5 * (1.0 - 1e-3), 0.0, -3.0),
+        DVec3::Z,
+        f64::INFINITY,
+        Integration::Exact,
+        0.5,
+    );
     assert!(rel(r.tau, 3.0 * 0.5 * 1e-3, 0.0) < 1e-9, "{}", r.tau);
 }
 

@@ -47,7 +47,11 @@ fn exr_round_trips_exactly_and_is_rec709_rgba_f32() {
     let ch = h.shared_attributes.chromaticities.expect("chromaticities attribute");
     assert_eq!((ch.red.0, ch.red.1, ch.white.0, ch.white.1), (0.64, 0.33, 0.3127, 0.329));
     // Written atomically: no temporary file is left behind.
-    let left: Vec<_> = std::fs::read_dir(path.parent().unwrap()).unwrap().filter_map(|e| e.ok()).filter(|e| e.file_name().to_string_lossy().contains(".tmp-")).collect();
+    let left: Vec<_> = std::fs::read_dir(path.parent().unwrap())
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
     assert!(left.is_empty(), "{left:?}");
     // A bad destination is a typed error.
     let bad = PathBuf::from("/nonexistent-aurora-dir/x.exr");
@@ -99,7 +103,12 @@ fn srgb8(x: f64) -> u8 {
 #[test]
 fn png_preview_applies_exposure_then_srgb_and_clamps() {
     let vals = [0.0f32, 0.001, 0.0031308, 0.05, 0.18, 0.5, 1.0, 3.0, -1.0];
-    let img = Image { width: vals.len(), height: 1, pixels: vals.iter().map(|&v| [v, v * 0.5, v * 0.25, 1.0]).collect(), stats: RenderStats::default() };
+    let img = Image {
+        width: vals.len(),
+        height: 1,
+        pixels: vals.iter().map(|&v| [v, v * 0.5, v * 0.25, 1.0]).collect(),
+        stats: RenderStats::default(),
+    };
     for exposure in [0.0, 1.0, -2.5] {
         let path = tmp(&format!("p{exposure}.png"));
         write_png(&path, &img, exposure).unwrap();
@@ -158,7 +167,8 @@ fn row_0_is_the_top_and_column_0_the_left() {
     e.set(IVec3::new(3, 10, 3), [1.0; 3]);
     let s = settings(persp([0.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 1.0], 60.0), 20, 20, 1);
     let img = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
-    let lit: Vec<(usize, usize)> = (0..20).flat_map(|y| (0..20).map(move |x| (x, y))).filter(|&(x, y)| img.pixel(x, y)[0] > 0.0).collect();
+    let lit: Vec<(usize, usize)> =
+        (0..20).flat_map(|y| (0..20).map(move |x| (x, y))).filter(|&(x, y)| img.pixel(x, y)[0] > 0.0).collect();
     assert!(!lit.is_empty());
     assert!(lit.iter().all(|&(x, y)| x >= 10 && y < 10), "{lit:?}");
 }
@@ -201,13 +211,20 @@ fn same_image_whatever_the_thread_count() {
     let (d, e, s) = busy_scene();
     let vol = Volume { density: Some(&d), emission: Some(&e) };
     let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| render(&s, &vol, &NoProgress).unwrap())
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| render(&s, &vol, &NoProgress).unwrap())
     };
     let (a, b, c) = (run(1), run(2), run(5));
     assert!(a.stats.terrain_hits > 0 && a.stats.shadow_rays > 0);
     assert_eq!(a.pixels, b.pixels);
     assert_eq!(a.pixels, c.pixels);
-    assert_eq!((a.stats.primary_rays, a.stats.shadow_rays, a.stats.volume_work), (c.stats.primary_rays, c.stats.shadow_rays, c.stats.volume_work));
+    assert_eq!(
+        (a.stats.primary_rays, a.stats.shadow_rays, a.stats.volume_work),
+        (c.stats.primary_rays, c.stats.shadow_rays, c.stats.volume_work)
+    );
     let mut s2 = s.clone();
     s2.seed += 1;
     let d2 = render(&s2, &vol, &NoProgress).unwrap();
@@ -215,8 +232,16 @@ fn same_image_whatever_the_thread_count() {
     // Fixed-step integration is deterministic too.
     let mut s3 = s.clone();
     s3.integration = Integration::FixedStep(0.1);
-    let f1 = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| render(&s3, &vol, &NoProgress).unwrap());
-    let f3 = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| render(&s3, &vol, &NoProgress).unwrap());
+    let f1 = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| render(&s3, &vol, &NoProgress).unwrap());
+    let f3 = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap()
+        .install(|| render(&s3, &vol, &NoProgress).unwrap());
     assert_eq!(f1.pixels, f3.pixels);
 }
 

@@ -133,7 +133,11 @@ fn emissive_slab_lights_the_ground_as_the_closed_form() {
     // 256 independent pixels, each the mean of 16 x 16 shadow samples:
     // 4 standard errors (estimated from the pixels themselves).
     assert!(se < 0.02 * want, "standard error {se} too large for a meaningful test");
-    assert!((m - want).abs() < 4.0 * se, "ground radiance {m} +- {se}, closed form {want} (infinite slab: {})", 2.0 * ALBEDO * E[1] as f64 * NZ as f64);
+    assert!(
+        (m - want).abs() < 4.0 * se,
+        "ground radiance {m} +- {se}, closed form {want} (infinite slab: {})",
+        2.0 * ALBEDO * E[1] as f64 * NZ as f64
+    );
     eprintln!("slab: {m:.5} +- {se:.5} vs {want:.5} (infinite slab {:.5})", 2.0 * ALBEDO * E[1] as f64 * NZ as f64);
     for p in &img.pixels {
         // Grey emission shape: every sample has the same colour, so the
@@ -164,7 +168,9 @@ fn j_absorbing(sigma: f64) -> f64 {
     let g8 = gauss(8);
     let depth = |w: DVec3| -> f64 {
         let mut ts = vec![];
-        for (k, planes) in [(0, [-m - 1.0, -m, m, m + 1.0]), (1, [-m - 1.0, -m, m, m + 1.0]), (2, [z0 - 1.0, z0, z1, z1 + 1.0])] {
+        for (k, planes) in
+            [(0, [-m - 1.0, -m, m, m + 1.0]), (1, [-m - 1.0, -m, m, m + 1.0]), (2, [z0 - 1.0, z0, z1, z1 + 1.0])]
+        {
             if w[k] != 0.0 {
                 for p in planes {
                     let t = p / w[k];

@@ -25,7 +25,9 @@
 //! trilinear field is continuous there and both cells hold the plane's values
 //! (dual leaves share their boundary planes), so the result is the same.
 
-use super::medium::{cell_bit, mask_has, Field, BLOCK_LOG2, BLOCK_VOXELS_LOG2, LEAF_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2};
+use super::medium::{
+    cell_bit, mask_has, Field, BLOCK_LOG2, BLOCK_VOXELS_LOG2, LEAF_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2,
+};
 use glam::{DVec3, IVec3};
 
 /// A ray in a field's index space: `u(t) = o + t d`, with t the world-space
@@ -139,7 +141,11 @@ impl Dda {
     #[inline]
     fn advance(&mut self, ray: &IndexRay) {
         let a = if self.t_next[0] <= self.t_next[1] {
-            if self.t_next[0] <= self.t_next[2] { 0 } else { 2 }
+            if self.t_next[0] <= self.t_next[2] {
+                0
+            } else {
+                2
+            }
         } else if self.t_next[1] <= self.t_next[2] {
             1
         } else {

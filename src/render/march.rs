@@ -107,14 +107,7 @@ fn local(ray: &IndexRay, t: f64, seg: &CellSeg) -> [f64; 3] {
 /// Adds the cubics of the channels `sigma` / `e` held by `field` over `[t0, t1]`
 /// of cell `seg` to `piece`.
 #[inline]
-fn fill_piece(
-    piece: &mut Piece,
-    field: &Field,
-    ray: &IndexRay,
-    seg: &CellSeg,
-    sigma: Option<usize>,
-    e: Option<usize>,
-) {
+fn fill_piece(piece: &mut Piece, field: &Field, ray: &IndexRay, seg: &CellSeg, sigma: Option<usize>, e: Option<usize>) {
     let ua = local(ray, piece.t0, seg);
     let ub = local(ray, piece.t1, seg);
     if let Some(ch) = sigma {

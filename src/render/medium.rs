@@ -55,16 +55,8 @@ const SUPER_SLOTS: usize = 1 << (3 * SUPER_LOG2);
 
 /// Offsets (in values of one channel) of the 8 corners of a dual cell from its
 /// (0,0,0) corner, in the order (x,y,z) = 000, 001, 010, 011, 100, 101, 110, 111.
-pub const CORNER_OFFSETS: [usize; 8] = [
-    0,
-    1,
-    GHOST,
-    GHOST + 1,
-    GHOST * GHOST,
-    GHOST * GHOST + 1,
-    GHOST * GHOST + GHOST,
-    GHOST * GHOST + GHOST + 1,
-];
+pub const CORNER_OFFSETS: [usize; 8] =
+    [0, 1, GHOST, GHOST + 1, GHOST * GHOST, GHOST * GHOST + 1, GHOST * GHOST + GHOST, GHOST * GHOST + GHOST + 1];
 
 /// Offset of ghost value (x,y,z), each in 0..=8, within one dual leaf.
 #[inline]
@@ -235,7 +227,7 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
 pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
     let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
     let ts = g.transform.voxel_size;
-    if !(ts.is_finite() && ts > 0.0) || !g.transform.translation.is_finite() {
+    if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
         return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
     }
     if g.background != T::ZERO {
@@ -278,10 +270,8 @@ impl Field {
                 first += s.grid.channels();
             }
         });
-        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) = values
-            .par_chunks(per_leaf.max(1))
-            .map(|v| cell_masks(v, channels))
-            .unzip();
+        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
+            values.par_chunks(per_leaf.max(1)).map(|v| cell_masks(v, channels)).unzip();
 
         // Hierarchy: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
         let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
@@ -319,7 +309,22 @@ impl Field {
                 shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
             )
         };
-        Field { transform, channels, keys, values, mask_first, mask_any, blocks, supers, root, super_bounds, lo, hi, root_lo, root_hi }
+        Field {
+            transform,
+            channels,
+            keys,
+            values,
+            mask_first,
+            mask_any,
+            blocks,
+            supers,
+            root,
+            super_bounds,
+            lo,
+            hi,
+            root_lo,
+            root_hi,
+        }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -393,10 +398,7 @@ impl Field {
 
     /// World-space box of the stored dual leaves (the support of the field).
     pub fn world_bounds(&self) -> (DVec3, DVec3) {
-        (
-            self.transform.index_to_world(self.lo.as_dvec3()),
-            self.transform.index_to_world(self.hi.as_dvec3()),
-        )
+        (self.transform.index_to_world(self.lo.as_dvec3()), self.transform.index_to_world(self.hi.as_dvec3()))
     }
 }
 
@@ -527,6 +529,10 @@ impl Medium {
 
     /// World-space box enclosing every field's support, if any.
     pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.fields.iter().filter(|f| !f.is_empty()).map(Field::world_bounds).reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+        self.fields
+            .iter()
+            .filter(|f| !f.is_empty())
+            .map(Field::world_bounds)
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 }

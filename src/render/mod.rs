@@ -28,6 +28,11 @@
 //! terrain or infinity (volume coverage); RGB already contains the terrain or
 //! background seen through the volume.
 
+// `!(x > 0.0)` is used on purpose throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Loops over the three colour channels index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
 pub mod camera;
 pub mod dda;
 pub mod film;
@@ -45,7 +50,7 @@ pub use terrain::{write_obj, Heightfield, TerrainModel};
 use crate::grid::Grid;
 use crate::progress::Progress;
 use crate::scene::{Background, Camera, RenderParams, Scene, Terrain, VolumeParams};
-use rand::{Rng, SeedableRng};
+use rand::Rng;
 use rand_pcg::Pcg32;
 use rayon::prelude::*;
 use shadow::{estimate_irradiance, EmissionSampler, ShadowScene};
@@ -249,7 +254,12 @@ impl Prepared {
             return bad(format!("terrain.albedo {:?} must be in [0, 1]", settings.terrain.albedo));
         }
         let camera = CameraModel::new(&settings.camera, r.width, r.height)?;
-        let medium = Medium::new(volume.density, volume.emission, settings.volume.density_scale, settings.volume.emission_scale)?;
+        let medium = Medium::new(
+            volume.density,
+            volume.emission,
+            settings.volume.density_scale,
+            settings.volume.emission_scale,
+        )?;
         let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
         let sampler = match (&terrain, volume.emission, medium.emission) {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
@@ -356,9 +366,4 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
         stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
     }
     Ok(Image { width: w, height: h, pixels, stats })
-}
-
-/// A seeded random stream for tests and tools that need one.
-pub fn rng_from_seed(seed: u64) -> Pcg32 {
-    Pcg32::seed_from_u64(seed)
 }

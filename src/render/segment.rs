@@ -42,8 +42,10 @@ pub const TAU_CUTOFF: f64 = 40.0;
 /// Largest optical depth of one quadrature part (see the module doc).
 pub const KAPPA_MAX: f64 = 0.5;
 
-/// 6-point Gauss-Legendre nodes and weights on [-1, 1] (A&S table 25.4).
+/// 6-point Gauss-Legendre nodes and weights on [-1, 1] (A&S table 25.4, digits as printed there).
+#[allow(clippy::excessive_precision)]
 const GL6_X: [f64; 3] = [0.238_619_186_083_196_9, 0.661_209_386_466_264_5, 0.932_469_514_203_152_1];
+#[allow(clippy::excessive_precision)]
 const GL6_W: [f64; 3] = [0.467_913_934_572_691_0, 0.360_761_573_048_138_6, 0.171_324_492_379_170_4];
 
 /// 6-point Gauss-Legendre nodes on [0, 1].
@@ -56,14 +58,8 @@ pub const GL_NODES: [f64; 6] = [
     0.5 + 0.5 * GL6_X[2],
 ];
 /// 6-point Gauss-Legendre weights on [0, 1] (sum to 1).
-pub const GL_WEIGHTS: [f64; 6] = [
-    0.5 * GL6_W[2],
-    0.5 * GL6_W[1],
-    0.5 * GL6_W[0],
-    0.5 * GL6_W[0],
-    0.5 * GL6_W[1],
-    0.5 * GL6_W[2],
-];
+pub const GL_WEIGHTS: [f64; 6] =
+    [0.5 * GL6_W[2], 0.5 * GL6_W[1], 0.5 * GL6_W[0], 0.5 * GL6_W[0], 0.5 * GL6_W[1], 0.5 * GL6_W[2]];
 
 /// `c[0] + c[1] s + c[2] s^2 + c[3] s^3`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

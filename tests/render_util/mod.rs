@@ -1,7 +1,8 @@
 //! Helpers shared by the `render_*` tests: grid builders, scene settings, and
 //! oracles written independently of `aurora::render` (camera formula,
 //! ray-box clipping, brute-force integration through `Grid::sample_world`).
-#![allow(dead_code)]
+#![allow(dead_code, clippy::excessive_precision, clippy::too_many_arguments, clippy::needless_range_loop)]
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use aurora::grid::{Grid, Transform};
 use aurora::render::{Integration, RenderSettings};
@@ -197,7 +198,8 @@ pub fn oracle(
     let emit = |t: f64| emission.map_or([0.0; 3], |g| g.sample_world(o + d * t).map(|v| es * v as f64));
     let g3 = gauss(3);
     let g8 = gauss(8);
-    let tau_over = |x: f64, y: f64| -> f64 { g3.iter().map(|(s, w)| w * sigma(x + (y - x) * s)).sum::<f64>() * (y - x) };
+    let tau_over =
+        |x: f64, y: f64| -> f64 { g3.iter().map(|(s, w)| w * sigma(x + (y - x) * s)).sum::<f64>() * (y - x) };
     let mut tau = 0.0;
     let mut l = [0.0; 3];
     for w2 in ts.windows(2) {
