@@ -29,7 +29,8 @@ fn finish(tmp: &Path, path: &Path) -> Result<(), RenderError> {
 }
 
 /// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
-pub fn write_exr(path: &Path, image: &Image) -> Result<(), RenderError> {
+pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
         return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
@@ -55,7 +56,8 @@ pub fn write_exr(path: &Path, image: &Image) -> Result<(), RenderError> {
 }
 
 /// Reads the first RGBA layer of an EXR (alpha 1 if absent). Stats are zero.
-pub fn read_exr(path: &Path) -> Result<Image, RenderError> {
+pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
+    let path = path.as_ref();
     let img = read_first_rgba_layer_from_file(
         path,
         |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
@@ -86,7 +88,8 @@ pub fn display_u8(linear: f32, exposure: f64) -> u8 {
 }
 
 /// Writes an 8-bit sRGB PNG preview with the documented display transform.
-pub fn write_png(path: &Path, image: &Image, exposure: f64) -> Result<(), RenderError> {
+pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result<(), RenderError> {
+    let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
         return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));

@@ -73,7 +73,8 @@ pub enum Integration {
     /// bounded error (`segment.rs`).
     Exact,
     /// Fixed steps of this length (scene units), one sample per step, as
-    /// Cycles' biased ray marching (`march.rs`). For comparisons.
+    /// Cycles' biased ray marching (`march.rs`), on primary and shadow rays
+    /// alike. For comparisons and benchmarks; its error grows with the step.
     FixedStep(f64),
 }
 

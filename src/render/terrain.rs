@@ -427,7 +427,8 @@ fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
 /// importer gets exactly our vertices. Import in Blender with
 /// `bpy.ops.wm.obj_import(filepath=..., forward_axis='Y', up_axis='Z')` (the
 /// defaults assume a Y-up file and would rotate the mesh).
-pub fn write_obj(path: &Path, hf: &Heightfield) -> Result<(), RenderError> {
+pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderError> {
+    let path = path.as_ref();
     let io = |e: std::io::Error| RenderError::Io { path: path.to_path_buf(), source: e };
     let tmp = super::film::temp_path(path);
     let result = (|| -> std::io::Result<()> {
