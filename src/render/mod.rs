@@ -1,1 +1,370 @@
-//! Reference raymarcher (to be written)
+//! The reference raymarcher: the ground truth users compare Cycles and other
+//! renderers against. It reads grids only (never the bake).
+//!
+//! Model (emission-absorption, no scattering), per primary ray:
+//! `L = int_0^d T(0,s) e(s) ds + T(0,d) L_behind`, `T = exp(-int sigma_t)`,
+//! with `sigma_t = density_scale * density` and `e = emission_scale * emission`
+//! sampled as Cycles samples the same VDB: voxel (i,j,k) centred at index point
+//! (i,j,k), trilinear, inactive voxels 0 (`shared/notes/cycles-conventions.md`).
+//! `L_behind` is the background radiance, or, where the ray hits the terrain,
+//! `albedo / pi * E` with `E` the irradiance the volume's emission delivers
+//! through the volume's transmittance, estimated with emissive shadow rays
+//! (`shadow.rs`; the 2014 report's `L = T * Li + Lvi`). **Background
+//! radiance does not light the terrain**: it is only what camera rays see
+//! behind everything.
+//!
+//! Stages (each a function of plain data):
+//! `camera.rs` (rays) -> `medium.rs` (ghosted dual leaves + tree, built once)
+//! -> `dda.rs` (hierarchical DDA: occupied leaves, then dual cells) ->
+//! `segment.rs` (exact optical depth, Gauss-Legendre emission per cell) ->
+//! `march.rs` (integrators, one walker for primary and shadow rays) ->
+//! `terrain.rs`, `shadow.rs` -> `film.rs` (EXR / PNG).
+//!
+//! Pixels: row 0 at the top. With `spp = 1` a pixel is sampled at its centre;
+//! with more samples the pixel value is the average over its square (Cycles'
+//! BOX filter), sample positions uniform in the pixel. Each pixel's random
+//! stream is seeded from `(seed, pixel index)`, so the image does not depend
+//! on the thread count. Output alpha is `1 - T` along the primary ray up to the
+//! terrain or infinity (volume coverage); RGB already contains the terrain or
+//! background seen through the volume.
+
+// `!(x > 0.0)` is used on purpose throughout: it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Loops over the three colour channels index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
+pub mod camera;
+pub mod dda;
+pub mod film;
+pub mod march;
+pub mod medium;
+pub mod segment;
+pub mod shadow;
+pub mod terrain;
+
+pub use camera::{CameraModel, Ray};
+pub use march::{optical_depth_along_ray, radiance_along_ray, RayIntegral};
+pub use medium::Medium;
+pub use terrain::{write_obj, Heightfield, TerrainModel};
+
+use crate::grid::Grid;
+use crate::progress::Progress;
+use crate::scene::{Background, Camera, RenderParams, Scene, Terrain, VolumeParams};
+use rand::Rng;
+use rand_pcg::Pcg32;
+use rayon::prelude::*;
+use shadow::{estimate_irradiance, EmissionSampler, ShadowScene};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The grids to render. A VDB without a density grid has no extinction; one
+/// without emission emits nothing (a float emission grid is converted to grey
+/// by the loader).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Volume<'a> {
+    pub density: Option<&'a Grid<f32>>,
+    pub emission: Option<&'a Grid<[f32; 3]>>,
+}
+
+/// How rays integrate the volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Integration {
+    /// Exact optical depth per dual cell, Gauss-Legendre emission with a
+    /// bounded error (`segment.rs`).
+    Exact,
+    /// Fixed steps of this length (scene units), one sample per step, as
+    /// Cycles' biased ray marching (`march.rs`), on primary and shadow rays
+    /// alike. For comparisons and benchmarks; its error grows with the step.
+    FixedStep(f64),
+}
+
+/// Everything `render` needs besides the grids.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub camera: Camera,
+    pub render: RenderParams,
+    pub volume: VolumeParams,
+    pub background: Background,
+    pub terrain: Terrain,
+    /// Seed of every random stream (with the pixel index).
+    pub seed: u64,
+    pub integration: Integration,
+    /// Emissive shadow rays per terrain hit per pixel sample (total per pixel:
+    /// `spp * shadow_samples` where the terrain is seen).
+    pub shadow_samples: usize,
+    /// Folder against which a relative `terrain.heightmap` is resolved (the
+    /// scene file's folder); None = the working directory.
+    pub base_dir: Option<PathBuf>,
+}
+
+impl RenderSettings {
+    /// The scene's camera, render, volume, background and terrain, its seed,
+    /// exact integration and one shadow ray per terrain hit and sample.
+    pub fn from_scene(scene: &Scene) -> RenderSettings {
+        RenderSettings {
+            camera: scene.camera.clone(),
+            render: scene.render.clone(),
+            volume: scene.volume.clone(),
+            background: scene.background.clone(),
+            terrain: scene.terrain.clone(),
+            seed: scene.seed,
+            integration: Integration::Exact,
+            shadow_samples: 1,
+            base_dir: None,
+        }
+    }
+}
+
+/// Work and time of one render. Counts are exact and deterministic; times are
+/// measured (wall clock, and per-thread time summed over threads).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    /// Camera rays (pixels x spp).
+    pub primary_rays: u64,
+    /// Emission samples drawn at terrain hits (hits x shadow_samples).
+    pub shadow_samples: u64,
+    /// Shadow rays actually traced (samples facing the surface).
+    pub shadow_rays: u64,
+    /// Primary rays that hit the terrain.
+    pub terrain_hits: u64,
+    /// Dual-cell pieces / quadrature parts (exact) or steps (fixed step)
+    /// integrated along primary rays.
+    pub volume_work: u64,
+    /// Dual leaves in the acceleration structure, and its size in bytes.
+    pub leaves: u64,
+    pub accel_bytes: u64,
+    /// Building the acceleration structure, emission sampler and terrain.
+    pub build_seconds: f64,
+    /// Wall-clock time of the pixel loop.
+    pub render_seconds: f64,
+    /// Thread time of the pixel loop summed over threads.
+    pub thread_seconds: f64,
+    /// Of `thread_seconds`, the time spent estimating terrain irradiance.
+    pub shadow_thread_seconds: f64,
+    pub threads: usize,
+}
+
+impl RenderStats {
+    /// Primary rays per second of wall-clock time (all threads, including
+    /// the shadow rays they spawn).
+    pub fn primary_rays_per_second(&self) -> f64 {
+        self.primary_rays as f64 / self.render_seconds.max(1e-12)
+    }
+    /// Primary rays per thread-second, shadow work excluded.
+    pub fn primary_rays_per_thread_second(&self) -> f64 {
+        self.primary_rays as f64 / (self.thread_seconds - self.shadow_thread_seconds).max(1e-12)
+    }
+    /// Shadow-ray samples per thread-second.
+    pub fn shadow_samples_per_thread_second(&self) -> f64 {
+        self.shadow_samples as f64 / self.shadow_thread_seconds.max(1e-12)
+    }
+}
+
+/// A rendered image: linear Rec.709 RGBA, row 0 at the top, A = 1 - T.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 4]>,
+    pub stats: RenderStats,
+}
+
+impl Image {
+    pub fn pixel(&self, x: usize, y: usize) -> [f32; 4] {
+        self.pixels[y * self.width + x]
+    }
+}
+
+/// Why a render (or an image file) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// A setting is out of range.
+    #[error("render settings: {0}")]
+    Settings(String),
+    /// A grid the renderer cannot sample like Cycles (non-zero background,
+    /// negative or non-finite values, bad transform).
+    #[error("grid '{grid}': {message}")]
+    Grid { grid: String, message: String },
+    /// The terrain heightmap could not be read.
+    #[error("heightmap {}: {message}", path.display())]
+    Heightmap { path: PathBuf, message: String },
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: EXR: {message}", path.display())]
+    Exr { path: PathBuf, message: String },
+    #[error("{}: PNG: {message}", path.display())]
+    Png { path: PathBuf, message: String },
+}
+
+/// SplitMix64 (Steele et al. 2014): decorrelates seeds.
+fn splitmix64(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// The random stream of pixel `index` for `seed`.
+pub fn pixel_rng(seed: u64, index: u64) -> Pcg32 {
+    Pcg32::new(splitmix64(seed ^ splitmix64(index)), index)
+}
+
+/// A scene ready to render: camera, medium, terrain and emission sampler.
+pub struct Prepared {
+    pub camera: CameraModel,
+    pub medium: Medium,
+    pub terrain: TerrainModel,
+    pub sampler: Option<EmissionSampler>,
+    pub settings: RenderSettings,
+}
+
+/// Per-row work counters (summed in row order).
+#[derive(Clone, Copy, Default)]
+struct Counters {
+    primary: u64,
+    shadow_samples: u64,
+    shadow_rays: u64,
+    hits: u64,
+    work: u64,
+    shadow_nanos: u64,
+}
+
+impl Prepared {
+    /// Validates the settings and builds everything the pixel loop reads.
+    pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
+        let r = &settings.render;
+        let bad = |m: String| Err(RenderError::Settings(m));
+        if r.width == 0 || r.height == 0 || r.width > 65536 || r.height > 65536 {
+            return bad(format!("render.width x height = {}x{} must be within 1..=65536", r.width, r.height));
+        }
+        if r.spp == 0 {
+            return bad("render.spp must be at least 1".into());
+        }
+        if settings.shadow_samples == 0 {
+            return bad("shadow_samples must be at least 1".into());
+        }
+        if let Integration::FixedStep(h) = settings.integration {
+            if !(h.is_finite() && h > 0.0) {
+                return bad(format!("fixed step {h} must be finite and > 0"));
+            }
+        }
+        if settings.background.radiance.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            return bad(format!("background.radiance {:?} must be finite and >= 0", settings.background.radiance));
+        }
+        if settings.terrain.albedo.iter().any(|v| !(0.0..=1.0).contains(v)) {
+            return bad(format!("terrain.albedo {:?} must be in [0, 1]", settings.terrain.albedo));
+        }
+        let camera = CameraModel::new(&settings.camera, r.width, r.height)?;
+        let medium = Medium::new(
+            volume.density,
+            volume.emission,
+            settings.volume.density_scale,
+            settings.volume.emission_scale,
+        )?;
+        let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
+        let sampler = match (&terrain, volume.emission, medium.emission) {
+            (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
+            (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
+        };
+        Ok(Prepared { camera, medium, terrain, sampler, settings: settings.clone() })
+    }
+
+    fn shadow_scene(&self) -> ShadowScene<'_> {
+        ShadowScene {
+            medium: &self.medium,
+            terrain: &self.terrain,
+            sampler: self.sampler.as_ref(),
+            integration: self.settings.integration,
+        }
+    }
+
+    /// The value of pixel (px, py) (row 0 at the top).
+    pub fn pixel(&self, px: usize, py: usize) -> [f32; 4] {
+        self.pixel_counted(px, py, &mut Counters::default())
+    }
+
+    fn pixel_counted(&self, px: usize, py: usize, n: &mut Counters) -> [f32; 4] {
+        let s = &self.settings;
+        let spp = s.render.spp;
+        let index = (py * self.camera.width + px) as u64;
+        let mut rng = pixel_rng(s.seed, index);
+        let shadow = self.shadow_scene();
+        let albedo = s.terrain.albedo;
+        let background = s.background.radiance;
+        let mut sum = [0.0f64; 4];
+        for _ in 0..spp {
+            let (jx, jy, offset) = if spp == 1 {
+                (0.5, 0.5, 0.5)
+            } else {
+                (rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>())
+            };
+            let ray = self.camera.ray(px as f64 + jx, py as f64 + jy);
+            let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
+            let t_end = hit.map_or(f64::INFINITY, |h| h.t);
+            let vol = radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset);
+            let t = vol.transmittance();
+            n.primary += 1;
+            n.work += vol.work;
+            let behind = match hit {
+                Some(h) => {
+                    n.hits += 1;
+                    let start = Instant::now();
+                    let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.shadow_samples, &mut rng);
+                    n.shadow_nanos += start.elapsed().as_nanos() as u64;
+                    n.shadow_samples += s.shadow_samples as u64;
+                    n.shadow_rays += rays;
+                    [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c])
+                }
+                None => background,
+            };
+            for c in 0..3 {
+                sum[c] += vol.l[c] + t * behind[c];
+            }
+            sum[3] += 1.0 - t;
+        }
+        sum.map(|v| (v / spp as f64) as f32)
+    }
+}
+
+/// Renders the volume (and terrain) with `settings`. Multithreaded with rayon
+/// (the caller sets the thread count); reports one progress unit per row.
+pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Progress) -> Result<Image, RenderError> {
+    let build = Instant::now();
+    let prepared = Prepared::new(settings, volume)?;
+    let build_seconds = build.elapsed().as_secs_f64();
+    let (w, h) = (prepared.camera.width, prepared.camera.height);
+    progress.start("render", h as u64);
+    let start = Instant::now();
+    let rows: Vec<(Vec<[f32; 4]>, Counters, f64)> = (0..h)
+        .into_par_iter()
+        .map(|py| {
+            let t0 = Instant::now();
+            let mut n = Counters::default();
+            let row: Vec<[f32; 4]> = (0..w).map(|px| prepared.pixel_counted(px, py, &mut n)).collect();
+            progress.inc(1);
+            (row, n, t0.elapsed().as_secs_f64())
+        })
+        .collect();
+    let render_seconds = start.elapsed().as_secs_f64();
+    progress.finish();
+    let mut stats = RenderStats {
+        leaves: prepared.medium.leaf_count() as u64,
+        accel_bytes: prepared.medium.memory_bytes() as u64,
+        build_seconds,
+        render_seconds,
+        threads: rayon::current_num_threads(),
+        ..RenderStats::default()
+    };
+    let mut pixels = Vec::with_capacity(w * h);
+    for (row, n, secs) in rows {
+        pixels.extend(row);
+        stats.primary_rays += n.primary;
+        stats.shadow_samples += n.shadow_samples;
+        stats.shadow_rays += n.shadow_rays;
+        stats.terrain_hits += n.hits;
+        stats.volume_work += n.work;
+        stats.thread_seconds += secs;
+        stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
+    }
+    Ok(Image { width: w, height: h, pixels, stats })
+}

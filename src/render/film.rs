@@ -1,0 +1,118 @@
+//! Image files: the linear OpenEXR result and an 8-bit PNG preview.
+//!
+//! * EXR: 32-bit float RGBA, linear Rec.709 (chromaticities attribute set to
+//!   Rec.709 primaries and D65 white), row 0 at the top, `A = 1 - T` (the
+//!   volume's coverage along the primary ray; RGB already contains what lies
+//!   behind). Lossless compression (the `exr` crate's default).
+//! * PNG preview, display transform: `v = clamp(sRGB_OETF(2^exposure * linear), 0, 1)`
+//!   per RGB channel, with the sRGB OETF `12.92 x` for `x <= 0.0031308` and
+//!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), quantised as
+//!   `round(255 v)`; alpha is dropped (8-bit RGB).
+//!
+//! Both are written to a temporary file in the destination folder and renamed.
+
+use super::{Image, RenderError, RenderStats};
+use exr::prelude::{read_first_rgba_layer_from_file, SpecificChannels, Vec2, WritableImage};
+use std::path::{Path, PathBuf};
+
+/// `dir/.name.tmp-<pid>`: a temporary name next to `path`.
+pub fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+}
+
+fn finish(tmp: &Path, path: &Path) -> Result<(), RenderError> {
+    std::fs::rename(tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(tmp);
+        RenderError::Io { path: path.to_path_buf(), source: e }
+    })
+}
+
+/// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
+pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+        let p = image.pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    });
+    let mut exr_image = exr::image::Image::from_channels((w, h), channels);
+    exr_image.attributes.chromaticities = Some(exr::meta::attribute::Chromaticities {
+        red: Vec2(0.64, 0.33),
+        green: Vec2(0.30, 0.60),
+        blue: Vec2(0.15, 0.06),
+        white: Vec2(0.3127, 0.3290),
+    });
+    let tmp = temp_path(path);
+    let r = exr_image.write().to_file(&tmp);
+    if let Err(e) = r {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(RenderError::Exr { path: path.to_path_buf(), message: e.to_string() });
+    }
+    finish(&tmp, path)
+}
+
+/// Reads the first RGBA layer of an EXR (alpha 1 if absent). Stats are zero.
+pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
+    let path = path.as_ref();
+    let img = read_first_rgba_layer_from_file(
+        path,
+        |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
+        |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.1 * *w + pos.0] = [r, g, b, a];
+        },
+    )
+    .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let size = img.layer_data.size;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    Ok(Image { width: size.0, height: size.1, pixels, stats: RenderStats::default() })
+}
+
+/// The sRGB OETF (IEC 61966-2-1) of a linear value.
+pub fn srgb_oetf(x: f64) -> f64 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The preview's display transform of one linear channel value (module doc).
+pub fn display_u8(linear: f32, exposure: f64) -> u8 {
+    let v = srgb_oetf(linear as f64 * exposure.exp2());
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (v * 255.0).round() as u8
+}
+
+/// Writes an 8-bit sRGB PNG preview with the documented display transform.
+pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    if !exposure.is_finite() {
+        return Err(RenderError::Settings(format!("exposure {exposure} must be finite")));
+    }
+    let data: Vec<u8> = image.pixels.iter().flat_map(|p| [0, 1, 2].map(|c| display_u8(p[c], exposure))).collect();
+    let tmp = temp_path(path);
+    let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
+    let r = (|| -> Result<(), RenderError> {
+        let file = std::fs::File::create(&tmp).map_err(|e| RenderError::Io { path: tmp.clone(), source: e })?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
+        writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
+        writer.finish().map_err(|e| png_err(e.to_string()))
+    })();
+    if let Err(e) = r {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    finish(&tmp, path)
+}

@@ -1,0 +1,538 @@
+//! The renderer's plain-data view of the volume: sigma_t and emission laid out
+//! for fast, exact sampling along rays, built once per render.
+//!
+//! # Dual leaves
+//! Cycles (like OpenVDB's `BoxSampler`) samples a grid trilinearly between the
+//! eight voxel centres around a point; voxel (i,j,k) sits at index point
+//! (i,j,k) and inactive voxels read as 0 (`shared/notes/cycles-conventions.md`).
+//! So the field is a trilinear polynomial inside each *dual cell* `[i,i+1] x
+//! [j,j+1] x [k,k+1]` of index space. We group dual cells into *dual leaves* of
+//! 8^3 cells: dual leaf `D` covers index space `[8D, 8D+8]^3` and needs the 9^3
+//! voxel values `8D .. 8D+8` (its own 8^3 leaf plus one "ghost" layer from the
+//! three upper neighbours). Storing those 9^3 values contiguously (several
+//! channels interleaved) makes every dual cell read 8 neighbouring numbers with
+//! no hash lookup. A dual leaf exists iff one of its 9^3 voxels is active and
+//! non-zero, so the field is exactly 0 outside the stored dual leaves: a
+//! single active voxel creates the 8 dual leaves (or fewer) around it, and its
+//! tent-shaped footprint reaches exactly one voxel past its centre.
+//!
+//! # Hierarchy (for empty-space skipping)
+//! Like OpenVDB's 5-4-3 tree (and `VolumeHDDA`), the dual leaves hang from
+//! `Block`s of 16^3 dual leaves (128 voxels) and those from `Super` nodes of
+//! 32^3 blocks (4096 voxels), found by a hash map at the root. Children are
+//! dense `u32` index arrays (`NONE` = empty). Memory and build time scale with
+//! the number of occupied leaves, never with the bounding-box volume; the walk
+//! (`dda.rs`) costs a few root steps per 4096 voxels of empty space.
+//!
+//! The structure is plain data: no references into the source grids.
+
+use crate::grid::{leaf_offset, Grid, Transform, VoxelValue, LEAF_DIM};
+use glam::{DVec3, IVec3};
+use rayon::prelude::*;
+use std::collections::{HashMap, HashSet};
+
+use super::RenderError;
+
+/// Values per axis of a dual leaf: 8 cells need 9 voxel planes.
+pub const GHOST: usize = 9;
+/// Values per channel of a dual leaf.
+pub const GHOST_VALUES: usize = GHOST * GHOST * GHOST;
+/// Empty child slot.
+pub const NONE: u32 = u32::MAX;
+/// log2 of the dual-leaf edge in voxels (OpenVDB LeafNode::LOG2DIM).
+pub const LEAF_LOG2: u32 = 3;
+/// log2 of the block edge in dual leaves (OpenVDB InternalNode<.,4>).
+pub const BLOCK_LOG2: u32 = 4;
+/// log2 of the super-node edge in blocks (OpenVDB InternalNode<.,5>).
+pub const SUPER_LOG2: u32 = 5;
+/// log2 of a block edge in voxels (128).
+pub const BLOCK_VOXELS_LOG2: u32 = LEAF_LOG2 + BLOCK_LOG2;
+/// log2 of a super-node edge in voxels (4096).
+pub const SUPER_VOXELS_LOG2: u32 = BLOCK_VOXELS_LOG2 + SUPER_LOG2;
+
+const BLOCK_SLOTS: usize = 1 << (3 * BLOCK_LOG2);
+const SUPER_SLOTS: usize = 1 << (3 * SUPER_LOG2);
+
+/// Offsets (in values of one channel) of the 8 corners of a dual cell from its
+/// (0,0,0) corner, in the order (x,y,z) = 000, 001, 010, 011, 100, 101, 110, 111.
+pub const CORNER_OFFSETS: [usize; 8] =
+    [0, 1, GHOST, GHOST + 1, GHOST * GHOST, GHOST * GHOST + 1, GHOST * GHOST + GHOST, GHOST * GHOST + GHOST + 1];
+
+/// Offset of ghost value (x,y,z), each in 0..=8, within one dual leaf.
+#[inline]
+pub fn ghost_offset(x: usize, y: usize, z: usize) -> usize {
+    (x * GHOST + y) * GHOST + z
+}
+
+/// Bit of dual cell (x,y,z), each in 0..8, in a dual leaf's cell mask
+/// (same order as OpenVDB's `coordToOffset`).
+#[inline]
+pub fn cell_bit(x: i32, y: i32, z: i32) -> usize {
+    ((x << 6) | (y << 3) | z) as usize
+}
+
+/// Slot of a child with coordinates `c` (in child units) in a node of
+/// `2^log2` children per axis.
+#[inline]
+fn slot(c: IVec3, log2: u32) -> usize {
+    let m = (1 << log2) - 1;
+    (((c.x & m) << (2 * log2)) | ((c.y & m) << log2) | (c.z & m)) as usize
+}
+
+#[inline]
+fn shr(c: IVec3, n: u32) -> IVec3 {
+    IVec3::new(c.x >> n, c.y >> n, c.z >> n)
+}
+
+/// A 512-bit set of dual cells.
+pub type CellMask = [u64; 8];
+
+#[inline]
+pub fn mask_has(m: &CellMask, bit: usize) -> bool {
+    (m[bit >> 6] >> (bit & 63)) & 1 == 1
+}
+
+/// One or more scalar fields on one grid transform, as ghosted dual leaves.
+///
+/// Channel `c` of ghost value `g` of leaf `l` is `values[(l * GHOST_VALUES + g) * channels + c]`.
+#[derive(Debug, Clone)]
+pub struct Field {
+    pub transform: Transform,
+    pub channels: usize,
+    /// Dual-leaf keys (index origin / 8), in ascending (x, y, z) order.
+    pub keys: Vec<IVec3>,
+    pub values: Vec<f32>,
+    /// Per dual leaf: cells where channel 0 is not identically 0.
+    pub mask_first: Vec<CellMask>,
+    /// Per dual leaf: cells where some channel is not identically 0.
+    pub mask_any: Vec<CellMask>,
+    pub(crate) blocks: Vec<Box<[u32; BLOCK_SLOTS]>>,
+    pub(crate) supers: Vec<Box<[u32; SUPER_SLOTS]>>,
+    pub(crate) root: HashMap<IVec3, u32>,
+    /// Per super node: the index-space box of its dual leaves (voxel units),
+    /// so a ray is clipped to what is occupied, not to the node's 4096^3.
+    pub(crate) super_bounds: Vec<(IVec3, IVec3)>,
+    /// Index-space box covered by the dual leaves, in voxel units: `[lo, hi]`.
+    pub lo: IVec3,
+    pub hi: IVec3,
+    /// Super-node coordinates spanned by the root: `[root_lo, root_hi)`.
+    pub(crate) root_lo: IVec3,
+    pub(crate) root_hi: IVec3,
+}
+
+/// A source of channels for [`Field::build`]: one grid and the factor its
+/// values are multiplied by.
+pub struct Source<'a> {
+    pub grid: SourceGrid<'a>,
+    pub scale: f64,
+}
+
+pub enum SourceGrid<'a> {
+    Scalar(&'a Grid<f32>),
+    Vector(&'a Grid<[f32; 3]>),
+}
+
+impl SourceGrid<'_> {
+    fn channels(&self) -> usize {
+        match self {
+            SourceGrid::Scalar(_) => 1,
+            SourceGrid::Vector(_) => 3,
+        }
+    }
+    fn transform(&self) -> Transform {
+        match self {
+            SourceGrid::Scalar(g) => g.transform,
+            SourceGrid::Vector(g) => g.transform,
+        }
+    }
+    /// Origins of real leaves, and for each a bitmask over the 8 offsets
+    /// (dx,dy,dz) in {0,1}^3 of the dual leaves it feeds with a non-zero voxel.
+    fn dual_keys(&self, out: &mut HashSet<IVec3>) {
+        match self {
+            SourceGrid::Scalar(g) => collect_dual_keys(g, out),
+            SourceGrid::Vector(g) => collect_dual_keys(g, out),
+        }
+    }
+    /// Copies this grid's 9^3 ghost values of dual leaf `key` into `dst`
+    /// (stride `stride`, starting at channel `first`), times `scale`.
+    fn fill(&self, key: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
+        match self {
+            SourceGrid::Scalar(g) => fill_ghost(g, key, scale, dst, stride, first),
+            SourceGrid::Vector(g) => fill_ghost(g, key, scale, dst, stride, first),
+        }
+    }
+}
+
+/// Every dual leaf touched by a non-zero active voxel of `g`. A voxel v lies in
+/// the dual cells `v - {0,1}^3`, hence in dual leaves `floor((v - {0,1}^3) / 8)`;
+/// voxels with a local coordinate 0 also feed the lower neighbour.
+fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, out: &mut HashSet<IVec3>) {
+    for leaf in g.leaves() {
+        let key = shr(leaf.origin, LEAF_LOG2);
+        let mut feeds = 0u8;
+        for (ijk, v) in leaf.iter_active() {
+            if v == T::ZERO {
+                continue;
+            }
+            let l = ijk - leaf.origin;
+            for d in 0..8u8 {
+                let (dx, dy, dz) = (d >> 2 & 1, d >> 1 & 1, d & 1);
+                if (dx == 0 || l.x == 0) && (dy == 0 || l.y == 0) && (dz == 0 || l.z == 0) {
+                    feeds |= 1 << d;
+                }
+            }
+            if feeds == 0xff {
+                break;
+            }
+        }
+        for d in 0..8u8 {
+            if feeds >> d & 1 == 1 {
+                let off = IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32);
+                out.insert(key - off);
+            }
+        }
+    }
+}
+
+fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
+    let base = key * LEAF_DIM;
+    for d in 0..8 {
+        let off = IVec3::new(d >> 2 & 1, d >> 1 & 1, d & 1);
+        let Some(leaf) = g.leaf(base + off * LEAF_DIM) else { continue };
+        // Along an axis with offset 0 we copy local 0..8 to ghost 0..8; with
+        // offset 1 only local plane 0 goes to ghost plane 8.
+        let range = |o: i32| if o == 0 { 0..LEAF_DIM } else { 0..1 };
+        for lx in range(off.x) {
+            for ly in range(off.y) {
+                for lz in range(off.z) {
+                    let n = leaf_offset(IVec3::new(lx, ly, lz));
+                    if !leaf.is_active(n) {
+                        continue;
+                    }
+                    let c = leaf.values[n].components();
+                    let gx = (lx + off.x * LEAF_DIM) as usize;
+                    let gy = (ly + off.y * LEAF_DIM) as usize;
+                    let gz = (lz + off.z * LEAF_DIM) as usize;
+                    let at = ghost_offset(gx, gy, gz) * stride + first;
+                    for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
+                        dst[at + k] = (*ck as f64 * scale) as f32;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Rejects grids the renderer cannot sample the way Cycles does.
+pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
+    let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
+    let ts = g.transform.voxel_size;
+    if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
+        return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
+    }
+    if g.background != T::ZERO {
+        return Err(err(format!(
+            "background {:?} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
+            g.background
+        )));
+    }
+    for (ijk, v) in g.iter_active() {
+        let c = v.components();
+        if c[..T::COMPONENTS].iter().any(|x| !f32::is_finite(*x) || *x < 0.0) {
+            return Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0")));
+        }
+    }
+    Ok(())
+}
+
+impl Field {
+    /// Builds a field whose channels are the concatenation of `sources`' channels
+    /// (all on the same transform), each multiplied by its scale.
+    pub fn build(sources: &[Source<'_>]) -> Field {
+        assert!(!sources.is_empty());
+        let transform = sources[0].grid.transform();
+        debug_assert!(sources.iter().all(|s| s.grid.transform() == transform));
+        let channels: usize = sources.iter().map(|s| s.grid.channels()).sum();
+
+        let mut set = HashSet::new();
+        for s in sources {
+            s.grid.dual_keys(&mut set);
+        }
+        let mut keys: Vec<IVec3> = set.into_iter().collect();
+        keys.sort_by_key(|k| (k.x, k.y, k.z));
+
+        let per_leaf = GHOST_VALUES * channels;
+        let mut values = vec![0.0f32; keys.len() * per_leaf];
+        values.par_chunks_mut(per_leaf.max(1)).zip(keys.par_iter()).for_each(|(dst, &key)| {
+            let mut first = 0;
+            for s in sources {
+                s.grid.fill(key, s.scale, dst, channels, first);
+                first += s.grid.channels();
+            }
+        });
+        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
+            values.par_chunks(per_leaf.max(1)).map(|v| cell_masks(v, channels)).unzip();
+
+        // Hierarchy: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
+        let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
+        let mut supers: Vec<Box<[u32; SUPER_SLOTS]>> = Vec::new();
+        let mut root: HashMap<IVec3, u32> = HashMap::new();
+        let mut super_bounds: Vec<(IVec3, IVec3)> = Vec::new();
+        let (mut lo, mut hi) = (IVec3::MAX, IVec3::MIN);
+        for (i, &k) in keys.iter().enumerate() {
+            lo = lo.min(k);
+            hi = hi.max(k);
+            let b = shr(k, BLOCK_LOG2);
+            let s = shr(b, SUPER_LOG2);
+            let si = *root.entry(s).or_insert_with(|| {
+                supers.push(Box::new([NONE; SUPER_SLOTS]));
+                super_bounds.push((IVec3::MAX, IVec3::MIN));
+                (supers.len() - 1) as u32
+            });
+            let sb = &mut super_bounds[si as usize];
+            *sb = (sb.0.min(k * LEAF_DIM), sb.1.max((k + IVec3::ONE) * LEAF_DIM));
+            let sup = &mut supers[si as usize];
+            let bs = slot(b, SUPER_LOG2);
+            if sup[bs] == NONE {
+                blocks.push(Box::new([NONE; BLOCK_SLOTS]));
+                sup[bs] = (blocks.len() - 1) as u32;
+            }
+            blocks[sup[bs] as usize][slot(k, BLOCK_LOG2)] = i as u32;
+        }
+        let (lo, hi, root_lo, root_hi) = if keys.is_empty() {
+            (IVec3::ZERO, IVec3::ZERO, IVec3::ZERO, IVec3::ZERO)
+        } else {
+            (
+                lo * LEAF_DIM,
+                (hi + IVec3::ONE) * LEAF_DIM,
+                shr(lo, BLOCK_LOG2 + SUPER_LOG2),
+                shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
+            )
+        };
+        Field {
+            transform,
+            channels,
+            keys,
+            values,
+            mask_first,
+            mask_any,
+            blocks,
+            supers,
+            root,
+            super_bounds,
+            lo,
+            hi,
+            root_lo,
+            root_hi,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.keys.is_empty()
+    }
+
+    pub fn leaf_count(&self) -> usize {
+        self.keys.len()
+    }
+
+    /// Bytes held by the structure (for reports).
+    pub fn memory_bytes(&self) -> usize {
+        self.values.len() * 4
+            + self.keys.len() * (12 + 128)
+            + self.blocks.len() * BLOCK_SLOTS * 4
+            + self.supers.len() * SUPER_SLOTS * 4
+            + self.root.len() * (24 + 24)
+    }
+
+    /// Index of the dual leaf with key `k`, if stored.
+    #[inline]
+    pub fn find_leaf(&self, k: IVec3) -> Option<u32> {
+        let b = shr(k, BLOCK_LOG2);
+        let s = shr(b, SUPER_LOG2);
+        let si = *self.root.get(&s)?;
+        let bi = self.supers[si as usize][slot(b, SUPER_LOG2)];
+        if bi == NONE {
+            return None;
+        }
+        let li = self.blocks[bi as usize][slot(k, BLOCK_LOG2)];
+        (li != NONE).then_some(li)
+    }
+
+    /// Start (in `values`) of ghost value `(x,y,z)` of leaf `leaf`.
+    #[inline]
+    pub fn value_index(&self, leaf: u32, x: usize, y: usize, z: usize) -> usize {
+        (leaf as usize * GHOST_VALUES + ghost_offset(x, y, z)) * self.channels
+    }
+
+    /// Trilinear value of every channel at index-space point `u` (voxel
+    /// centres at integers; 0 outside the stored dual leaves). Written
+    /// independently of `Grid::sample_index` but equal to it.
+    pub fn sample_index(&self, u: DVec3, out: &mut [f64]) {
+        out[..self.channels].fill(0.0);
+        let base = u.floor();
+        if !base.is_finite() || base.abs().max_element() > (i32::MAX / 2) as f64 {
+            return;
+        }
+        let c = base.as_ivec3();
+        let Some(leaf) = self.find_leaf(shr(c, LEAF_LOG2)) else { return };
+        let l = c - shr(c, LEAF_LOG2) * LEAF_DIM;
+        let f = u - base;
+        let at = self.value_index(leaf, l.x as usize, l.y as usize, l.z as usize);
+        let w = [
+            (1.0 - f.x) * (1.0 - f.y) * (1.0 - f.z),
+            (1.0 - f.x) * (1.0 - f.y) * f.z,
+            (1.0 - f.x) * f.y * (1.0 - f.z),
+            (1.0 - f.x) * f.y * f.z,
+            f.x * (1.0 - f.y) * (1.0 - f.z),
+            f.x * (1.0 - f.y) * f.z,
+            f.x * f.y * (1.0 - f.z),
+            f.x * f.y * f.z,
+        ];
+        for (k, off) in CORNER_OFFSETS.iter().enumerate() {
+            let v = &self.values[at + off * self.channels..][..self.channels];
+            for ch in 0..self.channels {
+                out[ch] += w[k] * v[ch] as f64;
+            }
+        }
+    }
+
+    /// World-space box of the stored dual leaves (the support of the field).
+    pub fn world_bounds(&self) -> (DVec3, DVec3) {
+        (self.transform.index_to_world(self.lo.as_dvec3()), self.transform.index_to_world(self.hi.as_dvec3()))
+    }
+}
+
+/// Masks of the dual cells of one leaf in which channel 0 (resp. any channel)
+/// has a non-zero corner.
+fn cell_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
+    let mut first = [0u64; 8];
+    let mut any = [0u64; 8];
+    for x in 0..8 {
+        for y in 0..8 {
+            for z in 0..8 {
+                let at = ghost_offset(x, y, z) * channels;
+                let mut f = false;
+                let mut a = false;
+                for off in CORNER_OFFSETS {
+                    let c = &v[at + off * channels..][..channels];
+                    f |= c[0] != 0.0;
+                    a |= c.iter().any(|x| *x != 0.0);
+                }
+                let bit = cell_bit(x as i32, y as i32, z as i32);
+                if f {
+                    first[bit >> 6] |= 1 << (bit & 63);
+                }
+                if a {
+                    any[bit >> 6] |= 1 << (bit & 63);
+                }
+            }
+        }
+    }
+    (first, any)
+}
+
+/// Where a quantity lives: which field, which channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Channel {
+    pub field: usize,
+    pub channel: usize,
+}
+
+/// The volume as the renderer sees it: sigma_t = density_scale * density and
+/// emission e = emission_scale * emission, each on its grid's own transform.
+/// When both grids share a transform they share one [`Field`] (channel 0 =
+/// sigma_t, channels 1..4 = e), so a ray walks one tree.
+#[derive(Debug, Clone)]
+pub struct Medium {
+    pub fields: Vec<Field>,
+    /// sigma_t, if the volume has any extinction.
+    pub sigma_t: Option<Channel>,
+    /// First of the three emission channels, if the volume emits.
+    pub emission: Option<Channel>,
+}
+
+impl Medium {
+    /// Builds the medium. A missing grid, a zero scale or a grid with no
+    /// non-zero voxel means "no extinction" / "no emission".
+    pub fn new(
+        density: Option<&Grid<f32>>,
+        emission: Option<&Grid<[f32; 3]>>,
+        density_scale: f64,
+        emission_scale: f64,
+    ) -> Result<Medium, RenderError> {
+        for (what, s) in [("density_scale", density_scale), ("emission_scale", emission_scale)] {
+            if !(s.is_finite() && s >= 0.0) {
+                return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
+            }
+        }
+        if let Some(g) = density {
+            validate_grid(g)?;
+        }
+        if let Some(g) = emission {
+            validate_grid(g)?;
+        }
+        let density = density.filter(|g| density_scale > 0.0 && g.iter_active().any(|(_, v)| v != 0.0));
+        let emission = emission.filter(|g| emission_scale > 0.0 && g.iter_active().any(|(_, v)| v != [0.0; 3]));
+        let d = density.map(|g| Source { grid: SourceGrid::Scalar(g), scale: density_scale });
+        let e = emission.map(|g| Source { grid: SourceGrid::Vector(g), scale: emission_scale });
+        Ok(match (d, e) {
+            (None, None) => Medium { fields: vec![], sigma_t: None, emission: None },
+            (Some(d), None) => Medium {
+                fields: vec![Field::build(&[d])],
+                sigma_t: Some(Channel { field: 0, channel: 0 }),
+                emission: None,
+            },
+            (None, Some(e)) => Medium {
+                fields: vec![Field::build(&[e])],
+                sigma_t: None,
+                emission: Some(Channel { field: 0, channel: 0 }),
+            },
+            (Some(d), Some(e)) if d.grid.transform() == e.grid.transform() => Medium {
+                fields: vec![Field::build(&[d, e])],
+                sigma_t: Some(Channel { field: 0, channel: 0 }),
+                emission: Some(Channel { field: 0, channel: 1 }),
+            },
+            (Some(d), Some(e)) => Medium {
+                fields: vec![Field::build(&[d]), Field::build(&[e])],
+                sigma_t: Some(Channel { field: 0, channel: 0 }),
+                emission: Some(Channel { field: 1, channel: 0 }),
+            },
+        })
+    }
+
+    /// sigma_t at a world point (per unit length).
+    pub fn sigma_t_at(&self, p: DVec3) -> f64 {
+        let Some(c) = self.sigma_t else { return 0.0 };
+        let f = &self.fields[c.field];
+        let mut v = [0.0; 4];
+        f.sample_index(f.transform.world_to_index(p), &mut v);
+        v[c.channel]
+    }
+
+    /// Emitted radiance per unit length at a world point.
+    pub fn emission_at(&self, p: DVec3) -> [f64; 3] {
+        let Some(c) = self.emission else { return [0.0; 3] };
+        let f = &self.fields[c.field];
+        let mut v = [0.0; 4];
+        f.sample_index(f.transform.world_to_index(p), &mut v);
+        [v[c.channel], v[c.channel + 1], v[c.channel + 2]]
+    }
+
+    /// Total dual leaves stored.
+    pub fn leaf_count(&self) -> usize {
+        self.fields.iter().map(Field::leaf_count).sum()
+    }
+
+    pub fn memory_bytes(&self) -> usize {
+        self.fields.iter().map(Field::memory_bytes).sum()
+    }
+
+    /// World-space box enclosing every field's support, if any.
+    pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
+        self.fields
+            .iter()
+            .filter(|f| !f.is_empty())
+            .map(Field::world_bounds)
+            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+    }
+}

@@ -1,0 +1,464 @@
+//! Terrain under the aurora: an infinite plane or a triangulated heightfield,
+//! defined so that Blender can import exactly the same mesh ([`write_obj`]).
+//!
+//! # Heightfield
+//! A regular grid of `nx x ny` height samples over `extent = [x0, y0, x1, y1]`
+//! (sample (i, j) at `x = x0 + i (x1 - x0) / (nx - 1)`, `y = y0 + j (y1 - y0) / (ny - 1)`);
+//! every cell is split along its diagonal from (i, j) to (i+1, j+1) into the
+//! triangles `(p00, p10, p11)` and `(p00, p11, p01)`, both wound
+//! counter-clockwise seen from above. Positions are rounded to f32 once, so
+//! the mesh we trace and the OBJ Blender reads (in f32) are the same numbers.
+//! Outside the extent there is no ground.
+//!
+//! * Procedural (`kind = "heightfield"`, no `heightmap`): the resolution is 8
+//!   samples per `mountain_scale` along each axis, `cells = ceil(8 L /
+//!   mountain_scale)` clamped to [1, 1023] (at most 1024^2 samples); heights
+//!   are `height + mountain_height * clamp(0.5 + fbm(x / s, y / s), 0, 1)`
+//!   with `fbm` = 6 octaves of Perlin noise (`noise` crate, seed from
+//!   `terrain.seed`), lacunarity 2, gain 1/2, normalised by the sum of gains.
+//! * Heightmap PNG (8- or 16-bit greyscale, at most 4096^2): one sample per
+//!   pixel, column 0 at `x0`, **row 0 at `y1`** (north up, as the image is
+//!   viewed), height `height + mountain_height * v` with `v` in [0, 1].
+//!
+//! Rays are traced with a 2D DDA over the cells the ray's ground projection
+//! crosses (cells culled by their height range) and an f64 Moller-Trumbore
+//! test of the two triangles of each cell. The shading normal is the
+//! triangle's geometric normal, turned to face the incoming ray (two-sided,
+//! flat: as Cycles shades an imported mesh with flat shading).
+
+use super::RenderError;
+use crate::scene::{Terrain, TerrainKind};
+use glam::DVec3;
+use noise::{NoiseFn, Perlin};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Samples per `mountain_scale` of the procedural heightfield.
+pub const SAMPLES_PER_FEATURE: f64 = 8.0;
+/// Largest number of cells per axis of the procedural heightfield.
+pub const MAX_CELLS: usize = 1023;
+/// Largest heightmap side in pixels.
+pub const MAX_HEIGHTMAP: usize = 4096;
+/// fBm octaves.
+pub const OCTAVES: usize = 6;
+
+/// A ray-surface intersection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SurfaceHit {
+    pub t: f64,
+    pub p: DVec3,
+    /// Unit normal on the side the ray came from.
+    pub n: DVec3,
+}
+
+/// The ground, ready for ray tracing.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TerrainModel {
+    None,
+    /// The plane z = height.
+    Plane {
+        height: f64,
+    },
+    Heightfield(Heightfield),
+}
+
+impl TerrainModel {
+    /// Builds the terrain of a scene; a heightmap path is resolved against
+    /// `base_dir` (the scene file's folder) when relative.
+    pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<TerrainModel, RenderError> {
+        Ok(match t.kind {
+            TerrainKind::None => TerrainModel::None,
+            TerrainKind::Plane => {
+                if !t.height.is_finite() {
+                    return Err(RenderError::Settings(format!("terrain.height = {} must be finite", t.height)));
+                }
+                TerrainModel::Plane { height: t.height }
+            }
+            TerrainKind::Heightfield => TerrainModel::Heightfield(Heightfield::from_terrain(t, base_dir)?),
+        })
+    }
+
+    /// The nearest hit with `t` in `(t_min, t_max)`.
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+        match self {
+            TerrainModel::None => None,
+            TerrainModel::Plane { height } => {
+                if d.z == 0.0 {
+                    return None;
+                }
+                let t = (height - o.z) / d.z;
+                (t > t_min && t < t_max).then(|| SurfaceHit {
+                    t,
+                    p: DVec3::new(o.x + d.x * t, o.y + d.y * t, *height),
+                    n: DVec3::new(0.0, 0.0, -d.z.signum()),
+                })
+            }
+            TerrainModel::Heightfield(h) => h.intersect(o, d, t_min, t_max),
+        }
+    }
+
+    pub fn is_none(&self) -> bool {
+        matches!(self, TerrainModel::None)
+    }
+}
+
+/// A triangulated regular grid of heights (see the module doc).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Heightfield {
+    /// Sample x coordinates, strictly increasing, f32-exact.
+    pub xs: Vec<f64>,
+    /// Sample y coordinates, strictly increasing, f32-exact.
+    pub ys: Vec<f64>,
+    /// Heights, f32-exact, row-major: `z[j * nx + i]` is at `(xs[i], ys[j])`.
+    pub z: Vec<f64>,
+    pub zmin: f64,
+    pub zmax: f64,
+}
+
+/// Cells of the procedural heightfield along an axis of length `len`.
+pub fn procedural_cells(len: f64, mountain_scale: f64) -> usize {
+    let c = (SAMPLES_PER_FEATURE * len / mountain_scale).ceil();
+    if c.is_finite() {
+        (c as usize).clamp(1, MAX_CELLS)
+    } else {
+        MAX_CELLS
+    }
+}
+
+fn f32_exact(x: f64) -> f64 {
+    x as f32 as f64
+}
+
+/// `n` f32-exact coordinates from `a` to `b`, or an error if f32 rounding
+/// would merge two of them.
+fn axis(a: f64, b: f64, n: usize, what: &str) -> Result<Vec<f64>, RenderError> {
+    let v: Vec<f64> = (0..n).map(|i| f32_exact(a + (b - a) * i as f64 / (n - 1) as f64)).collect();
+    if v.windows(2).any(|w| !(w[1] > w[0])) {
+        return Err(RenderError::Settings(format!(
+            "terrain.extent {what} range [{a}, {b}] is too small for {n} samples in single precision"
+        )));
+    }
+    Ok(v)
+}
+
+impl Heightfield {
+    /// A heightfield from explicit samples (heights rounded to f32).
+    pub fn from_samples(xs: Vec<f64>, ys: Vec<f64>, z: Vec<f64>) -> Result<Heightfield, RenderError> {
+        let (nx, ny) = (xs.len(), ys.len());
+        if nx < 2 || ny < 2 || z.len() != nx * ny {
+            return Err(RenderError::Settings(format!(
+                "a heightfield needs at least 2x2 samples and nx*ny heights (got {nx}x{ny}, {} heights)",
+                z.len()
+            )));
+        }
+        let xs: Vec<f64> = xs.into_iter().map(f32_exact).collect();
+        let ys: Vec<f64> = ys.into_iter().map(f32_exact).collect();
+        let z: Vec<f64> = z.into_iter().map(f32_exact).collect();
+        if xs.windows(2).any(|w| !(w[1] > w[0])) || ys.windows(2).any(|w| !(w[1] > w[0])) {
+            return Err(RenderError::Settings("heightfield sample coordinates must increase strictly".into()));
+        }
+        if z.iter().chain(&xs).chain(&ys).any(|v| !v.is_finite()) {
+            return Err(RenderError::Settings("heightfield samples must be finite".into()));
+        }
+        let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
+        let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Ok(Heightfield { xs, ys, z, zmin, zmax })
+    }
+
+    /// The heightfield of a scene's `[terrain]` (kind must be "heightfield").
+    pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<Heightfield, RenderError> {
+        let [x0, y0, x1, y1] = t.extent;
+        if !(x1 > x0 && y1 > y0 && t.extent.iter().all(|v| v.is_finite())) {
+            return Err(RenderError::Settings(format!(
+                "terrain.extent {:?} must be [x0, y0, x1, y1] with x1 > x0, y1 > y0",
+                t.extent
+            )));
+        }
+        if !(t.height.is_finite() && t.mountain_height.is_finite() && t.mountain_height >= 0.0) {
+            return Err(RenderError::Settings(
+                "terrain.height and mountain_height must be finite, mountain_height >= 0".into(),
+            ));
+        }
+        match &t.heightmap {
+            Some(p) => {
+                let path = match base_dir {
+                    Some(b) if Path::new(p).is_relative() => b.join(p),
+                    _ => PathBuf::from(p),
+                };
+                Self::from_heightmap(&path, t)
+            }
+            None => Self::procedural(t),
+        }
+    }
+
+    /// Procedural fBm mountains (see the module doc).
+    pub fn procedural(t: &Terrain) -> Result<Heightfield, RenderError> {
+        if !(t.mountain_scale > 0.0 && t.mountain_scale.is_finite()) {
+            return Err(RenderError::Settings(format!(
+                "terrain.mountain_scale = {} must be finite and > 0",
+                t.mountain_scale
+            )));
+        }
+        let [x0, y0, x1, y1] = t.extent;
+        let cx = procedural_cells(x1 - x0, t.mountain_scale);
+        let cy = procedural_cells(y1 - y0, t.mountain_scale);
+        let xs = axis(x0, x1, cx + 1, "x")?;
+        let ys = axis(y0, y1, cy + 1, "y")?;
+        let perlin = Perlin::new((t.seed ^ (t.seed >> 32)) as u32);
+        let mut z = Vec::with_capacity(xs.len() * ys.len());
+        for &y in &ys {
+            for &x in &xs {
+                z.push(t.height + t.mountain_height * mountain(&perlin, x / t.mountain_scale, y / t.mountain_scale));
+            }
+        }
+        Self::from_samples(xs, ys, z)
+    }
+
+    /// Heights from an 8- or 16-bit greyscale PNG (see the module doc).
+    pub fn from_heightmap(path: &Path, t: &Terrain) -> Result<Heightfield, RenderError> {
+        let err = |message: String| RenderError::Heightmap { path: path.to_path_buf(), message };
+        let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+        let mut dec = png::Decoder::new(std::io::BufReader::new(file));
+        dec.set_transformations(png::Transformations::EXPAND);
+        let mut reader = dec.read_info().map_err(|e| err(e.to_string()))?;
+        let (w, h) = (reader.info().width as usize, reader.info().height as usize);
+        if w < 2 || h < 2 || w > MAX_HEIGHTMAP || h > MAX_HEIGHTMAP {
+            return Err(err(format!("is {w}x{h} pixels; heightmaps must be 2..={MAX_HEIGHTMAP} pixels on each side")));
+        }
+        let mut buf = vec![0u8; reader.output_buffer_size()];
+        let info = reader.next_frame(&mut buf).map_err(|e| err(e.to_string()))?;
+        let (ct, depth) = reader.output_color_type();
+        let channels = match ct {
+            png::ColorType::Grayscale => 1,
+            png::ColorType::GrayscaleAlpha => 2,
+            other => return Err(err(format!("is {other:?}; heightmaps must be greyscale (8 or 16 bit)"))),
+        };
+        let bytes = match depth {
+            png::BitDepth::Eight => 1,
+            png::BitDepth::Sixteen => 2,
+            other => return Err(err(format!("has bit depth {other:?} after expansion; expected 8 or 16"))),
+        };
+        let max = if bytes == 1 { 255.0 } else { 65535.0 };
+        let [x0, y0, x1, y1] = t.extent;
+        let xs = axis(x0, x1, w, "x")?;
+        let ys = axis(y0, y1, h, "y")?;
+        let mut z = vec![0.0; w * h];
+        for row in 0..h {
+            let line = &buf[row * info.line_size..][..info.line_size];
+            // Row 0 is the north edge (y1): sample j = h - 1 - row.
+            let j = h - 1 - row;
+            for i in 0..w {
+                let at = i * channels * bytes;
+                let v = if bytes == 1 { line[at] as f64 } else { u16::from_be_bytes([line[at], line[at + 1]]) as f64 };
+                z[j * w + i] = t.height + t.mountain_height * v / max;
+            }
+        }
+        Self::from_samples(xs, ys, z)
+    }
+
+    pub fn nx(&self) -> usize {
+        self.xs.len()
+    }
+    pub fn ny(&self) -> usize {
+        self.ys.len()
+    }
+
+    /// Sample (i, j) as a point.
+    #[inline]
+    pub fn vertex(&self, i: usize, j: usize) -> DVec3 {
+        DVec3::new(self.xs[i], self.ys[j], self.z[j * self.xs.len() + i])
+    }
+
+    /// The two triangles of cell (i, j), split along the (i,j)-(i+1,j+1) diagonal.
+    #[inline]
+    pub fn cell_triangles(&self, i: usize, j: usize) -> [[DVec3; 3]; 2] {
+        let p00 = self.vertex(i, j);
+        let p10 = self.vertex(i + 1, j);
+        let p11 = self.vertex(i + 1, j + 1);
+        let p01 = self.vertex(i, j + 1);
+        [[p00, p10, p11], [p00, p11, p01]]
+    }
+
+    /// The nearest hit with `t` in `(t_min, t_max)` (2D DDA over cells).
+    pub fn intersect(&self, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+        let (nx, ny) = (self.nx(), self.ny());
+        let lo = DVec3::new(self.xs[0], self.ys[0], self.zmin);
+        let hi = DVec3::new(self.xs[nx - 1], self.ys[ny - 1], self.zmax);
+        let (mut ta, mut tb) = (t_min, t_max);
+        for k in 0..3 {
+            if d[k] == 0.0 {
+                if o[k] < lo[k] || o[k] > hi[k] {
+                    return None;
+                }
+            } else {
+                let (p, q) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+                ta = ta.max(p.min(q));
+                tb = tb.min(p.max(q));
+            }
+        }
+        if !(ta <= tb) {
+            return None;
+        }
+        let p = o + d * ta;
+        let cell = |v: &[f64], x: f64| v.partition_point(|s| *s <= x).saturating_sub(1).min(v.len() - 2);
+        let (mut i, mut j) = (cell(&self.xs, p.x), cell(&self.ys, p.y));
+        let next = |v: &[f64], k: usize, o: f64, d: f64| -> f64 {
+            if d > 0.0 {
+                (v[k + 1] - o) / d
+            } else if d < 0.0 {
+                (v[k] - o) / d
+            } else {
+                f64::INFINITY
+            }
+        };
+        let mut tx = next(&self.xs, i, o.x, d.x);
+        let mut ty = next(&self.ys, j, o.y, d.y);
+        let mut t = ta;
+        loop {
+            let t_end = tx.min(ty).min(tb);
+            // Cull the cell by its height range against the ray's z over the cell.
+            let (za, zb) = (o.z + d.z * t, o.z + d.z * t_end);
+            let n = nx;
+            let hs = [self.z[j * n + i], self.z[j * n + i + 1], self.z[(j + 1) * n + i], self.z[(j + 1) * n + i + 1]];
+            let cmin = hs.iter().copied().fold(f64::INFINITY, f64::min);
+            let cmax = hs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let margin = 1e-9 * (1.0 + za.abs().max(zb.abs()));
+            if za.min(zb) <= cmax + margin && za.max(zb) >= cmin - margin {
+                let mut best: Option<SurfaceHit> = None;
+                for tri in self.cell_triangles(i, j) {
+                    if let Some(h) = intersect_triangle(o, d, &tri, t_min, t_max) {
+                        if best.is_none_or(|b| h.t < b.t) {
+                            best = Some(h);
+                        }
+                    }
+                }
+                if best.is_some() {
+                    return best;
+                }
+            }
+            if t_end >= tb {
+                return None;
+            }
+            t = t_end;
+            if tx <= ty {
+                if d.x > 0.0 {
+                    i += 1;
+                    if i >= nx - 1 {
+                        return None;
+                    }
+                } else {
+                    if i == 0 {
+                        return None;
+                    }
+                    i -= 1;
+                }
+                tx = next(&self.xs, i, o.x, d.x);
+            } else {
+                if d.y > 0.0 {
+                    j += 1;
+                    if j >= ny - 1 {
+                        return None;
+                    }
+                } else {
+                    if j == 0 {
+                        return None;
+                    }
+                    j -= 1;
+                }
+                ty = next(&self.ys, j, o.y, d.y);
+            }
+        }
+    }
+}
+
+/// Moller & Trumbore (1997) ray-triangle test in f64; edges are inclusive
+/// (with a 1e-12 barycentric tolerance) so the shared diagonal and cell
+/// borders leave no cracks.
+pub fn intersect_triangle(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+    const EPS: f64 = 1e-12;
+    let e1 = tri[1] - tri[0];
+    let e2 = tri[2] - tri[0];
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - tri[0];
+    let u = tv.dot(pv) * inv;
+    if !(-EPS..=1.0 + EPS).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < -EPS || u + v > 1.0 + EPS {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    if !(t > t_min && t < t_max) {
+        return None;
+    }
+    let mut n = e1.cross(e2).normalize();
+    if n.dot(d) > 0.0 {
+        n = -n;
+    }
+    Some(SurfaceHit { t, p: o + d * t, n })
+}
+
+/// Procedural mountain profile in [0, 1] at `(x, y)` in feature units.
+fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
+    let (mut sum, mut norm, mut amp, mut freq) = (0.0, 0.0, 1.0, 1.0);
+    for o in 0..OCTAVES {
+        // Offsets keep the octaves' lattice zeros from lining up at the origin.
+        let off = 17.31 * o as f64 + 0.5;
+        sum += amp * perlin.get([x * freq + off, y * freq - off]);
+        norm += amp;
+        amp *= 0.5;
+        freq *= 2.0;
+    }
+    (0.5 + sum / norm).clamp(0.0, 1.0)
+}
+
+/// Writes the heightfield as a Wavefront OBJ (z up, scene units), written to
+/// a temporary file and renamed. Vertex `j * nx + i + 1` is sample (i, j);
+/// faces are the two triangles of each cell in the order of
+/// [`Heightfield::cell_triangles`], smoothing off. Coordinates are printed as
+/// the shortest decimal that reads back to the same f32, so Blender's
+/// importer gets exactly our vertices. Import in Blender with
+/// `bpy.ops.wm.obj_import(filepath=..., forward_axis='Y', up_axis='Z')` (the
+/// defaults assume a Y-up file and would rotate the mesh).
+pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let io = |e: std::io::Error| RenderError::Io { path: path.to_path_buf(), source: e };
+    let tmp = super::film::temp_path(path);
+    let result = (|| -> std::io::Result<()> {
+        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        let (nx, ny) = (hf.nx(), hf.ny());
+        writeln!(w, "# aurora terrain: {nx} x {ny} height samples, z up, scene units (km)")?;
+        writeln!(w, "# Blender: bpy.ops.wm.obj_import(filepath=..., forward_axis='Y', up_axis='Z')")?;
+        writeln!(w, "o terrain")?;
+        for j in 0..ny {
+            for i in 0..nx {
+                let v = hf.vertex(i, j);
+                writeln!(w, "v {} {} {}", v.x as f32, v.y as f32, v.z as f32)?;
+            }
+        }
+        writeln!(w, "s off")?;
+        for j in 0..ny - 1 {
+            for i in 0..nx - 1 {
+                let a = j * nx + i + 1;
+                let b = a + 1;
+                let c = a + nx + 1;
+                let d = a + nx;
+                writeln!(w, "f {a} {b} {c}")?;
+                writeln!(w, "f {a} {c} {d}")?;
+            }
+        }
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(io)
+}
