@@ -15,6 +15,7 @@ pub mod grid;
 pub mod photons;
 pub mod progress;
 pub mod render;
+pub mod rng;
 pub mod scene;
 pub mod spectrum;
 pub mod usd;
