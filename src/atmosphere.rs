@@ -231,12 +231,12 @@ mod tests {
         // Oracle: trapezoid integration of the `ussa1976` package's density on
         // a 50 m grid to 1000 km (the model itself, not this table). The table
         // has 5-25 km nodes where the scale height changes by up to 40 % per
-        // segment (110-130 km, where temperature climbs fast), so log-linear
-        // interpolation is good to a few percent: allow 4 %.
+        // segment (110-130 km, where temperature climbs fast); log-linear
+        // interpolation measured 1.1 % off at 110 km, < 0.3 % elsewhere: allow 2 %.
         let a = Atmosphere::us1976();
         for (h, want) in [(100.0, 3.4023e-4), (110.0, 7.5828e-5), (150.0, 5.0198e-6), (200.0, 9.6884e-7), (300.0, 1.0560e-7)] {
             let got = a.column_mass(h);
-            assert!((got / want - 1.0).abs() < 0.04, "{h} km: {got:e} vs {want:e}");
+            assert!((got / want - 1.0).abs() < 0.02, "{h} km: {got:e} vs {want:e}");
         }
     }
 
