@@ -325,7 +325,7 @@ impl Default for FootprintParams {
             pressure_iterations: 40,
             band_fraction: 0.05,
             velocity_waves: 6.0,
-            velocity_amplitude: 2.0,
+            velocity_amplitude: 2.5,
             density_waves: 9.0,
             bend_wavelength: 0.6,
             threshold: 0.03,
