@@ -24,7 +24,12 @@
 //! the number flux is `phi(E) ~ E exp(-E/E0)` (the brief's Gamma(2, E0)), so
 //! the energy flux is `E phi(E) ~ Gamma(3, E0)`; since every beam carries
 //! the same power, energies must follow the energy flux, else hard electrons
-//! would be under-weighted by E / <E>.
+//! would be under-weighted by E / <E>. A share `soft_fraction` of the energy
+//! flux is carried by a second, soft Maxwellian (E0 = `soft_energy_kev`, some
+//! 0.1 keV): the low-energy electrons of real arc spectra that stop above
+//! 200 km, where O(1D) escapes quenching and the red tops shine. Each beam is
+//! soft with probability `soft_fraction` (equal-power beams: the mixture by
+//! energy flux).
 
 use crate::atmosphere::Atmosphere;
 use crate::footprint::Footprint;
@@ -387,9 +392,10 @@ pub fn trace_all(
                 let z = scene.beams.top_km
                     + scene.beams.top_noise_km * rng::noise1(&top_noise, u * scene.beams.top_noise_freq);
                 let colour_offset_km = scene.colour.noise_km * rng::noise1(&colour_noise, u * scene.colour.noise_freq);
+                let e0 = if r.random::<f64>() < curtain.soft_fraction { curtain.soft_energy_kev } else { curtain.char_energy_kev };
                 let start = BeamStart {
                     position: DVec3::new(x, y, z),
-                    energy_kev: sample_gamma3(curtain.char_energy_kev, &mut r),
+                    energy_kev: sample_gamma3(e0, &mut r),
                     power_kev_s,
                     colour_offset_km,
                 };
@@ -588,7 +594,7 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
         let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0 };
-        let p = params();
+        let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
         let ctx = BeamContext { atmosphere: &atm, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
         let mut r = rng::rng(&[6]);
         let mut left = 0;
