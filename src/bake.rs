@@ -326,6 +326,32 @@ mod tests {
     }
 
     #[test]
+    fn gather_methods_and_colour_map_mode_bake() {
+        // splat (sample-point radius) and kdtree (balloon radius) estimate the
+        // same density: with radius noise their totals agree to the noise's
+        // effect on normalisation (a few percent), and both conserve power.
+        let mut s = small_scene();
+        let a = bake(&s, &NoProgress).unwrap();
+        s.photons.gather = GatherMethod::Splat;
+        let b = bake(&s, &NoProgress).unwrap();
+        let total = |g: &Grid<[f32; 3]>| g.iter_active().map(|(_, v)| v[1] as f64).sum::<f64>();
+        let (ta, tb) = (total(&a.emission), total(&b.emission));
+        assert!((ta / tb - 1.0).abs() < 0.05, "{ta} vs {tb}");
+        // report2014 averages colours: its values are photon powers / 1e19,
+        // bounded by the largest photon's.
+        s.photons.gather = GatherMethod::Report2014;
+        let c = bake(&s, &NoProgress).unwrap();
+        let max_photon = c.photons.iter().map(|p| p.power[1]).fold(0.0f32, f32::max) as f64 / 1e19;
+        assert!(c.emission.iter_active().all(|(_, v)| (v[1] as f64) <= max_photon * (1.0 + 1e-5)));
+        // Artist colour map: a constant blue map gives blue everywhere.
+        s.photons.gather = GatherMethod::Kdtree;
+        s.colour.mode = ColourMode::Colormap;
+        s.colour.colormap = vec![[80.0, 0.0, 0.0, 1.0], [400.0, 0.0, 0.0, 1.0]];
+        let d = bake(&s, &NoProgress).unwrap();
+        assert!(d.emission.iter_active().all(|(_, v)| v[0] == 0.0 && v[1] == 0.0 && v[2] > 0.0));
+    }
+
+    #[test]
     fn aurora_is_green_in_the_middle_and_red_on_top() {
         // Luminance-weighted colour of the emission by altitude band.
         let mut s = small_scene();

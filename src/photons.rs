@@ -479,9 +479,18 @@ impl GatherSetup<'_> {
         let mut k = Self::new_kernels();
         for &i in photons {
             let p = &self.photons[i as usize];
-            let kernel = Kernel::with_mass(self.radius.radius(pos(p)), self.cutoff, self.mass);
-            for n in 0..LEAF_NUM_VALUES {
-                k.set(n, &kernel);
+            let q = pos(p);
+            let kernel = Kernel::with_mass(self.radius.radius(q), self.cutoff, self.mass);
+            let Some((lo, hi)) = self.local_range(origin, q, kernel.reach()) else { continue };
+            // The photon's kernel in the rows it can touch (whole z-rows:
+            // accumulate reads them 4 lanes at a time).
+            for x in lo.x..=hi.x {
+                for y in lo.y..=hi.y {
+                    let row = ((x << 6) | (y << 3)) as usize;
+                    for n in row..row + 8 {
+                        k.set(n, &kernel);
+                    }
+                }
             }
             self.accumulate(origin, p, kernel.reach(), &k, &mut acc);
         }
