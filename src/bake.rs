@@ -219,8 +219,8 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 
     let mut total = [0.0f64; 3];
     for p in &photons {
-        for k in 0..3 {
-            total[k] += p.power[k] as f64;
+        for (t, &c) in total.iter_mut().zip(&p.power) {
+            *t += c as f64;
         }
     }
     let bbox = emission.index_bbox();
@@ -259,8 +259,10 @@ mod tests {
 
     /// A small, fast scene: one short curtain, few beams, coarse voxels.
     fn small_scene() -> Scene {
-        let mut s = Scene::default();
-        s.curtains = vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }];
+        let mut s = Scene {
+            curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
+            ..Scene::default()
+        };
         s.footprint.resolution = [128, 48];
         s.beams.count = 300;
         s.photons.radius_km = 1.0;
@@ -294,13 +296,13 @@ mod tests {
         let v3 = b.stats.voxel_size_km.powi(3);
         let mut sum = [0.0f64; 3];
         for (_, v) in b.emission.iter_active() {
-            for k in 0..3 {
-                sum[k] += v[k] as f64 * v3;
+            for (t, &c) in sum.iter_mut().zip(&v) {
+                *t += c as f64 * v3;
             }
         }
-        for k in 0..3 {
-            let want = b.stats.total_emitted_power[k] / 1e19;
-            assert!((sum[k] / want - 1.0).abs() < 5e-3, "component {k}: {} vs {want}", sum[k]);
+        for (k, (&got, &power)) in sum.iter().zip(&b.stats.total_emitted_power).enumerate() {
+            let want = power / 1e19;
+            assert!((got / want - 1.0).abs() < 5e-3, "component {k}: {got} vs {want}");
         }
     }
 

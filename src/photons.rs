@@ -195,8 +195,8 @@ impl<'a> PhotonMap<'a> {
         for i in self.within(x, kernel.reach()) {
             let p = &self.photons[i];
             let w = kernel.eval_d2(pos(p).distance_squared(x));
-            for k in 0..3 {
-                acc[k] += w * p.power[k] as f64;
+            for (a, &c) in acc.iter_mut().zip(&p.power) {
+                *a += w * c as f64;
             }
         }
         acc
@@ -209,8 +209,8 @@ pub fn estimate_brute_force(photons: &[Photon], x: DVec3, kernel: &Kernel) -> [f
     for p in photons {
         let w = kernel.eval_d2(pos(p).distance_squared(x));
         if w > 0.0 {
-            for k in 0..3 {
-                acc[k] += w * p.power[k] as f64;
+            for (a, &c) in acc.iter_mut().zip(&p.power) {
+                *a += w * c as f64;
             }
         }
     }
@@ -302,7 +302,7 @@ pub fn exp_neg_f32(x: f32) -> f32 {
     let f = y - (t - MAGIC);
     const C: [f32; 7] = [
         1.0,
-        0.693_147_2,
+        std::f32::consts::LN_2,
         0.240_226_5,
         0.055_504_11,
         0.009_618_129,
@@ -416,17 +416,16 @@ impl GatherSetup<'_> {
             for y in lo.y..=hi.y {
                 let dxy = dx2 + d2(1, y);
                 let row = ((x << 6) | (y << 3)) as usize;
-                for half in 0..2 {
-                    if dxy + near[half] >= reach2 {
+                for (half, &nz) in near.iter().enumerate() {
+                    if dxy + nz >= reach2 {
                         continue; // this half row misses the reach sphere
                     }
                     let (b, o) = (row + 4 * half, 4 * half);
                     let dz: &[f32; 4] = dz2[o..o + 4].try_into().unwrap();
                     let w = kernel_lanes(dxy, dz, &k.reach2[b..b + 4], &k.norm[b..b + 4], &k.inv_2r2[b..b + 4]);
-                    for c in 0..3 {
-                        let a: &mut [f32] = &mut acc.c[c][b..b + 4];
-                        for z in 0..4 {
-                            a[z] += w[z] * phi[c];
+                    for (col, &ph) in acc.c.iter_mut().zip(&phi) {
+                        for (a, &wz) in col[b..b + 4].iter_mut().zip(&w) {
+                            *a += wz * ph;
                         }
                     }
                 }

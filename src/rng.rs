@@ -60,7 +60,7 @@ pub fn perlin(parts: &[u64]) -> Perlin {
 /// flooring, which breaks continuity at negative coordinates.)
 #[inline]
 pub fn noise1(p: &Perlin, x: f64) -> f64 {
-    p.get([x, 0.318_309_886])
+    p.get([x, 0.371_9])
 }
 
 /// 2D Perlin noise in [-1, 1].

@@ -137,7 +137,7 @@ impl LineYields {
 ///   `q_D = A_D / (A_D + k_D [N2])`, k_D = 3e-11 cm^3/s and lifetime
 ///   1/A_D = 110 s (half-quenched where [N2] = 3e8 cm^-3, near 260 km); the
 ///   emitted photons split 3:1 between 630.0 and 636.4 nm.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct EmissionModel {
     pub atmosphere: Atmosphere,
 }
@@ -166,12 +166,6 @@ pub const Y_D: f64 = 20.0;
 pub const A_D: f64 = 1.0 / 110.0;
 /// O(1D) + N2 quenching, cm^3/s.
 pub const K_D_N2: f64 = 3e-11;
-
-impl Default for EmissionModel {
-    fn default() -> Self {
-        Self { atmosphere: Atmosphere::us1976() }
-    }
-}
 
 impl EmissionModel {
     pub fn new(atmosphere: Atmosphere) -> Self {
