@@ -314,7 +314,7 @@ impl Default for Curtain {
             rotation_deg: 0.0,
             energy_flux: 5.0,
             char_energy_kev: 3.0,
-            soft_fraction: 0.15,
+            soft_fraction: 0.1,
             soft_energy_kev: 0.2,
             beam_weight: 1.0,
             bend_km: 12.0,
