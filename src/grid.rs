@@ -60,6 +60,8 @@ pub trait VoxelValue: Copy + PartialEq + Send + Sync + std::fmt::Debug + 'static
     fn components(&self) -> [f32; 3];
     fn from_components(c: &[f32]) -> Self;
     fn is_finite(&self) -> bool {
+        // f32::is_finite by path: `c.is_finite()` on a `&f32` resolves to this
+        // very trait method (receiver &f32) and recursed forever.
         self.components()[..Self::COMPONENTS].iter().all(|c| f32::is_finite(*c))
     }
     /// a + (b - a) * t, componentwise.
@@ -400,6 +402,15 @@ mod tests {
         for c in 0..3 {
             assert!((v[c] as f64 - expect[c]).abs() < 1e-5, "{v:?} vs {expect:?}");
         }
+    }
+
+    #[test]
+    fn is_finite_checks_components_without_recursing() {
+        assert!(VoxelValue::is_finite(&1.0f32) && !VoxelValue::is_finite(&f32::NAN));
+        assert!(!VoxelValue::is_finite(&[0.0f32, f32::INFINITY, 0.0]));
+        let mut g = Grid::new("e", [0.0f32; 3], Transform::new(1.0, DVec3::ZERO));
+        g.set(IVec3::ZERO, [1.0, 2.0, 3.0]);
+        assert!(g.first_non_finite().is_none());
     }
 
     #[test]

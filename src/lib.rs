@@ -17,6 +17,7 @@ pub mod grid;
 pub mod photons;
 pub mod progress;
 pub mod render;
+pub mod rng;
 pub mod scene;
 pub mod spectrum;
 pub mod usd;

@@ -67,6 +67,11 @@ pub struct Curtain {
     pub energy_flux: f64,
     /// Characteristic energy E0 of the Maxwellian electron spectrum, keV.
     pub char_energy_kev: f64,
+    /// Share of the energy flux carried by a soft Maxwellian component (the
+    /// low-energy electrons that light the red tops above 200 km), in [0, 1].
+    pub soft_fraction: f64,
+    /// Characteristic energy of that soft component, keV.
+    pub soft_energy_kev: f64,
     /// Share of the scene's beams given to this curtain (relative weight).
     pub beam_weight: f64,
     /// Amplitude of the low-frequency noise curve that bends the band, km.
@@ -309,6 +314,8 @@ impl Default for Curtain {
             rotation_deg: 0.0,
             energy_flux: 5.0,
             char_energy_kev: 3.0,
+            soft_fraction: 0.1,
+            soft_energy_kev: 0.2,
             beam_weight: 1.0,
             bend_km: 12.0,
             seed: 0,
@@ -323,9 +330,9 @@ impl Default for FootprintParams {
             steps: 12,
             dt: 1.0,
             pressure_iterations: 40,
-            band_fraction: 0.05,
+            band_fraction: 0.08,
             velocity_waves: 6.0,
-            velocity_amplitude: 2.0,
+            velocity_amplitude: 2.5,
             density_waves: 9.0,
             bend_wavelength: 0.6,
             threshold: 0.03,
@@ -336,14 +343,14 @@ impl Default for FootprintParams {
 impl Default for BeamParams {
     fn default() -> Self {
         Self {
-            count: 20_000,
+            count: 8_000,
             top_km: 260.0,
             top_noise_km: 6.0,
             top_noise_freq: 0.5,
-            alpha_d_deg: 20.0,
-            delta_alpha_deg: 10.0,
-            length_km: 200.0,
-            dt: 0.005,
+            alpha_d_deg: 5.0,
+            delta_alpha_deg: 3.0,
+            length_km: 400.0,
+            dt: 0.0025,
             b_inclination_deg: 78.0,
             b_declination_deg: 0.0,
         }
@@ -365,7 +372,7 @@ impl Default for PhotonParams {
     fn default() -> Self {
         Self {
             radius_km: 0.5,
-            cutoff: 3.0,
+            cutoff: 2.5,
             radius_noise: 0.3,
             radius_noise_freq: 0.05,
             gather: GatherMethod::Kdtree,
@@ -604,6 +611,8 @@ impl Scene {
             v.finite_pos(t, "width", c.width);
             v.range(t, "energy_flux", c.energy_flux, 0.0, 1e4, false);
             v.range(t, "char_energy_kev", c.char_energy_kev, 0.05, 100.0, true);
+            v.range(t, "soft_fraction", c.soft_fraction, 0.0, 1.0, true);
+            v.range(t, "soft_energy_kev", c.soft_energy_kev, 0.01, 100.0, true);
             v.range(t, "beam_weight", c.beam_weight, 0.0, 1e9, false);
             v.range(t, "bend_km", c.bend_km, 0.0, 1e4, true);
             v.finite(t, "rotation_deg", c.rotation_deg);

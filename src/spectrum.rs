@@ -1,1 +1,417 @@
-//! spectrum (to be written)
+//! Colour of the aurora: CIE 1931 colour matching, the emission lines and
+//! their yields per keV of deposited electron energy as a function of altitude,
+//! and the artist colour map alternative.
+//!
+//! Colour space: linear Rec.709 / sRGB primaries, D65 white. A photon "power"
+//! in this crate is an RGB triple in units where one photon per second of
+//! OI 557.7 nm has luminance Y = 1; the emission grid then reads 1 = 1 kR of
+//! 557.7 nm per km of path (see `photons`).
+//!
+//! Sources:
+//! - CIE 1931 2-degree colour matching functions through the multi-lobe
+//!   Gaussian fit of Wyman, Sloan & Shirley, "Simple analytic approximations to
+//!   the CIE XYZ color matching functions", JCGT 2(2), 2013 (their eq. 2-4).
+//! - XYZ to linear sRGB: IEC 61966-2-1 (the sRGB standard), D65.
+//! - Yields and quenching: see [`EmissionModel`].
+
+use crate::atmosphere::Atmosphere;
+
+/// Piecewise Gaussian of Wyman, Sloan & Shirley (2013): width `s1` left of the
+/// mean, `s2` right of it.
+#[inline]
+fn lobe(x: f64, mu: f64, s1: f64, s2: f64) -> f64 {
+    let t = (x - mu) / if x < mu { s1 } else { s2 };
+    (-0.5 * t * t).exp()
+}
+
+/// CIE 1931 2-degree colour matching functions (xbar, ybar, zbar) at
+/// `lambda_nm`, multi-lobe fit of Wyman, Sloan & Shirley (2013), eq. 2-4.
+pub fn cie1931_xyz(lambda_nm: f64) -> [f64; 3] {
+    let l = lambda_nm;
+    let x = 1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7) - 0.065 * lobe(l, 501.1, 20.4, 26.2);
+    let y = 0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1);
+    let z = 1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8);
+    [x, y, z]
+}
+
+/// XYZ to linear Rec.709 (sRGB primaries, D65 white), IEC 61966-2-1.
+pub const XYZ_TO_REC709: [[f64; 3]; 3] = [
+    [3.2406, -1.5372, -0.4986],
+    [-0.9689, 1.8758, 0.0415],
+    [0.0557, -0.2040, 1.0570],
+];
+
+/// Luminance Y of a linear Rec.709 colour (the Y row of the inverse matrix).
+pub const REC709_LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+pub fn xyz_to_rec709(xyz: [f64; 3]) -> [f64; 3] {
+    let m = &XYZ_TO_REC709;
+    std::array::from_fn(|i| m[i][0] * xyz[0] + m[i][1] * xyz[1] + m[i][2] * xyz[2])
+}
+
+#[inline]
+pub fn luminance(rgb: [f64; 3]) -> f64 {
+    REC709_LUMA[0] * rgb[0] + REC709_LUMA[1] * rgb[1] + REC709_LUMA[2] * rgb[2]
+}
+
+/// Gamut mapping for colours outside Rec.709 (every monochromatic line is):
+/// desaturate toward the white of equal luminance, `(1 - t) rgb + t (Y, Y, Y)`,
+/// with the smallest `t` in [0, 1] that leaves no component negative. Y is
+/// kept exactly (white has luminance Y and the map is affine), and the hue in
+/// the RGB cube is kept approximately (we move along the line to grey).
+/// A colour with Y <= 0 has no such white and maps to black.
+pub fn gamut_map(rgb: [f64; 3]) -> [f64; 3] {
+    let y = luminance(rgb);
+    if y <= 0.0 {
+        return [0.0; 3];
+    }
+    // Component c reaches 0 at t = -c / (Y - c) (Y > 0 > c).
+    let t = rgb.iter().filter(|&&c| c < 0.0).map(|&c| -c / (y - c)).fold(0.0, f64::max);
+    std::array::from_fn(|i| ((1.0 - t) * rgb[i] + t * y).max(0.0))
+}
+
+/// An emission line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Line {
+    pub name: &'static str,
+    pub lambda_nm: f64,
+}
+
+pub const OI_5577: Line = Line { name: "OI 557.7 nm", lambda_nm: 557.7 };
+pub const OI_6300: Line = Line { name: "OI 630.0 nm", lambda_nm: 630.0 };
+pub const OI_6364: Line = Line { name: "OI 636.4 nm", lambda_nm: 636.4 };
+pub const N2P_4278: Line = Line { name: "N2+ 427.8 nm", lambda_nm: 427.8 };
+/// The lines of the physical colour model, in [`LineYields`] order.
+pub const LINES: [Line; 4] = [OI_5577, OI_6300, OI_6364, N2P_4278];
+
+/// Linear Rec.709 colour of one photon per second of a line, gamut mapped,
+/// in units where one 557.7 nm photon has Y = 1. Photon counts become
+/// radiometric weights through the photon energy ratio `557.7 / lambda`
+/// (the CMFs weigh radiant power, not photon number).
+pub fn line_rgb(lambda_nm: f64) -> [f64; 3] {
+    let y_ref = luminance(gamut_map(xyz_to_rec709(cie1931_xyz(OI_5577.lambda_nm))));
+    let c = gamut_map(xyz_to_rec709(cie1931_xyz(lambda_nm)));
+    let w = OI_5577.lambda_nm / lambda_nm / y_ref;
+    c.map(|x| x * w)
+}
+
+/// Photons emitted per keV of electron energy deposited, per line.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct LineYields {
+    pub oi_5577: f64,
+    pub oi_6300: f64,
+    pub oi_6364: f64,
+    pub n2p_4278: f64,
+}
+
+impl LineYields {
+    pub fn as_array(&self) -> [f64; 4] {
+        [self.oi_5577, self.oi_6300, self.oi_6364, self.n2p_4278]
+    }
+}
+
+/// The emission yields per keV deposited at altitude h: a deliberately simple,
+/// documented parameterisation (not a chemistry model), calibrated to the
+/// standard rules of thumb. With x_s = n_s / (n_N2 + n_O2 + n_O) the mole
+/// fraction of species s (ionisation and excitation shared by mole fraction):
+///
+/// - **N2+ 427.8 nm**: `eps_4278 = 0.34 x_N2 / 0.781`. 0.34 photons/keV is
+///   Rees & Luckey (1974): about 210 R of 427.8 nm per erg cm^-2 s^-1
+///   (1 erg = 6.24e8 keV), for the mixed lower thermosphere (x_N2 = 0.781).
+/// - **OI 557.7 nm**: O(1S) comes mostly from energy transfer
+///   N2(A) + O -> O(1S) near 100-120 km, and from electron impact on O higher
+///   up: `eps_5577 = Q_1S (Y_A x_N2 T_A + Y_O x_O)`, where
+///   `T_A = k_AO [O] / (k_AO [O] + k_AO2 [O2] + A_A)` is the fraction of
+///   N2(A) that gives its energy to O (k_AO = 3e-11, k_AO2 = 2.5e-12 cm^3/s,
+///   A_A = 0.5 /s; laboratory orders of magnitude, e.g. Piper 1982), and
+///   `Q_1S = A_1S / (A_1S + k_1S [O2])` the O(1S) survival against quenching
+///   by O2 (A_1S = 1/0.7 s, k_1S = 5e-14 cm^3/s, the Slanger & Black rate
+///   4e-12 exp(-865/T) at T = 200 K). Together they put the green lower border
+///   near 95-100 km, where O falls away and O2 takes N2(A). Y_A = 1.33 and
+///   Y_O = 2.0 photons/keV give about 1.1 photons/keV at 110 km: about 3 times
+///   427.8, i.e. the usual ~1 kR of 557.7 per erg cm^-2 s^-1.
+/// - **OI 630.0 + 636.4 nm**: O(1D) production `Y_D x_O` (Y_D = 20 per keV in
+///   pure O, about 0.7 per 35 eV ion pair, counting secondary electrons and
+///   dissociative recombination), rising with altitude with the O fraction,
+///   times the survival against quenching by N2
+///   `q_D = A_D / (A_D + k_D [N2])`, k_D = 3e-11 cm^3/s and lifetime
+///   1/A_D = 110 s (half-quenched where [N2] = 3e8 cm^-3, near 260 km); the
+///   emitted photons split 3:1 between 630.0 and 636.4 nm.
+#[derive(Clone, Debug, Default)]
+pub struct EmissionModel {
+    pub atmosphere: Atmosphere,
+}
+
+/// 427.8 nm photons per keV at the reference N2 fraction (Rees & Luckey 1974).
+pub const EPS_4278: f64 = 0.34;
+/// N2 mole fraction of the well-mixed atmosphere.
+pub const X_N2_MIXED: f64 = 0.781;
+/// O(1S) yield through N2(A) energy transfer, photons per keV into N2.
+pub const Y_A: f64 = 1.33;
+/// O(1S) yield by direct impact on O, photons per keV into O.
+pub const Y_O: f64 = 2.0;
+/// N2(A) + O rate, cm^3/s.
+pub const K_A_O: f64 = 3e-11;
+/// N2(A) + O2 quenching rate, cm^3/s.
+pub const K_A_O2: f64 = 2.5e-12;
+/// N2(A) radiative rate, 1/s.
+pub const A_A: f64 = 0.5;
+/// O(1S) radiative rate, 1/s (lifetime about 0.7 s).
+pub const A_1S: f64 = 1.0 / 0.7;
+/// O(1S) + O2 quenching at about 200 K, cm^3/s.
+pub const K_1S_O2: f64 = 5e-14;
+/// O(1D) production per keV into O.
+pub const Y_D: f64 = 20.0;
+/// O(1D) radiative rate, 1/s (lifetime 110 s).
+pub const A_D: f64 = 1.0 / 110.0;
+/// O(1D) + N2 quenching, cm^3/s.
+pub const K_D_N2: f64 = 3e-11;
+
+impl EmissionModel {
+    pub fn new(atmosphere: Atmosphere) -> Self {
+        Self { atmosphere }
+    }
+
+    /// Photons per keV deposited at altitude `h_km`, per line.
+    pub fn yields(&self, h_km: f64) -> LineYields {
+        let c = self.atmosphere.composition(h_km);
+        let total = c.total();
+        let (x_n2, x_o) = (c.n2 / total, c.o / total);
+        let t_a = K_A_O * c.o / (K_A_O * c.o + K_A_O2 * c.o2 + A_A);
+        let q_1s = A_1S / (A_1S + K_1S_O2 * c.o2);
+        let q_d = A_D / (A_D + K_D_N2 * c.n2);
+        let o1d = Y_D * x_o * q_d;
+        LineYields {
+            oi_5577: q_1s * (Y_A * x_n2 * t_a + Y_O * x_o),
+            oi_6300: 0.75 * o1d,
+            oi_6364: 0.25 * o1d,
+            n2p_4278: EPS_4278 * x_n2 / X_N2_MIXED,
+        }
+    }
+
+    /// Linear Rec.709 colour emitted per keV deposited at `h_km`.
+    pub fn rgb_per_kev(&self, h_km: f64) -> [f64; 3] {
+        let y = self.yields(h_km).as_array();
+        let mut rgb = [0.0; 3];
+        for (line, n) in LINES.iter().zip(y) {
+            let c = line_rgb(line.lambda_nm);
+            for k in 0..3 {
+                rgb[k] += n * c[k];
+            }
+        }
+        rgb
+    }
+}
+
+/// Altitude -> colour per keV, tabulated for fast lookup along beams, from
+/// either the physical model or an artist colour map.
+#[derive(Clone, Debug)]
+pub struct ColourTable {
+    h0: f64,
+    dh: f64,
+    rgb: Vec<[f64; 3]>,
+}
+
+/// Altitude range of the physical table, km (clamped outside).
+pub const TABLE_H: (f64, f64) = (60.0, 700.0);
+
+impl ColourTable {
+    /// The physical model tabulated every 0.05 km over [`TABLE_H`]: linear
+    /// interpolation of the smooth yields is then exact to about 1e-5.
+    pub fn physical(model: &EmissionModel) -> Self {
+        let dh = 0.05;
+        let n = ((TABLE_H.1 - TABLE_H.0) / dh).round() as usize + 1;
+        let rgb = (0..n).map(|i| model.rgb_per_kev(TABLE_H.0 + i as f64 * dh)).collect();
+        Self { h0: TABLE_H.0, dh, rgb }
+    }
+
+    /// An artist colour map: rows of [altitude_km, r, g, b] with ascending
+    /// altitudes (validated by the scene), colour per keV deposited. Linear
+    /// interpolation between rows, clamped to the first and last row.
+    pub fn colormap(rows: &[[f64; 4]]) -> Self {
+        let (lo, hi) = match (rows.first(), rows.last()) {
+            (Some(a), Some(b)) => (a[0], b[0]),
+            _ => return Self { h0: 0.0, dh: 1.0, rgb: vec![[0.0; 3]] },
+        };
+        let dh = 0.05;
+        let n = (((hi - lo) / dh).ceil() as usize).max(1) + 1;
+        let rgb = (0..n).map(|i| colormap_rgb(rows, lo + i as f64 * dh)).collect();
+        Self { h0: lo, dh, rgb }
+    }
+
+    /// Colour per keV at `h_km` (linear between samples, clamped at the ends).
+    #[inline]
+    pub fn rgb(&self, h_km: f64) -> [f64; 3] {
+        let u = ((h_km - self.h0) / self.dh).max(0.0);
+        let i = (u as usize).min(self.rgb.len() - 1);
+        if i + 1 >= self.rgb.len() {
+            return self.rgb[self.rgb.len() - 1];
+        }
+        let f = u - i as f64;
+        let (a, b) = (self.rgb[i], self.rgb[i + 1]);
+        std::array::from_fn(|k| a[k] + (b[k] - a[k]) * f)
+    }
+
+    /// Colour of energy deposited at the true altitude `h_km`, with the
+    /// chromaticity taken at `h_colour_km` (the report's colour noise perturbs
+    /// the colour, not the intensity): luminance of `rgb(h)`, hue and
+    /// saturation of `rgb(h_colour)`.
+    #[inline]
+    pub fn rgb_with_colour_altitude(&self, h_km: f64, h_colour_km: f64) -> [f64; 3] {
+        let c = self.rgb(h_colour_km);
+        let y = luminance(self.rgb(h_km));
+        let yc = luminance(c);
+        if yc > 0.0 {
+            c.map(|x| x * y / yc)
+        } else {
+            self.rgb(h_km)
+        }
+    }
+}
+
+/// Artist colour map lookup: linear interpolation in altitude, clamped.
+pub fn colormap_rgb(rows: &[[f64; 4]], h_km: f64) -> [f64; 3] {
+    let Some(first) = rows.first() else { return [0.0; 3] };
+    if h_km <= first[0] {
+        return [first[1], first[2], first[3]];
+    }
+    for w in rows.windows(2) {
+        if h_km <= w[1][0] {
+            let t = (h_km - w[0][0]) / (w[1][0] - w[0][0]);
+            return std::array::from_fn(|k| w[0][k + 1] + (w[1][k + 1] - w[0][k + 1]) * t);
+        }
+    }
+    let last = rows[rows.len() - 1];
+    [last[1], last[2], last[3]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cmf_fit_matches_cie_table_values() {
+        // CIE 1931 2-degree table values. The multi-lobe fit is an
+        // approximation (largest error here: xbar(440) 0.359 vs 0.348, 1 % of
+        // the peak); allow 2 % of each function's peak (1.06, 1.0, 1.78).
+        let cases = [
+            (555.0, 1, 1.0000),
+            (600.0, 0, 1.0622),
+            (450.0, 2, 1.7721),
+            (630.0, 1, 0.2650),
+            (440.0, 0, 0.3483),
+            (500.0, 1, 0.3230),
+            (650.0, 0, 0.2835),
+        ];
+        let peak = [1.0622, 1.0, 1.7721];
+        for (l, k, want) in cases {
+            let got = cie1931_xyz(l)[k];
+            assert!((got - want).abs() < 0.02 * peak[k], "{l} nm component {k}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn white_maps_to_equal_rgb_and_luma_row_matches_y() {
+        // D65 white point XYZ (0.95047, 1, 1.08883) -> (1, 1, 1) to the
+        // matrix's 4-digit precision.
+        let w = xyz_to_rec709([0.95047, 1.0, 1.08883]);
+        for c in w {
+            assert!((c - 1.0).abs() < 1e-3, "{w:?}");
+        }
+        let xyz = [0.3, 0.5, 0.2];
+        assert!((luminance(xyz_to_rec709(xyz)) - 0.5).abs() < 1e-3);
+    }
+
+    #[test]
+    fn gamut_map_keeps_luminance_and_clears_negatives() {
+        for l in [427.8, 450.0, 500.0, 557.7, 630.0, 700.0] {
+            let raw = xyz_to_rec709(cie1931_xyz(l));
+            let m = gamut_map(raw);
+            assert!(m.iter().all(|&c| c >= 0.0), "{l}: {m:?}");
+            // Affine map toward (Y, Y, Y): Y is kept to rounding.
+            assert!((luminance(m) - luminance(raw)).abs() < 1e-12 * (1.0 + luminance(raw).abs()), "{l}");
+            // Minimal: some component sits at exactly zero when raw was out of gamut.
+            if raw.iter().any(|&c| c < 0.0) {
+                assert!(m.iter().any(|&c| c.abs() < 1e-12), "{l}: {m:?}");
+            }
+        }
+        let inside = [0.2, 0.5, 0.1];
+        assert_eq!(gamut_map(inside), inside);
+    }
+
+    #[test]
+    fn one_557_7_photon_has_unit_luminance_and_lines_have_their_hues() {
+        assert!((luminance(line_rgb(557.7)) - 1.0).abs() < 1e-12);
+        let g = line_rgb(557.7);
+        assert!(g[1] > g[0] && g[1] > g[2], "green {g:?}");
+        let r = line_rgb(630.0);
+        assert!(r[0] > 5.0 * r[1] && r[0] > 5.0 * r[2], "red {r:?}");
+        let b = line_rgb(427.8);
+        assert!(b[2] > b[0] && b[2] > b[1], "violet {b:?}");
+    }
+
+    #[test]
+    fn yields_match_the_rules_of_thumb() {
+        let m = EmissionModel::default();
+        let y110 = m.yields(110.0);
+        // 427.8 nm: 0.34 photons/keV scaled by x_N2 (0.76 at 110 km).
+        assert!((y110.n2p_4278 - 0.34 * 0.763 / 0.781).abs() < 0.01, "{y110:?}");
+        // Green about 3 times the 427.8 yield at 110 km ("a few times").
+        let ratio = y110.oi_5577 / y110.n2p_4278;
+        assert!((2.0..5.0).contains(&ratio), "green/blue {ratio}");
+        // Lower border: green at 90 km below a third of its 110 km yield.
+        assert!(m.yields(90.0).oi_5577 < y110.oi_5577 / 3.0);
+        // Red: negligible at 110 km, quenched half way near 260 km, 630:636.4 = 3.
+        assert!(y110.oi_6300 < 0.01 * y110.oi_5577);
+        let y = m.yields(300.0);
+        assert!((y.oi_6300 / y.oi_6364 - 3.0).abs() < 1e-12);
+        assert!(m.yields(300.0).oi_6300 > m.yields(200.0).oi_6300);
+    }
+
+    #[test]
+    fn colour_is_green_at_110_km_and_red_at_250_km() {
+        let m = EmissionModel::default();
+        let c = m.rgb_per_kev(110.0);
+        assert!(c[1] > c[0] && c[1] > c[2], "110 km {c:?}");
+        let c = m.rgb_per_kev(250.0);
+        assert!(c[0] > c[1] && c[0] > c[2], "250 km {c:?}");
+        // The lower border is bluer than the green layer (violet N2+ shows).
+        let (lo, mid) = (m.rgb_per_kev(88.0), m.rgb_per_kev(110.0));
+        assert!(lo[2] / lo[1] > mid[2] / mid[1].max(1e-30), "{lo:?} {mid:?}");
+    }
+
+    #[test]
+    fn table_interpolates_the_model_and_clamps() {
+        let m = EmissionModel::default();
+        let t = ColourTable::physical(&m);
+        for h in [95.3, 110.01, 151.77, 247.5] {
+            let (a, b) = (t.rgb(h), m.rgb_per_kev(h));
+            for k in 0..3 {
+                // Linear interpolation error h^2/8 |f''| relative: ~1e-4 here.
+                assert!((a[k] - b[k]).abs() <= 1e-3 * (b[k].abs() + 1e-3), "{h}: {a:?} vs {b:?}");
+            }
+        }
+        assert_eq!(t.rgb(10.0), t.rgb(TABLE_H.0));
+        assert_eq!(t.rgb(5000.0), t.rgb(TABLE_H.1));
+        // Colour altitude changes chromaticity only.
+        let c = t.rgb_with_colour_altitude(110.0, 250.0);
+        assert!((luminance(c) - luminance(t.rgb(110.0))).abs() < 1e-12);
+        assert!(c[0] > c[1]);
+    }
+
+    #[test]
+    fn colormap_interpolates_linearly_and_clamps_at_the_ends() {
+        let rows = [[100.0, 0.0, 1.0, 0.0], [200.0, 1.0, 0.0, 0.5]];
+        assert_eq!(colormap_rgb(&rows, 50.0), [0.0, 1.0, 0.0]);
+        assert_eq!(colormap_rgb(&rows, 300.0), [1.0, 0.0, 0.5]);
+        let c = colormap_rgb(&rows, 125.0);
+        assert!((c[0] - 0.25).abs() < 1e-12 && (c[1] - 0.75).abs() < 1e-12 && (c[2] - 0.125).abs() < 1e-12);
+        let t = ColourTable::colormap(&rows);
+        let c2 = t.rgb(125.0);
+        for k in 0..3 {
+            assert!((c2[k] - c[k]).abs() < 1e-12);
+        }
+        assert_eq!(t.rgb(0.0), [0.0, 1.0, 0.0]);
+        assert_eq!(t.rgb(1e4), [1.0, 0.0, 0.5]);
+    }
+}
