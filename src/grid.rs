@@ -60,7 +60,7 @@ pub trait VoxelValue: Copy + PartialEq + Send + Sync + std::fmt::Debug + 'static
     fn components(&self) -> [f32; 3];
     fn from_components(c: &[f32]) -> Self;
     fn is_finite(&self) -> bool {
-        self.components()[..Self::COMPONENTS].iter().all(|c| c.is_finite())
+        self.components()[..Self::COMPONENTS].iter().all(|c| f32::is_finite(*c))
     }
     /// a + (b - a) * t, componentwise.
     fn lerp(a: Self, b: Self, t: f64) -> Self;
