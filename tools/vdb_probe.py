@@ -93,7 +93,8 @@ def probe(path, samples, dump):
 
 
 def write_reference(path):
-    """Grids covering the cases our reader must handle in OpenVDB's own bytes."""
+    """Grids covering the cases our reader must handle in OpenVDB's own bytes:
+    tiles, vec3s, half floats, a plain float grid, an unsupported type."""
     density = vdb.FloatGrid()
     density.name = "density"
     density.gridClass = vdb.GridClass.FOG_VOLUME
@@ -130,7 +131,23 @@ def write_reference(path):
     for i in range(0, 30, 2):
         acc.setValueOn((i, -i, 3 * i), (i / 3.0, 1.0 / (i + 1), -2.0 * i))
 
-    vdb.write(path, grids=[density, emission, half])
+    # No tiles: this one goes through vdb-rs (with Blosc) in our reader.
+    plain = vdb.FloatGrid()
+    plain.name = "density_plain"
+    plain.gridClass = vdb.GridClass.FOG_VOLUME
+    plain.transform = vdb.createLinearTransform(voxelSize=0.25)
+    plain.transform.translate((10.0, -20.0, 2.5))
+    acc = plain.getAccessor()
+    for i in range(-300, 300, 7):
+        for k in range(-20, 20):
+            acc.setValueOn((i, i // 3, k), math.sin(0.01 * i) * math.exp(-0.1 * abs(k)))
+
+    # A type aurora does not read: skipped, the others still load.
+    mask = vdb.BoolGrid()
+    mask.name = "mask"
+    mask.getAccessor().setValueOn((1, 2, 3), True)
+
+    vdb.write(path, grids=[density, emission, half, plain, mask])
     return probe(path, None, True)
 
 
