@@ -64,19 +64,22 @@ pub fn mask_compress<T: VoxelValue>(
 ) -> (u8, [T; 2]) {
     let mut inactive = [background, background];
     let mut unique = 0usize;
-    for (n, &v) in values.iter().enumerate() {
-        if unique >= 3 {
-            break;
-        }
-        if layout::mask_bit(value_mask, n) || child_mask.is_some_and(|c| layout::mask_bit(c, n)) {
-            continue;
-        }
-        let seen = (unique > 0 && eq(v, inactive[0])) || (unique > 1 && eq(v, inactive[1]));
-        if !seen {
-            if unique < 2 {
-                inactive[unique] = v;
+    'scan: for (w, &word) in value_mask.iter().enumerate() {
+        // Inactive slots that are not child pointers, in index order.
+        let mut bits = !word & !child_mask.map_or(0, |c| c[w]);
+        while bits != 0 {
+            if unique >= 3 {
+                break 'scan;
             }
-            unique += 1;
+            let v = values[w * 64 + bits.trailing_zeros() as usize];
+            bits &= bits - 1;
+            let seen = (unique > 0 && eq(v, inactive[0])) || (unique > 1 && eq(v, inactive[1]));
+            if !seen {
+                if unique < 2 {
+                    inactive[unique] = v;
+                }
+                unique += 1;
+            }
         }
     }
     let minus_bg = negative(background);
@@ -158,12 +161,8 @@ impl Encoder {
                 push_full(out, v);
             }
         }
-        // Gather the values to store into `raw`.
-        self.raw.clear();
-        let elem = if self.half { 2 } else { 4 } * T::COMPONENTS;
         let all = m == meta::NO_MASK_AND_ALL_VALS;
         let count = if all { values.len() } else { layout::mask_count(value_mask) };
-        self.raw.reserve(count * elem);
         if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
             // Selection mask: bit set where an inactive slot holds inactive1.
             self.selection.clear();
@@ -177,33 +176,63 @@ impl Encoder {
                 out.extend_from_slice(&w.to_le_bytes());
             }
         }
-        let half = self.half;
-        let push = |raw: &mut Vec<u8>, v: T| {
-            let c = v.components();
-            for &x in &c[..T::COMPONENTS] {
-                if half {
-                    raw.extend_from_slice(&f16::from_f32(x).to_bits().to_le_bytes());
-                } else {
-                    raw.extend_from_slice(&x.to_le_bytes());
-                }
-            }
-        };
-        if all {
-            for &v in values {
-                push(&mut self.raw, v);
-            }
-        } else {
-            for n in layout::mask_ones(value_mask) {
-                push(&mut self.raw, values[n]);
-            }
-        }
         if self.half && count == 0 {
             // HalfWriter::write returns before writing anything, even a ZIP size.
             return;
         }
         match self.zlib.as_mut() {
-            Some(z) => zip_to_stream(z, &mut self.zbuf, &self.raw, out),
-            None => out.extend_from_slice(&self.raw),
+            Some(z) => {
+                self.raw.clear();
+                gather(&mut self.raw, values, value_mask, all, count, self.half);
+                zip_to_stream(z, &mut self.zbuf, &self.raw, out);
+            }
+            None => gather(out, values, value_mask, all, count, self.half),
+        }
+    }
+}
+
+/// Appends the `count` values to store (all of them, or the active ones in
+/// index order) as little-endian `f32` or binary16 components.
+fn gather<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, half: bool) {
+    if half {
+        gather_as::<T, true>(dst, values, mask, all, count)
+    } else {
+        gather_as::<T, false>(dst, values, mask, all, count)
+    }
+}
+
+fn gather_as<T: VoxelValue, const HALF: bool>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize) {
+    let stride = T::COMPONENTS * if HALF { 2 } else { 4 };
+    let start = dst.len();
+    dst.resize(start + count * stride, 0);
+    let mut slots = dst[start..].chunks_exact_mut(stride);
+    if all {
+        for (slot, v) in (&mut slots).zip(values) {
+            put::<T, HALF>(slot, v);
+        }
+    } else {
+        for (w, &word) in mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let v = &values[w * 64 + bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+                match slots.next() {
+                    Some(slot) => put::<T, HALF>(slot, v),
+                    None => return, // count was the mask's popcount: unreachable
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn put<T: VoxelValue, const HALF: bool>(slot: &mut [u8], v: &T) {
+    let c = v.components();
+    for k in 0..T::COMPONENTS {
+        if HALF {
+            slot[2 * k..2 * k + 2].copy_from_slice(&f16::from_f32(c[k]).to_bits().to_le_bytes());
+        } else {
+            slot[4 * k..4 * k + 4].copy_from_slice(&c[k].to_le_bytes());
         }
     }
 }

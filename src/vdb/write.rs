@@ -161,38 +161,112 @@ pub fn compression_flags(c: Compression) -> u32 {
 
 /// Encodes a whole VDB file in memory.
 pub fn write_vdb_bytes(grids: &[GridRef], opts: &WriteOptions) -> Result<Vec<u8>, VdbWriteError> {
-    encode_file(grids, opts).map(|(bytes, _)| bytes)
+    let mut out = Vec::new();
+    encode_file(&mut out, grids, opts)?;
+    Ok(out)
 }
 
-/// Writes a VDB file atomically: to a temporary name in the same folder,
-/// then renamed over `path`.
+/// Writes a VDB file atomically: streamed to a temporary name in the same
+/// folder, then renamed over `path`. On any error the temporary file is
+/// removed and `path` is untouched. The bytes are those of [`write_vdb_bytes`].
 pub fn write_vdb(path: &Path, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
-    let (bytes, stats) = encode_file(grids, opts)?;
-    write_atomic(path, &bytes).map_err(|source| VdbWriteError::Io { path: path.to_path_buf(), source })?;
-    Ok(stats)
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same folder and a
-/// rename, so readers never see a half-written file.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    use std::io::Write;
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path.file_name().ok_or_else(|| std::io::Error::other("path has no file name"))?;
-    let tmp = dir.join(format!(".{}.tmp{}", file_name.to_string_lossy(), std::process::id()));
+    let io = |source| VdbWriteError::Io { path: path.to_path_buf(), source };
+    let tmp = temp_path(path).map_err(io)?;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        drop(f);
-        std::fs::rename(&tmp, path)
+        let mut target = FileTarget(std::fs::File::create(&tmp).map_err(io)?);
+        let stats = encode_file(&mut target, grids, opts).map_err(|e| match e {
+            VdbWriteError::Io { source, .. } => io(source),
+            other => other,
+        })?;
+        drop(target);
+        std::fs::rename(&tmp, path).map_err(io)?;
+        Ok(stats)
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same folder and a
+/// rename, so readers never see a half-written file. The rename makes the
+/// replacement atomic for every reader and for a crash of this process; like
+/// OpenVDB, we do not `fsync` (power-loss durability is the file system's
+/// business and costs ~10 ms per 30 MB).
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = temp_path(path)?;
+    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// `.<name>.tmp<pid>` in the folder of `path`.
+fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let file_name = path.file_name().ok_or_else(|| std::io::Error::other("path has no file name"))?;
+    Ok(dir.join(format!(".{}.tmp{}", file_name.to_string_lossy(), std::process::id())))
+}
+
+/// Where the file goes: appended in order, with a few fixed-size fields
+/// (descriptor offsets, UUID) patched in place at the end.
+trait Target {
+    fn append(&mut self, bytes: &[u8]) -> std::io::Result<()>;
+    fn patch(&mut self, at: u64, bytes: &[u8]) -> std::io::Result<()>;
+}
+
+impl Target for Vec<u8> {
+    fn append(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.extend_from_slice(bytes);
+        Ok(())
+    }
+    fn patch(&mut self, at: u64, bytes: &[u8]) -> std::io::Result<()> {
+        self[at as usize..at as usize + bytes.len()].copy_from_slice(bytes);
+        Ok(())
+    }
+}
+
+/// A file written sequentially (pieces are leaf chunks of ~100 KB or a few
+/// headers, so no buffering is needed), patched with positioned writes.
+struct FileTarget(std::fs::File);
+
+impl Target for FileTarget {
+    fn append(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        use std::io::Write;
+        self.0.write_all(bytes)
+    }
+    fn patch(&mut self, at: u64, bytes: &[u8]) -> std::io::Result<()> {
+        use std::io::{Seek, SeekFrom, Write};
+        let end = self.0.stream_position()?;
+        self.0.seek(SeekFrom::Start(at))?;
+        self.0.write_all(bytes)?;
+        self.0.seek(SeekFrom::Start(end))?;
+        Ok(())
+    }
+}
+
+/// Appends pieces to a [`Target`], tracking the file offset and the hash of
+/// every piece after the header (for the UUID).
+struct Stream<'t> {
+    target: &'t mut dyn Target,
+    pos: u64,
+    hashes: Vec<(u64, u64)>,
+}
+
+impl Stream<'_> {
+    fn put(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        self.put_hashed(bytes, piece_hash(bytes))
+    }
+    fn put_hashed(&mut self, bytes: &[u8], hash: (u64, u64)) -> std::io::Result<()> {
+        self.target.append(bytes)?;
+        self.pos += bytes.len() as u64;
+        self.hashes.push(hash);
+        Ok(())
+    }
 }
 
 /// Timings of repeated writes of the same grids (for benchmarks; see
@@ -251,26 +325,32 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
     Ok(())
 }
 
-fn encode_file(grids: &[GridRef], opts: &WriteOptions) -> Result<(Vec<u8>, WriteStats), VdbWriteError> {
+/// Streams the whole file into `target`; IO errors name `<output>` and are
+/// renamed by the caller.
+fn encode_file(target: &mut dyn Target, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
     check_options(grids, opts)?;
+    let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     let flags = compression_flags(opts.compression);
-    let mut out = vec![0u8; layout::HEADER_LEN];
-    // 7. File MetaMap: empty.
-    out.extend_from_slice(&0u32.to_le_bytes());
-    // 8. Grid count.
-    out.extend_from_slice(&(grids.len() as i32).to_le_bytes());
+    // Steps 1-6, the header, are written last (the UUID hashes the content):
+    // a placeholder of the same length first.
+    target.append(&[0u8; layout::HEADER_LEN]).map_err(io)?;
+    let mut out = Stream { target, pos: layout::HEADER_LEN as u64, hashes: Vec::new() };
+    // 7. File MetaMap: empty. 8. Grid count.
+    let mut head = Vec::new();
+    head.extend_from_slice(&0u32.to_le_bytes());
+    head.extend_from_slice(&(grids.len() as i32).to_le_bytes());
+    out.put(&head).map_err(io)?;
     let mut stats = Vec::with_capacity(grids.len());
     for g in grids {
         let half = opts.half.iter().any(|h| h == g.name());
-        let start = out.len();
+        let start = out.pos;
         let (active_voxels, leaves) = match g {
             GridRef::Float(g) => write_grid(&mut out, g, flags, half, &opts.metadata)?,
             GridRef::Vec3(g) => write_grid(&mut out, g, flags, half, &opts.metadata)?,
         };
-        stats.push(GridStats { name: g.name().to_string(), active_voxels, leaves, bytes: (out.len() - start) as u64 });
+        stats.push(GridStats { name: g.name().to_string(), active_voxels, leaves, bytes: out.pos - start });
     }
-    // Steps 1-6: the header, now that the content (and so the UUID) is known.
-    let uuid = content_uuid(&out[layout::HEADER_LEN..]);
+    let uuid = content_uuid(&out.hashes);
     let mut h = Vec::with_capacity(layout::HEADER_LEN);
     h.extend_from_slice(&layout::MAGIC.to_le_bytes());
     h.extend_from_slice(&layout::FILE_VERSION.to_le_bytes());
@@ -279,9 +359,9 @@ fn encode_file(grids: &[GridRef], opts: &WriteOptions) -> Result<(Vec<u8>, Write
     h.push(1);
     h.extend_from_slice(uuid.as_bytes());
     debug_assert_eq!(h.len(), layout::HEADER_LEN);
-    out[..layout::HEADER_LEN].copy_from_slice(&h);
-    let bytes = out.len() as u64;
-    Ok((out, WriteStats { bytes, grids: stats }))
+    let bytes = out.pos;
+    out.target.patch(0, &h).map_err(io)?;
+    Ok(WriteStats { bytes, grids: stats })
 }
 
 fn push_string(out: &mut Vec<u8>, s: &str) {
@@ -372,14 +452,17 @@ fn build_tree<T: VoxelValue>(grid: &Grid<T>) -> Tree<'_, T> {
     Tree { roots, leaves: keyed.into_iter().map(|(_, l)| l).collect() }
 }
 
-/// Writes descriptor and body of one grid; returns (active voxels, leaves).
+/// Streams descriptor and body of one grid; returns (active voxels, leaves).
+/// The descriptor's three offsets are hashed as zeros and patched once the
+/// grid is written (as OpenVDB's `Archive::writeGrid` seeks back for them).
 fn write_grid<T: VoxelValue>(
-    out: &mut Vec<u8>,
+    out: &mut Stream,
     grid: &Grid<T>,
     flags: u32,
     half: bool,
     extra: &[(String, MetaValue)],
 ) -> Result<(u64, usize), VdbWriteError> {
+    let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     let name = &grid.name;
     let tr = grid.transform;
     if !(tr.voxel_size.is_finite() && tr.voxel_size != 0.0 && tr.translation.is_finite()) {
@@ -395,23 +478,21 @@ fn write_grid<T: VoxelValue>(
         return Err(VdbWriteError::BadBackground { grid: name.clone(), value: format!("{bg:?}") });
     }
     let tree = build_tree(grid);
-    // Leaf buffers first (they hold the value checks), in parallel chunks.
-    let buffers = encode_leaf_buffers(&tree.leaves, name, bg, flags, half)?;
+    let (active, bbox) = leaf_statistics(&tree.leaves);
 
     // Descriptor: name, type, instance parent, then gridPos/blockPos/endPos.
+    let mut head = Vec::new();
     let type_name = if half { format!("{}{}", T::TREE_TYPE, layout::HALF_FLOAT_SUFFIX) } else { T::TREE_TYPE.to_string() };
-    push_string(out, name);
-    push_string(out, &type_name);
-    push_string(out, "");
-    let offsets_at = out.len();
-    out.extend_from_slice(&[0u8; 24]);
-    let grid_pos = out.len();
-    out.extend_from_slice(&flags.to_le_bytes());
+    push_string(&mut head, name);
+    push_string(&mut head, &type_name);
+    push_string(&mut head, "");
+    let offsets_at = out.pos + head.len() as u64;
+    head.extend_from_slice(&[0u8; 24]);
+    let grid_pos = out.pos + head.len() as u64;
+    head.extend_from_slice(&flags.to_le_bytes());
 
     // Grid metadata.
-    let active = grid.active_voxel_count();
-    let (bmin, bmax) = grid
-        .index_bbox()
+    let (bmin, bmax) = bbox
         .map(|(lo, hi)| (lo.to_array(), hi.to_array()))
         // OpenVDB's empty CoordBBox: min = INT_MAX, max = INT_MIN.
         .unwrap_or(([i32::MAX; 3], [i32::MIN; 3]));
@@ -429,18 +510,19 @@ fn write_grid<T: VoxelValue>(
         meta.push((layout::META_HALF.into(), MetaValue::Bool(true)));
     }
     meta.extend(extra.iter().cloned());
-    write_meta_map(out, meta);
-
-    write_transform(out, tr.voxel_size, tr.translation.to_array());
-    write_root_topology(out, &tree, bg, flags, half);
-    let block_pos = out.len();
-    for b in &buffers {
-        out.extend_from_slice(b);
-    }
-    let end_pos = out.len();
+    write_meta_map(&mut head, meta);
+    write_transform(&mut head, tr.voxel_size, tr.translation.to_array());
+    write_root_topology(&mut head, &tree, bg, flags, half);
+    out.put(&head).map_err(io)?;
+    drop(head);
+    let block_pos = out.pos;
+    write_buffers(out, &tree.leaves, name, bg, flags, half)?;
+    let end_pos = out.pos;
+    let mut offsets = [0u8; 24];
     for (i, p) in [grid_pos, block_pos, end_pos].into_iter().enumerate() {
-        out[offsets_at + 8 * i..offsets_at + 8 * i + 8].copy_from_slice(&(p as i64).to_le_bytes());
+        offsets[8 * i..8 * i + 8].copy_from_slice(&(p as i64).to_le_bytes());
     }
+    out.target.patch(offsets_at, &offsets).map_err(io)?;
     Ok((active, tree.leaves.len()))
 }
 
@@ -572,6 +654,12 @@ fn write_mask(out: &mut Vec<u8>, mask: &[u64]) {
 /// within half range in half mode. The error names the first bad voxel in
 /// offset order.
 fn check_leaf<T: VoxelValue>(leaf: &Leaf<T>, grid: &str, half: bool) -> Result<(), VdbWriteError> {
+    let limit = if half { HALF_MAX } else { f32::MAX };
+    // Fast path: `x.abs() <= limit` is false for NaN and infinities.
+    let all_ok = leaf.values.iter().all(|v| v.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= limit));
+    if all_ok {
+        return Ok(());
+    }
     for n in 0..LEAF_NUM_VALUES {
         let v = leaf.values[n];
         let c = v.components();
@@ -580,52 +668,112 @@ fn check_leaf<T: VoxelValue>(leaf: &Leaf<T>, grid: &str, half: bool) -> Result<(
         if !c.iter().all(|x| x.is_finite()) {
             return Err(VdbWriteError::NonFinite { grid: grid.to_string(), ijk, value: format!("{v:?}") });
         }
-        if half && !c.iter().all(|x| x.abs() <= HALF_MAX) {
+        if !c.iter().all(|x| x.abs() <= limit) {
             return Err(VdbWriteError::HalfOverflow { grid: grid.to_string(), ijk, value: format!("{v:?}") });
         }
     }
     Ok(())
 }
 
+/// Inclusive index bounding box of a leaf's active voxels, from its mask:
+/// word `w` holds the voxels with local x = w, byte `j` of it those with
+/// y = j, bit `b` of a byte z = b (offset `x<<6 | y<<3 | z`).
+fn leaf_active_bbox(origin: IVec3, mask: &[u64; crate::grid::LEAF_MASK_WORDS]) -> Option<(IVec3, IVec3)> {
+    let (mut x0, mut x1, mut ys, mut zs) = (8i32, -1i32, 0u8, 0u8);
+    for (w, &word) in mask.iter().enumerate() {
+        if word == 0 {
+            continue;
+        }
+        x0 = x0.min(w as i32);
+        x1 = w as i32;
+        for (j, b) in word.to_le_bytes().into_iter().enumerate() {
+            if b != 0 {
+                ys |= 1 << j;
+                zs |= b;
+            }
+        }
+    }
+    if x1 < 0 {
+        return None;
+    }
+    let lo = IVec3::new(x0, ys.trailing_zeros() as i32, zs.trailing_zeros() as i32);
+    let hi = IVec3::new(x1, 7 - ys.leading_zeros() as i32, 7 - zs.leading_zeros() as i32);
+    Some((origin + lo, origin + hi))
+}
+
+/// Active voxel count and bounding box of the leaves (OpenVDB's
+/// `file_voxel_count`, `file_bbox_min/max`), from the masks alone.
+fn leaf_statistics<T: VoxelValue>(leaves: &[&Leaf<T>]) -> (u64, Option<(IVec3, IVec3)>) {
+    leaves
+        .par_iter()
+        .map(|l| (l.active_count(), leaf_active_bbox(l.origin, &l.mask)))
+        .reduce(
+            || (0, None),
+            |(n, a), (m, b)| {
+                let bb = match (a, b) {
+                    (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
+                    (a, b) => a.or(b),
+                };
+                (n + m, bb)
+            },
+        )
+}
+
 /// Leaves per parallel work item: enough to amortise the zlib stream setup.
 const LEAVES_PER_CHUNK: usize = 64;
+/// Chunks encoded per parallel batch before they are written out: bounds the
+/// memory held to about 1024 leaves' buffers (~6 MB for vec3s).
+const CHUNKS_PER_BATCH: usize = 16;
 
-/// Encodes all leaf buffers in file order, in parallel chunks. On bad values,
-/// the error is the one of the first bad leaf in file order (deterministic).
-fn encode_leaf_buffers<T: VoxelValue>(
+/// Encodes and streams all leaf buffers in file order, in parallel chunks
+/// (each hashed where it is encoded). On bad values, the error is the one of
+/// the first bad leaf in file order (deterministic).
+fn write_buffers<T: VoxelValue>(
+    out: &mut Stream,
     leaves: &[&Leaf<T>],
     grid: &str,
     bg: T,
     flags: u32,
     half: bool,
-) -> Result<Vec<Vec<u8>>, VdbWriteError> {
-    let chunks: Vec<Result<Vec<u8>, VdbWriteError>> = leaves
-        .par_chunks(LEAVES_PER_CHUNK)
-        .map(|chunk| {
-            let mut enc = Encoder::new(flags, half);
-            let mut out = Vec::with_capacity(chunk.len() * (64 + 16 + LEAF_NUM_VALUES * T::COMPONENTS * 2));
-            for leaf in chunk {
-                check_leaf(leaf, grid, half)?;
-                write_leaf_buffers(&mut out, leaf, bg, &mut enc);
-            }
-            Ok(out)
-        })
-        .collect();
-    chunks.into_iter().collect()
+) -> Result<(), VdbWriteError> {
+    let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
+    for batch in leaves.chunks(LEAVES_PER_CHUNK * CHUNKS_PER_BATCH) {
+        let chunks: Vec<Result<(Vec<u8>, (u64, u64)), VdbWriteError>> = batch
+            .par_chunks(LEAVES_PER_CHUNK)
+            .map(|chunk| {
+                let mut enc = Encoder::new(flags, half);
+                let elem = if half { 2 } else { 4 } * T::COMPONENTS;
+                let mut bytes = Vec::with_capacity(chunk.len() * (64 + 1 + 8 + LEAF_NUM_VALUES * elem));
+                for leaf in chunk {
+                    check_leaf(leaf, grid, half)?;
+                    write_leaf_buffers(&mut bytes, leaf, bg, &mut enc);
+                }
+                let h = piece_hash(&bytes);
+                Ok((bytes, h))
+            })
+            .collect();
+        for c in chunks {
+            let (bytes, h) = c?;
+            out.put_hashed(&bytes, h).map_err(io)?;
+        }
+    }
+    Ok(())
 }
 
-/// A UUID (RFC 9562 version 8, "custom") from a 128-bit hash of the file
-/// content, formatted 8-4-4-4-12 in lowercase hex. Chunks are hashed in
-/// parallel and combined in order, so the result is thread-count independent.
-pub fn content_uuid(content: &[u8]) -> String {
-    const CHUNK: usize = 1 << 20;
-    let parts: Vec<(u64, u64)> = content
-        .par_chunks(CHUNK)
-        .map(|c| (hash64(c, 0x243F_6A88_85A3_08D3), hash64(c, 0x1319_8A2E_0370_7344)))
-        .collect();
-    let mut a = 0xA409_3822_299F_31D0u64 ^ content.len() as u64;
+/// The 128-bit hash of one piece of the file (two seeded [`hash64`] lanes).
+fn piece_hash(bytes: &[u8]) -> (u64, u64) {
+    (hash64(bytes, 0x243F_6A88_85A3_08D3), hash64(bytes, 0x1319_8A2E_0370_7344))
+}
+
+/// A UUID (RFC 9562 version 8, "custom") from the hashes of the file's pieces
+/// after the header, in order (their boundaries are fixed by the content:
+/// headers, topology, chunks of 64 leaves; the descriptor offsets are hashed
+/// as zeros). Formatted 8-4-4-4-12 in lowercase hex. Identical inputs give
+/// identical UUIDs whatever the thread count.
+pub fn content_uuid(piece_hashes: &[(u64, u64)]) -> String {
+    let mut a = 0xA409_3822_299F_31D0u64 ^ piece_hashes.len() as u64;
     let mut b = 0x082E_FA98_EC4E_6C89u64;
-    for (x, y) in parts {
+    for &(x, y) in piece_hashes {
         a = mix(a ^ x);
         b = mix(b ^ y);
     }
@@ -785,11 +933,32 @@ mod tests {
         assert!(matches!(write_vdb_bytes(&[GridRef::Float(&bad)], &Default::default()), Err(VdbWriteError::BadTransform { .. })));
     }
 
+    /// The mask-derived leaf bbox equals brute force over random masks.
+    #[test]
+    fn leaf_bbox_from_mask_matches_brute_force() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(7);
+        let origin = IVec3::new(-16, 8, 4096);
+        for trial in 0..500 {
+            let mut leaf = Leaf::new(origin, 0.0f32);
+            let k = if trial % 50 == 0 { 0 } else { rng.random_range(1..20) };
+            for _ in 0..k {
+                leaf.set_active(rng.random_range(0..512), true);
+            }
+            let mut brute: Option<(IVec3, IVec3)> = None;
+            for (p, _) in leaf.iter_active() {
+                brute = Some(brute.map_or((p, p), |(a, b)| (a.min(p), b.max(p))));
+            }
+            assert_eq!(leaf_active_bbox(origin, &leaf.mask), brute);
+        }
+    }
+
     #[test]
     fn uuid_is_well_formed_and_content_dependent() {
-        let a = content_uuid(b"hello");
-        assert_ne!(a, content_uuid(b"hellp"));
-        assert_eq!(a, content_uuid(b"hello"));
+        let a = content_uuid(&[piece_hash(b"hello")]);
+        assert_ne!(a, content_uuid(&[piece_hash(b"hellp")]));
+        assert_ne!(a, content_uuid(&[piece_hash(b"hel"), piece_hash(b"lo")]));
+        assert_eq!(a, content_uuid(&[piece_hash(b"hello")]));
         assert_eq!(a.len(), 36);
         assert!(matches!(a.as_bytes()[19], b'8' | b'9' | b'a' | b'b'));
     }
