@@ -153,7 +153,9 @@ impl Encoder {
         out.push(m);
         if matches!(
             m,
-            meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
+            meta::NO_MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_TWO_INACTIVE_VALS
         ) {
             let n_inactive = if m == meta::MASK_AND_TWO_INACTIVE_VALS { 2 } else { 1 };
             for &v in &inactive[..n_inactive] {
@@ -163,7 +165,12 @@ impl Encoder {
         }
         let all = m == meta::NO_MASK_AND_ALL_VALS;
         let count = if all { values.len() } else { layout::mask_count(value_mask) };
-        if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
+        if matches!(
+            m,
+            meta::MASK_AND_NO_INACTIVE_VALS
+                | meta::MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_TWO_INACTIVE_VALS
+        ) {
             // Selection mask: bit set where an inactive slot holds inactive1.
             self.selection.clear();
             self.selection.resize(values.len() / 64, 0);
@@ -201,7 +208,13 @@ fn gather<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: boo
     }
 }
 
-fn gather_as<T: VoxelValue, const HALF: bool>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize) {
+fn gather_as<T: VoxelValue, const HALF: bool>(
+    dst: &mut Vec<u8>,
+    values: &[T],
+    mask: &[u64],
+    all: bool,
+    count: usize,
+) {
     let stride = T::COMPONENTS * if HALF { 2 } else { 4 };
     let start = dst.len();
     dst.resize(start + count * stride, 0);
@@ -290,13 +303,21 @@ pub fn read_values<T: VoxelValue>(
     }
     let mut inactive0 = if m == meta::NO_MASK_OR_INACTIVE_VALS { background } else { negative(background) };
     let mut inactive1 = background;
-    if matches!(m, meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
+    if matches!(
+        m,
+        meta::NO_MASK_AND_ONE_INACTIVE_VAL
+            | meta::MASK_AND_ONE_INACTIVE_VAL
+            | meta::MASK_AND_TWO_INACTIVE_VALS
+    ) {
         inactive0 = read_full(cur)?;
         if m == meta::MASK_AND_TWO_INACTIVE_VALS {
             inactive1 = read_full(cur)?;
         }
     }
-    let selection = if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
+    let selection = if matches!(
+        m,
+        meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
+    ) {
         Some(cur.u64s(n / 64)?)
     } else {
         None
@@ -362,20 +383,24 @@ fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<
     let len = cur.i64()?;
     if len <= 0 {
         if len.unsigned_abs() != nbytes as u64 {
-            return Err(cur.err_at(at, format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs())));
+            return Err(cur.err_at(
+                at,
+                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
+            ));
         }
         let b = cur.bytes(nbytes)?;
         return Ok(decode.then(|| b.to_vec()));
     }
     let stream = cur.bytes_len(len as u64)?;
-    if !decode {
-        return Ok(None);
-    }
+    // Decompressed even when only validating: vdb-rs reads just the first
+    // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
+    // damaged stream would otherwise pass unnoticed. OpenVDB's `uncompress`
+    // checks the whole stream.
     let mut out = vec![0u8; nbytes];
     let mut z = Decompress::new(true);
     let status = z.decompress(stream, &mut out, FlushDecompress::Finish);
     match status {
-        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(Some(out)),
+        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(out)),
         Ok(_) => Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
         Err(e) => Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
     }
@@ -389,7 +414,10 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
     let len = cur.i64()?;
     if len <= 0 {
         if len.unsigned_abs() != nbytes as u64 {
-            return Err(cur.err_at(at, format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs())));
+            return Err(cur.err_at(
+                at,
+                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
+            ));
         }
         let b = cur.bytes(nbytes)?;
         return Ok(decode.then(|| b.to_vec()));
@@ -398,7 +426,8 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
     let mut header_nbytes: usize = 0;
     // SAFETY: `blosc_cbuffer_validate` reads at most `frame.len()` bytes of the
     // frame (it first checks `cbytes >= BLOSC_MIN_HEADER_LENGTH`).
-    let ok = unsafe { blosc_src::blosc_cbuffer_validate(frame.as_ptr().cast(), frame.len(), &mut header_nbytes) };
+    let ok =
+        unsafe { blosc_src::blosc_cbuffer_validate(frame.as_ptr().cast(), frame.len(), &mut header_nbytes) };
     if ok != 0 {
         return Err(cur.err_at(at, "invalid Blosc chunk header".to_string()));
     }
@@ -414,7 +443,9 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
     let mut out = vec![0u8; nbytes];
     // SAFETY: the frame was validated above (its header's cbytes equals the
     // slice length), and blosc writes at most `destsize` = `out.len()` bytes.
-    let got = unsafe { blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), out.as_mut_ptr().cast(), out.len(), 1) };
+    let got = unsafe {
+        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), out.as_mut_ptr().cast(), out.len(), 1)
+    };
     if got != nbytes as i32 {
         return Err(cur.err_at(at, format!("corrupt Blosc chunk (decompressed {got} of {nbytes} bytes)")));
     }
@@ -425,7 +456,14 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
 mod tests {
     use super::*;
 
-    fn record<T: VoxelValue>(flags: u32, half: bool, values: &[T], mask: &[u64], child: Option<&[u64]>, bg: T) -> Vec<u8> {
+    fn record<T: VoxelValue>(
+        flags: u32,
+        half: bool,
+        values: &[T],
+        mask: &[u64],
+        child: Option<&[u64]>,
+        bg: T,
+    ) -> Vec<u8> {
         let mut out = Vec::new();
         Encoder::new(flags, half).write_values(&mut out, values, mask, child, bg);
         out
@@ -442,15 +480,16 @@ mod tests {
     /// slots (every 3rd) hold distinct values.
     fn leaf(inactive: impl Fn(usize) -> f32) -> (Vec<f32>, Vec<u64>) {
         let mut mask = vec![0u64; 8];
-        let mut values = vec![0f32; 512];
-        for n in 0..512 {
-            if n % 3 == 0 {
-                layout::set_mask_bit(&mut mask, n);
-                values[n] = 1.0 + n as f32 * 0.25;
-            } else {
-                values[n] = inactive(n);
-            }
-        }
+        let values: Vec<f32> = (0..512)
+            .map(|n| {
+                if n % 3 == 0 {
+                    layout::set_mask_bit(&mut mask, n);
+                    1.0 + n as f32 * 0.25
+                } else {
+                    inactive(n)
+                }
+            })
+            .collect();
         (values, mask)
     }
 
@@ -460,7 +499,8 @@ mod tests {
     #[test]
     fn mask_compress_cases_and_round_trip() {
         let bg = 2.0f32;
-        let cases: Vec<(u8, Box<dyn Fn(usize) -> f32>)> = vec![
+        type Case = (u8, Box<dyn Fn(usize) -> f32>);
+        let cases: Vec<Case> = vec![
             (0, Box::new(|_| 2.0)),
             (1, Box::new(|_| -2.0)),
             (2, Box::new(|_| 5.0)),
@@ -566,7 +606,8 @@ mod tests {
     fn malformed_records_are_errors() {
         let mask = vec![u64::MAX; 8];
         let fmt = |flags| RecordFormat { flags, half: false };
-        let try_read = |b: &[u8], flags| read_values::<f32>(&mut Cursor::new(b), fmt(flags), 512, &mask, 0.0, true);
+        let try_read =
+            |b: &[u8], flags| read_values::<f32>(&mut Cursor::new(b), fmt(flags), 512, &mask, 0.0, true);
         assert!(try_read(&[7], 2).is_err());
         assert!(try_read(&[0, 1, 2, 3], 2).is_err());
         let mut b = vec![0u8];

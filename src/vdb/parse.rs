@@ -54,7 +54,9 @@ impl<'a> Cursor<'a> {
     /// Moves to absolute offset `pos`, which must lie within the data.
     pub fn seek(&mut self, pos: u64) -> Result<(), ParseError> {
         if pos > self.data.len() as u64 {
-            return Err(self.err(format!("offset {pos} is past the end of the file ({} bytes)", self.data.len())));
+            return Err(
+                self.err(format!("offset {pos} is past the end of the file ({} bytes)", self.data.len()))
+            );
         }
         self.pos = pos as usize;
         Ok(())
@@ -113,7 +115,9 @@ impl<'a> Cursor<'a> {
         let at = self.pos;
         let len = self.u32()? as usize;
         if len > self.remaining() {
-            return Err(self.err_at(at, format!("string length {len} exceeds the {} bytes left", self.remaining())));
+            return Err(
+                self.err_at(at, format!("string length {len} exceeds the {} bytes left", self.remaining()))
+            );
         }
         self.bytes(len)
     }
@@ -135,7 +139,10 @@ pub enum RawMeta {
     Vec3s([f32; 3]),
     Vec3d([f64; 3]),
     /// Any other type, kept as raw bytes (e.g. `__delayedload`).
-    Other { type_name: String, bytes: Vec<u8> },
+    Other {
+        type_name: String,
+        bytes: Vec<u8>,
+    },
 }
 
 /// MetaMap: `u32 count`, then `count` x {key, type name, `u32 size`, value}.
@@ -146,7 +153,8 @@ pub fn read_meta_map(cur: &mut Cursor) -> Result<Vec<(String, RawMeta)>, ParseEr
     let count = cur.u32()? as usize;
     // Each entry takes at least 12 bytes (three u32 lengths).
     if count > cur.remaining() / 12 {
-        return Err(cur.err_at(at, format!("metadata count {count} cannot fit in the {} bytes left", cur.remaining())));
+        return Err(cur
+            .err_at(at, format!("metadata count {count} cannot fit in the {} bytes left", cur.remaining())));
     }
     let mut out = Vec::with_capacity(count);
     for _ in 0..count {
@@ -165,7 +173,10 @@ pub fn read_meta_map(cur: &mut Cursor) -> Result<Vec<(String, RawMeta)>, ParseEr
         };
         if let Some(w) = want {
             if size != w {
-                return Err(cur.err_at(size_at, format!("metadata `{key}` of type {type_name} has size {size}, expected {w}")));
+                return Err(cur.err_at(
+                    size_at,
+                    format!("metadata `{key}` of type {type_name} has size {size}, expected {w}"),
+                ));
             }
         }
         let f32_at = |i: usize| f32::from_le_bytes(v[4 * i..4 * i + 4].try_into().expect("4 bytes"));
@@ -293,7 +304,10 @@ pub fn parse_file(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> bool) -> Result<
     let grid_count = cur.i32()?;
     // A descriptor takes at least 3 string lengths and 3 offsets (36 bytes).
     if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
-        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
+        return Err(cur.err_at(
+            at,
+            format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining()),
+        ));
     }
     let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count as usize);
     for _ in 0..grid_count {
@@ -313,9 +327,13 @@ pub fn parse_file(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> bool) -> Result<
 /// 2) file version, 3) library version, 4) has-grid-offsets flag, 5) (no
 /// compression byte since 222), 6) UUID; then the file MetaMap.
 fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
-    let magic = cur.i64().map_err(|_| cur.err_at(0, "not a VDB file: shorter than the 8-byte magic number".into()))?;
+    let magic = cur
+        .i64()
+        .map_err(|_| cur.err_at(0, "not a VDB file: shorter than the 8-byte magic number".into()))?;
     if magic != layout::MAGIC {
-        return Err(cur.err_at(0, format!("not a VDB file: magic number {magic:#x}, expected {:#x}", layout::MAGIC)));
+        return Err(
+            cur.err_at(0, format!("not a VDB file: magic number {magic:#x}, expected {:#x}", layout::MAGIC))
+        );
     }
     let file_version = cur.u32()?;
     if !(layout::MIN_READ_VERSION..=layout::MAX_READ_VERSION).contains(&file_version) {
@@ -332,14 +350,23 @@ fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
     let library_minor = cur.u32()?;
     let has_offsets = cur.u8()?;
     if has_offsets != 1 {
-        return Err(cur.err_at(20, format!("has-grid-offsets flag is {has_offsets}: streamed archives without offsets are not supported")));
+        return Err(cur.err_at(
+            20,
+            format!(
+                "has-grid-offsets flag is {has_offsets}: streamed archives without offsets are not supported"
+            ),
+        ));
     }
     let uuid = String::from_utf8_lossy(cur.bytes(layout::UUID_LEN)?).into_owned();
     let metadata = read_meta_map(cur)?;
     Ok(Header { file_version, library_major, library_minor, uuid, metadata })
 }
 
-fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> bool) -> Result<ParsedGrid, ParseError> {
+fn read_grid(
+    cur: &mut Cursor,
+    header: &Header,
+    decode: &dyn Fn(&GridHeader) -> bool,
+) -> Result<ParsedGrid, ParseError> {
     let desc_at = cur.pos();
     let unique_name = cur.string()?;
     let type_name = cur.string()?;
@@ -368,7 +395,9 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
     let comp_at = cur.pos();
     let compression = cur.u32()?;
     if compression & !(layout::COMPRESS_ZIP | layout::COMPRESS_ACTIVE_MASK | layout::COMPRESS_BLOSC) != 0 {
-        return Err(cur.err_at(comp_at, format!("grid `{unique_name}`: invalid compression flags {compression:#x}")));
+        return Err(
+            cur.err_at(comp_at, format!("grid `{unique_name}`: invalid compression flags {compression:#x}"))
+        );
     }
     let metadata = read_meta_map(cur)?;
     let half = metadata.iter().any(|(k, v)| k == layout::META_HALF && *v == RawMeta::Bool(true));
@@ -392,7 +421,10 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
             if !gh.instance_parent.is_empty() {
                 return Err(cur.err_at(
                     desc_at,
-                    format!("grid `{}` is an instance of `{}`: instanced grids are not supported", gh.unique_name, gh.instance_parent),
+                    format!(
+                        "grid `{}` is an instance of `{}`: instanced grids are not supported",
+                        gh.unique_name, gh.instance_parent
+                    ),
                 ));
             }
             let (map_name, transform) = read_transform(cur, &gh.unique_name)?;
@@ -405,7 +437,12 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
                 ValueKind::Vec3 => AnyTree::Vec3(read_tree::<[f32; 3]>(cur, &gh, fmt, dec)?),
             };
             if cur.pos() as u64 != gh.end_pos {
-                return Err(cur.err(format!("grid `{}`: data end at {} but endPos says {}", gh.unique_name, cur.pos(), gh.end_pos)));
+                return Err(cur.err(format!(
+                    "grid `{}`: data end at {} but endPos says {}",
+                    gh.unique_name,
+                    cur.pos(),
+                    gh.end_pos
+                )));
             }
             Some(tree)
         }
@@ -458,10 +495,15 @@ fn read_transform(cur: &mut Cursor, grid: &str) -> Result<(String, Transform), P
         }
     };
     if !(scale.x == scale.y && scale.y == scale.z) {
-        return Err(cur.err_at(at, format!("grid `{grid}`: non-uniform voxel scale {scale} is not supported")));
+        return Err(
+            cur.err_at(at, format!("grid `{grid}`: non-uniform voxel scale {scale} is not supported"))
+        );
     }
     if !(scale.x.is_finite() && scale.x != 0.0 && translation.is_finite()) {
-        return Err(cur.err_at(at, format!("grid `{grid}`: degenerate transform (scale {}, translation {translation})", scale.x)));
+        return Err(cur.err_at(
+            at,
+            format!("grid `{grid}`: degenerate transform (scale {}, translation {translation})", scale.x),
+        ));
     }
     Ok((name, Transform::new(scale.x, translation)))
 }
@@ -516,7 +558,12 @@ fn read_internal<T: VoxelValue>(
 
 /// Reads topology and buffers of a tree (OpenVDB `RootNode::readTopology`,
 /// then `Tree::readBuffers`), in the depth-first order both passes share.
-fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat, decode: bool) -> Result<Tree<T>, ParseError> {
+fn read_tree<T: VoxelValue>(
+    cur: &mut Cursor,
+    gh: &GridHeader,
+    fmt: RecordFormat,
+    decode: bool,
+) -> Result<Tree<T>, ParseError> {
     let name = &gh.unique_name;
     let at = cur.pos();
     let buffer_count = cur.i32()?;
@@ -529,9 +576,15 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
     let child_count = cur.u32()? as usize;
     let full = 4 * T::COMPONENTS;
     if tile_count > cur.remaining() / (12 + full + 1) || child_count > cur.remaining() / 12 {
-        return Err(cur.err_at(at, format!("grid `{name}`: {tile_count} root tiles and {child_count} children cannot fit in the file")));
+        return Err(cur.err_at(
+            at,
+            format!(
+                "grid `{name}`: {tile_count} root tiles and {child_count} children cannot fit in the file"
+            ),
+        ));
     }
-    let mut tree = Tree { background, leaves: Vec::new(), tiles: Vec::new(), leaf_count: 0, active_tile_count: 0 };
+    let mut tree =
+        Tree { background, leaves: Vec::new(), tiles: Vec::new(), leaf_count: 0, active_tile_count: 0 };
     for _ in 0..tile_count {
         let o = cur.ivec3()?;
         let v: T = read_value(cur)?;
@@ -549,7 +602,8 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
         let at = cur.pos();
         let origin = cur.ivec3()?;
         if layout::root_child_origin(origin) != origin {
-            return Err(cur.err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
+            return Err(cur
+                .err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
         }
         if let Some(p) = prev {
             if (p.x, p.y, p.z) >= (origin.x, origin.y, origin.z) {
@@ -578,7 +632,11 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
         }
     }
     if cur.pos() as u64 != gh.block_pos {
-        return Err(cur.err(format!("grid `{name}`: topology ends at {} but blockPos says {}", cur.pos(), gh.block_pos)));
+        return Err(cur.err(format!(
+            "grid `{name}`: topology ends at {} but blockPos says {}",
+            cur.pos(),
+            gh.block_pos
+        )));
     }
     // Buffers: per leaf, a copy of the value mask and the value record.
     for node in &nodes16 {
@@ -586,7 +644,10 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
             let at = cur.pos();
             let copy = cur.u64s(LEAF_MASK_WORDS)?;
             if copy[..] != mask[..] {
-                return Err(cur.err_at(at, format!("grid `{name}`: leaf value mask in the buffers differs from the topology")));
+                return Err(cur.err_at(
+                    at,
+                    format!("grid `{name}`: leaf value mask in the buffers differs from the topology"),
+                ));
             }
             let values = codec::read_values::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, decode)?;
             if let Some(values) = values {

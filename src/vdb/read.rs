@@ -127,7 +127,8 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 
 /// Reads a VDB file.
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
-    let bytes = std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    let bytes =
+        std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
     read_vdb_named(&bytes, &path.display().to_string())
 }
 
@@ -140,7 +141,10 @@ pub fn read_vdb_bytes(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
 fn vdbrs_reads(gh: &GridHeader) -> bool {
     gh.kind == Some(ValueKind::Float)
         && !gh.half
-        && matches!(gh.map_name.as_str(), "UniformScaleMap" | "UniformScaleTranslateMap" | "ScaleTranslateMap")
+        && matches!(
+            gh.map_name.as_str(),
+            "UniformScaleMap" | "UniformScaleTranslateMap" | "ScaleTranslateMap"
+        )
 }
 
 fn read_vdb_named(bytes: &[u8], file: &str) -> Result<VdbFile, VdbReadError> {
@@ -155,11 +159,13 @@ fn read_vdb_named(bytes: &[u8], file: &str) -> Result<VdbFile, VdbReadError> {
         .map(|g| g.header.unique_name.clone())
         .collect();
     if !retry.is_empty() {
-        parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh) || retry.contains(&gh.unique_name)).map_err(invalid)?;
+        parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh) || retry.contains(&gh.unique_name))
+            .map_err(invalid)?;
     }
     let use_vdbrs = |gh: &GridHeader| vdbrs_reads(gh) && !retry.contains(&gh.unique_name);
     // 2. vdb-rs for the plain float grids.
-    let vdbrs_names: Vec<String> = parsed.grids.iter().filter(|g| use_vdbrs(&g.header)).map(|g| g.header.unique_name.clone()).collect();
+    let vdbrs_names: Vec<String> =
+        parsed.grids.iter().filter(|g| use_vdbrs(&g.header)).map(|g| g.header.unique_name.clone()).collect();
     let mut from_vdbrs = read_with_vdbrs(bytes, &vdbrs_names, file)?.into_iter();
     // 3. Assemble in file order.
     let ParsedFile { header, grids: parsed_grids } = parsed;
@@ -236,10 +242,20 @@ fn normalise<T: VoxelValue>(mut leaf: Leaf<T>, background: T) -> Leaf<T> {
 }
 
 /// Builds a grid from a natively decoded tree, densifying active tiles.
-fn assemble<T: VoxelValue>(tree: Tree<T>, name: &str, transform: Transform, file: &str) -> Result<Grid<T>, VdbReadError> {
+fn assemble<T: VoxelValue>(
+    tree: Tree<T>,
+    name: &str,
+    transform: Transform,
+    file: &str,
+) -> Result<Grid<T>, VdbReadError> {
     let voxels: u128 = tree.tiles.iter().map(|(_, l, _)| 1u128 << (3 * l)).sum();
     if voxels > MAX_TILE_VOXELS {
-        return Err(VdbReadError::TooManyTileVoxels { file: file.into(), grid: name.into(), voxels, limit: MAX_TILE_VOXELS });
+        return Err(VdbReadError::TooManyTileVoxels {
+            file: file.into(),
+            grid: name.into(),
+            voxels,
+            limit: MAX_TILE_VOXELS,
+        });
     }
     let mut g = Grid::new(name, tree.background, transform);
     for leaf in tree.leaves {
@@ -295,15 +311,20 @@ fn vdbrs_key(name: &str) -> String {
     name.bytes().map(char::from).collect()
 }
 
+/// Leaves and transform of one grid as vdb-rs read it.
+type VdbRsGrid = (Vec<Leaf<f32>>, Transform);
+
 /// Reads the named float grids with vdb-rs: for each, its leaves (mask and
 /// values) and transform.
-fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<(Vec<Leaf<f32>>, Transform)>, VdbReadError> {
+fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<VdbRsGrid>, VdbReadError> {
     if names.is_empty() {
         return Ok(Vec::new());
     }
-    let fail = |grid: &str, message: String| VdbReadError::VdbRs { file: file.into(), grid: grid.into(), message };
+    let fail =
+        |grid: &str, message: String| VdbReadError::VdbRs { file: file.into(), grid: grid.into(), message };
     let result = catch_silently(|| -> Result<Vec<_>, (String, String)> {
-        let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes)).map_err(|e| (String::new(), e.to_string()))?;
+        let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes))
+            .map_err(|e| (String::new(), e.to_string()))?;
         let mut out = Vec::with_capacity(names.len());
         for name in names {
             let g = reader.read_grid::<f32>(&vdbrs_key(name)).map_err(|e| (name.clone(), e.to_string()))?;
@@ -320,10 +341,12 @@ fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<(Ve
 
 /// Extracts leaves and transform from a vdb-rs grid. Leaf origins are derived
 /// from the slot indices with our offset functions.
-fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<(Vec<Leaf<f32>>, Transform), String> {
+fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
     use super::layout::{internal16_child_origin, internal32_child_origin};
     let transform = match &g.transform {
-        vdb_rs::Map::ScaleTranslateMap { translation: t, scale_values: s, .. } => Transform::new(s.x, DVec3::new(t.x, t.y, t.z)),
+        vdb_rs::Map::ScaleTranslateMap { translation: t, scale_values: s, .. } => {
+            Transform::new(s.x, DVec3::new(t.x, t.y, t.z))
+        }
         vdb_rs::Map::UniformScaleMap { scale_values: s, .. } => Transform::new(s.x, DVec3::ZERO),
     };
     let mut leaves = Vec::new();
@@ -334,7 +357,8 @@ fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<(Vec<Leaf<f32>>, Transform), S
             let o4 = internal32_child_origin(o5, i5);
             for i4 in n4.child_mask.iter_ones() {
                 let n3 = n4.nodes.get(&(i4 as u32)).ok_or("missing leaf node")?;
-                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != 8 {
+                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != 8
+                {
                     return Err(format!("leaf buffer of {} values", n3.buffer.len()));
                 }
                 let mut leaf = Leaf::new(internal16_child_origin(o4, i4), 0.0f32);

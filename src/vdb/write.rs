@@ -295,7 +295,12 @@ impl BenchWrite {
 }
 
 /// Writes `grids` to `path` `repeats` times and times each write.
-pub fn bench_write(path: &Path, grids: &[GridRef], opts: &WriteOptions, repeats: usize) -> Result<BenchWrite, VdbWriteError> {
+pub fn bench_write(
+    path: &Path,
+    grids: &[GridRef],
+    opts: &WriteOptions,
+    repeats: usize,
+) -> Result<BenchWrite, VdbWriteError> {
     let mut seconds = Vec::with_capacity(repeats);
     let mut bytes = 0;
     for _ in 0..repeats.max(1) {
@@ -318,7 +323,10 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
         }
     }
     for (i, (k, _)) in opts.metadata.iter().enumerate() {
-        if k.is_empty() || RESERVED_KEYS.contains(&k.as_str()) || opts.metadata[..i].iter().any(|(o, _)| o == k) {
+        if k.is_empty()
+            || RESERVED_KEYS.contains(&k.as_str())
+            || opts.metadata[..i].iter().any(|(o, _)| o == k)
+        {
             return Err(VdbWriteError::ReservedMetadata(k.clone()));
         }
     }
@@ -327,7 +335,11 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
 
 /// Streams the whole file into `target`; IO errors name `<output>` and are
 /// renamed by the caller.
-fn encode_file(target: &mut dyn Target, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
+fn encode_file(
+    target: &mut dyn Target,
+    grids: &[GridRef],
+    opts: &WriteOptions,
+) -> Result<WriteStats, VdbWriteError> {
     check_options(grids, opts)?;
     let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     let flags = compression_flags(opts.compression);
@@ -424,12 +436,23 @@ struct Node16 {
 /// Regroups leaves: sort by (root origin x, y, z, Internal32 slot, Internal16
 /// slot), which is exactly the depth-first order of OpenVDB's tree.
 fn build_tree<T: VoxelValue>(grid: &Grid<T>) -> Tree<'_, T> {
-    let mut keyed: Vec<((i32, i32, i32, u32, u32), &Leaf<T>)> = grid
+    // (root origin x, y, z, Internal32 slot, Internal16 slot)
+    type Key = (i32, i32, i32, u32, u32);
+    let mut keyed: Vec<(Key, &Leaf<T>)> = grid
         .leaves()
         .iter()
         .map(|l| {
             let r = layout::root_child_origin(l.origin);
-            ((r.x, r.y, r.z, layout::internal32_offset(l.origin) as u32, layout::internal16_offset(l.origin) as u32), l)
+            (
+                (
+                    r.x,
+                    r.y,
+                    r.z,
+                    layout::internal32_offset(l.origin) as u32,
+                    layout::internal16_offset(l.origin) as u32,
+                ),
+                l,
+            )
         })
         .collect();
     keyed.sort_unstable_by_key(|(k, _)| *k);
@@ -473,7 +496,8 @@ fn write_grid<T: VoxelValue>(
         });
     }
     let bg = grid.background;
-    let bg_ok = bg.is_finite() && (!half || bg.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= HALF_MAX));
+    let bg_ok =
+        bg.is_finite() && (!half || bg.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= HALF_MAX));
     if !bg_ok {
         return Err(VdbWriteError::BadBackground { grid: name.clone(), value: format!("{bg:?}") });
     }
@@ -482,7 +506,11 @@ fn write_grid<T: VoxelValue>(
 
     // Descriptor: name, type, instance parent, then gridPos/blockPos/endPos.
     let mut head = Vec::new();
-    let type_name = if half { format!("{}{}", T::TREE_TYPE, layout::HALF_FLOAT_SUFFIX) } else { T::TREE_TYPE.to_string() };
+    let type_name = if half {
+        format!("{}{}", T::TREE_TYPE, layout::HALF_FLOAT_SUFFIX)
+    } else {
+        T::TREE_TYPE.to_string()
+    };
     push_string(&mut head, name);
     push_string(&mut head, &type_name);
     push_string(&mut head, "");
@@ -704,19 +732,16 @@ fn leaf_active_bbox(origin: IVec3, mask: &[u64; crate::grid::LEAF_MASK_WORDS]) -
 /// Active voxel count and bounding box of the leaves (OpenVDB's
 /// `file_voxel_count`, `file_bbox_min/max`), from the masks alone.
 fn leaf_statistics<T: VoxelValue>(leaves: &[&Leaf<T>]) -> (u64, Option<(IVec3, IVec3)>) {
-    leaves
-        .par_iter()
-        .map(|l| (l.active_count(), leaf_active_bbox(l.origin, &l.mask)))
-        .reduce(
-            || (0, None),
-            |(n, a), (m, b)| {
-                let bb = match (a, b) {
-                    (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
-                    (a, b) => a.or(b),
-                };
-                (n + m, bb)
-            },
-        )
+    leaves.par_iter().map(|l| (l.active_count(), leaf_active_bbox(l.origin, &l.mask))).reduce(
+        || (0, None),
+        |(n, a), (m, b)| {
+            let bb = match (a, b) {
+                (Some(a), Some(b)) => Some((a.0.min(b.0), a.1.max(b.1))),
+                (a, b) => a.or(b),
+            };
+            (n + m, bb)
+        },
+    )
 }
 
 /// Leaves per parallel work item: enough to amortise the zlib stream setup.
@@ -738,7 +763,8 @@ fn write_buffers<T: VoxelValue>(
 ) -> Result<(), VdbWriteError> {
     let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     for batch in leaves.chunks(LEAVES_PER_CHUNK * CHUNKS_PER_BATCH) {
-        let chunks: Vec<Result<(Vec<u8>, (u64, u64)), VdbWriteError>> = batch
+        type Encoded = Result<(Vec<u8>, (u64, u64)), VdbWriteError>;
+        let chunks: Vec<Encoded> = batch
             .par_chunks(LEAVES_PER_CHUNK)
             .map(|chunk| {
                 let mut enc = Encoder::new(flags, half);
@@ -842,14 +868,14 @@ mod tests {
         assert_eq!(
             origins,
             vec![
-                IVec3::new(-8, 0, 0),    // root (-4096, 0, 0)
-                IVec3::new(0, 0, -8),    // root (0, 0, -4096)
-                IVec3::new(0, 0, 0),     // root (0,0,0), slot32 0, slot16 0
-                IVec3::new(0, 0, 8),     //   slot16 1
-                IVec3::new(8, 0, 0),     //   slot16 256
-                IVec3::new(0, 200, 0),   // slot32 32
-                IVec3::new(128, 0, 0),   // slot32 1024
-                IVec3::new(5000, 0, 0),  // root (4096, 0, 0)
+                IVec3::new(-8, 0, 0),   // root (-4096, 0, 0)
+                IVec3::new(0, 0, -8),   // root (0, 0, -4096)
+                IVec3::new(0, 0, 0),    // root (0,0,0), slot32 0, slot16 0
+                IVec3::new(0, 0, 8),    //   slot16 1
+                IVec3::new(8, 0, 0),    //   slot16 256
+                IVec3::new(0, 200, 0),  // slot32 32
+                IVec3::new(128, 0, 0),  // slot32 1024
+                IVec3::new(5000, 0, 0), // root (4096, 0, 0)
             ]
         );
         assert_eq!(tree.roots.len(), 4);
@@ -869,7 +895,11 @@ mod tests {
         let uuid = std::str::from_utf8(&a[21..57]).unwrap();
         assert_eq!(uuid.len(), 36);
         assert_eq!(uuid.as_bytes()[14], b'8');
-        assert!(uuid.chars().enumerate().all(|(i, c)| if [8, 13, 18, 23].contains(&i) { c == '-' } else { c.is_ascii_hexdigit() }));
+        assert!(uuid.chars().enumerate().all(|(i, c)| if [8, 13, 18, 23].contains(&i) {
+            c == '-'
+        } else {
+            c.is_ascii_hexdigit()
+        }));
         // Empty file MetaMap, one grid; the descriptor starts at 65.
         assert_eq!(&a[57..65], &[0, 0, 0, 0, 1, 0, 0, 0]);
         let desc = 65 + 4 + 7 + 4 + 16 + 4;
@@ -906,12 +936,18 @@ mod tests {
         assert!(msg.contains("`density`") && msg.contains("(-9, 4, 100)") && msg.contains("NaN"), "{msg}");
         let mut g = grid_with(&[]);
         g.set(IVec3::new(0, 0, 0), f32::INFINITY);
-        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions::default()), Err(VdbWriteError::NonFinite { .. })));
+        assert!(matches!(
+            write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions::default()),
+            Err(VdbWriteError::NonFinite { .. })
+        ));
         let mut e = Grid::new("emission", [0.0f32; 3], Transform::new(1.0, DVec3::ZERO));
         e.set(IVec3::new(3, -4, 5), [1.0, 70000.0, 0.0]);
         let opts = WriteOptions { half: vec!["emission".into()], ..Default::default() };
         let err = write_vdb_bytes(&[GridRef::Vec3(&e)], &opts).unwrap_err();
-        assert!(matches!(err, VdbWriteError::HalfOverflow { ref grid, ijk: [3, -4, 5], .. } if grid == "emission"), "{err}");
+        assert!(
+            matches!(err, VdbWriteError::HalfOverflow { ref grid, ijk: [3, -4, 5], .. } if grid == "emission"),
+            "{err}"
+        );
         // 65504 itself is the largest half and is accepted.
         e.set(IVec3::new(3, -4, 5), [1.0, 65504.0, -65504.0]);
         assert!(write_vdb_bytes(&[GridRef::Vec3(&e)], &opts).is_ok());
@@ -924,13 +960,26 @@ mod tests {
     fn option_errors() {
         let g = grid_with(&[(IVec3::ZERO, 1.0)]);
         let opts = WriteOptions { half: vec!["nope".into()], ..Default::default() };
-        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &opts), Err(VdbWriteError::UnknownHalfGrid(_))));
-        let opts = WriteOptions { metadata: vec![("name".into(), MetaValue::Bool(true))], ..Default::default() };
-        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &opts), Err(VdbWriteError::ReservedMetadata(_))));
-        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g), GridRef::Float(&g)], &Default::default()), Err(VdbWriteError::BadName(_))));
+        assert!(matches!(
+            write_vdb_bytes(&[GridRef::Float(&g)], &opts),
+            Err(VdbWriteError::UnknownHalfGrid(_))
+        ));
+        let opts =
+            WriteOptions { metadata: vec![("name".into(), MetaValue::Bool(true))], ..Default::default() };
+        assert!(matches!(
+            write_vdb_bytes(&[GridRef::Float(&g)], &opts),
+            Err(VdbWriteError::ReservedMetadata(_))
+        ));
+        assert!(matches!(
+            write_vdb_bytes(&[GridRef::Float(&g), GridRef::Float(&g)], &Default::default()),
+            Err(VdbWriteError::BadName(_))
+        ));
         let mut bad = g.clone();
         bad.transform.voxel_size = 0.0;
-        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&bad)], &Default::default()), Err(VdbWriteError::BadTransform { .. })));
+        assert!(matches!(
+            write_vdb_bytes(&[GridRef::Float(&bad)], &Default::default()),
+            Err(VdbWriteError::BadTransform { .. })
+        ));
     }
 
     /// The mask-derived leaf bbox equals brute force over random masks.

@@ -31,7 +31,9 @@ pub fn system_python() -> PathBuf {
 
 /// The project venv's Python (bpy, usd-core): `$AURORA_PYTHON` or `<repo>/.venv/bin/python`.
 pub fn venv_python() -> PathBuf {
-    let p = std::env::var_os("AURORA_PYTHON").map(PathBuf::from).unwrap_or_else(|| repo_root().join(".venv/bin/python"));
+    let p = std::env::var_os("AURORA_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| repo_root().join(".venv/bin/python"));
     assert!(p.exists(), "{} is missing: run tools/setup (or set AURORA_PYTHON)", p.display());
     p
 }
@@ -52,9 +54,11 @@ pub fn run_json(python: &Path, script: &str, args: &[&str]) -> Value {
         out.status
     );
     // bpy may print its own lines; the JSON is the last line.
-    let line = stdout.lines().rev().find(|l| l.starts_with('{') || l.starts_with('[')).unwrap_or_else(|| {
-        panic!("{script} printed no JSON\nstdout: {stdout}\nstderr: {stderr}")
-    });
+    let line = stdout
+        .lines()
+        .rev()
+        .find(|l| l.starts_with('{') || l.starts_with('['))
+        .unwrap_or_else(|| panic!("{script} printed no JSON\nstdout: {stdout}\nstderr: {stderr}"));
     serde_json::from_str(line).unwrap_or_else(|e| panic!("{script}: bad JSON ({e}): {line}"))
 }
 
@@ -67,7 +71,11 @@ pub fn vdb_print_ok(file: &Path) -> String {
         .unwrap_or_else(|e| panic!("cannot run vdb_print: {e}; run tools/setup"));
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "vdb_print -l {} failed: {text}", file.display());
-    assert!(!text.to_lowercase().contains("error"), "vdb_print -l {} reported an error:\n{text}", file.display());
+    assert!(
+        !text.to_lowercase().contains("error"),
+        "vdb_print -l {} reported an error:\n{text}",
+        file.display()
+    );
     text
 }
 
