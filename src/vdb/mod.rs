@@ -3,7 +3,7 @@
 //!
 //! - [`layout`]: format constants and the per-level node offset functions;
 //! - [`codec`]: the compressed-values record (mask compression, ZIP, half);
-//! - [`write`]: grids -> file bytes;
+//! - [`write`](mod@write): grids -> file bytes;
 //! - [`parse`]: bounds-checked parser (validation and native decoding);
 //! - [`read`]: file -> grids (vdb-rs where it is right, our parser elsewhere).
 pub mod codec;

@@ -11,8 +11,8 @@
 //! 4. has-grid-offsets flag, `u8` 1;
 //! 5. (the compression byte of versions 220-221 is omitted since 222);
 //! 6. UUID, 36 ASCII characters. OpenVDB draws it at random; we derive it
-//!    from a hash of everything after the header, so identical inputs give
-//!    byte-identical files;
+//!    from a hash of everything after the header (see [`content_uuid`]), so
+//!    identical inputs give byte-identical files;
 //! 7. file MetaMap (empty);
 //! 8. `i32` grid count;
 //! 9. per grid: descriptor (name, type, instance parent, `gridPos`,
@@ -24,9 +24,15 @@
 //! hierarchy: root children in ascending signed (x, y, z) order, Internal32
 //! and Internal16 children in ascending slot order, identically in the
 //! topology and buffer passes (a different order makes OpenVDB silently
-//! misassign buffers). Each node level writes its own bytes. Leaf buffers are
-//! encoded in parallel in chunks and concatenated in order, so the output does
-//! not depend on the thread count.
+//! misassign buffers). Each node level writes its own bytes.
+//!
+//! The file is streamed: the header is written last over a placeholder, and
+//! each grid's three offsets are patched once the grid is written (as
+//! `Archive::writeGrid` does). Leaf buffers are encoded in parallel in chunks
+//! of 64 leaves, batch by batch, and written in order, so memory stays bounded
+//! and the output does not depend on the thread count. All values are checked
+//! before anything is renamed into place: NaN or infinity, and in half mode
+//! magnitudes above 65504, are refused with the grid name and voxel.
 
 use super::codec::{self, Encoder};
 use super::layout::{self, INTERNAL16, INTERNAL32};
