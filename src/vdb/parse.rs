@@ -221,8 +221,10 @@ pub struct Header {
 /// A grid's descriptor and everything before its tree.
 #[derive(Clone, Debug)]
 pub struct GridHeader {
-    /// Name in the descriptor (unique in the file).
+    /// Name in the descriptor (unique in the file), lossily decoded as UTF-8.
     pub unique_name: String,
+    /// The descriptor name's bytes as stored.
+    pub unique_name_raw: Vec<u8>,
     /// Grid type as stored, e.g. `Tree_float_5_4_3_HalfFloat`.
     pub type_name: String,
     /// `None` for types aurora does not read (they are skipped).
@@ -312,7 +314,7 @@ pub fn parse_file(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> bool) -> Result<
     let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count as usize);
     for _ in 0..grid_count {
         let g = read_grid(&mut cur, &header, decode)?;
-        if grids.iter().any(|o| o.header.unique_name == g.header.unique_name) {
+        if grids.iter().any(|o| o.header.unique_name_raw == g.header.unique_name_raw) {
             return Err(ParseError {
                 offset: g.header.grid_pos,
                 message: format!("two grids share the descriptor name `{}`", g.header.unique_name),
@@ -368,7 +370,8 @@ fn read_grid(
     decode: &dyn Fn(&GridHeader) -> bool,
 ) -> Result<ParsedGrid, ParseError> {
     let desc_at = cur.pos();
-    let unique_name = cur.string()?;
+    let unique_name_raw = cur.string_bytes()?.to_vec();
+    let unique_name = String::from_utf8_lossy(&unique_name_raw).into_owned();
     let type_name = cur.string()?;
     let instance_parent = cur.string()?;
     let grid_pos = cur.i64()?;
@@ -403,6 +406,7 @@ fn read_grid(
     let half = metadata.iter().any(|(k, v)| k == layout::META_HALF && *v == RawMeta::Bool(true));
     let mut gh = GridHeader {
         unique_name,
+        unique_name_raw,
         type_name,
         kind,
         instance_parent,

@@ -152,20 +152,24 @@ fn read_vdb_named(bytes: &[u8], file: &str) -> Result<VdbFile, VdbReadError> {
     // 1. Validate everything; decode natively what vdb-rs cannot read.
     let mut parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh)).map_err(invalid)?;
     // Grids with active tiles go native too (vdb-rs drops root tiles).
-    let retry: HashSet<String> = parsed
+    let retry: HashSet<Vec<u8>> = parsed
         .grids
         .iter()
         .filter(|g| vdbrs_reads(&g.header) && tree_tile_count(g.tree.as_ref()) > 0)
-        .map(|g| g.header.unique_name.clone())
+        .map(|g| g.header.unique_name_raw.clone())
         .collect();
     if !retry.is_empty() {
-        parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh) || retry.contains(&gh.unique_name))
+        parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh) || retry.contains(&gh.unique_name_raw))
             .map_err(invalid)?;
     }
-    let use_vdbrs = |gh: &GridHeader| vdbrs_reads(gh) && !retry.contains(&gh.unique_name);
+    let use_vdbrs = |gh: &GridHeader| vdbrs_reads(gh) && !retry.contains(&gh.unique_name_raw);
     // 2. vdb-rs for the plain float grids.
-    let vdbrs_names: Vec<String> =
-        parsed.grids.iter().filter(|g| use_vdbrs(&g.header)).map(|g| g.header.unique_name.clone()).collect();
+    let vdbrs_names: Vec<(String, Vec<u8>)> = parsed
+        .grids
+        .iter()
+        .filter(|g| use_vdbrs(&g.header))
+        .map(|g| (g.header.unique_name.clone(), g.header.unique_name_raw.clone()))
+        .collect();
     let mut from_vdbrs = read_with_vdbrs(bytes, &vdbrs_names, file)?.into_iter();
     // 3. Assemble in file order.
     let ParsedFile { header, grids: parsed_grids } = parsed;
@@ -189,7 +193,13 @@ fn read_vdb_named(bytes: &[u8], file: &str) -> Result<VdbFile, VdbReadError> {
         let transform = gh.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
         match (pg.tree, decoder) {
             (Some(AnyTree::Float(tree)), Decoder::VdbRs) => {
-                let (leaves, vdbrs_transform) = from_vdbrs.next().expect("one vdb-rs result per vdb-rs grid");
+                let Some((leaves, vdbrs_transform)) = from_vdbrs.next() else {
+                    return Err(VdbReadError::VdbRs {
+                        file: file.into(),
+                        grid: name,
+                        message: "returned fewer grids than asked for".into(),
+                    });
+                };
                 let mut g = Grid::new(name.clone(), tree.background, vdbrs_transform);
                 for leaf in leaves {
                     g.insert_leaf(normalise(leaf, tree.background));
@@ -307,16 +317,20 @@ fn catch_silently<R>(f: impl FnOnce() -> R) -> Result<R, String> {
 }
 
 /// vdb-rs keys grids by descriptor name read byte by byte as `char`s.
-fn vdbrs_key(name: &str) -> String {
-    name.bytes().map(char::from).collect()
+fn vdbrs_key(name: &[u8]) -> String {
+    name.iter().map(|&b| char::from(b)).collect()
 }
 
 /// Leaves and transform of one grid as vdb-rs read it.
 type VdbRsGrid = (Vec<Leaf<f32>>, Transform);
 
-/// Reads the named float grids with vdb-rs: for each, its leaves (mask and
-/// values) and transform.
-fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<VdbRsGrid>, VdbReadError> {
+/// Reads the named float grids (display name, descriptor name bytes) with
+/// vdb-rs: for each, its leaves (mask and values) and transform.
+fn read_with_vdbrs(
+    bytes: &[u8],
+    names: &[(String, Vec<u8>)],
+    file: &str,
+) -> Result<Vec<VdbRsGrid>, VdbReadError> {
     if names.is_empty() {
         return Ok(Vec::new());
     }
@@ -326,8 +340,8 @@ fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<Vdb
         let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes))
             .map_err(|e| (String::new(), e.to_string()))?;
         let mut out = Vec::with_capacity(names.len());
-        for name in names {
-            let g = reader.read_grid::<f32>(&vdbrs_key(name)).map_err(|e| (name.clone(), e.to_string()))?;
+        for (name, raw) in names {
+            let g = reader.read_grid::<f32>(&vdbrs_key(raw)).map_err(|e| (name.clone(), e.to_string()))?;
             out.push(convert_vdbrs(&g).map_err(|m| (name.clone(), m))?);
         }
         Ok(out)
@@ -335,7 +349,10 @@ fn read_with_vdbrs(bytes: &[u8], names: &[String], file: &str) -> Result<Vec<Vdb
     match result {
         Ok(Ok(v)) => Ok(v),
         Ok(Err((grid, message))) => Err(fail(&grid, message)),
-        Err(panic) => Err(fail(names.join(", ").as_str(), format!("panicked: {panic}"))),
+        Err(panic) => {
+            let all: Vec<&str> = names.iter().map(|(n, _)| n.as_str()).collect();
+            Err(fail(&all.join(", "), format!("panicked: {panic}")))
+        }
     }
 }
 
@@ -384,4 +401,33 @@ pub fn read_native_float_grids(bytes: &[u8]) -> Result<Vec<Grid<f32>>, VdbReadEr
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A panic inside the contained region comes back as an error with its
+    /// message, on this thread and on concurrent ones.
+    #[test]
+    fn panics_are_contained() {
+        assert_eq!(catch_silently(|| 7), Ok(7));
+        assert_eq!(catch_silently(|| -> i32 { panic!("boom {}", 1) }), Err("boom 1".to_string()));
+        let handles: Vec<_> = (0..4)
+            .map(|i| std::thread::spawn(move || catch_silently(move || -> u8 { panic!("thread {i}") })))
+            .collect();
+        for (i, h) in handles.into_iter().enumerate() {
+            assert_eq!(h.join().unwrap(), Err(format!("thread {i}")));
+        }
+        // The flag is reset: a later panic outside is not silenced (not
+        // observable here beyond the flag itself).
+        assert!(!SILENCE_PANICS.with(|s| s.get()));
+    }
+
+    /// vdb-rs's descriptor keys are the name's bytes as chars.
+    #[test]
+    fn vdbrs_keys_are_latin1() {
+        assert_eq!(vdbrs_key(b"density"), "density");
+        assert_eq!(vdbrs_key("dé".as_bytes()), "d\u{c3}\u{a9}");
+    }
 }
