@@ -1,10 +1,12 @@
-//! Blender (bpy 5.0.1) loads our VDB as a Volume with both grids, and imports
+//! Blender (bpy 5.0.1) loads our VDB (every compression mode, with and
+//! without half floats) as a Volume with both grids, and imports
 //! our USD stage as a Volume with the same grids; usd-core (pxr) opens the
 //! stage and resolves its fields. Needs `tools/setup`; a missing tool fails.
 
 mod common;
 
 use aurora::grid::{Grid, VoxelValue};
+use aurora::scene::Compression;
 use aurora::usd::write_usda;
 use aurora::vdb::write::{write_vdb, GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
@@ -95,17 +97,40 @@ fn blender_loads_our_vdb_and_imports_our_usd_stage() {
     write_usda(&usda, "aurora.vdb", &[("density", "float"), ("emission", "float3")], 1000.0).unwrap();
     let py = common::venv_python();
 
-    // The VDB on its own.
-    let r = common::run_json(&py, "blender_probe.py", &[vdb.to_str().unwrap()]);
-    let vols = r["volumes"].as_array().unwrap_or_else(|| panic!("{r}"));
-    assert_eq!(vols.len(), 1);
-    check_volume(&vols[0], &d, &e, &vdb, 1.0);
+    // Every compression mode, with and without half floats, then the stage,
+    // all in one Blender session (a fresh empty scene per file).
+    let mut files = Vec::new();
+    for comp in [Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask] {
+        for half in [false, true] {
+            let p = dir.join(format!("{comp:?}_{half}.vdb"));
+            let o = WriteOptions {
+                compression: comp,
+                half: if half { vec!["density".into(), "emission".into()] } else { vec![] },
+                ..Default::default()
+            };
+            write_vdb(&p, &[GridRef::Float(&d), GridRef::Vec3(&e)], &o).unwrap();
+            files.push(p);
+        }
+    }
+    let mut args: Vec<&str> = files.iter().map(|p| p.to_str().unwrap()).collect();
+    args.push(vdb.to_str().unwrap());
+    args.push(usda.to_str().unwrap());
+    let r = common::run_json(&py, "blender_probe.py", &args);
+    let r = r.as_array().unwrap_or_else(|| panic!("{r}"));
+    assert_eq!(r.len(), files.len() + 2);
+    for (p, entry) in files.iter().chain([&vdb]).zip(r) {
+        let vols = entry["volumes"].as_array().unwrap_or_else(|| panic!("{entry}"));
+        assert_eq!(vols.len(), 1, "{}", p.display());
+        check_volume(&vols[0], &d, &e, p, 1.0);
+    }
 
-    // The USD stage: one Volume object, metersPerUnit 1000 -> object scale 1000.
-    let r = common::run_json(&py, "blender_probe.py", &[usda.to_str().unwrap()]);
-    assert_eq!(r["import_status"], json!(["FINISHED"]), "{r}");
-    let vols = r["volumes"].as_array().unwrap();
-    assert_eq!(vols.len(), 1, "one Volume object: {r}");
+    // The USD stage: one Volume object (plus an Empty per field prim),
+    // metersPerUnit 1000 -> object scale 1000, Z up -> no rotation.
+    let u = &r[files.len() + 1];
+    assert_eq!(u["import_status"], json!(["FINISHED"]), "{u}");
+    let vols = u["volumes"].as_array().unwrap();
+    assert_eq!(vols.len(), 1, "one Volume object: {u}");
+    assert_eq!(u["object_types"], json!(["EMPTY", "EMPTY", "VOLUME"]));
     check_volume(&vols[0], &d, &e, &vdb, 1000.0);
 
     // usd-core: the stage, its metadata and resolved fields.

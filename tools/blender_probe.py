@@ -3,10 +3,11 @@
 Runs under the project venv's Python (.venv/bin/python; see tools/setup).
 Used by tests/vdb_blender.rs.
 
-  blender_probe.py FILE.vdb     load the file as a Volume datablock on an object
-  blender_probe.py FILE.usda    import the stage with bpy.ops.wm.usd_import
+  blender_probe.py FILE...      per file, in a fresh empty scene:
+                                FILE.vdb: load it as a Volume datablock on an object;
+                                FILE.usda: import it with bpy.ops.wm.usd_import
 
-Prints one JSON line: per Volume object, its name, location/scale/dimensions,
+Prints one JSON line, a list with one entry per file: per Volume object, its name, location/scale/dimensions,
 world matrix, the volume's file path, load error, and per grid its name,
 data type, channels, index-to-object matrix and whether grid.load() succeeded.
 The object's bounds are Blender's: the union of the grids' leaf-node boxes,
@@ -57,7 +58,7 @@ def describe(obj):
     }
 
 
-def main(path):
+def probe(path):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     path = os.path.abspath(path)
     if path.endswith(".vdb"):
@@ -73,8 +74,8 @@ def main(path):
         result = {"mode": "usd", "import_status": sorted(status)}
     result["volumes"] = [describe(o) for o in objects]
     result["object_types"] = sorted(o.type for o in bpy.data.objects)
-    print(json.dumps(result))
+    return result
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    print(json.dumps([probe(p) for p in sys.argv[1:]]))
