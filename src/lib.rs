@@ -13,7 +13,7 @@ pub mod bench;
 pub mod beams;
 pub mod footprint;
 pub mod grid;
-// pub mod outputs;
+pub mod outputs;
 pub mod photons;
 pub mod progress;
 pub mod render;

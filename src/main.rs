@@ -134,8 +134,8 @@ fn run(cli: Cli) -> Result<()> {
             }
             with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet))
         }
-        Command::Render { scene, vdb, out, png, spp, seed, common } => {
-            let mut scene = load_scene(&scene)?;
+        Command::Render { scene: scene_arg, vdb, out, png, spp, seed, common } => {
+            let mut scene = load_scene(&scene_arg)?;
             if let Some(s) = seed {
                 scene.seed = s;
             }
@@ -145,7 +145,8 @@ fn run(cli: Cli) -> Result<()> {
                 }
                 scene.render.spp = n;
             }
-            with_threads(common.threads, || render_cmd(&scene, vdb.as_deref(), &out, png.as_deref(), common.quiet))
+            let dir = scene_dir(&scene_arg);
+            with_threads(common.threads, || render_cmd(&scene, &dir, vdb.as_deref(), &out, png.as_deref(), common.quiet))
         }
         Command::Scene { name } => {
             let s = aurora::scene::presets::by_name(&name).expect("clap checked the name");
@@ -163,9 +164,16 @@ fn run(cli: Cli) -> Result<()> {
             }
             Ok(())
         }
-        Command::Terrain { scene, out } => {
-            let scene = load_scene(&scene)?;
-            let hf = aurora::render::terrain::Heightfield::from_scene(&scene.terrain, scene_dir(&scene))
+        Command::Terrain { scene: scene_arg, out } => {
+            let scene = load_scene(&scene_arg)?;
+            if scene.terrain.kind != aurora::scene::TerrainKind::Heightfield {
+                return Err(InputError(format!(
+                    "terrain.kind = {:?}: only a heightfield has a mesh to write (a plane is z = terrain.height)",
+                    scene.terrain.kind
+                ))
+                .into());
+            }
+            let hf = aurora::render::terrain::Heightfield::from_terrain(&scene.terrain, Some(&scene_dir(&scene_arg)))
                 .map_err(|e| InputError(e.to_string()))?;
             aurora::render::terrain::write_obj(&out, &hf).with_context(|| format!("cannot write {}", out.display()))?;
             eprintln!("wrote {}", out.display());
@@ -174,8 +182,15 @@ fn run(cli: Cli) -> Result<()> {
     }
 }
 
-fn scene_dir(_scene: &Scene) -> &Path {
-    Path::new(".")
+/// The folder relative paths in a scene file (a heightmap) are resolved
+/// against: the scene file's own folder, or "." for a preset.
+fn scene_dir(scene_arg: &str) -> PathBuf {
+    let p = Path::new(scene_arg);
+    if p.exists() {
+        p.parent().filter(|d| !d.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
+    } else {
+        PathBuf::from(".")
+    }
 }
 
 fn scene_header(name: &str) -> String {
@@ -209,24 +224,26 @@ fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
     let bake = aurora::bake::bake(scene, progress)?;
-    let report = aurora::bake::write_outputs(scene, &bake, out)?;
+    let report = aurora::outputs::write_outputs(scene, &bake, out)?;
     if !quiet {
         eprintln!("{}", report.summary());
     }
     Ok(())
 }
 
-fn render_cmd(scene: &Scene, vdb: Option<&Path>, out: &Path, png: Option<&Path>, quiet: bool) -> Result<()> {
+fn render_cmd(scene: &Scene, dir: &Path, vdb: Option<&Path>, out: &Path, png: Option<&Path>, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
-    let settings = aurora::render::RenderSettings::from_scene(scene);
+    let mut settings = aurora::render::RenderSettings::from_scene(scene);
+    settings.base_dir = Some(dir.to_path_buf());
     let (density, emission);
     match vdb {
         Some(path) => {
             let file = aurora::vdb::read::read_vdb(path).map_err(|e| InputError(e.to_string()))?;
-            let v = aurora::render::VolumeGrids::from_vdb(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?;
-            density = v.density;
-            emission = v.emission;
+            let (d, e) = aurora::vdb::read::render_grids(file)
+                .map_err(|e| InputError(format!("{}: {e}", path.display())))?;
+            density = d;
+            emission = e;
         }
         None => {
             let bake = aurora::bake::bake(scene, progress)?;
@@ -243,7 +260,15 @@ fn render_cmd(scene: &Scene, vdb: Option<&Path>, out: &Path, png: Option<&Path>,
     }
     if !quiet {
         eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());
-        eprintln!("{}", image.stats.summary());
+        let st = &image.stats;
+        eprintln!(
+            "{} primary rays in {:.2} s ({:.0}/s), {} shadow samples, {} threads",
+            st.primary_rays,
+            st.render_seconds,
+            st.primary_rays_per_second(),
+            st.shadow_samples,
+            st.threads
+        );
     }
     Ok(())
 }

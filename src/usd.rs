@@ -1,1 +1,169 @@
-//! usd (to be written)
+//! USD stage for the baked volume: `aurora.usda` beside the VDB, one
+//! `UsdVol.Volume` prim whose fields are `OpenVDBAsset` prims pointing into
+//! the single VDB file (Blender keeps only one file per volume; see
+//! `/work/shared/notes/cycles-conventions.md`).
+//!
+//! Schema facts (usd-core's `usdVol/generatedSchema.usda`): `fieldClass` is a
+//! token among `levelSet`, `fogVolume`, `staggered`, `unknown`;
+//! `fieldDataType` a token such as `float` or `float3`; `filePath` an asset
+//! path, written `./name` so it resolves against the stage's own folder; the
+//! Volume links each field through a `field:<name>` relationship. The text is
+//! what usd-core's `ExportToString` writes for the same stage.
+//!
+//! Transform: none on the prim (identity). The VDB's own grid transform
+//! already maps voxel indices to world coordinates in kilometres, z up, so the
+//! stage declares `metersPerUnit = 1000` and `upAxis = "Z"`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Name of the `Volume` prim (and the stage's default prim).
+pub const VOLUME_PRIM: &str = "aurora";
+
+/// Data types accepted for `fieldDataType`.
+const DATA_TYPES: &[&str] = &["float", "float3", "half", "half3", "double", "double3"];
+
+fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+fn invalid(msg: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, msg)
+}
+
+/// Checks what goes into the text: prim names must be USD identifiers, the
+/// asset path must not contain `@` or line breaks, data types must be known.
+fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
+    if vdb_file_name.is_empty()
+        || vdb_file_name.contains(['@', '\n', '\r'])
+        || Path::new(vdb_file_name).is_absolute()
+    {
+        return Err(invalid(format!(
+            "VDB file name `{vdb_file_name}` must be a non-empty relative path without `@`"
+        )));
+    }
+    for (i, (name, ty)) in fields.iter().enumerate() {
+        if !is_identifier(name) || fields[..i].iter().any(|(n, _)| n == name) {
+            return Err(invalid(format!("field name `{name}` is not a unique USD identifier")));
+        }
+        if !DATA_TYPES.contains(ty) {
+            return Err(invalid(format!("field `{name}`: data type `{ty}` is not one of {DATA_TYPES:?}")));
+        }
+    }
+    if !(meters_per_unit.is_finite() && meters_per_unit > 0.0) {
+        return Err(invalid(format!("metersPerUnit {meters_per_unit} must be positive")));
+    }
+    Ok(())
+}
+
+/// The stage text. `vdb_file_name` is relative to the stage's folder;
+/// `fields` are (grid name, data type: `"float"` | `"float3"`).
+/// Call [`write_usda`] to have the inputs validated.
+pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
+    let asset = if vdb_file_name.starts_with("./") || vdb_file_name.starts_with("../") {
+        vdb_file_name.to_string()
+    } else {
+        format!("./{vdb_file_name}")
+    };
+    let mut s = String::new();
+    let _ = writeln!(s, "#usda 1.0");
+    let _ = writeln!(s, "(");
+    let _ = writeln!(s, "    defaultPrim = \"{VOLUME_PRIM}\"");
+    let _ = writeln!(
+        s,
+        "    doc = \"Aurora volume written by {}; fields in {asset}\"",
+        crate::vdb::write::CREATOR
+    );
+    let _ = writeln!(s, "    metersPerUnit = {}", fmt_number(meters_per_unit));
+    let _ = writeln!(s, "    upAxis = \"Z\"");
+    let _ = writeln!(s, ")");
+    let _ = writeln!(s);
+    let _ = writeln!(s, "def Volume \"{VOLUME_PRIM}\"");
+    let _ = writeln!(s, "{{");
+    for (name, _) in fields {
+        let _ = writeln!(s, "    custom rel field:{name} = </{VOLUME_PRIM}/{name}>");
+    }
+    for (name, ty) in fields {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "    def OpenVDBAsset \"{name}\"");
+        let _ = writeln!(s, "    {{");
+        let _ = writeln!(s, "        token fieldClass = \"fogVolume\"");
+        let _ = writeln!(s, "        token fieldDataType = \"{ty}\"");
+        let _ = writeln!(s, "        token fieldName = \"{name}\"");
+        let _ = writeln!(s, "        asset filePath = @{asset}@");
+        let _ = writeln!(s, "    }}");
+    }
+    let _ = writeln!(s, "}}");
+    s
+}
+
+/// A number as USD writes it: integers without a decimal point.
+fn fmt_number(x: f64) -> String {
+    if x.fract() == 0.0 && x.abs() < 1e15 {
+        format!("{}", x as i64)
+    } else {
+        format!("{x}")
+    }
+}
+
+/// Writes the stage atomically (temporary file in the same folder, then rename).
+pub fn write_usda(
+    path: &Path,
+    vdb_file_name: &str,
+    fields: &[(&str, &str)],
+    meters_per_unit: f64,
+) -> Result<(), std::io::Error> {
+    check(vdb_file_name, fields, meters_per_unit)?;
+    crate::vdb::write::write_atomic(path, usda_text(vdb_file_name, fields, meters_per_unit).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_matches_usd_core_export() {
+        let t = usda_text("aurora.vdb", &[("density", "float"), ("emission", "float3")], 1000.0);
+        // The body, exactly as usd-core's ExportToString writes it.
+        let body = r#"def Volume "aurora"
+{
+    custom rel field:density = </aurora/density>
+    custom rel field:emission = </aurora/emission>
+
+    def OpenVDBAsset "density"
+    {
+        token fieldClass = "fogVolume"
+        token fieldDataType = "float"
+        token fieldName = "density"
+        asset filePath = @./aurora.vdb@
+    }
+
+    def OpenVDBAsset "emission"
+    {
+        token fieldClass = "fogVolume"
+        token fieldDataType = "float3"
+        token fieldName = "emission"
+        asset filePath = @./aurora.vdb@
+    }
+}
+"#;
+        assert!(t.ends_with(body), "{t}");
+        assert!(t.starts_with("#usda 1.0\n(\n    defaultPrim = \"aurora\"\n"));
+        assert!(t.contains("    metersPerUnit = 1000\n    upAxis = \"Z\"\n)"));
+        assert_eq!(fmt_number(0.01), "0.01");
+    }
+
+    #[test]
+    fn bad_inputs_are_refused() {
+        let p = std::env::temp_dir().join("aurora-usd-test-never-written.usda");
+        assert!(write_usda(&p, "a@b.vdb", &[("density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "/abs/a.vdb", &[("density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "a.vdb", &[("1density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "a.vdb", &[("density", "float"), ("density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "a.vdb", &[("density", "vec3")], 1000.0).is_err());
+        assert!(write_usda(&p, "a.vdb", &[("density", "float")], 0.0).is_err());
+        assert!(!p.exists());
+    }
+}

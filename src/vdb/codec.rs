@@ -1,0 +1,635 @@
+//! The compressed-values record: how OpenVDB stores every value array (leaf
+//! buffers and internal-node tile values), in both directions.
+//!
+//! Writer side: OpenVDB `io::writeCompressedValues` with `io::MaskCompress`
+//! choosing the metadata byte; reader side: `io::readCompressedValues`
+//! (`openvdb/io/Compression.h`). Layout (file version >= 222):
+//!
+//! ```text
+//! i8     meta                      always present
+//! ValueT inactive0                 if meta in {2, 4, 5}   (full f32, rounded to half first in half mode)
+//! ValueT inactive1                 if meta == 5
+//! N/8    selection mask            if meta in {3, 4, 5}
+//! data   count values              count = popcount(value mask) if ACTIVE_MASK and meta != 6, else N
+//! ```
+//!
+//! `data` is `f32` (or IEEE binary16 in half mode) per component; with ZIP it is
+//! `i64 L` then L bytes of a zlib stream (`compress2`, level 6) if that is
+//! shorter than the raw bytes, else `-rawBytes` and the raw bytes; in half mode
+//! a count of 0 writes nothing at all. BLOSC (`i64 L` + a Blosc1 frame) is only
+//! read, never written.
+
+use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
+use super::parse::{Cursor, ParseError};
+use crate::grid::VoxelValue;
+use flate2::{Compress, Compression, Decompress, FlushCompress, FlushDecompress, Status};
+use half::f16;
+
+/// zlib level of OpenVDB's `ZIP_COMPRESSION_LEVEL` (`Z_DEFAULT_COMPRESSION` = 6).
+pub const ZIP_LEVEL: u32 = 6;
+
+/// `x` rounded to half precision and back (OpenVDB `io::truncateRealToHalf`,
+/// round to nearest even).
+#[inline]
+pub fn round_half(x: f32) -> f32 {
+    f16::from_f32(x).to_f32()
+}
+
+/// Componentwise [`round_half`].
+pub fn round_half_value<T: VoxelValue>(v: T) -> T {
+    let c = v.components();
+    T::from_components(&[round_half(c[0]), round_half(c[1]), round_half(c[2])])
+}
+
+/// Componentwise negation (OpenVDB `math::negative`).
+fn negative<T: VoxelValue>(v: T) -> T {
+    let c = v.components();
+    T::from_components(&[-c[0], -c[1], -c[2]])
+}
+
+/// OpenVDB `math::isExactlyEqual`: `==` per component, so -0 equals +0.
+#[inline]
+fn eq<T: VoxelValue>(a: T, b: T) -> bool {
+    a == b
+}
+
+/// OpenVDB `io::MaskCompress`: scans the inactive slots that are not child
+/// pointers, in index order, for up to three distinct values and chooses the
+/// metadata byte. Returns `(meta, [inactive0, inactive1])`.
+pub fn mask_compress<T: VoxelValue>(
+    values: &[T],
+    value_mask: &[u64],
+    child_mask: Option<&[u64]>,
+    background: T,
+) -> (u8, [T; 2]) {
+    let mut inactive = [background, background];
+    let mut unique = 0usize;
+    'scan: for (w, &word) in value_mask.iter().enumerate() {
+        // Inactive slots that are not child pointers, in index order.
+        let mut bits = !word & !child_mask.map_or(0, |c| c[w]);
+        while bits != 0 {
+            if unique >= 3 {
+                break 'scan;
+            }
+            let v = values[w * 64 + bits.trailing_zeros() as usize];
+            bits &= bits - 1;
+            let seen = (unique > 0 && eq(v, inactive[0])) || (unique > 1 && eq(v, inactive[1]));
+            if !seen {
+                if unique < 2 {
+                    inactive[unique] = v;
+                }
+                unique += 1;
+            }
+        }
+    }
+    let minus_bg = negative(background);
+    let m = match unique {
+        0 => meta::NO_MASK_OR_INACTIVE_VALS,
+        1 if eq(inactive[0], background) => meta::NO_MASK_OR_INACTIVE_VALS,
+        1 if eq(inactive[0], minus_bg) => meta::NO_MASK_AND_MINUS_BG,
+        1 => meta::NO_MASK_AND_ONE_INACTIVE_VAL,
+        2 => {
+            if !eq(inactive[0], background) && !eq(inactive[1], background) {
+                meta::MASK_AND_TWO_INACTIVE_VALS
+            } else if eq(inactive[1], background) {
+                if eq(inactive[0], minus_bg) {
+                    meta::MASK_AND_NO_INACTIVE_VALS
+                } else {
+                    meta::MASK_AND_ONE_INACTIVE_VAL
+                }
+            } else {
+                // inactive[0] is the background: swap so inactive0 is the other value.
+                inactive.swap(0, 1);
+                if eq(inactive[0], minus_bg) {
+                    meta::MASK_AND_NO_INACTIVE_VALS
+                } else {
+                    meta::MASK_AND_ONE_INACTIVE_VAL
+                }
+            }
+        }
+        _ => meta::NO_MASK_AND_ALL_VALS,
+    };
+    (m, inactive)
+}
+
+/// Writes compressed-values records with one grid's settings. Holds a reusable
+/// zlib stream: `deflateReset` gives the same bytes as the fresh
+/// `deflateInit` inside `compress2`, without its allocation per array.
+pub struct Encoder {
+    flags: u32,
+    half: bool,
+    zlib: Option<Compress>,
+    raw: Vec<u8>,
+    zbuf: Vec<u8>,
+    selection: Vec<u64>,
+}
+
+impl Encoder {
+    /// `flags`: ZIP and/or ACTIVE_MASK (BLOSC is not written).
+    pub fn new(flags: u32, half: bool) -> Self {
+        debug_assert_eq!(flags & COMPRESS_BLOSC, 0);
+        let zlib = (flags & COMPRESS_ZIP != 0).then(|| Compress::new(Compression::new(ZIP_LEVEL), true));
+        Self { flags, half, zlib, raw: Vec::new(), zbuf: Vec::new(), selection: Vec::new() }
+    }
+
+    /// Appends the record of `values` (all N slots of a node) to `out`.
+    /// `child_mask` marks internal-node slots holding children (skipped by the
+    /// inactive-value scan). In half mode the caller has checked that every
+    /// value is within half range.
+    pub fn write_values<T: VoxelValue>(
+        &mut self,
+        out: &mut Vec<u8>,
+        values: &[T],
+        value_mask: &[u64],
+        child_mask: Option<&[u64]>,
+        background: T,
+    ) {
+        let masked = self.flags & COMPRESS_ACTIVE_MASK != 0;
+        let (m, inactive) = if masked {
+            mask_compress(values, value_mask, child_mask, background)
+        } else {
+            (meta::NO_MASK_AND_ALL_VALS, [background; 2])
+        };
+        out.push(m);
+        if matches!(
+            m,
+            meta::NO_MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_TWO_INACTIVE_VALS
+        ) {
+            let n_inactive = if m == meta::MASK_AND_TWO_INACTIVE_VALS { 2 } else { 1 };
+            for &v in &inactive[..n_inactive] {
+                let v = if self.half { round_half_value(v) } else { v };
+                push_full(out, v);
+            }
+        }
+        let all = m == meta::NO_MASK_AND_ALL_VALS;
+        let count = if all { values.len() } else { layout::mask_count(value_mask) };
+        if matches!(
+            m,
+            meta::MASK_AND_NO_INACTIVE_VALS
+                | meta::MASK_AND_ONE_INACTIVE_VAL
+                | meta::MASK_AND_TWO_INACTIVE_VALS
+        ) {
+            // Selection mask: bit set where an inactive slot holds inactive1.
+            self.selection.clear();
+            self.selection.resize(values.len() / 64, 0);
+            for (n, &v) in values.iter().enumerate() {
+                if !layout::mask_bit(value_mask, n) && eq(v, inactive[1]) {
+                    layout::set_mask_bit(&mut self.selection, n);
+                }
+            }
+            for w in &self.selection {
+                out.extend_from_slice(&w.to_le_bytes());
+            }
+        }
+        if self.half && count == 0 {
+            // HalfWriter::write returns before writing anything, even a ZIP size.
+            return;
+        }
+        match self.zlib.as_mut() {
+            Some(z) => {
+                self.raw.clear();
+                gather(&mut self.raw, values, value_mask, all, count, self.half);
+                zip_to_stream(z, &mut self.zbuf, &self.raw, out);
+            }
+            None => gather(out, values, value_mask, all, count, self.half),
+        }
+    }
+}
+
+/// Appends the `count` values to store (all of them, or the active ones in
+/// index order) as little-endian `f32` or binary16 components.
+fn gather<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, half: bool) {
+    if half {
+        gather_as::<T, true>(dst, values, mask, all, count)
+    } else {
+        gather_as::<T, false>(dst, values, mask, all, count)
+    }
+}
+
+fn gather_as<T: VoxelValue, const HALF: bool>(
+    dst: &mut Vec<u8>,
+    values: &[T],
+    mask: &[u64],
+    all: bool,
+    count: usize,
+) {
+    let stride = T::COMPONENTS * if HALF { 2 } else { 4 };
+    let start = dst.len();
+    dst.resize(start + count * stride, 0);
+    let mut slots = dst[start..].chunks_exact_mut(stride);
+    if all {
+        for (slot, v) in (&mut slots).zip(values) {
+            put::<T, HALF>(slot, v);
+        }
+    } else {
+        for (w, &word) in mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let v = &values[w * 64 + bits.trailing_zeros() as usize];
+                bits &= bits - 1;
+                match slots.next() {
+                    Some(slot) => put::<T, HALF>(slot, v),
+                    None => return, // count was the mask's popcount: unreachable
+                }
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn put<T: VoxelValue, const HALF: bool>(slot: &mut [u8], v: &T) {
+    let c = v.components();
+    for k in 0..T::COMPONENTS {
+        if HALF {
+            slot[2 * k..2 * k + 2].copy_from_slice(&f16::from_f32(c[k]).to_bits().to_le_bytes());
+        } else {
+            slot[4 * k..4 * k + 4].copy_from_slice(&c[k].to_le_bytes());
+        }
+    }
+}
+
+/// Appends a value at full precision (`f32` per component).
+pub fn push_full<T: VoxelValue>(out: &mut Vec<u8>, v: T) {
+    for x in &v.components()[..T::COMPONENTS] {
+        out.extend_from_slice(&x.to_le_bytes());
+    }
+}
+
+/// OpenVDB `io::zipToStream`: `i64 L` and the zlib stream when it is shorter
+/// than the raw bytes, else `-rawBytes` and the raw bytes.
+fn zip_to_stream(z: &mut Compress, zbuf: &mut Vec<u8>, raw: &[u8], out: &mut Vec<u8>) {
+    z.reset();
+    // Only a stream shorter than the raw bytes is kept, so `raw.len()` bytes of
+    // output space suffice: if deflate does not finish within them, store raw.
+    zbuf.clear();
+    zbuf.resize(raw.len(), 0);
+    let finished = matches!(z.compress(raw, zbuf, FlushCompress::Finish), Ok(Status::StreamEnd));
+    let zlen = z.total_out() as usize;
+    if finished && zlen < raw.len() {
+        out.extend_from_slice(&(zlen as i64).to_le_bytes());
+        out.extend_from_slice(&zbuf[..zlen]);
+    } else {
+        out.extend_from_slice(&(-(raw.len() as i64)).to_le_bytes());
+        out.extend_from_slice(raw);
+    }
+}
+
+/// How a grid's records are decoded.
+#[derive(Clone, Copy, Debug)]
+pub struct RecordFormat {
+    /// Per-grid compression flags.
+    pub flags: u32,
+    /// Stored as half floats.
+    pub half: bool,
+}
+
+/// Reads (or, when `decode` is false, validates and skips) one
+/// compressed-values record of `n` slots. Returns all `n` values with the
+/// inactive ones rebuilt as OpenVDB does. Every length is checked against the
+/// bytes that remain, so garbage never causes a large allocation.
+pub fn read_values<T: VoxelValue>(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    background: T,
+    decode: bool,
+) -> Result<Option<Vec<T>>, ParseError> {
+    let m = cur.u8()?;
+    if m > meta::NO_MASK_AND_ALL_VALS {
+        return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
+    }
+    let mut inactive0 = if m == meta::NO_MASK_OR_INACTIVE_VALS { background } else { negative(background) };
+    let mut inactive1 = background;
+    if matches!(
+        m,
+        meta::NO_MASK_AND_ONE_INACTIVE_VAL
+            | meta::MASK_AND_ONE_INACTIVE_VAL
+            | meta::MASK_AND_TWO_INACTIVE_VALS
+    ) {
+        inactive0 = read_full(cur)?;
+        if m == meta::MASK_AND_TWO_INACTIVE_VALS {
+            inactive1 = read_full(cur)?;
+        }
+    }
+    let selection = if matches!(
+        m,
+        meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
+    ) {
+        Some(cur.u64s(n / 64)?)
+    } else {
+        None
+    };
+    let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
+    let count = if masked { layout::mask_count(value_mask) } else { n };
+    let comp = T::COMPONENTS;
+    let elem = if fmt.half { 2 } else { 4 } * comp;
+    let nbytes = count * elem;
+    let raw: Option<Vec<u8>> = if fmt.half && count == 0 {
+        Some(Vec::new())
+    } else if fmt.flags & COMPRESS_BLOSC != 0 {
+        read_blosc(cur, nbytes, decode)?
+    } else if fmt.flags & COMPRESS_ZIP != 0 {
+        read_zip(cur, nbytes, decode)?
+    } else {
+        let b = cur.bytes(nbytes)?;
+        decode.then(|| b.to_vec())
+    };
+    let Some(raw) = raw else { return Ok(None) };
+    let mut packed: Vec<T> = Vec::with_capacity(count);
+    let mut c = [0f32; 3];
+    for chunk in raw.chunks_exact(elem) {
+        for (k, x) in c[..comp].iter_mut().enumerate() {
+            *x = if fmt.half {
+                f16::from_bits(u16::from_le_bytes([chunk[2 * k], chunk[2 * k + 1]])).to_f32()
+            } else {
+                f32::from_le_bytes(chunk[4 * k..4 * k + 4].try_into().expect("4-byte chunk"))
+            };
+        }
+        packed.push(T::from_components(&c));
+    }
+    if !masked || count == n {
+        return Ok(Some(packed));
+    }
+    // Rebuild inactive slots: selection bit set -> inactive1, clear -> inactive0.
+    let mut out = Vec::with_capacity(n);
+    let mut next = packed.into_iter();
+    for i in 0..n {
+        if layout::mask_bit(value_mask, i) {
+            out.push(next.next().unwrap_or(background));
+        } else if selection.as_ref().is_some_and(|s| layout::mask_bit(s, i)) {
+            out.push(inactive1);
+        } else {
+            out.push(inactive0);
+        }
+    }
+    Ok(Some(out))
+}
+
+/// A value stored at full precision.
+fn read_full<T: VoxelValue>(cur: &mut Cursor) -> Result<T, ParseError> {
+    let mut c = [0f32; 3];
+    for x in c[..T::COMPONENTS].iter_mut() {
+        *x = cur.f32()?;
+    }
+    Ok(T::from_components(&c))
+}
+
+/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly `nbytes`.
+fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+    let at = cur.pos();
+    let len = cur.i64()?;
+    if len <= 0 {
+        if len.unsigned_abs() != nbytes as u64 {
+            return Err(cur.err_at(
+                at,
+                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
+            ));
+        }
+        let b = cur.bytes(nbytes)?;
+        return Ok(decode.then(|| b.to_vec()));
+    }
+    let stream = cur.bytes_len(len as u64)?;
+    // Decompressed even when only validating: vdb-rs reads just the first
+    // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
+    // damaged stream would otherwise pass unnoticed. OpenVDB's `uncompress`
+    // checks the whole stream.
+    let mut out = vec![0u8; nbytes];
+    let mut z = Decompress::new(true);
+    let status = z.decompress(stream, &mut out, FlushDecompress::Finish);
+    match status {
+        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(out)),
+        Ok(_) => Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
+        Err(e) => Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
+    }
+}
+
+/// OpenVDB `io::bloscFromStream`. The Blosc header is validated
+/// (`blosc_cbuffer_validate`: its compressed size must equal the chunk length)
+/// before the C decompressor sees the bytes, so it never reads out of bounds.
+fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+    let at = cur.pos();
+    let len = cur.i64()?;
+    if len <= 0 {
+        if len.unsigned_abs() != nbytes as u64 {
+            return Err(cur.err_at(
+                at,
+                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
+            ));
+        }
+        let b = cur.bytes(nbytes)?;
+        return Ok(decode.then(|| b.to_vec()));
+    }
+    let frame = cur.bytes_len(len as u64)?;
+    let mut header_nbytes: usize = 0;
+    // SAFETY: `blosc_cbuffer_validate` reads at most `frame.len()` bytes of the
+    // frame (it first checks `cbytes >= BLOSC_MIN_HEADER_LENGTH`).
+    let ok =
+        unsafe { blosc_src::blosc_cbuffer_validate(frame.as_ptr().cast(), frame.len(), &mut header_nbytes) };
+    if ok != 0 {
+        return Err(cur.err_at(at, "invalid Blosc chunk header".to_string()));
+    }
+    if header_nbytes != nbytes {
+        return Err(cur.err_at(at, format!("Blosc chunk holds {header_nbytes} bytes, expected {nbytes}")));
+    }
+    if !decode {
+        return Ok(None);
+    }
+    if nbytes == 0 {
+        return Ok(Some(Vec::new()));
+    }
+    let mut out = vec![0u8; nbytes];
+    // SAFETY: the frame was validated above (its header's cbytes equals the
+    // slice length), and blosc writes at most `destsize` = `out.len()` bytes.
+    let got = unsafe {
+        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), out.as_mut_ptr().cast(), out.len(), 1)
+    };
+    if got != nbytes as i32 {
+        return Err(cur.err_at(at, format!("corrupt Blosc chunk (decompressed {got} of {nbytes} bytes)")));
+    }
+    Ok(Some(out))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn record<T: VoxelValue>(
+        flags: u32,
+        half: bool,
+        values: &[T],
+        mask: &[u64],
+        child: Option<&[u64]>,
+        bg: T,
+    ) -> Vec<u8> {
+        let mut out = Vec::new();
+        Encoder::new(flags, half).write_values(&mut out, values, mask, child, bg);
+        out
+    }
+
+    fn decode<T: VoxelValue>(bytes: &[u8], flags: u32, half: bool, n: usize, mask: &[u64], bg: T) -> Vec<T> {
+        let mut cur = Cursor::new(bytes);
+        let v = read_values(&mut cur, RecordFormat { flags, half }, n, mask, bg, true).unwrap().unwrap();
+        assert_eq!(cur.pos(), bytes.len(), "record fully consumed");
+        v
+    }
+
+    /// A 512-slot leaf whose inactive slots hold `inactive(n)` and whose active
+    /// slots (every 3rd) hold distinct values.
+    fn leaf(inactive: impl Fn(usize) -> f32) -> (Vec<f32>, Vec<u64>) {
+        let mut mask = vec![0u64; 8];
+        let values: Vec<f32> = (0..512)
+            .map(|n| {
+                if n % 3 == 0 {
+                    layout::set_mask_bit(&mut mask, n);
+                    1.0 + n as f32 * 0.25
+                } else {
+                    inactive(n)
+                }
+            })
+            .collect();
+        (values, mask)
+    }
+
+    /// All seven metadata cases of `MaskCompress`, with the bytes the notes
+    /// give for each (meta byte, stored inactive values, selection mask), and
+    /// an exact round trip through the reader in every compression mode.
+    #[test]
+    fn mask_compress_cases_and_round_trip() {
+        let bg = 2.0f32;
+        type Case = (u8, Box<dyn Fn(usize) -> f32>);
+        let cases: Vec<Case> = vec![
+            (0, Box::new(|_| 2.0)),
+            (1, Box::new(|_| -2.0)),
+            (2, Box::new(|_| 5.0)),
+            (3, Box::new(|n| if n % 2 == 0 { -2.0 } else { 2.0 })),
+            (4, Box::new(|n| if n % 2 == 0 { 2.0 } else { 7.0 })),
+            (5, Box::new(|n| if n % 2 == 0 { 7.0 } else { 8.0 })),
+            (6, Box::new(|n| n as f32)),
+        ];
+        for (want, f) in &cases {
+            let (values, mask) = leaf(f);
+            let (m, inactive) = mask_compress(&values, &mask, None, bg);
+            assert_eq!(m, *want);
+            match m {
+                2 => assert_eq!(inactive[0], 5.0),
+                4 => assert_eq!(inactive, [7.0, 2.0]),
+                5 => assert_eq!(inactive, [8.0, 7.0]),
+                _ => {}
+            }
+            for flags in 0..4 {
+                let bytes = record(flags, false, &values, &mask, None, bg);
+                let expect_meta = if flags & COMPRESS_ACTIVE_MASK != 0 { *want } else { 6 };
+                assert_eq!(bytes[0], expect_meta);
+                assert_eq!(decode(&bytes, flags, false, 512, &mask, bg), values, "meta {m} flags {flags}");
+            }
+        }
+    }
+
+    /// With every inactive slot at the background, mask mode stores exactly
+    /// the active values after a 0 byte; ZIP of nothing is 8 zero bytes and
+    /// half mode with nothing to store writes nothing.
+    #[test]
+    fn fog_volume_records_are_minimal() {
+        let (values, mask) = leaf(|_| 0.0);
+        let active: Vec<u8> = layout::mask_ones(&mask).flat_map(|n| values[n].to_le_bytes()).collect();
+        let bytes = record(COMPRESS_ACTIVE_MASK, false, &values, &mask, None, 0.0);
+        assert_eq!(bytes[0], 0);
+        assert_eq!(&bytes[1..], &active[..]);
+        let empty = vec![0u64; 8];
+        let zeros = vec![0f32; 512];
+        assert_eq!(record(3, false, &zeros, &empty, None, 0.0), vec![0u8; 9]);
+        assert_eq!(record(2, true, &zeros, &empty, None, 0.0), vec![0u8]);
+        assert_eq!(record(3, true, &zeros, &empty, None, 0.0), vec![0u8]);
+        // A fully active leaf is meta 0 with all 512 values.
+        let full = vec![u64::MAX; 8];
+        let bytes = record(2, false, &values, &full, None, 0.0);
+        assert_eq!(bytes.len(), 1 + 512 * 4);
+        assert_eq!(decode(&bytes, 2, false, 512, &full, 0.0f32), values);
+    }
+
+    /// ZIP output is exactly zlib's `compress2` at level 6: the stream for a
+    /// known input, checked against Python's `zlib.compress(data, 6)`.
+    #[test]
+    fn zip_matches_zlib_compress2() {
+        let raw: Vec<u8> = (0..64u32).flat_map(|i| (i as f32 * 0.5).to_le_bytes()).collect();
+        let mut z = Compress::new(Compression::new(ZIP_LEVEL), true);
+        let mut out = Vec::new();
+        zip_to_stream(&mut z, &mut Vec::new(), &raw, &mut out);
+        // python3 -c "import zlib,struct;d=b''.join(struct.pack('<f',i*0.5) for i in range(64));print(zlib.compress(d,6).hex())"
+        let expect = hex("789c1dc31114c2001400c08f61180ec3306bb3300cc3300c0741100441100441100441100c8220088220088220088220e85ef7de45fc3522720b238d484ced983b76eedac293375f461651b26cc5c4aa35eba6366dd9b663d79e7d73070e1d3976e2d49973172e5db976e3d69d857b0f1e3d79f6e2d59b771f3e7df9f6e337fb01b26c332e");
+        let zlen = i64::from_le_bytes(out[..8].try_into().unwrap());
+        assert_eq!(zlen as usize, out.len() - 8);
+        assert_eq!(hex_str(&out[8..]), hex_str(&expect));
+        // Incompressible data is stored raw with a negative length.
+        let noise: Vec<u8> = (0..256u32).map(|i| (i.wrapping_mul(2654435761) >> 13) as u8).collect();
+        let mut out = Vec::new();
+        zip_to_stream(&mut z, &mut Vec::new(), &noise, &mut out);
+        assert_eq!(i64::from_le_bytes(out[..8].try_into().unwrap()), -256);
+        assert_eq!(&out[8..], &noise[..]);
+    }
+
+    fn hex(s: &str) -> Vec<u8> {
+        (0..s.len()).step_by(2).map(|i| u8::from_str_radix(&s[i..i + 2], 16).unwrap()).collect()
+    }
+    fn hex_str(b: &[u8]) -> String {
+        b.iter().map(|x| format!("{x:02x}")).collect()
+    }
+
+    /// Half mode: data are binary16, stored inactive values are rounded but
+    /// kept as f32, and vec3 values keep x y z order.
+    #[test]
+    fn half_records() {
+        let mut mask = vec![0u64; 8];
+        layout::set_mask_bit(&mut mask, 3);
+        let mut values = vec![[0.1f32, 0.2, 0.3]; 512];
+        values[3] = [1.0, -2.5, 65504.0];
+        let bytes = record(COMPRESS_ACTIVE_MASK, true, &values, &mask, None, [0.0; 3]);
+        let r = round_half(0.1);
+        assert_eq!(bytes[0], 2);
+        assert_eq!(&bytes[1..5], &r.to_le_bytes());
+        assert_eq!(bytes.len(), 1 + 12 + 6);
+        assert_eq!(&bytes[13..], &[0x00, 0x3c, 0x00, 0xc1, 0xff, 0x7b]);
+        let back = decode(&bytes, 2, true, 512, &mask, [0.0f32; 3]);
+        assert_eq!(back[3], [1.0, -2.5, 65504.0]);
+        assert_eq!(back[0], [round_half(0.1), round_half(0.2), round_half(0.3)]);
+        // Round to nearest even: 2049 lies halfway between 2048 and 2050.
+        assert_eq!(round_half(2049.0), 2048.0);
+        assert_eq!(round_half(2051.0), 2052.0);
+    }
+
+    /// Malformed records are errors: bad meta byte, truncated data, wrong zip
+    /// sizes, a zip stream that decodes to the wrong length.
+    #[test]
+    fn malformed_records_are_errors() {
+        let mask = vec![u64::MAX; 8];
+        let fmt = |flags| RecordFormat { flags, half: false };
+        let try_read =
+            |b: &[u8], flags| read_values::<f32>(&mut Cursor::new(b), fmt(flags), 512, &mask, 0.0, true);
+        assert!(try_read(&[7], 2).is_err());
+        assert!(try_read(&[0, 1, 2, 3], 2).is_err());
+        let mut b = vec![0u8];
+        b.extend_from_slice(&(-100i64).to_le_bytes());
+        b.extend_from_slice(&[0; 100]);
+        assert!(try_read(&b, 3).is_err());
+        let mut b = vec![0u8];
+        b.extend_from_slice(&(i64::MAX).to_le_bytes());
+        assert!(try_read(&b, 3).is_err());
+        // A valid zlib stream of the wrong length.
+        let mut z = Compress::new(Compression::new(6), true);
+        let mut s = vec![0u8; 100];
+        z.compress(&[0u8; 16], &mut s, FlushCompress::Finish).unwrap();
+        s.truncate(z.total_out() as usize);
+        let mut b = vec![0u8];
+        b.extend_from_slice(&(s.len() as i64).to_le_bytes());
+        b.extend_from_slice(&s);
+        assert!(try_read(&b, 3).is_err());
+        // Garbage where a Blosc frame should be.
+        let mut b = vec![0u8];
+        b.extend_from_slice(&20i64.to_le_bytes());
+        b.extend_from_slice(&[0xAB; 20]);
+        assert!(try_read(&b, 6).is_err());
+    }
+}

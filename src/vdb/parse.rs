@@ -1,0 +1,700 @@
+//! Bounds-checked parser of OpenVDB files (file versions 222 to 225), used
+//! two ways by [`super::read`]:
+//!
+//! - *validation* (`decode = false`): walks every byte the way OpenVDB's
+//!   `io::File` does (header, metadata, descriptors, transform, topology and
+//!   buffers), checking every length, offset, count, mask and Blosc header
+//!   against the bytes that exist, without decompressing. A file that passes
+//!   cannot make vdb-rs allocate from a garbage length or read past the end;
+//! - *native decoding* (`decode = true`): the same walk, decoding values, for
+//!   the grids vdb-rs cannot read (vec3s grids, half grids, tiles, maps other
+//!   than its three).
+//!
+//! Nothing here panics on input and every loop is bounded by bytes consumed:
+//! descriptors only move forward (`gridPos >= descriptor end`,
+//! `endPos >= blockPos >= gridPos`) and every count is checked against the
+//! bytes left before it is used.
+
+use super::codec::{self, RecordFormat};
+use super::layout::{self, INTERNAL16, INTERNAL32};
+use crate::grid::{Leaf, Transform, VoxelValue, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
+use glam::{DVec3, IVec3};
+
+/// What is wrong, and at which byte offset of the file.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("at byte {offset}: {message}")]
+pub struct ParseError {
+    pub offset: u64,
+    pub message: String,
+}
+
+/// A read position in a byte slice; every read checks the bytes left.
+pub struct Cursor<'a> {
+    data: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> Cursor<'a> {
+    pub fn new(data: &'a [u8]) -> Self {
+        Self { data, pos: 0 }
+    }
+    pub fn pos(&self) -> usize {
+        self.pos
+    }
+    pub fn remaining(&self) -> usize {
+        self.data.len() - self.pos
+    }
+    /// An error at the current position.
+    pub fn err(&self, message: String) -> ParseError {
+        self.err_at(self.pos, message)
+    }
+    pub fn err_at(&self, at: usize, message: String) -> ParseError {
+        ParseError { offset: at as u64, message }
+    }
+    /// Moves to absolute offset `pos`, which must lie within the data.
+    pub fn seek(&mut self, pos: u64) -> Result<(), ParseError> {
+        if pos > self.data.len() as u64 {
+            return Err(
+                self.err(format!("offset {pos} is past the end of the file ({} bytes)", self.data.len()))
+            );
+        }
+        self.pos = pos as usize;
+        Ok(())
+    }
+    pub fn bytes(&mut self, n: usize) -> Result<&'a [u8], ParseError> {
+        if n > self.remaining() {
+            return Err(self.err(format!("truncated: needs {n} more bytes, {} left", self.remaining())));
+        }
+        let b = &self.data[self.pos..self.pos + n];
+        self.pos += n;
+        Ok(b)
+    }
+    /// `n` bytes where `n` came from the file as a 64-bit length.
+    pub fn bytes_len(&mut self, n: u64) -> Result<&'a [u8], ParseError> {
+        if n > self.remaining() as u64 {
+            return Err(self.err(format!("truncated: chunk of {n} bytes, {} left", self.remaining())));
+        }
+        self.bytes(n as usize)
+    }
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], ParseError> {
+        let mut a = [0u8; N];
+        a.copy_from_slice(self.bytes(N)?);
+        Ok(a)
+    }
+    pub fn u8(&mut self) -> Result<u8, ParseError> {
+        Ok(self.array::<1>()?[0])
+    }
+    pub fn u32(&mut self) -> Result<u32, ParseError> {
+        Ok(u32::from_le_bytes(self.array()?))
+    }
+    pub fn i32(&mut self) -> Result<i32, ParseError> {
+        Ok(i32::from_le_bytes(self.array()?))
+    }
+    pub fn i64(&mut self) -> Result<i64, ParseError> {
+        Ok(i64::from_le_bytes(self.array()?))
+    }
+    pub fn f32(&mut self) -> Result<f32, ParseError> {
+        Ok(f32::from_le_bytes(self.array()?))
+    }
+    pub fn f64(&mut self) -> Result<f64, ParseError> {
+        Ok(f64::from_le_bytes(self.array()?))
+    }
+    pub fn ivec3(&mut self) -> Result<IVec3, ParseError> {
+        Ok(IVec3::new(self.i32()?, self.i32()?, self.i32()?))
+    }
+    pub fn dvec3(&mut self) -> Result<DVec3, ParseError> {
+        Ok(DVec3::new(self.f64()?, self.f64()?, self.f64()?))
+    }
+    /// `count` little-endian `u64` words (a node mask).
+    pub fn u64s(&mut self, count: usize) -> Result<Vec<u64>, ParseError> {
+        let b = self.bytes(count * 8)?;
+        Ok(b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().expect("8-byte chunk"))).collect())
+    }
+    /// OpenVDB string: `u32` length, then the bytes (no NUL).
+    pub fn string_bytes(&mut self) -> Result<&'a [u8], ParseError> {
+        let at = self.pos;
+        let len = self.u32()? as usize;
+        if len > self.remaining() {
+            return Err(
+                self.err_at(at, format!("string length {len} exceeds the {} bytes left", self.remaining()))
+            );
+        }
+        self.bytes(len)
+    }
+    pub fn string(&mut self) -> Result<String, ParseError> {
+        Ok(String::from_utf8_lossy(self.string_bytes()?).into_owned())
+    }
+}
+
+/// One metadata value as stored (OpenVDB `TypedMetadata` type names).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RawMeta {
+    String(String),
+    Bool(bool),
+    Int32(i32),
+    Int64(i64),
+    Float(f32),
+    Double(f64),
+    Vec3i([i32; 3]),
+    Vec3s([f32; 3]),
+    Vec3d([f64; 3]),
+    /// Any other type, kept as raw bytes (e.g. `__delayedload`).
+    Other {
+        type_name: String,
+        bytes: Vec<u8>,
+    },
+}
+
+/// MetaMap: `u32 count`, then `count` x {key, type name, `u32 size`, value}.
+/// The size of a known type must match it (both OpenVDB and vdb-rs read known
+/// types by their own size, so a mismatch would misalign everything after).
+pub fn read_meta_map(cur: &mut Cursor) -> Result<Vec<(String, RawMeta)>, ParseError> {
+    let at = cur.pos();
+    let count = cur.u32()? as usize;
+    // Each entry takes at least 12 bytes (three u32 lengths).
+    if count > cur.remaining() / 12 {
+        return Err(cur
+            .err_at(at, format!("metadata count {count} cannot fit in the {} bytes left", cur.remaining())));
+    }
+    let mut out = Vec::with_capacity(count);
+    for _ in 0..count {
+        let key = cur.string()?;
+        let type_name = cur.string()?;
+        let size_at = cur.pos();
+        let size = cur.u32()? as usize;
+        let v = cur.bytes(size)?;
+        let want = match type_name.as_str() {
+            "bool" => Some(1),
+            "int32" | "float" => Some(4),
+            "int64" | "double" => Some(8),
+            "vec3i" | "vec3s" => Some(12),
+            "vec3d" => Some(24),
+            _ => None,
+        };
+        if let Some(w) = want {
+            if size != w {
+                return Err(cur.err_at(
+                    size_at,
+                    format!("metadata `{key}` of type {type_name} has size {size}, expected {w}"),
+                ));
+            }
+        }
+        let f32_at = |i: usize| f32::from_le_bytes(v[4 * i..4 * i + 4].try_into().expect("4 bytes"));
+        let i32_at = |i: usize| i32::from_le_bytes(v[4 * i..4 * i + 4].try_into().expect("4 bytes"));
+        let f64_at = |i: usize| f64::from_le_bytes(v[8 * i..8 * i + 8].try_into().expect("8 bytes"));
+        let value = match type_name.as_str() {
+            "string" => RawMeta::String(String::from_utf8_lossy(v).into_owned()),
+            "bool" => RawMeta::Bool(v[0] != 0),
+            "int32" => RawMeta::Int32(i32_at(0)),
+            "int64" => RawMeta::Int64(i64::from_le_bytes(v.try_into().expect("8 bytes"))),
+            "float" => RawMeta::Float(f32_at(0)),
+            "double" => RawMeta::Double(f64_at(0)),
+            "vec3i" => RawMeta::Vec3i([i32_at(0), i32_at(1), i32_at(2)]),
+            "vec3s" => RawMeta::Vec3s([f32_at(0), f32_at(1), f32_at(2)]),
+            "vec3d" => RawMeta::Vec3d([f64_at(0), f64_at(1), f64_at(2)]),
+            _ => RawMeta::Other { type_name: type_name.clone(), bytes: v.to_vec() },
+        };
+        out.push((key, value));
+    }
+    Ok(out)
+}
+
+/// The value type of a grid we read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ValueKind {
+    /// `Tree_float_5_4_3`
+    Float,
+    /// `Tree_vec3s_5_4_3`
+    Vec3,
+}
+
+/// File header (OpenVDB `Archive::readHeader`).
+#[derive(Clone, Debug)]
+pub struct Header {
+    pub file_version: u32,
+    pub library_major: u32,
+    pub library_minor: u32,
+    pub uuid: String,
+    pub metadata: Vec<(String, RawMeta)>,
+}
+
+/// A grid's descriptor and everything before its tree.
+#[derive(Clone, Debug)]
+pub struct GridHeader {
+    /// Name in the descriptor (unique in the file), lossily decoded as UTF-8.
+    pub unique_name: String,
+    /// The descriptor name's bytes as stored.
+    pub unique_name_raw: Vec<u8>,
+    /// Grid type as stored, e.g. `Tree_float_5_4_3_HalfFloat`.
+    pub type_name: String,
+    /// `None` for types aurora does not read (they are skipped).
+    pub kind: Option<ValueKind>,
+    pub instance_parent: String,
+    pub grid_pos: u64,
+    pub block_pos: u64,
+    pub end_pos: u64,
+    pub compression: u32,
+    pub metadata: Vec<(String, RawMeta)>,
+    /// Stored as half floats (decided by `is_saved_as_half_float`, as OpenVDB does).
+    pub half: bool,
+    /// Map type name, e.g. `UniformScaleTranslateMap`.
+    pub map_name: String,
+    /// `None` for skipped grids.
+    pub transform: Option<Transform>,
+}
+
+impl GridHeader {
+    /// The grid's name: metadata `name` (where OpenVDB takes it from), else
+    /// the descriptor name without OpenVDB's `"\x1e" + N` uniquifying suffix.
+    pub fn name(&self) -> String {
+        match self.metadata.iter().find(|(k, _)| k == "name") {
+            Some((_, RawMeta::String(s))) => s.clone(),
+            _ => self.unique_name.split('\x1e').next().unwrap_or("").to_string(),
+        }
+    }
+    /// Metadata `class` (e.g. `fog volume`), or `unknown`.
+    pub fn class(&self) -> String {
+        match self.metadata.iter().find(|(k, _)| k == "class") {
+            Some((_, RawMeta::String(s))) => s.clone(),
+            _ => "unknown".to_string(),
+        }
+    }
+}
+
+/// A parsed tree: leaves with their stored values (inactive values rebuilt as
+/// OpenVDB does) and active tiles. Empty vectors when not decoding.
+#[derive(Clone, Debug)]
+pub struct Tree<T> {
+    pub background: T,
+    pub leaves: Vec<Leaf<T>>,
+    /// Active tiles: (origin, log2 of the edge in voxels, value).
+    pub tiles: Vec<(IVec3, u32, T)>,
+    /// Number of leaves, counted even when not decoding.
+    pub leaf_count: usize,
+    /// Number of active tiles at any level, counted even when not decoding.
+    pub active_tile_count: usize,
+}
+
+/// A decoded grid tree of either value type.
+#[derive(Clone, Debug)]
+pub enum AnyTree {
+    Float(Tree<f32>),
+    Vec3(Tree<[f32; 3]>),
+}
+
+/// One grid of the file: header and, for grids of a kind we read, its tree.
+#[derive(Clone, Debug)]
+pub struct ParsedGrid {
+    pub header: GridHeader,
+    /// `None` for skipped grid types.
+    pub tree: Option<AnyTree>,
+}
+
+/// A whole parsed file.
+#[derive(Clone, Debug)]
+pub struct ParsedFile {
+    pub header: Header,
+    pub grids: Vec<ParsedGrid>,
+}
+
+/// Parses a whole file. `decode(grid)` says whether to decode that grid's
+/// values (otherwise they are validated and skipped).
+pub fn parse_file(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> bool) -> Result<ParsedFile, ParseError> {
+    let mut cur = Cursor::new(bytes);
+    let header = read_header(&mut cur)?;
+    let at = cur.pos();
+    let grid_count = cur.i32()?;
+    // A descriptor takes at least 3 string lengths and 3 offsets (36 bytes).
+    if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
+        return Err(cur.err_at(
+            at,
+            format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining()),
+        ));
+    }
+    let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count as usize);
+    for _ in 0..grid_count {
+        let g = read_grid(&mut cur, &header, decode)?;
+        if grids.iter().any(|o| o.header.unique_name_raw == g.header.unique_name_raw) {
+            return Err(ParseError {
+                offset: g.header.grid_pos,
+                message: format!("two grids share the descriptor name `{}`", g.header.unique_name),
+            });
+        }
+        grids.push(g);
+    }
+    Ok(ParsedFile { header, grids })
+}
+
+/// Header steps in byte order (OpenVDB `Archive::readHeader`): 1) magic,
+/// 2) file version, 3) library version, 4) has-grid-offsets flag, 5) (no
+/// compression byte since 222), 6) UUID; then the file MetaMap.
+fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
+    let magic = cur
+        .i64()
+        .map_err(|_| cur.err_at(0, "not a VDB file: shorter than the 8-byte magic number".into()))?;
+    if magic != layout::MAGIC {
+        return Err(
+            cur.err_at(0, format!("not a VDB file: magic number {magic:#x}, expected {:#x}", layout::MAGIC))
+        );
+    }
+    let file_version = cur.u32()?;
+    if !(layout::MIN_READ_VERSION..=layout::MAX_READ_VERSION).contains(&file_version) {
+        return Err(cur.err_at(
+            8,
+            format!(
+                "unsupported file format version {file_version} (this reader handles {}..={})",
+                layout::MIN_READ_VERSION,
+                layout::MAX_READ_VERSION
+            ),
+        ));
+    }
+    let library_major = cur.u32()?;
+    let library_minor = cur.u32()?;
+    let has_offsets = cur.u8()?;
+    if has_offsets != 1 {
+        return Err(cur.err_at(
+            20,
+            format!(
+                "has-grid-offsets flag is {has_offsets}: streamed archives without offsets are not supported"
+            ),
+        ));
+    }
+    let uuid = String::from_utf8_lossy(cur.bytes(layout::UUID_LEN)?).into_owned();
+    let metadata = read_meta_map(cur)?;
+    Ok(Header { file_version, library_major, library_minor, uuid, metadata })
+}
+
+fn read_grid(
+    cur: &mut Cursor,
+    header: &Header,
+    decode: &dyn Fn(&GridHeader) -> bool,
+) -> Result<ParsedGrid, ParseError> {
+    let desc_at = cur.pos();
+    let unique_name_raw = cur.string_bytes()?.to_vec();
+    let unique_name = String::from_utf8_lossy(&unique_name_raw).into_owned();
+    let type_name = cur.string()?;
+    let instance_parent = cur.string()?;
+    let grid_pos = cur.i64()?;
+    let block_pos = cur.i64()?;
+    let end_pos = cur.i64()?;
+    let desc_end = cur.pos() as i64;
+    let len = cur.data.len() as i64;
+    if !(desc_end <= grid_pos && grid_pos <= block_pos && block_pos <= end_pos && end_pos <= len) {
+        return Err(cur.err_at(
+            desc_at,
+            format!(
+                "grid `{unique_name}`: offsets out of order or past the end (descriptor ends at {desc_end}, \
+                 gridPos {grid_pos}, blockPos {block_pos}, endPos {end_pos}, file length {len})"
+            ),
+        ));
+    }
+    let base = type_name.strip_suffix(layout::HALF_FLOAT_SUFFIX).unwrap_or(&type_name);
+    let kind = match base {
+        "Tree_float_5_4_3" => Some(ValueKind::Float),
+        "Tree_vec3s_5_4_3" => Some(ValueKind::Vec3),
+        _ => None,
+    };
+    cur.seek(grid_pos as u64)?;
+    let comp_at = cur.pos();
+    let compression = cur.u32()?;
+    if compression & !(layout::COMPRESS_ZIP | layout::COMPRESS_ACTIVE_MASK | layout::COMPRESS_BLOSC) != 0 {
+        return Err(
+            cur.err_at(comp_at, format!("grid `{unique_name}`: invalid compression flags {compression:#x}"))
+        );
+    }
+    let metadata = read_meta_map(cur)?;
+    let half = metadata.iter().any(|(k, v)| k == layout::META_HALF && *v == RawMeta::Bool(true));
+    let mut gh = GridHeader {
+        unique_name,
+        unique_name_raw,
+        type_name,
+        kind,
+        instance_parent,
+        grid_pos: grid_pos as u64,
+        block_pos: block_pos as u64,
+        end_pos: end_pos as u64,
+        compression,
+        metadata,
+        half,
+        map_name: String::new(),
+        transform: None,
+    };
+    let tree = match kind {
+        None => None,
+        Some(kind) => {
+            if !gh.instance_parent.is_empty() {
+                return Err(cur.err_at(
+                    desc_at,
+                    format!(
+                        "grid `{}` is an instance of `{}`: instanced grids are not supported",
+                        gh.unique_name, gh.instance_parent
+                    ),
+                ));
+            }
+            let (map_name, transform) = read_transform(cur, &gh.unique_name)?;
+            gh.map_name = map_name;
+            gh.transform = Some(transform);
+            let fmt = RecordFormat { flags: compression, half };
+            let dec = decode(&gh);
+            let tree = match kind {
+                ValueKind::Float => AnyTree::Float(read_tree::<f32>(cur, &gh, fmt, dec)?),
+                ValueKind::Vec3 => AnyTree::Vec3(read_tree::<[f32; 3]>(cur, &gh, fmt, dec)?),
+            };
+            if cur.pos() as u64 != gh.end_pos {
+                return Err(cur.err(format!(
+                    "grid `{}`: data end at {} but endPos says {}",
+                    gh.unique_name,
+                    cur.pos(),
+                    gh.end_pos
+                )));
+            }
+            Some(tree)
+        }
+    };
+    let _ = header;
+    cur.seek(gh.end_pos)?;
+    Ok(ParsedGrid { header: gh, tree })
+}
+
+/// Reads a transform (OpenVDB `Transform::read`: map type name, then the
+/// map's fields) and reduces it to a uniform scale + translation.
+fn read_transform(cur: &mut Cursor, grid: &str) -> Result<(String, Transform), ParseError> {
+    let at = cur.pos();
+    let name = cur.string()?;
+    let (scale, translation) = match name.as_str() {
+        "UniformScaleTranslateMap" | "ScaleTranslateMap" => {
+            let t = cur.dvec3()?;
+            let s = cur.dvec3()?;
+            for _ in 0..4 {
+                cur.dvec3()?; // voxelSize, scaleInverse, invScaleSqr, invTwiceScale
+            }
+            (s, t)
+        }
+        "UniformScaleMap" | "ScaleMap" => {
+            let s = cur.dvec3()?;
+            for _ in 0..4 {
+                cur.dvec3()?;
+            }
+            (s, DVec3::ZERO)
+        }
+        "TranslationMap" => (DVec3::ONE, cur.dvec3()?),
+        "AffineMap" => {
+            // Mat4d, row-major, row-vector convention: translation in row 3.
+            let mut m = [0f64; 16];
+            for v in m.iter_mut() {
+                *v = cur.f64()?;
+            }
+            let s = DVec3::new(m[0], m[5], m[10]);
+            let off_diag = [1, 2, 3, 4, 6, 7, 8, 9, 11];
+            if off_diag.iter().any(|&i| m[i] != 0.0) || m[15] != 1.0 {
+                return Err(cur.err_at(at, format!("grid `{grid}`: AffineMap with rotation, shear or projection is not supported")));
+            }
+            (s, DVec3::new(m[12], m[13], m[14]))
+        }
+        other => {
+            return Err(cur.err_at(
+                at,
+                format!("grid `{grid}`: unsupported transform map `{other}` (only uniform scale + translation maps are read)"),
+            ))
+        }
+    };
+    if !(scale.x == scale.y && scale.y == scale.z) {
+        return Err(
+            cur.err_at(at, format!("grid `{grid}`: non-uniform voxel scale {scale} is not supported"))
+        );
+    }
+    if !(scale.x.is_finite() && scale.x != 0.0 && translation.is_finite()) {
+        return Err(cur.err_at(
+            at,
+            format!("grid `{grid}`: degenerate transform (scale {}, translation {translation})", scale.x),
+        ));
+    }
+    Ok((name, Transform::new(scale.x, translation)))
+}
+
+/// A full-precision value.
+fn read_value<T: VoxelValue>(cur: &mut Cursor) -> Result<T, ParseError> {
+    let mut c = [0f32; 3];
+    for x in c[..T::COMPONENTS].iter_mut() {
+        *x = cur.f32()?;
+    }
+    Ok(T::from_components(&c))
+}
+
+/// Topology of one Internal16 node: slot in its parent, masks and leaf masks.
+struct Node16<T> {
+    origin: IVec3,
+    child_mask: Vec<u64>,
+    leaf_masks: Vec<[u64; LEAF_MASK_WORDS]>,
+    _t: std::marker::PhantomData<T>,
+}
+
+/// Reads an internal node's masks and value array (OpenVDB
+/// `InternalNode::readTopology`), collecting its active tiles.
+fn read_internal<T: VoxelValue>(
+    cur: &mut Cursor,
+    level: layout::InternalLevel,
+    origin: IVec3,
+    fmt: RecordFormat,
+    background: T,
+    decode: bool,
+    tree: &mut Tree<T>,
+) -> Result<Vec<u64>, ParseError> {
+    let child_mask = cur.u64s(level.mask_words())?;
+    let value_mask = cur.u64s(level.mask_words())?;
+    let values = codec::read_values::<T>(cur, fmt, level.num_values(), &value_mask, background, decode)?;
+    for n in layout::mask_ones(&value_mask) {
+        if layout::mask_bit(&child_mask, n) {
+            continue;
+        }
+        tree.active_tile_count += 1;
+        if let Some(v) = &values {
+            let o = if level == INTERNAL32 {
+                layout::internal32_child_origin(origin, n)
+            } else {
+                layout::internal16_child_origin(origin, n)
+            };
+            tree.tiles.push((o, level.child_log2, v[n]));
+        }
+    }
+    Ok(child_mask)
+}
+
+/// Reads topology and buffers of a tree (OpenVDB `RootNode::readTopology`,
+/// then `Tree::readBuffers`), in the depth-first order both passes share.
+fn read_tree<T: VoxelValue>(
+    cur: &mut Cursor,
+    gh: &GridHeader,
+    fmt: RecordFormat,
+    decode: bool,
+) -> Result<Tree<T>, ParseError> {
+    let name = &gh.unique_name;
+    let at = cur.pos();
+    let buffer_count = cur.i32()?;
+    if buffer_count != 1 {
+        return Err(cur.err_at(at, format!("grid `{name}`: buffer count {buffer_count}, expected 1")));
+    }
+    let background: T = read_value(cur)?;
+    let at = cur.pos();
+    let tile_count = cur.u32()? as usize;
+    let child_count = cur.u32()? as usize;
+    let full = 4 * T::COMPONENTS;
+    if tile_count > cur.remaining() / (12 + full + 1) || child_count > cur.remaining() / 12 {
+        return Err(cur.err_at(
+            at,
+            format!(
+                "grid `{name}`: {tile_count} root tiles and {child_count} children cannot fit in the file"
+            ),
+        ));
+    }
+    let mut tree =
+        Tree { background, leaves: Vec::new(), tiles: Vec::new(), leaf_count: 0, active_tile_count: 0 };
+    for _ in 0..tile_count {
+        let o = cur.ivec3()?;
+        let v: T = read_value(cur)?;
+        let active = cur.u8()?;
+        if active != 0 {
+            tree.active_tile_count += 1;
+            if decode {
+                tree.tiles.push((o & IVec3::splat(!4095), layout::ROOT_CHILD_LOG2, v));
+            }
+        }
+    }
+    let mut nodes16: Vec<Node16<T>> = Vec::new();
+    let mut prev: Option<IVec3> = None;
+    for _ in 0..child_count {
+        let at = cur.pos();
+        let origin = cur.ivec3()?;
+        if layout::root_child_origin(origin) != origin {
+            return Err(cur
+                .err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
+        }
+        if let Some(p) = prev {
+            if (p.x, p.y, p.z) >= (origin.x, origin.y, origin.z) {
+                return Err(cur.err_at(
+                    at,
+                    format!("grid `{name}`: root children not in ascending (x, y, z) order ({p} then {origin}); OpenVDB would misassign their buffers"),
+                ));
+            }
+        }
+        prev = Some(origin);
+        let cm32 = read_internal(cur, INTERNAL32, origin, fmt, background, decode, &mut tree)?;
+        for n32 in layout::mask_ones(&cm32) {
+            let o16 = layout::internal32_child_origin(origin, n32);
+            let cm16 = read_internal(cur, INTERNAL16, o16, fmt, background, decode, &mut tree)?;
+            let k = layout::mask_count(&cm16);
+            if k * 64 > cur.remaining() {
+                return Err(cur.err(format!("grid `{name}`: truncated leaf topology")));
+            }
+            let mut leaf_masks = Vec::with_capacity(k);
+            for _ in 0..k {
+                let m = cur.u64s(LEAF_MASK_WORDS)?;
+                leaf_masks.push(m.try_into().expect("8 words"));
+            }
+            tree.leaf_count += k;
+            nodes16.push(Node16 { origin: o16, child_mask: cm16, leaf_masks, _t: std::marker::PhantomData });
+        }
+    }
+    if cur.pos() as u64 != gh.block_pos {
+        return Err(cur.err(format!(
+            "grid `{name}`: topology ends at {} but blockPos says {}",
+            cur.pos(),
+            gh.block_pos
+        )));
+    }
+    // Buffers: per leaf, a copy of the value mask and the value record.
+    for node in &nodes16 {
+        for (n16, mask) in layout::mask_ones(&node.child_mask).zip(&node.leaf_masks) {
+            let at = cur.pos();
+            let copy = cur.u64s(LEAF_MASK_WORDS)?;
+            if copy[..] != mask[..] {
+                return Err(cur.err_at(
+                    at,
+                    format!("grid `{name}`: leaf value mask in the buffers differs from the topology"),
+                ));
+            }
+            let values = codec::read_values::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, decode)?;
+            if let Some(values) = values {
+                let origin = layout::internal16_child_origin(node.origin, n16);
+                let mut leaf = Leaf::new(origin, background);
+                leaf.mask = *mask;
+                leaf.values.copy_from_slice(&values);
+                tree.leaves.push(leaf);
+            }
+        }
+    }
+    Ok(tree)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cursor_checks_bounds() {
+        let data = [1u8, 0, 0, 0, 0xff, 0xff, 0xff, 0x7f];
+        let mut c = Cursor::new(&data);
+        assert_eq!(c.u32().unwrap(), 1);
+        assert!(c.string().is_err(), "length 2^31-1 exceeds the data");
+        let mut c = Cursor::new(&data);
+        assert!(c.seek(9).is_err());
+        assert!(c.bytes_len(u64::MAX).is_err());
+        assert!(c.u64s(2).is_err());
+    }
+
+    #[test]
+    fn meta_map_sizes_are_checked() {
+        let mut b = Vec::new();
+        b.extend_from_slice(&1u32.to_le_bytes());
+        for s in ["flag", "bool"] {
+            b.extend_from_slice(&(s.len() as u32).to_le_bytes());
+            b.extend_from_slice(s.as_bytes());
+        }
+        b.extend_from_slice(&4u32.to_le_bytes());
+        b.extend_from_slice(&[1, 0, 0, 0]);
+        assert!(read_meta_map(&mut Cursor::new(&b)).is_err(), "a 4-byte bool is rejected");
+        // A huge count is rejected before anything is allocated.
+        let b = u32::MAX.to_le_bytes();
+        assert!(read_meta_map(&mut Cursor::new(&b)).is_err());
+    }
+}
