@@ -586,7 +586,7 @@ impl Scene {
 
     /// The scene as TOML, as `aurora scene default` prints it.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).expect("a scene always serialises")
+        toml::to_string(self).expect("a scene always serialises")
     }
 
     /// 64-bit FNV-1a hash of the canonical TOML: identifies a bake's inputs.
