@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 #: Cycles samples per pixel by default: see DEFAULTS in the add-on README
 #: (noise vs samples measured by tests/python/bench_cycles_noise.py).
-DEFAULT_SAMPLES = 256
+DEFAULT_SAMPLES = 128
 
 
 def load_addon(name: str = "aurora_importer"):
