@@ -7,6 +7,7 @@ import bpy
 from bpy.props import BoolProperty, FloatProperty, FloatVectorProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
+from .render_settings import CyclesSettings
 from .scene_setup import setup_scene_from_toml
 from .volume_import import AuroraImportError, import_aurora
 
@@ -33,8 +34,6 @@ class IMPORT_OT_aurora(bpy.types.Operator, ImportHelper):
     def execute(self, context):
         try:
             if self.scene_file:
-                from .render_settings import CyclesSettings
-
                 setup_scene_from_toml(
                     bpy.path.abspath(self.scene_file),
                     vdb=self.filepath,

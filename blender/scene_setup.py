@@ -82,6 +82,8 @@ def setup_scene_from_toml(
                              pad_dir=pad_dir)
     if ter is not None and settings.terrain_lighting == "lights":
         for obj in vols:
+            if "emission" not in {g.name for g in obj.data.grids}:
+                continue
             clusters = emission_clusters(bpy.path.abspath(obj.data.filepath), spec.volume.emission_scale,
                                          settings.max_lights)
             _, objs = build_emission_lights(scene, clusters, obj.matrix_world)

@@ -144,6 +144,22 @@ def test_enables_as_legacy_addon(bpy, fresh, tmp_path, aurora_vdb):
         assert mod.bl_info["blender"] <= (5, 0, 0)
         assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb)) == {"FINISHED"}
         assert_aurora_volume([o for o in bpy.data.objects if o.type == "VOLUME"][0], 1.0, 1.0)
+        # With a scene file: camera, world and the file's scales come too.
+        cam = {"position": [0, -50, 5], "look_at": [10, 0, 103], "up": [0, 0, 1], "projection": "perspective",
+               "fov_deg": 30.0}
+        toml = synth.write_scene(tmp_path / "op.toml", cam, 64, 36, density_scale=0.25, emission_scale=2.0)
+        before = set(bpy.data.objects)
+        assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb), scene_file=str(toml)) == {"FINISHED"}
+        sc = bpy.context.scene
+        assert sc.camera is not None and sc.camera.data.angle_y == pytest.approx(math.radians(30.0))
+        assert not sc.render.film_transparent  # interactive default: opaque film, background visible
+        new_vols = [o for o in bpy.data.objects if o not in before and o.type == "VOLUME"]
+        assert len(new_vols) == 1
+        assert_aurora_volume(new_vols[0], 0.25, 2.0)
+        # Errors are reported (an ERROR report, which bpy.ops turns into a
+        # RuntimeError for a script), not a Python traceback from the add-on.
+        with pytest.raises(RuntimeError, match="missing.vdb: no such file"):
+            bpy.ops.import_scene.aurora(filepath=str(tmp_path / "missing.vdb"))
     finally:
         addon_utils.disable(name, default_set=True)
         bpy.context.preferences.filepaths.script_directories.remove(d)
