@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 #: Upper bound on the number of point lights (Blender objects) made.
-DEFAULT_MAX_LIGHTS = 4096
+DEFAULT_MAX_LIGHTS = 512
 _BLOCKS = (1, 2, 4, 8, 16, 32, 64, 128)
 
 

@@ -51,7 +51,7 @@ class CyclesSettings:
     #: low noise) or "paths" (a diffuse bounce into the volume, brute force).
     terrain_lighting: str = "lights"
     #: At most this many point lights in "lights" mode.
-    max_lights: int = 4096
+    max_lights: int = 512
     threads: int = 0  # 0 = all cores
 
 

@@ -166,7 +166,7 @@ def main(argv=None) -> int:
     p.add_argument("--terrain-lighting", choices=["lights", "paths"], default=None,
                    help="how the aurora lights the terrain: clustered point lights (default, low noise) "
                         "or diffuse bounces into the volume (brute force)")
-    p.add_argument("--max-lights", type=int, default=None, help="at most this many point lights (default 4096)")
+    p.add_argument("--max-lights", type=int, default=None, help="at most this many point lights for the terrain (default 512)")
     p.add_argument("--threads", type=int, default=None, help="CPU threads (default: all)")
     p.add_argument("--no-pad", action="store_true",
                    help="render the VDB as it is (default: a copy with a shell of active zero voxels, "
