@@ -184,10 +184,15 @@ def main(argv=None) -> int:
         render(a.scene, a.vdb, a.out, a.samples, a.terrain_obj, a.seed, a.quiet, pad=not a.no_pad, volume_biased=biased,
                step_rate=a.step_rate, terrain_lighting=a.terrain_lighting, max_lights=a.max_lights, threads=a.threads)
     except Exception as e:  # noqa: BLE001 - one place maps errors to an exit status
+        # Bad input (scene file, VDB, terrain OBJ, resolution): 2; anything else: 1.
         addon = sys.modules.get("aurora_importer")
-        user = addon is not None and isinstance(e, (addon.SceneFileError, addon.AuroraImportError))
+        user_errors = (ValueError, FileNotFoundError)
+        if addon is not None:
+            from aurora_importer.terrain import TerrainError
+
+            user_errors += (addon.SceneFileError, addon.AuroraImportError, TerrainError)
         print(f"cycles_render: error: {e}", file=sys.stderr)
-        return 2 if user else 1
+        return 2 if isinstance(e, user_errors) else 1
     return 0
 
 

@@ -25,6 +25,12 @@ for p in (HERE, ROOT / "tools"):
         sys.path.insert(0, str(p))
 
 
+def pytest_sessionfinish(session, exitstatus):
+    import shutil
+
+    shutil.rmtree(_USER, ignore_errors=True)
+
+
 @pytest.fixture(scope="session")
 def blender_user_dir() -> Path:
     return Path(_USER)

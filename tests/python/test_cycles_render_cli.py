@@ -58,3 +58,7 @@ def test_cli_exit_codes(tmp_path):
                        capture_output=True, text=True)
     assert r.returncode == 2 and "render.width" in r.stderr, r.stderr
     assert not (tmp_path / "o.exr").exists()
+    hf = synth.write_scene(tmp_path / "hf.toml", cam, 8, 8, terrain={"kind": "heightfield"})
+    r = subprocess.run([sys.executable, TOOL, hf, "--vdb", vdb, "--out", tmp_path / "o.exr"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and "aurora terrain" in r.stderr, r.stderr
