@@ -231,7 +231,7 @@ where
             .draw_series(pts.iter().map(|m| {
                 let star = if m.scene_setting { " *" } else { "" };
                 let text = if m.error == 0.0 {
-                    format!("{}{star} (reference, error 0)", short_num(m.param))
+                    format!("reference, error 0{star}")
                 } else {
                     format!("{}{star}", short_num(m.param))
                 };
