@@ -74,9 +74,15 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         .output()
         .expect("run aurora bench");
     let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(run.status.success(), "status {:?}\nstdout:\n{stdout}\nstderr:\n{}", run.status, String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "status {:?}\nstdout:\n{stdout}\nstderr:\n{}",
+        run.status,
+        String::from_utf8_lossy(&run.stderr)
+    );
     // The summary table names every study.
-    let studies = ["photon count", "gather radius", "gather method", "voxel size", "primary-ray integration", "shadow rays"];
+    let studies =
+        ["photon count", "gather radius", "gather method", "voxel size", "primary-ray integration", "shadow rays"];
     for st in studies {
         assert!(stdout.contains(&format!("== {st} ")), "summary lacks {st}:\n{stdout}");
     }
@@ -105,9 +111,10 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         // unflagged one is dominated (or repeats an earlier flagged point).
         let pts: Vec<(f64, f64)> = sel.iter().map(|r| (num(r, "seconds"), num(r, "error"))).collect();
         for (i, r) in sel.iter().enumerate() {
-            let dominated = pts.iter().enumerate().any(|(j, q)| {
-                j != i && q.0 <= pts[i].0 && q.1 <= pts[i].1 && (q.0 < pts[i].0 || q.1 < pts[i].1)
-            });
+            let dominated = pts
+                .iter()
+                .enumerate()
+                .any(|(j, q)| j != i && q.0 <= pts[i].0 && q.1 <= pts[i].1 && (q.0 < pts[i].0 || q.1 < pts[i].1));
             let duplicate = pts[..i].iter().any(|q| *q == pts[i]);
             assert_eq!(r["pareto"] == "1", !dominated && !duplicate, "{st}: {r:?}");
         }
@@ -162,7 +169,8 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     }
 
     // --- bench.json
-    let j: Value = serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).expect("bench.json")).expect("json");
+    let j: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).expect("bench.json")).expect("json");
     assert!(j["machine"]["nproc"].as_u64().unwrap() >= 1);
     assert!(!j["machine"]["model_name"].as_str().unwrap().is_empty());
     let date = j["date"].as_str().unwrap();

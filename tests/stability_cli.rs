@@ -66,8 +66,11 @@ fn deflection_of_90_degrees_is_refused_naming_key_and_range_and_nothing_is_writt
     }
     // Just below 90 is accepted (and baked: see stability_extremes.rs).
     let scene = d.join("alpha-89.toml");
-    std::fs::write(&scene, small_scene("count = 10\nalpha_d_deg = 89.9\ndelta_alpha_deg = 10.0", "", "", "steps = 2", ""))
-        .unwrap();
+    std::fs::write(
+        &scene,
+        small_scene("count = 10\nalpha_d_deg = 89.9\ndelta_alpha_deg = 10.0", "", "", "steps = 2", ""),
+    )
+    .unwrap();
     let o = aurora(&["bake", scene.to_str().unwrap(), "--out", d.join("out-89").to_str().unwrap(), "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
@@ -117,7 +120,10 @@ fn a_bake_beyond_half_range_fails_cleanly_and_full_float_keeps_the_values() {
     let o = aurora(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "-q"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let e = stderr(&o);
-    assert!(e.contains("aurora.vdb") && e.contains("`emission`") && e.contains("65504") && e.contains("full float"), "{e}");
+    assert!(
+        e.contains("aurora.vdb") && e.contains("`emission`") && e.contains("65504") && e.contains("full float"),
+        "{e}"
+    );
     assert!(files_in(&out).is_empty(), "nothing written: {:?}", files_in(&out));
 
     std::fs::write(&scene, body(false)).unwrap();
@@ -161,11 +167,20 @@ fn under_resolved_kernels_and_curtains_are_warned_on_stderr() {
     // (0.7 km), on 1 km voxels.
     let (o, _) = run(
         "curtain",
-        small_scene("count = 20", "radius_km = 1.0", "voxel_size = 1.0", "steps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02", ""),
+        small_scene(
+            "count = 20",
+            "radius_km = 1.0",
+            "voxel_size = 1.0",
+            "steps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02",
+            "",
+        ),
     );
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
-    assert!(e.contains("aurora: warning: under-resolved curtain: curtain[0]") && e.contains("thinner than a voxel (1 km)"), "{e}");
+    assert!(
+        e.contains("aurora: warning: under-resolved curtain: curtain[0]") && e.contains("thinner than a voxel (1 km)"),
+        "{e}"
+    );
     assert!(!e.contains("under-resolved kernel"), "{e}");
 }
 

@@ -124,8 +124,7 @@ fn radius_error_curve_has_noise_and_blur_ends_and_a_minimum_between() {
     }
     // The shape: a minimum strictly inside, between a quarter of the photon
     // spacing and the thickness; both ends at least twice the minimum.
-    let (imin, &(rmin, emin, _, _)) =
-        measured.iter().enumerate().min_by(|a, b| a.1 .1.total_cmp(&b.1 .1)).unwrap();
+    let (imin, &(rmin, emin, _, _)) = measured.iter().enumerate().min_by(|a, b| a.1 .1.total_cmp(&b.1 .1)).unwrap();
     assert!(imin > 0 && imin < measured.len() - 1, "minimum at an end: {measured:?}");
     assert!(rmin > 0.25 * spacing && rmin < thickness, "minimum at r = {rmin}: {measured:?}");
     assert!(measured[0].1 > 2.0 * emin, "noise end: {measured:?}");

@@ -30,6 +30,8 @@
 //! voxels (4 and 8 km, a quarter and half of the medium) are checked against
 //! the step sum: bounded and finite, however wrong.
 
+#![allow(clippy::needless_range_loop)] // colour channels index several arrays
+
 use aurora::grid::{Grid, Transform};
 use aurora::render::{radiance_along_ray, Integration, Medium};
 use glam::{DVec3, IVec3};

@@ -35,7 +35,8 @@ pub struct Measurement {
 /// minimised: no other point is at least as good in both and better in one.
 /// Returned in ascending time.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
+    let mut idx: Vec<usize> =
+        (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
     idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
@@ -157,7 +158,11 @@ pub fn draw_study(ms: &[Measurement], study: &str, stem: &Path) -> Result<(), Ch
     Ok(())
 }
 
-fn draw_on<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, ms: &[Measurement], study: &str) -> Result<(), String>
+fn draw_on<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    ms: &[Measurement],
+    study: &str,
+) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {

@@ -21,9 +21,8 @@ fn visit_pairs<T: VoxelValue>(test: &Grid<T>, reference: &Grid<T>, mut f: impl F
         let p = test.transform.index_to_world(ijk.as_dvec3());
         let b = reference.sample_world(p);
         if b.components()[..T::COMPONENTS].iter().all(|&x| x == 0.0) {
-            let a = a.components();
-            for c in 0..T::COMPONENTS {
-                f(a[c] as f64, 0.0, w);
+            for &x in &a.components()[..T::COMPONENTS] {
+                f(x as f64, 0.0, w);
             }
         }
     }
@@ -92,14 +91,23 @@ pub fn image_rel_error(a: &[[f32; 4]], b: &[[f32; 4]], floor: f64) -> (f64, f64)
         }
     }
     let mean = if n == 0 { 0.0 } else { sum / n as f64 };
-    let flux = if fb == 0.0 { if fa == 0.0 { 1.0 } else { f64::INFINITY } } else { fa / fb };
+    let flux = if fb == 0.0 {
+        if fa == 0.0 {
+            1.0
+        } else {
+            f64::INFINITY
+        }
+    } else {
+        fa / fb
+    };
     (mean, flux)
 }
 
 /// [`image_rel_error`] over the pixels where `mask` is true (e.g. terrain).
 pub fn image_rel_error_masked(a: &[[f32; 4]], b: &[[f32; 4]], mask: &[bool], floor: f64) -> (f64, f64) {
     assert!(a.len() == mask.len() && b.len() == mask.len(), "images and mask differ in size");
-    let pick = |img: &[[f32; 4]]| -> Vec<[f32; 4]> { img.iter().zip(mask).filter(|(_, &m)| m).map(|(p, _)| *p).collect() };
+    let pick =
+        |img: &[[f32; 4]]| -> Vec<[f32; 4]> { img.iter().zip(mask).filter(|(_, &m)| m).map(|(p, _)| *p).collect() };
     image_rel_error(&pick(a), &pick(b), floor)
 }
 

@@ -118,11 +118,8 @@ pub fn study_json(st: &Study) -> Value {
     let front: Vec<Value> = ms.iter().zip(&flags).filter(|(_, &f)| f).map(|(m, _)| point(m)).collect();
     let scene = ms.iter().zip(&flags).find(|(m, _)| m.scene_setting);
     let most_accurate = ms.iter().min_by(|a, b| a.error.total_cmp(&b.error).then(a.seconds.total_cmp(&b.seconds)));
-    let as_good = scene.and_then(|(s, _)| {
-        ms.iter()
-            .filter(|m| m.error <= s.error)
-            .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
-    });
+    let as_good = scene
+        .and_then(|(s, _)| ms.iter().filter(|m| m.error <= s.error).min_by(|a, b| a.seconds.total_cmp(&b.seconds)));
     json!({
         "study": st.name,
         "timed_stage": st.stage,

@@ -179,11 +179,14 @@ pub struct Bench<'a> {
     field: Field,
     photons: BTreeMap<usize, (Vec<Photon>, f64)>,
     /// Test gathers by (beams, radius bits, voxel bits, method).
-    gathers: HashMap<GatherKey, (Arc<Grid<[f32; 3]>>, f64)>,
+    gathers: HashMap<GatherKey, Timed<Arc<Grid<[f32; 3]>>>>,
     log: &'a (dyn Fn(&str) + Sync),
 }
 
 type GatherKey = (usize, u64, u64, u8);
+
+/// A result and the wall time it took, seconds.
+type Timed<T> = (T, f64);
 
 impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
@@ -247,7 +250,13 @@ impl<'a> Bench<'a> {
 
     /// [`Bench::gather_uncached`], kept for the other studies that use the
     /// same setting (test settings only: references are used once).
-    fn gather(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<(Arc<Grid<[f32; 3]>>, f64), SweepError> {
+    fn gather(
+        &mut self,
+        n: usize,
+        r: f64,
+        v: f64,
+        method: GatherMethod,
+    ) -> Result<Timed<Arc<Grid<[f32; 3]>>>, SweepError> {
         let key = (n, r.to_bits(), v.to_bits(), method as u8);
         if let Some((g, s)) = self.gathers.get(&key) {
             return Ok((g.clone(), *s));
@@ -260,7 +269,13 @@ impl<'a> Bench<'a> {
 
     /// The emission grid of `n` beams gathered with base radius `r`, voxel
     /// `v` and `method` (radius noise as in the scene), and the gather time.
-    fn gather_uncached(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
+    fn gather_uncached(
+        &mut self,
+        n: usize,
+        r: f64,
+        v: f64,
+        method: GatherMethod,
+    ) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
         let p = &self.scene.photons;
         let radius = RadiusField::new(
             r,
@@ -340,7 +355,17 @@ impl<'a> Bench<'a> {
             if k == n {
                 err_n = Some(e);
             }
-            ms.push(self.measure(name, &method, "beams", k as f64, "beams+gather", trace_s + gather_s, e, metric, k == n));
+            ms.push(self.measure(
+                name,
+                &method,
+                "beams",
+                k as f64,
+                "beams+gather",
+                trace_s + gather_s,
+                e,
+                metric,
+                k == n,
+            ));
         }
         let mut notes = vec![format!(
             "Pure noise: the reference has the same kernel and voxels, so the error is the Monte Carlo noise of the density estimate, expected to fall as beams^-1/2 (sigma sqrt(1/n - 1/M) with the shared first beams)."
@@ -381,10 +406,30 @@ impl<'a> Bench<'a> {
                 let k = self.beams_times(f);
                 let (g, secs) = self.gather(k, r, v, method)?;
                 let here = method == scene_gather && k == n;
-                ms.push(self.measure(name, label, "beams", k as f64, "gather", secs, grid_rel_rms(&g, &reference), metric, here));
+                ms.push(self.measure(
+                    name,
+                    label,
+                    "beams",
+                    k as f64,
+                    "gather",
+                    secs,
+                    grid_rel_rms(&g, &reference),
+                    metric,
+                    here,
+                ));
                 if method == GatherMethod::Report2014 {
                     let (e, s) = grid_rel_rms_best_scale(&g, &reference);
-                    scaled.push(self.measure(name, "report2014, best-fit scale", "beams", k as f64, "gather", secs, e, metric, false));
+                    scaled.push(self.measure(
+                        name,
+                        "report2014, best-fit scale",
+                        "beams",
+                        k as f64,
+                        "gather",
+                        secs,
+                        e,
+                        metric,
+                        false,
+                    ));
                     self.say(&format!("  (report2014 best-fit scale factor {s:.4e})"));
                 }
             }
@@ -516,7 +561,8 @@ impl<'a> Bench<'a> {
         s.integration = Integration::Exact;
         let (exact, exact_s) = self.render_timed(&s, &vol)?;
         let all = vec![true; exact.pixels.len()];
-        let mut ms = vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
+        let mut ms =
+            vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
         let mut flux = Vec::new();
         for f in self.plan.step_factors.clone() {
             let h = v * f;
