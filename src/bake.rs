@@ -123,12 +123,59 @@ pub enum BakeError {
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
 }
 
-/// The voxel size in km and where it came from.
-pub fn voxel_size(scene: &Scene) -> (f64, String) {
+/// The voxel size in km and where it came from. `"auto"` asks the camera:
+/// see [`auto_voxel_size`].
+pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
     match scene.grid.voxel_size {
         VoxelSize::Km(v) => (v, "scene".into()),
-        VoxelSize::Auto(_) => (scene.photons.radius_km, "auto (photons.radius_km)".into()),
+        VoxelSize::Auto(_) => {
+            let (v, why) = auto_voxel_size(scene, photons);
+            (v, format!("auto: {why}"))
+        }
     }
+}
+
+/// No more model than the picture needs: the voxel size at which one voxel
+/// projects to about one pixel at the nearest aurora.
+///
+/// Perspective: a pixel subtends 2 tan(fov/2) / height radians, so at
+/// distance d it covers d 2 tan(fov/2) / height km; d is the 1st percentile
+/// of the photons' distances from the camera (robust to a few stray photons,
+/// which would otherwise shrink every voxel). Orthographic: ortho_height /
+/// height. Never below half the kernel radius: the kernel already blurs the
+/// field at that scale, so finer voxels add memory and no detail. Rounded to
+/// three significant digits so the size reads well in bake.json.
+pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
+    let cam = &scene.camera;
+    let floor = 0.5 * scene.photons.radius_km;
+    let (raw, why) = match cam.projection {
+        crate::scene::Projection::Orthographic => {
+            (cam.ortho_height / scene.render.height as f64, "ortho_height / height".to_string())
+        }
+        crate::scene::Projection::Perspective => {
+            let eye = DVec3::from_array(cam.position);
+            let mut d: Vec<f64> = photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect();
+            if d.is_empty() {
+                return (scene.photons.radius_km, "no photons: kernel radius".into());
+            }
+            let k = d.len() / 100;
+            let (_, nth, _) = d.select_nth_unstable_by(k, f64::total_cmp);
+            let dist = *nth;
+            let pixel = 2.0 * (0.5 * cam.fov_deg.to_radians()).tan() / scene.render.height as f64;
+            (dist * pixel, format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
+        }
+    };
+    let v = raw.max(floor);
+    let why = if raw < floor { format!("{why}, raised to half the kernel radius") } else { why };
+    (round_sig(v, 3), why)
+}
+
+fn round_sig(x: f64, digits: i32) -> f64 {
+    if x == 0.0 || !x.is_finite() {
+        return x;
+    }
+    let p = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    (x * p).round() / p
 }
 
 /// One footprint per curtain (in curtain order; simulated in parallel).
@@ -271,7 +318,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     times.beams = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let (vs, vs_source) = voxel_size(scene);
+    let (vs, vs_source) = voxel_size(scene, &photons);
     let warnings = resolution_warnings(scene, &fps, vs);
     let transform = Transform::new(vs, DVec3::ZERO);
     let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
@@ -504,5 +551,44 @@ mod tests {
         assert!(mid[1] > mid[0] && mid[1] > mid[2], "105-130 km {mid:?}");
         let top = band(230.0, 300.0);
         assert!(top[0] > top[1] && top[0] > top[2], "230-300 km {top:?}");
+    }
+}
+
+#[cfg(test)]
+mod auto_voxel_tests {
+    use super::*;
+    use crate::scene::{AutoTag, Projection};
+
+    fn photon_at(p: [f32; 3]) -> Photon {
+        Photon { position: p, power: [1.0; 3] }
+    }
+
+    /// A pixel at distance d covers d * 2 tan(fov/2) / height.
+    #[test]
+    fn auto_voxel_projects_to_one_pixel_at_the_nearest_aurora() {
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Auto(AutoTag::Auto);
+        s.camera.position = [0.0, 0.0, 0.0];
+        s.camera.fov_deg = 90.0;
+        s.render.height = 100;
+        s.photons.radius_km = 0.1;
+        // 1000 photons at 150, 151, ... km: the 1st percentile (index 10) is 160 km.
+        let photons: Vec<Photon> = (0..1000).map(|i| photon_at([0.0, 0.0, 150.0 + i as f32])).collect();
+        let (v, why) = voxel_size(&s, &photons);
+        assert!((v - 160.0 * 2.0 / 100.0).abs() < 1e-9, "{v} {why}");
+        assert!(why.starts_with("auto"));
+        // One stray photon near the camera moves the percentile by one photon
+        // (159 km instead of 160), not to 1 km.
+        let mut with_stray = photons.clone();
+        with_stray.push(photon_at([0.0, 0.0, 1.0]));
+        assert!((voxel_size(&s, &with_stray).0 - 1.59 * 2.0).abs() < 1e-9);
+        // Never below half the kernel radius.
+        s.photons.radius_km = 10.0;
+        assert_eq!(voxel_size(&s, &photons).0, 5.0);
+        // Orthographic: ortho_height / height.
+        s.photons.radius_km = 0.1;
+        s.camera.projection = Projection::Orthographic;
+        s.camera.ortho_height = 20.0;
+        assert!((voxel_size(&s, &photons).0 - 0.2).abs() < 1e-12);
     }
 }

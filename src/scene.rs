@@ -397,11 +397,11 @@ impl Default for GridParams {
 impl Default for Camera {
     fn default() -> Self {
         Self {
-            position: [0.0, -260.0, 1.5],
-            look_at: [0.0, 0.0, 110.0],
+            position: [0.0, -90.0, 1.0],
+            look_at: [0.0, 20.0, 70.0],
             up: [0.0, 0.0, 1.0],
             projection: Projection::Perspective,
-            fov_deg: 50.0,
+            fov_deg: 75.0,
             ortho_height: 10.0,
         }
     }
@@ -409,7 +409,7 @@ impl Default for Camera {
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 16, exposure: 0.0 }
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0 }
     }
 }
 
@@ -431,8 +431,8 @@ impl Default for Terrain {
             kind: TerrainKind::None,
             height: 0.0,
             albedo: [0.3, 0.3, 0.3],
-            mountain_height: 2.0,
-            mountain_scale: 20.0,
+            mountain_height: 3.0,
+            mountain_scale: 10.0,
             heightmap: None,
             extent: [-300.0, -300.0, 300.0, 300.0],
             seed: 7,
@@ -510,7 +510,10 @@ pub mod presets {
         s.beams.delta_alpha_deg = 12.0;
         s.beams.length_km = 70.0;
         s.beams.dt = 0.004;
-        s.beams.top_km = 180.0;
+        // With s = L dt xi (mean L dt / 2 = 0.14 km) and at most 250 steps a
+        // beam travels 35 km on average: starting at 140 km it reaches the
+        // green layer (100-120 km), as the report's curtains do.
+        s.beams.top_km = 140.0;
         s.photons.radius_km = 0.2;
         s.grid.voxel_size = VoxelSize::Km(0.2);
         s.grid.density_a = 0.9;
@@ -583,7 +586,7 @@ impl Scene {
 
     /// The scene as TOML, as `aurora scene default` prints it.
     pub fn to_toml(&self) -> String {
-        toml::to_string_pretty(self).expect("a scene always serialises")
+        toml::to_string(self).expect("a scene always serialises")
     }
 
     /// 64-bit FNV-1a hash of the canonical TOML: identifies a bake's inputs.

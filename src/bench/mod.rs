@@ -15,7 +15,11 @@ pub mod reduced;
 pub mod report;
 pub mod sweeps;
 
-use crate::scene::Scene;
+use crate::atmosphere::Atmosphere;
+use crate::bake::{self, BakeError};
+use crate::beams;
+use crate::progress::NoProgress;
+use crate::scene::{Scene, VoxelSize};
 use report::{BenchRun, Machine};
 use std::time::{Instant, SystemTime};
 use sweeps::{Bench, Plan, SweepError};
@@ -27,7 +31,18 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     let date = report::utc_date(SystemTime::now());
     let mut machine = Machine::probe();
     let plan = if quick { Plan::quick() } else { Plan::full() };
-    let red = reduced::reduce(scene, plan.curtain_km);
+    let auto_voxel = match scene.grid.voxel_size {
+        VoxelSize::Km(_) => None,
+        VoxelSize::Auto(_) => {
+            // "auto" depends on the full scene's photons: trace them once.
+            let atmosphere = Atmosphere::us1976();
+            let colour = bake::colour_table(scene, &atmosphere);
+            let fps = bake::footprints(scene);
+            let (photons, _) = beams::trace_all(scene, &fps, &atmosphere, &colour, &NoProgress).map_err(BakeError::from)?;
+            Some(bake::voxel_size(scene, &photons))
+        }
+    };
+    let red = reduced::reduce(scene, plan.curtain_km, auto_voxel);
     for c in &red.changes {
         log(&format!("reduced scene: {c}"));
     }

@@ -15,12 +15,13 @@
 //! - `beams.count` -> `round(count * w_0 / sum(w) * f)` (the first curtain's
 //!   share of the beams, times `f`): the same beams per km of curtain, so
 //!   each beam carries the same power;
-//! - `grid.voxel_size = "auto"` is resolved to its value in km.
+//! - `grid.voxel_size = "auto"` is replaced by the size the full scene's
+//!   bake would choose (passed in: it depends on the full scene's photons
+//!   and camera).
 //!
 //! Everything else (seed, atmosphere, kernel, colour, B field, volume
 //! scales, terrain) is the scene's own.
 
-use crate::bake;
 use crate::scene::{Camera, Projection, Scene, Terrain, TerrainKind, VoxelSize};
 
 /// The reduced scene and a line per change made, for `bench.json`.
@@ -31,8 +32,9 @@ pub struct Reduced {
 }
 
 /// See the module documentation. The scene must have been validated (at
-/// least one curtain).
-pub fn reduce(scene: &Scene, length_km: f64) -> Reduced {
+/// least one curtain). `auto_voxel` is the full scene's resolved voxel size
+/// and how it was chosen, used when `grid.voxel_size = "auto"`.
+pub fn reduce(scene: &Scene, length_km: f64, auto_voxel: Option<(f64, String)>) -> Reduced {
     let mut s = scene.clone();
     let mut changes = Vec::new();
     let c0 = scene.curtains[0].clone();
@@ -64,10 +66,9 @@ pub fn reduce(scene: &Scene, length_km: f64) -> Reduced {
         changes.push(format!("beams.count: {} -> {n} (same beams per km of curtain)", scene.beams.count));
     }
     s.beams.count = n;
-    if let VoxelSize::Auto(_) = scene.grid.voxel_size {
-        let (v, src) = bake::voxel_size(scene);
+    if let (VoxelSize::Auto(_), Some((v, src))) = (scene.grid.voxel_size, auto_voxel) {
         s.grid.voxel_size = VoxelSize::Km(v);
-        changes.push(format!("grid.voxel_size: auto -> {v} km ({src})"));
+        changes.push(format!("grid.voxel_size: auto -> {v} km (the full scene's {src})"));
     }
     Reduced { scene: s, changes }
 }
@@ -134,7 +135,7 @@ mod tests {
     #[test]
     fn reduction_keeps_beams_per_km_and_wavelengths() {
         let s = Scene::default();
-        let r = reduce(&s, 40.0);
+        let r = reduce(&s, 40.0, None);
         let (full, red) = (&s.curtains[0], &r.scene.curtains[0]);
         assert_eq!(r.scene.curtains.len(), 1);
         assert_eq!(red.length, 40.0);
@@ -152,14 +153,23 @@ mod tests {
         assert!((cell(&s) - cell(&r.scene)).abs() < 1e-9);
         r.scene.validate("reduced", None).unwrap();
         // A curtain already shorter is kept whole.
-        let r2 = reduce(&r.scene, 100.0);
+        let r2 = reduce(&r.scene, 100.0, None);
         assert_eq!(r2.scene.curtains[0].length, 40.0);
         assert_eq!(r2.scene.beams.count, r.scene.beams.count);
     }
 
     #[test]
+    fn auto_voxel_size_is_replaced_by_the_full_scenes() {
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Auto(crate::scene::AutoTag::Auto);
+        let r = reduce(&s, 40.0, Some((0.37, "auto: test".into())));
+        assert_eq!(r.scene.grid.voxel_size, VoxelSize::Km(0.37));
+        assert!(r.changes.iter().any(|c| c.contains("auto -> 0.37 km")));
+    }
+
+    #[test]
     fn cameras_validate() {
-        let r = reduce(&Scene::default(), 40.0);
+        let r = reduce(&Scene::default(), 40.0, None);
         let mut s = r.scene.clone();
         s.camera = volume_camera(&s);
         s.validate("volume camera", None).unwrap();

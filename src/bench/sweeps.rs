@@ -39,7 +39,7 @@ use crate::grid::{Grid, Transform};
 use crate::photons::{self, RadiusField};
 use crate::progress::NoProgress;
 use crate::render::{self, Image, Integration, Prepared, RenderError, RenderSettings, Volume};
-use crate::scene::{GatherMethod, Scene, TerrainKind};
+use crate::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
 use crate::spectrum::ColourTable;
 use glam::DVec3;
 use std::collections::{BTreeMap, HashMap};
@@ -224,7 +224,11 @@ impl<'a> Bench<'a> {
 
     /// v, the scene's voxel size, km.
     pub fn voxel(&self) -> f64 {
-        bake::voxel_size(&self.scene).0
+        match self.scene.grid.voxel_size {
+            VoxelSize::Km(v) => v,
+            // reduce() resolves "auto"; kept as a fallback: the kernel radius.
+            VoxelSize::Auto(_) => self.scene.photons.radius_km,
+        }
     }
 
     /// The photons of `n` beams and the fastest trace time (cached).

@@ -1,0 +1,133 @@
+"""Shaders that reproduce `aurora render`'s radiance model in Cycles.
+
+Volume (emission-absorption, no scattering unless asked):
+
+    dL/ds = -sigma_t L + Le,   sigma_t = density_scale * density(x),
+                               Le      = emission_scale * emission(x)
+
+so along a ray L = integral Le(s) T(s) ds + T L_behind with
+T(s) = exp(-integral_0^s sigma_t). Built from one Principled Volume
+(measured in ../shared/notes/cycles-conventions.md):
+- Density input = density_scale multiplies the `density` grid (Density
+  Attribute), so sigma_t = density_scale * density;
+- Color = 0 turns scattering off; Absorption Color = 0 makes all of sigma_t
+  absorption (Cycles: sigma_a = sigma_t * (1 - Color) * (1 - Absorption Color));
+- Emission Color from an Attribute node (`emission`, Color output: a vec3 grid
+  keeps its channels, a float grid reads as grey), Emission Strength =
+  emission_scale; Principled emission is per unit length and is *not*
+  multiplied by density;
+- Blackbody Intensity = 0, or Cycles adds blackbody light.
+With `scattering_albedo` a > 0, Color = a: sigma_s = a sigma_t,
+sigma_a = (1 - a) sigma_t; sigma_t is unchanged.
+
+Terrain: Lambertian diffuse with the albedo (roughness 0 is Lambert in
+Cycles), plus an almost-1 holdout so that the film alpha of camera rays
+that end on the terrain is the volume coverage 1 - T (see `terrain_material`).
+"""
+
+from __future__ import annotations
+
+import bpy
+
+#: Weight of the holdout closure on the terrain: 1 - HOLDOUT_EPS. A holdout of
+#: weight exactly 1 makes Cycles terminate the path (no terrain radiance);
+#: below 1 the path goes on and the film's transparency gains
+#: (1 - HOLDOUT_EPS) * T. The alpha error this leaves is HOLDOUT_EPS * T.
+HOLDOUT_EPS = 1e-6
+
+
+def _clear(tree):
+    for n in list(tree.nodes):
+        tree.nodes.remove(n)
+
+
+def volume_material(
+    name: str,
+    density_scale: float,
+    emission_scale: float,
+    has_density: bool = True,
+    has_emission: bool = True,
+    scattering_albedo=0.0,
+    anisotropy: float = 0.0,
+) -> bpy.types.Material:
+    """A material for a Volume object holding `density` and/or `emission`.
+
+    A missing `density` grid gives Density 0 (Principled would otherwise fill
+    the padded bounds with its constant Density); a missing `emission` grid
+    gives Emission Strength 0.
+    """
+    if density_scale < 0 or emission_scale < 0:
+        raise ValueError("density_scale and emission_scale must be >= 0")
+    albedo = _rgb(scattering_albedo)
+    if any(not 0.0 <= a <= 1.0 for a in albedo):
+        raise ValueError(f"scattering_albedo must be in [0, 1], got {scattering_albedo!r}")
+    mat = bpy.data.materials.new(name)
+    tree = mat.node_tree  # materials always have a node tree in Blender 5
+    _clear(tree)
+    pv = tree.nodes.new("ShaderNodeVolumePrincipled")
+    pv.location = (0, 0)
+    pv.inputs["Color"].default_value = (*albedo, 1.0)
+    pv.inputs["Absorption Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    pv.inputs["Anisotropy"].default_value = anisotropy
+    pv.inputs["Blackbody Intensity"].default_value = 0.0
+    pv.inputs["Density"].default_value = density_scale if has_density else 0.0
+    pv.inputs["Density Attribute"].default_value = "density" if has_density else ""
+    pv.inputs["Temperature Attribute"].default_value = ""
+    pv.inputs["Emission Strength"].default_value = emission_scale if has_emission else 0.0
+    pv.inputs["Emission Color"].default_value = (0.0, 0.0, 0.0, 1.0)
+    if has_emission:
+        attr = tree.nodes.new("ShaderNodeAttribute")
+        attr.location = (-250, -200)
+        attr.attribute_type = "GEOMETRY"
+        attr.attribute_name = "emission"
+        tree.links.new(attr.outputs["Color"], pv.inputs["Emission Color"])
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (300, 0)
+    out.target = "ALL"
+    tree.links.new(pv.outputs["Volume"], out.inputs["Volume"])
+    mat.cycles.volume_interpolation = "LINEAR"  # trilinear, as `aurora render`
+    mat.cycles.volume_step_rate = 1.0  # the scene's step rate alone decides
+    mat["aurora_density_scale"] = float(density_scale)
+    mat["aurora_emission_scale"] = float(emission_scale)
+    return mat
+
+
+def terrain_material(name: str, albedo, volume_alpha: bool = True) -> bpy.types.Material:
+    """Lambertian terrain. With `volume_alpha`, a holdout of weight
+    1 - HOLDOUT_EPS is added for camera rays (Cycles only applies holdouts
+    to camera-visible paths), so film alpha = 1 - T_volume in front of the
+    terrain instead of 1; the diffuse closure still shades the terrain."""
+    rgb = _rgb(albedo)
+    mat = bpy.data.materials.new(name)
+    tree = mat.node_tree
+    _clear(tree)
+    diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (*rgb, 1.0)
+    diffuse.inputs["Roughness"].default_value = 0.0
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    out.location = (500, 0)
+    out.target = "ALL"
+    shader = diffuse.outputs["BSDF"]
+    if volume_alpha:
+        holdout = tree.nodes.new("ShaderNodeHoldout")
+        nothing = tree.nodes.new("ShaderNodeEmission")
+        nothing.inputs["Strength"].default_value = 0.0
+        mix = tree.nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = HOLDOUT_EPS  # (1 - eps) holdout + eps nothing
+        tree.links.new(holdout.outputs["Holdout"], mix.inputs[1])
+        tree.links.new(nothing.outputs["Emission"], mix.inputs[2])
+        add = tree.nodes.new("ShaderNodeAddShader")
+        tree.links.new(mix.outputs["Shader"], add.inputs[0])
+        tree.links.new(diffuse.outputs["BSDF"], add.inputs[1])
+        shader = add.outputs["Shader"]
+    tree.links.new(shader, out.inputs["Surface"])
+    return mat
+
+
+def _rgb(x):
+    if isinstance(x, (int, float)):
+        return (float(x),) * 3
+    t = tuple(float(v) for v in x)
+    if len(t) != 3:
+        raise ValueError(f"expected a number or 3 numbers, got {x!r}")
+    return t

@@ -1,0 +1,95 @@
+"""Build a whole Blender scene from an aurora scene TOML.
+
+`setup_scene_from_toml(path, vdb=...)` gives the same picture as
+`aurora render path --vdb ...`: camera, resolution and pixel footprint,
+volume material with the file's density/emission scales, background seen only
+by camera rays, terrain (plane or heightfield OBJ), and the Cycles settings of
+render_settings.py. The pixel footprint follows the scene's `render.spp`
+(1: pixel centres; more: the pixel square); the number of Cycles samples is
+separate (Cycles needs many more than the reference raymarcher).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import bpy
+
+from .camera import build_camera
+from .emission_lights import build_emission_lights, emission_clusters
+from .render_settings import CyclesSettings, configure_cycles, set_scene_units
+from .scene_toml import SceneSpec, load_scene
+from .terrain import heightfield_terrain, plane_terrain
+from .volume_import import import_aurora
+from .world import background_world
+
+
+@dataclass
+class AuroraScene:
+    spec: SceneSpec
+    camera: bpy.types.Object | None
+    volumes: list
+    terrain: bpy.types.Object | None
+    world: bpy.types.World | None
+    settings: CyclesSettings
+    #: Point lights standing in for the emission (terrain_lighting "lights").
+    lights: list
+
+
+def setup_scene_from_toml(
+    path,
+    vdb=None,
+    terrain_obj=None,
+    scene: bpy.types.Scene | None = None,
+    settings: CyclesSettings | None = None,
+    camera: bool = True,
+    world: bool = True,
+    terrain: bool = True,
+    volume_alpha: bool = True,
+    pad_dir=None,
+) -> AuroraScene:
+    """Set up `scene` (default: the context scene) from the scene file `path`.
+
+    vdb: the bake to import (.vdb or .usda); None builds everything else.
+    terrain_obj: the OBJ from `aurora terrain` (needed for kind = "heightfield").
+    settings: Cycles settings; its point_sample is overridden by render.spp.
+    volume_alpha: terrain pixels get alpha = 1 - T_volume (else 1).
+    pad_dir: where to write the Cycles-padded copy of the VDB (see
+    volume_import.import_aurora); None renders the file as it is.
+    """
+    spec = load_scene(path)
+    scene = scene or bpy.context.scene
+    settings = replace(settings or CyclesSettings(), point_sample=spec.render.spp == 1)
+    set_scene_units(scene)
+    configure_cycles(scene, spec.render.width, spec.render.height, settings)
+    cam = build_camera(scene, spec.camera) if camera else None
+    wld = None
+    if world:
+        wld = background_world("AuroraBackground", spec.background.radiance)
+        scene.world = wld
+    ter = None
+    if terrain and spec.terrain.kind == "plane":
+        ter = plane_terrain(scene, spec.terrain.height, spec.terrain.albedo, spec.camera.position[:2], volume_alpha)
+    elif terrain and spec.terrain.kind == "heightfield":
+        if terrain_obj is None:
+            raise ValueError(f"{path}: terrain.kind = \"heightfield\" needs the OBJ from `aurora terrain`")
+        ter = heightfield_terrain(scene, Path(terrain_obj), spec.terrain.albedo, volume_alpha)
+    vols = []
+    lights = []
+    if vdb is not None:
+        vols = import_aurora(vdb, spec.volume.density_scale, spec.volume.emission_scale, scene=scene,
+                             pad_dir=pad_dir)
+    if ter is not None and settings.terrain_lighting == "lights":
+        for obj in vols:
+            if "emission" not in {g.name for g in obj.data.grids}:
+                continue
+            clusters = emission_clusters(bpy.path.abspath(obj.data.filepath), spec.volume.emission_scale,
+                                         settings.max_lights)
+            _, objs = build_emission_lights(scene, clusters, obj.matrix_world)
+            lights += objs
+            # The lights carry the emission to the terrain; a diffuse ray
+            # meeting the volume would count it twice. Shadow rays still
+            # cross the volume and are attenuated by it.
+            obj.visible_diffuse = False
+    return AuroraScene(spec, cam, vols, ter, wld, settings, lights)

@@ -1,0 +1,230 @@
+"""The render-relevant part of an aurora scene file, read without bpy.
+
+`aurora render` and the Blender side must agree on the camera, the film,
+the volume scales, the background and the terrain. This module reads those
+five tables of the scene TOML (`src/scene.rs` is the authority: same keys,
+same defaults, same ranges) into plain dataclasses. The bake tables
+(`curtain`, `beams`, ...) are ignored here: the baker validates them.
+
+Units are kilometres, z up (Blender units = km in this add-on).
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+
+class SceneFileError(ValueError):
+    """A scene file that cannot be read or has a value out of range."""
+
+
+@dataclass(frozen=True)
+class Camera:
+    position: tuple[float, float, float] = (0.0, -260.0, 1.5)
+    look_at: tuple[float, float, float] = (0.0, 0.0, 110.0)
+    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    projection: str = "perspective"
+    #: Vertical field of view, degrees (perspective).
+    fov_deg: float = 50.0
+    #: Vertical extent of the view in km (orthographic).
+    ortho_height: float = 10.0
+
+
+@dataclass(frozen=True)
+class Render:
+    width: int = 640
+    height: int = 360
+    spp: int = 16
+    exposure: float = 0.0
+
+
+@dataclass(frozen=True)
+class Volume:
+    #: extinction sigma_t = density_scale * density grid (per km).
+    density_scale: float = 1.0
+    #: emitted radiance per km = emission_scale * emission grid.
+    emission_scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class Background:
+    #: Radiance seen by camera rays that escape; lights nothing.
+    radiance: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+
+@dataclass(frozen=True)
+class Terrain:
+    kind: str = "none"
+    height: float = 0.0
+    albedo: tuple[float, float, float] = (0.3, 0.3, 0.3)
+
+
+@dataclass(frozen=True)
+class SceneSpec:
+    """What a renderer needs from a scene file."""
+
+    camera: Camera = field(default_factory=Camera)
+    render: Render = field(default_factory=Render)
+    volume: Volume = field(default_factory=Volume)
+    background: Background = field(default_factory=Background)
+    terrain: Terrain = field(default_factory=Terrain)
+    #: The file it came from (None for a scene built in code).
+    path: Path | None = None
+
+
+_TABLES = {
+    "camera": Camera,
+    "render": Render,
+    "volume": Volume,
+    "background": Background,
+    # `terrain` has more keys (mountains, heightmap) that only the terrain
+    # generator uses; they are accepted and ignored here.
+    "terrain": Terrain,
+}
+_TERRAIN_GENERATOR_KEYS = {"mountain_height", "mountain_scale", "heightmap", "extent", "seed"}
+
+
+def _vec3(where: str, value) -> tuple[float, float, float]:
+    if not (isinstance(value, list) and len(value) == 3 and all(isinstance(x, (int, float)) for x in value)):
+        raise SceneFileError(f"{where} must be a list of 3 numbers, got {value!r}")
+    v = tuple(float(x) for x in value)
+    if not all(math.isfinite(x) for x in v):
+        raise SceneFileError(f"{where} must be finite, got {value!r}")
+    return v  # type: ignore[return-value]
+
+
+def _number(where: str, value, lo: float, hi: float, lo_open: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise SceneFileError(f"{where} must be a number, got {value!r}")
+    x = float(value)
+    ok = math.isfinite(x) and (x > lo if lo_open else x >= lo) and x <= hi
+    if not ok:
+        bracket = "(" if lo_open else "["
+        raise SceneFileError(f"{where} = {value!r} must be in {bracket}{lo}, {hi}]")
+    return x
+
+
+def _table(doc: dict, name: str, src: str) -> dict:
+    t = doc.get(name, {})
+    if not isinstance(t, dict):
+        raise SceneFileError(f"{src}: [{name}] must be a table")
+    cls = _TABLES[name]
+    known = set(cls.__dataclass_fields__)
+    if name == "terrain":
+        known |= _TERRAIN_GENERATOR_KEYS
+    unknown = sorted(set(t) - known)
+    if unknown:
+        raise SceneFileError(f"{src}: unknown key(s) in [{name}]: {', '.join(unknown)}")
+    return t
+
+
+def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -> SceneSpec:
+    """Validate the render tables of a parsed TOML document (ranges as in
+    `Scene::validate` in src/scene.rs)."""
+    c = _table(doc, "camera", src)
+    d = Camera()
+    cam = Camera(
+        position=_vec3(f"{src}: camera.position", c.get("position", list(d.position))),
+        look_at=_vec3(f"{src}: camera.look_at", c.get("look_at", list(d.look_at))),
+        up=_vec3(f"{src}: camera.up", c.get("up", list(d.up))),
+        projection=c.get("projection", d.projection),
+        fov_deg=_number(f"{src}: camera.fov_deg", c.get("fov_deg", d.fov_deg), 0.0, 180.0, lo_open=True),
+        ortho_height=_number(f"{src}: camera.ortho_height", c.get("ortho_height", d.ortho_height), 0.0, math.inf, lo_open=True),
+    )
+    if cam.projection not in ("perspective", "orthographic"):
+        raise SceneFileError(f"{src}: camera.projection = {cam.projection!r} must be \"perspective\" or \"orthographic\"")
+    fwd = [b - a for a, b in zip(cam.position, cam.look_at)]
+    if all(x == 0.0 for x in fwd):
+        raise SceneFileError(f"{src}: camera.look_at must differ from camera.position")
+    if sum(x * x for x in _cross(fwd, cam.up)) < 1e-18:
+        raise SceneFileError(f"{src}: camera.up must not be parallel to the view direction")
+
+    r = _table(doc, "render", src)
+    d = Render()
+    ren = Render(
+        width=int(_number(f"{src}: render.width", r.get("width", d.width), 1, 16384)),
+        height=int(_number(f"{src}: render.height", r.get("height", d.height), 1, 16384)),
+        spp=int(_number(f"{src}: render.spp", r.get("spp", d.spp), 1, 65536)),
+        exposure=_number(f"{src}: render.exposure", r.get("exposure", d.exposure), -50.0, 50.0),
+    )
+    for k in ("width", "height", "spp"):
+        if k in r and (isinstance(r[k], float) and r[k] != int(r[k])):
+            raise SceneFileError(f"{src}: render.{k} must be an integer, got {r[k]!r}")
+
+    v = _table(doc, "volume", src)
+    d = Volume()
+    vol = Volume(
+        density_scale=_number(f"{src}: volume.density_scale", v.get("density_scale", d.density_scale), 0.0, 1e9),
+        emission_scale=_number(f"{src}: volume.emission_scale", v.get("emission_scale", d.emission_scale), 0.0, 1e9),
+    )
+
+    b = _table(doc, "background", src)
+    rad = _vec3(f"{src}: background.radiance", b.get("radiance", list(Background().radiance)))
+    if any(x < 0.0 for x in rad):
+        raise SceneFileError(f"{src}: background.radiance components must be >= 0, got {list(rad)}")
+
+    t = _table(doc, "terrain", src)
+    d = Terrain()
+    ter = Terrain(
+        kind=t.get("kind", d.kind),
+        height=_number(f"{src}: terrain.height", t.get("height", d.height), -math.inf, math.inf),
+        albedo=_vec3(f"{src}: terrain.albedo", t.get("albedo", list(d.albedo))),
+    )
+    if ter.kind not in ("none", "plane", "heightfield"):
+        raise SceneFileError(f"{src}: terrain.kind = {ter.kind!r} must be \"none\", \"plane\" or \"heightfield\"")
+    if any(not 0.0 <= a <= 1.0 for a in ter.albedo):
+        raise SceneFileError(f"{src}: terrain.albedo components must be in [0, 1], got {list(ter.albedo)}")
+
+    return SceneSpec(cam, ren, vol, Background(rad), ter, path)
+
+
+def load_scene(path: str | Path) -> SceneSpec:
+    """Read and validate the render tables of a scene TOML file."""
+    p = Path(path)
+    try:
+        with open(p, "rb") as f:
+            doc = tomllib.load(f)
+    except OSError as e:
+        raise SceneFileError(f"{p}: cannot read: {e}") from e
+    except tomllib.TOMLDecodeError as e:
+        raise SceneFileError(f"{p}: not valid TOML: {e}") from e
+    return scene_from_dict(doc, str(p), p.resolve())
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _normalize(a):
+    n = math.sqrt(sum(x * x for x in a))
+    return [x / n for x in a]
+
+
+def camera_basis(cam: Camera):
+    """(right, up', forward) unit vectors, `aurora render`'s convention:
+    forward = normalize(look_at - position), right = normalize(forward x up),
+    up' = right x forward."""
+    forward = _normalize([b - a for a, b in zip(cam.position, cam.look_at)])
+    right = _normalize(_cross(forward, cam.up))
+    up = _cross(right, forward)
+    return tuple(right), tuple(up), tuple(forward)
+
+
+def pixel_ray(cam: Camera, width: int, height: int, px: float, py: float):
+    """Origin and unit direction of the camera ray through raster point
+    (px, py), measured in pixels from the top-left corner (pixel centres at
+    half-integers, row 0 at the top). Used by tests to predict images."""
+    right, up, forward = camera_basis(cam)
+    # Screen coordinates in [-1, 1] vertically, [-aspect, aspect] horizontally.
+    sx = (2.0 * px - width) / height
+    sy = (height - 2.0 * py) / height
+    if cam.projection == "perspective":
+        t = math.tan(math.radians(cam.fov_deg) / 2.0)
+        d = _normalize([f + t * (sx * r + sy * u) for f, r, u in zip(forward, right, up)])
+        return tuple(cam.position), tuple(d)
+    h = cam.ortho_height / 2.0
+    o = tuple(p + h * (sx * r + sy * u) for p, r, u in zip(cam.position, right, up))
+    return o, forward

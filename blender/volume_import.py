@@ -1,0 +1,148 @@
+"""Import an aurora bake (.vdb, or the .usda that points at it) as a Volume object.
+
+The VDB's own transform places the voxels in km (= Blender units), so a
+.vdb becomes a Volume object at identity. A USD stage is imported with
+Blender's USD importer, which scales root prims by the stage's metersPerUnit
+(aurora writes 1000: km) and turns Y-up stages to Z-up; one Blender unit is
+one km here, so the roots are then scaled by 1/1000. Path lengths are
+measured in the grid's own units (`volume.render.space` OBJECT), the units
+of the bake's per-km density and emission, whatever the object's scale.
+
+Render accuracy (../shared/notes/cycles-conventions.md): precision FULL (HALF
+is off by up to 0.34%), clipping 0 (the default 0.001 drops faint emission).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import bpy
+from mathutils import Matrix
+
+from .material import volume_material
+from .render_settings import set_scene_units
+from .vdb_pad import pad_vdb
+
+VDB_SUFFIXES = {".vdb"}
+USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
+#: Blender units per metre (1 BU = 1 km).
+BU_PER_METRE = 1.0e-3
+
+
+class AuroraImportError(RuntimeError):
+    """The file is missing, unreadable or holds no aurora grids."""
+
+
+def import_aurora(
+    filepath,
+    density_scale: float = 1.0,
+    emission_scale: float = 1.0,
+    scattering_albedo=0.0,
+    anisotropy: float = 0.0,
+    scene: bpy.types.Scene | None = None,
+    name: str | None = None,
+    set_units: bool = True,
+    pad_dir=None,
+) -> list[bpy.types.Object]:
+    """Import `filepath` (.vdb or .usd[a|c|z]) into `scene` (default: the
+    context scene) and give every imported Volume the aurora material.
+
+    extinction = density_scale * `density`, emitted radiance per km =
+    emission_scale * `emission`; scattering only if `scattering_albedo` > 0.
+    pad_dir: if given, each VDB is first copied there with a shell of active
+    zero voxels around its non-zero voxels (vdb_pad.py: makes Cycles' biased
+    volume mode exact at the edges of the active region) and the Volume
+    reads the copy; the original path is kept in the object's
+    `aurora_source` property.
+    Returns the Volume objects (one for a .vdb).
+    """
+    path = Path(filepath).expanduser().resolve()
+    if not path.is_file():
+        raise AuroraImportError(f"{path}: no such file")
+    scene = scene or bpy.context.scene
+    suffix = path.suffix.lower()
+    if suffix in VDB_SUFFIXES:
+        objects = [_import_vdb(scene, path, name or path.stem)]
+    elif suffix in USD_SUFFIXES:
+        objects = _import_usd(scene, path)
+    else:
+        raise AuroraImportError(f"{path}: expected .vdb or .usd/.usda/.usdc/.usdz")
+    for obj in objects:
+        vol = obj.data
+        source = Path(bpy.path.abspath(vol.filepath))
+        if pad_dir is not None:
+            padded = Path(pad_dir) / f"{source.stem}.cycles-padded.vdb"
+            try:
+                pad_vdb(source, padded)
+            except (OSError, RuntimeError, ValueError) as e:
+                raise AuroraImportError(f"{source}: cannot write the padded copy {padded}: {e}") from e
+            vol.filepath = str(padded)
+        grids = _load_grids(vol, source)
+        has_density = grids.get("density") == "FLOAT"
+        if "density" in grids and not has_density:
+            raise AuroraImportError(f"{path}: grid `density` is {grids['density']}, expected FLOAT")
+        has_emission = grids.get("emission") in ("VECTOR_FLOAT", "FLOAT")
+        if "emission" in grids and not has_emission:
+            raise AuroraImportError(f"{path}: grid `emission` is {grids['emission']}, expected VECTOR_FLOAT or FLOAT")
+        if not (has_density or has_emission):
+            raise AuroraImportError(f"{path}: no `density` or `emission` grid (found: {sorted(grids) or 'none'})")
+        vol.render.precision = "FULL"
+        vol.render.clipping = 0.0
+        vol.render.space = "OBJECT"
+        vol.render.step_size = 0.0  # auto: the voxel size, times the scene's step rate
+        mat = volume_material(
+            f"{obj.name}Material",
+            density_scale,
+            emission_scale,
+            has_density=has_density,
+            has_emission=has_emission,
+            scattering_albedo=scattering_albedo,
+            anisotropy=anisotropy,
+        )
+        vol.materials.clear()
+        vol.materials.append(mat)
+        obj["aurora_source"] = str(source)
+    if set_units:
+        set_scene_units(scene)
+    return objects
+
+
+def _load_grids(vol: bpy.types.Volume, path: Path) -> dict[str, str]:
+    if not vol.grids.load():
+        raise AuroraImportError(f"{path}: Blender cannot read the VDB: {vol.grids.error_message}")
+    return {g.name: g.data_type for g in vol.grids}
+
+
+def _import_vdb(scene, path: Path, name: str) -> bpy.types.Object:
+    vol = bpy.data.volumes.new(name)
+    vol.filepath = str(path)
+    vol.sequence_mode = "CLIP"
+    obj = bpy.data.objects.new(name, vol)
+    scene.collection.objects.link(obj)
+    obj.matrix_world = Matrix.Identity(4)
+    return obj
+
+
+def _import_usd(scene, path: Path) -> list[bpy.types.Object]:
+    before = set(bpy.data.objects)
+    with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
+        result = bpy.ops.wm.usd_import(
+            filepath=str(path),
+            import_volumes=True,
+            import_cameras=False,
+            import_lights=False,
+            import_materials=False,
+            apply_unit_conversion_scale=True,
+            create_world_material=False,
+        )
+    if "FINISHED" not in result:
+        raise AuroraImportError(f"{path}: Blender's USD importer failed")
+    new = [o for o in bpy.data.objects if o not in before]
+    # The importer scaled the roots to metres; bring them to km.
+    for obj in new:
+        if obj.parent is None or obj.parent not in new:
+            obj.matrix_world = Matrix.Scale(BU_PER_METRE, 4) @ obj.matrix_world
+    volumes = [o for o in new if o.type == "VOLUME"]
+    if not volumes:
+        raise AuroraImportError(f"{path}: the stage holds no UsdVol.Volume")
+    return volumes

@@ -1,0 +1,36 @@
+"""The background: constant radiance seen only by camera rays.
+
+`aurora render` adds `background.radiance` to camera rays that escape (times
+the volume transmittance T) and never lights the terrain with it. In Cycles
+that is a Background shader behind Light Path "Is Camera Ray" (0 for every
+other ray), and the world is not sampled as a light (sampling NONE), so the
+only way it contributes is through camera rays that miss everything.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+
+def background_world(name: str, radiance) -> bpy.types.World:
+    r, g, b = (float(x) for x in radiance)
+    world = bpy.data.worlds.new(name)
+    tree = world.node_tree
+    for n in list(tree.nodes):
+        tree.nodes.remove(n)
+    bg = tree.nodes.new("ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (r, g, b, 1.0)
+    bg.inputs["Strength"].default_value = 1.0
+    path = tree.nodes.new("ShaderNodeLightPath")
+    path.location = (0, 300)
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.location = (250, 0)
+    out = tree.nodes.new("ShaderNodeOutputWorld")
+    out.location = (450, 0)
+    # Fac = Is Camera Ray: 0 -> first input (unconnected = no light), 1 -> background.
+    tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
+    tree.links.new(bg.outputs["Background"], mix.inputs[2])
+    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    world.cycles.sampling_method = "NONE"
+    world["aurora_background_radiance"] = [r, g, b]
+    return world

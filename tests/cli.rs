@@ -1,0 +1,198 @@
+//! The `aurora` binary end to end: a small scene baked, read back, rendered;
+//! byte-identical output whatever the thread count; bad input refused with
+//! exit status 2, a message naming file, key, value and range, and nothing
+//! written.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BIN: &str = env!("CARGO_BIN_EXE_aurora");
+
+/// A scene small enough to bake in about a second.
+const SMALL: &str = r#"
+seed = 7
+[[curtain]]
+center = [0.0, 0.0]
+length = 40.0
+width = 12.0
+bend_km = 3.0
+[footprint]
+resolution = [96, 32]
+steps = 4
+[beams]
+count = 400
+[photons]
+radius_km = 0.8
+[grid]
+voxel_size = 1.0
+[camera]
+position = [0.0, -120.0, 20.0]
+look_at = [0.0, 0.0, 120.0]
+fov_deg = 60.0
+[render]
+width = 48
+height = 32
+spp = 2
+[terrain]
+kind = "plane"
+"#;
+
+fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(BIN).args(args).output().expect("aurora runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn bake_writes_vdb_usda_and_report_that_agree() {
+    let dir = scratch("bake");
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, SMALL).unwrap();
+    let out = dir.join("out");
+    let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("bake.json")).unwrap()).unwrap();
+    let stats = &report["stats"];
+    assert_eq!(stats["beams"], 400);
+    assert!(stats["photons"].as_u64().unwrap() > 400, "every beam deposits photons");
+    assert_eq!(stats["voxel_size_km"], 1.0);
+    assert_eq!(report["units"], "km");
+    assert_eq!(report["seed"], 7);
+
+    let file = aurora::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
+    let e = file.vec3("emission").expect("emission grid");
+    let d = file.float("density").expect("density grid");
+    assert_eq!(e.active_voxel_count(), stats["active_voxels"].as_u64().unwrap());
+    assert_eq!(e.leaf_count() as u64, stats["leaves"].as_u64().unwrap());
+    // The density lives on the aurora's own voxels only: no fog box.
+    assert!(d.active_voxel_count() <= e.active_voxel_count());
+    for (ijk, _) in d.iter_active() {
+        assert!(e.is_active(ijk), "density outside the aurora at {ijk}");
+    }
+    assert!(e.first_non_finite().is_none() && d.first_non_finite().is_none());
+    let peak = e.iter_active().map(|(_, v)| v[1]).fold(0.0f32, f32::max);
+    assert!((peak as f64 - stats["peak_emission"][1].as_f64().unwrap()).abs() <= 1e-6 * peak as f64);
+
+    let usda = std::fs::read_to_string(out.join("aurora.usda")).unwrap();
+    assert!(usda.contains("@./aurora.vdb@") && usda.contains("metersPerUnit = 1000"), "{usda}");
+    // No temporary files are left behind.
+    let names: Vec<String> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert_eq!(names.len(), 3, "{names:?}");
+
+    // Render the baked file with the reference renderer.
+    let exr = dir.join("r.exr");
+    let png = dir.join("r.png");
+    let o = run(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--vdb",
+        out.join("aurora.vdb").to_str().unwrap(),
+        "--out",
+        exr.to_str().unwrap(),
+        "--png",
+        png.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let img = aurora::render::film::read_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (48, 32));
+    assert!(img.pixels.iter().flatten().all(|c| c.is_finite()));
+    assert!(img.pixels.iter().any(|p| p[1] > 0.0), "the aurora is in view");
+    assert_eq!(&std::fs::read(&png).unwrap()[1..4], b"PNG");
+}
+
+#[test]
+fn same_seed_gives_byte_identical_vdb_for_any_thread_count() {
+    let dir = scratch("determinism");
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, SMALL).unwrap();
+    let mut files = Vec::new();
+    for threads in ["1", "2", "3"] {
+        let out = dir.join(format!("t{threads}"));
+        let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--threads", threads, "-q"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        files.push(std::fs::read(out.join("aurora.vdb")).unwrap());
+    }
+    assert!(files[0] == files[1] && files[1] == files[2], "aurora.vdb differs between thread counts");
+    // A different seed changes the bake.
+    let out = dir.join("seed8");
+    let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--seed", "8", "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(std::fs::read(out.join("aurora.vdb")).unwrap(), files[0]);
+}
+
+/// Each bad scene: (TOML, words the message must contain).
+#[test]
+fn bad_input_exits_2_names_the_problem_and_writes_nothing() {
+    let dir = scratch("bad");
+    let cases: &[(&str, &[&str])] = &[
+        ("[beams\ncount = 3\n", &["bad.toml", "line 1"]),
+        ("[beams]\ncount = 3\nbogus_key = 1\n", &["bad.toml", "bogus_key", "line 3"]),
+        ("[beams]\nalpha_d_deg = 90.0\n", &["bad.toml:2", "beams.alpha_d_deg = 90", "[0, 90)"]),
+        ("[beams]\ncount = 0\n", &["bad.toml:2", "beams.count = 0", "[1, "]),
+        ("[photons]\nradius_km = -0.5\n", &["bad.toml:2", "photons.radius_km = -0.5", "> 0"]),
+        ("[grid]\nvoxel_size = 0.0\n", &["bad.toml:2", "grid.voxel_size = 0", "> 0"]),
+        ("[grid]\nvoxel_size = 0.001\n", &["bad.toml:2", "grid.voxel_size", "GiB"]),
+    ];
+    for (toml, words) in cases {
+        let scene = dir.join("bad.toml");
+        std::fs::write(&scene, toml).unwrap();
+        let out = dir.join("never");
+        let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{toml:?}: {}", stderr(&o));
+        let msg = stderr(&o);
+        for w in *words {
+            assert!(msg.contains(w), "{toml:?}: message lacks {w:?}: {msg}");
+        }
+        assert!(!out.exists(), "{toml:?}: output folder was created");
+    }
+    // A missing scene file, and a VDB that is not one.
+    let o = run(&["bake", dir.join("missing.toml").to_str().unwrap(), "--out", dir.join("never").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("missing.toml"));
+    let junk = dir.join("junk.vdb");
+    std::fs::write(&junk, b"not a vdb at all").unwrap();
+    let exr = dir.join("x.exr");
+    let o = run(&["render", "default", "--vdb", junk.to_str().unwrap(), "--out", exr.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("junk.vdb"), "{}", stderr(&o));
+    assert!(!exr.exists());
+}
+
+#[test]
+fn printed_presets_parse_back_to_themselves() {
+    for name in aurora::scene::presets::NAMES {
+        let o = run(&["scene", name]);
+        assert!(o.status.success());
+        let text = String::from_utf8(o.stdout).unwrap();
+        let parsed = aurora::scene::Scene::from_toml_str(&text, name).unwrap();
+        assert_eq!(parsed, aurora::scene::presets::by_name(name).unwrap());
+    }
+}
+
+#[test]
+fn footprint_and_terrain_commands_write_files() {
+    let dir = scratch("fp");
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, SMALL.replace("kind = \"plane\"", "kind = \"heightfield\"")).unwrap();
+    let o = run(&["footprint", scene.to_str().unwrap(), "--out", dir.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let png = std::fs::read(dir.join("footprint-0.png")).unwrap();
+    assert_eq!(&png[1..4], b"PNG");
+    let obj = dir.join("t.obj");
+    let o = run(&["terrain", scene.to_str().unwrap(), "--out", obj.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&obj).unwrap();
+    assert!(text.lines().filter(|l| l.starts_with("v ")).count() > 100);
+    assert!(text.lines().any(|l| l.starts_with("f ")));
+}

@@ -1,0 +1,336 @@
+"""The Blender add-on in ../../blender: install, enable, import, scene set-up.
+
+Headless, through bpy 5.0.1. Two ways in are tested: the Blender 4.2+
+extension route (zip + `bpy.ops.extensions.package_install_files`, what a
+user does from Preferences) and the legacy add-on route (the folder on a
+script directory + `addon_utils.enable`). Blender's user folders point at a
+temporary directory (conftest.py).
+"""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import synth
+
+ROOT = Path(__file__).resolve().parent.parent.parent
+ADDON = ROOT / "blender"
+
+
+@pytest.fixture(scope="module")
+def aurora_vdb(tmp_path_factory):
+    """Both grids, 12^3 voxels of 0.5 km, index 0 at (10, -3, 100) km."""
+    d = tmp_path_factory.mktemp("vdb")
+    dens = np.full((12, 12, 12), 0.02, np.float32)
+    em = np.zeros((12, 12, 12, 3), np.float32)
+    em[..., 1] = np.linspace(0.1, 1.0, 12)[None, None, :]
+    return synth.write_vdb(d / "aurora.vdb", 0.5, (10.0, -3.0, 100.0), dens, em)
+
+
+def write_usda(path: Path, vdb_name: str, meters_per_unit: float, up_axis: str) -> Path:
+    """A stage like `aurora bake` writes: one UsdVol.Volume, two OpenVDBAsset
+    fields in one VDB file, relative asset paths."""
+    path.write_text(f"""#usda 1.0
+(
+    defaultPrim = "aurora"
+    metersPerUnit = {meters_per_unit}
+    upAxis = "{up_axis}"
+)
+
+def Volume "aurora"
+{{
+    rel field:density = </aurora/density>
+    rel field:emission = </aurora/emission>
+
+    def OpenVDBAsset "density"
+    {{
+        asset filePath = @./{vdb_name}@
+        token fieldName = "density"
+    }}
+
+    def OpenVDBAsset "emission"
+    {{
+        asset filePath = @./{vdb_name}@
+        token fieldName = "emission"
+    }}
+}}
+""")
+    return path
+
+
+def principled(mat):
+    nodes = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeVolumePrincipled"]
+    assert len(nodes) == 1
+    return nodes[0]
+
+
+def assert_aurora_volume(obj, density_scale, emission_scale):
+    """The Volume object and its material are wired as the add-on promises."""
+    assert obj.type == "VOLUME"
+    vol = obj.data
+    assert vol.grids.load(), vol.grids.error_message
+    grids = {g.name: g.data_type for g in vol.grids}
+    assert grids == {"density": "FLOAT", "emission": "VECTOR_FLOAT"}
+    assert vol.render.precision == "FULL"
+    assert vol.render.clipping == 0.0
+    assert vol.render.space == "OBJECT"
+    mat = vol.materials[0]
+    pv = principled(mat)
+    assert tuple(pv.inputs["Color"].default_value)[:3] == (0.0, 0.0, 0.0)  # no scattering
+    assert tuple(pv.inputs["Absorption Color"].default_value)[:3] == (0.0, 0.0, 0.0)  # sigma_a = density
+    assert pv.inputs["Blackbody Intensity"].default_value == 0.0
+    assert pv.inputs["Density"].default_value == pytest.approx(density_scale)
+    assert pv.inputs["Density Attribute"].default_value == "density"
+    assert pv.inputs["Emission Strength"].default_value == pytest.approx(emission_scale)
+    assert not pv.inputs["Temperature"].is_linked
+    links = pv.inputs["Emission Color"].links
+    assert len(links) == 1
+    attr = links[0].from_node
+    assert attr.bl_idname == "ShaderNodeAttribute"
+    assert (attr.attribute_type, attr.attribute_name, links[0].from_socket.name) == ("GEOMETRY", "emission", "Color")
+    out = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+    assert len(out) == 1 and out[0].inputs["Volume"].links[0].from_node == pv
+    assert not out[0].inputs["Surface"].is_linked
+    assert mat.cycles.volume_interpolation == "LINEAR"
+
+
+def test_installs_and_enables_as_extension_and_imports(bpy, fresh, tmp_path, aurora_vdb, blender_user_dir):
+    z = tmp_path / "aurora_importer.zip"
+    with zipfile.ZipFile(z, "w") as f:
+        for p in sorted(ADDON.rglob("*")):
+            if p.is_file() and "__pycache__" not in p.parts:
+                f.write(p, p.relative_to(ADDON))
+    result = bpy.ops.extensions.package_install_files(filepath=str(z), repo="user_default", enable_on_install=True)
+    assert result == {"FINISHED"}
+    module = "bl_ext.user_default.aurora_importer"
+    try:
+        assert module in bpy.context.preferences.addons
+        installed = Path(bpy.utils.user_resource("EXTENSIONS")) / "user_default" / "aurora_importer"
+        assert (installed / "blender_manifest.toml").is_file()
+        assert str(installed).startswith(str(blender_user_dir))  # never the real user folder
+        assert hasattr(bpy.ops.import_scene, "aurora")
+        result = bpy.ops.import_scene.aurora(filepath=str(aurora_vdb), density_scale=2.0, emission_scale=3.0)
+        assert result == {"FINISHED"}
+        vols = [o for o in bpy.data.objects if o.type == "VOLUME"]
+        assert len(vols) == 1
+        assert_aurora_volume(vols[0], 2.0, 3.0)
+        assert np.allclose(np.array(vols[0].matrix_world), np.eye(4))
+        assert bpy.context.scene.unit_settings.scale_length == 1000.0  # 1 BU = 1 km
+    finally:
+        bpy.ops.preferences.addon_disable(module=module)
+    assert module not in bpy.context.preferences.addons
+
+
+def test_enables_as_legacy_addon(bpy, fresh, tmp_path, aurora_vdb):
+    import addon_utils
+
+    # A name of its own, so this is not the copy conftest already imported.
+    name = "aurora_importer_legacy"
+    (tmp_path / "scripts" / "addons").mkdir(parents=True)
+    (tmp_path / "scripts" / "addons" / name).symlink_to(ADDON, target_is_directory=True)
+    d = bpy.context.preferences.filepaths.script_directories.new()
+    d.directory = str(tmp_path / "scripts")
+    bpy.utils.refresh_script_paths()
+    try:
+        mod = addon_utils.enable(name, default_set=True, handle_error=None)
+        assert mod is not None and name in bpy.context.preferences.addons
+        assert mod.bl_info["blender"] <= (5, 0, 0)
+        assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb)) == {"FINISHED"}
+        assert_aurora_volume([o for o in bpy.data.objects if o.type == "VOLUME"][0], 1.0, 1.0)
+        # With a scene file: camera, world and the file's scales come too.
+        cam = {"position": [0, -50, 5], "look_at": [10, 0, 103], "up": [0, 0, 1], "projection": "perspective",
+               "fov_deg": 30.0}
+        toml = synth.write_scene(tmp_path / "op.toml", cam, 64, 36, density_scale=0.25, emission_scale=2.0)
+        before = set(bpy.data.objects)
+        assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb), scene_file=str(toml)) == {"FINISHED"}
+        sc = bpy.context.scene
+        assert sc.camera is not None and sc.camera.data.angle_y == pytest.approx(math.radians(30.0))
+        assert not sc.render.film_transparent  # interactive default: opaque film, background visible
+        new_vols = [o for o in bpy.data.objects if o not in before and o.type == "VOLUME"]
+        assert len(new_vols) == 1
+        assert_aurora_volume(new_vols[0], 0.25, 2.0)
+        # Errors are reported (an ERROR report, which bpy.ops turns into a
+        # RuntimeError for a script), not a Python traceback from the add-on.
+        with pytest.raises(RuntimeError, match="missing.vdb: no such file"):
+            bpy.ops.import_scene.aurora(filepath=str(tmp_path / "missing.vdb"))
+    finally:
+        addon_utils.disable(name, default_set=True)
+        bpy.context.preferences.filepaths.script_directories.remove(d)
+        sys.modules.pop(name, None)
+
+
+def test_import_function_vdb(addon, fresh, aurora_vdb, bpy):
+    objs = addon.import_aurora(aurora_vdb, density_scale=0.5, emission_scale=4.0)
+    assert len(objs) == 1
+    obj = objs[0]
+    assert_aurora_volume(obj, 0.5, 4.0)
+    assert np.allclose(np.array(obj.matrix_world), np.eye(4))  # the VDB's transform places it
+    # Bounds in km straight from the VDB transform: index 0..11 at 0.5 km from (10, -3, 100).
+    corners = np.array([obj.matrix_world @ __import__("mathutils").Vector(c) for c in obj.bound_box])
+    assert corners.min(0)[2] <= 100.0 + 1e-6 and corners.max(0)[2] >= 105.5 - 1e-6
+    assert obj["aurora_source"] == str(Path(aurora_vdb).resolve())
+
+
+def test_import_with_scattering_keeps_extinction(addon, fresh, aurora_vdb):
+    obj = addon.import_aurora(aurora_vdb, 1.5, 1.0, scattering_albedo=0.6)[0]
+    pv = principled(obj.data.materials[0])
+    # sigma_s = 0.6 sigma_t, sigma_a = 0.4 sigma_t: Density (sigma_t) unchanged.
+    assert tuple(pv.inputs["Color"].default_value)[:3] == pytest.approx((0.6, 0.6, 0.6))
+    assert pv.inputs["Density"].default_value == pytest.approx(1.5)
+
+
+def test_float_emission_grid_reads_as_grey(addon, fresh, tmp_path):
+    v = synth.write_vdb(tmp_path / "grey.vdb", 1.0, (0, 0, 0), None, np.ones((4, 4, 4), np.float32))
+    obj = addon.import_aurora(v)[0]
+    grids = {g.name: g.data_type for g in obj.data.grids}
+    assert grids == {"emission": "FLOAT"}
+    pv = principled(obj.data.materials[0])
+    # No density grid: Density 0, or Principled would fill the bounds with it.
+    assert pv.inputs["Density"].default_value == 0.0
+    assert pv.inputs["Emission Color"].links[0].from_node.attribute_name == "emission"
+
+
+@pytest.mark.parametrize("mpu, up, scale, rot_x_deg", [(1000, "Z", 1.0, 0.0), (1, "Y", 1e-3, 90.0)])
+def test_import_usda(addon, fresh, bpy, tmp_path, aurora_vdb, mpu, up, scale, rot_x_deg):
+    """aurora's stage (km: metersPerUnit 1000, Z up) lands at identity; a
+    stage in metres with Y up is scaled to km and turned Z-up."""
+    import shutil
+
+    shutil.copy(aurora_vdb, tmp_path / "aurora.vdb")
+    usda = write_usda(tmp_path / "aurora.usda", "aurora.vdb", mpu, up)
+    # The file is a valid UsdVol stage for the USD library itself (its own
+    # process: usd-core and Blender's bundled USD stay apart).
+    check = ("from pxr import Usd, UsdVol, UsdGeom; s = Usd.Stage.Open(%r); v = UsdVol.Volume(s.GetPrimAtPath('/aurora'));"
+             "f = v.GetFieldPaths(); assert sorted(str(k) for k in f) == ['density', 'emission'], f;"
+             "assert UsdGeom.GetStageMetersPerUnit(s) == %r" % (str(usda), float(mpu)))
+    subprocess.run([sys.executable, "-c", check], check=True)
+    objs = addon.import_aurora(usda, 1.0, 2.0)
+    assert len(objs) == 1
+    assert_aurora_volume(objs[0], 1.0, 2.0)
+    from mathutils import Matrix
+
+    expected = Matrix.Scale(scale, 4) @ Matrix.Rotation(math.radians(rot_x_deg), 4, "X")
+    assert np.allclose(np.array(objs[0].matrix_world), np.array(expected), atol=1e-9)
+
+
+def test_import_errors(addon, fresh, bpy, tmp_path):
+    with pytest.raises(addon.AuroraImportError, match="no such file"):
+        addon.import_aurora(tmp_path / "missing.vdb")
+    other = tmp_path / "other.vdb"
+    import pyopenvdb as vdb
+
+    g = vdb.FloatGrid()
+    g.name = "temperature"
+    g.getAccessor().setValueOn((0, 0, 0), 1.0)
+    vdb.write(str(other), grids=[g])
+    with pytest.raises(addon.AuroraImportError, match="no `density` or `emission`"):
+        addon.import_aurora(other)
+    bad = tmp_path / "notes.txt"
+    bad.write_text("x")
+    with pytest.raises(addon.AuroraImportError, match="expected .vdb"):
+        addon.import_aurora(bad)
+
+
+def test_setup_scene_from_toml_perspective(addon, fresh, bpy, tmp_path, aurora_vdb):
+    cam = {"position": [0.0, -260.0, 1.5], "look_at": [0.0, 0.0, 110.0], "up": [0, 0, 1],
+           "projection": "perspective", "fov_deg": 50.0}
+    scene_path = synth.write_scene(tmp_path / "s.toml", cam, 160, 90, spp=16, density_scale=0.7,
+                                   emission_scale=1.3, background=(0.01, 0.02, 0.03),
+                                   terrain={"kind": "plane", "height": 0.25, "albedo": [0.2, 0.3, 0.4]})
+    built = addon.setup_scene_from_toml(scene_path, vdb=aurora_vdb,
+                                        settings=addon.CyclesSettings(samples=32, seed=3))
+    sc = bpy.context.scene
+    # Camera: columns right, up', -forward (the reference renderer's basis).
+    f = np.array([0.0, 260.0, 108.5]) / np.linalg.norm([0.0, 260.0, 108.5])
+    r = np.cross(f, [0, 0, 1])
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    m = np.array(built.camera.matrix_world)
+    assert np.allclose(m[:3, 0], r) and np.allclose(m[:3, 1], u) and np.allclose(m[:3, 2], -f)
+    assert np.allclose(m[:3, 3], [0.0, -260.0, 1.5])
+    c = built.camera.data
+    assert (c.type, c.sensor_fit) == ("PERSP", "VERTICAL")
+    assert c.angle_y == pytest.approx(math.radians(50.0))
+    assert sc.camera == built.camera
+    # Film and sampling.
+    assert (sc.render.resolution_x, sc.render.resolution_y, sc.render.resolution_percentage) == (160, 90, 100)
+    assert sc.render.film_transparent and sc.view_layers[0].use_pass_environment
+    assert sc.cycles.pixel_filter_type == "BOX"
+    assert (sc.cycles.samples, sc.cycles.seed) == (32, 3)
+    assert not sc.cycles.use_denoising and not sc.cycles.use_adaptive_sampling
+    assert sc.cycles.sample_clamp_direct == 0 and sc.cycles.sample_clamp_indirect == 0
+    assert sc.cycles.volume_biased and sc.cycles.volume_step_rate == pytest.approx(0.1)
+    assert (sc.view_settings.view_transform, sc.view_settings.look, sc.view_settings.exposure) == ("Standard", "None", 0)
+    assert sc.unit_settings.scale_length == 1000.0
+    # Background only for camera rays, not a light.
+    w = sc.world
+    assert w.cycles.sampling_method == "NONE"
+    bg = [n for n in w.node_tree.nodes if n.bl_idname == "ShaderNodeBackground"][0]
+    assert tuple(bg.inputs["Color"].default_value)[:3] == pytest.approx((0.01, 0.02, 0.03))
+    mix = [n for n in w.node_tree.nodes if n.bl_idname == "ShaderNodeMixShader"][0]
+    assert mix.inputs["Fac"].links[0].from_socket.name == "Is Camera Ray"
+    # Volume scales from [volume]; terrain plane with the albedo; lights for the terrain.
+    assert_aurora_volume(built.volumes[0], 0.7, 1.3)
+    ter = built.terrain
+    zs = {round(v.co.z, 9) for v in ter.data.vertices}
+    assert zs == {0.25}
+    diffuse = [n for n in ter.data.materials[0].node_tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse"][0]
+    assert tuple(diffuse.inputs["Color"].default_value)[:3] == pytest.approx((0.2, 0.3, 0.4))
+    assert len(built.lights) > 0 and not built.volumes[0].visible_diffuse
+    total = sum(o.data.energy * np.array(o.data.color) for o in built.lights)
+    # P = 4 pi I, I = emission_scale * h^3 * sum(emission): 1.3 * 0.125 * 144 * sum(linspace(0.1, 1, 12)).
+    assert total[1] == pytest.approx(4 * math.pi * 1.3 * 0.125 * 144 * 6.6, rel=1e-5)
+
+
+def test_setup_scene_orthographic_point_sampled_heightfield(addon, fresh, bpy, tmp_path):
+    cam = {"position": [1.0, 2.0, 30.0], "look_at": [1.0, 2.0, 0.0], "up": [0, 1, 0],
+           "projection": "orthographic", "ortho_height": 12.0}
+    scene_path = synth.write_scene(tmp_path / "o.toml", cam, 40, 30, spp=1,
+                                   terrain={"kind": "heightfield", "height": 0.0, "albedo": [0.5, 0.5, 0.5]})
+    obj = tmp_path / "terrain.obj"
+    # Two triangles rising along +x to z = 3 km; with normals, as a mesher may write them.
+    obj.write_text("v 0 0 0\nv 10 0 3\nv 10 10 3\nv 0 10 0\nvn -0.287 0 0.958\n"
+                   "f 1//1 2//1 3//1\nf 1//1 3//1 4//1\n")
+    with pytest.raises(ValueError, match="aurora terrain"):
+        addon.setup_scene_from_toml(scene_path)
+    built = addon.setup_scene_from_toml(scene_path, terrain_obj=obj)
+    sc = bpy.context.scene
+    c = built.camera.data
+    assert (c.type, c.sensor_fit, c.ortho_scale) == ("ORTHO", "VERTICAL", 12.0)
+    assert sc.cycles.pixel_filter_type == "GAUSSIAN" and sc.cycles.filter_width == pytest.approx(0.01)
+    verts = sorted(tuple(round(x, 6) for x in built.terrain.matrix_world @ v.co) for v in built.terrain.data.vertices)
+    assert verts == [(0, 0, 0), (0, 10, 0), (10, 0, 3), (10, 10, 3)]  # z stayed up
+    assert all(not p.use_smooth for p in built.terrain.data.polygons)  # flat: geometric normals
+
+
+def test_scene_file_errors(addon, tmp_path):
+    p = tmp_path / "bad.toml"
+    p.write_text("[camera]\nprojection = \"fisheye\"\n")
+    with pytest.raises(addon.SceneFileError, match="fisheye"):
+        addon.load_scene(p)
+    p.write_text("[render]\nwidht = 3\n")
+    with pytest.raises(addon.SceneFileError, match="widht"):
+        addon.load_scene(p)
+    p.write_text("[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, 5]\nup = [0, 0, 1]\n")
+    with pytest.raises(addon.SceneFileError, match="parallel"):
+        addon.load_scene(p)
+    # The bake's own tables are the baker's business: accepted here.
+    p.write_text("seed = 3\n[[curtain]]\nlength = 100.0\n[grid]\nvoxel_size = \"auto\"\n[render]\nwidth = 8\nheight = 4\n")
+    s = addon.load_scene(p)
+    assert (s.render.width, s.render.height, s.camera.fov_deg) == (8, 4, 50.0)
+
+
+def test_blender_minimum_resolution_is_refused(addon, fresh, tmp_path):
+    """Blender silently raises a 2-pixel-high render to 4 pixels (changing the
+    pixel size, measured): refused instead."""
+    cam = {"position": [0, -5, 0], "look_at": [0, 0, 0], "up": [0, 0, 1], "projection": "orthographic",
+           "ortho_height": 1.0}
+    with pytest.raises(ValueError, match="at least 4x4"):
+        addon.setup_scene_from_toml(synth.write_scene(tmp_path / "t.toml", cam, 64, 2))

@@ -1,0 +1,200 @@
+#!/usr/bin/env python3
+"""Render an aurora scene with Blender Cycles (CPU), exactly as `aurora render` frames it.
+
+    .venv/bin/python tools/cycles_render.py SCENE.toml --vdb FILE.vdb --out IMAGE.exr \
+        [--samples N] [--terrain-obj terrain.obj] [--seed S] [--volume-mode biased|unbiased] [--step-rate R]
+
+Everything goes through the add-on in ../blender (setup_scene_from_toml):
+same camera, resolution, pixel footprint (spp = 1: pixel centres, else the
+pixel square), background, terrain and emission-absorption model.
+
+Output: linear Rec.709 OpenEXR, RGBA 32-bit float, row 0 at the top:
+- A = Cycles' film alpha with a transparent film: 1 - T, T the volume
+  transmittance along the primary ray (up to the terrain, whose holdout of
+  weight 1 - 1e-6 makes its pixels transparent too; see blender/material.py);
+- RGB = Combined + Environment. With a transparent film Cycles does not add
+  the background radiance to Combined; it writes throughput * L_bg of the
+  escaping camera paths, the same paths that make alpha, into the
+  Environment pass. Their sum is exactly what an opaque film would give:
+  volume emission + T * L_bg (+ terrain radiance where the terrain is hit).
+
+Needs bpy 5.0.1, numpy, OpenEXR and the standard library only. The image is
+written to a temporary name in the output folder and renamed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parent.parent
+
+#: Cycles samples per pixel by default: see DEFAULTS in the add-on README
+#: (noise vs samples measured by tests/python/bench_cycles_noise.py).
+DEFAULT_SAMPLES = 128
+
+
+def load_addon(name: str = "aurora_importer"):
+    """Import ../blender as a package (relative imports inside it work under any name)."""
+    if name in sys.modules:
+        return sys.modules[name]
+    init = ROOT / "blender" / "__init__.py"
+    spec = importlib.util.spec_from_file_location(name, init, submodule_search_locations=[str(init.parent)])
+    mod = importlib.util.module_from_spec(spec)
+    sys.modules[name] = mod
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def read_exr_layers(path) -> dict[str, np.ndarray]:
+    """Every channel group of a (multi-part, multi-layer) EXR as float32 arrays
+    (H, W, C), keyed by name (e.g. 'ViewLayer.Combined'); row 0 is the top."""
+    import OpenEXR
+
+    out = {}
+    with OpenEXR.File(str(path), separate_channels=False) as f:
+        for part in f.parts:
+            for key, ch in part.channels.items():
+                a = np.asarray(ch.pixels, dtype=np.float32)
+                out[key] = a if a.ndim == 3 else a[..., None]
+    return out
+
+
+def write_rgba_exr(path, rgba: np.ndarray, metadata: dict[str, str] | None = None) -> None:
+    """RGBA float32 scanline EXR (ZIP), written to a temporary name and renamed."""
+    import OpenEXR
+
+    path = Path(path)
+    rgba = np.ascontiguousarray(rgba, dtype=np.float32)
+    if rgba.ndim != 3 or rgba.shape[2] != 4:
+        raise ValueError(f"expected (H, W, 4), got {rgba.shape}")
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    for k, v in (metadata or {}).items():
+        header[k] = str(v)
+    channels = {c: np.ascontiguousarray(rgba[..., i]) for i, c in enumerate("RGBA")}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp.exr", dir=path.parent)
+    os.close(fd)
+    try:
+        with OpenEXR.File(header, channels) as f:
+            f.write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=None, seed: int = 0,
+           quiet: bool = False, pad: bool = True, **overrides) -> dict:
+    """Render and write `out`; returns timings and settings (for reports).
+    `overrides` are CyclesSettings fields (volume_biased, step_rate,
+    terrain_lighting, max_lights, threads); None leaves the default.
+    pad: render a copy of the VDB with a shell of active zero voxels
+    (blender/vdb_pad.py), so the biased volume mode is exact at the edges."""
+    import bpy
+
+    addon = load_addon()
+    kw = {k: v for k, v in overrides.items() if v is not None}
+    settings = addon.CyclesSettings(samples=samples, seed=seed, **kw)
+    with tempfile.TemporaryDirectory(prefix="cycles_render.") as tmp:
+        t0 = time.perf_counter()
+        bpy.ops.wm.read_factory_settings(use_empty=True)
+        built = addon.setup_scene_from_toml(scene_toml, vdb=vdb, terrain_obj=terrain_obj, settings=settings,
+                                            pad_dir=tmp if pad else None)
+        scene = bpy.context.scene
+        t_setup = time.perf_counter() - t0
+        raw = Path(tmp) / "passes.exr"
+        scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
+        scene.render.image_settings.file_format = "OPEN_EXR_MULTILAYER"
+        scene.render.image_settings.color_depth = "32"
+        scene.render.image_settings.exr_codec = "ZIP"
+        scene.render.filepath = str(raw)
+        t1 = time.perf_counter()
+        bpy.ops.render.render(write_still=True)
+        t_render = time.perf_counter() - t1
+        layers = read_exr_layers(raw)
+    combined = _find(layers, "Combined")
+    env = _find(layers, "Environment")
+    rgba = combined.copy()
+    rgba[..., :3] += env[..., :3]
+    s = built.settings
+    meta = {
+        "aurora_renderer": "Blender Cycles " + bpy.app.version_string,
+        "aurora_samples": s.samples,
+        "aurora_volume_mode": "biased" if s.volume_biased else "unbiased",
+        "aurora_step_rate": s.step_rate,
+        "aurora_seed": s.seed,
+        "aurora_pixel_filter": "point (pixel centres)" if s.point_sample else "box (pixel square)",
+        "aurora_alpha": "1 - T_volume along the primary ray",
+        "aurora_terrain_lighting": s.terrain_lighting if built.terrain is not None else "no terrain",
+        "aurora_emission_lights": len(built.lights),
+        "aurora_vdb_padded": "yes" if pad else "no",
+    }
+    write_rgba_exr(out, rgba, meta)
+    info = {"setup_s": t_setup, "render_s": t_render, "width": rgba.shape[1], "height": rgba.shape[0], **meta}
+    if not quiet:
+        print(f"cycles_render: wrote {out} ({rgba.shape[1]}x{rgba.shape[0]}, {s.samples} spp, "
+              f"{meta['aurora_volume_mode']} step rate {s.step_rate}) render {t_render:.2f} s", file=sys.stderr)
+    return info
+
+
+def _find(layers: dict, suffix: str) -> np.ndarray:
+    for k, v in layers.items():
+        if k.split(".")[-1] == suffix or k.endswith("." + suffix):
+            return v
+    raise RuntimeError(f"pass {suffix} missing from Cycles output (have {sorted(layers)})")
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("scene", help="scene TOML (units km, z up)")
+    p.add_argument("--vdb", required=True, help="the bake (.vdb, or the .usda pointing at it)")
+    p.add_argument("--out", required=True, help="output IMAGE.exr (linear RGBA float)")
+    p.add_argument("--samples", type=int, default=DEFAULT_SAMPLES, help=f"Cycles samples per pixel (default {DEFAULT_SAMPLES})")
+    p.add_argument("--terrain-obj", help="terrain OBJ from `aurora terrain` (heightfield terrain)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--volume-mode", choices=["biased", "unbiased"], default=None,
+                   help="Cycles volume integrator (default: biased ray marching at a small step)")
+    p.add_argument("--step-rate", type=float, default=None, help="biased mode step, in voxels (default 0.1)")
+    p.add_argument("--terrain-lighting", choices=["lights", "paths"], default=None,
+                   help="how the aurora lights the terrain: clustered point lights (default, low noise) "
+                        "or diffuse bounces into the volume (brute force)")
+    p.add_argument("--max-lights", type=int, default=None, help="at most this many point lights for the terrain (default 512)")
+    p.add_argument("--threads", type=int, default=None, help="CPU threads (default: all)")
+    p.add_argument("--no-pad", action="store_true",
+                   help="render the VDB as it is (default: a copy with a shell of active zero voxels, "
+                        "which makes Cycles' biased mode exact at the edges)")
+    p.add_argument("-q", "--quiet", action="store_true")
+    a = p.parse_args(argv)
+    if a.samples < 1:
+        p.error("--samples must be at least 1")
+    for f in [a.scene, a.vdb] + ([a.terrain_obj] if a.terrain_obj else []):
+        if not Path(f).is_file():
+            print(f"cycles_render: error: {f}: no such file", file=sys.stderr)
+            return 2
+    biased = None if a.volume_mode is None else a.volume_mode == "biased"
+    try:
+        render(a.scene, a.vdb, a.out, a.samples, a.terrain_obj, a.seed, a.quiet, pad=not a.no_pad, volume_biased=biased,
+               step_rate=a.step_rate, terrain_lighting=a.terrain_lighting, max_lights=a.max_lights, threads=a.threads)
+    except Exception as e:  # noqa: BLE001 - one place maps errors to an exit status
+        # Bad input (scene file, VDB, terrain OBJ, resolution): 2; anything else: 1.
+        addon = sys.modules.get("aurora_importer")
+        user_errors = (ValueError, FileNotFoundError)
+        if addon is not None:
+            from aurora_importer.terrain import TerrainError
+
+            user_errors += (addon.SceneFileError, addon.AuroraImportError, TerrainError)
+        print(f"cycles_render: error: {e}", file=sys.stderr)
+        return 2 if isinstance(e, user_errors) else 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
