@@ -153,6 +153,21 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let (rmin, rmax) = (rs.iter().cloned().fold(f64::MAX, f64::min), rs.iter().cloned().fold(f64::MIN, f64::max));
     assert!(at(rmin) > at(scene_r) && at(rmax) > at(scene_r), "radius curve has no interior minimum: {radius:?}");
 
+    // One gather setting, one time: the scene's own kd-tree gather (N beams,
+    // r, v) appears in three gather-timed studies with the same seconds.
+    let scene_gather: Vec<f64> = rows
+        .iter()
+        .filter(|r| {
+            r["scene_setting"] == "1" && ["gather radius", "gather method", "voxel size"].contains(&r["study"].as_str())
+        })
+        .map(|r| num(r, "seconds"))
+        .collect();
+    assert_eq!(scene_gather.len(), 3);
+    assert!(scene_gather.iter().all(|&t| t == scene_gather[0]), "{scene_gather:?}");
+    // The photon-count study adds the beam trace to the same gather.
+    let pc = rows.iter().find(|r| r["study"] == "photon count" && r["scene_setting"] == "1").unwrap();
+    assert!(num(pc, "seconds") > scene_gather[0], "beams + gather > gather");
+
     // --- charts
     for st in studies {
         let stem = aurora::bench::report::slug(st);

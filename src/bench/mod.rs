@@ -38,7 +38,8 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
             let atmosphere = Atmosphere::us1976();
             let colour = bake::colour_table(scene, &atmosphere);
             let fps = bake::footprints(scene);
-            let (photons, _) = beams::trace_all(scene, &fps, &atmosphere, &colour, &NoProgress).map_err(BakeError::from)?;
+            let (photons, _) =
+                beams::trace_all(scene, &fps, &atmosphere, &colour, &NoProgress).map_err(BakeError::from)?;
             Some(bake::voxel_size(scene, &photons))
         }
     };
@@ -53,6 +54,9 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     let grids = b.bake_grids()?;
     studies.push(b.integration_study(&grids)?);
     studies.push(b.shadow_study(&grids)?);
+    if plan.retime {
+        b.retime(&mut studies)?;
+    }
     machine.loadavg_end = report::loadavg();
     Ok(BenchRun {
         machine,

@@ -22,11 +22,15 @@
 //! `err(N) / sqrt(M / N - 1)`.
 //!
 //! Times: each timed call is repeated until it has used
-//! [`Plan::min_timing_seconds`] (at most 3 runs) and the fastest run is kept
-//! (the machine may be shared; the fastest run is the least disturbed). A
-//! setting that several studies share (the scene's own gather appears in
-//! four) is gathered and timed once and reused, so it has one time
-//! everywhere. Results are deterministic; only the times vary between runs.
+//! [`Plan::min_timing_seconds`] (at most [`Plan::max_timing_runs`] runs) and
+//! the fastest run is kept (the machine may be shared; the fastest run is the
+//! least disturbed). A setting that several studies share (the scene's own
+//! gather appears in four) is gathered and timed once and reused, so it has
+//! one time everywhere; after all studies every gather setting is timed once
+//! more ([`Bench::retime`]), minutes later, and the fastest of all its runs
+//! kept, so a burst of load from other processes does not single out the
+//! settings measured during it. Results are deterministic; only the times
+//! vary between runs.
 
 use super::chart::Measurement;
 use super::metrics::{grid_rel_rms, grid_rel_rms_best_scale, image_rel_error_masked};
@@ -72,8 +76,14 @@ pub struct Plan {
     pub shadow_counts: Vec<usize>,
     pub shadow_reference: usize,
     pub ground_image: [usize; 2],
-    /// Repeat a timed call until it has used this long (at most 3 runs).
+    /// Repeat a timed call until it has used this long, at most
+    /// `max_timing_runs` times, and keep the fastest run.
     pub min_timing_seconds: f64,
+    pub max_timing_runs: usize,
+    /// Time every gather setting once more after all studies (keeping the
+    /// fastest of all its runs): a later, independent sample of the
+    /// machine's load.
+    pub retime: bool,
 }
 
 impl Plan {
@@ -95,6 +105,8 @@ impl Plan {
             shadow_reference: 512,
             ground_image: [64, 40],
             min_timing_seconds: 1.0,
+            max_timing_runs: 5,
+            retime: true,
         }
     }
 
@@ -117,6 +129,8 @@ impl Plan {
             shadow_reference: 256,
             ground_image: [32, 20],
             min_timing_seconds: 0.0,
+            max_timing_runs: 1,
+            retime: true,
         }
     }
 }
@@ -149,15 +163,15 @@ pub enum SweepError {
     Render(#[from] RenderError),
 }
 
-/// Runs `f` until it has used `min_seconds` (at most 3 times) and returns its
-/// first result with the fastest run's wall time.
-pub fn timed<T>(min_seconds: f64, mut f: impl FnMut() -> T) -> (T, f64) {
+/// Runs `f` until it has used `min_seconds` (at most `max_runs` times) and
+/// returns its first result with the fastest run's wall time.
+pub fn timed<T>(min_seconds: f64, max_runs: usize, mut f: impl FnMut() -> T) -> (T, f64) {
     let t = Instant::now();
     let out = f();
     let mut best = t.elapsed().as_secs_f64();
     let mut spent = best;
     let mut runs = 1;
-    while spent < min_seconds && runs < 3 {
+    while spent < min_seconds && runs < max_runs {
         let t = Instant::now();
         drop(f());
         let s = t.elapsed().as_secs_f64();
@@ -180,10 +194,17 @@ pub struct Bench<'a> {
     photons: BTreeMap<usize, (Vec<Photon>, f64)>,
     /// Test gathers by (beams, radius bits, voxel bits, method).
     gathers: HashMap<GatherKey, Timed<Arc<Grid<[f32; 3]>>>>,
+    /// Measurements timed by a cached gather: (study, method, param bits),
+    /// the gather's key and the seconds added to it (the beam trace).
+    gather_timed: Vec<((String, String, u64), GatherKey, f64)>,
     log: &'a (dyn Fn(&str) + Sync),
 }
 
 type GatherKey = (usize, u64, u64, u8);
+
+fn gather_key(n: usize, r: f64, v: f64, method: GatherMethod) -> GatherKey {
+    (n, r.to_bits(), v.to_bits(), method as u8)
+}
 
 /// A result and the wall time it took, seconds.
 type Timed<T> = (T, f64);
@@ -204,6 +225,7 @@ impl<'a> Bench<'a> {
             field,
             photons: BTreeMap::new(),
             gathers: HashMap::new(),
+            gather_timed: Vec::new(),
             log,
         }
     }
@@ -238,9 +260,9 @@ impl<'a> Bench<'a> {
         }
         let mut s = self.scene.clone();
         s.beams.count = n;
-        let min = self.plan.min_timing_seconds;
+        let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (res, secs) =
-            timed(min, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
+            timed(min, runs, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
         let (ph, _) = res.map_err(BakeError::from)?;
         self.photons.insert(n, (ph, secs));
         Ok(())
@@ -252,6 +274,42 @@ impl<'a> Bench<'a> {
         Ok((p.as_slice(), *s))
     }
 
+    /// Records that the time of the last measurement of `ms` is the gather
+    /// `key`'s plus `extra` seconds.
+    fn note_last(&mut self, ms: &[Measurement], key: GatherKey, extra: f64) {
+        if let Some(m) = ms.last() {
+            self.gather_timed.push(((m.study.clone(), m.method.clone(), m.param.to_bits()), key, extra));
+        }
+    }
+
+    /// Times every cached gather setting once more and sets each
+    /// measurement's time from the fastest of all its runs.
+    pub fn retime(&mut self, studies: &mut [Study]) -> Result<(), SweepError> {
+        let mut keys: Vec<GatherKey> = self.gather_timed.iter().map(|(_, k, _)| *k).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        self.say(&format!("retiming {} gather settings", keys.len()));
+        for key in keys {
+            let (n, r, v, m) = (key.0, f64::from_bits(key.1), f64::from_bits(key.2), key.3);
+            let method = [GatherMethod::Kdtree, GatherMethod::Splat, GatherMethod::Report2014][m as usize];
+            let (_, secs) = self.gather_uncached(n, r, v, method)?;
+            if let Some(entry) = self.gathers.get_mut(&key) {
+                entry.1 = entry.1.min(secs);
+            }
+        }
+        for (id, key, extra) in &self.gather_timed {
+            let best = self.gathers[key].1 + extra;
+            for st in studies.iter_mut() {
+                for m in st.measurements.iter_mut() {
+                    if (&m.study, &m.method, m.param.to_bits()) == (&id.0, &id.1, id.2) {
+                        m.seconds = best;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// [`Bench::gather_uncached`], kept for the other studies that use the
     /// same setting (test settings only: references are used once).
     fn gather(
@@ -261,7 +319,7 @@ impl<'a> Bench<'a> {
         v: f64,
         method: GatherMethod,
     ) -> Result<Timed<Arc<Grid<[f32; 3]>>>, SweepError> {
-        let key = (n, r.to_bits(), v.to_bits(), method as u8);
+        let key = gather_key(n, r, v, method);
         if let Some((g, s)) = self.gathers.get(&key) {
             return Ok((g.clone(), *s));
         }
@@ -290,10 +348,10 @@ impl<'a> Bench<'a> {
             &[self.scene.seed],
         );
         let cutoff = p.cutoff;
-        let min = self.plan.min_timing_seconds;
+        let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (photons, _) = self.photons_of(n)?;
         let tr = Transform::new(v, DVec3::ZERO);
-        Ok(timed(min, || photons::gather_grid(photons, tr, &radius, cutoff, method, &NoProgress)))
+        Ok(timed(min, runs, || photons::gather_grid(photons, tr, &radius, cutoff, method, &NoProgress)))
     }
 
     fn say(&self, s: &str) {
@@ -370,6 +428,7 @@ impl<'a> Bench<'a> {
                 metric,
                 k == n,
             ));
+            self.note_last(&ms, gather_key(k, r, v, GatherMethod::Kdtree), trace_s);
         }
         let mut notes = vec![format!(
             "Pure noise: the reference has the same kernel and voxels, so the error is the Monte Carlo noise of the density estimate, expected to fall as beams^-1/2 (sigma sqrt(1/n - 1/M) with the shared first beams)."
@@ -421,6 +480,7 @@ impl<'a> Bench<'a> {
                     metric,
                     here,
                 ));
+                self.note_last(&ms, gather_key(k, r, v, method), 0.0);
                 if method == GatherMethod::Report2014 {
                     let (e, s) = grid_rel_rms_best_scale(&g, &reference);
                     scaled.push(self.measure(
@@ -434,6 +494,7 @@ impl<'a> Bench<'a> {
                         metric,
                         false,
                     ));
+                    self.note_last(&scaled, gather_key(k, r, v, method), 0.0);
                     self.say(&format!("  (report2014 best-fit scale factor {s:.4e})"));
                 }
             }
@@ -473,6 +534,7 @@ impl<'a> Bench<'a> {
                 let (g, secs) = self.gather(k, rr, v, GatherMethod::Kdtree)?;
                 let e = grid_rel_rms(&g, &reference);
                 ms.push(self.measure(name, &method, "radius_km", rr, "gather", secs, e, metric, k == n && f == 1.0));
+                self.note_last(&ms, gather_key(k, rr, v, GatherMethod::Kdtree), 0.0);
             }
         }
         Ok(Study {
@@ -512,6 +574,7 @@ impl<'a> Bench<'a> {
                 let e = grid_rel_rms(&g, &reference);
                 let here = f == 1.0 && method == self.scene.photons.gather;
                 ms.push(self.measure(name, label, "voxel_km", vv, "gather", secs, e, metric, here));
+                self.note_last(&ms, gather_key(n, r, vv, method), 0.0);
             }
         }
         Ok(Study {
@@ -532,15 +595,15 @@ impl<'a> Bench<'a> {
     }
 
     fn render_timed(&self, s: &RenderSettings, vol: &Volume<'_>) -> Result<(Image, f64), SweepError> {
-        let min = self.plan.min_timing_seconds;
-        let (img, _) = timed(min, || render::render(s, vol, &NoProgress));
+        let (min, max_runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
+        let (img, _) = timed(0.0, 1, || render::render(s, vol, &NoProgress));
         let img = img?;
         // The pixel loop only (the acceleration structure is built once per
         // render whatever the integrator): the fastest of the runs.
         let mut best = img.stats.render_seconds;
         let mut spent = best;
         let mut runs = 1;
-        while spent < min && runs < 3 {
+        while spent < min && runs < max_runs {
             let again = render::render(s, vol, &NoProgress)?;
             best = best.min(again.stats.render_seconds);
             spent += again.stats.render_seconds;
