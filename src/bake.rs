@@ -10,6 +10,11 @@
 //!    order and sorted; a voxel is active when its emission is nonzero;
 //! 4. the density grid on the same active voxels ([`density_grid`]).
 //!
+//! [`resolution_warnings`] flags bakes whose voxels under-resolve the kernel
+//! or the curtains, [`extinction_warning`] air extinction clamped at
+//! [`MAX_EXTINCTION_PER_KM`] (`BakeStats::warnings`; the CLI prints them on
+//! stderr). Emission that overflows f32 is an error, never a file.
+//!
 //! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
 //! kernel radius `photons.radius_km` for now, until camera-based sizing
 //! lands), translation 0, so voxel (i, j, k) is centred at
@@ -33,6 +38,14 @@ use std::time::Instant;
 /// the aurora is within a few percent of its peak, falling smoothly to 0 in
 /// its faint fringes.
 pub const AURORA_FRACTION: f64 = 0.01;
+
+/// Largest air extinction stored, per km (the top of `density_a`'s range).
+/// `density_a exp(-density_b (h - density_base_km))` grows without bound
+/// below the base altitude and overflows f32 (and then f64) for steep
+/// profiles; at 10^6 per km a metre of path has optical depth 10^3, so any
+/// voxel is opaque and larger values change nothing but the risk of
+/// infinity. Clamped voxels are reported by a warning.
+pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
 
 /// The baked volumes and what produced them.
 #[derive(Clone, Debug)]
@@ -87,6 +100,9 @@ pub struct BakeStats {
     pub deposited_power_w: f64,
     pub beam_stats: BeamStats,
     pub times_s: StageTimes,
+    /// Under-resolution warnings ([`resolution_warnings`]); empty when the
+    /// grid resolves the kernel and every curtain.
+    pub warnings: Vec<String>,
 }
 
 impl BakeStats {
@@ -101,6 +117,10 @@ impl BakeStats {
 pub enum BakeError {
     #[error(transparent)]
     Beams(#[from] BeamError),
+    /// The emission overflowed single precision (never written: a safety
+    /// net behind the scene's validation ranges).
+    #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
+    NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
 }
 
 /// The voxel size in km and where it came from. `"auto"` asks the camera:
@@ -163,6 +183,49 @@ pub fn footprints(scene: &Scene) -> Vec<Footprint> {
     scene.curtains.par_iter().map(|c| footprint::simulate(c, &scene.footprint, scene.seed)).collect()
 }
 
+/// Mean thickness, km, of the band the beams of a footprint start from: the
+/// area of the cells above `threshold` divided by the curtain's length (the
+/// sum of the band's widths across the curtain, averaged along it).
+pub fn band_thickness_km(fp: &Footprint, threshold: f64) -> f64 {
+    let cells = fp.data.iter().filter(|&&d| d as f64 > threshold).count();
+    cells as f64 * fp.cell_area_km2() / fp.length
+}
+
+/// Warnings for a bake at voxel size `voxel_km` whose grid under-resolves
+/// what it stores:
+/// - the smallest kernel radius, `r_min = radius_km (1 - radius_noise)`, is
+///   below half a voxel. Voxel centres sample the Gaussian kernel; by Poisson
+///   summation the sum of a Gaussian of sd r sampled every h differs from its
+///   integral by up to `2 exp(-2 pi^2 r^2 / h^2)` per axis: 1.4 % at
+///   r = h / 2, 22 % at r = h / 3, so below h / 2 each photon's contribution
+///   depends on where it falls between voxel centres (noise at the voxel
+///   scale, power no longer conserved voxel by voxel).
+/// - a curtain's beams start in a band thinner than a voxel
+///   ([`band_thickness_km`]): across its thickness the sheet is one voxel or
+///   less, so its profile is lost (beam deflections widen the sheet a
+///   little; the kernel blurs it to at least r).
+pub fn resolution_warnings(scene: &Scene, footprints: &[Footprint], voxel_km: f64) -> Vec<String> {
+    let mut w = Vec::new();
+    let p = &scene.photons;
+    let r_min = p.radius_km * (1.0 - p.radius_noise);
+    if r_min < 0.5 * voxel_km {
+        w.push(format!(
+            "under-resolved kernel: photons.radius_km = {} (smallest radius with radius_noise = {}: {:.4} km) is below half the voxel size ({} km); the emission is aliased at the voxel scale: use grid.voxel_size <= {:.4} or a larger radius",
+            p.radius_km, p.radius_noise, r_min, voxel_km, 2.0 * r_min
+        ));
+    }
+    for (i, fp) in footprints.iter().enumerate() {
+        let t = band_thickness_km(fp, scene.footprint.threshold);
+        if t < voxel_km {
+            w.push(format!(
+                "under-resolved curtain: curtain[{i}]'s beams start in a band {t:.3} km thick on average (footprint above threshold), thinner than a voxel ({voxel_km} km); the sheet's profile across is lost: use grid.voxel_size <= {:.3}",
+                t
+            ));
+        }
+    }
+    w
+}
+
 /// The colour table the scene asks for.
 pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
     match scene.colour.mode {
@@ -173,7 +236,7 @@ pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
 
 /// The density grid on the emission's active voxels:
 /// `density_a exp(-density_b (h - density_base_km))` (the report's air
-/// density, per km) times an aurora indicator in [0, 1] that saturates
+/// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
 /// smoothly in the emission's luminance relative to [`AURORA_FRACTION`] of the
 /// peak. No fog box: only where the aurora is.
 pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64) -> Grid<f32> {
@@ -192,7 +255,7 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
                     let v = l.values[n];
                     let y = luminance([v[0] as f64, v[1] as f64, v[2] as f64]).max(0.0);
                     let indicator = if scale > 0.0 { 1.0 - (-y / scale).exp() } else { 0.0 };
-                    let air = params.density_a * (-params.density_b * (h - params.density_base_km)).exp();
+                    let air = extinction(params, h);
                     out.values[n] = (air * indicator) as f32;
                 }
             }
@@ -205,6 +268,28 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
     }
     g.sort_leaves();
     g
+}
+
+/// The air extinction at altitude `h` km, per km:
+/// `density_a exp(-density_b (h - density_base_km))`, at most
+/// [`MAX_EXTINCTION_PER_KM`] (and 0, not NaN, when `density_a` is 0).
+pub fn extinction(params: &GridParams, h: f64) -> f64 {
+    if params.density_a > 0.0 {
+        (params.density_a * (-params.density_b * (h - params.density_base_km)).exp()).min(MAX_EXTINCTION_PER_KM)
+    } else {
+        0.0
+    }
+}
+
+/// A warning when the air extinction reaches [`MAX_EXTINCTION_PER_KM`] at
+/// the lowest altitude `h_min` km of the grid (it decreases with altitude).
+pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
+    let raw = params.density_a * (-params.density_b * (h_min - params.density_base_km)).exp();
+    (params.density_a > 0.0 && raw >= MAX_EXTINCTION_PER_KM).then(|| {
+        format!(
+            "air extinction clamped: grid.density_a exp(-density_b (h - density_base_km)) reaches {raw:.3e} per km at {h_min:.1} km, above the maximum {MAX_EXTINCTION_PER_KM:e} (opaque); density is clamped there"
+        )
+    })
 }
 
 /// Runs every stage of the bake for a validated scene.
@@ -234,6 +319,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 
     let t = Instant::now();
     let (vs, vs_source) = voxel_size(scene, &photons);
+    let warnings = resolution_warnings(scene, &fps, vs);
     let transform = Transform::new(vs, DVec3::ZERO);
     let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
     let radius = RadiusField::new(
@@ -251,11 +337,22 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t = Instant::now();
     let mut peak = [0.0f32; 3];
     let mut peak_y = 0.0f64;
-    for (_, v) in emission.iter_active() {
+    for (ijk, v) in emission.iter_active() {
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(BakeError::NonFinite {
+                ijk: ijk.to_array(),
+                value: format!("{v:?}"),
+                radius_km: scene.photons.radius_km,
+            });
+        }
         for k in 0..3 {
             peak[k] = peak[k].max(v[k]);
         }
         peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
+    }
+    let mut warnings = warnings;
+    if let Some((lo, _)) = emission.index_bbox() {
+        warnings.extend(extinction_warning(&scene.grid, transform.index_to_world(lo.as_dvec3()).z));
     }
     progress.start("density", emission.leaf_count() as u64);
     let density = density_grid(&emission, &scene.grid, peak_y);
@@ -294,6 +391,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
         deposited_power_w: beam_stats.deposited_power_w,
         beam_stats,
         times_s: times,
+        warnings,
     };
     Ok(Bake { emission, density, photons, stats })
 }
@@ -398,6 +496,37 @@ mod tests {
         s.colour.colormap = vec![[80.0, 0.0, 0.0, 1.0], [400.0, 0.0, 0.0, 1.0]];
         let d = bake(&s, &NoProgress).unwrap();
         assert!(d.emission.iter_active().all(|(_, v)| v[0] == 0.0 && v[1] == 0.0 && v[2] > 0.0));
+    }
+
+    #[test]
+    fn a_resolved_bake_has_no_warnings() {
+        // small_scene: r_min = 1.0 * 0.7 = 0.7 km >= half of the 1 km voxel,
+        // and the band (band_fraction 0.08 of 16 km, spread by the fluid) is
+        // wider than a voxel.
+        let b = bake(&small_scene(), &NoProgress).unwrap();
+        assert!(b.stats.warnings.is_empty(), "{:?}", b.stats.warnings);
+    }
+
+    #[test]
+    fn steep_air_density_is_clamped_and_warned_never_infinite() {
+        // exp(-10 (h - 10^6)) overflows f64 for any altitude of the grid.
+        let mut s = small_scene();
+        s.grid.density_b = 10.0;
+        s.grid.density_base_km = 1e6;
+        let b = bake(&s, &NoProgress).unwrap();
+        assert!(b.density.first_non_finite().is_none());
+        let max = b.density.iter_active().map(|(_, d)| d).fold(0.0f32, f32::max);
+        assert_eq!(max, MAX_EXTINCTION_PER_KM as f32, "the peak voxel's indicator is 1 - e^-100 = 1 in f64");
+        assert!(b.stats.warnings.iter().any(|w| w.starts_with("air extinction clamped")), "{:?}", b.stats.warnings);
+        // density_a = 0 gives 0, not 0 * inf = NaN.
+        s.grid.density_a = 0.0;
+        let b = bake(&s, &NoProgress).unwrap();
+        assert!(b.density.iter_active().all(|(_, d)| d == 0.0));
+        assert!(b.stats.warnings.is_empty(), "{:?}", b.stats.warnings);
+        // The default profile is far below the clamp: no warning, the formula.
+        let p = GridParams::default();
+        assert_eq!(extinction(&p, 100.0), p.density_a * (-p.density_b * (100.0 - p.density_base_km)).exp());
+        assert!(extinction_warning(&p, 60.0).is_none());
     }
 
     #[test]

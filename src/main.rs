@@ -82,6 +82,25 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Measure speed against accuracy of every method choice (photon count, gather radius and
+    /// method, voxel size, ray integration, shadow rays) on a reduced copy of the scene.
+    ///
+    /// Writes DIR/bench.csv, DIR/bench.json and a PNG and SVG chart per study (time against
+    /// error, Pareto front marked), and prints a summary table. A few minutes on 2 cores;
+    /// under a minute with --quick.
+    Bench {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Output folder (created if missing).
+        #[arg(long, default_value = "aurora-bench", value_name = "DIR")]
+        out: PathBuf,
+        /// Fewer settings and cheaper references (a smoke test of the bench).
+        #[arg(long)]
+        quick: bool,
+        #[command(flatten)]
+        common: Common,
+    },
     /// Print a built-in scene as TOML, to copy and edit.
     Scene {
         /// Preset name.
@@ -154,6 +173,10 @@ fn run(cli: Cli) -> Result<()> {
             }
             let dir = scene_dir(&scene_arg);
             with_threads(common.threads, || render_cmd(&scene, &dir, vdb.as_deref(), &out, png.as_deref(), shadow_samples, common.quiet))
+        }
+        Command::Bench { scene: scene_arg, out, quick, common } => {
+            let scene = load_scene(&scene_arg)?;
+            with_threads(common.threads, || bench_cmd(&scene, &scene_arg, &out, quick, common.quiet))
         }
         Command::Scene { name } => {
             let s = aurora::scene::presets::by_name(&name).expect("clap checked the name");
@@ -231,6 +254,7 @@ fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
     let bake = aurora::bake::bake(scene, progress)?;
+    print_warnings(&bake.stats.warnings);
     let report = aurora::outputs::write_outputs(scene, &bake, out)?;
     if !quiet {
         eprintln!("{}", report.summary());
@@ -263,6 +287,7 @@ fn render_cmd(
         }
         None => {
             let bake = aurora::bake::bake(scene, progress)?;
+            print_warnings(&bake.stats.warnings);
             density = Some(bake.density);
             emission = Some(bake.emission);
         }
@@ -285,6 +310,28 @@ fn render_cmd(
             st.shadow_samples,
             st.threads
         );
+    }
+    Ok(())
+}
+
+/// Bake warnings (under-resolved kernel or curtains) on stderr, even with --quiet.
+fn print_warnings(warnings: &[String]) {
+    for w in warnings {
+        eprintln!("aurora: warning: {w}");
+    }
+}
+
+fn bench_cmd(scene: &Scene, scene_arg: &str, out: &Path, quick: bool, quiet: bool) -> Result<()> {
+    let log = |line: &str| {
+        if !quiet {
+            eprintln!("bench: {line}");
+        }
+    };
+    let run = aurora::bench::run(scene, scene_arg, quick, &log)?;
+    let written = aurora::bench::report::write(&run, out)?;
+    print!("{}", aurora::bench::report::summary(&run));
+    if !quiet {
+        eprintln!("wrote {} files to {}", written.len(), out.display());
     }
     Ok(())
 }

@@ -610,8 +610,10 @@ impl Scene {
         }
         for (i, c) in self.curtains.iter().enumerate() {
             let t = Some(("curtain", i));
-            v.finite_pos(t, "length", c.length);
-            v.finite_pos(t, "width", c.width);
+            // At most 10^4 km: beyond that the flat ground is meaningless and
+            // a single beam's photon power (f32) can overflow.
+            v.range(t, "length", c.length, 0.0, 1e4, false);
+            v.range(t, "width", c.width, 0.0, 1e4, false);
             v.range(t, "energy_flux", c.energy_flux, 0.0, 1e4, false);
             v.range(t, "char_energy_kev", c.char_energy_kev, 0.05, 100.0, true);
             v.range(t, "soft_fraction", c.soft_fraction, 0.0, 1.0, true);
@@ -696,7 +698,9 @@ impl Scene {
 
         let cam = &self.camera;
         let t = Some(("camera", 0));
-        v.range(t, "fov_deg", cam.fov_deg, 0.0, 180.0, false);
+        if !(cam.fov_deg > 0.0 && cam.fov_deg < 180.0) {
+            v.push(t, "fov_deg", fmt_num(cam.fov_deg), "must be in (0, 180)".into());
+        }
         v.finite_pos(t, "ortho_height", cam.ortho_height);
         let dir = [cam.look_at[0] - cam.position[0], cam.look_at[1] - cam.position[1], cam.look_at[2] - cam.position[2]];
         if dir.iter().all(|d| *d == 0.0) {
@@ -726,8 +730,9 @@ impl Scene {
         v.range(t, "density_scale", vol.density_scale, 0.0, 1e9, true);
         v.range(t, "emission_scale", vol.emission_scale, 0.0, 1e9, true);
         let t = Some(("background", 0));
-        if self.background.radiance.iter().any(|x| !x.is_finite() || *x < 0.0) {
-            v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be finite and >= 0".into());
+        // Bounded so that pixels (f32) stay finite.
+        if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
+            v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
         }
         let ter = &self.terrain;
         let t = Some(("terrain", 0));

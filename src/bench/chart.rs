@@ -1,9 +1,11 @@
 //! Speed-against-accuracy records, their Pareto front, and the charts.
 //!
-//! A [`Measurement`] is one run of one method at one setting: wall time and
-//! error against a converged reference of the same quantity. Runs are kept as
-//! CSV (`bench.csv`) and drawn per study as time (x, log) against error
-//! (y, log), one curve per method, the Pareto front drawn over them.
+//! A [`Measurement`] is one run of one method at one setting: wall time of
+//! the stage the method affects and error against a converged reference of
+//! the same quantity. Runs are kept as CSV (`bench.csv`) and drawn per study
+//! as time (x, log) against error (y, log), one curve per method, the Pareto
+//! front drawn over them. A reference measured against itself has error 0,
+//! which a log axis cannot show: it is drawn as a triangle on the bottom edge.
 
 use plotters::prelude::*;
 use std::path::Path;
@@ -18,18 +20,23 @@ pub struct Measurement {
     /// The swept parameter's name and value, e.g. ("beams", 20000).
     pub param_name: String,
     pub param: f64,
+    /// The stage whose wall time `seconds` is, e.g. "gather" or "render".
+    pub stage: String,
     /// Wall time, seconds.
     pub seconds: f64,
     /// Error against the reference (relative RMS unless `metric` says otherwise).
     pub error: f64,
     pub metric: String,
+    /// This run uses the given scene's own setting for what is swept.
+    pub scene_setting: bool,
 }
 
 /// Indices of the points on the Pareto front of (time, error), both to be
 /// minimised: no other point is at least as good in both and better in one.
 /// Returned in ascending time.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
+    let mut idx: Vec<usize> =
+        (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
     idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
@@ -42,20 +49,27 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     front
 }
 
+/// The header of [`to_csv`].
+pub const CSV_HEADER: &str = "study,method,param_name,param,stage,seconds,error,metric,scene_setting,pareto";
+
 /// `bench.csv`: one row per measurement, plus a Pareto flag within its study.
 pub fn to_csv(ms: &[Measurement]) -> String {
-    let mut s = String::from("study,method,param_name,param,seconds,error,metric,pareto\n");
+    let mut s = format!("{CSV_HEADER}\n");
     let on_front = front_flags(ms);
     for (m, p) in ms.iter().zip(on_front) {
         s += &format!(
-            "{},{},{},{},{:.6},{:.6e},{},{}\n",
+            // Shortest round-trip representations: the CSV holds exactly
+            // the numbers the Pareto flags were computed from.
+            "{},{},{},{},{},{},{:e},{},{},{}\n",
             csv_field(&m.study),
             csv_field(&m.method),
             csv_field(&m.param_name),
             m.param,
+            csv_field(&m.stage),
             m.seconds,
             m.error,
             csv_field(&m.metric),
+            m.scene_setting as u8,
             p as u8
         );
     }
@@ -144,26 +158,35 @@ pub fn draw_study(ms: &[Measurement], study: &str, stem: &Path) -> Result<(), Ch
     Ok(())
 }
 
-fn draw_on<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, ms: &[Measurement], study: &str) -> Result<(), String>
+fn draw_on<DB: DrawingBackend>(
+    root: DrawingArea<DB, plotters::coord::Shift>,
+    ms: &[Measurement],
+    study: &str,
+) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
     let sel: Vec<&Measurement> =
-        ms.iter().filter(|m| m.study == study && m.seconds > 0.0 && m.error > 0.0 && m.error.is_finite()).collect();
+        ms.iter().filter(|m| m.study == study && m.seconds > 0.0 && m.error >= 0.0 && m.error.is_finite()).collect();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
-    if sel.is_empty() {
+    if !sel.iter().any(|m| m.error > 0.0) {
         return Err(format!("study '{study}' has no finite positive measurements"));
     }
     let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for m in &sel {
         t0 = t0.min(m.seconds);
         t1 = t1.max(m.seconds);
-        e0 = e0.min(m.error);
-        e1 = e1.max(m.error);
+        if m.error > 0.0 {
+            e0 = e0.min(m.error);
+            e1 = e1.max(m.error);
+        }
     }
     // Pad a little in log space so end points are not on the frame.
     let (t0, t1) = (t0 / 1.5, t1 * 1.5);
     let (e0, e1) = (e0 / 1.5, e1 * 1.5);
+    // Where an error of exactly 0 (a reference against itself) is drawn.
+    let floor = e0 * 1.05;
+    let shown = |m: &Measurement| (m.seconds, if m.error > 0.0 { m.error } else { floor });
     let metric = sel[0].metric.clone();
     let mut chart = ChartBuilder::on(&root)
         .caption(format!("{study}: time against error"), ("sans-serif", 24))
@@ -172,11 +195,12 @@ where
         .y_label_area_size(80)
         .build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())
         .map_err(|e| e.to_string())?;
+    let stage = sel[0].stage.clone();
     chart
         .configure_mesh()
         .x_label_formatter(&|x| sig(*x))
         .y_label_formatter(&|y| sig(*y))
-        .x_desc("wall time (s)")
+        .x_desc(format!("wall time of {stage} (s)"))
         .y_desc(format!("error ({metric})"))
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
@@ -193,28 +217,40 @@ where
         let color = PALETTE[k % PALETTE.len()];
         let mut pts: Vec<&&Measurement> = sel.iter().filter(|m| m.method == *method).collect();
         pts.sort_by(|a, b| a.param.total_cmp(&b.param));
-        let series: Vec<(f64, f64)> = pts.iter().map(|m| (m.seconds, m.error)).collect();
+        let series: Vec<(f64, f64)> = pts.iter().filter(|m| m.error > 0.0).map(|m| (m.seconds, m.error)).collect();
         chart
             .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
             .map_err(|e| e.to_string())?
             .label(method.to_string())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
         chart.draw_series(series.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(|e| e.to_string())?;
-        // Label each point with its parameter value.
+        // Error 0: a triangle on the bottom edge.
+        chart
+            .draw_series(
+                pts.iter().filter(|m| m.error == 0.0).map(|m| TriangleMarker::new(shown(m), 7, color.filled())),
+            )
+            .map_err(|e| e.to_string())?;
+        // Label each point with its parameter value; the scene's own setting
+        // is marked with a star.
         chart
             .draw_series(pts.iter().map(|m| {
-                EmptyElement::at((m.seconds, m.error))
-                    + Text::new(short_num(m.param), (6, -14), ("sans-serif", 12).into_font().color(&color))
+                let star = if m.scene_setting { " *" } else { "" };
+                let text = if m.error == 0.0 {
+                    format!("reference, error 0{star}")
+                } else {
+                    format!("{}{star}", short_num(m.param))
+                };
+                EmptyElement::at(shown(m)) + Text::new(text, (6, -14), ("sans-serif", 12).into_font().color(&color))
             }))
             .map_err(|e| e.to_string())?;
     }
     // The Pareto front over all methods of this study.
     let all: Vec<(f64, f64)> = sel.iter().map(|m| (m.seconds, m.error)).collect();
-    let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|i| all[i]).collect();
+    let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|i| shown(sel[i])).collect();
     chart
         .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(1)))
         .map_err(|e| e.to_string())?
-        .label("Pareto front")
+        .label("Pareto front (* = scene setting)")
         .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], BLACK.stroke_width(1)));
     chart.draw_series(front.iter().map(|&p| Circle::new(p, 8, BLACK.stroke_width(1)))).map_err(|e| e.to_string())?;
     chart
@@ -300,15 +336,22 @@ mod tests {
             method: "m".into(),
             param_name: "p".into(),
             param: 1.0,
+            stage: "gather".into(),
             seconds: s,
             error: e,
             metric: "rel".into(),
+            scene_setting: false,
         };
         let ms = vec![m("a", 1.0, 1.0), m("a", 2.0, 2.0), m("b", 2.0, 2.0)];
         assert_eq!(front_flags(&ms), vec![true, false, true]);
         let csv = to_csv(&ms);
         assert_eq!(csv.lines().count(), 4);
+        assert_eq!(csv.lines().next().unwrap(), CSV_HEADER);
         assert!(csv.lines().nth(2).unwrap().ends_with(",0"));
+        // Numbers are written so that they read back exactly.
+        let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
+        assert_eq!(row[5].parse::<f64>().unwrap(), 1.0);
+        assert_eq!(row[6].parse::<f64>().unwrap(), 1.0);
     }
 
     #[test]
@@ -321,9 +364,12 @@ mod tests {
                 method: if k % 2 == 0 { "a".into() } else { "b".into() },
                 param_name: "n".into(),
                 param: k as f64,
+                stage: "render".into(),
                 seconds: 0.1 * k as f64,
-                error: 1.0 / k as f64,
+                // The last point is a reference: error 0.
+                error: if k == 5 { 0.0 } else { 1.0 / k as f64 },
                 metric: "rel".into(),
+                scene_setting: k == 2,
             })
             .collect();
         draw_study(&ms, "demo", &dir.join("demo")).unwrap();
@@ -331,6 +377,7 @@ mod tests {
         assert_eq!(&png[1..4], b"PNG");
         let svg = std::fs::read_to_string(dir.join("demo.svg")).unwrap();
         assert!(svg.contains("<svg") && svg.contains("Pareto front"));
+        assert!(svg.contains("reference, error 0") && svg.contains("2 *"), "zero-error and scene markers drawn");
         if std::env::var_os("AURORA_KEEP_CHART").is_none() {
             std::fs::remove_dir_all(&dir).unwrap();
         }

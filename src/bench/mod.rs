@@ -1,3 +1,71 @@
 //! `aurora bench`: speed against accuracy for every method choice.
+//!
+//! [`run`] reduces the scene ([`reduced`]), runs every study ([`sweeps`]):
+//! photon count, gather radius, gather method, voxel size, primary-ray
+//! integration and shadow rays, each measuring wall time of the affected
+//! stage against error relative to a converged reference, and returns a
+//! [`report::BenchRun`]; [`report::write`] leaves `bench.csv`, `bench.json`
+//! and a chart per study (PNG and SVG, [`chart`]) in the output folder.
+//! Speed targets live here and in the committed runs under
+//! `benchmarks/bench/`, never in unit tests.
+
 pub mod chart;
 pub mod metrics;
+pub mod reduced;
+pub mod report;
+pub mod sweeps;
+
+use crate::atmosphere::Atmosphere;
+use crate::bake::{self, BakeError};
+use crate::beams;
+use crate::progress::NoProgress;
+use crate::scene::{Scene, VoxelSize};
+use report::{BenchRun, Machine};
+use std::time::{Instant, SystemTime};
+use sweeps::{Bench, Plan, SweepError};
+
+/// Runs every study on `scene` (validated), full or `quick`. `scene_name`
+/// names it in the outputs; `log` receives a line per measurement.
+pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
+    let start = Instant::now();
+    let date = report::utc_date(SystemTime::now());
+    let mut machine = Machine::probe();
+    let plan = if quick { Plan::quick() } else { Plan::full() };
+    let auto_voxel = match scene.grid.voxel_size {
+        VoxelSize::Km(_) => None,
+        VoxelSize::Auto(_) => {
+            // "auto" depends on the full scene's photons: trace them once.
+            let atmosphere = Atmosphere::us1976();
+            let colour = bake::colour_table(scene, &atmosphere);
+            let fps = bake::footprints(scene);
+            let (photons, _) =
+                beams::trace_all(scene, &fps, &atmosphere, &colour, &NoProgress).map_err(BakeError::from)?;
+            Some(bake::voxel_size(scene, &photons))
+        }
+    };
+    let red = reduced::reduce(scene, plan.curtain_km, auto_voxel);
+    for c in &red.changes {
+        log(&format!("reduced scene: {c}"));
+    }
+    let mut b = Bench::new(red.scene.clone(), plan.clone(), log);
+    let mut studies = b.photon_and_gather_studies()?;
+    studies.insert(1, b.radius_study()?);
+    studies.push(b.voxel_study()?);
+    let grids = b.bake_grids()?;
+    studies.push(b.integration_study(&grids)?);
+    studies.push(b.shadow_study(&grids)?);
+    if plan.retime {
+        b.retime(&mut studies)?;
+    }
+    machine.loadavg_end = report::loadavg();
+    Ok(BenchRun {
+        machine,
+        date,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        plan,
+        scene_name: scene_name.to_string(),
+        reduced_toml: red.scene.to_toml(),
+        reduction: red.changes,
+        studies,
+    })
+}

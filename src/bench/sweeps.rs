@@ -1,0 +1,734 @@
+//! The studies of `aurora bench`: each sweeps one method choice on the
+//! reduced scene ([`super::reduced`]) and measures, per setting, the wall time
+//! of the stage the choice affects and the error against a converged
+//! reference of the same quantity.
+//!
+//! | study | swept | timed stage | reference | metric |
+//! |---|---|---|---|---|
+//! | photon count | beams, r fixed | beams + gather | kd-tree, `M` beams, same r, voxel | rel. RMS of `emission` |
+//! | gather radius | r, beams fixed | gather | kd-tree, `M` beams, r / 2, voxel / 2 | rel. RMS of `emission` |
+//! | gather method | kd-tree, splat, report2014, beams | gather | kd-tree, `M` beams | rel. RMS of `emission` |
+//! | voxel size | voxel, per gather method | gather | same photons and method, fine voxels | rel. RMS of `emission` |
+//! | primary-ray integration | fixed step h, exact | render (pixel loop) | exact integration | mean rel. luminance error, pixels > 1 % of peak |
+//! | shadow rays | shadow rays per hit, pixel samples | render (pixel loop) | same estimator, many samples | mean rel. luminance error, terrain pixels > 1 % of peak |
+//!
+//! Noise references share their first beams (or samples) with every test
+//! run: beam `i` has the random stream `(seed, curtain seed, i)` whatever the
+//! count, and a pixel's shadow samples come from one stream in order. The
+//! error of `n` samples against `M` is then `sigma sqrt(1/n - 1/M)`, the
+//! test's own noise slightly understated (by 1 - sqrt(1 - n/M) relative: 6 %
+//! at n = M / 8), never inflated by the reference's. From the photon-count
+//! reference, `sigma / sqrt(M)` (the reference's own noise) is estimated as
+//! `err(N) / sqrt(M / N - 1)`.
+//!
+//! Times: each timed call is repeated until it has used
+//! [`Plan::min_timing_seconds`] (at most [`Plan::max_timing_runs`] runs) and
+//! the fastest run is kept (the machine may be shared; the fastest run is the
+//! least disturbed). A setting that several studies share (the scene's own
+//! gather appears in four) is gathered and timed once and reused, so it has
+//! one time everywhere; after all studies every gather setting is timed once
+//! more ([`Bench::retime`]), minutes later, and the fastest of all its runs
+//! kept, so a burst of load from other processes does not single out the
+//! settings measured during it. Results are deterministic; only the times
+//! vary between runs.
+
+use super::chart::Measurement;
+use super::metrics::{grid_rel_rms, grid_rel_rms_best_scale, image_rel_error_masked};
+use super::reduced::{ground_camera, ground_terrain, volume_camera};
+use crate::atmosphere::Atmosphere;
+use crate::bake::{self, BakeError};
+use crate::beams::{self, Field, Photon};
+use crate::footprint::Footprint;
+use crate::grid::{Grid, Transform};
+use crate::photons::{self, RadiusField};
+use crate::progress::NoProgress;
+use crate::render::{self, Image, Integration, Prepared, RenderError, RenderSettings, Volume};
+use crate::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
+use crate::spectrum::ColourTable;
+use glam::DVec3;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// What each study sweeps. Factors multiply the reduced scene's own values
+/// (`N` = its beam count, `r` its kernel radius, `v` its voxel size).
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Plan {
+    pub quick: bool,
+    /// Length the curtain is cut to, km ([`super::reduced::reduce`]).
+    pub curtain_km: f64,
+    /// Photon-count study: beams, times N.
+    pub beam_factors: Vec<f64>,
+    /// Beams of the gather references, times N.
+    pub reference_beams: f64,
+    /// Radius study: radii, times r; one curve per beam factor (times N).
+    pub radius_factors: Vec<f64>,
+    pub radius_beam_factors: Vec<f64>,
+    /// Gather-method study: beams, times N.
+    pub gather_beam_factors: Vec<f64>,
+    /// Voxel study: voxel sizes, times v, and the reference's, times v.
+    pub voxel_factors: Vec<f64>,
+    pub reference_voxel: f64,
+    /// Integration study: fixed steps, times v; image size.
+    pub step_factors: Vec<f64>,
+    pub volume_image: [usize; 2],
+    /// Shadow study: samples per pixel or per hit; reference count; image size.
+    pub shadow_counts: Vec<usize>,
+    pub shadow_reference: usize,
+    pub ground_image: [usize; 2],
+    /// Repeat a timed call until it has used this long, at most
+    /// `max_timing_runs` times, and keep the fastest run.
+    pub min_timing_seconds: f64,
+    pub max_timing_runs: usize,
+    /// Time every gather setting once more after all studies (keeping the
+    /// fastest of all its runs): a later, independent sample of the
+    /// machine's load.
+    pub retime: bool,
+}
+
+impl Plan {
+    /// The full bench: a few minutes on 2 cores.
+    pub fn full() -> Plan {
+        Plan {
+            quick: false,
+            curtain_km: 40.0,
+            beam_factors: vec![0.125, 0.25, 0.5, 1.0, 2.0, 4.0],
+            reference_beams: 32.0,
+            radius_factors: vec![0.5, 0.7, 1.0, 1.4, 2.0, 2.8],
+            radius_beam_factors: vec![1.0, 4.0],
+            gather_beam_factors: vec![0.25, 0.5, 1.0, 2.0],
+            voxel_factors: vec![2.0, 1.4, 1.0, 0.7, 0.5],
+            reference_voxel: 0.4,
+            step_factors: vec![4.0, 2.0, 1.0, 0.5, 0.25],
+            volume_image: [128, 128],
+            shadow_counts: vec![1, 2, 4, 8, 16, 32, 64],
+            shadow_reference: 512,
+            ground_image: [64, 40],
+            min_timing_seconds: 1.0,
+            max_timing_runs: 5,
+            retime: true,
+        }
+    }
+
+    /// `--quick`: under a minute on 2 cores (a shorter curtain, fewer points,
+    /// cheaper references).
+    pub fn quick() -> Plan {
+        Plan {
+            quick: true,
+            curtain_km: 20.0,
+            beam_factors: vec![0.25, 0.5, 1.0, 2.0],
+            reference_beams: 8.0,
+            radius_factors: vec![0.5, 1.0, 2.0, 2.8],
+            radius_beam_factors: vec![1.0],
+            gather_beam_factors: vec![0.5, 1.0, 2.0],
+            voxel_factors: vec![2.0, 1.4, 1.0],
+            reference_voxel: 0.5,
+            step_factors: vec![4.0, 2.0, 1.0, 0.5],
+            volume_image: [64, 64],
+            shadow_counts: vec![1, 4, 16],
+            shadow_reference: 256,
+            ground_image: [32, 20],
+            min_timing_seconds: 0.0,
+            max_timing_runs: 1,
+            retime: true,
+        }
+    }
+}
+
+/// One study: its measurements and how they were made.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Study {
+    pub name: String,
+    /// The stage whose wall time is measured.
+    pub stage: String,
+    pub metric: String,
+    /// What the errors are measured against.
+    pub reference: String,
+    /// Wall time of the reference's timed stage, seconds.
+    pub reference_seconds: f64,
+    /// The parameter whose increase is expected to lower the error, per
+    /// method (`+1`: error falls as the parameter grows, `-1`: it rises).
+    pub expected_trend: Vec<(String, i32)>,
+    pub notes: Vec<String>,
+    #[serde(skip)]
+    pub measurements: Vec<Measurement>,
+}
+
+/// Why a bench failed.
+#[derive(Debug, thiserror::Error)]
+pub enum SweepError {
+    #[error("bench bake: {0}")]
+    Bake(#[from] BakeError),
+    #[error("bench render: {0}")]
+    Render(#[from] RenderError),
+}
+
+/// Runs `f` until it has used `min_seconds` (at most `max_runs` times) and
+/// returns its first result with the fastest run's wall time.
+pub fn timed<T>(min_seconds: f64, max_runs: usize, mut f: impl FnMut() -> T) -> (T, f64) {
+    let t = Instant::now();
+    let out = f();
+    let mut best = t.elapsed().as_secs_f64();
+    let mut spent = best;
+    let mut runs = 1;
+    while spent < min_seconds && runs < max_runs {
+        let t = Instant::now();
+        drop(f());
+        let s = t.elapsed().as_secs_f64();
+        best = best.min(s);
+        spent += s;
+        runs += 1;
+    }
+    (out, best)
+}
+
+/// Everything the studies share: the reduced scene's footprints, tables,
+/// field and a cache of traced photons per beam count.
+pub struct Bench<'a> {
+    pub scene: Scene,
+    pub plan: Plan,
+    footprints: Vec<Footprint>,
+    atmosphere: Atmosphere,
+    colour: ColourTable,
+    field: Field,
+    photons: BTreeMap<usize, (Vec<Photon>, f64)>,
+    /// Test gathers by (beams, radius bits, voxel bits, method).
+    gathers: HashMap<GatherKey, Timed<Arc<Grid<[f32; 3]>>>>,
+    /// Measurements timed by a cached gather: (study, method, param bits),
+    /// the gather's key and the seconds added to it (the beam trace).
+    gather_timed: Vec<((String, String, u64), GatherKey, f64)>,
+    log: &'a (dyn Fn(&str) + Sync),
+}
+
+type GatherKey = (usize, u64, u64, u8);
+
+fn gather_key(n: usize, r: f64, v: f64, method: GatherMethod) -> GatherKey {
+    (n, r.to_bits(), v.to_bits(), method as u8)
+}
+
+/// A result and the wall time it took, seconds.
+type Timed<T> = (T, f64);
+
+impl<'a> Bench<'a> {
+    /// `scene` is the reduced scene.
+    pub fn new(scene: Scene, plan: Plan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
+        let footprints = bake::footprints(&scene);
+        let atmosphere = Atmosphere::us1976();
+        let colour = bake::colour_table(&scene, &atmosphere);
+        let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
+        Bench {
+            scene,
+            plan,
+            footprints,
+            atmosphere,
+            colour,
+            field,
+            photons: BTreeMap::new(),
+            gathers: HashMap::new(),
+            gather_timed: Vec::new(),
+            log,
+        }
+    }
+
+    /// N, the reduced scene's beam count.
+    pub fn beams(&self) -> usize {
+        self.scene.beams.count
+    }
+
+    fn beams_times(&self, factor: f64) -> usize {
+        ((self.beams() as f64 * factor).round() as usize).max(1)
+    }
+
+    /// r, the scene's kernel radius, km.
+    pub fn radius(&self) -> f64 {
+        self.scene.photons.radius_km
+    }
+
+    /// v, the scene's voxel size, km.
+    pub fn voxel(&self) -> f64 {
+        match self.scene.grid.voxel_size {
+            VoxelSize::Km(v) => v,
+            // reduce() resolves "auto"; kept as a fallback: the kernel radius.
+            VoxelSize::Auto(_) => self.scene.photons.radius_km,
+        }
+    }
+
+    /// The photons of `n` beams and the fastest trace time (cached).
+    fn trace(&mut self, n: usize) -> Result<(), SweepError> {
+        if self.photons.contains_key(&n) {
+            return Ok(());
+        }
+        let mut s = self.scene.clone();
+        s.beams.count = n;
+        let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
+        let (res, secs) =
+            timed(min, runs, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
+        let (ph, _) = res.map_err(BakeError::from)?;
+        self.photons.insert(n, (ph, secs));
+        Ok(())
+    }
+
+    fn photons_of(&mut self, n: usize) -> Result<(&[Photon], f64), SweepError> {
+        self.trace(n)?;
+        let (p, s) = &self.photons[&n];
+        Ok((p.as_slice(), *s))
+    }
+
+    /// Records that the time of the last measurement of `ms` is the gather
+    /// `key`'s plus `extra` seconds.
+    fn note_last(&mut self, ms: &[Measurement], key: GatherKey, extra: f64) {
+        if let Some(m) = ms.last() {
+            self.gather_timed.push(((m.study.clone(), m.method.clone(), m.param.to_bits()), key, extra));
+        }
+    }
+
+    /// Times every cached gather setting once more and sets each
+    /// measurement's time from the fastest of all its runs.
+    pub fn retime(&mut self, studies: &mut [Study]) -> Result<(), SweepError> {
+        let mut keys: Vec<GatherKey> = self.gather_timed.iter().map(|(_, k, _)| *k).collect();
+        keys.sort_unstable();
+        keys.dedup();
+        self.say(&format!("retiming {} gather settings", keys.len()));
+        for key in keys {
+            let (n, r, v, m) = (key.0, f64::from_bits(key.1), f64::from_bits(key.2), key.3);
+            let method = [GatherMethod::Kdtree, GatherMethod::Splat, GatherMethod::Report2014][m as usize];
+            let (_, secs) = self.gather_uncached(n, r, v, method)?;
+            if let Some(entry) = self.gathers.get_mut(&key) {
+                entry.1 = entry.1.min(secs);
+            }
+        }
+        for (id, key, extra) in &self.gather_timed {
+            let best = self.gathers[key].1 + extra;
+            for st in studies.iter_mut() {
+                for m in st.measurements.iter_mut() {
+                    if (&m.study, &m.method, m.param.to_bits()) == (&id.0, &id.1, id.2) {
+                        m.seconds = best;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Bench::gather_uncached`], kept for the other studies that use the
+    /// same setting (test settings only: references are used once).
+    fn gather(
+        &mut self,
+        n: usize,
+        r: f64,
+        v: f64,
+        method: GatherMethod,
+    ) -> Result<Timed<Arc<Grid<[f32; 3]>>>, SweepError> {
+        let key = gather_key(n, r, v, method);
+        if let Some((g, s)) = self.gathers.get(&key) {
+            return Ok((g.clone(), *s));
+        }
+        let (g, s) = self.gather_uncached(n, r, v, method)?;
+        let g = Arc::new(g);
+        self.gathers.insert(key, (g.clone(), s));
+        Ok((g, s))
+    }
+
+    /// The emission grid of `n` beams gathered with base radius `r`, voxel
+    /// `v` and `method` (radius noise as in the scene), and the gather time.
+    fn gather_uncached(
+        &mut self,
+        n: usize,
+        r: f64,
+        v: f64,
+        method: GatherMethod,
+    ) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
+        let p = &self.scene.photons;
+        let radius = RadiusField::new(
+            r,
+            p.radius_noise,
+            p.radius_noise_freq,
+            self.field.b,
+            self.scene.beams.top_km,
+            &[self.scene.seed],
+        );
+        let cutoff = p.cutoff;
+        let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
+        let (photons, _) = self.photons_of(n)?;
+        let tr = Transform::new(v, DVec3::ZERO);
+        Ok(timed(min, runs, || photons::gather_grid(photons, tr, &radius, cutoff, method, &NoProgress)))
+    }
+
+    fn say(&self, s: &str) {
+        (self.log)(s)
+    }
+
+    /// The kd-tree reference of the photon-count and gather-method studies:
+    /// `M` beams, the scene's radius and voxel.
+    fn noise_reference(&mut self) -> Result<(Grid<[f32; 3]>, usize, f64), SweepError> {
+        let m = self.beams_times(self.plan.reference_beams);
+        self.say(&format!("reference: kd-tree, {m} beams, r = {} km, voxel {} km", self.radius(), self.voxel()));
+        let (g, secs) = self.gather_uncached(m, self.radius(), self.voxel(), GatherMethod::Kdtree)?;
+        Ok((g, m, secs))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn measure(
+        &self,
+        study: &str,
+        method: &str,
+        param_name: &str,
+        param: f64,
+        stage: &str,
+        seconds: f64,
+        error: f64,
+        metric: &str,
+        scene_setting: bool,
+    ) -> Measurement {
+        self.say(&format!(
+            "{study}: {method}, {param_name} = {param}: {seconds:.3} s ({stage}), error {error:.4e}{}",
+            if scene_setting { " [scene setting]" } else { "" }
+        ));
+        Measurement {
+            study: study.into(),
+            method: method.into(),
+            param_name: param_name.into(),
+            param,
+            stage: stage.into(),
+            seconds,
+            error,
+            metric: metric.into(),
+            scene_setting,
+        }
+    }
+
+    /// Photon count and gather method (they share the kd-tree reference).
+    pub fn photon_and_gather_studies(&mut self) -> Result<Vec<Study>, SweepError> {
+        let (reference, m, ref_secs) = self.noise_reference()?;
+        let n = self.beams();
+        let (r, v) = (self.radius(), self.voxel());
+        let metric = "relative RMS of emission";
+
+        // Photon count at fixed radius: beams + gather time.
+        let name = "photon count";
+        let method = format!("kd-tree, r = {r} km");
+        let mut ms = Vec::new();
+        let mut err_n = None;
+        for f in self.plan.beam_factors.clone() {
+            let k = self.beams_times(f);
+            let (g, gather_s) = self.gather(k, r, v, GatherMethod::Kdtree)?;
+            let trace_s = self.photons[&k].1;
+            let e = grid_rel_rms(&g, &reference);
+            if k == n {
+                err_n = Some(e);
+            }
+            ms.push(self.measure(
+                name,
+                &method,
+                "beams",
+                k as f64,
+                "beams+gather",
+                trace_s + gather_s,
+                e,
+                metric,
+                k == n,
+            ));
+            self.note_last(&ms, gather_key(k, r, v, GatherMethod::Kdtree), trace_s);
+        }
+        let mut notes = vec![format!(
+            "Pure noise: the reference has the same kernel and voxels, so the error is the Monte Carlo noise of the density estimate, expected to fall as beams^-1/2 (sigma sqrt(1/n - 1/M) with the shared first beams)."
+        )];
+        if let Some(e) = err_n {
+            notes.push(format!(
+                "Estimated noise of the reference itself ({m} beams): err(N = {n}) / sqrt(M/N - 1) = {:.3e}.",
+                e / ((m as f64 / n as f64) - 1.0).max(1e-12).sqrt()
+            ));
+        }
+        let photon = Study {
+            name: name.into(),
+            stage: "beams+gather".into(),
+            metric: metric.into(),
+            reference: format!("kd-tree gather of {m} beams, same radius (r = {r} km, radius noise as in the scene) and voxel ({v} km)"),
+            reference_seconds: ref_secs + self.photons[&m].1,
+            expected_trend: vec![(method.clone(), 1)],
+            notes,
+            measurements: ms,
+        };
+
+        // Gather methods, each over beams: gather time only.
+        let name = "gather method";
+        let mut ms = Vec::new();
+        let scene_gather = self.scene.photons.gather;
+        let mut trend = Vec::new();
+        for method in [GatherMethod::Kdtree, GatherMethod::Splat, GatherMethod::Report2014] {
+            let label = match method {
+                GatherMethod::Kdtree => "kd-tree (kiddo)",
+                GatherMethod::Splat => "splat",
+                GatherMethod::Report2014 => "report2014 (average)",
+            };
+            if method != GatherMethod::Report2014 {
+                trend.push((label.to_string(), 1));
+            }
+            let mut scaled = Vec::new();
+            for f in self.plan.gather_beam_factors.clone() {
+                let k = self.beams_times(f);
+                let (g, secs) = self.gather(k, r, v, method)?;
+                let here = method == scene_gather && k == n;
+                ms.push(self.measure(
+                    name,
+                    label,
+                    "beams",
+                    k as f64,
+                    "gather",
+                    secs,
+                    grid_rel_rms(&g, &reference),
+                    metric,
+                    here,
+                ));
+                self.note_last(&ms, gather_key(k, r, v, method), 0.0);
+                if method == GatherMethod::Report2014 {
+                    let (e, s) = grid_rel_rms_best_scale(&g, &reference);
+                    scaled.push(self.measure(
+                        name,
+                        "report2014, best-fit scale",
+                        "beams",
+                        k as f64,
+                        "gather",
+                        secs,
+                        e,
+                        metric,
+                        false,
+                    ));
+                    self.note_last(&scaled, gather_key(k, r, v, method), 0.0);
+                    self.say(&format!("  (report2014 best-fit scale factor {s:.4e})"));
+                }
+            }
+            ms.extend(scaled);
+        }
+        let gather = Study {
+            name: name.into(),
+            stage: "gather".into(),
+            metric: metric.into(),
+            reference: photon.reference.clone(),
+            reference_seconds: ref_secs,
+            expected_trend: trend,
+            notes: vec![
+                "kd-tree is a balloon estimator (radius at the voxel), splat a sample-point estimator (radius at the photon): with radius noise they differ slightly, without it they are the same sum.".into(),
+                "report2014 is the 2014 report's kernel-weighted average of photon colours, not a density: its values are a photon's power, so its error against the density reference is expected to be large (about 1 or more). 'report2014, best-fit scale' is the same grid scaled by the least-squares factor: the error of its shape alone.".into(),
+            ],
+            measurements: ms,
+        };
+        Ok(vec![photon, gather])
+    }
+
+    /// Gather radius at fixed photon count: noise against blur.
+    pub fn radius_study(&mut self) -> Result<Study, SweepError> {
+        let (r, v, n) = (self.radius(), self.voxel(), self.beams());
+        let m = self.beams_times(self.plan.reference_beams);
+        let (r_ref, v_ref) = (0.5 * r, 0.5 * v);
+        self.say(&format!("reference: kd-tree, {m} beams, r = {r_ref} km, voxel {v_ref} km"));
+        let (reference, ref_secs) = self.gather_uncached(m, r_ref, v_ref, GatherMethod::Kdtree)?;
+        let name = "gather radius";
+        let metric = "relative RMS of emission";
+        let mut ms = Vec::new();
+        for bf in self.plan.radius_beam_factors.clone() {
+            let k = self.beams_times(bf);
+            let method = format!("kd-tree, {k} beams");
+            for f in self.plan.radius_factors.clone() {
+                let rr = r * f;
+                let (g, secs) = self.gather(k, rr, v, GatherMethod::Kdtree)?;
+                let e = grid_rel_rms(&g, &reference);
+                ms.push(self.measure(name, &method, "radius_km", rr, "gather", secs, e, metric, k == n && f == 1.0));
+                self.note_last(&ms, gather_key(k, rr, v, GatherMethod::Kdtree), 0.0);
+            }
+        }
+        Ok(Study {
+            name: name.into(),
+            stage: "gather".into(),
+            metric: metric.into(),
+            reference: format!(
+                "kd-tree gather of {m} beams with half the radius (r = {r_ref} km, radius noise as in the scene) on half the voxel size ({v_ref} km): the blur of the reference itself (r/2) is not measured"
+            ),
+            reference_seconds: ref_secs,
+            expected_trend: vec![],
+            notes: vec![
+                format!("Voxel size fixed at the scene's ({v} km). Small radii: noise (few photons per kernel) and, below half a voxel, aliasing; large radii: blur across the curtain."),
+                format!("The reference's own noise is about sqrt((N r^3) / (M (r/2)^3)) = {:.2} of the noise at the scene's setting (N = {n}, r = {r}); it adds to every error in quadrature.", ((n as f64 * 8.0) / m as f64).sqrt()),
+            ],
+            measurements: ms,
+        })
+    }
+
+    /// Voxel size at fixed photons and radius, per gather method.
+    pub fn voxel_study(&mut self) -> Result<Study, SweepError> {
+        let (r, v, n) = (self.radius(), self.voxel(), self.beams());
+        let v_ref = v * self.plan.reference_voxel;
+        let name = "voxel size";
+        let metric = "relative RMS of emission";
+        let mut ms = Vec::new();
+        let mut ref_secs = 0.0;
+        let mut trend = Vec::new();
+        for (method, label) in [(GatherMethod::Kdtree, "kd-tree (kiddo)"), (GatherMethod::Splat, "splat")] {
+            self.say(&format!("reference: {label}, {n} beams, r = {r} km, voxel {v_ref} km"));
+            let (reference, secs) = self.gather_uncached(n, r, v_ref, method)?;
+            ref_secs += secs;
+            trend.push((label.to_string(), -1));
+            for f in self.plan.voxel_factors.clone() {
+                let vv = v * f;
+                let (g, secs) = self.gather(n, r, vv, method)?;
+                let e = grid_rel_rms(&g, &reference);
+                let here = f == 1.0 && method == self.scene.photons.gather;
+                ms.push(self.measure(name, label, "voxel_km", vv, "gather", secs, e, metric, here));
+                self.note_last(&ms, gather_key(n, r, vv, method), 0.0);
+            }
+        }
+        Ok(Study {
+            name: name.into(),
+            stage: "gather".into(),
+            metric: metric.into(),
+            reference: format!("the same photons ({n} beams) and method on voxels of {v_ref} km; kernel r = {r} km"),
+            reference_seconds: ref_secs,
+            expected_trend: trend,
+            notes: vec!["Pure discretisation: the photons and kernel are those of the reference, so the error is that of storing the estimate at voxel centres and reading it back trilinearly (as Cycles does), against a finer grid.".into()],
+            measurements: ms,
+        })
+    }
+
+    /// The reduced scene's grids at its own settings (the CLI's bake).
+    pub fn bake_grids(&self) -> Result<bake::Bake, SweepError> {
+        Ok(bake::bake(&self.scene, &NoProgress)?)
+    }
+
+    fn render_timed(&self, s: &RenderSettings, vol: &Volume<'_>) -> Result<(Image, f64), SweepError> {
+        let (min, max_runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
+        let (img, _) = timed(0.0, 1, || render::render(s, vol, &NoProgress));
+        let img = img?;
+        // The pixel loop only (the acceleration structure is built once per
+        // render whatever the integrator): the fastest of the runs.
+        let mut best = img.stats.render_seconds;
+        let mut spent = best;
+        let mut runs = 1;
+        while spent < min && runs < max_runs {
+            let again = render::render(s, vol, &NoProgress)?;
+            best = best.min(again.stats.render_seconds);
+            spent += again.stats.render_seconds;
+            runs += 1;
+        }
+        Ok((img, best))
+    }
+
+    /// Fixed-step ray marching against exact per-voxel integration.
+    pub fn integration_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
+        let v = self.voxel();
+        let mut s = RenderSettings::from_scene(&self.scene);
+        s.camera = volume_camera(&self.scene);
+        s.render.width = self.plan.volume_image[0];
+        s.render.height = self.plan.volume_image[1];
+        s.render.spp = 1;
+        s.terrain.kind = TerrainKind::None;
+        s.background.radiance = [0.0; 3];
+        let vol = Volume { density: Some(&grids.density), emission: Some(&grids.emission) };
+        let name = "primary-ray integration";
+        let metric = "mean relative luminance error, pixels > 1% of peak";
+        s.integration = Integration::Exact;
+        let (exact, exact_s) = self.render_timed(&s, &vol)?;
+        let all = vec![true; exact.pixels.len()];
+        let mut ms =
+            vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
+        let mut flux = Vec::new();
+        for f in self.plan.step_factors.clone() {
+            let h = v * f;
+            s.integration = Integration::FixedStep(h);
+            let (img, secs) = self.render_timed(&s, &vol)?;
+            let (e, fl) = image_rel_error_masked(&img.pixels, &exact.pixels, &all, 0.01);
+            flux.push(format!("h = {h} km: {fl:.5}"));
+            ms.push(self.measure(name, "fixed step", "step_km", h, "render", secs, e, metric, false));
+        }
+        let lit = exact.pixels.iter().filter(|p| p[1] > 0.0).count();
+        Ok(Study {
+            name: name.into(),
+            stage: "render".into(),
+            metric: metric.into(),
+            reference: format!(
+                "the exact integrator's image ({}x{} px, spp 1, {} pixels with emission; camera: bench volume camera, no terrain)",
+                exact.width, exact.height, lit
+            ),
+            reference_seconds: exact_s,
+            expected_trend: vec![("fixed step".into(), -1)],
+            notes: vec![
+                format!("Voxel size {v} km; steps are multiples of it. Exact integration is the reference (error 0, drawn on the bottom edge); its own error against closed forms is below 1e-4 (tests/render_closed_forms.rs, tests/stability_integration.rs)."),
+                format!("Total flux ratio fixed/exact: {}", flux.join(", ")),
+            ],
+            measurements: ms,
+        })
+    }
+
+    /// Shadow rays per terrain hit, and pixel samples, against converged
+    /// terrain lighting.
+    pub fn shadow_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
+        let mut s = RenderSettings::from_scene(&self.scene);
+        s.terrain = ground_terrain(&self.scene);
+        s.camera = ground_camera(&self.scene, &s.terrain);
+        s.render.width = self.plan.ground_image[0];
+        s.render.height = self.plan.ground_image[1];
+        s.integration = Integration::Exact;
+        let vol = Volume { density: Some(&grids.density), emission: Some(&grids.emission) };
+        // Terrain pixels: where the pixel-centre ray hits the ground.
+        let prepared = Prepared::new(&s, &vol)?;
+        let (w, h) = (s.render.width, s.render.height);
+        let mask: Vec<bool> = (0..w * h)
+            .map(|i| {
+                let ray = prepared.camera.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                prepared.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY).is_some()
+            })
+            .collect();
+        drop(prepared);
+        let terrain_px = mask.iter().filter(|&&m| m).count();
+        let name = "shadow rays";
+        let metric = "mean relative luminance error, terrain pixels > 1% of peak";
+        let big = self.plan.shadow_reference;
+        let scene_spp = self.scene.render.spp;
+        let mut counts = self.plan.shadow_counts.clone();
+        if !self.plan.quick && !counts.contains(&scene_spp) && scene_spp < big {
+            counts.push(scene_spp);
+            counts.sort_unstable();
+        }
+        let mut ms = Vec::new();
+        let mut ref_secs = 0.0;
+        let methods = [("shadow rays per hit (spp 1)", true), ("pixel samples (1 shadow ray each)", false)];
+        for (label, per_hit) in methods {
+            let set = |s: &mut RenderSettings, k: usize| {
+                if per_hit {
+                    s.render.spp = 1;
+                    s.shadow_samples = k;
+                } else {
+                    s.render.spp = k;
+                    s.shadow_samples = 1;
+                }
+            };
+            set(&mut s, big);
+            self.say(&format!("reference: {label}, {big} samples per pixel"));
+            let (reference, secs) = self.render_timed(&s, &vol)?;
+            ref_secs += secs;
+            for &k in &counts {
+                set(&mut s, k);
+                let (img, secs) = self.render_timed(&s, &vol)?;
+                let (e, _) = image_rel_error_masked(&img.pixels, &reference.pixels, &mask, 0.01);
+                // The CLI renders with the scene's spp and one shadow ray per hit.
+                let here = !per_hit && k == scene_spp;
+                ms.push(self.measure(name, label, "samples", k as f64, "render", secs, e, metric, here));
+            }
+        }
+        Ok(Study {
+            name: name.into(),
+            stage: "render".into(),
+            metric: metric.into(),
+            reference: format!(
+                "the same estimator with {big} samples per pixel ({w}x{h} px, {terrain_px} terrain pixels; bench ground camera, terrain {:?})",
+                s.terrain.kind
+            ),
+            reference_seconds: ref_secs,
+            expected_trend: methods.iter().map(|(l, _)| (l.to_string(), 1)).collect(),
+            notes: vec![
+                "Each curve has its own reference (its estimator with many samples): 'shadow rays per hit' converges to the pixel-centre value, 'pixel samples' to the pixel's box-filtered value. Both errors are Monte Carlo noise, falling as samples^-1/2.".into(),
+                format!("The CLI's `aurora render` uses spp = {scene_spp} from the scene and 1 shadow ray per terrain hit (marked as the scene setting)."),
+            ],
+            measurements: ms,
+        })
+    }
+}
