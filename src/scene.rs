@@ -694,7 +694,11 @@ impl Scene {
         v.range(t, "density_a", g.density_a, 0.0, 1e6, true);
         v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
         v.finite(t, "density_base_km", g.density_base_km);
-        v.range(t, "prune", g.prune, 0.0, 0.5, true);
+        // Contribution-based pruning (issue 6) is not implemented: refuse a
+        // value that would otherwise be silently ignored.
+        if g.prune != 0.0 {
+            v.push(t, "prune", fmt_num(g.prune), "must be 0: contribution-based pruning is not implemented yet".into());
+        }
 
         let cam = &self.camera;
         let t = Some(("camera", 0));
@@ -927,6 +931,12 @@ mod tests {
         assert_eq!(s.camera.projection, Projection::Orthographic);
         assert_eq!(s.render.width, 8);
         assert_eq!(s.curtains.len(), 3);
+    }
+
+    #[test]
+    fn unimplemented_pruning_is_refused_not_ignored() {
+        let m = Scene::from_toml_str("[grid]\nprune = 0.01\n", "p.toml").unwrap_err().to_string();
+        assert!(m.contains("p.toml:2: grid.prune = 0.01") && m.contains("not implemented"), "{m}");
     }
 
     #[test]
