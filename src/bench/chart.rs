@@ -193,7 +193,10 @@ where
         .margin(15)
         .x_label_area_size(50)
         .y_label_area_size(80)
-        .build_cartesian_2d((t0..t1).log_scale(), (e0..e1).log_scale())
+        .build_cartesian_2d(
+            (t0..t1).log_scale().with_key_points(nice_ticks(t0, t1)),
+            (e0..e1).log_scale().with_key_points(nice_ticks(e0, e1)),
+        )
         .map_err(|e| e.to_string())?;
     let stage = sel[0].stage.clone();
     chart
@@ -265,14 +268,40 @@ where
     Ok(())
 }
 
-/// A tick label with three significant digits.
+/// Tick positions for a log axis over [lo, hi]: 1, 2 and 5 times powers of
+/// ten, or every 1..9 times a power of ten when that leaves fewer than three
+/// (a range narrower than a decade). Labelling every 1..9 on a wide axis runs
+/// the labels together.
+fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let pick = |ms: &[f64]| -> Vec<f64> {
+        (k0..=k1).flat_map(|k| ms.iter().map(move |m| m * 10f64.powi(k))).filter(|&x| x >= lo && x <= hi).collect()
+    };
+    let coarse = pick(&[1.0, 2.0, 5.0]);
+    if coarse.len() >= 3 {
+        coarse
+    } else {
+        pick(&[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+    }
+}
+
+/// A tick label with at most three significant digits.
 fn sig(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
     let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;
     if x.abs() >= 1e-3 && x.abs() < 1e5 {
-        format!("{x:.digits$}")
+        // Trailing zeros dropped: "0.08", "2", "0.125".
+        let s = format!("{x:.digits$}");
+        if s.contains('.') {
+            s.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            s
+        }
     } else {
         format!("{x:.1e}")
     }
@@ -327,6 +356,16 @@ mod tests {
             brute.sort();
             assert_eq!(fast, brute, "{pts:?}");
         }
+    }
+
+    #[test]
+    fn log_ticks_are_one_two_five_unless_the_range_is_narrow() {
+        let close =
+            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x / y - 1.0).abs() < 1e-12);
+        assert!(close(&nice_ticks(0.03, 3.0), &[0.05, 0.1, 0.2, 0.5, 1.0, 2.0]), "{:?}", nice_ticks(0.03, 3.0));
+        assert!(close(&nice_ticks(0.045, 0.12), &[0.05, 0.06, 0.07, 0.08, 0.09, 0.1]), "{:?}", nice_ticks(0.045, 0.12));
+        assert!(nice_ticks(0.0, 1.0).is_empty());
+        assert_eq!([sig(0.08), sig(2.0), sig(0.125), sig(150.0), sig(2e-5)], ["0.08", "2", "0.125", "150", "2.0e-5"]);
     }
 
     #[test]
