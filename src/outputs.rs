@@ -7,7 +7,7 @@
 use crate::bake::Bake;
 use crate::scene::Scene;
 use crate::usd;
-use crate::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
+use crate::vdb::write::{write_atomic, write_vdb, GridRef, MetaValue, WriteOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -115,16 +115,4 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
     write_atomic(&json_path, text.as_bytes())
         .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
     Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
-}
-
-/// Writes `bytes` to `path` through a temporary file in the same folder.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
-    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }

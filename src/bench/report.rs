@@ -5,7 +5,7 @@
 
 use super::chart::{self, front_flags, Measurement};
 use super::sweeps::{Plan, Study};
-use crate::outputs::write_atomic;
+use crate::vdb::write::write_atomic;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};

@@ -377,20 +377,34 @@ fn read_full<T: VoxelValue>(cur: &mut Cursor) -> Result<T, ParseError> {
     Ok(T::from_components(&c))
 }
 
+/// The length prefix of a compressed chunk (`i64 L`), shared by ZIP and
+/// Blosc: L <= 0 means the data were stored raw, -L bytes, which must be
+/// exactly `nbytes`; L > 0 is the compressed stream's length.
+enum ChunkLen {
+    Stored(Option<Vec<u8>>),
+    Compressed(i64),
+}
+
+fn read_chunk_len(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<ChunkLen, ParseError> {
+    let at = cur.pos();
+    let len = cur.i64()?;
+    if len > 0 {
+        return Ok(ChunkLen::Compressed(len));
+    }
+    if len.unsigned_abs() != nbytes as u64 {
+        return Err(cur.err_at(at, format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs())));
+    }
+    let b = cur.bytes(nbytes)?;
+    Ok(ChunkLen::Stored(decode.then(|| b.to_vec())))
+}
+
 /// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly `nbytes`.
 fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
     let at = cur.pos();
-    let len = cur.i64()?;
-    if len <= 0 {
-        if len.unsigned_abs() != nbytes as u64 {
-            return Err(cur.err_at(
-                at,
-                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
-            ));
-        }
-        let b = cur.bytes(nbytes)?;
-        return Ok(decode.then(|| b.to_vec()));
-    }
+    let len = match read_chunk_len(cur, nbytes, decode)? {
+        ChunkLen::Stored(raw) => return Ok(raw),
+        ChunkLen::Compressed(len) => len,
+    };
     let stream = cur.bytes_len(len as u64)?;
     // Decompressed even when only validating: vdb-rs reads just the first
     // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
@@ -411,17 +425,10 @@ fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<
 /// before the C decompressor sees the bytes, so it never reads out of bounds.
 fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
     let at = cur.pos();
-    let len = cur.i64()?;
-    if len <= 0 {
-        if len.unsigned_abs() != nbytes as u64 {
-            return Err(cur.err_at(
-                at,
-                format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs()),
-            ));
-        }
-        let b = cur.bytes(nbytes)?;
-        return Ok(decode.then(|| b.to_vec()));
-    }
+    let len = match read_chunk_len(cur, nbytes, decode)? {
+        ChunkLen::Stored(raw) => return Ok(raw),
+        ChunkLen::Compressed(len) => len,
+    };
     let frame = cur.bytes_len(len as u64)?;
     let mut header_nbytes: usize = 0;
     // SAFETY: `blosc_cbuffer_validate` reads at most `frame.len()` bytes of the
