@@ -3,12 +3,15 @@
 //! [`bake`] composes the stages, each a function of plain data:
 //! 1. one footprint per curtain ([`footprints`], seeded by scene and curtain seed);
 //! 2. electron beams traced through the atmosphere, leaving photons
-//!    ([`crate::beams::trace_all`]);
+//!    ([`crate::beams::trace_all`]); with `beams.target_noise > 0` their
+//!    number comes from a pilot ([`crate::pilot`]);
 //! 3. the emission grid by kernel density estimation over the photons
 //!    ([`crate::photons::gather_grid`]): candidate 8^3 leaves are those within
 //!    `cutoff * r_max` of a photon, gathered in parallel, collected in leaf
 //!    order and sorted; a voxel is active when its emission is nonzero;
-//! 4. the density grid on the same active voxels ([`density_grid`]).
+//! 4. with `grid.prune > 0`, the leaves faintest at the camera dropped within
+//!    that error budget ([`crate::prune`]);
+//! 5. the density grid on the (kept) active voxels ([`density_grid`]).
 //!
 //! [`resolution_warnings`] flags bakes whose voxels under-resolve the kernel
 //! or the curtains, [`extinction_warning`] air extinction clamped at
@@ -21,11 +24,13 @@
 //! `voxel_size * (i, j, k)` km.
 
 use crate::atmosphere::Atmosphere;
-use crate::beams::{self, BeamError, BeamStats, Field, Photon};
+use crate::beams::{self, BeamError, BeamStats, Photon};
+use crate::pilot::{self, NoiseEstimate};
 use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf, Transform};
 use crate::photons::{self, RadiusField};
 use crate::progress::Progress;
+use crate::prune::{self, PruneStats};
 use crate::scene::{ColourMode, GatherMethod, GridParams, Scene, VoxelSize};
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
 use glam::DVec3;
@@ -62,8 +67,10 @@ pub struct Bake {
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct StageTimes {
     pub footprints: f64,
+    pub pilot: f64,
     pub beams: f64,
     pub gather: f64,
+    pub prune: f64,
     pub density: f64,
     pub total: f64,
 }
@@ -100,6 +107,10 @@ pub struct BakeStats {
     pub deposited_power_w: f64,
     pub beam_stats: BeamStats,
     pub times_s: StageTimes,
+    /// How `beams.target_noise` set the beam count (None when it is 0).
+    pub noise: Option<NoiseEstimate>,
+    /// What `grid.prune` removed (None when it is 0).
+    pub prune: Option<PruneStats>,
     /// Under-resolution warnings ([`resolution_warnings`]); empty when the
     /// grid resolves the kernel and every curtain.
     pub warnings: Vec<String>,
@@ -311,25 +322,45 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     progress.finish();
     times.footprints = t.elapsed().as_secs_f64();
 
-    let t = Instant::now();
     let atmosphere = Atmosphere::us1976();
     let colour = colour_table(scene, &atmosphere);
-    let (photons, beam_stats) = beams::trace_all(scene, &fps, &atmosphere, &colour, progress)?;
+    let mut noise_warning = None;
+    let noise = if scene.beams.target_noise > 0.0 {
+        let t = Instant::now();
+        progress.start("pilot (beams.target_noise)", 1);
+        let est = pilot::beams_for_noise(scene, &fps, &atmosphere, &colour, scene.beams.target_noise)?;
+        progress.inc(1);
+        progress.finish();
+        times.pilot = t.elapsed().as_secs_f64();
+        if est.capped {
+            noise_warning = Some(format!(
+                "beams.target_noise = {} needs {:.0} beams (pilot: {:.3} relative RMS noise at {} beams); capped at beams.count = {}, expected noise {:.3}: raise beams.count to reach the target",
+                est.target, est.beams_needed, est.pilot_noise, est.pilot_beams, est.beams, est.expected_noise
+            ));
+        }
+        Some(est)
+    } else {
+        None
+    };
+    let counted;
+    let traced_scene = match &noise {
+        Some(est) => {
+            counted = Scene { beams: crate::scene::BeamParams { count: est.beams, ..scene.beams.clone() }, ..scene.clone() };
+            &counted
+        }
+        None => scene,
+    };
+
+    let t = Instant::now();
+    let (photons, beam_stats) = beams::trace_all(traced_scene, &fps, &atmosphere, &colour, progress)?;
     times.beams = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let (vs, vs_source) = voxel_size(scene, &photons);
-    let warnings = resolution_warnings(scene, &fps, vs);
+    let mut warnings = resolution_warnings(scene, &fps, vs);
+    warnings.extend(noise_warning);
     let transform = Transform::new(vs, DVec3::ZERO);
-    let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
-    let radius = RadiusField::new(
-        scene.photons.radius_km,
-        scene.photons.radius_noise,
-        scene.photons.radius_noise_freq,
-        field.b,
-        scene.beams.top_km,
-        &[scene.seed],
-    );
+    let radius = RadiusField::from_scene(scene);
     let emission =
         photons::gather_grid(&photons, transform, &radius, scene.photons.cutoff, scene.photons.gather, progress);
     times.gather = t.elapsed().as_secs_f64();
@@ -350,15 +381,22 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
         }
         peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
     }
-    let mut warnings = warnings;
     if let Some((lo, _)) = emission.index_bbox() {
         warnings.extend(extinction_warning(&scene.grid, transform.index_to_world(lo.as_dvec3()).z));
     }
+    let scan_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut emission = emission;
+    let prune_stats = (scene.grid.prune > 0.0).then(|| prune::prune(&mut emission, &scene.camera, scene.render.width as f64 / scene.render.height as f64, scene.grid.prune));
+    times.prune = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
     progress.start("density", emission.leaf_count() as u64);
     let density = density_grid(&emission, &scene.grid, peak_y);
     progress.inc(emission.leaf_count() as u64);
     progress.finish();
-    times.density = t.elapsed().as_secs_f64();
+    times.density = scan_s + t.elapsed().as_secs_f64();
     times.total = t_all.elapsed().as_secs_f64();
 
     let mut total = [0.0f64; 3];
@@ -391,6 +429,8 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
         deposited_power_w: beam_stats.deposited_power_w,
         beam_stats,
         times_s: times,
+        noise,
+        prune: prune_stats,
         warnings,
     };
     Ok(Bake { emission, density, photons, stats })

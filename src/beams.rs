@@ -351,6 +351,20 @@ pub fn trace_all(
     colour: &ColourTable,
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
+    trace_all_from(scene, footprints, atmosphere, colour, 0, progress)
+}
+
+/// [`trace_all`] with beam `i` of a curtain drawing the random stream of
+/// index `first_beam + i`: beams from disjoint index ranges are independent
+/// samples of the same scene (the pilot of `crate::pilot` uses two).
+pub fn trace_all_from(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    first_beam: u64,
+    progress: &dyn Progress,
+) -> Result<(Vec<Photon>, BeamStats), BeamError> {
     let weights: Vec<f64> = scene.curtains.iter().map(|c| c.beam_weight).collect();
     let counts = apportion(scene.beams.count, &weights);
     let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
@@ -385,7 +399,7 @@ pub fn trace_all(
         let traces: Vec<(Vec<Photon>, EndReason, f64)> = (0..n)
             .into_par_iter()
             .map(|i| {
-                let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, i as u64]);
+                let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
                 let (u, v) = cdf.sample(fp, &mut r);
                 let (x, y) = fp.to_world(u, v);
                 // High-frequency noise on the start height along the curtain.

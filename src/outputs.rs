@@ -48,6 +48,32 @@ impl BakeReport {
             j["stats"]["leaves"],
             j["stats"]["voxel_size_km"],
             j["total_seconds"].as_f64().unwrap_or(0.0),
+        ) + &self.noise_line()
+            + &self.prune_line()
+    }
+
+    fn noise_line(&self) -> String {
+        let n = &self.json["stats"]["noise"];
+        if n.is_null() {
+            return String::new();
+        }
+        format!(
+            "\nbeams.target_noise = {}: pilot of 2 x {} beams measured {:.3} relative RMS noise; {} beams used{}, expected noise {:.3}",
+            n["target"], n["pilot_beams"], n["pilot_noise"].as_f64().unwrap_or(0.0), n["beams"],
+            if n["capped"].as_bool() == Some(true) { " (capped at beams.count)" } else { "" },
+            n["expected_noise"].as_f64().unwrap_or(0.0)
+        )
+    }
+
+    fn prune_line(&self) -> String {
+        let p = &self.json["stats"]["prune"];
+        if p.is_null() {
+            return String::new();
+        }
+        format!(
+            "\npruned (grid.prune = {}): {} of {} leaves, {} of {} voxels, {:.3e} of the image's light (estimated, extinction ignored)",
+            p["budget"], p["leaves_removed"], p["leaves_before"], p["voxels_removed"], p["voxels_before"],
+            p["removed_fraction"].as_f64().unwrap_or(0.0)
         )
     }
 }

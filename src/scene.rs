@@ -110,8 +110,13 @@ pub struct FootprintParams {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct BeamParams {
-    /// Total number of beams over all curtains.
+    /// Total number of beams over all curtains; with `target_noise > 0`, the
+    /// most the noise target may use.
     pub count: usize,
+    /// Relative RMS noise of the emission grid to aim for (0 = off: use
+    /// `count`). A pilot bake measures the scene's noise and sets the beam
+    /// count from it (`crate::pilot`), at most `count`.
+    pub target_noise: f64,
     /// Altitude where beams start, km.
     pub top_km: f64,
     /// Amplitude of the high-frequency 1D Perlin noise on the start height, km.
@@ -204,6 +209,18 @@ pub enum AutoTag {
     Auto,
 }
 
+/// Largest `grid.prune`: half the light may go, no more (beyond that the
+/// "error budget" is no longer a small error).
+pub const MAX_PRUNE: f64 = 0.5;
+
+/// Default `grid.prune`, from the pruning study of `aurora bench` and the
+/// default scene (640x360): at 10^-3 the file is 11 % smaller (9 % fewer
+/// voxels, 28 % fewer leaves) and the image differs from the unpruned one by
+/// 0.28 % per pixel (mean, pixels above 1 % of the peak), below the 0.42 % to
+/// which our renderer and Cycles agree on the same file; at 10^-2 the error
+/// is 2.7 %, visible in the faint fringes.
+pub const DEFAULT_PRUNE: f64 = 1e-3;
+
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct GridParams {
@@ -216,8 +233,10 @@ pub struct GridParams {
     /// Store `emission` as half floats in the VDB.
     pub half_emission: bool,
     pub compression: Compression,
-    /// Leaves whose contribution to the image is below this fraction of the
-    /// total are pruned (0 = keep every leaf with any emission).
+    /// Error budget of contribution-based pruning (`crate::prune`): the
+    /// faintest leaves, as seen from the camera, are dropped while their
+    /// share of the light reaching it stays below this fraction
+    /// (0 = keep every leaf with any emission).
     pub prune: f64,
 }
 
@@ -344,6 +363,7 @@ impl Default for BeamParams {
     fn default() -> Self {
         Self {
             count: 8_000,
+            target_noise: 0.0,
             top_km: 260.0,
             top_noise_km: 6.0,
             top_noise_freq: 0.5,
@@ -389,7 +409,7 @@ impl Default for GridParams {
             density_base_km: 90.0,
             half_emission: false,
             compression: Compression::ZipActiveMask,
-            prune: 0.0,
+            prune: DEFAULT_PRUNE,
         }
     }
 }
@@ -645,6 +665,7 @@ impl Scene {
         let b = &self.beams;
         let t = Some(("beams", 0));
         v.range(t, "count", b.count as f64, 1.0, 1e8, true);
+        v.range(t, "target_noise", b.target_noise, 0.0, 1.0, true);
         v.range(t, "top_km", b.top_km, 80.0, 1000.0, true);
         v.range(t, "top_noise_km", b.top_noise_km, 0.0, 100.0, true);
         v.range(t, "top_noise_freq", b.top_noise_freq, 0.0, 1e3, true);
@@ -694,11 +715,7 @@ impl Scene {
         v.range(t, "density_a", g.density_a, 0.0, 1e6, true);
         v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
         v.finite(t, "density_base_km", g.density_base_km);
-        // Contribution-based pruning (issue 6) is not implemented: refuse a
-        // value that would otherwise be silently ignored.
-        if g.prune != 0.0 {
-            v.push(t, "prune", fmt_num(g.prune), "must be 0: contribution-based pruning is not implemented yet".into());
-        }
+        v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
 
         let cam = &self.camera;
         let t = Some(("camera", 0));
@@ -934,9 +951,10 @@ mod tests {
     }
 
     #[test]
-    fn unimplemented_pruning_is_refused_not_ignored() {
-        let m = Scene::from_toml_str("[grid]\nprune = 0.01\n", "p.toml").unwrap_err().to_string();
-        assert!(m.contains("p.toml:2: grid.prune = 0.01") && m.contains("not implemented"), "{m}");
+    fn prune_budget_outside_its_range_is_refused() {
+        let m = Scene::from_toml_str("[grid]\nprune = 0.7\n", "p.toml").unwrap_err().to_string();
+        assert!(m.contains("p.toml:2: grid.prune = 0.7") && m.contains("[0, 0.5]"), "{m}");
+        assert!(Scene::from_toml_str("[grid]\nprune = 0.01\n", "p.toml").is_ok());
     }
 
     #[test]

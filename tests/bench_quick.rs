@@ -82,7 +82,15 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     );
     // The summary table names every study.
     let studies =
-        ["photon count", "gather radius", "gather method", "voxel size", "primary-ray integration", "shadow rays"];
+        [
+        "photon count",
+        "gather radius",
+        "gather method",
+        "voxel size",
+        "primary-ray integration",
+        "pruning",
+        "shadow rays",
+    ];
     for st in studies {
         assert!(stdout.contains(&format!("== {st} ")), "summary lacks {st}:\n{stdout}");
     }
@@ -141,6 +149,12 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let exact: Vec<&Row> = rows.iter().filter(|r| r["method"].starts_with("exact")).collect();
     assert_eq!(exact.len(), 1);
     assert_eq!(num(exact[0], "error"), 0.0, "exact is the reference");
+    // Pruning: a larger budget drops more light, so the image error grows;
+    // the unpruned bake is the reference (error 0).
+    strictly_increasing("pruning", &curve(&rows, "pruning", "contribution pruning"));
+    let unpruned: Vec<&Row> = rows.iter().filter(|r| r["method"] == "unpruned").collect();
+    assert_eq!(unpruned.len(), 1);
+    assert_eq!(num(unpruned[0], "error"), 0.0, "unpruned is the reference");
     for m in ["shadow rays per hit (spp 1)", "pixel samples (1 shadow ray each)"] {
         strictly_decreasing(m, &curve(&rows, "shadow rays", m));
     }

@@ -2,7 +2,7 @@
 //!
 //! [`run`] reduces the scene ([`reduced`]), runs every study ([`sweeps`]):
 //! photon count, gather radius, gather method, voxel size, primary-ray
-//! integration and shadow rays, each measuring wall time of the affected
+//! integration, pruning and shadow rays, each measuring wall time of the affected
 //! stage against error relative to a converged reference, and returns a
 //! [`report::BenchRun`]; [`report::write`] leaves `bench.csv`, `bench.json`
 //! and a chart per study (PNG and SVG, [`chart`]) in the output folder.
@@ -53,6 +53,7 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     studies.push(b.voxel_study()?);
     let grids = b.bake_grids()?;
     studies.push(b.integration_study(&grids)?);
+    studies.push(b.prune_study(&grids)?);
     studies.push(b.shadow_study(&grids)?);
     if plan.retime {
         b.retime(&mut studies)?;

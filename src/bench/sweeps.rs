@@ -10,6 +10,7 @@
 //! | gather method | kd-tree, splat, report2014, beams | gather | kd-tree, `M` beams | rel. RMS of `emission` |
 //! | voxel size | voxel, per gather method | gather | same photons and method, fine voxels | rel. RMS of `emission` |
 //! | primary-ray integration | fixed step h, exact | render (pixel loop) | exact integration | mean rel. luminance error, pixels > 1 % of peak |
+//! | pruning | error budget `grid.prune` | render (pixel loop) | the unpruned bake's image | mean rel. luminance error, pixels > 1 % of peak |
 //! | shadow rays | shadow rays per hit, pixel samples | render (pixel loop) | same estimator, many samples | mean rel. luminance error, terrain pixels > 1 % of peak |
 //!
 //! Noise references share their first beams (or samples) with every test
@@ -42,6 +43,7 @@ use crate::footprint::Footprint;
 use crate::grid::{Grid, Transform};
 use crate::photons::{self, RadiusField};
 use crate::progress::NoProgress;
+use crate::vdb::write::GridRef;
 use crate::render::{self, Image, Integration, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
 use crate::spectrum::ColourTable;
@@ -72,6 +74,9 @@ pub struct Plan {
     /// Integration study: fixed steps, times v; image size.
     pub step_factors: Vec<f64>,
     pub volume_image: [usize; 2],
+    /// Pruning study: error budgets (`grid.prune`), the unpruned bake as the
+    /// reference.
+    pub prune_budgets: Vec<f64>,
     /// Shadow study: samples per pixel or per hit; reference count; image size.
     pub shadow_counts: Vec<usize>,
     pub shadow_reference: usize,
@@ -101,6 +106,7 @@ impl Plan {
             reference_voxel: 0.4,
             step_factors: vec![4.0, 2.0, 1.0, 0.5, 0.25],
             volume_image: [128, 128],
+            prune_budgets: vec![1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1],
             shadow_counts: vec![1, 2, 4, 8, 16, 32, 64],
             shadow_reference: 512,
             ground_image: [64, 40],
@@ -125,6 +131,7 @@ impl Plan {
             reference_voxel: 0.5,
             step_factors: vec![4.0, 2.0, 1.0, 0.5],
             volume_image: [64, 64],
+            prune_budgets: vec![1e-3, 1e-2, 0.1],
             shadow_counts: vec![1, 4, 16],
             shadow_reference: 256,
             ground_image: [32, 20],
@@ -654,6 +661,77 @@ impl<'a> Bench<'a> {
                 format!("Voxel size {v} km; steps are multiples of it. Exact integration is the reference (error 0, drawn on the bottom edge); its own error against closed forms is below 1e-4 (tests/render_closed_forms.rs, tests/stability_integration.rs)."),
                 format!("Total flux ratio fixed/exact: {}", flux.join(", ")),
             ],
+            measurements: ms,
+        })
+    }
+
+    /// Contribution-based pruning ([`crate::prune`]): the reduced scene's
+    /// bake pruned at each budget, seen through the bench volume camera
+    /// (which also weights the leaves), against the unpruned image. Time is
+    /// the render's pixel loop; file size and voxels go in the notes.
+    pub fn prune_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
+        let mut s = RenderSettings::from_scene(&self.scene);
+        s.camera = volume_camera(&self.scene);
+        s.render.width = self.plan.volume_image[0];
+        s.render.height = self.plan.volume_image[1];
+        s.render.spp = 1;
+        s.terrain.kind = TerrainKind::None;
+        s.background.radiance = [0.0; 3];
+        s.integration = Integration::Exact;
+        let aspect = s.render.width as f64 / s.render.height as f64;
+        let opts = crate::outputs::write_options(&self.scene);
+        let bytes = |e: &Grid<[f32; 3]>, d: &Grid<f32>| -> usize {
+            crate::vdb::write::write_vdb_bytes(&[GridRef::Float(d), GridRef::Vec3(e)], &opts).map(|b| b.len()).unwrap_or(0)
+        };
+        let name = "pruning";
+        let metric = "mean relative luminance error, pixels > 1% of peak";
+        let vol = Volume { density: Some(&grids.density), emission: Some(&grids.emission) };
+        let (full, full_s) = self.render_timed(&s, &vol)?;
+        let all = vec![true; full.pixels.len()];
+        let full_bytes = bytes(&grids.emission, &grids.density);
+        let scene_budget = self.scene.grid.prune;
+        let mut ms = vec![self.measure(name, "unpruned", "budget", 0.0, "render", full_s, 0.0, metric, scene_budget == 0.0)];
+        let mut notes = vec![format!(
+            "Unpruned: {} active voxels, {} leaves, {full_bytes} bytes (VDB, scene compression). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
+            grids.emission.active_voxel_count(),
+            grids.emission.leaf_count()
+        )];
+        let mut budgets = self.plan.prune_budgets.clone();
+        if scene_budget > 0.0 && !budgets.contains(&scene_budget) {
+            budgets.push(scene_budget);
+            budgets.sort_by(f64::total_cmp);
+        }
+        for &b in &budgets {
+            let mut e = grids.emission.clone();
+            let st = crate::prune::prune(&mut e, &s.camera, aspect, b);
+            let d = bake::density_grid(&e, &self.scene.grid, grids.stats.peak_luminance);
+            let vol = Volume { density: Some(&d), emission: Some(&e) };
+            let (img, secs) = self.render_timed(&s, &vol)?;
+            let (err, flux) = image_rel_error_masked(&img.pixels, &full.pixels, &all, 0.01);
+            let nb = bytes(&e, &d);
+            notes.push(format!(
+                "budget {b}: {} of {} leaves, {} of {} voxels, estimate {:.3e}, flux {flux:.5}, {nb} bytes ({:.3} of unpruned)",
+                st.leaves_removed,
+                st.leaves_before,
+                st.voxels_removed,
+                st.voxels_before,
+                st.removed_fraction,
+                nb as f64 / full_bytes.max(1) as f64
+            ));
+            ms.push(self.measure(name, "contribution pruning", "budget", b, "render", secs, err, metric, b == scene_budget));
+        }
+        notes.push(format!("The scene's grid.prune = {scene_budget}."));
+        Ok(Study {
+            name: name.into(),
+            stage: "render".into(),
+            metric: metric.into(),
+            reference: format!(
+                "the unpruned bake's image ({}x{} px, spp 1, exact integration; bench volume camera, no terrain)",
+                full.width, full.height
+            ),
+            reference_seconds: full_s,
+            expected_trend: vec![("contribution pruning".into(), -1)],
+            notes,
             measurements: ms,
         })
     }
