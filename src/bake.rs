@@ -132,6 +132,9 @@ pub enum BakeError {
     /// net behind the scene's validation ranges).
     #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
+    /// `grid.half_emission` asks for half floats the emission exceeds.
+    #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
+    HalfOverflow { ijk: [i32; 3], peak: f32 },
 }
 
 /// The voxel size in km and where it came from. `"auto"` asks the camera:
@@ -375,6 +378,10 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
                 value: format!("{v:?}"),
                 radius_km: scene.photons.radius_km,
             });
+        }
+        if scene.grid.half_emission && v.iter().any(|x| x.abs() > half::f16::MAX.to_f32()) {
+            let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+            return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
         }
         for k in 0..3 {
             peak[k] = peak[k].max(v[k]);

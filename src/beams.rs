@@ -321,8 +321,8 @@ pub fn apportion(count: usize, weights: &[f64]) -> Vec<usize> {
 /// A beam stage failure.
 #[derive(Debug, thiserror::Error)]
 pub enum BeamError {
-    #[error("curtain {curtain}: no footprint cell is above the threshold {threshold}, so it cannot emit beams")]
-    EmptyFootprint { curtain: usize, threshold: f64 },
+    #[error("curtain[{curtain}]: no footprint cell is above footprint.threshold = {threshold} after the fluid simulation (largest cell: {peak}), so it cannot emit beams: the band was advected out of its box or thinned below the threshold; lower footprint.threshold, footprint.velocity_amplitude or footprint.steps, or widen the curtain")]
+    EmptyFootprint { curtain: usize, threshold: f64, peak: f32 },
 }
 
 /// Counts from the beam stage.
@@ -379,7 +379,8 @@ pub fn trace_all_from(
         }
         let cdf = FootprintCdf::new(fp, threshold);
         if cdf.is_empty() {
-            return Err(BeamError::EmptyFootprint { curtain: ci, threshold });
+            let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
+            return Err(BeamError::EmptyFootprint { curtain: ci, threshold, peak });
         }
         // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
         let power_w = curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6;

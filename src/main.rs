@@ -3,7 +3,8 @@
 //! composes the library's stages (bake -> files, files -> render).
 //!
 //! Exit status: 0 on success, 2 for bad input (scene file, arguments, an
-//! unreadable VDB), 1 for anything else.
+//! unreadable VDB or one the renderer refuses, a scene the bake cannot
+//! honour), 1 for anything else.
 
 use anyhow::{Context, Result};
 use aurora::progress::{NoProgress, Progress};
@@ -136,7 +137,15 @@ fn main() {
     let code = match run(cli) {
         Ok(()) => 0,
         Err(e) => {
-            let input = e.downcast_ref::<InputError>().is_some() || e.downcast_ref::<SceneError>().is_some();
+            // A bake error comes from the scene's parameters (every variant
+            // names the keys to change): the user's input too.
+            let input = e.downcast_ref::<InputError>().is_some()
+                || e.downcast_ref::<SceneError>().is_some()
+                || e.downcast_ref::<aurora::bake::BakeError>().is_some()
+                || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
+                    use aurora::render::RenderError::*;
+                    matches!(r, Settings(_) | Grid { .. } | Heightmap { .. })
+                });
             eprintln!("aurora: error: {e:#}");
             if input {
                 2

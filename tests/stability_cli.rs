@@ -118,12 +118,10 @@ fn a_bake_beyond_half_range_fails_cleanly_and_full_float_keeps_the_values() {
     std::fs::write(&scene, body(true)).unwrap();
     let out = d.join("out-half");
     let o = aurora(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "-q"]);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    // The scene asked for it: bad input, exit 2, naming the key and the limit.
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let e = stderr(&o);
-    assert!(
-        e.contains("aurora.vdb") && e.contains("`emission`") && e.contains("65504") && e.contains("full float"),
-        "{e}"
-    );
+    assert!(e.contains("grid.half_emission") && e.contains("65504") && e.contains("voxel ("), "{e}");
     assert!(files_in(&out).is_empty(), "nothing written: {:?}", files_in(&out));
 
     std::fs::write(&scene, body(false)).unwrap();
@@ -214,4 +212,48 @@ fn band_thickness_is_the_band_area_over_the_length() {
     assert_eq!(w.len(), 2, "one per thin curtain: {w:?}");
     let w = aurora::bake::resolution_warnings(&s, &[], 1.01);
     assert_eq!(w.len(), 1, "r = 0.5 < 1.01 / 2: {w:?}");
+}
+
+#[test]
+fn a_foreign_vdb_whose_scaled_values_would_overflow_is_refused_naming_the_scale() {
+    // A valid file (finite values) that only overflows once multiplied by
+    // the scene's emission_scale (1e9, the largest the scene accepts):
+    // 1e25 x 1e9 = 1e34 per km, and a ray crossing the voxel would reach inf
+    // in f32 film. Refused before rendering: exit 2, the key named, no image.
+    let d = dir("scaled-overflow");
+    let path = d.join("foreign.vdb");
+    let tr = Transform::new(1.0, DVec3::ZERO);
+    let mut e: Grid<[f32; 3]> = Grid::new("emission", [0.0; 3], tr);
+    e.set(IVec3::new(0, 0, 100), [1e25, 1e25, 1e25]);
+    write_vdb(&path, &[GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
+    let scene = d.join("s.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n[volume]\nemission_scale = 1e9\n",
+    )
+    .unwrap();
+    let img = d.join("out.exr");
+    let _ = std::fs::remove_file(&img);
+    let o = aurora(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--vdb",
+        path.to_str().unwrap(),
+        "--out",
+        img.to_str().unwrap(),
+        "-q",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let m = stderr(&o);
+    assert!(m.contains("emission") && m.contains("volume.emission_scale") && m.contains("overflow"), "{m}");
+    assert!(!img.exists());
+    // The same file at scale 1 renders, every pixel finite.
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n",
+    )
+    .unwrap();
+    let o = aurora(&["render", scene.to_str().unwrap(), "--vdb", path.to_str().unwrap(), "--out", img.to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(img.exists());
 }

@@ -245,6 +245,31 @@ pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
     Ok(())
 }
 
+/// Largest scaled voxel value the renderer accepts. The field stores scaled
+/// values as f32 (at most 3.4e38) and the film is f32: a radiance of 10^30
+/// per km integrated over 10^8 km of path still fits, so no finite input
+/// below this bound can reach an infinite pixel.
+pub const MAX_SCALED_VALUE: f64 = 1e30;
+
+/// Rejects a grid whose largest value times `scale` exceeds
+/// [`MAX_SCALED_VALUE`] (a foreign VDB near f32's limit with a large scale).
+fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, key: &str, scale: f64) -> Result<(), RenderError> {
+    if scale == 0.0 {
+        return Ok(());
+    }
+    let peak = g.iter_active().flat_map(|(_, v)| v.components()).fold(0.0f32, f32::max) as f64;
+    if peak * scale > MAX_SCALED_VALUE {
+        return Err(RenderError::Grid {
+            grid: g.name.clone(),
+            message: format!(
+                "largest value {peak:e} times volume.{key} = {scale:e} is {:e}, above {MAX_SCALED_VALUE:e}: the image would overflow; lower volume.{key}",
+                peak * scale
+            ),
+        });
+    }
+    Ok(())
+}
+
 impl Field {
     /// Builds a field whose channels are the concatenation of `sources`' channels
     /// (all on the same transform), each multiplied by its scale.
@@ -467,9 +492,11 @@ impl Medium {
         }
         if let Some(g) = density {
             validate_grid(g)?;
+            check_scaled_peak(g, "density_scale", density_scale)?;
         }
         if let Some(g) = emission {
             validate_grid(g)?;
+            check_scaled_peak(g, "emission_scale", emission_scale)?;
         }
         let density = density.filter(|g| density_scale > 0.0 && g.iter_active().any(|(_, v)| v != 0.0));
         let emission = emission.filter(|g| emission_scale > 0.0 && g.iter_active().any(|(_, v)| v != [0.0; 3]));
