@@ -65,6 +65,20 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     let stats = &report["stats"];
     assert_eq!(stats["beams"], 400);
     assert!(stats["photons"].as_u64().unwrap() > 400, "every beam deposits photons");
+    // Default pruning (grid.prune = 0.001) reported and consistent; no noise target.
+    let pr = &stats["prune"];
+    assert_eq!(pr["budget"], 0.001);
+    let removed = pr["removed_fraction"].as_f64().unwrap();
+    assert!(removed > 0.0 && removed <= 0.001, "{pr}");
+    assert_eq!(
+        pr["voxels_before"].as_u64().unwrap() - pr["voxels_removed"].as_u64().unwrap(),
+        stats["active_voxels"].as_u64().unwrap()
+    );
+    assert_eq!(
+        pr["leaves_before"].as_u64().unwrap() - pr["leaves_removed"].as_u64().unwrap(),
+        stats["leaves"].as_u64().unwrap()
+    );
+    assert!(stats["noise"].is_null());
     assert_eq!(stats["voxel_size_km"], 1.0);
     assert_eq!(report["units"], "km");
     assert_eq!(report["seed"], 7);
@@ -195,4 +209,37 @@ fn footprint_and_terrain_commands_write_files() {
     let text = std::fs::read_to_string(&obj).unwrap();
     assert!(text.lines().filter(|l| l.starts_with("v ")).count() > 100);
     assert!(text.lines().any(|l| l.starts_with("f ")));
+}
+
+#[test]
+fn target_noise_sets_the_beam_count_and_prune_zero_keeps_every_leaf() {
+    let dir = scratch("noise");
+    let scene = dir.join("noise.toml");
+    let text = SMALL.replace("count = 400", "count = 100000\ntarget_noise = 0.4").replace(
+        "voxel_size = 1.0",
+        "voxel_size = 1.0\nprune = 0.0",
+    );
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("beams.target_noise = 0.4"), "{}", stderr(&o));
+    let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("bake.json")).unwrap()).unwrap();
+    let stats = &report["stats"];
+    let n = &stats["noise"];
+    // The count is the pilot's law, m (noise_m / target)^2 rounded up, and
+    // the bake used it.
+    let (m, noise_m) = (n["pilot_beams"].as_f64().unwrap(), n["pilot_noise"].as_f64().unwrap());
+    let want = (m * (noise_m / 0.4).powi(2)).ceil() as u64;
+    assert_eq!(n["beams"].as_u64().unwrap(), want, "{n}");
+    assert_eq!(stats["beams"].as_u64().unwrap(), want);
+    assert_eq!(n["capped"], false);
+    assert!(stats["prune"].is_null(), "prune = 0 stores every leaf");
+    // A target beyond beams.count: capped, with a warning naming both keys.
+    let capped = dir.join("capped.toml");
+    std::fs::write(&capped, std::fs::read_to_string(&scene).unwrap().replace("count = 100000", "count = 50")).unwrap();
+    let o = run(&["bake", capped.to_str().unwrap(), "--out", dir.join("out2").to_str().unwrap(), "-q"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("beams.target_noise = 0.4") && e.contains("capped at beams.count = 50"), "{e}");
 }

@@ -619,9 +619,9 @@ impl<'a> Bench<'a> {
         Ok((img, best))
     }
 
-    /// Fixed-step ray marching against exact per-voxel integration.
-    pub fn integration_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
-        let v = self.voxel();
+    /// The volume studies' render settings: the bench volume camera, its
+    /// image size, one sample at each pixel centre, no terrain, black sky.
+    fn volume_settings(&self) -> RenderSettings {
         let mut s = RenderSettings::from_scene(&self.scene);
         s.camera = volume_camera(&self.scene);
         s.render.width = self.plan.volume_image[0];
@@ -629,6 +629,13 @@ impl<'a> Bench<'a> {
         s.render.spp = 1;
         s.terrain.kind = TerrainKind::None;
         s.background.radiance = [0.0; 3];
+        s
+    }
+
+    /// Fixed-step ray marching against exact per-voxel integration.
+    pub fn integration_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
+        let v = self.voxel();
+        let mut s = self.volume_settings();
         let vol = Volume { density: Some(&grids.density), emission: Some(&grids.emission) };
         let name = "primary-ray integration";
         let metric = "mean relative luminance error, pixels > 1% of peak";
@@ -674,13 +681,7 @@ impl<'a> Bench<'a> {
     /// notes. Render time barely changes: the dropped leaves are faint and
     /// few rays cross them.
     pub fn prune_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
-        let mut s = RenderSettings::from_scene(&self.scene);
-        s.camera = volume_camera(&self.scene);
-        s.render.width = self.plan.volume_image[0];
-        s.render.height = self.plan.volume_image[1];
-        s.render.spp = 1;
-        s.terrain.kind = TerrainKind::None;
-        s.background.radiance = [0.0; 3];
+        let mut s = self.volume_settings();
         s.integration = Integration::Exact;
         let aspect = s.render.width as f64 / s.render.height as f64;
         let opts = crate::outputs::write_options(&self.scene);
