@@ -157,8 +157,10 @@ pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
 /// of the photons' distances from the camera (robust to a few stray photons,
 /// which would otherwise shrink every voxel). Orthographic: ortho_height /
 /// height. Never below half the kernel radius: the kernel already blurs the
-/// field at that scale, so finer voxels add memory and no detail. Rounded to
-/// three significant digits so the size reads well in bake.json.
+/// field at that scale, so finer voxels add memory and no detail; never above
+/// twice the smallest kernel radius, where the voxels would alias it.
+/// Rounded to three significant digits (down, at that ceiling) so the size
+/// reads well in bake.json.
 pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
     let cam = &scene.camera;
     let floor = 0.5 * scene.photons.radius_km;
@@ -179,6 +181,14 @@ pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
             (dist * pixel, format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
         }
     };
+    // Never above twice the smallest kernel radius either: coarser voxels
+    // alias the kernel (see [`resolution_warnings`]), so the bake would
+    // warn about its own choice.
+    let ceiling = 2.0 * scene.photons.radius_km * (1.0 - scene.photons.radius_noise);
+    if raw > ceiling && ceiling >= floor {
+        let p = 10f64.powi(2 - ceiling.abs().log10().floor() as i32);
+        return ((ceiling * p).floor() / p, format!("{why}, lowered to twice the smallest kernel radius"));
+    }
     let v = raw.max(floor);
     let why = if raw < floor { format!("{why}, raised to half the kernel radius") } else { why };
     (round_sig(v, 3), why)
@@ -618,7 +628,8 @@ mod auto_voxel_tests {
         s.camera.position = [0.0, 0.0, 0.0];
         s.camera.fov_deg = 90.0;
         s.render.height = 100;
-        s.photons.radius_km = 0.1;
+        s.photons.radius_km = 2.0;
+        s.photons.radius_noise = 0.0;
         // 1000 photons at 150, 151, ... km: the 1st percentile (index 10) is 160 km.
         let photons: Vec<Photon> = (0..1000).map(|i| photon_at([0.0, 0.0, 150.0 + i as f32])).collect();
         let (v, why) = voxel_size(&s, &photons);
@@ -632,8 +643,15 @@ mod auto_voxel_tests {
         // Never below half the kernel radius.
         s.photons.radius_km = 10.0;
         assert_eq!(voxel_size(&s, &photons).0, 5.0);
+        // Never above twice the smallest radius (1.0 x (1 - 0.3) x 2 = 1.4 km).
+        s.photons.radius_km = 1.0;
+        s.photons.radius_noise = 0.3;
+        let (v, why) = voxel_size(&s, &photons);
+        assert!((v - 1.4).abs() < 1e-12 && why.contains("lowered"), "{v} {why}");
+        assert!(resolution_warnings(&s, &[], v).is_empty(), "the bake does not warn about its own choice");
         // Orthographic: ortho_height / height.
         s.photons.radius_km = 0.1;
+        s.photons.radius_noise = 0.0;
         s.camera.projection = Projection::Orthographic;
         s.camera.ortho_height = 20.0;
         assert!((voxel_size(&s, &photons).0 - 0.2).abs() < 1e-12);
