@@ -544,9 +544,15 @@ class CyclesWorker:
     def close(self):
         if self.proc.poll() is None:
             self.proc.stdin.close()
-            self.proc.wait(timeout=60)
-        self.answers.close()
-        self.log.close()
+            try:
+                self.proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait()
+        if not self.answers.closed:
+            self.answers.close()
+        if not self.log.closed:
+            self.log.close()
 
 
 def worker_main(fd: int) -> int:
@@ -651,7 +657,8 @@ def downsample(img, f: int):
     return img.reshape(h // f, f, w // f, f, c).mean(axis=(1, 3))
 
 
-def study_render(tools: Tools, cfg: dict, scene_text: str, vdb: Path, out: Path, targets: dict) -> dict:
+def study_render(tools: Tools, cfg: dict, worker: CyclesWorker, scene_text: str, vdb: Path, out: Path,
+                 targets: dict) -> dict:
     sys.path.insert(0, str(TOOLS))
     import compare
     import numpy as np
@@ -660,18 +667,13 @@ def study_render(tools: Tools, cfg: dict, scene_text: str, vdb: Path, out: Path,
     w, h = cfg["size"]
     d = out / "render"
     d.mkdir(parents=True, exist_ok=True)
-    log("render: starting the Cycles worker (bpy)")
-    worker = CyclesWorker(d / "cycles-worker.log")
     res = {"blender": worker.info["blender"], "size": [w, h], "threads": THREADS, "cases": {}}
-    try:
-        padded = d / "aurora.cycles-padded.vdb"
-        pad = worker.ask(op="pad", src=str(vdb), dst=str(padded))
-        res["cycles_padding_s"] = pad["seconds"]
-        for case in ("volume", "terrain"):
-            res["cases"][case] = render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb,
-                                             padded, d / case, case, targets[case])
-    finally:
-        worker.close()
+    padded = d / "aurora.cycles-padded.vdb"
+    pad = worker.ask(op="pad", src=str(vdb), dst=str(padded))
+    res["cycles_padding_s"] = pad["seconds"]
+    for case in ("volume", "terrain"):
+        res["cases"][case] = render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb,
+                                         padded, d / case, case, targets[case])
     return res
 
 
@@ -992,8 +994,19 @@ def main(argv=None) -> int:
         return 1
 
 
+def require_modules() -> None:
+    """Fail at once, with a message, if a module the run needs is missing."""
+    for name, why in (("numpy", "images and metrics"), ("OpenEXR", "reading and writing EXR images")):
+        try:
+            __import__(name)
+        except ImportError as e:
+            raise Failure(f"cannot import {name} ({why}); run with .venv/bin/python (tools/setup): {e}") from e
+    import_pyopenvdb()
+
+
 def run_all(a) -> int:
     cfg = QUICK if a.quick else FULL
+    require_modules()
     out = Path(a.out).resolve()
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
@@ -1007,6 +1020,18 @@ def run_all(a) -> int:
     }
     tools = Tools()
     vdb = import_pyopenvdb()
+    # Start bpy first: a missing Blender fails the run before anything is
+    # timed, and the worker then waits on its stdin (no CPU) until the renders.
+    log("starting the Cycles worker (bpy)")
+    (out / "render").mkdir(parents=True, exist_ok=True)
+    worker = CyclesWorker(out / "render" / "cycles-worker.log")
+    try:
+        return run_studies(a, cfg, out, res, tools, vdb, worker, t_start)
+    finally:
+        worker.close()
+
+
+def run_studies(a, cfg, out, res, tools, vdb, worker, t_start) -> int:
     res["aurora_version"] = tools.version()
     res["openvdb_version"] = ".".join(map(str, vdb.LIBRARY_VERSION))
     res["sections_s"] = {}
@@ -1037,8 +1062,9 @@ def run_all(a) -> int:
     t = time.perf_counter()
     targets = {"volume": a.volume_target or cfg["target"]["volume"],
                "terrain": a.terrain_target or cfg["target"]["terrain"]}
-    res["render"] = study_render(tools, cfg, scene_text, out / "bake" / "aurora.vdb", out, targets)
+    res["render"] = study_render(tools, cfg, worker, scene_text, out / "bake" / "aurora.vdb", out, targets)
     res["sections_s"]["render"] = time.perf_counter() - t
+    worker.close()  # free bpy's memory before seed2014
     if a.quick or a.skip_seed2014:
         res["seed2014"] = {"skipped": True, "why": "--quick" if a.quick else "--skip-seed2014"}
     else:
