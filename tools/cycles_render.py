@@ -27,6 +27,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import os
+import resource
 import sys
 import tempfile
 import time
@@ -93,7 +94,10 @@ def write_rgba_exr(path, rgba: np.ndarray, metadata: dict[str, str] | None = Non
 
 def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=None, seed: int = 0,
            quiet: bool = False, pad: bool = True, **overrides) -> dict:
-    """Render and write `out`; returns timings and settings (for reports).
+    """Render and write `out`; returns timings and settings (for reports):
+    setup_s (scene set-up, padding included), render_s and render_cpu_s (wall
+    and process CPU time of bpy.ops.render.render: Cycles' sync, the VDB load,
+    sampling and the EXR write).
     `overrides` are CyclesSettings fields (volume_biased, step_rate,
     terrain_lighting, max_lights, threads); None leaves the default.
     pad: render a copy of the VDB with a shell of active zero voxels
@@ -117,8 +121,10 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         scene.render.image_settings.exr_codec = "ZIP"
         scene.render.filepath = str(raw)
         t1 = time.perf_counter()
+        cpu1 = _cpu_seconds()
         bpy.ops.render.render(write_still=True)
         t_render = time.perf_counter() - t1
+        cpu_render = _cpu_seconds() - cpu1
         layers = read_exr_layers(raw)
     combined = _find(layers, "Combined")
     env = _find(layers, "Environment")
@@ -138,11 +144,18 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         "aurora_vdb_padded": "yes" if pad else "no",
     }
     write_rgba_exr(out, rgba, meta)
-    info = {"setup_s": t_setup, "render_s": t_render, "width": rgba.shape[1], "height": rgba.shape[0], **meta}
+    info = {"setup_s": t_setup, "render_s": t_render, "render_cpu_s": cpu_render, "width": rgba.shape[1],
+            "height": rgba.shape[0], **meta}
     if not quiet:
         print(f"cycles_render: wrote {out} ({rgba.shape[1]}x{rgba.shape[0]}, {s.samples} spp, "
               f"{meta['aurora_volume_mode']} step rate {s.step_rate}) render {t_render:.2f} s", file=sys.stderr)
     return info
+
+
+def _cpu_seconds() -> float:
+    """User + system CPU time of this process, all threads (Cycles' included)."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 
 
 def _find(layers: dict, suffix: str) -> np.ndarray:
