@@ -22,7 +22,11 @@
 //!
 //! Pixels: row 0 at the top. With `spp = 1` a pixel is sampled at its centre;
 //! with more samples the pixel value is the average over its square (Cycles'
-//! BOX filter), sample positions uniform in the pixel. Each pixel's random
+//! BOX filter), at stratified positions ([`pixel_sample`]: the R2
+//! low-discrepancy sequence, randomly shifted per pixel, so each position is
+//! uniform in the pixel and the estimate unbiased, while the samples of a
+//! pixel spread evenly: on sub-pixel streaks its error falls about as
+//! `spp^-1` instead of `spp^-1/2`, as Cycles' does). Each pixel's random
 //! stream is seeded from `(seed, pixel index)`, so the image does not depend
 //! on the thread count. Output alpha is `1 - T` along the primary ray up to the
 //! terrain or infinity (volume coverage); RGB already contains the terrain or
@@ -204,6 +208,25 @@ fn splitmix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// 1 / phi_2 and 1 / phi_2^2, phi_2 = 1.3247... the plastic number (the
+/// real root of x^3 = x + 1): the R2 sequence's generators (Roberts 2018,
+/// "The unreasonable effectiveness of quasirandom sequences").
+const R2_ALPHA: [f64; 2] = [0.754_877_666_246_692_8, 0.569_840_290_998_053_2];
+
+/// Position of sample `i` inside a pixel, in `[0, 1)^2`: the R2 sequence
+/// `frac(shift + (i + 1) alpha)` with a per-pixel random `shift` (a
+/// Cranley-Patterson rotation). For a uniform shift every sample is uniform
+/// in the pixel (unbiased), and the `n` samples of a pixel keep R2's low
+/// discrepancy for every `n`.
+pub fn pixel_sample(shift: [f64; 2], i: usize) -> (f64, f64) {
+    let k = (i + 1) as f64;
+    let f = |s: f64, a: f64| {
+        let x = s + k * a;
+        x - x.floor()
+    };
+    (f(shift[0], R2_ALPHA[0]), f(shift[1], R2_ALPHA[1]))
+}
+
 /// The random stream of pixel `index` for `seed`.
 pub fn pixel_rng(seed: u64, index: u64) -> Pcg32 {
     Pcg32::new(splitmix64(seed ^ splitmix64(index)), index)
@@ -292,11 +315,13 @@ impl Prepared {
         let albedo = s.terrain.albedo;
         let background = s.background.radiance;
         let mut sum = [0.0f64; 4];
-        for _ in 0..spp {
+        let shift = if spp == 1 { [0.0; 2] } else { [rng.random::<f64>(), rng.random::<f64>()] };
+        for i in 0..spp {
             let (jx, jy, offset) = if spp == 1 {
                 (0.5, 0.5, 0.5)
             } else {
-                (rng.random::<f64>(), rng.random::<f64>(), rng.random::<f64>())
+                let (jx, jy) = pixel_sample(shift, i);
+                (jx, jy, rng.random::<f64>())
             };
             let ray = self.camera.ray(px as f64 + jx, py as f64 + jy);
             let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
@@ -367,4 +392,48 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
         stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
     }
     Ok(Image { width: w, height: h, pixels, stats })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// RMS error of the fraction of a pixel left of an edge at x = 0.3 (a
+    /// sub-pixel streak's border) estimated from `n` samples, over many
+    /// pixels (random shifts), and the mean error.
+    fn edge_error(n: usize) -> (f64, f64) {
+        let mut rng = pixel_rng(11, n as u64);
+        let pixels = 4000;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for _ in 0..pixels {
+            let shift = [rng.random::<f64>(), rng.random::<f64>()];
+            let inside = (0..n).filter(|&i| pixel_sample(shift, i).0 < 0.3).count();
+            let e = inside as f64 / n as f64 - 0.3;
+            sum += e;
+            sum2 += e * e;
+        }
+        ((sum2 / pixels as f64).sqrt(), sum / pixels as f64)
+    }
+
+    /// Unbiased, and far less noisy than independent uniform samples (RMS
+    /// sqrt(0.3 * 0.7 / n)), falling about as 1/n instead of 1/sqrt(n).
+    #[test]
+    fn pixel_samples_are_unbiased_and_stratified() {
+        let (rms64, mean64) = edge_error(64);
+        let (rms256, _) = edge_error(256);
+        let iid = |n: f64| (0.3f64 * 0.7 / n).sqrt();
+        // Unbiased: the mean error within 4 standard errors (4000 pixels) of 0.
+        assert!(mean64.abs() < 4.0 * rms64 / 4000f64.sqrt(), "bias {mean64}");
+        // A shifted Kronecker sequence misses an interval's share by O(1/n):
+        // measured 0.017 at n = 64 against 0.057 for independent samples.
+        assert!(rms64 < 0.4 * iid(64.0), "rms {rms64} vs iid {}", iid(64.0));
+        // Four times the samples: independent samples halve the error; these
+        // cut it by about 4 (0.4 leaves room for the O(log n / n) bound).
+        assert!(rms256 < 0.4 * rms64, "{rms256} vs {rms64}");
+        // Every position inside the pixel.
+        for i in 0..1000 {
+            let (x, y) = pixel_sample([0.999_999, 0.5], i);
+            assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+        }
+    }
 }
