@@ -14,6 +14,10 @@ unchanged) the biased mode matches trilinear interpolation exactly.
 
 `pad_vdb(src, dst)` writes such a copy (all grids, file metadata kept); it
 uses Blender's bundled `openvdb` module (or Debian's `pyopenvdb`).
+`has_cycles_shell(path)` tells whether a file already carries the shell:
+`aurora bake` writes it (`grid.cycles_shell = true`, the default) and marks
+every grid with the metadata `aurora_cycles_shell = true`, so the add-on
+need not copy it.
 """
 
 from __future__ import annotations
@@ -77,6 +81,23 @@ def pad_grid(grid, slab: int = 32) -> int:
                 acc.setActiveState(ijk, True)
                 switched += 1
     return switched
+
+
+def has_cycles_shell(path) -> bool:
+    """True when every grid of the file says `aurora_cycles_shell = true`
+    (reads the grids' metadata only, not their voxels)."""
+    vdb = import_openvdb()
+    grids = vdb.readAllGridMetadata(str(path))
+    if not grids:
+        return False
+    for g in grids:
+        try:
+            flag = g["aurora_cycles_shell"]
+        except (KeyError, TypeError):
+            return False
+        if flag is not True:
+            return False
+    return True
 
 
 def pad_vdb(src, dst) -> PadReport:

@@ -21,7 +21,7 @@ from mathutils import Matrix
 
 from .material import volume_material
 from .render_settings import set_scene_units
-from .vdb_pad import pad_vdb
+from .vdb_pad import has_cycles_shell, pad_vdb
 
 VDB_SUFFIXES = {".vdb"}
 USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
@@ -53,7 +53,9 @@ def import_aurora(
     zero voxels around its non-zero voxels (vdb_pad.py: makes Cycles' biased
     volume mode exact at the edges of the active region) and the Volume
     reads the copy; the original path is kept in the object's
-    `aurora_source` property.
+    `aurora_source` property. Files that already carry the shell (`aurora
+    bake` writes it: metadata `aurora_cycles_shell = true` on every grid)
+    are read as they are.
     Returns the Volume objects (one for a .vdb).
     """
     path = Path(filepath).expanduser().resolve()
@@ -70,7 +72,7 @@ def import_aurora(
     for obj in objects:
         vol = obj.data
         source = Path(bpy.path.abspath(vol.filepath))
-        if pad_dir is not None:
+        if pad_dir is not None and not has_cycles_shell(source):
             padded = Path(pad_dir) / f"{source.stem}.cycles-padded.vdb"
             try:
                 pad_vdb(source, padded)

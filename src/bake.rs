@@ -11,7 +11,9 @@
 //!    order and sorted; a voxel is active when its emission is nonzero;
 //! 4. with `grid.prune > 0`, the leaves faintest at the camera dropped within
 //!    that error budget ([`crate::prune`]);
-//! 5. the density grid on the (kept) active voxels ([`density_grid`]).
+//! 5. the density grid on the (kept) active voxels ([`density_grid`]);
+//! 6. with `grid.cycles_shell`, both grids dilated by one voxel of active
+//!    zeros ([`crate::grid::Grid::dilate_active`]).
 //!
 //! [`resolution_warnings`] flags bakes whose voxels under-resolve the kernel
 //! or the curtains, [`extinction_warning`] air extinction clamped at
@@ -88,9 +90,16 @@ pub struct BakeStats {
     pub gather: GatherMethod,
     pub beams: usize,
     pub photons: usize,
+    /// Voxels (and leaves) holding aurora: non-zero emission.
     pub active_voxels: u64,
     pub leaves: usize,
-    /// Inclusive index bounding box of the active voxels, [min, max].
+    /// Active zero voxels of the `grid.cycles_shell` (0 without it).
+    pub shell_voxels: u64,
+    /// Active voxels and leaves per grid in the file: the aurora's plus the shell.
+    pub file_voxels: u64,
+    pub file_leaves: usize,
+    /// Inclusive index bounding box of the file's active voxels (shell
+    /// included), [min, max].
     pub index_bbox: Option<[[i32; 3]; 2]>,
     /// World bounding box of the active voxel centres, km, [min, max].
     pub world_bbox: Option<[[f64; 3]; 2]>,
@@ -410,9 +419,18 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 
     let t = Instant::now();
     progress.start("density", emission.leaf_count() as u64);
-    let density = density_grid(&emission, &scene.grid, peak_y);
+    let mut density = density_grid(&emission, &scene.grid, peak_y);
     progress.inc(emission.leaf_count() as u64);
     progress.finish();
+    let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
+    let shell_voxels = if scene.grid.cycles_shell {
+        let n = emission.dilate_active();
+        let m = density.dilate_active();
+        debug_assert_eq!(n, m, "both grids live on the same voxels");
+        n
+    } else {
+        0
+    };
     times.density = scan_s + t.elapsed().as_secs_f64();
     times.total = t_all.elapsed().as_secs_f64();
 
@@ -432,8 +450,11 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
         gather: scene.photons.gather,
         beams: beam_stats.beams,
         photons: photons.len(),
-        active_voxels: emission.active_voxel_count(),
-        leaves: emission.leaf_count(),
+        active_voxels: aurora_voxels,
+        leaves: aurora_leaves,
+        shell_voxels,
+        file_voxels: emission.active_voxel_count(),
+        file_leaves: emission.leaf_count(),
         index_bbox: bbox.map(|(a, b)| [a.to_array(), b.to_array()]),
         world_bbox: bbox.map(|(a, b)| {
             [transform.index_to_world(a.as_dvec3()).to_array(), transform.index_to_world(b.as_dvec3()).to_array()]
@@ -517,8 +538,21 @@ mod tests {
             assert!(d.is_finite() && d >= 0.0);
         }
         assert!(b.emission.first_non_finite().is_none());
-        assert_eq!(b.stats.active_voxels, b.emission.active_voxel_count());
-        assert_eq!(b.stats.leaves, b.emission.leaf_count());
+        // The aurora's voxels (non-zero emission) plus the Cycles shell (zeros).
+        let nonzero = b.emission.iter_active().filter(|(_, v)| *v != [0.0; 3]).count() as u64;
+        assert_eq!(b.stats.active_voxels, nonzero);
+        assert_eq!(b.stats.active_voxels + b.stats.shell_voxels, b.emission.active_voxel_count());
+        assert_eq!(b.stats.file_voxels, b.emission.active_voxel_count());
+        assert_eq!(b.stats.file_leaves, b.emission.leaf_count());
+        // The shell is exactly the 26-neighbourhood of the non-zero voxels.
+        for (ijk, v) in b.emission.iter_active() {
+            let near = (-1..=1).any(|dx| {
+                (-1..=1).any(|dy| {
+                    (-1..=1).any(|dz| b.emission.get(ijk + glam::IVec3::new(dx, dy, dz)) != [0.0; 3])
+                })
+            });
+            assert!(near, "active voxel {ijk} = {v:?} is not next to the aurora");
+        }
         assert_eq!(b.stats.photons, b.photons.len());
         // Energy bookkeeping: deposited <= electron power.
         assert!(b.stats.deposited_power_w <= b.stats.electron_power_w * (1.0 + 1e-9));
@@ -551,6 +585,7 @@ mod tests {
         s.photons.gather = GatherMethod::Kdtree;
         s.colour.mode = ColourMode::Colormap;
         s.colour.colormap = vec![[80.0, 0.0, 0.0, 1.0], [400.0, 0.0, 0.0, 1.0]];
+        s.grid.cycles_shell = false;
         let d = bake(&s, &NoProgress).unwrap();
         assert!(d.emission.iter_active().all(|(_, v)| v[0] == 0.0 && v[1] == 0.0 && v[2] > 0.0));
     }

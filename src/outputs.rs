@@ -37,7 +37,7 @@ impl BakeReport {
     pub fn summary(&self) -> String {
         let j = &self.json;
         format!(
-            "wrote {} ({} bytes), {} and {}\n{} beams, {} photons, {} active voxels in {} leaves, voxel {} km, bake {:.2} s",
+            "wrote {} ({} bytes), {} and {}\n{} beams, {} photons, {} active voxels in {} leaves (+{} shell voxels for Cycles), voxel {} km, bake {:.2} s",
             self.vdb.display(),
             j["files"]["vdb_bytes"],
             self.usda.display(),
@@ -46,6 +46,7 @@ impl BakeReport {
             j["stats"]["photons"],
             j["stats"]["active_voxels"],
             j["stats"]["leaves"],
+            j["stats"]["shell_voxels"],
             j["stats"]["voxel_size_km"],
             j["total_seconds"].as_f64().unwrap_or(0.0),
         ) + &self.noise_line()
@@ -89,6 +90,8 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
             MetaValue::String("linear Rec.709 radiance per km; Y = 1 for 1 kR of OI 557.7 nm per km".into()),
         ),
         ("aurora_density_units".into(), MetaValue::String("extinction per km".into())),
+        // The add-on skips its own padding when this is true (blender/volume_import.py).
+        ("aurora_cycles_shell".into(), MetaValue::Bool(scene.grid.cycles_shell)),
     ]
 }
 

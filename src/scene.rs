@@ -232,6 +232,12 @@ pub struct GridParams {
     pub density_base_km: f64,
     /// Store `emission` as half floats in the VDB.
     pub half_emission: bool,
+    /// Also store a one-voxel shell of active zero voxels around the aurora
+    /// (the 26-neighbourhood of its voxels): Cycles' biased volume mode
+    /// marches only the active voxels grown across faces, so without it the
+    /// low-index edges lose up to half a voxel of their trilinear ramp
+    /// (`blender/vdb_pad.py`). The field is unchanged.
+    pub cycles_shell: bool,
     pub compression: Compression,
     /// Error budget of contribution-based pruning (`crate::prune`): the
     /// faintest leaves, as seen from the camera, are dropped while their
@@ -408,6 +414,7 @@ impl Default for GridParams {
             density_b: 0.02,
             density_base_km: 90.0,
             half_emission: false,
+            cycles_shell: true,
             compression: Compression::ZipActiveMask,
             prune: DEFAULT_PRUNE,
         }

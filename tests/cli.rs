@@ -86,8 +86,13 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     let file = aurora::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
     let e = file.vec3("emission").expect("emission grid");
     let d = file.float("density").expect("density grid");
-    assert_eq!(e.active_voxel_count(), stats["active_voxels"].as_u64().unwrap());
-    assert_eq!(e.leaf_count() as u64, stats["leaves"].as_u64().unwrap());
+    // The file holds the aurora's voxels plus the Cycles shell of active zeros.
+    assert_eq!(e.active_voxel_count(), stats["file_voxels"].as_u64().unwrap());
+    assert_eq!(e.leaf_count() as u64, stats["file_leaves"].as_u64().unwrap());
+    let nonzero = e.iter_active().filter(|(_, v)| *v != [0.0; 3]).count() as u64;
+    assert_eq!(nonzero, stats["active_voxels"].as_u64().unwrap());
+    assert_eq!(nonzero + stats["shell_voxels"].as_u64().unwrap(), e.active_voxel_count());
+    assert!(stats["shell_voxels"].as_u64().unwrap() > 0);
     // The density lives on the aurora's own voxels only: no fog box.
     assert!(d.active_voxel_count() <= e.active_voxel_count());
     for (ijk, _) in d.iter_active() {

@@ -10,6 +10,7 @@ temporary directory (conftest.py).
 from __future__ import annotations
 
 import math
+import os
 import subprocess
 import sys
 import zipfile
@@ -334,3 +335,47 @@ def test_blender_minimum_resolution_is_refused(addon, fresh, tmp_path):
            "ortho_height": 1.0}
     with pytest.raises(ValueError, match="at least 4x4"):
         addon.setup_scene_from_toml(synth.write_scene(tmp_path / "t.toml", cam, 64, 2))
+
+
+SHELL_SCENE = """seed = 5
+[[curtain]]
+center = [0.0, 0.0]
+length = 30.0
+width = 10.0
+bend_km = 2.0
+[footprint]
+resolution = [64, 24]
+steps = 3
+[beams]
+count = 150
+[photons]
+radius_km = 0.8
+[grid]
+voxel_size = 1.0
+cycles_shell = {shell}
+"""
+
+
+@pytest.mark.parametrize("shell", [True, False])
+def test_bake_writes_the_cycles_shell_the_addon_would_add(addon, tmp_path, shell):
+    # `aurora bake` dilates both grids by one voxel of active zeros (the
+    # 26-neighbourhood) and marks them; the add-on then reads the file as it
+    # is. Proof that the bake's shell is the add-on's: padding the baked file
+    # switches on no voxel at all. Without the shell, padding adds voxels and
+    # the file is not marked.
+    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
+    assert aurora.is_file(), f"{aurora} missing: cargo build --release first"
+    scene = tmp_path / "s.toml"
+    scene.write_text(SHELL_SCENE.format(shell=str(shell).lower()))
+    out = tmp_path / "out"
+    r = subprocess.run([str(aurora), "bake", str(scene), "--out", str(out), "-q"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    vdb = out / "aurora.vdb"
+    from aurora_importer.vdb_pad import has_cycles_shell, pad_vdb
+    assert has_cycles_shell(vdb) is shell
+    report = pad_vdb(vdb, tmp_path / "padded.vdb")
+    added = sum(report.grids.values())
+    if shell:
+        assert report.grids == {"density": 0, "emission": 0}, report.grids
+    else:
+        assert added > 0, report.grids
