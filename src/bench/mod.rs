@@ -53,7 +53,7 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     studies.push(b.voxel_study()?);
     let grids = b.bake_grids()?;
     studies.push(b.integration_study(&grids)?);
-    studies.push(b.prune_study(&grids)?);
+    studies.push(b.prune_study()?);
     studies.push(b.shadow_study(&grids)?);
     if plan.retime {
         b.retime(&mut studies)?;

@@ -672,15 +672,34 @@ impl<'a> Bench<'a> {
         })
     }
 
-    /// Contribution-based pruning ([`crate::prune`]): the reduced scene's
-    /// bake pruned at each budget, seen through the bench volume camera
+    /// Contribution-based pruning ([`crate::prune`]): the reduced scene
+    /// baked unpruned, then pruned at each budget (and given the Cycles
+    /// shell, as the bake does), seen through the bench volume camera
     /// (which also weights the leaves), against the unpruned image. What
     /// pruning saves is storage, so the time is the VDB write (encoding both
     /// grids with the scene's compression, in memory: it scales with the
     /// file's size), fastest of the timing runs; sizes and voxels go in the
     /// notes. Render time barely changes: the dropped leaves are faint and
     /// few rays cross them.
-    pub fn prune_study(&self, grids: &bake::Bake) -> Result<Study, SweepError> {
+    pub fn prune_study(&self) -> Result<Study, SweepError> {
+        // The reference: the reduced scene baked without pruning (and
+        // without the Cycles shell, added below to every variant as the bake
+        // adds it after pruning).
+        let mut unpruned = self.scene.clone();
+        unpruned.grid.prune = 0.0;
+        unpruned.grid.cycles_shell = false;
+        let base = bake::bake(&unpruned, &NoProgress)?;
+        let peak = base.stats.peak_luminance;
+        let finish = |e: &Grid<[f32; 3]>| -> (Grid<[f32; 3]>, Grid<f32>) {
+            let mut e = e.clone();
+            let mut d = bake::density_grid(&e, &self.scene.grid, peak);
+            if self.scene.grid.cycles_shell {
+                e.dilate_active();
+                d.dilate_active();
+            }
+            (e, d)
+        };
+        let (full_e, full_d) = finish(&base.emission);
         let mut s = self.volume_settings();
         s.integration = Integration::Exact;
         let aspect = s.render.width as f64 / s.render.height as f64;
@@ -695,17 +714,18 @@ impl<'a> Bench<'a> {
         };
         let name = "pruning";
         let metric = "mean relative luminance error, pixels > 1% of peak";
-        let vol = Volume { density: Some(&grids.density), emission: Some(&grids.emission) };
+        let vol = Volume { density: Some(&full_d), emission: Some(&full_e) };
         let (full, _) = self.render_timed(&s, &vol)?;
         let all = vec![true; full.pixels.len()];
-        let (full_bytes, full_s) = write(&grids.emission, &grids.density);
+        let (full_bytes, full_s) = write(&full_e, &full_d);
         let scene_budget = self.scene.grid.prune;
         let mut ms =
             vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", full_s, 0.0, metric, scene_budget == 0.0)];
         let mut notes = vec![format!(
-            "Unpruned: {} active voxels, {} leaves, {full_bytes} bytes (VDB, scene compression). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
-            grids.emission.active_voxel_count(),
-            grids.emission.leaf_count()
+            "Unpruned: {} aurora voxels, {} leaves, {full_bytes} bytes (VDB, scene compression, Cycles shell: {}). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
+            base.emission.active_voxel_count(),
+            base.emission.leaf_count(),
+            self.scene.grid.cycles_shell
         )];
         let mut budgets = self.plan.prune_budgets.clone();
         if scene_budget > 0.0 && !budgets.contains(&scene_budget) {
@@ -713,9 +733,9 @@ impl<'a> Bench<'a> {
             budgets.sort_by(f64::total_cmp);
         }
         for &b in &budgets {
-            let mut e = grids.emission.clone();
+            let mut e = base.emission.clone();
             let st = crate::prune::prune(&mut e, &s.camera, aspect, b);
-            let d = bake::density_grid(&e, &self.scene.grid, grids.stats.peak_luminance);
+            let (e, d) = finish(&e);
             let vol = Volume { density: Some(&d), emission: Some(&e) };
             let (img, _) = self.render_timed(&s, &vol)?;
             let (err, flux) = image_rel_error_masked(&img.pixels, &full.pixels, &all, 0.01);
