@@ -263,7 +263,7 @@ def write_png(path, rgb8: np.ndarray) -> None:
 
     png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
            + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
-    _write_atomic(path, png)
+    write_atomic(path, png)
 
 
 def _read_png_gray(path) -> np.ndarray:
@@ -316,13 +316,18 @@ def _read_png_gray(path) -> np.ndarray:
     return px[..., 0] if depth == 8 else (px[..., 0].astype(np.int32) << 8 | px[..., 1])
 
 
-def _write_atomic(path, data: bytes) -> None:
+def write_atomic(path, data: bytes) -> None:
+    """Write `data` to a temporary file beside `path` and rename it there
+    (readers never see a half-written file), with the usual file mode."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
     try:
         with os.fdopen(fd, "wb") as f:
             f.write(data)
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
@@ -339,7 +344,7 @@ def compare(a_path, b_path, out_png=None, json_path=None, mask=None, threshold: 
     if out_png:
         write_png(out_png, make_picture(a, b, m, threshold, rel_range, mask))
     if json_path:
-        _write_atomic(json_path, (json.dumps(m, indent=2, sort_keys=True) + "\n").encode())
+        write_atomic(json_path, (json.dumps(m, indent=2, sort_keys=True) + "\n").encode())
     return m
 
 

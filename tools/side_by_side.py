@@ -146,19 +146,11 @@ def log(msg: str) -> None:
 # ---------------------------------------------------------------- small helpers
 
 def write_atomic(path: Path, data: bytes) -> None:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual mode
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    """tools/compare.py's write_atomic (temporary name, then rename); imported
+    here, not at the top, so missing numpy is reported by the up-front checks."""
+    from compare import write_atomic as write
+
+    write(path, data)
 
 
 def run(cmd, what: str, **kw) -> subprocess.CompletedProcess:
