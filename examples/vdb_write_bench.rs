@@ -25,6 +25,9 @@ use glam::{DVec3, IVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "../tests/common/openvdb_tool.rs"]
+mod openvdb_tool;
+
 struct Args {
     input: Option<PathBuf>,
     repeat: usize,
@@ -117,33 +120,6 @@ fn synthetic() -> (Grid<f32>, Grid<[f32; 3]>) {
     (d, e)
 }
 
-/// Compiles the OpenVDB writer tool into `target/` if missing or stale.
-fn openvdb_tool() -> anyhow::Result<PathBuf> {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let src = root.join("tools/openvdb_write_bench.cpp");
-    let bin = root.join("target/openvdb_write_bench");
-    let stale = match (std::fs::metadata(&src), std::fs::metadata(&bin)) {
-        (Ok(s), Ok(b)) => s.modified()? > b.modified()?,
-        _ => true,
-    };
-    if stale {
-        let tmp = bin.with_extension(format!("tmp{}", std::process::id()));
-        let out = Command::new("g++")
-            .args(["-O2", "-std=c++17"])
-            .arg(&src)
-            .arg("-o")
-            .arg(&tmp)
-            .args(["-lopenvdb", "-ltbb", "-lImath-3_1", "-lpthread"])
-            .output()?;
-        anyhow::ensure!(
-            out.status.success(),
-            "g++ failed (run tools/setup): {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        std::fs::rename(&tmp, &bin)?;
-    }
-    Ok(bin)
-}
 
 /// Runs OpenVDB's writer on `input` with the same settings; returns (best s, bytes).
 fn openvdb_write(
@@ -197,7 +173,7 @@ fn main() -> anyhow::Result<()> {
         args.half,
         args.repeat
     );
-    let tool = openvdb_tool()?;
+    let tool = openvdb_tool::build(Path::new(env!("CARGO_MANIFEST_DIR"))).map_err(anyhow::Error::msg)?;
     println!(
         "{:<16} {:>10} {:>10} {:>7} {:>12} {:>12} {:>7}",
         "mode", "aurora s", "openvdb s", "ratio", "aurora B", "openvdb B", "size"

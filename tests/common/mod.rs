@@ -10,6 +10,8 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod openvdb_tool;
+
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -134,30 +136,5 @@ pub fn test_emission() -> Grid<[f32; 3]> {
 /// OpenVDB's own writer (`tools/openvdb_write_bench.cpp`), compiled into
 /// `target/` on first use and whenever the source is newer.
 pub fn openvdb_write_tool() -> PathBuf {
-    let src = repo_root().join("tools/openvdb_write_bench.cpp");
-    let bin = repo_root().join("target/openvdb_write_bench");
-    let stale = match (std::fs::metadata(&src), std::fs::metadata(&bin)) {
-        (Ok(s), Ok(b)) => s.modified().unwrap() > b.modified().unwrap(),
-        _ => true,
-    };
-    if stale {
-        // Compile to a private name, then rename: concurrent users never see a partial binary.
-        let tmp = bin.with_extension(format!("tmp{}", std::process::id()));
-        let out = Command::new("g++")
-            .args(["-O2", "-std=c++17"])
-            .arg(&src)
-            .arg("-o")
-            .arg(&tmp)
-            .args(["-lopenvdb", "-ltbb", "-lImath-3_1", "-lpthread"])
-            .output()
-            .unwrap_or_else(|e| panic!("cannot run g++: {e}; run tools/setup"));
-        assert!(
-            out.status.success(),
-            "compiling {} failed (run tools/setup for libopenvdb-dev and libboost-dev):\n{}",
-            src.display(),
-            String::from_utf8_lossy(&out.stderr)
-        );
-        std::fs::rename(&tmp, &bin).expect("install compiled tool");
-    }
-    bin
+    openvdb_tool::build(&repo_root()).unwrap_or_else(|e| panic!("{e}"))
 }
