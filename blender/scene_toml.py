@@ -23,12 +23,12 @@ class SceneFileError(ValueError):
 
 @dataclass(frozen=True)
 class Camera:
-    position: tuple[float, float, float] = (0.0, -260.0, 1.5)
-    look_at: tuple[float, float, float] = (0.0, 0.0, 110.0)
+    position: tuple[float, float, float] = (0.0, -90.0, 1.0)
+    look_at: tuple[float, float, float] = (0.0, 20.0, 70.0)
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
     projection: str = "perspective"
     #: Vertical field of view, degrees (perspective).
-    fov_deg: float = 50.0
+    fov_deg: float = 75.0
     #: Vertical extent of the view in km (orthographic).
     ortho_height: float = 10.0
 
@@ -38,7 +38,7 @@ class Render:
     width: int = 640
     height: int = 360
     spp: int = 16
-    exposure: float = 0.0
+    exposure: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -57,7 +57,8 @@ class Background:
 
 @dataclass(frozen=True)
 class Terrain:
-    kind: str = "none"
+    #: A scene file without [terrain] gets aurora's default scene terrain.
+    kind: str = "heightfield"
     height: float = 0.0
     albedo: tuple[float, float, float] = (0.3, 0.3, 0.3)
 

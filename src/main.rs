@@ -102,10 +102,10 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
-    /// Print a built-in scene as TOML, to copy and edit.
+    /// Print a built-in scene as TOML, to copy and edit; or a scene file with every default filled in.
     Scene {
-        /// Preset name.
-        #[arg(default_value = "default", value_parser = clap::builder::PossibleValuesParser::new(aurora::scene::presets::NAMES))]
+        /// Preset name (default, seed2014) or a scene file.
+        #[arg(default_value = "default")]
         name: String,
     },
     /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
@@ -188,7 +188,7 @@ fn run(cli: Cli) -> Result<()> {
             with_threads(common.threads, || bench_cmd(&scene, &scene_arg, &out, quick, common.quiet))
         }
         Command::Scene { name } => {
-            let s = aurora::scene::presets::by_name(&name).expect("clap checked the name");
+            let s = load_scene(&name)?;
             print!("{}", scene_header(&name));
             print!("{}", s.to_toml());
             Ok(())

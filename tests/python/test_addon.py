@@ -325,7 +325,8 @@ def test_scene_file_errors(addon, tmp_path):
     # The bake's own tables are the baker's business: accepted here.
     p.write_text("seed = 3\n[[curtain]]\nlength = 100.0\n[grid]\nvoxel_size = \"auto\"\n[render]\nwidth = 8\nheight = 4\n")
     s = addon.load_scene(p)
-    assert (s.render.width, s.render.height, s.camera.fov_deg) == (8, 4, 50.0)
+    # Left-out keys take aurora's defaults (fov 75, see test_scene_defaults_match_the_baker).
+    assert (s.render.width, s.render.height, s.camera.fov_deg) == (8, 4, 75.0)
 
 
 def test_blender_minimum_resolution_is_refused(addon, fresh, tmp_path):
@@ -379,3 +380,21 @@ def test_bake_writes_the_cycles_shell_the_addon_would_add(addon, tmp_path, shell
         assert report.grids == {"density": 0, "emission": 0}, report.grids
     else:
         assert added > 0, report.grids
+
+
+def test_scene_defaults_match_the_baker(addon, tmp_path):
+    # A scene file that leaves out [camera], [render], [volume], [background]
+    # and [terrain] must frame and expose the same picture in Blender as in
+    # `aurora render`: the add-on's defaults are aurora's. `aurora scene FILE`
+    # prints the file with every default filled in by aurora itself.
+    from aurora_importer.scene_toml import load_scene
+    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
+    minimal = tmp_path / "minimal.toml"
+    minimal.write_text("seed = 3\n")
+    r = subprocess.run([str(aurora), "scene", str(minimal)], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    full = tmp_path / "full.toml"
+    full.write_text(r.stdout)
+    ours, theirs = load_scene(minimal), load_scene(full)
+    for table in ("camera", "render", "volume", "background", "terrain"):
+        assert getattr(ours, table) == getattr(theirs, table), table
