@@ -241,6 +241,8 @@ pub enum FootprintError {
     Io { path: String, source: std::io::Error },
     #[error("{path}: PNG encoding failed: {message}")]
     Png { path: String, message: String },
+    #[error(transparent)]
+    Output(Box<crate::atomic::AtomicError>),
 }
 
 impl Footprint {
@@ -332,7 +334,6 @@ impl Footprint {
     /// name in the same folder, then renamed.
     pub fn write_png(&self, path: &Path) -> Result<(), FootprintError> {
         let name = path.display().to_string();
-        let io = |source| FootprintError::Io { path: name.clone(), source };
         let png_err = |e: png::EncodingError| FootprintError::Png { path: name.clone(), message: e.to_string() };
         let mut pixels = Vec::with_capacity(self.nx * self.ny);
         for j in (0..self.ny).rev() {
@@ -340,11 +341,9 @@ impl Footprint {
                 pixels.push((self.cell(i, j).clamp(0.0, 1.0) * 255.0).round() as u8);
             }
         }
-        let file_name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "footprint.png".into());
-        let tmp = path.with_file_name(format!(".{file_name}.tmp"));
+        let mut tmp = crate::atomic::TempFile::create(path).map_err(|e| FootprintError::Output(Box::new(e)))?;
         {
-            let file = std::fs::File::create(&tmp).map_err(io)?;
-            let w = std::io::BufWriter::new(file);
+            let w = std::io::BufWriter::new(tmp.file());
             let mut enc = png::Encoder::new(w, self.nx as u32, self.ny as u32);
             enc.set_color(png::ColorType::Grayscale);
             enc.set_depth(png::BitDepth::Eight);
@@ -352,7 +351,7 @@ impl Footprint {
             writer.write_image_data(&pixels).map_err(png_err)?;
             writer.finish().map_err(png_err)?;
         }
-        std::fs::rename(&tmp, path).map_err(io)
+        tmp.commit().map_err(|e| FootprintError::Output(Box::new(e)))
     }
 }
 

@@ -8,6 +8,7 @@
 //! the stages above them.
 
 pub mod atmosphere;
+pub mod atomic;
 pub mod bake;
 pub mod bench;
 pub mod beams;

@@ -64,8 +64,10 @@ enum Command {
         /// Render this VDB instead of baking the scene.
         #[arg(long, value_name = "FILE.vdb")]
         vdb: Option<PathBuf>,
-        /// Output image (linear Rec.709 RGBA, A = volume coverage 1 - T).
-        #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr")]
+        /// Output image, its format from the extension: .exr (linear Rec.709 RGBA, A = volume
+        /// coverage 1 - T) or .png (sRGB preview at [render] exposure). Only a new name or a
+        /// regular file is ever replaced.
+        #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr|IMAGE.png")]
         out: PathBuf,
         /// Also write an sRGB PNG preview (exposure from [render] exposure).
         #[arg(long, value_name = "PREVIEW.png")]
@@ -142,9 +144,17 @@ fn main() {
             let input = e.downcast_ref::<InputError>().is_some()
                 || e.downcast_ref::<SceneError>().is_some()
                 || e.downcast_ref::<aurora::bake::BakeError>().is_some()
+                || e.downcast_ref::<aurora::atomic::AtomicError>().is_some_and(|a| a.is_input())
+                || e.downcast_ref::<aurora::outputs::OutputError>().is_some_and(|o| o.is_input())
+                || e.downcast_ref::<aurora::footprint::FootprintError>()
+                    .is_some_and(|f| matches!(f, aurora::footprint::FootprintError::Output(a) if a.is_input()))
                 || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
                     use aurora::render::RenderError::*;
-                    matches!(r, Settings(_) | Grid { .. } | Heightmap { .. })
+                    match r {
+                        Settings(_) | Grid { .. } | Heightmap { .. } => true,
+                        Output(a) => a.is_input(),
+                        _ => false,
+                    }
                 });
             eprintln!("aurora: error: {e:#}");
             if input {
@@ -181,7 +191,18 @@ fn run(cli: Cli) -> Result<()> {
                 scene.render.spp = n;
             }
             let dir = scene_dir(&scene_arg);
-            with_threads(common.threads, || render_cmd(&scene, &dir, vdb.as_deref(), &out, png.as_deref(), shadow_samples, common.quiet))
+            // Refuse a bad output before rendering, not after.
+            let format = image_format("--out", &out)?;
+            if let Some(p) = &png {
+                if image_format("--png", p)? != ImageFormat::Png {
+                    return Err(InputError(format!("--png {}: the preview is a PNG; give a name ending in .png", p.display())).into());
+                }
+                aurora::atomic::check_replaceable(p)?;
+            }
+            aurora::atomic::check_replaceable(&out)?;
+            with_threads(common.threads, || {
+                render_cmd(&scene, &dir, vdb.as_deref(), &out, format, png.as_deref(), shadow_samples, common.quiet)
+            })
         }
         Command::Bench { scene: scene_arg, out, quick, common } => {
             let scene = load_scene(&scene_arg)?;
@@ -195,7 +216,7 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Footprint { scene, out } => {
             let scene = load_scene(&scene)?;
-            std::fs::create_dir_all(&out).with_context(|| format!("cannot create {}", out.display()))?;
+            aurora::atomic::prepare_folder(&out)?;
             for (i, fp) in aurora::bake::footprints(&scene).iter().enumerate() {
                 let path = out.join(format!("footprint-{i}.png"));
                 fp.write_png(&path).with_context(|| format!("cannot write {}", path.display()))?;
@@ -205,6 +226,10 @@ fn run(cli: Cli) -> Result<()> {
         }
         Command::Terrain { scene: scene_arg, out } => {
             let scene = load_scene(&scene_arg)?;
+            if out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("obj") {
+                return Err(InputError(format!("--out {}: the terrain is written as a Wavefront OBJ; give a name ending in .obj", out.display())).into());
+            }
+            aurora::atomic::check_replaceable(&out)?;
             if scene.terrain.kind != aurora::scene::TerrainKind::Heightfield {
                 return Err(InputError(format!(
                     "terrain.kind = {:?}: only a heightfield has a mesh to write (a plane is z = terrain.height)",
@@ -262,20 +287,49 @@ where
 fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    // The folder is checked and locked before the bake, not after it.
+    let _lock = aurora::outputs::prepare(out, || {
+        eprintln!("aurora: another bake is writing to {}; waiting for it to finish", out.display())
+    })?;
     let bake = aurora::bake::bake(scene, progress)?;
     print_warnings(&bake.stats.warnings);
-    let report = aurora::outputs::write_outputs(scene, &bake, out)?;
+    let report = aurora::outputs::write_outputs_locked(scene, &bake, out)?;
     if !quiet {
         eprintln!("{}", report.summary());
     }
     Ok(())
 }
 
+/// The image formats `aurora render` writes, chosen by the file name's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ImageFormat {
+    /// Linear Rec.709 RGBA f32 OpenEXR.
+    Exr,
+    /// sRGB 8-bit preview at the scene's exposure.
+    Png,
+}
+
+/// The format an output name asks for: `.exr` or `.png` (any case); anything
+/// else is an error naming the flag, so `--out x.png` never gets EXR bytes.
+fn image_format(flag: &str, path: &Path) -> Result<ImageFormat> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("exr") => Ok(ImageFormat::Exr),
+        Some("png") => Ok(ImageFormat::Png),
+        _ => Err(InputError(format!(
+            "{flag} {}: unknown image format; the name must end in .exr (linear OpenEXR) or .png (sRGB preview)",
+            path.display()
+        ))
+        .into()),
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
 fn render_cmd(
     scene: &Scene,
     dir: &Path,
     vdb: Option<&Path>,
     out: &Path,
+    format: ImageFormat,
     png: Option<&Path>,
     shadow_samples: usize,
     quiet: bool,
@@ -303,7 +357,11 @@ fn render_cmd(
     }
     let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
     let image = aurora::render::render(&settings, &volume, progress)?;
-    aurora::render::film::write_exr(out, &image).with_context(|| format!("cannot write {}", out.display()))?;
+    match format {
+        ImageFormat::Exr => aurora::render::film::write_exr(out, &image),
+        ImageFormat::Png => aurora::render::film::write_png(out, &image, scene.render.exposure),
+    }
+    .with_context(|| format!("cannot write {}", out.display()))?;
     if let Some(p) = png {
         aurora::render::film::write_png(p, &image, scene.render.exposure)
             .with_context(|| format!("cannot write {}", p.display()))?;

@@ -1,13 +1,21 @@
 //! What `aurora bake` leaves on disk: `aurora.vdb` (both grids), `aurora.usda`
 //! (a UsdVol stage pointing at it) and `bake.json` (counts, bounds, timings).
 //!
-//! Every file is written to a temporary name in the output folder and renamed,
-//! so an interrupted or failed bake never leaves a half-written file.
+//! The three files are one unit ([`crate::atomic::Unit`]): a lock on the
+//! folder's `.aurora.lock` keeps two bakes from interleaving (the second
+//! waits), all three are written in full to temporaries before any is
+//! renamed, and `bake.json`, which names the VDB's size and content UUID, is
+//! renamed last (the old one removed first). So an interrupted, failed or
+//! concurrent bake leaves the previous complete set or a set without a
+//! `bake.json`, never a VDB beside another bake's report, and a killed bake's
+//! temporaries are removed by the next bake into that folder. Only regular
+//! files are ever replaced.
 
 use crate::bake::Bake;
 use crate::scene::Scene;
 use crate::usd;
-use crate::vdb::write::{write_atomic, write_vdb, GridRef, MetaValue, WriteOptions};
+use crate::atomic::{AtomicError, TempFile, Unit, UnitLock};
+use crate::vdb::write::{write_vdb_into, GridRef, MetaValue, WriteOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -15,13 +23,57 @@ use std::time::Instant;
 pub const VDB_NAME: &str = "aurora.vdb";
 pub const USDA_NAME: &str = "aurora.usda";
 pub const JSON_NAME: &str = "bake.json";
+/// The stem of the bake's unit lock, `.aurora.lock` in the output folder.
+pub const LOCK_STEM: &str = "aurora";
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    #[error("cannot create output folder {path}: {source}")]
-    CreateDir { path: PathBuf, source: std::io::Error },
     #[error("cannot write {path}: {message}")]
     Write { path: PathBuf, message: String },
+    #[error(transparent)]
+    Output(#[from] AtomicError),
+}
+
+impl OutputError {
+    /// True when the user's choice of output is at fault (exit status 2).
+    pub fn is_input(&self) -> bool {
+        matches!(self, OutputError::Output(e) if e.is_input())
+    }
+}
+
+/// Checks, before a long bake, that `out` is (or can be made) a writable
+/// folder and that none of the bake's names in it is anything but a regular
+/// file; then takes the folder's bake lock (waiting for another bake into the
+/// same folder to finish; `on_wait` tells the user). Hold the lock until
+/// [`write_outputs_locked`] returns. If the bake fails, dropping the guard
+/// removes the folder again when this call created it and it is still empty.
+pub fn prepare(out: &Path, on_wait: impl FnOnce()) -> Result<BakeFolder, OutputError> {
+    let created = !out.exists();
+    crate::atomic::prepare_folder(out)?;
+    let guard = |lock| BakeFolder { dir: out.to_path_buf(), created, lock: Some(lock) };
+    let folder = guard(UnitLock::acquire(out, LOCK_STEM, on_wait)?);
+    for name in [VDB_NAME, USDA_NAME, JSON_NAME] {
+        crate::atomic::check_replaceable(&out.join(name))?;
+    }
+    Ok(folder)
+}
+
+/// A bake's output folder, locked (see [`prepare`]).
+#[derive(Debug)]
+pub struct BakeFolder {
+    dir: PathBuf,
+    created: bool,
+    lock: Option<UnitLock>,
+}
+
+impl Drop for BakeFolder {
+    fn drop(&mut self) {
+        drop(self.lock.take());
+        if self.created {
+            // Fails, harmlessly, unless the folder is empty.
+            let _ = std::fs::remove_dir(&self.dir);
+        }
+    }
 }
 
 /// What was written, and the report that went into `bake.json`.
@@ -104,24 +156,37 @@ pub fn write_options(scene: &Scene) -> WriteOptions {
     }
 }
 
-/// Writes the three files into `out` (created if missing).
+/// Writes the three files into `out` as one unit (see the module docs).
+/// Takes the folder's lock itself: a caller that already holds it (from
+/// [`prepare`], taken before a long bake) calls [`write_outputs_locked`].
 pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
-    std::fs::create_dir_all(out).map_err(|source| OutputError::CreateDir { path: out.to_path_buf(), source })?;
+    let _lock = prepare(out, || {})?;
+    write_outputs_locked(scene, bake, out)
+}
+
+/// [`write_outputs`] for a caller that holds the folder's lock from [`prepare`].
+pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
     let vdb_path = out.join(VDB_NAME);
-    let t0 = Instant::now();
-    let stats = write_vdb(
-        &vdb_path,
-        &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)],
-        &write_options(scene),
-    )
-    .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
-    let vdb_seconds = t0.elapsed().as_secs_f64();
-
     let usda_path = out.join(USDA_NAME);
-    usd::write_usda(&usda_path, VDB_NAME, &[("density", "float"), ("emission", "float3")], 1000.0)
-        .map_err(|e| OutputError::Write { path: usda_path.clone(), message: e.to_string() })?;
-
     let json_path = out.join(JSON_NAME);
+    let mut unit = Unit::new();
+
+    let t0 = Instant::now();
+    let mut vdb_tmp = TempFile::create(&vdb_path)?;
+    let stats = write_vdb_into(&mut vdb_tmp, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &write_options(scene))
+        .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
+    let vdb_seconds = t0.elapsed().as_secs_f64();
+    unit.stage(vdb_tmp);
+
+    let mut usda_tmp = TempFile::create(&usda_path)?;
+    let usda = usd::usda_text(VDB_NAME, &[("density", "float"), ("emission", "float3")], 1000.0);
+    use std::io::Write;
+    usda_tmp
+        .file()
+        .write_all(usda.as_bytes())
+        .map_err(|e| OutputError::Write { path: usda_path.clone(), message: e.to_string() })?;
+    unit.stage(usda_tmp);
+
     let total: f64 = bake.stats.total_seconds() + vdb_seconds;
     let report = json!({
         "aurora_version": env!("CARGO_PKG_VERSION"),
@@ -133,15 +198,22 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
         "files": {
             "vdb": VDB_NAME,
             "vdb_bytes": stats.bytes,
+            "vdb_uuid": stats.uuid,
             "vdb_write_seconds": vdb_seconds,
             "usda": USDA_NAME,
+            "usda_bytes": usda.len(),
             "compression": scene.grid.compression,
             "half_emission": scene.grid.half_emission,
         },
         "total_seconds": total,
     });
     let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
-    write_atomic(&json_path, text.as_bytes())
+    let mut json_tmp = TempFile::create(&json_path)?;
+    json_tmp
+        .file()
+        .write_all(text.as_bytes())
         .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
+    unit.stage_manifest(json_tmp);
+    unit.commit()?;
     Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
 }

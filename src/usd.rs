@@ -116,7 +116,7 @@ pub fn write_usda(
     meters_per_unit: f64,
 ) -> Result<(), std::io::Error> {
     check(vdb_file_name, fields, meters_per_unit)?;
-    crate::vdb::write::write_atomic(path, usda_text(vdb_file_name, fields, meters_per_unit).as_bytes())
+    crate::atomic::write_atomic(path, usda_text(vdb_file_name, fields, meters_per_unit).as_bytes()).map_err(Into::into)
 }
 
 #[cfg(test)]

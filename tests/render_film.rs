@@ -50,12 +50,12 @@ fn exr_round_trips_exactly_and_is_rec709_rgba_f32() {
     let left: Vec<_> = std::fs::read_dir(path.parent().unwrap())
         .unwrap()
         .filter_map(|e| e.ok())
-        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp"))
         .collect();
     assert!(left.is_empty(), "{left:?}");
     // A bad destination is a typed error.
     let bad = PathBuf::from("/nonexistent-aurora-dir/x.exr");
-    assert!(matches!(write_exr(&bad, &img), Err(RenderError::Exr { .. }) | Err(RenderError::Io { .. })));
+    assert!(matches!(write_exr(&bad, &img), Err(RenderError::Output(_))));
 }
 
 #[test]

@@ -5,7 +5,7 @@
 
 use super::chart::{self, front_flags, Measurement};
 use super::sweeps::{Plan, Study};
-use crate::vdb::write::write_atomic;
+use crate::atomic::write_atomic;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -228,7 +228,7 @@ pub fn write(run: &BenchRun, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut written = Vec::new();
     let ms = run.measurements();
     let csv = dir.join("bench.csv");
-    write_atomic(&csv, chart::to_csv(&ms).as_bytes()).map_err(io(&csv))?;
+    write_atomic(&csv, chart::to_csv(&ms).as_bytes()).map_err(|e| io(&csv)(e.into()))?;
     written.push(csv);
     for st in &run.studies {
         let name = slug(&st.name);
@@ -242,7 +242,7 @@ pub fn write(run: &BenchRun, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     }
     let json_path = dir.join("bench.json");
     let text = serde_json::to_string_pretty(&to_json(run)).expect("bench json serialises") + "\n";
-    write_atomic(&json_path, text.as_bytes()).map_err(io(&json_path))?;
+    write_atomic(&json_path, text.as_bytes()).map_err(|e| io(&json_path)(e.into()))?;
     written.push(json_path);
     Ok(written)
 }

@@ -13,19 +13,10 @@
 
 use super::{Image, RenderError, RenderStats};
 use exr::prelude::{read_first_rgba_layer_from_file, SpecificChannels, Vec2, WritableImage};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-/// `dir/.name.tmp-<pid>`: a temporary name next to `path`.
-pub fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
-}
-
-fn finish(tmp: &Path, path: &Path) -> Result<(), RenderError> {
-    std::fs::rename(tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(tmp);
-        RenderError::Io { path: path.to_path_buf(), source: e }
-    })
+fn output_err(e: crate::atomic::AtomicError) -> RenderError {
+    RenderError::Output(Box::new(e))
 }
 
 /// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
@@ -46,13 +37,12 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
         blue: Vec2(0.15, 0.06),
         white: Vec2(0.3127, 0.3290),
     });
-    let tmp = temp_path(path);
-    let r = exr_image.write().to_file(&tmp);
-    if let Err(e) = r {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(RenderError::Exr { path: path.to_path_buf(), message: e.to_string() });
-    }
-    finish(&tmp, path)
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
+    exr_image
+        .write()
+        .to_buffered(std::io::BufWriter::new(tmp.file()))
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    tmp.commit().map_err(output_err)
 }
 
 /// Reads the first RGBA layer of an EXR (alpha 1 if absent). Stats are zero.
@@ -98,11 +88,10 @@ pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result
         return Err(RenderError::Settings(format!("exposure {exposure} must be finite")));
     }
     let data: Vec<u8> = image.pixels.iter().flat_map(|p| [0, 1, 2].map(|c| display_u8(p[c], exposure))).collect();
-    let tmp = temp_path(path);
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
     let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
     let r = (|| -> Result<(), RenderError> {
-        let file = std::fs::File::create(&tmp).map_err(|e| RenderError::Io { path: tmp.clone(), source: e })?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.file()), w as u32, h as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
@@ -110,9 +99,6 @@ pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result
         writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
         writer.finish().map_err(|e| png_err(e.to_string()))
     })();
-    if let Err(e) = r {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    finish(&tmp, path)
+    r?;
+    tmp.commit().map_err(output_err)
 }

@@ -198,6 +198,9 @@ pub enum RenderError {
     Exr { path: PathBuf, message: String },
     #[error("{}: PNG: {message}", path.display())]
     Png { path: PathBuf, message: String },
+    /// The output is not ours to replace, or could not be staged or renamed.
+    #[error(transparent)]
+    Output(Box<crate::atomic::AtomicError>),
 }
 
 /// SplitMix64 (Steele et al. 2014): decorrelates seeds.

@@ -430,9 +430,9 @@ fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
 pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderError> {
     let path = path.as_ref();
     let io = |e: std::io::Error| RenderError::Io { path: path.to_path_buf(), source: e };
-    let tmp = super::film::temp_path(path);
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(|e| RenderError::Output(Box::new(e)))?;
     let result = (|| -> std::io::Result<()> {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+        let mut w = std::io::BufWriter::new(tmp.file());
         let (nx, ny) = (hf.nx(), hf.ny());
         writeln!(w, "# aurora terrain: {nx} x {ny} height samples, z up, scene units (km)")?;
         writeln!(w, "# Blender: bpy.ops.wm.obj_import(filepath=..., forward_axis='Y', up_axis='Z')")?;
@@ -454,11 +454,8 @@ pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderE
                 writeln!(w, "f {a} {c} {d}")?;
             }
         }
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
-        std::fs::rename(&tmp, path)
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(io)
+    result.map_err(io)?;
+    tmp.commit().map_err(|e| RenderError::Output(Box::new(e)))
 }

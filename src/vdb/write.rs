@@ -115,6 +115,9 @@ pub enum VdbWriteError {
     ReservedMetadata(String),
     #[error("writing `{path}`: {source}")]
     Io { path: PathBuf, source: std::io::Error },
+    /// The destination is not ours to replace, or the temporary could not be made or renamed.
+    #[error(transparent)]
+    Output(Box<crate::atomic::AtomicError>),
 }
 
 /// What was written, per grid.
@@ -132,6 +135,9 @@ pub struct GridStats {
 pub struct WriteStats {
     /// File size.
     pub bytes: u64,
+    /// The file's UUID: a hash of its content ([`content_uuid`]), so it
+    /// identifies these bytes (bake.json names it).
+    pub uuid: String,
     pub grids: Vec<GridStats>,
 }
 
@@ -172,50 +178,26 @@ pub fn write_vdb_bytes(grids: &[GridRef], opts: &WriteOptions) -> Result<Vec<u8>
     Ok(out)
 }
 
-/// Writes a VDB file atomically: streamed to a temporary name in the same
-/// folder, then renamed over `path`. On any error the temporary file is
-/// removed and `path` is untouched. The bytes are those of [`write_vdb_bytes`].
+/// Writes a VDB file atomically: streamed to a locked temporary in the same
+/// folder, then renamed over `path` ([`crate::atomic`]: only a regular file is
+/// ever replaced). On any error the temporary is removed and `path` is
+/// untouched. The bytes are those of [`write_vdb_bytes`].
 pub fn write_vdb(path: &Path, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
-    let io = |source| VdbWriteError::Io { path: path.to_path_buf(), source };
-    let tmp = temp_path(path).map_err(io)?;
-    let result = (|| {
-        let mut target = FileTarget(std::fs::File::create(&tmp).map_err(io)?);
-        let stats = encode_file(&mut target, grids, opts).map_err(|e| match e {
-            VdbWriteError::Io { source, .. } => io(source),
-            other => other,
-        })?;
-        drop(target);
-        std::fs::rename(&tmp, path).map_err(io)?;
-        Ok(stats)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(|e| VdbWriteError::Output(Box::new(e)))?;
+    let stats = write_vdb_into(&mut tmp, grids, opts)?;
+    tmp.commit().map_err(|e| VdbWriteError::Output(Box::new(e)))?;
+    Ok(stats)
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same folder and a
-/// rename, so readers never see a half-written file. The rename makes the
-/// replacement atomic for every reader and for a crash of this process; like
-/// OpenVDB, we do not `fsync` (power-loss durability is the file system's
-/// business and costs ~10 ms per 30 MB).
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let tmp = temp_path(path)?;
-    let result = std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
-}
-
-/// `.<name>.tmp<pid>` in the folder of `path`.
-fn temp_path(path: &Path) -> std::io::Result<PathBuf> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let file_name = path.file_name().ok_or_else(|| std::io::Error::other("path has no file name"))?;
-    Ok(dir.join(format!(".{}.tmp{}", file_name.to_string_lossy(), std::process::id())))
+/// Streams a VDB file into a staged temporary (committed by the caller, for
+/// example as a member of a [`crate::atomic::Unit`]).
+pub fn write_vdb_into(tmp: &mut crate::atomic::TempFile, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
+    let path = tmp.dest().to_path_buf();
+    let mut target = FileTarget(tmp.file());
+    encode_file(&mut target, grids, opts).map_err(|e| match e {
+        VdbWriteError::Io { source, .. } => VdbWriteError::Io { path, source },
+        other => other,
+    })
 }
 
 /// Where the file goes: appended in order, with a few fixed-size fields
@@ -238,9 +220,9 @@ impl Target for Vec<u8> {
 
 /// A file written sequentially (pieces are leaf chunks of ~100 KB or a few
 /// headers, so no buffering is needed), patched with positioned writes.
-struct FileTarget(std::fs::File);
+struct FileTarget<'f>(&'f mut std::fs::File);
 
-impl Target for FileTarget {
+impl Target for FileTarget<'_> {
     fn append(&mut self, bytes: &[u8]) -> std::io::Result<()> {
         use std::io::Write;
         self.0.write_all(bytes)
@@ -379,7 +361,7 @@ fn encode_file(
     debug_assert_eq!(h.len(), layout::HEADER_LEN);
     let bytes = out.pos;
     out.target.patch(0, &h).map_err(io)?;
-    Ok(WriteStats { bytes, grids: stats })
+    Ok(WriteStats { bytes, uuid, grids: stats })
 }
 
 fn push_string(out: &mut Vec<u8>, s: &str) {
