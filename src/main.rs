@@ -28,8 +28,8 @@ struct Cli {
 #[derive(clap::Args)]
 struct Common {
     /// Worker threads (default: all cores). Output is identical for any count.
-    #[arg(long, value_name = "N")]
-    threads: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_THREADS))]
+    threads: Option<u64>,
     /// No progress bars or summary on stderr.
     #[arg(long, short)]
     quiet: bool,
@@ -46,7 +46,7 @@ enum Command {
         #[arg(long, default_value = "aurora-out", value_name = "DIR")]
         out: PathBuf,
         /// Override the scene's seed.
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
         seed: Option<u64>,
         #[command(flatten)]
         common: Common,
@@ -73,14 +73,15 @@ enum Command {
         #[arg(long, value_name = "PREVIEW.png")]
         png: Option<PathBuf>,
         /// Override [render] spp.
-        #[arg(long, value_name = "N")]
-        spp: Option<usize>,
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
+        spp: Option<u64>,
         /// Emissive shadow-ray samples per terrain hit per pixel sample (default 1):
         /// more makes lit terrain less noisy at less cost than more spp.
-        #[arg(long, value_name = "N", default_value_t = 1)]
-        shadow_samples: usize,
+        #[arg(long, value_name = "N", default_value_t = 1,
+              value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SHADOW_SAMPLES))]
+        shadow_samples: u64,
         /// Override the scene's seed.
-        #[arg(long, value_name = "N")]
+        #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
         seed: Option<u64>,
         #[command(flatten)]
         common: Common,
@@ -177,18 +178,13 @@ fn run(cli: Cli) -> Result<()> {
             with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet))
         }
         Command::Render { scene: scene_arg, vdb, out, png, spp, shadow_samples, seed, common } => {
-            if shadow_samples == 0 {
-                return Err(InputError("--shadow-samples must be at least 1".into()).into());
-            }
+            let shadow_samples = shadow_samples as usize;
             let mut scene = load_scene(&scene_arg)?;
             if let Some(s) = seed {
                 scene.seed = s;
             }
             if let Some(n) = spp {
-                if n == 0 {
-                    return Err(InputError("--spp must be at least 1".into()).into());
-                }
-                scene.render.spp = n;
+                scene.render.spp = n as usize;
             }
             let dir = scene_dir(&scene_arg);
             // Refuse a bad output before rendering, not after.
@@ -269,16 +265,14 @@ fn load_scene(arg: &str) -> Result<Scene> {
     Ok(Scene::load(arg)?)
 }
 
-fn with_threads<T>(threads: Option<usize>, f: impl FnOnce() -> Result<T> + Send) -> Result<T>
+fn with_threads<T>(threads: Option<u64>, f: impl FnOnce() -> Result<T> + Send) -> Result<T>
 where
     T: Send,
 {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
-        if n == 0 {
-            return Err(InputError("--threads must be at least 1".into()).into());
-        }
-        b = b.num_threads(n);
+        // 1..=MAX_THREADS, checked by clap.
+        b = b.num_threads(n as usize);
     }
     let pool = b.build().context("cannot start the thread pool")?;
     pool.install(f)

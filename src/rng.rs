@@ -60,19 +60,66 @@ pub fn perlin(parts: &[u64]) -> Perlin {
 /// flooring, which breaks continuity at negative coordinates.)
 #[inline]
 pub fn noise1(p: &Perlin, x: f64) -> f64 {
-    p.get([x, 0.371_9])
+    noise2(p, x, 0.371_9)
 }
 
 /// 2D Perlin noise in [-1, 1].
+///
+/// The noise crate's Perlin hashes lattice corners by `corner & 0xff`, so it
+/// is periodic with period 256 in each coordinate; its `floor` to `isize`
+/// panics for coordinates beyond `isize` (a huge `voxel_size`, a tiny
+/// `bend_wavelength` or `mountain_scale`) and for NaN. Coordinates of
+/// magnitude 2^31 or more are moved by a multiple of 256 into [0, 256):
+/// `x - 256 floor(x / 256)` is exact there (the result is a multiple of
+/// ulp(x) and smaller than |x|), and so is the crate's own `x - floor(x)`, so
+/// the value is the one the crate would give without the overflow; smaller
+/// coordinates pass unchanged (bit for bit today's noise); a non-finite
+/// coordinate gives 0.
 #[inline]
 pub fn noise2(p: &Perlin, x: f64, y: f64) -> f64 {
-    p.get([x, y])
+    p.get([wrap_period(x), wrap_period(y)])
+}
+
+/// The Perlin lattice period of the noise crate's permutation table.
+const PERLIN_PERIOD: f64 = 256.0;
+
+/// Below this magnitude coordinates pass unchanged.
+const WRAP_FROM: f64 = 2_147_483_648.0;
+
+#[inline]
+fn wrap_period(x: f64) -> f64 {
+    if !x.is_finite() {
+        0.0
+    } else if x.abs() < WRAP_FROM {
+        x
+    } else {
+        x - PERLIN_PERIOD * (x / PERLIN_PERIOD).floor()
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use rand::Rng;
+
+    #[test]
+    fn noise_is_periodic_exactly_and_total_on_any_input() {
+        let p = perlin(&[3]);
+        for i in 0..1000 {
+            let (x, y) = (i as f64 * 0.731 - 300.0, i as f64 * -0.277 + 11.0);
+            // Unwrapped crate value where it does not panic.
+            assert_eq!(noise2(&p, x, y), p.get([x, y]), "at ({x}, {y})");
+            // Far coordinates equal their wrapped selves (the period is exact).
+            let far = 2f64.powi(32); // a multiple of 256 whose ulp (2^-20) keeps x + far exact
+            let (xf, yf) = ((x * 64.0).round() / 64.0, (y * 64.0).round() / 64.0);
+            assert_eq!(noise2(&p, xf + far, yf - far), noise2(&p, xf, yf), "at ({xf}, {yf})");
+        }
+        for x in [1e20, -1e300, f64::MAX, f64::MIN_POSITIVE, -1e-300, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let v = noise2(&p, x, 0.5);
+            assert!(v.is_finite() && (-1.0..=1.0).contains(&v), "{x} -> {v}");
+            assert!(noise1(&p, x).is_finite());
+        }
+    }
 
     #[test]
     fn streams_are_reproducible_and_distinct() {

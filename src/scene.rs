@@ -196,11 +196,43 @@ pub enum Compression {
 }
 
 /// Voxel size: a number of km, or "auto" (from the camera).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {
     Km(f64),
     Auto(AutoTag),
+}
+
+/// A number (integer or float) of km, or exactly the string "auto"; anything
+/// else is an error that lists both (serde's untagged enums only say "did not
+/// match any variant").
+impl<'de> Deserialize<'de> for VoxelSize {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = VoxelSize;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a voxel size in km (a number > 0) or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<VoxelSize, E> {
+                if s == "auto" {
+                    Ok(VoxelSize::Auto(AutoTag::Auto))
+                } else {
+                    Err(E::custom(format!("unknown value \"{s}\": expected a voxel size in km (a number > 0) or \"auto\" (lower case)")))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -208,6 +240,18 @@ pub enum VoxelSize {
 pub enum AutoTag {
     Auto,
 }
+
+/// Largest seed: TOML integers are signed 64-bit, so a scene (and the
+/// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
+pub const MAX_SEED: u64 = i64::MAX as u64;
+/// Largest `render.spp` (also the `--spp` flag's).
+pub const MAX_SPP: u64 = 65_536;
+/// Largest image side, `render.width` and `render.height`, pixels.
+pub const MAX_IMAGE_SIDE: u64 = 16_384;
+/// Largest `--shadow-samples` per terrain hit per pixel sample.
+pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
+/// Largest `--threads`.
+pub const MAX_THREADS: u64 = 1_024;
 
 /// Largest `grid.prune`: half the light may go, no more (beyond that the
 /// "error budget" is no longer a small error).
@@ -593,6 +637,7 @@ impl Scene {
     /// Parses TOML text (unknown keys are errors), then validates it.
     /// `file` names the source in messages.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
+        check_shapes(text, file)?;
         let scene: Scene = toml::from_str(text)
             .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
         scene.validate(file, Some(text))?;
@@ -749,9 +794,9 @@ impl Scene {
         }
         let r = &self.render;
         let t = Some(("render", 0));
-        v.range(t, "width", r.width as f64, 1.0, 16384.0, true);
-        v.range(t, "height", r.height as f64, 1.0, 16384.0, true);
-        v.range(t, "spp", r.spp as f64, 1.0, 65536.0, true);
+        v.range(t, "width", r.width as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
+        v.range(t, "height", r.height as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
+        v.range(t, "spp", r.spp as f64, 1.0, MAX_SPP as f64, true);
         v.range(t, "exposure", r.exposure, -50.0, 50.0, true);
         let vol = &self.volume;
         let t = Some(("volume", 0));
@@ -820,6 +865,66 @@ impl Scene {
             }
         }
         (lo, hi)
+    }
+}
+
+/// Refuses arrays of the wrong length before serde sees them (serde fills a
+/// fixed-size array from the first N values of a longer TOML array and drops
+/// the rest silently: `center = [-20, 0, 999]` would bake at (-20, 0)).
+///
+/// The expected shapes come from the scene's own defaults, so every key added
+/// later is covered: an array of numbers there is a fixed-size array (its
+/// length is the one required); an array of arrays (the colour map) has rows
+/// of the default row's length; an array of tables (`[[curtain]]`) is checked
+/// table by table against a default curtain.
+pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
+    let user: toml::Table = match text.parse() {
+        Ok(t) => t,
+        // Syntax errors are reported by the parser proper, with its message.
+        Err(_) => return Ok(()),
+    };
+    let mut reference = Scene::default();
+    reference.curtains = vec![Curtain::default()];
+    let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
+    let mut v = Validator { file, text: Some(text), errors: Vec::new() };
+    shapes_table(&user, &reference, None, &mut v);
+    if v.errors.is_empty() {
+        Ok(())
+    } else {
+        Err(SceneError::Invalid(v.errors))
+    }
+}
+
+fn shapes_table(user: &toml::Table, reference: &toml::Table, table: Option<(&str, usize)>, v: &mut Validator<'_>) {
+    use toml::Value;
+    for (key, uv) in user {
+        let Some(rv) = reference.get(key) else { continue };
+        match (uv, rv) {
+            (Value::Table(ut), Value::Table(rt)) if table.is_none() => shapes_table(ut, rt, Some((key.as_str(), 0)), v),
+            (Value::Array(ua), Value::Array(ra)) => match ra.first() {
+                Some(Value::Table(rt)) if table.is_none() => {
+                    for (i, u) in ua.iter().enumerate() {
+                        if let Value::Table(ut) = u {
+                            shapes_table(ut, rt, Some((key.as_str(), i)), v);
+                        }
+                    }
+                }
+                Some(Value::Array(row)) => {
+                    for (i, u) in ua.iter().enumerate() {
+                        if let Value::Array(ur) = u {
+                            if ur.len() != row.len() {
+                                v.push(table, key, format!("row {i}: {u}"), format!("every row must have {} values", row.len()));
+                            }
+                        }
+                    }
+                }
+                Some(_) if ua.len() != ra.len() => {
+                    v.push(table, key, uv.to_string(), format!("must have exactly {} values, not {}", ra.len(), ua.len()));
+                }
+                _ => {}
+            },
+            _ => {}
+        }
     }
 }
 
@@ -965,8 +1070,30 @@ mod tests {
     }
 
     #[test]
+    fn arrays_of_the_wrong_length_are_refused_naming_key_and_line() {
+        let cases = [
+            ("[[curtain]]\ncenter = [-20.0, 0.0, 999.0]\n", "curtain[0].center", 2),
+            ("[camera]\nposition = [0.0, -90.0, 1.0, 5.0]\n", "camera.position", 2),
+            ("[camera]\nup = [0.0, 1.0]\n", "camera.up", 2),
+            ("[footprint]\nresolution = [64, 32, 8]\n", "footprint.resolution", 2),
+            ("[colour]\nmode = \"colormap\"\ncolormap = [[90.0, 0.1, 0.2, 0.3, 9.0], [100.0, 0.1, 0.2, 0.3]]\n", "colour.colormap", 3),
+            ("[terrain]\nextent = [0.0, 0.0, 1.0]\n", "terrain.extent", 2),
+        ];
+        for (text, key, line) in cases {
+            let e = Scene::from_toml_str(text, "s.toml").unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(&format!("s.toml:{line}:")), "{text}: {e}");
+        }
+        // Right lengths still parse.
+        Scene::from_toml_str("[[curtain]]\ncenter = [-20.0, 0.0]\n[camera]\nposition = [0.0, -90.0, 1.0]\n", "s.toml").unwrap();
+    }
+
+    #[test]
     fn voxel_size_auto_parses() {
         let s = Scene::from_toml_str("[grid]\nvoxel_size = \"auto\"\n", "a.toml").unwrap();
         assert_eq!(s.grid.voxel_size, VoxelSize::Auto(AutoTag::Auto));
+        let s = Scene::from_toml_str("[grid]\nvoxel_size = 1\n", "a.toml").unwrap();
+        assert_eq!(s.grid.voxel_size, VoxelSize::Km(1.0));
+        let e = Scene::from_toml_str("[grid]\nvoxel_size = \"AUTO\"\n", "a.toml").unwrap_err().to_string();
+        assert!(e.contains("voxel_size") && e.contains("\"auto\"") && !e.contains("untagged"), "{e}");
     }
 }

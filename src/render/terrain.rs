@@ -29,7 +29,7 @@
 use super::RenderError;
 use crate::scene::{Terrain, TerrainKind};
 use glam::DVec3;
-use noise::{NoiseFn, Perlin};
+use noise::Perlin;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -411,7 +411,7 @@ fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
     for o in 0..OCTAVES {
         // Offsets keep the octaves' lattice zeros from lining up at the origin.
         let off = 17.31 * o as f64 + 0.5;
-        sum += amp * perlin.get([x * freq + off, y * freq - off]);
+        sum += amp * crate::rng::noise2(perlin, x * freq + off, y * freq - off);
         norm += amp;
         amp *= 0.5;
         freq *= 2.0;
