@@ -142,6 +142,14 @@ pub enum BakeError {
     #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
     /// `grid.half_emission` asks for half floats the emission exceeds.
+    /// The bake would need more memory than this process may use
+    /// ([`crate::budget`]); refused before anything is allocated.
+    #[error(transparent)]
+    Memory(#[from] crate::budget::TooLarge),
+    /// The bake produced no emission at all: an empty VDB is never written
+    /// silently. The message says where the beams' energy went.
+    #[error("the bake deposited no light: {0}")]
+    Empty(String),
     #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
     HalfOverflow { ijk: [i32; 3], peak: f32 },
 }
@@ -325,10 +333,34 @@ pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
     })
 }
 
+/// Why a bake came out empty, in the user's terms: how its beams ended and
+/// which keys to look at.
+pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
+    let mut why = format!(
+        "{} beams made {} photons ({} left their footprint, {} spent their energy, {} took the most steps, 1 / beams.dt = {})",
+        stats.beams,
+        stats.photons,
+        stats.ended_left_footprint,
+        stats.ended_energy_spent,
+        stats.ended_max_steps,
+        (1.0 / beams.dt).round()
+    );
+    if stats.photons == 0 {
+        why += &format!(
+            "; no beam deposited energy before stopping: check beams.length_km = {} (a first step longer than the atmosphere leaves nothing) and beams.top_km = {}",
+            beams.length_km, beams.top_km
+        );
+    } else {
+        why += "; their emission is zero everywhere (curtain energy_flux, or an all-zero colour map)";
+    }
+    why
+}
+
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
     let mut times = StageTimes::default();
+    crate::budget::check(&crate::budget::estimate(scene), &crate::memory::available())?;
 
     let t = Instant::now();
     progress.start("footprints", scene.curtains.len() as u64);
@@ -386,6 +418,9 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let emission =
         photons::gather_grid(&photons, transform, &radius, scene.photons.cutoff, scene.photons.gather, progress);
     times.gather = t.elapsed().as_secs_f64();
+    if emission.leaf_count() == 0 {
+        return Err(BakeError::Empty(empty_reason(&beam_stats, &scene.beams)));
+    }
 
     let t = Instant::now();
     let mut peak = [0.0f32; 3];

@@ -437,6 +437,10 @@ mod tests {
 pub enum RenderGridsError {
     #[error("holds neither a `density` nor an `emission` grid (grids: {0})")]
     NoAuroraGrids(String),
+    /// A grid the renderer would use has a type it cannot (a vec3 or bool
+    /// `density`, say): refused rather than silently ignored.
+    #[error("grid `{name}` is {type_name}; the renderer needs {expected}")]
+    WrongType { name: String, type_name: String, expected: &'static str },
 }
 
 /// The grids a renderer needs from a file: a float `density` grid (extinction)
@@ -444,6 +448,16 @@ pub enum RenderGridsError {
 /// all three channels). Either may be absent, not both.
 pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
     let names: Vec<String> = file.grids.iter().map(|g| g.name.clone()).collect();
+    for g in &file.grids {
+        let expected = match g.name.as_str() {
+            "density" if g.kind != Some(ValueKind::Float) => "a float grid (extinction per unit length)",
+            "emission" if !matches!(g.kind, Some(ValueKind::Float) | Some(ValueKind::Vec3)) => {
+                "a vec3 grid (or a float grid, taken as grey)"
+            }
+            _ => continue,
+        };
+        return Err(RenderGridsError::WrongType { name: g.name.clone(), type_name: g.type_name.clone(), expected });
+    }
     let mut density = None;
     let mut float_emission = None;
     for g in file.float_grids {

@@ -1,0 +1,233 @@
+//! The bake's memory, known before it is spent.
+//!
+//! [`estimate`] bounds what a bake of a validated scene allocates at its peak,
+//! from the scene alone (before any footprint is simulated or beam traced), and
+//! [`check`] compares it with what this process may use
+//! ([`crate::memory::available`]), refusing with the key that drives the
+//! estimate, the memory needed and the memory available. Every term is an
+//! upper bound, so a scene that passes does not run out of memory through the
+//! bake's own allocations; scenes near the limit may be refused that would
+//! have fitted (the error says which key to lower).
+//!
+//! The terms (bytes):
+//! - **photons**: at most `ceil(1 / beams.dt)` photons per beam (one per
+//!   step), `beams.count` beams, [`Photon`] each; held three times at the
+//!   peak (the per-beam vectors while they are concatenated, the
+//!   concatenation, and the kd-tree's copy of the positions with indices).
+//! - **candidate leaves**: every photon lists the 8^3-voxel leaves within the
+//!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` before they are
+//!   deduplicated: at most `photons * L` entries of 12 bytes, with
+//!   `L = (2 reach / leaf + 2)^3`.
+//! - **grids**: the leaves, at most the smaller of `photons * L` and the
+//!   number of leaves in the scene's world box dilated by the reach, each
+//!   holding an emission leaf (512 x 12 bytes), a density leaf (512 x 4) and
+//!   masks, with 30 % for the Cycles shell and the sort.
+//! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell.
+//!
+//! With `voxel_size = "auto"` the voxel is at least half the smallest kernel
+//! radius ([`crate::bake::auto_voxel_size`]), which the estimate uses.
+
+use crate::beams::Photon;
+use crate::memory::{gib, MemoryLimit};
+use crate::scene::{Scene, VoxelSize};
+
+/// Bytes per leaf of both grids: emission values, density values, two masks
+/// and bookkeeping.
+const LEAF_BYTES: f64 = 512.0 * 12.0 + 512.0 * 4.0 + 2.0 * 64.0 + 64.0;
+/// Share of the limit the estimate may use (the rest: the program, the
+/// allocator's slack, the output writer's buffers).
+pub const USABLE_FRACTION: f64 = 0.8;
+
+/// One term of the estimate, and the scene key that drives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Term {
+    pub what: &'static str,
+    pub bytes: f64,
+    /// The key to change, as the user writes it (e.g. "beams.count").
+    pub key: String,
+    /// Its value, as written.
+    pub value: String,
+}
+
+/// The bake's estimated peak memory, term by term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub terms: Vec<Term>,
+}
+
+impl Estimate {
+    pub fn total(&self) -> f64 {
+        self.terms.iter().map(|t| t.bytes).sum()
+    }
+    /// The largest term.
+    pub fn dominant(&self) -> &Term {
+        self.terms.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)).expect("an estimate has terms")
+    }
+}
+
+/// A bake that would not fit.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{key} = {value} needs about {needed} for its {what} ({total} in all), but this process may use {available}; lower {key}")]
+pub struct TooLarge {
+    pub key: String,
+    pub value: String,
+    pub what: &'static str,
+    pub needed: String,
+    pub total: String,
+    pub available: String,
+}
+
+/// A conservative world box around every curtain, km: footprint boxes
+/// (rotated), from 50 km (below the lowest altitude the hardest electrons
+/// reach) to the beams' top, widened by the drift along an inclined field.
+pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
+    let z0 = 50.0;
+    let z1 = scene.beams.top_km + scene.beams.top_noise_km;
+    let tilt = (90.0 - scene.beams.b_inclination_deg).to_radians().tan() * (z1 - z0);
+    let mut lo = [f64::INFINITY, f64::INFINITY, z0];
+    let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
+    for c in &scene.curtains {
+        let (s, co) = c.rotation_deg.to_radians().sin_cos();
+        for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
+            let (u, w) = (a * c.length, b * c.width);
+            let x = c.center[0] + u * co - w * s;
+            let y = c.center[1] + u * s + w * co;
+            lo[0] = lo[0].min(x - tilt);
+            lo[1] = lo[1].min(y - tilt);
+            hi[0] = hi[0].max(x + tilt);
+            hi[1] = hi[1].max(y + tilt);
+        }
+    }
+    (lo, hi)
+}
+
+/// The smallest voxel the bake may use, km.
+fn min_voxel_km(scene: &Scene) -> (f64, String, String) {
+    match scene.grid.voxel_size {
+        VoxelSize::Km(v) => (v, "grid.voxel_size".into(), format!("{v}")),
+        VoxelSize::Auto(_) => (
+            0.5 * scene.photons.radius_km,
+            "grid.voxel_size".into(),
+            format!("\"auto\" (at least photons.radius_km / 2 = {} km)", 0.5 * scene.photons.radius_km),
+        ),
+    }
+}
+
+/// The bake's peak memory, bounded from the scene alone.
+pub fn estimate(scene: &Scene) -> Estimate {
+    let b = &scene.beams;
+    let steps = (1.0 / b.dt).ceil();
+    let photons = b.count as f64 * steps;
+    let photon_bytes = std::mem::size_of::<Photon>() as f64;
+    let (photon_key, photon_value) = if steps > 1000.0 {
+        ("beams.dt".to_string(), format!("{}", b.dt))
+    } else {
+        ("beams.count".to_string(), format!("{}", b.count))
+    };
+
+    let (voxel, vkey, vvalue) = min_voxel_km(scene);
+    let leaf_km = 8.0 * voxel;
+    let p = &scene.photons;
+    let reach = p.cutoff * p.radius_km * (1.0 + p.radius_noise);
+    let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
+    let (lo, hi) = world_bounds(scene);
+    let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
+    let leaves = box_leaves.min(photons * per_photon);
+    // Blame the kernel when its reach, not the voxel or the curtains, makes the grid large.
+    let box_without_reach: f64 = (0..3).map(|i| ((hi[i] - lo[i]) / leaf_km).ceil() + 1.0).product();
+    let (grid_key, grid_value) = if box_leaves > 4.0 * box_without_reach && reach > leaf_km {
+        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    } else {
+        (vkey, vvalue)
+    };
+    let candidates = photons * per_photon.min(box_leaves) * 12.0;
+    let (cand_key, cand_value) =
+        if per_photon > 64.0 { ("photons.radius_km".to_string(), format!("{}", p.radius_km)) } else { (photon_key.clone(), photon_value.clone()) };
+
+    let [nx, ny] = scene.footprint.resolution;
+    let footprint = scene.curtains.len() as f64 * nx as f64 * ny as f64 * 12.0 * 8.0;
+
+    Estimate {
+        terms: vec![
+            Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
+            Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
+            Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
+            Term {
+                what: "footprints",
+                bytes: footprint,
+                key: "footprint.resolution".into(),
+                value: format!("[{nx}, {ny}]"),
+            },
+        ],
+    }
+}
+
+/// Refuses a bake whose estimate exceeds [`USABLE_FRACTION`] of `limit`.
+pub fn check(estimate: &Estimate, limit: &MemoryLimit) -> Result<(), TooLarge> {
+    let total = estimate.total();
+    if total <= USABLE_FRACTION * limit.bytes {
+        return Ok(());
+    }
+    let d = estimate.dominant();
+    Err(TooLarge {
+        key: d.key.clone(),
+        value: d.value.clone(),
+        what: d.what,
+        needed: gib(d.bytes),
+        total: gib(total),
+        available: limit.to_string(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limit(g: f64) -> MemoryLimit {
+        MemoryLimit { bytes: g * (1u64 << 30) as f64, source: "test" }
+    }
+
+    #[test]
+    fn default_scene_fits_in_a_few_gib_and_the_bound_is_above_what_it_uses() {
+        let s = Scene::default();
+        let e = estimate(&s);
+        // Measured: 270 MB peak for the default bake (README); the bound is
+        // above it and well below 8 GiB.
+        assert!(e.total() > 0.27e9 && e.total() < 4.0 * (1u64 << 30) as f64, "{}", gib(e.total()));
+        check(&e, &limit(8.0)).unwrap();
+    }
+
+    #[test]
+    fn huge_scenes_are_refused_naming_the_key_that_drives_them() {
+        let mut s = Scene::default();
+        s.beams.count = 100_000_000;
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "beams.count", "{e}");
+
+        let mut s = Scene::default();
+        s.beams.dt = 1e-6;
+        assert_eq!(check(&estimate(&s), &limit(8.0)).unwrap_err().key, "beams.dt");
+
+        let mut s = Scene::default();
+        s.photons.radius_km = 50.0;
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "photons.radius_km", "{e}");
+
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Km(0.005);
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "grid.voxel_size", "{e}");
+        assert!(e.to_string().contains("GiB") && e.to_string().contains("test"), "{e}");
+    }
+
+    #[test]
+    fn estimate_grows_with_beams_and_shrinks_with_voxel_size() {
+        let mut s = Scene::default();
+        let a = estimate(&s).total();
+        s.beams.count *= 2;
+        assert!(estimate(&s).total() > a);
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Km(2.0);
+        assert!(estimate(&s).total() < a);
+    }
+}
