@@ -681,7 +681,12 @@ impl Scene {
             v.range(t, "beam_weight", c.beam_weight, 0.0, 1e9, false);
             v.range(t, "bend_km", c.bend_km, 0.0, 1e4, true);
             v.finite(t, "rotation_deg", c.rotation_deg);
-            v.finite(t, "center", c.center[0] + c.center[1]);
+            // Within 10^4 km of the origin, like the curtain's size: the flat
+            // ground means nothing beyond, and photon positions are f32 (at
+            // 10^20 km their spacing would exceed the aurora).
+            if c.center.iter().any(|x| !(x.is_finite() && x.abs() <= 1e4)) {
+                v.push(t, "center", format!("{:?}", c.center), "each coordinate must be in [-1e4, 1e4] km".into());
+            }
             if c.bend_km * 2.0 >= c.width {
                 v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than width / 2 = {}", c.width / 2.0));
             }
