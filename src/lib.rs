@@ -12,6 +12,7 @@ pub mod bake;
 pub mod bench;
 pub mod beams;
 pub mod footprint;
+pub mod frames;
 pub mod grid;
 pub mod outputs;
 pub mod photons;
