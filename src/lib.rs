@@ -7,6 +7,7 @@
 //! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`) know nothing of
 //! the stages above them.
 
+pub mod animation;
 pub mod atmosphere;
 pub mod bake;
 pub mod bench;
