@@ -38,6 +38,10 @@ struct Common {
 #[derive(Subcommand)]
 enum Command {
     /// Bake a scene into DIR/aurora.vdb, DIR/aurora.usda and DIR/bake.json.
+    ///
+    /// With --frames, a sequence: DIR/aurora.NNNN.vdb and DIR/aurora.NNNN.json per frame
+    /// (frame N at [animation] time_s + (N - 1) / fps) and one DIR/aurora.usda time-sampled over
+    /// the whole range. Frames already complete are skipped, so a rerun resumes.
     Bake {
         /// Scene file or preset name.
         #[arg(default_value = "default")]
@@ -48,6 +52,14 @@ enum Command {
         /// Override the scene's seed.
         #[arg(long, value_name = "N")]
         seed: Option<u64>,
+        /// Frames to bake, in Open Job Description range syntax: 4, 1-100, 1,3,7-20:2.
+        #[arg(long, value_name = "SPEC")]
+        frames: Option<String>,
+        /// Bake only a share of the frames: I/N (I from 0), auto (a Slurm job array's
+        /// SLURM_ARRAY_TASK_ID, _MIN and _COUNT) or auto/N (JOB_COMPLETION_INDEX of a
+        /// Kubernetes Indexed Job). Shards share one output folder.
+        #[arg(long, value_name = "I/N|auto|auto/N", requires = "frames")]
+        shard: Option<String>,
         #[command(flatten)]
         common: Common,
     },
@@ -61,9 +73,14 @@ enum Command {
         /// Scene file or preset name.
         #[arg(default_value = "default")]
         scene: String,
-        /// Render this VDB instead of baking the scene.
+        /// Render this VDB instead of baking the scene (with --frame: the sequence folder).
         #[arg(long, value_name = "FILE.vdb")]
         vdb: Option<PathBuf>,
+        /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,
+        /// or a range (1-48) for an image sequence. The frame number goes before the extension
+        /// of --out and --png (aurora.0003.exr).
+        #[arg(long, value_name = "SPEC", requires = "vdb")]
+        frame: Option<String>,
         /// Output image (linear Rec.709 RGBA, A = volume coverage 1 - T).
         #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr")]
         out: PathBuf,
@@ -159,14 +176,47 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Bake { scene, out, seed, common } => {
+        Command::Bake { scene, out, seed, frames, shard, common } => {
             let mut scene = load_scene(&scene)?;
             if let Some(s) = seed {
                 scene.seed = s;
             }
-            with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet))
+            match frames {
+                Some(spec) => {
+                    let (frames, mine) = frame_selection(&spec, shard.as_deref())?;
+                    with_threads(common.threads, || bake_frames_cmd(&scene, &out, &frames, &mine, common.quiet))
+                }
+                None => with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet)),
+            }
         }
-        Command::Render { scene: scene_arg, vdb, out, png, spp, shadow_samples, seed, common } => {
+        Command::Render { scene: scene_arg, vdb, frame: Some(spec), out, png, spp, shadow_samples, seed, common } => {
+            if shadow_samples == 0 {
+                return Err(InputError("--shadow-samples must be at least 1".into()).into());
+            }
+            let mut scene = load_scene(&scene_arg)?;
+            if let Some(s) = seed {
+                scene.seed = s;
+            }
+            if let Some(n) = spp {
+                if n == 0 {
+                    return Err(InputError("--spp must be at least 1".into()).into());
+                }
+                scene.render.spp = n;
+            }
+            let (frames, _) = frame_selection(&spec, None)?;
+            let dir = scene_dir(&scene_arg);
+            let seq = vdb.expect("clap requires --vdb with --frame");
+            with_threads(common.threads, || {
+                for &f in &frames {
+                    let (vdb_path, _) = aurora::outputs::frame_paths(&seq, f);
+                    let exr = frame_name(&out, f);
+                    let pngf = png.as_deref().map(|p| frame_name(p, f));
+                    render_cmd(&scene, &dir, Some(&vdb_path), &exr, pngf.as_deref(), shadow_samples, common.quiet)?;
+                }
+                Ok(())
+            })
+        }
+        Command::Render { scene: scene_arg, vdb, frame: None, out, png, spp, shadow_samples, seed, common } => {
             if shadow_samples == 0 {
                 return Err(InputError("--shadow-samples must be at least 1".into()).into());
             }
@@ -219,6 +269,67 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// The frames of SPEC (exit 2 on bad syntax or a negative frame) and the
+/// share `--shard` gives this process.
+fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec<i64>)> {
+    let frames = aurora::frames::parse_range(spec).map_err(|e| InputError(e.to_string()))?;
+    if let Some(f) = frames.iter().find(|&&f| f < 0) {
+        return Err(InputError(format!(
+            "--frames `{spec}`: frame {f} is negative; frame files are named by frame number (aurora.0001.vdb), so frames must be >= 0"
+        ))
+        .into());
+    }
+    let (i, n) = match shard {
+        None => (0, 1),
+        Some(t) => aurora::frames::Shard::parse(t)
+            .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
+            .map_err(|e| InputError(e.to_string()))?,
+    };
+    let mine = aurora::frames::select(&frames, i, n);
+    Ok((frames, mine))
+}
+
+/// `name.ext` -> `name.NNNN.ext` (the frame before the extension).
+fn frame_name(path: &Path, frame: i64) -> PathBuf {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "frame".into());
+    let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(aurora::frames::frame_file_name(&stem, frame, &ext))
+}
+
+/// Bakes this process's share `mine` of the sequence `frames` into `out`.
+fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    aurora::outputs::write_sequence_usda(out, frames, scene.animation.fps)?;
+    let t0 = std::time::Instant::now();
+    let (mut baked, mut skipped) = (0usize, 0usize);
+    for &f in mine {
+        if aurora::outputs::frame_complete(out, f) {
+            skipped += 1;
+            continue;
+        }
+        let at = Scene { animation: aurora::animation::at_frame(&scene.animation, f), ..scene.clone() };
+        let bake = aurora::bake::bake(&at, progress)?;
+        print_warnings(&bake.stats.warnings);
+        let report = aurora::outputs::write_frame(&at, &bake, out, f)?;
+        baked += 1;
+        if !quiet {
+            eprintln!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display());
+        }
+    }
+    if !quiet {
+        let secs = t0.elapsed().as_secs_f64();
+        eprintln!(
+            "{baked} frames baked, {skipped} already complete, of {} for this shard ({} in the sequence) in {secs:.2} s ({:.3} frames/s); stage {}",
+            mine.len(),
+            frames.len(),
+            if secs > 0.0 { baked as f64 / secs } else { 0.0 },
+            out.join(aurora::outputs::USDA_NAME).display()
+        );
+    }
+    Ok(())
 }
 
 /// The folder relative paths in a scene file (a heightmap) are resolved

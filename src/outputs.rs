@@ -15,6 +15,8 @@ use std::time::Instant;
 pub const VDB_NAME: &str = "aurora.vdb";
 pub const USDA_NAME: &str = "aurora.usda";
 pub const JSON_NAME: &str = "bake.json";
+/// Stem of a sequence's frame files: `aurora.NNNN.vdb`, `aurora.NNNN.json`.
+pub const FRAME_STEM: &str = "aurora";
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -144,4 +146,75 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
     write_atomic(&json_path, text.as_bytes())
         .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
     Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
+}
+
+/// The frame files of a sequence: `DIR/aurora.NNNN.vdb` and its report
+/// `DIR/aurora.NNNN.json`.
+pub fn frame_paths(out: &Path, frame: i64) -> (PathBuf, PathBuf) {
+    (
+        out.join(crate::frames::frame_file_name(FRAME_STEM, frame, "vdb")),
+        out.join(crate::frames::frame_file_name(FRAME_STEM, frame, "json")),
+    )
+}
+
+/// A frame is complete when both its final names exist. Final names only
+/// ever appear by rename (temporaries are `.NAME.tmpPID`), and the report is
+/// renamed last, so a frame interrupted anywhere is baked again.
+pub fn frame_complete(out: &Path, frame: i64) -> bool {
+    let (vdb, json) = frame_paths(out, frame);
+    vdb.is_file() && json.is_file()
+}
+
+/// Writes the sequence stage `DIR/aurora.usda` listing every frame of the
+/// range (whichever shard bakes it): the same bytes from every shard, written
+/// to a temporary name and renamed, so it is never half-written and any
+/// shard may rewrite it.
+pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathBuf, OutputError> {
+    std::fs::create_dir_all(out).map_err(|source| OutputError::CreateDir { path: out.to_path_buf(), source })?;
+    let list: Vec<(i64, String)> =
+        frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
+    let path = out.join(USDA_NAME);
+    usd::write_usda_sequence(&path, &list, &[("density", "float"), ("emission", "float3")], 1000.0, fps)
+        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+    Ok(path)
+}
+
+/// Writes frame `frame` of a sequence: the VDB (with `aurora_frame` and
+/// `aurora_time_s` metadata), then its report (renamed last: see
+/// [`frame_complete`]). `scene` is the scene at that frame's time.
+pub fn write_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64) -> Result<BakeReport, OutputError> {
+    std::fs::create_dir_all(out).map_err(|source| OutputError::CreateDir { path: out.to_path_buf(), source })?;
+    let (vdb_path, json_path) = frame_paths(out, frame);
+    let mut opts = write_options(scene);
+    opts.metadata.push(("aurora_frame".into(), MetaValue::Int64(frame)));
+    opts.metadata.push(("aurora_time_s".into(), MetaValue::String(format!("{}", scene.animation.time_s))));
+    let t0 = Instant::now();
+    let stats = write_vdb(&vdb_path, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &opts)
+        .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
+    let vdb_seconds = t0.elapsed().as_secs_f64();
+    let vdb_name = crate::frames::frame_file_name(FRAME_STEM, frame, "vdb");
+    let report = json!({
+        "aurora_version": env!("CARGO_PKG_VERSION"),
+        "scene_hash": format!("{:016x}", scene.hash()),
+        "seed": scene.seed,
+        "units": "km",
+        "frame": frame,
+        "time_s": scene.animation.time_s,
+        "fps": scene.animation.fps,
+        "threads": rayon::current_num_threads(),
+        "stats": bake.stats,
+        "files": {
+            "vdb": vdb_name,
+            "vdb_bytes": stats.bytes,
+            "vdb_write_seconds": vdb_seconds,
+            "usda": USDA_NAME,
+            "compression": scene.grid.compression,
+            "half_emission": scene.grid.half_emission,
+        },
+        "total_seconds": bake.stats.total_seconds() + vdb_seconds,
+    });
+    let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
+    write_atomic(&json_path, text.as_bytes())
+        .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
+    Ok(BakeReport { vdb: vdb_path, usda: out.join(USDA_NAME), json_path, json: report })
 }
