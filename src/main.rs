@@ -53,7 +53,7 @@ enum Command {
         #[arg(long, value_name = "N")]
         seed: Option<u64>,
         /// Frames to bake, in Open Job Description range syntax: 4, 1-100, 1,3,7-20:2.
-        #[arg(long, value_name = "SPEC")]
+        #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
         frames: Option<String>,
         /// Bake only a share of the frames: I/N (I from 0), auto (a Slurm job array's
         /// SLURM_ARRAY_TASK_ID, _MIN and _COUNT) or auto/N (JOB_COMPLETION_INDEX of a
@@ -79,7 +79,7 @@ enum Command {
         /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,
         /// or a range (1-48) for an image sequence. The frame number goes before the extension
         /// of --out and --png (aurora.0003.exr).
-        #[arg(long, value_name = "SPEC", requires = "vdb")]
+        #[arg(long, value_name = "SPEC", requires = "vdb", allow_hyphen_values = true)]
         frame: Option<String>,
         /// Output image (linear Rec.709 RGBA, A = volume coverage 1 - T).
         #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr")]
