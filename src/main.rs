@@ -60,6 +60,11 @@ enum Command {
         /// Kubernetes Indexed Job). Shards share one output folder.
         #[arg(long, value_name = "I/N|auto|auto/N", requires = "frames")]
         shard: Option<String>,
+        /// The whole range aurora.usda lists, when --frames is one farm task's part of it
+        /// (an Open Job Description task baking frame 7 of 1-100: --frames 7 --sequence 1-100).
+        /// Default: --frames.
+        #[arg(long, value_name = "SPEC", requires = "frames", allow_hyphen_values = true)]
+        sequence: Option<String>,
         #[command(flatten)]
         common: Common,
     },
@@ -176,14 +181,21 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Bake { scene, out, seed, frames, shard, common } => {
+        Command::Bake { scene, out, seed, frames, shard, sequence, common } => {
             let mut scene = load_scene(&scene)?;
             if let Some(s) = seed {
                 scene.seed = s;
             }
             match frames {
                 Some(spec) => {
-                    let (frames, mine) = frame_selection(&spec, shard.as_deref())?;
+                    let (mut frames, mine) = frame_selection(&spec, shard.as_deref())?;
+                    if let Some(seq) = sequence {
+                        let (all, _) = frame_selection(&seq, None)?;
+                        if let Some(f) = frames.iter().find(|f| all.binary_search(f).is_err()) {
+                            return Err(InputError(format!("--frames `{spec}`: frame {f} is not in --sequence `{seq}`")).into());
+                        }
+                        frames = all;
+                    }
                     with_threads(common.threads, || bake_frames_cmd(&scene, &out, &frames, &mine, common.quiet))
                 }
                 None => with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet)),
