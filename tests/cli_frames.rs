@@ -185,3 +185,26 @@ fn bad_ranges_and_shards_exit_2_naming_the_text() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("stepped"));
     assert!(!out.exists(), "a refused bake wrote {}", out.display());
 }
+
+#[test]
+fn render_frame_renders_one_frame_or_a_range_of_a_sequence_folder() {
+    let dir = scratch("render");
+    let scene = dir.join("small.toml");
+    std::fs::write(&scene, format!("{SMALL}[render]\nwidth = 16\nheight = 12\nspp = 1\n")).unwrap();
+    let out = dir.join("out");
+    ok(&bake(&scene, &out, &["--frames", "1-2"], &[]));
+    let img = dir.join("f.exr");
+    let o = Command::new(BIN)
+        .arg("render").arg(&scene).arg("--vdb").arg(&out).args(["--frame", "1-2", "--out"]).arg(&img)
+        .arg("--png").arg(dir.join("f.png")).arg("-q")
+        .output().unwrap();
+    ok(&o);
+    for f in ["f.0001.exr", "f.0002.exr", "f.0001.png", "f.0002.png"] {
+        assert!(dir.join(f).is_file(), "{f} missing");
+    }
+    assert_ne!(std::fs::read(dir.join("f.0001.exr")).unwrap(), std::fs::read(dir.join("f.0002.exr")).unwrap());
+    // A frame the folder does not hold is an input error naming the file.
+    let o = Command::new(BIN).arg("render").arg(&scene).arg("--vdb").arg(&out).args(["--frame", "7", "--out"]).arg(&img).arg("-q").output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("aurora.0007.vdb"));
+}
