@@ -14,7 +14,8 @@ Blender's own sequence (is_sequence, frame_start, frame_duration,
 frame_offset: Blender loads file number scene frame - frame_start + 1 +
 frame_offset, digits before the extension replaced at the same width), and
 the scene's frame range and fps to the sequence's (fps from the frame's
-`aurora.NNNN.json`, or the stage's timeCodesPerSecond).
+`aurora.NNNN.json`, or the stage's timeCodesPerSecond), and the current frame
+to the imported file's (a stage: its first frame).
 
 Render accuracy (../shared/notes/cycles-conventions.md): precision FULL (HALF
 is off by up to 0.34%), clipping 0 (the default 0.001 drops faint emission).
@@ -124,6 +125,10 @@ def import_aurora(
         scene.frame_start, scene.frame_end = first, last
         if fps:
             set_scene_fps(scene, fps)
+        # The scene shows the frame that was imported (a frame file's own
+        # number; a stage's first frame), so rendering it renders that file.
+        m = FRAME_RE.match(path.name)
+        scene.frame_current = int(m["digits"]) if m and path.suffix.lower() == ".vdb" else first
     return objects
 
 

@@ -98,7 +98,8 @@ def test_addon_sets_up_the_sequence_from_a_frame_file(addon, fresh, bpy, sequenc
     later.mkdir()
     for f in range(1, 5):
         shutil.copy(sequence / f"aurora.{f:04d}.vdb", later / f"aurora.{f + 4:04d}.vdb")
-    obj = addon.import_aurora(later / "aurora.0005.vdb")[0]
+    obj = addon.import_aurora(later / "aurora.0006.vdb")[0]
+    assert scene.frame_current == 6, "the scene should show the imported frame"
     assert (obj.data.frame_start, obj.data.frame_duration, obj.data.frame_offset) == (5, 4, 4)
     assert (scene.frame_start, scene.frame_end) == (5, 8)
     assert evaluated_file(bpy, obj, 6) == "aurora.0006.vdb"
