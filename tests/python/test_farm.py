@@ -22,6 +22,7 @@ import shutil
 import signal
 import socket
 import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -191,7 +192,10 @@ PartitionName=test Nodes={host} Default=YES MaxTime=INFINITE State=UP
 
 
 def test_openjd_template_checks_and_runs(tmp_path: Path) -> None:
-    openjd = shutil.which("openjd") or str(Path(os.sys.executable).parent / "openjd")
+    # The venv's own openjd (tools/check runs .venv/bin/python without
+    # activating the venv), else one on PATH.
+    beside = Path(sys.executable).parent / "openjd"
+    openjd = str(beside) if beside.exists() else (shutil.which("openjd") or str(beside))
     assert Path(openjd).exists(), "openjd-cli missing: run tools/setup (PIP_PKGS has openjd-cli)"
     template = ROOT / "farm" / "openjd" / "aurora-frames.yaml"
     subprocess.run([openjd, "check", str(template)], check=True)
