@@ -174,9 +174,77 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathB
     let list: Vec<(i64, String)> =
         frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
     let path = out.join(USDA_NAME);
-    usd::write_usda_sequence(&path, &list, &[("density", "float"), ("emission", "float3")], 1000.0, fps)
-        .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+    let err = |e: std::io::Error| OutputError::Write { path: path.clone(), message: e.to_string() };
+    let text = usd::usda_sequence_checked(&list, &[("density", "float"), ("emission", "float3")], 1000.0, fps).map_err(err)?;
+    write_shared(&path, text.as_bytes()).map_err(err)?;
     Ok(path)
+}
+
+/// Atomic write of a file that many processes on many hosts may write at
+/// once into one shared folder (every shard writes the stage): the
+/// temporary name `.NAME.tmp.HOST.PID.NANOS.K` is unique per host, process
+/// and call (containers often all run as PID 1, so a PID alone collides),
+/// created exclusively, then renamed over NAME. Every writer's bytes are
+/// complete before its rename, so NAME is never half-written.
+pub fn write_shared(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    use std::io::Write;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let host = std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .unwrap_or_default()
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '-')
+        .collect::<String>();
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos()).unwrap_or(0);
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = path.with_file_name(format!(
+        ".{name}.tmp.{host}.{}.{nanos}.{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut f = std::fs::OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eight writers (one process, as containers that are all PID 1 look to
+    /// a shared folder) write the stage 40 times each at once: every write
+    /// succeeds, the stage is whole, no temporary is left.
+    #[test]
+    fn concurrent_stage_writers_never_fail_or_leave_temporaries() {
+        let dir = std::env::temp_dir().join(format!("aurora-shared-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let frames: Vec<i64> = (1..=500).collect();
+        std::thread::scope(|s| {
+            for _ in 0..8 {
+                s.spawn(|| {
+                    for _ in 0..40 {
+                        write_sequence_usda(&dir, &frames, 24.0).unwrap();
+                    }
+                });
+            }
+        });
+        let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
+        assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
+        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, [USDA_NAME]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
 
 /// Writes frame `frame` of a sequence: the VDB (with `aurora_frame` and

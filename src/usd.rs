@@ -170,6 +170,18 @@ pub fn write_usda_sequence(
     meters_per_unit: f64,
     fps: f64,
 ) -> Result<(), std::io::Error> {
+    let text = usda_sequence_checked(frames, fields, meters_per_unit, fps)?;
+    crate::vdb::write::write_atomic(path, text.as_bytes())
+}
+
+/// [`usda_sequence_text`] after checking its inputs as
+/// [`write_usda_sequence`] does.
+pub fn usda_sequence_checked(
+    frames: &[(i64, String)],
+    fields: &[(&str, &str)],
+    meters_per_unit: f64,
+    fps: f64,
+) -> Result<String, std::io::Error> {
     if frames.is_empty() || frames.windows(2).any(|w| w[1].0 <= w[0].0) {
         return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
     }
@@ -179,7 +191,7 @@ pub fn write_usda_sequence(
     for (_, name) in frames {
         check(name, fields, meters_per_unit)?;
     }
-    crate::vdb::write::write_atomic(path, usda_sequence_text(frames, fields, meters_per_unit, fps).as_bytes())
+    Ok(usda_sequence_text(frames, fields, meters_per_unit, fps))
 }
 
 /// A number as USD writes it: integers without a decimal point.
