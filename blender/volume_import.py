@@ -8,12 +8,23 @@ one km here, so the roots are then scaled by 1/1000. Path lengths are
 measured in the grid's own units (`volume.render.space` OBJECT), the units
 of the bake's per-km density and emission, whatever the object's scale.
 
+Sequences (`aurora bake --frames`): importing any `aurora.NNNN.vdb` of a
+folder, or the folder's time-sampled `aurora.usda`, sets the Volume up as
+Blender's own sequence (is_sequence, frame_start, frame_duration,
+frame_offset: Blender loads file number scene frame - frame_start + 1 +
+frame_offset, digits before the extension replaced at the same width), and
+the scene's frame range and fps to the sequence's (fps from the frame's
+`aurora.NNNN.json`, or the stage's timeCodesPerSecond), and the current frame
+to the imported file's (a stage: its first frame).
+
 Render accuracy (../shared/notes/cycles-conventions.md): precision FULL (HALF
 is off by up to 0.34%), clipping 0 (the default 0.001 drops faint emission).
 """
 
 from __future__ import annotations
 
+import json
+import re
 from pathlib import Path
 
 import bpy
@@ -106,7 +117,73 @@ def import_aurora(
         obj["aurora_source"] = str(source)
     if set_units:
         set_scene_units(scene)
+    seq = sequence_of(path)
+    if seq is not None:
+        first, last, fps = seq
+        for obj in objects:
+            set_volume_sequence(obj.data, first, last)
+        scene.frame_start, scene.frame_end = first, last
+        if fps:
+            set_scene_fps(scene, fps)
+        # The scene shows the frame that was imported (a frame file's own
+        # number; a stage's first frame), so rendering it renders that file.
+        m = FRAME_RE.match(path.name)
+        scene.frame_current = int(m["digits"]) if m and path.suffix.lower() == ".vdb" else first
     return objects
+
+
+#: `stem.NNNN.vdb`: the digits just before the extension (Blender's rule).
+FRAME_RE = re.compile(r"^(?P<stem>.*?)(?P<digits>\d+)(?P<ext>\.vdb)$", re.IGNORECASE)
+
+
+def sequence_of(path: Path) -> tuple[int, int, float | None] | None:
+    """(first frame, last frame, fps or None) of the sequence `path` belongs
+    to: a frame file `stem.NNNN.vdb` with sibling frames, or a stage whose
+    filePath is time-sampled. None for a single file."""
+    if path.suffix.lower() == ".usda":
+        text = path.read_text(errors="replace")
+        if "filePath.timeSamples" not in text:
+            return None
+        num = lambda key: re.search(rf"^\s*{key}\s*=\s*([-0-9.eE+]+)", text, re.MULTILINE)
+        start, end, tcps = num("startTimeCode"), num("endTimeCode"), num("timeCodesPerSecond")
+        if not (start and end):
+            return None
+        return int(float(start.group(1))), int(float(end.group(1))), float(tcps.group(1)) if tcps else None
+    m = FRAME_RE.match(path.name)
+    if not m:
+        return None
+    stem, width = m["stem"], len(m["digits"])
+    frames = []
+    for p in path.parent.iterdir():
+        q = FRAME_RE.match(p.name)
+        if q and q["stem"] == stem and len(q["digits"]) >= width and p.is_file():
+            frames.append(int(q["digits"]))
+    if len(frames) < 2:
+        return None
+    fps = None
+    report = path.with_suffix(".json")
+    try:
+        fps = float(json.loads(report.read_text())["fps"])
+    except (OSError, ValueError, KeyError, TypeError):
+        pass
+    return min(frames), max(frames), fps
+
+
+def set_volume_sequence(vol: bpy.types.Volume, first: int, last: int) -> None:
+    """Scene frame F loads file number F for F in [first, last] (CLIP
+    outside): Blender's file number is F - frame_start + 1 + frame_offset."""
+    vol.is_sequence = True
+    vol.frame_start = first
+    vol.frame_duration = last - first + 1
+    vol.frame_offset = first - 1
+    vol.sequence_mode = "CLIP"
+
+
+def set_scene_fps(scene: bpy.types.Scene, fps: float) -> None:
+    """fps = render.fps / render.fps_base, fps an integer where it can be."""
+    whole = max(1, round(fps))
+    scene.render.fps = whole
+    scene.render.fps_base = whole / fps
 
 
 def _load_grids(vol: bpy.types.Volume, path: Path) -> dict[str, str]:

@@ -10,7 +10,7 @@
 //!    a device node does not write through it but replaces its directory entry:
 //!    as root, `--out /dev/full` used to replace the system's `/dev/full`.)
 //! 2. **A file appears whole or not at all.** Bytes go to a temporary name in
-//!    the destination's folder, `.<name>.tmp<pid>-<n>`, created with
+//!    the destination's folder, `.<name>.tmp<pid>-<n>.<host>`, created with
 //!    `O_EXCL` (so nothing planted at that name is written through), and are
 //!    renamed over the destination at the end. On any error, or when a
 //!    [`TempFile`] is dropped uncommitted, the temporary is removed.
@@ -134,6 +134,18 @@ pub fn prepare_folder(dir: &Path) -> Result<(), AtomicError> {
     Ok(())
 }
 
+/// `.HOST` for temporary names, so writers on several hosts sharing a folder
+/// (farm shards in containers that all run as PID 1) never pick one name.
+fn host_tag() -> String {
+    static TAG: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TAG.get_or_init(|| {
+        let h = std::fs::read_to_string("/proc/sys/kernel/hostname").or_else(|_| std::env::var("HOSTNAME")).unwrap_or_default();
+        let h: String = h.trim().chars().filter(|c| c.is_ascii_alphanumeric() || *c == '-').take(64).collect();
+        if h.is_empty() { String::new() } else { format!(".{h}") }
+    })
+    .clone()
+}
+
 static SERIAL: AtomicU64 = AtomicU64::new(0);
 
 fn next_serial() -> u64 {
@@ -207,7 +219,7 @@ impl TempFile {
         check_replaceable(dest)?;
         sweep_stale(dest)?;
         let name = file_name(dest)?;
-        let tmp = folder_of(dest).join(format!("{}{}-{}", temp_prefix(&name), std::process::id(), next_serial()));
+        let tmp = folder_of(dest).join(format!("{}{}-{}{}", temp_prefix(&name), std::process::id(), next_serial(), host_tag()));
         let file = OpenOptions::new().read(true).write(true).create_new(true).open(&tmp).map_err(io_err(&tmp))?;
         file.lock().map_err(io_err(&tmp))?;
         Ok(Self { tmp, dest: dest.to_path_buf(), file: Some(file) })

@@ -219,9 +219,10 @@ fn round_sig(x: f64, digits: i32) -> f64 {
     (x * p).round() / p
 }
 
-/// One footprint per curtain (in curtain order; simulated in parallel).
+/// One footprint per curtain (in curtain order; simulated in parallel), at
+/// the scene's `animation.time_s`.
 pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    scene.curtains.par_iter().map(|c| footprint::simulate(c, &scene.footprint, scene.seed)).collect()
+    scene.curtains.par_iter().map(|c| footprint::simulate_at(c, &scene.footprint, &scene.animation, scene.seed, scene.animation.time_s)).collect()
 }
 
 /// Mean thickness, km, of the band the beams of a footprint start from: the
@@ -368,7 +369,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
         .curtains
         .par_iter()
         .map(|c| {
-            let f = footprint::simulate(c, &scene.footprint, scene.seed);
+            let f = footprint::simulate_at(c, &scene.footprint, &scene.animation, scene.seed, scene.animation.time_s);
             progress.inc(1);
             f
         })

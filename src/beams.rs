@@ -377,8 +377,12 @@ pub fn trace_all_from(
         if n == 0 {
             continue;
         }
-        let cdf = FootprintCdf::new(fp, threshold);
-        if cdf.is_empty() {
+        // Beam i maps the same point of the unit square through every
+        // frame's footprint (crate::animation: identity across frames).
+        let starts = crate::footprint::StartMap::new(fp, threshold);
+        let anim = &scene.animation;
+        let ray_shift = crate::animation::ray_shift_km(anim);
+        if starts.is_empty() {
             let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
             return Err(BeamError::EmptyFootprint { curtain: ci, threshold, peak });
         }
@@ -401,12 +405,16 @@ pub fn trace_all_from(
             .into_par_iter()
             .map(|i| {
                 let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
-                let (u, v) = cdf.sample(fp, &mut r);
+                let (xi1, xi2) = (r.random::<f64>(), r.random::<f64>());
+                let (u, v) = starts.map(xi1, xi2);
                 let (x, y) = fp.to_world(u, v);
-                // High-frequency noise on the start height along the curtain.
+                // High-frequency noise on the start height along the curtain
+                // (the rays), running along it in time.
+                let ur = u - ray_shift;
                 let z = scene.beams.top_km
-                    + scene.beams.top_noise_km * rng::noise1(&top_noise, u * scene.beams.top_noise_freq);
-                let colour_offset_km = scene.colour.noise_km * rng::noise1(&colour_noise, u * scene.colour.noise_freq);
+                    + scene.beams.top_noise_km * rng::noise1(&top_noise, ur * scene.beams.top_noise_freq);
+                let colour_offset_km = scene.colour.noise_km * rng::noise1(&colour_noise, ur * scene.colour.noise_freq);
+                let power_kev_s = power_kev_s * crate::animation::pulsation(anim, scene.seed, x, y);
                 let e0 = if r.random::<f64>() < curtain.soft_fraction { curtain.soft_energy_kev } else { curtain.char_energy_kev };
                 let start = BeamStart {
                     position: DVec3::new(x, y, z),

@@ -7,6 +7,7 @@
 //! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`) know nothing of
 //! the stages above them.
 
+pub mod animation;
 pub mod atmosphere;
 pub mod atomic;
 pub mod bake;
@@ -14,6 +15,7 @@ pub mod bench;
 pub mod budget;
 pub mod beams;
 pub mod footprint;
+pub mod frames;
 pub mod grid;
 pub mod memory;
 pub mod outputs;

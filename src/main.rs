@@ -38,6 +38,10 @@ struct Common {
 #[derive(Subcommand)]
 enum Command {
     /// Bake a scene into DIR/aurora.vdb, DIR/aurora.usda and DIR/bake.json.
+    ///
+    /// With --frames, a sequence: DIR/aurora.NNNN.vdb and DIR/aurora.NNNN.json per frame
+    /// (frame N at [animation] time_s + (N - 1) / fps) and one DIR/aurora.usda time-sampled over
+    /// the whole range. Frames already complete are skipped, so a rerun resumes.
     Bake {
         /// Scene file or preset name.
         #[arg(default_value = "default")]
@@ -48,6 +52,19 @@ enum Command {
         /// Override the scene's seed.
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
         seed: Option<u64>,
+        /// Frames to bake, in Open Job Description range syntax: 4, 1-100, 1,3,7-20:2.
+        #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+        frames: Option<String>,
+        /// Bake only a share of the frames: I/N (I from 0), auto (a Slurm job array's
+        /// SLURM_ARRAY_TASK_ID, _MIN and _COUNT) or auto/N (JOB_COMPLETION_INDEX of a
+        /// Kubernetes Indexed Job). Shards share one output folder.
+        #[arg(long, value_name = "I/N|auto|auto/N", requires = "frames")]
+        shard: Option<String>,
+        /// The whole range aurora.usda lists, when --frames is one farm task's part of it
+        /// (an Open Job Description task baking frame 7 of 1-100: --frames 7 --sequence 1-100).
+        /// Default: --frames.
+        #[arg(long, value_name = "SPEC", requires = "frames", allow_hyphen_values = true)]
+        sequence: Option<String>,
         #[command(flatten)]
         common: Common,
     },
@@ -61,9 +78,14 @@ enum Command {
         /// Scene file or preset name.
         #[arg(default_value = "default")]
         scene: String,
-        /// Render this VDB instead of baking the scene.
+        /// Render this VDB instead of baking the scene (with --frame: the sequence folder).
         #[arg(long, value_name = "FILE.vdb")]
         vdb: Option<PathBuf>,
+        /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,
+        /// or a range (1-48) for an image sequence. The frame number goes before the extension
+        /// of --out and --png (aurora.0003.exr).
+        #[arg(long, value_name = "SPEC", requires = "vdb", allow_hyphen_values = true)]
+        frame: Option<String>,
         /// Output image, its format from the extension: .exr (linear Rec.709 RGBA, A = volume
         /// coverage 1 - T) or .png (sRGB preview at [render] exposure). Only a new name or a
         /// regular file is ever replaced.
@@ -170,14 +192,27 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Bake { scene, out, seed, common } => {
+        Command::Bake { scene, out, seed, frames, shard, sequence, common } => {
             let mut scene = load_scene(&scene)?;
             if let Some(s) = seed {
                 scene.seed = s;
             }
-            with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet))
+            match frames {
+                Some(spec) => {
+                    let (mut frames, mine) = frame_selection(&spec, shard.as_deref())?;
+                    if let Some(seq) = sequence {
+                        let (all, _) = frame_selection(&seq, None)?;
+                        if let Some(f) = frames.iter().find(|f| all.binary_search(f).is_err()) {
+                            return Err(InputError(format!("--frames `{spec}`: frame {f} is not in --sequence `{seq}`")).into());
+                        }
+                        frames = all;
+                    }
+                    with_threads(common.threads, || bake_frames_cmd(&scene, &out, &frames, &mine, common.quiet))
+                }
+                None => with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet)),
+            }
         }
-        Command::Render { scene: scene_arg, vdb, out, png, spp, shadow_samples, seed, common } => {
+        Command::Render { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, common } => {
             let shadow_samples = shadow_samples as usize;
             let mut scene = load_scene(&scene_arg)?;
             if let Some(s) = seed {
@@ -196,9 +231,27 @@ fn run(cli: Cli) -> Result<()> {
                 aurora::atomic::check_replaceable(p)?;
             }
             aurora::atomic::check_replaceable(&out)?;
-            with_threads(common.threads, || {
-                render_cmd(&scene, &dir, vdb.as_deref(), &out, format, png.as_deref(), shadow_samples, common.quiet)
-            })
+            match frame {
+                Some(spec) => {
+                    let (frames, _) = frame_selection(&spec, None)?;
+                    let seq = vdb.expect("clap requires --vdb with --frame");
+                    for &f in &frames {
+                        aurora::atomic::check_replaceable(&frame_name(&out, f))?;
+                    }
+                    with_threads(common.threads, || {
+                        for &f in &frames {
+                            let (vdb_path, _) = aurora::outputs::frame_paths(&seq, f);
+                            let exr = frame_name(&out, f);
+                            let pngf = png.as_deref().map(|p| frame_name(p, f));
+                            render_cmd(&scene, &dir, Some(&vdb_path), &exr, format, pngf.as_deref(), shadow_samples, common.quiet)?;
+                        }
+                        Ok(())
+                    })
+                }
+                None => with_threads(common.threads, || {
+                    render_cmd(&scene, &dir, vdb.as_deref(), &out, format, png.as_deref(), shadow_samples, common.quiet)
+                }),
+            }
         }
         Command::Bench { scene: scene_arg, out, quick, common } => {
             let scene = load_scene(&scene_arg)?;
@@ -240,6 +293,78 @@ fn run(cli: Cli) -> Result<()> {
             Ok(())
         }
     }
+}
+
+/// The frames of SPEC (exit 2 on bad syntax or a negative frame) and the
+/// share `--shard` gives this process.
+fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec<i64>)> {
+    let frames = aurora::frames::parse_range(spec).map_err(|e| InputError(e.to_string()))?;
+    if let Some(f) = frames.iter().find(|&&f| f < 0) {
+        return Err(InputError(format!(
+            "--frames `{spec}`: frame {f} is negative; frame files are named by frame number (aurora.0001.vdb), so frames must be >= 0"
+        ))
+        .into());
+    }
+    let (i, n) = match shard {
+        None => (0, 1),
+        Some(t) => aurora::frames::Shard::parse(t)
+            .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
+            .map_err(|e| InputError(e.to_string()))?,
+    };
+    let mine = aurora::frames::select(&frames, i, n);
+    Ok((frames, mine))
+}
+
+/// `name.ext` -> `name.NNNN.ext` (the frame before the extension).
+fn frame_name(path: &Path, frame: i64) -> PathBuf {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "frame".into());
+    let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(aurora::frames::frame_file_name(&stem, frame, &ext))
+}
+
+/// Bakes this process's share `mine` of the sequence `frames` into `out`.
+fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    aurora::outputs::write_sequence_usda(out, frames, scene.animation.fps)?;
+    let t0 = std::time::Instant::now();
+    let (mut baked, mut skipped) = (0usize, 0usize);
+    for &f in mine {
+        if aurora::outputs::frame_complete(out, f) {
+            skipped += 1;
+            continue;
+        }
+        // One writer per frame: a shard that finds another baking it waits,
+        // then finds it complete.
+        let _lock = aurora::outputs::lock_frame(out, f, || {
+            if !quiet {
+                eprintln!("frame {f}: another process is baking it; waiting")
+            }
+        })?;
+        if aurora::outputs::frame_complete(out, f) {
+            skipped += 1;
+            continue;
+        }
+        let at = Scene { animation: aurora::animation::at_frame(&scene.animation, f), ..scene.clone() };
+        let bake = aurora::bake::bake(&at, progress)?;
+        print_warnings(&bake.stats.warnings);
+        let report = aurora::outputs::write_frame(&at, &bake, out, f)?;
+        baked += 1;
+        if !quiet {
+            eprintln!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display());
+        }
+    }
+    if !quiet {
+        let secs = t0.elapsed().as_secs_f64();
+        eprintln!(
+            "{baked} frames baked, {skipped} already complete, of {} for this shard ({} in the sequence) in {secs:.2} s ({:.3} frames/s); stage {}",
+            mine.len(),
+            frames.len(),
+            if secs > 0.0 { baked as f64 / secs } else { 0.0 },
+            out.join(aurora::outputs::USDA_NAME).display()
+        );
+    }
+    Ok(())
 }
 
 /// The folder relative paths in a scene file (a heightmap) are resolved

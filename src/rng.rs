@@ -20,6 +20,7 @@ pub mod tag {
     pub const BEAM_TOP_NOISE: u64 = 0x2002;
     pub const COLOUR_NOISE: u64 = 0x2003;
     pub const RADIUS_NOISE: u64 = 0x3001;
+    pub const PULSATION: u64 = 0x4001;
 }
 
 /// The splitmix64 finaliser of `x + golden gamma`: a bijection on u64 with
@@ -60,8 +61,12 @@ pub fn perlin(parts: &[u64]) -> Perlin {
 /// flooring, which breaks continuity at negative coordinates.)
 #[inline]
 pub fn noise1(p: &Perlin, x: f64) -> f64 {
-    noise2(p, x, 0.371_9)
+    noise2(p, x, NOISE1_Y)
 }
+
+/// The y at which [`noise1`] reads the 2D noise: a motion that moves along
+/// y from here starts from the 1D noise.
+pub const NOISE1_Y: f64 = 0.371_9;
 
 /// 2D Perlin noise in [-1, 1].
 ///

@@ -32,6 +32,7 @@ pub struct Scene {
     pub volume: VolumeParams,
     pub background: Background,
     pub terrain: Terrain,
+    pub animation: AnimationParams,
 }
 
 /// One auroral curtain: where its footprint lies and how hard it is driven.
@@ -88,6 +89,46 @@ pub struct FootprintParams {
     pub bend_wavelength: f64,
     /// Footprint densities below this (of a peak of 1) emit no beams.
     pub threshold: f64,
+}
+
+/// Motion in time (`crate::animation`): closed form in t, so any frame costs
+/// one bake. Speeds from the time scales physicists quote (see
+/// `../shared/notes/validation-and-animation.md`); every motion parameter at 0
+/// gives identical frames.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct AnimationParams {
+    /// Frames per second of a sequence (`aurora bake --frames`).
+    pub fps: f64,
+    /// Time of the bake, s; frame N of a sequence is baked at
+    /// `time_s + (N - 1) / fps`.
+    pub time_s: f64,
+    /// Phase speed of the folds (the footprint's vortex row) along the
+    /// curtain, km/s (spirals drift about 4 km/s, surges about 2 km/s).
+    pub fold_speed_kms: f64,
+    /// Relative swing of the fold-driving velocity (folds deepen and relax), in [0, 1).
+    pub fold_breathing: f64,
+    /// Period of that swing, s.
+    pub fold_breathing_period_s: f64,
+    /// Speed at which the bend curve travels along the curtain, km/s.
+    pub bend_speed_kms: f64,
+    /// Rate at which the bend curve changes shape, 1/s (its noise moves one
+    /// lattice cell in 1 / rate seconds).
+    pub bend_change_hz: f64,
+    /// Amplitude of the curtain's drift across its axis, km (bounded: a
+    /// sine of period `drift_period_s`, so curtains never leave the view).
+    pub drift_km: f64,
+    pub drift_period_s: f64,
+    /// Speed of the rays (the start-height and colour noise) along the
+    /// curtain, km/s (up to about 25 km/s).
+    pub ray_speed_kms: f64,
+    /// Depth of pulsating patches, in [0, 1] (0 = off): each patch's
+    /// electron flux swings between (1 - pulsation) and 1 times its value.
+    pub pulsation: f64,
+    /// Size of a pulsating patch, km.
+    pub pulsation_patch_km: f64,
+    /// Range of patch periods, s (most often 6-10 s; a few s to 20 s).
+    pub pulsation_period_s: [f64; 2],
 }
 
 /// Electron beams traced down the geomagnetic field (Baranoski et al. 2000).
@@ -397,6 +438,26 @@ impl Default for FootprintParams {
     }
 }
 
+impl Default for AnimationParams {
+    fn default() -> Self {
+        Self {
+            fps: 24.0,
+            time_s: 0.0,
+            fold_speed_kms: 3.0,
+            fold_breathing: 0.3,
+            fold_breathing_period_s: 40.0,
+            bend_speed_kms: 1.0,
+            bend_change_hz: 1.0 / 60.0,
+            drift_km: 8.0,
+            drift_period_s: 300.0,
+            ray_speed_kms: 10.0,
+            pulsation: 0.0,
+            pulsation_patch_km: 25.0,
+            pulsation_period_s: [6.0, 10.0],
+        }
+    }
+}
+
 impl Default for BeamParams {
     fn default() -> Self {
         Self {
@@ -555,6 +616,7 @@ pub mod presets {
             volume: VolumeParams::default(),
             background: Background::default(),
             terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
+            animation: AnimationParams::default(),
         }
     }
 
@@ -709,6 +771,27 @@ impl Scene {
         v.range(t, "density_waves", f.density_waves, 0.0, 1e3, true);
         v.range(t, "bend_wavelength", f.bend_wavelength, 0.0, 1e3, false);
         v.range(t, "threshold", f.threshold, 0.0, 1.0, false);
+
+        let a = &self.animation;
+        let t = Some(("animation", 0));
+        v.range(t, "fps", a.fps, 0.0, 1000.0, false);
+        v.range(t, "time_s", a.time_s, 0.0, 1e7, true);
+        v.range(t, "fold_speed_kms", a.fold_speed_kms, -100.0, 100.0, true);
+        if !(0.0..1.0).contains(&a.fold_breathing) {
+            v.push(t, "fold_breathing", fmt_num(a.fold_breathing), "must be in [0, 1)".into());
+        }
+        v.range(t, "fold_breathing_period_s", a.fold_breathing_period_s, 0.0, 1e6, false);
+        v.range(t, "bend_speed_kms", a.bend_speed_kms, -100.0, 100.0, true);
+        v.range(t, "bend_change_hz", a.bend_change_hz, 0.0, 100.0, true);
+        v.range(t, "drift_km", a.drift_km, 0.0, 1e3, true);
+        v.range(t, "drift_period_s", a.drift_period_s, 0.0, 1e6, false);
+        v.range(t, "ray_speed_kms", a.ray_speed_kms, -100.0, 100.0, true);
+        v.range(t, "pulsation", a.pulsation, 0.0, 1.0, true);
+        v.range(t, "pulsation_patch_km", a.pulsation_patch_km, 0.0, 1e4, false);
+        let [p0, p1] = a.pulsation_period_s;
+        if !(p0.is_finite() && p1.is_finite() && p0 > 0.0 && p1 >= p0 && p1 <= 1e4) {
+            v.push(t, "pulsation_period_s", format!("[{}, {}]", fmt_num(p0), fmt_num(p1)), "must be [min, max] with 0 < min <= max <= 10000".into());
+        }
 
         let b = &self.beams;
         let t = Some(("beams", 0));

@@ -1,7 +1,11 @@
 //! USD stage for the baked volume: `aurora.usda` beside the VDB, one
 //! `UsdVol.Volume` prim whose fields are `OpenVDBAsset` prims pointing into
 //! the single VDB file (Blender keeps only one file per volume; see
-//! `/work/shared/notes/cycles-conventions.md`).
+//! `../shared/notes/cycles-conventions.md`).
+//!
+//! A frame sequence (`aurora bake --frames`) gets one stage whose fields'
+//! `filePath` is time-sampled, one sample per frame file
+//! ([`usda_sequence_text`]).
 //!
 //! Schema facts (usd-core's `usdVol/generatedSchema.usda`): `fieldClass` is a
 //! token among `levelSet`, `fogVolume`, `staggered`, `unknown`;
@@ -99,6 +103,97 @@ pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: 
     s
 }
 
+/// The stage of a frame sequence: the same prims, each field's `filePath`
+/// time-sampled, one sample per frame (`frames`: (frame number, VDB file
+/// name relative to the stage)); `startTimeCode` and `endTimeCode` are the
+/// first and last frame, `timeCodesPerSecond` and `framesPerSecond` the
+/// sequence's fps. USD has no `####` substitution: every frame is listed
+/// (openusd.org, UsdVol OpenVDBAsset). Stage metadata in the order
+/// usd-core's `ExportToString` sorts it. Call [`write_usda_sequence`] to
+/// have the inputs validated.
+pub fn usda_sequence_text(frames: &[(i64, String)], fields: &[(&str, &str)], meters_per_unit: f64, fps: f64) -> String {
+    let asset = |name: &str| {
+        if name.starts_with("./") || name.starts_with("../") {
+            name.to_string()
+        } else {
+            format!("./{name}")
+        }
+    };
+    let (first, last) = (frames.first().map_or(0, |f| f.0), frames.last().map_or(0, |f| f.0));
+    let mut s = String::new();
+    let _ = writeln!(s, "#usda 1.0");
+    let _ = writeln!(s, "(");
+    let _ = writeln!(s, "    defaultPrim = \"{VOLUME_PRIM}\"");
+    let _ = writeln!(
+        s,
+        "    doc = \"Aurora volume sequence written by {}: frames {first} to {last}, {} files\"",
+        crate::vdb::write::CREATOR,
+        frames.len()
+    );
+    let _ = writeln!(s, "    endTimeCode = {last}");
+    let _ = writeln!(s, "    framesPerSecond = {}", fmt_number(fps));
+    let _ = writeln!(s, "    metersPerUnit = {}", fmt_number(meters_per_unit));
+    let _ = writeln!(s, "    startTimeCode = {first}");
+    let _ = writeln!(s, "    timeCodesPerSecond = {}", fmt_number(fps));
+    let _ = writeln!(s, "    upAxis = \"Z\"");
+    let _ = writeln!(s, ")");
+    let _ = writeln!(s);
+    let _ = writeln!(s, "def Volume \"{VOLUME_PRIM}\"");
+    let _ = writeln!(s, "{{");
+    for (name, _) in fields {
+        let _ = writeln!(s, "    custom rel field:{name} = </{VOLUME_PRIM}/{name}>");
+    }
+    for (name, ty) in fields {
+        let _ = writeln!(s);
+        let _ = writeln!(s, "    def OpenVDBAsset \"{name}\"");
+        let _ = writeln!(s, "    {{");
+        let _ = writeln!(s, "        token fieldClass = \"fogVolume\"");
+        let _ = writeln!(s, "        token fieldDataType = \"{ty}\"");
+        let _ = writeln!(s, "        token fieldName = \"{name}\"");
+        let _ = writeln!(s, "        asset filePath.timeSamples = {{");
+        for (f, file) in frames {
+            let _ = writeln!(s, "            {f}: @{}@,", asset(file));
+        }
+        let _ = writeln!(s, "        }}");
+        let _ = writeln!(s, "    }}");
+    }
+    let _ = writeln!(s, "}}");
+    s
+}
+
+/// Writes a sequence stage atomically (see [`usda_sequence_text`]); frames
+/// must be non-empty and ascending, fps finite and positive.
+pub fn write_usda_sequence(
+    path: &Path,
+    frames: &[(i64, String)],
+    fields: &[(&str, &str)],
+    meters_per_unit: f64,
+    fps: f64,
+) -> Result<(), std::io::Error> {
+    let text = usda_sequence_checked(frames, fields, meters_per_unit, fps)?;
+    crate::atomic::write_atomic(path, text.as_bytes()).map_err(Into::into)
+}
+
+/// [`usda_sequence_text`] after checking its inputs as
+/// [`write_usda_sequence`] does.
+pub fn usda_sequence_checked(
+    frames: &[(i64, String)],
+    fields: &[(&str, &str)],
+    meters_per_unit: f64,
+    fps: f64,
+) -> Result<String, std::io::Error> {
+    if frames.is_empty() || frames.windows(2).any(|w| w[1].0 <= w[0].0) {
+        return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
+    }
+    if !(fps.is_finite() && fps > 0.0) {
+        return Err(invalid(format!("fps {fps} must be positive")));
+    }
+    for (_, name) in frames {
+        check(name, fields, meters_per_unit)?;
+    }
+    Ok(usda_sequence_text(frames, fields, meters_per_unit, fps))
+}
+
 /// A number as USD writes it: integers without a decimal point.
 fn fmt_number(x: f64) -> String {
     if x.fract() == 0.0 && x.abs() < 1e15 {
@@ -153,6 +248,19 @@ mod tests {
         assert!(t.starts_with("#usda 1.0\n(\n    defaultPrim = \"aurora\"\n"));
         assert!(t.contains("    metersPerUnit = 1000\n    upAxis = \"Z\"\n)"));
         assert_eq!(fmt_number(0.01), "0.01");
+    }
+
+    #[test]
+    fn sequence_lists_every_frame_as_a_time_sample() {
+        let frames: Vec<(i64, String)> = [1, 2, 3].iter().map(|&f| (f, format!("aurora.{f:04}.vdb"))).collect();
+        let t = usda_sequence_text(&frames, &[("density", "float")], 1000.0, 24.0);
+        assert!(t.contains("    endTimeCode = 3\n    framesPerSecond = 24\n    metersPerUnit = 1000\n    startTimeCode = 1\n    timeCodesPerSecond = 24\n"), "{t}");
+        assert!(t.contains("        asset filePath.timeSamples = {\n            1: @./aurora.0001.vdb@,\n            2: @./aurora.0002.vdb@,\n            3: @./aurora.0003.vdb@,\n        }\n"), "{t}");
+        let p = std::env::temp_dir().join("aurora-usd-seq-never-written.usda");
+        assert!(write_usda_sequence(&p, &[], &[("density", "float")], 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence(&p, &[(2, "a.vdb".into()), (1, "b.vdb".into())], &[("density", "float")], 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence(&p, &frames, &[("density", "float")], 1000.0, 0.0).is_err());
+        assert!(!p.exists());
     }
 
     #[test]

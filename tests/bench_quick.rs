@@ -90,6 +90,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         "primary-ray integration",
         "pruning",
         "shadow rays",
+        "animation flicker",
     ];
     for st in studies {
         assert!(stdout.contains(&format!("== {st} ")), "summary lacks {st}:\n{stdout}");

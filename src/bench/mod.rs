@@ -2,13 +2,15 @@
 //!
 //! [`run`] reduces the scene ([`reduced`]), runs every study ([`sweeps`]):
 //! photon count, gather radius, gather method, voxel size, primary-ray
-//! integration, pruning and shadow rays, each measuring wall time of the affected
+//! integration, pruning, shadow rays and animation flicker
+//! ([`animation`]), each measuring wall time of the affected
 //! stage against error relative to a converged reference, and returns a
 //! [`report::BenchRun`]; [`report::write`] leaves `bench.csv`, `bench.json`
 //! and a chart per study (PNG and SVG, [`chart`]) in the output folder.
 //! Speed targets live here and in the committed runs under
 //! `benchmarks/bench/`, never in unit tests.
 
+pub mod animation;
 pub mod chart;
 pub mod metrics;
 pub mod reduced;
@@ -55,6 +57,7 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     studies.push(b.integration_study(&grids)?);
     studies.push(b.prune_study()?);
     studies.push(b.shadow_study(&grids)?);
+    studies.push(animation::animation_study(&red.scene, &plan, log)?);
     if plan.retime {
         b.retime(&mut studies)?;
     }

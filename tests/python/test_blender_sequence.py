@@ -1,0 +1,127 @@
+"""A baked frame sequence in Blender and USD: Blender's own volume sequence
+logic loads frame 3 from frame 1's name; the add-on sets the sequence up
+(is_sequence, frame_start, frame_duration, frame_offset, scene range and fps)
+from a frame file or from the stage; usd-core reads the stage with one time
+sample per frame and field.
+
+The binary is target/release/aurora (AURORA_BIN overrides).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENE = """
+seed = 7
+[[curtain]]
+length = 40.0
+width = 12.0
+bend_km = 3.0
+[footprint]
+resolution = [96, 32]
+steps = 4
+[beams]
+count = 300
+[photons]
+radius_km = 0.8
+[grid]
+voxel_size = 1.0
+[animation]
+fps = 30.0
+ray_speed_kms = 20.0
+drift_km = 4.0
+drift_period_s = 1.0
+"""
+
+
+@pytest.fixture(scope="module")
+def sequence(tmp_path_factory) -> Path:
+    aurora = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
+    assert aurora.is_file(), f"{aurora} missing: cargo build --release first"
+    d = tmp_path_factory.mktemp("seq")
+    (d / "scene.toml").write_text(SCENE)
+    subprocess.run([str(aurora), "bake", str(d / "scene.toml"), "--frames", "1-4", "--out", str(d / "out"), "-q"], check=True)
+    return d / "out"
+
+
+def evaluated_file(bpy, obj, frame: int) -> str:
+    bpy.context.scene.frame_set(frame)
+    dg = bpy.context.evaluated_depsgraph_get()
+    vol = obj.evaluated_get(dg).data
+    assert vol.grids.load(), vol.grids.error_message
+    return Path(bpy.path.abspath(vol.grids.frame_filepath)).name
+
+
+def bounds(obj) -> list[tuple[float, ...]]:
+    return sorted(tuple(round(c, 4) for c in v) for v in obj.bound_box)
+
+
+def test_blenders_own_sequence_logic_loads_frame_3_from_frame_1s_name(bpy, fresh, sequence):
+    scene = bpy.context.scene
+    vol = bpy.data.volumes.new("seq")
+    vol.filepath = str(sequence / "aurora.0001.vdb")
+    vol.is_sequence = True
+    vol.frame_start = 1
+    vol.frame_duration = 4
+    obj = bpy.data.objects.new("seq", vol)
+    scene.collection.objects.link(obj)
+    assert evaluated_file(bpy, obj, 3) == "aurora.0003.vdb"
+    # And the grids are frame 3's: the same bounds as frame 3 opened alone.
+    dg = bpy.context.evaluated_depsgraph_get()
+    seq_bounds = bounds(obj.evaluated_get(dg))
+    single = bpy.data.volumes.new("single")
+    single.filepath = str(sequence / "aurora.0003.vdb")
+    one = bpy.data.objects.new("single", single)
+    scene.collection.objects.link(one)
+    dg = bpy.context.evaluated_depsgraph_get()
+    assert seq_bounds == bounds(one.evaluated_get(dg))
+    assert evaluated_file(bpy, obj, 1) == "aurora.0001.vdb"
+
+
+def test_addon_sets_up_the_sequence_from_a_frame_file(addon, fresh, bpy, sequence, tmp_path):
+    obj = addon.import_aurora(sequence / "aurora.0001.vdb")[0]
+    vol = obj.data
+    assert (vol.is_sequence, vol.frame_start, vol.frame_duration, vol.frame_offset) == (True, 1, 4, 0)
+    scene = bpy.context.scene
+    assert (scene.frame_start, scene.frame_end) == (1, 4)
+    assert scene.render.fps / scene.render.fps_base == pytest.approx(30.0)
+    assert evaluated_file(bpy, obj, 3) == "aurora.0003.vdb"
+    # A sequence starting at frame 5: scene frame F still loads file F.
+    later = tmp_path / "later"
+    later.mkdir()
+    for f in range(1, 5):
+        shutil.copy(sequence / f"aurora.{f:04d}.vdb", later / f"aurora.{f + 4:04d}.vdb")
+    obj = addon.import_aurora(later / "aurora.0006.vdb")[0]
+    assert scene.frame_current == 6, "the scene should show the imported frame"
+    assert (obj.data.frame_start, obj.data.frame_duration, obj.data.frame_offset) == (5, 4, 4)
+    assert (scene.frame_start, scene.frame_end) == (5, 8)
+    assert evaluated_file(bpy, obj, 6) == "aurora.0006.vdb"
+
+
+def test_stage_has_a_time_sample_per_frame_and_imports_as_a_sequence(addon, fresh, bpy, sequence):
+    usda = sequence / "aurora.usda"
+    check = (
+        "from pxr import Usd, UsdVol; s = Usd.Stage.Open(%r);"
+        "assert (s.GetStartTimeCode(), s.GetEndTimeCode(), s.GetTimeCodesPerSecond()) == (1, 4, 30), s;"
+        "import os\n"
+        "for n in ('density', 'emission'):\n"
+        "    a = UsdVol.OpenVDBAsset(s.GetPrimAtPath('/aurora/' + n)).GetFilePathAttr()\n"
+        "    assert a.GetTimeSamples() == [1, 2, 3, 4], a.GetTimeSamples()\n"
+        "    assert os.path.basename(a.Get(3).resolvedPath) == 'aurora.0003.vdb', a.Get(3)\n" % str(usda)
+    )
+    subprocess.run([sys.executable, "-c", check], check=True)
+    objs = addon.import_aurora(usda)
+    assert len(objs) == 1
+    vol = objs[0].data
+    assert vol.is_sequence and vol.frame_start == 1 and vol.frame_duration == 4
+    scene = bpy.context.scene
+    assert (scene.frame_start, scene.frame_end) == (1, 4)
+    assert scene.render.fps / scene.render.fps_base == pytest.approx(30.0)
+    assert evaluated_file(bpy, objs[0], 3) == "aurora.0003.vdb"
