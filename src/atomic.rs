@@ -170,13 +170,23 @@ fn temp_prefix(name: &str) -> String {
     format!(".{name}.tmp")
 }
 
+/// The prefix of a temporary in the instant between its creation and its lock.
+fn fresh_prefix(name: &str) -> String {
+    format!(".{name}.new")
+}
+
+/// A `.new` file older than this was left by a writer that died between
+/// creating and locking it (microseconds): it is swept too.
+const FRESH_GRACE: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// Removes the temporaries of `path` (`.<name>.tmp*` beside it) whose owner is
 /// gone (their lock is free). Returns how many were removed. Temporaries of a
 /// live writer (locked) are left alone; so is anything that is not a regular
 /// file.
 pub fn sweep_stale(path: &Path) -> Result<usize, AtomicError> {
     let dir = folder_of(path);
-    let prefix = temp_prefix(&file_name(path)?);
+    let name = file_name(path)?;
+    let (prefix, fresh) = (temp_prefix(&name), fresh_prefix(&name));
     let entries = match std::fs::read_dir(&dir) {
         Ok(e) => e,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
@@ -184,11 +194,16 @@ pub fn sweep_stale(path: &Path) -> Result<usize, AtomicError> {
     };
     let mut removed = 0;
     for entry in entries.flatten() {
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if !name.starts_with(&prefix) {
+        let entry_name = entry.file_name().to_string_lossy().into_owned();
+        let p = entry.path();
+        if entry_name.starts_with(&fresh) {
+            let old = std::fs::symlink_metadata(&p).ok().and_then(|m| m.modified().ok()).and_then(|t| t.elapsed().ok());
+            if !old.is_some_and(|age| age > FRESH_GRACE) {
+                continue;
+            }
+        } else if !entry_name.starts_with(&prefix) {
             continue;
         }
-        let p = entry.path();
         if kind_at(&p).ok().flatten() != Some("regular") {
             continue;
         }
@@ -219,9 +234,16 @@ impl TempFile {
         check_replaceable(dest)?;
         sweep_stale(dest)?;
         let name = file_name(dest)?;
-        let tmp = folder_of(dest).join(format!("{}{}-{}{}", temp_prefix(&name), std::process::id(), next_serial(), host_tag()));
-        let file = OpenOptions::new().read(true).write(true).create_new(true).open(&tmp).map_err(io_err(&tmp))?;
-        file.lock().map_err(io_err(&tmp))?;
+        let unique = format!("{}-{}{}", std::process::id(), next_serial(), host_tag());
+        let tmp = folder_of(dest).join(format!("{}{unique}", temp_prefix(&name)));
+        // Created and locked under a name sweepers ignore, then renamed to the
+        // temporary name: a sweeper never sees an unlocked live temporary.
+        let fresh = folder_of(dest).join(format!("{}{unique}", fresh_prefix(&name)));
+        let file = OpenOptions::new().read(true).write(true).create_new(true).open(&fresh).map_err(io_err(&fresh))?;
+        if let Err(e) = file.lock().and_then(|_| std::fs::rename(&fresh, &tmp)) {
+            let _ = std::fs::remove_file(&fresh);
+            return Err(AtomicError::Io { path: tmp, source: e });
+        }
         Ok(Self { tmp, dest: dest.to_path_buf(), file: Some(file) })
     }
 
