@@ -10,6 +10,7 @@
 pub mod atmosphere;
 pub mod bake;
 pub mod bench;
+pub mod fang;
 pub mod beams;
 pub mod footprint;
 pub mod grid;
