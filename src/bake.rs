@@ -325,6 +325,14 @@ pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
     })
 }
 
+/// The scene's neutral atmosphere (`[atmosphere] model`).
+pub fn atmosphere(scene: &Scene) -> Atmosphere {
+    match scene.atmosphere.model {
+        crate::scene::AtmosphereModel::Nrlmsis21 => Atmosphere::nrlmsis21(),
+        crate::scene::AtmosphereModel::Us1976 => Atmosphere::us1976(),
+    }
+}
+
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
@@ -344,7 +352,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     progress.finish();
     times.footprints = t.elapsed().as_secs_f64();
 
-    let atmosphere = Atmosphere::us1976();
+    let atmosphere = atmosphere(scene);
     let colour = colour_table(scene, &atmosphere);
     let mut noise_warning = None;
     let noise = if scene.beams.target_noise > 0.0 {
