@@ -17,6 +17,7 @@ pub mod grid;
 pub mod outputs;
 pub mod photons;
 pub mod pilot;
+pub mod profile;
 pub mod progress;
 pub mod prune;
 pub mod render;
