@@ -34,7 +34,10 @@
 //!   footprint **keeps going**: the footprint only says where electrons enter
 //!   at the top; a field line does not end where our threshold cuts the
 //!   footprint's fringe, and stopping there lost 21 % of the default scene's
-//!   power. The `1/dt` step limit does not stop a Fang beam either (only a
+//!   power. (Only a foot outside the footprint's box enlarged by its own
+//!   size on every side stops a Fang beam: runaway steps, never the
+//!   sub-kilometre wander of ordinary deflections.) A step through the
+//!   atmosphere's bottom is cut there. The `1/dt` step limit does not stop a Fang beam either (only a
 //!   safety cap of [`FANG_MAX_STEPS`]). CSDA keeps the old rules: leaving the
 //!   footprint, `1/dt` steps, or energy spent. Whatever a beam did not
 //!   deposit is reported ([`CurtainPower`]), so nothing is lost silently.
@@ -153,7 +156,9 @@ pub fn sample_gamma3(e0: f64, r: &mut impl Rng) -> f64 {
 /// Why a beam stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EndReason {
-    /// Its field-line foot left the footprint (density at or below threshold).
+    /// Its field-line foot left the footprint: CSDA, the density at or below
+    /// threshold; Fang models, the footprint's box enlarged by its own size
+    /// on every side (runaway steps only).
     LeftFootprint,
     /// The atmosphere absorbed all its energy.
     EnergySpent,
@@ -352,12 +357,30 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
     // high up) is outside the bake: reported, not deposited.
     out.above_top_kev_s = pw * done;
     let bottom = ctx.atmosphere.bottom_km();
+    let z0 = start.position.z;
+    let (half_l, half_w) = (0.5 * ctx.footprint.length, 0.5 * ctx.footprint.width);
     for _ in 0..FANG_MAX_STEPS {
         if total - done <= COMPLETE_TOL * total {
             out.end = EndReason::EnergySpent;
             break;
         }
-        let (p_new, _) = step(ctx, p, r);
+        let (mut p_new, _) = step(ctx, p, r);
+        // The foot may leave the footprint's density (the beam goes on), but
+        // not the simulated domain enlarged by its own size on every side:
+        // only runaway steps (deflections near 90 degrees, huge lengths)
+        // get that far; what they carry is reported as undeposited.
+        let foot = ctx.field.foot(p_new, z0);
+        let (u, v) = ctx.footprint.to_local(foot.x, foot.y);
+        if !(u.abs() <= 2.0 * half_l && v.abs() <= 2.0 * half_w) {
+            out.end = EndReason::LeftFootprint;
+            break;
+        }
+        // A step through the atmosphere's bottom ends there: below it the
+        // model has no air; the rest is reported as undeposited.
+        let through_bottom = p_new.z < bottom;
+        if through_bottom {
+            p_new = p + (p_new - p) * ((p.z - bottom) / (p.z - p_new.z)).clamp(0.0, 1.0);
+        }
         if ctx.record_path {
             out.path.push(p_new);
         }
@@ -373,7 +396,7 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
             out.end = EndReason::EnergySpent;
             break;
         }
-        if p.z < bottom {
+        if through_bottom {
             out.end = EndReason::Bottom;
             break;
         }
@@ -872,16 +895,58 @@ mod tests {
     fn fang_beams_keep_going_when_their_foot_leaves_the_footprint() {
         let atm = Atmosphere::nrlmsis21();
         let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
-        // The 2 km strip that stops CSDA beams (test below).
-        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0 };
+        // A 2 km strip of density (the kind that stops CSDA beams, test
+        // below) in the middle of an 18 km box.
+        let mut data = vec![0.0; 9];
+        data[4] = 1.0;
+        let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0 };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
         let g = SpectrumDeposition::curtain(30.0, 0.0, 0.2);
         let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
         let mut r = rng::rng(&[6]);
+        let mut outside = 0;
         for _ in 0..20 {
             let t = trace_beam(&ctx, &start(30.0), &mut r);
             assert_eq!(t.end, EndReason::EnergySpent);
             assert_eq!(t.undeposited_kev_s, 0.0);
+            outside += t.photons.iter().filter(|ph| {
+                let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
+                let foot = ctx.field.foot(q, 260.0);
+                fp.cell_value_world(foot.x, foot.y) <= 0.03
+            }).count();
+        }
+        assert!(outside > 100, "only {outside} photons beyond the strip: the test does not test");
+    }
+
+    #[test]
+    fn runaway_fang_steps_end_at_the_bottom_or_the_enlarged_box() {
+        let atm = Atmosphere::nrlmsis21();
+        let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
+        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 10.0, width: 4.0 };
+        let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+        // Straight down in steps of up to 2.5e6 km: the first step is cut at
+        // the atmosphere's bottom (where a 3 keV spectrum is complete).
+        let p = BeamParams { length_km: 1e9, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, b_inclination_deg: 90.0, ..params() };
+        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut rng::rng(&[9]));
+        assert!(matches!(t.end, EndReason::Bottom | EndReason::EnergySpent), "{:?}", t.end);
+        assert!(t.photons.iter().all(|ph| ph.position[2] >= 50.0 - 1e-4), "{:?}", t.photons);
+        let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+        assert!((dep + t.backscatter_kev_s + t.above_top_kev_s + t.undeposited_kev_s - 1.0).abs() < 1e-12);
+        // Near-horizontal steps of 1e11 km: stopped at the box enlarged by
+        // its size (|u| <= 10, |v| <= 4 at the start altitude), never placing
+        // a photon whose foot is further out.
+        let p = BeamParams { length_km: 1e9, alpha_d_deg: 89.999, delta_alpha_deg: 0.0, b_inclination_deg: 10.0, ..params() };
+        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let mut r = rng::rng(&[10]);
+        for _ in 0..20 {
+            let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut r);
+            assert_ne!(t.end, EndReason::MaxSteps);
+            for ph in &t.photons {
+                let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
+                let foot = ctx.field.foot(q, 260.0);
+                assert!(foot.x.abs() <= 10.0 + 1e-3 && foot.y.abs() <= 4.0 + 1e-3, "{foot}");
+            }
         }
     }
 
