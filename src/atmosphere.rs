@@ -1,13 +1,18 @@
-//! The neutral upper atmosphere, 80-500 km: mass density, the number densities
-//! of N2, O2 and O, and the column mass above an altitude.
+//! The neutral atmosphere, 50-700 km: mass density, the number densities of
+//! N2, O2 and O, and the column mass above an altitude. Two tables:
 //!
-//! Values are **approximate U.S. Standard Atmosphere 1976** numbers (NOAA,
-//! NASA, USAF, "U.S. Standard Atmosphere, 1976", NOAA-S/T 76-1562): computed
-//! with the open `ussa1976` Python package (v0.3.4, a re-implementation of the
-//! standard's equations) and rounded to 5 significant digits. The standard
-//! defines atomic oxygen only from 86 km: at 86 km we use its boundary value
-//! 8.6e10 cm^-3 and at 80 km an exponential extrapolation of the 86-90 km slope
-//! (flagged below). Auroral emission barely depends on the 80-86 km values.
+//! - **NRLMSIS 2.1** (the default; Emmert et al. 2022, J. Geophys. Res. Space
+//!   Physics 127, e2022JA030896) for an auroral-zone winter night: 67 N, 20 E,
+//!   2020-01-15 00:00 UT, F10.7 = F10.7a = 150, Ap = 15, every 0.5 km from 50
+//!   to 700 km, in `data/nrlmsis21.csv`, made by `tools/msis_table.py` with the
+//!   `pymsis` package (a 30 keV spectrum deposits down to about 65 km).
+//! - **Approximate U.S. Standard Atmosphere 1976**, 80-500 km (NOAA, NASA,
+//!   USAF, "U.S. Standard Atmosphere, 1976", NOAA-S/T 76-1562): computed with
+//!   the open `ussa1976` Python package (v0.3.4, a re-implementation of the
+//!   standard's equations) and rounded to 5 significant digits. The standard
+//!   defines atomic oxygen only from 86 km: at 86 km we use its boundary value
+//!   8.6e10 cm^-3 and at 80 km an exponential extrapolation of the 86-90 km
+//!   slope (flagged below).
 //!
 //! Between table altitudes every quantity is interpolated log-linearly (an
 //! exponential within each segment, with its own scale height), and outside the
@@ -68,11 +73,10 @@ const USSA1976: [[f64; 5]; 43] = [
     [475.0, 8.3453e-16, 5.2851e+05, 1.0397e+04, 2.9572e+07],
     [500.0, 5.5630e-16, 2.5888e+05, 4.6014e+03, 1.9669e+07],
 ];
-const ROWS: usize = USSA1976.len();
 
-/// Lowest and highest tabulated altitude, km.
-pub const H_MIN: f64 = 80.0;
-pub const H_MAX: f64 = 500.0;
+/// The NRLMSIS 2.1 table (see the module doc): a CSV with a `#` comment line,
+/// a header, then altitude_km, rho_g_cm3, n2_cm3, o2_cm3, o_cm3, temperature_k.
+const NRLMSIS21_CSV: &str = include_str!("../data/nrlmsis21.csv");
 
 /// Number densities of the three species that matter for the aurora, cm^-3.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -103,22 +107,43 @@ pub struct Atmosphere {
 
 impl Default for Atmosphere {
     fn default() -> Self {
-        Self::us1976()
+        Self::nrlmsis21()
     }
 }
 
 impl Atmosphere {
     /// The approximate U.S. Standard Atmosphere 1976 table of this module.
     pub fn us1976() -> Self {
-        let rows = &USSA1976[..ROWS];
+        Self::from_rows(&USSA1976)
+    }
+
+    /// NRLMSIS 2.1 for an auroral-zone winter night (module doc), parsed once.
+    pub fn nrlmsis21() -> Self {
+        static TABLE: std::sync::OnceLock<Atmosphere> = std::sync::OnceLock::new();
+        TABLE.get_or_init(|| Self::from_rows(&parse_csv(NRLMSIS21_CSV))).clone()
+    }
+
+    /// Lowest and highest tabulated altitude, km (outside, the end segments
+    /// are extrapolated).
+    pub fn bottom_km(&self) -> f64 {
+        self.h[0]
+    }
+    pub fn top_km(&self) -> f64 {
+        self.h[self.h.len() - 1]
+    }
+
+    /// A table of rows [altitude km, rho g cm^-3, n(N2), n(O2), n(O) cm^-3],
+    /// ascending altitude, every value positive.
+    fn from_rows(rows: &[[f64; 5]]) -> Self {
+        let n = rows.len();
         let h: Vec<f64> = rows.iter().map(|r| r[0]).collect();
         let ln: Vec<[f64; 4]> = rows.iter().map(|r| [r[1].ln(), r[2].ln(), r[3].ln(), r[4].ln()]).collect();
-        let scale: Vec<f64> = (0..ROWS - 1).map(|i| (h[i + 1] - h[i]) / (ln[i][0] - ln[i + 1][0])).collect();
-        let mut col = vec![0.0; ROWS];
+        let scale: Vec<f64> = (0..n - 1).map(|i| (h[i + 1] - h[i]) / (ln[i][0] - ln[i + 1][0])).collect();
+        let mut col = vec![0.0; n];
         // Above the last node the last segment's exponential continues to
         // infinity: integral = rho * H.
-        col[ROWS - 1] = rows[ROWS - 1][1] * scale[ROWS - 2] * CM_PER_KM;
-        for i in (0..ROWS - 1).rev() {
+        col[n - 1] = rows[n - 1][1] * scale[n - 2] * CM_PER_KM;
+        for i in (0..n - 1).rev() {
             // Exact integral of rho_i exp(-(h - h_i)/H_i) over the segment.
             col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
         }
@@ -163,7 +188,7 @@ impl Atmosphere {
         let i = self.segment(h);
         let rho = self.rho(h);
         let h_i = self.scale[i];
-        if h >= self.h[ROWS - 1] {
+        if h >= self.h[self.h.len() - 1] {
             return rho * h_i * CM_PER_KM;
         }
         // col(h) = col_{i+1} + H_i (rho(h) - rho_{i+1}); below the table the
@@ -183,6 +208,19 @@ impl Atmosphere {
         }
         (len_km / dh) * (self.column_mass(h0) - self.column_mass(h1)).abs()
     }
+}
+
+/// Rows of the committed NRLMSIS CSV (five leading columns). The file is
+/// ours and fixed at compile time: a malformed row is a build defect, caught
+/// by the tests.
+fn parse_csv(text: &str) -> Vec<[f64; 5]> {
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("altitude") && !l.trim().is_empty())
+        .map(|l| {
+            let mut it = l.split(',').map(|x| x.trim().parse::<f64>().expect("data/nrlmsis21.csv: a number"));
+            std::array::from_fn(|_| it.next().expect("data/nrlmsis21.csv: 5 columns"))
+        })
+        .collect()
 }
 
 #[cfg(test)]
@@ -210,7 +248,7 @@ mod tests {
     #[test]
     fn interpolation_reproduces_the_table_nodes() {
         let a = Atmosphere::us1976();
-        for r in &USSA1976[..ROWS] {
+        for r in &USSA1976 {
             let c = a.composition(r[0]);
             // exp(ln x) round trip: a few ulps of relative error.
             for (got, want) in [(a.rho(r[0]), r[1]), (c.n2, r[2]), (c.o2, r[3]), (c.o, r[4])] {
@@ -251,7 +289,7 @@ mod tests {
             assert!((deriv / a.rho(h) - 1.0).abs() < 1e-6, "{h}: {deriv:e} vs {:e}", a.rho(h));
         }
         // Continuity of the column across nodes.
-        for r in &USSA1976[1..ROWS - 1] {
+        for r in &USSA1976[1..USSA1976.len() - 1] {
             let (lo, hi) = (a.column_mass(r[0] - 1e-9), a.column_mass(r[0] + 1e-9));
             assert!((lo / hi - 1.0).abs() < 1e-9);
         }
@@ -272,6 +310,45 @@ mod tests {
         // Nearly horizontal agrees with horizontal to first order in dh / H.
         let near = a.slant_column(110.0, 110.0 + 1e-5, 3.0);
         assert!((near / flat - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn nrlmsis_table_spans_50_to_700_km_and_decreases() {
+        let a = Atmosphere::nrlmsis21();
+        assert_eq!((a.bottom_km(), a.top_km()), (50.0, 700.0));
+        assert_eq!(parse_csv(NRLMSIS21_CSV).len(), 1301);
+        let mut prev = f64::INFINITY;
+        for i in 0..=6500 {
+            let h = 50.0 + i as f64 * 0.1;
+            let (r, col) = (a.rho(h), a.column_mass(h));
+            assert!(r > 0.0 && col < prev, "{h} km");
+            prev = col;
+        }
+    }
+
+    #[test]
+    fn nrlmsis_column_is_hydrostatic_rho_times_kt_over_mg() {
+        // Hydrostatic equilibrium: column mass = p / g = rho k T / (m g),
+        // with m the mean molecular mass. Oracle from the table's own
+        // temperature column; m = rho / (n_N2 + n_O2 + n_O) ignores Ar and He
+        // (about 1 % of the number density from 50 to 120 km, up to a few %
+        // near 300 km) and g is the point value at h, not the column's mean
+        // (g falls 3 % per 100 km): allow 4 %.
+        let a = Atmosphere::nrlmsis21();
+        let rows: Vec<Vec<f64>> = NRLMSIS21_CSV
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.starts_with("altitude"))
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        const K_B: f64 = 1.380649e-16; // erg/K
+        for h in [60.0, 80.0, 100.0, 110.0, 130.0, 200.0, 300.0] {
+            let r = rows.iter().find(|r| r[0] == h).unwrap();
+            let m = r[1] / (r[2] + r[3] + r[4]);
+            let g = 980.665 * (6371.0 / (6371.0 + h)).powi(2);
+            let want = r[1] * K_B * r[5] / (m * g);
+            let got = a.column_mass(h);
+            assert!((got / want - 1.0).abs() < 0.04, "{h} km: {got:e} vs {want:e}");
+        }
     }
 
     #[test]

@@ -357,6 +357,14 @@ pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> Stri
     why
 }
 
+/// The scene's neutral atmosphere (`[atmosphere] model`).
+pub fn atmosphere(scene: &Scene) -> Atmosphere {
+    match scene.atmosphere.model {
+        crate::scene::AtmosphereModel::Nrlmsis21 => Atmosphere::nrlmsis21(),
+        crate::scene::AtmosphereModel::Us1976 => Atmosphere::us1976(),
+    }
+}
+
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
@@ -377,7 +385,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     progress.finish();
     times.footprints = t.elapsed().as_secs_f64();
 
-    let atmosphere = Atmosphere::us1976();
+    let atmosphere = atmosphere(scene);
     let colour = colour_table(scene, &atmosphere);
     let mut noise_warning = None;
     let noise = if scene.beams.target_noise > 0.0 {
@@ -655,6 +663,73 @@ mod tests {
         let p = GridParams::default();
         assert_eq!(extinction(&p, 100.0), p.density_a * (-p.density_b * (100.0 - p.density_base_km)).exp());
         assert!(extinction_warning(&p, 60.0).is_none());
+    }
+
+    #[test]
+    fn power_accounting_closes_and_deposits_match_electron_power_less_backscatter() {
+        // Expected deposition: every beam finishes (no undeposited power),
+        // each curtain's electron power splits exactly into deposited +
+        // backscattered (Fang's 1 - G(inf)) + above the beams' top, and the
+        // deposit matches electron power less those within 1 % (it is exact
+        // up to rounding: telescoping sums).
+        let s = small_scene();
+        let b = bake(&s, &NoProgress).unwrap();
+        let st = &b.stats.beam_stats;
+        assert_eq!(st.curtains.len(), 1);
+        assert_eq!((st.ended_left_footprint, st.ended_max_steps, st.ended_bottom), (0, 0, 0));
+        for c in &st.curtains {
+            let sum = c.deposited_power_w + c.backscattered_power_w + c.above_top_power_w + c.undeposited_power_w;
+            assert!((sum / c.electron_power_w - 1.0).abs() < 1e-9, "{c:?}");
+            assert_eq!(c.undeposited_power_w, 0.0);
+            let g = crate::fang::SpectrumDeposition::curtain(s.curtains[0].char_energy_kev, s.curtains[0].soft_fraction, s.curtains[0].soft_energy_kev);
+            assert!((c.backscattered_power_w / c.electron_power_w - (1.0 - g.total())).abs() < 1e-9, "{c:?}");
+            let expect = c.electron_power_w - c.backscattered_power_w - c.above_top_power_w;
+            assert!((c.deposited_power_w / expect - 1.0).abs() < 0.01, "{c:?}");
+            // Soft electrons above 260 km: a few percent at most.
+            assert!(c.above_top_power_w < 0.05 * c.electron_power_w, "{c:?}");
+        }
+        assert!((b.stats.deposited_power_w - st.deposited_power_w).abs() < 1e-9 * st.deposited_power_w);
+        // The photons carry the deposited energy: total luminance > 0 and the
+        // stats agree with the per-curtain sums.
+        assert!((st.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.electron_power_w);
+        // CSDA keeps its old stopping rules, and reports what they leave.
+        let mut c = small_scene();
+        c.beams.deposition = crate::scene::Deposition::Csda;
+        let st = bake(&c, &NoProgress).unwrap().stats.beam_stats;
+        let cp = &st.curtains[0];
+        assert!(st.ended_left_footprint > 0 && cp.undeposited_power_w > 0.0, "{st:?}");
+        let sum = cp.deposited_power_w + cp.undeposited_power_w;
+        assert!((sum / cp.electron_power_w - 1.0).abs() < 1e-9, "{cp:?}");
+    }
+
+    #[test]
+    fn hard_spectrum_shows_the_pink_n2_first_positive_lower_border() {
+        // 30 keV Maxwellian, no soft part, no colour noise: below 84 km the
+        // grid is red and violet over green (N2 1P and N2+ 1N stay with N2,
+        // 557.7 nm fades with O), while the green layer is green.
+        let mut s = small_scene();
+        s.curtains[0].char_energy_kev = 30.0;
+        s.curtains[0].soft_fraction = 0.0;
+        s.colour.noise_km = 0.0;
+        s.beams.count = 600;
+        let b = bake(&s, &NoProgress).unwrap();
+        let band = |lo: f64, hi: f64| {
+            let mut c = [0.0f64; 3];
+            for (ijk, v) in b.emission.iter_active() {
+                let z = ijk.z as f64 * b.stats.voxel_size_km;
+                if (lo..hi).contains(&z) {
+                    for k in 0..3 {
+                        c[k] += v[k] as f64;
+                    }
+                }
+            }
+            c
+        };
+        let green = band(100.0, 120.0);
+        assert!(green[1] > green[0] && green[1] > green[2], "100-120 km {green:?}");
+        let border = band(76.0, 84.0);
+        assert!(border[0] > border[1] && border[2] > border[1], "76-84 km {border:?}");
+        assert!(border.iter().sum::<f64>() > 1e-3 * green.iter().sum::<f64>(), "a 30 keV spectrum lights 76-84 km: {border:?}");
     }
 
     #[test]

@@ -8,12 +8,39 @@
 //!   report drew one number `t` for both (`s = L dt t`, `alpha = alpha_D - t
 //!   delta_alpha`), which makes long steps always the least deflected: a
 //!   correlation with no physical basis.
-//! - Energy loss is continuous slowing down with the range-energy relation
-//!   `R(E) = 4.30e-7 + 5.36e-6 E^1.67` g cm^-2 (E in keV; Barrett & Hays 1976,
-//!   Rees 1989): the column mass `int rho ds` along each (slanted) step shrinks
-//!   the residual range, and the energy deposited is `E_before - E_after`. So
-//!   where a beam stops and where it deposits its energy follow the
-//!   atmosphere, not a hand-set beam length.
+//! - Energy deposition follows the atmosphere, not a hand-set beam length,
+//!   in one of three models (`beams.deposition`, [`DepositModel`]):
+//!   - **expected** (default): every beam carries its curtain's whole
+//!     spectrum and deposits on each step the spectrum's expected energy
+//!     between the column masses of the step's ends, `P (G(m1) - G(m0))`, with
+//!     `G` Fang et al. 2010 integrated over the spectrum ([`crate::fang`]).
+//!     Random numbers shape only the path (Rao-Blackwellisation: the path
+//!     does not depend on the electron's energy in this model), so which
+//!     altitudes a beam lights is no longer a coin toss.
+//!   - **sampled**: one energy per beam, drawn as below, deposited by Fang
+//!     2010's monoenergetic profile, `P (D_E(m1) - D_E(m0))`: the same mean.
+//!   - **csda**: one energy per beam, continuous slowing down along the
+//!     straight step with the range-energy relation `R(E) = 4.30e-7 +
+//!     5.36e-6 E^1.67` g cm^-2 (Barrett & Hays 1976, Rees 1989): the model
+//!     before Fang, which puts the energy at the end of the range. Kept for
+//!     comparison, with its old stopping rules (below).
+//!   In the Fang models `m` is the deepest vertical column reached so far (a
+//!   step that climbs deposits nothing until the beam is deeper again), so
+//!   deposits never go negative and sum to `P G(m_deepest)`.
+//! - Where a beam stops. Fang models: when its deposition is complete (at
+//!   most 1e-4 of the spectrum's total remains: that rest is deposited on
+//!   the last step, so a finished beam deposits exactly `P G(inf)`), or at
+//!   the atmosphere's bottom (50 km). A beam whose field-line foot leaves the
+//!   footprint **keeps going**: the footprint only says where electrons enter
+//!   at the top; a field line does not end where our threshold cuts the
+//!   footprint's fringe, and stopping there lost 21 % of the default scene's
+//!   power. (Only a foot outside the footprint's box enlarged by its own
+//!   size on every side stops a Fang beam: runaway steps, never the
+//!   sub-kilometre wander of ordinary deflections.) A step through the
+//!   atmosphere's bottom is cut there. The `1/dt` step limit does not stop a Fang beam either (only a
+//!   safety cap of [`FANG_MAX_STEPS`]). CSDA keeps the old rules: leaving the
+//!   footprint, `1/dt` steps, or energy spent. Whatever a beam did not
+//!   deposit is reported ([`CurtainPower`]), so nothing is lost silently.
 //! - Photons carry physical power (see [`Photon`]), not a colour-map colour.
 //!
 //! Normalisation: curtain c with peak energy flux `F` (mW m^-2 = erg cm^-2
@@ -32,10 +59,11 @@
 //! energy flux).
 
 use crate::atmosphere::Atmosphere;
+use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::progress::Progress;
 use crate::rng;
-use crate::scene::{BeamParams, Scene};
+use crate::scene::{BeamParams, Deposition, Scene};
 use crate::spectrum::ColourTable;
 use glam::DVec3;
 use noise::Perlin;
@@ -52,6 +80,15 @@ pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
 pub struct Photon {
     pub position: [f32; 3],
     pub power: [f32; 3],
+}
+
+/// The photon of one step's deposit from `start` to `end`, carrying `power`.
+/// A point at the step's end for now; the one place to change when photons
+/// become segments.
+#[inline]
+pub fn deposit(start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
+    let _ = start;
+    Photon { position: [end.x as f32, end.y as f32, end.z as f32], power }
 }
 
 /// The geomagnetic frame: `b` the unit field direction (pointing down, the
@@ -119,18 +156,33 @@ pub fn sample_gamma3(e0: f64, r: &mut impl Rng) -> f64 {
 /// Why a beam stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum EndReason {
-    /// Its field-line foot left the footprint (density at or below threshold).
+    /// Its field-line foot left the footprint: CSDA, the density at or below
+    /// threshold; Fang models, the footprint's box enlarged by its own size
+    /// on every side (runaway steps only).
     LeftFootprint,
     /// The atmosphere absorbed all its energy.
     EnergySpent,
-    /// It took the maximum number of steps, 1 / dt.
+    /// It took the maximum number of steps (1 / dt for CSDA,
+    /// [`FANG_MAX_STEPS`] for the Fang models).
     MaxSteps,
+    /// It went below the atmosphere's table (Fang models).
+    Bottom,
 }
+
+/// Safety cap on the steps of a Fang-model beam (which otherwise goes on
+/// until its deposition is complete).
+pub const FANG_MAX_STEPS: usize = 1_000_000;
+
+/// A beam has finished when at most this fraction of its spectrum's total
+/// deposition remains (the rest goes into its last step).
+pub const COMPLETE_TOL: f64 = 1e-4;
 
 /// Where a beam starts and what it carries.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BeamStart {
     pub position: DVec3,
+    /// The beam's electron energy (sampled and CSDA models; unused by the
+    /// expected model, which carries the whole spectrum).
     pub energy_kev: f64,
     /// Electron power of the beam, keV/s.
     pub power_kev_s: f64,
@@ -143,9 +195,17 @@ pub struct BeamStart {
 #[derive(Clone, Debug, PartialEq)]
 pub struct BeamTrace {
     pub photons: Vec<Photon>,
-    /// Energy lost per step, keV, in step order (one entry per deposit that
-    /// produced a photon).
-    pub deposits_kev: Vec<f64>,
+    /// One entry per photon, in step order: the step's altitudes and the
+    /// power it deposited.
+    pub deposits: Vec<StepDeposit>,
+    /// Power the beam's model says is backscattered (never deposited:
+    /// `P (1 - D(inf))`), keV/s; 0 for CSDA.
+    pub backscatter_kev_s: f64,
+    /// Power the model deposits above the beam's start altitude (outside
+    /// the bake), keV/s; 0 for CSDA.
+    pub above_top_kev_s: f64,
+    /// Power the beam still carried when it stopped, keV/s.
+    pub undeposited_kev_s: f64,
     pub end: EndReason,
     /// Position after the last accepted step.
     pub end_position: DVec3,
@@ -153,9 +213,29 @@ pub struct BeamTrace {
     pub path: Vec<DVec3>,
 }
 
+/// One step's deposit: from altitude `z_start` to `z_end` km, `power_kev_s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepDeposit {
+    pub z_start: f64,
+    pub z_end: f64,
+    pub power_kev_s: f64,
+}
+
+/// How a curtain's beams deposit energy (module doc).
+#[derive(Clone, Copy, Debug)]
+pub enum DepositModel<'a> {
+    /// The curtain's whole spectrum on every beam.
+    Expected(&'a SpectrumDeposition),
+    /// One energy per beam, Fang 2010 monoenergetic.
+    Sampled(&'a MonoDeposition),
+    /// One energy per beam, continuous slowing down.
+    Csda,
+}
+
 /// Everything a beam needs that is shared by the beams of one curtain.
 pub struct BeamContext<'a> {
     pub atmosphere: &'a Atmosphere,
+    pub model: DepositModel<'a>,
     pub colour: &'a ColourTable,
     pub field: Field,
     pub params: &'a BeamParams,
@@ -213,14 +293,125 @@ impl FootprintCdf {
 /// Each step: `p_new = p + s B + t (u cos beta + v sin beta)` with
 /// `s = L dt xi`, `tan alpha = t / s`, alpha uniform in
 /// [alpha_D - delta_alpha, alpha_D], beta uniform in [0, 2 pi), xi uniform in
-/// [0, 1), all independent. The step's column mass shrinks the residual
-/// range; the energy lost is deposited as one photon at `p_new`, coloured by
-/// the emission lines at that altitude.
+/// [0, 1), all independent. The energy the step deposits ([`DepositModel`])
+/// becomes one photon ([`deposit`]), coloured by the emission lines at the
+/// step's end altitude.
 pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTrace {
+    match ctx.model {
+        DepositModel::Csda => trace_csda(ctx, start, r),
+        DepositModel::Expected(g) => {
+            let total = g.total();
+            trace_fang(ctx, start, r, total, |m| g.fraction_above(m))
+        }
+        DepositModel::Sampled(d) => {
+            let e = start.energy_kev;
+            trace_fang(ctx, start, r, d.total(e), |m| d.fraction_above(e, m))
+        }
+    }
+}
+
+/// One random step from `p` (the Baranoski et al. update).
+#[inline]
+fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
     let p_ = ctx.params;
-    let alpha_d = p_.alpha_d_deg.to_radians();
-    let delta = p_.delta_alpha_deg.to_radians();
-    let max_steps = (1.0 / p_.dt).round().max(1.0) as usize;
+    let s = p_.length_km * p_.dt * r.random::<f64>();
+    let alpha = p_.alpha_d_deg.to_radians() - p_.delta_alpha_deg.to_radians() * r.random::<f64>();
+    let beta = std::f64::consts::TAU * r.random::<f64>();
+    let t = s * alpha.tan();
+    let (sb, cb) = beta.sin_cos();
+    let f = ctx.field;
+    (p + f.b * s + (f.u * cb + f.v * sb) * t, s / alpha.cos())
+}
+
+/// Pushes the photon and deposit record of one step.
+#[inline]
+fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64) {
+    let rgb = ctx.colour.rgb_with_colour_altitude(to.z, to.z + start.colour_offset_km);
+    out.photons.push(deposit(from, to, [(rgb[0] * kev_s) as f32, (rgb[1] * kev_s) as f32, (rgb[2] * kev_s) as f32]));
+    out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s });
+}
+
+/// The Fang models: `frac(m)` is the fraction of the beam's power deposited
+/// above column mass m, `total` its limit. Deposits `P (frac(m1) - frac(m0))`
+/// per step with m the deepest column so far; stops when complete (the
+/// remaining <= COMPLETE_TOL of the total goes into that last step) or below
+/// the atmosphere's table.
+fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64, frac: impl Fn(f64) -> f64) -> BeamTrace {
+    let pw = start.power_kev_s;
+    let mut p = start.position;
+    let mut done = frac(ctx.atmosphere.column_mass(p.z));
+    let mut out = BeamTrace {
+        photons: Vec::new(),
+        deposits: Vec::new(),
+        backscatter_kev_s: pw * (1.0 - total),
+        above_top_kev_s: 0.0,
+        undeposited_kev_s: 0.0,
+        end: EndReason::MaxSteps,
+        end_position: p,
+        path: Vec::new(),
+    };
+    if ctx.record_path {
+        out.path.push(p);
+    }
+    // What the spectrum deposits above the start altitude (soft electrons,
+    // high up) is outside the bake: reported, not deposited.
+    out.above_top_kev_s = pw * done;
+    let bottom = ctx.atmosphere.bottom_km();
+    let z0 = start.position.z;
+    let (half_l, half_w) = (0.5 * ctx.footprint.length, 0.5 * ctx.footprint.width);
+    for _ in 0..FANG_MAX_STEPS {
+        if total - done <= COMPLETE_TOL * total {
+            out.end = EndReason::EnergySpent;
+            break;
+        }
+        let (mut p_new, _) = step(ctx, p, r);
+        // The foot may leave the footprint's density (the beam goes on), but
+        // not the simulated domain enlarged by its own size on every side:
+        // only runaway steps (deflections near 90 degrees, huge lengths)
+        // get that far; what they carry is reported as undeposited.
+        let foot = ctx.field.foot(p_new, z0);
+        let (u, v) = ctx.footprint.to_local(foot.x, foot.y);
+        if !(u.abs() <= 2.0 * half_l && v.abs() <= 2.0 * half_w) {
+            out.end = EndReason::LeftFootprint;
+            break;
+        }
+        // A step through the atmosphere's bottom ends there: below it the
+        // model has no air; the rest is reported as undeposited.
+        let through_bottom = p_new.z < bottom;
+        if through_bottom {
+            p_new = p + (p_new - p) * ((p.z - bottom) / (p.z - p_new.z)).clamp(0.0, 1.0);
+        }
+        if ctx.record_path {
+            out.path.push(p_new);
+        }
+        let f_new = frac(ctx.atmosphere.column_mass(p_new.z)).max(done);
+        let complete = total - f_new <= COMPLETE_TOL * total;
+        let f_new = if complete { total } else { f_new };
+        if f_new > done {
+            emit(ctx, start, &mut out, p, p_new, pw * (f_new - done));
+        }
+        done = f_new;
+        p = p_new;
+        if complete {
+            out.end = EndReason::EnergySpent;
+            break;
+        }
+        if through_bottom {
+            out.end = EndReason::Bottom;
+            break;
+        }
+    }
+    out.undeposited_kev_s = pw * (total - done).max(0.0);
+    out.end_position = p;
+    out
+}
+
+/// Continuous slowing down along straight steps (the model before Fang):
+/// the step's column mass shrinks the residual range; the energy lost is
+/// the deposit. Stops after 1/dt steps, when the energy is spent, or when
+/// the field-line foot leaves the footprint.
+fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTrace {
+    let max_steps = (1.0 / ctx.params.dt).round().max(1.0) as usize;
     let z0 = start.position.z;
     let f = ctx.field;
     let mut p = start.position;
@@ -230,7 +421,10 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
     let mut col_p = ctx.atmosphere.column_mass(p.z);
     let mut out = BeamTrace {
         photons: Vec::new(),
-        deposits_kev: Vec::new(),
+        deposits: Vec::new(),
+        backscatter_kev_s: 0.0,
+        above_top_kev_s: 0.0,
+        undeposited_kev_s: 0.0,
         end: EndReason::MaxSteps,
         end_position: p,
         path: Vec::new(),
@@ -243,12 +437,7 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
         return out;
     }
     for _ in 0..max_steps {
-        let s = p_.length_km * p_.dt * r.random::<f64>();
-        let alpha = alpha_d - delta * r.random::<f64>();
-        let beta = std::f64::consts::TAU * r.random::<f64>();
-        let t = s * alpha.tan();
-        let (sb, cb) = beta.sin_cos();
-        let p_new = p + f.b * s + (f.u * cb + f.v * sb) * t;
+        let (p_new, len) = step(ctx, p, r);
         // Still above the footprint? Its field line must come from a cell
         // above threshold at the start altitude.
         let foot = f.foot(p_new, z0);
@@ -258,7 +447,6 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
         }
         // Column mass along the straight step (plane-parallel atmosphere):
         // (length / |dz|) |C(z1) - C(z0)|, or rho * length when level.
-        let len = s / alpha.cos();
         let col_new = ctx.atmosphere.column_mass(p_new.z);
         let dz = (p_new.z - p.z).abs();
         let column = if dz > 1e-6 * len && dz > 1e-9 {
@@ -269,19 +457,14 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
         r_res -= column;
         let e_after = energy_from_range(r_res);
         let de = e - e_after;
+        let from = p;
         p = p_new;
         col_p = col_new;
         if ctx.record_path {
             out.path.push(p);
         }
         if de > 0.0 {
-            let watts = de * power_per_kev; // keV/s deposited in this step
-            let rgb = ctx.colour.rgb_with_colour_altitude(p.z, p.z + start.colour_offset_km);
-            out.photons.push(Photon {
-                position: [p.x as f32, p.y as f32, p.z as f32],
-                power: [(rgb[0] * watts) as f32, (rgb[1] * watts) as f32, (rgb[2] * watts) as f32],
-            });
-            out.deposits_kev.push(de);
+            emit(ctx, start, &mut out, from, p, de * power_per_kev);
         }
         e = e_after;
         if e <= 0.0 {
@@ -289,6 +472,7 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
             break;
         }
     }
+    out.undeposited_kev_s = e.max(0.0) * power_per_kev;
     out.end_position = p;
     out
 }
@@ -325,6 +509,26 @@ pub enum BeamError {
     EmptyFootprint { curtain: usize, threshold: f64, peak: f32 },
 }
 
+/// Where one curtain's electron power went, W. `electron = deposited +
+/// backscattered + above_top + undeposited` (to rounding).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CurtainPower {
+    /// Energy flux times footprint area above threshold.
+    pub electron_power_w: f64,
+    /// Deposited along the beams (the photons' energy).
+    pub deposited_power_w: f64,
+    /// Backscattered according to the deposition model (Fang: 1 minus the
+    /// fit's total deposition; 0 for CSDA).
+    pub backscattered_power_w: f64,
+    /// Deposited by the model above the beams' start altitude, outside the
+    /// bake (soft electrons).
+    pub above_top_power_w: f64,
+    /// Still carried by beams when they stopped: CSDA beams that left the
+    /// footprint or ran out of steps, Fang beams below the atmosphere's
+    /// bottom or at the safety cap.
+    pub undeposited_power_w: f64,
+}
+
 /// Counts from the beam stage.
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct BeamStats {
@@ -333,11 +537,16 @@ pub struct BeamStats {
     pub ended_left_footprint: usize,
     pub ended_energy_spent: usize,
     pub ended_max_steps: usize,
+    pub ended_bottom: usize,
     /// Electron power into the atmosphere over all curtains, W.
     pub electron_power_w: f64,
-    /// Of which deposited along the beams (the rest left with beams that
-    /// stopped early), W.
+    /// Of which deposited along the beams, W (the rest: see [`CurtainPower`]).
     pub deposited_power_w: f64,
+    pub backscattered_power_w: f64,
+    pub above_top_power_w: f64,
+    pub undeposited_power_w: f64,
+    /// The same per curtain, in scene order.
+    pub curtains: Vec<CurtainPower>,
 }
 
 /// Traces every beam of every curtain. Beams run in parallel; each has its
@@ -365,12 +574,57 @@ pub fn trace_all_from(
     first_beam: u64,
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
+    let t = trace_curtains(scene, footprints, atmosphere, colour, first_beam, false, progress)?;
+    Ok((t.photons, t.stats))
+}
+
+/// The beams' deposits, per curtain in scene order, exactly as [`trace_all`]
+/// makes them (same beams, same random streams): what `aurora profile` bins.
+pub fn trace_deposits(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    progress: &dyn Progress,
+) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
+    let t = trace_curtains(scene, footprints, atmosphere, colour, 0, true, progress)?;
+    Ok((t.deposits, t.stats))
+}
+
+/// What [`trace_curtains`] returns.
+struct Traced {
+    photons: Vec<Photon>,
+    stats: BeamStats,
+    /// Per curtain (empty vectors unless recorded).
+    deposits: Vec<Vec<StepDeposit>>,
+}
+
+/// One beam's result, kept until the curtain's beams are concatenated.
+struct BeamOut {
+    photons: Vec<Photon>,
+    deposits: Vec<StepDeposit>,
+    end: EndReason,
+    /// keV/s: deposited, backscattered, above the top, undeposited.
+    power: [f64; 4],
+}
+
+fn trace_curtains(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    first_beam: u64,
+    record_deposits: bool,
+    progress: &dyn Progress,
+) -> Result<Traced, BeamError> {
     let weights: Vec<f64> = scene.curtains.iter().map(|c| c.beam_weight).collect();
     let counts = apportion(scene.beams.count, &weights);
     let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
     let threshold = scene.footprint.threshold;
     let mut stats = BeamStats::default();
     let mut photons = Vec::new();
+    let mut all_deposits = vec![Vec::new(); scene.curtains.len()];
+    stats.curtains = vec![CurtainPower::default(); scene.curtains.len()];
     progress.start("beams", counts.iter().sum::<usize>() as u64);
     for (ci, (curtain, fp)) in scene.curtains.iter().zip(footprints).enumerate() {
         let n = counts[ci];
@@ -389,11 +643,20 @@ pub fn trace_all_from(
         // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
         let power_w = curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6;
         let power_kev_s = power_w * KEV_PER_J / n as f64;
-        stats.electron_power_w += power_w;
         let top_noise: Perlin = rng::perlin(&[scene.seed, curtain.seed, rng::tag::BEAM_TOP_NOISE]);
         let colour_noise: Perlin = rng::perlin(&[scene.seed, curtain.seed, rng::tag::COLOUR_NOISE]);
+        let spectrum;
+        let model = match scene.beams.deposition {
+            Deposition::Expected => {
+                spectrum = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+                DepositModel::Expected(&spectrum)
+            }
+            Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
+            Deposition::Csda => DepositModel::Csda,
+        };
         let ctx = BeamContext {
             atmosphere,
+            model,
             colour,
             field,
             params: &scene.beams,
@@ -401,7 +664,7 @@ pub fn trace_all_from(
             threshold,
             record_path: false,
         };
-        let traces: Vec<(Vec<Photon>, EndReason, f64)> = (0..n)
+        let traces: Vec<BeamOut> = (0..n)
             .into_par_iter()
             .map(|i| {
                 let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
@@ -415,6 +678,7 @@ pub fn trace_all_from(
                     + scene.beams.top_noise_km * rng::noise1(&top_noise, ur * scene.beams.top_noise_freq);
                 let colour_offset_km = scene.colour.noise_km * rng::noise1(&colour_noise, ur * scene.colour.noise_freq);
                 let power_kev_s = power_kev_s * crate::animation::pulsation(anim, scene.seed, x, y);
+                // Drawn in every model, so a beam's path is the same in all.
                 let e0 = if r.random::<f64>() < curtain.soft_fraction { curtain.soft_energy_kev } else { curtain.char_energy_kev };
                 let start = BeamStart {
                     position: DVec3::new(x, y, z),
@@ -424,24 +688,43 @@ pub fn trace_all_from(
                 };
                 let t = trace_beam(&ctx, &start, &mut r);
                 progress.inc(1);
-                let deposited: f64 = t.deposits_kev.iter().sum::<f64>() * power_kev_s / start.energy_kev;
-                (t.photons, t.end, deposited)
+                let deposited: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+                BeamOut {
+                    power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s],
+                    photons: t.photons,
+                    deposits: if record_deposits { t.deposits } else { Vec::new() },
+                    end: t.end,
+                }
             })
             .collect();
-        for (ph, end, dep) in traces {
-            match end {
+        let cp = &mut stats.curtains[ci];
+        cp.electron_power_w = power_w;
+        for b in traces {
+            match b.end {
                 EndReason::LeftFootprint => stats.ended_left_footprint += 1,
                 EndReason::EnergySpent => stats.ended_energy_spent += 1,
                 EndReason::MaxSteps => stats.ended_max_steps += 1,
+                EndReason::Bottom => stats.ended_bottom += 1,
             }
-            stats.deposited_power_w += dep / KEV_PER_J;
-            photons.extend_from_slice(&ph);
+            cp.deposited_power_w += b.power[0] / KEV_PER_J;
+            cp.backscattered_power_w += b.power[1] / KEV_PER_J;
+            cp.above_top_power_w += b.power[2] / KEV_PER_J;
+            cp.undeposited_power_w += b.power[3] / KEV_PER_J;
+            photons.extend_from_slice(&b.photons);
+            all_deposits[ci].extend_from_slice(&b.deposits);
         }
         stats.beams += n;
     }
+    for cp in &stats.curtains {
+        stats.electron_power_w += cp.electron_power_w;
+        stats.deposited_power_w += cp.deposited_power_w;
+        stats.backscattered_power_w += cp.backscattered_power_w;
+        stats.above_top_power_w += cp.above_top_power_w;
+        stats.undeposited_power_w += cp.undeposited_power_w;
+    }
     stats.photons = photons.len();
     progress.finish();
-    Ok((photons, stats))
+    Ok(Traced { photons, stats, deposits: all_deposits })
 }
 
 #[cfg(test)]
@@ -496,7 +779,7 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = BeamParams { alpha_d_deg: 25.0, delta_alpha_deg: 12.0, b_inclination_deg: 70.0, b_declination_deg: 20.0, ..params() };
-        let ctx = BeamContext { atmosphere: &atm, colour: &colour, field: Field::new(70.0, 20.0), params: &p, footprint: &fp, threshold: 0.03, record_path: true };
+        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: Field::new(70.0, 20.0), params: &p, footprint: &fp, threshold: 0.03, record_path: true };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
         let mut n = 0;
@@ -524,16 +807,18 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext { atmosphere: &atm, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
             let t = trace_beam(&ctx, &start(e0), &mut r);
             assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
-            let sum: f64 = t.deposits_kev.iter().sum();
-            // The deposits telescope: sum = E0 - 0, up to one rounding per
-            // step (a few hundred steps x 1 ulp of E0).
-            assert!((sum - e0).abs() < 1e-12 * e0 * t.deposits_kev.len() as f64, "{e0}: {sum}");
-            assert_eq!(t.photons.len(), t.deposits_kev.len());
+            // power_kev_s = 1: the deposits are the fractions E_lost / E0.
+            let sum: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+            // The deposits telescope: sum = (E0 - 0) / E0, up to one rounding
+            // per step (a few hundred steps x 1 ulp).
+            assert!((sum - 1.0).abs() < 1e-12 * t.deposits.len() as f64, "{e0}: {sum}");
+            assert_eq!(t.photons.len(), t.deposits.len());
+            assert_eq!(t.undeposited_kev_s, 0.0);
         }
     }
 
@@ -543,7 +828,7 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext { atmosphere: &atm, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
             let n = 50;
@@ -588,6 +873,145 @@ mod tests {
         assert!((got - p).abs() < 5.0 * sigma, "{got} vs {p} +- {sigma}");
     }
 
+    fn fang_ctx<'a>(atm: &'a Atmosphere, colour: &'a ColourTable, fp: &'a Footprint, p: &'a BeamParams, model: DepositModel<'a>) -> BeamContext<'a> {
+        BeamContext { atmosphere: atm, model, colour, field: Field::new(p.b_inclination_deg, p.b_declination_deg), params: p, footprint: fp, threshold: 0.03, record_path: false }
+    }
+
+    #[test]
+    fn expected_beam_deposits_the_spectrum_total_below_its_start_and_accounts_for_the_rest() {
+        let atm = Atmosphere::nrlmsis21();
+        let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
+        let fp = flat_footprint(1e5);
+        let p = params();
+        for (e0, soft) in [(1.0, 0.0), (3.0, 0.1), (30.0, 0.0)] {
+            let g = SpectrumDeposition::curtain(e0, soft, 0.2);
+            let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+            let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[7]));
+            assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
+            let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+            let above = g.fraction_above(atm.column_mass(260.0));
+            // A finished beam deposits exactly G(inf) - G(m_start): sums of
+            // telescoping differences, rounding only.
+            assert!((dep - (g.total() - above)).abs() < 1e-12, "{e0}: {dep} vs {}", g.total() - above);
+            assert!((t.above_top_kev_s - above).abs() < 1e-15 && t.undeposited_kev_s == 0.0);
+            assert!((dep + t.backscatter_kev_s + t.above_top_kev_s - 1.0).abs() < 1e-12);
+            assert!(t.deposits.iter().all(|d| d.power_kev_s > 0.0));
+        }
+    }
+
+    #[test]
+    fn fang_beams_keep_going_when_their_foot_leaves_the_footprint() {
+        let atm = Atmosphere::nrlmsis21();
+        let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
+        // A 2 km strip of density (the kind that stops CSDA beams, test
+        // below) in the middle of an 18 km box.
+        let mut data = vec![0.0; 9];
+        data[4] = 1.0;
+        let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0 };
+        let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
+        let g = SpectrumDeposition::curtain(30.0, 0.0, 0.2);
+        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let mut r = rng::rng(&[6]);
+        let mut outside = 0;
+        for _ in 0..20 {
+            let t = trace_beam(&ctx, &start(30.0), &mut r);
+            assert_eq!(t.end, EndReason::EnergySpent);
+            assert_eq!(t.undeposited_kev_s, 0.0);
+            outside += t.photons.iter().filter(|ph| {
+                let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
+                let foot = ctx.field.foot(q, 260.0);
+                fp.cell_value_world(foot.x, foot.y) <= 0.03
+            }).count();
+        }
+        assert!(outside > 100, "only {outside} photons beyond the strip: the test does not test");
+    }
+
+    #[test]
+    fn runaway_fang_steps_end_at_the_bottom_or_the_enlarged_box() {
+        let atm = Atmosphere::nrlmsis21();
+        let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
+        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 10.0, width: 4.0 };
+        let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+        // Straight down in steps of up to 2.5e6 km: the first step is cut at
+        // the atmosphere's bottom (where a 3 keV spectrum is complete).
+        let p = BeamParams { length_km: 1e9, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, b_inclination_deg: 90.0, ..params() };
+        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut rng::rng(&[9]));
+        assert!(matches!(t.end, EndReason::Bottom | EndReason::EnergySpent), "{:?}", t.end);
+        assert!(t.photons.iter().all(|ph| ph.position[2] >= 50.0 - 1e-4), "{:?}", t.photons);
+        let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+        assert!((dep + t.backscatter_kev_s + t.above_top_kev_s + t.undeposited_kev_s - 1.0).abs() < 1e-12);
+        // Near-horizontal steps of 1e11 km: stopped at the box enlarged by
+        // its size (|u| <= 10, |v| <= 4 at the start altitude), never placing
+        // a photon whose foot is further out.
+        let p = BeamParams { length_km: 1e9, alpha_d_deg: 89.999, delta_alpha_deg: 0.0, b_inclination_deg: 10.0, ..params() };
+        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let mut r = rng::rng(&[10]);
+        for _ in 0..20 {
+            let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut r);
+            assert_ne!(t.end, EndReason::MaxSteps);
+            for ph in &t.photons {
+                let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
+                let foot = ctx.field.foot(q, 260.0);
+                assert!(foot.x.abs() <= 10.0 + 1e-3 && foot.y.abs() <= 4.0 + 1e-3, "{foot}");
+            }
+        }
+    }
+
+    #[test]
+    fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
+        // Same random stream => same path in both models (the energy is
+        // drawn before the path and the path does not depend on it), so per
+        // altitude bin the sampled deposits' mean over beams must converge
+        // to the expected model's (Rao-Blackwellisation: E[D_E] = G). Test
+        // each 2 km bin at 5 standard errors of the sampled mean (sample
+        // variance over N = 4000 beams; 80 bins, so a false alarm at
+        // 5 sigma has probability ~ 80 x 6e-7).
+        let atm = Atmosphere::nrlmsis21();
+        let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
+        let fp = flat_footprint(1e5);
+        let p = params();
+        let (e0, soft, e_soft) = (3.0, 0.2, 0.3);
+        let g = SpectrumDeposition::curtain(e0, soft, e_soft);
+        let (ce, cs) = (fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g)), fang_ctx(&atm, &colour, &fp, &p, DepositModel::Sampled(MonoDeposition::get())));
+        let n = 4000;
+        let nb = 80;
+        let bin = |z: f64| (((z - 80.0) / 2.0).floor() as isize).clamp(0, nb as isize - 1) as usize;
+        let (mut sum_e, mut sum_s, mut sum_s2) = (vec![0.0; nb], vec![0.0; nb], vec![0.0; nb]);
+        for i in 0..n {
+            let mut r = rng::rng(&[8, i as u64]);
+            let e0_i = if r.random::<f64>() < soft { e_soft } else { e0 };
+            let st = BeamStart { energy_kev: sample_gamma3(e0_i, &mut r), ..start(0.0) };
+            let mut r2 = r.clone();
+            let (te, ts) = (trace_beam(&ce, &st, &mut r), trace_beam(&cs, &st, &mut r2));
+            let mut per = vec![0.0; nb];
+            for d in &ts.deposits {
+                per[bin(d.z_end)] += d.power_kev_s;
+            }
+            for d in &te.deposits {
+                sum_e[bin(d.z_end)] += d.power_kev_s;
+            }
+            // Above the start: both models account for it, not deposit it.
+            sum_e[nb - 1] += te.above_top_kev_s;
+            per[nb - 1] += ts.above_top_kev_s;
+            for b in 0..nb {
+                sum_s[b] += per[b];
+                sum_s2[b] += per[b] * per[b];
+            }
+        }
+        let nf = n as f64;
+        let mut checked = 0;
+        for b in 0..nb {
+            let (me, ms) = (sum_e[b] / nf, sum_s[b] / nf);
+            let se = ((sum_s2[b] / nf - ms * ms).max(0.0) / nf).sqrt();
+            assert!((me - ms).abs() <= 5.0 * se + 1e-9, "bin {} km: expected {me:.5} sampled {ms:.5} +- {se:.5}", 80 + 2 * b);
+            if me > 1e-3 {
+                checked += 1;
+            }
+        }
+        assert!(checked > 15, "{checked} bins with deposits");
+    }
+
     #[test]
     fn gamma3_has_the_right_mean_and_variance() {
         // Gamma(3, E0): mean 3 E0, variance 3 E0^2. Sample mean of N = 1e5 has
@@ -618,7 +1042,7 @@ mod tests {
         // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
         let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0 };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
-        let ctx = BeamContext { atmosphere: &atm, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: Field::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
         let mut r = rng::rng(&[6]);
         let mut left = 0;
         for _ in 0..50 {

@@ -127,6 +127,22 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Altitude profiles per curtain from the bake's own beam deposits: CSV with columns
+    /// curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300,oi_6364,n2_1p,deposited_kev_s
+    /// (0.5 km bin centres; ion pairs/s, photons/s, keV/s summed over the curtain).
+    Profile {
+        /// Scene file or preset name.
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Output CSV (written atomically); standard output without it.
+        #[arg(long, value_name = "FILE.csv")]
+        out: Option<PathBuf>,
+        /// Override the scene's seed.
+        #[arg(long, value_name = "N")]
+        seed: Option<u64>,
+        #[command(flatten)]
+        common: Common,
+    },
     /// Print a built-in scene as TOML, to copy and edit; or a scene file with every default filled in.
     Scene {
         /// Preset name (default, seed2014) or a scene file.
@@ -256,6 +272,13 @@ fn run(cli: Cli) -> Result<()> {
         Command::Bench { scene: scene_arg, out, quick, common } => {
             let scene = load_scene(&scene_arg)?;
             with_threads(common.threads, || bench_cmd(&scene, &scene_arg, &out, quick, common.quiet))
+        }
+        Command::Profile { scene, out, seed, common } => {
+            let mut scene = load_scene(&scene)?;
+            if let Some(s) = seed {
+                scene.seed = s;
+            }
+            with_threads(common.threads, || profile_cmd(&scene, out.as_deref(), common.quiet))
         }
         Command::Scene { name } => {
             let s = load_scene(&name)?;
@@ -401,6 +424,30 @@ where
     }
     let pool = b.build().context("cannot start the thread pool")?;
     pool.install(f)
+}
+
+fn profile_cmd(scene: &Scene, out: Option<&Path>, quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
+    let p = aurora::profile::profile(scene, progress)?;
+    let csv = aurora::profile::to_csv(&p);
+    match out {
+        Some(path) => {
+            aurora::atomic::write_atomic(path, csv.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+            if !quiet {
+                eprintln!("wrote {}", path.display());
+            }
+        }
+        None => print!("{csv}"),
+    }
+    if !quiet {
+        let s = &p.beam_stats;
+        eprintln!(
+            "electron power {:.4e} W: deposited {:.4e}, backscattered {:.4e}, above the beams' top {:.4e}, undeposited {:.4e}",
+            s.electron_power_w, s.deposited_power_w, s.backscattered_power_w, s.above_top_power_w, s.undeposited_power_w
+        );
+    }
+    Ok(())
 }
 
 fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {

@@ -33,6 +33,7 @@ pub struct Scene {
     pub background: Background,
     pub terrain: Terrain,
     pub animation: AnimationParams,
+    pub atmosphere: AtmosphereParams,
 }
 
 /// One auroral curtain: where its footprint lies and how hard it is driven.
@@ -160,6 +161,44 @@ pub struct BeamParams {
     pub b_inclination_deg: f64,
     /// Magnetic declination: azimuth of B's horizontal part, degrees from +y towards +x.
     pub b_declination_deg: f64,
+    /// How a beam deposits its energy (`crate::beams`): `expected` (the
+    /// curtain's whole spectrum on every beam, Fang et al. 2010 integrated),
+    /// `sampled` (one energy per beam, Fang 2010 monoenergetic) or `csda`
+    /// (one energy per beam, straight-line continuous slowing down: the
+    /// model before Fang, kept for comparison).
+    pub deposition: Deposition,
+}
+
+/// Beam energy deposition model; see [`BeamParams::deposition`].
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Deposition {
+    Expected,
+    Sampled,
+    Csda,
+}
+
+/// The neutral atmosphere model (`crate::atmosphere`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum AtmosphereModel {
+    /// NRLMSIS 2.1, 67 N, 20 E, 2020-01-15 00:00 UT, F10.7 = 150, Ap = 15.
+    Nrlmsis21,
+    /// Approximate U.S. Standard Atmosphere 1976, 80-500 km.
+    Us1976,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct AtmosphereParams {
+    /// `nrlmsis21` (default) or `us1976`.
+    pub model: AtmosphereModel,
+}
+
+impl Default for AtmosphereParams {
+    fn default() -> Self {
+        Self { model: AtmosphereModel::Nrlmsis21 }
+    }
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -472,6 +511,7 @@ impl Default for BeamParams {
             dt: 0.0025,
             b_inclination_deg: 78.0,
             b_declination_deg: 0.0,
+            deposition: Deposition::Expected,
         }
     }
 }
@@ -617,6 +657,7 @@ pub mod presets {
             background: Background::default(),
             terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
             animation: AnimationParams::default(),
+            atmosphere: AtmosphereParams::default(),
         }
     }
 
@@ -635,6 +676,9 @@ pub mod presets {
         // beam travels 35 km on average: starting at 140 km it reaches the
         // green layer (100-120 km), as the report's curtains do.
         s.beams.top_km = 140.0;
+        // The report's beams end after 1/dt steps wherever they are: its look
+        // needs the straight-line model and its stopping rules.
+        s.beams.deposition = Deposition::Csda;
         s.photons.radius_km = 0.2;
         s.grid.voxel_size = VoxelSize::Km(0.2);
         s.grid.density_a = 0.9;
@@ -1126,6 +1170,19 @@ mod tests {
         }
         // Right lengths still parse.
         Scene::from_toml_str("[[curtain]]\ncenter = [-20.0, 0.0]\n[camera]\nposition = [0.0, -90.0, 1.0]\n", "s.toml").unwrap();
+    }
+
+    #[test]
+    fn atmosphere_and_deposition_models_parse_and_unknown_names_are_refused() {
+        let s = Scene::from_toml_str("[atmosphere]\nmodel = \"us1976\"\n[beams]\ndeposition = \"sampled\"\n", "m.toml").unwrap();
+        assert_eq!(s.atmosphere.model, AtmosphereModel::Us1976);
+        assert_eq!(s.beams.deposition, Deposition::Sampled);
+        let d = Scene::default();
+        assert_eq!((d.atmosphere.model, d.beams.deposition), (AtmosphereModel::Nrlmsis21, Deposition::Expected));
+        let m = Scene::from_toml_str("[atmosphere]\nmodel = \"msis00\"\n", "m.toml").unwrap_err().to_string();
+        assert!(m.contains("m.toml") && m.contains("msis00") && m.contains("nrlmsis21") && m.contains("us1976"), "{m}");
+        let m = Scene::from_toml_str("[beams]\ndeposition = \"mean\"\n", "m.toml").unwrap_err().to_string();
+        assert!(m.contains("mean") && m.contains("expected") && m.contains("sampled") && m.contains("csda"), "{m}");
     }
 
     #[test]

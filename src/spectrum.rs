@@ -81,8 +81,15 @@ pub const OI_5577: Line = Line { name: "OI 557.7 nm", lambda_nm: 557.7 };
 pub const OI_6300: Line = Line { name: "OI 630.0 nm", lambda_nm: 630.0 };
 pub const OI_6364: Line = Line { name: "OI 636.4 nm", lambda_nm: 636.4 };
 pub const N2P_4278: Line = Line { name: "N2+ 427.8 nm", lambda_nm: 427.8 };
+/// The N2 first positive (B3Pi_g -> A3Sigma_u+) bands of the visible red,
+/// the Delta v = 3 sequence: band heads (3,0) 687.5 ... (8,5) 646.9 nm
+/// (Lofthus & Krupenie 1977, J. Phys. Chem. Ref. Data 6, 113). Its colour
+/// is the band-averaged one, [`n2_1p_rgb`]; `lambda_nm` is the mean.
+pub const N2_1P: Line = Line { name: "N2 1P 647-688 nm", lambda_nm: 666.8 };
+/// Band heads of the N2 1P Delta v = 3 sequence, nm, taken with equal weight.
+pub const N2_1P_BANDS_NM: [f64; 6] = [646.9, 654.5, 662.4, 670.5, 678.9, 687.5];
 /// The lines of the physical colour model, in [`LineYields`] order.
-pub const LINES: [Line; 4] = [OI_5577, OI_6300, OI_6364, N2P_4278];
+pub const LINES: [Line; 5] = [OI_5577, OI_6300, OI_6364, N2P_4278, N2_1P];
 
 /// Linear Rec.709 colour of one photon per second of a line, gamut mapped,
 /// in units where one 557.7 nm photon has Y = 1. Photon counts become
@@ -95,6 +102,22 @@ pub fn line_rgb(lambda_nm: f64) -> [f64; 3] {
     c.map(|x| x * w)
 }
 
+/// Linear Rec.709 colour of one photon per second of the N2 1P visible
+/// bands: the mean, over [`N2_1P_BANDS_NM`] with equal photon weights, of
+/// each band's CIE colour weighted by its photon energy (`557.7 / lambda`),
+/// gamut mapped once (the mixture is what the eye sees), in the units of
+/// [`line_rgb`].
+pub fn n2_1p_rgb() -> [f64; 3] {
+    let y_ref = luminance(gamut_map(xyz_to_rec709(cie1931_xyz(OI_5577.lambda_nm))));
+    let n = N2_1P_BANDS_NM.len() as f64;
+    let xyz = N2_1P_BANDS_NM.iter().fold([0.0; 3], |acc, &l| {
+        let c = cie1931_xyz(l);
+        let w = OI_5577.lambda_nm / l / n;
+        [acc[0] + w * c[0], acc[1] + w * c[1], acc[2] + w * c[2]]
+    });
+    gamut_map(xyz_to_rec709(xyz)).map(|x| x / y_ref)
+}
+
 /// Photons emitted per keV of electron energy deposited, per line.
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct LineYields {
@@ -102,11 +125,13 @@ pub struct LineYields {
     pub oi_6300: f64,
     pub oi_6364: f64,
     pub n2p_4278: f64,
+    /// N2 first positive, visible red bands (Delta v = 3), all together.
+    pub n2_1p: f64,
 }
 
 impl LineYields {
-    pub fn as_array(&self) -> [f64; 4] {
-        [self.oi_5577, self.oi_6300, self.oi_6364, self.n2p_4278]
+    pub fn as_array(&self) -> [f64; 5] {
+        [self.oi_5577, self.oi_6300, self.oi_6364, self.n2p_4278, self.n2_1p]
     }
 }
 
@@ -137,6 +162,19 @@ impl LineYields {
 ///   `q_D = A_D / (A_D + k_D [N2])`, k_D = 3e-11 cm^3/s and lifetime
 ///   1/A_D = 110 s (half-quenched where [N2] = 3e8 cm^-3, near 260 km); the
 ///   emitted photons split 3:1 between 630.0 and 636.4 nm.
+/// - **N2 1P, 647-688 nm** (the red of the pink lower border of hard
+///   aurora): `eps_1P = R_1P eps_4278`, proportional to N2 like 427.8 nm.
+///   N2(B) is excited by electron impact on N2 (directly and by cascade from
+///   N2(C) and higher states) and radiates in microseconds, so neither O
+///   thinning nor quenching removes it above 60 km (k_N2 [N2] ~ 1e3 /s
+///   against A ~ 1.5e5 /s at 80 km), while 557.7 nm fades below 100 km with
+///   O and under O2 quenching: the lower border turns from green to the
+///   violet of N2+ 1N plus the red of N2 1P, pink, without anyone placing it.
+///   R_1P = 1 (photons of the Delta v = 3 sequence per 427.8 nm photon) is
+///   our round reading of auroral spectra (Vallance Jones 1974, "Aurora",
+///   ch. 4; Gattinger & Vallance Jones 1974, Can. J. Phys. 52, 2343, the
+///   1P vibrational development): the bands are of the order of the 427.8 nm
+///   band in photon count. An approximate, documented choice, not a fit.
 #[derive(Clone, Debug, Default)]
 pub struct EmissionModel {
     pub atmosphere: Atmosphere,
@@ -150,6 +188,8 @@ pub const X_N2_MIXED: f64 = 0.781;
 pub const Y_A: f64 = 1.33;
 /// O(1S) yield by direct impact on O, photons per keV into O.
 pub const Y_O: f64 = 2.0;
+/// N2 1P (Delta v = 3) photons per 427.8 nm photon (see [`EmissionModel`]).
+pub const R_1P: f64 = 1.0;
 /// N2(A) + O rate, cm^3/s.
 pub const K_A_O: f64 = 3e-11;
 /// N2(A) + O2 quenching rate, cm^3/s.
@@ -186,6 +226,7 @@ impl EmissionModel {
             oi_6300: 0.75 * o1d,
             oi_6364: 0.25 * o1d,
             n2p_4278: EPS_4278 * x_n2 / X_N2_MIXED,
+            n2_1p: R_1P * EPS_4278 * x_n2 / X_N2_MIXED,
         }
     }
 
@@ -194,7 +235,7 @@ impl EmissionModel {
         let y = self.yields(h_km).as_array();
         let mut rgb = [0.0; 3];
         for (line, n) in LINES.iter().zip(y) {
-            let c = line_rgb(line.lambda_nm);
+            let c = if *line == N2_1P { n2_1p_rgb() } else { line_rgb(line.lambda_nm) };
             for k in 0..3 {
                 rgb[k] += n * c[k];
             }
@@ -213,7 +254,7 @@ pub struct ColourTable {
 }
 
 /// Altitude range of the physical table, km (clamped outside).
-pub const TABLE_H: (f64, f64) = (60.0, 700.0);
+pub const TABLE_H: (f64, f64) = (50.0, 700.0);
 
 impl ColourTable {
     /// The physical model tabulated every 0.05 km over [`TABLE_H`]: linear
@@ -378,6 +419,37 @@ mod tests {
         // The lower border is bluer than the green layer (violet N2+ shows).
         let (lo, mid) = (m.rgb_per_kev(88.0), m.rgb_per_kev(110.0));
         assert!(lo[2] / lo[1] > mid[2] / mid[1].max(1e-30), "{lo:?} {mid:?}");
+    }
+
+    #[test]
+    fn n2_1p_is_red_and_makes_the_lower_border_of_hard_aurora_pink() {
+        let c = n2_1p_rgb();
+        assert!(c[0] > 5.0 * c[1] && c[0] > 5.0 * c[2], "1P colour {c:?}");
+        // Its mean wavelength lies inside its bands.
+        assert!((N2_1P_BANDS_NM.iter().sum::<f64>() / 6.0 - N2_1P.lambda_nm).abs() < 0.1);
+        let m = EmissionModel::default();
+        // 1P follows N2 like 427.8 nm at every altitude.
+        for h in [80.0, 100.0, 150.0, 250.0] {
+            let y = m.yields(h);
+            assert!((y.n2_1p / y.n2p_4278 - R_1P).abs() < 1e-12);
+        }
+        // Green layer: green dominates. Lower border: red over green grows
+        // steadily downward (R = G near 86 km on NRLMSIS, 5 times the green
+        // layer's ratio by 84 km), and below 84 km red and blue both exceed
+        // green: pink/magenta. (557.7 nm holds 0.37 of its red/green at
+        // 110 km: the gamut-mapped green line is yellowish.)
+        let mid = m.rgb_per_kev(110.0);
+        assert!(mid[1] > mid[0] && mid[1] > mid[2], "110 km {mid:?}");
+        let rg = |h: f64| m.rgb_per_kev(h)[0] / m.rgb_per_kev(h)[1];
+        assert!(rg(84.0) > 5.0 * rg(110.0), "{} vs {}", rg(84.0), rg(110.0));
+        for h in [78.0, 81.0, 83.5] {
+            let lo = m.rgb_per_kev(h);
+            assert!(lo[0] > lo[1] && lo[2] > lo[1], "{h} km {lo:?}");
+        }
+        for k in 0..16 {
+            let h = 78.0 + 2.0 * k as f64;
+            assert!(rg(h) > rg(h + 2.0), "red/green not growing downward at {h} km");
+        }
     }
 
     #[test]

@@ -17,7 +17,6 @@ pub mod reduced;
 pub mod report;
 pub mod sweeps;
 
-use crate::atmosphere::Atmosphere;
 use crate::bake::{self, BakeError};
 use crate::beams;
 use crate::progress::NoProgress;
@@ -37,7 +36,7 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
         VoxelSize::Km(_) => None,
         VoxelSize::Auto(_) => {
             // "auto" depends on the full scene's photons: trace them once.
-            let atmosphere = Atmosphere::us1976();
+            let atmosphere = bake::atmosphere(scene);
             let colour = bake::colour_table(scene, &atmosphere);
             let fps = bake::footprints(scene);
             let (photons, _) =

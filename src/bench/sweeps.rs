@@ -220,7 +220,7 @@ impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
     pub fn new(scene: Scene, plan: Plan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
         let footprints = bake::footprints(&scene);
-        let atmosphere = Atmosphere::us1976();
+        let atmosphere = bake::atmosphere(&scene);
         let colour = bake::colour_table(&scene, &atmosphere);
         let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
         Bench {

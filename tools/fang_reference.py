@@ -1,0 +1,57 @@
+#!/usr/bin/env python3
+"""Writes data/fang_reference.csv: Fang et al. 2008 and 2010 energy
+dissipation computed by `eppaurora` (PyPI), the oracle of src/fang.rs's tests.
+
+Columns: model, energy_kev, column_g_cm2, scale_height_cm, dissipation_per_cm
+(energy dissipated per cm per unit incident energy flux, 1/cm: eppaurora's
+en_diss with flux = 1 keV cm^-2 s^-1). Models:
+- fang2010_mono: eppaurora.fang2010_mono (monoenergetic electrons);
+- fang2008: eppaurora.fang2008 (Maxwellian, E = characteristic energy);
+- fang2010_maxw: eppaurora.fang2010_maxw_int, Fang 2010 integrated over a
+  Maxwellian, bounds 0.1-1000 keV, 2048 log-spaced energies.
+rho is set to column / H, so eppaurora sees the column mass rho H exactly.
+Rerun: `python tools/fang_reference.py [OUT.csv]`.
+"""
+import os
+import sys
+
+import numpy as np
+import eppaurora
+
+H_CM = (6.0e5, 2.5e6)
+
+
+def rows():
+    out = []
+    cols = np.logspace(-8, -1, 15)
+    for e in (0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 1000.0):
+        for h in H_CM:
+            v = eppaurora.fang2010_mono(e, 1.0, h, cols / h)
+            out += [("fang2010_mono", e, m, h, x) for m, x in zip(cols, np.ravel(v))]
+    for e0 in (0.5, 1.0, 3.0, 10.0, 30.0):
+        for h in H_CM:
+            v = eppaurora.fang2008(e0, 1.0, h, cols / h)
+            out += [("fang2008", e0, m, h, x) for m, x in zip(cols, np.ravel(v))]
+    fine = np.logspace(-7, -1, 40)
+    for e0 in (1.0, 3.0, 10.0, 30.0):
+        h = H_CM[0]
+        v = eppaurora.fang2010_maxw_int(e0, 1.0, h, fine / h, bounds=(0.1, 1000.0), nstep=2048)
+        out += [("fang2010_maxw", e0, m, h, x) for m, x in zip(fine, np.ravel(v))]
+    return out
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "data", "fang_reference.csv")
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write(f"# eppaurora {eppaurora.__version__}; made by tools/fang_reference.py\n")
+        f.write("model,energy_kev,column_g_cm2,scale_height_cm,dissipation_per_cm\n")
+        for model, e, m, h, x in rows():
+            f.write(f"{model},{e:g},{m:.17g},{h:.17g},{x:.17g}\n")
+    os.replace(tmp, path)
+    print(f"wrote {path}", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""Writes data/nrlmsis21.csv: the NRLMSIS 2.1 atmosphere that `aurora` uses by
+default (`[atmosphere] model = "nrlmsis21"`, src/atmosphere.rs).
+
+An auroral-zone winter night: 67 N, 20 E, 2020-01-15 00:00 UT,
+F10.7 = F10.7a = 150 sfu, Ap = 15 (all seven Ap slots), 50-700 km every 0.5 km.
+Columns: altitude_km, rho_g_cm3 (total mass density), n2_cm3, o2_cm3, o_cm3
+(number densities), temperature_k. Six significant digits.
+
+Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
+incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the
+`pymsis` package (PyPI). Rerun: `python tools/msis_table.py [OUT.csv]`.
+"""
+import os
+import sys
+
+import numpy as np
+import pymsis
+
+LAT, LON = 67.0, 20.0
+DATE = np.datetime64("2020-01-15T00:00")
+F107 = F107A = 150.0
+AP = 15.0
+ALTITUDES = np.arange(50.0, 700.0 + 0.25, 0.5)
+
+
+def table(altitudes=ALTITUDES):
+    """Rows [alt km, rho g/cm^3, n(N2), n(O2), n(O) cm^-3, T K]."""
+    out = pymsis.calculate(
+        np.full(len(altitudes), DATE), np.full(len(altitudes), LON), np.full(len(altitudes), LAT),
+        altitudes, np.full(len(altitudes), F107), np.full(len(altitudes), F107A),
+        np.full((len(altitudes), 7), AP), version=2.1)
+    out = np.asarray(out).reshape(len(altitudes), -1)
+    v = pymsis.Variable
+    rho = out[:, v.MASS_DENSITY] * 1e-3  # kg/m^3 -> g/cm^3
+    n = [out[:, s] * 1e-6 for s in (v.N2, v.O2, v.O)]  # m^-3 -> cm^-3
+    rows = np.column_stack([altitudes, rho, *n, out[:, v.TEMPERATURE]])
+    # NRLMSIS leaves atomic oxygen undefined (NaN) at its 50 km boundary:
+    # extend the next two rows' exponential down to it (flagged in the header).
+    o = rows[:, 4]
+    for i in np.flatnonzero(~np.isfinite(o))[::-1]:
+        o[i] = o[i + 1] * (o[i + 1] / o[i + 2]) ** ((altitudes[i + 1] - altitudes[i]) / (altitudes[i + 2] - altitudes[i + 1]))
+    return rows
+
+
+def main():
+    here = os.path.dirname(os.path.abspath(__file__))
+    path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "data", "nrlmsis21.csv")
+    rows = table()
+    assert np.all(np.isfinite(rows)) and np.all(rows[:, 1:] > 0), "NRLMSIS returned a non-positive value"
+    tmp = path + ".tmp"
+    with open(tmp, "w") as f:
+        f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
+                f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
+                f"O at 50 km extrapolated (NRLMSIS leaves it undefined there); made by tools/msis_table.py\n")
+        f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k\n")
+        for r in rows:
+            f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")
+    os.replace(tmp, path)
+    print(f"wrote {path}: {len(rows)} rows", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    main()
