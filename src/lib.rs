@@ -4,13 +4,14 @@
 //! scene -> footprint -> beams -> photons -> grids -> files (vdb, usd),
 //! and the renderer reads grids only.
 //!
-//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`) know nothing of
+//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`, `camera`) know nothing of
 //! the stages above them.
 
 pub mod atmosphere;
 pub mod bake;
 pub mod bench;
 pub mod beams;
+pub mod camera;
 pub mod footprint;
 pub mod grid;
 pub mod outputs;

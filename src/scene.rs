@@ -251,6 +251,62 @@ pub struct GridParams {
 pub enum Projection {
     Perspective,
     Orthographic,
+    /// Equidistant fisheye (Cycles' `FISHEYE_EQUIDISTANT`): `fov_deg` is the
+    /// angle across the image circle, up to 360; 180 is a dome master.
+    Fisheye,
+    /// 360 x 180 degree latitude-longitude panorama (Cycles'
+    /// `EQUIRECTANGULAR`); `fov_deg` is not used.
+    Equirectangular,
+}
+
+/// Largest `render.width` and `render.height` (the one image-size limit:
+/// the scene, the camera and the renderer all check this).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+impl Camera {
+    /// The largest `fov_deg` of this projection: 360 for the fisheye (the
+    /// whole sphere), below 180 for a pinhole (degrees, exclusive).
+    pub fn max_fov_deg(&self) -> (f64, bool) {
+        match self.projection {
+            Projection::Fisheye => (360.0, true),
+            _ => (180.0, false),
+        }
+    }
+
+    /// Every camera value outside its range, as (key, value, allowed): the
+    /// one set of camera limits, applied by [`Scene::validate`] and by
+    /// `crate::camera::CameraModel::new`.
+    pub fn problems(&self) -> Vec<(&'static str, String, String)> {
+        let mut p = Vec::new();
+        let (max_fov, inclusive) = self.max_fov_deg();
+        if !(self.fov_deg > 0.0 && (self.fov_deg < max_fov || (inclusive && self.fov_deg == max_fov))) {
+            let close = if inclusive { "]" } else { ")" };
+            p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
+        }
+        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
+            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
+        }
+        let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
+        if dir.iter().all(|d| *d == 0.0) {
+            p.push(("look_at", format!("{:?}", self.look_at), "must differ from camera.position".into()));
+        }
+        let cross = [
+            dir[1] * self.up[2] - dir[2] * self.up[1],
+            dir[2] * self.up[0] - dir[0] * self.up[2],
+            dir[0] * self.up[1] - dir[1] * self.up[0],
+        ];
+        let up2: f64 = self.up.iter().map(|u| u * u).sum();
+        let dir2: f64 = dir.iter().map(|u| u * u).sum();
+        if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
+            p.push(("up", format!("{:?}", self.up), "must not be parallel to the view direction".into()));
+        }
+        for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
+            if a.iter().any(|x| !x.is_finite()) {
+                p.push((k, format!("{a:?}"), "must be finite".into()));
+            }
+        }
+        p
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -260,7 +316,8 @@ pub struct Camera {
     pub look_at: [f64; 3],
     pub up: [f64; 3],
     pub projection: Projection,
-    /// Vertical field of view, degrees (perspective).
+    /// Vertical field of view, degrees (perspective); the angle across the
+    /// image circle (fisheye, up to 360).
     pub fov_deg: f64,
     /// Height of the view in scene units (orthographic).
     pub ortho_height: f64,
@@ -724,33 +781,14 @@ impl Scene {
         v.finite(t, "density_base_km", g.density_base_km);
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
 
-        let cam = &self.camera;
         let t = Some(("camera", 0));
-        if !(cam.fov_deg > 0.0 && cam.fov_deg < 180.0) {
-            v.push(t, "fov_deg", fmt_num(cam.fov_deg), "must be in (0, 180)".into());
-        }
-        v.finite_pos(t, "ortho_height", cam.ortho_height);
-        let dir = [cam.look_at[0] - cam.position[0], cam.look_at[1] - cam.position[1], cam.look_at[2] - cam.position[2]];
-        if dir.iter().all(|d| *d == 0.0) {
-            v.push(t, "look_at", format!("{:?}", cam.look_at), "must differ from camera.position".into());
-        }
-        let cross = [
-            dir[1] * cam.up[2] - dir[2] * cam.up[1],
-            dir[2] * cam.up[0] - dir[0] * cam.up[2],
-            dir[0] * cam.up[1] - dir[1] * cam.up[0],
-        ];
-        if cross.iter().map(|c| c * c).sum::<f64>() < 1e-18 {
-            v.push(t, "up", format!("{:?}", cam.up), "must not be parallel to the view direction".into());
-        }
-        for (k, a) in [("position", cam.position), ("look_at", cam.look_at), ("up", cam.up)] {
-            if a.iter().any(|x| !x.is_finite()) {
-                v.push(t, k, format!("{a:?}"), "must be finite".into());
-            }
+        for (key, value, allowed) in self.camera.problems() {
+            v.push(t, key, value, allowed);
         }
         let r = &self.render;
         let t = Some(("render", 0));
-        v.range(t, "width", r.width as f64, 1.0, 16384.0, true);
-        v.range(t, "height", r.height as f64, 1.0, 16384.0, true);
+        v.range(t, "width", r.width as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
+        v.range(t, "height", r.height as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
         v.range(t, "spp", r.spp as f64, 1.0, 65536.0, true);
         v.range(t, "exposure", r.exposure, -50.0, 50.0, true);
         let vol = &self.volume;

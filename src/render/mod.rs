@@ -14,7 +14,7 @@
 //! behind everything.
 //!
 //! Stages (each a function of plain data):
-//! `camera.rs` (rays) -> `medium.rs` (ghosted dual leaves + tree, built once)
+//! `crate::camera` (rays) -> `medium.rs` (ghosted dual leaves + tree, built once)
 //! -> `dda.rs` (hierarchical DDA: occupied leaves, then dual cells) ->
 //! `segment.rs` (exact optical depth, Gauss-Legendre emission per cell) ->
 //! `march.rs` (integrators, one walker for primary and shadow rays) ->
@@ -37,7 +37,7 @@
 // Loops over the three colour channels index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-pub mod camera;
+pub use crate::camera;
 pub mod dda;
 pub mod film;
 pub mod march;
@@ -46,7 +46,7 @@ pub mod segment;
 pub mod shadow;
 pub mod terrain;
 
-pub use camera::{CameraModel, Ray};
+pub use crate::camera::{CameraModel, Ray};
 pub use march::{optical_depth_along_ray, radiance_along_ray, RayIntegral};
 pub use medium::Medium;
 pub use terrain::{write_obj, Heightfield, TerrainModel};
@@ -200,6 +200,12 @@ pub enum RenderError {
     Png { path: PathBuf, message: String },
 }
 
+impl From<crate::camera::CameraError> for RenderError {
+    fn from(e: crate::camera::CameraError) -> Self {
+        RenderError::Settings(e.to_string())
+    }
+}
+
 /// SplitMix64 (Steele et al. 2014): decorrelates seeds.
 fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -257,9 +263,6 @@ impl Prepared {
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
         let r = &settings.render;
         let bad = |m: String| Err(RenderError::Settings(m));
-        if r.width == 0 || r.height == 0 || r.width > 65536 || r.height > 65536 {
-            return bad(format!("render.width x height = {}x{} must be within 1..=65536", r.width, r.height));
-        }
         if r.spp == 0 {
             return bad("render.spp must be at least 1".into());
         }
@@ -323,7 +326,12 @@ impl Prepared {
                 let (jx, jy) = pixel_sample(shift, i);
                 (jx, jy, rng.random::<f64>())
             };
-            let ray = self.camera.ray(px as f64 + jx, py as f64 + jy);
+            // Outside a fisheye's image circle the sample sees nothing
+            // (RGBA 0, as Cycles leaves it).
+            let Some(ray) = self.camera.ray_at(px as f64 + jx, py as f64 + jy) else {
+                n.primary += 1;
+                continue;
+            };
             let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
             let t_end = hit.map_or(f64::INFINITY, |h| h.t);
             let vol = radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset);
