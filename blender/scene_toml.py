@@ -17,6 +17,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 
+#: `camera.projection` values (src/scene.rs, `Projection`).
+PROJECTIONS = ("perspective", "orthographic", "fisheye", "equirectangular")
+
+
 class SceneFileError(ValueError):
     """A scene file that cannot be read or has a value out of range."""
 
@@ -27,7 +31,8 @@ class Camera:
     look_at: tuple[float, float, float] = (0.0, 20.0, 70.0)
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
     projection: str = "perspective"
-    #: Vertical field of view, degrees (perspective).
+    #: Vertical field of view, degrees (perspective); the angle across the
+    #: image circle (fisheye, up to 360).
     fov_deg: float = 75.0
     #: Vertical extent of the view in km (orthographic).
     ortho_height: float = 10.0
@@ -132,11 +137,14 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         look_at=_vec3(f"{src}: camera.look_at", c.get("look_at", list(d.look_at))),
         up=_vec3(f"{src}: camera.up", c.get("up", list(d.up))),
         projection=c.get("projection", d.projection),
-        fov_deg=_number(f"{src}: camera.fov_deg", c.get("fov_deg", d.fov_deg), 0.0, 180.0, lo_open=True),
+        fov_deg=_number(f"{src}: camera.fov_deg", c.get("fov_deg", d.fov_deg), 0.0,
+                        360.0 if c.get("projection") == "fisheye" else 180.0, lo_open=True),
         ortho_height=_number(f"{src}: camera.ortho_height", c.get("ortho_height", d.ortho_height), 0.0, math.inf, lo_open=True),
     )
-    if cam.projection not in ("perspective", "orthographic"):
-        raise SceneFileError(f"{src}: camera.projection = {cam.projection!r} must be \"perspective\" or \"orthographic\"")
+    if cam.projection not in PROJECTIONS:
+        raise SceneFileError(f"{src}: camera.projection = {cam.projection!r} must be one of {', '.join(PROJECTIONS)}")
+    if cam.projection != "fisheye" and cam.fov_deg >= 180.0:
+        raise SceneFileError(f"{src}: camera.fov_deg = {cam.fov_deg} must be in (0, 180)")
     fwd = [b - a for a, b in zip(cam.position, cam.look_at)]
     if all(x == 0.0 for x in fwd):
         raise SceneFileError(f"{src}: camera.look_at must differ from camera.position")
@@ -217,8 +225,23 @@ def camera_basis(cam: Camera):
 def pixel_ray(cam: Camera, width: int, height: int, px: float, py: float):
     """Origin and unit direction of the camera ray through raster point
     (px, py), measured in pixels from the top-left corner (pixel centres at
-    half-integers, row 0 at the top). Used by tests to predict images."""
+    half-integers, row 0 at the top). Used by tests to predict images.
+    None outside a fisheye's image circle (src/camera.rs)."""
     right, up, forward = camera_basis(cam)
+    if cam.projection in ("fisheye", "equirectangular"):
+        u, v = 2.0 * px / width - 1.0, 1.0 - 2.0 * py / height
+        if cam.projection == "fisheye":
+            r = math.hypot(u, v)
+            if r > 1.0:
+                return None
+            th = r * math.radians(cam.fov_deg) / 2.0
+            a, b = (math.sin(th) / r if r > 0 else 0.0), math.cos(th)
+            d = [b * f + a * (u * x + v * y) for f, x, y in zip(forward, right, up)]
+        else:
+            lam, beta = math.pi * u, math.pi / 2.0 * v
+            d = [math.cos(beta) * (math.cos(lam) * f + math.sin(lam) * x) + math.sin(beta) * y
+                 for f, x, y in zip(forward, right, up)]
+        return tuple(cam.position), tuple(_normalize(d))
     # Screen coordinates in [-1, 1] vertically, [-aspect, aspect] horizontally.
     sx = (2.0 * px - width) / height
     sy = (height - 2.0 * py) / height
