@@ -256,6 +256,23 @@ impl CameraModel {
         }
     }
 
+    /// The solid angle, sr, of the pixel that sees direction `dir` (unit):
+    /// the centre pixel's (perspective `(2 tan(fov/2) / H)^2`; fisheye
+    /// `fov^2 / (W H)`, from `dtheta = fov/2 dr` and `dr = 2 / W` across a
+    /// pixel; equirectangular `(2 pi / W) (pi / H)`) times
+    /// [`relative_pixel_solid_angle`](Self::relative_pixel_solid_angle).
+    /// None for the orthographic camera (its pixels are areas, not angles).
+    pub fn pixel_solid_angle(&self, dir: DVec3) -> Option<f64> {
+        let (w, h) = (self.width as f64, self.height as f64);
+        let omega0 = match self.projection {
+            Projection::Orthographic => return None,
+            Projection::Perspective => (2.0 * self.tan_half_fov / h).powi(2),
+            Projection::Fisheye => (2.0 * self.half_fov).powi(2) / (w * h),
+            Projection::Equirectangular => (2.0 * PI / w) * (PI / h),
+        };
+        Some(omega0 * self.relative_pixel_solid_angle(dir))
+    }
+
     /// How many pixels a unit area facing the camera at `p` covers, up to a
     /// constant factor (the same for every `p`): `1 / (d^2 Omega_p /
     /// Omega_0)` with `d` the distance (at least `sqrt(d2_min)`, so a point

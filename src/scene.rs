@@ -348,6 +348,16 @@ pub struct VolumeParams {
 pub struct Background {
     /// Constant radiance behind the volume where no terrain is hit.
     pub radiance: [f64; 3],
+    /// Optional equirectangular linear EXR of sky radiance, added to
+    /// `radiance` (path relative to the scene file; mapped as Blender's
+    /// Environment Texture: centre towards +x, top row the zenith).
+    pub image: Option<String>,
+    /// A procedural star field (`crate::render::sky`), from the scene seed.
+    pub stars: bool,
+    /// Faintest star drawn, visual magnitude (6: the naked eye's limit).
+    pub limiting_magnitude: f64,
+    /// Scale on the stars' physical irradiance.
+    pub star_brightness: f64,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -505,7 +515,7 @@ impl Default for VolumeParams {
 
 impl Default for Background {
     fn default() -> Self {
-        Self { radiance: [0.0, 0.0, 0.0] }
+        Self { radiance: [0.0, 0.0, 0.0], image: None, stars: false, limiting_magnitude: 6.0, star_brightness: 1.0 }
     }
 }
 
@@ -800,6 +810,10 @@ impl Scene {
         if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
             v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
         }
+        // Beyond m = 8 the 0.45 slope of the star counts no longer holds
+        // (and the count passes 38,000).
+        v.range(t, "limiting_magnitude", self.background.limiting_magnitude, -1.5, 8.0, true);
+        v.range(t, "star_brightness", self.background.star_brightness, 0.0, 1e6, true);
         let ter = &self.terrain;
         let t = Some(("terrain", 0));
         v.finite(t, "height", ter.height);

@@ -44,6 +44,7 @@ pub mod march;
 pub mod medium;
 pub mod segment;
 pub mod shadow;
+pub mod sky;
 pub mod terrain;
 
 pub use crate::camera::{CameraModel, Ray};
@@ -244,6 +245,7 @@ pub struct Prepared {
     pub medium: Medium,
     pub terrain: TerrainModel,
     pub sampler: Option<EmissionSampler>,
+    pub sky: sky::Sky,
     pub settings: RenderSettings,
 }
 
@@ -292,7 +294,8 @@ impl Prepared {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
         };
-        Ok(Prepared { camera, medium, terrain, sampler, settings: settings.clone() })
+        let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
+        Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
     }
 
     fn shadow_scene(&self) -> ShadowScene<'_> {
@@ -348,7 +351,10 @@ impl Prepared {
                     n.shadow_rays += rays;
                     [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c])
                 }
-                None => background,
+                None => {
+                    let s = self.sky.radiance(ray.dir);
+                    [0, 1, 2].map(|c| background[c] + s[c])
+                }
             };
             for c in 0..3 {
                 sum[c] += vol.l[c] + t * behind[c];
@@ -399,7 +405,23 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
         stats.thread_seconds += secs;
         stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
     }
+    prepared.add_stars(&mut pixels);
     Ok(Image { width: w, height: h, pixels, stats })
+}
+
+impl Prepared {
+    /// The star field's points (`sky.rs`), seen through the volume's
+    /// transmittance, hidden by the terrain.
+    fn add_stars(&self, pixels: &mut [[f32; 4]]) {
+        let s = &self.settings;
+        let o = self.camera.position;
+        self.sky.add_stars(pixels, &self.camera, |dir| {
+            if self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
+                return None;
+            }
+            Some(optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance())
+        });
+    }
 }
 
 #[cfg(test)]
