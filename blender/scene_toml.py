@@ -58,6 +58,12 @@ class Volume:
 class Background:
     #: Radiance seen by camera rays that escape; lights nothing.
     radiance: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: Equirectangular linear EXR of sky radiance (relative to the scene file).
+    image: str | None = None
+    #: Procedural stars (drawn by `aurora render` only).
+    stars: bool = False
+    limiting_magnitude: float = 6.0
+    star_brightness: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -174,6 +180,16 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     rad = _vec3(f"{src}: background.radiance", b.get("radiance", list(Background().radiance)))
     if any(x < 0.0 for x in rad):
         raise SceneFileError(f"{src}: background.radiance components must be >= 0, got {list(rad)}")
+    db = Background()
+    img = b.get("image", db.image)
+    if img is not None and not isinstance(img, str):
+        raise SceneFileError(f"{src}: background.image must be a path string, got {img!r}")
+    stars = b.get("stars", db.stars)
+    if not isinstance(stars, bool):
+        raise SceneFileError(f"{src}: background.stars must be true or false, got {stars!r}")
+    bg = Background(rad, img, stars,
+                    _number(f"{src}: background.limiting_magnitude", b.get("limiting_magnitude", db.limiting_magnitude), -1.5, 8.0),
+                    _number(f"{src}: background.star_brightness", b.get("star_brightness", db.star_brightness), 0.0, 1e6))
 
     t = _table(doc, "terrain", src)
     d = Terrain()
@@ -187,7 +203,7 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     if any(not 0.0 <= a <= 1.0 for a in ter.albedo):
         raise SceneFileError(f"{src}: terrain.albedo components must be in [0, 1], got {list(ter.albedo)}")
 
-    return SceneSpec(cam, ren, vol, Background(rad), ter, path)
+    return SceneSpec(cam, ren, vol, bg, ter, path)
 
 
 def load_scene(path: str | Path) -> SceneSpec:
