@@ -107,6 +107,10 @@ enum Command {
         /// Preset name (default, seed2014) or a scene file.
         #[arg(default_value = "default")]
         name: String,
+        /// Print every scene key's default and allowed range as JSON instead
+        /// (the Blender add-on reads a copy: blender/scene_schema.json).
+        #[arg(long)]
+        schema: bool,
     },
     /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
     Footprint {
@@ -187,7 +191,11 @@ fn run(cli: Cli) -> Result<()> {
             let scene = load_scene(&scene_arg)?;
             with_threads(common.threads, || bench_cmd(&scene, &scene_arg, &out, quick, common.quiet))
         }
-        Command::Scene { name } => {
+        Command::Scene { schema: true, .. } => {
+            print!("{}", aurora::scene::schema::schema_json());
+            Ok(())
+        }
+        Command::Scene { name, .. } => {
             let s = load_scene(&name)?;
             print!("{}", scene_header(&name));
             print!("{}", s.to_toml());

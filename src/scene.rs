@@ -698,7 +698,13 @@ impl Scene {
 
     /// Checks every range; `text` (the TOML source) is used to find lines.
     pub fn validate(&self, file: &str, text: Option<&str>) -> Result<(), SceneError> {
-        let mut v = Validator { file, text, errors: Vec::new() };
+        self.validate_with(file, text).map(|_| ())
+    }
+
+    /// [`validate`](Self::validate), also returning every check made (the
+    /// ranges [`schema`] prints).
+    fn validate_with(&self, file: &str, text: Option<&str>) -> Result<Vec<(String, schema::Allowed)>, SceneError> {
+        let mut v = Validator { file, text, errors: Vec::new(), checks: Vec::new() };
         if self.curtains.is_empty() {
             v.push(None, "curtain", "[]".into(), "at least one [[curtain]] table is required".into());
         }
@@ -716,8 +722,18 @@ impl Scene {
             v.range(t, "bend_km", c.bend_km, 0.0, 1e4, true);
             v.finite(t, "rotation_deg", c.rotation_deg);
             v.finite(t, "center", c.center[0] + c.center[1]);
+            v.allow(t, "bend_km", schema::Allowed::Rule("in [0, 1e4], less than width / 2".into()));
             if c.bend_km * 2.0 >= c.width {
                 v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than width / 2 = {}", c.width / 2.0));
+            }
+        }
+        if self.curtains.is_empty() {
+            // Record the per-curtain ranges from a default curtain.
+            let one = Scene { curtains: vec![Curtain::default()], ..self.clone() };
+            if let Ok(c) = one.validate_with(file, None) {
+                for (k, a) in c.into_iter().filter(|(k, _)| k.starts_with("curtain.")) {
+                    v.checks.push((k, a));
+                }
             }
         }
         if self.curtains.iter().all(|c| c.beam_weight <= 0.0) && !self.curtains.is_empty() {
@@ -743,6 +759,8 @@ impl Scene {
         v.range(t, "top_km", b.top_km, 80.0, 1000.0, true);
         v.range(t, "top_noise_km", b.top_noise_km, 0.0, 100.0, true);
         v.range(t, "top_noise_freq", b.top_noise_freq, 0.0, 1e3, true);
+        v.allow(t, "alpha_d_deg", schema::Allowed::Range { min: 0.0, max: 90.0, min_inclusive: true, max_inclusive: false });
+        v.allow(t, "delta_alpha_deg", schema::Allowed::Rule("in [0, beams.alpha_d_deg]".into()));
         if !(b.alpha_d_deg >= 0.0 && b.alpha_d_deg < 90.0) {
             v.push(t, "alpha_d_deg", b.alpha_d_deg.to_string(), "must be in [0, 90) degrees: at 90 a beam no longer moves along B".into());
         }
@@ -758,6 +776,7 @@ impl Scene {
         let t = Some(("colour", 0));
         v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);
         v.range(t, "noise_freq", c.noise_freq, 0.0, 1e3, true);
+        v.allow(t, "colormap", schema::Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()));
         if c.mode == ColourMode::Colormap {
             if c.colormap.len() < 2 {
                 v.push(t, "colormap", format!("{} rows", c.colormap.len()), "needs at least 2 rows of [altitude_km, r, g, b]".into());
@@ -783,6 +802,7 @@ impl Scene {
 
         let g = &self.grid;
         let t = Some(("grid", 0));
+        v.allow(t, "voxel_size", schema::Allowed::Rule("a number of km > 0, or \"auto\"".into()));
         if let VoxelSize::Km(s) = g.voxel_size {
             v.finite_pos(t, "voxel_size", s);
         }
@@ -792,6 +812,11 @@ impl Scene {
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
 
         let t = Some(("camera", 0));
+        v.allow(t, "fov_deg", schema::Allowed::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\"".into()));
+        v.allow(t, "ortho_height", schema::Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
+        v.allow(t, "look_at", schema::Allowed::Rule("finite, differs from camera.position".into()));
+        v.allow(t, "up", schema::Allowed::Rule("finite, not parallel to look_at - position".into()));
+        v.allow(t, "position", schema::Allowed::Rule("finite".into()));
         for (key, value, allowed) in self.camera.problems() {
             v.push(t, key, value, allowed);
         }
@@ -807,6 +832,7 @@ impl Scene {
         v.range(t, "emission_scale", vol.emission_scale, 0.0, 1e9, true);
         let t = Some(("background", 0));
         // Bounded so that pixels (f32) stay finite.
+        v.allow(t, "radiance", schema::Allowed::Range { min: 0.0, max: 1e9, min_inclusive: true, max_inclusive: true });
         if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
             v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
         }
@@ -817,6 +843,8 @@ impl Scene {
         let ter = &self.terrain;
         let t = Some(("terrain", 0));
         v.finite(t, "height", ter.height);
+        v.allow(t, "albedo", schema::Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: true });
+        v.allow(t, "extent", schema::Allowed::Rule("[x0, y0, x1, y1] with x1 > x0 and y1 > y0".into()));
         if ter.albedo.iter().any(|x| !(0.0..=1.0).contains(x)) {
             v.push(t, "albedo", format!("{:?}", ter.albedo), "components must be in [0, 1]".into());
         }
@@ -843,7 +871,7 @@ impl Scene {
             }
         }
         if v.errors.is_empty() {
-            Ok(())
+            Ok(v.checks)
         } else {
             Err(SceneError::Invalid(v.errors))
         }
@@ -889,6 +917,8 @@ struct Validator<'a> {
     file: &'a str,
     text: Option<&'a str>,
     errors: Vec<RangeError>,
+    /// Every check made, as (key, allowed range), for [`schema`].
+    checks: Vec<(String, schema::Allowed)>,
 }
 
 impl Validator<'_> {
@@ -901,7 +931,21 @@ impl Validator<'_> {
         };
         self.errors.push(RangeError { file: self.file.to_string(), line, key, value, allowed });
     }
+    fn key(t: Option<(&str, usize)>, key: &str) -> String {
+        match t {
+            Some((t, _)) => format!("{t}.{key}"),
+            None => key.to_string(),
+        }
+    }
+    /// Records an allowed range or rule for the schema (no check).
+    fn allow(&mut self, t: Option<(&str, usize)>, key: &str, a: schema::Allowed) {
+        let k = Self::key(t, key);
+        if !self.checks.iter().any(|(c, _)| *c == k) {
+            self.checks.push((k, a));
+        }
+    }
     fn range(&mut self, t: Option<(&str, usize)>, key: &str, x: f64, lo: f64, hi: f64, lo_inclusive: bool) {
+        self.allow(t, key, schema::Allowed::Range { min: lo, max: hi, min_inclusive: lo_inclusive, max_inclusive: true });
         let ok = x.is_finite() && (if lo_inclusive { x >= lo } else { x > lo }) && x <= hi;
         if !ok {
             let open = if lo_inclusive { "[" } else { "(" };
@@ -909,11 +953,13 @@ impl Validator<'_> {
         }
     }
     fn finite_pos(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, schema::Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
         if !(x.is_finite() && x > 0.0) {
             self.push(t, key, fmt_num(x), "must be a finite number > 0".into());
         }
     }
     fn finite(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, schema::Allowed::Rule("finite".into()));
         if !x.is_finite() {
             self.push(t, key, fmt_num(x), "must be finite".into());
         }
@@ -964,9 +1010,145 @@ pub fn find_key_line(text: &str, table: Option<(&str, usize)>, key: &str) -> Opt
     None
 }
 
+pub mod schema {
+    //! `aurora scene --schema`: every scene key, its default and its allowed
+    //! range, as JSON. One source: defaults are `Scene::default()` (what a
+    //! missing table or key gives) serialised, and ranges are the checks
+    //! [`Scene::validate`] makes, recorded as it validates the default
+    //! scene (`Validator::allow`): a range changed there changes here.
+    use super::*;
+    use serde_json::{json, Map, Value};
+
+    /// What a key accepts.
+    #[derive(Clone, Debug, PartialEq)]
+    pub enum Allowed {
+        Range { min: f64, max: f64, min_inclusive: bool, max_inclusive: bool },
+        Rule(String),
+    }
+
+    fn num(x: f64) -> Value {
+        if x.is_finite() {
+            json!(x)
+        } else {
+            json!(if x > 0.0 { "inf" } else { "-inf" })
+        }
+    }
+
+    fn names<T: Serialize>(all: &[T]) -> Value {
+        Value::Array(all.iter().map(|v| serde_json::to_value(v).expect("enum serialises")).collect())
+    }
+
+    /// Allowed values of the enum-valued keys (every variant listed; a
+    /// test checks each parses).
+    pub fn enum_values() -> Vec<(&'static str, Value)> {
+        vec![
+            ("camera.projection", names(&[Projection::Perspective, Projection::Orthographic, Projection::Fisheye, Projection::Equirectangular])),
+            ("colour.mode", names(&[ColourMode::Physical, ColourMode::Colormap])),
+            ("photons.gather", names(&[GatherMethod::Kdtree, GatherMethod::Splat, GatherMethod::Report2014])),
+            ("grid.compression", names(&[Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask])),
+            ("terrain.kind", names(&[TerrainKind::None, TerrainKind::Plane, TerrainKind::Heightfield])),
+        ]
+    }
+
+    /// The schema: `{table: {key: {"default": .., "min"/"max"/.. or "rule"
+    /// or "values"}}}`; `curtain` describes one `[[curtain]]` entry
+    /// (defaults of `Curtain::default()`), top-level keys sit under `""`.
+    /// Where a key inside a table that is present defaults differently from
+    /// a missing table (`terrain.kind`), `default_in_table` says so.
+    pub fn schema() -> Value {
+        let scene = Scene::default();
+        let checks = scene.validate_with("default", None).expect("the default scene validates");
+        let defaults = serde_json::to_value(&scene).expect("a scene serialises");
+        let in_table: Value = json!({
+            "footprint": FootprintParams::default(), "beams": BeamParams::default(), "colour": ColourParams::default(),
+            "photons": PhotonParams::default(), "grid": GridParams::default(), "camera": Camera::default(),
+            "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(),
+            "terrain": Terrain::default(),
+        });
+        let enums = enum_values();
+        let mut out = Map::new();
+        let Value::Object(top) = defaults else { unreachable!() };
+        for (table, value) in top {
+            let (name, fields) = match (table.as_str(), value) {
+                ("curtain", _) => ("curtain".to_string(), serde_json::to_value(Curtain::default()).expect("serialises")),
+                (_, v @ Value::Object(_)) => (table.clone(), v),
+                (_, v) => {
+                    let mut m = Map::new();
+                    m.insert(table.clone(), v);
+                    (String::new(), Value::Object(m))
+                }
+            };
+            let Value::Object(fields) = fields else { continue };
+            let entry = out.entry(name.clone()).or_insert_with(|| Value::Object(Map::new()));
+            for (key, default) in fields {
+                let full = if name.is_empty() { key.clone() } else { format!("{name}.{key}") };
+                let mut k = Map::new();
+                k.insert("default".into(), default.clone());
+                if let Some(d) = in_table.get(&name).and_then(|t| t.get(&key)) {
+                    if *d != default {
+                        k.insert("default_in_table".into(), d.clone());
+                    }
+                }
+                match checks.iter().find(|(c, _)| *c == full).map(|(_, a)| a) {
+                    Some(Allowed::Range { min, max, min_inclusive, max_inclusive }) => {
+                        k.insert("min".into(), num(*min));
+                        k.insert("max".into(), num(*max));
+                        k.insert("min_inclusive".into(), json!(min_inclusive));
+                        k.insert("max_inclusive".into(), json!(max_inclusive));
+                    }
+                    Some(Allowed::Rule(r)) => {
+                        k.insert("rule".into(), json!(r));
+                    }
+                    None => {}
+                }
+                if let Some((_, v)) = enums.iter().find(|(e, _)| *e == full) {
+                    k.insert("values".into(), v.clone());
+                }
+                entry.as_object_mut().expect("object").insert(key, Value::Object(k));
+            }
+        }
+        Value::Object(out)
+    }
+
+    /// The schema as `aurora scene --schema` prints it (sorted keys, two
+    /// spaces, trailing newline).
+    pub fn schema_json() -> String {
+        serde_json::to_string_pretty(&schema()).expect("serialises") + "\n"
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn schema_has_every_key_with_default_and_range() {
+        let s = schema::schema();
+        assert_eq!(s["camera"]["fov_deg"]["default"], 75.0);
+        assert!(s["camera"]["fov_deg"]["rule"].as_str().unwrap().contains("360"));
+        assert_eq!(s["render"]["width"]["max"], MAX_IMAGE_SIDE as f64);
+        assert_eq!(s["grid"]["prune"]["max"], MAX_PRUNE);
+        assert_eq!(s["curtain"]["char_energy_kev"]["min"], 0.05);
+        assert_eq!(s["terrain"]["kind"]["default"], "heightfield");
+        assert_eq!(s["terrain"]["kind"]["default_in_table"], "none");
+        assert_eq!(s[""]["seed"]["default"], 2014);
+        // Every numeric key has a range or a rule, and every enum value parses.
+        for (table, keys) in s.as_object().unwrap() {
+            for (key, k) in keys.as_object().unwrap() {
+                let d = &k["default"];
+                if d.is_number() && key != "seed" && key != "count" || d.is_array() {
+                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table == "" , "{table}.{key} has no range");
+                }
+            }
+        }
+        for (key, values) in schema::enum_values() {
+            let (t, k) = key.split_once('.').unwrap();
+            for v in values.as_array().unwrap() {
+                let text = format!("[{t}]\n{k} = {v}\n");
+                assert!(Scene::from_toml_str(&text, "e.toml").is_ok() || t == "colour" || t == "terrain", "{text}");
+            }
+        }
+    }
 
     #[test]
     fn presets_validate_and_round_trip_through_toml() {
