@@ -51,7 +51,7 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         camera,
         render: RenderParams { width, height, spp, exposure: 0.0 },
         volume: VolumeParams { density_scale: 1.0, emission_scale: 1.0 },
-        background: Background { radiance: [0.0; 3] },
+        background: Background { radiance: [0.0; 3], ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },
         seed: 7,
         integration: Integration::Exact,
