@@ -7,6 +7,14 @@ extent; the image centre is on the optical axis. A Blender camera looks down
 its local -Z with +Y up, so its world matrix has columns (right, up',
 -forward, position); sensor fit VERTICAL makes `angle_y` and `ortho_scale`
 vertical quantities whatever the aspect ratio.
+
+Panoramas (`projection = "fisheye"` / `"equirectangular"`) are Cycles'
+panoramic camera (type PANO), FISHEYE_EQUIDISTANT with `fisheye_fov = fov`
+or EQUIRECTANGULAR over the full sphere; Cycles turns its panoramic camera
+space so that the image centre looks down the object's -Z, the same matrix
+serves. The equidistant fisheye ignores the sensor: its image circle spans
+the frame (an ellipse when the image is not square), as `aurora render`'s
+does (src/camera.rs).
 """
 
 from __future__ import annotations
@@ -48,6 +56,15 @@ def build_camera(scene: bpy.types.Scene, cam: Camera, name: str = "AuroraCamera"
     if cam.projection == "perspective":
         data.type = "PERSP"
         data.angle_y = math.radians(cam.fov_deg)
+    elif cam.projection == "fisheye":
+        data.type = "PANO"
+        data.panorama_type = "FISHEYE_EQUIDISTANT"
+        data.fisheye_fov = math.radians(cam.fov_deg)
+    elif cam.projection == "equirectangular":
+        data.type = "PANO"
+        data.panorama_type = "EQUIRECTANGULAR"
+        data.latitude_min, data.latitude_max = -math.pi / 2.0, math.pi / 2.0
+        data.longitude_min, data.longitude_max = -math.pi, math.pi
     else:
         data.type = "ORTHO"
         data.ortho_scale = cam.ortho_height

@@ -66,7 +66,10 @@ def setup_scene_from_toml(
     cam = build_camera(scene, spec.camera) if camera else None
     wld = None
     if world:
-        wld = background_world("AuroraBackground", spec.background.radiance)
+        image = spec.background.image
+        if image is not None and spec.path is not None and not Path(image).is_absolute():
+            image = spec.path.parent / image
+        wld = background_world("AuroraBackground", spec.background.radiance, image)
         scene.world = wld
     ter = None
     if terrain and spec.terrain.kind == "plane":

@@ -2,8 +2,10 @@
 
 `aurora render` and the Blender side must agree on the camera, the film,
 the volume scales, the background and the terrain. This module reads those
-five tables of the scene TOML (`src/scene.rs` is the authority: same keys,
-same defaults, same ranges) into plain dataclasses. The bake tables
+five tables of the scene TOML into plain dataclasses. `src/scene.rs` is the
+authority: the defaults and ranges below come from its schema
+(`aurora scene --schema`, committed as scene_schema.json next to this file
+and checked against the binary by tests/schema.rs), not restated here. The bake tables
 (`curtain`, `beams`, ...) are ignored here: the baker validates them.
 
 Units are kilometres, z up (Blender units = km in this add-on).
@@ -11,10 +13,28 @@ Units are kilometres, z up (Blender units = km in this add-on).
 
 from __future__ import annotations
 
+import json
 import math
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+
+
+#: `aurora scene --schema`: {table: {key: {"default", "min", "max", ...}}}.
+SCHEMA = json.loads((Path(__file__).resolve().parent / "scene_schema.json").read_text())
+
+
+def _default(table: str, key: str):
+    v = SCHEMA[table][key]["default"]
+    return tuple(v) if isinstance(v, list) else v
+
+
+def _bound(x):
+    return {"inf": math.inf, "-inf": -math.inf}.get(x, x) if isinstance(x, str) else float(x)
+
+
+#: `camera.projection` values (src/scene.rs, `Projection`).
+PROJECTIONS = tuple(SCHEMA["camera"]["projection"]["values"])
 
 
 class SceneFileError(ValueError):
@@ -23,44 +43,51 @@ class SceneFileError(ValueError):
 
 @dataclass(frozen=True)
 class Camera:
-    position: tuple[float, float, float] = (0.0, -90.0, 1.0)
-    look_at: tuple[float, float, float] = (0.0, 20.0, 70.0)
-    up: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    projection: str = "perspective"
-    #: Vertical field of view, degrees (perspective).
-    fov_deg: float = 75.0
+    position: tuple[float, float, float] = _default("camera", "position")
+    look_at: tuple[float, float, float] = _default("camera", "look_at")
+    up: tuple[float, float, float] = _default("camera", "up")
+    projection: str = _default("camera", "projection")
+    #: Vertical field of view, degrees (perspective); the angle across the
+    #: image circle (fisheye, up to 360).
+    fov_deg: float = _default("camera", "fov_deg")
     #: Vertical extent of the view in km (orthographic).
-    ortho_height: float = 10.0
+    ortho_height: float = _default("camera", "ortho_height")
 
 
 @dataclass(frozen=True)
 class Render:
-    width: int = 640
-    height: int = 360
-    spp: int = 16
-    exposure: float = 3.0
+    width: int = _default("render", "width")
+    height: int = _default("render", "height")
+    spp: int = _default("render", "spp")
+    exposure: float = _default("render", "exposure")
 
 
 @dataclass(frozen=True)
 class Volume:
     #: extinction sigma_t = density_scale * density grid (per km).
-    density_scale: float = 1.0
+    density_scale: float = _default("volume", "density_scale")
     #: emitted radiance per km = emission_scale * emission grid.
-    emission_scale: float = 1.0
+    emission_scale: float = _default("volume", "emission_scale")
 
 
 @dataclass(frozen=True)
 class Background:
     #: Radiance seen by camera rays that escape; lights nothing.
-    radiance: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radiance: tuple[float, float, float] = _default("background", "radiance")
+    #: Equirectangular linear EXR of sky radiance (relative to the scene file).
+    image: str | None = _default("background", "image")
+    #: Procedural stars (drawn by `aurora render` only).
+    stars: bool = _default("background", "stars")
+    limiting_magnitude: float = _default("background", "limiting_magnitude")
+    star_brightness: float = _default("background", "star_brightness")
 
 
 @dataclass(frozen=True)
 class Terrain:
     #: A scene file without [terrain] gets aurora's default scene terrain.
-    kind: str = "heightfield"
-    height: float = 0.0
-    albedo: tuple[float, float, float] = (0.3, 0.3, 0.3)
+    kind: str = _default("terrain", "kind")
+    height: float = _default("terrain", "height")
+    albedo: tuple[float, float, float] = _default("terrain", "albedo")
 
 
 @dataclass(frozen=True)
@@ -97,14 +124,22 @@ def _vec3(where: str, value) -> tuple[float, float, float]:
     return v  # type: ignore[return-value]
 
 
-def _number(where: str, value, lo: float, hi: float, lo_open: bool = False) -> float:
+def _checked(src: str, table: str, key: str, t: dict) -> float:
+    """`t[key]` (or the default) checked against the schema's range."""
+    k = SCHEMA[table][key]
+    return _number(f"{src}: {table}.{key}", t.get(key, k["default"]), _bound(k["min"]), _bound(k["max"]),
+                   lo_open=not k["min_inclusive"], hi_open=not k["max_inclusive"])
+
+
+def _number(where: str, value, lo: float, hi: float, lo_open: bool = False, hi_open: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SceneFileError(f"{where} must be a number, got {value!r}")
     x = float(value)
-    ok = math.isfinite(x) and (x > lo if lo_open else x >= lo) and x <= hi
+    ok = (math.isfinite(x) and (x > lo if lo_open else x >= lo) and (x < hi if hi_open else x <= hi))
     if not ok:
         bracket = "(" if lo_open else "["
-        raise SceneFileError(f"{where} = {value!r} must be in {bracket}{lo}, {hi}]")
+        close = ")" if hi_open else "]"
+        raise SceneFileError(f"{where} = {value!r} must be in {bracket}{lo}, {hi}{close}")
     return x
 
 
@@ -132,11 +167,14 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         look_at=_vec3(f"{src}: camera.look_at", c.get("look_at", list(d.look_at))),
         up=_vec3(f"{src}: camera.up", c.get("up", list(d.up))),
         projection=c.get("projection", d.projection),
-        fov_deg=_number(f"{src}: camera.fov_deg", c.get("fov_deg", d.fov_deg), 0.0, 180.0, lo_open=True),
-        ortho_height=_number(f"{src}: camera.ortho_height", c.get("ortho_height", d.ortho_height), 0.0, math.inf, lo_open=True),
+        fov_deg=_number(f"{src}: camera.fov_deg", c.get("fov_deg", d.fov_deg), 0.0,
+                        360.0 if c.get("projection") == "fisheye" else 180.0, lo_open=True),
+        ortho_height=_checked(src, "camera", "ortho_height", c),
     )
-    if cam.projection not in ("perspective", "orthographic"):
-        raise SceneFileError(f"{src}: camera.projection = {cam.projection!r} must be \"perspective\" or \"orthographic\"")
+    if cam.projection not in PROJECTIONS:
+        raise SceneFileError(f"{src}: camera.projection = {cam.projection!r} must be one of {', '.join(PROJECTIONS)}")
+    if cam.projection != "fisheye" and cam.fov_deg >= 180.0:
+        raise SceneFileError(f"{src}: camera.fov_deg = {cam.fov_deg} must be in (0, 180)")
     fwd = [b - a for a, b in zip(cam.position, cam.look_at)]
     if all(x == 0.0 for x in fwd):
         raise SceneFileError(f"{src}: camera.look_at must differ from camera.position")
@@ -146,10 +184,10 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     r = _table(doc, "render", src)
     d = Render()
     ren = Render(
-        width=int(_number(f"{src}: render.width", r.get("width", d.width), 1, 16384)),
-        height=int(_number(f"{src}: render.height", r.get("height", d.height), 1, 16384)),
-        spp=int(_number(f"{src}: render.spp", r.get("spp", d.spp), 1, 65536)),
-        exposure=_number(f"{src}: render.exposure", r.get("exposure", d.exposure), -50.0, 50.0),
+        width=int(_checked(src, "render", "width", r)),
+        height=int(_checked(src, "render", "height", r)),
+        spp=int(_checked(src, "render", "spp", r)),
+        exposure=_checked(src, "render", "exposure", r),
     )
     for k in ("width", "height", "spp"):
         if k in r and (isinstance(r[k], float) and r[k] != int(r[k])):
@@ -158,19 +196,31 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     v = _table(doc, "volume", src)
     d = Volume()
     vol = Volume(
-        density_scale=_number(f"{src}: volume.density_scale", v.get("density_scale", d.density_scale), 0.0, 1e9),
-        emission_scale=_number(f"{src}: volume.emission_scale", v.get("emission_scale", d.emission_scale), 0.0, 1e9),
+        density_scale=_checked(src, "volume", "density_scale", v),
+        emission_scale=_checked(src, "volume", "emission_scale", v),
     )
 
     b = _table(doc, "background", src)
     rad = _vec3(f"{src}: background.radiance", b.get("radiance", list(Background().radiance)))
     if any(x < 0.0 for x in rad):
         raise SceneFileError(f"{src}: background.radiance components must be >= 0, got {list(rad)}")
+    db = Background()
+    img = b.get("image", db.image)
+    if img is not None and not isinstance(img, str):
+        raise SceneFileError(f"{src}: background.image must be a path string, got {img!r}")
+    stars = b.get("stars", db.stars)
+    if not isinstance(stars, bool):
+        raise SceneFileError(f"{src}: background.stars must be true or false, got {stars!r}")
+    bg = Background(rad, img, stars,
+                    _checked(src, "background", "limiting_magnitude", b), _checked(src, "background", "star_brightness", b))
 
     t = _table(doc, "terrain", src)
     d = Terrain()
     ter = Terrain(
-        kind=t.get("kind", d.kind),
+        # A [terrain] table without `kind` takes Terrain::default()'s kind
+        # (the schema's default_in_table), a file without [terrain] the
+        # default scene's.
+        kind=t.get("kind", SCHEMA["terrain"]["kind"].get("default_in_table", d.kind) if "terrain" in doc else d.kind),
         height=_number(f"{src}: terrain.height", t.get("height", d.height), -math.inf, math.inf),
         albedo=_vec3(f"{src}: terrain.albedo", t.get("albedo", list(d.albedo))),
     )
@@ -179,7 +229,7 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     if any(not 0.0 <= a <= 1.0 for a in ter.albedo):
         raise SceneFileError(f"{src}: terrain.albedo components must be in [0, 1], got {list(ter.albedo)}")
 
-    return SceneSpec(cam, ren, vol, Background(rad), ter, path)
+    return SceneSpec(cam, ren, vol, bg, ter, path)
 
 
 def load_scene(path: str | Path) -> SceneSpec:
@@ -217,8 +267,23 @@ def camera_basis(cam: Camera):
 def pixel_ray(cam: Camera, width: int, height: int, px: float, py: float):
     """Origin and unit direction of the camera ray through raster point
     (px, py), measured in pixels from the top-left corner (pixel centres at
-    half-integers, row 0 at the top). Used by tests to predict images."""
+    half-integers, row 0 at the top). Used by tests to predict images.
+    None outside a fisheye's image circle (src/camera.rs)."""
     right, up, forward = camera_basis(cam)
+    if cam.projection in ("fisheye", "equirectangular"):
+        u, v = 2.0 * px / width - 1.0, 1.0 - 2.0 * py / height
+        if cam.projection == "fisheye":
+            r = math.hypot(u, v)
+            if r > 1.0:
+                return None
+            th = r * math.radians(cam.fov_deg) / 2.0
+            a, b = (math.sin(th) / r if r > 0 else 0.0), math.cos(th)
+            d = [b * f + a * (u * x + v * y) for f, x, y in zip(forward, right, up)]
+        else:
+            lam, beta = math.pi * u, math.pi / 2.0 * v
+            d = [math.cos(beta) * (math.cos(lam) * f + math.sin(lam) * x) + math.sin(beta) * y
+                 for f, x, y in zip(forward, right, up)]
+        return tuple(cam.position), tuple(_normalize(d))
     # Screen coordinates in [-1, 1] vertically, [-aspect, aspect] horizontally.
     sx = (2.0 * px - width) / height
     sy = (height - 2.0 * py) / height

@@ -32,6 +32,7 @@ use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf, Transform};
 use crate::photons::{self, RadiusField};
 use crate::progress::Progress;
+use crate::camera::CameraModel;
 use crate::prune::{self, PruneStats};
 use crate::scene::{ColourMode, GatherMethod, GridParams, Scene, VoxelSize};
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
@@ -152,6 +153,9 @@ pub enum BakeError {
     Empty(String),
     #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
     HalfOverflow { ijk: [i32; 3], peak: f32 },
+    /// The scene's camera is out of range (never with a validated scene).
+    #[error(transparent)]
+    Camera(#[from] crate::camera::CameraError),
 }
 
 /// The voxel size in km and where it came from. `"auto"` asks the camera:
@@ -169,8 +173,10 @@ pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
 /// No more model than the picture needs: the voxel size at which one voxel
 /// projects to about one pixel at the nearest aurora.
 ///
-/// Perspective: a pixel subtends 2 tan(fov/2) / height radians, so at
-/// distance d it covers d 2 tan(fov/2) / height km; d is the 1st percentile
+/// A pixel at the image centre subtends an angle `a` (perspective:
+/// 2 tan(fov/2) / height; fisheye: fov / max(width, height); equirectangular:
+/// min(360 / width, 180 / height) degrees: `CameraModel::pixel_angle`), so at
+/// distance d it covers d a km; d is the 1st percentile
 /// of the photons' distances from the camera (robust to a few stray photons,
 /// which would otherwise shrink every voxel). Orthographic: ortho_height /
 /// height. Never below half the kernel radius: the kernel already blurs the
@@ -179,14 +185,16 @@ pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
 /// Rounded to three significant digits (down, at that ceiling) so the size
 /// reads well in bake.json.
 pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
-    let cam = &scene.camera;
     let floor = 0.5 * scene.photons.radius_km;
-    let (raw, why) = match cam.projection {
-        crate::scene::Projection::Orthographic => {
-            (cam.ortho_height / scene.render.height as f64, "ortho_height / height".to_string())
-        }
-        crate::scene::Projection::Perspective => {
-            let eye = DVec3::from_array(cam.position);
+    // A validated scene always has a camera; should it not, the kernel
+    // radius is a size that neither aliases nor wastes.
+    let Ok(cam) = CameraModel::new(&scene.camera, scene.render.width, scene.render.height) else {
+        return (scene.photons.radius_km, "no valid camera: kernel radius".into());
+    };
+    let (raw, why) = match cam.pixel_angle() {
+        None => (cam.pixel_footprint(0.0), "ortho_height / height".to_string()),
+        Some(_) => {
+            let eye = cam.position;
             let mut d: Vec<f64> = photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect();
             if d.is_empty() {
                 return (scene.photons.radius_km, "no photons: kernel radius".into());
@@ -194,8 +202,7 @@ pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
             let k = d.len() / 100;
             let (_, nth, _) = d.select_nth_unstable_by(k, f64::total_cmp);
             let dist = *nth;
-            let pixel = 2.0 * (0.5 * cam.fov_deg.to_radians()).tan() / scene.render.height as f64;
-            (dist * pixel, format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
+            (cam.pixel_footprint(dist), format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
         }
     };
     // Never above twice the smallest kernel radius either: coarser voxels
@@ -458,7 +465,12 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 
     let t = Instant::now();
     let mut emission = emission;
-    let prune_stats = (scene.grid.prune > 0.0).then(|| prune::prune(&mut emission, &scene.camera, scene.render.width as f64 / scene.render.height as f64, scene.grid.prune));
+    let prune_stats = if scene.grid.prune > 0.0 {
+        let camera = CameraModel::new(&scene.camera, scene.render.width, scene.render.height)?;
+        Some(prune::prune(&mut emission, &camera, scene.grid.prune))
+    } else {
+        None
+    };
     times.prune = t.elapsed().as_secs_f64();
 
     let t = Instant::now();

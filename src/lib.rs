@@ -4,7 +4,7 @@
 //! scene -> footprint -> beams -> photons -> grids -> files (vdb, usd),
 //! and the renderer reads grids only.
 //!
-//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`) know nothing of
+//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`, `camera`) know nothing of
 //! the stages above them.
 
 pub mod animation;
@@ -15,6 +15,7 @@ pub mod bench;
 pub mod budget;
 pub mod fang;
 pub mod beams;
+pub mod camera;
 pub mod footprint;
 pub mod frames;
 pub mod grid;

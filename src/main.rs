@@ -148,6 +148,10 @@ enum Command {
         /// Preset name (default, seed2014) or a scene file.
         #[arg(default_value = "default")]
         name: String,
+        /// Print every scene key's default and allowed range as JSON instead
+        /// (the Blender add-on reads a copy: blender/scene_schema.json).
+        #[arg(long)]
+        schema: bool,
     },
     /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
     Footprint {
@@ -280,7 +284,11 @@ fn run(cli: Cli) -> Result<()> {
             }
             with_threads(common.threads, || profile_cmd(&scene, out.as_deref(), common.quiet))
         }
-        Command::Scene { name } => {
+        Command::Scene { schema: true, .. } => {
+            print!("{}", aurora::scene::schema::schema_json());
+            Ok(())
+        }
+        Command::Scene { name, .. } => {
             let s = load_scene(&name)?;
             print!("{}", scene_header(&name));
             print!("{}", s.to_toml());

@@ -12,7 +12,12 @@
 //! orthographic camera every pixel has the same area and a voxel adds
 //! `epsilon V` whatever its distance. So a leaf's contribution
 //! ([`leaf_contributions`]) is `sum Y V w` over its active voxels, with
-//! `w = 1 / (d^2 cos^3 theta)` (perspective) or `1` (orthographic).
+//! `w = 1 / (d^2 cos^3 theta)` (perspective) or `1` (orthographic). In
+//! general `w = 1 / (d^2 Omega_p / Omega_0)`, the pixel's solid angle
+//! relative to the centre pixel's coming from the camera
+//! ([`crate::camera::CameraModel::relative_pixel_solid_angle`]):
+//! `sin theta / theta` for the equidistant fisheye (`theta` off axis),
+//! `cos beta` for the equirectangular panorama (`beta` the latitude).
 //!
 //! [`prune`] drops leaves in increasing order of contribution for as long as
 //! the dropped total stays within `budget` of the grid's total: the removed
@@ -21,7 +26,8 @@
 //! - extinction is ignored: air in front of a leaf only lowers its real
 //!   contribution (and the total by the same or less);
 //! - off-screen voxels count as if they were on the frame's corner
-//!   (`cos theta` is clamped at the corner's): off-screen aurora lights the
+//!   (`cos theta` is clamped at the corner's; for a fisheye, the image
+//!   circle's edge): off-screen aurora lights the
 //!   terrain in frame and a lighting artist may re-frame the shot, so a
 //!   block is dropped for being faint, not for being off screen.
 //! When all the aurora is in frame the bound is a bound on the image's flux
@@ -31,11 +37,15 @@
 //! straddle a dropped leaf's faces (their kept side is brighter). `aurora
 //! bench` measures the per-pixel error.
 //!
+//! A bake pruned for one camera is pruned for that camera: another view
+//! (or a fisheye's wider field) may miss faint leaves. `grid.prune = 0`
+//! keeps every leaf, for every camera.
+//!
 //! The density grid is built afterwards on the kept voxels (it lives on the
 //! emission's active voxels), so both grids lose the same leaves.
 
+use crate::camera::CameraModel;
 use crate::grid::{Grid, LEAF_NUM_VALUES};
-use crate::scene::{Camera, Projection};
 use crate::spectrum::luminance;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -56,43 +66,23 @@ pub struct PruneStats {
     pub removed_fraction: f64,
 }
 
-/// The weight `w` of the module documentation for one camera and image
-/// aspect ratio (width / height).
-#[derive(Clone, Copy, Debug)]
-pub struct Weight {
-    eye: DVec3,
-    forward: DVec3,
-    perspective: bool,
-    /// `cos theta` at the frame's corner: `1 / sqrt(1 + tan^2(fov/2) (1 + aspect^2))`.
-    cos_corner: f64,
-    /// Smallest `d^2`: a quarter voxel squared, so a voxel around the eye
-    /// does not get an infinite weight.
+/// The weight `w` of the module documentation for one camera:
+/// [`CameraModel::pixel_weight`], with a quarter voxel as the smallest
+/// distance so a voxel around the eye does not get an infinite weight.
+#[derive(Clone, Debug)]
+pub struct Weight<'a> {
+    camera: &'a CameraModel,
     d2_min: f64,
 }
 
-impl Weight {
-    pub fn new(camera: &Camera, aspect: f64, voxel_km: f64) -> Weight {
-        let eye = DVec3::from_array(camera.position);
-        let forward = (DVec3::from_array(camera.look_at) - eye).normalize_or_zero();
-        let t = (0.5 * camera.fov_deg.to_radians()).tan();
-        Weight {
-            eye,
-            forward,
-            perspective: camera.projection == Projection::Perspective,
-            cos_corner: 1.0 / (1.0 + t * t * (1.0 + aspect * aspect)).sqrt(),
-            d2_min: 0.25 * voxel_km * voxel_km,
-        }
+impl Weight<'_> {
+    pub fn new(camera: &CameraModel, voxel_km: f64) -> Weight<'_> {
+        Weight { camera, d2_min: 0.25 * voxel_km * voxel_km }
     }
 
     /// `w` at world position `p`.
     pub fn at(&self, p: DVec3) -> f64 {
-        if !self.perspective {
-            return 1.0;
-        }
-        let v = p - self.eye;
-        let d2 = v.length_squared().max(self.d2_min);
-        let cos = (v.dot(self.forward) / d2.sqrt()).max(self.cos_corner);
-        1.0 / (d2 * cos * cos * cos)
+        self.camera.pixel_weight(p, self.d2_min)
     }
 }
 
@@ -100,10 +90,10 @@ impl Weight {
 /// `sum over active voxels of Y(epsilon) V w(d)` (see the module
 /// documentation). Each leaf's sum runs in voxel order, so the result does
 /// not depend on the thread count.
-pub fn leaf_contributions(emission: &Grid<[f32; 3]>, camera: &Camera, aspect: f64) -> Vec<f64> {
+pub fn leaf_contributions(emission: &Grid<[f32; 3]>, camera: &CameraModel) -> Vec<f64> {
     let tr = emission.transform;
     let v = tr.voxel_size.powi(3);
-    let w = Weight::new(camera, aspect, tr.voxel_size);
+    let w = Weight::new(camera, tr.voxel_size);
     emission
         .leaves()
         .par_iter()
@@ -149,11 +139,11 @@ pub fn select(contributions: &[f64], origins: &[[i32; 3]], budget: f64) -> (Vec<
 }
 
 /// Drops the emission's faintest leaves within `budget` (see the module
-/// documentation). `aspect` is the image's width / height.
-pub fn prune(emission: &mut Grid<[f32; 3]>, camera: &Camera, aspect: f64, budget: f64) -> PruneStats {
+/// documentation) for `camera` (the scene's camera at the render size).
+pub fn prune(emission: &mut Grid<[f32; 3]>, camera: &CameraModel, budget: f64) -> PruneStats {
     let leaves_before = emission.leaf_count();
     let voxels_before = emission.active_voxel_count();
-    let c = leaf_contributions(emission, camera, aspect);
+    let c = leaf_contributions(emission, camera);
     let origins: Vec<[i32; 3]> = emission.leaves().iter().map(|l| l.origin.to_array()).collect();
     let (keep, removed_fraction) = select(&c, &origins, budget);
     let mut it = keep.iter();
@@ -173,7 +163,12 @@ pub fn prune(emission: &mut Grid<[f32; 3]>, camera: &Camera, aspect: f64, budget
 mod tests {
     use super::*;
     use crate::grid::Transform;
+    use crate::scene::{Camera, Projection};
     use glam::IVec3;
+
+    fn model(cam: Camera) -> CameraModel {
+        CameraModel::new(&cam, 100, 100).unwrap()
+    }
 
     fn camera_at(p: [f64; 3]) -> Camera {
         Camera { position: p, look_at: [p[0] + 1.0, p[1], p[2]], ..Camera::default() }
@@ -192,7 +187,7 @@ mod tests {
     #[test]
     fn contribution_falls_as_inverse_square_of_distance_on_axis() {
         let g = row(4);
-        let c = leaf_contributions(&g, &camera_at([0.0; 3]), 1.0);
+        let c = leaf_contributions(&g, &model(camera_at([0.0; 3])));
         let y = luminance([0.0, 1.0, 0.0]);
         // On the optical axis (cos theta = 1): y V / d^2.
         for (l, ci) in g.leaves().iter().zip(&c) {
@@ -200,7 +195,7 @@ mod tests {
             assert!((ci / want - 1.0).abs() < 1e-12, "{ci} vs {want}");
         }
         let ortho = Camera { projection: Projection::Orthographic, ..camera_at([0.0; 3]) };
-        for ci in leaf_contributions(&g, &ortho, 1.0) {
+        for ci in leaf_contributions(&g, &model(ortho)) {
             assert!((ci / y - 1.0).abs() < 1e-12);
         }
     }
@@ -214,7 +209,8 @@ mod tests {
         // Check w against that pixel-count ratio between an on-axis and an
         // off-axis point, measured by projecting a tiny square's corners.
         let cam = Camera { fov_deg: 90.0, ..camera_at([0.0; 3]) };
-        let w = Weight::new(&cam, 1.0, 1e-6);
+        let m = model(cam);
+        let w = Weight::new(&m, 1e-6);
         let project = |p: DVec3| (p.y / p.x, p.z / p.x); // image plane x = 1
         let pixels = |c: DVec3| {
             // A square of side h facing the eye (normal along c).
@@ -270,7 +266,7 @@ mod tests {
         // expected drop is recomputed here the plain way (farthest first,
         // while the running sum stays within the budget).
         let mut g = row(8);
-        let cam = camera_at([0.0; 3]);
+        let cam = model(camera_at([0.0; 3]));
         let c: Vec<f64> = (1..=8).map(|i| 1.0 / (100.0 * (i * i) as f64)).collect();
         let total: f64 = c.iter().sum();
         let budget = 0.05;
@@ -284,7 +280,7 @@ mod tests {
             want_removed += 1;
         }
         assert!(want_removed >= 2, "the test should drop several leaves");
-        let s = prune(&mut g, &cam, 1.0, budget);
+        let s = prune(&mut g, &cam, budget);
         assert_eq!(s.leaves_removed, want_removed);
         assert_eq!(s.voxels_removed, want_removed as u64);
         assert!((s.removed_fraction - removed / total).abs() < 1e-12);
@@ -295,7 +291,7 @@ mod tests {
         }
         // Budget 0 keeps everything.
         let mut h = row(8);
-        assert_eq!(prune(&mut h, &cam, 1.0, 0.0).leaves_removed, 0);
+        assert_eq!(prune(&mut h, &cam, 0.0).leaves_removed, 0);
         assert_eq!(h, row(8));
     }
 }

@@ -310,8 +310,6 @@ pub enum AutoTag {
 pub const MAX_SEED: u64 = i64::MAX as u64;
 /// Largest `render.spp` (also the `--spp` flag's).
 pub const MAX_SPP: u64 = 65_536;
-/// Largest image side, `render.width` and `render.height`, pixels.
-pub const MAX_IMAGE_SIDE: u64 = 16_384;
 /// Largest `--shadow-samples` per terrain hit per pixel sample.
 pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 /// Largest colour-map component (linear RGB per unit deposited power, about
@@ -363,6 +361,62 @@ pub struct GridParams {
 pub enum Projection {
     Perspective,
     Orthographic,
+    /// Equidistant fisheye (Cycles' `FISHEYE_EQUIDISTANT`): `fov_deg` is the
+    /// angle across the image circle, up to 360; 180 is a dome master.
+    Fisheye,
+    /// 360 x 180 degree latitude-longitude panorama (Cycles'
+    /// `EQUIRECTANGULAR`); `fov_deg` is not used.
+    Equirectangular,
+}
+
+/// Largest `render.width` and `render.height` (the one image-size limit:
+/// the scene, the camera and the renderer all check this).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+impl Camera {
+    /// The largest `fov_deg` of this projection: 360 for the fisheye (the
+    /// whole sphere), below 180 for a pinhole (degrees, exclusive).
+    pub fn max_fov_deg(&self) -> (f64, bool) {
+        match self.projection {
+            Projection::Fisheye => (360.0, true),
+            _ => (180.0, false),
+        }
+    }
+
+    /// Every camera value outside its range, as (key, value, allowed): the
+    /// one set of camera limits, applied by [`Scene::validate`] and by
+    /// `crate::camera::CameraModel::new`.
+    pub fn problems(&self) -> Vec<(&'static str, String, String)> {
+        let mut p = Vec::new();
+        let (max_fov, inclusive) = self.max_fov_deg();
+        if !(self.fov_deg > 0.0 && (self.fov_deg < max_fov || (inclusive && self.fov_deg == max_fov))) {
+            let close = if inclusive { "]" } else { ")" };
+            p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
+        }
+        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
+            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
+        }
+        let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
+        if dir.iter().all(|d| *d == 0.0) {
+            p.push(("look_at", format!("{:?}", self.look_at), "must differ from camera.position".into()));
+        }
+        let cross = [
+            dir[1] * self.up[2] - dir[2] * self.up[1],
+            dir[2] * self.up[0] - dir[0] * self.up[2],
+            dir[0] * self.up[1] - dir[1] * self.up[0],
+        ];
+        let up2: f64 = self.up.iter().map(|u| u * u).sum();
+        let dir2: f64 = dir.iter().map(|u| u * u).sum();
+        if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
+            p.push(("up", format!("{:?}", self.up), "must not be parallel to the view direction".into()));
+        }
+        for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
+            if a.iter().any(|x| !x.is_finite()) {
+                p.push((k, format!("{a:?}"), "must be finite".into()));
+            }
+        }
+        p
+    }
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -372,7 +426,8 @@ pub struct Camera {
     pub look_at: [f64; 3],
     pub up: [f64; 3],
     pub projection: Projection,
-    /// Vertical field of view, degrees (perspective).
+    /// Vertical field of view, degrees (perspective); the angle across the
+    /// image circle (fisheye, up to 360).
     pub fov_deg: f64,
     /// Height of the view in scene units (orthographic).
     pub ortho_height: f64,
@@ -403,6 +458,16 @@ pub struct VolumeParams {
 pub struct Background {
     /// Constant radiance behind the volume where no terrain is hit.
     pub radiance: [f64; 3],
+    /// Optional equirectangular linear EXR of sky radiance, added to
+    /// `radiance` (path relative to the scene file; mapped as Blender's
+    /// Environment Texture: centre towards +x, top row the zenith).
+    pub image: Option<String>,
+    /// A procedural star field (`crate::render::sky`), from the scene seed.
+    pub stars: bool,
+    /// Faintest star drawn, visual magnitude (6: the naked eye's limit).
+    pub limiting_magnitude: f64,
+    /// Scale on the stars' physical irradiance.
+    pub star_brightness: f64,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -581,7 +646,7 @@ impl Default for VolumeParams {
 
 impl Default for Background {
     fn default() -> Self {
-        Self { radiance: [0.0, 0.0, 0.0] }
+        Self { radiance: [0.0, 0.0, 0.0], image: None, stars: false, limiting_magnitude: 6.0, star_brightness: 1.0 }
     }
 }
 
@@ -770,7 +835,13 @@ impl Scene {
 
     /// Checks every range; `text` (the TOML source) is used to find lines.
     pub fn validate(&self, file: &str, text: Option<&str>) -> Result<(), SceneError> {
-        let mut v = Validator { file, text, errors: Vec::new() };
+        self.validate_with(file, text).map(|_| ())
+    }
+
+    /// [`validate`](Self::validate), also returning every check made (the
+    /// ranges [`schema`] prints).
+    fn validate_with(&self, file: &str, text: Option<&str>) -> Result<Vec<(String, schema::Allowed)>, SceneError> {
+        let mut v = Validator { file, text, errors: Vec::new(), checks: Vec::new() };
         if self.curtains.is_empty() {
             v.push(None, "curtain", "[]".into(), "at least one [[curtain]] table is required".into());
         }
@@ -793,8 +864,19 @@ impl Scene {
             if c.center.iter().any(|x| !(x.is_finite() && x.abs() <= 1e4)) {
                 v.push(t, "center", format!("{:?}", c.center), "each coordinate must be in [-1e4, 1e4] km".into());
             }
+            v.allow(t, "center", schema::Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
+            v.allow(t, "bend_km", schema::Allowed::Rule("in [0, 1e4], less than width / 2".into()));
             if c.bend_km * 2.0 >= c.width {
                 v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than width / 2 = {}", c.width / 2.0));
+            }
+        }
+        if self.curtains.is_empty() {
+            // Record the per-curtain ranges from a default curtain.
+            let one = Scene { curtains: vec![Curtain::default()], ..self.clone() };
+            if let Ok(c) = one.validate_with(file, None) {
+                for (k, a) in c.into_iter().filter(|(k, _)| k.starts_with("curtain.")) {
+                    v.checks.push((k, a));
+                }
             }
         }
         if self.curtains.iter().all(|c| c.beam_weight <= 0.0) && !self.curtains.is_empty() {
@@ -802,6 +884,7 @@ impl Scene {
         }
         let f = &self.footprint;
         let t = Some(("footprint", 0));
+        v.allow(t, "resolution", schema::Allowed::Rule("each side in [8, 4096]".into()));
         // Each side: a 10^8 x 8 footprint would pass a check of the smaller one.
         if f.resolution.iter().any(|&n| !(8..=4096).contains(&n)) {
             v.push(t, "resolution", format!("{:?}", f.resolution), "each side must be in [8, 4096]".into());
@@ -821,6 +904,8 @@ impl Scene {
         v.range(t, "fps", a.fps, 0.0, 1000.0, false);
         v.range(t, "time_s", a.time_s, 0.0, 1e7, true);
         v.range(t, "fold_speed_kms", a.fold_speed_kms, -100.0, 100.0, true);
+        v.allow(t, "fold_breathing", schema::Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: false });
+        v.allow(t, "pulsation_period_s", schema::Allowed::Rule("[min, max] with 0 < min <= max <= 10000".into()));
         if !(0.0..1.0).contains(&a.fold_breathing) {
             v.push(t, "fold_breathing", fmt_num(a.fold_breathing), "must be in [0, 1)".into());
         }
@@ -844,6 +929,8 @@ impl Scene {
         v.range(t, "top_km", b.top_km, 80.0, 1000.0, true);
         v.range(t, "top_noise_km", b.top_noise_km, 0.0, 100.0, true);
         v.range(t, "top_noise_freq", b.top_noise_freq, 0.0, 1e3, true);
+        v.allow(t, "alpha_d_deg", schema::Allowed::Range { min: 0.0, max: 90.0, min_inclusive: true, max_inclusive: false });
+        v.allow(t, "delta_alpha_deg", schema::Allowed::Rule("in [0, beams.alpha_d_deg]".into()));
         if !(b.alpha_d_deg >= 0.0 && b.alpha_d_deg < 90.0) {
             v.push(t, "alpha_d_deg", b.alpha_d_deg.to_string(), "must be in [0, 90) degrees: at 90 a beam no longer moves along B".into());
         }
@@ -859,6 +946,7 @@ impl Scene {
         let t = Some(("colour", 0));
         v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);
         v.range(t, "noise_freq", c.noise_freq, 0.0, 1e3, true);
+        v.allow(t, "colormap", schema::Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()));
         if c.mode == ColourMode::Colormap {
             if c.colormap.len() < 2 {
                 v.push(t, "colormap", format!("{} rows", c.colormap.len()), "needs at least 2 rows of [altitude_km, r, g, b]".into());
@@ -884,6 +972,7 @@ impl Scene {
 
         let g = &self.grid;
         let t = Some(("grid", 0));
+        v.allow(t, "voxel_size", schema::Allowed::Rule("a number of km > 0, or \"auto\"".into()));
         if let VoxelSize::Km(s) = g.voxel_size {
             v.finite_pos(t, "voxel_size", s);
         }
@@ -892,28 +981,14 @@ impl Scene {
         v.finite(t, "density_base_km", g.density_base_km);
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
 
-        let cam = &self.camera;
         let t = Some(("camera", 0));
-        if !(cam.fov_deg > 0.0 && cam.fov_deg < 180.0) {
-            v.push(t, "fov_deg", fmt_num(cam.fov_deg), "must be in (0, 180)".into());
-        }
-        v.finite_pos(t, "ortho_height", cam.ortho_height);
-        let dir = [cam.look_at[0] - cam.position[0], cam.look_at[1] - cam.position[1], cam.look_at[2] - cam.position[2]];
-        if dir.iter().all(|d| *d == 0.0) {
-            v.push(t, "look_at", format!("{:?}", cam.look_at), "must differ from camera.position".into());
-        }
-        let cross = [
-            dir[1] * cam.up[2] - dir[2] * cam.up[1],
-            dir[2] * cam.up[0] - dir[0] * cam.up[2],
-            dir[0] * cam.up[1] - dir[1] * cam.up[0],
-        ];
-        if cross.iter().map(|c| c * c).sum::<f64>() < 1e-18 {
-            v.push(t, "up", format!("{:?}", cam.up), "must not be parallel to the view direction".into());
-        }
-        for (k, a) in [("position", cam.position), ("look_at", cam.look_at), ("up", cam.up)] {
-            if a.iter().any(|x| !x.is_finite()) {
-                v.push(t, k, format!("{a:?}"), "must be finite".into());
-            }
+        v.allow(t, "fov_deg", schema::Allowed::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\"".into()));
+        v.allow(t, "ortho_height", schema::Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
+        v.allow(t, "look_at", schema::Allowed::Rule("finite, differs from camera.position".into()));
+        v.allow(t, "up", schema::Allowed::Rule("finite, not parallel to look_at - position".into()));
+        v.allow(t, "position", schema::Allowed::Rule("finite".into()));
+        for (key, value, allowed) in self.camera.problems() {
+            v.push(t, key, value, allowed);
         }
         let r = &self.render;
         let t = Some(("render", 0));
@@ -927,12 +1002,19 @@ impl Scene {
         v.range(t, "emission_scale", vol.emission_scale, 0.0, 1e9, true);
         let t = Some(("background", 0));
         // Bounded so that pixels (f32) stay finite.
+        v.allow(t, "radiance", schema::Allowed::Range { min: 0.0, max: 1e9, min_inclusive: true, max_inclusive: true });
         if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
             v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
         }
+        // Beyond m = 8 the 0.45 slope of the star counts no longer holds
+        // (and the count passes 38,000).
+        v.range(t, "limiting_magnitude", self.background.limiting_magnitude, -1.5, 8.0, true);
+        v.range(t, "star_brightness", self.background.star_brightness, 0.0, 1e6, true);
         let ter = &self.terrain;
         let t = Some(("terrain", 0));
         v.finite(t, "height", ter.height);
+        v.allow(t, "albedo", schema::Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: true });
+        v.allow(t, "extent", schema::Allowed::Rule("[x0, y0, x1, y1] with x1 > x0 and y1 > y0".into()));
         if ter.albedo.iter().any(|x| !(0.0..=1.0).contains(x)) {
             v.push(t, "albedo", format!("{:?}", ter.albedo), "components must be in [0, 1]".into());
         }
@@ -943,7 +1025,7 @@ impl Scene {
         }
 
         if v.errors.is_empty() {
-            Ok(())
+            Ok(v.checks)
         } else {
             Err(SceneError::Invalid(v.errors))
         }
@@ -968,7 +1050,7 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
     let mut reference = Scene::default();
     reference.curtains = vec![Curtain::default()];
     let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
-    let mut v = Validator { file, text: Some(text), errors: Vec::new() };
+    let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
     shapes_table(&user, &reference, None, &mut v);
     if v.errors.is_empty() {
         Ok(())
@@ -1024,6 +1106,8 @@ struct Validator<'a> {
     file: &'a str,
     text: Option<&'a str>,
     errors: Vec<RangeError>,
+    /// Every check made, as (key, allowed range), for [`schema`].
+    checks: Vec<(String, schema::Allowed)>,
 }
 
 impl Validator<'_> {
@@ -1036,7 +1120,21 @@ impl Validator<'_> {
         };
         self.errors.push(RangeError { file: self.file.to_string(), line, key, value, allowed });
     }
+    fn key(t: Option<(&str, usize)>, key: &str) -> String {
+        match t {
+            Some((t, _)) => format!("{t}.{key}"),
+            None => key.to_string(),
+        }
+    }
+    /// Records an allowed range or rule for the schema (no check).
+    fn allow(&mut self, t: Option<(&str, usize)>, key: &str, a: schema::Allowed) {
+        let k = Self::key(t, key);
+        if !self.checks.iter().any(|(c, _)| *c == k) {
+            self.checks.push((k, a));
+        }
+    }
     fn range(&mut self, t: Option<(&str, usize)>, key: &str, x: f64, lo: f64, hi: f64, lo_inclusive: bool) {
+        self.allow(t, key, schema::Allowed::Range { min: lo, max: hi, min_inclusive: lo_inclusive, max_inclusive: true });
         let ok = x.is_finite() && (if lo_inclusive { x >= lo } else { x > lo }) && x <= hi;
         if !ok {
             let open = if lo_inclusive { "[" } else { "(" };
@@ -1044,11 +1142,13 @@ impl Validator<'_> {
         }
     }
     fn finite_pos(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, schema::Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
         if !(x.is_finite() && x > 0.0) {
             self.push(t, key, fmt_num(x), "must be a finite number > 0".into());
         }
     }
     fn finite(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, schema::Allowed::Rule("finite".into()));
         if !x.is_finite() {
             self.push(t, key, fmt_num(x), "must be finite".into());
         }
@@ -1099,9 +1199,163 @@ pub fn find_key_line(text: &str, table: Option<(&str, usize)>, key: &str) -> Opt
     None
 }
 
+pub mod schema {
+    //! `aurora scene --schema`: every scene key, its default and its allowed
+    //! range, as JSON. One source: defaults are `Scene::default()` (what a
+    //! missing table or key gives) serialised, and ranges are the checks
+    //! [`Scene::validate`] makes, recorded as it validates the default
+    //! scene (`Validator::allow`): a range changed there changes here.
+    use super::*;
+    use serde_json::{json, Map, Value};
+
+    /// What a key accepts.
+    #[derive(Clone, Debug, PartialEq)]
+    pub enum Allowed {
+        Range { min: f64, max: f64, min_inclusive: bool, max_inclusive: bool },
+        Rule(String),
+    }
+
+    fn num(x: f64) -> Value {
+        if x.is_finite() {
+            json!(x)
+        } else {
+            json!(if x > 0.0 { "inf" } else { "-inf" })
+        }
+    }
+
+    /// Allowed values of the enum-valued keys: every key whose default is a
+    /// string is given a value no enum has, and the parser's own message
+    /// ("expected one of `a`, `b`") lists the variants. No list to keep in
+    /// step by hand: a variant added to an enum appears here (a test checks
+    /// each value parses).
+    pub fn enum_values() -> Vec<(String, Value)> {
+        let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
+        let mut out = Vec::new();
+        let Value::Object(top) = defaults else { return out };
+        for (table, fields) in top {
+            let fields = if table == "curtain" { serde_json::to_value(Curtain::default()).expect("serialises") } else { fields };
+            let Value::Object(fields) = fields else { continue };
+            for (key, d) in fields {
+                if !d.is_string() {
+                    continue;
+                }
+                let header = if table == "curtain" { "[[curtain]]".to_string() } else { format!("[{table}]") };
+                let text = format!("{header}\n{key} = \"not a variant\"\n");
+                let Err(SceneError::Parse { message, .. }) = Scene::from_toml_str(&text, "enum") else { continue };
+                let Some(list) = message.split("expected one of ").nth(1).or_else(|| message.split("expected ").nth(1)) else { continue };
+                let values: Vec<Value> = list
+                    .split('`')
+                    .enumerate()
+                    .filter(|(i, _)| i % 2 == 1)
+                    .map(|(_, v)| json!(v))
+                    .collect();
+                if !values.is_empty() {
+                    out.push((format!("{table}.{key}"), Value::Array(values)));
+                }
+            }
+        }
+        out
+    }
+
+    /// The schema: `{table: {key: {"default": .., "min"/"max"/.. or "rule"
+    /// or "values"}}}`; `curtain` describes one `[[curtain]]` entry
+    /// (defaults of `Curtain::default()`), top-level keys sit under `""`.
+    /// Where a key inside a table that is present defaults differently from
+    /// a missing table (`terrain.kind`), `default_in_table` says so.
+    pub fn schema() -> Value {
+        let scene = Scene::default();
+        let checks = scene.validate_with("default", None).expect("the default scene validates");
+        let defaults = serde_json::to_value(&scene).expect("a scene serialises");
+        let in_table: Value = json!({
+            "footprint": FootprintParams::default(), "beams": BeamParams::default(), "colour": ColourParams::default(),
+            "photons": PhotonParams::default(), "grid": GridParams::default(), "camera": Camera::default(),
+            "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(),
+            "terrain": Terrain::default(), "atmosphere": AtmosphereParams::default(), "animation": AnimationParams::default(),
+        });
+        let enums = enum_values();
+        let mut out = Map::new();
+        let Value::Object(top) = defaults else { unreachable!() };
+        for (table, value) in top {
+            let (name, fields) = match (table.as_str(), value) {
+                ("curtain", _) => ("curtain".to_string(), serde_json::to_value(Curtain::default()).expect("serialises")),
+                (_, v @ Value::Object(_)) => (table.clone(), v),
+                (_, v) => {
+                    let mut m = Map::new();
+                    m.insert(table.clone(), v);
+                    (String::new(), Value::Object(m))
+                }
+            };
+            let Value::Object(fields) = fields else { continue };
+            let entry = out.entry(name.clone()).or_insert_with(|| Value::Object(Map::new()));
+            for (key, default) in fields {
+                let full = if name.is_empty() { key.clone() } else { format!("{name}.{key}") };
+                let mut k = Map::new();
+                k.insert("default".into(), default.clone());
+                if let Some(d) = in_table.get(&name).and_then(|t| t.get(&key)) {
+                    if *d != default {
+                        k.insert("default_in_table".into(), d.clone());
+                    }
+                }
+                match checks.iter().find(|(c, _)| *c == full).map(|(_, a)| a) {
+                    Some(Allowed::Range { min, max, min_inclusive, max_inclusive }) => {
+                        k.insert("min".into(), num(*min));
+                        k.insert("max".into(), num(*max));
+                        k.insert("min_inclusive".into(), json!(min_inclusive));
+                        k.insert("max_inclusive".into(), json!(max_inclusive));
+                    }
+                    Some(Allowed::Rule(r)) => {
+                        k.insert("rule".into(), json!(r));
+                    }
+                    None => {}
+                }
+                if let Some((_, v)) = enums.iter().find(|(e, _)| *e == full) {
+                    k.insert("values".into(), v.clone());
+                }
+                entry.as_object_mut().expect("object").insert(key, Value::Object(k));
+            }
+        }
+        Value::Object(out)
+    }
+
+    /// The schema as `aurora scene --schema` prints it (sorted keys, two
+    /// spaces, trailing newline).
+    pub fn schema_json() -> String {
+        serde_json::to_string_pretty(&schema()).expect("serialises") + "\n"
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn schema_has_every_key_with_default_and_range() {
+        let s = schema::schema();
+        assert_eq!(s["camera"]["fov_deg"]["default"], 75.0);
+        assert!(s["camera"]["fov_deg"]["rule"].as_str().unwrap().contains("360"));
+        assert_eq!(s["render"]["width"]["max"], MAX_IMAGE_SIDE as f64);
+        assert_eq!(s["grid"]["prune"]["max"], MAX_PRUNE);
+        assert_eq!(s["curtain"]["char_energy_kev"]["min"], 0.05);
+        assert_eq!(s["terrain"]["kind"]["default"], "heightfield");
+        assert_eq!(s["terrain"]["kind"]["default_in_table"], "none");
+        assert_eq!(s[""]["seed"]["default"], 2014);
+        // Every numeric key has a range or a rule, and every enum value parses.
+        for (table, keys) in s.as_object().unwrap() {
+            for (key, k) in keys.as_object().unwrap() {
+                let d = &k["default"];
+                if d.is_number() && key != "seed" && key != "count" || d.is_array() {
+                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table == "" , "{table}.{key} has no range");
+                }
+            }
+        }
+        for (key, values) in schema::enum_values() {
+            let (t, k) = key.split_once('.').unwrap();
+            for v in values.as_array().unwrap() {
+                let text = format!("[{t}]\n{k} = {v}\n");
+                assert!(Scene::from_toml_str(&text, "e.toml").is_ok() || t == "colour" || t == "terrain", "{text}");
+            }
+        }
+    }
 
     #[test]
     fn presets_validate_and_round_trip_through_toml() {

@@ -1,5 +1,5 @@
 //! The camera as Blender builds it: the settings documented in
-//! `render/camera.rs` (sensor_fit 'VERTICAL', angle_y = fov, ortho_scale =
+//! `src/camera.rs` (sensor_fit 'VERTICAL', angle_y = fov, ortho_scale =
 //! ortho_height, basis columns right, up', -forward) must project world
 //! points to the same film positions in Blender 5.0 as our camera.
 
@@ -21,6 +21,7 @@ fn project(m: &CameraModel, p: DVec3) -> (f64, f64) {
             (d.dot(m.right) / z / (m.tan_half_fov * w / h), d.dot(m.up) / z / m.tan_half_fov)
         }
         Projection::Orthographic => (d.dot(m.right) / (m.half_height * w / h), d.dot(m.up) / m.half_height),
+        p => panic!("{p:?}: panoramic cameras are checked against Cycles in tests/python"),
     };
     // Round trip through our own rays: the film point maps back onto p.
     let r = m.ray((x + 1.0) / 2.0 * w, (1.0 - y) / 2.0 * h);

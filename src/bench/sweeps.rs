@@ -702,7 +702,7 @@ impl<'a> Bench<'a> {
         let (full_e, full_d) = finish(&base.emission);
         let mut s = self.volume_settings();
         s.integration = Integration::Exact;
-        let aspect = s.render.width as f64 / s.render.height as f64;
+        let camera = crate::camera::CameraModel::new(&s.camera, s.render.width, s.render.height).map_err(RenderError::from)?;
         let opts = crate::outputs::write_options(&self.scene);
         let (min, max_runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         // (bytes, fastest write time)
@@ -734,7 +734,7 @@ impl<'a> Bench<'a> {
         }
         for &b in &budgets {
             let mut e = base.emission.clone();
-            let st = crate::prune::prune(&mut e, &s.camera, aspect, b);
+            let st = crate::prune::prune(&mut e, &camera, b);
             let (e, d) = finish(&e);
             let vol = Volume { density: Some(&d), emission: Some(&e) };
             let (img, _) = self.render_timed(&s, &vol)?;

@@ -14,7 +14,7 @@
 //! behind everything.
 //!
 //! Stages (each a function of plain data):
-//! `camera.rs` (rays) -> `medium.rs` (ghosted dual leaves + tree, built once)
+//! `crate::camera` (rays) -> `medium.rs` (ghosted dual leaves + tree, built once)
 //! -> `dda.rs` (hierarchical DDA: occupied leaves, then dual cells) ->
 //! `segment.rs` (exact optical depth, Gauss-Legendre emission per cell) ->
 //! `march.rs` (integrators, one walker for primary and shadow rays) ->
@@ -37,16 +37,17 @@
 // Loops over the three colour channels index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-pub mod camera;
+pub use crate::camera;
 pub mod dda;
 pub mod film;
 pub mod march;
 pub mod medium;
 pub mod segment;
 pub mod shadow;
+pub mod sky;
 pub mod terrain;
 
-pub use camera::{CameraModel, Ray};
+pub use crate::camera::{CameraModel, Ray};
 pub use march::{optical_depth_along_ray, radiance_along_ray, RayIntegral};
 pub use medium::Medium;
 pub use terrain::{write_obj, Heightfield, TerrainModel};
@@ -203,6 +204,12 @@ pub enum RenderError {
     Output(Box<crate::atomic::AtomicError>),
 }
 
+impl From<crate::camera::CameraError> for RenderError {
+    fn from(e: crate::camera::CameraError) -> Self {
+        RenderError::Settings(e.to_string())
+    }
+}
+
 /// SplitMix64 (Steele et al. 2014): decorrelates seeds.
 fn splitmix64(mut z: u64) -> u64 {
     z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
@@ -241,6 +248,7 @@ pub struct Prepared {
     pub medium: Medium,
     pub terrain: TerrainModel,
     pub sampler: Option<EmissionSampler>,
+    pub sky: sky::Sky,
     pub settings: RenderSettings,
 }
 
@@ -260,9 +268,6 @@ impl Prepared {
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
         let r = &settings.render;
         let bad = |m: String| Err(RenderError::Settings(m));
-        if r.width == 0 || r.height == 0 || r.width > 65536 || r.height > 65536 {
-            return bad(format!("render.width x height = {}x{} must be within 1..=65536", r.width, r.height));
-        }
         if r.spp == 0 {
             return bad("render.spp must be at least 1".into());
         }
@@ -292,7 +297,8 @@ impl Prepared {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
         };
-        Ok(Prepared { camera, medium, terrain, sampler, settings: settings.clone() })
+        let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
+        Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
     }
 
     fn shadow_scene(&self) -> ShadowScene<'_> {
@@ -326,7 +332,12 @@ impl Prepared {
                 let (jx, jy) = pixel_sample(shift, i);
                 (jx, jy, rng.random::<f64>())
             };
-            let ray = self.camera.ray(px as f64 + jx, py as f64 + jy);
+            // Outside a fisheye's image circle the sample sees nothing
+            // (RGBA 0, as Cycles leaves it).
+            let Some(ray) = self.camera.ray_at(px as f64 + jx, py as f64 + jy) else {
+                n.primary += 1;
+                continue;
+            };
             let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
             let t_end = hit.map_or(f64::INFINITY, |h| h.t);
             let vol = radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset);
@@ -343,7 +354,10 @@ impl Prepared {
                     n.shadow_rays += rays;
                     [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c])
                 }
-                None => background,
+                None => {
+                    let s = self.sky.radiance(ray.dir);
+                    [0, 1, 2].map(|c| background[c] + s[c])
+                }
             };
             for c in 0..3 {
                 sum[c] += vol.l[c] + t * behind[c];
@@ -394,7 +408,23 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
         stats.thread_seconds += secs;
         stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
     }
+    prepared.add_stars(&mut pixels);
     Ok(Image { width: w, height: h, pixels, stats })
+}
+
+impl Prepared {
+    /// The star field's points (`sky.rs`), seen through the volume's
+    /// transmittance, hidden by the terrain.
+    fn add_stars(&self, pixels: &mut [[f32; 4]]) {
+        let s = &self.settings;
+        let o = self.camera.position;
+        self.sky.add_stars(pixels, &self.camera, |dir| {
+            if self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
+                return None;
+            }
+            Some(optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance())
+        });
+    }
 }
 
 #[cfg(test)]

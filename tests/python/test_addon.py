@@ -313,8 +313,8 @@ def test_setup_scene_orthographic_point_sampled_heightfield(addon, fresh, bpy, t
 
 def test_scene_file_errors(addon, tmp_path):
     p = tmp_path / "bad.toml"
-    p.write_text("[camera]\nprojection = \"fisheye\"\n")
-    with pytest.raises(addon.SceneFileError, match="fisheye"):
+    p.write_text("[camera]\nprojection = \"mirrorball\"\n")
+    with pytest.raises(addon.SceneFileError, match="mirrorball"):
         addon.load_scene(p)
     p.write_text("[render]\nwidht = 3\n")
     with pytest.raises(addon.SceneFileError, match="widht"):
@@ -398,3 +398,39 @@ def test_scene_defaults_match_the_baker(addon, tmp_path):
     ours, theirs = load_scene(minimal), load_scene(full)
     for table in ("camera", "render", "volume", "background", "terrain"):
         assert getattr(ours, table) == getattr(theirs, table), table
+
+
+def test_scene_schema_copy_is_the_binarys(addon):
+    # The add-on's defaults and ranges come from blender/scene_schema.json;
+    # it must be what `aurora scene --schema` prints (tests/schema.rs checks
+    # the same from Rust), and a [terrain] table without `kind` means no
+    # terrain there as in aurora (Terrain::default), unlike a missing table.
+    from aurora_importer import scene_toml
+    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
+    r = subprocess.run([str(aurora), "scene", "--schema"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    committed = (Path(__file__).resolve().parents[2] / "blender" / "scene_schema.json").read_text()
+    assert r.stdout == committed, "run: aurora scene --schema > blender/scene_schema.json"
+    assert scene_toml.Camera().fov_deg == scene_toml.SCHEMA["camera"]["fov_deg"]["default"]
+    assert scene_toml.scene_from_dict({"terrain": {"height": 1.0}}).terrain.kind == "none"
+    assert scene_toml.scene_from_dict({}).terrain.kind == "heightfield"
+    with pytest.raises(scene_toml.SceneFileError, match="render.width"):
+        scene_toml.scene_from_dict({"render": {"width": scene_toml.SCHEMA["render"]["width"]["max"] + 1}})
+
+
+def test_panoramic_cameras(addon, fresh, tmp_path):
+    import bpy
+    for proj, fov, kind in [("fisheye", 180.0, "FISHEYE_EQUIDISTANT"), ("equirectangular", 75.0, "EQUIRECTANGULAR")]:
+        cam = {"position": [0.0, 0.0, 1.0], "look_at": [0.0, 0.0, 10.0], "up": [0.0, 1.0, 0.0],
+               "projection": proj, "fov_deg": fov}
+        scene_path = synth.write_scene(tmp_path / f"{proj}.toml", cam, 64, 64, spp=1)
+        built = addon.setup_scene_from_toml(scene_path)
+        c = built.camera.data
+        assert (c.type, c.panorama_type) == ("PANO", kind)
+        if proj == "fisheye":
+            assert c.fisheye_fov == pytest.approx(math.radians(fov))
+        else:
+            assert (c.longitude_min, c.longitude_max) == pytest.approx((-math.pi, math.pi))
+        # The image centre looks down the object's -Z = forward (straight up).
+        assert tuple(built.camera.matrix_world.col[2][:3]) == pytest.approx((0.0, 0.0, -1.0), abs=1e-9)
+        bpy.ops.wm.read_factory_settings(use_empty=True)

@@ -51,7 +51,7 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         camera,
         render: RenderParams { width, height, spp, exposure: 0.0 },
         volume: VolumeParams { density_scale: 1.0, emission_scale: 1.0 },
-        background: Background { radiance: [0.0; 3] },
+        background: Background { radiance: [0.0; 3], ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },
         seed: 7,
         integration: Integration::Exact,
@@ -79,6 +79,31 @@ pub fn camera_ray(cam: &Camera, w: usize, h: usize, fx: f64, fy: f64) -> (DVec3,
             let y = (1.0 - 2.0 * fy / hf) * cam.ortho_height / 2.0;
             let x = (2.0 * fx / wf - 1.0) * cam.ortho_height / 2.0 * wf / hf;
             (pos + x * right + y * up, fwd)
+        }
+        // Panoramas as Cycles writes them (kernel/camera/projection.h):
+        // a direction (x, y, z) in Cycles' panoramic camera space (looking
+        // along +x) is `x fwd - y right + z up` in the world
+        // (blender_camera_matrix). Outside the fisheye's circle: no ray (0).
+        Projection::Fisheye => {
+            let (u, v) = (2.0 * fx / wf - 1.0, 1.0 - 2.0 * fy / hf);
+            let r = (u * u + v * v).sqrt();
+            if r > 1.0 {
+                return (pos, DVec3::ZERO);
+            }
+            let theta = r * cam.fov_deg.to_radians() * 0.5;
+            let mut phi = if r > 0.0 { (u / r).clamp(-1.0, 1.0).acos() } else { 0.0 };
+            if v < 0.0 {
+                phi = -phi;
+            }
+            let l = DVec3::new(theta.cos(), -phi.cos() * theta.sin(), phi.sin() * theta.sin());
+            (pos, l.x * fwd - l.y * right + l.z * up)
+        }
+        Projection::Equirectangular => {
+            let (u, v) = (fx / wf, 1.0 - fy / hf);
+            let pi = std::f64::consts::PI;
+            let (phi, theta) = (-2.0 * pi * u + pi, -pi * v + pi);
+            let l = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            (pos, l.x * fwd - l.y * right + l.z * up)
         }
     }
 }

@@ -1,0 +1,303 @@
+//! The sky behind the volume: an equirectangular radiance map
+//! (`[background] image`) and a procedural star field (`[background]
+//! stars`). Like `background.radiance`, the sky is seen by camera rays only
+//! (through the volume's transmittance) and lights nothing.
+//!
+//! **Sky image.** A linear equirectangular EXR, mapped as Blender's
+//! Environment Texture maps it by default (Cycles
+//! `direction_to_equirectangular`): a world direction `(x, y, z)` reads
+//! `u = 1/2 - atan2(y, x) / (2 pi)` (left to right) and
+//! `v = 1/2 + asin(z) / pi` (bottom to top), so the image centre faces +x
+//! and its top row the zenith; bilinear between pixel centres, periodic in
+//! u, clamped in v (Cycles' Linear interpolation with Repeat extension).
+//!
+//! **Stars.** Isotropic directions, magnitudes from the cumulative count
+//! of stars brighter than m over the whole sky,
+//! `N(<m) = 4800 x 10^(0.45 (m - 6))`: the slope `d log10 N / dm ~ 0.45`
+//! and about 4800 stars to m = 6 (Allen's Astrophysical Quantities, 4th
+//! ed., star counts; 9110 in the Yale Bright Star Catalogue to m = 6.5,
+//! against 8100 here), which holds up to m ~ 8. So star i of
+//! `n = N(<m_lim)` gets `m = m_lim + log10(u) / 0.45` (`u` uniform),
+//! clamped at -1.5 (Sirius). Its irradiance, in the radiance unit of the
+//! volume (kR, emission per km times km) times steradians, is
+//! `E = E_0 10^(-0.4 m)`, `E_0` the V-band photon flux of a magnitude-0
+//! star: 3.63e-9 erg cm^-2 s^-1 A^-1 (Bessell 1979) over 880 A (the V
+//! filter's width) at 3.61e-12 erg per 550 nm photon is 8.85e5 photons
+//! cm^-2 s^-1, and 1 kR sr is 10^9 / (4 pi) photons cm^-2 s^-1, so
+//! `E_0 = 0.0111 kR sr` (times `star_brightness`). Colours are blackbody
+//! colours (Planck's law through the CIE 1931 observer, normalised to
+//! luminance 1) of a temperature drawn from approximate shares of
+//! naked-eye stars by spectral class (B 12 %, A 22 %, F 17 %, G 15 %,
+//! K 30 %, M 4 %; Bright Star Catalogue counts, rounded).
+//!
+//! Stars are points: each adds its flux to the one pixel whose area holds
+//! its projection, as radiance `E T / Omega_p` (`Omega_p` the pixel's solid
+//! angle, from the camera; `T` the volume's transmittance towards the star,
+//! 0 behind terrain), so they stay one pixel wide and keep their flux at
+//! any resolution. An orthographic camera sees no stars (its pixels have no
+//! solid angle). Same seed, same stars; the pixel sums are done star by
+//! star in a fixed order after the pixel loop, so the image does not
+//! depend on the thread count.
+
+use super::{Image, RenderError};
+use crate::camera::CameraModel;
+use crate::scene::Background;
+use crate::spectrum::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
+use glam::DVec3;
+use rand::Rng;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// Stars brighter than magnitude 6 over the whole sky.
+pub const STARS_TO_MAG_6: f64 = 4800.0;
+/// `d log10 N(<m) / dm`.
+pub const COUNT_SLOPE: f64 = 0.45;
+/// Irradiance of a magnitude-0 star, kR sr (see the module documentation).
+pub const MAG0_KR_SR: f64 = 0.0111;
+/// The brightest star drawn (Sirius, V = -1.46).
+pub const BRIGHTEST_MAG: f64 = -1.5;
+
+/// Spectral classes of naked-eye stars: (share, effective temperature K).
+const CLASSES: [(f64, f64); 6] = [(0.12, 15000.0), (0.22, 9000.0), (0.17, 6700.0), (0.15, 5600.0), (0.30, 4500.0), (0.04, 3400.0)];
+
+/// An equirectangular radiance map (row 0 at the top).
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnvMap {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<[f32; 3]>,
+}
+
+impl EnvMap {
+    /// From an image; refuses negative or non-finite radiance.
+    pub fn from_image(img: &Image, path: &Path) -> Result<EnvMap, RenderError> {
+        if img.width == 0 || img.height == 0 {
+            return Err(RenderError::Settings(format!("background.image {}: empty image", path.display())));
+        }
+        let pixels: Vec<[f32; 3]> = img.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        if let Some(i) = pixels.iter().position(|p| p.iter().any(|c| !(c.is_finite() && *c >= 0.0))) {
+            return Err(RenderError::Settings(format!(
+                "background.image {}: pixel ({}, {}) = {:?} must be finite and >= 0",
+                path.display(),
+                i % img.width,
+                i / img.width,
+                pixels[i]
+            )));
+        }
+        Ok(EnvMap { width: img.width, height: img.height, pixels })
+    }
+
+    /// `(u, v)` of a world direction, v from the bottom (module documentation).
+    pub fn uv(dir: DVec3) -> (f64, f64) {
+        let d = dir.normalize();
+        (0.5 - d.y.atan2(d.x) / (2.0 * PI), 0.5 + d.z.clamp(-1.0, 1.0).asin() / PI)
+    }
+
+    /// Radiance seen along `dir`: bilinear between pixel centres.
+    pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
+        let (u, v) = Self::uv(dir);
+        let (w, h) = (self.width as f64, self.height as f64);
+        // Continuous pixel coordinates, column 0 / row 0 (top) centres at 0.
+        let x = u * w - 0.5;
+        let y = (1.0 - v) * h - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let col = |i: f64| (i.rem_euclid(w)) as usize;
+        let row = |j: f64| j.clamp(0.0, h - 1.0) as usize;
+        let p = |i: f64, j: f64| self.pixels[row(j) * self.width + col(i)];
+        let (a, b, c, d) = (p(x0, y0), p(x0 + 1.0, y0), p(x0, y0 + 1.0), p(x0 + 1.0, y0 + 1.0));
+        [0, 1, 2].map(|k| {
+            (1.0 - fy) * ((1.0 - fx) * a[k] as f64 + fx * b[k] as f64) + fy * ((1.0 - fx) * c[k] as f64 + fx * d[k] as f64)
+        })
+    }
+}
+
+/// One star: a direction and its irradiance per channel, kR sr.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Star {
+    pub dir: DVec3,
+    pub magnitude: f64,
+    pub irradiance: [f64; 3],
+}
+
+/// Linear Rec.709 colour of a blackbody at `t_k` kelvin, luminance 1.
+pub fn blackbody_rgb(t_k: f64) -> [f64; 3] {
+    // Planck's law up to a constant: lambda^-5 / (exp(hc / (lambda k T)) - 1).
+    const HC_K: f64 = 1.438_777e7; // nm K
+    let mut xyz = [0.0f64; 3];
+    let mut l: f64 = 380.0;
+    while l <= 780.0 {
+        let b = l.powi(-5) / ((HC_K / (l * t_k)).exp() - 1.0);
+        let c = cie1931_xyz(l);
+        for k in 0..3 {
+            xyz[k] += b * c[k];
+        }
+        l += 5.0;
+    }
+    let rgb = gamut_map(xyz_to_rec709([xyz[0] / xyz[1], 1.0, xyz[2] / xyz[1]]));
+    let y = luminance(rgb);
+    rgb.map(|c| c / y)
+}
+
+/// The star field of `seed` down to `limiting_magnitude` (module
+/// documentation), `brightness` times the physical irradiance.
+pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64) -> Vec<Star> {
+    let n = (STARS_TO_MAG_6 * 10f64.powf(COUNT_SLOPE * (limiting_magnitude - 6.0))).round() as usize;
+    let colours: Vec<[f64; 3]> = CLASSES.iter().map(|&(_, t)| blackbody_rgb(t)).collect();
+    let mut rng = crate::rng::rng(&[seed, 0x5354_4152_5300]);
+    (0..n)
+        .map(|_| {
+            // Uniform on the sphere: z uniform in [-1, 1], azimuth uniform.
+            let z: f64 = rng.random::<f64>() * 2.0 - 1.0;
+            let phi = rng.random::<f64>() * 2.0 * PI;
+            let s = (1.0 - z * z).max(0.0).sqrt();
+            let u: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
+            let m = (limiting_magnitude + u.log10() / COUNT_SLOPE).max(BRIGHTEST_MAG);
+            let mut pick: f64 = rng.random::<f64>();
+            let mut class = CLASSES.len() - 1;
+            for (i, (share, _)) in CLASSES.iter().enumerate() {
+                if pick < *share {
+                    class = i;
+                    break;
+                }
+                pick -= share;
+            }
+            let e = brightness * MAG0_KR_SR * 10f64.powf(-0.4 * m);
+            Star { dir: DVec3::new(s * phi.cos(), s * phi.sin(), z), magnitude: m, irradiance: colours[class].map(|c| c * e) }
+        })
+        .collect()
+}
+
+/// Everything the renderer needs of the sky.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sky {
+    pub image: Option<EnvMap>,
+    pub stars: Vec<Star>,
+}
+
+impl Sky {
+    /// Loads `background.image` (relative to `base_dir`) and draws the
+    /// stars of `seed`.
+    pub fn new(bg: &Background, seed: u64, base_dir: Option<&Path>) -> Result<Sky, RenderError> {
+        let image = match &bg.image {
+            None => None,
+            Some(p) => {
+                let path = match base_dir {
+                    Some(d) if Path::new(p).is_relative() => d.join(p),
+                    _ => Path::new(p).to_path_buf(),
+                };
+                let img = super::film::read_exr(&path)?;
+                Some(EnvMap::from_image(&img, &path)?)
+            }
+        };
+        let stars = if bg.stars { star_field(seed, bg.limiting_magnitude, bg.star_brightness) } else { Vec::new() };
+        Ok(Sky { image, stars })
+    }
+
+    /// The sky's radiance along `dir` (the image's; stars are added apart).
+    pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
+        self.image.as_ref().map_or([0.0; 3], |m| m.radiance(dir))
+    }
+
+    /// Adds every star to the pixel that sees it: `E T / Omega_p`, `T` from
+    /// `transmittance(dir)` (None when terrain hides the star).
+    pub fn add_stars(&self, img: &mut [[f32; 4]], camera: &CameraModel, transmittance: impl Fn(DVec3) -> Option<f64>) {
+        for s in &self.stars {
+            let Some(omega) = camera.pixel_solid_angle(s.dir) else { return };
+            let Some((fx, fy)) = camera.project(camera.position + s.dir) else { continue };
+            let (px, py) = ((fx as usize).min(camera.width - 1), (fy as usize).min(camera.height - 1));
+            let Some(t) = transmittance(s.dir) else { continue };
+            let p = &mut img[py * camera.width + px];
+            for k in 0..3 {
+                p[k] += (s.irradiance[k] * t / omega) as f32;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Camera, Projection};
+
+    /// The drawn magnitudes follow log10 N(<m) = const + 0.45 m: counts
+    /// brighter than m_lim - 1 and m_lim - 2 are 10^-0.45 and 10^-0.9 of
+    /// the total, within 4 Poisson standard deviations.
+    #[test]
+    fn magnitudes_follow_the_star_counts() {
+        let stars = star_field(3, 7.0, 1.0);
+        let n = stars.len() as f64;
+        assert!((n / (STARS_TO_MAG_6 * 10f64.powf(0.45)) - 1.0).abs() < 1e-3, "{n}");
+        for dm in [1.0, 2.0] {
+            let k = stars.iter().filter(|s| s.magnitude < 7.0 - dm).count() as f64;
+            let want = n * 10f64.powf(-0.45 * dm);
+            assert!((k - want).abs() < 4.0 * want.sqrt(), "dm {dm}: {k} vs {want}");
+        }
+        // Isotropic: as many in each hemisphere, within 4 sigma.
+        let up = stars.iter().filter(|s| s.dir.z > 0.0).count() as f64;
+        assert!((up - n / 2.0).abs() < 4.0 * (n / 4.0).sqrt());
+        // Deterministic per seed.
+        assert_eq!(star_field(3, 7.0, 1.0), stars);
+        assert_ne!(star_field(4, 7.0, 1.0), stars);
+    }
+
+    #[test]
+    fn blackbody_colours_run_from_red_to_blue() {
+        let cool = blackbody_rgb(3400.0);
+        let sun = blackbody_rgb(5800.0);
+        let hot = blackbody_rgb(15000.0);
+        assert!(cool[0] > cool[2] && hot[2] > hot[0], "{cool:?} {hot:?}");
+        // Near white around the sun's temperature (D65 is 6504 K).
+        assert!((sun[0] / sun[2] - 1.0).abs() < 0.35, "{sun:?}");
+        for c in [cool, sun, hot] {
+            assert!((luminance(c) - 1.0).abs() < 1e-9);
+        }
+    }
+
+    /// A star's flux, summed over the image, is E T whatever the resolution
+    /// and projection, and it lands on one pixel.
+    #[test]
+    fn a_star_keeps_its_flux_at_any_resolution() {
+        let sky = Sky { image: None, stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0] }] };
+        for (p, w, h) in [(Projection::Fisheye, 64, 64), (Projection::Fisheye, 512, 512), (Projection::Equirectangular, 128, 64), (Projection::Perspective, 300, 200)] {
+            let cam = Camera { position: [0.0; 3], look_at: [0.0, 0.0, 1.0], up: [0.0, 1.0, 0.0], projection: p, fov_deg: if p == Projection::Fisheye { 180.0 } else { 90.0 }, ortho_height: 1.0 };
+            let m = CameraModel::new(&cam, w, h).unwrap();
+            let mut img = vec![[0.0f32; 4]; w * h];
+            sky.add_stars(&mut img, &m, |_| Some(0.5));
+            let lit: Vec<usize> = (0..w * h).filter(|&i| img[i][0] > 0.0).collect();
+            assert_eq!(lit.len(), 1, "{p:?} {w}x{h}");
+            // Flux = radiance x the pixel's solid angle (numerically, from
+            // the corner rays' spherical quadrilateral as in camera.rs).
+            let i = lit[0];
+            let (px, py) = ((i % w) as f64, (i / w) as f64);
+            let omega = m.pixel_solid_angle(m.ray(px + 0.5, py + 0.5).dir).unwrap();
+            let flux = img[i][2] as f64 * omega;
+            // The pixel's solid angle varies by < 1 % across one pixel here.
+            assert!((flux / 1.5 - 1.0).abs() < 0.01, "{p:?} {w}x{h}: {flux}");
+        }
+    }
+
+    #[test]
+    fn env_map_faces_plus_x_at_its_centre_and_the_zenith_at_its_top() {
+        let (w, h) = (8, 4);
+        let mut pixels = vec![[0.0f32; 3]; w * h];
+        pixels[w + w / 2] = [1.0, 0.0, 0.0]; // row 1, column 4: just above the horizon, centre
+        pixels[0] = [0.0, 5.0, 0.0]; // top row, column 0
+        let m = EnvMap { width: w, height: h, pixels };
+        // Centre of pixel (4, 1): u = 4.5 / 8, v = 1 - 1.5 / 4.
+        let (u, v) = (4.5 / 8.0, 1.0 - 1.5 / 4.0);
+        let az = (0.5 - u) * 2.0 * PI;
+        let el = (v - 0.5) * PI;
+        let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        assert!((m.radiance(d)[0] - 1.0).abs() < 1e-9);
+        assert_eq!(EnvMap::uv(DVec3::X), (0.5, 0.5));
+        let (_, vz) = EnvMap::uv(DVec3::Z);
+        assert_eq!(vz, 1.0);
+        // Periodic in u: column 0 and column 7 blend across the seam.
+        let (u0, v0) = (0.0, 1.0 - 0.5 / 4.0);
+        let az = (0.5 - u0) * 2.0 * PI;
+        let el = (v0 - 0.5) * PI;
+        let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        assert!((m.radiance(d)[1] - 2.5).abs() < 1e-6, "{:?}", m.radiance(d));
+    }
+}
