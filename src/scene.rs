@@ -193,6 +193,9 @@ pub enum Compression {
     Zip,
     ActiveMask,
     ZipActiveMask,
+    /// Blosc (LZ4, byte shuffle), as OpenVDB and Houdini write by default.
+    Blosc,
+    BloscActiveMask,
 }
 
 /// Voxel size: a number of km, or "auto" (from the camera).

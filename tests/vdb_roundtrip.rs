@@ -15,8 +15,14 @@ use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 use std::time::{Duration, Instant};
 
-const MODES: [Compression; 4] =
-    [Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask];
+const MODES: [Compression; 6] = [
+    Compression::None,
+    Compression::Zip,
+    Compression::ActiveMask,
+    Compression::ZipActiveMask,
+    Compression::Blosc,
+    Compression::BloscActiveMask,
+];
 
 /// Every voxel of `b` is active exactly where it is in `a`, with bit-identical
 /// values (so -0.0 and +0.0 differ, NaN payloads would too); transform, name

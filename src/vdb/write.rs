@@ -162,6 +162,8 @@ pub fn compression_flags(c: Compression) -> u32 {
         Compression::Zip => layout::COMPRESS_ZIP,
         Compression::ActiveMask => layout::COMPRESS_ACTIVE_MASK,
         Compression::ZipActiveMask => layout::COMPRESS_ZIP | layout::COMPRESS_ACTIVE_MASK,
+        Compression::Blosc => layout::COMPRESS_BLOSC,
+        Compression::BloscActiveMask => layout::COMPRESS_BLOSC | layout::COMPRESS_ACTIVE_MASK,
     }
 }
 
