@@ -83,9 +83,10 @@ pub struct WriteOptions {
 }
 
 impl Default for WriteOptions {
-    /// ZIP + active-mask compression, no half grids, no extra metadata.
+    /// Blosc + active-mask compression (OpenVDB's default), no half grids,
+    /// no extra metadata.
     fn default() -> Self {
-        Self { compression: Compression::ZipActiveMask, half: Vec::new(), metadata: Vec::new() }
+        Self { compression: Compression::BloscActiveMask, half: Vec::new(), metadata: Vec::new() }
     }
 }
 
