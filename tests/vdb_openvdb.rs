@@ -9,7 +9,7 @@ mod common;
 use aurora::grid::{Grid, VoxelValue};
 use aurora::scene::Compression;
 use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_vdb, Decoder};
+use aurora::vdb::read::{read_vdb, read_vdb_bytes_with_vdbrs, Decoder};
 use aurora::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use glam::{DVec3, IVec3};
 use serde_json::{json, Value};
@@ -210,8 +210,16 @@ fn our_reader_reads_files_openvdb_writes() {
             other => assert_eq!(info.decoder, Decoder::Skipped, "{name} of type {other}"),
         }
     }
-    // Which decoder read what: the tile-free float grid through vdb-rs.
-    assert_eq!(f.info("density_plain").unwrap().decoder, Decoder::VdbRs);
+    // Our decoder reads every grid; vdb-rs (the oracle) reads the tile-free
+    // float grid the same.
+    assert_eq!(f.info("density_plain").unwrap().decoder, Decoder::Native);
+    let v = read_vdb_bytes_with_vdbrs(&std::fs::read(&path).unwrap()).unwrap();
+    assert_eq!(v.info("density_plain").unwrap().decoder, Decoder::VdbRs);
+    let (a, b) = (f.float("density_plain").unwrap(), v.float("density_plain").unwrap());
+    assert_eq!(a.active_voxel_count(), b.active_voxel_count());
+    for (p, x) in a.iter_active() {
+        assert_eq!(x.to_bits(), b.get(p).to_bits(), "density_plain at {p}: native vs vdb-rs");
+    }
     assert_eq!(f.info("density").unwrap().decoder, Decoder::Native, "tiles");
     assert_eq!(f.info("emission").unwrap().decoder, Decoder::Native, "vec3s");
     assert!(f.info("emission_half").unwrap().half);

@@ -353,6 +353,33 @@ pub fn read_values<T: VoxelValue>(
     background: T,
     decode: bool,
 ) -> Result<Option<Vec<T>>, ParseError> {
+    let mut scratch = Vec::new();
+    if !decode {
+        read_values_into::<T>(cur, fmt, n, value_mask, background, None, &mut scratch, true)?;
+        return Ok(None);
+    }
+    let mut out = vec![background; n];
+    read_values_into(cur, fmt, n, value_mask, background, Some(&mut out), &mut scratch, true)?;
+    Ok(Some(out))
+}
+
+/// [`read_values`] writing straight into `out` (all `n` slots), with no
+/// allocation beyond `scratch` (reused for decompression): stored values
+/// are converted from the file's bytes, or from the decompressed bytes, in
+/// place. With `out = None` the record is only validated and skipped; a ZIP
+/// stream is then decompressed only if `check_zip` (the caller that decodes
+/// the record later may skip it: decoding checks it).
+#[allow(clippy::too_many_arguments)]
+pub fn read_values_into<T: VoxelValue>(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    background: T,
+    out: Option<&mut [T]>,
+    scratch: &mut Vec<u8>,
+    check_zip: bool,
+) -> Result<(), ParseError> {
     let m = cur.u8()?;
     if m > meta::NO_MASK_AND_ALL_VALS {
         return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
@@ -370,11 +397,12 @@ pub fn read_values<T: VoxelValue>(
             inactive1 = read_full(cur)?;
         }
     }
-    let selection = if matches!(
+    // Selection mask as stored bytes: bit i is byte i >> 3, bit i & 7.
+    let selection: Option<&[u8]> = if matches!(
         m,
         meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
     ) {
-        Some(cur.u64s(n / 64)?)
+        Some(cur.bytes(n / 8)?)
     } else {
         None
     };
@@ -383,45 +411,49 @@ pub fn read_values<T: VoxelValue>(
     let comp = T::COMPONENTS;
     let elem = if fmt.half { 2 } else { 4 } * comp;
     let nbytes = count * elem;
-    let raw: Option<Vec<u8>> = if fmt.half && count == 0 {
-        Some(Vec::new())
+    let decode = out.is_some();
+    let raw: Option<&[u8]> = if fmt.half && count == 0 {
+        Some(&[])
     } else if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, decode)?
+        read_blosc(cur, nbytes, decode, scratch)?
     } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_zip(cur, nbytes, decode)?
+        read_zip(cur, nbytes, decode, decode || check_zip, scratch)?
     } else {
-        let b = cur.bytes(nbytes)?;
-        decode.then(|| b.to_vec())
+        Some(cur.bytes(nbytes)?)
     };
-    let Some(raw) = raw else { return Ok(None) };
-    let mut packed: Vec<T> = Vec::with_capacity(count);
-    let mut c = [0f32; 3];
-    for chunk in raw.chunks_exact(elem) {
-        for (k, x) in c[..comp].iter_mut().enumerate() {
+    let (Some(out), Some(raw)) = (out, raw) else { return Ok(()) };
+    debug_assert_eq!(out.len(), n);
+    let value = |k: usize| -> T {
+        let chunk = &raw[k * elem..(k + 1) * elem];
+        let mut c = [0f32; 3];
+        for (j, x) in c[..comp].iter_mut().enumerate() {
             *x = if fmt.half {
-                f16::from_bits(u16::from_le_bytes([chunk[2 * k], chunk[2 * k + 1]])).to_f32()
+                f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32()
             } else {
-                f32::from_le_bytes(chunk[4 * k..4 * k + 4].try_into().expect("4-byte chunk"))
+                f32::from_le_bytes(chunk[4 * j..4 * j + 4].try_into().expect("4-byte chunk"))
             };
         }
-        packed.push(T::from_components(&c));
-    }
+        T::from_components(&c)
+    };
     if !masked || count == n {
-        return Ok(Some(packed));
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = value(k);
+        }
+        return Ok(());
     }
     // Rebuild inactive slots: selection bit set -> inactive1, clear -> inactive0.
-    let mut out = Vec::with_capacity(n);
-    let mut next = packed.into_iter();
-    for i in 0..n {
-        if layout::mask_bit(value_mask, i) {
-            out.push(next.next().unwrap_or(background));
-        } else if selection.as_ref().is_some_and(|s| layout::mask_bit(s, i)) {
-            out.push(inactive1);
+    let mut next = 0usize;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = if layout::mask_bit(value_mask, i) {
+            next += 1;
+            value(next - 1)
+        } else if selection.is_some_and(|s| s[i >> 3] >> (i & 7) & 1 == 1) {
+            inactive1
         } else {
-            out.push(inactive0);
-        }
+            inactive0
+        };
     }
-    Ok(Some(out))
+    Ok(())
 }
 
 /// A value stored at full precision.
@@ -436,12 +468,12 @@ fn read_full<T: VoxelValue>(cur: &mut Cursor) -> Result<T, ParseError> {
 /// The length prefix of a compressed chunk (`i64 L`), shared by ZIP and
 /// Blosc: L <= 0 means the data were stored raw, -L bytes, which must be
 /// exactly `nbytes`; L > 0 is the compressed stream's length.
-enum ChunkLen {
-    Stored(Option<Vec<u8>>),
+enum ChunkLen<'a> {
+    Stored(&'a [u8]),
     Compressed(i64),
 }
 
-fn read_chunk_len(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<ChunkLen, ParseError> {
+fn read_chunk_len<'a>(cur: &mut Cursor<'a>, nbytes: usize) -> Result<ChunkLen<'a>, ParseError> {
     let at = cur.pos();
     let len = cur.i64()?;
     if len > 0 {
@@ -450,27 +482,41 @@ fn read_chunk_len(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Chunk
     if len.unsigned_abs() != nbytes as u64 {
         return Err(cur.err_at(at, format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs())));
     }
-    let b = cur.bytes(nbytes)?;
-    Ok(ChunkLen::Stored(decode.then(|| b.to_vec())))
+    Ok(ChunkLen::Stored(cur.bytes(nbytes)?))
 }
 
-/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly `nbytes`.
-fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly
+/// `nbytes`. Stored chunks come back as the file's bytes; streams are
+/// decompressed into `scratch` when `inflate` is set.
+fn read_zip<'a, 's>(
+    cur: &mut Cursor<'a>,
+    nbytes: usize,
+    decode: bool,
+    inflate: bool,
+    scratch: &'s mut Vec<u8>,
+) -> Result<Option<&'s [u8]>, ParseError>
+where
+    'a: 's,
+{
     let at = cur.pos();
-    let len = match read_chunk_len(cur, nbytes, decode)? {
-        ChunkLen::Stored(raw) => return Ok(raw),
+    let len = match read_chunk_len(cur, nbytes)? {
+        ChunkLen::Stored(raw) => return Ok(decode.then_some(raw)),
         ChunkLen::Compressed(len) => len,
     };
     let stream = cur.bytes_len(len as u64)?;
+    if !inflate {
+        return Ok(None);
+    }
     // Decompressed even when only validating: vdb-rs reads just the first
     // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
     // damaged stream would otherwise pass unnoticed. OpenVDB's `uncompress`
     // checks the whole stream.
-    let mut out = vec![0u8; nbytes];
+    scratch.clear();
+    scratch.resize(nbytes, 0);
     let mut z = Decompress::new(true);
-    let status = z.decompress(stream, &mut out, FlushDecompress::Finish);
+    let status = z.decompress(stream, scratch, FlushDecompress::Finish);
     match status {
-        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(out)),
+        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(&scratch[..])),
         Ok(_) => Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
         Err(e) => Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
     }
@@ -479,10 +525,18 @@ fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<
 /// OpenVDB `io::bloscFromStream`. The Blosc header is validated
 /// (`blosc_cbuffer_validate`: its compressed size must equal the chunk length)
 /// before the C decompressor sees the bytes, so it never reads out of bounds.
-fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+fn read_blosc<'a, 's>(
+    cur: &mut Cursor<'a>,
+    nbytes: usize,
+    decode: bool,
+    scratch: &'s mut Vec<u8>,
+) -> Result<Option<&'s [u8]>, ParseError>
+where
+    'a: 's,
+{
     let at = cur.pos();
-    let len = match read_chunk_len(cur, nbytes, decode)? {
-        ChunkLen::Stored(raw) => return Ok(raw),
+    let len = match read_chunk_len(cur, nbytes)? {
+        ChunkLen::Stored(raw) => return Ok(decode.then_some(raw)),
         ChunkLen::Compressed(len) => len,
     };
     let frame = cur.bytes_len(len as u64)?;
@@ -501,18 +555,19 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
         return Ok(None);
     }
     if nbytes == 0 {
-        return Ok(Some(Vec::new()));
+        return Ok(Some(&[]));
     }
-    let mut out = vec![0u8; nbytes];
+    scratch.clear();
+    scratch.resize(nbytes, 0);
     // SAFETY: the frame was validated above (its header's cbytes equals the
-    // slice length), and blosc writes at most `destsize` = `out.len()` bytes.
+    // slice length), and blosc writes at most `destsize` = `scratch.len()` bytes.
     let got = unsafe {
-        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), out.as_mut_ptr().cast(), out.len(), 1)
+        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), scratch.as_mut_ptr().cast(), scratch.len(), 1)
     };
     if got != nbytes as i32 {
         return Err(cur.err_at(at, format!("corrupt Blosc chunk (decompressed {got} of {nbytes} bytes)")));
     }
-    Ok(Some(out))
+    Ok(Some(&scratch[..]))
 }
 
 #[cfg(test)]
