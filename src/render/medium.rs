@@ -26,7 +26,7 @@
 //!
 //! The structure is plain data: no references into the source grids.
 
-use crate::grid::{leaf_offset, Grid, Transform, VoxelValue, LEAF_DIM};
+use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -217,23 +217,25 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
         let off = IVec3::new(d >> 2 & 1, d >> 1 & 1, d & 1);
         let Some(leaf) = g.leaf(base + off * LEAF_DIM) else { continue };
         // Along an axis with offset 0 we copy local 0..8 to ghost 0..8; with
-        // offset 1 only local plane 0 goes to ghost plane 8.
-        let range = |o: i32| if o == 0 { 0..LEAF_DIM } else { 0..1 };
-        for lx in range(off.x) {
-            for ly in range(off.y) {
-                for lz in range(off.z) {
-                    let n = leaf_offset(IVec3::new(lx, ly, lz));
-                    if !leaf.is_active(n) {
-                        continue;
-                    }
-                    let c = leaf.values[n].components();
-                    let gx = (lx + off.x * LEAF_DIM) as usize;
-                    let gy = (ly + off.y * LEAF_DIM) as usize;
-                    let gz = (lz + off.z * LEAF_DIM) as usize;
-                    let at = ghost_offset(gx, gy, gz) * stride + first;
-                    for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
-                        dst[at + k] = (*ck as f64 * scale) as f32;
-                    }
+        // offset 1 only local plane 0 goes to ghost plane 8. Only active
+        // voxels are copied (`dst` starts at 0), walking the mask's set bits.
+        for (w, &word) in leaf.mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let n = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                // n = (x << 6) | (y << 3) | z.
+                let (lx, ly, lz) = (n >> 6, (n >> 3) & 7, n & 7);
+                if (off.x == 1 && lx != 0) || (off.y == 1 && ly != 0) || (off.z == 1 && lz != 0) {
+                    continue;
+                }
+                let c = leaf.values[n].components();
+                let gx = lx + off.x as usize * LEAF_DIM as usize;
+                let gy = ly + off.y as usize * LEAF_DIM as usize;
+                let gz = lz + off.z as usize * LEAF_DIM as usize;
+                let at = ghost_offset(gx, gy, gz) * stride + first;
+                for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
+                    dst[at + k] = (*ck as f64 * scale) as f32;
                 }
             }
         }
@@ -452,26 +454,21 @@ impl Field {
 /// Masks of the dual cells of one leaf in which channel 0 (resp. any channel)
 /// has a non-zero corner.
 fn cell_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
+    // Per ghost point: bit 0 = channel 0 non-zero, bit 1 = any channel non-zero.
+    let mut nz = [0u8; GHOST_VALUES];
+    for (p, c) in nz.iter_mut().zip(v.chunks_exact(channels)) {
+        *p = u8::from(c[0] != 0.0) | (u8::from(c.iter().any(|x| *x != 0.0)) << 1);
+    }
     let mut first = [0u64; 8];
     let mut any = [0u64; 8];
     for x in 0..8 {
         for y in 0..8 {
             for z in 0..8 {
-                let at = ghost_offset(x, y, z) * channels;
-                let mut f = false;
-                let mut a = false;
-                for off in CORNER_OFFSETS {
-                    let c = &v[at + off * channels..][..channels];
-                    f |= c[0] != 0.0;
-                    a |= c.iter().any(|x| *x != 0.0);
-                }
+                let at = ghost_offset(x, y, z);
+                let m = CORNER_OFFSETS.iter().fold(0u8, |m, off| m | nz[at + off]);
                 let bit = cell_bit(x as i32, y as i32, z as i32);
-                if f {
-                    first[bit >> 6] |= 1 << (bit & 63);
-                }
-                if a {
-                    any[bit >> 6] |= 1 << (bit & 63);
-                }
+                first[bit >> 6] |= u64::from(m & 1) << (bit & 63);
+                any[bit >> 6] |= u64::from(m >> 1 & 1) << (bit & 63);
             }
         }
     }
