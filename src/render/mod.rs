@@ -242,7 +242,7 @@ pub fn pixel_sample(shift: [f64; 2], i: usize) -> (f64, f64) {
 /// last sample is an unpaired R2 point.
 pub fn pixel_position(shift: [f64; 2], i: usize) -> (f64, f64) {
     let (x, y) = pixel_sample(shift, i / 2);
-    if i % 2 == 0 {
+    if i.is_multiple_of(2) {
         (x, y)
     } else {
         (1.0 - x, 1.0 - y)
