@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release --example vdb_write_bench -- [--input BAKE.vdb] [--repeat N]
-//!     [--threads N] [--half GRID]... [--modes none,zip,active-mask,zip+active-mask]
+//!     [--threads N] [--half GRID]... [--modes none,zip,active-mask,zip+active-mask,blosc,blosc+active-mask]
 //!     [--out-dir DIR]
 //! ```
 //!
@@ -43,6 +43,8 @@ fn mode_name(c: Compression) -> &'static str {
         Compression::Zip => "zip",
         Compression::ActiveMask => "active-mask",
         Compression::ZipActiveMask => "zip+active-mask",
+        Compression::Blosc => "blosc",
+        Compression::BloscActiveMask => "blosc+active-mask",
     }
 }
 
@@ -73,6 +75,8 @@ fn parse_args() -> anyhow::Result<Args> {
                         "zip" => Ok(Compression::Zip),
                         "active-mask" => Ok(Compression::ActiveMask),
                         "zip+active-mask" => Ok(Compression::ZipActiveMask),
+                        "blosc" => Ok(Compression::Blosc),
+                        "blosc+active-mask" => Ok(Compression::BloscActiveMask),
                         other => Err(anyhow::anyhow!("unknown mode {other}")),
                     })
                     .collect::<anyhow::Result<_>>()?

@@ -514,6 +514,7 @@ fn render_cmd(
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
     let (density, emission);
+    let open = std::time::Instant::now();
     match vdb {
         Some(path) => {
             let file = aurora::vdb::read::read_vdb(path).map_err(|e| InputError(e.to_string()))?;
@@ -529,6 +530,7 @@ fn render_cmd(
             emission = Some(bake.emission);
         }
     }
+    let open_seconds = open.elapsed().as_secs_f64();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
     let image = aurora::render::render(&settings, &volume, progress)?;
     match format {
@@ -550,6 +552,13 @@ fn render_cmd(
             st.primary_rays_per_second(),
             st.shadow_samples,
             st.threads
+        );
+        eprintln!(
+            "times: {} {:.2} s, build {:.2} s, trace {:.2} s",
+            if vdb.is_some() { "open VDB" } else { "bake" },
+            open_seconds,
+            st.build_seconds,
+            st.render_seconds
         );
     }
     Ok(())

@@ -257,6 +257,9 @@ pub enum Compression {
     Zip,
     ActiveMask,
     ZipActiveMask,
+    /// Blosc (LZ4, byte shuffle), as OpenVDB and Houdini write by default.
+    Blosc,
+    BloscActiveMask,
 }
 
 /// Voxel size: a number of km, or "auto" (from the camera).
@@ -613,7 +616,9 @@ impl Default for GridParams {
             density_base_km: 90.0,
             half_emission: false,
             cycles_shell: true,
-            compression: Compression::ZipActiveMask,
+            // OpenVDB's and Houdini's default; read by OpenVDB 10-12,
+            // Blender 5 and our reader; writes ~8x faster than ZIP, same size.
+            compression: Compression::BloscActiveMask,
             prune: DEFAULT_PRUNE,
         }
     }

@@ -100,7 +100,14 @@ fn blender_loads_our_vdb_and_imports_our_usd_stage() {
     // Every compression mode, with and without half floats, then the stage,
     // all in one Blender session (a fresh empty scene per file).
     let mut files = Vec::new();
-    for comp in [Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask] {
+    for comp in [
+        Compression::None,
+        Compression::Zip,
+        Compression::ActiveMask,
+        Compression::ZipActiveMask,
+        Compression::Blosc,
+        Compression::BloscActiveMask,
+    ] {
         for half in [false, true] {
             let p = dir.join(format!("{comp:?}_{half}.vdb"));
             let o = WriteOptions {

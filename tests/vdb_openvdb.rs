@@ -9,14 +9,20 @@ mod common;
 use aurora::grid::{Grid, VoxelValue};
 use aurora::scene::Compression;
 use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_vdb, Decoder};
+use aurora::vdb::read::{read_vdb, read_vdb_bytes_with_vdbrs, Decoder};
 use aurora::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use glam::{DVec3, IVec3};
 use serde_json::{json, Value};
 use std::collections::HashMap;
 
-const MODES: [Compression; 4] =
-    [Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask];
+const MODES: [Compression; 6] = [
+    Compression::None,
+    Compression::Zip,
+    Compression::ActiveMask,
+    Compression::ZipActiveMask,
+    Compression::Blosc,
+    Compression::BloscActiveMask,
+];
 
 fn ivec(v: &Value) -> IVec3 {
     let a: Vec<i32> =
@@ -204,8 +210,16 @@ fn our_reader_reads_files_openvdb_writes() {
             other => assert_eq!(info.decoder, Decoder::Skipped, "{name} of type {other}"),
         }
     }
-    // Which decoder read what: the tile-free float grid through vdb-rs.
-    assert_eq!(f.info("density_plain").unwrap().decoder, Decoder::VdbRs);
+    // Our decoder reads every grid; vdb-rs (the oracle) reads the tile-free
+    // float grid the same.
+    assert_eq!(f.info("density_plain").unwrap().decoder, Decoder::Native);
+    let v = read_vdb_bytes_with_vdbrs(&std::fs::read(&path).unwrap()).unwrap();
+    assert_eq!(v.info("density_plain").unwrap().decoder, Decoder::VdbRs);
+    let (a, b) = (f.float("density_plain").unwrap(), v.float("density_plain").unwrap());
+    assert_eq!(a.active_voxel_count(), b.active_voxel_count());
+    for (p, x) in a.iter_active() {
+        assert_eq!(x.to_bits(), b.get(p).to_bits(), "density_plain at {p}: native vs vdb-rs");
+    }
     assert_eq!(f.info("density").unwrap().decoder, Decoder::Native, "tiles");
     assert_eq!(f.info("emission").unwrap().decoder, Decoder::Native, "vec3s");
     assert!(f.info("emission_half").unwrap().half);
@@ -291,9 +305,10 @@ fn transform_start(bytes: &[u8], grid_pos: u64) -> usize {
 
 /// The transform, topology and buffers we write are byte-identical to what
 /// OpenVDB's C++ writer (libopenvdb 10.0.1, same compression, same half
-/// setting) writes for the same grids, in all eight modes, including every
-/// mask-compression case and ZIP streams (same zlib, level 6). Only the
-/// header UUID and grid metadata differ.
+/// setting) writes for the same grids, in all twelve modes, including every
+/// mask-compression case, ZIP streams (same zlib, level 6) and Blosc frames
+/// (our bundled c-blosc 1.21.6 against Debian's 1.21.3 with liblz4 1.9.4:
+/// the same LZ4 bytes). Only the header UUID and grid metadata differ.
 #[test]
 fn tree_bytes_are_identical_to_openvdb_writer() {
     let tool = common::openvdb_write_tool();
@@ -315,6 +330,8 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
                 Compression::Zip => "zip",
                 Compression::ActiveMask => "active-mask",
                 Compression::ZipActiveMask => "zip+active-mask",
+                Compression::Blosc => "blosc",
+                Compression::BloscActiveMask => "blosc+active-mask",
             };
             let mut cmd = std::process::Command::new(&tool);
             cmd.arg(&ours).arg(&theirs).arg(mode);

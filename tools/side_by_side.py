@@ -332,8 +332,8 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
     src = bake_dir / "aurora.vdb"
     bake = json.loads((bake_dir / "bake.json").read_text())
     comp = bake["files"]["compression"]
-    if comp != "zip-active-mask" or bake["files"]["half_emission"]:
-        raise Failure(f"the default bake is {comp}, half {bake['files']['half_emission']}: expected zip-active-mask, f32")
+    if comp != "blosc-active-mask" or bake["files"]["half_emission"]:
+        raise Failure(f"the default bake is {comp}, half {bake['files']['half_emission']}: expected blosc-active-mask, f32")
     d = out / "vdb"
     d.mkdir(parents=True, exist_ok=True)
     tools.build_vdb_bench()
@@ -350,19 +350,29 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
     py_path = d / "pyopenvdb_blosc+active-mask.vdb"
     cpp_blosc_path = d / "openvdb_blosc+active-mask.vdb"
 
-    runs = {"aurora_zip": [], "cpp_zip": [], "pyopenvdb_blosc": [], "cpp_blosc": []}
+    runs = {"aurora_zip": [], "cpp_zip": [], "aurora_blosc": [], "pyopenvdb_blosc": [], "cpp_blosc": []}
     sizes = {}
 
-    def ours_and_cpp_zip():
-        r = run([tools.vdb_bench, "--input", src, "--modes", "zip+active-mask", "--repeat", 1, "--threads", THREADS,
+    def ours_and_cpp(mode, ours, cpp):
+        r = run([tools.vdb_bench, "--input", src, "--modes", mode, "--repeat", 1, "--threads", THREADS,
                  "--out-dir", d], "examples/vdb_write_bench")
-        rows = [ln for ln in r.stdout.splitlines() if ln.startswith("csv,zip+active-mask,")]
+        rows = [ln for ln in r.stdout.splitlines() if ln.startswith(f"csv,{mode},")]
         if len(rows) != 1:
             raise Failure(f"vdb_write_bench printed no csv row:\n{r.stdout}")
         f = rows[0].split(",")
-        runs["aurora_zip"].append(float(f[4]))
-        runs["cpp_zip"].append(float(f[6]))
-        sizes["aurora_zip"], sizes["cpp_zip"] = int(f[8]), int(f[9])
+        runs[ours].append(float(f[4]))
+        sizes[ours] = int(f[8])
+        if cpp is not None:
+            runs[cpp].append(float(f[6]))
+            sizes[cpp] = int(f[9])
+
+    def ours_and_cpp_zip():
+        ours_and_cpp("zip+active-mask", "aurora_zip", "cpp_zip")
+
+    def ours_blosc():
+        # The example also writes OpenVDB's Blosc file (openvdb_blosc+active-mask.vdb):
+        # cpp_blosc below rewrites it and is the C++ Blosc time reported.
+        ours_and_cpp("blosc+active-mask", "aurora_blosc", None)
 
     def cpp_blosc():
         if not tools.cpp_bench.is_file():
@@ -385,7 +395,7 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
             raise
         sizes["pyopenvdb_blosc"] = py_path.stat().st_size
 
-    writers = [ours_and_cpp_zip, py_blosc, cpp_blosc]
+    writers = [ours_and_cpp_zip, ours_blosc, py_blosc, cpp_blosc]
     for rep in range(cfg["vdb_repeats"]):
         log(f"vdb: run {rep + 1}/{cfg['vdb_repeats']}")
         k = rep % len(writers)  # rotate who goes first
@@ -393,6 +403,7 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
             w()
 
     ours_file = d / "aurora_zip+active-mask.vdb"
+    ours_blosc_file = d / "aurora_blosc+active-mask.vdb"
     cpp_file = d / "openvdb_zip+active-mask.vdb"
     log("vdb: reading the files back with pyopenvdb")
     t0 = time.perf_counter()
@@ -400,10 +411,12 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
     eq_cpp = grids_equal(vdb, src, cpp_file)
     eq_ours = grids_equal(vdb, src, ours_file)
     eq_cpp_blosc = grids_equal(vdb, src, cpp_blosc_path)
+    eq_ours_blosc = grids_equal(vdb, src, ours_blosc_file)
     check_s = time.perf_counter() - t0
     files = {
         "aurora_zip": file_facts(vdb, ours_file),
         "cpp_zip": file_facts(vdb, cpp_file),
+        "aurora_blosc": file_facts(vdb, ours_blosc_file),
         "pyopenvdb_blosc": file_facts(vdb, py_path),
         "cpp_blosc": file_facts(vdb, cpp_blosc_path),
     }
@@ -424,6 +437,9 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
             "cpp_zip": {"what": f"OpenVDB {lib} C++ io::File::write (tools/openvdb_write_bench.cpp), "
                                 "ZIP + active mask, f32, grid class set to unknown (OpenVDB drops ZIP for fog "
                                 "volumes); timed by the same example, alternating with ours"},
+            "aurora_blosc": {"what": f"aurora vdb::write (Rust, {THREADS} threads), BLOSC + active mask (the "
+                                     "default since issue 14; tree bytes identical to OpenVDB's), f32, fog volume; "
+                                     "timed by examples/vdb_write_bench.rs"},
             "pyopenvdb_blosc": {"what": f"pyopenvdb {lib} write(path, grids, metadata) from Python; pyopenvdb has "
                                         "no compression setting: io::File's default, BLOSC + active mask, f32, "
                                         "class set to unknown (no effect on Blosc)"},
@@ -441,9 +457,12 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
             "ours_zip_over_pyopenvdb_blosc_time": b["aurora_zip"] / b["pyopenvdb_blosc"],
             "ours_zip_over_pyopenvdb_blosc_bytes": sizes["aurora_zip"] / sizes["pyopenvdb_blosc"],
             "pyopenvdb_over_cpp_blosc_time": b["pyopenvdb_blosc"] / b["cpp_blosc"],
+            "ours_blosc_over_ours_zip_time": b["aurora_blosc"] / b["aurora_zip"],
+            "ours_blosc_over_cpp_blosc_time": b["aurora_blosc"] / b["cpp_blosc"],
+            "ours_blosc_over_cpp_blosc_bytes": sizes["aurora_blosc"] / sizes["cpp_blosc"],
         },
         "read_back": {"ours_vs_pyopenvdb": eq_py, "ours_vs_cpp_zip": eq_cpp, "bake_vs_bench_ours": eq_ours,
-                      "ours_vs_cpp_blosc": eq_cpp_blosc, "check_s": check_s,
+                      "ours_vs_cpp_blosc": eq_cpp_blosc, "ours_blosc": eq_ours_blosc, "check_s": check_s,
                       "how": "pyopenvdb readAll of both files; per grid: name, value type, transform, active "
                              "voxel count, then every active voxel's coordinates and value compared exactly"},
     }
@@ -888,9 +907,9 @@ def report_text(res: dict) -> str:
     L.append(f"1. VDB writer: the default bake's grids ({', '.join(i['grids'])}: {i['active_voxels']:,} active voxels, "
              f"{i['leaves']:,} leaves, f32), best of {v['repeats']} runs, writers alternating")
     L.append(f"   {'writer':<34} {'compression':<22} {'class':<11} {'best s':>8} {'bytes':>13}")
-    names = {"aurora_zip": "aurora (Rust)", "cpp_zip": "OpenVDB C++", "pyopenvdb_blosc": "pyopenvdb.write",
-             "cpp_blosc": "OpenVDB C++"}
-    for k in ("aurora_zip", "cpp_zip", "pyopenvdb_blosc", "cpp_blosc"):
+    names = {"aurora_zip": "aurora (Rust)", "cpp_zip": "OpenVDB C++", "aurora_blosc": "aurora (Rust)",
+             "pyopenvdb_blosc": "pyopenvdb.write", "cpp_blosc": "OpenVDB C++"}
+    for k in ("aurora_zip", "cpp_zip", "aurora_blosc", "pyopenvdb_blosc", "cpp_blosc"):
         f = v["files"][k]
         gm = next(iter(f["grids"].values()))
         cls = sorted({x["class"] for x in f["grids"].values()})
@@ -902,9 +921,12 @@ def report_text(res: dict) -> str:
     L.append(f"   ours (ZIP) / pyopenvdb (Blosc, its only choice; not like for like): time "
              f"{r['ours_zip_over_pyopenvdb_blosc_time']:.3f}, size {r['ours_zip_over_pyopenvdb_blosc_bytes']:.4f}")
     L.append(f"   pyopenvdb / OpenVDB C++, both Blosc + active mask: time {r['pyopenvdb_over_cpp_blosc_time']:.3f}")
+    L.append(f"   ours Blosc / ours ZIP: time {r['ours_blosc_over_ours_zip_time']:.3f}; ours / OpenVDB C++, both Blosc + "
+             f"active mask: time {r['ours_blosc_over_cpp_blosc_time']:.3f}, size {r['ours_blosc_over_cpp_blosc_bytes']:.4f}")
     rb = v["read_back"]
     L.append(f"   read back with pyopenvdb: ours == pyopenvdb's file, == C++ ZIP file, == C++ Blosc file: "
-             f"{rb['ours_vs_pyopenvdb']['equal'] and rb['ours_vs_cpp_zip']['equal'] and rb['ours_vs_cpp_blosc']['equal']} "
+             f"{rb['ours_vs_pyopenvdb']['equal'] and rb['ours_vs_cpp_zip']['equal'] and rb['ours_vs_cpp_blosc']['equal']}, "
+             f"our Blosc file == the bake: {rb['ours_blosc']['equal']} "
              f"(every active voxel, exact values)")
     L.append(f"   (in the bake itself our writer took {i['bake_vdb_write_s']:.2f} s, one run)")
     L.append("")

@@ -26,10 +26,10 @@
 //!
 //! The structure is plain data: no references into the source grids.
 
-use crate::grid::{leaf_offset, Grid, Transform, VoxelValue, LEAF_DIM};
+use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 
 use super::RenderError;
 
@@ -147,7 +147,7 @@ impl SourceGrid<'_> {
     }
     /// Origins of real leaves, and for each a bitmask over the 8 offsets
     /// (dx,dy,dz) in {0,1}^3 of the dual leaves it feeds with a non-zero voxel.
-    fn dual_keys(&self, out: &mut HashSet<IVec3>) {
+    fn dual_keys(&self, out: &mut Vec<IVec3>) {
         match self {
             SourceGrid::Scalar(g) => collect_dual_keys(g, out),
             SourceGrid::Vector(g) => collect_dual_keys(g, out),
@@ -165,33 +165,50 @@ impl SourceGrid<'_> {
 
 /// Every dual leaf touched by a non-zero active voxel of `g`. A voxel v lies in
 /// the dual cells `v - {0,1}^3`, hence in dual leaves `floor((v - {0,1}^3) / 8)`;
-/// voxels with a local coordinate 0 also feed the lower neighbour.
-fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, out: &mut HashSet<IVec3>) {
-    for leaf in g.leaves() {
-        let key = shr(leaf.origin, LEAF_LOG2);
-        let mut feeds = 0u8;
-        for (ijk, v) in leaf.iter_active() {
-            if v == T::ZERO {
+/// voxels with a local coordinate 0 also feed the lower neighbour. Leaves are
+/// scanned in parallel; the keys are appended unsorted and with repeats
+/// (the caller sorts and deduplicates).
+fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, out: &mut Vec<IVec3>) {
+    let keys: Vec<IVec3> = g
+        .leaves()
+        .par_iter()
+        .flat_map_iter(|leaf| {
+            let key = shr(leaf.origin, LEAF_LOG2);
+            let feeds = leaf_feeds(leaf);
+            (0..8u8).filter(move |d| feeds >> d & 1 == 1).map(move |d| {
+                key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
+            })
+        })
+        .collect();
+    out.extend(keys);
+}
+
+/// Bit `d` = (dx,dy,dz) set iff the leaf has a non-zero active voxel whose
+/// local coordinate is 0 on every axis where the offset is 1: such a voxel
+/// feeds dual leaf `key - (dx,dy,dz)`. Walks the active mask word by word.
+fn leaf_feeds<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> u8 {
+    let mut feeds = 0u8;
+    for (w, &word) in leaf.mask.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let n = w * 64 + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            if leaf.values[n] == T::ZERO {
                 continue;
             }
-            let l = ijk - leaf.origin;
+            // n = (x << 6) | (y << 3) | z.
+            let (x0, y0, z0) = (n >> 6 == 0, (n >> 3) & 7 == 0, n & 7 == 0);
             for d in 0..8u8 {
-                let (dx, dy, dz) = (d >> 2 & 1, d >> 1 & 1, d & 1);
-                if (dx == 0 || l.x == 0) && (dy == 0 || l.y == 0) && (dz == 0 || l.z == 0) {
+                if (d >> 2 & 1 == 0 || x0) && (d >> 1 & 1 == 0 || y0) && (d & 1 == 0 || z0) {
                     feeds |= 1 << d;
                 }
             }
             if feeds == 0xff {
-                break;
-            }
-        }
-        for d in 0..8u8 {
-            if feeds >> d & 1 == 1 {
-                let off = IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32);
-                out.insert(key - off);
+                return feeds;
             }
         }
     }
+    feeds
 }
 
 fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
@@ -200,23 +217,25 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
         let off = IVec3::new(d >> 2 & 1, d >> 1 & 1, d & 1);
         let Some(leaf) = g.leaf(base + off * LEAF_DIM) else { continue };
         // Along an axis with offset 0 we copy local 0..8 to ghost 0..8; with
-        // offset 1 only local plane 0 goes to ghost plane 8.
-        let range = |o: i32| if o == 0 { 0..LEAF_DIM } else { 0..1 };
-        for lx in range(off.x) {
-            for ly in range(off.y) {
-                for lz in range(off.z) {
-                    let n = leaf_offset(IVec3::new(lx, ly, lz));
-                    if !leaf.is_active(n) {
-                        continue;
-                    }
-                    let c = leaf.values[n].components();
-                    let gx = (lx + off.x * LEAF_DIM) as usize;
-                    let gy = (ly + off.y * LEAF_DIM) as usize;
-                    let gz = (lz + off.z * LEAF_DIM) as usize;
-                    let at = ghost_offset(gx, gy, gz) * stride + first;
-                    for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
-                        dst[at + k] = (*ck as f64 * scale) as f32;
-                    }
+        // offset 1 only local plane 0 goes to ghost plane 8. Only active
+        // voxels are copied (`dst` starts at 0), walking the mask's set bits.
+        for (w, &word) in leaf.mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let n = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                // n = (x << 6) | (y << 3) | z.
+                let (lx, ly, lz) = (n >> 6, (n >> 3) & 7, n & 7);
+                if (off.x == 1 && lx != 0) || (off.y == 1 && ly != 0) || (off.z == 1 && lz != 0) {
+                    continue;
+                }
+                let c = leaf.values[n].components();
+                let gx = lx + off.x as usize * LEAF_DIM as usize;
+                let gy = ly + off.y as usize * LEAF_DIM as usize;
+                let gz = lz + off.z as usize * LEAF_DIM as usize;
+                let at = ghost_offset(gx, gy, gz) * stride + first;
+                for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
+                    dst[at + k] = (*ck as f64 * scale) as f32;
                 }
             }
         }
@@ -236,13 +255,14 @@ pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
             g.background
         )));
     }
-    for (ijk, v) in g.iter_active() {
-        let c = v.components();
-        if c[..T::COMPONENTS].iter().any(|x| !f32::is_finite(*x) || *x < 0.0) {
-            return Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0")));
-        }
+    // Leaves in parallel; the first bad voxel in leaf order is reported.
+    let bad = g.leaves().par_iter().find_map_first(|leaf| {
+        leaf.iter_active().find(|(_, v)| v.components()[..T::COMPONENTS].iter().any(|x| !f32::is_finite(*x) || *x < 0.0))
+    });
+    match bad {
+        Some((ijk, v)) => Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0"))),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Largest scaled voxel value the renderer accepts. The field stores scaled
@@ -257,7 +277,11 @@ fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, key: &str, scale: f64) -> Resul
     if scale == 0.0 {
         return Ok(());
     }
-    let peak = g.iter_active().flat_map(|(_, v)| v.components()).fold(0.0f32, f32::max) as f64;
+    let peak = g
+        .leaves()
+        .par_iter()
+        .map(|leaf| leaf.iter_active().flat_map(|(_, v)| v.components()).fold(0.0f32, f32::max))
+        .reduce(|| 0.0f32, f32::max) as f64;
     if peak * scale > MAX_SCALED_VALUE {
         return Err(RenderError::Grid {
             grid: g.name.clone(),
@@ -279,12 +303,12 @@ impl Field {
         debug_assert!(sources.iter().all(|s| s.grid.transform() == transform));
         let channels: usize = sources.iter().map(|s| s.grid.channels()).sum();
 
-        let mut set = HashSet::new();
+        let mut keys = Vec::new();
         for s in sources {
-            s.grid.dual_keys(&mut set);
+            s.grid.dual_keys(&mut keys);
         }
-        let mut keys: Vec<IVec3> = set.into_iter().collect();
-        keys.sort_by_key(|k| (k.x, k.y, k.z));
+        keys.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
+        keys.dedup();
 
         let per_leaf = GHOST_VALUES * channels;
         let mut values = vec![0.0f32; keys.len() * per_leaf];
@@ -430,26 +454,21 @@ impl Field {
 /// Masks of the dual cells of one leaf in which channel 0 (resp. any channel)
 /// has a non-zero corner.
 fn cell_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
+    // Per ghost point: bit 0 = channel 0 non-zero, bit 1 = any channel non-zero.
+    let mut nz = [0u8; GHOST_VALUES];
+    for (p, c) in nz.iter_mut().zip(v.chunks_exact(channels)) {
+        *p = u8::from(c[0] != 0.0) | (u8::from(c.iter().any(|x| *x != 0.0)) << 1);
+    }
     let mut first = [0u64; 8];
     let mut any = [0u64; 8];
     for x in 0..8 {
         for y in 0..8 {
             for z in 0..8 {
-                let at = ghost_offset(x, y, z) * channels;
-                let mut f = false;
-                let mut a = false;
-                for off in CORNER_OFFSETS {
-                    let c = &v[at + off * channels..][..channels];
-                    f |= c[0] != 0.0;
-                    a |= c.iter().any(|x| *x != 0.0);
-                }
+                let at = ghost_offset(x, y, z);
+                let m = CORNER_OFFSETS.iter().fold(0u8, |m, off| m | nz[at + off]);
                 let bit = cell_bit(x as i32, y as i32, z as i32);
-                if f {
-                    first[bit >> 6] |= 1 << (bit & 63);
-                }
-                if a {
-                    any[bit >> 6] |= 1 << (bit & 63);
-                }
+                first[bit >> 6] |= u64::from(m & 1) << (bit & 63);
+                any[bit >> 6] |= u64::from(m >> 1 & 1) << (bit & 63);
             }
         }
     }
@@ -498,8 +517,9 @@ impl Medium {
             validate_grid(g)?;
             check_scaled_peak(g, "emission_scale", emission_scale)?;
         }
-        let density = density.filter(|g| density_scale > 0.0 && g.iter_active().any(|(_, v)| v != 0.0));
-        let emission = emission.filter(|g| emission_scale > 0.0 && g.iter_active().any(|(_, v)| v != [0.0; 3]));
+        let density = density.filter(|g| density_scale > 0.0 && g.leaves().par_iter().any(|l| leaf_feeds(l) != 0));
+        let emission =
+            emission.filter(|g| emission_scale > 0.0 && g.leaves().par_iter().any(|l| leaf_feeds(l) != 0));
         let d = density.map(|g| Source { grid: SourceGrid::Scalar(g), scale: density_scale });
         let e = emission.map(|g| Source { grid: SourceGrid::Vector(g), scale: emission_scale });
         Ok(match (d, e) {

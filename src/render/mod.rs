@@ -22,11 +22,19 @@
 //!
 //! Pixels: row 0 at the top. With `spp = 1` a pixel is sampled at its centre;
 //! with more samples the pixel value is the average over its square (Cycles'
-//! BOX filter), at stratified positions ([`pixel_sample`]: the R2
-//! low-discrepancy sequence, randomly shifted per pixel, so each position is
-//! uniform in the pixel and the estimate unbiased, while the samples of a
-//! pixel spread evenly: on sub-pixel streaks its error falls about as
-//! `spp^-1` instead of `spp^-1/2`, as Cycles' does). Each pixel's random
+//! BOX filter), at stratified antithetic positions ([`pixel_position`]):
+//! `spp / 2` points of the R2 low-discrepancy sequence, randomly shifted per
+//! pixel, each followed by its reflection through the pixel centre
+//! `(x, y) -> (1 - x, 1 - y)` (an odd `spp` ends with one unpaired R2 point).
+//! Every position is uniform in the pixel (a uniform point's reflection is
+//! uniform), so the mean of the samples is an unbiased estimate of the pixel
+//! mean. If the radiance is linear across the pixel, `L(c + u) = L(c) + g.u`,
+//! each pair sums to `2 L(c)`, the exact pixel mean, whatever the shift: the
+//! estimator is exact on linear fields (the first-order antithetic variate,
+//! Hammersley & Morton 1956), and on a smooth field its error is second order
+//! in the pixel size. The R2 points keep the set spread evenly: on sub-pixel
+//! streaks the error falls about as `spp^-1` instead of `spp^-1/2`, as
+//! Cycles' does. Each pixel's random
 //! stream is seeded from `(seed, pixel index)`, so the image does not depend
 //! on the thread count. Output alpha is `1 - T` along the primary ray up to the
 //! terrain or infinity (volume coverage); RGB already contains the terrain or
@@ -237,6 +245,20 @@ pub fn pixel_sample(shift: [f64; 2], i: usize) -> (f64, f64) {
     (f(shift[0], R2_ALPHA[0]), f(shift[1], R2_ALPHA[1]))
 }
 
+/// Position of sample `i` of `spp` (>= 2) inside a pixel, in `[0, 1]^2`:
+/// the R2 point `pixel_sample(shift, i / 2)` for even `i`, its reflection
+/// through the pixel centre for odd `i` (module doc: unbiased, and exact
+/// where the radiance is linear across the pixel). With an odd `spp` the
+/// last sample is an unpaired R2 point.
+pub fn pixel_position(shift: [f64; 2], i: usize) -> (f64, f64) {
+    let (x, y) = pixel_sample(shift, i / 2);
+    if i.is_multiple_of(2) {
+        (x, y)
+    } else {
+        (1.0 - x, 1.0 - y)
+    }
+}
+
 /// The random stream of pixel `index` for `seed`.
 pub fn pixel_rng(seed: u64, index: u64) -> Pcg32 {
     Pcg32::new(splitmix64(seed ^ splitmix64(index)), index)
@@ -329,7 +351,7 @@ impl Prepared {
             let (jx, jy, offset) = if spp == 1 {
                 (0.5, 0.5, 0.5)
             } else {
-                let (jx, jy) = pixel_sample(shift, i);
+                let (jx, jy) = pixel_position(shift, i);
                 (jx, jy, rng.random::<f64>())
             };
             // Outside a fisheye's image circle the sample sees nothing
@@ -446,6 +468,43 @@ mod tests {
             sum2 += e * e;
         }
         ((sum2 / pixels as f64).sqrt(), sum / pixels as f64)
+    }
+
+    /// The antithetic set: pairs symmetric about the centre, every position
+    /// in the pixel, still stratified on an edge (RMS well below independent
+    /// samples at 64 and falling about as 1/n), and unbiased on it. On an
+    /// edge it counts n/2 R2 points on two intervals, [0, 0.3) and (0.7, 1]:
+    /// measured 0.027 at n = 64, between the full R2 set's 0.017 and
+    /// independent samples' 0.057.
+    #[test]
+    fn antithetic_positions_pair_up_and_stay_stratified() {
+        let mut rng = pixel_rng(3, 9);
+        for _ in 0..100 {
+            let shift = [rng.random::<f64>(), rng.random::<f64>()];
+            for k in 0..8 {
+                let (a, b) = (pixel_position(shift, 2 * k), pixel_position(shift, 2 * k + 1));
+                assert_eq!((a.0 + b.0, a.1 + b.1), (1.0, 1.0));
+                assert!((0.0..=1.0).contains(&b.0) && (0.0..=1.0).contains(&b.1));
+            }
+        }
+        let edge = |n: usize| {
+            let mut rng = pixel_rng(12, n as u64);
+            let pixels = 4000;
+            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+            for _ in 0..pixels {
+                let shift = [rng.random::<f64>(), rng.random::<f64>()];
+                let inside = (0..n).filter(|&i| pixel_position(shift, i).0 < 0.3).count();
+                let e = inside as f64 / n as f64 - 0.3;
+                sum += e;
+                sum2 += e * e;
+            }
+            ((sum2 / pixels as f64).sqrt(), sum / pixels as f64)
+        };
+        let (rms64, mean64) = edge(64);
+        let (rms256, _) = edge(256);
+        assert!(mean64.abs() < 4.0 * rms64 / 4000f64.sqrt(), "bias {mean64}");
+        assert!(rms64 < 0.55 * (0.3f64 * 0.7 / 64.0).sqrt(), "rms {rms64}");
+        assert!(rms256 < 0.4 * rms64, "{rms256} vs {rms64}");
     }
 
     /// Unbiased, and far less noisy than independent uniform samples (RMS

@@ -16,8 +16,13 @@
 //! `data` is `f32` (or IEEE binary16 in half mode) per component; with ZIP it is
 //! `i64 L` then L bytes of a zlib stream (`compress2`, level 6) if that is
 //! shorter than the raw bytes, else `-rawBytes` and the raw bytes; in half mode
-//! a count of 0 writes nothing at all. BLOSC (`i64 L` + a Blosc1 frame) is only
-//! read, never written.
+//! a count of 0 writes nothing at all. With BLOSC (`io::bloscToStream`) it is
+//! `i64 L` then a Blosc1 frame of L bytes: LZ4 at clevel 9, byte shuffle,
+//! typesize 4 (`sizeof(float)` whatever the value type, half included), one
+//! block covering the whole array, one thread. Blosc never refuses: data it
+//! cannot shrink are stored inside the frame (16 more bytes than raw), so the
+//! `-rawBytes` form is only a fallback for an internal Blosc error, as in
+//! OpenVDB. Zero values (non-half) give a 16-byte header-only frame.
 
 use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
 use super::parse::{Cursor, ParseError};
@@ -119,17 +124,20 @@ pub struct Encoder {
     flags: u32,
     half: bool,
     zlib: Option<Compress>,
+    blosc: bool,
     raw: Vec<u8>,
     zbuf: Vec<u8>,
     selection: Vec<u64>,
 }
 
 impl Encoder {
-    /// `flags`: ZIP and/or ACTIVE_MASK (BLOSC is not written).
+    /// `flags`: ZIP or BLOSC (BLOSC wins if both are set, as in OpenVDB's
+    /// `writeData`), and/or ACTIVE_MASK.
     pub fn new(flags: u32, half: bool) -> Self {
-        debug_assert_eq!(flags & COMPRESS_BLOSC, 0);
-        let zlib = (flags & COMPRESS_ZIP != 0).then(|| Compress::new(Compression::new(ZIP_LEVEL), true));
-        Self { flags, half, zlib, raw: Vec::new(), zbuf: Vec::new(), selection: Vec::new() }
+        let blosc = flags & COMPRESS_BLOSC != 0;
+        let zlib = (!blosc && flags & COMPRESS_ZIP != 0)
+            .then(|| Compress::new(Compression::new(ZIP_LEVEL), true));
+        Self { flags, half, zlib, blosc, raw: Vec::new(), zbuf: Vec::new(), selection: Vec::new() }
     }
 
     /// Appends the record of `values` (all N slots of a node) to `out`.
@@ -185,6 +193,12 @@ impl Encoder {
         }
         if self.half && count == 0 {
             // HalfWriter::write returns before writing anything, even a ZIP size.
+            return;
+        }
+        if self.blosc {
+            self.raw.clear();
+            gather(&mut self.raw, values, value_mask, all, count, self.half);
+            blosc_to_stream(&self.raw, out);
             return;
         }
         match self.zlib.as_mut() {
@@ -276,6 +290,48 @@ fn zip_to_stream(z: &mut Compress, zbuf: &mut Vec<u8>, raw: &[u8], out: &mut Vec
     }
 }
 
+/// Blosc level of OpenVDB's `bloscCompress` (0..9, 9 = most effort).
+pub const BLOSC_LEVEL: i32 = 9;
+/// Blosc type size of OpenVDB's `bloscCompress`: `sizeof(float)` for every
+/// value type (a vec3s is shuffled as three floats, a half array as pairs).
+pub const BLOSC_TYPESIZE: usize = 4;
+
+/// OpenVDB `io::bloscToStream`: `i64 L` and the Blosc frame
+/// (`blosc_compress_ctx(9, shuffle, 4, n, .., "lz4", blocksize n, 1 thread)`),
+/// or, only if Blosc reports an error, `-rawBytes` and the raw bytes.
+/// Appends straight into `out`: the frame is compressed in place after the
+/// 8-byte length, which is patched afterwards.
+fn blosc_to_stream(raw: &[u8], out: &mut Vec<u8>) {
+    let at = out.len();
+    let cap = raw.len() + blosc_src::BLOSC_MAX_OVERHEAD as usize;
+    out.resize(at + 8 + cap, 0);
+    // SAFETY: `raw` and the destination are disjoint; blosc writes at most
+    // `destsize` = `cap` bytes, all inside `out[at + 8..]`. The compressor
+    // name is a NUL-terminated constant.
+    let got = unsafe {
+        blosc_src::blosc_compress_ctx(
+            BLOSC_LEVEL,
+            blosc_src::BLOSC_SHUFFLE as i32,
+            BLOSC_TYPESIZE,
+            raw.len(),
+            raw.as_ptr().cast(),
+            out[at + 8..].as_mut_ptr().cast(),
+            cap,
+            blosc_src::BLOSC_LZ4_COMPNAME.as_ptr().cast(),
+            raw.len(),
+            1,
+        )
+    };
+    if got > 0 {
+        out.truncate(at + 8 + got as usize);
+        out[at..at + 8].copy_from_slice(&(got as i64).to_le_bytes());
+    } else {
+        out.truncate(at);
+        out.extend_from_slice(&(-(raw.len() as i64)).to_le_bytes());
+        out.extend_from_slice(raw);
+    }
+}
+
 /// How a grid's records are decoded.
 #[derive(Clone, Copy, Debug)]
 pub struct RecordFormat {
@@ -297,6 +353,33 @@ pub fn read_values<T: VoxelValue>(
     background: T,
     decode: bool,
 ) -> Result<Option<Vec<T>>, ParseError> {
+    let mut scratch = Vec::new();
+    if !decode {
+        read_values_into::<T>(cur, fmt, n, value_mask, background, None, &mut scratch, true)?;
+        return Ok(None);
+    }
+    let mut out = vec![background; n];
+    read_values_into(cur, fmt, n, value_mask, background, Some(&mut out), &mut scratch, true)?;
+    Ok(Some(out))
+}
+
+/// [`read_values`] writing straight into `out` (all `n` slots), with no
+/// allocation beyond `scratch` (reused for decompression): stored values
+/// are converted from the file's bytes, or from the decompressed bytes, in
+/// place. With `out = None` the record is only validated and skipped; a ZIP
+/// stream is then decompressed only if `check_zip` (the caller that decodes
+/// the record later may skip it: decoding checks it).
+#[allow(clippy::too_many_arguments)]
+pub fn read_values_into<T: VoxelValue>(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    background: T,
+    out: Option<&mut [T]>,
+    scratch: &mut Vec<u8>,
+    check_zip: bool,
+) -> Result<(), ParseError> {
     let m = cur.u8()?;
     if m > meta::NO_MASK_AND_ALL_VALS {
         return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
@@ -314,11 +397,12 @@ pub fn read_values<T: VoxelValue>(
             inactive1 = read_full(cur)?;
         }
     }
-    let selection = if matches!(
+    // Selection mask as stored bytes: bit i is byte i >> 3, bit i & 7.
+    let selection: Option<&[u8]> = if matches!(
         m,
         meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
     ) {
-        Some(cur.u64s(n / 64)?)
+        Some(cur.bytes(n / 8)?)
     } else {
         None
     };
@@ -327,45 +411,49 @@ pub fn read_values<T: VoxelValue>(
     let comp = T::COMPONENTS;
     let elem = if fmt.half { 2 } else { 4 } * comp;
     let nbytes = count * elem;
-    let raw: Option<Vec<u8>> = if fmt.half && count == 0 {
-        Some(Vec::new())
+    let decode = out.is_some();
+    let raw: Option<&[u8]> = if fmt.half && count == 0 {
+        Some(&[])
     } else if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, decode)?
+        read_blosc(cur, nbytes, decode, scratch)?
     } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_zip(cur, nbytes, decode)?
+        read_zip(cur, nbytes, decode, decode || check_zip, scratch)?
     } else {
-        let b = cur.bytes(nbytes)?;
-        decode.then(|| b.to_vec())
+        Some(cur.bytes(nbytes)?)
     };
-    let Some(raw) = raw else { return Ok(None) };
-    let mut packed: Vec<T> = Vec::with_capacity(count);
-    let mut c = [0f32; 3];
-    for chunk in raw.chunks_exact(elem) {
-        for (k, x) in c[..comp].iter_mut().enumerate() {
+    let (Some(out), Some(raw)) = (out, raw) else { return Ok(()) };
+    debug_assert_eq!(out.len(), n);
+    let value = |k: usize| -> T {
+        let chunk = &raw[k * elem..(k + 1) * elem];
+        let mut c = [0f32; 3];
+        for (j, x) in c[..comp].iter_mut().enumerate() {
             *x = if fmt.half {
-                f16::from_bits(u16::from_le_bytes([chunk[2 * k], chunk[2 * k + 1]])).to_f32()
+                f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32()
             } else {
-                f32::from_le_bytes(chunk[4 * k..4 * k + 4].try_into().expect("4-byte chunk"))
+                f32::from_le_bytes(chunk[4 * j..4 * j + 4].try_into().expect("4-byte chunk"))
             };
         }
-        packed.push(T::from_components(&c));
-    }
+        T::from_components(&c)
+    };
     if !masked || count == n {
-        return Ok(Some(packed));
+        for (k, o) in out.iter_mut().enumerate() {
+            *o = value(k);
+        }
+        return Ok(());
     }
     // Rebuild inactive slots: selection bit set -> inactive1, clear -> inactive0.
-    let mut out = Vec::with_capacity(n);
-    let mut next = packed.into_iter();
-    for i in 0..n {
-        if layout::mask_bit(value_mask, i) {
-            out.push(next.next().unwrap_or(background));
-        } else if selection.as_ref().is_some_and(|s| layout::mask_bit(s, i)) {
-            out.push(inactive1);
+    let mut next = 0usize;
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = if layout::mask_bit(value_mask, i) {
+            next += 1;
+            value(next - 1)
+        } else if selection.is_some_and(|s| s[i >> 3] >> (i & 7) & 1 == 1) {
+            inactive1
         } else {
-            out.push(inactive0);
-        }
+            inactive0
+        };
     }
-    Ok(Some(out))
+    Ok(())
 }
 
 /// A value stored at full precision.
@@ -380,12 +468,12 @@ fn read_full<T: VoxelValue>(cur: &mut Cursor) -> Result<T, ParseError> {
 /// The length prefix of a compressed chunk (`i64 L`), shared by ZIP and
 /// Blosc: L <= 0 means the data were stored raw, -L bytes, which must be
 /// exactly `nbytes`; L > 0 is the compressed stream's length.
-enum ChunkLen {
-    Stored(Option<Vec<u8>>),
+enum ChunkLen<'a> {
+    Stored(&'a [u8]),
     Compressed(i64),
 }
 
-fn read_chunk_len(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<ChunkLen, ParseError> {
+fn read_chunk_len<'a>(cur: &mut Cursor<'a>, nbytes: usize) -> Result<ChunkLen<'a>, ParseError> {
     let at = cur.pos();
     let len = cur.i64()?;
     if len > 0 {
@@ -394,27 +482,41 @@ fn read_chunk_len(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Chunk
     if len.unsigned_abs() != nbytes as u64 {
         return Err(cur.err_at(at, format!("expected a {nbytes}-byte uncompressed chunk, found {}", len.unsigned_abs())));
     }
-    let b = cur.bytes(nbytes)?;
-    Ok(ChunkLen::Stored(decode.then(|| b.to_vec())))
+    Ok(ChunkLen::Stored(cur.bytes(nbytes)?))
 }
 
-/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly `nbytes`.
-fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly
+/// `nbytes`. Stored chunks come back as the file's bytes; streams are
+/// decompressed into `scratch` when `inflate` is set.
+fn read_zip<'a, 's>(
+    cur: &mut Cursor<'a>,
+    nbytes: usize,
+    decode: bool,
+    inflate: bool,
+    scratch: &'s mut Vec<u8>,
+) -> Result<Option<&'s [u8]>, ParseError>
+where
+    'a: 's,
+{
     let at = cur.pos();
-    let len = match read_chunk_len(cur, nbytes, decode)? {
-        ChunkLen::Stored(raw) => return Ok(raw),
+    let len = match read_chunk_len(cur, nbytes)? {
+        ChunkLen::Stored(raw) => return Ok(decode.then_some(raw)),
         ChunkLen::Compressed(len) => len,
     };
     let stream = cur.bytes_len(len as u64)?;
+    if !inflate {
+        return Ok(None);
+    }
     // Decompressed even when only validating: vdb-rs reads just the first
     // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
     // damaged stream would otherwise pass unnoticed. OpenVDB's `uncompress`
     // checks the whole stream.
-    let mut out = vec![0u8; nbytes];
+    scratch.clear();
+    scratch.resize(nbytes, 0);
     let mut z = Decompress::new(true);
-    let status = z.decompress(stream, &mut out, FlushDecompress::Finish);
+    let status = z.decompress(stream, scratch, FlushDecompress::Finish);
     match status {
-        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(out)),
+        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(&scratch[..])),
         Ok(_) => Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
         Err(e) => Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
     }
@@ -423,10 +525,18 @@ fn read_zip(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<
 /// OpenVDB `io::bloscFromStream`. The Blosc header is validated
 /// (`blosc_cbuffer_validate`: its compressed size must equal the chunk length)
 /// before the C decompressor sees the bytes, so it never reads out of bounds.
-fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Vec<u8>>, ParseError> {
+fn read_blosc<'a, 's>(
+    cur: &mut Cursor<'a>,
+    nbytes: usize,
+    decode: bool,
+    scratch: &'s mut Vec<u8>,
+) -> Result<Option<&'s [u8]>, ParseError>
+where
+    'a: 's,
+{
     let at = cur.pos();
-    let len = match read_chunk_len(cur, nbytes, decode)? {
-        ChunkLen::Stored(raw) => return Ok(raw),
+    let len = match read_chunk_len(cur, nbytes)? {
+        ChunkLen::Stored(raw) => return Ok(decode.then_some(raw)),
         ChunkLen::Compressed(len) => len,
     };
     let frame = cur.bytes_len(len as u64)?;
@@ -445,18 +555,19 @@ fn read_blosc(cur: &mut Cursor, nbytes: usize, decode: bool) -> Result<Option<Ve
         return Ok(None);
     }
     if nbytes == 0 {
-        return Ok(Some(Vec::new()));
+        return Ok(Some(&[]));
     }
-    let mut out = vec![0u8; nbytes];
+    scratch.clear();
+    scratch.resize(nbytes, 0);
     // SAFETY: the frame was validated above (its header's cbytes equals the
-    // slice length), and blosc writes at most `destsize` = `out.len()` bytes.
+    // slice length), and blosc writes at most `destsize` = `scratch.len()` bytes.
     let got = unsafe {
-        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), out.as_mut_ptr().cast(), out.len(), 1)
+        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), scratch.as_mut_ptr().cast(), scratch.len(), 1)
     };
     if got != nbytes as i32 {
         return Err(cur.err_at(at, format!("corrupt Blosc chunk (decompressed {got} of {nbytes} bytes)")));
     }
-    Ok(Some(out))
+    Ok(Some(&scratch[..]))
 }
 
 #[cfg(test)]
@@ -576,6 +687,44 @@ mod tests {
         zip_to_stream(&mut z, &mut Vec::new(), &noise, &mut out);
         assert_eq!(i64::from_le_bytes(out[..8].try_into().unwrap()), -256);
         assert_eq!(&out[8..], &noise[..]);
+    }
+
+    /// Blosc records: an empty non-half array is an 8-byte length plus a
+    /// 16-byte header-only frame (the 24 bytes per empty internal array the
+    /// notes measured in pyopenvdb's files); half with nothing to store writes
+    /// nothing; a smooth leaf shrinks; every case reads back exactly, float
+    /// and vec3, full and half; incompressible data stay inside a frame.
+    #[test]
+    fn blosc_records() {
+        let flags = COMPRESS_BLOSC | COMPRESS_ACTIVE_MASK;
+        let empty = vec![0u64; 8];
+        let zeros = vec![0f32; 512];
+        let b = record(flags, false, &zeros, &empty, None, 0.0);
+        assert_eq!(b.len(), 1 + 8 + 16);
+        assert_eq!(i64::from_le_bytes(b[1..9].try_into().unwrap()), 16);
+        assert_eq!(record(flags, true, &zeros, &empty, None, 0.0), vec![0u8]);
+        let full = vec![u64::MAX; 8];
+        let smooth: Vec<f32> = (0..512).map(|n| 1.0 + (n / 64) as f32 * 0.5).collect();
+        let b = record(flags, false, &smooth, &full, None, 0.0);
+        assert!(b.len() < 1 + 8 + 512 * 4 / 4, "smooth leaf compresses: {} bytes", b.len());
+        assert_eq!(decode(&b, flags, false, 512, &full, 0.0f32), smooth);
+        for f in [COMPRESS_BLOSC, flags] {
+            let (values, mask) = leaf(|n| if n % 2 == 0 { 7.0 } else { 8.0 });
+            for half in [false, true] {
+                let b = record(f, half, &values, &mask, None, 2.0);
+                let want: Vec<f32> = values.iter().map(|&v| if half { round_half(v) } else { v }).collect();
+                assert_eq!(decode(&b, f, half, 512, &mask, 2.0f32), want, "flags {f} half {half}");
+            }
+            let vecs: Vec<[f32; 3]> = (0..512).map(|n| [n as f32, -(n as f32), 0.25]).collect();
+            let b = record(f, false, &vecs, &full, None, [0.0; 3]);
+            assert_eq!(decode(&b, f, false, 512, &full, [0.0f32; 3]), vecs);
+        }
+        let noise: Vec<f32> =
+            (0..512u32).map(|i| f32::from_bits(0x3f80_0000 | (i.wrapping_mul(2654435761) >> 9))).collect();
+        let b = record(flags, false, &noise, &full, None, 0.0);
+        let len = i64::from_le_bytes(b[1..9].try_into().unwrap());
+        assert!(len > 0 && len <= 512 * 4 + 16, "stored in a frame, {len} bytes");
+        assert_eq!(decode(&b, flags, false, 512, &full, 0.0f32), noise);
     }
 
     fn hex(s: &str) -> Vec<u8> {

@@ -41,6 +41,10 @@ impl<'a> Cursor<'a> {
     pub fn pos(&self) -> usize {
         self.pos
     }
+    /// All the bytes (not only those left).
+    pub fn data(&self) -> &'a [u8] {
+        self.data
+    }
     pub fn remaining(&self) -> usize {
         self.data.len() - self.pos
     }
@@ -642,7 +646,12 @@ fn read_tree<T: VoxelValue>(
             gh.block_pos
         )));
     }
-    // Buffers: per leaf, a copy of the value mask and the value record.
+    // Buffers: per leaf, a copy of the value mask and the value record. The
+    // records are located in one serial pass (their lengths chain); when
+    // decoding, the leaves are then decoded in parallel, each straight into
+    // its own value array (no intermediate copies).
+    let mut spans: Vec<(IVec3, &[u64; LEAF_MASK_WORDS], usize)> = Vec::new();
+    let mut scratch = Vec::new();
     for node in &nodes16 {
         for (n16, mask) in layout::mask_ones(&node.child_mask).zip(&node.leaf_masks) {
             let at = cur.pos();
@@ -653,15 +662,38 @@ fn read_tree<T: VoxelValue>(
                     format!("grid `{name}`: leaf value mask in the buffers differs from the topology"),
                 ));
             }
-            let values = codec::read_values::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, decode)?;
-            if let Some(values) = values {
-                let origin = layout::internal16_child_origin(node.origin, n16);
-                let mut leaf = Leaf::new(origin, background);
-                leaf.mask = *mask;
-                leaf.values.copy_from_slice(&values);
-                tree.leaves.push(leaf);
+            let start = cur.pos();
+            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, !decode)?;
+            if decode {
+                spans.push((layout::internal16_child_origin(node.origin, n16), mask, start));
             }
         }
+    }
+    if decode {
+        use rayon::prelude::*;
+        let data = cur.data();
+        let leaves: Vec<Result<Leaf<T>, ParseError>> = spans
+            .par_iter()
+            .map_init(Vec::new, |scratch, &(origin, mask, start)| {
+                let mut c = Cursor::new(data);
+                c.seek(start as u64)?;
+                let mut leaf = Leaf::new(origin, background);
+                leaf.mask = *mask;
+                codec::read_values_into(
+                    &mut c,
+                    fmt,
+                    LEAF_NUM_VALUES,
+                    mask,
+                    background,
+                    Some(&mut leaf.values[..]),
+                    scratch,
+                    true,
+                )?;
+                Ok(leaf)
+            })
+            .collect();
+        // The first failing leaf in file order, whatever the thread count.
+        tree.leaves = leaves.into_iter().collect::<Result<_, _>>()?;
     }
     Ok(tree)
 }

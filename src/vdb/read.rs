@@ -2,23 +2,28 @@
 //! `vec3s` grids, ours or another tool's, into [`Grid<f32>`] /
 //! [`Grid<[f32; 3]>`].
 //!
-//! Three steps:
+//! Two steps:
 //! 1. **Validation** by our bounds-checked parser ([`super::parse`]): header,
 //!    magic, version, metadata and string lengths, descriptor offsets within
 //!    the file, grid types, transform, every node mask, count and chunk
-//!    length, Blosc headers. Nothing is handed to vdb-rs before this passes,
-//!    so it never sees a length that could make it allocate without bound.
-//! 2. **vdb-rs** reads the plain `float` grids (no half floats, no active
-//!    tiles, one of its three transform maps), inside
-//!    `std::panic::catch_unwind` with the panic message silenced: it still
-//!    has `unwrap`s, `assert`s and indexing on input.
-//! 3. **Our parser decodes** what vdb-rs gets wrong or cannot read:
-//!    - `vec3s` grids: vdb-rs reads every root background and tile value as
-//!      4 bytes, so a vec3s tree comes back misparsed (empty);
-//!    - half-float grids: vdb-rs converts only `f32` trees and misreads the
-//!      empty ZIP chunk of a half array (OpenVDB writes nothing there);
-//!    - active tiles (vdb-rs drops root tiles; we densify tiles into leaves);
-//!    - `ScaleMap`, `TranslationMap`, `AffineMap` transforms (vdb-rs panics).
+//!    length, Blosc headers.
+//! 2. **Decoding** by the same parser: the leaf records are located in one
+//!    serial pass, then decoded in parallel, each straight into its leaf
+//!    (decompressed into a per-thread scratch buffer, or read from the file's
+//!    bytes when stored raw): no intermediate copies. Active tiles are
+//!    densified into leaves; vec3s, half floats and every transform map of
+//!    `parse` are read.
+//!
+//! [`read_vdb_bytes_with_vdbrs`] reads the plain `float` grids (no half
+//! floats, no active tiles, one of its three transform maps) with the vdb-rs
+//! crate instead, as this reader did before issue 14: it is kept as the
+//! tests' independent oracle for our decoder. vdb-rs runs inside
+//! `std::panic::catch_unwind` with the panic message silenced (it still has
+//! `unwrap`s, `assert`s and indexing on input), and only on files our
+//! validation accepted, so it never sees a length that could make it
+//! allocate without bound. It gets vec3s trees (every root background and
+//! tile value read as 4 bytes), half grids and root tiles wrong, and panics on
+//! `ScaleMap`, `TranslationMap` and `AffineMap`.
 //!
 //! Every grid comes back with its inactive voxels at the background value
 //! (the [`Grid`] invariant). Note vdb-rs's magic-number check is inverted in
@@ -129,12 +134,18 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
     let bytes =
         std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
-    read_vdb_named(&bytes, &path.display().to_string())
+    read_vdb_named(&bytes, &path.display().to_string(), false)
 }
 
 /// Reads a VDB file held in memory.
 pub fn read_vdb_bytes(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>")
+    read_vdb_named(bytes, "<memory>", false)
+}
+
+/// [`read_vdb_bytes`] with the plain float grids decoded by vdb-rs (module
+/// docs): the tests' oracle for our decoder.
+pub fn read_vdb_bytes_with_vdbrs(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
+    read_vdb_named(bytes, "<memory>", true)
 }
 
 /// Whether vdb-rs reads this grid correctly (see the module docs).
@@ -147,8 +158,9 @@ fn vdbrs_reads(gh: &GridHeader) -> bool {
         )
 }
 
-fn read_vdb_named(bytes: &[u8], file: &str) -> Result<VdbFile, VdbReadError> {
+fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool) -> Result<VdbFile, VdbReadError> {
     let invalid = |source: ParseError| VdbReadError::Invalid { file: file.to_string(), source };
+    let vdbrs_reads = |gh: &GridHeader| allow_vdbrs && vdbrs_reads(gh);
     // 1. Validate everything; decode natively what vdb-rs cannot read.
     let mut parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh)).map_err(invalid)?;
     // Grids with active tiles go native too (vdb-rs drops root tiles).

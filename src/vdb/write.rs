@@ -83,9 +83,10 @@ pub struct WriteOptions {
 }
 
 impl Default for WriteOptions {
-    /// ZIP + active-mask compression, no half grids, no extra metadata.
+    /// Blosc + active-mask compression (OpenVDB's default), no half grids,
+    /// no extra metadata.
     fn default() -> Self {
-        Self { compression: Compression::ZipActiveMask, half: Vec::new(), metadata: Vec::new() }
+        Self { compression: Compression::BloscActiveMask, half: Vec::new(), metadata: Vec::new() }
     }
 }
 
@@ -168,6 +169,8 @@ pub fn compression_flags(c: Compression) -> u32 {
         Compression::Zip => layout::COMPRESS_ZIP,
         Compression::ActiveMask => layout::COMPRESS_ACTIVE_MASK,
         Compression::ZipActiveMask => layout::COMPRESS_ZIP | layout::COMPRESS_ACTIVE_MASK,
+        Compression::Blosc => layout::COMPRESS_BLOSC,
+        Compression::BloscActiveMask => layout::COMPRESS_BLOSC | layout::COMPRESS_ACTIVE_MASK,
     }
 }
 

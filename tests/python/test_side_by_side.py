@@ -46,6 +46,7 @@ def test_quick_side_by_side_runs_and_is_consistent(tmp_path):
     ratios = res["ratios"]
     for key in ("vdb_write.ours_over_cpp_zip_time", "vdb_write.ours_over_cpp_zip_bytes",
                 "vdb_write.ours_zip_over_pyopenvdb_blosc_time", "vdb_write.pyopenvdb_over_cpp_blosc_time",
+                "vdb_write.ours_blosc_over_ours_zip_time", "vdb_write.ours_blosc_over_cpp_blosc_bytes",
                 "gather.splat_over_kdtree_time", "gather.report2014_over_kdtree_time",
                 "render.volume.aurora_over_cycles_wall", "render.volume.aurora_over_cycles_cpu",
                 "render.terrain.aurora_over_cycles_wall", "render.terrain.aurora_over_cycles_cpu"):
@@ -56,14 +57,14 @@ def test_quick_side_by_side_runs_and_is_consistent(tmp_path):
 
     # VDB writers: the files read back equal, and each file holds what it says.
     v = res["vdb_write"]
-    for pair in ("ours_vs_pyopenvdb", "ours_vs_cpp_zip", "ours_vs_cpp_blosc", "bake_vs_bench_ours"):
+    for pair in ("ours_vs_pyopenvdb", "ours_vs_cpp_zip", "ours_vs_cpp_blosc", "bake_vs_bench_ours", "ours_blosc"):
         rb = v["read_back"][pair]
         assert rb["equal"] is True, pair
         assert sum(g["active_voxels"] for g in rb["grids"].values()) == v["input"]["active_voxels"], pair
     assert v["input"]["active_voxels"] > 0
     comp = {k: {g["file_compression"] for g in f["grids"].values()} for k, f in v["files"].items()}
     assert comp["aurora_zip"] == comp["cpp_zip"] == {"zip + active values"}, comp
-    assert comp["pyopenvdb_blosc"] == comp["cpp_blosc"] == {"blosc + active values"}, comp
+    assert comp["pyopenvdb_blosc"] == comp["cpp_blosc"] == comp["aurora_blosc"] == {"blosc + active values"}, comp
     for k, f in v["files"].items():
         assert f["bytes"] == v["bytes"][k] > 0, k
         assert len(v["seconds"][k]) == v["repeats"] == 1, k
