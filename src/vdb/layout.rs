@@ -13,7 +13,7 @@
 //!
 //! Each level has exactly one offset function (OpenVDB `coordToOffset`) and
 //! its inverse; the leaf's lives in `crate::grid` ([`crate::grid::leaf_offset`]).
-//! See `/work/shared/notes/vdb-format.md` for the byte layout.
+//! See `../shared/notes/vdb-format.md` for the byte layout.
 
 use glam::IVec3;
 

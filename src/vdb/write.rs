@@ -1,6 +1,6 @@
 //! Native OpenVDB writer: file format version 224, byte for byte what
 //! OpenVDB 10 to 12 write for fog-volume `float` and `vec3s` grids made of
-//! leaves (see `/work/shared/notes/vdb-format.md`).
+//! leaves (see `../shared/notes/vdb-format.md`).
 //!
 //! File layout, in byte order (OpenVDB `io/Archive.cc`, `Archive::writeHeader`
 //! then `Archive::write` / `writeGrid`):
