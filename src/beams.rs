@@ -35,7 +35,7 @@ use crate::atmosphere::Atmosphere;
 use crate::footprint::Footprint;
 use crate::progress::Progress;
 use crate::rng;
-use crate::scene::{BeamParams, Scene};
+use crate::scene::{BeamParams, BeamStarts, KernelShape, Scene};
 use crate::spectrum::ColourTable;
 use glam::DVec3;
 use noise::Perlin;
@@ -45,13 +45,52 @@ use rayon::prelude::*;
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
 
-/// A photon of the photon map: a position (km) and the power emitted there,
-/// as linear Rec.709 RGB in "557.7 nm photons per second" (one photon per
-/// second of 557.7 nm has luminance 1; see `spectrum`).
+/// A photon of the photon map: a segment from `position` to `end` (km; a
+/// point photon has `end == position`) and the power emitted along it,
+/// spread uniformly, as linear Rec.709 RGB in "557.7 nm photons per second"
+/// (one photon per second of 557.7 nm has luminance 1; see `spectrum`). The
+/// gather convolves its kernel with the segment (`crate::photons`, photon
+/// beams of Jarosz et al. 2011).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Photon {
     pub position: [f32; 3],
+    pub end: [f32; 3],
     pub power: [f32; 3],
+}
+
+impl Photon {
+    /// A point photon at `p`.
+    #[inline]
+    pub fn point(p: [f32; 3], power: [f32; 3]) -> Self {
+        Self { position: p, end: p, power }
+    }
+
+    /// A segment photon from `a` to `b`.
+    #[inline]
+    pub fn segment(a: [f32; 3], b: [f32; 3], power: [f32; 3]) -> Self {
+        Self { position: a, end: b, power }
+    }
+
+    /// The same power as a point photon at the segment's end (the deflection
+    /// point where the point estimator of `photons.kernel = "point"` puts it).
+    #[inline]
+    pub fn to_point(self) -> Self {
+        Self::point(self.end, self.power)
+    }
+
+    /// Whether the photon is a point (zero-length segment).
+    #[inline]
+    pub fn is_point(&self) -> bool {
+        self.position == self.end
+    }
+}
+
+/// The photon of one beam step: `power` spread along the step from `start`
+/// to `end` (km). The gather's segment kernel smooths it along the step;
+/// `photons.kernel = "point"` collapses it to a point at `end`.
+#[inline]
+pub fn deposit(start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
+    Photon::segment([start.x as f32, start.y as f32, start.z as f32], [end.x as f32, end.y as f32, end.z as f32], power)
 }
 
 /// The geomagnetic frame: `b` the unit field direction (pointing down, the
@@ -269,6 +308,7 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
         r_res -= column;
         let e_after = energy_from_range(r_res);
         let de = e - e_after;
+        let p_step = p;
         p = p_new;
         col_p = col_new;
         if ctx.record_path {
@@ -277,10 +317,7 @@ pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> Bea
         if de > 0.0 {
             let watts = de * power_per_kev; // keV/s deposited in this step
             let rgb = ctx.colour.rgb_with_colour_altitude(p.z, p.z + start.colour_offset_km);
-            out.photons.push(Photon {
-                position: [p.x as f32, p.y as f32, p.z as f32],
-                power: [(rgb[0] * watts) as f32, (rgb[1] * watts) as f32, (rgb[2] * watts) as f32],
-            });
+            out.photons.push(deposit(p_step, p, [(rgb[0] * watts) as f32, (rgb[1] * watts) as f32, (rgb[2] * watts) as f32]));
             out.deposits_kev.push(de);
         }
         e = e_after;
@@ -378,10 +415,12 @@ pub fn trace_all_from(
             continue;
         }
         let cdf = FootprintCdf::new(fp, threshold);
-        if cdf.is_empty() {
+        let flux = crate::starts::FluxMap::new(fp, threshold);
+        let shift = crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS]);
+        let Some(flux) = flux.filter(|_| !cdf.is_empty()) else {
             let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
             return Err(BeamError::EmptyFootprint { curtain: ci, threshold, peak });
-        }
+        };
         // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
         let power_w = curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6;
         let power_kev_s = power_w * KEV_PER_J / n as f64;
@@ -401,7 +440,10 @@ pub fn trace_all_from(
             .into_par_iter()
             .map(|i| {
                 let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
-                let (u, v) = cdf.sample(fp, &mut r);
+                let (u, v) = match scene.beams.starts {
+                    BeamStarts::Random => cdf.sample(fp, &mut r),
+                    BeamStarts::Stratified => flux.start(first_beam + i as u64, shift),
+                };
                 let (x, y) = fp.to_world(u, v);
                 // High-frequency noise on the start height along the curtain.
                 let z = scene.beams.top_km
@@ -417,7 +459,12 @@ pub fn trace_all_from(
                 let t = trace_beam(&ctx, &start, &mut r);
                 progress.inc(1);
                 let deposited: f64 = t.deposits_kev.iter().sum::<f64>() * power_kev_s / start.energy_kev;
-                (t.photons, t.end, deposited)
+                let mut photons = t.photons;
+                if scene.photons.kernel == KernelShape::Point {
+                    // The point estimator: each step's power at its end.
+                    photons.iter_mut().for_each(|p| *p = p.to_point());
+                }
+                (photons, t.end, deposited)
             })
             .collect();
         for (ph, end, dep) in traces {
@@ -578,6 +625,67 @@ mod tests {
         let got = top.iter().map(|e| hits[e.1]).sum::<usize>() as f64 / 20_000.0;
         let sigma = (p * (1.0 - p) / 20_000.0).sqrt();
         assert!((got - p).abs() < 5.0 * sigma, "{got} vs {p} +- {sigma}");
+    }
+
+    /// A small scene: one short curtain, few beams.
+    fn small_scene(count: usize) -> Scene {
+        let mut s = Scene {
+            curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
+            ..Scene::default()
+        };
+        s.footprint.resolution = [128, 48];
+        s.beams.count = count;
+        s
+    }
+
+    #[test]
+    fn stratified_beam_i_is_the_same_whatever_the_count_and_threads() {
+        // Beam i's start, energy and path depend on (seed, curtain, i) only:
+        // its photons are the same in a bake of N and of 2N beams (their
+        // power scales by N / 2N: each beam carries P / N), and the whole
+        // photon list is the same for 1 and 3 threads.
+        let s1 = small_scene(300);
+        let s2 = small_scene(600);
+        let fps = crate::bake::footprints(&s1);
+        let atm = Atmosphere::us1976();
+        let colour = crate::bake::colour_table(&s1, &atm);
+        let run = |s: &Scene, threads: usize| {
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+                trace_all(s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap().0
+            })
+        };
+        let (a, b) = (run(&s1, 1), run(&s2, 3));
+        assert_eq!(a, run(&s1, 3));
+        // The first 300 beams of the 600 come first in the list.
+        assert!(b.len() > a.len());
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!((p.position, p.end), (q.position, q.end));
+            for k in 0..3 {
+                // P/N halves exactly in binary, up to the f32 rounding of
+                // the product.
+                assert!((p.power[k] - 2.0 * q.power[k]).abs() <= 2e-7 * p.power[k].abs(), "{p:?} {q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn steps_are_segments_and_the_point_kernel_collapses_them() {
+        let mut s = small_scene(50);
+        let fps = crate::bake::footprints(&s);
+        let atm = Atmosphere::us1976();
+        let colour = crate::bake::colour_table(&s, &atm);
+        let (seg, _) = trace_all(&s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap();
+        assert!(seg.iter().filter(|p| !p.is_point()).count() > seg.len() / 2);
+        // Consecutive steps of a beam chain: one ends where the next starts
+        // (except across beams, and after a step that deposited nothing).
+        let chained = seg.windows(2).filter(|w| w[0].end == w[1].position).count();
+        assert!(chained as f64 > 0.9 * seg.len() as f64, "{chained} of {}", seg.len());
+        s.photons.kernel = KernelShape::Point;
+        let (pts, _) = trace_all(&s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap();
+        assert_eq!(pts.len(), seg.len());
+        for (p, q) in pts.iter().zip(&seg) {
+            assert!(p.is_point() && p.position == q.end && p.power == q.power);
+        }
     }
 
     #[test]

@@ -190,7 +190,7 @@ mod tests {
         let fps = bake::footprints(&s);
         let atm = Atmosphere::us1976();
         let colour = bake::colour_table(&s, &atm);
-        let target = 0.25;
+        let target = 0.18;
         let est = beams_for_noise(&s, &fps, &atm, &colour, target).unwrap();
         assert!(!est.capped && est.beams > 4 * PILOT_HALF_BEAMS, "{est:?}");
         let mut sn = s.clone();
