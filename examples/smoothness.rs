@@ -48,27 +48,9 @@ fn base_scene(beams: usize) -> Scene {
     s
 }
 
-/// `scene` with a TOML overlay `[table] key = value` applied, or None when
-/// this build has no such key (the old estimator's `beams.deposition =
-/// "sampled"` before expected deposition exists).
-fn with_key(scene: &Scene, table: &str, key: &str, value: &str) -> Option<Scene> {
-    let mut doc: toml::Table = toml::from_str(&scene.to_toml()).ok()?;
-    let t = doc.entry(table.to_string()).or_insert_with(|| toml::Value::Table(Default::default()));
-    let v: toml::Table = toml::from_str(&format!("x = {value}")).ok()?;
-    t.as_table_mut()?.insert(key.to_string(), v["x"].clone());
-    Scene::from_toml_str(&toml::to_string(&doc).ok()?, "overlay").ok()
-}
-
-/// The estimators before issue 10: point kernels, random starts, one
-/// sampled energy per beam (when the build has `beams.deposition`).
+/// The estimators before issue 10 (`aurora::bench::sweeps::old_estimators`).
 fn old_estimators(scene: &Scene) -> (Scene, bool) {
-    let mut s = scene.clone();
-    s.photons.kernel = aurora::scene::KernelShape::Point;
-    s.beams.starts = aurora::scene::BeamStarts::Random;
-    match with_key(&s, "beams", "deposition", "\"sampled\"") {
-        Some(t) => (t, true),
-        None => (s, false),
-    }
+    aurora::bench::sweeps::old_estimators(scene)
 }
 
 /// CPU time of this process (user + system, all threads), seconds, from

@@ -416,7 +416,15 @@ pub fn trace_all_from(
         }
         let cdf = FootprintCdf::new(fp, threshold);
         let flux = crate::starts::FluxMap::new(fp, threshold);
-        let shift = crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS]);
+        let shift0 = crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS]);
+        // Each block of 2^40 beam indices (the pilot's independent halves
+        // live in blocks 1-3) has its own Cranley-Patterson shift, so the
+        // blocks are independent randomisations of the sequence; block 0
+        // (every bake) keeps the plain shift.
+        let shift = |index: u64| match index >> 40 {
+            0 => shift0,
+            k => crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS, k]),
+        };
         let Some(flux) = flux.filter(|_| !cdf.is_empty()) else {
             let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
             return Err(BeamError::EmptyFootprint { curtain: ci, threshold, peak });
@@ -442,7 +450,7 @@ pub fn trace_all_from(
                 let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
                 let (u, v) = match scene.beams.starts {
                     BeamStarts::Random => cdf.sample(fp, &mut r),
-                    BeamStarts::Stratified => flux.start(first_beam + i as u64, shift),
+                    BeamStarts::Stratified => flux.start(first_beam + i as u64, shift(first_beam + i as u64)),
                 };
                 let (x, y) = fp.to_world(u, v);
                 // High-frequency noise on the start height along the curtain.

@@ -26,6 +26,10 @@
 //!   the flux, and the count of starts in it is off by the sequence's
 //!   discrepancy (`O(log N)` points) instead of `sqrt(n)`.
 //!
+//! Each block of 2^40 indices has its own shift (`crate::beams`): the
+//! pilot's halves (`crate::pilot`) are then independent randomisations, so
+//! their difference measures the variance of a stratified bake.
+//!
 //! The sequence is indexed by the beam index alone, in 64-bit fixed point
 //! (`x_i = s + i a mod 2^64`, exact for any index, including the pilot's
 //! second half at 2^40): beam `i` is the same beam whatever the beam count,
