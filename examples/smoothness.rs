@@ -138,6 +138,8 @@ fn main() {
     let threads = rayon::current_num_threads();
     let load0 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     let t0 = Instant::now();
+    // The commit when the run starts (the tree may move while it runs).
+    let commit = std::process::Command::new("git").args(["rev-parse", "--short", "HEAD"]).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
 
     // Bake times: alternate old and new, keep the fastest of each.
     let (mut t_new, mut t_old) = (f64::INFINITY, f64::INFINITY);
@@ -214,7 +216,7 @@ fn main() {
                     "mean_rel_vs_ref": e_old, "flux_vs_ref": f_old, "bake_s": t_old, "ref_bake_s": t_ref_old, "photons": b_old.stats.photons},
             "new_vs_old_ref": e_cross, "refs_new_vs_old": e_refs,
             "bake_time_ratio": ratio, "bake_cpu_ratio": cpu_ratio, "bake_cpu_s": {"new": c_new, "old": c_old},
-            "git_commit": std::process::Command::new("git").args(["rev-parse", "--short", "HEAD"]).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string()),
+            "git_commit": commit,
         });
         std::fs::write(dir.join("smoothness.json"), serde_json::to_string_pretty(&json).unwrap() + "\n").expect("write json");
         let lum = |p: &[f32; 4]| 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
