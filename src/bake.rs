@@ -775,7 +775,7 @@ mod auto_voxel_tests {
     use crate::scene::{AutoTag, Projection};
 
     fn photon_at(p: [f32; 3]) -> Photon {
-        Photon { position: p, power: [1.0; 3] }
+        Photon::point(p, [1.0; 3])
     }
 
     /// A pixel at distance d covers d * 2 tan(fov/2) / height.

@@ -63,7 +63,7 @@ use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::progress::Progress;
 use crate::rng;
-use crate::scene::{BeamParams, Deposition, Scene};
+use crate::scene::{BeamParams, BeamStarts, Deposition, KernelShape, Scene};
 use crate::spectrum::ColourTable;
 use glam::DVec3;
 use noise::Perlin;
@@ -73,22 +73,52 @@ use rayon::prelude::*;
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
 
-/// A photon of the photon map: a position (km) and the power emitted there,
-/// as linear Rec.709 RGB in "557.7 nm photons per second" (one photon per
-/// second of 557.7 nm has luminance 1; see `spectrum`).
+/// A photon of the photon map: a segment from `position` to `end` (km; a
+/// point photon has `end == position`) and the power emitted along it,
+/// spread uniformly, as linear Rec.709 RGB in "557.7 nm photons per second"
+/// (one photon per second of 557.7 nm has luminance 1; see `spectrum`). The
+/// gather convolves its kernel with the segment (`crate::photons`, photon
+/// beams of Jarosz et al. 2011).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Photon {
     pub position: [f32; 3],
+    pub end: [f32; 3],
     pub power: [f32; 3],
 }
 
-/// The photon of one step's deposit from `start` to `end`, carrying `power`.
-/// A point at the step's end for now; the one place to change when photons
-/// become segments.
+impl Photon {
+    /// A point photon at `p`.
+    #[inline]
+    pub fn point(p: [f32; 3], power: [f32; 3]) -> Self {
+        Self { position: p, end: p, power }
+    }
+
+    /// A segment photon from `a` to `b`.
+    #[inline]
+    pub fn segment(a: [f32; 3], b: [f32; 3], power: [f32; 3]) -> Self {
+        Self { position: a, end: b, power }
+    }
+
+    /// The same power as a point photon at the segment's end (the deflection
+    /// point where the point estimator of `photons.kernel = "point"` puts it).
+    #[inline]
+    pub fn to_point(self) -> Self {
+        Self::point(self.end, self.power)
+    }
+
+    /// Whether the photon is a point (zero-length segment).
+    #[inline]
+    pub fn is_point(&self) -> bool {
+        self.position == self.end
+    }
+}
+
+/// The photon of one beam step: `power` spread along the step from `start`
+/// to `end` (km). The gather's segment kernel smooths it along the step;
+/// `photons.kernel = "point"` collapses it to a point at `end`.
 #[inline]
 pub fn deposit(start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
-    let _ = start;
-    Photon { position: [end.x as f32, end.y as f32, end.z as f32], power }
+    Photon::segment([start.x as f32, start.y as f32, start.z as f32], [end.x as f32, end.y as f32, end.z as f32], power)
 }
 
 /// The geomagnetic frame: `b` the unit field direction (pointing down, the
@@ -636,10 +666,19 @@ fn trace_curtains(
         let starts = crate::footprint::StartMap::new(fp, threshold);
         let anim = &scene.animation;
         let ray_shift = crate::animation::ray_shift_km(anim);
+        let shift0 = crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS]);
+        // Each block of 2^40 beam indices (the pilot's independent halves
+        // live in blocks 1-3) has its own Cranley-Patterson shift, so the
+        // blocks are independent randomisations of the sequence; block 0
+        // (every bake) keeps the plain shift.
+        let shift = |index: u64| match index >> 40 {
+            0 => shift0,
+            k => crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS, k]),
+        };
         if starts.is_empty() {
             let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
             return Err(BeamError::EmptyFootprint { curtain: ci, threshold, peak });
-        }
+        };
         // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
         let power_w = curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6;
         let power_kev_s = power_w * KEV_PER_J / n as f64;
@@ -668,7 +707,20 @@ fn trace_curtains(
             .into_par_iter()
             .map(|i| {
                 let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
+                // The unit-square point of beam i: the shifted R2 sequence
+                // (stratified, fixed by the index whatever the count) or two
+                // random numbers; either is mapped through the footprint's
+                // continuous start map, so the beam moves with its curtain
+                // from frame to frame. Both numbers are drawn in either mode,
+                // so the rest of the beam's stream (energy, path) is the same.
                 let (xi1, xi2) = (r.random::<f64>(), r.random::<f64>());
+                let (xi1, xi2) = match scene.beams.starts {
+                    BeamStarts::Random => (xi1, xi2),
+                    BeamStarts::Stratified => {
+                        let [a, b] = crate::starts::r2(first_beam + i as u64, shift(first_beam + i as u64));
+                        (a, b)
+                    }
+                };
                 let (u, v) = starts.map(xi1, xi2);
                 let (x, y) = fp.to_world(u, v);
                 // High-frequency noise on the start height along the curtain
@@ -689,9 +741,14 @@ fn trace_curtains(
                 let t = trace_beam(&ctx, &start, &mut r);
                 progress.inc(1);
                 let deposited: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
+                let mut photons = t.photons;
+                if scene.photons.kernel == KernelShape::Point {
+                    // The point estimator: each step's power at its end.
+                    photons.iter_mut().for_each(|p| *p = p.to_point());
+                }
                 BeamOut {
                     power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s],
-                    photons: t.photons,
+                    photons,
                     deposits: if record_deposits { t.deposits } else { Vec::new() },
                     end: t.end,
                 }
@@ -958,6 +1015,47 @@ mod tests {
         }
     }
 
+    /// A small scene: one short curtain, few beams.
+    fn small_scene(count: usize) -> Scene {
+        let mut s = Scene {
+            curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
+            ..Scene::default()
+        };
+        s.footprint.resolution = [128, 48];
+        s.beams.count = count;
+        s
+    }
+
+    #[test]
+    fn stratified_beam_i_is_the_same_whatever_the_count_and_threads() {
+        // Beam i's start, energy and path depend on (seed, curtain, i) only:
+        // its photons are the same in a bake of N and of 2N beams (their
+        // power scales by N / 2N: each beam carries P / N), and the whole
+        // photon list is the same for 1 and 3 threads.
+        let s1 = small_scene(300);
+        let s2 = small_scene(600);
+        let fps = crate::bake::footprints(&s1);
+        let atm = Atmosphere::us1976();
+        let colour = crate::bake::colour_table(&s1, &atm);
+        let run = |s: &Scene, threads: usize| {
+            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
+                trace_all(s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap().0
+            })
+        };
+        let (a, b) = (run(&s1, 1), run(&s2, 3));
+        assert_eq!(a, run(&s1, 3));
+        // The first 300 beams of the 600 come first in the list.
+        assert!(b.len() > a.len());
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!((p.position, p.end), (q.position, q.end));
+            for k in 0..3 {
+                // P/N halves exactly in binary, up to the f32 rounding of
+                // the product.
+                assert!((p.power[k] - 2.0 * q.power[k]).abs() <= 2e-7 * p.power[k].abs(), "{p:?} {q:?}");
+            }
+        }
+    }
+
     #[test]
     fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
         // Same random stream => same path in both models (the energy is
@@ -1010,6 +1108,26 @@ mod tests {
             }
         }
         assert!(checked > 15, "{checked} bins with deposits");
+    }
+
+    #[test]
+    fn steps_are_segments_and_the_point_kernel_collapses_them() {
+        let mut s = small_scene(50);
+        let fps = crate::bake::footprints(&s);
+        let atm = Atmosphere::us1976();
+        let colour = crate::bake::colour_table(&s, &atm);
+        let (seg, _) = trace_all(&s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap();
+        assert!(seg.iter().filter(|p| !p.is_point()).count() > seg.len() / 2);
+        // Consecutive steps of a beam chain: one ends where the next starts
+        // (except across beams, and after a step that deposited nothing).
+        let chained = seg.windows(2).filter(|w| w[0].end == w[1].position).count();
+        assert!(chained as f64 > 0.9 * seg.len() as f64, "{chained} of {}", seg.len());
+        s.photons.kernel = KernelShape::Point;
+        let (pts, _) = trace_all(&s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap();
+        assert_eq!(pts.len(), seg.len());
+        for (p, q) in pts.iter().zip(&seg) {
+            assert!(p.is_point() && p.position == q.end && p.power == q.power);
+        }
     }
 
     #[test]

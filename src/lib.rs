@@ -30,5 +30,6 @@ pub mod render;
 pub mod rng;
 pub mod scene;
 pub mod spectrum;
+pub mod starts;
 pub mod usd;
 pub mod vdb;

@@ -18,16 +18,63 @@
 //! (1 kR = 1e9 photons cm^-2 s^-1 = 1e19 photons km^-2 s^-1). That is the
 //! unit of the `emission` grid: Y = 1 is 1 kR of 557.7 nm per km.
 //!
+//! **Segment kernels** (`photons.kernel = "segment"`, default). A beam step
+//! deposits its power along the segment from `a` to `b` (length L, unit
+//! direction d), not at one point: the photon is a short photon beam
+//! (Jarosz, Nowrouzezahrai, Sadeghi & Jensen, "A Comprehensive Theory of
+//! Volumetric Radiance Estimation Using Photon Points and Beams", ACM TOG
+//! 30(1), 2011), and its kernel is the Gaussian convolved with the uniform
+//! density `1/L` on the segment. Write `x - a = s d + p` (s along the
+//! segment, p perpendicular to it). The Gaussian factors into `phi_2(p)
+//! phi_1(s - t)` for a centre at `a + t d`, so
+//!
+//! ```text
+//! K_seg(x) = (1/L) int_0^L G_r(x - a - t d) dt
+//!          = exp(-|p|^2 / 2r^2) / (2 pi r^2)                (across)
+//!            * [erf(s / (sqrt2 r)) - erf((s - L) / (sqrt2 r))] / (2 L)   (along)
+//! ```
+//!
+//! (the along factor is `(Phi(s/r) - Phi((s-L)/r)) / L`, Phi the normal
+//! CDF). It is truncated where the distance from x to the segment reaches
+//! `cutoff * r` (a capsule, the ball of the point kernel swept along the
+//! segment) and renormalised by its mass inside, `M_seg(lambda)`, lambda =
+//! L / r. With u = s / r and `g(u) = (Phi(u) - Phi(u - lambda)) / lambda` the
+//! along density, the capsule splits into its cylinder (0 <= u <= lambda,
+//! where the across factor holds `1 - exp(-c^2/2)` of its mass inside radius
+//! c) and two half balls (u < 0 and, by symmetry, u > lambda, where the
+//! across radius is `sqrt(c^2 - u^2)`):
+//!
+//! ```text
+//! M_seg(lambda) = (1 - e^{-c^2/2}) A(lambda) + 2 int_{-c}^0 g(u) (1 - e^{-(c^2 - u^2)/2}) du
+//! A(lambda)     = int_0^lambda g = erf(lambda / sqrt2) - (2 / lambda) (phi(0) - phi(lambda))
+//! ```
+//!
+//! (A from `int Phi = u Phi(u) + phi(u)`; the half-ball integral has no
+//! elementary form and is integrated numerically once per bake into a table
+//! over lambda, [`SegmentMass`]). As L -> 0, g -> phi, A -> 0 and M_seg ->
+//! `int_{-c}^c phi(u) (1 - e^{-(c^2-u^2)/2}) du = M(c)`, the point kernel's
+//! mass: a zero-length segment is the point kernel, exactly (the gather
+//! takes the point kernel for L = 0, and the midpoint's below lambda =
+//! 0.004, where erf's f32 cancellation, 3e-7 / (0.8 lambda) relative, would
+//! cost more than the midpoint kernel's difference, `M_seg(lambda) / M(c) -
+//! 1 ~ 0.06 lambda` for c = 2.5: both below 1e-4 there). Each segment's kernel integrates to its
+//! power, as each point's does. Against points at the deflections, the
+//! estimate no longer ripples along the beam path at the step length.
+//! `photons.kernel = "point"` puts each step's power at its end (the
+//! deflection point), the estimator before segments, kept for comparison.
+//!
 //! The kernel radius is perturbed by the report's medium-frequency 2D noise,
 //! taken at the point's field-line foot so the variation follows B (rays).
 //!
 //! Gather methods (`photons.gather`):
 //! - `kdtree` (default): a balloon estimator, radius r(x) at the voxel. One
 //!   kiddo range query per 8^3 leaf finds the photons that can reach it; each
-//!   voxel then sums its photons' kernels in photon-index order.
+//!   voxel then sums its photons' kernels in photon-index order. The tree
+//!   holds segment midpoints; queries widen by the longest half segment.
 //! - `splat`: a sample-point estimator, radius r(x_i) at the photon. Photons
 //!   are binned per leaf (in photon order), each adds its kernel to the
-//!   leaf's voxels within its cutoff. No tree.
+//!   leaf's voxels within its cutoff. No tree. A segment takes r at its
+//!   midpoint.
 //! - `report2014`: the report's estimate, a kernel-weighted *average*
 //!   `sum(w Phi) / sum(w)` (w the unnormalised Gaussian) of photons binned in a
 //!   uniform grid (the leaves). Not a density: its magnitude is a photon's
@@ -63,6 +110,167 @@ pub fn gaussian_mass_inside(c: f64) -> f64 {
         s += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
     }
     s * h / 3.0
+}
+
+/// Standard normal density.
+#[inline]
+fn phi(u: f64) -> f64 {
+    (-0.5 * u * u).exp() / (2.0 * std::f64::consts::PI).sqrt()
+}
+
+/// Standard normal CDF (erfc keeps the lower tail's relative accuracy).
+#[inline]
+fn big_phi(u: f64) -> f64 {
+    0.5 * libm::erfc(-u / std::f64::consts::SQRT_2)
+}
+
+/// `A(lambda) = int_0^lambda (Phi(u) - Phi(u - lambda)) / lambda du`: the
+/// share of the segment kernel's along-axis mass over the segment itself.
+fn along_mass_inside(lambda: f64) -> f64 {
+    libm::erf(lambda / std::f64::consts::SQRT_2) - 2.0 / lambda * (phi(0.0) - phi(lambda))
+}
+
+/// `int_{-c}^0 h(u) (1 - e^{-(c^2 - u^2)/2}) du` by composite Simpson (128
+/// intervals; the integrand is smooth on [-c, 0], error below 1e-9).
+fn half_ball(c: f64, h: impl Fn(f64) -> f64) -> f64 {
+    let n = 128;
+    let dh = c / n as f64;
+    let f = |u: f64| h(u) * (1.0 - (-0.5 * (c * c - u * u)).exp());
+    let mut s = f(-c) + f(0.0);
+    for k in 1..n {
+        s += f(-c + k as f64 * dh) * if k % 2 == 1 { 4.0 } else { 2.0 };
+    }
+    s * dh / 3.0
+}
+
+/// `M_seg(lambda)`: mass of the standard Gaussian convolved with a segment of
+/// length `lambda` (in standard deviations) inside the capsule of radius `c`
+/// around the segment (derived in the module documentation). `M_seg(0) =
+/// M(c)`.
+pub fn segment_mass_inside(c: f64, lambda: f64) -> f64 {
+    if lambda <= 0.0 {
+        return gaussian_mass_inside(c);
+    }
+    let g = |u: f64| (big_phi(u) - big_phi(u - lambda)) / lambda;
+    (1.0 - (-0.5 * c * c).exp()) * along_mass_inside(lambda) + 2.0 * half_ball(c, g)
+}
+
+/// [`segment_mass_inside`] for one cutoff, tabulated over lambda in [0, 16]
+/// at steps of 1/256 and interpolated linearly (|M_seg''| is below 0.1, so
+/// the error is below (1/256)^2 / 8 * 0.1 = 2e-7, plus the f32 storage's
+/// 6e-8); beyond 16, `Phi(u - lambda)` is below 1e-57 on [-c, 0] and
+/// the half balls are `h_inf / lambda`, exactly.
+#[derive(Clone, Debug)]
+pub struct SegmentMass {
+    pub cutoff: f64,
+    table: Vec<f32>,
+    /// 1 / table, for the gather.
+    inv: Vec<f32>,
+    h_inf: f64,
+}
+
+impl SegmentMass {
+    const STEPS_PER_UNIT: f64 = 256.0;
+    const LAMBDA_MAX: f64 = 16.0;
+
+    pub fn new(cutoff: f64) -> Self {
+        let n = (Self::LAMBDA_MAX * Self::STEPS_PER_UNIT) as usize;
+        let table = (0..=n).map(|k| segment_mass_inside(cutoff, k as f64 / Self::STEPS_PER_UNIT) as f32).collect();
+        let table: Vec<f32> = table;
+        let inv = table.iter().map(|&m| 1.0 / m).collect();
+        Self { cutoff, table, inv, h_inf: half_ball(cutoff, big_phi) }
+    }
+
+    /// 1 / M_seg(lambda) in f32, interpolated linearly in the table of
+    /// reciprocals (1/M is as smooth as M, M near 1: the same error bound).
+    #[inline(always)]
+    pub fn inv_mass_f32(&self, lambda: f32) -> f32 {
+        if lambda as f64 >= Self::LAMBDA_MAX {
+            return (1.0 / self.mass(lambda as f64)) as f32;
+        }
+        let x = lambda * Self::STEPS_PER_UNIT as f32;
+        let k = x as usize;
+        let f = x - k as f32;
+        self.inv[k] + f * (self.inv[k + 1] - self.inv[k])
+    }
+
+    /// M_seg(lambda).
+    #[inline]
+    pub fn mass(&self, lambda: f64) -> f64 {
+        if lambda >= Self::LAMBDA_MAX {
+            let c = self.cutoff;
+            return (1.0 - (-0.5 * c * c).exp()) * along_mass_inside(lambda) + 2.0 * self.h_inf / lambda;
+        }
+        let x = lambda * Self::STEPS_PER_UNIT;
+        let k = x as usize;
+        let f = x - k as f64;
+        self.table[k] as f64 * (1.0 - f) + self.table[k + 1] as f64 * f
+    }
+}
+
+/// erf in f32 by Abramowitz & Stegun 7.1.26 (absolute error below 1.5e-7,
+/// plus f32 rounding), with the deterministic [`exp_neg_f32`].
+#[inline(always)]
+pub fn erf_f32(x: f32) -> f32 {
+    let ax = x.abs();
+    let t = 1.0 / (1.0 + 0.327_591_1 * ax);
+    let poly = t * (0.254_829_6 + t * (-0.284_496_74 + t * (1.421_413_7 + t * (-1.453_152 + t * 1.061_405_4))));
+    (1.0 - poly * exp_neg_f32(-ax * ax)).copysign(x)
+}
+
+/// erf on [0, 4] at steps of 1/1024, f32, for [`erf_lut`].
+fn erf_table() -> &'static [f32] {
+    static T: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
+    T.get_or_init(|| (0..=ERF_LUT_STEPS * 4 + 1).map(|k| libm::erf(k as f64 / ERF_LUT_STEPS as f64) as f32).collect())
+}
+
+const ERF_LUT_STEPS: usize = 1024;
+
+/// erf in f32 by linear interpolation in a table (steps h = 1/1024 on [0,
+/// 4], 1 beyond): error at most h^2 / 8 max|erf''| = 1.2e-7 (|erf''| <=
+/// 0.97), plus f32 rounding and erfc(4) = 1.5e-8 beyond. The gather's
+/// segment kernel takes two per voxel and photon; a lookup costs far less
+/// than [`erf_f32`]'s exponential and division.
+#[inline(always)]
+pub fn erf_lut(table: &[f32], x: f32) -> f32 {
+    let ax = (x.abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
+    let k = ax as usize;
+    let f = ax - k as f32;
+    let v = table[k] + f * (table[k + 1] - table[k]);
+    v.copysign(x)
+}
+
+/// Below this lambda = L / r a segment is gathered as a point at its
+/// midpoint (see the module documentation).
+pub const MIDPOINT_LAMBDA: f64 = 0.004;
+
+/// The segment kernel of `kernel` (its r and cutoff) for the segment a-b at
+/// x, km^-3, in f64 (the oracle of the gathers): the point kernel at `a` for
+/// a = b, else the formula of the module documentation, mass computed
+/// afresh.
+pub fn segment_kernel(kernel: &Kernel, a: DVec3, b: DVec3, x: DVec3) -> f64 {
+    let len = a.distance(b);
+    if len == 0.0 {
+        return kernel.eval_d2(a.distance_squared(x));
+    }
+    segment_kernel_with_mass(kernel, segment_mass_inside(kernel.cutoff, len / kernel.r), a, b, x)
+}
+
+/// [`segment_kernel`] for a != b given `m = M_seg(|b - a| / r)`.
+pub fn segment_kernel_with_mass(kernel: &Kernel, m: f64, a: DVec3, b: DVec3, x: DVec3) -> f64 {
+    let len = a.distance(b);
+    let d = (b - a) / len;
+    let w = x - a;
+    let s = w.dot(d);
+    let perp2 = (w.length_squared() - s * s).max(0.0);
+    let dist2 = if s < 0.0 { w.length_squared() } else if s > len { x.distance_squared(b) } else { perp2 };
+    if dist2 >= kernel.reach2 {
+        return 0.0;
+    }
+    let r = kernel.r;
+    let k = 1.0 / std::f64::consts::SQRT_2 / r;
+    (-perp2 * kernel.inv_2r2).exp() / (2.0 * std::f64::consts::PI * r * r) * (libm::erf(s * k) - libm::erf((s - len) * k))
+        / (2.0 * len * m)
 }
 
 /// The truncated, renormalised 3D Gaussian kernel of standard deviation `r`.
@@ -168,27 +376,51 @@ fn pos(p: &Photon) -> DVec3 {
     DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64)
 }
 
+#[inline]
+fn end(p: &Photon) -> DVec3 {
+    DVec3::new(p.end[0] as f64, p.end[1] as f64, p.end[2] as f64)
+}
+
+/// The photon's kernel at x (point or segment), f64.
+#[inline]
+fn photon_kernel(p: &Photon, kernel: &Kernel, x: DVec3) -> f64 {
+    if p.is_point() {
+        kernel.eval_d2(pos(p).distance_squared(x))
+    } else {
+        segment_kernel(kernel, pos(p), end(p), x)
+    }
+}
+
+/// Half the longest segment, km (0 for point photons).
+pub fn max_half_length(photons: &[Photon]) -> f64 {
+    photons.par_iter().map(|p| 0.5 * pos(p).distance(end(p))).reduce(|| 0.0, f64::max)
+}
+
 /// Photons with a kd-tree over their positions (kiddo's immutable tree:
 /// built once, queried many times).
 pub struct PhotonMap<'a> {
     pub photons: &'a [Photon],
     tree: ImmutableKdTree<f32, 3>,
+    /// Half the longest segment: the tree holds midpoints.
+    max_half: f64,
 }
 
 impl<'a> PhotonMap<'a> {
     pub fn new(photons: &'a [Photon]) -> Self {
-        let pts: Vec<[f32; 3]> = photons.iter().map(|p| p.position).collect();
-        Self { photons, tree: ImmutableKdTree::new_from_slice(&pts) }
+        let pts: Vec<[f32; 3]> = photons.iter().map(|p| (0.5 * (pos(p) + end(p))).as_vec3().to_array()).collect();
+        Self { photons, tree: ImmutableKdTree::new_from_slice(&pts), max_half: max_half_length(photons) }
     }
 
-    /// Indices of the photons within `radius` km of `x` (a superset: the
-    /// f32 query radius is widened by a relative 1e-5 to cover rounding),
-    /// ascending.
+    /// Indices of the photons whose segment comes within `radius` km of `x`
+    /// (a superset: midpoints within `radius` plus the longest half segment,
+    /// and the f32 query radius widened by a relative 1e-5 to cover
+    /// rounding), ascending.
     pub fn within(&self, x: DVec3, radius: f64) -> Vec<usize> {
         if self.photons.is_empty() {
             return Vec::new();
         }
         let q = [x.x as f32, x.y as f32, x.z as f32];
+        let radius = radius + self.max_half;
         let r = (radius * (1.0 + 1e-5) + 1e-5 * x.abs().max_element()) as f32;
         let mut idx: Vec<usize> =
             self.tree.within_unsorted::<SquaredEuclidean>(&q, r * r).into_iter().map(|n| n.item as usize).collect();
@@ -196,13 +428,13 @@ impl<'a> PhotonMap<'a> {
         idx
     }
 
-    /// eta(x) = sum_i Phi_i K(|x - x_i|), photons km^-3 s^-1 per colour,
-    /// through the tree. Exactly zero (never NaN) with no photon in reach.
+    /// eta(x) = sum_i Phi_i K_i(x) (the point or segment kernel of photon
+    /// i), photons km^-3 s^-1 per colour, through the tree. Exactly zero (never NaN) with no photon in reach.
     pub fn estimate(&self, x: DVec3, kernel: &Kernel) -> [f64; 3] {
         let mut acc = [0.0; 3];
         for i in self.within(x, kernel.reach()) {
             let p = &self.photons[i];
-            let w = kernel.eval_d2(pos(p).distance_squared(x));
+            let w = photon_kernel(p, kernel, x);
             for (a, &c) in acc.iter_mut().zip(&p.power) {
                 *a += w * c as f64;
             }
@@ -215,7 +447,7 @@ impl<'a> PhotonMap<'a> {
 pub fn estimate_brute_force(photons: &[Photon], x: DVec3, kernel: &Kernel) -> [f64; 3] {
     let mut acc = [0.0; 3];
     for p in photons {
-        let w = kernel.eval_d2(pos(p).distance_squared(x));
+        let w = photon_kernel(p, kernel, x);
         if w > 0.0 {
             for (a, &c) in acc.iter_mut().zip(&p.power) {
                 *a += w * c as f64;
@@ -225,7 +457,8 @@ pub fn estimate_brute_force(photons: &[Photon], x: DVec3, kernel: &Kernel) -> [f
     acc
 }
 
-/// Origins (index space) of the leaves within `reach` km of some photon:
+/// Origins (index space) of the leaves within `reach` km of some photon's
+/// segment:
 /// every voxel centre a kernel of that reach can touch lies in one of them.
 /// Sorted by (x, y, z), the grid's leaf order.
 pub fn candidate_leaves(photons: &[Photon], voxel_size: f64, reach: f64) -> Vec<IVec3> {
@@ -235,7 +468,7 @@ pub fn candidate_leaves(photons: &[Photon], voxel_size: f64, reach: f64) -> Vec<
             let mut v = Vec::new();
             let mut last: Option<(IVec3, IVec3)> = None;
             for p in chunk {
-                let range = leaf_range(pos(p), voxel_size, reach);
+                let range = leaf_range(p, voxel_size, reach);
                 if last == Some(range) {
                     continue; // neighbouring photons of a beam share leaves
                 }
@@ -252,11 +485,13 @@ pub fn candidate_leaves(photons: &[Photon], voxel_size: f64, reach: f64) -> Vec<
     keys.into_iter().map(|(x, y, z)| IVec3::new(x, y, z)).collect()
 }
 
-/// Leaf origins (first, last) covering the voxel centres within `reach` of `q`.
+/// Leaf origins (first, last) covering the voxel centres within `reach` of
+/// the photon's segment (its bounding box widened by `reach`).
 #[inline]
-fn leaf_range(q: DVec3, voxel_size: f64, reach: f64) -> (IVec3, IVec3) {
-    let lo = ((q - DVec3::splat(reach)) / voxel_size).ceil().as_ivec3();
-    let hi = ((q + DVec3::splat(reach)) / voxel_size).floor().as_ivec3();
+fn leaf_range(p: &Photon, voxel_size: f64, reach: f64) -> (IVec3, IVec3) {
+    let (a, b) = (pos(p), end(p));
+    let lo = ((a.min(b) - DVec3::splat(reach)) / voxel_size).ceil().as_ivec3();
+    let hi = ((a.max(b) + DVec3::splat(reach)) / voxel_size).floor().as_ivec3();
     (crate::grid::leaf_origin(lo), crate::grid::leaf_origin(hi))
 }
 
@@ -283,7 +518,7 @@ pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach:
     let index: HashMap<IVec3, usize> = leaves.iter().enumerate().map(|(i, &o)| (o, i)).collect();
     let mut bins: Vec<Vec<u32>> = vec![Vec::new(); leaves.len()];
     for (i, p) in photons.iter().enumerate() {
-        for_each_leaf(leaf_range(pos(p), voxel_size, reach), |o| {
+        for_each_leaf(leaf_range(p, voxel_size, reach), |o| {
             if let Some(&k) = index.get(&o) {
                 bins[k].push(i as u32);
             }
@@ -355,12 +590,59 @@ impl LeafKernels {
     }
 }
 
+/// Per-voxel segment-kernel parameters of one leaf.
+struct LeafSegKernels {
+    /// Smallest and largest r over the leaf, km.
+    r_min: f64,
+    r_max: f64,
+    /// The same parameters per voxel, for the scalar path.
+    all: Vec<SegParams>,
+}
+
+impl LeafSegKernels {
+    #[inline]
+    fn params(&self, n: usize) -> SegParams {
+        self.all[n]
+    }
+}
+
 /// Per-voxel sums of one leaf, one array per colour. f32: the sums are of
 /// positive terms in a fixed order, so n terms are good to n 2^-24 relative
 /// at worst (about sqrt(n) 2^-24 in practice, 1e-5 for 10^4 terms), far
 /// below the estimate's Monte Carlo noise; f64 made the gather 30 % slower.
 struct LeafAcc {
     c: [[f32; LEAF_NUM_VALUES]; 3],
+}
+
+/// Kernel parameters of one voxel for a segment photon, f32.
+#[derive(Clone, Copy, Debug, Default)]
+struct SegParams {
+    /// 1 / r.
+    inv_r: f32,
+    /// 1 / (sqrt 2 r).
+    inv_sqrt2r: f32,
+    /// 1 / (2 r^2).
+    inv_2r2: f32,
+    /// 1 / (2 pi r^2).
+    inv_2pi_r2: f32,
+    /// (c r)^2.
+    reach2: f32,
+    /// The point kernel's norm, 1 / ((2 pi)^(3/2) r^3 M(c)).
+    norm: f32,
+}
+
+impl SegParams {
+    fn new(k: &Kernel) -> Self {
+        let r = k.r;
+        Self {
+            inv_r: (1.0 / r) as f32,
+            inv_sqrt2r: (1.0 / (std::f64::consts::SQRT_2 * r)) as f32,
+            inv_2r2: k.inv_2r2 as f32,
+            inv_2pi_r2: (1.0 / (2.0 * std::f64::consts::PI * r * r)) as f32,
+            reach2: k.reach2 as f32,
+            norm: k.norm as f32,
+        }
+    }
 }
 
 /// What a leaf gather needs.
@@ -371,6 +653,8 @@ pub struct GatherSetup<'a> {
     pub cutoff: f64,
     /// gaussian_mass_inside(cutoff)
     pub mass: f64,
+    /// Segment kernel masses for `cutoff`.
+    pub seg: SegmentMass,
 }
 
 impl GatherSetup<'_> {
@@ -441,6 +725,120 @@ impl GatherSetup<'_> {
         }
     }
 
+    /// Adds segment photon `p`'s kernel to the voxels of the leaf at
+    /// `origin` within `reach` of its segment, with the parameters `sp(n)`
+    /// of voxel n: the closed form of the module documentation, or the
+    /// point kernel at the midpoint below [`MIDPOINT_LAMBDA`]. Offsets from
+    /// the segment's start are taken in f64 then rounded to f32.
+    #[inline]
+    fn accumulate_segment(&self, origin: IVec3, p: &Photon, reach: f64, sp: impl Fn(usize) -> SegParams, acc: &mut LeafAcc) {
+        let (a, b) = (pos(p), end(p));
+        let Some((lo, hi)) = self.local_box(origin, a.min(b), a.max(b), reach) else { return };
+        let len = a.distance(b);
+        let dir = ((b - a) / len).as_vec3();
+        let l = len as f32;
+        let vs = self.transform.voxel_size;
+        let t = self.transform.translation;
+        let off = |axis: usize, i: i32| -> f32 { ((origin[axis] + i) as f64 * vs + t[axis] - a[axis]) as f32 };
+        let mut wz = [0.0f32; LEAF_DIM as usize];
+        for z in lo.z..=hi.z {
+            wz[z as usize] = off(2, z);
+        }
+        let wz0 = off(2, 0);
+        let phi = p.power;
+        let inv_2l = 0.5 / l;
+        let erf = erf_table();
+        // Rows along z: a voxel within `reach` of the segment lies within it
+        // in (x, y) of the segment's (x, y) projection, at a distance e, and
+        // within sqrt(reach^2 - e^2) in z of the segment's z range. Rows and
+        // voxels outside are skipped (their kernel is 0 there anyway).
+        let (px, py) = (l * dir.x, l * dir.y);
+        let pxy2 = px * px + py * py;
+        let reach2 = (reach * reach) as f32;
+        let vs32 = vs as f32;
+        let (za, zb) = (0.0f32.min(l * dir.z), 0.0f32.max(l * dir.z));
+        for x in lo.x..=hi.x {
+            let wx = off(0, x);
+            for y in lo.y..=hi.y {
+                let wy = off(1, y);
+                let t = if pxy2 > 0.0 { ((wx * px + wy * py) / pxy2).clamp(0.0, 1.0) } else { 0.0 };
+                let e2 = (wx - t * px).powi(2) + (wy - t * py).powi(2);
+                if e2 >= reach2 {
+                    continue;
+                }
+                let h = (reach2 - e2).sqrt() * (1.0 + 1e-5) + 1e-5;
+                // Voxel z offsets from a are wz[0] + k vs, k = 0..8.
+                // Rounding toward zero then widening by one voxel: a
+                // superset without libm's ceil and floor.
+                let z0 = (((za - h - wz0) / vs32).max(-1.0) as i32).max(lo.z);
+                let z1 = (((zb + h - wz0) / vs32).min(9.0) as i32 + 1).min(hi.z);
+                let sxy = wx * dir.x + wy * dir.y;
+                let w2xy = wx * wx + wy * wy;
+                for z in z0..=z1 {
+                    let n = ((x << 6) | (y << 3) | z) as usize;
+                    let q = sp(n);
+                    let wzz = wz[z as usize];
+                    let s = sxy + wzz * dir.z;
+                    let w2 = w2xy + wzz * wzz;
+                    let lam = l * q.inv_r;
+                    let v = if (lam as f64) < MIDPOINT_LAMBDA {
+                        // |w - d L/2|^2.
+                        let dm2 = (w2 - s * l + 0.25 * l * l).max(0.0);
+                        if dm2 >= q.reach2 {
+                            continue;
+                        }
+                        q.norm * exp_neg_f32(-dm2 * q.inv_2r2)
+                    } else {
+                        let perp2 = (w2 - s * s).max(0.0);
+                        let dist2 = if s < 0.0 {
+                            w2
+                        } else if s > l {
+                            (w2 - 2.0 * s * l + l * l).max(0.0)
+                        } else {
+                            perp2
+                        };
+                        if dist2 >= q.reach2 {
+                            continue;
+                        }
+                        q.inv_2pi_r2 * inv_2l * self.seg.inv_mass_f32(lam)
+                            * exp_neg_f32(-perp2 * q.inv_2r2)
+                            * (erf_lut(erf, s * q.inv_sqrt2r) - erf_lut(erf, (s - l) * q.inv_sqrt2r))
+                    };
+                    for (col, &ph) in acc.c.iter_mut().zip(&phi) {
+                        col[n] += v * ph;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The balloon gather's segment path: a segment shorter than
+    /// [`MIDPOINT_LAMBDA`] times r at every voxel of the leaf goes to the
+    /// (vectorised) point path at its midpoint, any other to
+    /// [`Self::accumulate_segment`]. (A branch-free 8-lane version of the
+    /// latter was slower: it evaluates the voxels of each z-row that the
+    /// scalar loop's z range skips.)
+    #[inline]
+    fn accumulate_segment_rows(&self, origin: IVec3, p: &Photon, reach: f64, k: &LeafKernels, sk: &LeafSegKernels, acc: &mut LeafAcc) {
+        let (a, b) = (pos(p), end(p));
+        if a.distance(b) < MIDPOINT_LAMBDA * sk.r_min {
+            let mid = Photon::point((0.5 * (a + b)).as_vec3().to_array(), p.power);
+            return self.accumulate(origin, &mid, reach, k, acc);
+        }
+        self.accumulate_segment(origin, p, reach, |n| sk.params(n), acc)
+    }
+
+    /// Index range (inclusive, leaf-local, clamped to 0..8) of the voxels
+    /// whose centres can lie within `reach` of the box [lo, hi].
+    #[inline]
+    fn local_box(&self, origin: IVec3, lo: DVec3, hi: DVec3, reach: f64) -> Option<(IVec3, IVec3)> {
+        let (li, hi_) = (self.transform.world_to_index(lo), self.transform.world_to_index(hi));
+        let r = reach / self.transform.voxel_size;
+        let lo = ((li - DVec3::splat(r)).ceil().as_ivec3() - origin).max(IVec3::ZERO);
+        let hi = ((hi_ + DVec3::splat(r)).floor().as_ivec3() - origin).min(IVec3::splat(LEAF_DIM - 1));
+        (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z).then_some((lo, hi))
+    }
+
     /// Turns per-voxel sums into a leaf: value = sum * scale as f32, active
     /// where nonzero. None if nothing is active.
     fn finish(origin: IVec3, acc: &LeafAcc, scale: f64) -> Option<Leaf<[f32; 3]>> {
@@ -468,14 +866,29 @@ impl GatherSetup<'_> {
     /// each voxel: r(x_v).
     pub fn leaf_balloon(&self, origin: IVec3, candidates: impl Iterator<Item = usize>) -> Option<Leaf<[f32; 3]>> {
         let mut k = Self::new_kernels();
+        let mut sk = Box::new(LeafSegKernels {
+            r_min: f64::INFINITY,
+            r_max: 0.0,
+            all: vec![SegParams::default(); LEAF_NUM_VALUES],
+        });
         for n in 0..LEAF_NUM_VALUES {
             let c = self.centre(origin + crate::grid::offset_to_local(n));
-            k.set(n, &Kernel::with_mass(self.radius.radius(c), self.cutoff, self.mass));
+            let kernel = Kernel::with_mass(self.radius.radius(c), self.cutoff, self.mass);
+            k.set(n, &kernel);
+            let sp = SegParams::new(&kernel);
+            sk.r_min = sk.r_min.min(kernel.r);
+            sk.r_max = sk.r_max.max(kernel.r);
+            sk.all[n] = sp;
         }
         let reach = self.cutoff * self.radius.max();
         let mut acc = Self::new_acc();
         for i in candidates {
-            self.accumulate(origin, &self.photons[i], reach, &k, &mut acc);
+            let p = &self.photons[i];
+            if p.is_point() {
+                self.accumulate(origin, p, reach, &k, &mut acc);
+            } else {
+                self.accumulate_segment_rows(origin, p, reach, &k, &sk, &mut acc);
+            }
         }
         Self::finish(origin, &acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
@@ -486,6 +899,13 @@ impl GatherSetup<'_> {
         let mut k = Self::new_kernels();
         for &i in photons {
             let p = &self.photons[i as usize];
+            if !p.is_point() {
+                // r at the segment's midpoint.
+                let kernel = Kernel::with_mass(self.radius.radius(0.5 * (pos(p) + end(p))), self.cutoff, self.mass);
+                let sp = SegParams::new(&kernel);
+                self.accumulate_segment(origin, p, kernel.reach(), |_| sp, &mut acc);
+                continue;
+            }
             let q = pos(p);
             let kernel = Kernel::with_mass(self.radius.radius(q), self.cutoff, self.mass);
             let Some((lo, hi)) = self.local_range(origin, q, kernel.reach()) else { continue };
@@ -556,7 +976,7 @@ pub fn gather_grid(
     progress: &dyn Progress,
 ) -> Grid<[f32; 3]> {
     let mut grid = Grid::new("emission", [0.0f32; 3], transform);
-    let setup = GatherSetup { photons, transform, radius, cutoff, mass: gaussian_mass_inside(cutoff) };
+    let setup = GatherSetup { photons, transform, radius, cutoff, mass: gaussian_mass_inside(cutoff), seg: SegmentMass::new(cutoff) };
     let reach = cutoff * radius.max();
     let leaves = candidate_leaves(photons, transform.voxel_size, reach);
     progress.start("gather", leaves.len() as u64);
@@ -565,6 +985,7 @@ pub fn gather_grid(
             let map = PhotonMap::new(photons);
             // Voxel centres of a leaf lie within 3.5 voxels (per axis) of its
             // middle: a sphere of radius 3.5 sqrt(3) voxels plus the reach.
+            // (PhotonMap::within adds the longest half segment.)
             let half_diag = 3.5 * 3f64.sqrt() * transform.voxel_size;
             leaves
                 .par_iter()
@@ -614,7 +1035,7 @@ mod tests {
                 for c in &mut p {
                     *c = (lo + (hi - lo) * r.random::<f64>()) as f32;
                 }
-                Photon { position: p, power: [power, 0.5 * power, 0.25 * power] }
+                Photon::point(p, [power, 0.5 * power, 0.25 * power])
             })
             .collect()
     }
@@ -669,6 +1090,220 @@ mod tests {
     }
 
     #[test]
+    fn fast_erf_matches_libm() {
+        // A&S 7.1.26: 1.5e-7 absolute; exp_neg_f32's relative 1.5e-6 scales
+        // the tail term t P(t) e^{-x^2} = 1 - erf(|x|); f32 rounding of the
+        // result near 1 adds 6e-8.
+        for i in -100_000..=100_000 {
+            let x = 6.0 * i as f64 / 100_000.0;
+            let want = libm::erf(x as f32 as f64);
+            let bound = 1.5e-7 + 1.5e-6 * (1.0 - want.abs()) + 1.2e-7;
+            let err = (erf_f32(x as f32) as f64 - want).abs();
+            assert!(err < bound, "erf({x}): error {err} bound {bound}");
+        }
+    }
+
+    #[test]
+    fn erf_table_matches_libm() {
+        // h^2 / 8 max|erf''| = 1.2e-7, f32 storage and interpolation 1.2e-7.
+        let t = erf_table();
+        for i in -100_000..=100_000 {
+            let x = 6.0 * i as f64 / 100_000.0;
+            let err = (erf_lut(t, x as f32) as f64 - libm::erf(x as f32 as f64)).abs();
+            assert!(err < 2.5e-7, "erf({x}): error {err}");
+        }
+        let m = SegmentMass::new(2.5);
+        for i in 0..300 {
+            let lam = 0.004 + i as f64 * 0.071;
+            let (a, b) = (m.inv_mass_f32(lam as f32) as f64, 1.0 / segment_mass_inside(2.5, lam));
+            assert!((a - b).abs() < 1e-6, "lambda {lam}: {a} vs {b}");
+        }
+    }
+
+    #[test]
+    fn segment_mass_has_the_point_limit_and_its_table_interpolates() {
+        for c in [1.5, 2.5, 6.0] {
+            let m0 = gaussian_mass_inside(c);
+            assert_eq!(segment_mass_inside(c, 0.0), m0);
+            // First order: M_seg = M(c) + lambda e^{-c^2/2} c^2 / (2 sqrt(2 pi))
+            // (module documentation); at lambda = 1e-6 the difference is below 1e-6.
+            assert!((segment_mass_inside(c, 1e-6) - m0).abs() < 1e-6, "c {c}");
+            // Long segments: the cylinder dominates, M_seg -> 1 - e^{-c^2/2}.
+            assert!((segment_mass_inside(c, 1e6) - (1.0 - (-0.5 * c * c).exp())).abs() < 1e-5);
+            let t = SegmentMass::new(c);
+            // Linear interpolation at steps of 1/256 plus f32 storage: below
+            // 3e-7 (see SegmentMass); 1e-6 leaves room.
+            for i in 0..400 {
+                let lam = 0.013 + i as f64 * 0.0517;
+                let (a, b) = (t.mass(lam), segment_mass_inside(c, lam));
+                assert!((a - b).abs() < 1e-6, "c {c} lambda {lam}: table {a} direct {b}");
+            }
+            assert!((t.mass(40.0) - segment_mass_inside(c, 40.0)).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn segment_kernel_integrates_to_one() {
+        // Quadrature in coordinates along the segment (s) and across it
+        // (rho), where the capsule is exact: int K dV = int ds int 2 pi rho
+        // K(s, rho) drho, rho < R on the cylinder 0 <= s <= L, rho < R sin th
+        // on the caps (s = -R cos th, s = L + R cos th, ds = R sin th dth, no
+        // square-root end point). Simpson with 200 intervals on smooth
+        // integrands: error below 1e-8. This checks M_seg (the derivation
+        // of the module documentation) independently of its own quadrature;
+        // without it the integral would be M_seg, 6e-4 to 0.4 short.
+        let pi = std::f64::consts::PI;
+        let simpson = |lo: f64, hi: f64, f: &dyn Fn(f64) -> f64| {
+            let n = 200;
+            let h = (hi - lo) / n as f64;
+            let mut s = f(lo) + f(hi);
+            for k in 1..n {
+                s += f(lo + k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
+            }
+            s * h / 3.0
+        };
+        for (r, c) in [(0.5, 2.5), (0.3, 1.5), (0.8, 4.0)] {
+            for lam in [0.01, 0.1, 1.0, 3.0, 20.0] {
+                let k = Kernel::new(r, c);
+                let len = lam * r;
+                let a = DVec3::new(0.1, -0.2, 0.3);
+                let d = DVec3::new(1.0, 2.0, -0.5).normalize();
+                let b = a + d * len;
+                let perp = d.any_orthonormal_vector();
+                let m = segment_mass_inside(c, lam);
+                let big_r = c * r * (1.0 - 1e-12);
+                let kern = |s: f64, rho: f64| 2.0 * pi * rho * segment_kernel_with_mass(&k, m, a, b, a + d * s + perp * rho);
+                let cyl = simpson(0.0, len, &|s| simpson(0.0, big_r, &|rho| kern(s, rho)));
+                let cap = |th: f64, s: f64| big_r * th.sin() * simpson(0.0, big_r * th.sin(), &|rho| kern(s, rho));
+                let caps = simpson(0.0, 0.5 * pi, &|th| cap(th, -big_r * th.cos()) + cap(th, len + big_r * th.cos()));
+                let total = cyl + caps;
+                assert!((total - 1.0).abs() < 1e-7, "r {r} c {c} lambda {lam}: {total}");
+                assert!(1.0 - m > 1e-4, "test too weak: M_seg = {m}");
+            }
+        }
+    }
+
+    #[test]
+    fn segment_kernel_is_the_limit_of_point_photons_along_it() {
+        // n point photons of power 1/n at the midpoints of n equal pieces of
+        // the segment. With c = 6 the truncations differ by less than
+        // e^{-18} = 1.5e-8 of the peak, so this tests the closed form; the
+        // midpoint rule's error is (L/n)^2 / 24 max|d^2 G / ds^2| <= (L/n)^2
+        // / 24 * 2 G_max / r^2: below 2e-7 of the peak for L = 3 r, n = 2000.
+        let (r, c) = (0.4, 6.0);
+        let k = Kernel::new(r, c);
+        let peak = k.eval_d2(0.0);
+        let a = DVec3::new(3.0, 1.0, 100.0);
+        let b = a + DVec3::new(0.3, -0.5, -1.0).normalize() * 3.0 * r;
+        let n = 2000;
+        let pts: Vec<Photon> = (0..n)
+            .map(|i| {
+                let p = a + (b - a) * ((i as f64 + 0.5) / n as f64);
+                Photon::point(p.as_vec3().to_array(), [1.0 / n as f32; 3])
+            })
+            .collect();
+        // The f32 photon positions move the points by ~1e-5 km: the kernel's
+        // gradient (G / r per r) makes that 3e-5 of the peak.
+        let mut rr = rng::rng(&[21]);
+        for _ in 0..200 {
+            let x = a + DVec3::new(rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5) * 4.0 * r
+                + (b - a) * rr.random::<f64>();
+            let want = estimate_brute_force(&pts, x, &k)[0];
+            let got = segment_kernel(&k, a, b, x);
+            assert!((got - want).abs() < 5e-5 * peak, "{x}: segment {got} points {want} (peak {peak})");
+        }
+        // Zero length: the point kernel, exactly; a tiny segment: within its
+        // first-order mass change (0.06 lambda) plus f64 cancellation.
+        for x in [a, a + DVec3::splat(0.2), a + DVec3::X * 0.9] {
+            assert_eq!(segment_kernel(&k, a, a, x), k.eval_d2(a.distance_squared(x)));
+            let k25 = Kernel::new(r, 2.5);
+            let tiny = segment_kernel(&k25, a, a + DVec3::Z * 1e-6 * r, x);
+            let point = k25.eval_d2(a.distance_squared(x));
+            assert!((tiny - point).abs() <= 1e-6 * k25.eval_d2(0.0), "{tiny} vs {point}");
+        }
+    }
+
+    fn segment_photons(n: usize, seed: u64) -> Vec<Photon> {
+        // Beam-like steps of 0 to 1.2 km along a tilted direction in a 6 km
+        // box, a few points among them.
+        let mut r = rng::rng(&[seed]);
+        (0..n)
+            .map(|i| {
+                let a = DVec3::new(r.random::<f64>() * 6.0, r.random::<f64>() * 6.0, r.random::<f64>() * 6.0);
+                let d = DVec3::new(r.random::<f64>() - 0.5, r.random::<f64>() - 0.5, -2.0).normalize();
+                let len = if i % 10 == 0 { 0.0 } else { 1.2 * r.random::<f64>() };
+                let b = a + d * len;
+                Photon::segment(a.as_vec3().to_array(), b.as_vec3().to_array(), [1e19, 5e18, 2e18])
+            })
+            .collect()
+    }
+
+    #[test]
+    fn segment_gathers_match_the_f64_oracle_and_each_other() {
+        let photons = segment_photons(1500, 22);
+        let rf = RadiusField::new(0.4, 0.3, 0.2, DVec3::new(0.0, 0.2, -1.0).normalize(), 10.0, &[1]);
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let g = gather_grid(&photons, tr, &rf, 2.5, GatherMethod::Kdtree, &NoProgress);
+        assert!(g.active_voxel_count() > 1000);
+        let vmax = g.iter_active().map(|(_, v)| v[0]).fold(0.0f32, f32::max) as f64;
+        // Per voxel: each term's f32 kernel is within 1e-5 relative of the
+        // f64 closed form where the erf difference is large (erf 2.5e-7
+        // absolute, exp 1e-6, the table 1e-6), within 1e-4 of the point
+        // kernel's peak for lambda below MIDPOINT_LAMBDA (module
+        // documentation); so 1e-4 of the voxel plus an absolute 1e-6 of the
+        // grid's largest value for the erf's absolute error at the caps.
+        let mut checked = 0;
+        for (ijk, v) in g.iter_active().step_by(5) {
+            let b = voxel_brute(&photons, &g, &rf, 2.5, ijk);
+            for k in 0..3 {
+                let tol = 1e-4 * b[k].abs() + 1e-6 * vmax;
+                assert!((v[k] as f64 - b[k]).abs() <= tol, "{ijk}: {v:?} vs {b:?}");
+            }
+            checked += 1;
+        }
+        assert!(checked > 200);
+        // Completeness: voxels outside the grid's leaves see no photon.
+        for i in -6..20 {
+            for j in [-6, 19] {
+                let ijk = IVec3::new(i, j, i.rem_euclid(13));
+                if !g.is_active(ijk) {
+                    assert_eq!(voxel_brute(&photons, &g, &rf, 2.5, ijk), [0.0; 3], "{ijk}");
+                }
+            }
+        }
+        // Constant radius: balloon and splat are the same sum in the same
+        // order, through different f32 code (row lanes, the midpoint via the
+        // point path, against the scalar path): each within the oracle's
+        // tolerance of the other.
+        let rc = RadiusField::constant(0.35);
+        let a = gather_grid(&photons, tr, &rc, 2.5, GatherMethod::Kdtree, &NoProgress);
+        let s = gather_grid(&photons, tr, &rc, 2.5, GatherMethod::Splat, &NoProgress);
+        assert_eq!(a.active_voxel_count(), s.active_voxel_count());
+        let amax = a.iter_active().map(|(_, v)| v[0]).fold(0.0f32, f32::max);
+        for (ijk, v) in a.iter_active() {
+            let w = s.get(ijk);
+            for k in 0..3 {
+                assert!((v[k] - w[k]).abs() <= 2e-4 * w[k].abs() + 2e-6 * amax, "{ijk}: {v:?} vs {w:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn segment_grid_holds_the_photons_power() {
+        // Sum of the grid times the voxel volume = total power / 1e19 (kR per
+        // km), photons well inside: the midpoint rule on voxels of r / 4 has
+        // the capsule-surface error of `segment_kernel_integrates_to_one`,
+        // under 2 % per photon at h = r / 4, and it averages over photons.
+        let photons = segment_photons(300, 23);
+        let rf = RadiusField::constant(0.4);
+        let vs = 0.1;
+        let g = gather_grid(&photons, Transform::new(vs, DVec3::ZERO), &rf, 2.5, GatherMethod::Splat, &NoProgress);
+        let sum: f64 = g.iter_active().map(|(_, v)| v[0] as f64).sum::<f64>() * vs * vs * vs;
+        let want = photons.len() as f64;
+        assert!((sum / want - 1.0).abs() < 0.01, "{sum} vs {want}");
+    }
+
+    #[test]
     fn uniform_photons_give_a_constant_estimate() {
         // N photons of power P uniform in a box of volume V: E[eta] = N P / V
         // inside (the kernel integrates to 1 and is fully inside), and
@@ -717,9 +1352,11 @@ mod tests {
         // Clustered photons (a thin sheet, like a curtain) and random queries.
         let mut r = rng::rng(&[10]);
         let photons: Vec<Photon> = (0..20_000)
-            .map(|_| Photon {
-                position: [(r.random::<f64>() * 30.0) as f32, (r.random::<f64>() * 1.5) as f32, (100.0 + r.random::<f64>() * 30.0) as f32],
-                power: [r.random::<f32>(), r.random::<f32>(), r.random::<f32>()],
+            .map(|_| {
+                Photon::point(
+                    [(r.random::<f64>() * 30.0) as f32, (r.random::<f64>() * 1.5) as f32, (100.0 + r.random::<f64>() * 30.0) as f32],
+                    [r.random::<f32>(), r.random::<f32>(), r.random::<f32>()],
+                )
             })
             .collect();
         let map = PhotonMap::new(&photons);

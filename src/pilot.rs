@@ -19,8 +19,30 @@
 //!
 //! `noise(m)^2 = (sum (a - b)^2 / 2) / (sum ((a + b)/2)^2 - sum (a - b)^2 / 4)`.
 //!
+//! **Stratified starts** (`beams.starts = "stratified"`, [`crate::starts`])
+//! break the exact law: beams are still independent in their energies and
+//! deflections, but their starts are a low-discrepancy set, whose share of
+//! the variance falls faster than `1/N` (as `1/N^2` for smooth flux maps, up
+//! to logarithms). Measured on the test's small scene, each pilot block with
+//! its own Cranley-Patterson shift (`crate::starts`; with one shared shift
+//! the halves are correlated and the split estimate is off by 15 %):
+//! `noise(62) / noise(250) = 1.87`, `noise(250) / noise(1000) = 2.12`
+//! (random starts: 1.83 for the latter; 4x the beams should give 2, the
+//! estimates' own error is some 10 %). The start share is small on this
+//! scene, but the pilot does not assume it: it fits
+//!
+//! `noise(N)^2 = a / N + b / N^2`
+//!
+//! to two measurements, `m` and `m / 4` beams per half (the quarter pair on
+//! its own disjoint streams): with `v_i = noise(m_i)^2`,
+//! `b = (m_1 v_1 - m_2 v_2) / (1/m_1 - 1/m_2)` and `a = m_2 v_2 - b / m_2`;
+//! then `N = (a + sqrt(a^2 + 4 t^2 b)) / (2 t^2)` for target t. A negative
+//! `b` (sampling error, or random starts, where b = 0 in expectation) is set
+//! to 0, which is the plain law `N = m (noise(m) / t)^2`, exact for random
+//! starts.
+//!
 //! This measures noise only: the kernel's bias (blur), which more beams do
-//! not change, is not part of it. The pilot costs about `2m` beams of
+//! not change, is not part of it. The pilot costs about `2.5 m` beams of
 //! tracing and gathering; the count is capped at `beams.count`.
 
 use crate::atmosphere::Atmosphere;
@@ -44,6 +66,29 @@ pub const PILOT_HALF_BEAMS: usize = 500;
 /// beam count the scene accepts (10^8), so the halves never share a stream.
 pub const SECOND_HALF_OFFSET: u64 = 1 << 40;
 
+/// Beam-stream indices of the quarter-size pair: beyond both halves.
+pub const QUARTER_OFFSETS: [u64; 2] = [2 << 40, 3 << 40];
+
+/// `a` and `b` of `noise(N)^2 = a / N + b / N^2` from `noise(m1)` and
+/// `noise(m2)` (see the module documentation); b >= 0.
+pub fn fit_law(m1: f64, n1: f64, m2: f64, n2: f64) -> (f64, f64) {
+    let (v1, v2) = (n1 * n1, n2 * n2);
+    let b = ((m1 * v1 - m2 * v2) / (1.0 / m1 - 1.0 / m2)).max(0.0);
+    let a = m2 * v2 - b / m2;
+    if a <= 0.0 {
+        // The fast-falling share would be all the noise: keep the plain law
+        // (more beams, never fewer).
+        return (m2 * v2, 0.0);
+    }
+    (a, b)
+}
+
+/// The beam count N with `a / N + b / N^2 = target^2`.
+pub fn beams_for_law(a: f64, b: f64, target: f64) -> f64 {
+    let t2 = target * target;
+    (a + (a * a + 4.0 * t2 * b).sqrt()) / (2.0 * t2)
+}
+
 /// What the pilot measured and chose.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct NoiseEstimate {
@@ -53,11 +98,17 @@ pub struct NoiseEstimate {
     pub pilot_beams: usize,
     /// Relative RMS noise of an `m`-beam grid, measured.
     pub pilot_noise: f64,
-    /// `m (pilot_noise / target)^2`.
+    /// Relative RMS noise of an `m / 4`-beam grid, measured.
+    pub quarter_noise: f64,
+    /// The fitted law `noise(N)^2 = law_a / N + law_b / N^2`.
+    pub law_a: f64,
+    pub law_b: f64,
+    /// The N of the fitted law at the target (`m (pilot_noise / target)^2`
+    /// when law_b = 0).
     pub beams_needed: f64,
     /// The count used: `beams_needed` rounded up, at most `beams.count`.
     pub beams: usize,
-    /// The noise expected at `beams`: `pilot_noise sqrt(m / beams)`.
+    /// The noise expected at `beams` by the fitted law.
     pub expected_noise: f64,
     /// `beams.count` capped the count.
     pub capped: bool,
@@ -115,7 +166,16 @@ pub fn beams_for_noise(
     let ga = photons::gather_grid(&pa, transform, &radius, p.cutoff, p.gather, &NoProgress);
     let gb = photons::gather_grid(&pb, transform, &radius, p.cutoff, p.gather, &NoProgress);
     let pilot_noise = split_noise(&ga, &gb).sqrt();
-    let beams_needed = m as f64 * (pilot_noise / target).powi(2);
+    let q = m / 4;
+    let mut quarter = scene.clone();
+    quarter.beams.count = q;
+    let (qa, _) = beams::trace_all_from(&quarter, footprints, atmosphere, colour, QUARTER_OFFSETS[0], &NoProgress)?;
+    let (qb, _) = beams::trace_all_from(&quarter, footprints, atmosphere, colour, QUARTER_OFFSETS[1], &NoProgress)?;
+    let gqa = photons::gather_grid(&qa, transform, &radius, p.cutoff, p.gather, &NoProgress);
+    let gqb = photons::gather_grid(&qb, transform, &radius, p.cutoff, p.gather, &NoProgress);
+    let quarter_noise = split_noise(&gqa, &gqb).sqrt();
+    let (law_a, law_b) = fit_law(q as f64, quarter_noise, m as f64, pilot_noise);
+    let beams_needed = beams_for_law(law_a, law_b, target);
     let cap = scene.beams.count;
     let capped = !(beams_needed <= cap as f64);
     let beams = if capped { cap } else { (beams_needed.ceil() as usize).max(1) };
@@ -123,9 +183,12 @@ pub fn beams_for_noise(
         target,
         pilot_beams: m,
         pilot_noise,
+        quarter_noise,
+        law_a,
+        law_b,
         beams_needed,
         beams,
-        expected_noise: pilot_noise * (m as f64 / beams as f64).sqrt(),
+        expected_noise: (law_a / beams as f64 + law_b / (beams as f64).powi(2)).sqrt(),
         capped,
         seconds: t.elapsed().as_secs_f64(),
     })
@@ -178,6 +241,68 @@ mod tests {
         s
     }
 
+    /// `noise(m)` of the small scene measured by the split estimator.
+    fn split_noise_at(s: &Scene, fps: &[Footprint], atm: &Atmosphere, colour: &ColourTable, m: usize) -> f64 {
+        let mut sm = s.clone();
+        sm.beams.count = m;
+        let tr = Transform::new(1.0, DVec3::ZERO);
+        let p = &s.photons;
+        let grid = |first: u64| {
+            let (ph, _) = beams::trace_all_from(&sm, fps, atm, colour, first, &NoProgress).unwrap();
+            photons::gather_grid(&ph, tr, &RadiusField::from_scene(s), p.cutoff, p.gather, &NoProgress)
+        };
+        split_noise(&grid(0), &grid(SECOND_HALF_OFFSET)).sqrt()
+    }
+
+    #[test]
+    fn the_noise_law_with_and_without_stratified_starts() {
+        // Random starts: every beam independent, noise(250) / noise(1000) =
+        // 2 (N^-1/2) within the estimates' sampling error (a few percent
+        // each: 10 % on the ratio). Stratified starts: steeper (the starts'
+        // share falls faster), so the fitted law a / N + b / N^2 from 62 and
+        // 250 beams must predict noise(1000) better than the plain law from
+        // 250. With expected deposition and the continuous start map the
+        // noise falls faster still between 250 and 1000 beams (measured:
+        // fitted 0.132, plain 0.153, measured 0.102): the fit errs high, so a
+        // pilot using it picks more beams than needed, never fewer (the
+        // end-to-end test below holds the chosen count to 15 %); 35 % here.
+        let s = small_scene();
+        let fps = bake::footprints(&s);
+        let atm = Atmosphere::us1976();
+        let colour = bake::colour_table(&s, &atm);
+        let mut sr = s.clone();
+        sr.beams.starts = crate::scene::BeamStarts::Random;
+        let (a, b) = (split_noise_at(&sr, &fps, &atm, &colour, 250), split_noise_at(&sr, &fps, &atm, &colour, 1000));
+        eprintln!("random: noise(250) {a:.4}, noise(1000) {b:.4}, ratio {:.3}", a / b);
+        assert!((a / b - 2.0).abs() < 0.2, "random: noise(250) / noise(1000) = {}", a / b);
+        let (n62, n250, n1000) = (
+            split_noise_at(&s, &fps, &atm, &colour, 62),
+            split_noise_at(&s, &fps, &atm, &colour, 250),
+            split_noise_at(&s, &fps, &atm, &colour, 1000),
+        );
+        let (la, lb) = fit_law(62.0, n62, 250.0, n250);
+        let fitted = (la / 1000.0 + lb / 1e6).sqrt();
+        let plain = n250 * 0.5;
+        eprintln!("stratified: noise(62) {n62:.4} (250) {n250:.4} (1000) {n1000:.4}; predicted: fitted {fitted:.4}, plain {plain:.4}");
+        assert!(n250 / n1000 > 2.0, "stratified starts should fall faster than N^-1/2");
+        assert!((fitted / n1000 - 1.0).abs() < 0.35 && fitted >= n1000, "fitted {fitted} vs measured {n1000}");
+        assert!((fitted / n1000 - 1.0).abs() <= (plain / n1000 - 1.0).abs());
+    }
+
+    #[test]
+    fn law_fit_recovers_its_coefficients() {
+        let (a, b) = (3.0, 400.0);
+        let v = |m: f64| (a / m + b / (m * m)).sqrt();
+        let (fa, fb) = fit_law(125.0, v(125.0), 500.0, v(500.0));
+        assert!((fa / a - 1.0).abs() < 1e-12 && (fb / b - 1.0).abs() < 1e-12);
+        let n = beams_for_law(fa, fb, 0.05);
+        assert!((v(n) / 0.05 - 1.0).abs() < 1e-12);
+        // b = 0: the plain law.
+        let (pa, pb) = fit_law(125.0, 0.4, 500.0, 0.2);
+        assert_eq!(pb, 0.0);
+        assert!((beams_for_law(pa, pb, 0.1) - 500.0 * 4.0).abs() < 1e-9);
+    }
+
     #[test]
     fn the_chosen_count_reaches_the_target_noise() {
         // End to end: pick N for a target from the pilot, then measure the
@@ -186,12 +311,13 @@ mod tests {
         // The law N^-1/2 is exact in expectation; what is left is the
         // sampling error of the two estimates (a few percent each, from the
         // heavy tail of per-voxel contributions): 15 % on the noise. Target
-        // 0.1: expected deposition reaches 0.25 at the pilot's own 500 beams.
+        // 0.05: expected deposition with stratified starts reaches 0.1 with
+        // about 1100 beams, not enough above the pilot's own 500 to test.
         let s = small_scene();
         let fps = bake::footprints(&s);
         let atm = Atmosphere::us1976();
         let colour = bake::colour_table(&s, &atm);
-        let target = 0.1;
+        let target = 0.05;
         let est = beams_for_noise(&s, &fps, &atm, &colour, target).unwrap();
         assert!(!est.capped && est.beams > 4 * PILOT_HALF_BEAMS, "{est:?}");
         let mut sn = s.clone();
@@ -210,6 +336,7 @@ mod tests {
         capped.beams.count = est.beams / 4;
         let e2 = beams_for_noise(&capped, &fps, &atm, &colour, target).unwrap();
         assert!(e2.capped && e2.beams == est.beams / 4);
-        assert!((e2.expected_noise / (2.0 * target) - 1.0).abs() < 0.01, "{e2:?}");
+        let want = (e2.law_a / e2.beams as f64 + e2.law_b / (e2.beams as f64).powi(2)).sqrt();
+        assert!((e2.expected_noise / want - 1.0).abs() < 1e-12, "{e2:?}");
     }
 }

@@ -19,6 +19,7 @@ pub mod tag {
     pub const BEAM: u64 = 0x2001;
     pub const BEAM_TOP_NOISE: u64 = 0x2002;
     pub const COLOUR_NOISE: u64 = 0x2003;
+    pub const BEAM_STARTS: u64 = 0x2004;
     pub const RADIUS_NOISE: u64 = 0x3001;
     pub const PULSATION: u64 = 0x4001;
 }

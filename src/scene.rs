@@ -167,6 +167,8 @@ pub struct BeamParams {
     /// (one energy per beam, straight-line continuous slowing down: the
     /// model before Fang, kept for comparison).
     pub deposition: Deposition,
+    /// How beam starts are placed over the footprint (`crate::starts`).
+    pub starts: BeamStarts,
 }
 
 /// Beam energy deposition model; see [`BeamParams::deposition`].
@@ -199,6 +201,17 @@ impl Default for AtmosphereParams {
     fn default() -> Self {
         Self { model: AtmosphereModel::Nrlmsis21 }
     }
+}
+
+/// Placement of beam starts over the footprint, in proportion to its flux.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum BeamStarts {
+    /// Low-discrepancy: beam i takes point i of a randomly shifted R2
+    /// sequence, mapped through the footprint's flux (default).
+    Stratified,
+    /// Independent random points (the estimator before issue 10; for comparison).
+    Random,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -248,6 +261,19 @@ pub struct PhotonParams {
     /// Spatial frequency of that noise, cycles per km.
     pub radius_noise_freq: f64,
     pub gather: GatherMethod,
+    /// Kernel shape: each step's power spread along its segment, or at its
+    /// end point (the estimator before issue 10; for comparison).
+    pub kernel: KernelShape,
+}
+
+/// Photon kernel shape (`crate::photons`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum KernelShape {
+    /// The Gaussian convolved with each step's segment (photon beams; default).
+    Segment,
+    /// The Gaussian at each step's end point.
+    Point,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -580,6 +606,7 @@ impl Default for BeamParams {
             b_inclination_deg: 78.0,
             b_declination_deg: 0.0,
             deposition: Deposition::Expected,
+            starts: BeamStarts::Stratified,
         }
     }
 }
@@ -603,6 +630,7 @@ impl Default for PhotonParams {
             radius_noise: 0.3,
             radius_noise_freq: 0.05,
             gather: GatherMethod::Kdtree,
+            kernel: KernelShape::Segment,
         }
     }
 }

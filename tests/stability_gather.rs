@@ -47,7 +47,7 @@ fn sheet() -> Vec<Photon> {
             let x = (r.random::<f64>() - 0.5) * L;
             let z = (r.random::<f64>() - 0.5) * L;
             let y = S * normal(&mut r);
-            Photon { position: [x as f32, y as f32, z as f32], power: [1.0; 3] }
+            Photon::point([x as f32, y as f32, z as f32], [1.0; 3])
         })
         .collect()
 }

@@ -5,13 +5,20 @@
 //!
 //! | study | swept | timed stage | reference | metric |
 //! |---|---|---|---|---|
-//! | photon count | beams, r fixed | beams + gather | kd-tree, `M` beams, same r, voxel | rel. RMS of `emission` |
+//! | photon count | beams, r fixed; scene's and old estimators | beams + gather | kd-tree, `M` beams, same r, voxel | rel. RMS of `emission` |
 //! | gather radius | r, beams fixed | gather | kd-tree, `M` beams, r / 2, voxel / 2 | rel. RMS of `emission` |
-//! | gather method | kd-tree, splat, report2014, beams | gather | kd-tree, `M` beams | rel. RMS of `emission` |
+//! | gather method | kd-tree, splat, report2014, old estimators, beams | gather | kd-tree, `M` beams | rel. RMS of `emission` |
 //! | voxel size | voxel, per gather method | gather | same photons and method, fine voxels | rel. RMS of `emission` |
 //! | primary-ray integration | fixed step h, exact | render (pixel loop) | exact integration | mean rel. luminance error, pixels > 1 % of peak |
 //! | pruning | error budget `grid.prune` | VDB write (in memory) | the unpruned bake's image | mean rel. luminance error, pixels > 1 % of peak |
 //! | shadow rays | shadow rays per hit, pixel samples | render (pixel loop) | same estimator, many samples | mean rel. luminance error, terrain pixels > 1 % of peak |
+//!
+//! "Old estimators" ([`old_estimators`]: point kernels, random starts, one
+//! sampled energy per beam where the build has `beams.deposition`) are the
+//! estimators before issue 10, traced and gathered afresh at each beam count
+//! and measured against the same reference (the scene's estimators), so
+//! their error also holds the small bias between point and segment kernels;
+//! both series share one chart, time against error.
 //!
 //! Noise references share their first beams (or samples) with every test
 //! run: beam `i` has the random stream `(seed, curtain seed, i)` whatever the
@@ -213,6 +220,27 @@ fn gather_key(n: usize, r: f64, v: f64, method: GatherMethod) -> GatherKey {
     (n, r.to_bits(), v.to_bits(), method as u8)
 }
 
+/// The scene with the estimators before issue 10: point kernels, random
+/// beam starts and, where this build has the key, `beams.deposition =
+/// "sampled"` (one drawn energy per beam), applied as a TOML overlay so the
+/// bench needs no change when that key arrives. The flag says whether it
+/// was applied.
+pub fn old_estimators(scene: &Scene) -> (Scene, bool) {
+    let mut s = scene.clone();
+    s.photons.kernel = crate::scene::KernelShape::Point;
+    s.beams.starts = crate::scene::BeamStarts::Random;
+    let overlay = || -> Option<Scene> {
+        let mut doc: toml::Table = toml::from_str(&s.to_toml()).ok()?;
+        let beams = doc.get_mut("beams")?.as_table_mut()?;
+        beams.insert("deposition".into(), toml::Value::String("sampled".into()));
+        Scene::from_toml_str(&toml::to_string(&doc).ok()?, "old estimators").ok()
+    };
+    match overlay() {
+        Some(t) => (t, true),
+        None => (s, false),
+    }
+}
+
 /// A result and the wall time it took, seconds.
 type Timed<T> = (T, f64);
 
@@ -365,6 +393,30 @@ impl<'a> Bench<'a> {
         (self.log)(s)
     }
 
+    /// The old estimators ([`old_estimators`]) at `n` beams, kd-tree gather
+    /// at the scene's radius and voxel: the grid, the trace time and the
+    /// gather time (each the fastest of the plan's runs; not cached).
+    fn old_estimator_grid(&self, n: usize) -> Result<(Grid<[f32; 3]>, f64, f64), SweepError> {
+        let (mut s, _) = old_estimators(&self.scene);
+        s.beams.count = n;
+        let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
+        let (res, trace_s) =
+            timed(min, runs, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
+        let (photons, _) = res.map_err(BakeError::from)?;
+        let p = &self.scene.photons;
+        let radius = RadiusField::new(self.radius(), p.radius_noise, p.radius_noise_freq, self.field.b, self.scene.beams.top_km, &[self.scene.seed]);
+        let tr = Transform::new(self.voxel(), DVec3::ZERO);
+        let (g, gather_s) =
+            timed(min, runs, || photons::gather_grid(&photons, tr, &radius, p.cutoff, GatherMethod::Kdtree, &NoProgress));
+        Ok((g, trace_s, gather_s))
+    }
+
+    /// Label of the old estimators' series.
+    fn old_label(&self) -> String {
+        let (_, sampled) = old_estimators(&self.scene);
+        format!("old: point kernel, random starts{}, kd-tree", if sampled { ", sampled deposition" } else { "" })
+    }
+
     /// The kd-tree reference of the photon-count and gather-method studies:
     /// `M` beams, the scene's radius and voxel.
     fn noise_reference(&mut self) -> Result<(Grid<[f32; 3]>, usize, f64), SweepError> {
@@ -437,9 +489,19 @@ impl<'a> Bench<'a> {
             ));
             self.note_last(&ms, gather_key(k, r, v, GatherMethod::Kdtree), trace_s);
         }
+        // The old estimators over the same beam counts, on the same chart.
+        let old_label = self.old_label();
+        let mut old_gathers = Vec::new();
+        for f in self.plan.beam_factors.clone() {
+            let k = self.beams_times(f);
+            let (g, trace_s, gather_s) = self.old_estimator_grid(k)?;
+            let e = grid_rel_rms(&g, &reference);
+            ms.push(self.measure(name, &old_label, "beams", k as f64, "beams+gather", trace_s + gather_s, e, metric, false));
+            old_gathers.push((k, gather_s, e));
+        }
         let mut notes = vec![format!(
             "Pure noise: the reference has the same kernel and voxels, so the error is the Monte Carlo noise of the density estimate, expected to fall as beams^-1/2 (sigma sqrt(1/n - 1/M) with the shared first beams)."
-        )];
+        ), format!("'{old_label}': the estimators before issue 10 (photons.kernel = \"point\", beams.starts = \"random\"), against the same reference: its error also holds the point-vs-segment kernel bias, and its streams share no beams with the reference's.")];
         if let Some(e) = err_n {
             notes.push(format!(
                 "Estimated noise of the reference itself ({m} beams): err(N = {n}) / sqrt(M/N - 1) = {:.3e}.",
@@ -452,7 +514,7 @@ impl<'a> Bench<'a> {
             metric: metric.into(),
             reference: format!("kd-tree gather of {m} beams, same radius (r = {r} km, radius noise as in the scene) and voxel ({v} km)"),
             reference_seconds: ref_secs + self.photons[&m].1,
-            expected_trend: vec![(method.clone(), 1)],
+            expected_trend: vec![(method.clone(), 1), (old_label.clone(), 1)],
             notes,
             measurements: ms,
         };
@@ -507,6 +569,20 @@ impl<'a> Bench<'a> {
             }
             ms.extend(scaled);
         }
+        // The old estimators' gather times (kd-tree, point photons), from
+        // the photon-count study's runs at the gather study's beam counts.
+        for f in self.plan.gather_beam_factors.clone() {
+            let k = self.beams_times(f);
+            let (gather_s, e) = match old_gathers.iter().find(|g| g.0 == k) {
+                Some(&(_, s, e)) => (s, e),
+                None => {
+                    let (g, _, s) = self.old_estimator_grid(k)?;
+                    (s, grid_rel_rms(&g, &reference))
+                }
+            };
+            ms.push(self.measure(name, &old_label, "beams", k as f64, "gather", gather_s, e, metric, false));
+        }
+        trend.push((old_label.clone(), 1));
         let gather = Study {
             name: name.into(),
             stage: "gather".into(),
