@@ -15,9 +15,12 @@
 //!   peak (the per-beam vectors while they are concatenated, the
 //!   concatenation, and the kd-tree's copy of the positions with indices).
 //! - **candidate leaves**: every photon lists the 8^3-voxel leaves within the
-//!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` before they are
-//!   deduplicated: at most `photons * L` entries of 12 bytes, with
-//!   `L = (2 reach / leaf + 2)^3`.
+//!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` of its step
+//!   (at most `length_km * dt` long) before they are deduplicated: at most
+//!   `photons * L` entries of 12 bytes, `L = (ceil((2 reach + step) / leaf)
+//!   + 1)^3`; where every step descends (alpha_D below the field's dip), a
+//!   beam's path to the 50 km bottom is at most `h / sin(dip - alpha_D)`
+//!   long and its entries at most `(path / leaf + 2) * (L^(1/3))^2`.
 //! - **grids**: the leaves, at most the smaller of `photons * L` and the
 //!   number of leaves in the scene's world box dilated by the reach, each
 //!   holding an emission leaf (512 x 12 bytes), a density leaf (512 x 4) and
@@ -140,7 +143,26 @@ pub fn estimate(scene: &Scene) -> Estimate {
     } else {
         (vkey, vvalue)
     };
-    let candidates = photons * per_photon.min(box_leaves) * 12.0;
+    // Candidate entries: each photon's segment box (kernel reach around a
+    // step of at most length_km * dt) lists its leaves. Where every step
+    // descends (the deflection alpha_D is smaller than the field's dip),
+    // a beam's path from its top to the 50 km bottom is at most
+    // h / sin(dip - alpha_D) long, so its photons touch at most
+    // (path / leaf + 2) slices of cross^2 leaves, which bounds the list
+    // (photons of one beam are consecutive and deduplicated) far below
+    // photons x leaves per photon.
+    let step = b.length_km * b.dt;
+    let cross = ((2.0 * reach + step) / leaf_km).ceil() + 1.0;
+    let per_photon_seg = cross.powi(3);
+    let descent = (b.b_inclination_deg - b.alpha_d_deg).to_radians();
+    let per_beam = if descent > 0.05 {
+        let path = (b.top_km + b.top_noise_km - 50.0).max(0.0) / descent.sin();
+        (path / leaf_km + 2.0) * cross * cross
+    } else {
+        f64::INFINITY
+    };
+    let entries = (photons * per_photon_seg).min(b.count as f64 * per_beam).min(photons * per_photon_seg.min(box_leaves));
+    let candidates = entries * 12.0;
     let (cand_key, cand_value) =
         if per_photon > 64.0 { ("photons.radius_km".to_string(), format!("{}", p.radius_km)) } else { (photon_key.clone(), photon_value.clone()) };
 
