@@ -101,14 +101,16 @@ fn values_beyond_half_range_are_refused_by_the_writer_and_no_file_is_left() {
 
 #[test]
 fn a_bake_beyond_half_range_fails_cleanly_and_full_float_keeps_the_values() {
-    // A tiny kernel (0.01 km) on 0.2 km voxels with 40 beams at the largest
-    // energy flux: the few voxel centres that fall near a photon get its
-    // whole kernel peak, about 1.5e5 kR/km, beyond half range.
+    // A tiny point kernel (0.01 km) on 0.2 km voxels with 40 beams at the
+    // largest energy flux: the few voxel centres that fall near a photon get
+    // its whole kernel peak, about 1.5e5 kR/km, beyond half range. (The
+    // default segment kernel spreads each step's power along the step, so
+    // the point kernel is asked for.)
     let d = dir("half-bake");
     let body = |half: bool| {
         small_scene(
             "count = 40",
-            "radius_km = 0.01\nradius_noise = 0.0",
+            "radius_km = 0.01\nradius_noise = 0.0\nkernel = \"point\"",
             &format!("voxel_size = 0.2\nhalf_emission = {half}"),
             "steps = 4",
             "energy_flux = 10000.0",
