@@ -86,6 +86,11 @@ def test_quick_side_by_side_runs_and_is_consistent(tmp_path):
             assert all(a > b for a, b in zip(errs, errs[1:])), (case, who, errs)
             assert all(e["best_wall_s"] > 0 and e["best_cpu_s"] > 0 for e in lad), (case, who)
             eq = c["equal_error"][who]
-            assert eq["how"] == "interpolated", (case, who, eq)
-            assert lad[0]["samples"] <= eq["samples"] <= lad[-1]["samples"], (case, who, eq)
+            if eq["how"] == "interpolated":
+                assert lad[0]["samples"] <= eq["samples"] <= lad[-1]["samples"], (case, who, eq)
+            else:
+                # The quick ladder's first rung already beats the target (the
+                # default bake is smooth since expected deposition, and pixel
+                # samples are antithetic): the equal-error point lies below it.
+                assert lad[0]["error"] <= c["target_error"] and 0 < eq["samples"] <= lad[0]["samples"], (case, who, eq, lad[0])
         assert c["cycles_converged"]["agrees"], (case, c["cycles_converged"])
