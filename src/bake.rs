@@ -1,409 +1,65 @@
 //! The bake: scene -> footprints -> beams -> photons -> grids.
 //!
-//! [`bake`] composes the stages, each a function of plain data:
-//! 1. one footprint per curtain ([`footprints`], seeded by scene and curtain seed);
-//! 2. electron beams traced through the atmosphere, leaving photons
-//!    ([`crate::beams::trace_all`]); with `beams.target_noise > 0` their
-//!    number comes from a pilot ([`crate::pilot`]);
-//! 3. the emission grid by kernel density estimation over the photons
-//!    ([`crate::photons::gather_grid`]): candidate 8^3 leaves are those within
-//!    `cutoff * r_max` of a photon, gathered in parallel, collected in leaf
-//!    order and sorted; a voxel is active when its emission is nonzero;
-//! 4. with `grid.prune > 0`, the leaves faintest at the camera dropped within
-//!    that error budget ([`crate::prune`]);
-//! 5. the density grid on the (kept) active voxels ([`density_grid`]);
-//! 6. with `grid.cycles_shell`, both grids dilated by one voxel of active
-//!    zeros ([`crate::grid::Grid::dilate_active`]).
+//! [`bake`] composes the stages of [`crate::pipeline`] for a scene: the
+//! memory check ([`crate::budget`]), a [`BakePlan`] (footprints, atmosphere,
+//! colour table, field, kernel radius field), the beam count (from
+//! `beams.count`, or from a pilot, [`crate::pilot`], when
+//! `beams.target_noise > 0`), then trace, gather and finish. [`bake_plan`]
+//! does the same from a plan already built (frame sequences reuse one).
+//! The stage functions, the types and the helpers live in
+//! [`crate::pipeline`] and are re-exported here under their old paths.
 //!
-//! [`resolution_warnings`] flags bakes whose voxels under-resolve the kernel
-//! or the curtains, [`extinction_warning`] air extinction clamped at
-//! [`MAX_EXTINCTION_PER_KM`] (`BakeStats::warnings`; the CLI prints them on
-//! stderr). Emission that overflows f32 is an error, never a file.
-//!
-//! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
-//! kernel radius `photons.radius_km` for now, until camera-based sizing
-//! lands), translation 0, so voxel (i, j, k) is centred at
-//! `voxel_size * (i, j, k)` km.
+//! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"`
+//! from the camera, [`auto_voxel_size`]), translation 0, so voxel (i, j, k)
+//! is centred at `voxel_size * (i, j, k)` km.
 
-use crate::atmosphere::Atmosphere;
-use crate::beams::{self, BeamError, BeamStats, Photon};
-use crate::pilot::{self, NoiseEstimate};
-use crate::footprint::{self, Footprint};
-use crate::grid::{Grid, Leaf, Transform};
-use crate::photons::{self, RadiusField};
+pub use crate::pipeline::{
+    atmosphere, auto_voxel_size, band_thickness_km, colour_table, density_grid, empty_reason, extinction,
+    extinction_warning, footprints, resolution_warnings, voxel_size, Bake, BakeError, BakePlan, BakeStats, StageTimes,
+    AURORA_FRACTION, MAX_EXTINCTION_PER_KM,
+};
+use crate::pilot;
+use crate::pipeline;
 use crate::progress::Progress;
-use crate::camera::CameraModel;
-use crate::prune::{self, PruneStats};
-use crate::scene::{ColourMode, GatherMethod, GridParams, Scene, VoxelSize};
-use crate::spectrum::{luminance, ColourTable, EmissionModel};
-use glam::DVec3;
-use rayon::prelude::*;
-use serde::Serialize;
+use crate::scene::Scene;
 use std::time::Instant;
-
-/// The density indicator saturates at this fraction of the peak luminance:
-/// `indicator = 1 - exp(-Y / (AURORA_FRACTION * Y_peak))`, about 1 wherever
-/// the aurora is within a few percent of its peak, falling smoothly to 0 in
-/// its faint fringes.
-pub const AURORA_FRACTION: f64 = 0.01;
-
-/// Largest air extinction stored, per km (the top of `density_a`'s range).
-/// `density_a exp(-density_b (h - density_base_km))` grows without bound
-/// below the base altitude and overflows f32 (and then f64) for steep
-/// profiles; at 10^6 per km a metre of path has optical depth 10^3, so any
-/// voxel is opaque and larger values change nothing but the risk of
-/// infinity. Clamped voxels are reported by a warning.
-pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
-
-/// The baked volumes and what produced them.
-#[derive(Clone, Debug)]
-pub struct Bake {
-    /// Linear Rec.709 emission, kR per km (Y = 1: 1 kR of 557.7 nm per km).
-    pub emission: Grid<[f32; 3]>,
-    /// Extinction per km, on the emission's active voxels.
-    pub density: Grid<f32>,
-    pub photons: Vec<Photon>,
-    pub stats: BakeStats,
-}
-
-/// Wall time of each stage, seconds.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct StageTimes {
-    pub footprints: f64,
-    pub pilot: f64,
-    pub beams: f64,
-    pub gather: f64,
-    pub prune: f64,
-    pub density: f64,
-    pub total: f64,
-}
-
-/// Numbers describing a bake (written as bake.json).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BakeStats {
-    pub units: &'static str,
-    pub seed: u64,
-    /// FNV-1a hash of the scene's canonical TOML, hex.
-    pub scene_hash: String,
-    pub voxel_size_km: f64,
-    /// "scene" or "auto (photons.radius_km)".
-    pub voxel_size_source: String,
-    pub gather: GatherMethod,
-    pub beams: usize,
-    pub photons: usize,
-    /// Voxels (and leaves) holding aurora: non-zero emission.
-    pub active_voxels: u64,
-    pub leaves: usize,
-    /// Active zero voxels of the `grid.cycles_shell` (0 without it).
-    pub shell_voxels: u64,
-    /// Active voxels and leaves per grid in the file: the aurora's plus the shell.
-    pub file_voxels: u64,
-    pub file_leaves: usize,
-    /// Inclusive index bounding box of the file's active voxels (shell
-    /// included), [min, max].
-    pub index_bbox: Option<[[i32; 3]; 2]>,
-    /// World bounding box of the active voxel centres, km, [min, max].
-    pub world_bbox: Option<[[f64; 3]; 2]>,
-    /// Largest emission per component, and the largest luminance, kR/km.
-    pub peak_emission: [f32; 3],
-    pub peak_luminance: f64,
-    /// Sum of the photons' power, 557.7-equivalent photons per second, RGB.
-    pub total_emitted_power: [f64; 3],
-    /// The same as luminance, in 557.7 nm photons per second.
-    pub total_emitted_luminance: f64,
-    /// Electron power into the atmosphere, W, and how much the beams
-    /// deposited before stopping.
-    pub electron_power_w: f64,
-    pub deposited_power_w: f64,
-    pub beam_stats: BeamStats,
-    pub times_s: StageTimes,
-    /// How `beams.target_noise` set the beam count (None when it is 0).
-    pub noise: Option<NoiseEstimate>,
-    /// What `grid.prune` removed (None when it is 0).
-    pub prune: Option<PruneStats>,
-    /// Under-resolution warnings ([`resolution_warnings`]); empty when the
-    /// grid resolves the kernel and every curtain.
-    pub warnings: Vec<String>,
-}
-
-impl BakeStats {
-    /// Wall time of the whole bake, seconds.
-    pub fn total_seconds(&self) -> f64 {
-        self.times_s.total
-    }
-}
-
-/// A bake failure.
-#[derive(Debug, thiserror::Error)]
-pub enum BakeError {
-    #[error(transparent)]
-    Beams(#[from] BeamError),
-    /// The emission overflowed single precision (never written: a safety
-    /// net behind the scene's validation ranges).
-    #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
-    NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
-    /// `grid.half_emission` asks for half floats the emission exceeds.
-    /// The bake would need more memory than this process may use
-    /// ([`crate::budget`]); refused before anything is allocated.
-    #[error(transparent)]
-    Memory(#[from] crate::budget::TooLarge),
-    /// The bake produced no emission at all: an empty VDB is never written
-    /// silently. The message says where the beams' energy went.
-    #[error("the bake deposited no light: {0}")]
-    Empty(String),
-    #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
-    HalfOverflow { ijk: [i32; 3], peak: f32 },
-    /// The scene's camera is out of range (never with a validated scene).
-    #[error(transparent)]
-    Camera(#[from] crate::camera::CameraError),
-}
-
-/// The voxel size in km and where it came from. `"auto"` asks the camera:
-/// see [`auto_voxel_size`].
-pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
-    match scene.grid.voxel_size {
-        VoxelSize::Km(v) => (v, "scene".into()),
-        VoxelSize::Auto(_) => {
-            let (v, why) = auto_voxel_size(scene, photons);
-            (v, format!("auto: {why}"))
-        }
-    }
-}
-
-/// No more model than the picture needs: the voxel size at which one voxel
-/// projects to about one pixel at the nearest aurora.
-///
-/// A pixel at the image centre subtends an angle `a` (perspective:
-/// 2 tan(fov/2) / height; fisheye: fov / max(width, height); equirectangular:
-/// min(360 / width, 180 / height) degrees: `CameraModel::pixel_angle`), so at
-/// distance d it covers d a km; d is the 1st percentile
-/// of the photons' distances from the camera (robust to a few stray photons,
-/// which would otherwise shrink every voxel). Orthographic: ortho_height /
-/// height. Never below half the kernel radius: the kernel already blurs the
-/// field at that scale, so finer voxels add memory and no detail; never above
-/// twice the smallest kernel radius, where the voxels would alias it.
-/// Rounded to three significant digits (down, at that ceiling) so the size
-/// reads well in bake.json.
-pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
-    let floor = 0.5 * scene.photons.radius_km;
-    // A validated scene always has a camera; should it not, the kernel
-    // radius is a size that neither aliases nor wastes.
-    let Ok(cam) = CameraModel::new(&scene.camera, scene.render.width, scene.render.height) else {
-        return (scene.photons.radius_km, "no valid camera: kernel radius".into());
-    };
-    let (raw, why) = match cam.pixel_angle() {
-        None => (cam.pixel_footprint(0.0), "ortho_height / height".to_string()),
-        Some(_) => {
-            let eye = cam.position;
-            let mut d: Vec<f64> = photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect();
-            if d.is_empty() {
-                return (scene.photons.radius_km, "no photons: kernel radius".into());
-            }
-            let k = d.len() / 100;
-            let (_, nth, _) = d.select_nth_unstable_by(k, f64::total_cmp);
-            let dist = *nth;
-            (cam.pixel_footprint(dist), format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
-        }
-    };
-    // Never above twice the smallest kernel radius either: coarser voxels
-    // alias the kernel (see [`resolution_warnings`]), so the bake would
-    // warn about its own choice.
-    let ceiling = 2.0 * scene.photons.radius_km * (1.0 - scene.photons.radius_noise);
-    if raw > ceiling && ceiling >= floor {
-        let p = 10f64.powi(2 - ceiling.abs().log10().floor() as i32);
-        return ((ceiling * p).floor() / p, format!("{why}, lowered to twice the smallest kernel radius"));
-    }
-    let v = raw.max(floor);
-    let why = if raw < floor { format!("{why}, raised to half the kernel radius") } else { why };
-    (round_sig(v, 3), why)
-}
-
-fn round_sig(x: f64, digits: i32) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    let p = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
-    (x * p).round() / p
-}
-
-/// One footprint per curtain (in curtain order; simulated in parallel), at
-/// the scene's `animation.time_s`.
-pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    scene.curtains.par_iter().map(|c| footprint::simulate_at(c, &scene.footprint, &scene.animation, scene.seed, scene.animation.time_s)).collect()
-}
-
-/// Mean thickness, km, of the band the beams of a footprint start from: the
-/// area of the cells above `threshold` divided by the curtain's length (the
-/// sum of the band's widths across the curtain, averaged along it).
-pub fn band_thickness_km(fp: &Footprint, threshold: f64) -> f64 {
-    let cells = fp.data.iter().filter(|&&d| d as f64 > threshold).count();
-    cells as f64 * fp.cell_area_km2() / fp.length
-}
-
-/// Warnings for a bake at voxel size `voxel_km` whose grid under-resolves
-/// what it stores:
-/// - the smallest kernel radius, `r_min = radius_km (1 - radius_noise)`, is
-///   below half a voxel. Voxel centres sample the Gaussian kernel; by Poisson
-///   summation the sum of a Gaussian of sd r sampled every h differs from its
-///   integral by up to `2 exp(-2 pi^2 r^2 / h^2)` per axis: 1.4 % at
-///   r = h / 2, 22 % at r = h / 3, so below h / 2 each photon's contribution
-///   depends on where it falls between voxel centres (noise at the voxel
-///   scale, power no longer conserved voxel by voxel).
-/// - a curtain's beams start in a band thinner than a voxel
-///   ([`band_thickness_km`]): across its thickness the sheet is one voxel or
-///   less, so its profile is lost (beam deflections widen the sheet a
-///   little; the kernel blurs it to at least r).
-pub fn resolution_warnings(scene: &Scene, footprints: &[Footprint], voxel_km: f64) -> Vec<String> {
-    let mut w = Vec::new();
-    let p = &scene.photons;
-    let r_min = p.radius_km * (1.0 - p.radius_noise);
-    if r_min < 0.5 * voxel_km {
-        w.push(format!(
-            "under-resolved kernel: photons.radius_km = {} (smallest radius with radius_noise = {}: {:.4} km) is below half the voxel size ({} km); the emission is aliased at the voxel scale: use grid.voxel_size <= {:.4} or a larger radius",
-            p.radius_km, p.radius_noise, r_min, voxel_km, 2.0 * r_min
-        ));
-    }
-    for (i, fp) in footprints.iter().enumerate() {
-        let t = band_thickness_km(fp, scene.footprint.threshold);
-        if t < voxel_km {
-            w.push(format!(
-                "under-resolved curtain: curtain[{i}]'s beams start in a band {t:.3} km thick on average (footprint above threshold), thinner than a voxel ({voxel_km} km); the sheet's profile across is lost: use grid.voxel_size <= {:.3}",
-                t
-            ));
-        }
-    }
-    w
-}
-
-/// The colour table the scene asks for.
-pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
-    match scene.colour.mode {
-        ColourMode::Physical => ColourTable::physical(&EmissionModel::new(atmosphere.clone())),
-        ColourMode::Colormap => ColourTable::colormap(&scene.colour.colormap),
-    }
-}
-
-/// The density grid on the emission's active voxels:
-/// `density_a exp(-density_b (h - density_base_km))` (the report's air
-/// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
-/// smoothly in the emission's luminance relative to [`AURORA_FRACTION`] of the
-/// peak. No fog box: only where the aurora is.
-pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64) -> Grid<f32> {
-    let tr = emission.transform;
-    let scale = AURORA_FRACTION * peak_luminance;
-    let leaves: Vec<Leaf<f32>> = emission
-        .leaves()
-        .par_iter()
-        .map(|l| {
-            let mut out = Leaf::new(l.origin, 0.0f32);
-            out.mask = l.mask;
-            for n in 0..crate::grid::LEAF_NUM_VALUES {
-                if l.is_active(n) {
-                    let ijk = l.origin + crate::grid::offset_to_local(n);
-                    let h = tr.index_to_world(ijk.as_dvec3()).z;
-                    let v = l.values[n];
-                    let y = luminance([v[0] as f64, v[1] as f64, v[2] as f64]).max(0.0);
-                    let indicator = if scale > 0.0 { 1.0 - (-y / scale).exp() } else { 0.0 };
-                    let air = extinction(params, h);
-                    out.values[n] = (air * indicator) as f32;
-                }
-            }
-            out
-        })
-        .collect();
-    let mut g = Grid::new("density", 0.0f32, tr);
-    for l in leaves {
-        g.insert_leaf(l);
-    }
-    g.sort_leaves();
-    g
-}
-
-/// The air extinction at altitude `h` km, per km:
-/// `density_a exp(-density_b (h - density_base_km))`, at most
-/// [`MAX_EXTINCTION_PER_KM`] (and 0, not NaN, when `density_a` is 0).
-pub fn extinction(params: &GridParams, h: f64) -> f64 {
-    if params.density_a > 0.0 {
-        (params.density_a * (-params.density_b * (h - params.density_base_km)).exp()).min(MAX_EXTINCTION_PER_KM)
-    } else {
-        0.0
-    }
-}
-
-/// A warning when the air extinction reaches [`MAX_EXTINCTION_PER_KM`] at
-/// the lowest altitude `h_min` km of the grid (it decreases with altitude).
-pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
-    let raw = params.density_a * (-params.density_b * (h_min - params.density_base_km)).exp();
-    (params.density_a > 0.0 && raw >= MAX_EXTINCTION_PER_KM).then(|| {
-        format!(
-            "air extinction clamped: grid.density_a exp(-density_b (h - density_base_km)) reaches {raw:.3e} per km at {h_min:.1} km, above the maximum {MAX_EXTINCTION_PER_KM:e} (opaque); density is clamped there"
-        )
-    })
-}
-
-/// Why a bake came out empty, in the user's terms: how its beams ended and
-/// which keys to look at.
-pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
-    let mut why = format!(
-        "{} beams made {} photons ({} left their footprint, {} spent their energy, {} took the most steps, 1 / beams.dt = {})",
-        stats.beams,
-        stats.photons,
-        stats.ended_left_footprint,
-        stats.ended_energy_spent,
-        stats.ended_max_steps,
-        (1.0 / beams.dt).round()
-    );
-    if stats.photons == 0 {
-        why += &format!(
-            "; no beam deposited energy before stopping: check beams.length_km = {} (a first step longer than the atmosphere leaves nothing) and beams.top_km = {}",
-            beams.length_km, beams.top_km
-        );
-    } else {
-        why += "; their emission is zero everywhere (curtain energy_flux, or an all-zero colour map)";
-    }
-    why
-}
-
-/// The scene's neutral atmosphere (`[atmosphere] model`).
-pub fn atmosphere(scene: &Scene) -> Atmosphere {
-    match scene.atmosphere.model {
-        crate::scene::AtmosphereModel::Nrlmsis21 => Atmosphere::nrlmsis21(),
-        crate::scene::AtmosphereModel::Us1976 => Atmosphere::us1976(),
-    }
-}
 
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
-    let mut times = StageTimes::default();
     crate::budget::check(&crate::budget::estimate(scene), &crate::memory::available())?;
+    let plan = BakePlan::new(scene, progress);
+    bake_plan(&plan, t_all, progress)
+}
 
-    let t = Instant::now();
-    progress.start("footprints", scene.curtains.len() as u64);
-    let fps: Vec<Footprint> = scene
-        .curtains
-        .par_iter()
-        .map(|c| {
-            let f = footprint::simulate_at(c, &scene.footprint, &scene.animation, scene.seed, scene.animation.time_s);
-            progress.inc(1);
-            f
-        })
-        .collect();
-    progress.finish();
-    times.footprints = t.elapsed().as_secs_f64();
+/// [`bake`] reusing what it can of a previous plan ([`BakePlan::reusing`]:
+/// a frame sequence, where only the time changes, keeps the atmosphere and
+/// colour table); returns the bake and its plan, for the next call.
+pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> Result<(Bake, BakePlan), BakeError> {
+    let t_all = Instant::now();
+    crate::budget::check(&crate::budget::estimate(scene), &crate::memory::available())?;
+    let plan = match prev {
+        Some(p) => BakePlan::reusing(scene, p, progress),
+        None => BakePlan::new(scene, progress),
+    };
+    Ok((bake_plan(&plan, t_all, progress)?, plan))
+}
 
-    let atmosphere = atmosphere(scene);
-    let colour = colour_table(scene, &atmosphere);
-    let mut noise_warning = None;
-    let noise = if scene.beams.target_noise > 0.0 {
+/// Runs the pilot (when `beams.target_noise > 0`), trace, gather and finish
+/// on a plan; the stats' total time runs from `t_all`, the footprints' is
+/// the plan's.
+pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Result<Bake, BakeError> {
+    let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
+    let mut warnings = Vec::new();
+    let noise = if plan.beams.target_noise > 0.0 {
         let t = Instant::now();
         progress.start("pilot (beams.target_noise)", 1);
-        let est = pilot::beams_for_noise(scene, &fps, &atmosphere, &colour, scene.beams.target_noise)?;
+        let est = pilot::beams_for_noise(plan, plan.beams.target_noise)?;
         progress.inc(1);
         progress.finish();
         times.pilot = t.elapsed().as_secs_f64();
         if est.capped {
-            noise_warning = Some(format!(
+            warnings.push(format!(
                 "beams.target_noise = {} needs {:.0} beams (pilot: {:.3} relative RMS noise at {} beams); capped at beams.count = {}, expected noise {:.3}: raise beams.count to reach the target",
                 est.target, est.beams_needed, est.pilot_noise, est.pilot_beams, est.beams, est.expected_noise
             ));
@@ -412,129 +68,17 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     } else {
         None
     };
-    let counted;
-    let traced_scene = match &noise {
-        Some(est) => {
-            counted = Scene { beams: crate::scene::BeamParams { count: est.beams, ..scene.beams.clone() }, ..scene.clone() };
-            &counted
-        }
-        None => scene,
-    };
-
-    let t = Instant::now();
-    let (photons, beam_stats) = beams::trace_all(traced_scene, &fps, &atmosphere, &colour, progress)?;
-    times.beams = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let (vs, vs_source) = voxel_size(scene, &photons);
-    let mut warnings = resolution_warnings(scene, &fps, vs);
-    warnings.extend(noise_warning);
-    let transform = Transform::new(vs, DVec3::ZERO);
-    let radius = RadiusField::from_scene(scene);
-    let emission =
-        photons::gather_grid(&photons, transform, &radius, scene.photons.cutoff, scene.photons.gather, progress);
-    times.gather = t.elapsed().as_secs_f64();
-    if emission.leaf_count() == 0 {
-        return Err(BakeError::Empty(empty_reason(&beam_stats, &scene.beams)));
-    }
-
-    let t = Instant::now();
-    let mut peak = [0.0f32; 3];
-    let mut peak_y = 0.0f64;
-    for (ijk, v) in emission.iter_active() {
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(BakeError::NonFinite {
-                ijk: ijk.to_array(),
-                value: format!("{v:?}"),
-                radius_km: scene.photons.radius_km,
-            });
-        }
-        if scene.grid.half_emission && v.iter().any(|x| x.abs() > half::f16::MAX.to_f32()) {
-            let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-            return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
-        }
-        for k in 0..3 {
-            peak[k] = peak[k].max(v[k]);
-        }
-        peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
-    }
-    if let Some((lo, _)) = emission.index_bbox() {
-        warnings.extend(extinction_warning(&scene.grid, transform.index_to_world(lo.as_dvec3()).z));
-    }
-    let scan_s = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    let mut emission = emission;
-    let prune_stats = if scene.grid.prune > 0.0 {
-        let camera = CameraModel::new(&scene.camera, scene.render.width, scene.render.height)?;
-        Some(prune::prune(&mut emission, &camera, scene.grid.prune))
-    } else {
-        None
-    };
-    times.prune = t.elapsed().as_secs_f64();
-
-    let t = Instant::now();
-    progress.start("density", emission.leaf_count() as u64);
-    let mut density = density_grid(&emission, &scene.grid, peak_y);
-    progress.inc(emission.leaf_count() as u64);
-    progress.finish();
-    let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
-    let shell_voxels = if scene.grid.cycles_shell {
-        let n = emission.dilate_active();
-        let m = density.dilate_active();
-        debug_assert_eq!(n, m, "both grids live on the same voxels");
-        n
-    } else {
-        0
-    };
-    times.density = scan_s + t.elapsed().as_secs_f64();
-    times.total = t_all.elapsed().as_secs_f64();
-
-    let mut total = [0.0f64; 3];
-    for p in &photons {
-        for (t, &c) in total.iter_mut().zip(&p.power) {
-            *t += c as f64;
-        }
-    }
-    let bbox = emission.index_bbox();
-    let stats = BakeStats {
-        units: "km",
-        seed: scene.seed,
-        scene_hash: format!("{:016x}", scene.hash()),
-        voxel_size_km: vs,
-        voxel_size_source: vs_source,
-        gather: scene.photons.gather,
-        beams: beam_stats.beams,
-        photons: photons.len(),
-        active_voxels: aurora_voxels,
-        leaves: aurora_leaves,
-        shell_voxels,
-        file_voxels: emission.active_voxel_count(),
-        file_leaves: emission.leaf_count(),
-        index_bbox: bbox.map(|(a, b)| [a.to_array(), b.to_array()]),
-        world_bbox: bbox.map(|(a, b)| {
-            [transform.index_to_world(a.as_dvec3()).to_array(), transform.index_to_world(b.as_dvec3()).to_array()]
-        }),
-        peak_emission: peak,
-        peak_luminance: peak_y,
-        total_emitted_power: total,
-        total_emitted_luminance: luminance(total),
-        electron_power_w: beam_stats.electron_power_w,
-        deposited_power_w: beam_stats.deposited_power_w,
-        beam_stats,
-        times_s: times,
-        noise,
-        prune: prune_stats,
-        warnings,
-    };
-    Ok(Bake { emission, density, photons, stats })
+    let count = noise.as_ref().map_or(plan.beams.count, |e| e.beams);
+    let (emission, gathered) = pipeline::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
+    pipeline::finish(plan, emission, gathered, times, t_all, progress)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::Grid;
     use crate::progress::NoProgress;
-    use crate::scene::{Curtain, VoxelSize};
+    use crate::scene::{ColourMode, Curtain, GatherMethod, GridParams, VoxelSize};
 
     /// A small, fast scene: one short curtain, few beams, coarse voxels.
     fn small_scene() -> Scene {
@@ -772,7 +316,8 @@ mod tests {
 #[cfg(test)]
 mod auto_voxel_tests {
     use super::*;
-    use crate::scene::{AutoTag, Projection};
+    use crate::beams::Photon;
+    use crate::scene::{AutoTag, Projection, VoxelSize};
 
     fn photon_at(p: [f32; 3]) -> Photon {
         Photon::point(p, [1.0; 3])

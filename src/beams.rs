@@ -63,7 +63,7 @@ use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::progress::Progress;
 use crate::rng;
-use crate::scene::{BeamParams, BeamStarts, Deposition, KernelShape, Scene};
+use crate::scene::{AnimationParams, BeamParams, BeamStarts, Curtain, Deposition, KernelShape, Scene};
 use crate::spectrum::ColourTable;
 use glam::DVec3;
 use noise::Perlin;
@@ -579,6 +579,41 @@ pub struct BeamStats {
     pub curtains: Vec<CurtainPower>,
 }
 
+/// What tracing needs of the scene, as plain data (no `Scene`): the
+/// curtains, the beam parameters, the seed, the footprint threshold, the
+/// animation time (pulsation, ray drift), the colour noise and the kernel
+/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline`
+/// keeps owned copies.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceParams<'a> {
+    pub seed: u64,
+    pub curtains: &'a [Curtain],
+    pub beams: &'a BeamParams,
+    /// `footprint.threshold`.
+    pub threshold: f64,
+    pub animation: &'a AnimationParams,
+    /// `colour.noise_km` and `colour.noise_freq`.
+    pub colour_noise_km: f64,
+    pub colour_noise_freq: f64,
+    /// `photons.kernel`.
+    pub kernel: KernelShape,
+}
+
+impl<'a> TraceParams<'a> {
+    pub fn of(scene: &'a Scene) -> Self {
+        TraceParams {
+            seed: scene.seed,
+            curtains: &scene.curtains,
+            beams: &scene.beams,
+            threshold: scene.footprint.threshold,
+            animation: &scene.animation,
+            colour_noise_km: scene.colour.noise_km,
+            colour_noise_freq: scene.colour.noise_freq,
+            kernel: scene.photons.kernel,
+        }
+    }
+}
+
 /// Traces every beam of every curtain. Beams run in parallel; each has its
 /// own random stream seeded from (scene seed, curtain seed, beam index), and
 /// photons are concatenated in (curtain, beam) order, so the result does not
@@ -604,7 +639,8 @@ pub fn trace_all_from(
     first_beam: u64,
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
-    let t = trace_curtains(scene, footprints, atmosphere, colour, first_beam, false, progress)?;
+    let n = scene.beams.count;
+    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, first_beam, 0..n, false, progress)?;
     Ok((t.photons, t.stats))
 }
 
@@ -617,16 +653,18 @@ pub fn trace_deposits(
     colour: &ColourTable,
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
-    let t = trace_curtains(scene, footprints, atmosphere, colour, 0, true, progress)?;
+    let n = scene.beams.count;
+    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, 0, 0..n, true, progress)?;
     Ok((t.deposits, t.stats))
 }
 
-/// What [`trace_curtains`] returns.
-struct Traced {
-    photons: Vec<Photon>,
-    stats: BeamStats,
+/// What [`trace_range`] returns.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Traced {
+    pub photons: Vec<Photon>,
+    pub stats: BeamStats,
     /// Per curtain (empty vectors unless recorded).
-    deposits: Vec<Vec<StepDeposit>>,
+    pub deposits: Vec<Vec<StepDeposit>>,
 }
 
 /// One beam's result, kept until the curtain's beams are concatenated.
@@ -638,42 +676,63 @@ struct BeamOut {
     power: [f64; 4],
 }
 
-fn trace_curtains(
-    scene: &Scene,
+/// Traces beams `range` of a bake of `count` beams. The bake's beams are
+/// numbered curtain by curtain (curtain 0's share of `count` by
+/// [`apportion`], then curtain 1's, ...); local beam `i` of curtain `c`
+/// draws the random stream `stream_offset + i` (and, stratified, the R2
+/// point of that index) and carries `1 / n_c` of its curtain's power. So a
+/// beam is the same whatever range it is traced in: tracing `[0, K)` and
+/// `[K, N)` and concatenating gives the photons of `[0, N)` byte for byte.
+/// A range's `electron_power_w` is its beams' share of the curtains' power
+/// (all of it for `0..count`).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_range(
+    params: &TraceParams,
     footprints: &[Footprint],
     atmosphere: &Atmosphere,
     colour: &ColourTable,
-    first_beam: u64,
+    count: usize,
+    stream_offset: u64,
+    range: std::ops::Range<usize>,
     record_deposits: bool,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let weights: Vec<f64> = scene.curtains.iter().map(|c| c.beam_weight).collect();
-    let counts = apportion(scene.beams.count, &weights);
-    let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
-    let threshold = scene.footprint.threshold;
+    let first_beam = stream_offset;
+    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
+    let counts = apportion(count, &weights);
+    let field = Field::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
+    let threshold = params.threshold;
     let mut stats = BeamStats::default();
     let mut photons = Vec::new();
-    let mut all_deposits = vec![Vec::new(); scene.curtains.len()];
-    stats.curtains = vec![CurtainPower::default(); scene.curtains.len()];
-    progress.start("beams", counts.iter().sum::<usize>() as u64);
-    for (ci, (curtain, fp)) in scene.curtains.iter().zip(footprints).enumerate() {
+    let mut all_deposits = vec![Vec::new(); params.curtains.len()];
+    stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
+    let range = range.start.min(count)..range.end.min(count);
+    progress.start("beams", range.len() as u64);
+    let mut curtain_first = 0usize;
+    for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
         let n = counts[ci];
-        if n == 0 {
+        // This curtain's beams are [curtain_first, curtain_first + n) of the
+        // bake; those in `range`, as local indices:
+        let lo = range.start.saturating_sub(curtain_first).min(n);
+        let hi = range.end.saturating_sub(curtain_first).min(n);
+        curtain_first += n;
+        let local = lo..hi.max(lo);
+        if local.is_empty() {
             continue;
         }
         // Beam i maps the same point of the unit square through every
         // frame's footprint (crate::animation: identity across frames).
         let starts = crate::footprint::StartMap::new(fp, threshold);
-        let anim = &scene.animation;
+        let anim = params.animation;
         let ray_shift = crate::animation::ray_shift_km(anim);
-        let shift0 = crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS]);
+        let shift0 = crate::starts::shift(&[params.seed, curtain.seed, rng::tag::BEAM_STARTS]);
         // Each block of 2^40 beam indices (the pilot's independent halves
         // live in blocks 1-3) has its own Cranley-Patterson shift, so the
         // blocks are independent randomisations of the sequence; block 0
         // (every bake) keeps the plain shift.
         let shift = |index: u64| match index >> 40 {
             0 => shift0,
-            k => crate::starts::shift(&[scene.seed, curtain.seed, rng::tag::BEAM_STARTS, k]),
+            k => crate::starts::shift(&[params.seed, curtain.seed, rng::tag::BEAM_STARTS, k]),
         };
         if starts.is_empty() {
             let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
@@ -682,10 +741,10 @@ fn trace_curtains(
         // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
         let power_w = curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6;
         let power_kev_s = power_w * KEV_PER_J / n as f64;
-        let top_noise: Perlin = rng::perlin(&[scene.seed, curtain.seed, rng::tag::BEAM_TOP_NOISE]);
-        let colour_noise: Perlin = rng::perlin(&[scene.seed, curtain.seed, rng::tag::COLOUR_NOISE]);
+        let top_noise: Perlin = rng::perlin(&[params.seed, curtain.seed, rng::tag::BEAM_TOP_NOISE]);
+        let colour_noise: Perlin = rng::perlin(&[params.seed, curtain.seed, rng::tag::COLOUR_NOISE]);
         let spectrum;
-        let model = match scene.beams.deposition {
+        let model = match params.beams.deposition {
             Deposition::Expected => {
                 spectrum = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
                 DepositModel::Expected(&spectrum)
@@ -698,15 +757,15 @@ fn trace_curtains(
             model,
             colour,
             field,
-            params: &scene.beams,
+            params: params.beams,
             footprint: fp,
             threshold,
             record_path: false,
         };
-        let traces: Vec<BeamOut> = (0..n)
+        let traces: Vec<BeamOut> = local.clone()
             .into_par_iter()
             .map(|i| {
-                let mut r = rng::rng(&[scene.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
+                let mut r = rng::rng(&[params.seed, curtain.seed, rng::tag::BEAM, first_beam + i as u64]);
                 // The unit-square point of beam i: the shifted R2 sequence
                 // (stratified, fixed by the index whatever the count) or two
                 // random numbers; either is mapped through the footprint's
@@ -714,7 +773,7 @@ fn trace_curtains(
                 // from frame to frame. Both numbers are drawn in either mode,
                 // so the rest of the beam's stream (energy, path) is the same.
                 let (xi1, xi2) = (r.random::<f64>(), r.random::<f64>());
-                let (xi1, xi2) = match scene.beams.starts {
+                let (xi1, xi2) = match params.beams.starts {
                     BeamStarts::Random => (xi1, xi2),
                     BeamStarts::Stratified => {
                         let [a, b] = crate::starts::r2(first_beam + i as u64, shift(first_beam + i as u64));
@@ -726,10 +785,10 @@ fn trace_curtains(
                 // High-frequency noise on the start height along the curtain
                 // (the rays), running along it in time.
                 let ur = u - ray_shift;
-                let z = scene.beams.top_km
-                    + scene.beams.top_noise_km * rng::noise1(&top_noise, ur * scene.beams.top_noise_freq);
-                let colour_offset_km = scene.colour.noise_km * rng::noise1(&colour_noise, ur * scene.colour.noise_freq);
-                let power_kev_s = power_kev_s * crate::animation::pulsation(anim, scene.seed, x, y);
+                let z = params.beams.top_km
+                    + params.beams.top_noise_km * rng::noise1(&top_noise, ur * params.beams.top_noise_freq);
+                let colour_offset_km = params.colour_noise_km * rng::noise1(&colour_noise, ur * params.colour_noise_freq);
+                let power_kev_s = power_kev_s * crate::animation::pulsation(anim, params.seed, x, y);
                 // Drawn in every model, so a beam's path is the same in all.
                 let e0 = if r.random::<f64>() < curtain.soft_fraction { curtain.soft_energy_kev } else { curtain.char_energy_kev };
                 let start = BeamStart {
@@ -742,7 +801,7 @@ fn trace_curtains(
                 progress.inc(1);
                 let deposited: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
                 let mut photons = t.photons;
-                if scene.photons.kernel == KernelShape::Point {
+                if params.kernel == KernelShape::Point {
                     // The point estimator: each step's power at its end.
                     photons.iter_mut().for_each(|p| *p = p.to_point());
                 }
@@ -755,7 +814,8 @@ fn trace_curtains(
             })
             .collect();
         let cp = &mut stats.curtains[ci];
-        cp.electron_power_w = power_w;
+        // The range's share of the curtain's power (all of it for a whole bake).
+        cp.electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
         for b in traces {
             match b.end {
                 EndReason::LeftFootprint => stats.ended_left_footprint += 1,
@@ -770,7 +830,7 @@ fn trace_curtains(
             photons.extend_from_slice(&b.photons);
             all_deposits[ci].extend_from_slice(&b.deposits);
         }
-        stats.beams += n;
+        stats.beams += local.len();
     }
     for cp in &stats.curtains {
         stats.electron_power_w += cp.electron_power_w;

@@ -23,6 +23,7 @@ pub mod memory;
 pub mod outputs;
 pub mod photons;
 pub mod pilot;
+pub mod pipeline;
 pub mod profile;
 pub mod progress;
 pub mod prune;

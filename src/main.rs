@@ -360,6 +360,7 @@ fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quie
     aurora::outputs::write_sequence_usda(out, frames, scene.animation.fps)?;
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped) = (0usize, 0usize);
+    let mut plan: Option<aurora::pipeline::BakePlan> = None;
     for &f in mine {
         if aurora::outputs::frame_complete(out, f) {
             skipped += 1;
@@ -377,7 +378,9 @@ fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quie
             continue;
         }
         let at = Scene { animation: aurora::animation::at_frame(&scene.animation, f), ..scene.clone() };
-        let bake = aurora::bake::bake(&at, progress)?;
+        // One plan, carried from frame to frame (only the time changes).
+        let (bake, p) = aurora::bake::bake_reusing(&at, plan.as_ref(), progress)?;
+        plan = Some(p);
         print_warnings(&bake.stats.warnings);
         let report = aurora::outputs::write_frame(&at, &bake, out, f)?;
         baked += 1;

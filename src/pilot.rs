@@ -45,17 +45,10 @@
 //! not change, is not part of it. The pilot costs about `2.5 m` beams of
 //! tracing and gathering; the count is capped at `beams.count`.
 
-use crate::atmosphere::Atmosphere;
-use crate::bake::{self, BakeError};
-use crate::beams;
-use crate::footprint::Footprint;
-use crate::grid::{Grid, Transform};
-use crate::photons::{self, RadiusField};
+pub use crate::pipeline::NoiseEstimate;
+use crate::grid::Grid;
+use crate::pipeline::{self, BakeError, BakePlan};
 use crate::progress::NoProgress;
-use crate::scene::Scene;
-use crate::spectrum::ColourTable;
-use glam::DVec3;
-use serde::Serialize;
 
 /// Beams in each half of the pilot: about 6 % of the default scene's
 /// tracing and gathering, and enough that the noise estimate itself is
@@ -89,32 +82,6 @@ pub fn beams_for_law(a: f64, b: f64, target: f64) -> f64 {
     (a + (a * a + 4.0 * t2 * b).sqrt()) / (2.0 * t2)
 }
 
-/// What the pilot measured and chose.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct NoiseEstimate {
-    /// `beams.target_noise`.
-    pub target: f64,
-    /// Beams per pilot half, `m`.
-    pub pilot_beams: usize,
-    /// Relative RMS noise of an `m`-beam grid, measured.
-    pub pilot_noise: f64,
-    /// Relative RMS noise of an `m / 4`-beam grid, measured.
-    pub quarter_noise: f64,
-    /// The fitted law `noise(N)^2 = law_a / N + law_b / N^2`.
-    pub law_a: f64,
-    pub law_b: f64,
-    /// The N of the fitted law at the target (`m (pilot_noise / target)^2`
-    /// when law_b = 0).
-    pub beams_needed: f64,
-    /// The count used: `beams_needed` rounded up, at most `beams.count`.
-    pub beams: usize,
-    /// The noise expected at `beams` by the fitted law.
-    pub expected_noise: f64,
-    /// `beams.count` capped the count.
-    pub capped: bool,
-    pub seconds: f64,
-}
-
 /// `noise(m)^2` from two independent grids of `m` beams each (see the
 /// module documentation), over the union of their active voxels.
 pub fn split_noise(a: &Grid<[f32; 3]>, b: &Grid<[f32; 3]>) -> f64 {
@@ -141,42 +108,28 @@ pub fn split_noise(a: &Grid<[f32; 3]>, b: &Grid<[f32; 3]>) -> f64 {
     0.5 * diff2 / signal
 }
 
-/// Measures the scene's noise with a pilot of `2 m` beams
+/// Measures the plan's noise with a pilot of `2 m` beams
 /// ([`PILOT_HALF_BEAMS`]) and picks the beam count for `target` relative
-/// RMS noise, at most `scene.beams.count`.
-pub fn beams_for_noise(
-    scene: &Scene,
-    footprints: &[Footprint],
-    atmosphere: &Atmosphere,
-    colour: &ColourTable,
-    target: f64,
-) -> Result<NoiseEstimate, BakeError> {
+/// RMS noise, at most the plan's `beams.count`. Traces and gathers through
+/// the plan ([`pipeline::trace`], [`pipeline::gather`]); the count is an
+/// argument, the scene is never copied.
+pub fn beams_for_noise(plan: &BakePlan, target: f64) -> Result<NoiseEstimate, BakeError> {
     let t = std::time::Instant::now();
     let m = PILOT_HALF_BEAMS;
-    let mut pilot = scene.clone();
-    pilot.beams.count = m;
-    let (pa, _) = beams::trace_all_from(&pilot, footprints, atmosphere, colour, 0, &NoProgress)?;
-    let (pb, _) = beams::trace_all_from(&pilot, footprints, atmosphere, colour, SECOND_HALF_OFFSET, &NoProgress)?;
+    let pa = pipeline::trace(plan, m, 0, 0..m, &NoProgress)?.photons;
+    let pb = pipeline::trace(plan, m, SECOND_HALF_OFFSET, 0..m, &NoProgress)?.photons;
     // The bake's own grid ("auto" resolved on the pilot's photons, which
     // sample the same distribution as the bake's).
-    let (vs, _) = bake::voxel_size(scene, &pa);
-    let transform = Transform::new(vs, DVec3::ZERO);
-    let radius = RadiusField::from_scene(scene);
-    let p = &scene.photons;
-    let ga = photons::gather_grid(&pa, transform, &radius, p.cutoff, p.gather, &NoProgress);
-    let gb = photons::gather_grid(&pb, transform, &radius, p.cutoff, p.gather, &NoProgress);
-    let pilot_noise = split_noise(&ga, &gb).sqrt();
+    let (vs, _) = plan.voxel_size(&pa);
+    let grid = |photons: &[crate::beams::Photon]| pipeline::gather(plan, photons, vs, &NoProgress);
+    let pilot_noise = split_noise(&grid(&pa), &grid(&pb)).sqrt();
     let q = m / 4;
-    let mut quarter = scene.clone();
-    quarter.beams.count = q;
-    let (qa, _) = beams::trace_all_from(&quarter, footprints, atmosphere, colour, QUARTER_OFFSETS[0], &NoProgress)?;
-    let (qb, _) = beams::trace_all_from(&quarter, footprints, atmosphere, colour, QUARTER_OFFSETS[1], &NoProgress)?;
-    let gqa = photons::gather_grid(&qa, transform, &radius, p.cutoff, p.gather, &NoProgress);
-    let gqb = photons::gather_grid(&qb, transform, &radius, p.cutoff, p.gather, &NoProgress);
-    let quarter_noise = split_noise(&gqa, &gqb).sqrt();
+    let qa = pipeline::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;
+    let qb = pipeline::trace(plan, q, QUARTER_OFFSETS[1], 0..q, &NoProgress)?.photons;
+    let quarter_noise = split_noise(&grid(&qa), &grid(&qb)).sqrt();
     let (law_a, law_b) = fit_law(q as f64, quarter_noise, m as f64, pilot_noise);
     let beams_needed = beams_for_law(law_a, law_b, target);
-    let cap = scene.beams.count;
+    let cap = plan.beams.count;
     let capped = !(beams_needed <= cap as f64);
     let beams = if capped { cap } else { (beams_needed.ceil() as usize).max(1) };
     Ok(NoiseEstimate {
@@ -198,7 +151,8 @@ pub fn beams_for_noise(
 mod tests {
     use super::*;
     use crate::grid::Transform;
-    use glam::IVec3;
+    use crate::scene::Scene;
+    use glam::{DVec3, IVec3};
 
     #[test]
     fn split_noise_recovers_a_known_variance() {
@@ -238,18 +192,16 @@ mod tests {
         s.photons.radius_km = 1.0;
         s.grid.voxel_size = crate::scene::VoxelSize::Km(1.0);
         s.grid.prune = 0.0;
+        // The atmosphere these tests were calibrated with.
+        s.atmosphere.model = crate::scene::AtmosphereModel::Us1976;
         s
     }
 
-    /// `noise(m)` of the small scene measured by the split estimator.
-    fn split_noise_at(s: &Scene, fps: &[Footprint], atm: &Atmosphere, colour: &ColourTable, m: usize) -> f64 {
-        let mut sm = s.clone();
-        sm.beams.count = m;
-        let tr = Transform::new(1.0, DVec3::ZERO);
-        let p = &s.photons;
+    /// `noise(m)` of the plan measured by the split estimator.
+    fn split_noise_at(plan: &BakePlan, m: usize) -> f64 {
         let grid = |first: u64| {
-            let (ph, _) = beams::trace_all_from(&sm, fps, atm, colour, first, &NoProgress).unwrap();
-            photons::gather_grid(&ph, tr, &RadiusField::from_scene(s), p.cutoff, p.gather, &NoProgress)
+            let ph = pipeline::trace(plan, m, first, 0..m, &NoProgress).unwrap().photons;
+            pipeline::gather(plan, &ph, 1.0, &NoProgress)
         };
         split_noise(&grid(0), &grid(SECOND_HALF_OFFSET)).sqrt()
     }
@@ -267,18 +219,17 @@ mod tests {
         // pilot using it picks more beams than needed, never fewer (the
         // end-to-end test below holds the chosen count to 15 %); 35 % here.
         let s = small_scene();
-        let fps = bake::footprints(&s);
-        let atm = Atmosphere::us1976();
-        let colour = bake::colour_table(&s, &atm);
+        let plan = BakePlan::new(&s, &NoProgress);
         let mut sr = s.clone();
         sr.beams.starts = crate::scene::BeamStarts::Random;
-        let (a, b) = (split_noise_at(&sr, &fps, &atm, &colour, 250), split_noise_at(&sr, &fps, &atm, &colour, 1000));
+        let pr = BakePlan::reusing(&sr, &plan, &NoProgress);
+        let (a, b) = (split_noise_at(&pr, 250), split_noise_at(&pr, 1000));
         eprintln!("random: noise(250) {a:.4}, noise(1000) {b:.4}, ratio {:.3}", a / b);
         assert!((a / b - 2.0).abs() < 0.2, "random: noise(250) / noise(1000) = {}", a / b);
         let (n62, n250, n1000) = (
-            split_noise_at(&s, &fps, &atm, &colour, 62),
-            split_noise_at(&s, &fps, &atm, &colour, 250),
-            split_noise_at(&s, &fps, &atm, &colour, 1000),
+            split_noise_at(&plan, 62),
+            split_noise_at(&plan, 250),
+            split_noise_at(&plan, 1000),
         );
         let (la, lb) = fit_law(62.0, n62, 250.0, n250);
         let fitted = (la / 1000.0 + lb / 1e6).sqrt();
@@ -314,19 +265,14 @@ mod tests {
         // 0.05: expected deposition with stratified starts reaches 0.1 with
         // about 1100 beams, not enough above the pilot's own 500 to test.
         let s = small_scene();
-        let fps = bake::footprints(&s);
-        let atm = Atmosphere::us1976();
-        let colour = bake::colour_table(&s, &atm);
+        let plan = BakePlan::new(&s, &NoProgress);
         let target = 0.05;
-        let est = beams_for_noise(&s, &fps, &atm, &colour, target).unwrap();
+        let est = beams_for_noise(&plan, target).unwrap();
         assert!(!est.capped && est.beams > 4 * PILOT_HALF_BEAMS, "{est:?}");
-        let mut sn = s.clone();
-        sn.beams.count = est.beams;
+        let n = est.beams;
         let grid = |first: u64| {
-            let (ph, _) = beams::trace_all_from(&sn, &fps, &atm, &colour, first, &NoProgress).unwrap();
-            let tr = Transform::new(1.0, DVec3::ZERO);
-            let p = &s.photons;
-            photons::gather_grid(&ph, tr, &RadiusField::from_scene(&s), p.cutoff, p.gather, &NoProgress)
+            let ph = pipeline::trace(&plan, n, first, 0..n, &NoProgress).unwrap().photons;
+            pipeline::gather(&plan, &ph, 1.0, &NoProgress)
         };
         let measured = split_noise(&grid(1 << 20), &grid(3 << 40)).sqrt();
         eprintln!("target {target}: measured {measured}, {est:?}");
@@ -334,7 +280,7 @@ mod tests {
         // A cap below the need is reported, and honoured.
         let mut capped = s.clone();
         capped.beams.count = est.beams / 4;
-        let e2 = beams_for_noise(&capped, &fps, &atm, &colour, target).unwrap();
+        let e2 = beams_for_noise(&BakePlan::reusing(&capped, &plan, &NoProgress), target).unwrap();
         assert!(e2.capped && e2.beams == est.beams / 4);
         let want = (e2.law_a / e2.beams as f64 + e2.law_b / (e2.beams as f64).powi(2)).sqrt();
         assert!((e2.expected_noise / want - 1.0).abs() < 1e-12, "{e2:?}");

@@ -17,8 +17,8 @@ pub mod reduced;
 pub mod report;
 pub mod sweeps;
 
-use crate::bake::{self, BakeError};
-use crate::beams;
+use crate::bake::BakeError;
+use crate::pipeline::{self, BakePlan};
 use crate::progress::NoProgress;
 use crate::scene::{Scene, VoxelSize};
 use report::{BenchRun, Machine};
@@ -36,12 +36,10 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
         VoxelSize::Km(_) => None,
         VoxelSize::Auto(_) => {
             // "auto" depends on the full scene's photons: trace them once.
-            let atmosphere = bake::atmosphere(scene);
-            let colour = bake::colour_table(scene, &atmosphere);
-            let fps = bake::footprints(scene);
-            let (photons, _) =
-                beams::trace_all(scene, &fps, &atmosphere, &colour, &NoProgress).map_err(BakeError::from)?;
-            Some(bake::voxel_size(scene, &photons))
+            let plan = BakePlan::new(scene, &NoProgress);
+            let n = plan.beams.count;
+            let photons = pipeline::trace(&plan, n, 0, 0..n, &NoProgress).map_err(BakeError::from)?.photons;
+            Some(plan.voxel_size(&photons))
         }
     };
     let red = reduced::reduce(scene, plan.curtain_km, auto_voxel);

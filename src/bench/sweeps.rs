@@ -43,18 +43,14 @@
 use super::chart::Measurement;
 use super::metrics::{grid_rel_rms, grid_rel_rms_best_scale, image_rel_error_masked};
 use super::reduced::{ground_camera, ground_terrain, volume_camera};
-use crate::atmosphere::Atmosphere;
 use crate::bake::{self, BakeError};
-use crate::beams::{self, Field, Photon};
-use crate::footprint::Footprint;
-use crate::grid::{Grid, Transform};
-use crate::photons::{self, RadiusField};
+use crate::beams::Photon;
+use crate::grid::Grid;
+use crate::pipeline::{self, BakePlan, KernelRadius};
 use crate::progress::NoProgress;
 use crate::vdb::write::GridRef;
 use crate::render::{self, Image, Integration, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
-use crate::spectrum::ColourTable;
-use glam::DVec3;
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Instant;
@@ -201,10 +197,9 @@ pub fn timed<T>(min_seconds: f64, max_runs: usize, mut f: impl FnMut() -> T) -> 
 pub struct Bench<'a> {
     pub scene: Scene,
     pub plan: Plan,
-    footprints: Vec<Footprint>,
-    atmosphere: Atmosphere,
-    colour: ColourTable,
-    field: Field,
+    /// The reduced scene's bake plan (footprints, atmosphere, colour
+    /// table, field, radius field).
+    bake: BakePlan,
     photons: BTreeMap<usize, (Vec<Photon>, f64)>,
     /// Test gathers by (beams, radius bits, voxel bits, method).
     gathers: HashMap<GatherKey, Timed<Arc<Grid<[f32; 3]>>>>,
@@ -247,17 +242,11 @@ type Timed<T> = (T, f64);
 impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
     pub fn new(scene: Scene, plan: Plan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
-        let footprints = bake::footprints(&scene);
-        let atmosphere = bake::atmosphere(&scene);
-        let colour = bake::colour_table(&scene, &atmosphere);
-        let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
+        let bake = BakePlan::new(&scene, &NoProgress);
         Bench {
             scene,
             plan,
-            footprints,
-            atmosphere,
-            colour,
-            field,
+            bake,
             photons: BTreeMap::new(),
             gathers: HashMap::new(),
             gather_timed: Vec::new(),
@@ -276,7 +265,7 @@ impl<'a> Bench<'a> {
 
     /// r, the scene's kernel radius, km.
     pub fn radius(&self) -> f64 {
-        self.scene.photons.radius_km
+        self.bake.kernel.base_km
     }
 
     /// v, the scene's voxel size, km.
@@ -284,7 +273,7 @@ impl<'a> Bench<'a> {
         match self.scene.grid.voxel_size {
             VoxelSize::Km(v) => v,
             // reduce() resolves "auto"; kept as a fallback: the kernel radius.
-            VoxelSize::Auto(_) => self.scene.photons.radius_km,
+            VoxelSize::Auto(_) => self.bake.kernel.base_km,
         }
     }
 
@@ -293,12 +282,9 @@ impl<'a> Bench<'a> {
         if self.photons.contains_key(&n) {
             return Ok(());
         }
-        let mut s = self.scene.clone();
-        s.beams.count = n;
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, secs) =
-            timed(min, runs, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
-        let (ph, _) = res.map_err(BakeError::from)?;
+        let (res, secs) = timed(min, runs, || pipeline::trace(&self.bake, n, 0, 0..n, &NoProgress));
+        let ph = res.map_err(BakeError::from)?.photons;
         self.photons.insert(n, (ph, secs));
         Ok(())
     }
@@ -373,20 +359,12 @@ impl<'a> Bench<'a> {
         v: f64,
         method: GatherMethod,
     ) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
-        let p = &self.scene.photons;
-        let radius = RadiusField::new(
-            r,
-            p.radius_noise,
-            p.radius_noise_freq,
-            self.field.b,
-            self.scene.beams.top_km,
-            &[self.scene.seed],
-        );
-        let cutoff = p.cutoff;
+        let b = &self.bake;
+        let radius = pipeline::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
+        let cutoff = b.photons.cutoff;
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (photons, _) = self.photons_of(n)?;
-        let tr = Transform::new(v, DVec3::ZERO);
-        Ok(timed(min, runs, || photons::gather_grid(photons, tr, &radius, cutoff, method, &NoProgress)))
+        Ok(timed(min, runs, || pipeline::gather_with(photons, v, &radius, cutoff, method, &NoProgress)))
     }
 
     fn say(&self, s: &str) {
@@ -397,17 +375,16 @@ impl<'a> Bench<'a> {
     /// at the scene's radius and voxel: the grid, the trace time and the
     /// gather time (each the fastest of the plan's runs; not cached).
     fn old_estimator_grid(&self, n: usize) -> Result<(Grid<[f32; 3]>, f64, f64), SweepError> {
-        let (mut s, _) = old_estimators(&self.scene);
-        s.beams.count = n;
+        let (s, _) = old_estimators(&self.scene);
+        // Same curtains and footprint: the plan reuses the footprints.
+        let old = BakePlan::reusing(&s, &self.bake, &NoProgress);
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, trace_s) =
-            timed(min, runs, || beams::trace_all(&s, &self.footprints, &self.atmosphere, &self.colour, &NoProgress));
-        let (photons, _) = res.map_err(BakeError::from)?;
-        let p = &self.scene.photons;
-        let radius = RadiusField::new(self.radius(), p.radius_noise, p.radius_noise_freq, self.field.b, self.scene.beams.top_km, &[self.scene.seed]);
-        let tr = Transform::new(self.voxel(), DVec3::ZERO);
-        let (g, gather_s) =
-            timed(min, runs, || photons::gather_grid(&photons, tr, &radius, p.cutoff, GatherMethod::Kdtree, &NoProgress));
+        let (res, trace_s) = timed(min, runs, || pipeline::trace(&old, n, 0, 0..n, &NoProgress));
+        let photons = res.map_err(BakeError::from)?.photons;
+        let (v, cutoff) = (self.voxel(), self.bake.photons.cutoff);
+        let (g, gather_s) = timed(min, runs, || {
+            pipeline::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress)
+        });
         Ok((g, trace_s, gather_s))
     }
 
