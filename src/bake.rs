@@ -50,27 +50,36 @@ pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progr
 /// the plan's.
 pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
-    let mut warnings = Vec::new();
-    let noise = if plan.beams.target_noise > 0.0 {
-        let t = Instant::now();
-        progress.start("pilot (beams.target_noise)", 1);
-        let est = pilot::beams_for_noise(plan, plan.beams.target_noise)?;
-        progress.inc(1);
-        progress.finish();
-        times.pilot = t.elapsed().as_secs_f64();
-        if est.capped {
-            warnings.push(format!(
-                "beams.target_noise = {} needs {:.0} beams (pilot: {:.3} relative RMS noise at {} beams); capped at beams.count = {}, expected noise {:.3}: raise beams.count to reach the target",
-                est.target, est.beams_needed, est.pilot_noise, est.pilot_beams, est.beams, est.expected_noise
-            ));
-        }
-        Some(est)
-    } else {
-        None
-    };
-    let count = noise.as_ref().map_or(plan.beams.count, |e| e.beams);
+    let (count, noise, warnings) = beam_count(plan, &mut times, progress)?;
     let (emission, gathered) = pipeline::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
     pipeline::finish(plan, emission, gathered, times, t_all, progress)
+}
+
+/// The beam count: `beams.count`, or the pilot's when `beams.target_noise >
+/// 0` (with its estimate, and a warning when `beams.count` capped it);
+/// `times.pilot` is filled in.
+pub fn beam_count(
+    plan: &BakePlan,
+    times: &mut StageTimes,
+    progress: &dyn Progress,
+) -> Result<(usize, Option<pipeline::NoiseEstimate>, Vec<String>), BakeError> {
+    if plan.beams.target_noise <= 0.0 {
+        return Ok((plan.beams.count, None, Vec::new()));
+    }
+    let mut warnings = Vec::new();
+    let t = Instant::now();
+    progress.start("pilot (beams.target_noise)", 1);
+    let est = pilot::beams_for_noise(plan, plan.beams.target_noise)?;
+    progress.inc(1);
+    progress.finish();
+    times.pilot = t.elapsed().as_secs_f64();
+    if est.capped {
+        warnings.push(format!(
+            "beams.target_noise = {} needs {:.0} beams (pilot: {:.3} relative RMS noise at {} beams); capped at beams.count = {}, expected noise {:.3}: raise beams.count to reach the target",
+            est.target, est.beams_needed, est.pilot_noise, est.pilot_beams, est.beams, est.expected_noise
+        ));
+    }
+    Ok((est.beams, Some(est), warnings))
 }
 
 #[cfg(test)]

@@ -26,6 +26,7 @@ pub mod pilot;
 pub mod pipeline;
 pub mod profile;
 pub mod progress;
+pub mod preview;
 pub mod prune;
 pub mod render;
 pub mod rng;

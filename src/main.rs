@@ -153,6 +153,31 @@ enum Command {
         #[arg(long)]
         schema: bool,
     },
+    /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
+    ///
+    /// With --watch the scene file is polled (~100 ms); each save is parsed and validated (a bad
+    /// edit prints the error and the watch goes on) and only the stages the edit touches are
+    /// rerun: a render edit re-renders from the cached grids, a camera edit re-derives the voxel
+    /// size and pruning, a beams or colour edit retraces the beams but keeps the footprints.
+    /// A coarse picture (1/4 size, 1 spp) is written first, then the refined one (--size, the
+    /// scene's spp), atomically; each update prints its stage times. The bake uses the scene's own
+    /// settings. Without --watch: one picture, then exit.
+    Preview {
+        /// Scene file or preset name (a file for --watch).
+        #[arg(default_value = "default")]
+        scene: String,
+        /// Output PNG (replaced atomically on every update).
+        #[arg(long, default_value = "preview.png", value_name = "IMAGE.png")]
+        out: PathBuf,
+        /// Picture size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "320x180", value_name = "WxH", value_parser = parse_size)]
+        size: [usize; 2],
+        /// Keep watching the scene file and update the picture on every save.
+        #[arg(long)]
+        watch: bool,
+        #[command(flatten)]
+        common: Common,
+    },
     /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
     Footprint {
         /// Scene file or preset name.
@@ -293,6 +318,14 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", scene_header(&name));
             print!("{}", s.to_toml());
             Ok(())
+        }
+        Command::Preview { scene: scene_arg, out, size, watch, common } => {
+            image_format("--out", &out).and_then(|f| match f {
+                ImageFormat::Png => Ok(()),
+                ImageFormat::Exr => Err(InputError(format!("--out {}: the preview writes PNG", out.display())).into()),
+            })?;
+            let dir = scene_dir(&scene_arg);
+            with_threads(common.threads, || preview_cmd(&scene_arg, &dir, &out, size, watch, common.quiet))
         }
         Command::Footprint { scene, out } => {
             let scene = load_scene(&scene)?;
@@ -571,6 +604,76 @@ fn render_cmd(
 fn print_warnings(warnings: &[String]) {
     for w in warnings {
         eprintln!("aurora: warning: {w}");
+    }
+}
+
+/// `--size WxH`: two positive integers up to the scene's image limit.
+fn parse_size(text: &str) -> std::result::Result<[usize; 2], String> {
+    let max = aurora::scene::MAX_IMAGE_SIDE;
+    let bad = || format!("`{text}`: expected WIDTHxHEIGHT, each 1..={max} (e.g. 320x180)");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (usize, usize) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(bad());
+    }
+    Ok([w, h])
+}
+
+/// One preview, or (--watch) a preview per save of the scene file until
+/// killed. A bad edit is reported as `aurora bake` words it and the watch
+/// goes on with the last good scene.
+fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch: bool, quiet: bool) -> Result<()> {
+    use aurora::preview::{FileStamp, Preview};
+    let mut preview = Preview::new(out, size, Some(dir.to_path_buf()));
+    let report = |u: &aurora::preview::Update| {
+        if !quiet {
+            eprintln!("wrote {}: {}", out.display(), u.summary());
+        }
+    };
+    let on_coarse = |secs: f64| {
+        if !quiet {
+            eprintln!("coarse picture in {secs:.2} s");
+        }
+    };
+    if !watch {
+        let scene = load_scene(scene_arg)?;
+        let u = preview.update(&scene, &on_coarse)?;
+        if let Some(b) = preview.bake() {
+            print_warnings(&b.stats.warnings);
+        }
+        report(&u);
+        return Ok(());
+    }
+    let path = Path::new(scene_arg);
+    if !path.is_file() {
+        return Err(InputError(format!("{scene_arg}: --watch needs a scene file (write a preset to one: aurora scene default > scene.toml)")).into());
+    }
+    let mut last: Option<FileStamp> = None;
+    if !quiet {
+        eprintln!("watching {} (Ctrl-C to stop)", path.display());
+    }
+    loop {
+        if let Some((stamp, text)) = FileStamp::read(path) {
+            if last.as_ref() != Some(&stamp) {
+                let changed = last.as_ref().is_none_or(|l| l.hash != stamp.hash);
+                last = Some(stamp);
+                if changed {
+                    match Scene::from_toml_str(&text, scene_arg) {
+                        Err(e) => eprintln!("aurora: error: {e}"),
+                        Ok(scene) => match preview.update(&scene, &on_coarse) {
+                            Ok(u) => {
+                                if let Some(b) = preview.bake() {
+                                    print_warnings(&b.stats.warnings);
+                                }
+                                report(&u)
+                            }
+                            Err(e) => eprintln!("aurora: error: {e}"),
+                        },
+                    }
+                }
+            }
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
     }
 }
 
