@@ -659,7 +659,8 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
                 last = Some(stamp);
                 if changed {
                     match Scene::from_toml_str(&text, scene_arg) {
-                        Err(e) => eprintln!("aurora: error: {e}"),
+                        // Worded as `aurora bake` words it.
+                        Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
                         Ok(scene) => match preview.update(&scene, &on_coarse) {
                             Ok(u) => {
                                 if let Some(b) = preview.bake() {
@@ -667,7 +668,7 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
                                 }
                                 report(&u)
                             }
-                            Err(e) => eprintln!("aurora: error: {e}"),
+                            Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
                         },
                     }
                 }

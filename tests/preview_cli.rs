@@ -1,0 +1,134 @@
+//! `aurora preview --watch` driven as a user would: a render edit, a syntax
+//! error, a fix. The picture follows good edits, a bad one prints the error
+//! `aurora bake` prints and the watch goes on.
+
+use aurora::scene::{Curtain, Scene, VoxelSize};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_aurora");
+
+fn scratch(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("preview").join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A scene that bakes in about a second.
+fn small_scene() -> Scene {
+    let mut s = Scene {
+        curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
+        ..Scene::default()
+    };
+    s.footprint.resolution = [128, 48];
+    s.beams.count = 300;
+    s.photons.radius_km = 1.0;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s.render.spp = 2;
+    s
+}
+
+/// Kills the watcher however the test ends.
+struct Watcher(Child);
+
+impl Drop for Watcher {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// Waits until `cond` holds on the watcher's stderr so far (a file), or
+/// fails after `secs`.
+fn wait_for(log: &Path, secs: u64, what: &str, cond: impl Fn(&str) -> bool) -> String {
+    let t = Instant::now();
+    loop {
+        let text = std::fs::read_to_string(log).unwrap_or_default();
+        if cond(&text) {
+            return text;
+        }
+        assert!(t.elapsed() < Duration::from_secs(secs), "timed out waiting for {what}; stderr so far:\n{text}");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+fn pictures(text: &str) -> usize {
+    text.lines().filter(|l| l.starts_with("wrote ")).count()
+}
+
+#[test]
+fn watch_follows_good_edits_and_survives_a_bad_one() {
+    let dir = scratch("watch");
+    let scene_path = dir.join("scene.toml");
+    let png = dir.join("p.png");
+    let log = dir.join("stderr.txt");
+    let mut scene = small_scene();
+    std::fs::write(&scene_path, scene.to_toml()).unwrap();
+    let child = Command::new(BIN)
+        .args(["preview", scene_path.to_str().unwrap(), "--watch", "--size", "64x36", "--threads", "2", "--out"])
+        .arg(&png)
+        .stdout(Stdio::null())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .expect("aurora runs");
+    let mut w = Watcher(child);
+    wait_for(&log, 300, "the first picture", |t| pictures(t) >= 1);
+    let first = std::fs::read(&png).unwrap();
+
+    // 1. A render edit: brighter. The picture is rewritten, by a render only.
+    scene.render.exposure += 2.0;
+    std::fs::write(&scene_path, scene.to_toml()).unwrap();
+    let text = wait_for(&log, 120, "the render edit's picture", |t| pictures(t) >= 2);
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s"), "{last}");
+    let second = std::fs::read(&png).unwrap();
+    assert_ne!(first, second, "the render edit must change the picture");
+
+    // 2. A syntax error: the error as `aurora bake` words it; the process lives on.
+    let bad = format!("{}\n[render\n", scene.to_toml());
+    std::fs::write(&scene_path, &bad).unwrap();
+    let text = wait_for(&log, 60, "the syntax error", |t| t.contains("aurora: error:"));
+    let got = text.lines().find(|l| l.starts_with("aurora: error:")).unwrap().to_string();
+    let bake = Command::new(BIN).args(["bake", scene_path.to_str().unwrap(), "--out"]).arg(dir.join("bake")).output().unwrap();
+    assert_eq!(bake.status.code(), Some(2));
+    let want = String::from_utf8_lossy(&bake.stderr);
+    assert!(want.lines().any(|l| l == got), "preview: {got}\nbake: {want}");
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(w.0.try_wait().unwrap().is_none(), "the watcher exited on a bad edit");
+    assert_eq!(std::fs::read(&png).unwrap(), second, "a bad edit must not touch the picture");
+    assert_eq!(pictures(&std::fs::read_to_string(&log).unwrap()), 2);
+
+    // 3. The fix (and another exposure): a new picture, diffed against the
+    // last good scene (a render edit again).
+    scene.render.exposure -= 1.0;
+    std::fs::write(&scene_path, scene.to_toml()).unwrap();
+    let text = wait_for(&log, 120, "the fix's picture", |t| pictures(t) >= 3);
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    assert!(last.contains("edit (render)"), "{last}");
+    let third = std::fs::read(&png).unwrap();
+    assert_ne!(third, second);
+    assert!(w.0.try_wait().unwrap().is_none(), "the watcher must still run");
+    // PNG signature: a whole file, never a torn one.
+    assert_eq!(&third[..8], b"\x89PNG\r\n\x1a\n");
+}
+
+#[test]
+fn without_watch_one_picture_then_exit() {
+    let dir = scratch("once");
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, small_scene().to_toml()).unwrap();
+    let png = dir.join("once.png");
+    let out = Command::new(BIN)
+        .args(["preview", scene_path.to_str().unwrap(), "--size", "32x18", "--out"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    // A size out of range is refused with exit status 2.
+    let bad = Command::new(BIN).args(["preview", "--size", "0x10"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2), "{}", String::from_utf8_lossy(&bad.stderr));
+}
