@@ -101,6 +101,10 @@ pub struct Update {
     pub finish: f64,
     pub coarse_render: f64,
     pub render: f64,
+    /// Of `render`: building the renderer's structures from the grids
+    /// (`RenderStats::build_seconds`), and the pixel loop.
+    pub render_build: f64,
+    pub render_pixels: f64,
     /// From the start of the update to the coarse and the refined picture
     /// on disk.
     pub to_coarse: f64,
@@ -112,8 +116,8 @@ impl Update {
     pub fn summary(&self) -> String {
         let st = self.stage.map_or("first".to_string(), |s| format!("{s:?}").to_lowercase());
         format!(
-            "edit ({st}): footprints {:.2} s, pilot {:.2} s, trace {:.2} s, gather {:.2} s, finish {:.2} s, coarse render {:.2} s, render {:.2} s; edit to coarse picture {:.2} s, to picture {:.2} s",
-            self.footprints, self.pilot, self.trace, self.gather, self.finish, self.coarse_render, self.render, self.to_coarse, self.to_picture
+            "edit ({st}): footprints {:.2} s, pilot {:.2} s, trace {:.2} s, gather {:.2} s, finish {:.2} s, coarse render {:.2} s, render {:.2} s (build {:.2} s, pixels {:.2} s); edit to coarse picture {:.2} s, to picture {:.2} s",
+            self.footprints, self.pilot, self.trace, self.gather, self.finish, self.coarse_render, self.render, self.render_build, self.render_pixels, self.to_coarse, self.to_picture
         )
     }
 }
@@ -280,6 +284,7 @@ impl Preview {
         let img = render::render(&settings(w, h, scene.render.spp), &volume, nothing)?;
         render::film::write_png(&self.out, &img, exposure)?;
         u.render = t.elapsed().as_secs_f64();
+        (u.render_build, u.render_pixels) = (img.stats.build_seconds, img.stats.render_seconds);
         u.to_picture = t0.elapsed().as_secs_f64();
         Ok(u)
     }

@@ -12,10 +12,16 @@
 
 pub mod animation;
 pub mod chart;
+pub mod integration;
 pub mod metrics;
+pub mod photons;
+pub mod prune;
+pub mod radius;
 pub mod reduced;
 pub mod report;
+pub mod shadow;
 pub mod sweeps;
+pub mod voxel;
 
 use crate::bake::BakeError;
 use crate::pipeline::{self, BakePlan};
