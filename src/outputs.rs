@@ -168,53 +168,88 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
 
 /// [`write_outputs`] for a caller that holds the folder's lock from [`prepare`].
 pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
-    let vdb_path = out.join(VDB_NAME);
-    let usda_path = out.join(USDA_NAME);
-    let json_path = out.join(JSON_NAME);
-    let mut unit = Unit::new();
-
-    let t0 = Instant::now();
-    let mut vdb_tmp = TempFile::create(&vdb_path)?;
-    let stats = write_vdb_into(&mut vdb_tmp, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &write_options(scene))
-        .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
-    let vdb_seconds = t0.elapsed().as_secs_f64();
-    unit.stage(vdb_tmp);
-
-    let mut usda_tmp = TempFile::create(&usda_path)?;
     let usda = usd::usda_text(VDB_NAME, &[("density", "float"), ("emission", "float3")], 1000.0);
-    use std::io::Write;
-    usda_tmp
-        .file()
-        .write_all(usda.as_bytes())
-        .map_err(|e| OutputError::Write { path: usda_path.clone(), message: e.to_string() })?;
-    unit.stage(usda_tmp);
+    let usda_len = usda.len();
+    let files = UnitFiles {
+        vdb: out.join(VDB_NAME),
+        vdb_name: VDB_NAME.to_string(),
+        usda: Some((out.join(USDA_NAME), usda)),
+        json: out.join(JSON_NAME),
+        options: write_options(scene),
+    };
+    let mut report = unit_report(scene, bake);
+    write_unit(bake, files, |mut vdb_files, vdb_seconds| {
+        vdb_files["usda_bytes"] = json!(usda_len);
+        report["files"] = vdb_files;
+        report["total_seconds"] = json!(bake.stats.total_seconds() + vdb_seconds);
+        report
+    })
+}
 
-    let total: f64 = bake.stats.total_seconds() + vdb_seconds;
-    let report = json!({
+/// What one output unit holds: the VDB (its path, its name in the report,
+/// the write options), an optional USD stage with its text, and the report.
+struct UnitFiles {
+    vdb: PathBuf,
+    vdb_name: String,
+    usda: Option<(PathBuf, String)>,
+    json: PathBuf,
+    options: WriteOptions,
+}
+
+/// The report's keys common to a bake and a frame (the rest is added by the
+/// caller).
+fn unit_report(scene: &Scene, bake: &Bake) -> serde_json::Value {
+    json!({
         "aurora_version": env!("CARGO_PKG_VERSION"),
         "scene_hash": format!("{:016x}", scene.hash()),
         "seed": scene.seed,
         "units": "km",
         "threads": rayon::current_num_threads(),
         "stats": bake.stats,
-        "files": {
-            "vdb": VDB_NAME,
-            "vdb_bytes": stats.bytes,
-            "vdb_uuid": stats.uuid,
-            "vdb_write_seconds": vdb_seconds,
-            "usda": USDA_NAME,
-            "usda_bytes": usda.len(),
-            "compression": scene.grid.compression,
-            "half_emission": scene.grid.half_emission,
-        },
-        "total_seconds": total,
+    })
+}
+
+/// Writes one output unit: the VDB, then the USD stage if any, then the
+/// report (the manifest, renamed last). `report` receives the `files`
+/// object (VDB name, bytes, UUID and write time, the stage's name,
+/// compression, half floats) and the VDB write time, and returns the whole
+/// report.
+fn write_unit(
+    bake: &Bake,
+    files: UnitFiles,
+    report: impl FnOnce(serde_json::Value, f64) -> serde_json::Value,
+) -> Result<BakeReport, OutputError> {
+    use std::io::Write;
+    let UnitFiles { vdb: vdb_path, vdb_name, usda, json: json_path, options } = files;
+    let mut unit = Unit::new();
+    let t0 = Instant::now();
+    let mut vdb_tmp = TempFile::create(&vdb_path)?;
+    let stats = write_vdb_into(&mut vdb_tmp, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &options)
+        .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
+    let vdb_seconds = t0.elapsed().as_secs_f64();
+    unit.stage(vdb_tmp);
+    let usda_path = match usda {
+        Some((path, text)) => {
+            let mut tmp = TempFile::create(&path)?;
+            tmp.file().write_all(text.as_bytes()).map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
+            unit.stage(tmp);
+            path
+        }
+        None => vdb_path.with_file_name(USDA_NAME),
+    };
+    let vdb_files = json!({
+        "vdb": vdb_name,
+        "vdb_bytes": stats.bytes,
+        "vdb_uuid": stats.uuid,
+        "vdb_write_seconds": vdb_seconds,
+        "usda": USDA_NAME,
+        "compression": options.compression,
+        "half_emission": !options.half.is_empty(),
     });
+    let report = report(vdb_files, vdb_seconds);
     let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
     let mut json_tmp = TempFile::create(&json_path)?;
-    json_tmp
-        .file()
-        .write_all(text.as_bytes())
-        .map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
+    json_tmp.file().write_all(text.as_bytes()).map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
     unit.stage_manifest(json_tmp);
     unit.commit()?;
     Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
@@ -296,44 +331,19 @@ pub fn lock_frame(out: &Path, frame: i64, on_wait: impl FnOnce()) -> Result<Unit
 /// the scene at that frame's time. The caller holds [`lock_frame`].
 pub fn write_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64) -> Result<BakeReport, OutputError> {
     crate::atomic::prepare_folder(out)?;
-    let (vdb_path, json_path) = frame_paths(out, frame);
-    let mut opts = write_options(scene);
-    opts.metadata.push(("aurora_frame".into(), MetaValue::Int64(frame)));
-    opts.metadata.push(("aurora_time_s".into(), MetaValue::String(format!("{}", scene.animation.time_s))));
-    let mut unit = Unit::new();
-    let t0 = Instant::now();
-    let mut vdb_tmp = TempFile::create(&vdb_path)?;
-    let stats = write_vdb_into(&mut vdb_tmp, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &opts)
-        .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
-    unit.stage(vdb_tmp);
-    let vdb_seconds = t0.elapsed().as_secs_f64();
+    let (vdb, json) = frame_paths(out, frame);
+    let mut options = write_options(scene);
+    options.metadata.push(("aurora_frame".into(), MetaValue::Int64(frame)));
+    options.metadata.push(("aurora_time_s".into(), MetaValue::String(format!("{}", scene.animation.time_s))));
     let vdb_name = crate::frames::frame_file_name(FRAME_STEM, frame, "vdb");
-    let report = json!({
-        "aurora_version": env!("CARGO_PKG_VERSION"),
-        "scene_hash": format!("{:016x}", scene.hash()),
-        "seed": scene.seed,
-        "units": "km",
-        "frame": frame,
-        "time_s": scene.animation.time_s,
-        "fps": scene.animation.fps,
-        "threads": rayon::current_num_threads(),
-        "stats": bake.stats,
-        "files": {
-            "vdb": vdb_name,
-            "vdb_bytes": stats.bytes,
-            "vdb_uuid": stats.uuid,
-            "vdb_write_seconds": vdb_seconds,
-            "usda": USDA_NAME,
-            "compression": scene.grid.compression,
-            "half_emission": scene.grid.half_emission,
-        },
-        "total_seconds": bake.stats.total_seconds() + vdb_seconds,
-    });
-    let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
-    let mut json_tmp = TempFile::create(&json_path)?;
-    use std::io::Write;
-    json_tmp.file().write_all(text.as_bytes()).map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
-    unit.stage_manifest(json_tmp);
-    unit.commit()?;
-    Ok(BakeReport { vdb: vdb_path, usda: out.join(USDA_NAME), json_path, json: report })
+    let files = UnitFiles { vdb, vdb_name, usda: None, json, options };
+    let mut report = unit_report(scene, bake);
+    report["frame"] = json!(frame);
+    report["time_s"] = json!(scene.animation.time_s);
+    report["fps"] = json!(scene.animation.fps);
+    write_unit(bake, files, |vdb_files, vdb_seconds| {
+        report["files"] = vdb_files;
+        report["total_seconds"] = json!(bake.stats.total_seconds() + vdb_seconds);
+        report
+    })
 }
