@@ -945,6 +945,8 @@ def fmt_s(x: float) -> str:
 
 
 def report_vdb_gather(res: dict, L: list) -> None:
+    v = res["vdb_write"]
+    i = v["input"]
     L.append(f"1. VDB writer: the default bake's grids ({', '.join(i['grids'])}: {i['active_voxels']:,} active voxels, "
              f"{i['leaves']:,} leaves, f32), best of {v['repeats']} runs, writers alternating")
     L.append(f"   {'writer':<34} {'compression':<22} {'class':<11} {'best s':>8} {'bytes':>13}")
