@@ -105,6 +105,11 @@ enum Command {
         /// Override the scene's seed.
         #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
         seed: Option<u64>,
+        /// Adaptive sampling by pixel variance: spp becomes the average per pixel; half goes
+        /// to every pixel, the rest to the pixels with the largest relative spread (spp >= 8;
+        /// README "The reference renderer").
+        #[arg(long)]
+        adaptive: bool,
         #[command(flatten)]
         common: Common,
     },
@@ -257,7 +262,7 @@ fn run(cli: Cli) -> Result<()> {
                 None => with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet)),
             }
         }
-        Command::Render { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, common } => {
+        Command::Render { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, common } => {
             let shadow_samples = shadow_samples as usize;
             let mut scene = load_scene(&scene_arg)?;
             if let Some(s) = seed {
@@ -288,13 +293,13 @@ fn run(cli: Cli) -> Result<()> {
                             let (vdb_path, _) = aurora::outputs::frame_paths(&seq, f);
                             let exr = frame_name(&out, f);
                             let pngf = png.as_deref().map(|p| frame_name(p, f));
-                            render_cmd(&scene, &dir, Some(&vdb_path), &exr, format, pngf.as_deref(), shadow_samples, common.quiet)?;
+                            render_cmd(&scene, &dir, Some(&vdb_path), &exr, format, pngf.as_deref(), shadow_samples, adaptive, common.quiet)?;
                         }
                         Ok(())
                     })
                 }
                 None => with_threads(common.threads, || {
-                    render_cmd(&scene, &dir, vdb.as_deref(), &out, format, png.as_deref(), shadow_samples, common.quiet)
+                    render_cmd(&scene, &dir, vdb.as_deref(), &out, format, png.as_deref(), shadow_samples, adaptive, common.quiet)
                 }),
             }
         }
@@ -542,6 +547,7 @@ fn render_cmd(
     format: ImageFormat,
     png: Option<&Path>,
     shadow_samples: usize,
+    adaptive: bool,
     quiet: bool,
 ) -> Result<()> {
     let bars = Bars::new(quiet);
@@ -568,7 +574,11 @@ fn render_cmd(
     }
     let open_seconds = open.elapsed().as_secs_f64();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
-    let image = aurora::render::render(&settings, &volume, progress)?;
+    let image = if adaptive {
+        aurora::render::render_adaptive(&settings, &volume, progress)?
+    } else {
+        aurora::render::render(&settings, &volume, progress)?
+    };
     match format {
         ImageFormat::Exr => aurora::render::film::write_exr(out, &image),
         ImageFormat::Png => aurora::render::film::write_png(out, &image, scene.render.exposure),

@@ -21,7 +21,7 @@
 
 use super::dda::{segments, CellFilter, CellSeg, IndexRay, LeafWalker};
 use super::medium::{Channel, Field, Medium, CORNER_OFFSETS};
-use super::segment::{Accum, Cubic, Piece, TAU_CUTOFF};
+use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
 use super::Integration;
 use glam::DVec3;
 
@@ -108,14 +108,13 @@ fn local(ray: &IndexRay, t: f64, seg: &CellSeg) -> [f64; 3] {
 /// of cell `seg` to `piece`.
 #[inline]
 fn fill_piece(piece: &mut Piece, field: &Field, ray: &IndexRay, seg: &CellSeg, sigma: Option<usize>, e: Option<usize>) {
-    let ua = local(ray, piece.t0, seg);
-    let ub = local(ray, piece.t1, seg);
+    let line = Along::new(local(ray, piece.t0, seg), local(ray, piece.t1, seg));
     if let Some(ch) = sigma {
-        piece.sigma_t = Cubic::along(corners(field, seg.base, ch), ua, ub);
+        piece.sigma_t = line.cubic(corners(field, seg.base, ch));
     }
     if let Some(ch) = e {
         for k in 0..3 {
-            piece.e[k] = Cubic::along(corners(field, seg.base, ch + k), ua, ub);
+            piece.e[k] = line.cubic(corners(field, seg.base, ch + k));
         }
     }
 }

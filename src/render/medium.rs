@@ -218,24 +218,24 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
         let Some(leaf) = g.leaf(base + off * LEAF_DIM) else { continue };
         // Along an axis with offset 0 we copy local 0..8 to ghost 0..8; with
         // offset 1 only local plane 0 goes to ghost plane 8. Only active
-        // voxels are copied (`dst` starts at 0), walking the mask's set bits.
-        for (w, &word) in leaf.mask.iter().enumerate() {
-            let mut bits = word;
-            while bits != 0 {
-                let n = w * 64 + bits.trailing_zeros() as usize;
-                bits &= bits - 1;
-                // n = (x << 6) | (y << 3) | z.
-                let (lx, ly, lz) = (n >> 6, (n >> 3) & 7, n & 7);
-                if (off.x == 1 && lx != 0) || (off.y == 1 && ly != 0) || (off.z == 1 && lz != 0) {
-                    continue;
-                }
-                let c = leaf.values[n].components();
-                let gx = lx + off.x as usize * LEAF_DIM as usize;
-                let gy = ly + off.y as usize * LEAF_DIM as usize;
-                let gz = lz + off.z as usize * LEAF_DIM as usize;
-                let at = ghost_offset(gx, gy, gz) * stride + first;
-                for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
-                    dst[at + k] = (*ck as f64 * scale) as f32;
+        // voxels are copied (`dst` starts at 0): the mask's byte for row
+        // (x, y) holds the eight z bits of offsets `(x << 6) | (y << 3) | z`.
+        let span = |o: i32| if o == 1 { 1 } else { LEAF_DIM as usize };
+        let (nx, ny, nz) = (span(off.x), span(off.y), span(off.z));
+        let shift = |o: i32| o as usize * LEAF_DIM as usize;
+        let (sx, sy, sz) = (shift(off.x), shift(off.y), shift(off.z));
+        for lx in 0..nx {
+            for ly in 0..ny {
+                let row = (lx << 6) | (ly << 3);
+                let mut bits = (leaf.mask[row >> 6] >> (row & 63)) & ((1u64 << nz) - 1);
+                while bits != 0 {
+                    let lz = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let c = leaf.values[row | lz].components();
+                    let at = ghost_offset(lx + sx, ly + sy, lz + sz) * stride + first;
+                    for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
+                        dst[at + k] = (*ck as f64 * scale) as f32;
+                    }
                 }
             }
         }
@@ -244,6 +244,12 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
 
 /// Rejects grids the renderer cannot sample the way Cycles does.
 pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
+    validate_and_peak(g).map(|_| ())
+}
+
+/// [`validate_grid`], returning the largest active component (0 for an
+/// empty grid): one pass over the active voxels serves both checks.
+fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<f32, RenderError> {
     let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
     let ts = g.transform.voxel_size;
     if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
@@ -255,14 +261,42 @@ pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
             g.background
         )));
     }
-    // Leaves in parallel; the first bad voxel in leaf order is reported.
-    let bad = g.leaves().par_iter().find_map_first(|leaf| {
-        leaf.iter_active().find(|(_, v)| v.components()[..T::COMPONENTS].iter().any(|x| !f32::is_finite(*x) || *x < 0.0))
-    });
-    match bad {
-        Some((ijk, v)) => Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0"))),
-        None => Ok(()),
+    // Leaves in parallel: per leaf the peak, or the offset of its first bad
+    // voxel; the first bad voxel in leaf order is reported.
+    let per_leaf: Vec<Result<f32, usize>> = g
+        .leaves()
+        .par_iter()
+        .map(|leaf| {
+            let mut peak = 0.0f32;
+            for (w, &word) in leaf.mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let n = w * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    for &x in &leaf.values[n].components()[..T::COMPONENTS] {
+                        // `!(x >= 0.0)` also catches NaN.
+                        if !(x >= 0.0) || x == f32::INFINITY {
+                            return Err(n);
+                        }
+                        peak = peak.max(x);
+                    }
+                }
+            }
+            Ok(peak)
+        })
+        .collect();
+    let mut peak = 0.0f32;
+    for (leaf, r) in g.leaves().iter().zip(per_leaf) {
+        match r {
+            Ok(p) => peak = peak.max(p),
+            Err(n) => {
+                let ijk = leaf.origin + crate::grid::offset_to_local(n);
+                let v = leaf.values[n];
+                return Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0")));
+            }
+        }
     }
+    Ok(peak)
 }
 
 /// Largest scaled voxel value the renderer accepts. The field stores scaled
@@ -273,15 +307,11 @@ pub const MAX_SCALED_VALUE: f64 = 1e30;
 
 /// Rejects a grid whose largest value times `scale` exceeds
 /// [`MAX_SCALED_VALUE`] (a foreign VDB near f32's limit with a large scale).
-fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, key: &str, scale: f64) -> Result<(), RenderError> {
+fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
     if scale == 0.0 {
         return Ok(());
     }
-    let peak = g
-        .leaves()
-        .par_iter()
-        .map(|leaf| leaf.iter_active().flat_map(|(_, v)| v.components()).fold(0.0f32, f32::max))
-        .reduce(|| 0.0f32, f32::max) as f64;
+    let peak = peak as f64;
     if peak * scale > MAX_SCALED_VALUE {
         return Err(RenderError::Grid {
             grid: g.name.clone(),
@@ -509,17 +539,21 @@ impl Medium {
                 return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
             }
         }
+        // A grid feeds the field iff it has a non-zero active voxel: its
+        // peak (values are >= 0) is above 0.
+        let mut feeds = [false; 2];
         if let Some(g) = density {
-            validate_grid(g)?;
-            check_scaled_peak(g, "density_scale", density_scale)?;
+            let peak = validate_and_peak(g)?;
+            check_scaled_peak(g, peak, "density_scale", density_scale)?;
+            feeds[0] = peak > 0.0;
         }
         if let Some(g) = emission {
-            validate_grid(g)?;
-            check_scaled_peak(g, "emission_scale", emission_scale)?;
+            let peak = validate_and_peak(g)?;
+            check_scaled_peak(g, peak, "emission_scale", emission_scale)?;
+            feeds[1] = peak > 0.0;
         }
-        let density = density.filter(|g| density_scale > 0.0 && g.leaves().par_iter().any(|l| leaf_feeds(l) != 0));
-        let emission =
-            emission.filter(|g| emission_scale > 0.0 && g.leaves().par_iter().any(|l| leaf_feeds(l) != 0));
+        let density = density.filter(|_| density_scale > 0.0 && feeds[0]);
+        let emission = emission.filter(|_| emission_scale > 0.0 && feeds[1]);
         let d = density.map(|g| Source { grid: SourceGrid::Scalar(g), scale: density_scale });
         let e = emission.map(|g| Source { grid: SourceGrid::Vector(g), scale: emission_scale });
         Ok(match (d, e) {

@@ -338,26 +338,42 @@ impl Prepared {
     }
 
     fn pixel_counted(&self, px: usize, py: usize, n: &mut Counters) -> [f32; 4] {
+        let spp = self.settings.render.spp;
+        let mut st = self.pixel_start(px, py);
+        self.trace_samples(px, py, &mut st, spp, n);
+        st.sum.map(|v| (v / spp as f64) as f32)
+    }
+
+    /// A pixel's random stream and sample shift, nothing traced yet.
+    fn pixel_start(&self, px: usize, py: usize) -> PixelState {
+        let index = (py * self.camera.width + px) as u64;
+        let mut rng = pixel_rng(self.settings.seed, index);
+        let shift = if self.settings.render.spp == 1 { [0.0; 2] } else { [rng.random::<f64>(), rng.random::<f64>()] };
+        PixelState { rng, shift, sum: [0.0; 4], n: 0, pairs: 0, pair_sum: 0.0, pair_sum2: 0.0, pending: 0.0 }
+    }
+
+    /// Traces samples `st.n .. until` of the pixel and adds them to `st`
+    /// (the sample positions continue the pixel's R2 sequence, the random
+    /// numbers its stream, so tracing in two calls equals tracing in one).
+    fn trace_samples(&self, px: usize, py: usize, st: &mut PixelState, until: usize, n: &mut Counters) {
         let s = &self.settings;
         let spp = s.render.spp;
-        let index = (py * self.camera.width + px) as u64;
-        let mut rng = pixel_rng(s.seed, index);
         let shadow = self.shadow_scene();
         let albedo = s.terrain.albedo;
         let background = s.background.radiance;
-        let mut sum = [0.0f64; 4];
-        let shift = if spp == 1 { [0.0; 2] } else { [rng.random::<f64>(), rng.random::<f64>()] };
-        for i in 0..spp {
+        for i in st.n..until {
+            st.n = i + 1;
             let (jx, jy, offset) = if spp == 1 {
                 (0.5, 0.5, 0.5)
             } else {
-                let (jx, jy) = pixel_position(shift, i);
-                (jx, jy, rng.random::<f64>())
+                let (jx, jy) = pixel_position(st.shift, i);
+                (jx, jy, st.rng.random::<f64>())
             };
             // Outside a fisheye's image circle the sample sees nothing
             // (RGBA 0, as Cycles leaves it).
             let Some(ray) = self.camera.ray_at(px as f64 + jx, py as f64 + jy) else {
                 n.primary += 1;
+                st.add_luminance(i, 0.0);
                 continue;
             };
             let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
@@ -370,7 +386,7 @@ impl Prepared {
                 Some(h) => {
                     n.hits += 1;
                     let start = Instant::now();
-                    let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.shadow_samples, &mut rng);
+                    let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.shadow_samples, &mut st.rng);
                     n.shadow_nanos += start.elapsed().as_nanos() as u64;
                     n.shadow_samples += s.shadow_samples as u64;
                     n.shadow_rays += rays;
@@ -381,12 +397,56 @@ impl Prepared {
                     [0, 1, 2].map(|c| background[c] + s[c])
                 }
             };
+            let mut lum = 0.0;
             for c in 0..3 {
-                sum[c] += vol.l[c] + t * behind[c];
+                let v = vol.l[c] + t * behind[c];
+                st.sum[c] += v;
+                lum += v;
             }
-            sum[3] += 1.0 - t;
+            st.sum[3] += 1.0 - t;
+            st.add_luminance(i, lum);
         }
-        sum.map(|v| (v / spp as f64) as f32)
+    }
+}
+
+/// One pixel's samples so far: its random stream, the sum of its samples
+/// and the statistics of its antithetic pairs' means (R + G + B).
+#[derive(Clone)]
+struct PixelState {
+    rng: Pcg32,
+    shift: [f64; 2],
+    sum: [f64; 4],
+    /// Samples traced.
+    n: usize,
+    pairs: u32,
+    pair_sum: f64,
+    pair_sum2: f64,
+    /// R + G + B of the pair's first sample, while its partner is pending.
+    pending: f64,
+}
+
+impl PixelState {
+    #[inline]
+    fn add_luminance(&mut self, i: usize, lum: f64) {
+        if i.is_multiple_of(2) {
+            self.pending = lum;
+        } else {
+            let m = 0.5 * (self.pending + lum);
+            self.pairs += 1;
+            self.pair_sum += m;
+            self.pair_sum2 += m * m;
+        }
+    }
+
+    /// Mean R + G + B and the sample standard deviation of the pair means.
+    fn mean_and_pair_sd(&self) -> (f64, f64) {
+        let mean = (self.sum[0] + self.sum[1] + self.sum[2]) / self.n.max(1) as f64;
+        if self.pairs < 2 {
+            return (mean, 0.0);
+        }
+        let k = self.pairs as f64;
+        let var = (self.pair_sum2 - self.pair_sum * self.pair_sum / k) / (k - 1.0);
+        (mean, var.max(0.0).sqrt())
     }
 }
 
@@ -411,27 +471,161 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
         .collect();
     let render_seconds = start.elapsed().as_secs_f64();
     progress.finish();
-    let mut stats = RenderStats {
-        leaves: prepared.medium.leaf_count() as u64,
-        accel_bytes: prepared.medium.memory_bytes() as u64,
-        build_seconds,
-        render_seconds,
-        threads: rayon::current_num_threads(),
-        ..RenderStats::default()
-    };
     let mut pixels = Vec::with_capacity(w * h);
+    let mut counts = Vec::with_capacity(h);
     for (row, n, secs) in rows {
         pixels.extend(row);
-        stats.primary_rays += n.primary;
-        stats.shadow_samples += n.shadow_samples;
-        stats.shadow_rays += n.shadow_rays;
-        stats.terrain_hits += n.hits;
-        stats.volume_work += n.work;
-        stats.thread_seconds += secs;
-        stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
+        counts.push((n, secs));
     }
-    prepared.add_stars(&mut pixels);
-    Ok(Image { width: w, height: h, pixels, stats })
+    Ok(prepared.finish(pixels, &counts, build_seconds, render_seconds))
+}
+
+/// Least `render.spp` for [`render_adaptive`] to adapt (below it renders
+/// uniformly): its first pass needs at least two antithetic pairs a pixel.
+pub const ADAPTIVE_MIN_SPP: usize = 8;
+/// Pixels dimmer than this fraction of the brightest first-pass pixel count
+/// as this bright when their relative error is estimated (a floor: dark sky
+/// pixels would otherwise have huge relative errors and draw every sample).
+pub const ADAPTIVE_FLOOR: f64 = 0.01;
+
+/// [`render`] with adaptive sampling by pixel variance; `render.spp` is the
+/// average number of samples per pixel (the same ray budget as `render`).
+///
+/// Pass 1 traces `n0 = 2 floor(spp / 4)` samples (at least 4) in every
+/// pixel. Each antithetic pair's mean (R + G + B) is one observation; their
+/// sample standard deviation `s_i` over the pixel's `n0 / 2` pairs and the
+/// pixel mean `m_i` give its relative spread `r_i = s_i / max(m_i, f M)`,
+/// `M` the brightest pixel mean, `f` = [`ADAPTIVE_FLOOR`]. Pass 2 shares the
+/// remaining `(spp - n0) / 2` pairs per pixel in proportion to
+/// `r_i^(2/3)`: the allocation that minimises the summed relative error
+/// `sum r_i / sqrt(n_i)` for a fixed total `sum n_i` (Lagrange: `r_i n_i^(-3/2)`
+/// equal for all i). Counts are rounded by cumulative sums in pixel order, so
+/// the total is exact and the result depends only on pass 1, which depends
+/// only on (seed, pixel): the image is identical for any thread count. A
+/// pixel's extra samples continue its R2 sequence and random stream, and its
+/// value is the mean of all its samples. Each sample is unbiased, but the
+/// number of samples depends on the first ones, so the pixel mean carries a
+/// small bias of order `1 / n0` of its variance (the usual price of adaptive
+/// sampling, as in Cycles' own); pixels with no spread in pass 1 (empty
+/// sky) get no more samples. If every pixel's spread is 0 the budget is
+/// shared evenly.
+pub fn render_adaptive(
+    settings: &RenderSettings,
+    volume: &Volume<'_>,
+    progress: &dyn Progress,
+) -> Result<Image, RenderError> {
+    let spp = settings.render.spp;
+    if spp < ADAPTIVE_MIN_SPP {
+        return render(settings, volume, progress);
+    }
+    let build = Instant::now();
+    let prepared = Prepared::new(settings, volume)?;
+    let build_seconds = build.elapsed().as_secs_f64();
+    let (w, h) = (prepared.camera.width, prepared.camera.height);
+    let n0 = 2 * (spp / 4);
+    progress.start("render", 2 * h as u64);
+    let start = Instant::now();
+    let rows: Vec<(Vec<PixelState>, Counters, f64)> = (0..h)
+        .into_par_iter()
+        .map(|py| {
+            let t0 = Instant::now();
+            let mut n = Counters::default();
+            let row: Vec<PixelState> = (0..w)
+                .map(|px| {
+                    let mut st = prepared.pixel_start(px, py);
+                    prepared.trace_samples(px, py, &mut st, n0, &mut n);
+                    st
+                })
+                .collect();
+            progress.inc(1);
+            (row, n, t0.elapsed().as_secs_f64())
+        })
+        .collect();
+    let mut states = Vec::with_capacity(w * h);
+    let mut counts = Vec::with_capacity(2 * h);
+    for (row, n, secs) in rows {
+        states.extend(row);
+        counts.push((n, secs));
+    }
+    let extra = adaptive_pairs(&states, (spp - n0) / 2);
+    let pass2: Vec<(Counters, f64)> = states
+        .par_chunks_mut(w)
+        .zip(extra.par_chunks(w))
+        .enumerate()
+        .map(|(py, (row, ex))| {
+            let t0 = Instant::now();
+            let mut n = Counters::default();
+            for (px, (st, &e)) in row.iter_mut().zip(ex).enumerate() {
+                let until = st.n + 2 * e;
+                prepared.trace_samples(px, py, st, until, &mut n);
+            }
+            progress.inc(1);
+            (n, t0.elapsed().as_secs_f64())
+        })
+        .collect();
+    counts.extend(pass2);
+    let render_seconds = start.elapsed().as_secs_f64();
+    progress.finish();
+    let pixels = states.iter().map(|st| st.sum.map(|v| (v / st.n as f64) as f32)).collect();
+    Ok(prepared.finish(pixels, &counts, build_seconds, render_seconds))
+}
+
+/// Extra antithetic pairs per pixel for pass 2 of [`render_adaptive`]:
+/// `pairs_per_pixel * pixels` in all, in proportion to `r_i^(2/3)`.
+fn adaptive_pairs(states: &[PixelState], pairs_per_pixel: usize) -> Vec<usize> {
+    let stats: Vec<(f64, f64)> = states.iter().map(PixelState::mean_and_pair_sd).collect();
+    let peak = stats.iter().fold(0.0f64, |a, s| a.max(s.0));
+    let floor = (ADAPTIVE_FLOOR * peak).max(f64::MIN_POSITIVE);
+    let mut weights: Vec<f64> = stats.iter().map(|&(m, sd)| (sd / m.max(floor)).powf(2.0 / 3.0)).collect();
+    let mut total: f64 = weights.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        weights.fill(1.0);
+        total = weights.len() as f64;
+    }
+    let budget = (pairs_per_pixel * states.len()) as f64;
+    let mut cum = 0.0f64;
+    let mut given = 0usize;
+    weights
+        .iter()
+        .map(|wi| {
+            cum += wi;
+            let upto = ((budget * cum / total).round() as usize).max(given);
+            let e = upto - given;
+            given = upto;
+            e
+        })
+        .collect()
+}
+
+impl Prepared {
+    /// The image from its pixels and the per-row work counters: stats, then stars.
+    fn finish(
+        &self,
+        mut pixels: Vec<[f32; 4]>,
+        counts: &[(Counters, f64)],
+        build_seconds: f64,
+        render_seconds: f64,
+    ) -> Image {
+        let mut stats = RenderStats {
+            leaves: self.medium.leaf_count() as u64,
+            accel_bytes: self.medium.memory_bytes() as u64,
+            build_seconds,
+            render_seconds,
+            threads: rayon::current_num_threads(),
+            ..RenderStats::default()
+        };
+        for (n, secs) in counts {
+            stats.primary_rays += n.primary;
+            stats.shadow_samples += n.shadow_samples;
+            stats.shadow_rays += n.shadow_rays;
+            stats.terrain_hits += n.hits;
+            stats.volume_work += n.work;
+            stats.thread_seconds += secs;
+            stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
+        }
+        self.add_stars(&mut pixels);
+        Image { width: self.camera.width, height: self.camera.height, pixels, stats }
+    }
 }
 
 impl Prepared {
@@ -527,5 +721,36 @@ mod tests {
             let (x, y) = pixel_sample([0.999_999, 0.5], i);
             assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
         }
+    }
+
+    /// A pixel after 4 samples (2 pairs) with mean R + G + B `m` and pair
+    /// standard deviation `sd`.
+    fn state(m: f64, sd: f64) -> PixelState {
+        let (p1, p2) = (m - sd / 2f64.sqrt(), m + sd / 2f64.sqrt());
+        PixelState {
+            rng: pixel_rng(0, 0),
+            shift: [0.0; 2],
+            sum: [4.0 * m, 0.0, 0.0, 0.0],
+            n: 4,
+            pairs: 2,
+            pair_sum: p1 + p2,
+            pair_sum2: p1 * p1 + p2 * p2,
+            pending: 0.0,
+        }
+    }
+
+    /// The pass-2 budget is shared exactly, in proportion to the relative
+    /// spread to the power 2/3 (spreads 0.1 and 0.8: weights 1 and 4), a
+    /// pixel with no spread gets nothing, a dim one is floored at 1 % of the
+    /// peak (0.001 +- 0.001 counts as 0.01 +- 0.001: relative 0.1), and a
+    /// flat image shares the budget evenly.
+    #[test]
+    fn adaptive_pairs_follow_the_relative_spread() {
+        let (m, sd) = state(1.0, 0.8).mean_and_pair_sd();
+        assert!((m - 1.0).abs() < 1e-12 && (sd - 0.8).abs() < 1e-12, "{m} {sd}");
+        let states = [state(1.0, 0.1), state(1.0, 0.8), state(0.5, 0.0), state(0.001, 0.001)];
+        assert_eq!(adaptive_pairs(&states, 3), vec![2, 8, 0, 2]);
+        let flat = [state(1.0, 0.0), state(2.0, 0.0), state(0.0, 0.0)];
+        assert_eq!(adaptive_pairs(&flat, 2), vec![2, 2, 2]);
     }
 }

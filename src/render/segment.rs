@@ -73,29 +73,7 @@ impl Cubic {
     /// `ua` (s = 0) to `ub` (s = 1).
     #[inline]
     pub fn along(v: [f64; 8], ua: [f64; 3], ub: [f64; 3]) -> Cubic {
-        let [v000, v001, v010, v011, v100, v101, v110, v111] = v;
-        // Monomial form of the trilinear function.
-        let a = v000;
-        let b = v100 - v000;
-        let c = v010 - v000;
-        let d = v001 - v000;
-        let e = v110 - v100 - v010 + v000;
-        let f = v101 - v100 - v001 + v000;
-        let g = v011 - v010 - v001 + v000;
-        let h = v111 - v110 - v101 - v011 + v100 + v010 + v001 - v000;
-        let [x0, y0, z0] = ua;
-        let (xd, yd, zd) = (ub[0] - x0, ub[1] - y0, ub[2] - z0);
-        let c0 = a + b * x0 + c * y0 + d * z0 + e * x0 * y0 + f * x0 * z0 + g * y0 * z0 + h * x0 * y0 * z0;
-        let c1 = b * xd
-            + c * yd
-            + d * zd
-            + e * (x0 * yd + xd * y0)
-            + f * (x0 * zd + xd * z0)
-            + g * (y0 * zd + yd * z0)
-            + h * (xd * y0 * z0 + x0 * yd * z0 + x0 * y0 * zd);
-        let c2 = e * xd * yd + f * xd * zd + g * yd * zd + h * (xd * yd * z0 + xd * y0 * zd + x0 * yd * zd);
-        let c3 = h * xd * yd * zd;
-        Cubic([c0, c1, c2, c3])
+        Along::new(ua, ub).cubic(v)
     }
 
     #[inline]
@@ -129,6 +107,70 @@ impl Cubic {
 
     pub fn is_zero(&self) -> bool {
         self.0 == [0.0; 4]
+    }
+}
+
+/// The part of [`Cubic::along`] that depends only on the line: the cubic's
+/// coefficients are linear in the corner values, so a piece shares these
+/// products between its channels (sigma_t and three emission channels).
+#[derive(Clone, Copy, Debug)]
+pub struct Along {
+    x0: f64,
+    y0: f64,
+    z0: f64,
+    xd: f64,
+    yd: f64,
+    zd: f64,
+    /// Factors of e, f, g, h in c0; of e, f, g, h in c1; of e, f, g, h in c2; of h in c3.
+    q: [f64; 13],
+}
+
+impl Along {
+    /// The line from local point `ua` (s = 0) to `ub` (s = 1).
+    #[inline]
+    pub fn new(ua: [f64; 3], ub: [f64; 3]) -> Along {
+        let [x0, y0, z0] = ua;
+        let (xd, yd, zd) = (ub[0] - x0, ub[1] - y0, ub[2] - z0);
+        let q = [
+            x0 * y0,
+            x0 * z0,
+            y0 * z0,
+            x0 * y0 * z0,
+            x0 * yd + xd * y0,
+            x0 * zd + xd * z0,
+            y0 * zd + yd * z0,
+            xd * y0 * z0 + x0 * yd * z0 + x0 * y0 * zd,
+            xd * yd,
+            xd * zd,
+            yd * zd,
+            xd * yd * z0 + xd * y0 * zd + x0 * yd * zd,
+            xd * yd * zd,
+        ];
+        Along { x0, y0, z0, xd, yd, zd, q }
+    }
+
+    /// The cubic of the corner values `v` (order as [`Cubic::along`]) along
+    /// this line: the monomial form expanded along the line, with the
+    /// products of the line's coordinates taken from `q` (rounding differs
+    /// from multiplying them in per channel by an ulp or so).
+    #[inline]
+    pub fn cubic(&self, v: [f64; 8]) -> Cubic {
+        let [v000, v001, v010, v011, v100, v101, v110, v111] = v;
+        // Monomial form of the trilinear function.
+        let a = v000;
+        let b = v100 - v000;
+        let c = v010 - v000;
+        let d = v001 - v000;
+        let e = v110 - v100 - v010 + v000;
+        let f = v101 - v100 - v001 + v000;
+        let g = v011 - v010 - v001 + v000;
+        let h = v111 - v110 - v101 - v011 + v100 + v010 + v001 - v000;
+        let (x0, y0, z0, xd, yd, zd, q) = (self.x0, self.y0, self.z0, self.xd, self.yd, self.zd, &self.q);
+        let c0 = a + b * x0 + c * y0 + d * z0 + e * q[0] + f * q[1] + g * q[2] + h * q[3];
+        let c1 = b * xd + c * yd + d * zd + e * q[4] + f * q[5] + g * q[6] + h * q[7];
+        let c2 = e * q[8] + f * q[9] + g * q[10] + h * q[11];
+        let c3 = h * q[12];
+        Cubic([c0, c1, c2, c3])
     }
 }
 
