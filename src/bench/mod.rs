@@ -16,6 +16,7 @@ pub mod metrics;
 pub mod reduced;
 pub mod report;
 pub mod sweeps;
+pub mod vdb_write;
 
 use crate::bake::{self, BakeError};
 use crate::beams;
