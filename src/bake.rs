@@ -21,8 +21,9 @@
 //! stderr). Emission that overflows f32 is an error, never a file.
 //!
 //! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
-//! kernel radius `photons.radius_km` for now, until camera-based sizing
-//! lands), translation 0, so voxel (i, j, k) is centred at
+//! camera's choice, [`auto_voxel_size`]: one pixel at the nearest aurora,
+//! within [half the kernel radius, twice the smallest kernel radius]),
+//! translation 0, so voxel (i, j, k) is centred at
 //! `voxel_size * (i, j, k)` km.
 
 use crate::atmosphere::Atmosphere;

@@ -258,7 +258,9 @@ pub enum Compression {
     BloscActiveMask,
 }
 
-/// Voxel size: a number of km, or "auto" (from the camera).
+/// Voxel size: a number of km, or "auto": one voxel about one pixel of the
+/// scene's camera at the nearest aurora, resolved by the bake
+/// (`crate::bake::auto_voxel_size`).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {
