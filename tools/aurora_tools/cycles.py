@@ -39,7 +39,7 @@ DEFAULT_SAMPLES = 128
 
 
 def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=None, seed: int = 0,
-           quiet: bool = False, pad: bool = True, **overrides) -> dict:
+           quiet: bool = False, pad: bool = True, adaptive_threshold: float | None = None, **overrides) -> dict:
     """Render and write `out`; returns timings and settings (for reports):
     setup_s (scene set-up, padding included), render_s and render_cpu_s (wall
     and process CPU time of bpy.ops.render.render: Cycles' sync, the VDB load,
@@ -47,7 +47,11 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
     `overrides` are CyclesSettings fields (volume_biased, step_rate,
     terrain_lighting, max_lights, threads); None leaves the default.
     pad: render a copy of the VDB with a shell of active zero voxels
-    (blender/vdb_pad.py), so the biased volume mode is exact at the edges."""
+    (blender/vdb_pad.py), so the biased volume mode is exact at the edges.
+    adaptive_threshold: None keeps the add-on's setting (adaptive sampling
+    off); a number turns Cycles' adaptive sampling on with that noise
+    threshold (Blender's default is 0.01) and automatic minimum samples;
+    `samples` is then the maximum per pixel."""
     import bpy
 
     addon = load_addon()
@@ -59,6 +63,10 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         built = addon.setup_scene_from_toml(scene_toml, vdb=vdb, terrain_obj=terrain_obj, settings=settings,
                                             pad_dir=tmp if pad else None)
         scene = bpy.context.scene
+        if adaptive_threshold is not None:
+            scene.cycles.use_adaptive_sampling = True
+            scene.cycles.adaptive_threshold = adaptive_threshold
+            scene.cycles.adaptive_min_samples = 0
         t_setup = time.perf_counter() - t0
         raw = Path(tmp) / "passes.exr"
         scene.render.image_settings.media_type = "MULTI_LAYER_IMAGE"
@@ -88,6 +96,8 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         "aurora_terrain_lighting": s.terrain_lighting if built.terrain is not None else "no terrain",
         "aurora_emission_lights": len(built.lights),
         "aurora_vdb_padded": "yes" if pad else "no",
+        "aurora_adaptive_sampling": (f"on, threshold {adaptive_threshold}" if scene.cycles.use_adaptive_sampling
+                                     else "off"),
     }
     write_rgba_exr(out, rgba, meta)
     info = {"setup_s": t_setup, "render_s": t_render, "render_cpu_s": cpu_render, "width": rgba.shape[1],
