@@ -2,7 +2,7 @@
 
 `aurora render` and the Blender side must agree on the camera, the film,
 the volume scales, the background and the terrain. This module reads those
-five tables of the scene TOML into plain dataclasses. `src/scene.rs` is the
+five tables of the scene TOML into plain dataclasses. `src/scene/` is the
 authority: the defaults and ranges below come from its schema
 (`aurora scene --schema`, committed as scene_schema.json next to this file
 and checked against the binary by tests/schema.rs), not restated here. The bake tables
@@ -33,7 +33,7 @@ def _bound(x):
     return {"inf": math.inf, "-inf": -math.inf}.get(x, x) if isinstance(x, str) else float(x)
 
 
-#: `camera.projection` values (src/scene.rs, `Projection`).
+#: `camera.projection` values (src/scene/types.rs, `Projection`).
 PROJECTIONS = tuple(SCHEMA["camera"]["projection"]["values"])
 
 
@@ -159,7 +159,7 @@ def _table(doc: dict, name: str, src: str) -> dict:
 
 def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -> SceneSpec:
     """Validate the render tables of a parsed TOML document (ranges as in
-    `Scene::validate` in src/scene.rs)."""
+    `Scene::validate` in src/scene/validation.rs)."""
     c = _table(doc, "camera", src)
     d = Camera()
     cam = Camera(

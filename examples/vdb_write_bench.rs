@@ -20,7 +20,8 @@
 use aurora::grid::{Grid, Transform};
 use aurora::scene::Compression;
 use aurora::vdb::read::read_vdb;
-use aurora::vdb::write::{bench_write, GridRef, WriteOptions};
+use aurora::bench::vdb_write::{bench_write, BenchWrite};
+use aurora::vdb::write::{GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -204,7 +205,7 @@ fn main() -> anyhow::Result<()> {
             v.sort_by(f64::total_cmp);
             v[v.len() / 2]
         };
-        let ours = aurora::vdb::write::BenchWrite { seconds: ours_s.clone(), bytes: ours_bytes };
+        let ours = BenchWrite { seconds: ours_s.clone(), bytes: ours_bytes };
         let t_best = best(&theirs_s);
         let t_median = median(&theirs_s);
         println!(

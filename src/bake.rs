@@ -9,9 +9,11 @@
 //! The stage functions, the types and the helpers live in
 //! [`crate::pipeline`] and are re-exported here under their old paths.
 //!
-//! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"`
-//! from the camera, [`auto_voxel_size`]), translation 0, so voxel (i, j, k)
-//! is centred at `voxel_size * (i, j, k)` km.
+//! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
+//! camera's choice, [`auto_voxel_size`]: one pixel at the nearest aurora,
+//! within [half the kernel radius, twice the smallest kernel radius]),
+//! translation 0, so voxel (i, j, k) is centred at
+//! `voxel_size * (i, j, k)` km.
 
 pub use crate::pipeline::{
     atmosphere, auto_voxel_size, band_thickness_km, colour_table, density_grid, empty_reason, extinction,

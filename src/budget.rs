@@ -27,8 +27,9 @@
 //!   masks, with 30 % for the Cycles shell and the sort.
 //! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell.
 //!
-//! With `voxel_size = "auto"` the voxel is at least half the smallest kernel
-//! radius ([`crate::bake::auto_voxel_size`]), which the estimate uses.
+//! With `voxel_size = "auto"` the voxel is at least half the kernel radius
+//! `photons.radius_km` ([`crate::bake::auto_voxel_size`] never goes below
+//! it): the estimate uses that floor, the most memory "auto" can ask for.
 
 use crate::beams::Photon;
 use crate::memory::{gib, MemoryLimit};

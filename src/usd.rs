@@ -5,7 +5,8 @@
 //!
 //! A frame sequence (`aurora bake --frames`) gets one stage whose fields'
 //! `filePath` is time-sampled, one sample per frame file
-//! ([`usda_sequence_text`]).
+//! ([`usda_sequence_text`]). One writer makes both: a single bake is a
+//! one-sample sequence without timing.
 //!
 //! Schema facts (usd-core's `usdVol/generatedSchema.usda`): `fieldClass` is a
 //! token among `levelSet`, `fogVolume`, `staggered`, `unknown`;
@@ -62,25 +63,60 @@ fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> 
     Ok(())
 }
 
-/// The stage text. `vdb_file_name` is relative to the stage's folder;
-/// `fields` are (grid name, data type: `"float"` | `"float3"`).
-/// Call [`write_usda`] to have the inputs validated.
-pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
-    let asset = if vdb_file_name.starts_with("./") || vdb_file_name.starts_with("../") {
-        vdb_file_name.to_string()
+/// What the fields' `filePath` holds: the frames' VDB files (frame number,
+/// file name relative to the stage) and, for a sequence, its fps. A single
+/// bake is a one-sample sequence without timing: one file for every time,
+/// `filePath` a plain asset and no time codes on the stage.
+struct Samples<'a> {
+    frames: Vec<(i64, &'a str)>,
+    /// `None`: a single bake (exactly one frame, untimed).
+    fps: Option<f64>,
+}
+
+/// `./name` unless the name already starts at `.` or `..`, so the path
+/// resolves against the stage's own folder.
+fn asset(name: &str) -> String {
+    if name.starts_with("./") || name.starts_with("../") {
+        name.to_string()
     } else {
-        format!("./{vdb_file_name}")
-    };
+        format!("./{name}")
+    }
+}
+
+/// The one writer of stage text (single bake and sequence). Stage metadata
+/// in the order usd-core's `ExportToString` sorts it.
+fn stage_text(samples: &Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
+    let frames = &samples.frames;
+    let (first, last) = (frames.first().map_or(0, |f| f.0), frames.last().map_or(0, |f| f.0));
     let mut s = String::new();
     let _ = writeln!(s, "#usda 1.0");
     let _ = writeln!(s, "(");
     let _ = writeln!(s, "    defaultPrim = \"{VOLUME_PRIM}\"");
-    let _ = writeln!(
-        s,
-        "    doc = \"Aurora volume written by {}; fields in {asset}\"",
-        crate::vdb::write::CREATOR
-    );
+    match samples.fps {
+        None => {
+            let _ = writeln!(
+                s,
+                "    doc = \"Aurora volume written by {}; fields in {}\"",
+                crate::vdb::write::CREATOR,
+                asset(frames.first().map_or("", |f| f.1))
+            );
+        }
+        Some(fps) => {
+            let _ = writeln!(
+                s,
+                "    doc = \"Aurora volume sequence written by {}: frames {first} to {last}, {} files\"",
+                crate::vdb::write::CREATOR,
+                frames.len()
+            );
+            let _ = writeln!(s, "    endTimeCode = {last}");
+            let _ = writeln!(s, "    framesPerSecond = {}", fmt_number(fps));
+        }
+    }
     let _ = writeln!(s, "    metersPerUnit = {}", fmt_number(meters_per_unit));
+    if let Some(fps) = samples.fps {
+        let _ = writeln!(s, "    startTimeCode = {first}");
+        let _ = writeln!(s, "    timeCodesPerSecond = {}", fmt_number(fps));
+    }
     let _ = writeln!(s, "    upAxis = \"Z\"");
     let _ = writeln!(s, ")");
     let _ = writeln!(s);
@@ -96,11 +132,56 @@ pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: 
         let _ = writeln!(s, "        token fieldClass = \"fogVolume\"");
         let _ = writeln!(s, "        token fieldDataType = \"{ty}\"");
         let _ = writeln!(s, "        token fieldName = \"{name}\"");
-        let _ = writeln!(s, "        asset filePath = @{asset}@");
+        match samples.fps {
+            None => {
+                let _ = writeln!(s, "        asset filePath = @{}@", asset(frames.first().map_or("", |f| f.1)));
+            }
+            Some(_) => {
+                let _ = writeln!(s, "        asset filePath.timeSamples = {{");
+                for (f, file) in frames {
+                    let _ = writeln!(s, "            {f}: @{}@,", asset(file));
+                }
+                let _ = writeln!(s, "        }}");
+            }
+        }
         let _ = writeln!(s, "    }}");
     }
     let _ = writeln!(s, "}}");
     s
+}
+
+/// [`stage_text`] after checking every input: frames non-empty and
+/// ascending (a single bake: exactly one), fps finite and positive, and
+/// each file name, field and unit as [`check`] wants them.
+fn stage_checked(samples: &Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<String, std::io::Error> {
+    let frames = &samples.frames;
+    if frames.is_empty() || frames.windows(2).any(|w| w[1].0 <= w[0].0) || (samples.fps.is_none() && frames.len() != 1) {
+        return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
+    }
+    if let Some(fps) = samples.fps {
+        if !(fps.is_finite() && fps > 0.0) {
+            return Err(invalid(format!("fps {fps} must be positive")));
+        }
+    }
+    for (_, name) in frames {
+        check(name, fields, meters_per_unit)?;
+    }
+    Ok(stage_text(samples, fields, meters_per_unit))
+}
+
+fn single(vdb_file_name: &str) -> Samples<'_> {
+    Samples { frames: vec![(0, vdb_file_name)], fps: None }
+}
+
+fn sequence(frames: &[(i64, String)], fps: f64) -> Samples<'_> {
+    Samples { frames: frames.iter().map(|(f, n)| (*f, n.as_str())).collect(), fps: Some(fps) }
+}
+
+/// The stage text of a single bake. `vdb_file_name` is relative to the
+/// stage's folder; `fields` are (grid name, data type: `"float"` |
+/// `"float3"`). Call [`write_usda`] to have the inputs validated.
+pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
+    stage_text(&single(vdb_file_name), fields, meters_per_unit)
 }
 
 /// The stage of a frame sequence: the same prims, each field's `filePath`
@@ -108,57 +189,10 @@ pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: 
 /// name relative to the stage)); `startTimeCode` and `endTimeCode` are the
 /// first and last frame, `timeCodesPerSecond` and `framesPerSecond` the
 /// sequence's fps. USD has no `####` substitution: every frame is listed
-/// (openusd.org, UsdVol OpenVDBAsset). Stage metadata in the order
-/// usd-core's `ExportToString` sorts it. Call [`write_usda_sequence`] to
+/// (openusd.org, UsdVol OpenVDBAsset). Call [`write_usda_sequence`] to
 /// have the inputs validated.
 pub fn usda_sequence_text(frames: &[(i64, String)], fields: &[(&str, &str)], meters_per_unit: f64, fps: f64) -> String {
-    let asset = |name: &str| {
-        if name.starts_with("./") || name.starts_with("../") {
-            name.to_string()
-        } else {
-            format!("./{name}")
-        }
-    };
-    let (first, last) = (frames.first().map_or(0, |f| f.0), frames.last().map_or(0, |f| f.0));
-    let mut s = String::new();
-    let _ = writeln!(s, "#usda 1.0");
-    let _ = writeln!(s, "(");
-    let _ = writeln!(s, "    defaultPrim = \"{VOLUME_PRIM}\"");
-    let _ = writeln!(
-        s,
-        "    doc = \"Aurora volume sequence written by {}: frames {first} to {last}, {} files\"",
-        crate::vdb::write::CREATOR,
-        frames.len()
-    );
-    let _ = writeln!(s, "    endTimeCode = {last}");
-    let _ = writeln!(s, "    framesPerSecond = {}", fmt_number(fps));
-    let _ = writeln!(s, "    metersPerUnit = {}", fmt_number(meters_per_unit));
-    let _ = writeln!(s, "    startTimeCode = {first}");
-    let _ = writeln!(s, "    timeCodesPerSecond = {}", fmt_number(fps));
-    let _ = writeln!(s, "    upAxis = \"Z\"");
-    let _ = writeln!(s, ")");
-    let _ = writeln!(s);
-    let _ = writeln!(s, "def Volume \"{VOLUME_PRIM}\"");
-    let _ = writeln!(s, "{{");
-    for (name, _) in fields {
-        let _ = writeln!(s, "    custom rel field:{name} = </{VOLUME_PRIM}/{name}>");
-    }
-    for (name, ty) in fields {
-        let _ = writeln!(s);
-        let _ = writeln!(s, "    def OpenVDBAsset \"{name}\"");
-        let _ = writeln!(s, "    {{");
-        let _ = writeln!(s, "        token fieldClass = \"fogVolume\"");
-        let _ = writeln!(s, "        token fieldDataType = \"{ty}\"");
-        let _ = writeln!(s, "        token fieldName = \"{name}\"");
-        let _ = writeln!(s, "        asset filePath.timeSamples = {{");
-        for (f, file) in frames {
-            let _ = writeln!(s, "            {f}: @{}@,", asset(file));
-        }
-        let _ = writeln!(s, "        }}");
-        let _ = writeln!(s, "    }}");
-    }
-    let _ = writeln!(s, "}}");
-    s
+    stage_text(&sequence(frames, fps), fields, meters_per_unit)
 }
 
 /// Writes a sequence stage atomically (see [`usda_sequence_text`]); frames
@@ -182,16 +216,7 @@ pub fn usda_sequence_checked(
     meters_per_unit: f64,
     fps: f64,
 ) -> Result<String, std::io::Error> {
-    if frames.is_empty() || frames.windows(2).any(|w| w[1].0 <= w[0].0) {
-        return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
-    }
-    if !(fps.is_finite() && fps > 0.0) {
-        return Err(invalid(format!("fps {fps} must be positive")));
-    }
-    for (_, name) in frames {
-        check(name, fields, meters_per_unit)?;
-    }
-    Ok(usda_sequence_text(frames, fields, meters_per_unit, fps))
+    stage_checked(&sequence(frames, fps), fields, meters_per_unit)
 }
 
 /// A number as USD writes it: integers without a decimal point.
@@ -203,15 +228,16 @@ fn fmt_number(x: f64) -> String {
     }
 }
 
-/// Writes the stage atomically (temporary file in the same folder, then rename).
+/// Writes the stage of a single bake atomically (temporary file in the same
+/// folder, then rename).
 pub fn write_usda(
     path: &Path,
     vdb_file_name: &str,
     fields: &[(&str, &str)],
     meters_per_unit: f64,
 ) -> Result<(), std::io::Error> {
-    check(vdb_file_name, fields, meters_per_unit)?;
-    crate::atomic::write_atomic(path, usda_text(vdb_file_name, fields, meters_per_unit).as_bytes()).map_err(Into::into)
+    let text = stage_checked(&single(vdb_file_name), fields, meters_per_unit)?;
+    crate::atomic::write_atomic(path, text.as_bytes()).map_err(Into::into)
 }
 
 #[cfg(test)]

@@ -3,10 +3,10 @@
 //! exit status 2, a message naming file, key, value and range, and nothing
 //! written.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-const BIN: &str = env!("CARGO_BIN_EXE_aurora");
+use common::{aurora as run, stderr};
+use std::path::PathBuf;
 
 /// A scene small enough to bake in about a second.
 const SMALL: &str = r#"
@@ -38,18 +38,7 @@ kind = "plane"
 "#;
 
 fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(BIN).args(args).output().expect("aurora runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
+    common::scratch("tmp/cli", name)
 }
 
 #[test]

@@ -5,10 +5,11 @@
 //! every frame of the range whichever shard wrote it; bad ranges and shards
 //! exit 2 naming the offending text.
 
+mod common;
+
+use common::AURORA_BIN as BIN;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-const BIN: &str = env!("CARGO_BIN_EXE_aurora");
 
 /// A small scene (about a second a frame) whose motion is fast enough that
 /// consecutive frames differ at its 1 km voxels.
@@ -45,10 +46,7 @@ pulsation = 0.0
 "#;
 
 fn scratch(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli_frames").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("tmp/cli_frames", name)
 }
 
 fn bake(scene: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Output {

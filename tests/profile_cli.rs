@@ -1,10 +1,12 @@
 //! `aurora profile`: the CSV it promises, atomically written, and bad input
 //! refused with exit status 2 naming the key.
 
+mod common;
+
 use std::process::Command;
 
 fn aurora() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_aurora"))
+    Command::new(common::AURORA_BIN)
 }
 
 fn small_scene(extra: &str) -> String {
@@ -60,8 +62,5 @@ fn profile_refuses_a_bad_model_name_with_exit_2() {
 }
 
 fn tempfile_dir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("aurora-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::scratch("test-profile", tag)
 }

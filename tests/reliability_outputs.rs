@@ -5,32 +5,16 @@
 //! checked before the bake starts. Device nodes and FIFOs are made in a
 //! temporary folder, never the system's.
 
+mod common;
+
+use common::{aurora, file_names as names, stderr};
 use std::os::unix::fs::FileTypeExt;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 fn dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/test-reliability").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("create test folder under target/");
-    d
-}
-
-fn aurora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aurora")).args(args).output().expect("run aurora")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn names(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(d)
-        .map(|rd| rd.map(|e| e.expect("entry").file_name().to_string_lossy().into_owned()).collect())
-        .unwrap_or_default();
-    v.sort();
-    v
+    common::scratch("test-reliability", name)
 }
 
 /// A small, fast scene.

@@ -8,34 +8,17 @@
 //! cells, density stays within its initial bounds); `stability_extremes.rs`
 //! bakes with the largest `footprint.dt` the scene accepts.
 
+mod common;
+
 use aurora::grid::{Grid, Transform};
+use common::{aurora, file_names as files_in, stderr};
 use aurora::vdb::write::{write_vdb, GridRef, VdbWriteError, WriteOptions};
 use glam::{DVec3, IVec3};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::PathBuf;
+use std::process::Output;
 
 fn dir(name: &str) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("target/test-stability").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("create test folder under target/");
-    d
-}
-
-fn aurora(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_aurora")).args(args).output().expect("run aurora")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn files_in(d: &Path) -> Vec<String> {
-    let mut v: Vec<String> = match std::fs::read_dir(d) {
-        Ok(rd) => rd.map(|e| e.expect("dir entry").file_name().to_string_lossy().into_owned()).collect(),
-        Err(_) => Vec::new(),
-    };
-    v.sort();
-    v
+    common::scratch("test-stability", name)
 }
 
 /// A small scene (one 8 km curtain, a few beams) to which `extra` lines are

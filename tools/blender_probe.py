@@ -17,11 +17,9 @@ import json
 import os
 import sys
 
-try:
-    import bpy
-except ImportError as e:  # the Rust test turns this into a failure naming tools/setup
-    print(json.dumps({"error": f"bpy not importable: {e}; run tools/setup"}))
-    sys.exit(3)
+from aurora_tools.probe import require
+
+bpy = require("bpy")
 
 
 def matrix(m):

@@ -12,11 +12,14 @@ en_diss with flux = 1 keV cm^-2 s^-1). Models:
 rho is set to column / H, so eppaurora sees the column mass rho H exactly.
 Rerun: `python tools/fang_reference.py [OUT.csv]`.
 """
-import os
+import io
 import sys
 
 import numpy as np
 import eppaurora
+
+from aurora_tools import ROOT
+from aurora_tools.files import write_atomic
 
 H_CM = (6.0e5, 2.5e6)
 
@@ -41,15 +44,13 @@ def rows():
 
 
 def main():
-    here = os.path.dirname(os.path.abspath(__file__))
-    path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "data", "fang_reference.csv")
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
+    path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "fang_reference.csv")
+    with io.StringIO() as f:
         f.write(f"# eppaurora {eppaurora.__version__}; made by tools/fang_reference.py\n")
         f.write("model,energy_kev,column_g_cm2,scale_height_cm,dissipation_per_cm\n")
         for model, e, m, h, x in rows():
             f.write(f"{model},{e:g},{m:.17g},{h:.17g},{x:.17g}\n")
-    os.replace(tmp, path)
+        write_atomic(path, f.getvalue().encode())
     print(f"wrote {path}", file=sys.stderr)
 
 

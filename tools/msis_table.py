@@ -11,11 +11,14 @@ Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
 incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the
 `pymsis` package (PyPI). Rerun: `python tools/msis_table.py [OUT.csv]`.
 """
-import os
+import io
 import sys
 
 import numpy as np
 import pymsis
+
+from aurora_tools import ROOT
+from aurora_tools.files import write_atomic
 
 LAT, LON = 67.0, 20.0
 DATE = np.datetime64("2020-01-15T00:00")
@@ -44,19 +47,17 @@ def table(altitudes=ALTITUDES):
 
 
 def main():
-    here = os.path.dirname(os.path.abspath(__file__))
-    path = sys.argv[1] if len(sys.argv) > 1 else os.path.join(here, "..", "data", "nrlmsis21.csv")
+    path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "nrlmsis21.csv")
     rows = table()
     assert np.all(np.isfinite(rows)) and np.all(rows[:, 1:] > 0), "NRLMSIS returned a non-positive value"
-    tmp = path + ".tmp"
-    with open(tmp, "w") as f:
+    with io.StringIO() as f:
         f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
                 f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
                 f"O at 50 km extrapolated (NRLMSIS leaves it undefined there); made by tools/msis_table.py\n")
         f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k\n")
         for r in rows:
             f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")
-    os.replace(tmp, path)
+        write_atomic(path, f.getvalue().encode())
     print(f"wrote {path}: {len(rows)} rows", file=sys.stderr)
 
 

@@ -83,6 +83,10 @@ import time
 import traceback
 from pathlib import Path
 
+from aurora_tools.blender_worker import BlenderWorker, answers
+from aurora_tools.files import write_atomic
+from aurora_tools.toml_io import edit_toml, toml_value  # noqa: F401 - toml_value: part of this module's interface
+
 ROOT = Path(__file__).resolve().parent.parent
 TOOLS = ROOT / "tools"
 
@@ -178,14 +182,6 @@ def log(msg: str) -> None:
 
 # ---------------------------------------------------------------- small helpers
 
-def write_atomic(path: Path, data: bytes) -> None:
-    """tools/compare.py's write_atomic (temporary name, then rename); imported
-    here, not at the top, so missing numpy is reported by the up-front checks."""
-    from compare import write_atomic as write
-
-    write(path, data)
-
-
 def run(cmd, what: str, **kw) -> subprocess.CompletedProcess:
     cmd = [str(c) for c in cmd]
     try:
@@ -205,44 +201,6 @@ def timed_run(cmd, what: str) -> tuple[subprocess.CompletedProcess, float, float
     wall = time.perf_counter() - t0
     c1 = resource.getrusage(resource.RUSAGE_CHILDREN)
     return r, wall, (c1.ru_utime - c0.ru_utime) + (c1.ru_stime - c0.ru_stime)
-
-
-def toml_value(v) -> str:
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, (int, float)):
-        return repr(v)
-    if isinstance(v, str):
-        return json.dumps(v)
-    if isinstance(v, (list, tuple)):
-        return "[" + ", ".join(toml_value(x) for x in v) + "]"
-    raise TypeError(f"no TOML for {v!r}")
-
-
-def edit_toml(text: str, edits: dict) -> str:
-    """Set `key = value` in `[section]` of a scene file printed by `aurora
-    scene`, keeping every other line as it is. edits: {(section, key): value}."""
-    lines = text.splitlines()
-    todo = dict(edits)
-    section = None
-    header_at = {}
-    for i, line in enumerate(lines):
-        s = line.strip()
-        if s.startswith("["):
-            section = s.strip("[]").strip()
-            header_at.setdefault(section, i)
-            continue
-        m = re.match(r"\s*([A-Za-z0-9_]+)\s*=", line)
-        if m and (section, m.group(1)) in todo:
-            lines[i] = f"{m.group(1)} = {toml_value(todo.pop((section, m.group(1))))}"
-    for (sec, key), v in todo.items():  # keys the file does not print
-        if sec in header_at:
-            lines.insert(header_at[sec] + 1, f"{key} = {toml_value(v)}")
-            header_at = {k: (j + 1 if j > header_at[sec] else j) for k, j in header_at.items()}
-        else:
-            lines += ["", f"[{sec}]", f"{key} = {toml_value(v)}"]
-            header_at[sec] = len(lines) - 2
-    return "\n".join(lines) + "\n"
 
 
 def best(xs) -> float:
@@ -551,71 +509,29 @@ def study_gather(tools: Tools, cfg: dict, scene_text: str, main_bake: dict, out:
 
 # ---------------------------------------------------------------- 3. render
 
-class CyclesWorker:
+class CyclesWorker(BlenderWorker):
     """One long-lived bpy process (this script with --cycles-worker): requests
     as JSON lines on its stdin, answers as JSON lines on a pipe of their own
     (Blender prints to stdout; that goes to a log file)."""
 
     def __init__(self, log_path: Path):
-        r, w = os.pipe()
-        self.log = open(log_path, "w")
-        env = dict(os.environ)
-        env.setdefault("BLENDER_USER_RESOURCES", tempfile.mkdtemp(prefix="side-by-side-blender-"))
-        self.proc = subprocess.Popen([sys.executable, __file__, "--cycles-worker", str(w)], stdin=subprocess.PIPE,
-                                     stdout=self.log, stderr=subprocess.STDOUT, pass_fds=(w,), text=True, env=env)
-        os.close(w)
-        self.answers = os.fdopen(r, "r")
-        self.log_path = log_path
-        hello = self._read()
-        self.info = hello
-
-    def _read(self) -> dict:
-        line = self.answers.readline()
-        if not line:
-            self.proc.wait()
-            tail = Path(self.log_path).read_text(errors="replace")[-3000:]
-            raise Failure(f"the Cycles worker died (exit {self.proc.returncode}); its log {self.log_path}:\n{tail}")
-        a = json.loads(line)
-        if "error" in a:
-            raise Failure(f"Cycles worker: {a['error']}")
-        return a
-
-    def ask(self, **req) -> dict:
-        self.proc.stdin.write(json.dumps(req, default=str) + "\n")
-        self.proc.stdin.flush()
-        return self._read()
-
-    def close(self):
-        if self.proc.poll() is None:
-            self.proc.stdin.close()
-            try:
-                self.proc.wait(timeout=60)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        if not self.answers.closed:
-            self.answers.close()
-        if not self.log.closed:
-            self.log.close()
+        super().__init__([__file__, "--cycles-worker"], log_path, what="Cycles worker", failure=Failure,
+                         tmp_prefix="side-by-side-blender-")
 
 
 def worker_main(fd: int) -> int:
     """The bpy side of CyclesWorker."""
-    out = os.fdopen(fd, "w")
-
-    def say(obj):
-        out.write(json.dumps(obj) + "\n")
-        out.flush()
+    say = answers(fd)
 
     try:
-        sys.path.insert(0, str(TOOLS))
         import bpy
         import numpy as np
 
-        import compare
-        import cycles_render
+        from aurora_tools import cycles as cycles_render
+        from aurora_tools import image_compare as compare
+        from aurora_tools.addon import load_addon
 
-        addon = cycles_render.load_addon()
+        addon = load_addon()
         from aurora_importer.vdb_pad import pad_vdb
     except Exception as e:  # noqa: BLE001 - reported to the parent, which fails
         say({"error": f"cannot import bpy / the add-on (run with .venv/bin/python, bpy 5.0.1): {e!r}"})
@@ -705,10 +621,10 @@ def downsample(img, f: int):
 
 def study_render(tools: Tools, cfg: dict, worker: CyclesWorker, scene_text: str, vdb: Path, out: Path,
                  targets: dict) -> dict:
-    sys.path.insert(0, str(TOOLS))
-    import compare
     import numpy as np
-    from cycles_render import write_rgba_exr
+
+    from aurora_tools import image_compare as compare
+    from aurora_tools.exr_io import write_rgba_exr
 
     w, h = cfg["size"]
     d = out / "render"

@@ -14,11 +14,9 @@ tokens), fieldDataType, plus the Volume's local transform.
 import json
 import sys
 
-try:
-    from pxr import Sdf, Usd, UsdGeom, UsdVol
-except ImportError as e:  # the Rust test turns this into a failure naming tools/setup
-    print(json.dumps({"error": f"pxr (usd-core) not importable: {e}; run tools/setup"}))
-    sys.exit(3)
+from aurora_tools.probe import require
+
+Sdf, Usd, UsdGeom, UsdVol = (require(f"pxr.{m}", "pxr (usd-core)") for m in ("Sdf", "Usd", "UsdGeom", "UsdVol"))
 
 
 def main(path):

@@ -22,11 +22,9 @@ import json
 import math
 import sys
 
-try:
-    import pyopenvdb as vdb
-except ImportError as e:  # the Rust test turns this into a failure naming tools/setup
-    print(json.dumps({"error": f"pyopenvdb not importable: {e}; run tools/setup"}))
-    sys.exit(3)
+from aurora_tools.probe import require
+
+vdb = require("pyopenvdb")
 
 
 def jsonable(v):

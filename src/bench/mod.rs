@@ -22,6 +22,7 @@ pub mod report;
 pub mod shadow;
 pub mod sweeps;
 pub mod voxel;
+pub mod vdb_write;
 
 use crate::bake::BakeError;
 use crate::pipeline::{self, BakePlan};

@@ -48,6 +48,7 @@
 pub use crate::camera;
 pub mod dda;
 pub mod film;
+pub mod grids;
 pub mod march;
 pub mod medium;
 pub mod segment;

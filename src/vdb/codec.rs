@@ -25,7 +25,7 @@
 //! OpenVDB. Zero values (non-half) give a 16-byte header-only frame.
 
 use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
-use super::parse::{Cursor, ParseError};
+use super::cursor::{Cursor, ParseError};
 use crate::grid::VoxelValue;
 use flate2::{Compress, Compression, Decompress, FlushCompress, FlushDecompress, Status};
 use half::f16;

@@ -444,58 +444,28 @@ mod tests {
     }
 }
 
-/// Why a VDB cannot be rendered.
-#[derive(Debug, thiserror::Error)]
-pub enum RenderGridsError {
-    #[error("holds neither a `density` nor an `emission` grid (grids: {0})")]
-    NoAuroraGrids(String),
-    /// A grid the renderer would use has a type it cannot (a vec3 or bool
-    /// `density`, say): refused rather than silently ignored.
-    #[error("grid `{name}` is {type_name}; the renderer needs {expected}")]
-    WrongType { name: String, type_name: String, expected: &'static str },
-}
+/// Why a VDB cannot be rendered (the renderer's grid choice,
+/// [`crate::render::grids`]).
+pub use crate::render::grids::RenderGridsError;
 
-/// The grids a renderer needs from a file: a float `density` grid (extinction)
-/// and an `emission` grid, vec3, or float counted as grey (the same value in
-/// all three channels). Either may be absent, not both.
+/// The grids a renderer needs from a file: the file's grids listed for the
+/// renderer's grid choice ([`crate::render::grids::choose`]: a float
+/// `density` grid, an `emission` grid, vec3 or float counted as grey; either
+/// may be absent, not both).
 pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
-    let names: Vec<String> = file.grids.iter().map(|g| g.name.clone()).collect();
-    for g in &file.grids {
-        let expected = match g.name.as_str() {
-            "density" if g.kind != Some(ValueKind::Float) => "a float grid (extinction per unit length)",
-            "emission" if !matches!(g.kind, Some(ValueKind::Float) | Some(ValueKind::Vec3)) => {
-                "a vec3 grid (or a float grid, taken as grey)"
-            }
-            _ => continue,
-        };
-        return Err(RenderGridsError::WrongType { name: g.name.clone(), type_name: g.type_name.clone(), expected });
-    }
-    let mut density = None;
-    let mut float_emission = None;
-    for g in file.float_grids {
-        match g.name.as_str() {
-            "density" if density.is_none() => density = Some(g),
-            "emission" if float_emission.is_none() => float_emission = Some(g),
-            _ => {}
-        }
-    }
-    let mut emission = file.vec3_grids.into_iter().find(|g| g.name == "emission");
-    if emission.is_none() {
-        if let Some(f) = float_emission {
-            let mut grey = Grid::new("emission", [f.background; 3], f.transform);
-            for leaf in f.leaves() {
-                let mut l = crate::grid::Leaf::new(leaf.origin, [f.background; 3]);
-                l.mask = leaf.mask;
-                for (dst, src) in l.values.iter_mut().zip(leaf.values.iter()) {
-                    *dst = [*src; 3];
-                }
-                grey.insert_leaf(l);
-            }
-            emission = Some(grey);
-        }
-    }
-    if density.is_none() && emission.is_none() {
-        return Err(RenderGridsError::NoAuroraGrids(if names.is_empty() { "none".into() } else { names.join(", ") }));
-    }
-    Ok((density, emission))
+    use crate::render::grids::{choose, GridType, Listed};
+    let listing: Vec<Listed<'_>> = file
+        .grids
+        .iter()
+        .map(|g| Listed {
+            name: &g.name,
+            type_name: &g.type_name,
+            kind: match g.kind {
+                Some(ValueKind::Float) => GridType::Float,
+                Some(ValueKind::Vec3) => GridType::Vec3,
+                None => GridType::Other,
+            },
+        })
+        .collect();
+    choose(&listing, file.float_grids, file.vec3_grids)
 }

@@ -1,14 +1,15 @@
-//! Shared helpers of the VDB/USD integration tests: test grids, temp folders
-//! under `target/`, and the external reference tools (pyopenvdb, vdb_print,
-//! bpy, usd-core), which must be installed by `tools/setup`: a missing tool is
-//! a test failure, never a skip.
+//! Shared helpers of the integration tests (`mod common;`): the `aurora`
+//! binary and its stderr, scratch folders under `target/`, test grids, and
+//! the external reference tools (pyopenvdb, vdb_print, bpy, usd-core), which
+//! must be installed by `tools/setup`: a missing tool is a test failure,
+//! never a skip.
 #![allow(dead_code)]
 
 use aurora::grid::{Grid, Transform};
 use glam::{DVec3, IVec3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::process::{Command, Output};
 
 mod openvdb_tool;
 
@@ -16,12 +17,40 @@ pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The `aurora` binary cargo built for this test run.
+pub const AURORA_BIN: &str = env!("CARGO_BIN_EXE_aurora");
+
+/// `aurora ARGS...`, run to completion (stdout and stderr captured).
+pub fn aurora(args: &[&str]) -> Output {
+    Command::new(AURORA_BIN).args(args).output().expect("run aurora")
+}
+
+/// A process's stderr as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh empty folder `target/<group>/<name>` (whatever was there is
+/// removed first). `group` names the test file's corner of `target/`.
+pub fn scratch(group: &str, name: &str) -> PathBuf {
+    let d = repo_root().join("target").join(group).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create a test folder under target/");
+    d
+}
+
+/// The names in folder `d`, sorted (none if it does not exist).
+pub fn file_names(d: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(d)
+        .map(|rd| rd.map(|e| e.expect("dir entry").file_name().to_string_lossy().into_owned()).collect())
+        .unwrap_or_default();
+    v.sort();
+    v
+}
+
 /// A fresh empty folder `target/test-vdb/<name>`.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let d = repo_root().join("target").join("test-vdb").join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("create temp dir under target/");
-    d
+    scratch("test-vdb", name)
 }
 
 /// Debian's Python, which sees pyopenvdb.

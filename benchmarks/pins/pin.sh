@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Behaviour pins of the issue-12 part-4 moves (pure code moves: every hash
+# must be the same before and after). Prints `sha256  name` lines.
+#   benchmarks/pins/pin.sh [AURORA_BIN] > benchmarks/pins/rooms-after.txt
+# Pins: the default bake's aurora.vdb and aurora.usda, `aurora scene --schema`,
+# a 160x90 4-spp PNG render of that VDB, and a two-frame sequence's
+# aurora.usda (a reduced scene: 400 beams, 64x16 footprint) with its VDBs.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+BIN=${1:-./target/release/aurora}
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+"$BIN" bake -q --out "$T/bake" default >/dev/null 2>&1
+"$BIN" scene --schema >"$T/schema.json"
+"$BIN" scene default | sed -e 's/^width = 640$/width = 160/' -e 's/^height = 360$/height = 90/' \
+  -e 's/^spp = 16$/spp = 4/' >"$T/small.toml"
+grep -q '^width = 160$' "$T/small.toml" && grep -q '^spp = 4$' "$T/small.toml"
+"$BIN" render -q --vdb "$T/bake/aurora.vdb" --threads 2 --out "$T/render.png" "$T/small.toml" >/dev/null 2>&1
+"$BIN" scene default | sed -e 's/^count = 8000$/count = 400/' -e 's/^resolution = \[512, 128\]$/resolution = [64, 16]/' \
+  >"$T/seq.toml"
+grep -q '^count = 400$' "$T/seq.toml"
+"$BIN" bake -q --out "$T/seq" --frames 1-2 "$T/seq.toml" >/dev/null 2>&1
+cd "$T"
+sha256sum bake/aurora.vdb bake/aurora.usda schema.json render.png seq/aurora.usda seq/aurora.0001.vdb seq/aurora.0002.vdb

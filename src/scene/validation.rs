@@ -1,0 +1,550 @@
+//! Validation of a parsed scene: every range checked once, each error naming
+//! the file, line, key, value and allowed range ([`RangeError`]); the range
+//! limits (`MAX_*`); the shape check that runs before serde; the camera's
+//! one set of limits ([`Camera::problems`]). Each check also records its
+//! range for [`super::schema`]. Validity is a property of the scene alone,
+//! never of the machine: whether a bake fits in memory is decided at bake
+//! time (`crate::budget`).
+
+use super::*;
+use std::fmt;
+
+/// Largest seed: TOML integers are signed 64-bit, so a scene (and the
+/// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
+pub const MAX_SEED: u64 = i64::MAX as u64;
+/// Largest `render.spp` (also the `--spp` flag's).
+pub const MAX_SPP: u64 = 65_536;
+/// Largest `--shadow-samples` per terrain hit per pixel sample.
+pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
+/// Largest colour-map component (linear RGB per unit deposited power, about
+/// 1 for the report's map): far beyond any look, and small enough that a
+/// voxel's emission stays within single precision.
+pub const MAX_COLORMAP_VALUE: f64 = 1e6;
+/// Largest `--threads`.
+pub const MAX_THREADS: u64 = 1_024;
+
+/// Largest `grid.prune`: half the light may go, no more (beyond that the
+/// "error budget" is no longer a small error).
+pub const MAX_PRUNE: f64 = 0.5;
+
+/// Largest `render.width` and `render.height` (the one image-size limit:
+/// the scene, the camera and the renderer all check this).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+impl Camera {
+    /// The largest `fov_deg` of this projection: 360 for the fisheye (the
+    /// whole sphere), below 180 for a pinhole (degrees, exclusive).
+    pub fn max_fov_deg(&self) -> (f64, bool) {
+        match self.projection {
+            Projection::Fisheye => (360.0, true),
+            _ => (180.0, false),
+        }
+    }
+
+    /// Every camera value outside its range, as (key, value, allowed): the
+    /// one set of camera limits, applied by [`Scene::validate`] and by
+    /// `crate::camera::CameraModel::new`.
+    pub fn problems(&self) -> Vec<(&'static str, String, String)> {
+        let mut p = Vec::new();
+        let (max_fov, inclusive) = self.max_fov_deg();
+        if !(self.fov_deg > 0.0 && (self.fov_deg < max_fov || (inclusive && self.fov_deg == max_fov))) {
+            let close = if inclusive { "]" } else { ")" };
+            p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
+        }
+        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
+            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
+        }
+        let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
+        if dir.iter().all(|d| *d == 0.0) {
+            p.push(("look_at", format!("{:?}", self.look_at), "must differ from camera.position".into()));
+        }
+        let cross = [
+            dir[1] * self.up[2] - dir[2] * self.up[1],
+            dir[2] * self.up[0] - dir[0] * self.up[2],
+            dir[0] * self.up[1] - dir[1] * self.up[0],
+        ];
+        let up2: f64 = self.up.iter().map(|u| u * u).sum();
+        let dir2: f64 = dir.iter().map(|u| u * u).sum();
+        if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
+            p.push(("up", format!("{:?}", self.up), "must not be parallel to the view direction".into()));
+        }
+        for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
+            if a.iter().any(|x| !x.is_finite()) {
+                p.push((k, format!("{a:?}"), "must be finite".into()));
+            }
+        }
+        p
+    }
+}
+
+
+// ---------------------------------------------------------------- errors
+
+/// A scene that could not be read or is out of range.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{file}: cannot read: {source}")]
+    Io { file: String, source: std::io::Error },
+    #[error("{file}: {message}")]
+    Parse { file: String, message: String },
+    #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))]
+    Invalid(Vec<RangeError>),
+}
+
+/// One value outside its allowed range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RangeError {
+    pub file: String,
+    pub line: Option<usize>,
+    pub key: String,
+    pub value: String,
+    pub allowed: String,
+}
+
+impl fmt::Display for RangeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.line {
+            Some(l) => write!(f, "{}:{}: ", self.file, l)?,
+            None => write!(f, "{}: ", self.file)?,
+        }
+        write!(f, "{} = {} is out of range: {}", self.key, self.value, self.allowed)
+    }
+}
+
+/// What a key accepts.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Allowed {
+    Range { min: f64, max: f64, min_inclusive: bool, max_inclusive: bool },
+    Rule(String),
+}
+
+// ---------------------------------------------------------------- checks
+
+impl Scene {
+    /// [`validate`](Self::validate), also returning every check made (the
+    /// ranges [`schema`] prints).
+    pub(super) fn validate_with(&self, file: &str, text: Option<&str>) -> Result<Vec<(String, Allowed)>, SceneError> {
+        let mut v = Validator { file, text, errors: Vec::new(), checks: Vec::new() };
+        if self.curtains.is_empty() {
+            v.push(None, "curtain", "[]".into(), "at least one [[curtain]] table is required".into());
+        }
+        for (i, c) in self.curtains.iter().enumerate() {
+            let t = Some(("curtain", i));
+            // At most 10^4 km: beyond that the flat ground is meaningless and
+            // a single beam's photon power (f32) can overflow.
+            v.range(t, "length", c.length, 0.0, 1e4, false);
+            v.range(t, "width", c.width, 0.0, 1e4, false);
+            v.range(t, "energy_flux", c.energy_flux, 0.0, 1e4, false);
+            v.range(t, "char_energy_kev", c.char_energy_kev, 0.05, 100.0, true);
+            v.range(t, "soft_fraction", c.soft_fraction, 0.0, 1.0, true);
+            v.range(t, "soft_energy_kev", c.soft_energy_kev, 0.01, 100.0, true);
+            v.range(t, "beam_weight", c.beam_weight, 0.0, 1e9, false);
+            v.range(t, "bend_km", c.bend_km, 0.0, 1e4, true);
+            v.finite(t, "rotation_deg", c.rotation_deg);
+            // Within 10^4 km of the origin, like the curtain's size: the flat
+            // ground means nothing beyond, and photon positions are f32 (at
+            // 10^20 km their spacing would exceed the aurora).
+            if c.center.iter().any(|x| !(x.is_finite() && x.abs() <= 1e4)) {
+                v.push(t, "center", format!("{:?}", c.center), "each coordinate must be in [-1e4, 1e4] km".into());
+            }
+            v.allow(t, "center", Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
+            v.allow(t, "bend_km", Allowed::Rule("in [0, 1e4], less than width / 2".into()));
+            if c.bend_km * 2.0 >= c.width {
+                v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than width / 2 = {}", c.width / 2.0));
+            }
+        }
+        if self.curtains.is_empty() {
+            // Record the per-curtain ranges from a default curtain.
+            let one = Scene { curtains: vec![Curtain::default()], ..self.clone() };
+            if let Ok(c) = one.validate_with(file, None) {
+                for (k, a) in c.into_iter().filter(|(k, _)| k.starts_with("curtain.")) {
+                    v.checks.push((k, a));
+                }
+            }
+        }
+        if self.curtains.iter().all(|c| c.beam_weight <= 0.0) && !self.curtains.is_empty() {
+            v.push(Some(("curtain", 0)), "beam_weight", "0".into(), "at least one curtain needs beam_weight > 0".into());
+        }
+        let f = &self.footprint;
+        let t = Some(("footprint", 0));
+        v.allow(t, "resolution", Allowed::Rule("each side in [8, 4096]".into()));
+        // Each side: a 10^8 x 8 footprint would pass a check of the smaller one.
+        if f.resolution.iter().any(|&n| !(8..=4096).contains(&n)) {
+            v.push(t, "resolution", format!("{:?}", f.resolution), "each side must be in [8, 4096]".into());
+        }
+        v.range(t, "steps", f.steps as f64, 0.0, 10_000.0, true);
+        v.range(t, "dt", f.dt, 0.0, 1e6, false);
+        v.range(t, "pressure_iterations", f.pressure_iterations as f64, 0.0, 10_000.0, true);
+        v.range(t, "band_fraction", f.band_fraction, 0.0, 1.0, false);
+        v.range(t, "velocity_waves", f.velocity_waves, 0.0, 1e3, true);
+        v.range(t, "velocity_amplitude", f.velocity_amplitude, 0.0, 1e6, true);
+        v.range(t, "density_waves", f.density_waves, 0.0, 1e3, true);
+        v.range(t, "bend_wavelength", f.bend_wavelength, 0.0, 1e3, false);
+        v.range(t, "threshold", f.threshold, 0.0, 1.0, false);
+
+        let a = &self.animation;
+        let t = Some(("animation", 0));
+        v.range(t, "fps", a.fps, 0.0, 1000.0, false);
+        v.range(t, "time_s", a.time_s, 0.0, 1e7, true);
+        v.range(t, "fold_speed_kms", a.fold_speed_kms, -100.0, 100.0, true);
+        v.allow(t, "fold_breathing", Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: false });
+        v.allow(t, "pulsation_period_s", Allowed::Rule("[min, max] with 0 < min <= max <= 10000".into()));
+        if !(0.0..1.0).contains(&a.fold_breathing) {
+            v.push(t, "fold_breathing", fmt_num(a.fold_breathing), "must be in [0, 1)".into());
+        }
+        v.range(t, "fold_breathing_period_s", a.fold_breathing_period_s, 0.0, 1e6, false);
+        v.range(t, "bend_speed_kms", a.bend_speed_kms, -100.0, 100.0, true);
+        v.range(t, "bend_change_hz", a.bend_change_hz, 0.0, 100.0, true);
+        v.range(t, "drift_km", a.drift_km, 0.0, 1e3, true);
+        v.range(t, "drift_period_s", a.drift_period_s, 0.0, 1e6, false);
+        v.range(t, "ray_speed_kms", a.ray_speed_kms, -100.0, 100.0, true);
+        v.range(t, "pulsation", a.pulsation, 0.0, 1.0, true);
+        v.range(t, "pulsation_patch_km", a.pulsation_patch_km, 0.0, 1e4, false);
+        let [p0, p1] = a.pulsation_period_s;
+        if !(p0.is_finite() && p1.is_finite() && p0 > 0.0 && p1 >= p0 && p1 <= 1e4) {
+            v.push(t, "pulsation_period_s", format!("[{}, {}]", fmt_num(p0), fmt_num(p1)), "must be [min, max] with 0 < min <= max <= 10000".into());
+        }
+
+        let b = &self.beams;
+        let t = Some(("beams", 0));
+        v.range(t, "count", b.count as f64, 1.0, 1e8, true);
+        v.range(t, "target_noise", b.target_noise, 0.0, 1.0, true);
+        v.range(t, "top_km", b.top_km, 80.0, 1000.0, true);
+        v.range(t, "top_noise_km", b.top_noise_km, 0.0, 100.0, true);
+        v.range(t, "top_noise_freq", b.top_noise_freq, 0.0, 1e3, true);
+        v.allow(t, "alpha_d_deg", Allowed::Range { min: 0.0, max: 90.0, min_inclusive: true, max_inclusive: false });
+        v.allow(t, "delta_alpha_deg", Allowed::Rule("in [0, beams.alpha_d_deg]".into()));
+        if !(b.alpha_d_deg >= 0.0 && b.alpha_d_deg < 90.0) {
+            v.push(t, "alpha_d_deg", b.alpha_d_deg.to_string(), "must be in [0, 90) degrees: at 90 a beam no longer moves along B".into());
+        }
+        if !(b.delta_alpha_deg >= 0.0 && b.delta_alpha_deg <= b.alpha_d_deg) {
+            v.push(t, "delta_alpha_deg", b.delta_alpha_deg.to_string(), format!("must be in [0, alpha_d_deg = {}]", b.alpha_d_deg));
+        }
+        v.finite_pos(t, "length_km", b.length_km);
+        v.range(t, "dt", b.dt, 1e-6, 1.0, true);
+        v.range(t, "b_inclination_deg", b.b_inclination_deg, 10.0, 90.0, true);
+        v.finite(t, "b_declination_deg", b.b_declination_deg);
+
+        let c = &self.colour;
+        let t = Some(("colour", 0));
+        v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);
+        v.range(t, "noise_freq", c.noise_freq, 0.0, 1e3, true);
+        v.allow(t, "colormap", Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()));
+        if c.mode == ColourMode::Colormap {
+            if c.colormap.len() < 2 {
+                v.push(t, "colormap", format!("{} rows", c.colormap.len()), "needs at least 2 rows of [altitude_km, r, g, b]".into());
+            }
+            for (i, w) in c.colormap.windows(2).enumerate() {
+                if !(w[1][0] > w[0][0]) {
+                    v.push(t, "colormap", format!("row {}: {}", i + 1, w[1][0]), "altitudes must be strictly ascending".into());
+                }
+            }
+            for (i, r) in c.colormap.iter().enumerate() {
+                if r.iter().any(|x| !x.is_finite()) || r[1..].iter().any(|&x| !(0.0..=MAX_COLORMAP_VALUE).contains(&x)) {
+                    v.push(t, "colormap", format!("row {i}: {r:?}"), format!("values must be finite, colours in [0, {MAX_COLORMAP_VALUE:e}]"));
+                }
+            }
+        }
+
+        let p = &self.photons;
+        let t = Some(("photons", 0));
+        v.finite_pos(t, "radius_km", p.radius_km);
+        v.range(t, "cutoff", p.cutoff, 1.0, 6.0, true);
+        v.range(t, "radius_noise", p.radius_noise, 0.0, 0.9, true);
+        v.range(t, "radius_noise_freq", p.radius_noise_freq, 0.0, 1e3, true);
+
+        let g = &self.grid;
+        let t = Some(("grid", 0));
+        v.allow(t, "voxel_size", Allowed::Rule("a number of km > 0, or \"auto\"".into()));
+        if let VoxelSize::Km(s) = g.voxel_size {
+            v.finite_pos(t, "voxel_size", s);
+        }
+        v.range(t, "density_a", g.density_a, 0.0, 1e6, true);
+        v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
+        v.finite(t, "density_base_km", g.density_base_km);
+        v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
+
+        let t = Some(("camera", 0));
+        v.allow(t, "fov_deg", Allowed::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\"".into()));
+        v.allow(t, "ortho_height", Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
+        v.allow(t, "look_at", Allowed::Rule("finite, differs from camera.position".into()));
+        v.allow(t, "up", Allowed::Rule("finite, not parallel to look_at - position".into()));
+        v.allow(t, "position", Allowed::Rule("finite".into()));
+        for (key, value, allowed) in self.camera.problems() {
+            v.push(t, key, value, allowed);
+        }
+        let r = &self.render;
+        let t = Some(("render", 0));
+        v.range(t, "width", r.width as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
+        v.range(t, "height", r.height as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
+        v.range(t, "spp", r.spp as f64, 1.0, MAX_SPP as f64, true);
+        v.range(t, "exposure", r.exposure, -50.0, 50.0, true);
+        let vol = &self.volume;
+        let t = Some(("volume", 0));
+        v.range(t, "density_scale", vol.density_scale, 0.0, 1e9, true);
+        v.range(t, "emission_scale", vol.emission_scale, 0.0, 1e9, true);
+        let t = Some(("background", 0));
+        // Bounded so that pixels (f32) stay finite.
+        v.allow(t, "radiance", Allowed::Range { min: 0.0, max: 1e9, min_inclusive: true, max_inclusive: true });
+        if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
+            v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
+        }
+        // Beyond m = 8 the 0.45 slope of the star counts no longer holds
+        // (and the count passes 38,000).
+        v.range(t, "limiting_magnitude", self.background.limiting_magnitude, -1.5, 8.0, true);
+        v.range(t, "star_brightness", self.background.star_brightness, 0.0, 1e6, true);
+        let ter = &self.terrain;
+        let t = Some(("terrain", 0));
+        v.finite(t, "height", ter.height);
+        v.allow(t, "albedo", Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: true });
+        v.allow(t, "extent", Allowed::Rule("[x0, y0, x1, y1] with x1 > x0 and y1 > y0".into()));
+        if ter.albedo.iter().any(|x| !(0.0..=1.0).contains(x)) {
+            v.push(t, "albedo", format!("{:?}", ter.albedo), "components must be in [0, 1]".into());
+        }
+        v.range(t, "mountain_height", ter.mountain_height, 0.0, 100.0, true);
+        v.finite_pos(t, "mountain_scale", ter.mountain_scale);
+        if !(ter.extent[2] > ter.extent[0] && ter.extent[3] > ter.extent[1]) {
+            v.push(t, "extent", format!("{:?}", ter.extent), "must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0".into());
+        }
+
+        if v.errors.is_empty() {
+            Ok(v.checks)
+        } else {
+            Err(SceneError::Invalid(v.errors))
+        }
+    }
+}
+
+/// Refuses arrays of the wrong length before serde sees them (serde fills a
+/// fixed-size array from the first N values of a longer TOML array and drops
+/// the rest silently: `center = [-20, 0, 999]` would bake at (-20, 0)).
+///
+/// The expected shapes come from the scene's own defaults, so every key added
+/// later is covered: an array of numbers there is a fixed-size array (its
+/// length is the one required); an array of arrays (the colour map) has rows
+/// of the default row's length; an array of tables (`[[curtain]]`) is checked
+/// table by table against a default curtain.
+pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
+    let user: toml::Table = match text.parse() {
+        Ok(t) => t,
+        // Syntax errors are reported by the parser proper, with its message.
+        Err(_) => return Ok(()),
+    };
+    let mut reference = Scene::default();
+    reference.curtains = vec![Curtain::default()];
+    let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
+    let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
+    shapes_table(&user, &reference, None, &mut v);
+    if v.errors.is_empty() {
+        Ok(())
+    } else {
+        Err(SceneError::Invalid(v.errors))
+    }
+}
+
+fn shapes_table(user: &toml::Table, reference: &toml::Table, table: Option<(&str, usize)>, v: &mut Validator<'_>) {
+    use toml::Value;
+    for (key, uv) in user {
+        let Some(rv) = reference.get(key) else { continue };
+        match (uv, rv) {
+            (Value::Table(ut), Value::Table(rt)) if table.is_none() => shapes_table(ut, rt, Some((key.as_str(), 0)), v),
+            (Value::Array(ua), Value::Array(ra)) => match ra.first() {
+                Some(Value::Table(rt)) if table.is_none() => {
+                    for (i, u) in ua.iter().enumerate() {
+                        if let Value::Table(ut) = u {
+                            shapes_table(ut, rt, Some((key.as_str(), i)), v);
+                        }
+                    }
+                }
+                Some(Value::Array(row)) => {
+                    for (i, u) in ua.iter().enumerate() {
+                        if let Value::Array(ur) = u {
+                            if ur.len() != row.len() {
+                                v.push(table, key, format!("row {i}: {u}"), format!("every row must have {} values", row.len()));
+                            }
+                        }
+                    }
+                }
+                Some(_) if ua.len() != ra.len() => {
+                    v.push(table, key, uv.to_string(), format!("must have exactly {} values, not {}", ra.len(), ua.len()));
+                }
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+}
+
+
+struct Validator<'a> {
+    file: &'a str,
+    text: Option<&'a str>,
+    errors: Vec<RangeError>,
+    /// Every check made, as (key, allowed range), for [`schema`].
+    checks: Vec<(String, Allowed)>,
+}
+
+impl Validator<'_> {
+    fn push(&mut self, table: Option<(&str, usize)>, key: &str, value: String, allowed: String) {
+        let line = self.text.and_then(|t| find_key_line(t, table, key));
+        let key = match table {
+            Some(("curtain", i)) => format!("curtain[{i}].{key}"),
+            Some((t, _)) => format!("{t}.{key}"),
+            None => key.to_string(),
+        };
+        self.errors.push(RangeError { file: self.file.to_string(), line, key, value, allowed });
+    }
+    fn key(t: Option<(&str, usize)>, key: &str) -> String {
+        match t {
+            Some((t, _)) => format!("{t}.{key}"),
+            None => key.to_string(),
+        }
+    }
+    /// Records an allowed range or rule for the schema (no check).
+    fn allow(&mut self, t: Option<(&str, usize)>, key: &str, a: Allowed) {
+        let k = Self::key(t, key);
+        if !self.checks.iter().any(|(c, _)| *c == k) {
+            self.checks.push((k, a));
+        }
+    }
+    fn range(&mut self, t: Option<(&str, usize)>, key: &str, x: f64, lo: f64, hi: f64, lo_inclusive: bool) {
+        self.allow(t, key, Allowed::Range { min: lo, max: hi, min_inclusive: lo_inclusive, max_inclusive: true });
+        let ok = x.is_finite() && (if lo_inclusive { x >= lo } else { x > lo }) && x <= hi;
+        if !ok {
+            let open = if lo_inclusive { "[" } else { "(" };
+            self.push(t, key, fmt_num(x), format!("must be in {open}{}, {}]", fmt_num(lo), fmt_num(hi)));
+        }
+    }
+    fn finite_pos(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
+        if !(x.is_finite() && x > 0.0) {
+            self.push(t, key, fmt_num(x), "must be a finite number > 0".into());
+        }
+    }
+    fn finite(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
+        self.allow(t, key, Allowed::Rule("finite".into()));
+        if !x.is_finite() {
+            self.push(t, key, fmt_num(x), "must be finite".into());
+        }
+    }
+}
+
+fn fmt_num(x: f64) -> String {
+    if x == x.trunc() && x.abs() < 1e15 {
+        format!("{}", x as i64)
+    } else {
+        format!("{x}")
+    }
+}
+
+/// 1-based line of `key = ...` inside `[table]` (or the `index`-th
+/// `[[table]]`), or at the top level when `table` is None. A plain text scan:
+/// enough to point a user at the line, not a TOML parser.
+pub fn find_key_line(text: &str, table: Option<(&str, usize)>, key: &str) -> Option<usize> {
+    let mut current: Option<(String, usize)> = None;
+    let mut counts: std::collections::HashMap<String, usize> = Default::default();
+    for (ln, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if let Some(rest) = line.strip_prefix("[[") {
+            let name = rest.split("]]").next().unwrap_or("").trim().to_string();
+            let c = counts.entry(name.clone()).or_insert(0);
+            current = Some((name, *c));
+            *c += 1;
+            continue;
+        }
+        if let Some(rest) = line.strip_prefix('[') {
+            let name = rest.split(']').next().unwrap_or("").trim().to_string();
+            current = Some((name, 0));
+            continue;
+        }
+        let here = match (&current, table) {
+            (None, None) => true,
+            (Some((n, i)), Some((t, j))) => n == t && *i == j,
+            _ => false,
+        };
+        if here {
+            if let Some((k, _)) = line.split_once('=') {
+                if k.trim().trim_matches('"') == key {
+                    return Some(ln + 1);
+                }
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn unknown_key_is_an_error_naming_key_and_line() {
+        let e = Scene::from_toml_str("seed = 1\n[beams]\ncount = 5\nbogus = 3\n", "x.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(m.contains("x.toml") && m.contains("bogus") && m.contains("line 4"), "{m}");
+    }
+
+    #[test]
+    fn out_of_range_names_file_line_key_value_and_range() {
+        let text = "[beams]\ncount = 100\nalpha_d_deg = 95.0\n";
+        let m = Scene::from_toml_str(text, "s.toml").unwrap_err().to_string();
+        assert!(m.contains("s.toml:3: beams.alpha_d_deg = 95"), "{m}");
+        assert!(m.contains("[0, 90)"), "{m}");
+        let m = Scene::from_toml_str("[photons]\nradius_km = -1\n", "s.toml").unwrap_err().to_string();
+        assert!(m.contains("s.toml:2: photons.radius_km = -1"), "{m}");
+        let m = Scene::from_toml_str("[beams]\ncount = 0\n", "s.toml").unwrap_err().to_string();
+        assert!(m.contains("beams.count = 0") && m.contains("[1, "), "{m}");
+        // Validity does not depend on the machine: a tiny voxel is valid here and
+        // refused by the bake's memory budget (crate::budget).
+        assert!(Scene::from_toml_str("[grid]\nvoxel_size = 0.0001\n", "s.toml").is_ok());
+        let m = Scene::from_toml_str("[footprint]\nresolution = [100000000, 8]\n", "s.toml").unwrap_err().to_string();
+        assert!(m.contains("s.toml:2: footprint.resolution") && m.contains("[8, 4096]"), "{m}");
+    }
+
+    #[test]
+    fn prune_budget_outside_its_range_is_refused() {
+        let m = Scene::from_toml_str("[grid]\nprune = 0.7\n", "p.toml").unwrap_err().to_string();
+        assert!(m.contains("p.toml:2: grid.prune = 0.7") && m.contains("[0, 0.5]"), "{m}");
+        assert!(Scene::from_toml_str("[grid]\nprune = 0.01\n", "p.toml").is_ok());
+    }
+
+    #[test]
+    fn arrays_of_the_wrong_length_are_refused_naming_key_and_line() {
+        let cases = [
+            ("[[curtain]]\ncenter = [-20.0, 0.0, 999.0]\n", "curtain[0].center", 2),
+            ("[camera]\nposition = [0.0, -90.0, 1.0, 5.0]\n", "camera.position", 2),
+            ("[camera]\nup = [0.0, 1.0]\n", "camera.up", 2),
+            ("[footprint]\nresolution = [64, 32, 8]\n", "footprint.resolution", 2),
+            ("[colour]\nmode = \"colormap\"\ncolormap = [[90.0, 0.1, 0.2, 0.3, 9.0], [100.0, 0.1, 0.2, 0.3]]\n", "colour.colormap", 3),
+            ("[terrain]\nextent = [0.0, 0.0, 1.0]\n", "terrain.extent", 2),
+        ];
+        for (text, key, line) in cases {
+            let e = Scene::from_toml_str(text, "s.toml").unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(&format!("s.toml:{line}:")), "{text}: {e}");
+        }
+        // Right lengths still parse.
+        Scene::from_toml_str("[[curtain]]\ncenter = [-20.0, 0.0]\n[camera]\nposition = [0.0, -90.0, 1.0]\n", "s.toml").unwrap();
+    }
+
+    #[test]
+    fn atmosphere_and_deposition_models_parse_and_unknown_names_are_refused() {
+        let s = Scene::from_toml_str("[atmosphere]\nmodel = \"us1976\"\n[beams]\ndeposition = \"sampled\"\n", "m.toml").unwrap();
+        assert_eq!(s.atmosphere.model, AtmosphereModel::Us1976);
+        assert_eq!(s.beams.deposition, Deposition::Sampled);
+        let d = Scene::default();
+        assert_eq!((d.atmosphere.model, d.beams.deposition), (AtmosphereModel::Nrlmsis21, Deposition::Expected));
+        let m = Scene::from_toml_str("[atmosphere]\nmodel = \"msis00\"\n", "m.toml").unwrap_err().to_string();
+        assert!(m.contains("m.toml") && m.contains("msis00") && m.contains("nrlmsis21") && m.contains("us1976"), "{m}");
+        let m = Scene::from_toml_str("[beams]\ndeposition = \"mean\"\n", "m.toml").unwrap_err().to_string();
+        assert!(m.contains("mean") && m.contains("expected") && m.contains("sampled") && m.contains("csda"), "{m}");
+    }
+
+    #[test]
+    fn voxel_size_auto_parses() {
+        let s = Scene::from_toml_str("[grid]\nvoxel_size = \"auto\"\n", "a.toml").unwrap();
+        assert_eq!(s.grid.voxel_size, VoxelSize::Auto(AutoTag::Auto));
+        let s = Scene::from_toml_str("[grid]\nvoxel_size = 1\n", "a.toml").unwrap();
+        assert_eq!(s.grid.voxel_size, VoxelSize::Km(1.0));
+        let e = Scene::from_toml_str("[grid]\nvoxel_size = \"AUTO\"\n", "a.toml").unwrap_err().to_string();
+        assert!(e.contains("voxel_size") && e.contains("\"auto\"") && !e.contains("untagged"), "{e}");
+    }
+}
