@@ -18,9 +18,12 @@
 //! shared machine the wall time moves with the other jobs' load; the CPU
 //! time is the work done). Targets: 5 % and 1.5x.
 //!
-//! cargo run --release --example smoothness -- [--factor 16] [--runs 3] [--out DIR] [--time-only]
+//! cargo run --release --example smoothness -- [--factor 16] [--runs 3] [--out DIR] [--time-only] [--gather kdtree|splat]
 //!
 //! `--time-only` stops after the bake times (no references, no pictures).
+//! `--gather` overrides the new estimators' gather (default: the scene's).
+//! The old estimators always gather with the kd-tree, the default before
+//! issue 10.
 //!
 //! With `--out`, writes `smoothness.json`, `smoothness.txt` and the four
 //! pictures (PNG) there.
@@ -29,7 +32,7 @@ use aurora::bake::{self, Bake};
 use aurora::bench::metrics::image_rel_error;
 use aurora::progress::NoProgress;
 use aurora::render::{self, RenderSettings, Volume};
-use aurora::scene::{Scene, TerrainKind, VoxelSize};
+use aurora::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
 use std::time::Instant;
 
 /// The default scene with today's settings written out.
@@ -48,9 +51,13 @@ fn base_scene(beams: usize) -> Scene {
     s
 }
 
-/// The estimators before issue 10 (`aurora::bench::sweeps::old_estimators`).
+/// The estimators before issue 10 (`aurora::bench::sweeps::old_estimators`),
+/// with that time's default gather (the kd-tree) written out, whatever the
+/// scene's default gather now is.
 fn old_estimators(scene: &Scene) -> (Scene, bool) {
-    aurora::bench::sweeps::old_estimators(scene)
+    let (mut s, sampled) = aurora::bench::sweeps::old_estimators(scene);
+    s.photons.gather = GatherMethod::Kdtree;
+    (s, sampled)
 }
 
 /// CPU time of this process (user + system, all threads), seconds, from
@@ -108,6 +115,7 @@ fn main() {
     let mut runs = 3usize;
     let mut out: Option<std::path::PathBuf> = None;
     let mut time_only = false;
+    let mut gather: Option<GatherMethod> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut val = |name: &str| {
@@ -121,8 +129,18 @@ fn main() {
             "--runs" => runs = val("--runs").parse().unwrap_or(0),
             "--out" => out = Some(val("--out").into()),
             "--time-only" => time_only = true,
+            "--gather" => {
+                gather = Some(match val("--gather").as_str() {
+                    "kdtree" => GatherMethod::Kdtree,
+                    "splat" => GatherMethod::Splat,
+                    g => {
+                        eprintln!("--gather {g}: allowed kdtree, splat");
+                        std::process::exit(2)
+                    }
+                })
+            }
             _ => {
-                eprintln!("usage: smoothness [--factor N (>= 2)] [--runs N (>= 1)] [--out DIR] [--time-only]");
+                eprintln!("usage: smoothness [--factor N (>= 2)] [--runs N (>= 1)] [--out DIR] [--time-only] [--gather kdtree|splat]");
                 std::process::exit(2);
             }
         }
@@ -132,7 +150,10 @@ fn main() {
         std::process::exit(2);
     }
     let beams = 8000;
-    let new = base_scene(beams);
+    let mut new = base_scene(beams);
+    if let Some(g) = gather {
+        new.photons.gather = g;
+    }
     let (old, old_sampled) = old_estimators(&new);
     let scaled = |s: &Scene| Scene { beams: aurora::scene::BeamParams { count: beams * factor, ..s.beams.clone() }, ..s.clone() };
     let threads = rayon::current_num_threads();
@@ -179,14 +200,16 @@ fn main() {
         format!("smoothness benchmark: default scene, {beams} beams vs {}x, 0.5 km kernel and voxels, no pruning, volume only, 320x180, 16 spp", factor),
         format!("threads {threads}; load average before: {}; after: {}", load0.trim(), load1.trim()),
         format!(
-            "new estimators: kernel {:?}, starts {:?}, deposition {}",
+            "new estimators: kernel {:?}, gather {:?}, starts {:?}, deposition {}",
             new.photons.kernel,
+            new.photons.gather,
             new.beams.starts,
             dep(&new)
         ),
         format!(
-            "old estimators: kernel {:?}, starts {:?}, deposition {}{}",
+            "old estimators: kernel {:?}, gather {:?}, starts {:?}, deposition {}{}",
             old.photons.kernel,
+            old.photons.gather,
             old.beams.starts,
             dep(&old),
             if old_sampled { "" } else { " (this build has no beams.deposition)" }
@@ -210,9 +233,9 @@ fn main() {
             "beams": beams, "factor": factor, "runs": runs, "threads": threads,
             "loadavg_start": load0.trim(), "loadavg_end": load1.trim(),
             "old_has_sampled_deposition": old_sampled,
-            "new": {"kernel": format!("{:?}", new.photons.kernel), "starts": format!("{:?}", new.beams.starts), "deposition": dep(&new),
+            "new": {"kernel": format!("{:?}", new.photons.kernel), "gather": format!("{:?}", new.photons.gather), "starts": format!("{:?}", new.beams.starts), "deposition": dep(&new),
                     "mean_rel_vs_ref": e_new, "flux_vs_ref": f_new, "bake_s": t_new, "ref_bake_s": t_ref_new, "photons": b_new.stats.photons},
-            "old": {"kernel": format!("{:?}", old.photons.kernel), "starts": format!("{:?}", old.beams.starts), "deposition": dep(&old),
+            "old": {"kernel": format!("{:?}", old.photons.kernel), "gather": format!("{:?}", old.photons.gather), "starts": format!("{:?}", old.beams.starts), "deposition": dep(&old),
                     "mean_rel_vs_ref": e_old, "flux_vs_ref": f_old, "bake_s": t_old, "ref_bake_s": t_ref_old, "photons": b_old.stats.photons},
             "new_vs_old_ref": e_cross, "refs_new_vs_old": e_refs,
             "bake_time_ratio": ratio, "bake_cpu_ratio": cpu_ratio, "bake_cpu_s": {"new": c_new, "old": c_old},
