@@ -516,15 +516,33 @@ fn for_each_leaf((lo, hi): (IVec3, IVec3), mut f: impl FnMut(IVec3)) {
 
 /// Photon indices per candidate leaf, each list ascending (counting sort in
 /// photon order): the uniform grid of `splat` and `report2014`.
+///
+/// In parallel: (leaf, photon) pairs from chunks of photons, sorted (so
+/// each leaf's list is in photon order whatever the thread count), then cut
+/// into the lists.
 pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach: f64) -> Vec<Vec<u32>> {
-    let index: HashMap<IVec3, usize> = leaves.iter().enumerate().map(|(i, &o)| (o, i)).collect();
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); leaves.len()];
-    for (i, p) in photons.iter().enumerate() {
-        for_each_leaf(leaf_range(p, voxel_size, reach), |o| {
-            if let Some(&k) = index.get(&o) {
-                bins[k].push(i as u32);
+    let index: HashMap<IVec3, u32> = leaves.iter().enumerate().map(|(i, &o)| (o, i as u32)).collect();
+    const CHUNK: usize = 1 << 14;
+    let mut pairs: Vec<(u32, u32)> = photons
+        .par_chunks(CHUNK)
+        .enumerate()
+        .flat_map_iter(|(c, chunk)| {
+            let mut v = Vec::with_capacity(chunk.len() * 2);
+            for (j, p) in chunk.iter().enumerate() {
+                let i = (c * CHUNK + j) as u32;
+                for_each_leaf(leaf_range(p, voxel_size, reach), |o| {
+                    if let Some(&k) = index.get(&o) {
+                        v.push((k, i));
+                    }
+                });
             }
-        });
+            v
+        })
+        .collect();
+    pairs.par_sort_unstable();
+    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); leaves.len()];
+    for (k, i) in pairs {
+        bins[k as usize].push(i);
     }
     bins
 }
