@@ -1641,18 +1641,25 @@ mod tests {
 
     #[test]
     fn gather_is_independent_of_thread_count() {
-        let photons = uniform_box(5_000, 0.0, 8.0, 1e19, 14);
+        // Points, loose segments and beam paths (merged runs), with more
+        // photons than one binning chunk (2^14).
+        let mut photons = uniform_box(5_000, 0.0, 8.0, 1e19, 14);
+        photons.extend(segment_photons(2_000, 15));
+        for k in 0..200 {
+            photons.extend(beam_path(60, 100 + k));
+        }
+        assert!(photons.len() > 1 << 14);
         let rf = RadiusField::new(0.5, 0.3, 0.1, DVec3::NEG_Z, 0.0, &[3]);
         let tr = Transform::new(0.5, DVec3::ZERO);
-        let run = |threads| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-                gather_grid(&photons, tr, &rf, 3.0, GatherMethod::Kdtree, &NoProgress)
-            })
-        };
-        let (a, b) = (run(1), run(3));
-        assert_eq!(a, b);
-        let la: Vec<_> = a.leaves().iter().map(|l| l.origin).collect();
-        let lb: Vec<_> = b.leaves().iter().map(|l| l.origin).collect();
-        assert_eq!(la, lb);
+        for method in [GatherMethod::Kdtree, GatherMethod::Splat] {
+            let run = |threads| {
+                rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| gather_grid(&photons, tr, &rf, 3.0, method, &NoProgress))
+            };
+            let (a, b) = (run(1), run(3));
+            assert_eq!(a, b, "{method:?}");
+            let la: Vec<_> = a.leaves().iter().map(|l| l.origin).collect();
+            let lb: Vec<_> = b.leaves().iter().map(|l| l.origin).collect();
+            assert_eq!(la, lb);
+        }
     }
 }
