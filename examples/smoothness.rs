@@ -18,9 +18,12 @@
 //! shared machine the wall time moves with the other jobs' load; the CPU
 //! time is the work done). Targets: 5 % and 1.5x.
 //!
-//! cargo run --release --example smoothness -- [--factor 16] [--runs 3] [--out DIR] [--time-only]
+//! cargo run --release --example smoothness -- [--factor 16] [--runs 3] [--out DIR] [--time-only] [--gather kdtree|splat]
 //!
 //! `--time-only` stops after the bake times (no references, no pictures).
+//! `--gather` overrides the new estimators' gather (default: the scene's).
+//! The old estimators always gather with the kd-tree, the default before
+//! issue 10.
 //!
 //! With `--out`, writes `smoothness.json`, `smoothness.txt` and the four
 //! pictures (PNG) there.
@@ -29,7 +32,7 @@ use aurora::bake::{self, Bake};
 use aurora::bench::metrics::image_rel_error;
 use aurora::progress::NoProgress;
 use aurora::render::{self, RenderSettings, Volume};
-use aurora::scene::{Scene, TerrainKind, VoxelSize};
+use aurora::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
 use std::time::Instant;
 
 /// The default scene with today's settings written out.
@@ -48,10 +51,6 @@ fn base_scene(beams: usize) -> Scene {
     s
 }
 
-/// The estimators before issue 10 (`aurora::bench::sweeps::old_estimators`).
-fn old_estimators(scene: &Scene) -> (Scene, bool) {
-    aurora::bench::sweeps::old_estimators(scene)
-}
 
 /// CPU time of this process (user + system, all threads), seconds, from
 /// /proc/self/stat (clock ticks of 1/100 s); 0 where unavailable.
@@ -108,6 +107,7 @@ fn main() {
     let mut runs = 3usize;
     let mut out: Option<std::path::PathBuf> = None;
     let mut time_only = false;
+    let mut gather: Option<GatherMethod> = None;
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut val = |name: &str| {
@@ -121,8 +121,18 @@ fn main() {
             "--runs" => runs = val("--runs").parse().unwrap_or(0),
             "--out" => out = Some(val("--out").into()),
             "--time-only" => time_only = true,
+            "--gather" => {
+                gather = Some(match val("--gather").as_str() {
+                    "kdtree" => GatherMethod::Kdtree,
+                    "splat" => GatherMethod::Splat,
+                    g => {
+                        eprintln!("--gather {g}: allowed kdtree, splat");
+                        std::process::exit(2)
+                    }
+                })
+            }
             _ => {
-                eprintln!("usage: smoothness [--factor N (>= 2)] [--runs N (>= 1)] [--out DIR] [--time-only]");
+                eprintln!("usage: smoothness [--factor N (>= 2)] [--runs N (>= 1)] [--out DIR] [--time-only] [--gather kdtree|splat]");
                 std::process::exit(2);
             }
         }
@@ -132,8 +142,11 @@ fn main() {
         std::process::exit(2);
     }
     let beams = 8000;
-    let new = base_scene(beams);
-    let (old, old_sampled) = old_estimators(&new);
+    let mut new = base_scene(beams);
+    if let Some(g) = gather {
+        new.photons.gather = g;
+    }
+    let old = aurora::bench::sweeps::old_estimators(&new);
     let scaled = |s: &Scene| Scene { beams: aurora::scene::BeamParams { count: beams * factor, ..s.beams.clone() }, ..s.clone() };
     let threads = rayon::current_num_threads();
     let load0 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -179,17 +192,18 @@ fn main() {
         format!("smoothness benchmark: default scene, {beams} beams vs {}x, 0.5 km kernel and voxels, no pruning, volume only, 320x180, 16 spp", factor),
         format!("threads {threads}; load average before: {}; after: {}", load0.trim(), load1.trim()),
         format!(
-            "new estimators: kernel {:?}, starts {:?}, deposition {}",
+            "new estimators: kernel {:?}, gather {:?}, starts {:?}, deposition {}",
             new.photons.kernel,
+            new.photons.gather,
             new.beams.starts,
             dep(&new)
         ),
         format!(
-            "old estimators: kernel {:?}, starts {:?}, deposition {}{}",
+            "old estimators: kernel {:?}, gather {:?}, starts {:?}, deposition {}",
             old.photons.kernel,
+            old.photons.gather,
             old.beams.starts,
             dep(&old),
-            if old_sampled { "" } else { " (this build has no beams.deposition)" }
         ),
         format!("mean relative difference per pixel vs {factor}x beams (same estimator): new {:.1} % (flux ratio {f_new:.4}), old {:.1} % (flux ratio {f_old:.4}); target <= 5 %", 100.0 * e_new, 100.0 * e_old),
         format!("new {beams}-beam picture vs old {factor}x reference: {:.1} % (flux {f_cross:.4}); new vs old {factor}x references: {:.1} % (flux {f_refs:.4})", 100.0 * e_cross, 100.0 * e_refs),
@@ -209,10 +223,9 @@ fn main() {
         let json = serde_json::json!({
             "beams": beams, "factor": factor, "runs": runs, "threads": threads,
             "loadavg_start": load0.trim(), "loadavg_end": load1.trim(),
-            "old_has_sampled_deposition": old_sampled,
-            "new": {"kernel": format!("{:?}", new.photons.kernel), "starts": format!("{:?}", new.beams.starts), "deposition": dep(&new),
+            "new": {"kernel": format!("{:?}", new.photons.kernel), "gather": format!("{:?}", new.photons.gather), "starts": format!("{:?}", new.beams.starts), "deposition": dep(&new),
                     "mean_rel_vs_ref": e_new, "flux_vs_ref": f_new, "bake_s": t_new, "ref_bake_s": t_ref_new, "photons": b_new.stats.photons},
-            "old": {"kernel": format!("{:?}", old.photons.kernel), "starts": format!("{:?}", old.beams.starts), "deposition": dep(&old),
+            "old": {"kernel": format!("{:?}", old.photons.kernel), "gather": format!("{:?}", old.photons.gather), "starts": format!("{:?}", old.beams.starts), "deposition": dep(&old),
                     "mean_rel_vs_ref": e_old, "flux_vs_ref": f_old, "bake_s": t_old, "ref_bake_s": t_ref_old, "photons": b_old.stats.photons},
             "new_vs_old_ref": e_cross, "refs_new_vs_old": e_refs,
             "bake_time_ratio": ratio, "bake_cpu_ratio": cpu_ratio, "bake_cpu_s": {"new": c_new, "old": c_old},

@@ -231,8 +231,9 @@ pub struct BeamTrace {
     /// Power the beam's model says is backscattered (never deposited:
     /// `P (1 - D(inf))`), keV/s; 0 for CSDA.
     pub backscatter_kev_s: f64,
-    /// Power the model deposits above the beam's start altitude (outside
-    /// the bake), keV/s; 0 for CSDA.
+    /// Power the model deposits above the top of the beam's deposit (at
+    /// most [`ABOVE_START_TOL`] of its total, above [`above_start_top`]),
+    /// outside the bake, keV/s; 0 for CSDA.
     pub above_top_kev_s: f64,
     /// Power the beam still carried when it stopped, keV/s.
     pub undeposited_kev_s: f64,
@@ -384,8 +385,26 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
         out.path.push(p);
     }
     // What the spectrum deposits above the start altitude (soft electrons,
-    // high up) is outside the bake: reported, not deposited.
-    out.above_top_kev_s = pw * done;
+    // high up): along the field line above the start, in spans of
+    // ABOVE_START_SPAN_KM altitude, up to where at most ABOVE_START_TOL of
+    // the total lies higher (or the atmosphere's top); that rest is reported.
+    let z_up = above_start_top(ctx.atmosphere, &frac, total);
+    out.above_top_kev_s = pw * frac(ctx.atmosphere.column_mass(z_up)).min(done);
+    if z_up > p.z && done > 0.0 {
+        let n = ((z_up - p.z) / ABOVE_START_SPAN_KM).ceil().max(1.0) as usize;
+        let along = |z: f64| p + ctx.field.b * ((z - p.z) / ctx.field.b.z);
+        let mut f_hi = out.above_top_kev_s / pw;
+        for k in (0..n).rev() {
+            let (z_lo, z_hi) = (p.z + (z_up - p.z) * k as f64 / n as f64, p.z + (z_up - p.z) * (k + 1) as f64 / n as f64);
+            let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
+            if f_lo > f_hi {
+                emit(ctx, start, &mut out, along(z_hi), along(z_lo), pw * (f_lo - f_hi));
+            }
+            f_hi = f_hi.max(f_lo);
+        }
+    } else {
+        out.above_top_kev_s = pw * done;
+    }
     let bottom = ctx.atmosphere.bottom_km();
     let z0 = start.position.z;
     let (half_l, half_w) = (0.5 * ctx.footprint.length, 0.5 * ctx.footprint.width);
@@ -434,6 +453,37 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
     out.undeposited_kev_s = pw * (total - done).max(0.0);
     out.end_position = p;
     out
+}
+
+/// A Fang beam deposits what its spectrum leaves above its start along the
+/// field line above it, up to the altitude where at most this share of the
+/// spectrum's total deposition lies higher ([`above_start_top`]).
+pub const ABOVE_START_TOL: f64 = 2e-3;
+
+/// Altitude span of each segment of that deposit, km: the deposition
+/// above 250 km falls by e in some 40 km, so a 10 km span's power is
+/// spread evenly along it to within about 12 % at its ends.
+pub const ABOVE_START_SPAN_KM: f64 = 10.0;
+
+/// The altitude above which at most [`ABOVE_START_TOL`] of `total` is
+/// deposited by `frac` (the fraction deposited above a column mass), by
+/// bisection on the atmosphere's table (40 halvings of its range: far below
+/// a metre); the table's top if even that holds more.
+pub fn above_start_top(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f64) -> f64 {
+    let (mut lo, mut hi) = (atm.bottom_km(), atm.top_km());
+    let above = |z: f64| frac(atm.column_mass(z));
+    if above(hi) > ABOVE_START_TOL * total {
+        return hi;
+    }
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if above(mid) > ABOVE_START_TOL * total {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
 }
 
 /// Continuous slowing down along straight steps (the model before Fang):
@@ -1006,11 +1056,19 @@ mod tests {
             let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[7]));
             assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
             let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
-            let above = g.fraction_above(atm.column_mass(260.0));
-            // A finished beam deposits exactly G(inf) - G(m_start): sums of
-            // telescoping differences, rounding only.
+            // Above the start it deposits up to z_up, where at most
+            // ABOVE_START_TOL of the total lies higher: that rest is
+            // reported. A finished beam deposits exactly G(inf) - G(m(z_up)):
+            // sums of telescoping differences, rounding only.
+            let z_up = above_start_top(&atm, &|m| g.fraction_above(m), g.total());
+            let above = g.fraction_above(atm.column_mass(z_up.max(260.0)));
+            assert!(z_up <= atm.top_km() && above <= ABOVE_START_TOL * g.total(), "{e0}: {z_up} km, {above}");
             assert!((dep - (g.total() - above)).abs() < 1e-12, "{e0}: {dep} vs {}", g.total() - above);
             assert!((t.above_top_kev_s - above).abs() < 1e-15 && t.undeposited_kev_s == 0.0);
+            // What lies above the start is on the field line above it.
+            let up: f64 = t.deposits.iter().filter(|d| d.z_end >= 260.0 - 1e-9).map(|d| d.power_kev_s).sum();
+            let want = g.fraction_above(atm.column_mass(260.0)) - above;
+            assert!((up - want).abs() < 1e-12, "{e0}: above the start {up} vs {want}");
             assert!((dep + t.backscatter_kev_s + t.above_top_kev_s - 1.0).abs() < 1e-12);
             assert!(t.deposits.iter().all(|d| d.power_kev_s > 0.0));
         }

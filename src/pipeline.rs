@@ -447,7 +447,7 @@ pub struct NoiseEstimate {
     pub pilot_noise: f64,
     /// Relative RMS noise of an `m / 4`-beam grid, measured.
     pub quarter_noise: f64,
-    /// The fitted law `noise(N)^2 = law_a / N + law_b / N^2`.
+    /// The fitted law `noise(N)^2 = law_a / N + law_b / N^(3/2)`.
     pub law_a: f64,
     pub law_b: f64,
     /// The N of the fitted law at the target (`m (pilot_noise / target)^2`

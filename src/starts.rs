@@ -36,8 +36,6 @@
 //! chunking or thread count, so a beam keeps its identity across frames of
 //! an animation.
 
-use crate::footprint::Footprint;
-
 /// R2's generator in 64-bit fixed point: `alpha * 2^64` for
 /// `alpha = (1/g, 1/g^2)`, g = 1.324717957244746 (the plastic number).
 const R2_A: [u64; 2] = [
@@ -59,87 +57,11 @@ pub fn shift(parts: &[u64]) -> [u64; 2] {
     [a, crate::rng::splitmix64(a)]
 }
 
-/// Inverse-CDF map from the unit square to a footprint's flux density
-/// (cells above threshold, weighted by their density).
-#[derive(Clone, Debug)]
-pub struct FluxMap {
-    nx: usize,
-    ny: usize,
-    /// Cumulative column masses, `col[i]` = sum over columns 0..=i.
-    col: Vec<f64>,
-    /// Cumulative row masses per column, `row[i * ny + j]` = sum over rows
-    /// 0..=j of column i.
-    row: Vec<f64>,
-    length: f64,
-    width: f64,
-}
-
-/// Index of the first cumulative entry above `t` in `cum` (entries with
-/// zero mass are never chosen), clamped to the last entry with mass; and
-/// the remainder of `t` in that entry, in [0, 1).
-#[inline]
-fn invert(cum: &[f64], t: f64) -> (usize, f64) {
-    let total = *cum.last().unwrap();
-    let mut k = cum.partition_point(|&c| c <= t);
-    if k >= cum.len() {
-        // t rounded up to the total: the last entry with mass.
-        k = cum.len() - 1;
-        while k > 0 && cum[k - 1] == total {
-            k -= 1;
-        }
-    }
-    let lo = if k == 0 { 0.0 } else { cum[k - 1] };
-    // Kept 1e-9 of a cell from its upper edge, so rounding in the caller's
-    // (i + f) du never lands in the next cell.
-    let f = ((t - lo) / (cum[k] - lo)).clamp(0.0, 1.0 - 1e-9);
-    (k, f)
-}
-
-impl FluxMap {
-    /// The map of `f`'s cells above `threshold`; None if there is none.
-    pub fn new(f: &Footprint, threshold: f64) -> Option<Self> {
-        let (nx, ny) = (f.nx, f.ny);
-        let mut row = vec![0.0; nx * ny];
-        let mut col = vec![0.0; nx];
-        let mut acc_col = 0.0;
-        for i in 0..nx {
-            let mut acc = 0.0;
-            for j in 0..ny {
-                let d = f.cell(i, j) as f64;
-                if d > threshold {
-                    acc += d;
-                }
-                row[i * ny + j] = acc;
-            }
-            acc_col += acc;
-            col[i] = acc_col;
-        }
-        (acc_col > 0.0).then_some(Self { nx, ny, col, row, length: f.length, width: f.width })
-    }
-
-    /// The cell (i, j) and the point (u, v) in the curtain frame, km, that
-    /// the unit-square point `x` maps to.
-    pub fn map(&self, x: [f64; 2]) -> ((usize, usize), (f64, f64)) {
-        let total = self.col[self.nx - 1];
-        let (i, fu) = invert(&self.col, x[0] * total);
-        let rows = &self.row[i * self.ny..(i + 1) * self.ny];
-        let (j, fv) = invert(rows, x[1] * rows[self.ny - 1]);
-        let (du, dv) = (self.length / self.nx as f64, self.width / self.ny as f64);
-        ((i, j), (-0.5 * self.length + (i as f64 + fu) * du, -0.5 * self.width + (j as f64 + fv) * dv))
-    }
-
-    /// The start (u, v) of beam `index` of the stratified sequence with
-    /// `shift`.
-    #[inline]
-    pub fn start(&self, index: u64, shift: [u64; 2]) -> (f64, f64) {
-        self.map(r2(index, shift)).1
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::beams::FootprintCdf;
+    use crate::footprint::{Footprint, StartMap};
     use crate::scene::{Curtain, FootprintParams};
 
     fn footprint() -> Footprint {
@@ -173,7 +95,9 @@ mod tests {
 
     fn cell_of(fp: &Footprint, (u, v): (f64, f64)) -> (usize, usize) {
         let (du, dv) = fp.cell_size();
-        (((u + 0.5 * fp.length) / du) as usize, ((v + 0.5 * fp.width) / dv) as usize)
+        // A point on the last cell's outer edge (the map's image of x = 1 -
+        // 2^-53, rounded) belongs to that cell.
+        ((((u + 0.5 * fp.length) / du) as usize).min(fp.nx - 1), (((v + 0.5 * fp.width) / dv) as usize).min(fp.ny - 1))
     }
 
     #[test]
@@ -188,10 +112,15 @@ mod tests {
         // threshold and in proportion (chi^2 bounded, so no cell is missed).
         let fp = footprint();
         let thr = 0.2;
-        let map = FluxMap::new(&fp, thr).unwrap();
+        let map = StartMap::new(&fp, thr);
+        assert!(!map.is_empty());
         let n = 100_000u64;
         let sh = shift(&[1, 2]);
-        let strat: Vec<(usize, usize)> = (0..n).map(|i| map.map(r2(i, sh)).0).collect();
+        let start = |i: u64| {
+            let [a, b] = r2(i, sh);
+            map.map(a, b)
+        };
+        let strat: Vec<(usize, usize)> = (0..n).map(|i| cell_of(&fp, start(i))).collect();
         let cdf = FootprintCdf::new(&fp, thr);
         let mut r = crate::rng::rng(&[5]);
         let random: Vec<(usize, usize)> = (0..n).map(|_| cell_of(&fp, cdf.sample(&fp, &mut r))).collect();
@@ -202,11 +131,6 @@ mod tests {
         assert!(k > 300, "{k} cells");
         assert!((xr - dof).abs() < 5.0 * (2.0 * dof).sqrt(), "random control {xr} vs {dof}");
         assert!(xs < 0.25 * dof, "stratified chi2 {xs} vs multinomial mean {dof}");
-        // The point inside the cell agrees with the cell the map reports.
-        for i in 0..2000 {
-            let (c, p) = map.map(r2(i, sh));
-            assert_eq!(cell_of(&fp, p), c);
-        }
     }
 
     #[test]
@@ -258,19 +182,19 @@ mod tests {
     }
 
     #[test]
-    fn unit_square_corners_map_inside_cells_with_flux() {
+    fn the_unit_square_maps_inside_cells_with_flux() {
         let fp = Footprint { nx: 4, ny: 2, data: vec![0.0, 1.0, 0.0, 0.5, 0.0, 0.0, 0.0, 2.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 4.0, width: 2.0 };
-        let m = FluxMap::new(&fp, 0.1).unwrap();
-        for x in [[0.0, 0.0], [1.0, 1.0], [1.0 - 1e-16, 1.0 - 1e-16], [0.5, 0.999], [0.3, 0.0]] {
-            let ((i, j), (u, v)) = m.map(x);
+        let m = StartMap::new(&fp, 0.1);
+        // The map's domain is [0, 1)^2 (what r2 returns).
+        for x in [[0.0, 0.0], [1.0 - 1e-16, 1.0 - 1e-16], [0.5, 0.999], [0.3, 0.0]] {
+            let (i, j) = cell_of(&fp, m.map(x[0], x[1]));
             assert!(fp.cell(i, j) > 0.1, "{x:?} -> {i},{j}");
-            assert_eq!(cell_of(&fp, (u, v)), (i, j));
         }
         // Column 1 holds 1 of the 3.5 total: x1 in [0, 1/3.5) maps there.
-        assert_eq!(m.map([0.2, 0.5]).0, (1, 0));
+        assert_eq!(cell_of(&fp, m.map(0.2, 0.5)), (1, 0));
         // Column 3: rows 0.5 | 2, so x2 below 0.2 maps to row 0.
-        assert_eq!(m.map([0.5, 0.1]).0, (3, 0));
-        assert_eq!(m.map([0.5, 0.3]).0, (3, 1));
-        assert!(FluxMap::new(&fp, 5.0).is_none());
+        assert_eq!(cell_of(&fp, m.map(0.5, 0.1)), (3, 0));
+        assert_eq!(cell_of(&fp, m.map(0.5, 0.3)), (3, 1));
+        assert!(StartMap::new(&fp, 5.0).is_empty());
     }
 }

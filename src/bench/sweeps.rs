@@ -214,24 +214,15 @@ pub(super) fn gather_key(n: usize, r: f64, v: f64, method: GatherMethod) -> Gath
 }
 
 /// The scene with the estimators before issue 10: point kernels, random
-/// beam starts and, where this build has the key, `beams.deposition =
-/// "sampled"` (one drawn energy per beam), applied as a TOML overlay so the
-/// bench needs no change when that key arrives. The flag says whether it
-/// was applied.
-pub fn old_estimators(scene: &Scene) -> (Scene, bool) {
+/// beam starts, `beams.deposition = "sampled"` (one drawn energy per beam)
+/// and that time's default gather, the kd-tree.
+pub fn old_estimators(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     s.photons.kernel = crate::scene::KernelShape::Point;
+    s.photons.gather = GatherMethod::Kdtree;
     s.beams.starts = crate::scene::BeamStarts::Random;
-    let overlay = || -> Option<Scene> {
-        let mut doc: toml::Table = toml::from_str(&s.to_toml()).ok()?;
-        let beams = doc.get_mut("beams")?.as_table_mut()?;
-        beams.insert("deposition".into(), toml::Value::String("sampled".into()));
-        Scene::from_toml_str(&toml::to_string(&doc).ok()?, "old estimators").ok()
-    };
-    match overlay() {
-        Some(t) => (t, true),
-        None => (s, false),
-    }
+    s.beams.deposition = crate::scene::Deposition::Sampled;
+    s
 }
 
 /// A result and the wall time it took, seconds.
@@ -373,7 +364,7 @@ impl<'a> Bench<'a> {
     /// at the scene's radius and voxel: the grid, the trace time and the
     /// gather time (each the fastest of the plan's runs; not cached).
     pub(super) fn old_estimator_grid(&self, n: usize) -> Result<(Grid<[f32; 3]>, f64, f64), SweepError> {
-        let (s, _) = old_estimators(&self.scene);
+        let s = old_estimators(&self.scene);
         // Same curtains and footprint: the plan reuses the footprints.
         let old = BakePlan::reusing(&s, &self.bake, &NoProgress);
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
@@ -388,8 +379,7 @@ impl<'a> Bench<'a> {
 
     /// Label of the old estimators' series.
     pub(super) fn old_label(&self) -> String {
-        let (_, sampled) = old_estimators(&self.scene);
-        format!("old: point kernel, random starts{}, kd-tree", if sampled { ", sampled deposition" } else { "" })
+        "old: point kernel, random starts, sampled deposition, kd-tree".to_string()
     }
 
     /// The kd-tree reference of the photon-count and gather-method studies:
