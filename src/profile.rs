@@ -90,7 +90,7 @@ pub fn bin_deposits(deposits: &[StepDeposit], model: &EmissionModel, z0: f64, z1
 }
 
 /// Traces the scene's beams exactly as the bake does and bins their
-/// deposits per curtain, from the atmosphere's bottom to the beams' top.
+/// deposits per curtain, from the atmosphere's bottom to the highest deposit.
 pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BakeError> {
     let fps = bake::footprints(scene);
     let atmosphere: Atmosphere = bake::atmosphere(scene);
@@ -98,7 +98,10 @@ pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BakeEr
     let (deposits, beam_stats) = beams::trace_deposits(scene, &fps, &atmosphere, &colour, progress)?;
     let model = EmissionModel::new(atmosphere.clone());
     let z0 = atmosphere.bottom_km().floor();
-    let z1 = (scene.beams.top_km + scene.beams.top_noise_km + 1.0).ceil();
+    // Up to the highest deposit: the spectrum's share above a beam's start
+    // goes along the field line above it (`beams`), higher than `top_km`.
+    let highest = deposits.iter().flatten().map(|d| d.z_start.max(d.z_end)).fold(f64::NEG_INFINITY, f64::max);
+    let z1 = ((scene.beams.top_km + scene.beams.top_noise_km).max(highest) + 1.0).ceil();
     let curtains = deposits.iter().map(|d| bin_deposits(d, &model, z0, z1)).collect();
     Ok(Profile { curtains, beam_stats })
 }
