@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """Summarise a cargo-mutants run for docs/mutants/REPORT.md.
 
-usage: summarise.py MUTANTS_OUT OLD_TESTS
+usage: summarise.py OLD_TESTS MUTANTS_OUT...
 
-MUTANTS_OUT is the mutants.out directory of `tools/mutants`; OLD_TESTS a file
-of test names (one a line) that existed before the report's tests were added.
+MUTANTS_OUT: mutants.out directories of `tools/mutants` (one per shard),
+summed; OLD_TESTS: a file of test names (one a line) that existed before the
+report's tests were added.
 For every mutant: its outcome, and for a caught one whether a test of
 OLD_TESTS failed too (then the suite before the additions caught it) or only
 added tests did (then it survived the old suite and names the tests that now
@@ -16,10 +17,13 @@ import pathlib
 import re
 import sys
 
-out = pathlib.Path(sys.argv[1])
-old = set(pathlib.Path(sys.argv[2]).read_text().split())
+old = set(pathlib.Path(sys.argv[1]).read_text().split())
 rows = []
-for o in json.loads((out / "outcomes.json").read_text())["outcomes"]:
+outcomes = []
+for d in sys.argv[2:]:
+    out = pathlib.Path(d)
+    outcomes += [(out, o) for o in json.loads((out / "outcomes.json").read_text())["outcomes"]]
+for out, o in outcomes:
     if o["scenario"] == "Baseline":
         continue
     m = o["scenario"]["Mutant"]
