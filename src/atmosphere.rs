@@ -416,4 +416,15 @@ mod tests {
         let tiny = a.slant_column(110.0, 110.0 + 1e-10, 2e-10);
         assert!((tiny / (a.rho(110.0) * 2e-10 * CM_PER_KM) - 1.0).abs() < 1e-9, "{tiny:e}");
     }
+
+    #[test]
+    fn a_grazing_path_keeps_full_precision() {
+        // dh = 1e-8 km over 100 km: the difference of columns would cancel
+        // to ulp(C) / (rho dh) ~ 1e-7 relative; rho(mid) len is exact to
+        // (dh / H)^2 ~ 1e-18 (the density is exponential across dh).
+        let a = Atmosphere::nrlmsis21();
+        let got = a.slant_column(110.0, 110.0 + 1e-8, 100.0);
+        let want = a.rho(110.0 + 5e-9) * 100.0 * CM_PER_KM;
+        assert!((got / want - 1.0).abs() < 1e-12, "{got:e} vs {want:e}");
+    }
 }

@@ -693,4 +693,17 @@ mod tests {
         assert_eq!(ColourTable::colormap(&[]).rgb(120.0), [0.0; 3]);
         assert_eq!(colormap_rgb(&[], 120.0), [0.0; 3]);
     }
+
+    #[test]
+    fn colormap_table_spans_rows_below_sea_level() {
+        // The scene allows any strictly ascending finite altitudes; a map
+        // from -50 to 100 km is linear in between, and its table covers all
+        // of it (grey ramp: value (h + 50) / 150 per channel).
+        let rows = [[-50.0, 0.0, 0.0, 0.0], [100.0, 1.0, 1.0, 1.0]];
+        let t = ColourTable::colormap(&rows);
+        for h in [-50.0, 0.0, 37.5, 90.0, 100.0] {
+            let c = t.rgb(h);
+            assert!((c[0] - (h + 50.0) / 150.0).abs() < 1e-12, "{h} km: {c:?}");
+        }
+    }
 }

@@ -405,13 +405,15 @@ mod tests {
 
     #[test]
     fn an_opaque_piece_stops_at_the_cutoff_depth() {
-        // Optical depth 1000: the parts past depth TAU_CUTOFF carry less than
-        // exp(-40) of the result and are skipped: at most TAU_CUTOFF /
-        // KAPPA_MAX + 1 = 81 parts of the 2000, and the result is the slab's.
+        // Optical depth 1001.3 in 2003 parts of 0.4999: the parts past depth
+        // TAU_CUTOFF carry less than exp(-40) of the result and are skipped,
+        // so 81 parts are evaluated (depth 40.49 after the 81st), and the
+        // result is the slab's. (A depth that is not a multiple of
+        // KAPPA_MAX: the stop test never meets 40 exactly.)
         let mut a = Accum::default();
-        a.add(&piece(10.0, constant(100.0), [constant(1.0), Cubic::ZERO, Cubic::ZERO]), true);
-        assert!(a.parts <= (TAU_CUTOFF / KAPPA_MAX) as u64 + 1 && a.parts >= (TAU_CUTOFF / KAPPA_MAX) as u64, "{} parts", a.parts);
-        assert!((a.l[0] / slab(0.0, 100.0, 10.0, 1.0) - 1.0).abs() < 1e-11);
-        assert_eq!(a.tau, 1000.0);
+        a.add(&piece(10.0, constant(100.13), [constant(1.0), Cubic::ZERO, Cubic::ZERO]), true);
+        assert_eq!(a.parts, 81);
+        assert!((a.l[0] / slab(0.0, 100.13, 10.0, 1.0) - 1.0).abs() < 1e-11);
+        assert!((a.tau - 1001.3).abs() < 1e-9);
     }
 }
