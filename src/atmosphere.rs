@@ -358,4 +358,73 @@ mod tests {
         let h = (0..4200).map(|i| 80.0 + i as f64 * 0.1).find(|&h| a.composition(h).n2 < 1.0 / (110.0 * 3e-11)).unwrap();
         assert!((250.0..275.0).contains(&h), "{h}");
     }
+
+    // ---- Oracles added for the mutation report (issue 11 part 8,
+    // docs/mutants/REPORT.md).
+
+    #[test]
+    fn scale_height_is_minus_the_inverse_log_slope_of_density() {
+        // H = -1 / (d ln rho / dh): inside a segment ln rho is linear, so a
+        // central difference is exact to rounding (~1e-16 / (d/H) = 1e-10).
+        // Points off both tables' nodes (0.5 km grid, US 1976 nodes).
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            for h in [52.3, 82.2, 97.3, 113.1, 161.7, 250.2, 333.3, 480.1, 690.7] {
+                let d = 1e-4;
+                let slope = (a.rho(h + d).ln() - a.rho(h - d).ln()) / (2.0 * d);
+                let hs = a.scale_height(h);
+                assert!((hs * -slope - 1.0).abs() < 1e-8, "{h} km: H {hs} vs {}", -1.0 / slope);
+                assert!((4.0..120.0).contains(&hs), "{h} km: {hs}");
+            }
+        }
+    }
+
+    #[test]
+    fn column_continues_as_one_exponential_above_the_table_and_below_it() {
+        // Above the top node the last segment's exponential goes on: the
+        // column is rho H there, and -dC/dh = rho holds past both ends.
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            let top = a.top_km();
+            for h in [top, top + 50.0] {
+                let want = a.rho(h) * a.scale_height(h) * CM_PER_KM;
+                assert!((a.column_mass(h) / want - 1.0).abs() < 1e-12, "{h} km");
+            }
+            let (lo, hi) = (a.column_mass(top - 1e-9), a.column_mass(top + 1e-9));
+            assert!((lo / hi - 1.0).abs() < 1e-9);
+            for h in [a.bottom_km() - 10.0, top + 20.0] {
+                let d = 1e-4;
+                let deriv = -(a.column_mass(h + d) - a.column_mass(h - d)) / (2.0 * d * CM_PER_KM);
+                assert!((deriv / a.rho(h) - 1.0).abs() < 1e-6, "{h}: {deriv:e} vs {:e}", a.rho(h));
+            }
+        }
+        let a = Atmosphere::us1976();
+        assert_eq!((a.bottom_km(), a.top_km()), (80.0, 500.0));
+    }
+
+    #[test]
+    fn slant_column_is_symmetric_and_continuous_at_the_horizontal_switch() {
+        // The column along a path does not depend on its direction, and the
+        // switch to rho(mid) len for near-horizontal paths joins the general
+        // formula to first order in dh / H (dh = 1e-6 len here: 1e-7 of H).
+        let a = Atmosphere::nrlmsis21();
+        assert_eq!(a.slant_column(110.0, 130.0, 40.0), a.slant_column(130.0, 110.0, 40.0));
+        let len = 3.0;
+        let below = a.slant_column(110.0, 110.0 + 0.99e-6 * len, len);
+        let above = a.slant_column(110.0, 110.0 + 1.01e-6 * len, len);
+        assert!((below / above - 1.0).abs() < 1e-6, "{below:e} {above:e}");
+        // A short path of dh 1e-10 km (below the absolute switch, 1e-9 km):
+        // rho len, not the cancelling difference.
+        let tiny = a.slant_column(110.0, 110.0 + 1e-10, 2e-10);
+        assert!((tiny / (a.rho(110.0) * 2e-10 * CM_PER_KM) - 1.0).abs() < 1e-9, "{tiny:e}");
+    }
+
+    #[test]
+    fn a_grazing_path_keeps_full_precision() {
+        // dh = 1e-8 km over 100 km: the difference of columns would cancel
+        // to ulp(C) / (rho dh) ~ 1e-7 relative; rho(mid) len is exact to
+        // (dh / H)^2 ~ 1e-18 (the density is exponential across dh).
+        let a = Atmosphere::nrlmsis21();
+        let got = a.slant_column(110.0, 110.0 + 1e-8, 100.0);
+        let want = a.rho(110.0 + 5e-9) * 100.0 * CM_PER_KM;
+        assert!((got / want - 1.0).abs() < 1e-12, "{got:e} vs {want:e}");
+    }
 }

@@ -486,4 +486,224 @@ mod tests {
         assert_eq!(t.rgb(0.0), [0.0, 1.0, 0.0]);
         assert_eq!(t.rgb(1e4), [1.0, 0.0, 0.5]);
     }
+
+    // ---- Oracles added for the mutation report (issue 11 part 8,
+    // docs/mutants/REPORT.md): closed forms, literature numbers and
+    // conservation, not the code's constants read back.
+
+    #[test]
+    fn cmf_fit_follows_the_cie_table_across_the_visible() {
+        // CIE 1931 2-degree table (CIE 15:2004, table T.4), 10 nm steps.
+        // Same 2 %-of-peak tolerance as above (the fit's largest deviation on
+        // these rows is about 1 % of the peak).
+        #[rustfmt::skip]
+        let table = [
+            (400.0, 0.01431, 0.000396, 0.06785), (420.0, 0.13438, 0.0040, 0.64560),
+            (460.0, 0.29080, 0.06000, 1.66920), (470.0, 0.19536, 0.09098, 1.28764),
+            (480.0, 0.09564, 0.13902, 0.81295), (490.0, 0.03201, 0.20802, 0.46518),
+            (510.0, 0.00930, 0.50300, 0.15820), (520.0, 0.06327, 0.71000, 0.07825),
+            (530.0, 0.16550, 0.86200, 0.04216), (540.0, 0.29040, 0.95400, 0.02030),
+            (550.0, 0.43345, 0.99495, 0.00875), (560.0, 0.59450, 0.99500, 0.00390),
+            (570.0, 0.76210, 0.95200, 0.00210), (580.0, 0.91630, 0.87000, 0.00165),
+            (590.0, 1.02630, 0.75700, 0.00110), (610.0, 1.00260, 0.50300, 0.00034),
+            (620.0, 0.85445, 0.38100, 0.00019), (640.0, 0.44790, 0.17500, 0.00002),
+            (660.0, 0.16490, 0.06100, 0.0), (680.0, 0.04677, 0.01700, 0.0),
+            (700.0, 0.01136, 0.00410, 0.0),
+        ];
+        let peak = [1.0622, 1.0, 1.7826];
+        for (l, x, y, z) in table {
+            let got = cie1931_xyz(l);
+            for (k, want) in [x, y, z].into_iter().enumerate() {
+                assert!((got[k] - want).abs() < 0.02 * peak[k], "{l} nm component {k}: {} vs {want}", got[k]);
+            }
+        }
+        // Equal-energy white: the three functions have equal integrals
+        // (CIE 1931 normalisation, 106.86 nm each); the fit keeps them within
+        // 0.1 % (1 nm sums, 360-830 nm): allow 0.5 %.
+        let int = (360..=830).fold([0.0; 3], |a, l| {
+            let c = cie1931_xyz(l as f64);
+            [a[0] + c[0], a[1] + c[1], a[2] + c[2]]
+        });
+        for k in 0..3 {
+            assert!((int[k] / 106.86 - 1.0).abs() < 0.005, "integral {k}: {}", int[k]);
+        }
+    }
+
+    #[test]
+    fn gamut_map_moves_along_the_line_to_grey_by_the_smallest_step() {
+        // raw = (-0.1, 0.5, 0.2): Y = 0.35078, t = 0.1 / (Y + 0.1), and the
+        // result minus grey is (1 - t) times raw minus grey.
+        let raw = [-0.1, 0.5, 0.2];
+        let y = 0.2126 * -0.1 + 0.7152 * 0.5 + 0.0722 * 0.2;
+        let t = 0.1 / (y + 0.1);
+        let m = gamut_map(raw);
+        for k in 0..3 {
+            assert!((m[k] - y - (1.0 - t) * (raw[k] - y)).abs() < 1e-15, "{m:?}");
+        }
+        assert!(m[0].abs() < 1e-16);
+        // Two negative components: the more negative one decides.
+        let m = gamut_map([-0.3, 1.0, -0.05]);
+        assert!(m[0].abs() < 1e-15 && m[2] > 0.0, "{m:?}");
+        // Negative luminance: no white to move to, black.
+        assert_eq!(gamut_map([0.2, -0.2, 0.0]), [0.0; 3]);
+    }
+
+    #[test]
+    fn a_line_photon_weighs_its_energy_times_ybar() {
+        // Gamut mapping keeps Y, so one photon of wavelength l has luminance
+        // (557.7 / l) Y(l) / Y(557.7): photon energy h c / l times the
+        // luminous efficiency, relative to the 557.7 nm unit. Y is the
+        // luminance of the Rec.709 colour of the CMFs, i.e. ybar to the
+        // matrix's 4 digits (1e-3 at 427.8 nm), taken exactly here.
+        let y = |l: f64| luminance(xyz_to_rec709(cie1931_xyz(l)));
+        for l in [427.8, 557.7, 630.0, 636.4, 666.8] {
+            let want = 557.7 / l * y(l) / y(557.7);
+            assert!((luminance(line_rgb(l)) / want - 1.0).abs() < 1e-12, "{l}");
+        }
+        // The N2 1P colour is the gamut-mapped mixture of its bands, equal
+        // photon counts, each weighted by its photon energy.
+        let mut xyz = [0.0; 3];
+        for l in N2_1P_BANDS_NM {
+            let c = cie1931_xyz(l);
+            for k in 0..3 {
+                xyz[k] += 557.7 / l * c[k] / 6.0;
+            }
+        }
+        let want = gamut_map(xyz_to_rec709(xyz)).map(|c| c / y(557.7));
+        let got = n2_1p_rgb();
+        for k in 0..3 {
+            assert!((got[k] - want[k]).abs() < 1e-12 * want[0], "{got:?} vs {want:?}");
+        }
+        assert!((luminance(got) - luminance(xyz_to_rec709(xyz)) / y(557.7)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn line_yields_as_array_follow_the_lines_order() {
+        let y = LineYields { oi_5577: 1.0, oi_6300: 2.0, oi_6364: 3.0, n2p_4278: 4.0, n2_1p: 5.0 };
+        assert_eq!(y.as_array(), [1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_eq!(LINES.map(|l| l.name), ["OI 557.7 nm", "OI 630.0 nm", "OI 636.4 nm", "N2+ 427.8 nm", "N2 1P 647-688 nm"]);
+    }
+
+    /// The emission model as documented on [`EmissionModel`], with the rates
+    /// as the doc cites them (lifetimes, not rates), on the composition of
+    /// the atmosphere at `h`.
+    fn documented_yields(c: Composition) -> [f64; 5] {
+        let total = c.n2 + c.o2 + c.o;
+        let (x_n2, x_o) = (c.n2 / total, c.o / total);
+        // Competition kinetics: fraction of N2(A) quenched by O.
+        let t_a = 3e-11 * c.o / (3e-11 * c.o + 2.5e-12 * c.o2 + 0.5);
+        // Stern-Volmer survival against quenching, lifetime tau, rate k, density n.
+        let stern_volmer = |tau: f64, k: f64, n: f64| 1.0 / (1.0 + tau * k * n);
+        let green = stern_volmer(0.7, 5e-14, c.o2) * (1.33 * x_n2 * t_a + 2.0 * x_o);
+        let red = 20.0 * x_o * stern_volmer(110.0, 3e-11, c.n2);
+        let blue = 0.34 * x_n2 / 0.781;
+        [green, 0.75 * red, 0.25 * red, blue, blue]
+    }
+
+    use crate::atmosphere::Composition;
+
+    #[test]
+    fn yields_are_the_documented_kinetics_at_every_altitude() {
+        for atmosphere in [Atmosphere::nrlmsis21(), Atmosphere::us1976()] {
+            let m = EmissionModel::new(atmosphere.clone());
+            for i in 0..=130 {
+                let h = 50.0 + 5.0 * i as f64;
+                let got = m.yields(h).as_array();
+                let want = documented_yields(atmosphere.composition(h));
+                for k in 0..5 {
+                    // Same arithmetic in a different order: rounding only.
+                    assert!((got[k] - want[k]).abs() <= 1e-12 * want[k].abs(), "{h} km line {k}: {} vs {}", got[k], want[k]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn yields_reach_their_physical_limits_and_conserve_energy() {
+        let m = EmissionModel::default();
+        let a = Atmosphere::nrlmsis21();
+        // Well-mixed 50-80 km: N2 is 78.08 % of the air, 78.85 % of N2+O2
+        // (Ar not counted), so 427.8 nm is Rees & Luckey's 0.34 photons/keV
+        // to 1 %.
+        for h in [50.0, 65.0, 80.0] {
+            let y = m.yields(h).n2p_4278;
+            assert!((y / 0.34 - 1.0).abs() < 0.015, "{h} km: {y}");
+        }
+        // Top of the table (700 km), nearly pure O: 557.7 tends to the direct
+        // impact yield 2.0 per keV into O (O2 and N2(A) transfer gone) and
+        // 630.0 + 636.4 nm to the unquenched O(1D) yield 20 per keV into O
+        // ([N2] / 3.03e8 cm^-3 quenches a fraction of it: Stern-Volmer).
+        let c = a.composition(700.0);
+        let x_o = c.o / c.total();
+        let y = m.yields(700.0);
+        assert!((y.oi_5577 / (2.0 * x_o) - 1.0).abs() < 1e-3, "{y:?}");
+        let q = 1.0 / (1.0 + c.n2 / (1.0 / (110.0 * 3e-11)));
+        assert!(((y.oi_6300 + y.oi_6364) / (20.0 * x_o * q) - 1.0).abs() < 1e-12);
+        // O(1D) half-quenched where [N2] = 1 / (110 s * 3e-11 cm^3/s).
+        let n_half = 1.0 / (110.0 * 3e-11);
+        let h_half = (0..65000).map(|i| 50.0 + 0.01 * i as f64).find(|&h| a.composition(h).n2 < n_half).unwrap();
+        let c = a.composition(h_half);
+        let y = m.yields(h_half);
+        let q = (y.oi_6300 + y.oi_6364) / (20.0 * c.o / c.total());
+        assert!((q - 0.5).abs() < 1e-3, "{h_half} km: {q}");
+        // Energy: photons per keV times photon energy (1239.84 eV nm / l)
+        // stays below the keV deposited, at every altitude (a few % at most).
+        for i in 0..=650 {
+            let h = 50.0 + i as f64;
+            let radiated: f64 = m.yields(h).as_array().iter().zip(LINES).map(|(n, l)| n * 1.23984 / l.lambda_nm).sum();
+            assert!((0.0..0.1).contains(&radiated), "{h} km: {radiated} keV per keV");
+        }
+    }
+
+    #[test]
+    fn colour_per_kev_is_the_sum_of_the_line_colours() {
+        // Light adds: rgb = sum over lines of yield times one photon's colour
+        // (the 1P bands through their mixture colour).
+        let m = EmissionModel::default();
+        let colours = [line_rgb(557.7), line_rgb(630.0), line_rgb(636.4), line_rgb(427.8), n2_1p_rgb()];
+        for h in [70.0, 95.0, 110.0, 180.0, 300.0] {
+            let y = m.yields(h).as_array();
+            let got = m.rgb_per_kev(h);
+            for k in 0..3 {
+                let want: f64 = (0..5).map(|i| y[i] * colours[i][k]).sum();
+                assert!((got[k] - want).abs() < 1e-12 * (want.abs() + 1e-3), "{h} km {k}: {} vs {want}", got[k]);
+            }
+        }
+    }
+
+    #[test]
+    fn tables_end_at_their_last_row_and_black_colour_altitude_keeps_the_colour() {
+        let m = EmissionModel::default();
+        let t = ColourTable::physical(&m);
+        let (a, b) = (t.rgb(TABLE_H.1), m.rgb_per_kev(TABLE_H.1));
+        let (c, d) = (t.rgb(TABLE_H.0), m.rgb_per_kev(TABLE_H.0));
+        for k in 0..3 {
+            assert!((a[k] - b[k]).abs() <= 1e-12 * b[k].abs() && (c[k] - d[k]).abs() <= 1e-12 * d[k].abs());
+        }
+        // A black colour-map row has no chromaticity: the colour of the true
+        // altitude is kept.
+        let rows = [[100.0, 0.0, 0.0, 0.0], [200.0, 1.0, 0.5, 0.25], [250.0, 0.2, 0.3, 0.4]];
+        let t = ColourTable::colormap(&rows);
+        assert_eq!(t.rgb_with_colour_altitude(150.0, 100.0), t.rgb(150.0));
+        let (end, mid) = (t.rgb(250.0), t.rgb(225.0));
+        for k in 0..3 {
+            assert!((end[k] - rows[2][k + 1]).abs() < 1e-12, "{end:?}");
+            assert!((mid[k] - 0.5 * (rows[1][k + 1] + rows[2][k + 1])).abs() < 1e-12);
+        }
+        assert_eq!(ColourTable::colormap(&[]).rgb(120.0), [0.0; 3]);
+        assert_eq!(colormap_rgb(&[], 120.0), [0.0; 3]);
+    }
+
+    #[test]
+    fn colormap_table_spans_rows_below_sea_level() {
+        // The scene allows any strictly ascending finite altitudes; a map
+        // from -50 to 100 km is linear in between, and its table covers all
+        // of it (grey ramp: value (h + 50) / 150 per channel).
+        let rows = [[-50.0, 0.0, 0.0, 0.0], [100.0, 1.0, 1.0, 1.0]];
+        let t = ColourTable::colormap(&rows);
+        for h in [-50.0, 0.0, 37.5, 90.0, 100.0] {
+            let c = t.rgb(h);
+            assert!((c[0] - (h + 50.0) / 150.0).abs() < 1e-12, "{h} km: {c:?}");
+        }
+    }
 }

@@ -244,3 +244,218 @@ impl Accum {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Oracles for the segment kernel (issue 11 part 8, docs/mutants/REPORT.md):
+    //! the Gauss-Legendre rule's exactness on polynomials, the trilinear
+    //! interpolant evaluated directly, and closed forms of the emission
+    //! integral through an absorbing medium.
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn rng() -> rand_pcg::Pcg64 {
+        rand_pcg::Pcg64::seed_from_u64(0x5e6)
+    }
+
+    #[test]
+    fn gauss_legendre_6_integrates_polynomials_to_degree_11_exactly() {
+        // An n-point Gauss rule is exact to degree 2n - 1 (A&S 25.4.29):
+        // int_0^1 s^k ds = 1/(k+1) for k <= 11, to rounding (the printed
+        // 16-digit nodes and weights: a few 1e-16).
+        for k in 0..=11 {
+            let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * x.powi(k)).sum();
+            assert!((q - 1.0 / (k + 1) as f64).abs() < 2e-15, "degree {k}: {q}");
+        }
+        // Degree 12 is not exact: for s^12 the error is exactly
+        // (n!)^4 / ((2n+1) ((2n)!)^3) times 12! (A&S 25.4.30 on [0, 1],
+        // f^(12) = 12! everywhere), 9.0e-8.
+        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * x.powi(12)).sum();
+        let c = (720f64).powi(4) / (13.0 * 479001600f64.powi(3)) * 479001600.0;
+        assert!(((1.0 / 13.0 - q) / c - 1.0).abs() < 1e-6, "{} vs {c}", 1.0 / 13.0 - q);
+        // Nodes ascending, symmetric about 1/2; weights symmetric and positive.
+        for i in 0..6 {
+            assert!((GL_NODES[i] + GL_NODES[5 - i] - 1.0).abs() < 1e-16);
+            assert_eq!(GL_WEIGHTS[i], GL_WEIGHTS[5 - i]);
+            assert!(GL_WEIGHTS[i] > 0.0 && GL_NODES[i] > 0.0 && GL_NODES[i] < 1.0);
+        }
+        assert!(GL_NODES.windows(2).all(|w| w[0] < w[1]));
+    }
+
+    /// Trilinear interpolation of the corners `v` (index 4x + 2y + z) at `p`.
+    fn trilinear(v: [f64; 8], p: [f64; 3]) -> f64 {
+        let mut f = 0.0;
+        for (i, vi) in v.iter().enumerate() {
+            let w = |bit: usize, t: f64| if i >> bit & 1 == 1 { t } else { 1.0 - t };
+            f += vi * w(2, p[0]) * w(1, p[1]) * w(0, p[2]);
+        }
+        f
+    }
+
+    #[test]
+    fn cubic_along_a_segment_is_the_trilinear_interpolant_there() {
+        // Oracle: the interpolant evaluated directly at the point of the
+        // segment (a sum of 8 products), for random corners and segments
+        // (endpoints also outside the cell: the polynomial continues).
+        // Values O(1): rounding 1e-14.
+        let mut r = rng();
+        for _ in 0..500 {
+            let v: [f64; 8] = std::array::from_fn(|_| r.random_range(-2.0..2.0));
+            let ua: [f64; 3] = std::array::from_fn(|_| r.random_range(-0.2..1.2));
+            let ub: [f64; 3] = std::array::from_fn(|_| r.random_range(-0.2..1.2));
+            let c = Cubic::along(v, ua, ub);
+            for s in [0.0, 0.137, 0.5, 0.81, 1.0] {
+                let p = std::array::from_fn(|k| ua[k] + s * (ub[k] - ua[k]));
+                let want = trilinear(v, p);
+                assert!((c.eval(s) - want).abs() < 1e-12, "{v:?} {ua:?} {ub:?} s={s}: {} vs {want}", c.eval(s));
+            }
+        }
+    }
+
+    #[test]
+    fn cubic_eval_integral_and_antiderivative_agree_with_their_definitions() {
+        let c = Cubic([1.5, -2.0, 3.25, -0.75]);
+        let direct = |s: f64| 1.5 - 2.0 * s + 3.25 * s * s - 0.75 * s * s * s;
+        for s in [0.0, 0.3, 0.77, 1.0, 1.6] {
+            assert!((c.eval(s) - direct(s)).abs() < 1e-14);
+        }
+        // int_0^1 = 1.5 - 1 + 3.25/3 - 0.75/4, exactly.
+        assert!((c.integral() - (0.5 + 3.25 / 3.0 - 0.1875)).abs() < 1e-14);
+        assert_eq!(c.antiderivative(0.0), 0.0);
+        assert!((c.antiderivative(1.0) - c.integral()).abs() < 1e-14);
+        // P' = f (central difference on a quartic: error h^2 P'''/6 ~ 1e-10).
+        for s in [0.1, 0.45, 0.9] {
+            let h = 1e-5;
+            let d = (c.antiderivative(s + h) - c.antiderivative(s - h)) / (2.0 * h);
+            assert!((d - c.eval(s)).abs() < 1e-8, "{s}: {d} vs {}", c.eval(s));
+        }
+        // P(s) = int_0^s f by the (exact for degree 3) Gauss rule on [0, s].
+        let s = 0.6;
+        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * s * c.eval(s * x)).sum();
+        assert!((c.antiderivative(s) - q).abs() < 1e-14);
+        // Coefficient sum of P: sharp when all coefficients share a sign
+        // (then it is |P(1)|), and an upper bound of |P| on [0, 1] otherwise.
+        let neg = Cubic([-2.0, -4.0, -6.0, -8.0]);
+        assert!((neg.abs_antiderivative_sum() - 8.0).abs() < 1e-15);
+        assert!((neg.abs_antiderivative_sum() - neg.antiderivative(1.0).abs()).abs() < 1e-15);
+        let mixed = Cubic([-1.0, 2.0, -3.0, 4.0]);
+        assert!((mixed.abs_antiderivative_sum() - 4.0).abs() < 1e-15);
+        assert!(Cubic::ZERO.is_zero() && !Cubic([0.0, 0.0, 0.0, 1e-300]).is_zero() && !Cubic([1.0, 0.0, 0.0, 0.0]).is_zero());
+    }
+
+    fn piece(len: f64, sigma: Cubic, e: [Cubic; 3]) -> Piece {
+        Piece { t0: 2.0, t1: 2.0 + len, sigma_t: sigma, e }
+    }
+
+    fn constant(x: f64) -> Cubic {
+        Cubic([x, 0.0, 0.0, 0.0])
+    }
+
+    /// Emission of constant density `e` seen through a homogeneous slab of
+    /// extinction `sigma` and length `len` behind optical depth `tau0`:
+    /// `exp(-tau0) e (1 - exp(-sigma len)) / sigma` (the formal solution of
+    /// the transfer equation, e.g. Chandrasekhar 1960 ch. I).
+    fn slab(tau0: f64, sigma: f64, len: f64, e: f64) -> f64 {
+        (-tau0).exp() * e * -(-sigma * len).exp_m1() / sigma
+    }
+
+    #[test]
+    fn homogeneous_slab_matches_the_closed_form_behind_any_optical_depth() {
+        // Constant sigma: on each part the integrand is exp(-k u), k <= 1/2,
+        // whose 12th derivative is k^12 exp(-k u): the 6-point rule errs by
+        // 1.9e-16 k^12 < 1e-19 relative (A&S 25.4.30); rounding of the sums
+        // dominates. Allow 1e-11 (the module doc's measured worst case for
+        // general pieces is 3.5e-12).
+        for (tau0, sigma, len) in [(0.0, 0.3, 1.0), (0.0, 1.5, 2.0), (1.7, 3.0, 1.0), (0.0, 30.0, 1.0), (0.4, 0.02, 7.0)] {
+            let mut a = Accum { tau: tau0, ..Default::default() };
+            let e = [constant(1.0), constant(0.25), constant(2.0)];
+            a.add(&piece(len, constant(sigma), e), true);
+            for k in 0..3 {
+                let want = slab(tau0, sigma, len, e[k].0[0]);
+                assert!((a.l[k] / want - 1.0).abs() < 1e-11, "tau0 {tau0} sigma {sigma} len {len} channel {k}: {} vs {want}", a.l[k]);
+            }
+            assert!((a.tau - (tau0 + sigma * len)).abs() < 1e-12 * a.tau);
+            // One part per KAPPA_MAX of optical depth (module doc).
+            assert_eq!(a.parts, ((sigma * len / KAPPA_MAX).ceil() as u64).max(1), "sigma {sigma} len {len}");
+        }
+    }
+
+    #[test]
+    fn emission_without_extinction_is_the_exact_cubic_integral_attenuated_by_tau0() {
+        // sigma_t = 0: L = exp(-tau0) len int e, exactly.
+        let e = Cubic([0.5, 1.0, -0.3, 0.2]);
+        let mut a = Accum { tau: 0.8, ..Default::default() };
+        a.add(&piece(3.0, Cubic::ZERO, [Cubic::ZERO, e, Cubic::ZERO]), true);
+        let want = (-0.8f64).exp() * 3.0 * (0.5 + 0.5 - 0.1 + 0.05);
+        assert!((a.l[1] - want).abs() < 1e-14, "{} vs {want}", a.l[1]);
+        assert_eq!((a.l[0], a.l[2], a.tau, a.parts), (0.0, 0.0, 0.8, 1));
+    }
+
+    #[test]
+    fn pieces_compose_absorption_only_pieces_attenuate_and_empty_pieces_do_nothing() {
+        // An absorbing piece (with or without emission switched off) then an
+        // emitting one equals the emitting one behind the first's depth.
+        let e = [constant(1.0), Cubic::ZERO, Cubic::ZERO];
+        let mut a = Accum::default();
+        a.add(&piece(2.0, constant(0.6), e), false);
+        assert_eq!((a.l, a.parts), ([0.0; 3], 0), "emission off adds none");
+        assert!((a.tau - 1.2).abs() < 1e-15);
+        a.add(&piece(1.0, constant(0.4), e), true);
+        assert!((a.l[0] / slab(1.2, 0.4, 1.0, 1.0) - 1.0).abs() < 1e-11);
+        // Emission in one channel only is still emission.
+        let mut b = Accum::default();
+        b.add(&piece(1.0, constant(0.4), [Cubic::ZERO, Cubic::ZERO, constant(3.0)]), true);
+        assert!((b.l[2] / slab(0.0, 0.4, 1.0, 3.0) - 1.0).abs() < 1e-11 && b.l[0] == 0.0);
+        // Zero and negative lengths: nothing, and no work.
+        for len in [0.0, -1.0] {
+            let mut c = Accum::default();
+            c.add(&piece(len, constant(0.4), e), true);
+            c.add(&piece(len, Cubic::ZERO, e), true);
+            assert_eq!((c.l, c.tau, c.parts), ([0.0; 3], 0.0, 0), "len {len}");
+        }
+    }
+
+    /// Composite Simpson on 20000 intervals of `len exp(-tau0 - len P(s)) e(s)`:
+    /// error len h^4 max|g''''| / 180 with h = 5e-5, below 1e-15 relative
+    /// for the smooth integrands here.
+    fn simpson(tau0: f64, len: f64, sigma: Cubic, e: Cubic) -> f64 {
+        let n = 20000;
+        let h = 1.0 / n as f64;
+        let g = |s: f64| (-(tau0 + len * sigma.antiderivative(s))).exp() * e.eval(s);
+        let mut sum = g(0.0) + g(1.0);
+        for i in 1..n {
+            sum += if i % 2 == 1 { 4.0 } else { 2.0 } * g(i as f64 * h);
+        }
+        len * sum * h / 3.0
+    }
+
+    #[test]
+    fn varying_extinction_and_emission_match_a_fine_simpson_integration() {
+        let mut r = rng();
+        for _ in 0..40 {
+            let sigma = Cubic(std::array::from_fn(|_| r.random_range(0.0..3.0)));
+            let e = Cubic(std::array::from_fn(|_| r.random_range(0.0..2.0)));
+            let len = r.random_range(0.1..6.0);
+            let tau0 = r.random_range(0.0..2.0);
+            let mut a = Accum { tau: tau0, ..Default::default() };
+            a.add(&piece(len, sigma, [e, Cubic::ZERO, Cubic::ZERO]), true);
+            let want = simpson(tau0, len, sigma, e);
+            assert!((a.l[0] / want - 1.0).abs() < 1e-10, "{sigma:?} {e:?} len {len}: {} vs {want}", a.l[0]);
+            assert!((a.tau - tau0 - len * sigma.integral()).abs() < 1e-12 * a.tau);
+        }
+    }
+
+    #[test]
+    fn an_opaque_piece_stops_at_the_cutoff_depth() {
+        // Optical depth 1001.3 in 2003 parts of 0.4999: the parts past depth
+        // TAU_CUTOFF carry less than exp(-40) of the result and are skipped,
+        // so 81 parts are evaluated (depth 40.49 after the 81st), and the
+        // result is the slab's. (A depth that is not a multiple of
+        // KAPPA_MAX: the stop test never meets 40 exactly.)
+        let mut a = Accum::default();
+        a.add(&piece(10.0, constant(100.13), [constant(1.0), Cubic::ZERO, Cubic::ZERO]), true);
+        assert_eq!(a.parts, 81);
+        assert!((a.l[0] / slab(0.0, 100.13, 10.0, 1.0) - 1.0).abs() < 1e-11);
+        assert!((a.tau - 1001.3).abs() < 1e-9);
+    }
+}
