@@ -150,7 +150,7 @@ impl Scene {
             v.allow(t, "center", Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
             v.allow(t, "bend_km", Allowed::Rule("in [0, 1e4], less than width / 2".into()));
             if c.bend_km * 2.0 >= c.width {
-                v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than width / 2 = {}", c.width / 2.0));
+                v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than curtain[{i}].width / 2 = {} (raise width or lower bend_km)", c.width / 2.0));
             }
         }
         if self.curtains.is_empty() {
