@@ -540,7 +540,7 @@ impl Default for PhotonParams {
             cutoff: 2.5,
             radius_noise: 0.3,
             radius_noise_freq: 0.05,
-            gather: GatherMethod::Kdtree,
+            gather: GatherMethod::Splat,
             kernel: KernelShape::Segment,
         }
     }
