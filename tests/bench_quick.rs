@@ -134,7 +134,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     }
 
     // --- the expected trends
-    strictly_decreasing("photon count", &curve(&rows, "photon count", "kd-tree, r = 0.5 km"));
+    strictly_decreasing("photon count", &curve(&rows, "photon count", "splat, r = 0.5 km"));
     for m in ["kd-tree (kiddo)", "splat"] {
         strictly_decreasing(&format!("gather method / {m}"), &curve(&rows, "gather method", m));
         strictly_increasing(&format!("voxel size / {m}"), &curve(&rows, "voxel size", m));
@@ -168,7 +168,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let (rmin, rmax) = (rs.iter().cloned().fold(f64::MAX, f64::min), rs.iter().cloned().fold(f64::MIN, f64::max));
     assert!(at(rmin) > at(scene_r) && at(rmax) > at(scene_r), "radius curve has no interior minimum: {radius:?}");
 
-    // One gather setting, one time: the scene's own kd-tree gather (N beams,
+    // One gather setting, one time: the scene's own gather (N beams,
     // r, v) appears in three gather-timed studies with the same seconds.
     let scene_gather: Vec<f64> = rows
         .iter()

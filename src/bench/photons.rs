@@ -15,12 +15,13 @@ impl<'a> Bench<'a> {
 
         // Photon count at fixed radius: beams + gather time.
         let name = "photon count";
-        let method = format!("kd-tree, r = {r} km");
+        let (gm, label) = self.density_gather();
+        let method = format!("{label}, r = {r} km");
         let mut ms = Vec::new();
         let mut err_n = None;
         for f in self.plan.beam_factors.clone() {
             let k = self.beams_times(f);
-            let (g, gather_s) = self.gather(k, r, v, GatherMethod::Kdtree)?;
+            let (g, gather_s) = self.gather(k, r, v, gm)?;
             let trace_s = self.photons[&k].1;
             let e = grid_rel_rms(&g, &reference);
             if k == n {
@@ -37,7 +38,7 @@ impl<'a> Bench<'a> {
                 metric,
                 k == n,
             ));
-            self.note_last(&ms, gather_key(k, r, v, GatherMethod::Kdtree), trace_s);
+            self.note_last(&ms, gather_key(k, r, v, gm), trace_s);
         }
         // The old estimators over the same beam counts, on the same chart.
         let old_label = self.old_label();

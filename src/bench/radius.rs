@@ -16,15 +16,16 @@ impl<'a> Bench<'a> {
         let name = "gather radius";
         let metric = "relative RMS of emission";
         let mut ms = Vec::new();
+        let (gm, label) = self.density_gather();
         for bf in self.plan.radius_beam_factors.clone() {
             let k = self.beams_times(bf);
-            let method = format!("kd-tree, {k} beams");
+            let method = format!("{label}, {k} beams");
             for f in self.plan.radius_factors.clone() {
                 let rr = r * f;
-                let (g, secs) = self.gather(k, rr, v, GatherMethod::Kdtree)?;
+                let (g, secs) = self.gather(k, rr, v, gm)?;
                 let e = grid_rel_rms(&g, &reference);
                 ms.push(self.measure(name, &method, "radius_km", rr, "gather", secs, e, metric, k == n && f == 1.0));
-                self.note_last(&ms, gather_key(k, rr, v, GatherMethod::Kdtree), 0.0);
+                self.note_last(&ms, gather_key(k, rr, v, gm), 0.0);
             }
         }
         Ok(Study {

@@ -320,6 +320,17 @@ impl<'a> Bench<'a> {
         Ok(())
     }
 
+    /// The scene's density gather and its label, for the studies that vary
+    /// something else (photon count, radius): kd-tree or splat compute the
+    /// same field; report2014 is not a density estimate, so the kd-tree
+    /// stands in for it.
+    pub(super) fn density_gather(&self) -> (GatherMethod, &'static str) {
+        match self.scene.photons.gather {
+            GatherMethod::Splat => (GatherMethod::Splat, "splat"),
+            _ => (GatherMethod::Kdtree, "kd-tree"),
+        }
+    }
+
     /// [`Bench::gather_uncached`], kept for the other studies that use the
     /// same setting (test settings only: references are used once).
     pub(super) fn gather(
