@@ -427,4 +427,26 @@ mod tests {
         let want = a.rho(110.0 + 5e-9) * 100.0 * CM_PER_KM;
         assert!((got / want - 1.0).abs() < 1e-12, "{got:e} vs {want:e}");
     }
+
+    #[test]
+    fn a_steep_one_metre_path_is_not_treated_as_horizontal() {
+        // The switch to rho(mid) len is for nearly horizontal paths,
+        // dh < 1e-6 len. A 1 m path rising 0.99 m inside one table segment
+        // (100.0-100.5 km, H = 5.9 km) must carry the exact column of the
+        // exponential, rho(h0) H (1 - exp(-dh/H)) len / dh. rho(mid) len
+        // misses the curvature by (dh / 2H)^2 / 6 = 1.2e-9 relative; the
+        // general formula's cancellation costs about eps H / dh (a few 1e-12),
+        // so 1e-10 separates the two by an order of magnitude each way.
+        let a = Atmosphere::nrlmsis21();
+        let (h0, len) = (100.1, 1e-3);
+        let h1 = h0 + 0.99e-3;
+        let dh = h1 - h0;
+        let hs = a.scale_height(h0);
+        assert_eq!(hs, a.scale_height(h1), "one segment");
+        let want = a.rho(h0) * hs * -(-dh / hs).exp_m1() * (len / dh) * CM_PER_KM;
+        let got = a.slant_column(h0, h1, len);
+        assert!((got / want - 1.0).abs() < 1e-10, "{got:e} vs {want:e}: {:e}", got / want - 1.0);
+        // Downward the same.
+        assert!((a.slant_column(h1, h0, len) / want - 1.0).abs() < 1e-10);
+    }
 }
