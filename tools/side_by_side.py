@@ -18,8 +18,8 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    mask (pyopenvdb's flags). The files each writer wrote are read back with
    pyopenvdb and must hold identical active voxels and values, else the run
    fails.
-2. Gather. The same scene baked with `[photons] gather` = "kdtree" (default),
-   "splat" and "report2014" (the report's uniform-grid lookup: an average
+2. Gather. The same scene baked with `[photons] gather` = "kdtree",
+   "splat" (the default) and "report2014" (the report's uniform-grid lookup: an average
    colour, not a density; same stage, different estimator); `times_s.gather`
    from each bake.json, best of N.
 3. `aurora render` against Cycles (CPU, through the add-on, tools/
@@ -479,10 +479,12 @@ def study_gather(tools: Tools, cfg: dict, scene_text: str, main_bake: dict, out:
         write_atomic(p, edit_toml(scene_text, {("photons", "gather"): m}).encode())
         scenes[m] = p
     rows = {m: [] for m in methods}
-    rows["kdtree"].append(main_bake)  # the main bake is the first kdtree run
+    first = main_bake["bake"]["stats"]["gather"]  # the scene's own gather (splat by default)
+    if first in rows:
+        rows[first].append(main_bake)  # the main bake is that method's first run
     for rep in range(cfg["gather_repeats"]):
         for m in methods:
-            if m == "kdtree" and rep == 0:
+            if m == first and rep == 0:
                 continue
             log(f"gather: {m} run {rep + 1}/{cfg['gather_repeats']}")
             rows[m].append(bake(tools, scenes[m], d / f"bake-{m}"))
