@@ -4,22 +4,9 @@
     .venv/bin/python tools/cycles_render.py SCENE.toml --vdb FILE.vdb --out IMAGE.exr \
         [--samples N] [--terrain-obj terrain.obj] [--seed S] [--volume-mode biased|unbiased] [--step-rate R]
 
-Everything goes through the add-on in ../blender (setup_scene_from_toml):
-same camera, resolution, pixel footprint (spp = 1: pixel centres, else the
-pixel square), background, terrain and emission-absorption model.
-
-Output: linear Rec.709 OpenEXR, RGBA 32-bit float, row 0 at the top:
-- A = Cycles' film alpha with a transparent film: 1 - T, T the volume
-  transmittance along the primary ray (up to the terrain, whose holdout of
-  weight 1 - 1e-6 makes its pixels transparent too; see blender/material.py);
-- RGB = Combined + Environment. With a transparent film Cycles does not add
-  the background radiance to Combined; it writes throughput * L_bg of the
-  escaping camera paths, the same paths that make alpha, into the
-  Environment pass. Their sum is exactly what an opaque film would give:
-  volume emission + T * L_bg (+ terrain radiance where the terrain is hit).
-
-Needs bpy 5.0.1, numpy, OpenEXR and the standard library only. The image is
-written to a temporary name in the output folder and renamed.
+What it renders, and the output's channels (RGB = Combined + Environment,
+A = 1 - T): the module documentation of aurora_tools/cycles.py, which this
+script is the command line of.
 """
 
 from __future__ import annotations
