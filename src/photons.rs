@@ -346,14 +346,6 @@ impl RadiusField {
         Self { base, amp, freq, b, z_ref, noise: rng::perlin(&parts) }
     }
 
-    /// The scene's kernel radius field (`photons.radius_km`, its noise, along
-    /// the scene's B field from the beams' top).
-    pub fn from_scene(scene: &crate::scene::Scene) -> Self {
-        let b = crate::beams::Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg).b;
-        let p = &scene.photons;
-        Self::new(p.radius_km, p.radius_noise, p.radius_noise_freq, b, scene.beams.top_km, &[scene.seed])
-    }
-
     /// A constant radius.
     pub fn constant(r: f64) -> Self {
         Self { base: r, amp: 0.0, freq: 0.0, b: DVec3::NEG_Z, z_ref: 0.0, noise: Perlin::new(0) }
