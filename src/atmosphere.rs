@@ -112,6 +112,14 @@ impl Default for Atmosphere {
 }
 
 impl Atmosphere {
+    /// The table `[atmosphere] model` names.
+    pub fn of_model(model: crate::scene::AtmosphereModel) -> Self {
+        match model {
+            crate::scene::AtmosphereModel::Nrlmsis21 => Self::nrlmsis21(),
+            crate::scene::AtmosphereModel::Us1976 => Self::us1976(),
+        }
+    }
+
     /// The approximate U.S. Standard Atmosphere 1976 table of this module.
     pub fn us1976() -> Self {
         Self::from_rows(&USSA1976)

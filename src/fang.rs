@@ -225,6 +225,9 @@ const D_LN_M: f64 = 0.02;
 const X_MAX: f64 = 45.0;
 const N_X: usize = 450;
 
+/// Most curtain spectra [`SpectrumDeposition::curtain`] keeps.
+pub const SPECTRUM_CACHE: usize = 64;
+
 /// `G(m)`: the fraction of a spectrum's energy flux deposited above column
 /// mass m, Fang 2010 integrated over a mixture of Maxwellians (module doc),
 /// tabulated every 0.02 in ln m and interpolated linearly (error ~ 0.02^2/8
@@ -267,12 +270,34 @@ impl SpectrumDeposition {
     }
 
     /// A curtain's spectrum: the hard Maxwellian with 1 - `soft_fraction`
-    /// of the energy flux and the soft one with the rest.
-    pub fn curtain(char_energy_kev: f64, soft_fraction: f64, soft_energy_kev: f64) -> Self {
-        Self::new(&[
+    /// of the energy flux and the soft one with the rest. Tabulating `G`
+    /// costs ~10^6 evaluations of Fang's monoenergetic fraction (about 0.1
+    /// s on one core), and the memory budget, every trace call and every
+    /// preview edit ask for the same few spectra, so the tables are kept:
+    /// keyed by the three parameters' bits (the same parameters give the
+    /// same table bit for bit), at most [`SPECTRUM_CACHE`] of them (a new
+    /// one beyond that empties the cache: a preview session editing
+    /// energies would otherwise grow it without bound).
+    pub fn curtain(char_energy_kev: f64, soft_fraction: f64, soft_energy_kev: f64) -> std::sync::Arc<Self> {
+        use std::collections::HashMap;
+        use std::sync::{Arc, Mutex, OnceLock};
+        static CACHE: OnceLock<Mutex<HashMap<[u64; 3], Arc<SpectrumDeposition>>>> = OnceLock::new();
+        let key = [char_energy_kev.to_bits(), soft_fraction.to_bits(), soft_energy_kev.to_bits()];
+        let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+        if let Some(g) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
+            return Arc::clone(g);
+        }
+        // Built outside the lock (two threads may both build it; they get
+        // equal tables).
+        let g = Arc::new(Self::new(&[
             Maxwellian { share: 1.0 - soft_fraction, e0_kev: char_energy_kev },
             Maxwellian { share: soft_fraction, e0_kev: soft_energy_kev },
-        ])
+        ]));
+        let mut map = cache.lock().unwrap_or_else(|e| e.into_inner());
+        if map.len() >= SPECTRUM_CACHE {
+            map.clear();
+        }
+        Arc::clone(map.entry(key).or_insert(g))
     }
 
     /// Fraction of the energy flux deposited above column mass `m`.

@@ -212,7 +212,7 @@ pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
 
 /// [`auto_voxel_size`] from plain data.
 pub fn auto_voxel_size_for(kernel: KernelRadius, camera: Option<&CameraModel>, photons: &[Photon]) -> (f64, String) {
-    let floor = 0.5 * kernel.base_km;
+    let floor = kernel.auto_voxel_floor_km();
     // A validated scene always has a camera; should it not, the kernel
     // radius is a size that neither aliases nor wastes.
     let Some(cam) = camera else {
@@ -429,10 +429,7 @@ pub fn atmosphere(scene: &Scene) -> Atmosphere {
 
 /// The neutral atmosphere of `[atmosphere]`.
 pub fn atmosphere_for(params: &AtmosphereParams) -> Atmosphere {
-    match params.model {
-        crate::scene::AtmosphereModel::Nrlmsis21 => Atmosphere::nrlmsis21(),
-        crate::scene::AtmosphereModel::Us1976 => Atmosphere::us1976(),
-    }
+    Atmosphere::of_model(params.model)
 }
 
 /// What the pilot measured and chose (`crate::pilot`; kept here so the
@@ -462,31 +459,9 @@ pub struct NoiseEstimate {
     pub seconds: f64,
 }
 
-/// The kernel radius the scene asks for: `photons.radius_km` and its noise
-/// amplitude, and the smallest and largest radius they give. The one place
-/// that reads `photons.radius_km`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct KernelRadius {
-    /// `photons.radius_km`.
-    pub base_km: f64,
-    /// `photons.radius_noise`.
-    pub noise: f64,
-    /// `base_km (1 - noise)`.
-    pub min_km: f64,
-    /// `base_km (1 + noise)`.
-    pub max_km: f64,
-}
-
-impl KernelRadius {
-    pub fn of(p: &PhotonParams) -> Self {
-        Self::with_base(p.radius_km, p)
-    }
-
-    /// The same noise around another base radius (the bench's radius study).
-    pub fn with_base(base_km: f64, p: &PhotonParams) -> Self {
-        KernelRadius { base_km, noise: p.radius_noise, min_km: base_km * (1.0 - p.radius_noise), max_km: base_km * (1.0 + p.radius_noise) }
-    }
-}
+/// The kernel radius the scene asks for; it lives beside the scene
+/// (`crate::scene::kernel`) so that the memory budget reads it too.
+pub use crate::scene::KernelRadius;
 
 /// The kernel radius field at base radius `kernel.base_km` (noise from
 /// `photons.radius_noise_freq`, along the field `b` from the beams' top

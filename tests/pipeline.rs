@@ -5,25 +5,11 @@
 use aurora::bake;
 use aurora::pipeline::{self, BakePlan, StageTimes};
 use aurora::progress::NoProgress;
-use aurora::scene::{BeamStarts, Curtain, Deposition, Scene, VoxelSize};
+use aurora::scene::{BeamStarts, Deposition};
 use std::time::Instant;
 
-/// Two short curtains with unequal beam weights (so the apportioned counts
-/// differ), few beams, coarse voxels: a bake in about a second.
-fn small_scene() -> Scene {
-    let mut s = Scene {
-        curtains: vec![
-            Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() },
-            Curtain { center: [30.0, 20.0], length: 30.0, width: 14.0, beam_weight: 0.5, seed: 7, ..Curtain::default() },
-        ],
-        ..Scene::default()
-    };
-    s.footprint.resolution = [128, 48];
-    s.beams.count = 301;
-    s.photons.radius_km = 1.0;
-    s.grid.voxel_size = VoxelSize::Km(1.0);
-    s
-}
+mod common;
+use common::small_scene;
 
 #[test]
 fn chunked_tracing_equals_one_call_byte_for_byte() {

@@ -146,6 +146,16 @@ enum Outcome {
     Cut,
 }
 
+impl std::fmt::Display for Outcome {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Outcome::Exit(c) => write!(f, "exit {c}"),
+            Outcome::Signal(s) => write!(f, "killed by signal {s}{}", if *s == 6 { " (abort: a panic under the cap?)" } else { "" }),
+            Outcome::Cut => write!(f, "still running at the cut"),
+        }
+    }
+}
+
 /// Runs aurora under the address-space cap, stopping it after `CASE_SECONDS`.
 fn run_capped(args: &[&str], cwd: &Path) -> (Outcome, String) {
     use std::os::unix::process::ExitStatusExt;
@@ -212,7 +222,7 @@ fn run_all_counting(cases: Vec<(String, Vec<String>)>, d: &Path) -> (Vec<String>
                 }
                 if !ok {
                     let tail: String = err.lines().filter(|l| !l.starts_with("  ")).take(6).collect::<Vec<_>>().join(" | ");
-                    failures.lock().unwrap().push(format!("{label}: {outcome:?}: {tail}"));
+                    failures.lock().unwrap().push(format!("{label}: {outcome}: {tail}"));
                 }
                 // An error must say what is wrong, in words.
                 if matches!(outcome, Outcome::Exit(2)) && !err.contains("error") {

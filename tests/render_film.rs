@@ -58,6 +58,27 @@ fn exr_round_trips_exactly_and_is_rec709_rgba_f32() {
     assert!(matches!(write_exr(&bad, &img), Err(RenderError::Output(_))));
 }
 
+/// The exr crate compresses 64x64 tiles in parallel; with its default
+/// "unspecified" line order it wrote them in the order they finished, so a
+/// 640x360 image (60 tiles) came out with different bytes about one run in
+/// four. The header must say "increasing" (the crate then sorts the tiles),
+/// and repeated writes on a multi-threaded pool must give the same bytes.
+#[test]
+fn exr_bytes_are_the_same_every_time() {
+    let img = test_image(640, 360);
+    let path = tmp("same.exr");
+    write_exr(&path, &img).unwrap();
+    let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+    assert_eq!(meta.headers[0].line_order, exr::meta::attribute::LineOrder::Increasing);
+    let first = std::fs::read(&path).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(4).build().unwrap();
+    for _ in 0..8 {
+        pool.install(|| write_exr(&path, &img)).unwrap();
+        assert!(std::fs::read(&path).unwrap() == first, "EXR bytes changed between writes");
+    }
+    assert_eq!(read_exr(&path).unwrap().pixels, img.pixels);
+}
+
 #[test]
 fn blender_reads_our_exr_with_row_0_at_the_top() {
     // bpy's image pixels start at the bottom row (cycles-conventions.md).

@@ -3,7 +3,11 @@
 //! * EXR: 32-bit float RGBA, linear Rec.709 (chromaticities attribute set to
 //!   Rec.709 primaries and D65 white), row 0 at the top, `A = 1 - T` (the
 //!   volume's coverage along the primary ray; RGB already contains what lies
-//!   behind). Lossless compression (the `exr` crate's default).
+//!   behind). Lossless compression (the `exr` crate's default, RLE in 64x64
+//!   tiles), tiles stored in increasing order: the crate compresses tiles in
+//!   parallel and, with its default "unspecified" line order, writes them in
+//!   the order they finish, so the same image gave different bytes from run
+//!   to run; with `LineOrder::Increasing` it sorts them first.
 //! * PNG preview, display transform: `v = clamp(sRGB_OETF(2^exposure * linear), 0, 1)`
 //!   per RGB channel, with the sRGB OETF `12.92 x` for `x <= 0.0031308` and
 //!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), quantised as
@@ -37,6 +41,7 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
         blue: Vec2(0.15, 0.06),
         white: Vec2(0.3127, 0.3290),
     });
+    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
     let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
     exr_image
         .write()

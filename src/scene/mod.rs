@@ -12,16 +12,20 @@
 //!
 //! The rooms: [`types`] (the section structs and enums with their
 //! defaults), [`presets`] (the built-in scenes), [`validation`] (the range
-//! checks, their limits and the error types) and [`schema`] (the
-//! `--schema` JSON drawn from those checks). Everything is re-exported
-//! here, so `crate::scene::Camera`, `crate::scene::MAX_SPP` and the like
-//! name the same items as before the split.
+//! checks, their limits and the error types), [`schema`] (the
+//! `--schema` JSON drawn from those checks) and [`kernel`] (the photon
+//! kernel's radius range, read by the bake and the memory budget alike).
+//! Everything is re-exported here, so `crate::scene::Camera`,
+//! `crate::scene::MAX_SPP` and the like name the same items as before the
+//! split.
 
+pub mod kernel;
 pub mod presets;
 pub mod schema;
 pub mod types;
 pub mod validation;
 
+pub use kernel::KernelRadius;
 pub use types::*;
 pub use validation::{
     check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED,

@@ -167,3 +167,23 @@ pub fn test_emission() -> Grid<[f32; 3]> {
 pub fn openvdb_write_tool() -> PathBuf {
     openvdb_tool::build(&repo_root()).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// Two short curtains with unequal beam weights (so the apportioned counts
+/// differ), few beams, coarse voxels: a bake in about a second. The
+/// integration tests' one small scene (tests/pipeline.rs, tests/preview_cli.rs,
+/// tests/budget.rs).
+pub fn small_scene() -> aurora::scene::Scene {
+    use aurora::scene::{Curtain, Scene, VoxelSize};
+    let mut s = Scene {
+        curtains: vec![
+            Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() },
+            Curtain { center: [30.0, 20.0], length: 30.0, width: 14.0, beam_weight: 0.5, seed: 7, ..Curtain::default() },
+        ],
+        ..Scene::default()
+    };
+    s.footprint.resolution = [128, 48];
+    s.beams.count = 301;
+    s.photons.radius_km = 1.0;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s
+}
