@@ -14,7 +14,8 @@
 //! volume): the curtain's area times the height-resolved rate.
 
 use crate::atmosphere::Atmosphere;
-use crate::bake::{self, BakeError};
+use crate::bake::BakeError;
+use crate::pipeline::BakePlan;
 use crate::beams::{self, BeamStats, StepDeposit};
 use crate::fang::KEV_PER_ION_PAIR;
 use crate::progress::Progress;
@@ -92,10 +93,10 @@ pub fn bin_deposits(deposits: &[StepDeposit], model: &EmissionModel, z0: f64, z1
 /// Traces the scene's beams exactly as the bake does and bins their
 /// deposits per curtain, from the atmosphere's bottom to the highest deposit.
 pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BakeError> {
-    let fps = bake::footprints(scene);
-    let atmosphere: Atmosphere = bake::atmosphere(scene);
-    let colour = bake::colour_table(scene, &atmosphere);
-    let (deposits, beam_stats) = beams::trace_deposits(scene, &fps, &atmosphere, &colour, progress)?;
+    // The bake's own plan: its footprints, atmosphere and colour table.
+    let plan = BakePlan::new(scene, progress);
+    let atmosphere: &Atmosphere = &plan.atmosphere;
+    let (deposits, beam_stats) = beams::trace_deposits(scene, &plan.footprints, atmosphere, &plan.colour_table, progress)?;
     let model = EmissionModel::new(atmosphere.clone());
     let z0 = atmosphere.bottom_km().floor();
     // Up to the highest deposit: the spectrum's share above a beam's start
