@@ -640,14 +640,14 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
             eprintln!("wrote {}: {}", out.display(), u.summary());
         }
     };
-    let on_coarse = |secs: f64| {
+    let on_picture = |what: &str, secs: f64| {
         if !quiet {
-            eprintln!("coarse picture in {secs:.2} s");
+            eprintln!("{what} in {secs:.2} s");
         }
     };
     if !watch {
         let scene = load_scene(scene_arg)?;
-        let u = preview.update(&scene, &on_coarse)?;
+        let u = preview.update(&scene, &on_picture)?;
         if let Some(b) = preview.bake() {
             print_warnings(&b.stats.warnings);
         }
@@ -671,7 +671,7 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
                     match Scene::from_toml_str(&text, scene_arg) {
                         // Worded as `aurora bake` words it.
                         Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
-                        Ok(scene) => match preview.update(&scene, &on_coarse) {
+                        Ok(scene) => match preview.update(&scene, &on_picture) {
                             Ok(u) => {
                                 if let Some(b) = preview.bake() {
                                     print_warnings(&b.stats.warnings);

@@ -31,10 +31,12 @@
 //! preview size only sets the picture's.
 
 use crate::bake::{self, Bake, BakeError};
+use crate::camera::CameraModel;
 use crate::grid::Grid;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
 use crate::progress::NoProgress;
-use crate::render::{self, RenderError, RenderSettings, Volume};
+use crate::render::shadow::EmissionSampler;
+use crate::render::{self, Image, Prepared, RenderError, RenderSettings, TerrainModel, Volume};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -42,20 +44,29 @@ use std::time::Instant;
 /// Default preview size, pixels.
 pub const DEFAULT_SIZE: [usize; 2] = [320, 180];
 
+/// Default samples per pixel of the first refined picture (two antithetic
+/// pairs, `crate::render::pixel_position`); the scene's `render.spp`
+/// follows when it is larger.
+pub const DEFAULT_SPP: usize = 4;
+
 /// The coarse picture is this many times smaller per side, one sample per
 /// pixel.
 pub const COARSE_FACTOR: usize = 4;
 
 /// When an edit rebuilds the grids, the coarse picture is rendered from a
-/// gather on voxels this many times larger per side: the coarse picture's
-/// pixels are four times larger too, and the gather costs about 8x less.
-pub const COARSE_VOXEL_FACTOR: f64 = 2.0;
+/// gather on voxels this many times larger per side (the coarse picture's
+/// pixels are [`COARSE_FACTOR`] times larger too): the splat touches about
+/// `COARSE_VOXEL_FACTOR^3` times fewer voxels per photon.
+pub const COARSE_VOXEL_FACTOR: f64 = 4.0;
 
 /// The earliest stage an edit invalidates (later stages rerun too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Stage {
     /// Nothing the picture depends on changed.
     Nothing,
+    /// `render.exposure` only: a tone map of the last linear image, no
+    /// ray is traced.
+    Exposure,
     Render,
     /// The camera or the scene's image size: the automatic voxel size and
     /// pruning may change.
@@ -83,7 +94,10 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     at(old.photons != new.photons || old.grid.voxel_size != new.grid.voxel_size, Stage::Gather);
     at(old.grid != new.grid, Stage::Finish);
     at(old.camera != new.camera || (old.render.width, old.render.height) != (new.render.width, new.render.height), Stage::Camera);
-    at(old.render != new.render || old.volume != new.volume || old.background != new.background || old.terrain != new.terrain, Stage::Render);
+    let mut render = old.render.clone();
+    render.exposure = new.render.exposure;
+    at(render != new.render || old.volume != new.volume || old.background != new.background || old.terrain != new.terrain, Stage::Render);
+    at(old.render.exposure != new.render.exposure, Stage::Exposure);
     s
 }
 
@@ -106,25 +120,44 @@ pub struct Update {
     pub trace: f64,
     pub gather: f64,
     pub finish: f64,
+    /// The coarse picture, everything included (its quick gather and
+    /// finish after an edit that rebuilds the grids).
     pub coarse_render: f64,
+    /// The refined picture at the preview's spp: `render_build` (building or
+    /// refreshing the renderer's structures, `crate::render::Prepared`)
+    /// plus `render_pixels` (the pixel loop).
     pub render: f64,
-    /// Of `render`: building the renderer's structures from the grids
-    /// (`RenderStats::build_seconds`), and the pixel loop.
     pub render_build: f64,
     pub render_pixels: f64,
-    /// From the start of the update to the coarse and the refined picture
-    /// on disk.
+    /// Samples per pixel of the refined picture.
+    pub spp: usize,
+    /// The pixel loop of the picture at the scene's `render.spp` when it is
+    /// larger than the preview's (0 and `full_spp` 0 otherwise).
+    pub full_render: f64,
+    pub full_spp: usize,
+    /// Encoding and writing the PNGs (all pictures of the update).
+    pub png: f64,
+    /// From the start of the update to the coarse picture, the refined one
+    /// (at the preview's spp) and the one at the scene's spp on disk (0
+    /// when not written: an exposure edit writes only the refined one).
     pub to_coarse: f64,
     pub to_picture: f64,
+    pub to_full: f64,
 }
 
 impl Update {
     /// One line for the terminal.
     pub fn summary(&self) -> String {
         let st = self.stage.map_or("first".to_string(), |s| format!("{s:?}").to_lowercase());
+        let full = if self.full_spp > 0 {
+            format!(", full render {:.2} s ({} spp)", self.full_render, self.full_spp)
+        } else {
+            String::new()
+        };
+        let to_full = if self.full_spp > 0 { format!(", to full picture {:.2} s", self.to_full) } else { String::new() };
         format!(
-            "edit ({st}): footprints {:.2} s, pilot {:.2} s, trace {:.2} s, gather {:.2} s, finish {:.2} s, coarse render {:.2} s, render {:.2} s (build {:.2} s, pixels {:.2} s); edit to coarse picture {:.2} s, to picture {:.2} s",
-            self.footprints, self.pilot, self.trace, self.gather, self.finish, self.coarse_render, self.render, self.render_build, self.render_pixels, self.to_coarse, self.to_picture
+            "edit ({st}): footprints {:.2} s, pilot {:.2} s, trace {:.2} s, gather {:.2} s, finish {:.2} s, coarse render {:.2} s, render {:.2} s (build {:.2} s, pixels {:.2} s, {} spp){full}, png {:.2} s; edit to coarse picture {:.2} s, to picture {:.2} s{to_full}",
+            self.footprints, self.pilot, self.trace, self.gather, self.finish, self.coarse_render, self.render, self.render_build, self.render_pixels, self.spp, self.png, self.to_coarse, self.to_picture
         )
     }
 }
@@ -132,6 +165,7 @@ impl Update {
 /// The cached stages of one scene.
 struct Cache {
     scene: Scene,
+    /// The scene's plan, with `grid.cycles_shell` off ([`preview_plan`]).
     plan: BakePlan,
     /// Beam count, pilot estimate and pilot warnings.
     count: (usize, Option<pipeline::NoiseEstimate>, Vec<String>),
@@ -142,30 +176,115 @@ struct Cache {
     bake: Bake,
 }
 
+/// What the last refined picture was rendered with: the renderer's
+/// structures (kept while their inputs are unchanged) and the linear
+/// image last written (an exposure edit re-encodes it).
+struct Look {
+    prepared: Prepared,
+    image: Image,
+}
+
+/// The preview's copy of the scene's plan: without the Cycles shell. The
+/// shell is one voxel of active zeros around both grids for Cycles' sake
+/// (`crate::pipeline::finish`); the reference renderer samples inactive
+/// voxels as 0 too, so it changes no pixel (tested:
+/// `the_refined_picture_is_the_render_of_the_bake`) and only costs the
+/// dilation and a larger medium.
+fn preview_plan(mut plan: BakePlan) -> BakePlan {
+    plan.grid.cycles_shell = false;
+    plan
+}
+
+/// The renderer's structures for `s` and the grids in `volume`, reusing
+/// `old`'s where their inputs are unchanged (`grids_changed`: the bake
+/// was redone). The medium (the costly part: `Medium::new` bakes both
+/// volume scales in) is kept unless the grids or `[volume]` changed; the
+/// emission sampler unless they did or the terrain appeared or vanished;
+/// the camera, terrain and sky are rebuilt when their sections changed.
+fn refresh(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
+    let Some(old) = old.filter(|o| !grids_changed && o.settings.volume == s.volume) else {
+        return Prepared::new(s, volume);
+    };
+    let o = &old.settings;
+    let mut same = s.clone();
+    (same.camera, same.render) = (o.camera.clone(), o.render.clone());
+    if same == *o {
+        // Only the camera, size, spp or exposure changed.
+        let mut p = old;
+        if p.settings.camera != s.camera || (p.camera.width, p.camera.height) != (s.render.width, s.render.height) {
+            p.camera = CameraModel::new(&s.camera, s.render.width, s.render.height)?;
+        }
+        p.settings = s.clone();
+        return Ok(p);
+    }
+    // Validates the settings and builds camera, terrain and sky (cheap
+    // beside the medium), then takes the old medium and sampler.
+    let mut p = Prepared::new(s, &Volume::default())?;
+    let had_terrain = !matches!(old.terrain, TerrainModel::None);
+    p.medium = old.medium;
+    p.sampler = if had_terrain == !matches!(p.terrain, TerrainModel::None) {
+        old.sampler
+    } else {
+        match (&p.terrain, volume.emission, &p.medium.emission) {
+            (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
+            (_, Some(g), Some(_)) => EmissionSampler::new(g, s.volume.emission_scale),
+        }
+    };
+    Ok(p)
+}
+
 /// The preview's state: the last good scene's stage outputs.
 pub struct Preview {
     pub out: PathBuf,
     pub size: [usize; 2],
+    /// Samples per pixel of the refined picture ([`DEFAULT_SPP`]); the
+    /// scene's `render.spp` follows when larger, and caps it when smaller.
+    pub spp: usize,
     /// Folder against which a relative `terrain.heightmap` is resolved.
     pub base_dir: Option<PathBuf>,
     cache: Option<Cache>,
+    look: Option<Look>,
 }
 
 impl Preview {
     pub fn new(out: &Path, size: [usize; 2], base_dir: Option<PathBuf>) -> Preview {
-        Preview { out: out.to_path_buf(), size, base_dir, cache: None }
+        Preview { out: out.to_path_buf(), size, spp: DEFAULT_SPP, base_dir, cache: None, look: None }
     }
 
-    /// The last finished bake (None before the first update).
+    /// The last finished bake (None before the first update). The preview
+    /// bakes without `grid.cycles_shell` ([`preview_plan`]).
     pub fn bake(&self) -> Option<&Bake> {
         self.cache.as_ref().map(|c| &c.bake)
     }
 
+    /// The linear image of the last picture written at the preview size
+    /// (the scene's spp when it was rendered, else the preview's).
+    pub fn image(&self) -> Option<&Image> {
+        self.look.as_ref().map(|l| &l.image)
+    }
+
+    /// The render settings of a picture of `scene` at `w` x `h`, `spp`.
+    fn settings(&self, scene: &Scene, w: usize, h: usize, spp: usize) -> RenderSettings {
+        let mut s = RenderSettings::from_scene(scene);
+        s.base_dir = self.base_dir.clone();
+        s.render.width = w;
+        s.render.height = h;
+        s.render.spp = spp;
+        s
+    }
+
+    /// Writes `img` at `exposure` to the output PNG; returns its seconds.
+    fn write(&self, img: &Image, exposure: f64) -> Result<f64, RenderError> {
+        let t = Instant::now();
+        render::film::write_png(&self.out, img, exposure)?;
+        Ok(t.elapsed().as_secs_f64())
+    }
+
     /// The coarse picture of an edit that rebuilds the grids: the photons
-    /// gathered on voxels [`COARSE_VOXEL_FACTOR`] times larger (that many
-    /// cubed fewer voxels per photon), finished, rendered at the coarse size
-    /// with one sample and written. Returns its seconds.
-    fn coarse_picture(&self, scene: &Scene, plan: &BakePlan, photons: &[crate::beams::Photon], voxel_km: f64) -> Result<f64, PreviewError> {
+    /// gathered on voxels [`COARSE_VOXEL_FACTOR`] times larger, finished,
+    /// rendered at the coarse size with one sample and written. Returns its
+    /// seconds and the PNG's.
+    fn coarse_picture(&self, scene: &Scene, plan: &BakePlan, photons: &[crate::beams::Photon], voxel_km: f64) -> Result<(f64, f64), PreviewError> {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
@@ -181,21 +300,20 @@ impl Preview {
         };
         let b = pipeline::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
         let volume = Volume { density: Some(&b.density), emission: Some(&b.emission) };
-        let mut s = RenderSettings::from_scene(scene);
-        s.base_dir = self.base_dir.clone();
-        s.render.width = (self.size[0] / COARSE_FACTOR).max(1);
-        s.render.height = (self.size[1] / COARSE_FACTOR).max(1);
-        s.render.spp = 1;
+        let [w, h] = self.size;
+        let s = self.settings(scene, (w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1), 1);
         let img = render::render(&s, &volume, nothing)?;
-        render::film::write_png(&self.out, &img, scene.render.exposure)?;
-        Ok(t.elapsed().as_secs_f64())
+        let png = self.write(&img, scene.render.exposure)?;
+        Ok((t.elapsed().as_secs_f64(), png))
     }
 
     /// Brings the pictures up to date with `scene` (validated), rerunning
     /// only the stages the edit touches, and writes the coarse and refined
-    /// PNGs. On an error the previous state is kept. `on_coarse` is called
-    /// once the coarse picture is written.
-    pub fn update(&mut self, scene: &Scene, on_coarse: &dyn Fn(f64)) -> Result<Update, PreviewError> {
+    /// PNGs (and the one at the scene's spp when larger than the
+    /// preview's). On an error the previous state is kept. `on_picture`
+    /// is called with a description and the seconds since the update began
+    /// once each picture but the last is written.
+    pub fn update(&mut self, scene: &Scene, on_picture: &dyn Fn(&str, f64)) -> Result<Update, PreviewError> {
         let t0 = Instant::now();
         let mut u = Update::default();
         let stage = match &self.cache {
@@ -210,21 +328,37 @@ impl Preview {
             // Same scene (a save without changes): the picture is current.
             return Ok(u);
         }
+        let [w, h] = self.size;
+        let (cw, ch) = ((w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1));
+        let coarse_what = format!("coarse picture ({cw}x{ch}, 1 spp)");
+        if stage == Stage::Exposure {
+            if let Some(look) = &self.look {
+                // A tone map of the last linear image: nothing is traced.
+                u.png = self.write(&look.image, scene.render.exposure)?;
+                u.spp = look.prepared.settings.render.spp;
+                u.to_picture = t0.elapsed().as_secs_f64();
+                if let Some(c) = self.cache.as_mut() {
+                    c.scene = scene.clone();
+                }
+                return Ok(u);
+            }
+        }
         let mut times = StageTimes::default();
         let nothing = &NoProgress;
         // When the grids are rebuilt, the coarse picture comes from a
         // coarse gather before the full one (Preview::coarse_picture).
         let coarse_done = |u: &mut Update| {
             u.to_coarse = t0.elapsed().as_secs_f64();
-            on_coarse(u.to_coarse);
+            on_picture(&coarse_what, u.to_coarse);
         };
         // Stages up to the grids; the cache is replaced only on success.
+        let mut grids_changed = true;
         let next = match self.cache.take() {
             Some(mut c) if stage <= Stage::Gather => {
-                let r = (|| -> Result<(), PreviewError> {
+                let r = (|| -> Result<bool, PreviewError> {
                     // The plan's plain data follow the edit; footprints,
                     // atmosphere and colour table are kept.
-                    let plan = BakePlan::reusing(scene, &c.plan, nothing);
+                    let plan = preview_plan(BakePlan::reusing(scene, &c.plan, nothing));
                     let mut regather = stage == Stage::Gather;
                     if stage == Stage::Camera {
                         // "auto" voxel size follows the camera.
@@ -233,16 +367,16 @@ impl Preview {
                         if !regather && plan.grid.prune <= 0.0 {
                             c.plan = plan;
                             c.voxel = v;
-                            return Ok(());
+                            return Ok(false);
                         }
                     }
-                    if stage == Stage::Render {
+                    if stage <= Stage::Render {
                         c.plan = plan;
-                        return Ok(());
+                        return Ok(false);
                     }
                     if regather {
                         c.voxel = plan.voxel_size(&c.bake.photons);
-                        u.coarse_render = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0)?;
+                        (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
                         c.gathered = pipeline::gather(&plan, &c.bake.photons, c.voxel.0, nothing);
@@ -262,16 +396,17 @@ impl Preview {
                     c.bake = pipeline::finish(&plan, c.gathered.clone(), g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
                     c.plan = plan;
-                    Ok(())
+                    Ok(true)
                 })();
                 match r {
-                    Ok(()) => {
+                    Ok(changed) => {
+                        grids_changed = changed;
                         c.scene = scene.clone();
                         c
                     }
                     Err(e) => {
                         self.cache = Some(c);
-                        return Err(e.into());
+                        return Err(e);
                     }
                 }
             }
@@ -279,10 +414,10 @@ impl Preview {
                 let r = (|| -> Result<Cache, PreviewError> {
                     crate::budget::check(&crate::budget::estimate(scene), &crate::memory::available()).map_err(BakeError::from)?;
                     let t = Instant::now();
-                    let plan = match &prev {
+                    let plan = preview_plan(match &prev {
                         Some(c) => BakePlan::reusing(scene, &c.plan, nothing),
                         None => BakePlan::new(scene, nothing),
-                    };
+                    });
                     u.footprints = t.elapsed().as_secs_f64();
                     times.footprints = plan.footprint_seconds;
                     let count = bake::beam_count(&plan, &mut times, nothing)?;
@@ -291,7 +426,7 @@ impl Preview {
                     let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
-                    u.coarse_render = self.coarse_picture(scene, &plan, &traced.photons, voxel.0)?;
+                    (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0)?;
                     coarse_done(&mut u);
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
@@ -317,37 +452,57 @@ impl Preview {
                     Ok(c) => c,
                     Err(e) => {
                         self.cache = prev;
-                        return Err(e.into());
+                        return Err(e);
                     }
                 }
             }
         };
-        let cache = self.cache.insert(next);
+        self.cache = Some(next);
+        let cache = self.cache.as_ref().expect("just set");
         let exposure = scene.render.exposure;
         let volume = Volume { density: Some(&cache.bake.density), emission: Some(&cache.bake.emission) };
-        let [w, h] = self.size;
-        let settings = |w: usize, h: usize, spp: usize| {
-            let mut s = RenderSettings::from_scene(scene);
-            s.base_dir = self.base_dir.clone();
-            s.render.width = w;
-            s.render.height = h;
-            s.render.spp = spp;
-            s
-        };
+        let spp = self.spp.clamp(1, scene.render.spp.max(1));
+        let settings = self.settings(scene, w, h, spp);
+        let t = Instant::now();
+        let old = self.look.take().map(|l| l.prepared);
+        let mut prepared = refresh(old, grids_changed, &settings, &volume)?;
+        u.render_build = t.elapsed().as_secs_f64();
         if u.to_coarse == 0.0 {
+            // From the refined picture's structures at the coarse size.
             let t = Instant::now();
-            let coarse = settings((w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1), 1);
-            let img = render::render(&coarse, &volume, nothing)?;
-            render::film::write_png(&self.out, &img, exposure)?;
+            let camera = CameraModel::new(&scene.camera, cw, ch).map_err(RenderError::from)?;
+            let fine = std::mem::replace(&mut prepared.camera, camera);
+            prepared.settings.render.spp = 1;
+            let img = render::render_prepared(&prepared, nothing);
+            prepared.camera = fine;
+            prepared.settings.render.spp = spp;
+            u.png += self.write(&img?, exposure)?;
             u.coarse_render = t.elapsed().as_secs_f64();
             coarse_done(&mut u);
         }
         let t = Instant::now();
-        let img = render::render(&settings(w, h, scene.render.spp), &volume, nothing)?;
-        render::film::write_png(&self.out, &img, exposure)?;
-        u.render = t.elapsed().as_secs_f64();
-        (u.render_build, u.render_pixels) = (img.stats.build_seconds, img.stats.render_seconds);
+        let img = render::render_prepared(&prepared, nothing)?;
+        u.render_pixels = t.elapsed().as_secs_f64();
+        u.render = u.render_build + u.render_pixels;
+        u.spp = spp;
+        u.png += self.write(&img, exposure)?;
         u.to_picture = t0.elapsed().as_secs_f64();
+        let mut look = Look { prepared, image: img };
+        if scene.render.spp > spp {
+            on_picture(&format!("picture ({w}x{h}, {spp} spp)"), u.to_picture);
+            // The scene's spp: the same samples and more (a pixel's first
+            // `spp` samples do not depend on the total), as `aurora render`
+            // draws them.
+            let t = Instant::now();
+            look.prepared.settings.render.spp = scene.render.spp;
+            let img = render::render_prepared(&look.prepared, nothing)?;
+            u.full_render = t.elapsed().as_secs_f64();
+            u.full_spp = scene.render.spp;
+            u.png += self.write(&img, exposure)?;
+            u.to_full = t0.elapsed().as_secs_f64();
+            look.image = img;
+        }
+        self.look = Some(look);
         Ok(u)
     }
 }
@@ -387,7 +542,8 @@ mod tests {
             stage_for_edit(&a, &b)
         };
         assert_eq!(edit(&|_| {}), Stage::Nothing);
-        assert_eq!(edit(&|s| s.render.exposure += 1.0), Stage::Render);
+        assert_eq!(edit(&|s| s.render.exposure += 1.0), Stage::Exposure);
+        assert_eq!(edit(&|s| { s.render.exposure += 1.0; s.render.spp += 1 }), Stage::Render);
         assert_eq!(edit(&|s| s.render.spp += 1), Stage::Render);
         assert_eq!(edit(&|s| s.volume.emission_scale *= 2.0), Stage::Render);
         assert_eq!(edit(&|s| s.render.width += 2), Stage::Camera);
