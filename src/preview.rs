@@ -559,4 +559,136 @@ mod tests {
         // The earliest stage wins.
         assert_eq!(edit(&|s| { s.render.exposure += 1.0; s.beams.count += 1 }), Stage::Trace);
     }
+
+    /// A scene that bakes in about a second (tests/preview_cli.rs's).
+    fn small_scene() -> Scene {
+        let mut s = Scene {
+            curtains: vec![crate::scene::Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
+            ..Scene::default()
+        };
+        s.footprint.resolution = [128, 48];
+        s.beams.count = 300;
+        s.photons.radius_km = 1.0;
+        s.grid.voxel_size = crate::scene::VoxelSize::Km(1.0);
+        s.render.spp = 4;
+        s
+    }
+
+    fn scratch(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("aurora-preview-test-{}-{name}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join("p.png")
+    }
+
+    const SIZE: [usize; 2] = [48, 27];
+
+    /// `aurora render` of `aurora bake` at the preview size and `spp`: the
+    /// bake with its Cycles shell, rendered from scratch.
+    fn reference(scene: &Scene, spp: usize) -> Image {
+        let b = bake::bake(scene, &NoProgress).unwrap();
+        assert!(b.stats.shell_voxels > 0, "the reference keeps the shell");
+        let mut s = RenderSettings::from_scene(scene);
+        (s.render.width, s.render.height, s.render.spp) = (SIZE[0], SIZE[1], spp);
+        render::render(&s, &Volume { density: Some(&b.density), emission: Some(&b.emission) }, &NoProgress).unwrap()
+    }
+
+    /// The progressive pictures: first at the preview's spp, then at the
+    /// scene's, each the very image `aurora render` makes of `aurora bake`
+    /// at that spp (so dropping the Cycles shell changes no pixel, and the
+    /// cached renderer is the fresh one); a preview spp above the scene's
+    /// is capped by it (one picture).
+    #[test]
+    fn the_refined_picture_is_the_render_of_the_bake() {
+        let scene = small_scene();
+        let out = scratch("progressive");
+        let seen = std::sync::Mutex::new(Vec::new());
+        let mut p = Preview::new(&out, SIZE, None);
+        p.spp = 2;
+        let u = p.update(&scene, &|what, _| seen.lock().unwrap().push(what.to_string())).unwrap();
+        assert_eq!((u.spp, u.full_spp), (2, 4));
+        assert!(u.to_coarse > 0.0 && u.to_picture >= u.to_coarse && u.to_full >= u.to_picture, "{u:?}");
+        assert_eq!(*seen.lock().unwrap(), ["coarse picture (12x6, 1 spp)", "picture (48x27, 2 spp)"]);
+        assert_eq!(p.bake().unwrap().stats.shell_voxels, 0, "the preview bakes without the shell");
+        let full = reference(&scene, 4);
+        assert_eq!(p.image().unwrap().pixels, full.pixels);
+        let mut q = Preview::new(&out, SIZE, None);
+        q.spp = 8;
+        let u = q.update(&scene, &|_, _| {}).unwrap();
+        assert_eq!((u.spp, u.full_spp, u.to_full), (4, 0, 0.0));
+        assert_eq!(q.image().unwrap().pixels, full.pixels);
+        let mut r = Preview::new(&out, SIZE, None);
+        r.spp = 2;
+        let mut two = scene.clone();
+        two.render.spp = 2;
+        r.update(&two, &|_, _| {}).unwrap();
+        assert_eq!(r.image().unwrap().pixels, reference(&two, 2).pixels);
+        let _ = std::fs::remove_dir_all(out.parent().unwrap());
+    }
+
+    /// An exposure edit traces nothing: the PNG is the last linear image
+    /// re-encoded at the new exposure, every stage time is 0.
+    #[test]
+    fn an_exposure_edit_only_reencodes() {
+        let mut scene = small_scene();
+        let out = scratch("exposure");
+        let mut p = Preview::new(&out, SIZE, None);
+        p.update(&scene, &|_, _| {}).unwrap();
+        let before = std::fs::read(&out).unwrap();
+        let image = p.image().unwrap().clone();
+        scene.render.exposure += 1.5;
+        let u = p.update(&scene, &|_, _| panic!("an exposure edit writes one picture")).unwrap();
+        assert_eq!(u.stage, Some(Stage::Exposure));
+        let traced = [u.footprints, u.trace, u.gather, u.finish, u.coarse_render, u.render, u.render_build, u.render_pixels, u.full_render];
+        assert_eq!(traced, [0.0; 9], "{u:?}");
+        assert!(u.to_picture > 0.0 && u.png > 0.0);
+        assert_eq!(p.image().unwrap(), &image, "the linear image is kept");
+        let after = std::fs::read(&out).unwrap();
+        assert_ne!(after, before, "the picture follows the exposure");
+        let want = out.with_file_name("want.png");
+        render::film::write_png(&want, &image, scene.render.exposure).unwrap();
+        assert_eq!(after, std::fs::read(&want).unwrap());
+        // The next render edit is diffed against the new exposure.
+        scene.render.exposure += 0.5;
+        scene.volume.emission_scale *= 2.0;
+        let u = p.update(&scene, &|_, _| {}).unwrap();
+        assert_eq!(u.stage, Some(Stage::Render));
+        let _ = std::fs::remove_dir_all(out.parent().unwrap());
+    }
+
+    /// Every edit through the cached stages and renderer gives the picture
+    /// a fresh preview of the edited scene gives: render edits that keep
+    /// the medium (albedo, background, spp), rebuild it (volume scales) or
+    /// only the camera (fov, with and without pruning), a grid edit and a
+    /// beams edit.
+    #[test]
+    fn cached_updates_equal_fresh_ones() {
+        let mut scene = small_scene();
+        let out = scratch("cached");
+        let mut p = Preview::new(&out, SIZE, None);
+        p.spp = 2;
+        p.update(&scene, &|_, _| {}).unwrap();
+        let edits: [(&str, Stage, &dyn Fn(&mut Scene)); 8] = [
+            ("albedo", Stage::Render, &|s| s.terrain.albedo = [0.5, 0.4, 0.3]),
+            ("background", Stage::Render, &|s| s.background.radiance = [1e-3, 2e-3, 3e-3]),
+            ("spp", Stage::Render, &|s| s.render.spp = 6),
+            ("scales", Stage::Render, &|s| {
+                s.volume.emission_scale *= 3.0;
+                s.volume.density_scale *= 2.0
+            }),
+            ("fov, pruned", Stage::Camera, &|s| s.camera.fov_deg += 5.0),
+            ("unpruned", Stage::Finish, &|s| s.grid.prune = 0.0),
+            ("fov, unpruned", Stage::Camera, &|s| s.camera.fov_deg -= 3.0),
+            ("beams", Stage::Trace, &|s| s.beams.top_noise_km += 1.0),
+        ];
+        for (what, stage, edit) in edits {
+            edit(&mut scene);
+            let u = p.update(&scene, &|_, _| {}).unwrap();
+            assert_eq!(u.stage, Some(stage), "{what}");
+            let mut fresh = Preview::new(&out, SIZE, None);
+            fresh.spp = 2;
+            fresh.update(&scene, &|_, _| {}).unwrap();
+            assert!(p.image().unwrap().pixels == fresh.image().unwrap().pixels, "{what}: the cached picture differs from a fresh one");
+        }
+        let _ = std::fs::remove_dir_all(out.parent().unwrap());
+    }
 }
