@@ -31,6 +31,7 @@
 //! preview size only sets the picture's.
 
 use crate::bake::{self, Bake, BakeError};
+use crate::beams::Photon;
 use crate::camera::CameraModel;
 use crate::grid::Grid;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
@@ -58,6 +59,12 @@ pub const COARSE_FACTOR: usize = 4;
 /// pixels are [`COARSE_FACTOR`] times larger too): the splat touches about
 /// `COARSE_VOXEL_FACTOR^3` times fewer voxels per photon.
 pub const COARSE_VOXEL_FACTOR: f64 = 4.0;
+
+/// ... and from every this many-th photon (its power multiplied by as
+/// much): the gather's cost per photon does not shrink with the voxels'
+/// count (about 1.3 s of the default scene's 2.9 M photons on 4x voxels
+/// and 2 loaded cores, 0.9 s on 8x).
+pub const COARSE_PHOTON_STRIDE: usize = 4;
 
 /// The earliest stage an edit invalidates (later stages rerun too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -196,41 +203,57 @@ fn preview_plan(mut plan: BakePlan) -> BakePlan {
 }
 
 /// The renderer's structures for `s` and the grids in `volume`, reusing
-/// `old`'s where their inputs are unchanged (`grids_changed`: the bake
-/// was redone). The medium (the costly part: `Medium::new` bakes both
-/// volume scales in) is kept unless the grids or `[volume]` changed; the
-/// emission sampler unless they did or the terrain appeared or vanished;
-/// the camera, terrain and sky are rebuilt when their sections changed.
-fn refresh(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
-    let Some(old) = old.filter(|o| !grids_changed && o.settings.volume == s.volume) else {
+/// `old`'s parts whose inputs are unchanged (`grids_changed`: `volume`
+/// holds other grids than the ones `old` was built from). As
+/// `crate::render::Prepared::new` builds them, part by part:
+/// - the medium (the costly part; `Medium::new` bakes both volume scales
+///   in): kept unless the grids or `[volume]` changed;
+/// - the emission sampler: with the medium, unless the terrain appeared or
+///   vanished;
+/// - the terrain model: kept unless `[terrain]` other than `albedo` (read
+///   per hit from the settings) changed; the sky, unless `[background]` or
+///   the seed did; the camera, unless `[camera]` or the size did.
+///
+/// Without `old`, `Prepared::new` builds (and validates) everything; with
+/// it, `s` comes from a validated scene as `old`'s settings did.
+fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
+    let Some(old) = old.filter(|o| o.settings.integration == s.integration && o.settings.shadow_samples == s.shadow_samples) else {
         return Prepared::new(s, volume);
     };
-    let o = &old.settings;
-    let mut same = s.clone();
-    (same.camera, same.render) = (o.camera.clone(), o.render.clone());
-    if same == *o {
-        // Only the camera, size, spp or exposure changed.
-        let mut p = old;
-        if p.settings.camera != s.camera || (p.camera.width, p.camera.height) != (s.render.width, s.render.height) {
-            p.camera = CameraModel::new(&s.camera, s.render.width, s.render.height)?;
-        }
-        p.settings = s.clone();
-        return Ok(p);
-    }
-    // Validates the settings and builds camera, terrain and sky (cheap
-    // beside the medium), then takes the old medium and sampler.
-    let mut p = Prepared::new(s, &Volume::default())?;
+    let o = old.settings;
     let had_terrain = !matches!(old.terrain, TerrainModel::None);
-    p.medium = old.medium;
-    p.sampler = if had_terrain == !matches!(p.terrain, TerrainModel::None) {
+    let same_medium = !grids_changed && o.volume == s.volume;
+    let medium = if same_medium {
+        old.medium
+    } else {
+        render::Medium::new(volume.density, volume.emission, s.volume.density_scale, s.volume.emission_scale)?
+    };
+    let (mut t_old, mut t_new) = (o.terrain.clone(), s.terrain.clone());
+    (t_old.albedo, t_new.albedo) = ([0.0; 3], [0.0; 3]);
+    let terrain = if t_old == t_new && o.base_dir == s.base_dir {
+        old.terrain
+    } else {
+        TerrainModel::from_terrain(&s.terrain, s.base_dir.as_deref())?
+    };
+    let sampler = if same_medium && had_terrain == !matches!(terrain, TerrainModel::None) {
         old.sampler
     } else {
-        match (&p.terrain, volume.emission, &p.medium.emission) {
+        match (&terrain, volume.emission, &medium.emission) {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, s.volume.emission_scale),
         }
     };
-    Ok(p)
+    let sky = if o.background == s.background && o.seed == s.seed && o.base_dir == s.base_dir {
+        old.sky
+    } else {
+        render::sky::Sky::new(&s.background, s.seed, s.base_dir.as_deref())?
+    };
+    let camera = if o.camera == s.camera && (old.camera.width, old.camera.height) == (s.render.width, s.render.height) {
+        old.camera
+    } else {
+        CameraModel::new(&s.camera, s.render.width, s.render.height)?
+    };
+    Ok(Prepared { camera, medium, terrain, sampler, sky, settings: s.clone() })
 }
 
 /// The preview's state: the last good scene's stage outputs.
@@ -280,15 +303,29 @@ impl Preview {
         Ok(t.elapsed().as_secs_f64())
     }
 
-    /// The coarse picture of an edit that rebuilds the grids: the photons
-    /// gathered on voxels [`COARSE_VOXEL_FACTOR`] times larger, finished,
-    /// rendered at the coarse size with one sample and written. Returns its
-    /// seconds and the PNG's.
-    fn coarse_picture(&self, scene: &Scene, plan: &BakePlan, photons: &[crate::beams::Photon], voxel_km: f64) -> Result<(f64, f64), PreviewError> {
+    /// The coarse picture of an edit that rebuilds the grids: every
+    /// [`COARSE_PHOTON_STRIDE`]-th photon, its power multiplied by the
+    /// stride (the same expected emission), gathered on voxels
+    /// [`COARSE_VOXEL_FACTOR`] times larger, finished, rendered at the
+    /// coarse size with one sample and written. Only this picture comes
+    /// from a photon subset; the refined ones use every photon. The
+    /// renderer's parts that do not depend on the grids (terrain, sky) are
+    /// taken from `prev`, which holds the coarse picture's afterwards.
+    /// Returns its seconds and the PNG's.
+    fn coarse_picture(
+        &self,
+        scene: &Scene,
+        plan: &BakePlan,
+        photons: &[Photon],
+        voxel_km: f64,
+        prev: &mut Option<Prepared>,
+    ) -> Result<(f64, f64), PreviewError> {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
-        let emission = pipeline::gather(plan, photons, v, nothing);
+        let k = COARSE_PHOTON_STRIDE;
+        let subset: Vec<Photon> = photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
+        let emission = pipeline::gather(plan, &subset, v, nothing);
         // Only the grids are used: no photons for the power sums, no warnings.
         let g = Gathered {
             photons: Vec::new(),
@@ -302,7 +339,9 @@ impl Preview {
         let volume = Volume { density: Some(&b.density), emission: Some(&b.emission) };
         let [w, h] = self.size;
         let s = self.settings(scene, (w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1), 1);
-        let img = render::render(&s, &volume, nothing)?;
+        let p = assemble(prev.take(), true, &s, &volume)?;
+        let img = render::render_prepared(&p, nothing)?;
+        *prev = Some(p);
         let png = self.write(&img, scene.render.exposure)?;
         Ok((t.elapsed().as_secs_f64(), png))
     }
@@ -345,6 +384,9 @@ impl Preview {
         }
         let mut times = StageTimes::default();
         let nothing = &NoProgress;
+        // The renderer's parts of the last picture (the coarse picture's
+        // once it is rendered from a coarse gather).
+        let mut parts = self.look.take().map(|l| l.prepared);
         // When the grids are rebuilt, the coarse picture comes from a
         // coarse gather before the full one (Preview::coarse_picture).
         let coarse_done = |u: &mut Update| {
@@ -376,7 +418,7 @@ impl Preview {
                     }
                     if regather {
                         c.voxel = plan.voxel_size(&c.bake.photons);
-                        (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0)?;
+                        (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0, &mut parts)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
                         c.gathered = pipeline::gather(&plan, &c.bake.photons, c.voxel.0, nothing);
@@ -426,7 +468,7 @@ impl Preview {
                     let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
-                    (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0)?;
+                    (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0, &mut parts)?;
                     coarse_done(&mut u);
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
@@ -464,8 +506,7 @@ impl Preview {
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
         let settings = self.settings(scene, w, h, spp);
         let t = Instant::now();
-        let old = self.look.take().map(|l| l.prepared);
-        let mut prepared = refresh(old, grids_changed, &settings, &volume)?;
+        let mut prepared = assemble(parts, grids_changed, &settings, &volume)?;
         u.render_build = t.elapsed().as_secs_f64();
         if u.to_coarse == 0.0 {
             // From the refined picture's structures at the coarse size.
@@ -657,7 +698,8 @@ mod tests {
 
     /// Every edit through the cached stages and renderer gives the picture
     /// a fresh preview of the edited scene gives: render edits that keep
-    /// the medium (albedo, background, spp), rebuild it (volume scales) or
+    /// the medium (albedo, background, spp, stars, terrain geometry, the
+    /// terrain's presence: the sampler), rebuild it (volume scales) or
     /// only the camera (fov, with and without pruning), a grid edit and a
     /// beams edit.
     #[test]
@@ -667,10 +709,14 @@ mod tests {
         let mut p = Preview::new(&out, SIZE, None);
         p.spp = 2;
         p.update(&scene, &|_, _| {}).unwrap();
-        let edits: [(&str, Stage, &dyn Fn(&mut Scene)); 8] = [
+        let edits: [(&str, Stage, &dyn Fn(&mut Scene)); 12] = [
             ("albedo", Stage::Render, &|s| s.terrain.albedo = [0.5, 0.4, 0.3]),
             ("background", Stage::Render, &|s| s.background.radiance = [1e-3, 2e-3, 3e-3]),
             ("spp", Stage::Render, &|s| s.render.spp = 6),
+            ("stars", Stage::Render, &|s| s.background.stars = true),
+            ("mountains", Stage::Render, &|s| s.terrain.mountain_height += 1.0),
+            ("no terrain", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::None),
+            ("plane", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::Plane),
             ("scales", Stage::Render, &|s| {
                 s.volume.emission_scale *= 3.0;
                 s.volume.density_scale *= 2.0
