@@ -57,7 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("{what:<22} picture {:6.2} s | full {:6.2} s | coarse {:5.2} s | {}", u.to_picture, u.to_full, u.to_coarse, u.summary())
     };
     let mut step = |what: &str, scene: &Scene| -> Result<(), Box<dyn std::error::Error>> {
-        let u = pool.install(|| p.update(scene, &|_, _| {}))?;
+        let u = pool.install(|| p.update(scene, &|_, _| true))?;
         row(what, &u);
         Ok(())
     };

@@ -160,7 +160,7 @@ enum Command {
     },
     /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
     ///
-    /// With --watch the scene file is polled (~100 ms); each save is parsed and validated (a bad
+    /// With --watch the scene file is polled (~50 ms); each save is parsed and validated (a bad
     /// edit prints the error and the watch goes on) and only the stages the edit touches are
     /// rerun: an exposure edit re-encodes the last image (nothing traced), a render edit
     /// re-renders from the cached grids and renderer, a camera edit re-derives the voxel size and
@@ -648,10 +648,14 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
             eprintln!("wrote {}: {}", out.display(), u.summary());
         }
     };
+    // The hash of the scene text being previewed (--watch): a picture at
+    // the scene's spp is skipped once the file has changed again.
+    let previewing = std::cell::Cell::new(None::<u64>);
     let on_picture = |what: &str, secs: f64| {
         if !quiet {
             eprintln!("{what} in {secs:.2} s");
         }
+        previewing.get().is_none_or(|h| FileStamp::read(Path::new(scene_arg)).is_none_or(|(s, _)| s.hash == h))
     };
     if !watch {
         let scene = load_scene(scene_arg)?;
@@ -674,8 +678,10 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
         if let Some((stamp, text)) = FileStamp::read(path) {
             if last.as_ref() != Some(&stamp) {
                 let changed = last.as_ref().is_none_or(|l| l.hash != stamp.hash);
+                let hash = stamp.hash;
                 last = Some(stamp);
                 if changed {
+                    previewing.set(Some(hash));
                     match Scene::from_toml_str(&text, scene_arg) {
                         // Worded as `aurora bake` words it.
                         Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
@@ -692,7 +698,7 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
                 }
             }
         }
-        std::thread::sleep(std::time::Duration::from_millis(100));
+        std::thread::sleep(std::time::Duration::from_millis(50));
     }
 }
 

@@ -351,8 +351,11 @@ impl Preview {
     /// PNGs (and the one at the scene's spp when larger than the
     /// preview's). On an error the previous state is kept. `on_picture`
     /// is called with a description and the seconds since the update began
-    /// once each picture but the last is written.
-    pub fn update(&mut self, scene: &Scene, on_picture: &dyn Fn(&str, f64)) -> Result<Update, PreviewError> {
+    /// once each picture but the last is written; it returns whether to go
+    /// on, which only the picture at the preview's spp heeds: false skips
+    /// the one at the scene's spp (the watcher returns false when the file
+    /// changed again, so a newer edit does not wait for it).
+    pub fn update(&mut self, scene: &Scene, on_picture: &dyn Fn(&str, f64) -> bool) -> Result<Update, PreviewError> {
         let t0 = Instant::now();
         let mut u = Update::default();
         let stage = match &self.cache {
@@ -391,7 +394,8 @@ impl Preview {
         // coarse gather before the full one (Preview::coarse_picture).
         let coarse_done = |u: &mut Update| {
             u.to_coarse = t0.elapsed().as_secs_f64();
-            on_picture(&coarse_what, u.to_coarse);
+            // Too early to stop: the refined picture follows the cache.
+            let _ = on_picture(&coarse_what, u.to_coarse);
         };
         // Stages up to the grids; the cache is replaced only on success.
         let mut grids_changed = true;
@@ -529,8 +533,7 @@ impl Preview {
         u.png += self.write(&img, exposure)?;
         u.to_picture = t0.elapsed().as_secs_f64();
         let mut look = Look { prepared, image: img };
-        if scene.render.spp > spp {
-            on_picture(&format!("picture ({w}x{h}, {spp} spp)"), u.to_picture);
+        if scene.render.spp > spp && on_picture(&format!("picture ({w}x{h}, {spp} spp)"), u.to_picture) {
             // The scene's spp: the same samples and more (a pixel's first
             // `spp` samples do not depend on the total), as `aurora render`
             // draws them.
@@ -645,7 +648,12 @@ mod tests {
         let seen = std::sync::Mutex::new(Vec::new());
         let mut p = Preview::new(&out, SIZE, None);
         p.spp = 2;
-        let u = p.update(&scene, &|what, _| seen.lock().unwrap().push(what.to_string())).unwrap();
+        let u = p
+            .update(&scene, &|what, _| {
+                seen.lock().unwrap().push(what.to_string());
+                true
+            })
+            .unwrap();
         assert_eq!((u.spp, u.full_spp), (2, 4));
         assert!(u.to_coarse > 0.0 && u.to_picture >= u.to_coarse && u.to_full >= u.to_picture, "{u:?}");
         assert_eq!(*seen.lock().unwrap(), ["coarse picture (12x6, 1 spp)", "picture (48x27, 2 spp)"]);
@@ -654,15 +662,33 @@ mod tests {
         assert_eq!(p.image().unwrap().pixels, full.pixels);
         let mut q = Preview::new(&out, SIZE, None);
         q.spp = 8;
-        let u = q.update(&scene, &|_, _| {}).unwrap();
+        let u = q.update(&scene, &|_, _| true).unwrap();
         assert_eq!((u.spp, u.full_spp, u.to_full), (4, 0, 0.0));
         assert_eq!(q.image().unwrap().pixels, full.pixels);
         let mut r = Preview::new(&out, SIZE, None);
         r.spp = 2;
         let mut two = scene.clone();
         two.render.spp = 2;
-        r.update(&two, &|_, _| {}).unwrap();
+        r.update(&two, &|_, _| true).unwrap();
         assert_eq!(r.image().unwrap().pixels, reference(&two, 2).pixels);
+        let _ = std::fs::remove_dir_all(out.parent().unwrap());
+    }
+
+    /// A false from `on_picture` after the preview-spp picture skips the
+    /// one at the scene's spp; the next exposure edit re-encodes the
+    /// preview-spp image.
+    #[test]
+    fn a_newer_edit_skips_the_full_picture() {
+        let mut scene = small_scene();
+        let out = scratch("skip");
+        let mut p = Preview::new(&out, SIZE, None);
+        p.spp = 2;
+        let u = p.update(&scene, &|what, _| what.starts_with("coarse")).unwrap();
+        assert_eq!((u.spp, u.full_spp, u.full_render, u.to_full), (2, 0, 0.0, 0.0));
+        assert_eq!(p.image().unwrap().stats.primary_rays, (SIZE[0] * SIZE[1] * 2) as u64);
+        scene.render.exposure += 1.0;
+        let u = p.update(&scene, &|_, _| true).unwrap();
+        assert_eq!((u.stage, u.spp), (Some(Stage::Exposure), 2));
         let _ = std::fs::remove_dir_all(out.parent().unwrap());
     }
 
@@ -673,11 +699,12 @@ mod tests {
         let mut scene = small_scene();
         let out = scratch("exposure");
         let mut p = Preview::new(&out, SIZE, None);
-        p.update(&scene, &|_, _| {}).unwrap();
+        p.update(&scene, &|_, _| true).unwrap();
         let before = std::fs::read(&out).unwrap();
         let image = p.image().unwrap().clone();
         scene.render.exposure += 1.5;
         let u = p.update(&scene, &|_, _| panic!("an exposure edit writes one picture")).unwrap();
+        assert_eq!(u.to_full, 0.0);
         assert_eq!(u.stage, Some(Stage::Exposure));
         let traced = [u.footprints, u.trace, u.gather, u.finish, u.coarse_render, u.render, u.render_build, u.render_pixels, u.full_render];
         assert_eq!(traced, [0.0; 9], "{u:?}");
@@ -691,7 +718,7 @@ mod tests {
         // The next render edit is diffed against the new exposure.
         scene.render.exposure += 0.5;
         scene.volume.emission_scale *= 2.0;
-        let u = p.update(&scene, &|_, _| {}).unwrap();
+        let u = p.update(&scene, &|_, _| true).unwrap();
         assert_eq!(u.stage, Some(Stage::Render));
         let _ = std::fs::remove_dir_all(out.parent().unwrap());
     }
@@ -708,7 +735,7 @@ mod tests {
         let out = scratch("cached");
         let mut p = Preview::new(&out, SIZE, None);
         p.spp = 2;
-        p.update(&scene, &|_, _| {}).unwrap();
+        p.update(&scene, &|_, _| true).unwrap();
         let edits: [(&str, Stage, &dyn Fn(&mut Scene)); 12] = [
             ("albedo", Stage::Render, &|s| s.terrain.albedo = [0.5, 0.4, 0.3]),
             ("background", Stage::Render, &|s| s.background.radiance = [1e-3, 2e-3, 3e-3]),
@@ -728,11 +755,11 @@ mod tests {
         ];
         for (what, stage, edit) in edits {
             edit(&mut scene);
-            let u = p.update(&scene, &|_, _| {}).unwrap();
+            let u = p.update(&scene, &|_, _| true).unwrap();
             assert_eq!(u.stage, Some(stage), "{what}");
             let mut fresh = Preview::new(&out, SIZE, None);
             fresh.spp = 2;
-            fresh.update(&scene, &|_, _| {}).unwrap();
+            fresh.update(&scene, &|_, _| true).unwrap();
             assert!(p.image().unwrap().pixels == fresh.image().unwrap().pixels, "{what}: the cached picture differs from a fresh one");
         }
         let _ = std::fs::remove_dir_all(out.parent().unwrap());
