@@ -81,7 +81,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     let lines: Vec<&str> = text.lines().collect();
     let at = |p: &str| lines.iter().position(|l| l.starts_with(p)).unwrap_or_else(|| panic!("no '{p}' in\n{text}"));
     assert!(at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "), "{text}");
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (first)") && last.contains("1 spp), full render") && last.contains("(2 spp)"), "{last}");
     let first = std::fs::read(&png).unwrap();
 
@@ -89,7 +89,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.render.exposure += 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = wait_for(&log, 120, "the exposure edit's picture", |t| pictures(t) >= 2);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     for zero in ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"] {
         assert!(last.contains("edit (exposure)") && last.contains(zero), "{zero}: {last}");
     }
@@ -100,7 +100,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.volume.emission_scale *= 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = wait_for(&log, 120, "the render edit's picture", |t| pictures(t) >= 3);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"), "{last}");
     let second = std::fs::read(&png).unwrap();
     assert_ne!(exposed, second, "the render edit must change the picture");
@@ -124,7 +124,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.render.exposure -= 1.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = wait_for(&log, 120, "the fix's picture", |t| pictures(t) >= 4);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (exposure)"), "{last}");
     let third = std::fs::read(&png).unwrap();
     assert_ne!(third, second);
