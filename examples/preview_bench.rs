@@ -24,6 +24,20 @@ fn loadavg() -> String {
     std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
 }
 
+/// CPU seconds (user + system) of this process so far, all threads
+/// (`/proc/self/stat` fields 14 and 15, in clock ticks of 1/100 s).
+fn cpu_seconds() -> f64 {
+    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    // Fields after the command name, which is in parentheses.
+    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
+    let f: Vec<f64> = rest.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
+    if f.len() > 13 {
+        (f[11] + f[12]) / 100.0
+    } else {
+        0.0
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let opt = |name: &str| args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).map(|t| t.parse::<usize>()).transpose();
@@ -53,12 +67,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     println!("# 'picture': edit to the refined picture at the preview spp on disk (the targets: <= 1 s render edit, <= 3 s beams edit); 'full': to the picture at the scene spp");
     println!("# load average before: {}", loadavg());
-    let row = |what: &str, u: &Update| {
-        println!("{what:<22} picture {:6.2} s | full {:6.2} s | coarse {:5.2} s | {}", u.to_picture, u.to_full, u.to_coarse, u.summary())
+    println!("# cpu: CPU seconds (all threads) from the edit to the refined picture: on a loaded machine wall times stretch, CPU times much less; cpu / threads is a floor for a quiet machine's wall time");
+    let row = |what: &str, u: &Update, cpu: f64| {
+        println!("{what:<22} picture {:6.2} s | cpu {:6.2} s | full {:6.2} s | coarse {:5.2} s | {}", u.to_picture, cpu, u.to_full, u.to_coarse, u.summary())
     };
     let mut step = |what: &str, scene: &Scene| -> Result<(), Box<dyn std::error::Error>> {
-        let u = pool.install(|| p.update(scene, &|_, _| true))?;
-        row(what, &u);
+        let c0 = cpu_seconds();
+        let at_picture = std::sync::Mutex::new(None);
+        let u = pool.install(|| {
+            p.update(scene, &|what, _| {
+                if what.starts_with("picture") {
+                    *at_picture.lock().unwrap() = Some(cpu_seconds());
+                }
+                true
+            })
+        })?;
+        let c1 = at_picture.lock().unwrap().unwrap_or_else(cpu_seconds);
+        row(what, &u, c1 - c0);
         Ok(())
     };
     step("first", &scene)?;
