@@ -30,8 +30,10 @@
 //!    edit rebuilds the grids it comes before the full gather, from every
 //!    [`COARSE_PHOTON_STRIDE`]-th photon (power multiplied as much) gathered
 //!    on voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
-//!    made from a photon subset. Otherwise it is rendered from the refined
-//!    picture's structures with a smaller camera (a few ms).
+//!    made from a photon subset. After a `[volume]` edit (the medium is
+//!    rebuilt) it is rendered from the last coarse grids, before the
+//!    medium's build; otherwise from the refined picture's structures
+//!    with a smaller camera. Either way a few ms.
 //! 2. the refined one: the preview size at the preview's spp
 //!    ([`DEFAULT_SPP`] = 4, two antithetic pairs; `aurora preview --spp`),
 //!    capped by the scene's `render.spp`. **The edit-to-picture targets
@@ -209,6 +211,11 @@ struct Cache {
     gathered: Grid<[f32; 3]>,
     voxel: (f64, String),
     bake: Bake,
+    /// The coarse picture's grids ([`Preview::coarse_picture`]) while they
+    /// match `bake` (None after a finish without a coarse gather): a
+    /// `[volume]` edit renders its coarse picture from them before the
+    /// full medium is rebuilt.
+    coarse: Option<Bake>,
 }
 
 /// What the last refined picture was rendered with: the renderer's
@@ -347,7 +354,7 @@ impl Preview {
         photons: &[Photon],
         voxel_km: f64,
         prev: &mut Option<Prepared>,
-    ) -> Result<(f64, f64), PreviewError> {
+    ) -> Result<(f64, f64, Bake), PreviewError> {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
@@ -364,14 +371,22 @@ impl Preview {
             noise: None,
         };
         let b = pipeline::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
-        let volume = Volume { density: Some(&b.density), emission: Some(&b.emission) };
+        let png = self.coarse_from(scene, &b, prev)?;
+        Ok((t.elapsed().as_secs_f64(), png, b))
+    }
+
+    /// Renders and writes the coarse picture of `coarse`'s grids, with the
+    /// renderer's parts that do not depend on the grids (terrain, sky)
+    /// taken from `prev`, which holds the coarse picture's afterwards.
+    /// Returns the PNG's seconds.
+    fn coarse_from(&self, scene: &Scene, coarse: &Bake, prev: &mut Option<Prepared>) -> Result<f64, RenderError> {
+        let volume = Volume { density: Some(&coarse.density), emission: Some(&coarse.emission) };
         let [w, h] = self.size;
         let s = self.settings(scene, (w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1), 1);
         let p = assemble(prev.take(), true, &s, &volume)?;
-        let img = render::render_prepared(&p, nothing)?;
+        let img = render::render_prepared(&p, &NoProgress)?;
         *prev = Some(p);
-        let png = self.write(&img, scene.render.exposure)?;
-        Ok((t.elapsed().as_secs_f64(), png))
+        self.write(&img, scene.render.exposure)
     }
 
     /// Brings the pictures up to date with `scene` (validated), rerunning
@@ -450,11 +465,17 @@ impl Preview {
                     }
                     if regather {
                         c.voxel = plan.voxel_size(&c.bake.photons);
-                        (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0, &mut parts)?;
+                        let coarse;
+                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0, &mut parts)?;
+                        c.coarse = Some(coarse);
                         coarse_done(&mut u);
                         let t = Instant::now();
                         c.gathered = pipeline::gather(&plan, &c.bake.photons, c.voxel.0, nothing);
                         u.gather = t.elapsed().as_secs_f64();
+                    }
+                    if !regather {
+                        // The coarse grids were finished otherwise.
+                        c.coarse = None;
                     }
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, c.voxel.0);
@@ -500,7 +521,8 @@ impl Preview {
                     let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
-                    (u.coarse_render, u.png) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0, &mut parts)?;
+                    let (secs, png, coarse) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0, &mut parts)?;
+                    (u.coarse_render, u.png) = (secs, png);
                     coarse_done(&mut u);
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
@@ -520,7 +542,7 @@ impl Preview {
                     let (gathered, voxel, beam_stats) = (emission.clone(), (g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
                     let bake = pipeline::finish(&plan, emission, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
-                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, gathered, voxel, bake })
+                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, gathered, voxel, bake, coarse: Some(coarse) })
                 })();
                 match r {
                     Ok(c) => c,
@@ -538,7 +560,16 @@ impl Preview {
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
         let settings = self.settings(scene, w, h, spp);
         let t = Instant::now();
-        let mut prepared = assemble(parts, grids_changed, &settings, &volume)?;
+        // A `[volume]` edit rebuilds the medium: the coarse picture first,
+        // from the coarse grids.
+        let rebuild = grids_changed || parts.as_ref().is_none_or(|p| p.settings.volume != settings.volume);
+        if let (true, 0.0, Some(coarse)) = (rebuild, u.to_coarse, &cache.coarse) {
+            let t = Instant::now();
+            u.png += self.coarse_from(scene, coarse, &mut parts)?;
+            u.coarse_render = t.elapsed().as_secs_f64();
+            coarse_done(&mut u);
+        }
+        let mut prepared = assemble(parts, grids_changed || u.to_coarse > 0.0, &settings, &volume)?;
         u.render_build = t.elapsed().as_secs_f64();
         if u.to_coarse == 0.0 {
             // From the refined picture's structures at the coarse size.
@@ -786,6 +817,7 @@ mod tests {
             edit(&mut scene);
             let u = p.update(&scene, &|_, _| true).unwrap();
             assert_eq!(u.stage, Some(stage), "{what}");
+            assert!(u.to_coarse > 0.0 && u.to_coarse <= u.to_picture, "{what}: coarse first {u:?}");
             let mut fresh = Preview::new(&out, SIZE, None);
             fresh.spp = 2;
             fresh.update(&scene, &|_, _| true).unwrap();
