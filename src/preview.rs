@@ -559,7 +559,6 @@ impl Preview {
         let volume = Volume { density: Some(&cache.bake.density), emission: Some(&cache.bake.emission) };
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
         let settings = self.settings(scene, w, h, spp);
-        let t = Instant::now();
         // A `[volume]` edit rebuilds the medium: the coarse picture first,
         // from the coarse grids.
         let rebuild = grids_changed || parts.as_ref().is_none_or(|p| p.settings.volume != settings.volume);
@@ -569,6 +568,7 @@ impl Preview {
             u.coarse_render = t.elapsed().as_secs_f64();
             coarse_done(&mut u);
         }
+        let t = Instant::now();
         let mut prepared = assemble(parts, grids_changed || u.to_coarse > 0.0, &settings, &volume)?;
         u.render_build = t.elapsed().as_secs_f64();
         if u.to_coarse == 0.0 {
