@@ -310,7 +310,7 @@ impl Preview {
     }
 
     /// The last finished bake (None before the first update). The preview
-    /// bakes without `grid.cycles_shell` ([`preview_plan`]).
+    /// bakes without `grid.cycles_shell` (module doc).
     pub fn bake(&self) -> Option<&Bake> {
         self.cache.as_ref().map(|c| &c.bake)
     }
