@@ -803,11 +803,13 @@ mod tests {
             ("stars", Stage::Render, &|s| s.background.stars = true),
             ("mountains", Stage::Render, &|s| s.terrain.mountain_height += 1.0),
             ("no terrain", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::None),
-            ("plane", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::Plane),
+            // A medium built without terrain has no emission sampler: the
+            // terrain's return needs one.
             ("scales", Stage::Render, &|s| {
                 s.volume.emission_scale *= 3.0;
                 s.volume.density_scale *= 2.0
             }),
+            ("plane", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::Plane),
             ("fov, pruned", Stage::Camera, &|s| s.camera.fov_deg += 5.0),
             ("unpruned", Stage::Finish, &|s| s.grid.prune = 0.0),
             ("fov, unpruned", Stage::Camera, &|s| s.camera.fov_deg -= 3.0),
