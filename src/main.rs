@@ -160,13 +160,15 @@ enum Command {
     },
     /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
     ///
-    /// With --watch the scene file is polled (~100 ms); each save is parsed and validated (a bad
+    /// With --watch the scene file is polled (~50 ms); each save is parsed and validated (a bad
     /// edit prints the error and the watch goes on) and only the stages the edit touches are
-    /// rerun: a render edit re-renders from the cached grids, a camera edit re-derives the voxel
-    /// size and pruning, a beams or colour edit retraces the beams but keeps the footprints.
-    /// A coarse picture (1/4 size, 1 spp) is written first, then the refined one (--size, the
-    /// scene's spp), atomically; each update prints its stage times. The bake uses the scene's own
-    /// settings. Without --watch: one picture, then exit.
+    /// rerun: an exposure edit re-encodes the last image (nothing traced), a render edit
+    /// re-renders from the cached grids and renderer, a camera edit re-derives the voxel size and
+    /// pruning, a beams or colour edit retraces the beams but keeps the footprints. A coarse
+    /// picture (1/4 size, 1 spp) is written first, then the refined one (--size, --spp), then,
+    /// when [render] spp is larger, one at the scene's spp, each atomically; each update prints
+    /// its stage times. The bake uses the scene's own settings. Without --watch: one update, then
+    /// exit.
     Preview {
         /// Scene file or preset name (a file for --watch).
         #[arg(default_value = "default")]
@@ -180,6 +182,11 @@ enum Command {
         /// Keep watching the scene file and update the picture on every save.
         #[arg(long)]
         watch: bool,
+        /// Samples per pixel of the refined picture; when [render] spp is larger, a picture at
+        /// the scene's spp follows it (when smaller, it caps this).
+        #[arg(long, value_name = "N", default_value_t = aurora::preview::DEFAULT_SPP as u64,
+              value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
+        spp: u64,
         #[command(flatten)]
         common: Common,
     },
@@ -324,13 +331,13 @@ fn run(cli: Cli) -> Result<()> {
             print!("{}", s.to_toml());
             Ok(())
         }
-        Command::Preview { scene: scene_arg, out, size, watch, common } => {
+        Command::Preview { scene: scene_arg, out, size, watch, spp, common } => {
             image_format("--out", &out).and_then(|f| match f {
                 ImageFormat::Png => Ok(()),
                 ImageFormat::Exr => Err(InputError(format!("--out {}: the preview writes PNG", out.display())).into()),
             })?;
             let dir = scene_dir(&scene_arg);
-            with_threads(common.threads, || preview_cmd(&scene_arg, &dir, &out, size, watch, common.quiet))
+            with_threads(common.threads, || preview_cmd(&scene_arg, &dir, &out, size, spp as usize, watch, common.quiet))
         }
         Command::Footprint { scene, out } => {
             let scene = load_scene(&scene)?;
@@ -632,22 +639,27 @@ fn parse_size(text: &str) -> std::result::Result<[usize; 2], String> {
 /// One preview, or (--watch) a preview per save of the scene file until
 /// killed. A bad edit is reported as `aurora bake` words it and the watch
 /// goes on with the last good scene.
-fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch: bool, quiet: bool) -> Result<()> {
+fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: usize, watch: bool, quiet: bool) -> Result<()> {
     use aurora::preview::{FileStamp, Preview};
     let mut preview = Preview::new(out, size, Some(dir.to_path_buf()));
+    preview.spp = spp;
     let report = |u: &aurora::preview::Update| {
         if !quiet {
             eprintln!("wrote {}: {}", out.display(), u.summary());
         }
     };
-    let on_coarse = |secs: f64| {
+    // The hash of the scene text being previewed (--watch): a picture at
+    // the scene's spp is skipped once the file has changed again.
+    let previewing = std::cell::Cell::new(None::<u64>);
+    let on_picture = |what: &str, secs: f64| {
         if !quiet {
-            eprintln!("coarse picture in {secs:.2} s");
+            eprintln!("{what} in {secs:.2} s");
         }
+        previewing.get().is_none_or(|h| FileStamp::read(Path::new(scene_arg)).is_none_or(|(s, _)| s.hash == h))
     };
     if !watch {
         let scene = load_scene(scene_arg)?;
-        let u = preview.update(&scene, &on_coarse)?;
+        let u = preview.update(&scene, &on_picture)?;
         if let Some(b) = preview.bake() {
             print_warnings(&b.stats.warnings);
         }
@@ -666,12 +678,14 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
         if let Some((stamp, text)) = FileStamp::read(path) {
             if last.as_ref() != Some(&stamp) {
                 let changed = last.as_ref().is_none_or(|l| l.hash != stamp.hash);
+                let hash = stamp.hash;
                 last = Some(stamp);
                 if changed {
+                    previewing.set(Some(hash));
                     match Scene::from_toml_str(&text, scene_arg) {
                         // Worded as `aurora bake` words it.
                         Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
-                        Ok(scene) => match preview.update(&scene, &on_coarse) {
+                        Ok(scene) => match preview.update(&scene, &on_picture) {
                             Ok(u) => {
                                 if let Some(b) = preview.bake() {
                                     print_warnings(&b.stats.warnings);
@@ -684,7 +698,7 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], watch:
                 }
             }
         }
-        std::thread::sleep(std::time::Duration::from_millis(100));
+        std::thread::sleep(std::time::Duration::from_millis(50));
     }
 }
 

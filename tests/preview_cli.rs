@@ -1,6 +1,7 @@
-//! `aurora preview --watch` driven as a user would: a render edit, a syntax
-//! error, a fix. The picture follows good edits, a bad one prints the error
-//! `aurora bake` prints and the watch goes on.
+//! `aurora preview --watch` driven as a user would: an exposure edit (a
+//! tone map, nothing traced), a render edit, a syntax error, a fix. The
+//! picture follows good edits, a bad one prints the error `aurora bake`
+//! prints and the watch goes on.
 
 use aurora::scene::{Curtain, Scene, VoxelSize};
 use std::path::{Path, PathBuf};
@@ -67,24 +68,42 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     let mut scene = small_scene();
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let child = Command::new(BIN)
-        .args(["preview", scene_path.to_str().unwrap(), "--watch", "--size", "64x36", "--threads", "2", "--out"])
+        .args(["preview", scene_path.to_str().unwrap(), "--watch", "--size", "64x36", "--spp", "1", "--threads", "2", "--out"])
         .arg(&png)
         .stdout(Stdio::null())
         .stderr(std::fs::File::create(&log).unwrap())
         .spawn()
         .expect("aurora runs");
     let mut w = Watcher(child);
-    wait_for(&log, 300, "the first picture", |t| pictures(t) >= 1);
+    // The first update: coarse, the preview-spp picture (--spp 1), then the
+    // scene's spp (2).
+    let text = wait_for(&log, 300, "the first picture", |t| pictures(t) >= 1);
+    let lines: Vec<&str> = text.lines().collect();
+    let at = |p: &str| lines.iter().position(|l| l.starts_with(p)).unwrap_or_else(|| panic!("no '{p}' in\n{text}"));
+    assert!(at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "), "{text}");
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    assert!(last.contains("edit (first)") && last.contains("1 spp), full render") && last.contains("(2 spp)"), "{last}");
     let first = std::fs::read(&png).unwrap();
 
-    // 1. A render edit: brighter. The picture is rewritten, by a render only.
+    // 1. An exposure edit: brighter, a tone map of the last image, nothing traced.
     scene.render.exposure += 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let text = wait_for(&log, 120, "the render edit's picture", |t| pictures(t) >= 2);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
-    assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s"), "{last}");
+    let text = wait_for(&log, 120, "the exposure edit's picture", |t| pictures(t) >= 2);
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    for zero in ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"] {
+        assert!(last.contains("edit (exposure)") && last.contains(zero), "{zero}: {last}");
+    }
+    let exposed = std::fs::read(&png).unwrap();
+    assert_ne!(first, exposed, "the exposure edit must change the picture");
+
+    // 1b. A render edit that retraces: brighter emission, from the cached grids.
+    scene.volume.emission_scale *= 2.0;
+    std::fs::write(&scene_path, scene.to_toml()).unwrap();
+    let text = wait_for(&log, 120, "the render edit's picture", |t| pictures(t) >= 3);
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"), "{last}");
     let second = std::fs::read(&png).unwrap();
-    assert_ne!(first, second, "the render edit must change the picture");
+    assert_ne!(exposed, second, "the render edit must change the picture");
 
     // 2. A syntax error: the error as `aurora bake` words it; the process lives on.
     let bad = format!("{}\n[render\n", scene.to_toml());
@@ -98,15 +117,15 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     std::thread::sleep(Duration::from_millis(500));
     assert!(w.0.try_wait().unwrap().is_none(), "the watcher exited on a bad edit");
     assert_eq!(std::fs::read(&png).unwrap(), second, "a bad edit must not touch the picture");
-    assert_eq!(pictures(&std::fs::read_to_string(&log).unwrap()), 2);
+    assert_eq!(pictures(&std::fs::read_to_string(&log).unwrap()), 3);
 
     // 3. The fix (and another exposure): a new picture, diffed against the
-    // last good scene (a render edit again).
+    // last good scene (an exposure edit again).
     scene.render.exposure -= 1.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let text = wait_for(&log, 120, "the fix's picture", |t| pictures(t) >= 3);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).last().unwrap();
-    assert!(last.contains("edit (render)"), "{last}");
+    let text = wait_for(&log, 120, "the fix's picture", |t| pictures(t) >= 4);
+    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    assert!(last.contains("edit (exposure)"), "{last}");
     let third = std::fs::read(&png).unwrap();
     assert_ne!(third, second);
     assert!(w.0.try_wait().unwrap().is_none(), "the watcher must still run");
@@ -130,5 +149,7 @@ fn without_watch_one_picture_then_exit() {
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
     // A size out of range is refused with exit status 2.
     let bad = Command::new(BIN).args(["preview", "--size", "0x10"]).output().unwrap();
+    assert_eq!(bad.status.code(), Some(2), "{}", String::from_utf8_lossy(&bad.stderr));
+    let bad = Command::new(BIN).args(["preview", "--spp", "0"]).output().unwrap();
     assert_eq!(bad.status.code(), Some(2), "{}", String::from_utf8_lossy(&bad.stderr));
 }

@@ -486,6 +486,20 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
     let build = Instant::now();
     let prepared = Prepared::new(settings, volume)?;
     let build_seconds = build.elapsed().as_secs_f64();
+    let mut img = render_prepared(&prepared, progress)?;
+    img.stats.build_seconds = build_seconds;
+    Ok(img)
+}
+
+/// [`render`] from an already built [`Prepared`] at its settings (size
+/// from its camera, `settings.render.spp`): a caller that keeps the medium
+/// between renders (`crate::preview`) pays the build once. The same image
+/// as `render` with those settings; `stats.build_seconds` is 0.
+pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<Image, RenderError> {
+    if prepared.settings.render.spp == 0 {
+        return Err(RenderError::Settings("render.spp must be at least 1".into()));
+    }
+    let build_seconds = 0.0;
     let (w, h) = (prepared.camera.width, prepared.camera.height);
     progress.start("render", h as u64);
     let start = Instant::now();
