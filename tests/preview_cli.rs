@@ -3,10 +3,12 @@
 //! picture follows good edits, a bad one prints the error `aurora bake`
 //! prints and the watch goes on.
 
-use aurora::scene::{Curtain, Scene, VoxelSize};
+use aurora::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
+
+mod common;
 
 const BIN: &str = env!("CARGO_BIN_EXE_aurora");
 
@@ -17,16 +19,12 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
-/// A scene that bakes in about a second.
+/// A scene that bakes in about a second: the tests' small scene
+/// (`tests/common`) with one curtain and 2 samples per pixel.
 fn small_scene() -> Scene {
-    let mut s = Scene {
-        curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
-        ..Scene::default()
-    };
-    s.footprint.resolution = [128, 48];
+    let mut s = common::small_scene();
+    s.curtains.truncate(1);
     s.beams.count = 300;
-    s.photons.radius_km = 1.0;
-    s.grid.voxel_size = VoxelSize::Km(1.0);
     s.render.spp = 2;
     s
 }
