@@ -699,6 +699,48 @@ pub fn trace_and_gather(
     Ok((emission, Gathered { photons: traced.photons, beam_stats: traced.stats, voxel_km, voxel_source, warnings: w, noise }))
 }
 
+/// The emission's checks and peaks, the first step of [`finish`]: every
+/// active value finite (else [`BakeError::NonFinite`] at the first bad voxel
+/// in leaf order), within the half-float range when `half_emission`, and the
+/// largest component and luminance. Per leaf in parallel; the first error in
+/// leaf order wins and maxima do not depend on the order, so the outcome is
+/// the same whatever the thread count.
+pub fn scan_emission(emission: &Grid<[f32; 3]>, half_emission: bool, radius_km: f64) -> Result<([f32; 3], f64), BakeError> {
+    let half_max = half::f16::MAX.to_f32();
+    let per_leaf: Vec<Result<([f32; 3], f64), BakeError>> = emission
+        .leaves()
+        .par_iter()
+        .map(|l| {
+            let mut peak = [0.0f32; 3];
+            let mut peak_y = 0.0f64;
+            for (ijk, v) in l.iter_active() {
+                if v.iter().any(|x| !x.is_finite()) {
+                    return Err(BakeError::NonFinite { ijk: ijk.to_array(), value: format!("{v:?}"), radius_km });
+                }
+                if half_emission && v.iter().any(|x| x.abs() > half_max) {
+                    let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+                    return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
+                }
+                for k in 0..3 {
+                    peak[k] = peak[k].max(v[k]);
+                }
+                peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
+            }
+            Ok((peak, peak_y))
+        })
+        .collect();
+    let mut peak = [0.0f32; 3];
+    let mut peak_y = 0.0f64;
+    for r in per_leaf {
+        let (p, y) = r?;
+        for k in 0..3 {
+            peak[k] = peak[k].max(p[k]);
+        }
+        peak_y = peak_y.max(y);
+    }
+    Ok((peak, peak_y))
+}
+
 /// Stage 4: checks the emission, prunes it, builds the density grid and the
 /// Cycles shell, and the stats. `times.prune`, `times.density` are filled
 /// in; `times.total` is the time since `t_all`.
@@ -717,21 +759,7 @@ pub fn finish(
     let transform = emission.transform;
 
     let t = Instant::now();
-    let mut peak = [0.0f32; 3];
-    let mut peak_y = 0.0f64;
-    for (ijk, v) in emission.iter_active() {
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(BakeError::NonFinite { ijk: ijk.to_array(), value: format!("{v:?}"), radius_km: plan.kernel.base_km });
-        }
-        if plan.grid.half_emission && v.iter().any(|x| x.abs() > half::f16::MAX.to_f32()) {
-            let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-            return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
-        }
-        for k in 0..3 {
-            peak[k] = peak[k].max(v[k]);
-        }
-        peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
-    }
+    let (peak, peak_y) = scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km)?;
     if let Some((lo, _)) = emission.index_bbox() {
         warnings.extend(extinction_warning(&plan.grid, transform.index_to_world(lo.as_dvec3()).z));
     }
