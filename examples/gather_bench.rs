@@ -4,7 +4,11 @@
 //! wall and CPU seconds of each and the load average. The preview's beams
 //! edit pays trace + gather + finish (issue 14 part 4).
 //!
-//! `cargo run --release --example gather_bench -- [SCENE] [--threads N] [--reps K]`
+//! `cargo run --release --example gather_bench -- [SCENE] [--threads N] [--reps K] [--beams B]`
+//!
+//! `--beams B` traces B beams instead of the scene's count: with
+//! `valgrind --tool=callgrind --toggle-collect='*gather_grid*'` it gives the
+//! gather's instruction count, which the machine's load does not change.
 
 use aurora::pipeline::{self, BakePlan};
 use aurora::progress::NoProgress;
@@ -37,9 +41,14 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     let opt = |k: &str| args.iter().position(|a| a == k).and_then(|i| args.get(i + 1)).cloned();
     let threads = opt("--threads").map(|t| t.parse::<usize>()).transpose()?;
     let reps = opt("--reps").map(|t| t.parse::<usize>()).transpose()?.unwrap_or(2);
-    let values: Vec<String> = [opt("--threads"), opt("--reps")].into_iter().flatten().collect();
+    let beams = opt("--beams").map(|t| t.parse::<usize>()).transpose()?;
+    let values: Vec<String> = [opt("--threads"), opt("--reps"), opt("--beams")].into_iter().flatten().collect();
     let name = args.iter().find(|a| !a.starts_with("--") && !values.contains(a)).cloned().unwrap_or("default".into());
-    let scene = Scene::load(&name)?;
+    let mut scene = Scene::load(&name)?;
+    if let Some(n) = beams {
+        // A smaller bake for instruction counts (valgrind --tool=callgrind).
+        (scene.beams.count, scene.beams.target_noise) = (n, 0.0);
+    }
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
         pool = pool.num_threads(n);

@@ -219,10 +219,13 @@ impl SegmentMass {
     }
 }
 
+/// Entries of the erf table: erf(k / 1024) for k = 0..=4097.
+const ERF_LUT_LEN: usize = ERF_LUT_STEPS * 4 + 2;
+
 /// erf on [0, 4] at steps of 1/1024, f32, for [`erf_lut`].
-fn erf_table() -> &'static [f32] {
-    static T: std::sync::OnceLock<Vec<f32>> = std::sync::OnceLock::new();
-    T.get_or_init(|| (0..=ERF_LUT_STEPS * 4 + 1).map(|k| libm::erf(k as f64 / ERF_LUT_STEPS as f64) as f32).collect())
+fn erf_table() -> &'static [f32; ERF_LUT_LEN] {
+    static T: std::sync::OnceLock<[f32; ERF_LUT_LEN]> = std::sync::OnceLock::new();
+    T.get_or_init(|| std::array::from_fn(|k| libm::erf(k as f64 / ERF_LUT_STEPS as f64) as f32))
 }
 
 const ERF_LUT_STEPS: usize = 1024;
@@ -233,10 +236,17 @@ const ERF_LUT_STEPS: usize = 1024;
 /// segment kernel takes two per voxel and photon; a lookup costs far less
 /// than a rational approximation's exponential and division (Abramowitz &
 /// Stegun 7.1.26, the other f32 erf this module once had, measured slower).
+/// The cell index is `|x| / h - 1/2` rounded to nearest by the `1.5 * 2^23`
+/// trick of [`exp_neg_f32`] (floor of `|x| / h`, or one less at a cell
+/// boundary, where the interpolation weight is then 1: the same value),
+/// clamped to the table: no saturating float-to-integer conversion and no
+/// bounds check in the gather's inner loop.
 #[inline(always)]
-pub fn erf_lut(table: &[f32], x: f32) -> f32 {
+pub fn erf_lut(table: &[f32; ERF_LUT_LEN], x: f32) -> f32 {
+    const MAGIC: f32 = 12_582_912.0;
     let ax = (x.abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
-    let k = ax as usize;
+    let t = (ax - 0.5) + MAGIC;
+    let k = ((t.to_bits() as i32 - MAGIC.to_bits() as i32).max(0) as usize).min(ERF_LUT_LEN - 2);
     let f = ax - k as f32;
     let v = table[k] + f * (table[k + 1] - table[k]);
     v.copysign(x)
@@ -584,6 +594,49 @@ fn kernel_lanes(dxy: f32, dz2: &[f32; 4], reach2: &[f32], norm: &[f32], inv_2r2:
     w
 }
 
+/// The segment kernel's parts at 4 consecutive voxels of a z-row, offsets
+/// from the segment's start `w = (wx, wy, wz)` given as `s_xy = wx dx + wy
+/// dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`, `wz^2` per lane:
+/// the across factor `exp(-perp^2 / 2r^2)`, the erf arguments `s / (sqrt2
+/// r)` and `(s - L) / (sqrt2 r)`, and 1 where the voxel lies inside the
+/// capsule (distance to the segment below `c r`), else 0. Branch-free so it
+/// vectorises.
+#[inline(always)]
+fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: &SegParams) -> ([f32; 4], [f32; 4], [f32; 4], [f32; 4]) {
+    let (mut ex, mut u0, mut u1, mut inside) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+    for j in 0..4 {
+        let s = sxy + sz[j];
+        let w2 = w2xy + w2z[j];
+        let perp2 = (w2 - s * s).max(0.0);
+        let end2 = (w2 - 2.0 * s * l + l * l).max(0.0);
+        let dist2 = if s < 0.0 { w2 } else if s > l { end2 } else { perp2 };
+        inside[j] = if dist2 < q.reach2 { 1.0 } else { 0.0 };
+        ex[j] = exp_neg_f32(-perp2 * q.inv_2r2);
+        u0[j] = s * q.inv_sqrt2r;
+        u1[j] = (s - l) * q.inv_sqrt2r;
+    }
+    (ex, u0, u1, inside)
+}
+
+/// Scratch space of the splat gather, one per thread: the per-voxel sums
+/// (zero between leaves) and the point kernel's per-voxel parameters.
+pub struct SplatBuffers {
+    acc: Box<LeafAcc>,
+    k: Box<LeafKernels>,
+}
+
+impl SplatBuffers {
+    pub fn new() -> Self {
+        Self { acc: GatherSetup::new_acc(), k: GatherSetup::new_kernels() }
+    }
+}
+
+impl Default for SplatBuffers {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 /// Per-voxel kernel parameters of one leaf, structure of arrays.
 struct LeafKernels {
     /// 1 / ((2 pi)^(3/2) r^3 M(c)), km^-3.
@@ -667,6 +720,24 @@ pub struct GatherSetup<'a> {
     pub mass: f64,
     /// Segment kernel masses for `cutoff`.
     pub seg: SegmentMass,
+    /// The splat's kernel of each segment photon (r at its midpoint),
+    /// computed once per photon rather than once per leaf it touches (the
+    /// radius noise is a Perlin lookup); empty for the other gathers.
+    pub splat_kernels: Vec<SplatKernel>,
+}
+
+/// A segment photon's kernel in the splat: its parameters (r at the
+/// segment's midpoint) and reach `cutoff r`, km.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct SplatKernel {
+    sp: SegParams,
+    reach: f64,
+}
+
+impl SplatKernel {
+    fn new(kernel: &Kernel) -> Self {
+        Self { sp: SegParams::new(kernel), reach: kernel.reach() }
+    }
 }
 
 impl GatherSetup<'_> {
@@ -824,6 +895,101 @@ impl GatherSetup<'_> {
         }
     }
 
+    /// The splat's segment path: photon `p`'s segment kernel, with its one
+    /// set of parameters `sk`, added to the voxels of the leaf at `origin`
+    /// within its reach. A segment shorter than [`MIDPOINT_LAMBDA`] r goes
+    /// to the point path at its midpoint. Otherwise the closed form of the
+    /// module documentation, evaluated over whole half z-rows (4 voxels)
+    /// without branches: the capsule test `dist2 < (c r)^2` selects the
+    /// lanes (the same test, in the same f32 arithmetic, as
+    /// [`Self::accumulate_segment`], so the same voxels get a term), the
+    /// rows the capsule misses and the half rows outside its z range are
+    /// skipped whole. Offsets from the segment's start are taken in f64 then
+    /// rounded to f32.
+    #[inline]
+    fn splat_segment(&self, origin: IVec3, p: &Photon, sk: &SplatKernel, k: &mut LeafKernels, acc: &mut LeafAcc) {
+        let (a, b) = (pos(p), end(p));
+        let q = sk.sp;
+        let reach = sk.reach;
+        let len = a.distance(b);
+        let l = len as f32;
+        let lam = l * q.inv_r;
+        if (lam as f64) < MIDPOINT_LAMBDA {
+            let mid = 0.5 * (a + b);
+            let Some((lo, hi)) = self.local_range(origin, mid, reach) else { return };
+            for x in lo.x..=hi.x {
+                for y in lo.y..=hi.y {
+                    let row = ((x << 6) | (y << 3)) as usize;
+                    for n in row..row + 8 {
+                        (k.norm[n], k.inv_2r2[n], k.reach2[n]) = (q.norm, q.inv_2r2, q.reach2);
+                    }
+                }
+            }
+            let mid = Photon::point(mid.as_vec3().to_array(), p.power);
+            return self.accumulate(origin, &mid, reach, k, acc);
+        }
+        let Some((lo, hi)) = self.local_box(origin, a.min(b), a.max(b), reach) else { return };
+        let dir = ((b - a) / len).as_vec3();
+        let vs = self.transform.voxel_size;
+        let t = self.transform.translation;
+        let off = |axis: usize, i: i32| -> f32 { ((origin[axis] + i) as f64 * vs + t[axis] - a[axis]) as f32 };
+        let (mut sz, mut w2z) = ([0.0f32; 8], [0.0f32; 8]);
+        for z in 0..8 {
+            let w = off(2, z as i32);
+            (sz[z], w2z[z]) = (w * dir.z, w * w);
+        }
+        let wz0 = off(2, 0);
+        let phi = p.power;
+        // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
+        let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
+        let erf = erf_table();
+        let (px, py) = (l * dir.x, l * dir.y);
+        let pxy2 = px * px + py * py;
+        let reach2 = (reach * reach) as f32;
+        let inv_vs = (1.0 / vs) as f32;
+        let inv_pxy2 = if pxy2 > 0.0 { 1.0 / pxy2 } else { 0.0 };
+        let (za, zb) = (0.0f32.min(l * dir.z), 0.0f32.max(l * dir.z));
+        for x in lo.x..=hi.x {
+            let wx = off(0, x);
+            for y in lo.y..=hi.y {
+                let wy = off(1, y);
+                // The row's distance e in (x, y) from the segment's
+                // projection: rows with e >= reach miss the capsule, the
+                // others meet it within sqrt(reach^2 - e^2) in z of the
+                // segment's z range (widened as in accumulate_segment).
+                let tt = ((wx * px + wy * py) * inv_pxy2).clamp(0.0, 1.0);
+                let e2 = (wx - tt * px).powi(2) + (wy - tt * py).powi(2);
+                if e2 >= reach2 {
+                    continue;
+                }
+                let h = (reach2 - e2).sqrt() * (1.0 + 1e-5) + 1e-5;
+                let z0 = ((za - h - wz0) * inv_vs).max(-1.0) as i32;
+                let z1 = ((zb + h - wz0) * inv_vs).min(9.0) as i32 + 1;
+                let sxy = wx * dir.x + wy * dir.y;
+                let w2xy = wx * wx + wy * wy;
+                let row = ((x << 6) | (y << 3)) as usize;
+                for half in 0..2usize {
+                    let o = 4 * half;
+                    if z1 < o as i32 || z0 > o as i32 + 3 {
+                        continue;
+                    }
+                    let (sz4, w2z4) = (sz[o..o + 4].try_into().unwrap(), w2z[o..o + 4].try_into().unwrap());
+                    let (ex, u0, u1, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    let mut v = [0.0f32; 4];
+                    for j in 0..4 {
+                        v[j] = c * inside[j] * ex[j] * (erf_lut(erf, u0[j]) - erf_lut(erf, u1[j]));
+                    }
+                    let n = row + o;
+                    for (col, &ph) in acc.c.iter_mut().zip(&phi) {
+                        for (a, &vj) in col[n..n + 4].iter_mut().zip(&v) {
+                            *a += vj * ph;
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// The balloon gather's segment path: a segment shorter than
     /// [`MIDPOINT_LAMBDA`] times r at every voxel of the leaf goes to the
     /// (vectorised) point path at its midpoint, any other to
@@ -852,17 +1018,39 @@ impl GatherSetup<'_> {
     }
 
     /// Turns per-voxel sums into a leaf: value = sum * scale as f32, active
-    /// where nonzero. None if nothing is active.
-    fn finish(origin: IVec3, acc: &LeafAcc, scale: f64) -> Option<Leaf<[f32; 3]>> {
-        let mut leaf = Leaf::new(origin, [0.0f32; 3]);
-        for n in 0..LEAF_NUM_VALUES {
-            let v = [(acc.c[0][n] as f64 * scale) as f32, (acc.c[1][n] as f64 * scale) as f32, (acc.c[2][n] as f64 * scale) as f32];
-            if v.iter().any(|&c| c != 0.0) {
-                leaf.values[n] = v;
-                leaf.set_active(n, true);
+    /// where nonzero, and clears the sums for the next leaf. None if nothing
+    /// is active. The leaf's values are written once (no zeroed buffer
+    /// first).
+    fn finish(origin: IVec3, acc: &mut LeafAcc, scale: f64) -> Option<Leaf<[f32; 3]>> {
+        // Structure of arrays first (loops that vectorise), then the mask,
+        // then the leaf's interleaved values.
+        let mut v = [[0.0f32; LEAF_NUM_VALUES]; 3];
+        for (vk, ck) in v.iter_mut().zip(&acc.c) {
+            for (x, &c) in vk.iter_mut().zip(ck) {
+                *x = (c as f64 * scale) as f32;
             }
         }
-        (leaf.active_count() > 0).then_some(leaf)
+        acc.c = [[0.0; LEAF_NUM_VALUES]; 3];
+        let mut mask = [0u64; crate::grid::LEAF_MASK_WORDS];
+        for (w, m) in mask.iter_mut().enumerate() {
+            let mut bits = 0u64;
+            for b in 0..64 {
+                let n = w * 64 + b;
+                bits |= ((v[0][n] != 0.0 || v[1][n] != 0.0 || v[2][n] != 0.0) as u64) << b;
+            }
+            *m = bits;
+        }
+        if mask.iter().all(|&w| w == 0) {
+            return None;
+        }
+        let mut leaf = Leaf::new(origin, [0.0f32; 3]);
+        leaf.mask = mask;
+        for (n, x) in leaf.values.iter_mut().enumerate() {
+            if leaf.mask[n >> 6] >> (n & 63) & 1 == 1 {
+                *x = [v[0][n], v[1][n], v[2][n]];
+            }
+        }
+        Some(leaf)
     }
 
     fn new_acc() -> Box<LeafAcc> {
@@ -902,20 +1090,19 @@ impl GatherSetup<'_> {
                 self.accumulate_segment_rows(origin, p, reach, &k, &sk, &mut acc);
             }
         }
-        Self::finish(origin, &acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
+        Self::finish(origin, &mut acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
 
     /// Sample-point estimate (splat): kernel radius r(x_i) at each photon.
-    pub fn leaf_splat(&self, origin: IVec3, photons: &[u32]) -> Option<Leaf<[f32; 3]>> {
-        let mut acc = Self::new_acc();
-        let mut k = Self::new_kernels();
+    /// `bufs` is scratch space, reused from leaf to leaf (one per thread):
+    /// the sums are cleared after each leaf, and the per-voxel kernel rows
+    /// are written before they are read.
+    pub fn leaf_splat(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
+        let SplatBuffers { acc, k } = bufs;
         for &i in photons {
             let p = &self.photons[i as usize];
             if !p.is_point() {
-                // r at the segment's midpoint.
-                let kernel = Kernel::with_mass(self.radius.radius(0.5 * (pos(p) + end(p))), self.cutoff, self.mass);
-                let sp = SegParams::new(&kernel);
-                self.accumulate_segment(origin, p, kernel.reach(), |_| sp, &mut acc);
+                self.splat_segment(origin, p, &self.splat_kernels[i as usize], k, acc);
                 continue;
             }
             let q = pos(p);
@@ -931,9 +1118,9 @@ impl GatherSetup<'_> {
                     }
                 }
             }
-            self.accumulate(origin, p, kernel.reach(), &k, &mut acc);
+            self.accumulate(origin, p, kernel.reach(), k, acc);
         }
-        Self::finish(origin, &acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
+        Self::finish(origin, acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
 
     /// The 2014 report's weighted average colour, sum(w Phi) / sum(w), with
@@ -972,7 +1159,7 @@ impl GatherSetup<'_> {
                 }
             }
         }
-        Self::finish(origin, &acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
+        Self::finish(origin, &mut acc, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
 }
 
@@ -1096,7 +1283,16 @@ pub fn gather_grid(
         merged = merge_segments(photons, |p| radius.radius(p), MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
         &merged[..]
     };
-    let setup = GatherSetup { photons, transform, radius, cutoff, mass: gaussian_mass_inside(cutoff), seg: SegmentMass::new(cutoff) };
+    let mass = gaussian_mass_inside(cutoff);
+    let splat_kernels = if method == GatherMethod::Splat {
+        photons
+            .par_iter()
+            .map(|p| if p.is_point() { SplatKernel::default() } else { SplatKernel::new(&Kernel::with_mass(radius.radius(0.5 * (pos(p) + end(p))), cutoff, mass)) })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: SegmentMass::new(cutoff), splat_kernels };
     let reach = cutoff * radius.max();
     let leaves = candidate_leaves(photons, transform.voxel_size, reach);
     progress.start("gather", leaves.len() as u64);
@@ -1122,10 +1318,10 @@ pub fn gather_grid(
             leaves
                 .par_iter()
                 .zip(bins.par_iter())
-                .map(|(&o, b)| {
+                .map_init(SplatBuffers::new, |bufs, (&o, b)| {
                     progress.inc(1);
                     if method == GatherMethod::Splat {
-                        setup.leaf_splat(o, b)
+                        setup.leaf_splat(o, b, bufs)
                     } else {
                         setup.leaf_report2014(o, b)
                     }
