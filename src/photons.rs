@@ -516,16 +516,62 @@ fn for_each_leaf((lo, hi): (IVec3, IVec3), mut f: impl FnMut(IVec3)) {
     }
 }
 
-/// Photon indices per candidate leaf, each list ascending (counting sort in
-/// photon order): the uniform grid of `splat` and `report2014`.
+/// A multiplicative hash of a leaf origin for the binning's index (std's
+/// SipHash, built against flooding, cost more than the lookups' other work):
+/// the origins' three coordinates, each a multiple of 8, mixed by odd
+/// multipliers and xor. Deterministic (no random state).
+#[derive(Default, Clone, Copy)]
+pub struct OriginHasher(u64);
+
+impl std::hash::Hasher for OriginHasher {
+    #[inline]
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    #[inline]
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type OriginMap = HashMap<IVec3, u32, std::hash::BuildHasherDefault<OriginHasher>>;
+
+/// Photon indices per candidate leaf: leaf k's photons are
+/// `photons[start[k]..start[k + 1]]`, ascending.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Bins {
+    pub start: Vec<usize>,
+    pub photons: Vec<u32>,
+}
+
+impl Bins {
+    /// The photons of leaf `k`.
+    #[inline]
+    pub fn get(&self, k: usize) -> &[u32] {
+        &self.photons[self.start[k]..self.start[k + 1]]
+    }
+}
+
+/// Photon indices per candidate leaf, each list ascending: the uniform
+/// grid of `splat` and `report2014`.
 ///
-/// In parallel: (leaf, photon) pairs from chunks of photons, sorted (so
-/// each leaf's list is in photon order whatever the thread count), then cut
-/// into the lists.
-pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach: f64) -> Vec<Vec<u32>> {
-    let index: HashMap<IVec3, u32> = leaves.iter().enumerate().map(|(i, &o)| (o, i as u32)).collect();
+/// (leaf, photon) pairs from chunks of photons in parallel, collected in
+/// photon order, then a stable counting sort by leaf (count, prefix sum,
+/// scatter): each leaf's list is in photon order whatever the thread count.
+pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach: f64) -> Bins {
+    let index: OriginMap = leaves.iter().enumerate().map(|(i, &o)| (o, i as u32)).collect();
     const CHUNK: usize = 1 << 14;
-    let mut pairs: Vec<(u32, u32)> = photons
+    let pairs: Vec<(u32, u32)> = photons
         .par_chunks(CHUNK)
         .enumerate()
         .flat_map_iter(|(c, chunk)| {
@@ -541,12 +587,20 @@ pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach:
             v
         })
         .collect();
-    pairs.par_sort_unstable();
-    let mut bins: Vec<Vec<u32>> = vec![Vec::new(); leaves.len()];
-    for (k, i) in pairs {
-        bins[k as usize].push(i);
+    let mut start = vec![0usize; leaves.len() + 1];
+    for &(k, _) in &pairs {
+        start[k as usize + 1] += 1;
     }
-    bins
+    for k in 0..leaves.len() {
+        start[k + 1] += start[k];
+    }
+    let mut next = start.clone();
+    let mut out = vec![0u32; pairs.len()];
+    for &(k, i) in &pairs {
+        out[next[k as usize]] = i;
+        next[k as usize] += 1;
+    }
+    Bins { start, photons: out }
 }
 
 /// exp(x) for x <= 0 in f32, deterministic and branch-free so loops
@@ -949,10 +1003,11 @@ impl GatherSetup<'_> {
         let inv_vs = (1.0 / vs) as f32;
         let inv_pxy2 = if pxy2 > 0.0 { 1.0 / pxy2 } else { 0.0 };
         let (za, zb) = (0.0f32.min(l * dir.z), 0.0f32.max(l * dir.z));
+        let wys: [f32; 8] = std::array::from_fn(|y| off(1, y as i32));
         for x in lo.x..=hi.x {
             let wx = off(0, x);
             for y in lo.y..=hi.y {
-                let wy = off(1, y);
+                let wy = wys[y as usize];
                 // The row's distance e in (x, y) from the segment's
                 // projection: rows with e >= reach miss the capsule, the
                 // others meet it within sqrt(reach^2 - e^2) in z of the
@@ -1317,8 +1372,9 @@ pub fn gather_grid(
             let bins = bin_photons(photons, &leaves, transform.voxel_size, reach);
             leaves
                 .par_iter()
-                .zip(bins.par_iter())
-                .map_init(SplatBuffers::new, |bufs, (&o, b)| {
+                .enumerate()
+                .map_init(SplatBuffers::new, |bufs, (k, &o)| {
+                    let b = bins.get(k);
                     progress.inc(1);
                     if method == GatherMethod::Splat {
                         setup.leaf_splat(o, b, bufs)
