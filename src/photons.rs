@@ -252,6 +252,32 @@ pub fn erf_lut(table: &[f32; ERF_LUT_LEN], x: f32) -> f32 {
     v.copysign(x)
 }
 
+/// [`erf_lut`] at 4 arguments, staged so the index and interpolation
+/// arithmetic vectorise (only the 8 table reads are scalar); the same
+/// operations per lane, so the same values.
+#[inline(always)]
+fn erf_lut4(table: &[f32; ERF_LUT_LEN], x: &[f32; 4]) -> [f32; 4] {
+    const MAGIC: f32 = 12_582_912.0;
+    let (mut k, mut f) = ([0usize; 4], [0.0f32; 4]);
+    for j in 0..4 {
+        let ax = (x[j].abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
+        let t = (ax - 0.5) + MAGIC;
+        let kj = (t.to_bits() as i32 - MAGIC.to_bits() as i32).max(0).min(ERF_LUT_LEN as i32 - 2);
+        k[j] = kj as usize;
+        f[j] = ax - kj as f32;
+    }
+    let (mut a, mut b) = ([0.0f32; 4], [0.0f32; 4]);
+    for j in 0..4 {
+        let kj = k[j].min(ERF_LUT_LEN - 2);
+        (a[j], b[j]) = (table[kj], table[kj + 1]);
+    }
+    let mut v = [0.0f32; 4];
+    for j in 0..4 {
+        v[j] = (a[j] + f[j] * (b[j] - a[j])).copysign(x[j]);
+    }
+    v
+}
+
 /// Below this lambda = L / r a segment is gathered as a point at its
 /// midpoint (see the module documentation).
 pub const MIDPOINT_LAMBDA: f64 = 0.004;
@@ -992,7 +1018,6 @@ impl GatherSetup<'_> {
             let w = off(2, z as i32);
             (sz[z], w2z[z]) = (w * dir.z, w * w);
         }
-        let wz0 = off(2, 0);
         let phi = p.power;
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
@@ -1000,39 +1025,34 @@ impl GatherSetup<'_> {
         let (px, py) = (l * dir.x, l * dir.y);
         let pxy2 = px * px + py * py;
         let reach2 = (reach * reach) as f32;
-        let inv_vs = (1.0 / vs) as f32;
         let inv_pxy2 = if pxy2 > 0.0 { 1.0 / pxy2 } else { 0.0 };
-        let (za, zb) = (0.0f32.min(l * dir.z), 0.0f32.max(l * dir.z));
         let wys: [f32; 8] = std::array::from_fn(|y| off(1, y as i32));
+        // Half rows (lanes 0-3, 4-7) meeting the z range lo.z..=hi.z.
+        let halves = (if lo.z < 4 { 0 } else { 4 }..if hi.z >= 4 { 8 } else { 4 }).step_by(4);
         for x in lo.x..=hi.x {
             let wx = off(0, x);
             for y in lo.y..=hi.y {
                 let wy = wys[y as usize];
                 // The row's distance e in (x, y) from the segment's
-                // projection: rows with e >= reach miss the capsule, the
-                // others meet it within sqrt(reach^2 - e^2) in z of the
-                // segment's z range (widened as in accumulate_segment).
+                // projection: rows with e >= reach miss the capsule. (A z
+                // range per row, as in accumulate_segment, costs a square
+                // root per row and saved less than it cost: the half rows
+                // are those of the leaf's z range `lo.z..=hi.z`.)
                 let tt = ((wx * px + wy * py) * inv_pxy2).clamp(0.0, 1.0);
                 let e2 = (wx - tt * px).powi(2) + (wy - tt * py).powi(2);
                 if e2 >= reach2 {
                     continue;
                 }
-                let h = (reach2 - e2).sqrt() * (1.0 + 1e-5) + 1e-5;
-                let z0 = ((za - h - wz0) * inv_vs).max(-1.0) as i32;
-                let z1 = ((zb + h - wz0) * inv_vs).min(9.0) as i32 + 1;
                 let sxy = wx * dir.x + wy * dir.y;
                 let w2xy = wx * wx + wy * wy;
                 let row = ((x << 6) | (y << 3)) as usize;
-                for half in 0..2usize {
-                    let o = 4 * half;
-                    if z1 < o as i32 || z0 > o as i32 + 3 {
-                        continue;
-                    }
+                for o in halves.clone() {
                     let (sz4, w2z4) = (sz[o..o + 4].try_into().unwrap(), w2z[o..o + 4].try_into().unwrap());
                     let (ex, u0, u1, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    let (e0, e1) = (erf_lut4(erf, &u0), erf_lut4(erf, &u1));
                     let mut v = [0.0f32; 4];
                     for j in 0..4 {
-                        v[j] = c * inside[j] * ex[j] * (erf_lut(erf, u0[j]) - erf_lut(erf, u1[j]));
+                        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
                     }
                     let n = row + o;
                     for (col, &ph) in acc.c.iter_mut().zip(&phi) {
@@ -1086,12 +1106,14 @@ impl GatherSetup<'_> {
             }
         }
         acc.c = [[0.0; LEAF_NUM_VALUES]; 3];
+        // Active where some component is nonzero (`!= 0.0`: any bit but
+        // the sign set), bit by bit from the top of each word.
         let mut mask = [0u64; crate::grid::LEAF_MASK_WORDS];
         for (w, m) in mask.iter_mut().enumerate() {
             let mut bits = 0u64;
-            for b in 0..64 {
-                let n = w * 64 + b;
-                bits |= ((v[0][n] != 0.0 || v[1][n] != 0.0 || v[2][n] != 0.0) as u64) << b;
+            for n in (w * 64..w * 64 + 64).rev() {
+                let on = ((v[0][n].to_bits() | v[1][n].to_bits() | v[2][n].to_bits()) << 1) != 0;
+                bits = (bits << 1) | on as u64;
             }
             *m = bits;
         }
