@@ -62,6 +62,16 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         let traced = timed("trace", || pipeline::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
         let voxel = plan.voxel_size(&traced.photons);
         println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
+        {
+            // The gather's set-up steps alone (the gather repeats them).
+            use aurora::photons;
+            let r = &plan.radius;
+            let merged = timed("merge", || photons::merge_segments(&traced.photons, |p| r.radius(p), photons::MERGE_LEN_R, photons::MERGE_OFF_R, photons::MERGE_CDF));
+            let reach = plan.photons.cutoff * r.max();
+            let leaves = timed("leaves", || photons::candidate_leaves(&merged, voxel.0, reach));
+            let bins = timed("bins", || photons::bin_photons(&merged, &leaves, voxel.0, reach));
+            println!("# {} merged photons, {} candidate leaves, {} (leaf, photon) pairs", merged.len(), leaves.len(), bins.photons.len());
+        }
         for rep in 0..reps {
             println!("rep {rep} (load {})", loadavg());
             let (t0, c0) = (Instant::now(), cpu());

@@ -162,6 +162,40 @@ impl<T: VoxelValue> Leaf<T> {
     }
 }
 
+/// A multiplicative hash of leaf origins for the grids' leaf index and the
+/// gather's binning (std's SipHash, built against flooding, cost more than
+/// the lookups' other work): the coordinates mixed by rotation, xor and an
+/// odd multiplier. Deterministic (no random state); only lookups use it,
+/// never an iteration order.
+#[derive(Default, Clone, Copy)]
+pub struct OriginHasher(u64);
+
+impl std::hash::Hasher for OriginHasher {
+    #[inline]
+    fn finish(&self) -> u64 {
+        // The high bits are the well-mixed ones: fold them down for the
+        // table's low-bit bucket index.
+        self.0 ^ (self.0 >> 29)
+    }
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    #[inline]
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(26) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+/// A map keyed by leaf origin, hashed by [`OriginHasher`].
+pub type OriginMap<V> = HashMap<IVec3, V, std::hash::BuildHasherDefault<OriginHasher>>;
+
 /// Bits of a mask word (an x slice: bit `y << 3 | z`) with z = 0.
 const Z0: u64 = 0x0101_0101_0101_0101;
 /// Bits with z = 7.
@@ -235,7 +269,7 @@ pub struct Grid<T> {
     pub background: T,
     pub transform: Transform,
     leaves: Vec<Leaf<T>>,
-    index: HashMap<IVec3, u32>,
+    index: OriginMap<u32>,
 }
 
 impl<T: VoxelValue> PartialEq for Grid<T> {
@@ -255,7 +289,7 @@ impl<T: VoxelValue> PartialEq for Grid<T> {
 
 impl<T: VoxelValue> Grid<T> {
     pub fn new(name: impl Into<String>, background: T, transform: Transform) -> Self {
-        Self { name: name.into(), background, transform, leaves: Vec::new(), index: HashMap::new() }
+        Self { name: name.into(), background, transform, leaves: Vec::new(), index: OriginMap::default() }
     }
 
     pub fn leaves(&self) -> &[Leaf<T>] {
@@ -439,7 +473,9 @@ impl<T: VoxelValue> Grid<T> {
     /// Sorts leaves by origin (x, then y, then z) so iteration order is
     /// independent of insertion order.
     pub fn sort_leaves(&mut self) {
-        self.leaves.sort_by_key(|l| (l.origin.x, l.origin.y, l.origin.z));
+        use rayon::prelude::*;
+        // Origins are unique: an unstable sort gives the one order.
+        self.leaves.par_sort_unstable_by_key(|l| (l.origin.x, l.origin.y, l.origin.z));
         self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
     }
 }

@@ -103,7 +103,6 @@ use glam::{DVec3, IVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use noise::Perlin;
 use rayon::prelude::*;
-use std::collections::HashMap;
 
 /// Photons km^-2 s^-1 in one kR.
 pub const PHOTONS_PER_KM2_S_PER_KR: f64 = 1e19;
@@ -492,13 +491,21 @@ pub fn estimate_brute_force(photons: &[Photon], x: DVec3, kernel: &Kernel) -> [f
 /// every voxel centre a kernel of that reach can touch lies in one of them.
 /// Sorted by (x, y, z), the grid's leaf order.
 pub fn candidate_leaves(photons: &[Photon], voxel_size: f64, reach: f64) -> Vec<IVec3> {
+    candidate_leaves_by(photons, voxel_size, |_| reach)
+}
+
+/// [`candidate_leaves`] with a reach per photon, `reach(i)` km for photon
+/// i (the splat's: `cutoff r_i`, not the largest r's).
+pub fn candidate_leaves_by(photons: &[Photon], voxel_size: f64, reach: impl Fn(usize) -> f64 + Sync) -> Vec<IVec3> {
+    const CHUNK: usize = 1 << 16;
     let mut keys: Vec<(i32, i32, i32)> = photons
-        .par_chunks(1 << 16)
-        .flat_map_iter(|chunk| {
+        .par_chunks(CHUNK)
+        .enumerate()
+        .flat_map_iter(|(c, chunk)| {
             let mut v = Vec::new();
             let mut last: Option<(IVec3, IVec3)> = None;
-            for p in chunk {
-                let range = leaf_range(p, voxel_size, reach);
+            for (j, p) in chunk.iter().enumerate() {
+                let range = leaf_range(p, voxel_size, reach(c * CHUNK + j));
                 if last == Some(range) {
                     continue; // neighbouring photons of a beam share leaves
                 }
@@ -542,36 +549,6 @@ fn for_each_leaf((lo, hi): (IVec3, IVec3), mut f: impl FnMut(IVec3)) {
     }
 }
 
-/// A multiplicative hash of a leaf origin for the binning's index (std's
-/// SipHash, built against flooding, cost more than the lookups' other work):
-/// the origins' three coordinates, each a multiple of 8, mixed by odd
-/// multipliers and xor. Deterministic (no random state).
-#[derive(Default, Clone, Copy)]
-pub struct OriginHasher(u64);
-
-impl std::hash::Hasher for OriginHasher {
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    #[inline]
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(i as u32 as u64);
-    }
-    #[inline]
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
-type OriginMap = HashMap<IVec3, u32, std::hash::BuildHasherDefault<OriginHasher>>;
-
 /// Photon indices per candidate leaf: leaf k's photons are
 /// `photons[start[k]..start[k + 1]]`, ascending.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -595,7 +572,12 @@ impl Bins {
 /// photon order, then a stable counting sort by leaf (count, prefix sum,
 /// scatter): each leaf's list is in photon order whatever the thread count.
 pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach: f64) -> Bins {
-    let index: OriginMap = leaves.iter().enumerate().map(|(i, &o)| (o, i as u32)).collect();
+    bin_photons_by(photons, leaves, voxel_size, |_| reach)
+}
+
+/// [`bin_photons`] with a reach per photon (see [`candidate_leaves_by`]).
+pub fn bin_photons_by(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach: impl Fn(usize) -> f64 + Sync) -> Bins {
+    let index: crate::grid::OriginMap<u32> = leaves.iter().enumerate().map(|(i, &o)| (o, i as u32)).collect();
     const CHUNK: usize = 1 << 14;
     let pairs: Vec<(u32, u32)> = photons
         .par_chunks(CHUNK)
@@ -604,7 +586,7 @@ pub fn bin_photons(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, reach:
             let mut v = Vec::with_capacity(chunk.len() * 2);
             for (j, p) in chunk.iter().enumerate() {
                 let i = (c * CHUNK + j) as u32;
-                for_each_leaf(leaf_range(p, voxel_size, reach), |o| {
+                for_each_leaf(leaf_range(p, voxel_size, reach(i as usize)), |o| {
                     if let Some(&k) = index.get(&o) {
                         v.push((k, i));
                     }
@@ -800,14 +782,15 @@ pub struct GatherSetup<'a> {
     pub mass: f64,
     /// Segment kernel masses for `cutoff`.
     pub seg: SegmentMass,
-    /// The splat's kernel of each segment photon (r at its midpoint),
-    /// computed once per photon rather than once per leaf it touches (the
-    /// radius noise is a Perlin lookup); empty for the other gathers.
+    /// The splat's kernel of each photon (r at the point or the segment's
+    /// midpoint), computed once per photon rather than once per leaf it
+    /// touches (the radius noise is a Perlin lookup); empty for the other
+    /// gathers.
     pub splat_kernels: Vec<SplatKernel>,
 }
 
-/// A segment photon's kernel in the splat: its parameters (r at the
-/// segment's midpoint) and reach `cutoff r`, km.
+/// A photon's kernel in the splat: its parameters (r at the point, or at
+/// the segment's midpoint) and reach `cutoff r`, km, by which it is binned.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct SplatKernel {
     sp: SegParams,
@@ -1364,14 +1347,21 @@ pub fn gather_grid(
     let splat_kernels = if method == GatherMethod::Splat {
         photons
             .par_iter()
-            .map(|p| if p.is_point() { SplatKernel::default() } else { SplatKernel::new(&Kernel::with_mass(radius.radius(0.5 * (pos(p) + end(p))), cutoff, mass)) })
+            .map(|p| SplatKernel::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
             .collect()
     } else {
         Vec::new()
     };
     let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: SegmentMass::new(cutoff), splat_kernels };
     let reach = cutoff * radius.max();
-    let leaves = candidate_leaves(photons, transform.voxel_size, reach);
+    // The splat bins each photon by its own reach (cutoff r_i, r at the
+    // point or the segment's midpoint, as leaf_splat evaluates it); the
+    // balloon's kernel takes r at the voxel, so the largest r's reach.
+    let leaves = if method == GatherMethod::Splat {
+        candidate_leaves_by(photons, transform.voxel_size, |i| setup.splat_kernels[i].reach)
+    } else {
+        candidate_leaves(photons, transform.voxel_size, reach)
+    };
     progress.start("gather", leaves.len() as u64);
     let out: Vec<Option<Leaf<[f32; 3]>>> = match method {
         GatherMethod::Kdtree => {
@@ -1391,7 +1381,11 @@ pub fn gather_grid(
                 .collect()
         }
         GatherMethod::Splat | GatherMethod::Report2014 => {
-            let bins = bin_photons(photons, &leaves, transform.voxel_size, reach);
+            let bins = if method == GatherMethod::Splat {
+                bin_photons_by(photons, &leaves, transform.voxel_size, |i| setup.splat_kernels[i].reach)
+            } else {
+                bin_photons(photons, &leaves, transform.voxel_size, reach)
+            };
             leaves
                 .par_iter()
                 .enumerate()
