@@ -498,11 +498,13 @@ pub fn candidate_leaves(photons: &[Photon], voxel_size: f64, reach: f64) -> Vec<
 /// i (the splat's: `cutoff r_i`, not the largest r's).
 pub fn candidate_leaves_by(photons: &[Photon], voxel_size: f64, reach: impl Fn(usize) -> f64 + Sync) -> Vec<IVec3> {
     const CHUNK: usize = 1 << 16;
+    // Per chunk a set of origins (each leaf once per chunk however many
+    // photons reach it), then one sort of the chunks' few: deterministic.
     let mut keys: Vec<(i32, i32, i32)> = photons
         .par_chunks(CHUNK)
         .enumerate()
         .flat_map_iter(|(c, chunk)| {
-            let mut v = Vec::new();
+            let mut set = crate::grid::OriginMap::<()>::default();
             let mut last: Option<(IVec3, IVec3)> = None;
             for (j, p) in chunk.iter().enumerate() {
                 let range = leaf_range(p, voxel_size, reach(c * CHUNK + j));
@@ -510,11 +512,11 @@ pub fn candidate_leaves_by(photons: &[Photon], voxel_size: f64, reach: impl Fn(u
                     continue; // neighbouring photons of a beam share leaves
                 }
                 last = Some(range);
-                for_each_leaf(range, |o| v.push((o.x, o.y, o.z)));
+                for_each_leaf(range, |o| {
+                    set.insert(o, ());
+                });
             }
-            v.sort_unstable();
-            v.dedup();
-            v
+            set.into_keys().map(|o| (o.x, o.y, o.z))
         })
         .collect();
     keys.par_sort_unstable();
