@@ -83,7 +83,10 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                 timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));
             }
             let mut density = timed("density", || pipeline::density_grid(&emission, &plan.grid, peak_y));
-            let (n, _) = timed("shell", || (emission.dilate_active(), density.dilate_active()));
+            let (n, _) = timed("shell", || {
+                let n = emission.dilate_active();
+                (n, density.activate_like(&emission))
+            });
             println!(
                 "  gather+finish wall {:.3} s (finish {:.3} s), cpu {:.2} s; {} leaves, {} voxels + {n} shell",
                 t0.elapsed().as_secs_f64(),

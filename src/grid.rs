@@ -470,6 +470,42 @@ impl<T: VoxelValue> Grid<T> {
         added
     }
 
+    /// Switches on, with the background value, every voxel active in
+    /// `other` and inactive here, where this grid's active voxels are a
+    /// subset of `other`'s: after `other.dilate_active()`, a grid on the
+    /// same voxels as `other` was before gets the same dilation without
+    /// computing it again (the density grid follows the emission's). Both
+    /// grids' leaves sorted by origin (as [`Self::sort_leaves`] leaves
+    /// them); one merge walk, leaves end sorted. Returns the number of
+    /// voxels switched on.
+    pub fn activate_like<U: VoxelValue>(&mut self, other: &Grid<U>) -> u64 {
+        let bg = self.background;
+        let mut own = std::mem::take(&mut self.leaves).into_iter().peekable();
+        let mut leaves = Vec::with_capacity(other.leaves.len());
+        let mut added = 0u64;
+        for ol in &other.leaves {
+            let mut leaf = match own.peek() {
+                Some(l) if l.origin == ol.origin => own.next().expect("peeked"),
+                _ => Leaf::new(ol.origin, bg),
+            };
+            for w in 0..LEAF_MASK_WORDS {
+                let mut new = ol.mask[w] & !leaf.mask[w];
+                leaf.mask[w] |= new;
+                while new != 0 {
+                    let b = new.trailing_zeros() as usize;
+                    leaf.values[w * 64 + b] = bg;
+                    added += 1;
+                    new &= new - 1;
+                }
+            }
+            leaves.push(leaf);
+        }
+        assert!(own.next().is_none(), "activate_like: this grid's leaves must be a subset of the other's, both sorted");
+        self.leaves = leaves;
+        self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
+        added
+    }
+
     /// Sorts leaves by origin (x, then y, then z) so iteration order is
     /// independent of insertion order.
     pub fn sort_leaves(&mut self) {
@@ -518,10 +554,22 @@ mod tests {
                     }
                 }
             }
+            let mut h: Grid<[f32; 3]> = Grid::new("h", [2.0; 3], Transform::new(1.0, DVec3::ZERO));
+            for p in &seeds {
+                h.set(*p, [1.0; 3]);
+            }
+            h.sort_leaves();
             let added = g.dilate_active();
             let got: std::collections::BTreeSet<_> = g.iter_active().map(|(q, _)| (q.x, q.y, q.z)).collect();
             assert_eq!(got, want, "case {case}");
             assert_eq!(added as usize, want.len() - seeds.len());
+            // The same dilation copied onto a grid on the same voxels.
+            let mut h2 = h.clone();
+            assert_eq!(h.activate_like(&g), added);
+            assert_eq!(h2.dilate_active(), added);
+            assert_eq!(h, h2, "case {case}");
+            let (lh, lh2): (Vec<_>, Vec<_>) = (h.leaves().iter().map(|l| l.origin).collect(), h2.leaves().iter().map(|l| l.origin).collect());
+            assert_eq!(lh, lh2);
         }
     }
 

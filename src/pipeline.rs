@@ -785,8 +785,10 @@ pub fn finish(
     progress.finish();
     let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
     let shell_voxels = if plan.grid.cycles_shell {
+        // Both grids live on the same voxels: the density takes the
+        // emission's dilation rather than computing it again.
         let n = emission.dilate_active();
-        let m = density.dilate_active();
+        let m = density.activate_like(&emission);
         debug_assert_eq!(n, m, "both grids live on the same voxels");
         n
     } else {
