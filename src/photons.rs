@@ -669,16 +669,15 @@ fn kernel_lanes(dxy: f32, dz2: &[f32; 4], reach2: &[f32], norm: &[f32], inv_2r2:
     w
 }
 
-/// The segment kernel's parts at 4 consecutive voxels of a z-row, offsets
-/// from the segment's start `w = (wx, wy, wz)` given as `s_xy = wx dx + wy
-/// dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`, `wz^2` per lane:
-/// the across factor `exp(-perp^2 / 2r^2)`, the erf arguments `s / (sqrt2
-/// r)` and `(s - L) / (sqrt2 r)`, and 1 where the voxel lies inside the
-/// capsule (distance to the segment below `c r`), else 0. Branch-free so it
-/// vectorises.
+/// The segment kernel's geometry at 4 consecutive voxels of a z-row,
+/// offsets from the segment's start `w = (wx, wy, wz)` given as `s_xy = wx
+/// dx + wy dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`, `wz^2` per
+/// lane: `s` (along the segment), `perp^2` (across it), and 1 where the voxel
+/// lies inside the capsule (distance to the segment below `c r`), else 0.
+/// Branch-free so it vectorises.
 #[inline(always)]
-fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: &SegParams) -> ([f32; 4], [f32; 4], [f32; 4], [f32; 4]) {
-    let (mut ex, mut u0, mut u1, mut inside) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: &SegParams) -> ([f32; 4], [f32; 4], [f32; 4]) {
+    let (mut s4, mut p4, mut inside) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
     for j in 0..4 {
         let s = sxy + sz[j];
         let w2 = w2xy + w2z[j];
@@ -686,11 +685,9 @@ fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: 
         let end2 = (w2 - 2.0 * s * l + l * l).max(0.0);
         let dist2 = if s < 0.0 { w2 } else if s > l { end2 } else { perp2 };
         inside[j] = if dist2 < q.reach2 { 1.0 } else { 0.0 };
-        ex[j] = exp_neg_f32(-perp2 * q.inv_2r2);
-        u0[j] = s * q.inv_sqrt2r;
-        u1[j] = (s - l) * q.inv_sqrt2r;
+        (s4[j], p4[j]) = (s, perp2);
     }
-    (ex, u0, u1, inside)
+    (s4, p4, inside)
 }
 
 /// Scratch space of the splat gather, one per thread: the per-voxel sums
@@ -1044,7 +1041,16 @@ impl GatherSetup<'_> {
                 let row = ((x << 6) | (y << 3)) as usize;
                 for o in halves.clone() {
                     let (sz4, w2z4) = (sz[o..o + 4].try_into().unwrap(), w2z[o..o + 4].try_into().unwrap());
-                    let (ex, u0, u1, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    let (s4, perp2, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    if inside == [0.0; 4] {
+                        continue; // the half row misses the capsule
+                    }
+                    let (mut ex, mut u0, mut u1) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
+                    for j in 0..4 {
+                        ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
+                        u0[j] = s4[j] * q.inv_sqrt2r;
+                        u1[j] = (s4[j] - l) * q.inv_sqrt2r;
+                    }
                     let (e0, e1) = (erf_lut4(erf, &u0), erf_lut4(erf, &u1));
                     let mut v = [0.0f32; 4];
                     for j in 0..4 {
