@@ -535,13 +535,36 @@ pub fn candidate_leaves_by(photons: &[Photon], voxel_size: f64, reach: impl Fn(u
     keys.into_iter().map(|(x, y, z)| IVec3::new(x, y, z)).collect()
 }
 
+/// `ceil` per component as integers, by truncation and a correction
+/// (x86-64's baseline has no rounding instruction, so `f64::ceil` is a libm
+/// call; the gather takes six per photon and leaf). Exact for |x| < 2^31;
+/// NaN gives 0, as `as` does.
+#[inline(always)]
+fn ceil_i(v: DVec3) -> IVec3 {
+    let c = |x: f64| {
+        let i = x as i32;
+        i + ((i as f64) < x) as i32
+    };
+    IVec3::new(c(v.x), c(v.y), c(v.z))
+}
+
+/// `floor` per component as integers (see [`ceil_i`]).
+#[inline(always)]
+fn floor_i(v: DVec3) -> IVec3 {
+    let f = |x: f64| {
+        let i = x as i32;
+        i - ((i as f64) > x) as i32
+    };
+    IVec3::new(f(v.x), f(v.y), f(v.z))
+}
+
 /// Leaf origins (first, last) covering the voxel centres within `reach` of
 /// the photon's segment (its bounding box widened by `reach`).
 #[inline]
 fn leaf_range(p: &Photon, voxel_size: f64, reach: f64) -> (IVec3, IVec3) {
     let (a, b) = (pos(p), end(p));
-    let lo = ((a.min(b) - DVec3::splat(reach)) / voxel_size).ceil().as_ivec3();
-    let hi = ((a.max(b) + DVec3::splat(reach)) / voxel_size).floor().as_ivec3();
+    let lo = ceil_i((a.min(b) - DVec3::splat(reach)) / voxel_size);
+    let hi = floor_i((a.max(b) + DVec3::splat(reach)) / voxel_size);
     (crate::grid::leaf_origin(lo), crate::grid::leaf_origin(hi))
 }
 
@@ -824,8 +847,8 @@ impl GatherSetup<'_> {
     fn local_range(&self, origin: IVec3, q: DVec3, reach: f64) -> Option<(IVec3, IVec3)> {
         let qi = self.transform.world_to_index(q);
         let r = reach / self.transform.voxel_size;
-        let lo = (qi - DVec3::splat(r)).ceil().as_ivec3() - origin;
-        let hi = (qi + DVec3::splat(r)).floor().as_ivec3() - origin;
+        let lo = ceil_i(qi - DVec3::splat(r)) - origin;
+        let hi = floor_i(qi + DVec3::splat(r)) - origin;
         let lo = lo.max(IVec3::ZERO);
         let hi = hi.min(IVec3::splat(LEAF_DIM - 1));
         (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z).then_some((lo, hi))
@@ -1089,8 +1112,8 @@ impl GatherSetup<'_> {
     fn local_box(&self, origin: IVec3, lo: DVec3, hi: DVec3, reach: f64) -> Option<(IVec3, IVec3)> {
         let (li, hi_) = (self.transform.world_to_index(lo), self.transform.world_to_index(hi));
         let r = reach / self.transform.voxel_size;
-        let lo = ((li - DVec3::splat(r)).ceil().as_ivec3() - origin).max(IVec3::ZERO);
-        let hi = ((hi_ + DVec3::splat(r)).floor().as_ivec3() - origin).min(IVec3::splat(LEAF_DIM - 1));
+        let lo = (ceil_i(li - DVec3::splat(r)) - origin).max(IVec3::ZERO);
+        let hi = (floor_i(hi_ + DVec3::splat(r)) - origin).min(IVec3::splat(LEAF_DIM - 1));
         (lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z).then_some((lo, hi))
     }
 
@@ -1493,6 +1516,21 @@ mod tests {
             let bound = 4.0 * std::f64::consts::PI * (c * r).powi(2) * 0.5 * h * jump + 1e-6;
             assert!(bound < 0.5 * (1.0 - gaussian_mass_inside(c)) || c > 5.0, "test too weak for c = {c}");
             assert!((s - 1.0).abs() < bound, "r {r} c {c}: {s} (bound {bound})");
+        }
+    }
+
+    #[test]
+    fn integer_ceil_and_floor_match_libm() {
+        let mut rng = crate::rng::rng(&[9]);
+        for k in 0..100_000 {
+            let x: f64 = match k % 3 {
+                0 => rng.random_range(-1e6..1e6),
+                1 => (rng.random_range(-100..100) as f64) * 0.5,
+                _ => rng.random_range(-3.0..3.0),
+            };
+            let v = DVec3::new(x, -x, x * 0.25);
+            assert_eq!(ceil_i(v), v.ceil().as_ivec3(), "{v}");
+            assert_eq!(floor_i(v), v.floor().as_ivec3(), "{v}");
         }
     }
 
