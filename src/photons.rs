@@ -196,7 +196,9 @@ impl SegmentMass {
 
     pub fn new(cutoff: f64) -> Self {
         let n = (Self::LAMBDA_MAX * Self::STEPS_PER_UNIT) as usize;
-        let table = (0..=n).map(|k| segment_mass_inside(cutoff, k as f64 / Self::STEPS_PER_UNIT) as f32).collect();
+        // In parallel: each entry is a pure function of its lambda (some
+        // 500 k erfc calls in all, once per gather).
+        let table = (0..=n).into_par_iter().map(|k| segment_mass_inside(cutoff, k as f64 / Self::STEPS_PER_UNIT) as f32).collect();
         let table: Vec<f32> = table;
         let inv = table.iter().map(|&m| 1.0 / m).collect();
         Self { cutoff, table, inv, h_inf: half_ball(cutoff, big_phi) }
