@@ -75,7 +75,7 @@
 //!   are binned per leaf (in photon order), each adds its kernel to the
 //!   leaf's voxels within its cutoff. No tree. A segment takes r at its
 //!   midpoint. How it is evaluated (the same estimate, for speed: the
-//!   default bake's gather went from 7.6 to about 3.3 CPU seconds,
+//!   default bake's gather went from 7.6 to about 3 CPU seconds,
 //!   `examples/gather_bench.rs`): each photon's kernel parameters once
 //!   (not once per leaf: the radius noise is a Perlin lookup), and its
 //!   leaves from its own reach `c r_i` rather than the largest radius's;
