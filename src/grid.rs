@@ -162,6 +162,106 @@ impl<T: VoxelValue> Leaf<T> {
     }
 }
 
+/// A multiplicative hash of leaf origins for the grids' leaf index and the
+/// gather's binning (std's SipHash, built against flooding, cost more than
+/// the lookups' other work): the coordinates mixed by rotation, xor and an
+/// odd multiplier. Deterministic (no random state); only lookups use it,
+/// never an iteration order.
+#[derive(Default, Clone, Copy)]
+pub struct OriginHasher(u64);
+
+impl std::hash::Hasher for OriginHasher {
+    #[inline]
+    fn finish(&self) -> u64 {
+        // The high bits are the well-mixed ones: fold them down for the
+        // table's low-bit bucket index.
+        self.0 ^ (self.0 >> 29)
+    }
+    #[inline]
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    #[inline]
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    #[inline]
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(26) ^ i).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+/// A map keyed by leaf origin, hashed by [`OriginHasher`].
+pub type OriginMap<V> = HashMap<IVec3, V, std::hash::BuildHasherDefault<OriginHasher>>;
+
+/// Bits of a mask word (an x slice: bit `y << 3 | z`) with z = 0.
+const Z0: u64 = 0x0101_0101_0101_0101;
+/// Bits with z = 7.
+const Z7: u64 = Z0 << 7;
+/// Bits with y = 0.
+const Y0: u64 = 0xFF;
+
+/// The 26-neighbourhood dilation of one leaf's active mask, split over the
+/// leaf and its neighbours: entry `((dx + 1) * 3 + dy + 1) * 3 + dz + 1` is
+/// the mask it gives the leaf at offset (dx, dy, dz) leaves. The 3^3 cube is
+/// the product of three segments, so the dilation is one per axis in turn,
+/// on whole mask words (word x holds the (y, z) slice, bit `y << 3 | z`):
+/// shifts by 1 move along z (the bits crossing a z-row's end go to the z
+/// neighbour), by 8 along y, and neighbouring words along x.
+pub fn dilate_mask(m: &[u64; LEAF_MASK_WORDS]) -> [[u64; LEAF_MASK_WORDS]; 27] {
+    // z: [dz + 1][x].
+    let mut a = [[0u64; LEAF_MASK_WORDS]; 3];
+    for x in 0..LEAF_MASK_WORDS {
+        let v = m[x];
+        a[0][x] = (v & Z0) << 7;
+        a[1][x] = v | ((v << 1) & !Z0) | ((v >> 1) & !Z7);
+        a[2][x] = (v & Z7) >> 7;
+    }
+    // y: [dy + 1][dz + 1][x].
+    let mut b = [[[0u64; LEAF_MASK_WORDS]; 3]; 3];
+    for dz in 0..3 {
+        for x in 0..LEAF_MASK_WORDS {
+            let v = a[dz][x];
+            b[0][dz][x] = (v & Y0) << 56;
+            b[1][dz][x] = v | (v << 8) | (v >> 8);
+            b[2][dz][x] = v >> 56;
+        }
+    }
+    // x: [dx + 1][dy + 1][dz + 1][x].
+    let mut out = [[0u64; LEAF_MASK_WORDS]; 27];
+    let last = LEAF_MASK_WORDS - 1;
+    for dy in 0..3 {
+        for dz in 0..3 {
+            let v = &b[dy][dz];
+            let (lo, mid, hi) = (dy * 3 + dz, 9 + dy * 3 + dz, 18 + dy * 3 + dz);
+            for x in 0..LEAF_MASK_WORDS {
+                let prev = if x > 0 { v[x - 1] } else { 0 };
+                let next = if x < last { v[x + 1] } else { 0 };
+                out[mid][x] = prev | v[x] | next;
+            }
+            out[lo][last] = v[0];
+            out[hi][0] = v[last];
+        }
+    }
+    out
+}
+
+/// Inclusive local bounding box (0..8 per axis) of a leaf's active mask,
+/// None when it is empty.
+fn mask_bbox(m: &[u64; LEAF_MASK_WORDS]) -> Option<(IVec3, IVec3)> {
+    let x0 = m.iter().position(|&w| w != 0)?;
+    let x1 = m.iter().rposition(|&w| w != 0)?;
+    let plane = m.iter().fold(0u64, |a, &w| a | w);
+    // y: the nonzero bytes of the (y, z) plane; z: the bits of their OR.
+    let ys = (0..8).filter(|&y| (plane >> (8 * y)) & 0xFF != 0);
+    let (y0, y1) = (ys.clone().min()?, ys.max()?);
+    let zbits = (0..8).fold(0u64, |a, y| a | ((plane >> (8 * y)) & 0xFF));
+    let (z0, z1) = (zbits.trailing_zeros() as i32, 63 - zbits.leading_zeros() as i32);
+    Some((IVec3::new(x0 as i32, y0, z0), IVec3::new(x1 as i32, y1, z1)))
+}
+
 /// A sparse grid of `T` with a name, a background value and a transform.
 #[derive(Clone, Debug)]
 pub struct Grid<T> {
@@ -169,7 +269,7 @@ pub struct Grid<T> {
     pub background: T,
     pub transform: Transform,
     leaves: Vec<Leaf<T>>,
-    index: HashMap<IVec3, u32>,
+    index: OriginMap<u32>,
 }
 
 impl<T: VoxelValue> PartialEq for Grid<T> {
@@ -189,7 +289,7 @@ impl<T: VoxelValue> PartialEq for Grid<T> {
 
 impl<T: VoxelValue> Grid<T> {
     pub fn new(name: impl Into<String>, background: T, transform: Transform) -> Self {
-        Self { name: name.into(), background, transform, leaves: Vec::new(), index: HashMap::new() }
+        Self { name: name.into(), background, transform, leaves: Vec::new(), index: OriginMap::default() }
     }
 
     pub fn leaves(&self) -> &[Leaf<T>] {
@@ -283,19 +383,7 @@ impl<T: VoxelValue> Grid<T> {
     /// Inclusive index-space bounding box of the active voxels
     /// (OpenVDB's `file_bbox_min/max`), or `None` when nothing is active.
     pub fn index_bbox(&self) -> Option<(IVec3, IVec3)> {
-        let mut bb: Option<(IVec3, IVec3)> = None;
-        for leaf in &self.leaves {
-            for n in 0..LEAF_NUM_VALUES {
-                if leaf.is_active(n) {
-                    let p = leaf.origin + offset_to_local(n);
-                    bb = Some(match bb {
-                        None => (p, p),
-                        Some((lo, hi)) => (lo.min(p), hi.max(p)),
-                    });
-                }
-            }
-        }
-        bb
+        self.leaves.iter().filter_map(|l| mask_bbox(&l.mask).map(|(lo, hi)| (l.origin + lo, l.origin + hi))).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
     /// Active voxels as (index, value), leaf by leaf.
@@ -336,43 +424,14 @@ impl<T: VoxelValue> Grid<T> {
     /// leaves end sorted by origin.
     pub fn dilate_active(&mut self) -> u64 {
         use rayon::prelude::*;
-        const E: usize = LEAF_DIM as usize + 2; // the leaf and a one-voxel rim
         let bg = self.background;
-        // Per leaf, in parallel: the dilated mask on the leaf plus its rim
-        // (10^3 cells), split into masks for the leaf and its 26 neighbours.
+        // Per leaf, in parallel: the dilated mask split into masks for the
+        // leaf and its 26 neighbours ([`dilate_mask`]).
         let per_leaf: Vec<Vec<(IVec3, [u64; LEAF_MASK_WORDS])>> = self
             .leaves
             .par_iter()
             .map(|l| {
-                let mut ext = [false; E * E * E];
-                for n in 0..LEAF_NUM_VALUES {
-                    if l.is_active(n) {
-                        let p = offset_to_local(n);
-                        let (x, y, z) = (p.x as usize, p.y as usize, p.z as usize);
-                        for i in x..x + 3 {
-                            for j in y..y + 3 {
-                                for k in z..z + 3 {
-                                    ext[(i * E + j) * E + k] = true;
-                                }
-                            }
-                        }
-                    }
-                }
-                // Masks of the 27 leaves (this one in the middle), by offset.
-                let mut masks = [[0u64; LEAF_MASK_WORDS]; 27];
-                for i in 0..E {
-                    for j in 0..E {
-                        for k in 0..E {
-                            if ext[(i * E + j) * E + k] {
-                                let q = IVec3::new(i as i32 - 1, j as i32 - 1, k as i32 - 1);
-                                let d = q.div_euclid(IVec3::splat(LEAF_DIM)) + IVec3::ONE;
-                                let slot = ((d.x * 3 + d.y) * 3 + d.z) as usize;
-                                let m = leaf_offset(q);
-                                masks[slot][m >> 6] |= 1u64 << (m & 63);
-                            }
-                        }
-                    }
-                }
+                let masks = dilate_mask(&l.mask);
                 let mut out = Vec::new();
                 for (slot, mask) in masks.iter().enumerate() {
                     if mask.iter().any(|&w| w != 0) {
@@ -411,10 +470,48 @@ impl<T: VoxelValue> Grid<T> {
         added
     }
 
+    /// Switches on, with the background value, every voxel active in
+    /// `other` and inactive here, where this grid's active voxels are a
+    /// subset of `other`'s: after `other.dilate_active()`, a grid on the
+    /// same voxels as `other` was before gets the same dilation without
+    /// computing it again (the density grid follows the emission's). Both
+    /// grids' leaves sorted by origin (as [`Self::sort_leaves`] leaves
+    /// them); one merge walk, leaves end sorted. Returns the number of
+    /// voxels switched on.
+    pub fn activate_like<U: VoxelValue>(&mut self, other: &Grid<U>) -> u64 {
+        let bg = self.background;
+        let mut own = std::mem::take(&mut self.leaves).into_iter().peekable();
+        let mut leaves = Vec::with_capacity(other.leaves.len());
+        let mut added = 0u64;
+        for ol in &other.leaves {
+            let mut leaf = match own.peek() {
+                Some(l) if l.origin == ol.origin => own.next().expect("peeked"),
+                _ => Leaf::new(ol.origin, bg),
+            };
+            for w in 0..LEAF_MASK_WORDS {
+                let mut new = ol.mask[w] & !leaf.mask[w];
+                leaf.mask[w] |= new;
+                while new != 0 {
+                    let b = new.trailing_zeros() as usize;
+                    leaf.values[w * 64 + b] = bg;
+                    added += 1;
+                    new &= new - 1;
+                }
+            }
+            leaves.push(leaf);
+        }
+        assert!(own.next().is_none(), "activate_like: this grid's leaves must be a subset of the other's, both sorted");
+        self.leaves = leaves;
+        self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
+        added
+    }
+
     /// Sorts leaves by origin (x, then y, then z) so iteration order is
     /// independent of insertion order.
     pub fn sort_leaves(&mut self) {
-        self.leaves.sort_by_key(|l| (l.origin.x, l.origin.y, l.origin.z));
+        use rayon::prelude::*;
+        // Origins are unique: an unstable sort gives the one order.
+        self.leaves.par_sort_unstable_by_key(|l| (l.origin.x, l.origin.y, l.origin.z));
         self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
     }
 }
@@ -422,6 +519,59 @@ impl<T: VoxelValue> Grid<T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn dilation_and_bbox_match_brute_force_on_random_masks() {
+        // Oracle for the word-wise dilation (dilate_mask) and the mask
+        // bounding box: random voxels of varied densities in a few
+        // neighbouring leaves (every face, edge and corner crossing occurs),
+        // against the union of their 3x3x3 cubes and the min/max over them.
+        use rand::Rng;
+        let mut rng = crate::rng::rng(&[41]);
+        for case in 0..40 {
+            let mut g = Grid::new("d", 0.0f32, Transform::new(1.0, DVec3::ZERO));
+            let p_on = [0.002, 0.02, 0.2, 0.9][case % 4];
+            let mut seeds = Vec::new();
+            for x in -8..16 {
+                for y in -8..8 {
+                    for z in 0..16 {
+                        if rng.random::<f64>() < p_on {
+                            seeds.push(IVec3::new(x, y, z));
+                            g.set(IVec3::new(x, y, z), 1.0);
+                        }
+                    }
+                }
+            }
+            let bb = seeds.iter().fold(None, |b: Option<(IVec3, IVec3)>, &p| Some(b.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p)))));
+            assert_eq!(g.index_bbox(), bb, "case {case}");
+            let mut want = std::collections::BTreeSet::new();
+            for p in &seeds {
+                for dx in -1..=1 {
+                    for dy in -1..=1 {
+                        for dz in -1..=1 {
+                            want.insert((p.x + dx, p.y + dy, p.z + dz));
+                        }
+                    }
+                }
+            }
+            let mut h: Grid<[f32; 3]> = Grid::new("h", [2.0; 3], Transform::new(1.0, DVec3::ZERO));
+            for p in &seeds {
+                h.set(*p, [1.0; 3]);
+            }
+            h.sort_leaves();
+            let added = g.dilate_active();
+            let got: std::collections::BTreeSet<_> = g.iter_active().map(|(q, _)| (q.x, q.y, q.z)).collect();
+            assert_eq!(got, want, "case {case}");
+            assert_eq!(added as usize, want.len() - seeds.len());
+            // The same dilation copied onto a grid on the same voxels.
+            let mut h2 = h.clone();
+            assert_eq!(h.activate_like(&g), added);
+            assert_eq!(h2.dilate_active(), added);
+            assert_eq!(h, h2, "case {case}");
+            let (lh, lh2): (Vec<_>, Vec<_>) = (h.leaves().iter().map(|l| l.origin).collect(), h2.leaves().iter().map(|l| l.origin).collect());
+            assert_eq!(lh, lh2);
+        }
+    }
 
     #[test]
     fn dilation_matches_brute_force_26_neighbourhood() {

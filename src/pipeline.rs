@@ -349,21 +349,24 @@ pub fn colour_table_for(colour: &ColourParams, atmosphere: &Atmosphere) -> Colou
 pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64) -> Grid<f32> {
     let tr = emission.transform;
     let scale = AURORA_FRACTION * peak_luminance;
+    let inv_scale = if scale > 0.0 { (1.0 / scale) as f32 } else { 0.0 };
     let leaves: Vec<Leaf<f32>> = emission
         .leaves()
         .par_iter()
         .map(|l| {
+            // The air depends on the altitude only: once per z of the leaf.
+            let air: [f64; 8] = std::array::from_fn(|z| extinction(params, tr.index_to_world((l.origin + glam::IVec3::new(0, 0, z as i32)).as_dvec3()).z));
             let mut out = Leaf::new(l.origin, 0.0f32);
             out.mask = l.mask;
             for n in 0..crate::grid::LEAF_NUM_VALUES {
                 if l.is_active(n) {
-                    let ijk = l.origin + crate::grid::offset_to_local(n);
-                    let h = tr.index_to_world(ijk.as_dvec3()).z;
                     let v = l.values[n];
                     let y = luminance([v[0] as f64, v[1] as f64, v[2] as f64]).max(0.0);
-                    let indicator = if scale > 0.0 { 1.0 - (-y / scale).exp() } else { 0.0 };
-                    let air = extinction(params, h);
-                    out.values[n] = (air * indicator) as f32;
+                    // 1 - exp(-y / scale) in f32: within 2e-7 of the f64
+                    // value (exp_neg_f32's 1.2e-7 relative plus rounding);
+                    // 0 when scale is.
+                    let indicator = 1.0 - photons::exp_neg_f32(-(y as f32) * inv_scale);
+                    out.values[n] = (air[n & 7] * indicator as f64) as f32;
                 }
             }
             out
@@ -674,6 +677,48 @@ pub fn trace_and_gather(
     Ok((emission, Gathered { photons: traced.photons, beam_stats: traced.stats, voxel_km, voxel_source, warnings: w, noise }))
 }
 
+/// The emission's checks and peaks, the first step of [`finish`]: every
+/// active value finite (else [`BakeError::NonFinite`] at the first bad voxel
+/// in leaf order), within the half-float range when `half_emission`, and the
+/// largest component and luminance. Per leaf in parallel; the first error in
+/// leaf order wins and maxima do not depend on the order, so the outcome is
+/// the same whatever the thread count.
+pub fn scan_emission(emission: &Grid<[f32; 3]>, half_emission: bool, radius_km: f64) -> Result<([f32; 3], f64), BakeError> {
+    let half_max = half::f16::MAX.to_f32();
+    let per_leaf: Vec<Result<([f32; 3], f64), BakeError>> = emission
+        .leaves()
+        .par_iter()
+        .map(|l| {
+            let mut peak = [0.0f32; 3];
+            let mut peak_y = 0.0f64;
+            for (ijk, v) in l.iter_active() {
+                if v.iter().any(|x| !x.is_finite()) {
+                    return Err(BakeError::NonFinite { ijk: ijk.to_array(), value: format!("{v:?}"), radius_km });
+                }
+                if half_emission && v.iter().any(|x| x.abs() > half_max) {
+                    let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
+                    return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
+                }
+                for k in 0..3 {
+                    peak[k] = peak[k].max(v[k]);
+                }
+                peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
+            }
+            Ok((peak, peak_y))
+        })
+        .collect();
+    let mut peak = [0.0f32; 3];
+    let mut peak_y = 0.0f64;
+    for r in per_leaf {
+        let (p, y) = r?;
+        for k in 0..3 {
+            peak[k] = peak[k].max(p[k]);
+        }
+        peak_y = peak_y.max(y);
+    }
+    Ok((peak, peak_y))
+}
+
 /// Stage 4: checks the emission, prunes it, builds the density grid and the
 /// Cycles shell, and the stats. `times.prune`, `times.density` are filled
 /// in; `times.total` is the time since `t_all`.
@@ -692,21 +737,7 @@ pub fn finish(
     let transform = emission.transform;
 
     let t = Instant::now();
-    let mut peak = [0.0f32; 3];
-    let mut peak_y = 0.0f64;
-    for (ijk, v) in emission.iter_active() {
-        if v.iter().any(|x| !x.is_finite()) {
-            return Err(BakeError::NonFinite { ijk: ijk.to_array(), value: format!("{v:?}"), radius_km: plan.kernel.base_km });
-        }
-        if plan.grid.half_emission && v.iter().any(|x| x.abs() > half::f16::MAX.to_f32()) {
-            let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-            return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
-        }
-        for k in 0..3 {
-            peak[k] = peak[k].max(v[k]);
-        }
-        peak_y = peak_y.max(luminance([v[0] as f64, v[1] as f64, v[2] as f64]));
-    }
+    let (peak, peak_y) = scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km)?;
     if let Some((lo, _)) = emission.index_bbox() {
         warnings.extend(extinction_warning(&plan.grid, transform.index_to_world(lo.as_dvec3()).z));
     }
@@ -729,8 +760,10 @@ pub fn finish(
     progress.finish();
     let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
     let shell_voxels = if plan.grid.cycles_shell {
+        // Both grids live on the same voxels: the density takes the
+        // emission's dilation rather than computing it again.
         let n = emission.dilate_active();
-        let m = density.dilate_active();
+        let m = density.activate_like(&emission);
         debug_assert_eq!(n, m, "both grids live on the same voxels");
         n
     } else {

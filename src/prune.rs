@@ -45,6 +45,7 @@
 //! emission's active voxels), so both grids lose the same leaves.
 
 use crate::camera::CameraModel;
+use crate::scene::Projection;
 use crate::grid::{Grid, LEAF_NUM_VALUES};
 use crate::spectrum::luminance;
 use glam::DVec3;
@@ -73,16 +74,34 @@ pub struct PruneStats {
 pub struct Weight<'a> {
     camera: &'a CameraModel,
     d2_min: f64,
+    /// The perspective camera's `cos theta` at the frame's corner, computed
+    /// once here rather than per voxel (None for the other projections).
+    cos_corner: Option<f64>,
 }
 
 impl Weight<'_> {
     pub fn new(camera: &CameraModel, voxel_km: f64) -> Weight<'_> {
-        Weight { camera, d2_min: 0.25 * voxel_km * voxel_km }
+        let cos_corner = (camera.projection == Projection::Perspective).then(|| {
+            let (t, a) = (camera.tan_half_fov, camera.aspect());
+            1.0 / (1.0 + t * t * (1.0 + a * a)).sqrt()
+        });
+        Weight { camera, d2_min: 0.25 * voxel_km * voxel_km, cos_corner }
     }
 
-    /// `w` at world position `p`.
+    /// `w` at world position `p`: [`CameraModel::pixel_weight`], the
+    /// perspective case written out with the corner's cosine hoisted (the
+    /// same operations in the same order, so the same value; a test checks).
+    #[inline]
     pub fn at(&self, p: DVec3) -> f64 {
-        self.camera.pixel_weight(p, self.d2_min)
+        match self.cos_corner {
+            Some(cos_corner) => {
+                let v = p - self.camera.position;
+                let d2 = v.length_squared().max(self.d2_min);
+                let cos = (v.dot(self.camera.forward) / d2.sqrt()).max(cos_corner);
+                1.0 / (d2 * cos * cos * cos)
+            }
+            None => self.camera.pixel_weight(p, self.d2_min),
+        }
     }
 }
 
@@ -197,6 +216,21 @@ mod tests {
         let ortho = Camera { projection: Projection::Orthographic, ..camera_at([0.0; 3]) };
         for ci in leaf_contributions(&g, &model(ortho)) {
             assert!((ci / y - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn hoisted_weight_equals_the_cameras_pixel_weight() {
+        let mut rng = crate::rng::rng(&[5]);
+        use rand::Rng;
+        for projection in [Projection::Perspective, Projection::Orthographic, Projection::Fisheye, Projection::Equirectangular] {
+            let m = CameraModel::new(&Camera { projection, fov_deg: 70.0, ..camera_at([1.0, -2.0, 3.0]) }, 160, 90).unwrap();
+            let w = Weight::new(&m, 0.5);
+            for _ in 0..1000 {
+                let p = DVec3::new(rng.random_range(-50.0..50.0), rng.random_range(-50.0..50.0), rng.random_range(-5.0..50.0));
+                assert_eq!(w.at(p), m.pixel_weight(p, 0.25 * 0.5 * 0.5), "{projection:?} {p}");
+            }
+            assert_eq!(w.at(m.position), m.pixel_weight(m.position, 0.0625));
         }
     }
 

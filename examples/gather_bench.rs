@@ -1,0 +1,102 @@
+//! Gather and finish times of a bake at the scene's own settings (default:
+//! the default preset): traces once, then runs the gather and each part of
+//! the finish (scan, prune, density, Cycles shell) `--reps` times, printing
+//! wall and CPU seconds of each and the load average. The preview's beams
+//! edit pays trace + gather + finish (issue 14 part 4).
+//!
+//! `cargo run --release --example gather_bench -- [SCENE] [--threads N] [--reps K] [--beams B]`
+//!
+//! `--beams B` traces B beams instead of the scene's count: with
+//! `valgrind --tool=callgrind --toggle-collect='*gather_grid*'` it gives the
+//! gather's instruction count, which the machine's load does not change.
+
+use aurora::pipeline::{self, BakePlan};
+use aurora::progress::NoProgress;
+use aurora::scene::Scene;
+use std::time::Instant;
+
+fn loadavg() -> String {
+    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
+}
+
+/// CPU seconds of this process (user + system, /proc/self/stat, 100 Hz ticks).
+fn cpu() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = s.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let tick = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
+    // Fields after the command: state is 0, utime 11, stime 12.
+    (tick(11) + tick(12)) / 100.0
+}
+
+fn timed<R>(what: &str, f: impl FnOnce() -> R) -> R {
+    let (t, c) = (Instant::now(), cpu());
+    let r = f();
+    println!("  {what:<8} wall {:6.3} s  cpu {:6.2} s", t.elapsed().as_secs_f64(), cpu() - c);
+    r
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let opt = |k: &str| args.iter().position(|a| a == k).and_then(|i| args.get(i + 1)).cloned();
+    let threads = opt("--threads").map(|t| t.parse::<usize>()).transpose()?;
+    let reps = opt("--reps").map(|t| t.parse::<usize>()).transpose()?.unwrap_or(2);
+    let beams = opt("--beams").map(|t| t.parse::<usize>()).transpose()?;
+    let values: Vec<String> = [opt("--threads"), opt("--reps"), opt("--beams")].into_iter().flatten().collect();
+    let name = args.iter().find(|a| !a.starts_with("--") && !values.contains(a)).cloned().unwrap_or("default".into());
+    let mut scene = Scene::load(&name)?;
+    if let Some(n) = beams {
+        // A smaller bake for instruction counts (valgrind --tool=callgrind).
+        (scene.beams.count, scene.beams.target_noise) = (n, 0.0);
+    }
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        pool = pool.num_threads(n);
+    }
+    let pool = pool.build()?;
+    pool.install(|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+        println!("# gather bench: scene {name}, {} threads, load average {}", rayon::current_num_threads(), loadavg());
+        let plan = BakePlan::new(&scene, &NoProgress);
+        let mut times = pipeline::StageTimes::default();
+        let count = aurora::bake::beam_count(&plan, &mut times, &NoProgress)?;
+        let traced = timed("trace", || pipeline::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
+        let voxel = plan.voxel_size(&traced.photons);
+        println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
+        {
+            // The gather's set-up steps alone (the gather repeats them).
+            use aurora::photons;
+            let r = &plan.radius;
+            let merged = timed("merge", || photons::merge_segments(&traced.photons, |p| r.radius(p), photons::MERGE_LEN_R, photons::MERGE_OFF_R, photons::MERGE_CDF));
+            let reach = plan.photons.cutoff * r.max();
+            let leaves = timed("leaves", || photons::candidate_leaves(&merged, voxel.0, reach));
+            let bins = timed("bins", || photons::bin_photons(&merged, &leaves, voxel.0, reach));
+            println!("# {} merged photons, {} candidate leaves, {} (leaf, photon) pairs", merged.len(), leaves.len(), bins.photons.len());
+        }
+        for rep in 0..reps {
+            println!("rep {rep} (load {})", loadavg());
+            let (t0, c0) = (Instant::now(), cpu());
+            let mut emission = timed("gather", || pipeline::gather(&plan, &traced.photons, voxel.0, &NoProgress));
+            let t1 = Instant::now();
+            let (_, peak_y) = timed("scan", || pipeline::scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km))?;
+            if plan.grid.prune > 0.0 {
+                let camera = plan.camera_model()?;
+                timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));
+            }
+            let mut density = timed("density", || pipeline::density_grid(&emission, &plan.grid, peak_y));
+            let (n, _) = timed("shell", || {
+                let n = emission.dilate_active();
+                (n, density.activate_like(&emission))
+            });
+            println!(
+                "  gather+finish wall {:.3} s (finish {:.3} s), cpu {:.2} s; {} leaves, {} voxels + {n} shell",
+                t0.elapsed().as_secs_f64(),
+                t1.elapsed().as_secs_f64(),
+                cpu() - c0,
+                density.leaf_count(),
+                density.active_voxel_count() - n
+            );
+        }
+        println!("# load average after: {}", loadavg());
+        Ok(())
+    })
+}
