@@ -125,6 +125,8 @@ pub struct Field {
 pub struct Source<'a> {
     pub grid: SourceGrid<'a>,
     pub scale: f64,
+    /// Per leaf of the grid (in leaf order), its feeds byte ([`scan_leaf`]).
+    pub feeds: Vec<u8>,
 }
 
 pub enum SourceGrid<'a> {
@@ -145,12 +147,12 @@ impl SourceGrid<'_> {
             SourceGrid::Vector(g) => g.transform,
         }
     }
-    /// Origins of real leaves, and for each a bitmask over the 8 offsets
-    /// (dx,dy,dz) in {0,1}^3 of the dual leaves it feeds with a non-zero voxel.
-    fn dual_keys(&self, out: &mut Vec<IVec3>) {
+    /// Appends every dual leaf this grid feeds, given each leaf's feeds
+    /// byte from [`scan_leaf`] (in leaf order).
+    fn dual_keys(&self, feeds: &[u8], out: &mut Vec<IVec3>) {
         match self {
-            SourceGrid::Scalar(g) => collect_dual_keys(g, out),
-            SourceGrid::Vector(g) => collect_dual_keys(g, out),
+            SourceGrid::Scalar(g) => collect_dual_keys(g, feeds, out),
+            SourceGrid::Vector(g) => collect_dual_keys(g, feeds, out),
         }
     }
     /// Copies this grid's 9^3 ghost values of dual leaf `key` into `dst`
@@ -165,46 +167,86 @@ impl SourceGrid<'_> {
 
 /// Every dual leaf touched by a non-zero active voxel of `g`. A voxel v lies in
 /// the dual cells `v - {0,1}^3`, hence in dual leaves `floor((v - {0,1}^3) / 8)`;
-/// voxels with a local coordinate 0 also feed the lower neighbour. Leaves are
-/// scanned in parallel; the keys are appended unsorted and with repeats
-/// (the caller sorts and deduplicates).
-fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, out: &mut Vec<IVec3>) {
-    let keys: Vec<IVec3> = g
-        .leaves()
-        .par_iter()
-        .flat_map_iter(|leaf| {
-            let key = shr(leaf.origin, LEAF_LOG2);
-            let feeds = leaf_feeds(leaf);
-            (0..8u8).filter(move |d| feeds >> d & 1 == 1).map(move |d| {
-                key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
-            })
-        })
-        .collect();
-    out.extend(keys);
+/// voxels with a local coordinate 0 also feed the lower neighbour: bit `d`
+/// of `feeds[i]` says leaf `i` feeds dual leaf `key - (dx,dy,dz)`. The keys
+/// are appended unsorted and with repeats (the caller sorts and deduplicates).
+fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, feeds: &[u8], out: &mut Vec<IVec3>) {
+    for (leaf, &f) in g.leaves().iter().zip(feeds) {
+        let key = shr(leaf.origin, LEAF_LOG2);
+        out.extend((0..8u8).filter(|d| f >> d & 1 == 1).map(|d| {
+            key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
+        }));
+    }
 }
 
-/// Bit `d` = (dx,dy,dz) set iff the leaf has a non-zero active voxel whose
-/// local coordinate is 0 on every axis where the offset is 1: such a voxel
-/// feeds dual leaf `key - (dx,dy,dz)`. Walks the active mask word by word.
+/// Bits of a leaf's 64-voxel mask word with local z = 0 (`n & 7 == 0`).
+const Z0_BITS: u64 = 0x0101_0101_0101_0101;
+/// Bits of a mask word with local y = 0 (`(n >> 3) & 7 == 0`).
+const Y0_BITS: u64 = 0xff;
+
+/// The feeds byte of a leaf from its 512-bit set of non-zero active voxels
+/// (bit n = voxel `(x << 6) | (y << 3) | z`, word `x`): bit `d` = (dx,dy,dz)
+/// is set iff some voxel in the set has local coordinate 0 on every axis
+/// where the offset is 1. Word 0 holds x = 0; within a word the low byte
+/// holds y = 0 and [`Z0_BITS`] z = 0.
+fn feeds_from_nonzero(nz: &[u64; 8]) -> u8 {
+    let all = nz.iter().fold(0u64, |a, w| a | w);
+    let mut feeds = 0u8;
+    for d in 0..8u8 {
+        let x = if d >> 2 & 1 == 1 { nz[0] } else { all };
+        let y = if d >> 1 & 1 == 1 { Y0_BITS } else { u64::MAX };
+        let z = if d & 1 == 1 { Z0_BITS } else { u64::MAX };
+        if x & y & z != 0 {
+            feeds |= 1 << d;
+        }
+    }
+    feeds
+}
+
+/// One pass over a source leaf: its largest active component and its feeds
+/// byte ([`feeds_from_nonzero`]), or the offset of its first active voxel
+/// that is negative, infinite or NaN. Inactive voxels count as 0 whatever
+/// they hold.
+fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
+    let mut nz = [0u64; 8];
+    let mut peak = 0.0f32;
+    for (w, &active) in leaf.mask.iter().enumerate() {
+        if active == 0 {
+            continue;
+        }
+        let (mut nzw, mut bad) = (0u64, 0u64);
+        for (b, v) in leaf.values[w * 64..w * 64 + 64].iter().enumerate() {
+            let on = active >> b & 1 == 1;
+            let c = v.components();
+            for &x in &c[..T::COMPONENTS] {
+                let x = if on { x } else { 0.0 };
+                nzw |= u64::from(x != 0.0) << b;
+                // `!(x >= 0.0)` also catches NaN.
+                bad |= u64::from(!(x >= 0.0) || x == f32::INFINITY) << b;
+                peak = peak.max(x);
+            }
+        }
+        if bad != 0 {
+            return Err(w * 64 + bad.trailing_zeros() as usize);
+        }
+        nz[w] = nzw;
+    }
+    Ok((peak, feeds_from_nonzero(&nz)))
+}
+
+/// The feeds byte by brute force (every active voxel, every offset): the
+/// oracle of [`feeds_from_nonzero`].
+#[cfg(test)]
 fn leaf_feeds<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> u8 {
     let mut feeds = 0u8;
-    for (w, &word) in leaf.mask.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let n = w * 64 + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            if leaf.values[n] == T::ZERO {
-                continue;
-            }
-            // n = (x << 6) | (y << 3) | z.
-            let (x0, y0, z0) = (n >> 6 == 0, (n >> 3) & 7 == 0, n & 7 == 0);
-            for d in 0..8u8 {
-                if (d >> 2 & 1 == 0 || x0) && (d >> 1 & 1 == 0 || y0) && (d & 1 == 0 || z0) {
-                    feeds |= 1 << d;
-                }
-            }
-            if feeds == 0xff {
-                return feeds;
+    for n in 0..crate::grid::LEAF_NUM_VALUES {
+        if !leaf.is_active(n) || leaf.values[n] == T::ZERO {
+            continue;
+        }
+        let (x0, y0, z0) = (n >> 6 == 0, (n >> 3) & 7 == 0, n & 7 == 0);
+        for d in 0..8u8 {
+            if (d >> 2 & 1 == 0 || x0) && (d >> 1 & 1 == 0 || y0) && (d & 1 == 0 || z0) {
+                feeds |= 1 << d;
             }
         }
     }
@@ -219,7 +261,8 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
         // Along an axis with offset 0 we copy local 0..8 to ghost 0..8; with
         // offset 1 only local plane 0 goes to ghost plane 8. Only active
         // voxels are copied (`dst` starts at 0): the mask's byte for row
-        // (x, y) holds the eight z bits of offsets `(x << 6) | (y << 3) | z`.
+        // (x, y) holds the eight z bits of offsets `(x << 6) | (y << 3) | z`,
+        // and a row's z values are consecutive in `dst` too.
         let span = |o: i32| if o == 1 { 1 } else { LEAF_DIM as usize };
         let (nx, ny, nz) = (span(off.x), span(off.y), span(off.z));
         let shift = |o: i32| o as usize * LEAF_DIM as usize;
@@ -227,14 +270,18 @@ fn fill_ghost<T: VoxelValue>(g: &Grid<T>, key: IVec3, scale: f64, dst: &mut [f32
         for lx in 0..nx {
             for ly in 0..ny {
                 let row = (lx << 6) | (ly << 3);
-                let mut bits = (leaf.mask[row >> 6] >> (row & 63)) & ((1u64 << nz) - 1);
-                while bits != 0 {
-                    let lz = bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    let c = leaf.values[row | lz].components();
-                    let at = ghost_offset(lx + sx, ly + sy, lz + sz) * stride + first;
-                    for (k, ck) in c.iter().take(T::COMPONENTS).enumerate() {
-                        dst[at + k] = (*ck as f64 * scale) as f32;
+                let bits = (leaf.mask[row >> 6] >> (row & 63)) & ((1u64 << nz) - 1);
+                if bits == 0 {
+                    continue;
+                }
+                let at = ghost_offset(lx + sx, ly + sy, sz) * stride + first;
+                let out = &mut dst[at..at + (nz - 1) * stride + T::COMPONENTS];
+                for (lz, v) in leaf.values[row..row + nz].iter().enumerate() {
+                    if bits >> lz & 1 == 1 {
+                        let c = v.components();
+                        for k in 0..T::COMPONENTS {
+                            out[lz * stride + k] = (c[k] as f64 * scale) as f32;
+                        }
                     }
                 }
             }
@@ -248,8 +295,9 @@ pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
 }
 
 /// [`validate_grid`], returning the largest active component (0 for an
-/// empty grid): one pass over the active voxels serves both checks.
-fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<f32, RenderError> {
+/// empty grid) and each leaf's feeds byte ([`scan_leaf`]): one pass over the
+/// voxels serves the checks and the dual-leaf keys.
+fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<(f32, Vec<u8>), RenderError> {
     let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
     let ts = g.transform.voxel_size;
     if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
@@ -261,34 +309,17 @@ fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<f32, RenderError> {
             g.background
         )));
     }
-    // Leaves in parallel: per leaf the peak, or the offset of its first bad
-    // voxel; the first bad voxel in leaf order is reported.
-    let per_leaf: Vec<Result<f32, usize>> = g
-        .leaves()
-        .par_iter()
-        .map(|leaf| {
-            let mut peak = 0.0f32;
-            for (w, &word) in leaf.mask.iter().enumerate() {
-                let mut bits = word;
-                while bits != 0 {
-                    let n = w * 64 + bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    for &x in &leaf.values[n].components()[..T::COMPONENTS] {
-                        // `!(x >= 0.0)` also catches NaN.
-                        if !(x >= 0.0) || x == f32::INFINITY {
-                            return Err(n);
-                        }
-                        peak = peak.max(x);
-                    }
-                }
-            }
-            Ok(peak)
-        })
-        .collect();
+    // Leaves in parallel: per leaf the peak and feeds, or the offset of its
+    // first bad voxel; the first bad voxel in leaf order is reported.
+    let per_leaf: Vec<Result<(f32, u8), usize>> = g.leaves().par_iter().map(scan_leaf).collect();
     let mut peak = 0.0f32;
+    let mut feeds = Vec::with_capacity(per_leaf.len());
     for (leaf, r) in g.leaves().iter().zip(per_leaf) {
         match r {
-            Ok(p) => peak = peak.max(p),
+            Ok((p, f)) => {
+                peak = peak.max(p);
+                feeds.push(f);
+            }
             Err(n) => {
                 let ijk = leaf.origin + crate::grid::offset_to_local(n);
                 let v = leaf.values[n];
@@ -296,7 +327,7 @@ fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<f32, RenderError> {
             }
         }
     }
-    Ok(peak)
+    Ok((peak, feeds))
 }
 
 /// Largest scaled voxel value the renderer accepts. The field stores scaled
@@ -335,22 +366,26 @@ impl Field {
 
         let mut keys = Vec::new();
         for s in sources {
-            s.grid.dual_keys(&mut keys);
+            s.grid.dual_keys(&s.feeds, &mut keys);
         }
         keys.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
         keys.dedup();
 
         let per_leaf = GHOST_VALUES * channels;
         let mut values = vec![0.0f32; keys.len() * per_leaf];
-        values.par_chunks_mut(per_leaf.max(1)).zip(keys.par_iter()).for_each(|(dst, &key)| {
-            let mut first = 0;
-            for s in sources {
-                s.grid.fill(key, s.scale, dst, channels, first);
-                first += s.grid.channels();
-            }
-        });
-        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
-            values.par_chunks(per_leaf.max(1)).map(|v| cell_masks(v, channels)).unzip();
+        // Each dual leaf's masks right after its fill, while it is in cache.
+        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) = values
+            .par_chunks_mut(per_leaf.max(1))
+            .zip(keys.par_iter())
+            .map(|(dst, &key)| {
+                let mut first = 0;
+                for s in sources {
+                    s.grid.fill(key, s.scale, dst, channels, first);
+                    first += s.grid.channels();
+                }
+                cell_masks(dst, channels)
+            })
+            .unzip();
 
         // Hierarchy: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
         let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
@@ -541,21 +576,22 @@ impl Medium {
         }
         // A grid feeds the field iff it has a non-zero active voxel: its
         // peak (values are >= 0) is above 0.
-        let mut feeds = [false; 2];
+        let mut d = None;
         if let Some(g) = density {
-            let peak = validate_and_peak(g)?;
+            let (peak, feeds) = validate_and_peak(g)?;
             check_scaled_peak(g, peak, "density_scale", density_scale)?;
-            feeds[0] = peak > 0.0;
+            if density_scale > 0.0 && peak > 0.0 {
+                d = Some(Source { grid: SourceGrid::Scalar(g), scale: density_scale, feeds });
+            }
         }
+        let mut e = None;
         if let Some(g) = emission {
-            let peak = validate_and_peak(g)?;
+            let (peak, feeds) = validate_and_peak(g)?;
             check_scaled_peak(g, peak, "emission_scale", emission_scale)?;
-            feeds[1] = peak > 0.0;
+            if emission_scale > 0.0 && peak > 0.0 {
+                e = Some(Source { grid: SourceGrid::Vector(g), scale: emission_scale, feeds });
+            }
         }
-        let density = density.filter(|_| density_scale > 0.0 && feeds[0]);
-        let emission = emission.filter(|_| emission_scale > 0.0 && feeds[1]);
-        let d = density.map(|g| Source { grid: SourceGrid::Scalar(g), scale: density_scale });
-        let e = emission.map(|g| Source { grid: SourceGrid::Vector(g), scale: emission_scale });
         Ok(match (d, e) {
             (None, None) => Medium { fields: vec![], sigma_t: None, emission: None },
             (Some(d), None) => Medium {
@@ -615,5 +651,48 @@ impl Medium {
             .filter(|f| !f.is_empty())
             .map(Field::world_bounds)
             .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Leaf, LEAF_NUM_VALUES};
+    use rand::{Rng, SeedableRng};
+
+    /// The word-wise feeds byte equals the brute-force one on random
+    /// leaves of every density, with inactive voxels holding garbage that
+    /// must be ignored, and single voxels at every corner, edge and face.
+    #[test]
+    fn feeds_match_brute_force() {
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(5);
+        let check = |leaf: &Leaf<f32>| {
+            let (peak, feeds) = scan_leaf(leaf).unwrap();
+            assert_eq!(feeds, leaf_feeds(leaf));
+            let want = (0..LEAF_NUM_VALUES).filter(|&n| leaf.is_active(n)).map(|n| leaf.values[n]).fold(0.0, f32::max);
+            assert_eq!(peak, want);
+        };
+        for n in 0..LEAF_NUM_VALUES {
+            let mut leaf = Leaf::new(IVec3::ZERO, 0.0f32);
+            leaf.values[n] = 1.0;
+            leaf.set_active(n, true);
+            check(&leaf);
+        }
+        for &p in &[0.002, 0.01, 0.05, 0.3] {
+            for _ in 0..200 {
+                let mut leaf = Leaf::new(IVec3::ZERO, 0.0f32);
+                for n in 0..LEAF_NUM_VALUES {
+                    let on = rng.random::<f64>() < p;
+                    leaf.set_active(n, on);
+                    leaf.values[n] = if on && rng.random::<f64>() < 0.7 { rng.random::<f32>() } else if on { 0.0 } else { 5.0 };
+                }
+                check(&leaf);
+            }
+        }
+        let mut leaf = Leaf::new(IVec3::ZERO, 0.0f32);
+        leaf.set_active(77, true);
+        leaf.values[77] = -1.0;
+        leaf.values[3] = f32::NAN;
+        assert_eq!(scan_leaf(&leaf), Err(77));
     }
 }
