@@ -20,7 +20,7 @@
 //!   dual leaf are skipped: the field is 0 there, so this changes nothing.
 
 use super::dda::{segments, CellFilter, CellSeg, IndexRay, LeafWalker};
-use super::medium::{Channel, Field, Medium, CORNER_OFFSETS};
+use super::medium::{Channel, Field, Medium};
 use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
 use super::Integration;
 use glam::DVec3;
@@ -94,9 +94,8 @@ fn integrate(
 }
 
 #[inline]
-fn corners(field: &Field, base: usize, channel: usize) -> [f64; 8] {
-    let c = field.channels;
-    std::array::from_fn(|k| field.values[base + CORNER_OFFSETS[k] * c + channel] as f64)
+fn corners(field: &Field, at: &[usize; 8], channel: usize) -> [f64; 8] {
+    std::array::from_fn(|k| field.values[at[k] + channel] as f64)
 }
 
 #[inline]
@@ -110,11 +109,11 @@ fn local(ray: &IndexRay, t: f64, seg: &CellSeg) -> [f64; 3] {
 fn fill_piece(piece: &mut Piece, field: &Field, ray: &IndexRay, seg: &CellSeg, sigma: Option<usize>, e: Option<usize>) {
     let line = Along::new(local(ray, piece.t0, seg), local(ray, piece.t1, seg));
     if let Some(ch) = sigma {
-        piece.sigma_t = line.cubic(corners(field, seg.base, ch));
+        piece.sigma_t = line.cubic(corners(field, &seg.at, ch));
     }
     if let Some(ch) = e {
         for k in 0..3 {
-            piece.e[k] = line.cubic(corners(field, seg.base, ch + k));
+            piece.e[k] = line.cubic(corners(field, &seg.at, ch + k));
         }
     }
 }
