@@ -184,9 +184,9 @@ fn walk_exact(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, with_emiss
             let filter = if ce.is_none() && cs == Some(0) { CellFilter::First } else { CellFilter::Any };
             // The leaves, then each leaf's cells: `segments` written out as
             // two loops (the flattened iterator cost a tenth of the trace).
-            let mut leaves = LeafWalker::new(field, origin, dir, 0.0, t_max);
+            let leaves = LeafWalker::new(field, origin, dir, 0.0, t_max);
             let ray = leaves.ray;
-            'leaves: while let Some(span) = leaves.next() {
+            'leaves: for span in leaves {
                 for seg in CellWalker::new(field, ray, span, filter) {
                     let mut piece = Piece { t0: seg.t0, t1: seg.t1, ..Piece::default() };
                     fill_piece(&mut piece, field, &ray, &seg, cs, ce);
