@@ -566,7 +566,7 @@ fn render_cmd(
     let open = std::time::Instant::now();
     match vdb {
         Some(path) => {
-            let file = aurora::vdb::read::read_vdb(path).map_err(|e| InputError(e.to_string()))?;
+            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
             let (d, e) = aurora::vdb::read::render_grids(file)
                 .map_err(|e| InputError(format!("{}: {e}", path.display())))?;
             density = d;

@@ -38,7 +38,11 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    them N times, and from 3 on the median is used). The volume case also
    reports the 0.5 % crossing (one run per rung) and Cycles with its adaptive
    sampling on (noise threshold 0.01, Blender's default) beside the headline
-   Cycles with adaptive sampling off. --size 640x360 runs the volume case
+   Cycles with adaptive sampling off, and `aurora render --adaptive` (its
+   adaptive sampling by pixel variance) against both. Aurora's ladder has
+   rungs 6, 8 and 12 so that its 2 % crossing is measured, not interpolated
+   across 4..16; --ladder WHO=N,N,... replaces one volume ladder (to fit a
+   run in the time at hand: keep the rungs that bracket the targets). --size 640x360 runs the volume case
    at 640x360 with its own ladders and a 1x1 sub-pixel reference (SIZE_640);
    --render-only skips the VDB writer, gather and seed2014 studies.
    Times: `aurora render` = wall time of the whole process (read the VDB,
@@ -119,7 +123,10 @@ FULL = {
     # Which statistic of a rung's runs the equal-error times use.
     "stat": "best",
     "ladder": {
-        "volume": {"aurora": [4, 16, 64, 256, 1024], "cycles": [1, 2, 4, 8, 16, 32, 64, 128, 256],
+        # Rungs 6, 8 and 12 measure aurora's 2 % crossing instead of
+        # interpolating it across 4..16.
+        "volume": {"aurora": [4, 6, 8, 12, 16, 64, 256, 1024], "aurora_adaptive": [8, 12, 16, 32, 64],
+                   "cycles": [1, 2, 4, 8, 16, 32, 64, 128, 256],
                    "cycles_adaptive": [4, 8, 16, 32, 64, 128, 256]},
         "terrain": {"aurora": [1, 2, 4, 8, 16, 32], "cycles": [2, 4, 8, 16, 32, 64, 128]},
     },
@@ -140,6 +147,10 @@ SIZE_640 = {
         "terrain": FULL["ladder"]["terrain"],
     },
 }
+#: The renderers of the render study, in the order their rungs alternate:
+#: aurora, aurora --adaptive (its adaptive sampling by pixel variance),
+#: Cycles, Cycles with its adaptive sampling.
+WHOS = ("aurora", "aurora_adaptive", "cycles", "cycles_adaptive")
 #: Cycles' adaptive sampling noise threshold when it is on (Blender's default).
 ADAPTIVE_THRESHOLD = 0.01
 QUICK = {
@@ -156,7 +167,7 @@ QUICK = {
     "extra_targets": {"volume": [], "terrain": []},
     "stat": "best",
     "ladder": {
-        "volume": {"aurora": [4, 16, 64], "cycles": [1, 4, 16]},
+        "volume": {"aurora": [4, 16, 64], "aurora_adaptive": [8, 16], "cycles": [1, 4, 16]},
         "terrain": {"aurora": [1, 4, 16], "cycles": [2, 8, 32]},
     },
 }
@@ -563,9 +574,12 @@ def worker_main(fd: int) -> int:
     return 0
 
 
-def aurora_render(tools: Tools, scene: Path, vdb: Path, out: Path, spp: int, shadow: int, seed: int | None = None):
+def aurora_render(tools: Tools, scene: Path, vdb: Path, out: Path, spp: int, shadow: int, seed: int | None = None,
+                  adaptive: bool = False):
     cmd = [tools.aurora, "render", scene, "--vdb", vdb, "--out", out, "--spp", spp, "--shadow-samples", shadow,
            "--threads", THREADS]
+    if adaptive:
+        cmd.append("--adaptive")
     if seed is not None:
         cmd += ["--seed", seed]
     r, wall, cpu = timed_run(cmd, "aurora render")
@@ -714,15 +728,16 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
                threads=THREADS, step_rate=step)
 
     lad = cfg["ladder"][case]
-    whos = [w for w in ("aurora", "cycles", "cycles_adaptive") if lad.get(w)]
+    whos = [w for w in WHOS if lad.get(w)]
     rungs = {w: {} for w in whos}
     stat = cfg["stat"]
     targets = [target] + [t for t in cfg["extra_targets"].get(case, []) if t != target]
 
     def do(who: str, n: int) -> None:
-        if who == "aurora":
-            p = d / f"aurora-{n:05d}.exr"
-            r = aurora_render(tools, scene, vdb, p, n, shadow)
+        if who in ("aurora", "aurora_adaptive"):
+            adaptive = who == "aurora_adaptive"
+            p = d / f"{'aurora-adaptive' if adaptive else 'aurora'}-{n:05d}.exr"
+            r = aurora_render(tools, scene, vdb, p, n, shadow, adaptive=adaptive)
             t = {"wall_s": r["wall_s"], "cpu_s": r["cpu_s"], "pixel_loop_s": r["pixel_loop_s"]}
         else:
             adaptive = who == "cycles_adaptive"
@@ -769,6 +784,12 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
         if "cycles_adaptive" in e:
             r["aurora_over_cycles_adaptive_wall"] = e["aurora"]["wall_s"] / e["cycles_adaptive"]["wall_s"]
             r["aurora_over_cycles_adaptive_cpu"] = e["aurora"]["cpu_s"] / e["cycles_adaptive"]["cpu_s"]
+        # aurora render --adaptive against Cycles without and with its own.
+        if "aurora_adaptive" in e:
+            for who, key in (("cycles", "cycles"), ("cycles_adaptive", "cycles_adaptive")):
+                if who in e:
+                    r[f"aurora_adaptive_over_{key}_wall"] = e["aurora_adaptive"]["wall_s"] / e[who]["wall_s"]
+                    r[f"aurora_adaptive_over_{key}_cpu"] = e["aurora_adaptive"]["cpu_s"] / e[who]["cpu_s"]
         return r
 
     ratios = ratios_at(eq)
@@ -916,11 +937,14 @@ def report_render(res: dict, L: list) -> None:
                  f"{', %d shadow samples per terrain hit' % ref['shadow_samples'] if case == 'terrain' else ''}); its own error ~{100 * ref['own_error_estimate']:.2f}%")
         st = c.get("stat", "best")
         L.append(f"     {'renderer':<8} {'samples':>7} {'error %':>8} {'flux':>8} {st + ' wall s':>13} {st + ' cpu s':>12} runs")
-        names = {"aurora": "aurora", "cycles": "cycles", "cycles_adaptive": "cycles+ad"}
+        names = {"aurora": "aurora", "aurora_adaptive": "aurora+ad", "cycles": "cycles", "cycles_adaptive": "cycles+ad"}
         for who in c["ladders"]:
             for e in c["ladders"][who]:
                 L.append(f"     {names[who]:<9} {e['samples']:>6} {100 * e['error']:>8.3f} {e['flux_ratio']:>8.4f} "
                          f"{fmt_s(e[st + '_wall_s']):>13} {fmt_s(e[st + '_cpu_s']):>12} {len(e['runs']):>4}")
+        if "aurora_adaptive" in c["ladders"]:
+            L.append("     aurora+ad: aurora render --adaptive (a uniform first pass, the rest of the samples "
+                     "shared by the pixels' relative spread; samples = the mean per pixel)")
         if c.get("cycles_adaptive_threshold") is not None:
             L.append(f"     cycles+ad: Cycles with adaptive sampling on (noise threshold {c['cycles_adaptive_threshold']}, "
                      "automatic minimum samples; samples = the maximum per pixel)")
@@ -938,6 +962,13 @@ def report_render(res: dict, L: list) -> None:
                          f"{rt['aurora_over_cycles' + suffix + '_cpu']:.3f} (Cycles / aurora "
                          f"{1 / rt['aurora_over_cycles' + suffix + '_wall']:.1f}x wall, "
                          f"{1 / rt['aurora_over_cycles' + suffix + '_cpu']:.1f}x cpu)")
+            if "aurora_adaptive" in eqs:
+                ead = eqs["aurora_adaptive"]
+                L.append(f"       aurora+ad {ead['samples']:.0f} spp, {ead['wall_s']:.2f} s ({ead['how']})")
+                for who in [w for w in ("cycles", "cycles_adaptive") if w in eqs]:
+                    k = "aurora_adaptive_over_" + who
+                    L.append(f"         against {names[who]:<9}: wall {rt[k + '_wall']:.3f}, cpu {rt[k + '_cpu']:.3f} "
+                             f"(Cycles / aurora+ad {1 / rt[k + '_wall']:.1f}x wall, {1 / rt[k + '_cpu']:.1f}x cpu)")
         cc = c["cycles_converged"]
         L.append(f"     Cycles at {cc['samples']} samples: {100 * cc['error']:.2f}% from the reference, flux "
                  f"{cc['flux_ratio']:.4f} (cross-check bias {100 * cc['known_cross_check_bias']:.2f}%): "
@@ -1000,6 +1031,9 @@ def main(argv=None) -> int:
                                                                 "gather or seed2014 study)")
     p.add_argument("--repeats", type=int, help="runs of the rungs that bracket the headline target (default 2; "
                                                "3 or more: equal-error times from the median of the runs, else the best)")
+    p.add_argument("--ladder", action="append", default=[], metavar="WHO=N,N,...",
+                   help="replace one volume ladder (WHO: " + ", ".join(WHOS) + "; empty list drops it), e.g. to "
+                        "fit a run in the time at hand: the rungs that bracket the targets")
     p.add_argument("--cycles-worker", type=int, help=argparse.SUPPRESS)
     a = p.parse_args(argv)
     if a.cycles_worker is not None:
@@ -1032,6 +1066,13 @@ def run_all(a) -> int:
             raise Failure(f"--size {a.size}: expected WxH, e.g. 640x360")
         size = (int(m.group(1)), int(m.group(2)))
         cfg.update(SIZE_640 if size == SIZE_640["size"] else {"size": size})
+    for spec in a.ladder:
+        who, _, ns = spec.partition("=")
+        if who not in WHOS or not re.fullmatch(r"(\d+(,\d+)*)?", ns):
+            raise Failure(f"--ladder {spec}: expected WHO=N,N,... with WHO one of {', '.join(WHOS)}")
+        lad = {**cfg["ladder"], "volume": dict(cfg["ladder"]["volume"])}
+        lad["volume"][who] = [int(x) for x in ns.split(",") if x]
+        cfg["ladder"] = lad
     cases = tuple(c for c in a.cases.split(",") if c)
     if not cases or any(c not in ("volume", "terrain") for c in cases):
         raise Failure(f"--cases {a.cases}: expected volume and/or terrain")

@@ -309,8 +309,9 @@ fn slot(c: IVec3, log2: u32) -> usize {
 pub struct CellSeg {
     pub t0: f64,
     pub t1: f64,
-    /// Index in `Field::values` of the cell's (0,0,0) corner, channel 0.
-    pub base: usize,
+    /// Index in `Field::values` of each of the cell's 8 corners, channel 0
+    /// (`Field::corner_indices`).
+    pub at: [usize; 8],
     /// Index-space position of the cell's (0,0,0) corner (a voxel centre).
     pub corner: IVec3,
 }
@@ -356,8 +357,8 @@ impl Iterator for CellWalker<'_> {
             self.dda.advance(&self.ray);
             let l = c - self.origin;
             if t1 > t0 && mask_has(mask, cell_bit(l.x, l.y, l.z)) {
-                let base = self.field.value_index(self.leaf, l.x as usize, l.y as usize, l.z as usize);
-                return Some(CellSeg { t0, t1, base, corner: c });
+                let at = self.field.corner_indices(self.leaf, l.x as usize, l.y as usize, l.z as usize);
+                return Some(CellSeg { t0, t1, at, corner: c });
             }
         }
     }

@@ -423,37 +423,67 @@ pub fn read_values_into<T: VoxelValue>(
     };
     let (Some(out), Some(raw)) = (out, raw) else { return Ok(()) };
     debug_assert_eq!(out.len(), n);
-    let value = |k: usize| -> T {
-        let chunk = &raw[k * elem..(k + 1) * elem];
-        let mut c = [0f32; 3];
-        for (j, x) in c[..comp].iter_mut().enumerate() {
-            *x = if fmt.half {
-                f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32()
-            } else {
-                f32::from_le_bytes(chunk[4 * j..4 * j + 4].try_into().expect("4-byte chunk"))
-            };
-        }
-        T::from_components(&c)
-    };
-    if !masked || count == n {
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = value(k);
-        }
-        return Ok(());
-    }
-    // Rebuild inactive slots: selection bit set -> inactive1, clear -> inactive0.
-    let mut next = 0usize;
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = if layout::mask_bit(value_mask, i) {
-            next += 1;
-            value(next - 1)
-        } else if selection.is_some_and(|s| s[i >> 3] >> (i & 7) & 1 == 1) {
-            inactive1
-        } else {
-            inactive0
-        };
+    debug_assert_eq!(raw.len(), count * elem);
+    let scatter = Scatter { value_mask, selection, inactive: [inactive0, inactive1], full: !masked || count == n };
+    if fmt.half {
+        scatter.run(out, raw.chunks_exact(elem).map(|chunk| {
+            let mut c = [0f32; 3];
+            for (j, x) in c[..comp].iter_mut().enumerate() {
+                *x = f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32();
+            }
+            T::from_components(&c)
+        }));
+    } else {
+        scatter.run(out, raw.chunks_exact(elem).map(|chunk| {
+            let mut c = [0f32; 3];
+            for (x, b) in c[..comp].iter_mut().zip(chunk.chunks_exact(4)) {
+                *x = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+            }
+            T::from_components(&c)
+        }));
     }
     Ok(())
+}
+
+/// Where the decoded values of a record go: every slot in order (`full`),
+/// or the active slots (value mask) in order, the others rebuilt from the
+/// selection mask (bit set -> `inactive[1]`, clear -> `inactive[0]`).
+struct Scatter<'m, T> {
+    value_mask: &'m [u64],
+    selection: Option<&'m [u8]>,
+    inactive: [T; 2],
+    full: bool,
+}
+
+impl<T: VoxelValue> Scatter<'_, T> {
+    #[inline]
+    fn run(&self, out: &mut [T], mut values: impl Iterator<Item = T>) {
+        if self.full {
+            for (o, v) in out.iter_mut().zip(values) {
+                *o = v;
+            }
+            return;
+        }
+        match self.selection {
+            None => out.fill(self.inactive[0]),
+            Some(s) => {
+                for (i, o) in out.iter_mut().enumerate() {
+                    *o = self.inactive[usize::from(s[i >> 3] >> (i & 7) & 1)];
+                }
+            }
+        }
+        // The record holds exactly one value per active slot (`count`).
+        for (w, &word) in self.value_mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let i = w * 64 + bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                if let (Some(o), Some(v)) = (out.get_mut(i), values.next()) {
+                    *o = v;
+                }
+            }
+        }
+    }
 }
 
 /// A value stored at full precision.

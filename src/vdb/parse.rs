@@ -195,6 +195,25 @@ pub struct ParsedFile {
 /// Parses a whole file. `decode(grid)` says whether to decode that grid's
 /// values (otherwise they are validated and skipped).
 pub fn parse_file(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> bool) -> Result<ParsedFile, ParseError> {
+    parse_file_with(bytes, &|gh| if decode(gh) { Decode::All } else { Decode::Skip })
+}
+
+/// What to do with one grid's leaf values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Decode {
+    /// Validate and skip them.
+    Skip,
+    /// Decode every leaf.
+    All,
+    /// Decode every leaf, keep only those with a non-zero active value: for
+    /// a reader to whom an active 0 is the same as an inactive voxel (the
+    /// renderer, on a background-0 grid), such as the shell of zero voxels
+    /// our bakes add for Cycles. Every record is still decoded and checked.
+    NonZero,
+}
+
+/// [`parse_file`] with a per-grid [`Decode`] choice.
+pub fn parse_file_with(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> Decode) -> Result<ParsedFile, ParseError> {
     let mut cur = Cursor::new(bytes);
     let header = read_header(&mut cur)?;
     let at = cur.pos();
@@ -262,7 +281,7 @@ fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
 fn read_grid(
     cur: &mut Cursor,
     header: &Header,
-    decode: &dyn Fn(&GridHeader) -> bool,
+    decode: &dyn Fn(&GridHeader) -> Decode,
 ) -> Result<ParsedGrid, ParseError> {
     let desc_at = cur.pos();
     let unique_name_raw = cur.string_bytes()?.to_vec();
@@ -461,8 +480,9 @@ fn read_tree<T: VoxelValue>(
     cur: &mut Cursor,
     gh: &GridHeader,
     fmt: RecordFormat,
-    decode: bool,
+    how: Decode,
 ) -> Result<Tree<T>, ParseError> {
+    let decode = how != Decode::Skip;
     let name = &gh.unique_name;
     let at = cur.pos();
     let buffer_count = cur.i32()?;
@@ -563,7 +583,7 @@ fn read_tree<T: VoxelValue>(
     if decode {
         use rayon::prelude::*;
         let data = cur.data();
-        let leaves: Vec<Result<Leaf<T>, ParseError>> = spans
+        let leaves: Vec<Result<Option<Leaf<T>>, ParseError>> = spans
             .par_iter()
             .map_init(Vec::new, |scratch, &(origin, mask, start)| {
                 let mut c = Cursor::new(data);
@@ -580,13 +600,33 @@ fn read_tree<T: VoxelValue>(
                     scratch,
                     true,
                 )?;
-                Ok(leaf)
+                if how == Decode::NonZero && !has_nonzero_active(&leaf) {
+                    return Ok(None);
+                }
+                Ok(Some(leaf))
             })
             .collect();
         // The first failing leaf in file order, whatever the thread count.
-        tree.leaves = leaves.into_iter().collect::<Result<_, _>>()?;
+        let leaves: Vec<Option<Leaf<T>>> = leaves.into_iter().collect::<Result<_, _>>()?;
+        tree.leaves = leaves.into_iter().flatten().collect();
     }
     Ok(tree)
+}
+
+/// Whether some active voxel of `leaf` is not 0 (a NaN or negative value
+/// counts: the caller's validation reports it).
+fn has_nonzero_active<T: VoxelValue>(leaf: &Leaf<T>) -> bool {
+    leaf.mask.iter().enumerate().any(|(w, &word)| {
+        let mut bits = word;
+        while bits != 0 {
+            let n = w * 64 + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            if leaf.values[n] != T::ZERO {
+                return true;
+            }
+        }
+        false
+    })
 }
 
 #[cfg(test)]

@@ -134,18 +134,30 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
     let bytes =
         std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
-    read_vdb_named(&bytes, &path.display().to_string(), false)
+    read_vdb_named(&bytes, &path.display().to_string(), false, false)
+}
+
+/// [`read_vdb`] for the renderer: leaves whose active voxels are all 0 are
+/// dropped while decoding (every record is still decoded and validated).
+/// On a grid with background 0 (the only kind the renderer accepts) an
+/// active 0 samples exactly as an inactive voxel, so the rendered field is
+/// the same; the default bake's shell of zero voxels for Cycles (a third of
+/// its leaves) then costs no memory.
+pub fn read_vdb_for_render(path: &Path) -> Result<VdbFile, VdbReadError> {
+    let bytes =
+        std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    read_vdb_named(&bytes, &path.display().to_string(), false, true)
 }
 
 /// Reads a VDB file held in memory.
 pub fn read_vdb_bytes(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>", false)
+    read_vdb_named(bytes, "<memory>", false, false)
 }
 
 /// [`read_vdb_bytes`] with the plain float grids decoded by vdb-rs (module
 /// docs): the tests' oracle for our decoder.
 pub fn read_vdb_bytes_with_vdbrs(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>", true)
+    read_vdb_named(bytes, "<memory>", true, false)
 }
 
 /// Whether vdb-rs reads this grid correctly (see the module docs).
@@ -158,11 +170,13 @@ fn vdbrs_reads(gh: &GridHeader) -> bool {
         )
 }
 
-fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool) -> Result<VdbFile, VdbReadError> {
+fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) -> Result<VdbFile, VdbReadError> {
     let invalid = |source: ParseError| VdbReadError::Invalid { file: file.to_string(), source };
     let vdbrs_reads = |gh: &GridHeader| allow_vdbrs && vdbrs_reads(gh);
+    let native = if drop_zero { parse::Decode::NonZero } else { parse::Decode::All };
     // 1. Validate everything; decode natively what vdb-rs cannot read.
-    let mut parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh)).map_err(invalid)?;
+    let mut parsed = parse::parse_file_with(bytes, &|gh| if vdbrs_reads(gh) { parse::Decode::Skip } else { native })
+        .map_err(invalid)?;
     // Grids with active tiles go native too (vdb-rs drops root tiles).
     let retry: HashSet<Vec<u8>> = parsed
         .grids
@@ -171,8 +185,14 @@ fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool) -> Result<VdbFile
         .map(|g| g.header.unique_name_raw.clone())
         .collect();
     if !retry.is_empty() {
-        parsed = parse::parse_file(bytes, &|gh| !vdbrs_reads(gh) || retry.contains(&gh.unique_name_raw))
-            .map_err(invalid)?;
+        parsed = parse::parse_file_with(bytes, &|gh| {
+            if !vdbrs_reads(gh) || retry.contains(&gh.unique_name_raw) {
+                native
+            } else {
+                parse::Decode::Skip
+            }
+        })
+        .map_err(invalid)?;
     }
     let use_vdbrs = |gh: &GridHeader| vdbrs_reads(gh) && !retry.contains(&gh.unique_name_raw);
     // 2. vdb-rs for the plain float grids.
@@ -434,6 +454,39 @@ mod tests {
         // The flag is reset: a later panic outside is not silenced (not
         // observable here beyond the flag itself).
         assert!(!SILENCE_PANICS.with(|s| s.get()));
+    }
+
+    /// The renderer's read drops exactly the leaves whose active voxels are
+    /// all 0 (float and vec3, every compression) and keeps the others
+    /// bit for bit; a negative value is never dropped (validation sees it).
+    #[test]
+    fn render_read_drops_only_zero_leaves() {
+        use crate::scene::Compression;
+        use crate::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
+        let tr = Transform::new(0.5, DVec3::new(1.0, 2.0, 3.0));
+        let mut d = Grid::new("density", 0.0f32, tr);
+        let mut e = Grid::new("emission", [0.0f32; 3], tr);
+        for (ijk, v) in [((0, 0, 0), 1.5f32), ((3, 4, 5), 0.0), ((8, 0, 0), 0.0), ((9, 9, 9), 0.0), ((16, 0, 0), -0.0)] {
+            let ijk = IVec3::new(ijk.0, ijk.1, ijk.2);
+            d.set(ijk, v);
+            e.set(ijk, [0.0, v, 0.0]);
+        }
+        d.set(IVec3::new(0, 8, 0), -2.0);
+        e.set(IVec3::new(0, 8, 0), [0.0, 0.0, 1e-30]);
+        for c in [Compression::None, Compression::Zip, Compression::ZipActiveMask, Compression::BloscActiveMask] {
+            let opts = WriteOptions { compression: c, ..WriteOptions::default() };
+            let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
+            let all = read_vdb_named(&bytes, "t", false, false).unwrap();
+            let some = read_vdb_named(&bytes, "t", false, true).unwrap();
+            let origins = |g: &Grid<f32>| g.leaves().iter().map(|l| l.origin).collect::<Vec<_>>();
+            assert_eq!(origins(&all.float_grids[0]).len(), 5, "{c:?}");
+            assert_eq!(origins(&some.float_grids[0]), vec![IVec3::ZERO, IVec3::new(0, 8, 0)], "{c:?}");
+            for o in origins(&some.float_grids[0]) {
+                assert_eq!(some.float_grids[0].leaf(o).unwrap(), all.float_grids[0].leaf(o).unwrap());
+                assert_eq!(some.vec3_grids[0].leaf(o).unwrap(), all.vec3_grids[0].leaf(o).unwrap());
+            }
+            assert_eq!(some.vec3_grids[0].leaves().len(), 2, "{c:?}");
+        }
     }
 
     /// vdb-rs's descriptor keys are the name's bytes as chars.
