@@ -383,7 +383,7 @@ impl Prepared {
     }
 
     /// Traces samples `st.n .. until` of the pixel and adds them to `st`
-    /// (the sample positions continue the pixel's R2 sequence, the random
+    /// (the sample positions continue the pixel's sample sequence, the random
     /// numbers its stream, so tracing in two calls equals tracing in one).
     fn trace_samples(&self, px: usize, py: usize, st: &mut PixelState, until: usize, n: &mut Counters) {
         let s = &self.settings;
@@ -546,7 +546,7 @@ pub const ADAPTIVE_FLOOR: f64 = 0.01;
 /// equal for all i). Counts are rounded by cumulative sums in pixel order, so
 /// the total is exact and the result depends only on pass 1, which depends
 /// only on (seed, pixel): the image is identical for any thread count. A
-/// pixel's extra samples continue its R2 sequence and random stream, and its
+/// pixel's extra samples continue its sample sequence and random stream, and its
 /// value is the mean of all its samples. Each sample is unbiased, but the
 /// number of samples depends on the first ones, so the pixel mean carries a
 /// small bias of order `1 / n0` of its variance (the usual price of adaptive
@@ -764,9 +764,12 @@ mod tests {
                 // Unbiased: the mean error within 4 standard errors of 0.
                 assert!(mean.abs() <= 4.0 * rms / 4000f64.sqrt() + 1e-12, "{name}, n {n}: bias {mean} (rms {rms})");
                 // Stratified: well below independent samples at an even 4 and more
-                // (an odd count ends with an unpaired sample).
+                // (an odd count ends with an unpaired sample). The diagonal
+                // edge is the hardest case at 8 (measured 0.73 of iid; the
+                // R2 pairs had 0.48 there but 0.75 on the x edge at 4, where
+                // this set has 0.45).
                 if n >= 4 && n % 2 == 0 {
-                    assert!(rms < 0.7 * iid(n as f64, area), "{name}, n {n}: rms {rms} vs iid {}", iid(n as f64, area));
+                    assert!(rms < 0.78 * iid(n as f64, area), "{name}, n {n}: rms {rms} vs iid {}", iid(n as f64, area));
                 }
             }
             let (r64, _) = edge_error(64, side, area);
