@@ -135,6 +135,23 @@ pub struct Leaf<T> {
 }
 
 impl<T: VoxelValue> Leaf<T> {
+    /// Switches on, with the value `bg`, every voxel set in `mask` and off
+    /// here, a mask word at a time; returns how many.
+    fn switch_on(&mut self, mask: &[u64; LEAF_MASK_WORDS], bg: T) -> u64 {
+        let mut added = 0u64;
+        for w in 0..LEAF_MASK_WORDS {
+            let mut new = mask[w] & !self.mask[w];
+            self.mask[w] |= new;
+            while new != 0 {
+                let b = new.trailing_zeros() as usize;
+                self.values[w * 64 + b] = bg;
+                added += 1;
+                new &= new - 1;
+            }
+        }
+        added
+    }
+
     pub fn new(origin: IVec3, background: T) -> Self {
         debug_assert_eq!(origin, leaf_origin(origin));
         Self { origin, mask: [0; LEAF_MASK_WORDS], values: Box::new([background; LEAF_NUM_VALUES]) }
@@ -454,17 +471,7 @@ impl<T: VoxelValue> Grid<T> {
                     self.leaves.len() - 1
                 }
             };
-            let leaf = &mut self.leaves[i];
-            for w in 0..LEAF_MASK_WORDS {
-                let mut new = mask[w] & !leaf.mask[w];
-                leaf.mask[w] |= new;
-                while new != 0 {
-                    let b = new.trailing_zeros() as usize;
-                    leaf.values[w * 64 + b] = bg;
-                    added += 1;
-                    new &= new - 1;
-                }
-            }
+            added += self.leaves[i].switch_on(&mask, bg);
         }
         self.sort_leaves();
         added
@@ -488,16 +495,7 @@ impl<T: VoxelValue> Grid<T> {
                 Some(l) if l.origin == ol.origin => own.next().expect("peeked"),
                 _ => Leaf::new(ol.origin, bg),
             };
-            for w in 0..LEAF_MASK_WORDS {
-                let mut new = ol.mask[w] & !leaf.mask[w];
-                leaf.mask[w] |= new;
-                while new != 0 {
-                    let b = new.trailing_zeros() as usize;
-                    leaf.values[w * 64 + b] = bg;
-                    added += 1;
-                    new &= new - 1;
-                }
-            }
+            added += leaf.switch_on(&ol.mask, bg);
             leaves.push(leaf);
         }
         assert!(own.next().is_none(), "activate_like: this grid's leaves must be a subset of the other's, both sorted");
