@@ -89,19 +89,11 @@ mod tests {
     use super::*;
     use crate::grid::Grid;
     use crate::progress::NoProgress;
-    use crate::scene::{ColourMode, Curtain, GatherMethod, GridParams, VoxelSize};
+    use crate::scene::{ColourMode, GatherMethod, GridParams};
 
     /// A small, fast scene: one short curtain, few beams, coarse voxels.
     fn small_scene() -> Scene {
-        let mut s = Scene {
-            curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
-            ..Scene::default()
-        };
-        s.footprint.resolution = [128, 48];
-        s.beams.count = 300;
-        s.photons.radius_km = 1.0;
-        s.grid.voxel_size = VoxelSize::Km(1.0);
-        s
+        crate::scene::presets::small_test_scene()
     }
 
     #[test]

@@ -1135,11 +1135,7 @@ mod tests {
 
     /// A small scene: one short curtain, few beams.
     fn small_scene(count: usize) -> Scene {
-        let mut s = Scene {
-            curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
-            ..Scene::default()
-        };
-        s.footprint.resolution = [128, 48];
+        let mut s = crate::scene::presets::small_test_scene();
         s.beams.count = count;
         s
     }

@@ -229,14 +229,8 @@ mod tests {
 
     /// One short curtain, coarse voxels: a scene that bakes in a second.
     fn small_scene() -> Scene {
-        let mut s = Scene {
-            curtains: vec![crate::scene::Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
-            ..Scene::default()
-        };
-        s.footprint.resolution = [128, 48];
+        let mut s = crate::scene::presets::small_test_scene();
         s.beams.count = 100_000;
-        s.photons.radius_km = 1.0;
-        s.grid.voxel_size = crate::scene::VoxelSize::Km(1.0);
         s.grid.prune = 0.0;
         // The atmosphere these tests were calibrated with.
         s.atmosphere.model = crate::scene::AtmosphereModel::Us1976;

@@ -663,16 +663,9 @@ mod tests {
         assert_eq!(edit(&|s| { s.render.exposure += 1.0; s.beams.count += 1 }), Stage::Trace);
     }
 
-    /// A scene that bakes in about a second (tests/preview_cli.rs's).
+    /// A scene that bakes in about a second, 4 samples per pixel.
     fn small_scene() -> Scene {
-        let mut s = Scene {
-            curtains: vec![crate::scene::Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Default::default() }],
-            ..Scene::default()
-        };
-        s.footprint.resolution = [128, 48];
-        s.beams.count = 300;
-        s.photons.radius_km = 1.0;
-        s.grid.voxel_size = crate::scene::VoxelSize::Km(1.0);
+        let mut s = crate::scene::presets::small_test_scene();
         s.render.spp = 4;
         s
     }

@@ -78,6 +78,24 @@ pub fn seed2014() -> Scene {
     s
 }
 
+/// The unit tests' small scene: one short curtain (40 x 16 km, bent 3 km),
+/// a coarse footprint, 300 beams, a 1 km kernel on 1 km voxels: a bake in
+/// about a second. Tests change what they need from it.
+/// (`tests/common::small_scene` is the integration tests' two-curtain
+/// variant: integration tests do not see `cfg(test)` items.)
+#[cfg(test)]
+pub(crate) fn small_test_scene() -> Scene {
+    let mut s = Scene {
+        curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
+        ..Scene::default()
+    };
+    s.footprint.resolution = [128, 48];
+    s.beams.count = 300;
+    s.photons.radius_km = 1.0;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::Scene;
