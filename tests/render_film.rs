@@ -1,6 +1,7 @@
 //! Film and conventions: EXR/PNG files, camera, pixel filter, determinism,
 //! typed errors.
 
+mod common;
 mod render_util;
 
 use aurora::grid::{Grid, Transform};
@@ -85,7 +86,7 @@ fn blender_reads_our_exr_with_row_0_at_the_top() {
     let img = test_image(5, 3);
     let path = tmp("blender.exr");
     write_exr(&path, &img).unwrap();
-    let python = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
+    let python = common::venv_python();
     let script = r#"
 import bpy, sys
 im = bpy.data.images.load(sys.argv[-1])

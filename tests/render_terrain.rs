@@ -1,6 +1,7 @@
 //! Terrain lit by the aurora (emissive shadow rays), heightfield tracing and
 //! the OBJ export, against closed forms, brute force and Blender.
 
+mod common;
 mod render_util;
 
 use aurora::grid::Transform;
@@ -428,7 +429,7 @@ fn blender_imports_exactly_the_same_mesh() {
     let hf = mountains();
     let path = tmp("blender.obj");
     write_obj(&path, &hf).unwrap();
-    let python = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python");
+    let python = common::venv_python();
     let script = r#"
 import bpy, sys, struct
 bpy.ops.wm.read_factory_settings(use_empty=True)
