@@ -21,8 +21,8 @@
 //! - **candidate leaves**: every photon lists the 8^3-voxel leaves within the
 //!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` of its step
 //!   (at most `length_km * dt` long) before they are deduplicated: at most
-//!   `photons * L` entries of 12 bytes, `L = (ceil((2 reach + step) / leaf)
-//!   + 1)^3`; where every step descends (alpha_D below the field's dip), a
+//!   `photons * L` entries of 12 bytes,
+//!   `L = (ceil((2 reach + step) / leaf) + 1)^3`; where every step descends (alpha_D below the field's dip), a
 //!   beam's path to the 50 km bottom is at most `h / sin(dip - alpha_D)`
 //!   long and its entries at most `(path / leaf + 2) * (L^(1/3))^2`; its
 //!   column segments, end to end along the field line above its start,
@@ -265,20 +265,20 @@ pub fn estimate(scene: &Scene) -> Estimate {
 }
 
 /// Refuses a bake whose estimate exceeds [`USABLE_FRACTION`] of `limit`.
-pub fn check(estimate: &Estimate, limit: &MemoryLimit) -> Result<(), TooLarge> {
+pub fn check(estimate: &Estimate, limit: &MemoryLimit) -> Result<(), Box<TooLarge>> {
     let total = estimate.total();
     if total <= USABLE_FRACTION * limit.bytes {
         return Ok(());
     }
     let d = estimate.dominant();
-    Err(TooLarge {
+    Err(Box::new(TooLarge {
         key: d.key.clone(),
         value: d.value.clone(),
         what: d.what,
         needed: gib(d.bytes),
         total: gib(total),
         available: limit.to_string(),
-    })
+    }))
 }
 
 #[cfg(test)]

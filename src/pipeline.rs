@@ -156,15 +156,17 @@ pub enum BakeError {
     /// net behind the scene's validation ranges).
     #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
-    /// `grid.half_emission` asks for half floats the emission exceeds.
     /// The bake would need more memory than this process may use
-    /// ([`crate::budget`]); refused before anything is allocated.
+    /// ([`crate::budget`]); refused before anything is allocated. Boxed: its
+    /// six strings would otherwise set the size of every
+    /// `Result<_, BakeError>`.
     #[error(transparent)]
-    Memory(#[from] crate::budget::TooLarge),
+    Memory(#[from] Box<crate::budget::TooLarge>),
     /// The bake produced no emission at all: an empty VDB is never written
     /// silently. The message says where the beams' energy went.
     #[error("the bake deposited no light: {0}")]
     Empty(String),
+    /// `grid.half_emission` asks for half floats the emission exceeds.
     #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
     HalfOverflow { ijk: [i32; 3], peak: f32 },
     /// The scene's camera is out of range (never with a validated scene).
