@@ -36,7 +36,7 @@
 //!
 //! The structure is plain data: no references into the source grids.
 
-use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM};
+use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM, LEAF_MASK_WORDS};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -105,8 +105,8 @@ pub fn mask_has(m: &CellMask, bit: usize) -> bool {
 /// One or more scalar fields on one grid transform, as blocks and dual leaves.
 ///
 /// Channel `c` of voxel `(x,y,z)` of block `b` is
-/// `values[(b * BLOCK_VALUES + block_offset(x, y, z)) * channels + c]`.
-#[derive(Debug, Clone)]
+/// `scale[c] * values[(b * BLOCK_VALUES + block_offset(x, y, z)) * channels + c]`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Field {
     pub transform: Transform,
     pub channels: usize,
@@ -133,76 +133,92 @@ pub struct Field {
     /// Super-node coordinates spanned by the root: `[root_lo, root_hi)`.
     pub(crate) root_lo: IVec3,
     pub(crate) root_hi: IVec3,
+    /// Per channel, the factor its stored (unit) values are multiplied by
+    /// at lookup ([`Medium::set_scales`]).
+    pub scale: [f64; 4],
+    /// Blocks written (the others are all zeros and never touched).
+    live_blocks: usize,
 }
 
-/// A source of channels for [`Field::build`]: one grid and the factor its
-/// values are multiplied by.
-pub struct Source<'a> {
-    pub grid: SourceGrid<'a>,
-    pub scale: f64,
-    /// Per leaf of the grid (in leaf order), its feeds byte ([`scan_leaf`]).
-    pub feeds: Vec<u8>,
+/// Why a leaf's values could not be produced (a file's decode error).
+pub type LeafError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Per-thread buffers a [`LeafSource`] may decode a leaf into.
+#[derive(Default)]
+pub struct Scratch {
+    pub values: Vec<f32>,
+    pub bytes: Vec<u8>,
 }
 
-pub enum SourceGrid<'a> {
-    Scalar(&'a Grid<f32>),
-    Vector(&'a Grid<[f32; 3]>),
+/// One grid's leaves as the medium's builder reads them: origins and
+/// active masks up front (a file's topology lists them before any value),
+/// the values leaf by leaf, possibly decoded on demand and in parallel. A
+/// grid in memory is one ([`GridSource`]); so is a VDB file's grid
+/// (`crate::vdb::read`), which lets a render build its medium straight from
+/// the file's records, with no intermediate [`Grid`].
+pub trait LeafSource: Sync {
+    /// The grid's name (for messages).
+    fn name(&self) -> &str;
+    fn transform(&self) -> Transform;
+    /// Components per voxel: 1 (float) or 3 (vec3).
+    fn channels(&self) -> usize;
+    /// The background's components (the first [`channels`](Self::channels)).
+    fn background(&self) -> [f32; 3];
+    fn leaf_count(&self) -> usize;
+    /// Origin of leaf `i` (distinct for distinct `i`).
+    fn origin(&self, i: usize) -> IVec3;
+    /// Active mask of leaf `i`.
+    fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS];
+    /// The 512 values of leaf `i`, components interleaved (`512 *
+    /// channels` floats; inactive slots may hold anything), borrowed from
+    /// the source or decoded into `scratch`.
+    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<&'s [f32], LeafError>;
 }
 
-impl SourceGrid<'_> {
-    fn channels(&self) -> usize {
-        match self {
-            SourceGrid::Scalar(_) => 1,
-            SourceGrid::Vector(_) => 3,
-        }
-    }
-    fn transform(&self) -> Transform {
-        match self {
-            SourceGrid::Scalar(g) => g.transform,
-            SourceGrid::Vector(g) => g.transform,
-        }
-    }
-    /// Appends every dual leaf this grid feeds, given each leaf's feeds
-    /// byte from [`scan_leaf`] (in leaf order).
-    fn dual_keys(&self, feeds: &[u8], out: &mut Vec<IVec3>) {
-        match self {
-            SourceGrid::Scalar(g) => collect_dual_keys(g, feeds, out),
-            SourceGrid::Vector(g) => collect_dual_keys(g, feeds, out),
-        }
-    }
-    /// Copies this grid's active values of the leaf at `origin` into block
-    /// `dst` (stride `stride`, starting at channel `first`), times `scale`.
-    fn fill(&self, origin: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
-        match self {
-            SourceGrid::Scalar(g) => fill_block(g, origin, scale, dst, stride, first),
-            SourceGrid::Vector(g) => fill_block(g, origin, scale, dst, stride, first),
-        }
-    }
-    /// Origins of this grid's leaves that feed some dual leaf (have a
-    /// non-zero active voxel).
-    fn live_origins(&self, feeds: &[u8], out: &mut Vec<IVec3>) {
-        fn go<T: VoxelValue>(g: &Grid<T>, feeds: &[u8], out: &mut Vec<IVec3>) {
-            out.extend(g.leaves().iter().zip(feeds).filter(|(_, &f)| f != 0).map(|(l, _)| l.origin));
-        }
-        match self {
-            SourceGrid::Scalar(g) => go(g, feeds, out),
-            SourceGrid::Vector(g) => go(g, feeds, out),
-        }
-    }
-}
+/// A grid in memory as a [`LeafSource`].
+pub struct GridSource<'a, T>(pub &'a Grid<T>);
 
-/// Every dual leaf touched by a non-zero active voxel of `g`. A voxel v lies in
-/// the dual cells `v - {0,1}^3`, hence in dual leaves `floor((v - {0,1}^3) / 8)`;
-/// voxels with a local coordinate 0 also feed the lower neighbour: bit `d`
-/// of `feeds[i]` says leaf `i` feeds dual leaf `key - (dx,dy,dz)`. The keys
-/// are appended unsorted and with repeats (the caller sorts and deduplicates).
-fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, feeds: &[u8], out: &mut Vec<IVec3>) {
-    for (leaf, &f) in g.leaves().iter().zip(feeds) {
-        let key = shr(leaf.origin, LEAF_LOG2);
-        out.extend((0..8u8).filter(|d| f >> d & 1 == 1).map(|d| {
-            key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
-        }));
-    }
+macro_rules! grid_source {
+    ($t:ty, $flat:expr) => {
+        impl LeafSource for GridSource<'_, $t> {
+            fn name(&self) -> &str {
+                &self.0.name
+            }
+            fn transform(&self) -> Transform {
+                self.0.transform
+            }
+            fn channels(&self) -> usize {
+                <$t as VoxelValue>::COMPONENTS
+            }
+            fn background(&self) -> [f32; 3] {
+                self.0.background.components()
+            }
+            fn leaf_count(&self) -> usize {
+                self.0.leaves().len()
+            }
+            fn origin(&self, i: usize) -> IVec3 {
+                self.0.leaves()[i].origin
+            }
+            fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS] {
+                &self.0.leaves()[i].mask
+            }
+            fn values<'s>(&'s self, i: usize, _: &'s mut Scratch) -> Result<&'s [f32], LeafError> {
+                let flat: fn(&[$t]) -> &[f32] = $flat;
+                Ok(flat(&self.0.leaves()[i].values[..]))
+            }
+        }
+    };
+}
+grid_source!(f32, |v| v);
+grid_source!([f32; 3], |v| v.as_flattened());
+
+/// Every dual leaf a source leaf at `origin` feeds (bit `d` of `feeds`:
+/// dual leaf `key - (dx,dy,dz)`, see [`feeds_from_nonzero`]), appended.
+fn push_dual_keys(origin: IVec3, feeds: u8, out: &mut Vec<IVec3>) {
+    let key = shr(origin, LEAF_LOG2);
+    out.extend((0..8u8).filter(|d| feeds >> d & 1 == 1).map(|d| {
+        key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
+    }));
 }
 
 /// Bits of a leaf's 64-voxel mask word with local z = 0 (`n & 7 == 0`).
@@ -229,22 +245,21 @@ fn feeds_from_nonzero(nz: &[u64; 8]) -> u8 {
     feeds
 }
 
-/// One pass over a source leaf: its largest active component and its feeds
-/// byte ([`feeds_from_nonzero`]), or the offset of its first active voxel
-/// that is negative, infinite or NaN. Inactive voxels count as 0 whatever
-/// they hold.
-fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
+/// One pass over a source leaf's values (`channels` components a voxel,
+/// interleaved): its largest active component and, per mask word, its
+/// non-zero active voxels; or the offset of its first active voxel that is
+/// negative, infinite or NaN. Inactive voxels count as 0 whatever they hold.
+fn scan_values(values: &[f32], channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<(f32, [u64; 8]), usize> {
     let mut nz = [0u64; 8];
     let mut peak = 0.0f32;
-    for (w, &active) in leaf.mask.iter().enumerate() {
+    for (w, &active) in mask.iter().enumerate() {
         if active == 0 {
             continue;
         }
         let (mut nzw, mut bad) = (0u64, 0u64);
-        for (b, v) in leaf.values[w * 64..w * 64 + 64].iter().enumerate() {
+        for (b, v) in values[w * 64 * channels..(w + 1) * 64 * channels].chunks_exact(channels).enumerate() {
             let on = active >> b & 1 == 1;
-            let c = v.components();
-            for &x in &c[..T::COMPONENTS] {
+            for &x in v {
                 let x = if on { x } else { 0.0 };
                 nzw |= u64::from(x != 0.0) << b;
                 // `!(x >= 0.0)` also catches NaN.
@@ -257,7 +272,14 @@ fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), us
         }
         nz[w] = nzw;
     }
-    Ok((peak, feeds_from_nonzero(&nz)))
+    Ok((peak, nz))
+}
+
+/// [`scan_values`] of a grid leaf, with its feeds byte (the tests' entry).
+#[cfg(test)]
+fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
+    let flat: Vec<f32> = leaf.values.iter().flat_map(|v| v.components().into_iter().take(T::COMPONENTS)).collect();
+    scan_values(&flat, T::COMPONENTS, &leaf.mask).map(|(p, nz)| (p, feeds_from_nonzero(&nz)))
 }
 
 /// The feeds byte by brute force (every active voxel, every offset): the
@@ -279,80 +301,90 @@ fn leaf_feeds<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> u8 {
     feeds
 }
 
-fn fill_block<T: VoxelValue>(g: &Grid<T>, origin: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
-    let Some(leaf) = g.leaf(origin) else { return };
-    // Only active voxels are copied (`dst` starts at 0).
-    for (w, &word) in leaf.mask.iter().enumerate() {
+/// Copies the active values of a source leaf (`values`, `channels`
+/// components a voxel) into block `dst` (stride `stride`, starting at
+/// channel `first`); `dst` starts at 0, so inactive voxels read 0.
+fn fill_block(values: &[f32], channels: usize, mask: &[u64; LEAF_MASK_WORDS], dst: &mut [f32], stride: usize, first: usize) {
+    for (w, &word) in mask.iter().enumerate() {
         let mut bits = word;
         while bits != 0 {
             let n = w * 64 + bits.trailing_zeros() as usize;
             bits &= bits - 1;
-            let c = leaf.values[n].components();
             let at = n * stride + first;
-            for k in 0..T::COMPONENTS {
-                dst[at + k] = (c[k] as f64 * scale) as f32;
-            }
+            dst[at..at + channels].copy_from_slice(&values[n * channels..(n + 1) * channels]);
         }
     }
 }
 
 /// Rejects grids the renderer cannot sample the way Cycles does.
-pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
-    validate_and_peak(g).map(|_| ())
-}
-
-/// [`validate_grid`], returning the largest active component (0 for an
-/// empty grid) and each leaf's feeds byte ([`scan_leaf`]): one pass over the
-/// voxels serves the checks and the dual-leaf keys.
-fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<(f32, Vec<u8>), RenderError> {
-    let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
-    let ts = g.transform.voxel_size;
-    if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
-        return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
-    }
-    if g.background != T::ZERO {
-        return Err(err(format!(
-            "background {:?} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
-            g.background
-        )));
-    }
-    // Leaves in parallel: per leaf the peak and feeds, or the offset of its
-    // first bad voxel; the first bad voxel in leaf order is reported.
-    let per_leaf: Vec<Result<(f32, u8), usize>> = g.leaves().par_iter().map(scan_leaf).collect();
-    let mut peak = 0.0f32;
-    let mut feeds = Vec::with_capacity(per_leaf.len());
-    for (leaf, r) in g.leaves().iter().zip(per_leaf) {
-        match r {
-            Ok((p, f)) => {
-                peak = peak.max(p);
-                feeds.push(f);
-            }
-            Err(n) => {
-                let ijk = leaf.origin + crate::grid::offset_to_local(n);
-                let v = leaf.values[n];
-                return Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0")));
-            }
+pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError>
+where
+    for<'a> GridSource<'a, T>: LeafSource,
+{
+    let src = GridSource(g);
+    check_header(&src)?;
+    let mut scratch = Scratch::default();
+    for i in 0..src.leaf_count() {
+        let v = src.values(i, &mut scratch).map_err(|e| RenderError::Grid { grid: g.name.clone(), message: e.to_string() })?;
+        if let Err(n) = scan_values(v, src.channels(), src.mask(i)) {
+            return Err(bad_voxel(&src, i, n, v));
         }
     }
-    Ok((peak, feeds))
+    Ok(())
 }
 
-/// Largest scaled voxel value the renderer accepts. The field stores scaled
-/// values as f32 (at most 3.4e38) and the film is f32: a radiance of 10^30
-/// per km integrated over 10^8 km of path still fits, so no finite input
-/// below this bound can reach an infinite pixel.
+/// The checks on a source that need no values: transform and background.
+fn check_header(src: &dyn LeafSource) -> Result<(), RenderError> {
+    let err = |message: String| RenderError::Grid { grid: src.name().to_string(), message };
+    let t = src.transform();
+    let ts = t.voxel_size;
+    if !(ts.is_finite() && ts > 0.0 && t.translation.is_finite()) {
+        return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
+    }
+    let bg = src.background();
+    if bg[..src.channels()].iter().any(|&x| x != 0.0) {
+        return Err(err(format!(
+            "background {} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
+            value_text(&bg[..src.channels()])
+        )));
+    }
+    Ok(())
+}
+
+/// A voxel value as `{:?}` prints the grid's value type (`1.5` or `[1.0, 2.0, 3.0]`).
+fn value_text(c: &[f32]) -> String {
+    if c.len() == 1 {
+        format!("{:?}", c[0])
+    } else {
+        format!("{c:?}")
+    }
+}
+
+/// The error for voxel `n` of leaf `i` of `src` (values `v`).
+fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: &[f32]) -> RenderError {
+    let ch = src.channels();
+    let ijk = src.origin(i) + crate::grid::offset_to_local(n);
+    RenderError::Grid {
+        grid: src.name().to_string(),
+        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(&v[n * ch..(n + 1) * ch])),
+    }
+}
+
+/// Largest scaled voxel value the renderer accepts. The film is f32 and a
+/// radiance of 10^30 per km integrated over 10^8 km of path still fits, so
+/// no finite input below this bound can reach an infinite pixel.
 pub const MAX_SCALED_VALUE: f64 = 1e30;
 
 /// Rejects a grid whose largest value times `scale` exceeds
 /// [`MAX_SCALED_VALUE`] (a foreign VDB near f32's limit with a large scale).
-fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
+fn check_scaled_peak(grid: &str, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
     if scale == 0.0 {
         return Ok(());
     }
     let peak = peak as f64;
     if peak * scale > MAX_SCALED_VALUE {
         return Err(RenderError::Grid {
-            grid: g.name.clone(),
+            grid: grid.to_string(),
             message: format!(
                 "largest value {peak:e} times volume.{key} = {scale:e} is {:e}, above {MAX_SCALED_VALUE:e}: the image would overflow; lower volume.{key}",
                 peak * scale
@@ -362,45 +394,145 @@ fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, peak: f32, key: &str, scale: f6
     Ok(())
 }
 
-impl Field {
-    /// Builds a field whose channels are the concatenation of `sources`' channels
-    /// (all on the same transform), each multiplied by its scale.
-    pub fn build(sources: &[Source<'_>]) -> Field {
-        assert!(!sources.is_empty());
-        let transform = sources[0].grid.transform();
-        debug_assert!(sources.iter().all(|s| s.grid.transform() == transform));
-        let channels: usize = sources.iter().map(|s| s.grid.channels()).sum();
+/// What [`Field::from_sources`] found in one source.
+struct SourceReport {
+    /// Largest active component (0 for none).
+    peak: f32,
+    /// The first failure in block order: a bad voxel or a read error.
+    fail: Option<RenderError>,
+}
 
-        // Blocks: the source leaves with a non-zero voxel, in key order.
-        let mut origins = Vec::new();
-        for s in sources {
-            s.grid.live_origins(&s.feeds, &mut origins);
+/// What the pass found in one block.
+struct BlockScan {
+    /// Dual leaves the block feeds (0: no non-zero active voxel, the block
+    /// is not stored).
+    feeds: u8,
+    /// Its non-zero voxels: channel 0, any channel ([`voxel_masks`]).
+    masks: (CellMask, CellMask),
+    /// Per source: the largest active component, the first failure.
+    peaks: [f32; 2],
+    fails: [Option<Box<RenderError>>; 2],
+}
+
+/// Reads, checks and (if some source has a non-zero active voxel here)
+/// stores the leaves of one block: `leaves[k]` is source `k`'s leaf at the
+/// block's origin ([`NONE`] if it has none). A block with no non-zero voxel
+/// is never written, so its pages are never touched.
+fn scan_block(
+    sources: &[&dyn LeafSource],
+    leaves: &[u32; 2],
+    dst: &mut [f32],
+    channels: usize,
+    scratch: &mut [Scratch; 2],
+) -> BlockScan {
+    let mut scan = BlockScan { feeds: 0, masks: ([0; 8], [0; 8]), peaks: [0.0; 2], fails: [None, None] };
+    let mut got: [Option<&[f32]>; 2] = [None, None];
+    let mut nz = [0u64; 8];
+    for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {
+        let li = leaves[k];
+        if li == NONE {
+            continue;
         }
-        origins.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
-        origins.dedup();
-        let per_block = BLOCK_VALUES * channels;
-        let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
-        // Per block, its non-zero voxels: channel 0, and any channel.
-        let mut nonzero: Vec<(CellMask, CellMask)> = vec![([0; 8], [0; 8])];
-        nonzero.par_extend(values[per_block..].par_chunks_mut(per_block).zip(origins.par_iter()).map(
-            |(dst, &origin)| {
-                let mut first = 0;
-                for s in sources {
-                    s.grid.fill(origin, s.scale, dst, channels, first);
-                    first += s.grid.channels();
+        let li = li as usize;
+        match src.values(li, scr) {
+            Err(source) => {
+                scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source }))
+            }
+            Ok(v) => match scan_values(v, src.channels(), src.mask(li)) {
+                Err(n) => scan.fails[k] = Some(Box::new(bad_voxel(*src, li, n, v))),
+                Ok((peak, words)) => {
+                    scan.peaks[k] = peak;
+                    for (a, w) in nz.iter_mut().zip(words) {
+                        *a |= w;
+                    }
+                    got[k] = Some(v);
                 }
-                voxel_masks(dst, channels)
             },
-        ));
+        }
+    }
+    scan.feeds = feeds_from_nonzero(&nz);
+    if scan.feeds != 0 {
+        let mut first = 0;
+        for (k, src) in sources.iter().enumerate() {
+            if let Some(v) = got[k] {
+                fill_block(v, src.channels(), src.mask(leaves[k] as usize), dst, channels, first);
+            }
+            first += src.channels();
+        }
+        scan.masks = voxel_masks(dst, channels);
+    }
+    scan
+}
+
+impl Field {
+    /// Builds a field whose channels are the concatenation of `sources`'
+    /// channels (one or two sources, all on the same transform), at unit
+    /// scale (`scale` all 1), in one parallel pass over the union of their
+    /// leaves: each leaf is read (a file's record decoded) straight into a
+    /// per-thread buffer, checked (finite, >= 0), and its active values
+    /// copied into its block of one preallocated array; its largest value
+    /// and the dual leaves it feeds come from the same pass. Blocks are
+    /// numbered by the union of the sources' leaves (in key order), so a
+    /// leaf with no non-zero active voxel (the Cycles shell) keeps an
+    /// all-zero block that nothing references and nothing writes: its
+    /// memory is reserved, never touched. The result depends only on the
+    /// sources' leaves and values, never on the thread count.
+    fn from_sources(sources: &[&dyn LeafSource]) -> (Field, Vec<SourceReport>) {
+        assert!(!sources.is_empty() && sources.len() <= 2);
+        let transform = sources[0].transform();
+        debug_assert!(sources.iter().all(|s| s.transform() == transform));
+        let channels: usize = sources.iter().map(|s| s.channels()).sum();
+
+        // Blocks: the union of the sources' leaves, in key order.
+        let mut all: Vec<(IVec3, u32, u32)> = Vec::new();
+        for (k, s) in sources.iter().enumerate() {
+            all.extend((0..s.leaf_count()).map(|i| (s.origin(i), k as u32, i as u32)));
+        }
+        all.par_sort_unstable_by_key(|&(o, k, _)| (o.x, o.y, o.z, k));
+        let mut origins: Vec<IVec3> = Vec::with_capacity(all.len());
+        let mut leaf_of: Vec<[u32; 2]> = Vec::with_capacity(all.len());
+        for &(o, k, i) in &all {
+            if origins.last() != Some(&o) {
+                origins.push(o);
+                leaf_of.push([NONE; 2]);
+            }
+            if let Some(l) = leaf_of.last_mut() {
+                l[k as usize] = i;
+            }
+        }
+        drop(all);
+        let per_block = BLOCK_VALUES * channels;
+        // Zeroed by the allocator (fresh pages): blocks not written cost
+        // no memory.
+        let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
+        let mut scans: Vec<BlockScan> = values[per_block..]
+            .par_chunks_mut(per_block)
+            .zip(leaf_of.par_iter())
+            .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| {
+                scan_block(sources, leaves, dst, channels, scratch)
+            })
+            .collect();
+        drop(leaf_of);
+        let mut reports: Vec<SourceReport> = sources.iter().map(|_| SourceReport { peak: 0.0, fail: None }).collect();
+        for s in scans.iter_mut() {
+            for (k, r) in reports.iter_mut().enumerate() {
+                r.peak = r.peak.max(s.peaks[k]);
+                if r.fail.is_none() {
+                    r.fail = s.fails[k].take().map(|b| *b);
+                }
+            }
+        }
+        let live_blocks = scans.iter().filter(|s| s.feeds != 0).count();
         let block_of = |origin: IVec3| -> u32 {
-            origins
-                .binary_search_by_key(&(origin.x, origin.y, origin.z), |k| (k.x, k.y, k.z))
-                .map_or(0, |i| i as u32 + 1)
+            match origins.binary_search_by_key(&(origin.x, origin.y, origin.z), |k| (k.x, k.y, k.z)) {
+                Ok(i) if scans[i].feeds != 0 => i as u32 + 1,
+                _ => 0,
+            }
         };
 
         let mut keys = Vec::new();
-        for s in sources {
-            s.grid.dual_keys(&s.feeds, &mut keys);
+        for (s, &o) in scans.iter().zip(&origins) {
+            push_dual_keys(o, s.feeds, &mut keys);
         }
         keys.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
         keys.dedup();
@@ -413,8 +545,14 @@ impl Field {
                 })
             })
             .collect();
+        // Per block, its non-zero voxels (block 0 and unwritten blocks: none).
+        let mut nonzero: Vec<(CellMask, CellMask)> = Vec::with_capacity(scans.len() + 1);
+        nonzero.push(([0; 8], [0; 8]));
+        nonzero.extend(scans.iter().map(|s| s.masks));
+        drop(scans);
         let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
             neighbours.par_iter().map(|nb| cell_masks(nb, &nonzero)).unzip();
+
 
         // Hierarchy: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
         let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
@@ -452,7 +590,7 @@ impl Field {
                 shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
             )
         };
-        Field {
+        let field = Field {
             transform,
             channels,
             keys,
@@ -468,7 +606,10 @@ impl Field {
             hi,
             root_lo,
             root_hi,
-        }
+            scale: [1.0; 4],
+            live_blocks,
+        };
+        (field, reports)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -481,7 +622,7 @@ impl Field {
 
     /// Bytes held by the structure (for reports).
     pub fn memory_bytes(&self) -> usize {
-        self.values.len() * 4
+        (self.live_blocks + 1) * BLOCK_VALUES * self.channels * 4
             + self.keys.len() * (12 + 32 + 128)
             + self.blocks.len() * BLOCK_SLOTS * 4
             + self.supers.len() * SUPER_SLOTS * 4
@@ -550,6 +691,9 @@ impl Field {
                 out[ch] += w[k] * v[ch] as f64;
             }
         }
+        for ch in 0..self.channels {
+            out[ch] *= self.scale[ch];
+        }
     }
 
     /// World-space box of the stored dual leaves (the support of the field).
@@ -614,14 +758,43 @@ pub struct Channel {
 /// The volume as the renderer sees it: sigma_t = density_scale * density and
 /// emission e = emission_scale * emission, each on its grid's own transform.
 /// When both grids share a transform they share one [`Field`] (channel 0 =
-/// sigma_t, channels 1..4 = e), so a ray walks one tree.
-#[derive(Debug, Clone)]
+/// density, channels 1..4 = emission), so a ray walks one tree. The fields
+/// hold the grids' values as stored (unit scale) and the scales are applied
+/// at lookup ([`Field::scale`]), so [`Medium::set_scales`] changes them
+/// without a rebuild.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Medium {
     pub fields: Vec<Field>,
     /// sigma_t, if the volume has any extinction.
     pub sigma_t: Option<Channel>,
     /// First of the three emission channels, if the volume emits.
     pub emission: Option<Channel>,
+    /// Density, then emission: where its values are stored, its largest
+    /// value and its grid's name; `None` for a missing grid or one with no
+    /// non-zero active voxel. Kept whatever the scale, so that a scale
+    /// leaving or reaching 0 needs no rebuild either.
+    stored: [Option<Stored>; 2],
+    pub density_scale: f64,
+    pub emission_scale: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Stored {
+    channel: Channel,
+    peak: f32,
+    grid: String,
+}
+
+/// The scene keys of the two scales, density then emission.
+const SCALE_KEYS: [&str; 2] = ["density_scale", "emission_scale"];
+
+fn check_scales(scales: [f64; 2]) -> Result<(), RenderError> {
+    for (what, s) in SCALE_KEYS.iter().zip(scales) {
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
+        }
+    }
+    Ok(())
 }
 
 impl Medium {
@@ -633,52 +806,122 @@ impl Medium {
         density_scale: f64,
         emission_scale: f64,
     ) -> Result<Medium, RenderError> {
-        for (what, s) in [("density_scale", density_scale), ("emission_scale", emission_scale)] {
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
+        let d = density.map(GridSource);
+        let e = emission.map(GridSource);
+        Medium::from_sources(
+            d.as_ref().map(|s| s as &dyn LeafSource),
+            e.as_ref().map(|s| s as &dyn LeafSource),
+            density_scale,
+            emission_scale,
+        )
+    }
+
+    /// [`Medium::new`] from any [`LeafSource`]s (a density source of 1
+    /// channel, an emission source of 3): the same medium, field for field,
+    /// from a grid in memory or from a file's leaves decoded on the fly.
+    /// Errors (in this order): a scale out of range, a bad transform or
+    /// background, then per source (density first) its first bad voxel or
+    /// unreadable leaf in key order and a scaled peak above
+    /// [`MAX_SCALED_VALUE`].
+    pub fn from_sources(
+        density: Option<&dyn LeafSource>,
+        emission: Option<&dyn LeafSource>,
+        density_scale: f64,
+        emission_scale: f64,
+    ) -> Result<Medium, RenderError> {
+        let scales = [density_scale, emission_scale];
+        check_scales(scales)?;
+        let srcs = [density, emission];
+        for (s, want) in srcs.iter().zip([1, 3]) {
+            if let Some(s) = s {
+                if s.channels() != want {
+                    return Err(RenderError::Grid {
+                        grid: s.name().to_string(),
+                        message: format!("has {} components a voxel, expected {want}", s.channels()),
+                    });
+                }
+                check_header(*s)?;
             }
         }
-        // A grid feeds the field iff it has a non-zero active voxel: its
-        // peak (values are >= 0) is above 0.
-        let mut d = None;
-        if let Some(g) = density {
-            let (peak, feeds) = validate_and_peak(g)?;
-            check_scaled_peak(g, peak, "density_scale", density_scale)?;
-            if density_scale > 0.0 && peak > 0.0 {
-                d = Some(Source { grid: SourceGrid::Scalar(g), scale: density_scale, feeds });
+        // Sources sharing a transform share a field.
+        let groups: Vec<Vec<usize>> = match srcs {
+            [Some(d), Some(e)] if d.transform() == e.transform() => vec![vec![0, 1]],
+            _ => (0..2).filter(|&k| srcs[k].is_some()).map(|k| vec![k]).collect(),
+        };
+        let mut medium = Medium {
+            fields: Vec::new(),
+            sigma_t: None,
+            emission: None,
+            stored: [None, None],
+            density_scale,
+            emission_scale,
+        };
+        for group in groups {
+            let list: Vec<&dyn LeafSource> = group.iter().filter_map(|&k| srcs[k]).collect();
+            let (mut field, reports) = Field::from_sources(&list);
+            let mut peaks = [0.0f32; 2];
+            for (r, &k) in reports.into_iter().zip(&group) {
+                if let Some(e) = r.fail {
+                    return Err(e);
+                }
+                let name = srcs[k].map_or("", |s| s.name());
+                check_scaled_peak(name, r.peak, SCALE_KEYS[k], scales[k])?;
+                peaks[k] = r.peak;
+            }
+            // A source feeds the field iff it has a non-zero active voxel:
+            // its peak (values are >= 0) is above 0. Rebuilt without a
+            // source that has none (rare: an all-zero grid).
+            let live: Vec<usize> = group.iter().copied().filter(|&k| peaks[k] > 0.0).collect();
+            if live.is_empty() {
+                continue;
+            }
+            if live.len() < group.len() {
+                let list: Vec<&dyn LeafSource> = live.iter().filter_map(|&k| srcs[k]).collect();
+                field = Field::from_sources(&list).0;
+            }
+            let fi = medium.fields.len();
+            let mut ch = 0;
+            for &k in &live {
+                let src = srcs[k].expect("live sources exist");
+                medium.stored[k] =
+                    Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
+                ch += src.channels();
+            }
+            medium.fields.push(field);
+        }
+        medium.set_scales(density_scale, emission_scale)?;
+        Ok(medium)
+    }
+
+    /// Sets `volume.density_scale` and `volume.emission_scale` without
+    /// rebuilding anything (the fields hold unit values; the scales are
+    /// applied at lookup): the medium then equals `Medium::new` with these
+    /// scales, field for field. On error (a scale out of range, or a grid's
+    /// largest value times its scale above [`MAX_SCALED_VALUE`]) the medium
+    /// is unchanged.
+    pub fn set_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<(), RenderError> {
+        let scales = [density_scale, emission_scale];
+        check_scales(scales)?;
+        for (k, st) in self.stored.iter().enumerate() {
+            if let Some(st) = st {
+                check_scaled_peak(&st.grid, st.peak, SCALE_KEYS[k], scales[k])?;
             }
         }
-        let mut e = None;
-        if let Some(g) = emission {
-            let (peak, feeds) = validate_and_peak(g)?;
-            check_scaled_peak(g, peak, "emission_scale", emission_scale)?;
-            if emission_scale > 0.0 && peak > 0.0 {
-                e = Some(Source { grid: SourceGrid::Vector(g), scale: emission_scale, feeds });
+        for f in &mut self.fields {
+            f.scale = [1.0; 4];
+        }
+        for (k, (st, n)) in self.stored.iter().zip([1, 3]).enumerate() {
+            if let Some(st) = st {
+                let c = st.channel;
+                self.fields[c.field].scale[c.channel..c.channel + n].fill(scales[k]);
             }
         }
-        Ok(match (d, e) {
-            (None, None) => Medium { fields: vec![], sigma_t: None, emission: None },
-            (Some(d), None) => Medium {
-                fields: vec![Field::build(&[d])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: None,
-            },
-            (None, Some(e)) => Medium {
-                fields: vec![Field::build(&[e])],
-                sigma_t: None,
-                emission: Some(Channel { field: 0, channel: 0 }),
-            },
-            (Some(d), Some(e)) if d.grid.transform() == e.grid.transform() => Medium {
-                fields: vec![Field::build(&[d, e])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: Some(Channel { field: 0, channel: 1 }),
-            },
-            (Some(d), Some(e)) => Medium {
-                fields: vec![Field::build(&[d]), Field::build(&[e])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: Some(Channel { field: 1, channel: 0 }),
-            },
-        })
+        let on = |k: usize| self.stored[k].as_ref().filter(|_| scales[k] > 0.0).map(|s| s.channel);
+        self.sigma_t = on(0);
+        self.emission = on(1);
+        self.density_scale = density_scale;
+        self.emission_scale = emission_scale;
+        Ok(())
     }
 
     /// sigma_t at a world point (per unit length).

@@ -200,6 +200,9 @@ pub enum RenderError {
     /// negative or non-finite values, bad transform).
     #[error("grid '{grid}': {message}")]
     Grid { grid: String, message: String },
+    /// A grid's leaf could not be read (a file's record would not decode).
+    #[error("grid '{grid}': {source}")]
+    Source { grid: String, source: medium::LeafError },
     /// The terrain heightmap could not be read.
     #[error("heightmap {}: {message}", path.display())]
     Heightmap { path: PathBuf, message: String },
