@@ -321,6 +321,33 @@ struct Counters {
 impl Prepared {
     /// Validates the settings and builds everything the pixel loop reads.
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
+        let camera = Self::check(settings)?;
+        let medium = Medium::new(
+            volume.density,
+            volume.emission,
+            settings.volume.density_scale,
+            settings.volume.emission_scale,
+        )?;
+        Self::assemble(settings, camera, medium, volume.emission)
+    }
+
+    /// [`Prepared::new`] with a medium already built (for instance straight
+    /// from a file, `crate::vdb::read::read_render_medium`), its scales set
+    /// to the settings'. `emission` is the emission grid, needed only for
+    /// the terrain's emission sampler (`None` leaves the terrain unlit by
+    /// the volume's shadow rays: give it whenever the terrain is on).
+    pub fn with_medium(
+        settings: &RenderSettings,
+        mut medium: Medium,
+        emission: Option<&Grid<[f32; 3]>>,
+    ) -> Result<Prepared, RenderError> {
+        let camera = Self::check(settings)?;
+        medium.set_scales(settings.volume.density_scale, settings.volume.emission_scale)?;
+        Self::assemble(settings, camera, medium, emission)
+    }
+
+    /// The settings' checks; the camera.
+    fn check(settings: &RenderSettings) -> Result<CameraModel, RenderError> {
         let r = &settings.render;
         let bad = |m: String| Err(RenderError::Settings(m));
         if r.spp == 0 {
@@ -340,15 +367,17 @@ impl Prepared {
         if settings.terrain.albedo.iter().any(|v| !(0.0..=1.0).contains(v)) {
             return bad(format!("terrain.albedo {:?} must be in [0, 1]", settings.terrain.albedo));
         }
-        let camera = CameraModel::new(&settings.camera, r.width, r.height)?;
-        let medium = Medium::new(
-            volume.density,
-            volume.emission,
-            settings.volume.density_scale,
-            settings.volume.emission_scale,
-        )?;
+        Ok(CameraModel::new(&settings.camera, r.width, r.height)?)
+    }
+
+    fn assemble(
+        settings: &RenderSettings,
+        camera: CameraModel,
+        medium: Medium,
+        emission: Option<&Grid<[f32; 3]>>,
+    ) -> Result<Prepared, RenderError> {
         let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
-        let sampler = match (&terrain, volume.emission, medium.emission) {
+        let sampler = match (&terrain, emission, medium.emission) {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
         };
@@ -567,7 +596,23 @@ pub fn render_adaptive(
     }
     let build = Instant::now();
     let prepared = Prepared::new(settings, volume)?;
-    let build_seconds = build.elapsed().as_secs_f64();
+    render_adaptive_prepared(&prepared, build.elapsed().as_secs_f64(), progress)
+}
+
+/// [`render_adaptive`] from an already built [`Prepared`] (for instance
+/// one whose medium was read straight from a file,
+/// [`Prepared::with_medium`]); `build_seconds` goes into the stats.
+pub fn render_adaptive_prepared(
+    prepared: &Prepared,
+    build_seconds: f64,
+    progress: &dyn Progress,
+) -> Result<Image, RenderError> {
+    let spp = prepared.settings.render.spp;
+    if spp < ADAPTIVE_MIN_SPP {
+        let mut img = render_prepared(prepared, progress)?;
+        img.stats.build_seconds = build_seconds;
+        return Ok(img);
+    }
     let (w, h) = (prepared.camera.width, prepared.camera.height);
     let n0 = 2 * (spp / 4);
     progress.start("render", 2 * h as u64);

@@ -32,6 +32,7 @@
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
+use crate::render::medium::{LeafError, LeafSource, Medium, Scratch};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -521,4 +522,154 @@ pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f3
         })
         .collect();
     choose(&listing, file.float_grids, file.vec3_grids)
+}
+
+/// Why a VDB file's medium could not be built: the grid choice
+/// ([`crate::render::grids`]) or the renderer's checks on the values.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderReadError {
+    #[error(transparent)]
+    Read(#[from] VdbReadError),
+    #[error("{file}: {source}")]
+    Grids { file: String, source: RenderGridsError },
+    #[error("{file}: {source}")]
+    Render { file: String, source: crate::render::RenderError },
+}
+
+/// The renderer's medium read straight from a VDB file, and the split of
+/// the time it took.
+pub struct RenderMedium {
+    pub medium: crate::render::medium::Medium,
+    /// Reading the file and validating every record (its leaves located).
+    pub open_seconds: f64,
+    /// Decoding the records into the medium (`Medium::from_sources`).
+    pub build_seconds: f64,
+}
+
+/// One grid of a file as a [`LeafSource`]: its leaves located by a
+/// [`parse::Decode::Locate`] parse, each record decoded when the medium's
+/// builder asks for it, into the builder's per-thread scratch.
+struct FileLeaves<'a, T> {
+    name: String,
+    transform: Transform,
+    tree: &'a Tree<T>,
+    data: &'a [u8],
+}
+
+macro_rules! file_leaves {
+    ($t:ty, $as_values:expr) => {
+        impl LeafSource for FileLeaves<'_, $t> {
+            fn name(&self) -> &str {
+                &self.name
+            }
+            fn transform(&self) -> Transform {
+                self.transform
+            }
+            fn channels(&self) -> usize {
+                <$t as VoxelValue>::COMPONENTS
+            }
+            fn background(&self) -> [f32; 3] {
+                self.tree.background.components()
+            }
+            fn leaf_count(&self) -> usize {
+                self.tree.spans.len()
+            }
+            fn origin(&self, i: usize) -> IVec3 {
+                self.tree.spans[i].origin
+            }
+            fn mask(&self, i: usize) -> &[u64; crate::grid::LEAF_MASK_WORDS] {
+                &self.tree.spans[i].mask
+            }
+            fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<&'s [f32], LeafError> {
+                let as_values: fn(&mut [f32]) -> &mut [$t] = $as_values;
+                let n = crate::grid::LEAF_NUM_VALUES * <$t as VoxelValue>::COMPONENTS;
+                scratch.values.resize(n, 0.0);
+                let out = as_values(&mut scratch.values[..n]);
+                parse::decode_leaf(self.data, self.tree.format, self.tree.background, &self.tree.spans[i], out, &mut scratch.bytes)?;
+                Ok(&scratch.values[..n])
+            }
+        }
+    };
+}
+file_leaves!(f32, |v| v);
+file_leaves!([f32; 3], |v| v.as_chunks_mut::<3>().0);
+
+/// Reads a VDB file straight into the renderer's medium (the `render`
+/// command's path): the file is parsed once, validating every record and
+/// locating each leaf's, then [`Medium::from_sources`] decodes the records
+/// in parallel, each into a per-thread buffer, checks them and copies them
+/// into the medium's blocks: no [`Grid`] in between. The grids are the ones
+/// [`render_grids`] would choose and the medium equals `Medium::new` of
+/// those grids (read by [`read_vdb`]), field for field.
+///
+/// `Ok(None)` where this path does not apply and the caller should read
+/// grids instead ([`read_vdb_for_render`], [`render_grids`]): a float
+/// `emission` grid (read as grey), active tiles in a chosen grid, or no
+/// grid to render (the grid path reports it).
+pub fn read_render_medium(
+    path: &Path,
+    density_scale: f64,
+    emission_scale: f64,
+) -> Result<Option<RenderMedium>, RenderReadError> {
+    use crate::render::grids::{check_types, GridType, Listed};
+    let start = std::time::Instant::now();
+    let bytes =
+        std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    let file = path.display().to_string();
+    let invalid = |source: ParseError| VdbReadError::Invalid { file: file.clone(), source };
+    let parsed = parse::parse_file_with(&bytes, &|gh| {
+        if gh.kind.is_some() {
+            parse::Decode::Locate
+        } else {
+            parse::Decode::Skip
+        }
+    })
+    .map_err(invalid)?;
+    let names: Vec<String> = parsed.grids.iter().map(|g| g.header.name()).collect();
+    let listing: Vec<Listed<'_>> = parsed
+        .grids
+        .iter()
+        .zip(&names)
+        .map(|(g, name)| Listed {
+            name,
+            type_name: &g.header.type_name,
+            kind: match g.header.kind {
+                Some(ValueKind::Float) => GridType::Float,
+                Some(ValueKind::Vec3) => GridType::Vec3,
+                None => GridType::Other,
+            },
+        })
+        .collect();
+    check_types(&listing).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
+    let transform_of = |g: &parse::ParsedGrid| g.header.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
+    let mut density = None;
+    let mut emission = None;
+    let mut float_emission = false;
+    for (g, name) in parsed.grids.iter().zip(&names) {
+        match (&g.tree, name.as_str()) {
+            (Some(AnyTree::Float(t)), "density") if density.is_none() => {
+                density = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: &bytes })
+            }
+            (Some(AnyTree::Vec3(t)), "emission") if emission.is_none() => {
+                emission = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: &bytes })
+            }
+            (Some(AnyTree::Float(_)), "emission") => float_emission = true,
+            _ => {}
+        }
+    }
+    let tiles = density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0)
+        || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
+    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles {
+        return Ok(None);
+    }
+    let open_seconds = start.elapsed().as_secs_f64();
+    let build = std::time::Instant::now();
+    let medium = Medium::from_sources(
+        density.as_ref().map(|s| s as &dyn LeafSource),
+        emission.as_ref().map(|s| s as &dyn LeafSource),
+        density_scale,
+        emission_scale,
+    )
+    .map_err(|source| RenderReadError::Render { file: file.clone(), source })?;
+    Ok(Some(RenderMedium { medium, open_seconds, build_seconds: build.elapsed().as_secs_f64() }))
 }
