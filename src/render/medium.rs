@@ -169,10 +169,20 @@ pub trait LeafSource: Sync {
     fn origin(&self, i: usize) -> IVec3;
     /// Active mask of leaf `i`.
     fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS];
-    /// The 512 values of leaf `i`, components interleaved (`512 *
-    /// channels` floats; inactive slots may hold anything), borrowed from
-    /// the source or decoded into `scratch`.
-    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<&'s [f32], LeafError>;
+    /// The values of leaf `i`, components interleaved, borrowed from the
+    /// source or decoded into `scratch`.
+    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError>;
+}
+
+/// A leaf's values as a [`LeafSource`] gives them.
+#[derive(Clone, Copy, Debug)]
+pub enum LeafValues<'s> {
+    /// All 512 slots in index order (`512 * channels` floats; inactive
+    /// slots may hold anything).
+    All(&'s [f32]),
+    /// The active slots only, in index order (`popcount(mask) * channels`
+    /// floats): what an active-mask VDB record stores.
+    Active(&'s [f32]),
 }
 
 /// A grid in memory as a [`LeafSource`].
@@ -202,9 +212,9 @@ macro_rules! grid_source {
             fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS] {
                 &self.0.leaves()[i].mask
             }
-            fn values<'s>(&'s self, i: usize, _: &'s mut Scratch) -> Result<&'s [f32], LeafError> {
+            fn values<'s>(&'s self, i: usize, _: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
                 let flat: fn(&[$t]) -> &[f32] = $flat;
-                Ok(flat(&self.0.leaves()[i].values[..]))
+                Ok(LeafValues::All(flat(&self.0.leaves()[i].values[..])))
             }
         }
     };
@@ -245,41 +255,110 @@ fn feeds_from_nonzero(nz: &[u64; 8]) -> u8 {
     feeds
 }
 
-/// One pass over a source leaf's values (`channels` components a voxel,
-/// interleaved): its largest active component and, per mask word, its
-/// non-zero active voxels; or the offset of its first active voxel that is
-/// negative, infinite or NaN. Inactive voxels count as 0 whatever they hold.
-fn scan_values(values: &[f32], channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<(f32, [u64; 8]), usize> {
-    let mut nz = [0u64; 8];
-    let mut peak = 0.0f32;
-    for (w, &active) in mask.iter().enumerate() {
-        if active == 0 {
-            continue;
-        }
-        let (mut nzw, mut bad) = (0u64, 0u64);
-        for (b, v) in values[w * 64 * channels..(w + 1) * 64 * channels].chunks_exact(channels).enumerate() {
-            let on = active >> b & 1 == 1;
-            for &x in v {
-                let x = if on { x } else { 0.0 };
-                nzw |= u64::from(x != 0.0) << b;
-                // `!(x >= 0.0)` also catches NaN.
-                bad |= u64::from(!(x >= 0.0) || x == f32::INFINITY) << b;
-                peak = peak.max(x);
-            }
-        }
-        if bad != 0 {
-            return Err(w * 64 + bad.trailing_zeros() as usize);
-        }
-        nz[w] = nzw;
-    }
-    Ok((peak, nz))
+/// Whether a stored component is acceptable: finite and >= 0 (-0 included),
+/// on its bits: below +inf's bits, or -0's.
+#[inline]
+fn valid_bits(b: u32) -> bool {
+    b < 0x7f80_0000 || b == 0x8000_0000
 }
 
-/// [`scan_values`] of a grid leaf, with its feeds byte (the tests' entry).
+/// First pass over a source leaf: its largest active component, or the
+/// offset of its first active voxel that is negative, infinite or NaN.
+/// Inactive voxels count as 0 whatever they hold. On a leaf's active values
+/// alone ([`LeafValues::Active`]) the check runs on the floats' bits, in
+/// SIMD lanes: a valid value's bits order as its value.
+fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<f32, usize> {
+    match values {
+        LeafValues::Active(a) => {
+            let (mut peak, mut bad) = (0u32, 0u32);
+            for &x in a {
+                let b = x.to_bits();
+                bad |= u32::from(!valid_bits(b));
+                peak = peak.max(b & 0x7fff_ffff);
+            }
+            if bad != 0 {
+                // The first active voxel with a bad component.
+                let mut k = 0;
+                for (w, &word) in mask.iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        let n = w * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        if a[k * channels..(k + 1) * channels].iter().any(|x| !valid_bits(x.to_bits())) {
+                            return Err(n);
+                        }
+                        k += 1;
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
+        }
+        LeafValues::All(a) => {
+            let mut peak = 0u32;
+            for (w, &word) in mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let n = w * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    for &x in &a[n * channels..(n + 1) * channels] {
+                        let b = x.to_bits();
+                        if !valid_bits(b) {
+                            return Err(n);
+                        }
+                        peak = peak.max(b & 0x7fff_ffff);
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
+        }
+    }
+}
+
+/// Second pass over a source leaf with a non-zero voxel in its block: copies
+/// its active values into block `dst` (stride `stride`, starting at channel
+/// `first`; `dst` starts at 0, so inactive voxels read 0) and returns its
+/// voxels whose first component (resp. some component) is not 0.
+fn fill_leaf(
+    values: LeafValues<'_>,
+    channels: usize,
+    mask: &[u64; LEAF_MASK_WORDS],
+    dst: &mut [f32],
+    stride: usize,
+    first: usize,
+) -> (CellMask, CellMask) {
+    let (mut nz_first, mut nz_any) = ([0u64; 8], [0u64; 8]);
+    let (a, active) = match values {
+        LeafValues::All(a) => (a, false),
+        LeafValues::Active(a) => (a, true),
+    };
+    let mut k = 0;
+    for (w, &word) in mask.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let b = bits.trailing_zeros();
+            bits &= bits - 1;
+            let n = w * 64 + b as usize;
+            let i = if active { k } else { n };
+            k += 1;
+            let v = &a[i * channels..(i + 1) * channels];
+            let at = n * stride + first;
+            dst[at..at + channels].copy_from_slice(v);
+            nz_first[w] |= u64::from(v[0] != 0.0) << b;
+            nz_any[w] |= u64::from(v.iter().any(|&x| x != 0.0)) << b;
+        }
+    }
+    (nz_first, nz_any)
+}
+
+/// The largest active component and the feeds byte of a grid leaf (the
+/// tests' entry to the two passes).
 #[cfg(test)]
 fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
     let flat: Vec<f32> = leaf.values.iter().flat_map(|v| v.components().into_iter().take(T::COMPONENTS)).collect();
-    scan_values(&flat, T::COMPONENTS, &leaf.mask).map(|(p, nz)| (p, feeds_from_nonzero(&nz)))
+    let peak = leaf_peak(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask)?;
+    let mut dst = vec![0.0; flat.len()];
+    let (_, nz) = fill_leaf(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask, &mut dst, T::COMPONENTS, 0);
+    Ok((peak, feeds_from_nonzero(&nz)))
 }
 
 /// The feeds byte by brute force (every active voxel, every offset): the
@@ -301,21 +380,6 @@ fn leaf_feeds<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> u8 {
     feeds
 }
 
-/// Copies the active values of a source leaf (`values`, `channels`
-/// components a voxel) into block `dst` (stride `stride`, starting at
-/// channel `first`); `dst` starts at 0, so inactive voxels read 0.
-fn fill_block(values: &[f32], channels: usize, mask: &[u64; LEAF_MASK_WORDS], dst: &mut [f32], stride: usize, first: usize) {
-    for (w, &word) in mask.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let n = w * 64 + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let at = n * stride + first;
-            dst[at..at + channels].copy_from_slice(&values[n * channels..(n + 1) * channels]);
-        }
-    }
-}
-
 /// Rejects grids the renderer cannot sample the way Cycles does.
 pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError>
 where
@@ -326,7 +390,7 @@ where
     let mut scratch = Scratch::default();
     for i in 0..src.leaf_count() {
         let v = src.values(i, &mut scratch).map_err(|e| RenderError::Grid { grid: g.name.clone(), message: e.to_string() })?;
-        if let Err(n) = scan_values(v, src.channels(), src.mask(i)) {
+        if let Err(n) = leaf_peak(v, src.channels(), src.mask(i)) {
             return Err(bad_voxel(&src, i, n, v));
         }
     }
@@ -361,12 +425,22 @@ fn value_text(c: &[f32]) -> String {
 }
 
 /// The error for voxel `n` of leaf `i` of `src` (values `v`).
-fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: &[f32]) -> RenderError {
+fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<'_>) -> RenderError {
     let ch = src.channels();
     let ijk = src.origin(i) + crate::grid::offset_to_local(n);
+    let at = match v {
+        LeafValues::All(a) => &a[n * ch..(n + 1) * ch],
+        LeafValues::Active(a) => {
+            // The voxel's rank among the active ones.
+            let mask = src.mask(i);
+            let k: usize = (0..n >> 6).map(|w| mask[w].count_ones() as usize).sum::<usize>()
+                + (mask[n >> 6] & ((1u64 << (n & 63)) - 1)).count_ones() as usize;
+            &a[k * ch..(k + 1) * ch]
+        }
+    };
     RenderError::Grid {
         grid: src.name().to_string(),
-        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(&v[n * ch..(n + 1) * ch])),
+        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(at)),
     }
 }
 
@@ -426,8 +500,7 @@ fn scan_block(
     scratch: &mut [Scratch; 2],
 ) -> BlockScan {
     let mut scan = BlockScan { feeds: 0, masks: ([0; 8], [0; 8]), peaks: [0.0; 2], fails: [None, None] };
-    let mut got: [Option<&[f32]>; 2] = [None, None];
-    let mut nz = [0u64; 8];
+    let mut got: [Option<LeafValues<'_>>; 2] = [None, None];
     for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {
         let li = leaves[k];
         if li == NONE {
@@ -438,28 +511,33 @@ fn scan_block(
             Err(source) => {
                 scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source }))
             }
-            Ok(v) => match scan_values(v, src.channels(), src.mask(li)) {
+            Ok(v) => match leaf_peak(v, src.channels(), src.mask(li)) {
                 Err(n) => scan.fails[k] = Some(Box::new(bad_voxel(*src, li, n, v))),
-                Ok((peak, words)) => {
+                Ok(peak) => {
                     scan.peaks[k] = peak;
-                    for (a, w) in nz.iter_mut().zip(words) {
-                        *a |= w;
-                    }
                     got[k] = Some(v);
                 }
             },
         }
     }
-    scan.feeds = feeds_from_nonzero(&nz);
-    if scan.feeds != 0 {
-        let mut first = 0;
+    // Stored iff some source has a non-zero active voxel here (values are
+    // >= 0, so iff some peak is above 0).
+    if scan.peaks.iter().any(|&p| p > 0.0) {
+        let (mut first, mut nz) = (0, [0u64; 8]);
         for (k, src) in sources.iter().enumerate() {
             if let Some(v) = got[k] {
-                fill_block(v, src.channels(), src.mask(leaves[k] as usize), dst, channels, first);
+                let (f, a) = fill_leaf(v, src.channels(), src.mask(leaves[k] as usize), dst, channels, first);
+                if first == 0 {
+                    scan.masks.0 = f;
+                }
+                for (x, y) in nz.iter_mut().zip(a) {
+                    *x |= y;
+                }
             }
             first += src.channels();
         }
-        scan.masks = voxel_masks(dst, channels);
+        scan.masks.1 = nz;
+        scan.feeds = feeds_from_nonzero(&nz);
     }
     scan
 }
@@ -702,7 +780,9 @@ impl Field {
     }
 }
 
-/// Voxels of one block where channel 0 (resp. some channel) is not 0.
+/// Voxels of one block where channel 0 (resp. some channel) is not 0: the
+/// oracle of the masks [`fill_leaf`] returns.
+#[cfg(test)]
 fn voxel_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
     let mut first = [0u64; 8];
     let mut any = [0u64; 8];

@@ -32,7 +32,7 @@
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
-use crate::render::medium::{LeafError, LeafSource, Medium, Scratch};
+use crate::render::medium::{LeafError, LeafSource, LeafValues, Medium, Scratch};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -557,7 +557,7 @@ struct FileLeaves<'a, T> {
 }
 
 macro_rules! file_leaves {
-    ($t:ty, $as_values:expr) => {
+    ($t:ty) => {
         impl LeafSource for FileLeaves<'_, $t> {
             fn name(&self) -> &str {
                 &self.name
@@ -580,19 +580,29 @@ macro_rules! file_leaves {
             fn mask(&self, i: usize) -> &[u64; crate::grid::LEAF_MASK_WORDS] {
                 &self.tree.spans[i].mask
             }
-            fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<&'s [f32], LeafError> {
-                let as_values: fn(&mut [f32]) -> &mut [$t] = $as_values;
-                let n = crate::grid::LEAF_NUM_VALUES * <$t as VoxelValue>::COMPONENTS;
-                scratch.values.resize(n, 0.0);
-                let out = as_values(&mut scratch.values[..n]);
-                parse::decode_leaf(self.data, self.tree.format, self.tree.background, &self.tree.spans[i], out, &mut scratch.bytes)?;
-                Ok(&scratch.values[..n])
+            fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
+                let span = &self.tree.spans[i];
+                let mut c = super::cursor::Cursor::new(self.data);
+                c.seek(span.start as u64)?;
+                let slots = super::codec::read_stored_f32(
+                    &mut c,
+                    self.tree.format,
+                    crate::grid::LEAF_NUM_VALUES,
+                    &span.mask,
+                    <$t as VoxelValue>::COMPONENTS,
+                    &mut scratch.values,
+                    &mut scratch.bytes,
+                )?;
+                Ok(match slots {
+                    super::codec::StoredSlots::All => LeafValues::All(&scratch.values),
+                    super::codec::StoredSlots::Active => LeafValues::Active(&scratch.values),
+                })
             }
         }
     };
 }
-file_leaves!(f32, |v| v);
-file_leaves!([f32; 3], |v| v.as_chunks_mut::<3>().0);
+file_leaves!(f32);
+file_leaves!([f32; 3]);
 
 /// Reads a VDB file straight into the renderer's medium (the `render`
 /// command's path): the file is parsed once, validating every record and
