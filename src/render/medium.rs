@@ -357,7 +357,8 @@ fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), us
     let flat: Vec<f32> = leaf.values.iter().flat_map(|v| v.components().into_iter().take(T::COMPONENTS)).collect();
     let peak = leaf_peak(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask)?;
     let mut dst = vec![0.0; flat.len()];
-    let (_, nz) = fill_leaf(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask, &mut dst, T::COMPONENTS, 0);
+    let (first, nz) = fill_leaf(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask, &mut dst, T::COMPONENTS, 0);
+    assert_eq!((first, nz), voxel_masks(&dst, T::COMPONENTS), "the masks of the copied block");
     Ok((peak, feeds_from_nonzero(&nz)))
 }
 
