@@ -346,6 +346,29 @@ impl Prepared {
         Self::assemble(settings, camera, medium, emission)
     }
 
+    /// A `volume.density_scale` / `volume.emission_scale` edit without a
+    /// rebuild ([`Medium::set_scales`]; the emission sampler's power
+    /// likewise): the same `Prepared` as [`Prepared::new`] with the new
+    /// scales. `Ok(false)` where that needs the emission grid again (the
+    /// terrain is on and the emission scale leaves 0, so a sampler must be
+    /// built): the caller rebuilds. On `Err` nothing changed.
+    pub fn set_volume_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<bool, RenderError> {
+        self.medium.set_scales(density_scale, emission_scale)?;
+        self.settings.volume.density_scale = density_scale;
+        self.settings.volume.emission_scale = emission_scale;
+        match (self.sampler.as_mut(), self.medium.emission) {
+            (Some(s), Some(_)) => {
+                if !s.set_scale(emission_scale) {
+                    self.sampler = None;
+                }
+            }
+            (Some(_), None) => self.sampler = None,
+            (None, Some(_)) if !self.terrain.is_none() => return Ok(false),
+            (None, _) => {}
+        }
+        Ok(true)
+    }
+
     /// The settings' checks; the camera.
     fn check(settings: &RenderSettings) -> Result<CameraModel, RenderError> {
         let r = &settings.render;

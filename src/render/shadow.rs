@@ -98,6 +98,21 @@ impl EmissionSampler {
         (total > 0.0 && s.power > 0.0 && s.power.is_finite()).then_some(s)
     }
 
+    /// Sets `volume.emission_scale` in place: afterwards the sampler equals
+    /// what [`EmissionSampler::new`] gives with that scale. False (sampler
+    /// unchanged) where `new` would give `None` (a zero or overflowing
+    /// power): the caller drops it.
+    pub fn set_scale(&mut self, emission_scale: f64) -> bool {
+        let total = self.leaf_cdf.last().copied().unwrap_or(0.0);
+        let h = self.transform.voxel_size;
+        let power = emission_scale * total * h * h * h;
+        let ok = total > 0.0 && power > 0.0 && power.is_finite();
+        if ok {
+            self.power = power;
+        }
+        ok
+    }
+
     /// A point `y` (world space) with density `Y(e(y)) / power`.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> DVec3 {
         let total = *self.leaf_cdf.last().expect("non-empty sampler");
