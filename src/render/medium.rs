@@ -326,6 +326,22 @@ fn fill_leaf(
     stride: usize,
     first: usize,
 ) -> (CellMask, CellMask) {
+    match channels {
+        1 => fill_leaf_n::<1>(values, mask, dst, stride, first),
+        3 => fill_leaf_n::<3>(values, mask, dst, stride, first),
+        _ => unreachable!("sources have 1 or 3 channels (checked in Medium::from_sources)"),
+    }
+}
+
+/// [`fill_leaf`] for `C` channels (copies of a known length: no call).
+fn fill_leaf_n<const C: usize>(
+    values: LeafValues<'_>,
+    mask: &[u64; LEAF_MASK_WORDS],
+    dst: &mut [f32],
+    stride: usize,
+    first: usize,
+) -> (CellMask, CellMask) {
+    let channels = C;
     let (mut nz_first, mut nz_any) = ([0u64; 8], [0u64; 8]);
     let (a, active) = match values {
         LeafValues::All(a) => (a, false),
@@ -340,9 +356,10 @@ fn fill_leaf(
             let n = w * 64 + b as usize;
             let i = if active { k } else { n };
             k += 1;
-            let v = &a[i * channels..(i + 1) * channels];
+            let v: &[f32; C] = a[i * channels..(i + 1) * channels].try_into().expect("C floats");
             let at = n * stride + first;
-            dst[at..at + channels].copy_from_slice(v);
+            let d: &mut [f32; C] = (&mut dst[at..at + channels]).try_into().expect("C floats");
+            *d = *v;
             nz_first[w] |= u64::from(v[0] != 0.0) << b;
             nz_any[w] |= u64::from(v.iter().any(|&x| x != 0.0)) << b;
         }
