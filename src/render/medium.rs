@@ -811,10 +811,39 @@ fn voxel_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
     (first, any)
 }
 
+/// Bits of a mask word with local z = 7.
+const Z7_BITS: u64 = 0x8080_8080_8080_8080;
+
+/// The dual cells of one dual leaf with a non-zero corner, from the
+/// non-zero voxels of its eight blocks (`m[d]`, `d = dx << 2 | dy << 1 |
+/// dz`), a mask word at a time: cell (x,y,z) has corners (x+a, y+b, z+c),
+/// a,b,c in {0,1}, a coordinate 8 being 0 in the upper neighbour. Word `x`
+/// (bits `y << 3 | z`) ORs voxel words x and x+1, then shifts by one in z
+/// (bringing in the z = 0 column of the z neighbour) and by one in y (the
+/// y = 0 row of the y neighbour).
+fn cells_from_voxels(m: [&CellMask; 8]) -> CellMask {
+    let mut out = [0u64; 8];
+    for (x, o) in out.iter_mut().enumerate() {
+        let q = |d: usize| m[d][x] | if x < 7 { m[d][x + 1] } else { m[4 | d][0] };
+        let zs = |a: u64, b: u64| a | ((a >> 1) & !Z7_BITS) | ((b & Z0_BITS) << 7);
+        let (r0, r1) = (zs(q(0), q(1)), zs(q(2), q(3)));
+        *o = r0 | (r0 >> 8) | ((r1 & Y0_BITS) << 56);
+    }
+    out
+}
+
 /// Masks of the dual cells of one dual leaf (its blocks `nb`) in which
 /// channel 0 (resp. any channel) has a non-zero corner, from the blocks'
-/// [`voxel_masks`].
+/// non-zero voxels (channel 0, any channel).
 fn cell_masks(nb: &[u32; 8], nonzero: &[(CellMask, CellMask)]) -> (CellMask, CellMask) {
+    let first = cells_from_voxels(std::array::from_fn(|d| &nonzero[nb[d] as usize].0));
+    let any = cells_from_voxels(std::array::from_fn(|d| &nonzero[nb[d] as usize].1));
+    (first, any)
+}
+
+/// [`cell_masks`] by brute force over the 9^3 lattice (the tests' oracle).
+#[cfg(test)]
+fn cell_masks_brute(nb: &[u32; 8], nonzero: &[(CellMask, CellMask)]) -> (CellMask, CellMask) {
     // Per point of the 9^3 lattice: bit 0 = channel 0 non-zero, bit 1 = any.
     const G: usize = 9;
     let mut nz = [0u8; G * G * G];
@@ -1154,6 +1183,42 @@ mod tests {
             if terrain == TerrainKind::Plane {
                 assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
             }
+        }
+    }
+
+    /// The word-wise dual-cell masks equal the brute-force ones on random
+    /// blocks of every density, each block shared or absent (block 0).
+    #[test]
+    fn cell_masks_match_brute_force() {
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(9);
+        for &p in &[0.001, 0.01, 0.1, 0.5, 0.95] {
+            let mut nonzero: Vec<(CellMask, CellMask)> = vec![([0; 8], [0; 8])];
+            for _ in 0..12 {
+                let mut a = [0u64; 8];
+                let mut f = [0u64; 8];
+                for n in 0..512 {
+                    if rng.random::<f64>() < p {
+                        a[n >> 6] |= 1 << (n & 63);
+                        if rng.random::<f64>() < 0.5 {
+                            f[n >> 6] |= 1 << (n & 63);
+                        }
+                    }
+                }
+                nonzero.push((f, a));
+            }
+            for _ in 0..200 {
+                let nb: [u32; 8] = std::array::from_fn(|_| rng.random_range(0..nonzero.len() as u32));
+                assert_eq!(cell_masks(&nb, &nonzero), cell_masks_brute(&nb, &nonzero), "density {p}, blocks {nb:?}");
+            }
+        }
+        // One voxel at each corner of the lattice lights exactly its cells.
+        let mut one = [0u64; 8];
+        one[0] = 1;
+        let nonzero = vec![([0; 8], [0; 8]), (one, one)];
+        for d in 0..8 {
+            let mut nb = [0u32; 8];
+            nb[d] = 1;
+            assert_eq!(cell_masks(&nb, &nonzero), cell_masks_brute(&nb, &nonzero), "corner {d}");
         }
     }
 }
