@@ -562,9 +562,9 @@ fn render_cmd(
     let mut settings = aurora::render::RenderSettings::from_scene(scene);
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
-    // Without terrain the volume is all the render needs of the file: its
-    // medium is built straight from the file's records (no grids).
-    if let (Some(path), aurora::scene::TerrainKind::None) = (vdb, &scene.terrain.kind) {
+    // The medium straight from the file's records (no grids; the terrain's
+    // emission sampler is built from the medium).
+    if let Some(path) = vdb {
         let read = aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
             .map_err(|e| InputError(e.to_string()))?;
         if let Some(read) = read {

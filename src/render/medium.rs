@@ -138,6 +138,8 @@ pub struct Field {
     pub scale: [f64; 4],
     /// Blocks written (the others are all zeros and never touched).
     live_blocks: usize,
+    /// Origin (index space) of the source leaf of block `b` at `b - 1`.
+    pub block_origins: Vec<IVec3>,
 }
 
 /// Why a leaf's values could not be produced (a file's decode error).
@@ -704,6 +706,7 @@ impl Field {
             root_hi,
             scale: [1.0; 4],
             live_blocks,
+            block_origins: origins,
         };
         (field, reports)
     }
@@ -1018,6 +1021,12 @@ impl Medium {
         }
         medium.set_scales(density_scale, emission_scale)?;
         Ok(medium)
+    }
+
+    /// The emission channel's field and first channel whatever the scale
+    /// (`None` without a non-zero emission voxel).
+    pub fn stored_emission(&self) -> Option<Channel> {
+        self.stored[1].as_ref().map(|s| s.channel)
     }
 
     /// Sets `volume.density_scale` and `volume.emission_scale` without

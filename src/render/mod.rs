@@ -333,9 +333,9 @@ impl Prepared {
 
     /// [`Prepared::new`] with a medium already built (for instance straight
     /// from a file, `crate::vdb::read::read_render_medium`), its scales set
-    /// to the settings'. `emission` is the emission grid, needed only for
-    /// the terrain's emission sampler (`None` leaves the terrain unlit by
-    /// the volume's shadow rays: give it whenever the terrain is on).
+    /// to the settings'. `emission` is the emission grid for the terrain's
+    /// emission sampler if the caller has it; without it the sampler is
+    /// built from the medium (the same sampler).
     pub fn with_medium(
         settings: &RenderSettings,
         mut medium: Medium,
@@ -349,9 +349,9 @@ impl Prepared {
     /// A `volume.density_scale` / `volume.emission_scale` edit without a
     /// rebuild ([`Medium::set_scales`]; the emission sampler's power
     /// likewise): the same `Prepared` as [`Prepared::new`] with the new
-    /// scales. `Ok(false)` where that needs the emission grid again (the
-    /// terrain is on and the emission scale leaves 0, so a sampler must be
-    /// built): the caller rebuilds. On `Err` nothing changed.
+    /// scales (a sampler needed again when the emission scale leaves 0 is
+    /// built from the medium). Always `Ok(true)` today; `Ok(false)` would
+    /// ask the caller to rebuild. On `Err` nothing changed.
     pub fn set_volume_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<bool, RenderError> {
         self.medium.set_scales(density_scale, emission_scale)?;
         self.settings.volume.density_scale = density_scale;
@@ -363,7 +363,7 @@ impl Prepared {
                 }
             }
             (Some(_), None) => self.sampler = None,
-            (None, Some(_)) if !self.terrain.is_none() => return Ok(false),
+            (None, Some(_)) if !self.terrain.is_none() => self.sampler = EmissionSampler::from_medium(&self.medium),
             (None, _) => {}
         }
         Ok(true)
@@ -401,8 +401,9 @@ impl Prepared {
     ) -> Result<Prepared, RenderError> {
         let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
         let sampler = match (&terrain, emission, medium.emission) {
-            (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
+            (TerrainModel::None, _, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
+            (_, None, Some(_)) => EmissionSampler::from_medium(&medium),
         };
         let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })

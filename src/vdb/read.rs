@@ -592,11 +592,21 @@ mod tests {
         let volume = Volume { density: Some(&d), emission: Some(&e) };
         let want = render(&settings, &volume, &crate::progress::NoProgress).unwrap();
         let m = read_render_medium_bytes(&bytes, 1.0, 1.0).unwrap().unwrap().medium;
-        let p = Prepared::with_medium(&settings, m, None).unwrap();
+        let p = Prepared::with_medium(&settings, m.clone(), None).unwrap();
         let got = render_prepared(&p, &crate::progress::NoProgress).unwrap();
         let bits = |img: &crate::render::Image| img.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
         assert!(bits(&want).iter().any(|&b| b != 0), "the camera sees the volume");
         assert_eq!(bits(&got), bits(&want));
+        // With a terrain lit by the volume: the emission sampler built from
+        // the medium equals the one built from the grid.
+        let mut lit = settings.clone();
+        lit.terrain.kind = crate::scene::TerrainKind::Plane;
+        lit.terrain.height = -1.0;
+        let want = render(&lit, &volume, &crate::progress::NoProgress).unwrap();
+        let p = Prepared::with_medium(&lit, m, None).unwrap();
+        assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
+        assert_eq!(bits(&render_prepared(&p, &crate::progress::NoProgress).unwrap()), bits(&want));
+        assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
     }
 
     /// Bad files give typed errors, never a panic: every 7th byte of a
