@@ -350,9 +350,8 @@ impl Prepared {
     /// rebuild ([`Medium::set_scales`]; the emission sampler's power
     /// likewise): the same `Prepared` as [`Prepared::new`] with the new
     /// scales (a sampler needed again when the emission scale leaves 0 is
-    /// built from the medium). Always `Ok(true)` today; `Ok(false)` would
-    /// ask the caller to rebuild. On `Err` nothing changed.
-    pub fn set_volume_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<bool, RenderError> {
+    /// built from the medium). On `Err` nothing changed.
+    pub fn set_volume_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<(), RenderError> {
         self.medium.set_scales(density_scale, emission_scale)?;
         self.settings.volume.density_scale = density_scale;
         self.settings.volume.emission_scale = emission_scale;
@@ -366,7 +365,7 @@ impl Prepared {
             (None, Some(_)) if !self.terrain.is_none() => self.sampler = EmissionSampler::from_medium(&self.medium),
             (None, _) => {}
         }
-        Ok(true)
+        Ok(())
     }
 
     /// The settings' checks; the camera.
