@@ -169,7 +169,8 @@ pub struct Tree<T> {
     /// Number of active tiles at any level, counted even when not decoding.
     pub active_tile_count: usize,
     /// With [`Decode::Locate`]: every leaf's origin, mask and record, in
-    /// file order, for [`decode_leaf`] (empty otherwise).
+    /// file order (empty otherwise), for the caller to decode
+    /// (`codec::read_stored_f32` at `start`).
     pub spans: Vec<LeafSpan>,
     /// How the records are stored.
     pub format: RecordFormat,
@@ -183,23 +184,6 @@ pub struct LeafSpan {
     pub mask: [u64; LEAF_MASK_WORDS],
     /// Byte offset of the value record (after the mask copy).
     pub start: usize,
-}
-
-/// Decodes the record of `span` (located and validated by a
-/// [`Decode::Locate`] parse of the same `data`) into `out` (all 512 slots,
-/// inactive ones rebuilt as OpenVDB does); `scratch` is reused for
-/// decompression.
-pub fn decode_leaf<T: VoxelValue>(
-    data: &[u8],
-    format: RecordFormat,
-    background: T,
-    span: &LeafSpan,
-    out: &mut [T],
-    scratch: &mut Vec<u8>,
-) -> Result<(), ParseError> {
-    let mut c = Cursor::new(data);
-    c.seek(span.start as u64)?;
-    codec::read_values_into(&mut c, format, LEAF_NUM_VALUES, &span.mask, background, Some(out), scratch, true)
 }
 
 /// A decoded grid tree of either value type.
@@ -243,8 +227,8 @@ pub enum Decode {
     /// our bakes add for Cycles. Every record is still decoded and checked.
     NonZero,
     /// Validate every record and list where each leaf's lies
-    /// ([`Tree::spans`]) without decoding: the caller decodes them with
-    /// [`decode_leaf`] straight where it wants the values.
+    /// ([`Tree::spans`]) without decoding: the caller decodes them where
+    /// and when it wants the values.
     Locate,
 }
 
