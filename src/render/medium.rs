@@ -17,8 +17,9 @@
 //!
 //! # Blocks
 //! The values are stored once, per source leaf (a *block* of 8^3 voxels,
-//! every channel interleaved, scaled), and only for leaves with a non-zero
-//! active voxel; block 0 is all zeros. Each dual leaf holds the block numbers
+//! every channel interleaved, as stored in the grid: the volume scales are
+//! applied at lookup, [`Field::scale`]), and written only for leaves with a
+//! non-zero active voxel; block 0 is all zeros. Each dual leaf holds the block numbers
 //! of its own leaf and its seven upper neighbours (0 where absent), so a
 //! dual cell finds its 8 corners with no hash lookup: in its own block for
 //! cells with every local coordinate below 7 (343 of 512), else across the
@@ -33,6 +34,17 @@
 //! dense `u32` index arrays (`NONE` = empty). Memory and build time scale with
 //! the number of occupied leaves, never with the bounding-box volume; the walk
 //! (`dda.rs`) costs a few root steps per 4096 voxels of empty space.
+//!
+//! # Construction
+//! One parallel pass over the union of the sources' leaves
+//! ([`LeafSource`]: a grid in memory, or a VDB file's records decoded on
+//! demand), each leaf read into a per-thread buffer, checked (finite,
+//! >= 0) and its largest value taken on the floats' bits, then, if some
+//! source has a non-zero voxel there, copied into its block of one array
+//! allocated up front, its non-zero voxels and the dual leaves it feeds
+//! taken in the same loop. Blocks are numbered by the union of the leaves,
+//! so a grid read from a file and the same grid in memory give the same
+//! medium, field for field.
 //!
 //! The structure is plain data: no references into the source grids.
 

@@ -8,7 +8,11 @@
 //!   cannot make vdb-rs allocate from a garbage length or read past the end;
 //! - *native decoding* (`decode = true`): the same walk, decoding values, for
 //!   the grids vdb-rs cannot read (vec3s grids, half grids, tiles, maps other
-//!   than its three).
+//!   than its three);
+//! - *locating* ([`Decode::Locate`]): the validation walk, keeping each
+//!   leaf's origin, mask and record offset, for a caller that decodes the
+//!   records itself, in parallel, straight where it wants the values (the
+//!   renderer's medium, `super::read::read_render_medium`).
 //!
 //! Nothing here panics on input and every loop is bounded by bytes consumed:
 //! descriptors only move forward (`gridPos >= descriptor end`,
