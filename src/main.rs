@@ -231,7 +231,7 @@ fn main() {
                 || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
                     use aurora::render::RenderError::*;
                     match r {
-                        Settings(_) | Grid { .. } | Heightmap { .. } => true,
+                        Settings(_) | Grid { .. } | Source { .. } | Heightmap { .. } => true,
                         Output(a) => a.is_input(),
                         _ => false,
                     }
@@ -562,6 +562,23 @@ fn render_cmd(
     let mut settings = aurora::render::RenderSettings::from_scene(scene);
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
+    // The medium straight from the file's records (no grids; the terrain's
+    // emission sampler is built from the medium).
+    if let Some(path) = vdb {
+        let read = aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+            .map_err(|e| InputError(e.to_string()))?;
+        if let Some(read) = read {
+            let prepared = aurora::render::Prepared::with_medium(&settings, read.medium, None)?;
+            let image = if adaptive {
+                aurora::render::render_adaptive_prepared(&prepared, read.build_seconds, progress)?
+            } else {
+                let mut img = aurora::render::render_prepared(&prepared, progress)?;
+                img.stats.build_seconds = read.build_seconds;
+                img
+            };
+            return finish_render(scene, vdb, out, format, png, quiet, &image, read.open_seconds);
+        }
+    }
     let (density, emission);
     let open = std::time::Instant::now();
     match vdb {
@@ -586,13 +603,28 @@ fn render_cmd(
     } else {
         aurora::render::render(&settings, &volume, progress)?
     };
+    finish_render(scene, vdb, out, format, png, quiet, &image, open_seconds)
+}
+
+/// Writes a render's image (and PNG) and prints its statistics.
+#[allow(clippy::too_many_arguments)]
+fn finish_render(
+    scene: &Scene,
+    vdb: Option<&Path>,
+    out: &Path,
+    format: ImageFormat,
+    png: Option<&Path>,
+    quiet: bool,
+    image: &aurora::render::Image,
+    open_seconds: f64,
+) -> Result<()> {
     match format {
-        ImageFormat::Exr => aurora::render::film::write_exr(out, &image),
-        ImageFormat::Png => aurora::render::film::write_png(out, &image, scene.render.exposure),
+        ImageFormat::Exr => aurora::render::film::write_exr(out, image),
+        ImageFormat::Png => aurora::render::film::write_png(out, image, scene.render.exposure),
     }
     .with_context(|| format!("cannot write {}", out.display()))?;
     if let Some(p) = png {
-        aurora::render::film::write_png(p, &image, scene.render.exposure)
+        aurora::render::film::write_png(p, image, scene.render.exposure)
             .with_context(|| format!("cannot write {}", p.display()))?;
     }
     if !quiet {

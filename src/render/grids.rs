@@ -40,16 +40,10 @@ pub enum RenderGridsError {
     WrongType { name: String, type_name: String, expected: &'static str },
 }
 
-/// The grids a renderer needs: from `listing` (every grid of the file, in
-/// file order) and the file's decoded `float_grids` and `vec3_grids` (each
-/// in file order), the first float `density` and the first `emission`
-/// (vec3, else float taken as grey).
-pub fn choose(
-    listing: &[Listed<'_>],
-    float_grids: Vec<Grid<f32>>,
-    vec3_grids: Vec<Grid<[f32; 3]>>,
-) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
-    let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
+/// Refuses a grid the renderer would use but cannot (a vec3 or bool
+/// `density`, a bool `emission`): the type check of [`choose`], on the
+/// listing alone.
+pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
     for g in listing {
         let expected = match g.name {
             "density" if g.kind != GridType::Float => "a float grid (extinction per unit length)",
@@ -60,6 +54,20 @@ pub fn choose(
         };
         return Err(RenderGridsError::WrongType { name: g.name.to_string(), type_name: g.type_name.to_string(), expected });
     }
+    Ok(())
+}
+
+/// The grids a renderer needs: from `listing` (every grid of the file, in
+/// file order) and the file's decoded `float_grids` and `vec3_grids` (each
+/// in file order), the first float `density` and the first `emission`
+/// (vec3, else float taken as grey).
+pub fn choose(
+    listing: &[Listed<'_>],
+    float_grids: Vec<Grid<f32>>,
+    vec3_grids: Vec<Grid<[f32; 3]>>,
+) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
+    check_types(listing)?;
+    let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
     let mut density = None;
     let mut float_emission = None;
     for g in float_grids {

@@ -95,7 +95,8 @@ fn integrate(
 
 #[inline]
 fn corners(field: &Field, at: &[usize; 8], channel: usize) -> [f64; 8] {
-    std::array::from_fn(|k| field.values[at[k] + channel] as f64)
+    let scale = field.scale[channel];
+    std::array::from_fn(|k| field.values[at[k] + channel] as f64 * scale)
 }
 
 #[inline]

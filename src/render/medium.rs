@@ -17,8 +17,9 @@
 //!
 //! # Blocks
 //! The values are stored once, per source leaf (a *block* of 8^3 voxels,
-//! every channel interleaved, scaled), and only for leaves with a non-zero
-//! active voxel; block 0 is all zeros. Each dual leaf holds the block numbers
+//! every channel interleaved, as stored in the grid: the volume scales are
+//! applied at lookup, [`Field::scale`]), and written only for leaves with a
+//! non-zero active voxel; block 0 is all zeros. Each dual leaf holds the block numbers
 //! of its own leaf and its seven upper neighbours (0 where absent), so a
 //! dual cell finds its 8 corners with no hash lookup: in its own block for
 //! cells with every local coordinate below 7 (343 of 512), else across the
@@ -34,9 +35,20 @@
 //! the number of occupied leaves, never with the bounding-box volume; the walk
 //! (`dda.rs`) costs a few root steps per 4096 voxels of empty space.
 //!
+//! # Construction
+//! One parallel pass over the union of the sources' leaves
+//! ([`LeafSource`]: a grid in memory, or a VDB file's records decoded on
+//! demand), each leaf read into a per-thread buffer, checked (finite,
+//! >= 0) and its largest value taken on the floats' bits, then, if some
+//! source has a non-zero voxel there, copied into its block of one array
+//! allocated up front, its non-zero voxels and the dual leaves it feeds
+//! taken in the same loop. Blocks are numbered by the union of the leaves,
+//! so a grid read from a file and the same grid in memory give the same
+//! medium, field for field.
+//!
 //! The structure is plain data: no references into the source grids.
 
-use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM};
+use crate::grid::{Grid, Transform, VoxelValue, LEAF_DIM, LEAF_MASK_WORDS};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -105,8 +117,8 @@ pub fn mask_has(m: &CellMask, bit: usize) -> bool {
 /// One or more scalar fields on one grid transform, as blocks and dual leaves.
 ///
 /// Channel `c` of voxel `(x,y,z)` of block `b` is
-/// `values[(b * BLOCK_VALUES + block_offset(x, y, z)) * channels + c]`.
-#[derive(Debug, Clone)]
+/// `scale[c] * values[(b * BLOCK_VALUES + block_offset(x, y, z)) * channels + c]`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Field {
     pub transform: Transform,
     pub channels: usize,
@@ -133,76 +145,104 @@ pub struct Field {
     /// Super-node coordinates spanned by the root: `[root_lo, root_hi)`.
     pub(crate) root_lo: IVec3,
     pub(crate) root_hi: IVec3,
+    /// Per channel, the factor its stored (unit) values are multiplied by
+    /// at lookup ([`Medium::set_scales`]).
+    pub scale: [f64; 4],
+    /// Blocks written (the others are all zeros and never touched).
+    live_blocks: usize,
+    /// Origin (index space) of the source leaf of block `b` at `b - 1`.
+    pub block_origins: Vec<IVec3>,
 }
 
-/// A source of channels for [`Field::build`]: one grid and the factor its
-/// values are multiplied by.
-pub struct Source<'a> {
-    pub grid: SourceGrid<'a>,
-    pub scale: f64,
-    /// Per leaf of the grid (in leaf order), its feeds byte ([`scan_leaf`]).
-    pub feeds: Vec<u8>,
+/// Why a leaf's values could not be produced (a file's decode error).
+pub type LeafError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Per-thread buffers a [`LeafSource`] may decode a leaf into.
+#[derive(Default)]
+pub struct Scratch {
+    pub values: Vec<f32>,
+    pub bytes: Vec<u8>,
 }
 
-pub enum SourceGrid<'a> {
-    Scalar(&'a Grid<f32>),
-    Vector(&'a Grid<[f32; 3]>),
+/// One grid's leaves as the medium's builder reads them: origins and
+/// active masks up front (a file's topology lists them before any value),
+/// the values leaf by leaf, possibly decoded on demand and in parallel. A
+/// grid in memory is one ([`GridSource`]); so is a VDB file's grid
+/// (`crate::vdb::read`), which lets a render build its medium straight from
+/// the file's records, with no intermediate [`Grid`].
+pub trait LeafSource: Sync {
+    /// The grid's name (for messages).
+    fn name(&self) -> &str;
+    fn transform(&self) -> Transform;
+    /// Components per voxel: 1 (float) or 3 (vec3).
+    fn channels(&self) -> usize;
+    /// The background's components (the first [`channels`](Self::channels)).
+    fn background(&self) -> [f32; 3];
+    fn leaf_count(&self) -> usize;
+    /// Origin of leaf `i` (distinct for distinct `i`).
+    fn origin(&self, i: usize) -> IVec3;
+    /// Active mask of leaf `i`.
+    fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS];
+    /// The values of leaf `i`, components interleaved, borrowed from the
+    /// source or decoded into `scratch`.
+    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError>;
 }
 
-impl SourceGrid<'_> {
-    fn channels(&self) -> usize {
-        match self {
-            SourceGrid::Scalar(_) => 1,
-            SourceGrid::Vector(_) => 3,
-        }
-    }
-    fn transform(&self) -> Transform {
-        match self {
-            SourceGrid::Scalar(g) => g.transform,
-            SourceGrid::Vector(g) => g.transform,
-        }
-    }
-    /// Appends every dual leaf this grid feeds, given each leaf's feeds
-    /// byte from [`scan_leaf`] (in leaf order).
-    fn dual_keys(&self, feeds: &[u8], out: &mut Vec<IVec3>) {
-        match self {
-            SourceGrid::Scalar(g) => collect_dual_keys(g, feeds, out),
-            SourceGrid::Vector(g) => collect_dual_keys(g, feeds, out),
-        }
-    }
-    /// Copies this grid's active values of the leaf at `origin` into block
-    /// `dst` (stride `stride`, starting at channel `first`), times `scale`.
-    fn fill(&self, origin: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
-        match self {
-            SourceGrid::Scalar(g) => fill_block(g, origin, scale, dst, stride, first),
-            SourceGrid::Vector(g) => fill_block(g, origin, scale, dst, stride, first),
-        }
-    }
-    /// Origins of this grid's leaves that feed some dual leaf (have a
-    /// non-zero active voxel).
-    fn live_origins(&self, feeds: &[u8], out: &mut Vec<IVec3>) {
-        fn go<T: VoxelValue>(g: &Grid<T>, feeds: &[u8], out: &mut Vec<IVec3>) {
-            out.extend(g.leaves().iter().zip(feeds).filter(|(_, &f)| f != 0).map(|(l, _)| l.origin));
-        }
-        match self {
-            SourceGrid::Scalar(g) => go(g, feeds, out),
-            SourceGrid::Vector(g) => go(g, feeds, out),
-        }
-    }
+/// A leaf's values as a [`LeafSource`] gives them.
+#[derive(Clone, Copy, Debug)]
+pub enum LeafValues<'s> {
+    /// All 512 slots in index order (`512 * channels` floats; inactive
+    /// slots may hold anything).
+    All(&'s [f32]),
+    /// The active slots only, in index order (`popcount(mask) * channels`
+    /// floats): what an active-mask VDB record stores.
+    Active(&'s [f32]),
 }
 
-/// Every dual leaf touched by a non-zero active voxel of `g`. A voxel v lies in
-/// the dual cells `v - {0,1}^3`, hence in dual leaves `floor((v - {0,1}^3) / 8)`;
-/// voxels with a local coordinate 0 also feed the lower neighbour: bit `d`
-/// of `feeds[i]` says leaf `i` feeds dual leaf `key - (dx,dy,dz)`. The keys
-/// are appended unsorted and with repeats (the caller sorts and deduplicates).
-fn collect_dual_keys<T: VoxelValue>(g: &Grid<T>, feeds: &[u8], out: &mut Vec<IVec3>) {
-    for (leaf, &f) in g.leaves().iter().zip(feeds) {
-        let key = shr(leaf.origin, LEAF_LOG2);
-        out.extend((0..8u8).filter(|d| f >> d & 1 == 1).map(|d| {
-            key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
-        }));
-    }
+/// A grid in memory as a [`LeafSource`].
+pub struct GridSource<'a, T>(pub &'a Grid<T>);
+
+macro_rules! grid_source {
+    ($t:ty, $flat:expr) => {
+        impl LeafSource for GridSource<'_, $t> {
+            fn name(&self) -> &str {
+                &self.0.name
+            }
+            fn transform(&self) -> Transform {
+                self.0.transform
+            }
+            fn channels(&self) -> usize {
+                <$t as VoxelValue>::COMPONENTS
+            }
+            fn background(&self) -> [f32; 3] {
+                self.0.background.components()
+            }
+            fn leaf_count(&self) -> usize {
+                self.0.leaves().len()
+            }
+            fn origin(&self, i: usize) -> IVec3 {
+                self.0.leaves()[i].origin
+            }
+            fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS] {
+                &self.0.leaves()[i].mask
+            }
+            fn values<'s>(&'s self, i: usize, _: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
+                let flat: fn(&[$t]) -> &[f32] = $flat;
+                Ok(LeafValues::All(flat(&self.0.leaves()[i].values[..])))
+            }
+        }
+    };
+}
+grid_source!(f32, |v| v);
+grid_source!([f32; 3], |v| v.as_flattened());
+
+/// Every dual leaf a source leaf at `origin` feeds (bit `d` of `feeds`:
+/// dual leaf `key - (dx,dy,dz)`, see [`feeds_from_nonzero`]), appended.
+fn push_dual_keys(origin: IVec3, feeds: u8, out: &mut Vec<IVec3>) {
+    let key = shr(origin, LEAF_LOG2);
+    out.extend((0..8u8).filter(|d| feeds >> d & 1 == 1).map(|d| {
+        key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
+    }));
 }
 
 /// Bits of a leaf's 64-voxel mask word with local z = 0 (`n & 7 == 0`).
@@ -229,34 +269,127 @@ fn feeds_from_nonzero(nz: &[u64; 8]) -> u8 {
     feeds
 }
 
-/// One pass over a source leaf: its largest active component and its feeds
-/// byte ([`feeds_from_nonzero`]), or the offset of its first active voxel
-/// that is negative, infinite or NaN. Inactive voxels count as 0 whatever
-/// they hold.
-fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
-    let mut nz = [0u64; 8];
-    let mut peak = 0.0f32;
-    for (w, &active) in leaf.mask.iter().enumerate() {
-        if active == 0 {
-            continue;
-        }
-        let (mut nzw, mut bad) = (0u64, 0u64);
-        for (b, v) in leaf.values[w * 64..w * 64 + 64].iter().enumerate() {
-            let on = active >> b & 1 == 1;
-            let c = v.components();
-            for &x in &c[..T::COMPONENTS] {
-                let x = if on { x } else { 0.0 };
-                nzw |= u64::from(x != 0.0) << b;
-                // `!(x >= 0.0)` also catches NaN.
-                bad |= u64::from(!(x >= 0.0) || x == f32::INFINITY) << b;
-                peak = peak.max(x);
+/// Whether a stored component is acceptable: finite and >= 0 (-0 included),
+/// on its bits: below +inf's bits, or -0's.
+#[inline]
+fn valid_bits(b: u32) -> bool {
+    b < 0x7f80_0000 || b == 0x8000_0000
+}
+
+/// First pass over a source leaf: its largest active component, or the
+/// offset of its first active voxel that is negative, infinite or NaN.
+/// Inactive voxels count as 0 whatever they hold. On a leaf's active values
+/// alone ([`LeafValues::Active`]) the check runs on the floats' bits, in
+/// SIMD lanes: a valid value's bits order as its value.
+fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<f32, usize> {
+    match values {
+        LeafValues::Active(a) => {
+            let (mut peak, mut bad) = (0u32, 0u32);
+            for &x in a {
+                let b = x.to_bits();
+                bad |= u32::from(!valid_bits(b));
+                peak = peak.max(b & 0x7fff_ffff);
             }
+            if bad != 0 {
+                // The first active voxel with a bad component.
+                let mut k = 0;
+                for (w, &word) in mask.iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        let n = w * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        if a[k * channels..(k + 1) * channels].iter().any(|x| !valid_bits(x.to_bits())) {
+                            return Err(n);
+                        }
+                        k += 1;
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
         }
-        if bad != 0 {
-            return Err(w * 64 + bad.trailing_zeros() as usize);
+        LeafValues::All(a) => {
+            let mut peak = 0u32;
+            for (w, &word) in mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let n = w * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    for &x in &a[n * channels..(n + 1) * channels] {
+                        let b = x.to_bits();
+                        if !valid_bits(b) {
+                            return Err(n);
+                        }
+                        peak = peak.max(b & 0x7fff_ffff);
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
         }
-        nz[w] = nzw;
     }
+}
+
+/// Second pass over a source leaf with a non-zero voxel in its block: copies
+/// its active values into block `dst` (stride `stride`, starting at channel
+/// `first`; `dst` starts at 0, so inactive voxels read 0) and returns its
+/// voxels whose first component (resp. some component) is not 0.
+fn fill_leaf(
+    values: LeafValues<'_>,
+    channels: usize,
+    mask: &[u64; LEAF_MASK_WORDS],
+    dst: &mut [f32],
+    stride: usize,
+    first: usize,
+) -> (CellMask, CellMask) {
+    match channels {
+        1 => fill_leaf_n::<1>(values, mask, dst, stride, first),
+        3 => fill_leaf_n::<3>(values, mask, dst, stride, first),
+        _ => unreachable!("sources have 1 or 3 channels (checked in Medium::from_sources)"),
+    }
+}
+
+/// [`fill_leaf`] for `C` channels (copies of a known length: no call).
+fn fill_leaf_n<const C: usize>(
+    values: LeafValues<'_>,
+    mask: &[u64; LEAF_MASK_WORDS],
+    dst: &mut [f32],
+    stride: usize,
+    first: usize,
+) -> (CellMask, CellMask) {
+    let channels = C;
+    let (mut nz_first, mut nz_any) = ([0u64; 8], [0u64; 8]);
+    let (a, active) = match values {
+        LeafValues::All(a) => (a, false),
+        LeafValues::Active(a) => (a, true),
+    };
+    let mut k = 0;
+    for (w, &word) in mask.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let b = bits.trailing_zeros();
+            bits &= bits - 1;
+            let n = w * 64 + b as usize;
+            let i = if active { k } else { n };
+            k += 1;
+            let v: &[f32; C] = a[i * channels..(i + 1) * channels].try_into().expect("C floats");
+            let at = n * stride + first;
+            let d: &mut [f32; C] = (&mut dst[at..at + channels]).try_into().expect("C floats");
+            *d = *v;
+            nz_first[w] |= u64::from(v[0] != 0.0) << b;
+            nz_any[w] |= u64::from(v.iter().any(|&x| x != 0.0)) << b;
+        }
+    }
+    (nz_first, nz_any)
+}
+
+/// The largest active component and the feeds byte of a grid leaf (the
+/// tests' entry to the two passes).
+#[cfg(test)]
+fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
+    let flat: Vec<f32> = leaf.values.iter().flat_map(|v| v.components().into_iter().take(T::COMPONENTS)).collect();
+    let peak = leaf_peak(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask)?;
+    let mut dst = vec![0.0; flat.len()];
+    let (first, nz) = fill_leaf(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask, &mut dst, T::COMPONENTS, 0);
+    assert_eq!((first, nz), voxel_masks(&dst, T::COMPONENTS), "the masks of the copied block");
     Ok((peak, feeds_from_nonzero(&nz)))
 }
 
@@ -279,80 +412,85 @@ fn leaf_feeds<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> u8 {
     feeds
 }
 
-fn fill_block<T: VoxelValue>(g: &Grid<T>, origin: IVec3, scale: f64, dst: &mut [f32], stride: usize, first: usize) {
-    let Some(leaf) = g.leaf(origin) else { return };
-    // Only active voxels are copied (`dst` starts at 0).
-    for (w, &word) in leaf.mask.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let n = w * 64 + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let c = leaf.values[n].components();
-            let at = n * stride + first;
-            for k in 0..T::COMPONENTS {
-                dst[at + k] = (c[k] as f64 * scale) as f32;
-            }
+/// Rejects grids the renderer cannot sample the way Cycles does.
+pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError>
+where
+    for<'a> GridSource<'a, T>: LeafSource,
+{
+    let src = GridSource(g);
+    check_header(&src)?;
+    let mut scratch = Scratch::default();
+    for i in 0..src.leaf_count() {
+        let v = src.values(i, &mut scratch).map_err(|e| RenderError::Grid { grid: g.name.clone(), message: e.to_string() })?;
+        if let Err(n) = leaf_peak(v, src.channels(), src.mask(i)) {
+            return Err(bad_voxel(&src, i, n, v));
         }
     }
+    Ok(())
 }
 
-/// Rejects grids the renderer cannot sample the way Cycles does.
-pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError> {
-    validate_and_peak(g).map(|_| ())
-}
-
-/// [`validate_grid`], returning the largest active component (0 for an
-/// empty grid) and each leaf's feeds byte ([`scan_leaf`]): one pass over the
-/// voxels serves the checks and the dual-leaf keys.
-fn validate_and_peak<T: VoxelValue>(g: &Grid<T>) -> Result<(f32, Vec<u8>), RenderError> {
-    let err = |message: String| RenderError::Grid { grid: g.name.clone(), message };
-    let ts = g.transform.voxel_size;
-    if !(ts.is_finite() && ts > 0.0 && g.transform.translation.is_finite()) {
+/// The checks on a source that need no values: transform and background.
+fn check_header(src: &dyn LeafSource) -> Result<(), RenderError> {
+    let err = |message: String| RenderError::Grid { grid: src.name().to_string(), message };
+    let t = src.transform();
+    let ts = t.voxel_size;
+    if !(ts.is_finite() && ts > 0.0 && t.translation.is_finite()) {
         return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
     }
-    if g.background != T::ZERO {
+    let bg = src.background();
+    if bg[..src.channels()].iter().any(|&x| x != 0.0) {
         return Err(err(format!(
-            "background {:?} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
-            g.background
+            "background {} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
+            value_text(&bg[..src.channels()])
         )));
     }
-    // Leaves in parallel: per leaf the peak and feeds, or the offset of its
-    // first bad voxel; the first bad voxel in leaf order is reported.
-    let per_leaf: Vec<Result<(f32, u8), usize>> = g.leaves().par_iter().map(scan_leaf).collect();
-    let mut peak = 0.0f32;
-    let mut feeds = Vec::with_capacity(per_leaf.len());
-    for (leaf, r) in g.leaves().iter().zip(per_leaf) {
-        match r {
-            Ok((p, f)) => {
-                peak = peak.max(p);
-                feeds.push(f);
-            }
-            Err(n) => {
-                let ijk = leaf.origin + crate::grid::offset_to_local(n);
-                let v = leaf.values[n];
-                return Err(err(format!("voxel {ijk} holds {v:?}: values must be finite and >= 0")));
-            }
-        }
-    }
-    Ok((peak, feeds))
+    Ok(())
 }
 
-/// Largest scaled voxel value the renderer accepts. The field stores scaled
-/// values as f32 (at most 3.4e38) and the film is f32: a radiance of 10^30
-/// per km integrated over 10^8 km of path still fits, so no finite input
-/// below this bound can reach an infinite pixel.
+/// A voxel value as `{:?}` prints the grid's value type (`1.5` or `[1.0, 2.0, 3.0]`).
+fn value_text(c: &[f32]) -> String {
+    if c.len() == 1 {
+        format!("{:?}", c[0])
+    } else {
+        format!("{c:?}")
+    }
+}
+
+/// The error for voxel `n` of leaf `i` of `src` (values `v`).
+fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<'_>) -> RenderError {
+    let ch = src.channels();
+    let ijk = src.origin(i) + crate::grid::offset_to_local(n);
+    let at = match v {
+        LeafValues::All(a) => &a[n * ch..(n + 1) * ch],
+        LeafValues::Active(a) => {
+            // The voxel's rank among the active ones.
+            let mask = src.mask(i);
+            let k: usize = (0..n >> 6).map(|w| mask[w].count_ones() as usize).sum::<usize>()
+                + (mask[n >> 6] & ((1u64 << (n & 63)) - 1)).count_ones() as usize;
+            &a[k * ch..(k + 1) * ch]
+        }
+    };
+    RenderError::Grid {
+        grid: src.name().to_string(),
+        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(at)),
+    }
+}
+
+/// Largest scaled voxel value the renderer accepts. The film is f32 and a
+/// radiance of 10^30 per km integrated over 10^8 km of path still fits, so
+/// no finite input below this bound can reach an infinite pixel.
 pub const MAX_SCALED_VALUE: f64 = 1e30;
 
 /// Rejects a grid whose largest value times `scale` exceeds
 /// [`MAX_SCALED_VALUE`] (a foreign VDB near f32's limit with a large scale).
-fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
+fn check_scaled_peak(grid: &str, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
     if scale == 0.0 {
         return Ok(());
     }
     let peak = peak as f64;
     if peak * scale > MAX_SCALED_VALUE {
         return Err(RenderError::Grid {
-            grid: g.name.clone(),
+            grid: grid.to_string(),
             message: format!(
                 "largest value {peak:e} times volume.{key} = {scale:e} is {:e}, above {MAX_SCALED_VALUE:e}: the image would overflow; lower volume.{key}",
                 peak * scale
@@ -362,45 +500,149 @@ fn check_scaled_peak<T: VoxelValue>(g: &Grid<T>, peak: f32, key: &str, scale: f6
     Ok(())
 }
 
-impl Field {
-    /// Builds a field whose channels are the concatenation of `sources`' channels
-    /// (all on the same transform), each multiplied by its scale.
-    pub fn build(sources: &[Source<'_>]) -> Field {
-        assert!(!sources.is_empty());
-        let transform = sources[0].grid.transform();
-        debug_assert!(sources.iter().all(|s| s.grid.transform() == transform));
-        let channels: usize = sources.iter().map(|s| s.grid.channels()).sum();
+/// What [`Field::from_sources`] found in one source.
+struct SourceReport {
+    /// Largest active component (0 for none).
+    peak: f32,
+    /// The first failure in block order: a bad voxel or a read error.
+    fail: Option<RenderError>,
+}
 
-        // Blocks: the source leaves with a non-zero voxel, in key order.
-        let mut origins = Vec::new();
-        for s in sources {
-            s.grid.live_origins(&s.feeds, &mut origins);
+/// What the pass found in one block.
+struct BlockScan {
+    /// Dual leaves the block feeds (0: no non-zero active voxel, the block
+    /// is not stored).
+    feeds: u8,
+    /// Its non-zero voxels: channel 0, any channel ([`voxel_masks`]).
+    masks: (CellMask, CellMask),
+    /// Per source: the largest active component, the first failure.
+    peaks: [f32; 2],
+    fails: [Option<Box<RenderError>>; 2],
+}
+
+/// Reads, checks and (if some source has a non-zero active voxel here)
+/// stores the leaves of one block: `leaves[k]` is source `k`'s leaf at the
+/// block's origin ([`NONE`] if it has none). A block with no non-zero voxel
+/// is never written, so its pages are never touched.
+fn scan_block(
+    sources: &[&dyn LeafSource],
+    leaves: &[u32; 2],
+    dst: &mut [f32],
+    channels: usize,
+    scratch: &mut [Scratch; 2],
+) -> BlockScan {
+    let mut scan = BlockScan { feeds: 0, masks: ([0; 8], [0; 8]), peaks: [0.0; 2], fails: [None, None] };
+    let mut got: [Option<LeafValues<'_>>; 2] = [None, None];
+    for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {
+        let li = leaves[k];
+        if li == NONE {
+            continue;
         }
-        origins.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
-        origins.dedup();
-        let per_block = BLOCK_VALUES * channels;
-        let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
-        // Per block, its non-zero voxels: channel 0, and any channel.
-        let mut nonzero: Vec<(CellMask, CellMask)> = vec![([0; 8], [0; 8])];
-        nonzero.par_extend(values[per_block..].par_chunks_mut(per_block).zip(origins.par_iter()).map(
-            |(dst, &origin)| {
-                let mut first = 0;
-                for s in sources {
-                    s.grid.fill(origin, s.scale, dst, channels, first);
-                    first += s.grid.channels();
+        let li = li as usize;
+        match src.values(li, scr) {
+            Err(source) => {
+                scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source }))
+            }
+            Ok(v) => match leaf_peak(v, src.channels(), src.mask(li)) {
+                Err(n) => scan.fails[k] = Some(Box::new(bad_voxel(*src, li, n, v))),
+                Ok(peak) => {
+                    scan.peaks[k] = peak;
+                    got[k] = Some(v);
                 }
-                voxel_masks(dst, channels)
             },
-        ));
+        }
+    }
+    // Stored iff some source has a non-zero active voxel here (values are
+    // >= 0, so iff some peak is above 0).
+    if scan.peaks.iter().any(|&p| p > 0.0) {
+        let (mut first, mut nz) = (0, [0u64; 8]);
+        for (k, src) in sources.iter().enumerate() {
+            if let Some(v) = got[k] {
+                let (f, a) = fill_leaf(v, src.channels(), src.mask(leaves[k] as usize), dst, channels, first);
+                if first == 0 {
+                    scan.masks.0 = f;
+                }
+                for (x, y) in nz.iter_mut().zip(a) {
+                    *x |= y;
+                }
+            }
+            first += src.channels();
+        }
+        scan.masks.1 = nz;
+        scan.feeds = feeds_from_nonzero(&nz);
+    }
+    scan
+}
+
+impl Field {
+    /// Builds a field whose channels are the concatenation of `sources`'
+    /// channels (one or two sources, all on the same transform), at unit
+    /// scale (`scale` all 1), in one parallel pass over the union of their
+    /// leaves: each leaf is read (a file's record decoded) straight into a
+    /// per-thread buffer, checked (finite, >= 0), and its active values
+    /// copied into its block of one preallocated array; its largest value
+    /// and the dual leaves it feeds come from the same pass. Blocks are
+    /// numbered by the union of the sources' leaves (in key order), so a
+    /// leaf with no non-zero active voxel (the Cycles shell) keeps an
+    /// all-zero block that nothing references and nothing writes: its
+    /// memory is reserved, never touched. The result depends only on the
+    /// sources' leaves and values, never on the thread count.
+    fn from_sources(sources: &[&dyn LeafSource]) -> (Field, Vec<SourceReport>) {
+        assert!(!sources.is_empty() && sources.len() <= 2);
+        let transform = sources[0].transform();
+        debug_assert!(sources.iter().all(|s| s.transform() == transform));
+        let channels: usize = sources.iter().map(|s| s.channels()).sum();
+
+        // Blocks: the union of the sources' leaves, in key order.
+        let mut all: Vec<(IVec3, u32, u32)> = Vec::new();
+        for (k, s) in sources.iter().enumerate() {
+            all.extend((0..s.leaf_count()).map(|i| (s.origin(i), k as u32, i as u32)));
+        }
+        all.par_sort_unstable_by_key(|&(o, k, _)| (o.x, o.y, o.z, k));
+        let mut origins: Vec<IVec3> = Vec::with_capacity(all.len());
+        let mut leaf_of: Vec<[u32; 2]> = Vec::with_capacity(all.len());
+        for &(o, k, i) in &all {
+            if origins.last() != Some(&o) {
+                origins.push(o);
+                leaf_of.push([NONE; 2]);
+            }
+            if let Some(l) = leaf_of.last_mut() {
+                l[k as usize] = i;
+            }
+        }
+        drop(all);
+        let per_block = BLOCK_VALUES * channels;
+        // Zeroed by the allocator (fresh pages): blocks not written cost
+        // no memory.
+        let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
+        let mut scans: Vec<BlockScan> = values[per_block..]
+            .par_chunks_mut(per_block)
+            .zip(leaf_of.par_iter())
+            .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| {
+                scan_block(sources, leaves, dst, channels, scratch)
+            })
+            .collect();
+        drop(leaf_of);
+        let mut reports: Vec<SourceReport> = sources.iter().map(|_| SourceReport { peak: 0.0, fail: None }).collect();
+        for s in scans.iter_mut() {
+            for (k, r) in reports.iter_mut().enumerate() {
+                r.peak = r.peak.max(s.peaks[k]);
+                if r.fail.is_none() {
+                    r.fail = s.fails[k].take().map(|b| *b);
+                }
+            }
+        }
+        let live_blocks = scans.iter().filter(|s| s.feeds != 0).count();
         let block_of = |origin: IVec3| -> u32 {
-            origins
-                .binary_search_by_key(&(origin.x, origin.y, origin.z), |k| (k.x, k.y, k.z))
-                .map_or(0, |i| i as u32 + 1)
+            match origins.binary_search_by_key(&(origin.x, origin.y, origin.z), |k| (k.x, k.y, k.z)) {
+                Ok(i) if scans[i].feeds != 0 => i as u32 + 1,
+                _ => 0,
+            }
         };
 
         let mut keys = Vec::new();
-        for s in sources {
-            s.grid.dual_keys(&s.feeds, &mut keys);
+        for (s, &o) in scans.iter().zip(&origins) {
+            push_dual_keys(o, s.feeds, &mut keys);
         }
         keys.par_sort_unstable_by_key(|k| (k.x, k.y, k.z));
         keys.dedup();
@@ -413,8 +655,14 @@ impl Field {
                 })
             })
             .collect();
+        // Per block, its non-zero voxels (block 0 and unwritten blocks: none).
+        let mut nonzero: Vec<(CellMask, CellMask)> = Vec::with_capacity(scans.len() + 1);
+        nonzero.push(([0; 8], [0; 8]));
+        nonzero.extend(scans.iter().map(|s| s.masks));
+        drop(scans);
         let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
             neighbours.par_iter().map(|nb| cell_masks(nb, &nonzero)).unzip();
+
 
         // Hierarchy: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
         let mut blocks: Vec<Box<[u32; BLOCK_SLOTS]>> = Vec::new();
@@ -452,7 +700,7 @@ impl Field {
                 shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
             )
         };
-        Field {
+        let field = Field {
             transform,
             channels,
             keys,
@@ -468,7 +716,11 @@ impl Field {
             hi,
             root_lo,
             root_hi,
-        }
+            scale: [1.0; 4],
+            live_blocks,
+            block_origins: origins,
+        };
+        (field, reports)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -481,7 +733,7 @@ impl Field {
 
     /// Bytes held by the structure (for reports).
     pub fn memory_bytes(&self) -> usize {
-        self.values.len() * 4
+        (self.live_blocks + 1) * BLOCK_VALUES * self.channels * 4
             + self.keys.len() * (12 + 32 + 128)
             + self.blocks.len() * BLOCK_SLOTS * 4
             + self.supers.len() * SUPER_SLOTS * 4
@@ -550,6 +802,9 @@ impl Field {
                 out[ch] += w[k] * v[ch] as f64;
             }
         }
+        for ch in 0..self.channels {
+            out[ch] *= self.scale[ch];
+        }
     }
 
     /// World-space box of the stored dual leaves (the support of the field).
@@ -558,7 +813,9 @@ impl Field {
     }
 }
 
-/// Voxels of one block where channel 0 (resp. some channel) is not 0.
+/// Voxels of one block where channel 0 (resp. some channel) is not 0: the
+/// oracle of the masks [`fill_leaf`] returns.
+#[cfg(test)]
 fn voxel_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
     let mut first = [0u64; 8];
     let mut any = [0u64; 8];
@@ -569,10 +826,39 @@ fn voxel_masks(v: &[f32], channels: usize) -> (CellMask, CellMask) {
     (first, any)
 }
 
+/// Bits of a mask word with local z = 7.
+const Z7_BITS: u64 = 0x8080_8080_8080_8080;
+
+/// The dual cells of one dual leaf with a non-zero corner, from the
+/// non-zero voxels of its eight blocks (`m[d]`, `d = dx << 2 | dy << 1 |
+/// dz`), a mask word at a time: cell (x,y,z) has corners (x+a, y+b, z+c),
+/// a,b,c in {0,1}, a coordinate 8 being 0 in the upper neighbour. Word `x`
+/// (bits `y << 3 | z`) ORs voxel words x and x+1, then shifts by one in z
+/// (bringing in the z = 0 column of the z neighbour) and by one in y (the
+/// y = 0 row of the y neighbour).
+fn cells_from_voxels(m: [&CellMask; 8]) -> CellMask {
+    let mut out = [0u64; 8];
+    for (x, o) in out.iter_mut().enumerate() {
+        let q = |d: usize| m[d][x] | if x < 7 { m[d][x + 1] } else { m[4 | d][0] };
+        let zs = |a: u64, b: u64| a | ((a >> 1) & !Z7_BITS) | ((b & Z0_BITS) << 7);
+        let (r0, r1) = (zs(q(0), q(1)), zs(q(2), q(3)));
+        *o = r0 | (r0 >> 8) | ((r1 & Y0_BITS) << 56);
+    }
+    out
+}
+
 /// Masks of the dual cells of one dual leaf (its blocks `nb`) in which
 /// channel 0 (resp. any channel) has a non-zero corner, from the blocks'
-/// [`voxel_masks`].
+/// non-zero voxels (channel 0, any channel).
 fn cell_masks(nb: &[u32; 8], nonzero: &[(CellMask, CellMask)]) -> (CellMask, CellMask) {
+    let first = cells_from_voxels(std::array::from_fn(|d| &nonzero[nb[d] as usize].0));
+    let any = cells_from_voxels(std::array::from_fn(|d| &nonzero[nb[d] as usize].1));
+    (first, any)
+}
+
+/// [`cell_masks`] by brute force over the 9^3 lattice (the tests' oracle).
+#[cfg(test)]
+fn cell_masks_brute(nb: &[u32; 8], nonzero: &[(CellMask, CellMask)]) -> (CellMask, CellMask) {
     // Per point of the 9^3 lattice: bit 0 = channel 0 non-zero, bit 1 = any.
     const G: usize = 9;
     let mut nz = [0u8; G * G * G];
@@ -614,14 +900,43 @@ pub struct Channel {
 /// The volume as the renderer sees it: sigma_t = density_scale * density and
 /// emission e = emission_scale * emission, each on its grid's own transform.
 /// When both grids share a transform they share one [`Field`] (channel 0 =
-/// sigma_t, channels 1..4 = e), so a ray walks one tree.
-#[derive(Debug, Clone)]
+/// density, channels 1..4 = emission), so a ray walks one tree. The fields
+/// hold the grids' values as stored (unit scale) and the scales are applied
+/// at lookup ([`Field::scale`]), so [`Medium::set_scales`] changes them
+/// without a rebuild.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Medium {
     pub fields: Vec<Field>,
     /// sigma_t, if the volume has any extinction.
     pub sigma_t: Option<Channel>,
     /// First of the three emission channels, if the volume emits.
     pub emission: Option<Channel>,
+    /// Density, then emission: where its values are stored, its largest
+    /// value and its grid's name; `None` for a missing grid or one with no
+    /// non-zero active voxel. Kept whatever the scale, so that a scale
+    /// leaving or reaching 0 needs no rebuild either.
+    stored: [Option<Stored>; 2],
+    pub density_scale: f64,
+    pub emission_scale: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+struct Stored {
+    channel: Channel,
+    peak: f32,
+    grid: String,
+}
+
+/// The scene keys of the two scales, density then emission.
+const SCALE_KEYS: [&str; 2] = ["density_scale", "emission_scale"];
+
+fn check_scales(scales: [f64; 2]) -> Result<(), RenderError> {
+    for (what, s) in SCALE_KEYS.iter().zip(scales) {
+        if !(s.is_finite() && s >= 0.0) {
+            return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
+        }
+    }
+    Ok(())
 }
 
 impl Medium {
@@ -633,52 +948,128 @@ impl Medium {
         density_scale: f64,
         emission_scale: f64,
     ) -> Result<Medium, RenderError> {
-        for (what, s) in [("density_scale", density_scale), ("emission_scale", emission_scale)] {
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(RenderError::Settings(format!("volume.{what} = {s} must be finite and >= 0")));
+        let d = density.map(GridSource);
+        let e = emission.map(GridSource);
+        Medium::from_sources(
+            d.as_ref().map(|s| s as &dyn LeafSource),
+            e.as_ref().map(|s| s as &dyn LeafSource),
+            density_scale,
+            emission_scale,
+        )
+    }
+
+    /// [`Medium::new`] from any [`LeafSource`]s (a density source of 1
+    /// channel, an emission source of 3): the same medium, field for field,
+    /// from a grid in memory or from a file's leaves decoded on the fly.
+    /// Errors (in this order): a scale out of range, a bad transform or
+    /// background, then per source (density first) its first bad voxel or
+    /// unreadable leaf in key order and a scaled peak above
+    /// [`MAX_SCALED_VALUE`].
+    pub fn from_sources(
+        density: Option<&dyn LeafSource>,
+        emission: Option<&dyn LeafSource>,
+        density_scale: f64,
+        emission_scale: f64,
+    ) -> Result<Medium, RenderError> {
+        let scales = [density_scale, emission_scale];
+        check_scales(scales)?;
+        let srcs = [density, emission];
+        for (s, want) in srcs.iter().zip([1, 3]) {
+            if let Some(s) = s {
+                if s.channels() != want {
+                    return Err(RenderError::Grid {
+                        grid: s.name().to_string(),
+                        message: format!("has {} components a voxel, expected {want}", s.channels()),
+                    });
+                }
+                check_header(*s)?;
             }
         }
-        // A grid feeds the field iff it has a non-zero active voxel: its
-        // peak (values are >= 0) is above 0.
-        let mut d = None;
-        if let Some(g) = density {
-            let (peak, feeds) = validate_and_peak(g)?;
-            check_scaled_peak(g, peak, "density_scale", density_scale)?;
-            if density_scale > 0.0 && peak > 0.0 {
-                d = Some(Source { grid: SourceGrid::Scalar(g), scale: density_scale, feeds });
+        // Sources sharing a transform share a field.
+        let groups: Vec<Vec<usize>> = match srcs {
+            [Some(d), Some(e)] if d.transform() == e.transform() => vec![vec![0, 1]],
+            _ => (0..2).filter(|&k| srcs[k].is_some()).map(|k| vec![k]).collect(),
+        };
+        let mut medium = Medium {
+            fields: Vec::new(),
+            sigma_t: None,
+            emission: None,
+            stored: [None, None],
+            density_scale,
+            emission_scale,
+        };
+        for group in groups {
+            let list: Vec<&dyn LeafSource> = group.iter().filter_map(|&k| srcs[k]).collect();
+            let (mut field, reports) = Field::from_sources(&list);
+            let mut peaks = [0.0f32; 2];
+            for (r, &k) in reports.into_iter().zip(&group) {
+                if let Some(e) = r.fail {
+                    return Err(e);
+                }
+                let name = srcs[k].map_or("", |s| s.name());
+                check_scaled_peak(name, r.peak, SCALE_KEYS[k], scales[k])?;
+                peaks[k] = r.peak;
+            }
+            // A source feeds the field iff it has a non-zero active voxel:
+            // its peak (values are >= 0) is above 0. Rebuilt without a
+            // source that has none (rare: an all-zero grid).
+            let live: Vec<usize> = group.iter().copied().filter(|&k| peaks[k] > 0.0).collect();
+            if live.is_empty() {
+                continue;
+            }
+            if live.len() < group.len() {
+                let list: Vec<&dyn LeafSource> = live.iter().filter_map(|&k| srcs[k]).collect();
+                field = Field::from_sources(&list).0;
+            }
+            let fi = medium.fields.len();
+            let mut ch = 0;
+            for &k in &live {
+                let src = srcs[k].expect("live sources exist");
+                medium.stored[k] =
+                    Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
+                ch += src.channels();
+            }
+            medium.fields.push(field);
+        }
+        medium.set_scales(density_scale, emission_scale)?;
+        Ok(medium)
+    }
+
+    /// The emission channel's field and first channel whatever the scale
+    /// (`None` without a non-zero emission voxel).
+    pub fn stored_emission(&self) -> Option<Channel> {
+        self.stored[1].as_ref().map(|s| s.channel)
+    }
+
+    /// Sets `volume.density_scale` and `volume.emission_scale` without
+    /// rebuilding anything (the fields hold unit values; the scales are
+    /// applied at lookup): the medium then equals `Medium::new` with these
+    /// scales, field for field. On error (a scale out of range, or a grid's
+    /// largest value times its scale above [`MAX_SCALED_VALUE`]) the medium
+    /// is unchanged.
+    pub fn set_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<(), RenderError> {
+        let scales = [density_scale, emission_scale];
+        check_scales(scales)?;
+        for (k, st) in self.stored.iter().enumerate() {
+            if let Some(st) = st {
+                check_scaled_peak(&st.grid, st.peak, SCALE_KEYS[k], scales[k])?;
             }
         }
-        let mut e = None;
-        if let Some(g) = emission {
-            let (peak, feeds) = validate_and_peak(g)?;
-            check_scaled_peak(g, peak, "emission_scale", emission_scale)?;
-            if emission_scale > 0.0 && peak > 0.0 {
-                e = Some(Source { grid: SourceGrid::Vector(g), scale: emission_scale, feeds });
+        for f in &mut self.fields {
+            f.scale = [1.0; 4];
+        }
+        for (k, (st, n)) in self.stored.iter().zip([1, 3]).enumerate() {
+            if let Some(st) = st {
+                let c = st.channel;
+                self.fields[c.field].scale[c.channel..c.channel + n].fill(scales[k]);
             }
         }
-        Ok(match (d, e) {
-            (None, None) => Medium { fields: vec![], sigma_t: None, emission: None },
-            (Some(d), None) => Medium {
-                fields: vec![Field::build(&[d])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: None,
-            },
-            (None, Some(e)) => Medium {
-                fields: vec![Field::build(&[e])],
-                sigma_t: None,
-                emission: Some(Channel { field: 0, channel: 0 }),
-            },
-            (Some(d), Some(e)) if d.grid.transform() == e.grid.transform() => Medium {
-                fields: vec![Field::build(&[d, e])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: Some(Channel { field: 0, channel: 1 }),
-            },
-            (Some(d), Some(e)) => Medium {
-                fields: vec![Field::build(&[d]), Field::build(&[e])],
-                sigma_t: Some(Channel { field: 0, channel: 0 }),
-                emission: Some(Channel { field: 1, channel: 0 }),
-            },
-        })
+        let on = |k: usize| self.stored[k].as_ref().filter(|_| scales[k] > 0.0).map(|s| s.channel);
+        self.sigma_t = on(0);
+        self.emission = on(1);
+        self.density_scale = density_scale;
+        self.emission_scale = emission_scale;
+        Ok(())
     }
 
     /// sigma_t at a world point (per unit length).
@@ -758,5 +1149,94 @@ mod tests {
         leaf.values[77] = -1.0;
         leaf.values[3] = f32::NAN;
         assert_eq!(scan_leaf(&leaf), Err(77));
+    }
+
+    /// A scale edit through `Prepared::set_volume_scales` renders exactly
+    /// as a fresh `Prepared::new` with those scales, with and without the
+    /// terrain (whose emission sampler is rescaled, dropped at a zero
+    /// emission scale and rebuilt from the medium when it leaves 0).
+    #[test]
+    fn scale_edits_render_as_a_fresh_build() {
+        use crate::render::{render_prepared, Prepared, RenderSettings, Volume};
+        use crate::scene::TerrainKind;
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let mut d = Grid::new("density", 0.0f32, tr);
+        let mut e = Grid::new("emission", [0.0f32; 3], tr);
+        for x in -6..10 {
+            for y in -3..3 {
+                for z in 4..12 {
+                    let v = ((x * 7 + y * 3 + z) & 7) as f32 * 0.25;
+                    d.set(IVec3::new(x, y, z), 0.1 * v);
+                    e.set(IVec3::new(x, y, z), [v, 0.5 * v, 0.25]);
+                }
+            }
+        }
+        let volume = Volume { density: Some(&d), emission: Some(&e) };
+        let bits = |p: &Prepared| {
+            let img = render_prepared(p, &crate::progress::NoProgress).unwrap();
+            img.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>()
+        };
+        for terrain in [TerrainKind::None, TerrainKind::Plane] {
+            let mut scene = crate::scene::Scene::default();
+            scene.terrain.kind = terrain;
+            scene.terrain.height = 0.5;
+            scene.render.width = 16;
+            scene.render.height = 12;
+            scene.render.spp = 2;
+            scene.camera.position = [1.0, -20.0, 4.0];
+            scene.camera.look_at = [1.0, 0.0, 2.0];
+            let mut settings = RenderSettings::from_scene(&scene);
+            let mut p = Prepared::new(&settings, &volume).unwrap();
+            for (ds, es) in [(2.0, 0.5), (0.0, 3.0), (1.5, 0.0), (1.0, 1.0)] {
+                settings.volume.density_scale = ds;
+                settings.volume.emission_scale = es;
+                let fresh = Prepared::new(&settings, &volume).unwrap();
+                p.set_volume_scales(ds, es).unwrap();
+                assert!(p.medium == fresh.medium, "{terrain:?} {ds} {es}");
+                assert_eq!(p.sampler.as_ref().map(|s| s.power), fresh.sampler.as_ref().map(|s| s.power));
+                let want = bits(&fresh);
+                assert!(want.iter().any(|&b| b != 0), "the camera sees the volume");
+                assert_eq!(bits(&p), want, "{terrain:?} {ds} {es}");
+            }
+            if terrain == TerrainKind::Plane {
+                assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
+            }
+        }
+    }
+
+    /// The word-wise dual-cell masks equal the brute-force ones on random
+    /// blocks of every density, each block shared or absent (block 0).
+    #[test]
+    fn cell_masks_match_brute_force() {
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(9);
+        for &p in &[0.001, 0.01, 0.1, 0.5, 0.95] {
+            let mut nonzero: Vec<(CellMask, CellMask)> = vec![([0; 8], [0; 8])];
+            for _ in 0..12 {
+                let mut a = [0u64; 8];
+                let mut f = [0u64; 8];
+                for n in 0..512 {
+                    if rng.random::<f64>() < p {
+                        a[n >> 6] |= 1 << (n & 63);
+                        if rng.random::<f64>() < 0.5 {
+                            f[n >> 6] |= 1 << (n & 63);
+                        }
+                    }
+                }
+                nonzero.push((f, a));
+            }
+            for _ in 0..200 {
+                let nb: [u32; 8] = std::array::from_fn(|_| rng.random_range(0..nonzero.len() as u32));
+                assert_eq!(cell_masks(&nb, &nonzero), cell_masks_brute(&nb, &nonzero), "density {p}, blocks {nb:?}");
+            }
+        }
+        // One voxel at each corner of the lattice lights exactly its cells.
+        let mut one = [0u64; 8];
+        one[0] = 1;
+        let nonzero = vec![([0; 8], [0; 8]), (one, one)];
+        for d in 0..8 {
+            let mut nb = [0u32; 8];
+            nb[d] = 1;
+            assert_eq!(cell_masks(&nb, &nonzero), cell_masks_brute(&nb, &nonzero), "corner {d}");
+        }
     }
 }

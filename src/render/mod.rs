@@ -200,6 +200,9 @@ pub enum RenderError {
     /// negative or non-finite values, bad transform).
     #[error("grid '{grid}': {message}")]
     Grid { grid: String, message: String },
+    /// A grid's leaf could not be read (a file's record would not decode).
+    #[error("grid '{grid}': {source}")]
+    Source { grid: String, source: medium::LeafError },
     /// The terrain heightmap could not be read.
     #[error("heightmap {}: {message}", path.display())]
     Heightmap { path: PathBuf, message: String },
@@ -318,6 +321,55 @@ struct Counters {
 impl Prepared {
     /// Validates the settings and builds everything the pixel loop reads.
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
+        let camera = Self::check(settings)?;
+        let medium = Medium::new(
+            volume.density,
+            volume.emission,
+            settings.volume.density_scale,
+            settings.volume.emission_scale,
+        )?;
+        Self::assemble(settings, camera, medium, volume.emission)
+    }
+
+    /// [`Prepared::new`] with a medium already built (for instance straight
+    /// from a file, `crate::vdb::read::read_render_medium`), its scales set
+    /// to the settings'. `emission` is the emission grid for the terrain's
+    /// emission sampler if the caller has it; without it the sampler is
+    /// built from the medium (the same sampler).
+    pub fn with_medium(
+        settings: &RenderSettings,
+        mut medium: Medium,
+        emission: Option<&Grid<[f32; 3]>>,
+    ) -> Result<Prepared, RenderError> {
+        let camera = Self::check(settings)?;
+        medium.set_scales(settings.volume.density_scale, settings.volume.emission_scale)?;
+        Self::assemble(settings, camera, medium, emission)
+    }
+
+    /// A `volume.density_scale` / `volume.emission_scale` edit without a
+    /// rebuild ([`Medium::set_scales`]; the emission sampler's power
+    /// likewise): the same `Prepared` as [`Prepared::new`] with the new
+    /// scales (a sampler needed again when the emission scale leaves 0 is
+    /// built from the medium). On `Err` nothing changed.
+    pub fn set_volume_scales(&mut self, density_scale: f64, emission_scale: f64) -> Result<(), RenderError> {
+        self.medium.set_scales(density_scale, emission_scale)?;
+        self.settings.volume.density_scale = density_scale;
+        self.settings.volume.emission_scale = emission_scale;
+        match (self.sampler.as_mut(), self.medium.emission) {
+            (Some(s), Some(_)) => {
+                if !s.set_scale(emission_scale) {
+                    self.sampler = None;
+                }
+            }
+            (Some(_), None) => self.sampler = None,
+            (None, Some(_)) if !self.terrain.is_none() => self.sampler = EmissionSampler::from_medium(&self.medium),
+            (None, _) => {}
+        }
+        Ok(())
+    }
+
+    /// The settings' checks; the camera.
+    fn check(settings: &RenderSettings) -> Result<CameraModel, RenderError> {
         let r = &settings.render;
         let bad = |m: String| Err(RenderError::Settings(m));
         if r.spp == 0 {
@@ -337,17 +389,20 @@ impl Prepared {
         if settings.terrain.albedo.iter().any(|v| !(0.0..=1.0).contains(v)) {
             return bad(format!("terrain.albedo {:?} must be in [0, 1]", settings.terrain.albedo));
         }
-        let camera = CameraModel::new(&settings.camera, r.width, r.height)?;
-        let medium = Medium::new(
-            volume.density,
-            volume.emission,
-            settings.volume.density_scale,
-            settings.volume.emission_scale,
-        )?;
+        Ok(CameraModel::new(&settings.camera, r.width, r.height)?)
+    }
+
+    fn assemble(
+        settings: &RenderSettings,
+        camera: CameraModel,
+        medium: Medium,
+        emission: Option<&Grid<[f32; 3]>>,
+    ) -> Result<Prepared, RenderError> {
         let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
-        let sampler = match (&terrain, volume.emission, medium.emission) {
-            (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
+        let sampler = match (&terrain, emission, medium.emission) {
+            (TerrainModel::None, _, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
+            (_, None, Some(_)) => EmissionSampler::from_medium(&medium),
         };
         let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
@@ -564,7 +619,23 @@ pub fn render_adaptive(
     }
     let build = Instant::now();
     let prepared = Prepared::new(settings, volume)?;
-    let build_seconds = build.elapsed().as_secs_f64();
+    render_adaptive_prepared(&prepared, build.elapsed().as_secs_f64(), progress)
+}
+
+/// [`render_adaptive`] from an already built [`Prepared`] (for instance
+/// one whose medium was read straight from a file,
+/// [`Prepared::with_medium`]); `build_seconds` goes into the stats.
+pub fn render_adaptive_prepared(
+    prepared: &Prepared,
+    build_seconds: f64,
+    progress: &dyn Progress,
+) -> Result<Image, RenderError> {
+    let spp = prepared.settings.render.spp;
+    if spp < ADAPTIVE_MIN_SPP {
+        let mut img = render_prepared(prepared, progress)?;
+        img.stats.build_seconds = build_seconds;
+        return Ok(img);
+    }
     let (w, h) = (prepared.camera.width, prepared.camera.height);
     let n0 = 2 * (spp / 4);
     progress.start("render", 2 * h as u64);

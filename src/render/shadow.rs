@@ -98,6 +98,65 @@ impl EmissionSampler {
         (total > 0.0 && s.power > 0.0 && s.power.is_finite()).then_some(s)
     }
 
+    /// [`EmissionSampler::new`] from the medium's emission channels instead
+    /// of the grid (the render from a file's records has no grid): the
+    /// same sampler for a grid whose leaves are in (x, y, z) order (as every
+    /// grid `crate::vdb::read` returns), since the medium's blocks are the
+    /// grid's leaves in that order with their values as stored, inactive
+    /// voxels 0.
+    /// `None` when nothing emits or `volume.emission_scale` is 0.
+    pub fn from_medium(medium: &super::Medium) -> Option<EmissionSampler> {
+        let c = medium.emission?;
+        let f = &medium.fields[c.field];
+        let mut s = EmissionSampler {
+            transform: f.transform,
+            leaf_origins: Vec::new(),
+            leaf_cdf: Vec::new(),
+            leaf_start: vec![0],
+            voxel_offset: Vec::new(),
+            voxel_cdf: Vec::new(),
+            power: 0.0,
+        };
+        let mut total = 0.0;
+        let per_block = super::medium::BLOCK_VALUES * f.channels;
+        for (b, &origin) in f.block_origins.iter().enumerate() {
+            let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
+            let before = s.voxel_offset.len();
+            for (n, v) in block.chunks_exact(f.channels).enumerate() {
+                let v = &v[c.channel..c.channel + 3];
+                let w = luminance([v[0] as f64, v[1] as f64, v[2] as f64]);
+                if w > 0.0 {
+                    total += w;
+                    s.voxel_offset.push(n as u16);
+                    s.voxel_cdf.push(total);
+                }
+            }
+            if s.voxel_offset.len() > before {
+                s.leaf_origins.push(origin);
+                s.leaf_cdf.push(total);
+                s.leaf_start.push(s.voxel_offset.len() as u32);
+            }
+        }
+        let h = f.transform.voxel_size;
+        s.power = medium.emission_scale * total * h * h * h;
+        (total > 0.0 && s.power > 0.0 && s.power.is_finite()).then_some(s)
+    }
+
+    /// Sets `volume.emission_scale` in place: afterwards the sampler equals
+    /// what [`EmissionSampler::new`] gives with that scale. False (sampler
+    /// unchanged) where `new` would give `None` (a zero or overflowing
+    /// power): the caller drops it.
+    pub fn set_scale(&mut self, emission_scale: f64) -> bool {
+        let total = self.leaf_cdf.last().copied().unwrap_or(0.0);
+        let h = self.transform.voxel_size;
+        let power = emission_scale * total * h * h * h;
+        let ok = total > 0.0 && power > 0.0 && power.is_finite();
+        if ok {
+            self.power = power;
+        }
+        ok
+    }
+
     /// A point `y` (world space) with density `Y(e(y)) / power`.
     pub fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> DVec3 {
         let total = *self.leaf_cdf.last().expect("non-empty sampler");

@@ -570,6 +570,21 @@ where
         ChunkLen::Compressed(len) => len,
     };
     let frame = cur.bytes_len(len as u64)?;
+    blosc_validate(cur, at, frame, nbytes)?;
+    if !decode {
+        return Ok(None);
+    }
+    if nbytes == 0 {
+        return Ok(Some(&[]));
+    }
+    scratch.clear();
+    scratch.resize(nbytes, 0);
+    blosc_decompress(cur, at, frame, scratch)?;
+    Ok(Some(&scratch[..]))
+}
+
+/// Checks a Blosc frame's header: valid, and `nbytes` once decompressed.
+fn blosc_validate(cur: &Cursor, at: usize, frame: &[u8], nbytes: usize) -> Result<(), ParseError> {
     let mut header_nbytes: usize = 0;
     // SAFETY: `blosc_cbuffer_validate` reads at most `frame.len()` bytes of the
     // frame (it first checks `cbytes >= BLOSC_MIN_HEADER_LENGTH`).
@@ -581,23 +596,113 @@ where
     if header_nbytes != nbytes {
         return Err(cur.err_at(at, format!("Blosc chunk holds {header_nbytes} bytes, expected {nbytes}")));
     }
-    if !decode {
-        return Ok(None);
-    }
-    if nbytes == 0 {
-        return Ok(Some(&[]));
-    }
-    scratch.clear();
-    scratch.resize(nbytes, 0);
-    // SAFETY: the frame was validated above (its header's cbytes equals the
-    // slice length), and blosc writes at most `destsize` = `scratch.len()` bytes.
-    let got = unsafe {
-        blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), scratch.as_mut_ptr().cast(), scratch.len(), 1)
-    };
+    Ok(())
+}
+
+/// Decompresses a validated Blosc `frame` (whose header says `dst.len()`
+/// bytes) into `dst`.
+fn blosc_decompress(cur: &Cursor, at: usize, frame: &[u8], dst: &mut [u8]) -> Result<(), ParseError> {
+    let nbytes = dst.len();
+    // SAFETY: the frame was validated (its header's cbytes equals the slice
+    // length), and blosc writes at most `destsize` = `dst.len()` bytes.
+    let got = unsafe { blosc_src::blosc_decompress_ctx(frame.as_ptr().cast(), dst.as_mut_ptr().cast(), nbytes, 1) };
     if got != nbytes as i32 {
         return Err(cur.err_at(at, format!("corrupt Blosc chunk (decompressed {got} of {nbytes} bytes)")));
     }
-    Ok(Some(&scratch[..]))
+    Ok(())
+}
+
+/// Which slots [`read_stored_f32`] returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StoredSlots {
+    /// Every slot, in index order.
+    All,
+    /// The active slots only (value mask), in index order.
+    Active,
+}
+
+/// Decodes the values a record *stores*, as `comps` f32 components a
+/// slot, into `out`, without rebuilding the inactive slots: the active
+/// slots alone when the record holds only those (an active-mask record),
+/// else every slot. Checks what [`read_values_into`] checks. A Blosc frame
+/// of full floats is decompressed straight into `out`'s memory (on a
+/// little-endian machine its bytes are the floats); other encodings go
+/// through `scratch`.
+pub fn read_stored_f32(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    comps: usize,
+    out: &mut Vec<f32>,
+    scratch: &mut Vec<u8>,
+) -> Result<StoredSlots, ParseError> {
+    let m = cur.u8()?;
+    if m > meta::NO_MASK_AND_ALL_VALS {
+        return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
+    }
+    let n_inactive = match m {
+        meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL => 1,
+        meta::MASK_AND_TWO_INACTIVE_VALS => 2,
+        _ => 0,
+    };
+    cur.bytes(n_inactive * 4 * comps)?;
+    if matches!(
+        m,
+        meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
+    ) {
+        cur.bytes(n / 8)?;
+    }
+    let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
+    let count = if masked { layout::mask_count(value_mask) } else { n };
+    let slots = if count == n { StoredSlots::All } else { StoredSlots::Active };
+    let floats = count * comps;
+    out.clear();
+    out.resize(floats, 0.0);
+    if fmt.half && count == 0 {
+        return Ok(slots);
+    }
+    let nbytes = floats * if fmt.half { 2 } else { 4 };
+    if fmt.flags & COMPRESS_BLOSC != 0 && !fmt.half && cfg!(target_endian = "little") {
+        let at = cur.pos();
+        let frame = match read_chunk_len(cur, nbytes)? {
+            ChunkLen::Stored(raw) => {
+                le_floats(raw, out);
+                return Ok(slots);
+            }
+            ChunkLen::Compressed(len) => cur.bytes_len(len as u64)?,
+        };
+        blosc_validate(cur, at, frame, nbytes)?;
+        if nbytes > 0 {
+            // SAFETY: `out` holds `floats` f32s = `nbytes` initialised bytes,
+            // and any bit pattern is a valid f32.
+            let dst = unsafe { std::slice::from_raw_parts_mut(out.as_mut_ptr().cast::<u8>(), nbytes) };
+            blosc_decompress(cur, at, frame, dst)?;
+        }
+        return Ok(slots);
+    }
+    let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
+        read_blosc(cur, nbytes, true, scratch)?.unwrap_or(&[])
+    } else if fmt.flags & COMPRESS_ZIP != 0 {
+        read_zip(cur, nbytes, true, true, scratch)?.unwrap_or(&[])
+    } else {
+        cur.bytes(nbytes)?
+    };
+    if fmt.half {
+        for (o, b) in out.iter_mut().zip(raw.chunks_exact(2)) {
+            *o = f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
+        }
+    } else {
+        le_floats(raw, out);
+    }
+    Ok(slots)
+}
+
+/// Little-endian f32s from `raw` into `out` (as many as fit both).
+fn le_floats(raw: &[u8], out: &mut [f32]) {
+    for (o, b) in out.iter_mut().zip(raw.chunks_exact(4)) {
+        *o = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    }
 }
 
 #[cfg(test)]

@@ -8,7 +8,11 @@
 //!   cannot make vdb-rs allocate from a garbage length or read past the end;
 //! - *native decoding* (`decode = true`): the same walk, decoding values, for
 //!   the grids vdb-rs cannot read (vec3s grids, half grids, tiles, maps other
-//!   than its three).
+//!   than its three);
+//! - *locating* ([`Decode::Locate`]): the validation walk, keeping each
+//!   leaf's origin, mask and record offset, for a caller that decodes the
+//!   records itself, in parallel, straight where it wants the values (the
+//!   renderer's medium, `super::read::read_render_medium`).
 //!
 //! Nothing here panics on input and every loop is bounded by bytes consumed:
 //! descriptors only move forward (`gridPos >= descriptor end`,
@@ -168,6 +172,22 @@ pub struct Tree<T> {
     pub leaf_count: usize,
     /// Number of active tiles at any level, counted even when not decoding.
     pub active_tile_count: usize,
+    /// With [`Decode::Locate`]: every leaf's origin, mask and record, in
+    /// file order (empty otherwise), for the caller to decode
+    /// (`codec::read_stored_f32` at `start`).
+    pub spans: Vec<LeafSpan>,
+    /// How the records are stored.
+    pub format: RecordFormat,
+}
+
+/// Where one leaf's value record lies in the file (its mask already read
+/// from the topology and checked against the buffers' copy).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LeafSpan {
+    pub origin: IVec3,
+    pub mask: [u64; LEAF_MASK_WORDS],
+    /// Byte offset of the value record (after the mask copy).
+    pub start: usize,
 }
 
 /// A decoded grid tree of either value type.
@@ -210,6 +230,10 @@ pub enum Decode {
     /// renderer, on a background-0 grid), such as the shell of zero voxels
     /// our bakes add for Cycles. Every record is still decoded and checked.
     NonZero,
+    /// Validate every record and list where each leaf's lies
+    /// ([`Tree::spans`]) without decoding: the caller decodes them where
+    /// and when it wants the values.
+    Locate,
 }
 
 /// [`parse_file`] with a per-grid [`Decode`] choice.
@@ -482,7 +506,7 @@ fn read_tree<T: VoxelValue>(
     fmt: RecordFormat,
     how: Decode,
 ) -> Result<Tree<T>, ParseError> {
-    let decode = how != Decode::Skip;
+    let decode = matches!(how, Decode::All | Decode::NonZero);
     let name = &gh.unique_name;
     let at = cur.pos();
     let buffer_count = cur.i32()?;
@@ -502,8 +526,15 @@ fn read_tree<T: VoxelValue>(
             ),
         ));
     }
-    let mut tree =
-        Tree { background, leaves: Vec::new(), tiles: Vec::new(), leaf_count: 0, active_tile_count: 0 };
+    let mut tree = Tree {
+        background,
+        leaves: Vec::new(),
+        tiles: Vec::new(),
+        leaf_count: 0,
+        active_tile_count: 0,
+        spans: Vec::new(),
+        format: fmt,
+    };
     for _ in 0..tile_count {
         let o = cur.ivec3()?;
         let v: T = read_value(cur)?;
@@ -574,9 +605,14 @@ fn read_tree<T: VoxelValue>(
                 ));
             }
             let start = cur.pos();
-            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, !decode)?;
+            // A located record is decoded (and its ZIP stream checked) later.
+            let check_zip = !decode && how != Decode::Locate;
+            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_zip)?;
             if decode {
                 spans.push((layout::internal16_child_origin(node.origin, n16), mask, start));
+            } else if how == Decode::Locate {
+                let origin = layout::internal16_child_origin(node.origin, n16);
+                tree.spans.push(LeafSpan { origin, mask: *mask, start });
             }
         }
     }
