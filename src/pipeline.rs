@@ -726,10 +726,26 @@ pub fn finish(
     plan: &BakePlan,
     emission: Grid<[f32; 3]>,
     g: Gathered,
-    mut times: StageTimes,
+    times: StageTimes,
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<Bake, BakeError> {
+    finish_keeping(plan, emission, g, times, t_all, progress).map(|(b, _)| b)
+}
+
+/// [`finish`], also returning the leaves pruning dropped (leaf order; none
+/// when `grid.prune` is 0). Without the Cycles shell the bake's emission
+/// and these leaves are the gathered grid, so a caller that refinishes
+/// (the preview, after a camera or grid edit) keeps them instead of a copy
+/// of the gathered grid ([`Grid::restore_leaves`]).
+pub fn finish_keeping(
+    plan: &BakePlan,
+    emission: Grid<[f32; 3]>,
+    g: Gathered,
+    mut times: StageTimes,
+    t_all: Instant,
+    progress: &dyn Progress,
+) -> Result<(Bake, Vec<Leaf<[f32; 3]>>), BakeError> {
     let Gathered { photons, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
@@ -745,11 +761,12 @@ pub fn finish(
 
     let t = Instant::now();
     let mut emission = emission;
-    let prune_stats = if plan.grid.prune > 0.0 {
+    let (prune_stats, dropped) = if plan.grid.prune > 0.0 {
         let camera = plan.camera_model()?;
-        Some(prune::prune(&mut emission, &camera, plan.grid.prune))
+        let (st, dropped) = prune::prune_keeping(&mut emission, &camera, plan.grid.prune);
+        (Some(st), dropped)
     } else {
-        None
+        (None, Vec::new())
     };
     times.prune = t.elapsed().as_secs_f64();
 
@@ -809,5 +826,5 @@ pub fn finish(
         prune: prune_stats,
         warnings,
     };
-    Ok(Bake { emission, density, photons, stats })
+    Ok((Bake { emission, density, photons, stats }, dropped))
 }

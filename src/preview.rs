@@ -63,7 +63,7 @@
 use crate::bake::{self, Bake, BakeError};
 use crate::beams::Photon;
 use crate::camera::CameraModel;
-use crate::grid::Grid;
+use crate::grid::Leaf;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
 use crate::progress::NoProgress;
 use crate::render::shadow::EmissionSampler;
@@ -207,8 +207,13 @@ struct Cache {
     /// Beam count, pilot estimate and pilot warnings.
     count: (usize, Option<pipeline::NoiseEstimate>, Vec<String>),
     beam_stats: crate::beams::BeamStats,
-    /// The gathered emission before finishing, and its voxel size.
-    gathered: Grid<[f32; 3]>,
+    /// The leaves pruning dropped from the gathered emission: with
+    /// `bake.emission` (no Cycles shell) they are the gathered grid, which
+    /// a camera or grid edit refinishes ([`crate::grid::Grid::restore_leaves`]). Kept
+    /// instead of a copy of the gathered grid (some 340 MB on the default
+    /// scene, whose copy cost every beams edit 0.1-0.2 s).
+    dropped: Vec<Leaf<[f32; 3]>>,
+    /// The gathered emission's voxel size.
     voxel: (f64, String),
     bake: Bake,
     /// The coarse picture's grids ([`Preview::coarse_picture`]) while they
@@ -463,34 +468,37 @@ impl Preview {
                         c.plan = plan;
                         return Ok(false);
                     }
-                    if regather {
-                        c.voxel = plan.voxel_size(&c.bake.photons);
+                    let (gathered, voxel, coarse) = if regather {
+                        let voxel = plan.voxel_size(&c.bake.photons);
                         let coarse;
-                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0, &mut parts)?;
-                        c.coarse = Some(coarse);
+                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &c.bake.photons, voxel.0, &mut parts)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
-                        c.gathered = pipeline::gather(&plan, &c.bake.photons, c.voxel.0, nothing);
+                        let gathered = pipeline::gather(&plan, &c.bake.photons, voxel.0, nothing);
                         u.gather = t.elapsed().as_secs_f64();
-                    }
-                    if !regather {
-                        // The coarse grids were finished otherwise.
-                        c.coarse = None;
-                    }
+                        (gathered, voxel, Some(coarse))
+                    } else {
+                        // The gathered grid again: the finished emission
+                        // and the leaves pruning dropped. (The coarse grids
+                        // were finished otherwise.)
+                        let mut gathered = c.bake.emission.clone();
+                        gathered.restore_leaves(c.dropped.iter().cloned());
+                        (gathered, c.voxel.clone(), None)
+                    };
                     let t = Instant::now();
-                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, c.voxel.0);
+                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(c.count.2.iter().cloned());
                     let g = Gathered {
                         photons: c.bake.photons.clone(),
                         beam_stats: c.beam_stats.clone(),
-                        voxel_km: c.voxel.0,
-                        voxel_source: c.voxel.1.clone(),
+                        voxel_km: voxel.0,
+                        voxel_source: voxel.1.clone(),
                         warnings,
                         noise: c.count.1.clone(),
                     };
-                    c.bake = pipeline::finish(&plan, c.gathered.clone(), g, times.clone(), t0, nothing)?;
+                    (c.bake, c.dropped) = pipeline::finish_keeping(&plan, gathered, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
-                    c.plan = plan;
+                    (c.plan, c.voxel, c.coarse) = (plan, voxel, coarse);
                     Ok(true)
                 })();
                 match r {
@@ -539,10 +547,10 @@ impl Preview {
                         noise: count.1.clone(),
                     };
                     let t = Instant::now();
-                    let (gathered, voxel, beam_stats) = (emission.clone(), (g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
-                    let bake = pipeline::finish(&plan, emission, g, times.clone(), t0, nothing)?;
+                    let (voxel, beam_stats) = ((g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
+                    let (bake, dropped) = pipeline::finish_keeping(&plan, emission, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
-                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, gathered, voxel, bake, coarse: Some(coarse) })
+                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, dropped, voxel, bake, coarse: Some(coarse) })
                 })();
                 match r {
                     Ok(c) => c,
