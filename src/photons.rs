@@ -264,27 +264,27 @@ pub fn erf_lut(table: &[f32; ERF_LUT_LEN], x: f32) -> f32 {
     v.copysign(x)
 }
 
-/// [`erf_lut`] at 4 arguments, staged so the index and interpolation
-/// arithmetic vectorise (only the 8 table reads are scalar); the same
-/// operations per lane, so the same values.
+/// [`erf_lut`] at N arguments (4 or 8: half or whole z-rows), staged so
+/// the index and interpolation arithmetic vectorise (only the 2N table
+/// reads are scalar); the same operations per lane, so the same values.
 #[inline(always)]
-fn erf_lut4(table: &[f32; ERF_LUT_LEN], x: &[f32; 4]) -> [f32; 4] {
+fn erf_lut_lanes<const N: usize>(table: &[f32; ERF_LUT_LEN], x: &[f32; N]) -> [f32; N] {
     const MAGIC: f32 = 12_582_912.0;
-    let (mut k, mut f) = ([0usize; 4], [0.0f32; 4]);
-    for j in 0..4 {
+    let (mut k, mut f) = ([0usize; N], [0.0f32; N]);
+    for j in 0..N {
         let ax = (x[j].abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
         let t = (ax - 0.5) + MAGIC;
         let kj = (t.to_bits() as i32 - MAGIC.to_bits() as i32).max(0).min(ERF_LUT_LEN as i32 - 2);
         k[j] = kj as usize;
         f[j] = ax - kj as f32;
     }
-    let (mut a, mut b) = ([0.0f32; 4], [0.0f32; 4]);
-    for j in 0..4 {
+    let (mut a, mut b) = ([0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
         let kj = k[j].min(ERF_LUT_LEN - 2);
         (a[j], b[j]) = (table[kj], table[kj + 1]);
     }
-    let mut v = [0.0f32; 4];
-    for j in 0..4 {
+    let mut v = [0.0f32; N];
+    for j in 0..N {
         v[j] = (a[j] + f[j] * (b[j] - a[j])).copysign(x[j]);
     }
     v
@@ -694,16 +694,16 @@ fn kernel_lanes(dxy: f32, dz2: &[f32; 4], reach2: &[f32], norm: &[f32], inv_2r2:
     w
 }
 
-/// The segment kernel's geometry at 4 consecutive voxels of a z-row,
-/// offsets from the segment's start `w = (wx, wy, wz)` given as `s_xy = wx
-/// dx + wy dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`, `wz^2` per
-/// lane: `s` (along the segment), `perp^2` (across it), and 1 where the voxel
-/// lies inside the capsule (distance to the segment below `c r`), else 0.
-/// Branch-free so it vectorises.
+/// The segment kernel's geometry at N consecutive voxels of a z-row (4 or
+/// 8), offsets from the segment's start `w = (wx, wy, wz)` given as `s_xy
+/// = wx dx + wy dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`,
+/// `wz^2` per lane: `s` (along the segment), `perp^2` (across it), and 1
+/// where the voxel lies inside the capsule (distance to the segment below
+/// `c r`), else 0. Branch-free so it vectorises.
 #[inline(always)]
-fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: &SegParams) -> ([f32; 4], [f32; 4], [f32; 4]) {
-    let (mut s4, mut p4, mut inside) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-    for j in 0..4 {
+fn segment_lanes<const N: usize>(sxy: f32, w2xy: f32, sz: &[f32; N], w2z: &[f32; N], l: f32, q: &SegParams) -> ([f32; N], [f32; N], [f32; N]) {
+    let (mut s4, mut p4, mut inside) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
         let s = sxy + sz[j];
         let w2 = w2xy + w2z[j];
         let perp2 = (w2 - s * s).max(0.0);
@@ -713,6 +713,32 @@ fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: 
         (s4[j], p4[j]) = (s, perp2);
     }
     (s4, p4, inside)
+}
+
+/// The segment kernel's closed form at N lanes of a z-row from
+/// [`segment_lanes`]' `s`, `perp2` and `inside`, times the photon's power
+/// `phi`, added to the sums from voxel `n` on: `c inside exp(-perp2 / 2r^2)
+/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn add_segment_lanes<const N: usize>(acc: &mut LeafAcc, n: usize, s4: &[f32; N], perp2: &[f32; N], inside: &[f32; N], q: &SegParams, c: f32, l: f32, phi: &[f32; 3]) {
+    let erf = erf_table();
+    let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
+        ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
+        u0[j] = s4[j] * q.inv_sqrt2r;
+        u1[j] = (s4[j] - l) * q.inv_sqrt2r;
+    }
+    let (e0, e1) = (erf_lut_lanes(erf, &u0), erf_lut_lanes(erf, &u1));
+    let mut v = [0.0f32; N];
+    for j in 0..N {
+        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
+    }
+    for (col, &ph) in acc.c.iter_mut().zip(phi) {
+        for (a, &vj) in col[n..n + N].iter_mut().zip(&v) {
+            *a += vj * ph;
+        }
+    }
 }
 
 /// Scratch space of the splat gather, one per thread: the per-voxel sums
@@ -1004,7 +1030,7 @@ impl GatherSetup<'_> {
     /// rows the capsule misses and the half rows outside the segment's box
     /// widened by the reach are skipped whole. Offsets from the segment's
     /// start are taken in f64 then rounded to f32.
-    #[inline]
+    #[inline(always)]
     fn splat_segment(&self, origin: IVec3, p: &Photon, sk: &SplatKernel, k: &mut LeafKernels, acc: &mut LeafAcc) {
         let (a, b) = (pos(p), end(p));
         let q = sk.sp;
@@ -1039,7 +1065,6 @@ impl GatherSetup<'_> {
         let phi = p.power;
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
-        let erf = erf_table();
         let (px, py) = (l * dir.x, l * dir.y);
         let pxy2 = px * px + py * py;
         let reach2 = (reach * reach) as f32;
@@ -1047,6 +1072,7 @@ impl GatherSetup<'_> {
         let wys: [f32; 8] = std::array::from_fn(|y| off(1, y as i32));
         // Half rows (lanes 0-3, 4-7) meeting the z range lo.z..=hi.z.
         let halves = (if lo.z < 4 { 0 } else { 4 }..if hi.z >= 4 { 8 } else { 4 }).step_by(4);
+        let whole_rows = lo.z < 4 && hi.z >= 4;
         for x in lo.x..=hi.x {
             let wx = off(0, x);
             for y in lo.y..=hi.y {
@@ -1064,29 +1090,26 @@ impl GatherSetup<'_> {
                 let sxy = wx * dir.x + wy * dir.y;
                 let w2xy = wx * wx + wy * wy;
                 let row = ((x << 6) | (y << 3)) as usize;
+                if whole_rows {
+                    // Both halves at once (one 8-lane pass with AVX2,
+                    // `GatherSetup::leaf_splat`); a half the capsule misses
+                    // adds exact zeros (inside 0, every other factor finite
+                    // and e0 >= e1: erf_lut is monotone), which leaves the
+                    // non-negative sums as they are: the same values as
+                    // half rows.
+                    let (s8, perp2, inside) = segment_lanes(sxy, w2xy, &sz, &w2z, l, &q);
+                    if inside != [0.0; 8] {
+                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi);
+                    }
+                    continue;
+                }
                 for o in halves.clone() {
                     let (sz4, w2z4) = (sz[o..o + 4].try_into().unwrap(), w2z[o..o + 4].try_into().unwrap());
-                    let (s4, perp2, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    let (s4, perp2, inside) = segment_lanes::<4>(sxy, w2xy, sz4, w2z4, l, &q);
                     if inside == [0.0; 4] {
                         continue; // the half row misses the capsule
                     }
-                    let (mut ex, mut u0, mut u1) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-                    for j in 0..4 {
-                        ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
-                        u0[j] = s4[j] * q.inv_sqrt2r;
-                        u1[j] = (s4[j] - l) * q.inv_sqrt2r;
-                    }
-                    let (e0, e1) = (erf_lut4(erf, &u0), erf_lut4(erf, &u1));
-                    let mut v = [0.0f32; 4];
-                    for j in 0..4 {
-                        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
-                    }
-                    let n = row + o;
-                    for (col, &ph) in acc.c.iter_mut().zip(&phi) {
-                        for (a, &vj) in col[n..n + 4].iter_mut().zip(&v) {
-                            *a += vj * ph;
-                        }
-                    }
+                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi);
                 }
             }
         }
@@ -1202,6 +1225,26 @@ impl GatherSetup<'_> {
     /// the sums are cleared after each leaf, and the per-voxel kernel rows
     /// are written before they are read.
     pub fn leaf_splat(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { self.leaf_splat_avx2(origin, photons, bufs) };
+        }
+        self.leaf_splat_body(origin, photons, bufs)
+    }
+
+    /// [`Self::leaf_splat`] compiled for AVX2: the 8-lane z-rows of the
+    /// segment path in one pass. IEEE arithmetic is the same at any vector
+    /// width and Rust fuses no multiply-add, so the values are the same
+    /// bits as without AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn leaf_splat_avx2(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
+        self.leaf_splat_body(origin, photons, bufs)
+    }
+
+    #[inline(always)]
+    fn leaf_splat_body(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
         let SplatBuffers { acc, k } = bufs;
         for &i in photons {
             let p = &self.photons[i as usize];
