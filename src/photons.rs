@@ -847,7 +847,7 @@ pub struct GatherSetup<'a> {
     /// midpoint), computed once per photon rather than once per leaf it
     /// touches (the radius noise is a Perlin lookup); empty for the other
     /// gathers.
-    pub splat_kernels: Vec<SplatKernel>,
+    pub splat_kernels: &'a [SplatKernel],
 }
 
 /// A photon's kernel in the splat: its parameters (r at the point, or at
@@ -1420,26 +1420,69 @@ pub fn gather_grid(
     method: GatherMethod,
     progress: &dyn Progress,
 ) -> Grid<[f32; 3]> {
+    gather_prepared(&GatherInput::new(photons, radius, cutoff, method), transform, radius, cutoff, method, progress)
+}
+
+/// The photons as the gathers take them, made once for several gathers of
+/// the same photons (the preview's coarse picture and the refined one):
+/// straight, evenly lit runs of beam steps merged into one segment each
+/// ([`merge_segments`], all but `report2014`) and, for the splat, each
+/// photon's kernel (r at the point or the segment's midpoint: a Perlin
+/// lookup per photon).
+#[derive(Clone, Debug)]
+pub struct GatherInput {
+    pub photons: Vec<Photon>,
+    splat_kernels: Vec<SplatKernel>,
+    /// The segment kernel's masses for the cutoff (a table of some 4 k
+    /// numerical integrals).
+    seg: SegmentMass,
+}
+
+impl GatherInput {
+    pub fn new(photons: &[Photon], radius: &RadiusField, cutoff: f64, method: GatherMethod) -> Self {
+        let photons = if method == GatherMethod::Report2014 {
+            photons.to_vec()
+        } else {
+            merge_segments(photons, |p| radius.radius(p), MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF)
+        };
+        let mass = gaussian_mass_inside(cutoff);
+        let splat_kernels = if method == GatherMethod::Splat {
+            photons
+                .par_iter()
+                .map(|p| SplatKernel::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Self { photons, splat_kernels, seg: SegmentMass::new(cutoff) }
+    }
+
+    /// Every `k`-th photon (from the first), its power multiplied by `k`:
+    /// the same expected emission from `1/k` of the photons (the preview's
+    /// coarse picture). Kernels are kept.
+    pub fn every(&self, k: usize) -> Self {
+        let k = k.max(1);
+        let photons = self.photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
+        let splat_kernels = self.splat_kernels.iter().step_by(k).copied().collect();
+        Self { photons, splat_kernels, seg: self.seg.clone() }
+    }
+}
+
+/// [`gather_grid`] of photons made ready by [`GatherInput::new`] with the
+/// same radius field, cutoff and method.
+pub fn gather_prepared(
+    input: &GatherInput,
+    transform: Transform,
+    radius: &RadiusField,
+    cutoff: f64,
+    method: GatherMethod,
+    progress: &dyn Progress,
+) -> Grid<[f32; 3]> {
     let mut grid = Grid::new("emission", [0.0f32; 3], transform);
-    // Straight, evenly lit runs of beam steps as one segment each (the
-    // estimators that take segments).
-    let merged;
-    let photons = if method == GatherMethod::Report2014 {
-        photons
-    } else {
-        merged = merge_segments(photons, |p| radius.radius(p), MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
-        &merged[..]
-    };
+    let photons = &input.photons[..];
     let mass = gaussian_mass_inside(cutoff);
-    let splat_kernels = if method == GatherMethod::Splat {
-        photons
-            .par_iter()
-            .map(|p| SplatKernel::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: SegmentMass::new(cutoff), splat_kernels };
+    let splat_kernels = &input.splat_kernels[..];
+    let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: input.seg.clone(), splat_kernels };
     let reach = cutoff * radius.max();
     // The splat bins each photon by its own reach (cutoff r_i, r at the
     // point or the segment's midpoint, as leaf_splat evaluates it); the

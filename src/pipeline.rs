@@ -630,6 +630,19 @@ pub fn gather(plan: &BakePlan, photons: &[Photon], voxel_km: f64, progress: &dyn
     gather_with(photons, voxel_km, &plan.radius, plan.photons.cutoff, plan.photons.gather, progress)
 }
 
+/// The photons made ready for [`gather_from`] with the plan's radius field,
+/// cutoff and gather method (merged runs, splat kernels): once for several
+/// gathers of the same photons.
+pub fn gather_input(plan: &BakePlan, photons: &[Photon]) -> photons::GatherInput {
+    photons::GatherInput::new(photons, &plan.radius, plan.photons.cutoff, plan.photons.gather)
+}
+
+/// [`gather`] of photons made ready by [`gather_input`] with the same plan:
+/// the same grid.
+pub fn gather_from(plan: &BakePlan, input: &photons::GatherInput, voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
+    photons::gather_prepared(input, grid_transform(voxel_km), &plan.radius, plan.photons.cutoff, plan.photons.gather, progress)
+}
+
 /// The transform + radius field + gather set-up, written once: the emission
 /// grid of `photons` on [`grid_transform`]`(voxel_km)`.
 pub fn gather_with(

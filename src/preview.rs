@@ -61,7 +61,7 @@
 //! update reports every stage's time ([`Update`]).
 
 use crate::bake::{self, Bake, BakeError};
-use crate::beams::Photon;
+use crate::photons::GatherInput;
 use crate::camera::CameraModel;
 use crate::grid::Leaf;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
@@ -356,16 +356,14 @@ impl Preview {
         &self,
         scene: &Scene,
         plan: &BakePlan,
-        photons: &[Photon],
+        input: &GatherInput,
         voxel_km: f64,
         prev: &mut Option<Prepared>,
     ) -> Result<(f64, f64, Bake), PreviewError> {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
-        let k = COARSE_PHOTON_STRIDE;
-        let subset: Vec<Photon> = photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
-        let emission = pipeline::gather(plan, &subset, v, nothing);
+        let emission = pipeline::gather_from(plan, &input.every(COARSE_PHOTON_STRIDE), v, nothing);
         // Only the grids are used: no photons for the power sums, no warnings.
         let g = Gathered {
             photons: Vec::new(),
@@ -470,12 +468,15 @@ impl Preview {
                     }
                     let (gathered, voxel, coarse) = if regather {
                         let voxel = plan.voxel_size(&c.bake.photons);
+                        let t = Instant::now();
+                        let input = pipeline::gather_input(&plan, &c.bake.photons);
+                        u.gather = t.elapsed().as_secs_f64();
                         let coarse;
-                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &c.bake.photons, voxel.0, &mut parts)?;
+                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
-                        let gathered = pipeline::gather(&plan, &c.bake.photons, voxel.0, nothing);
-                        u.gather = t.elapsed().as_secs_f64();
+                        let gathered = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                        u.gather += t.elapsed().as_secs_f64();
                         (gathered, voxel, Some(coarse))
                     } else {
                         // The gathered grid again: the finished emission
@@ -529,14 +530,18 @@ impl Preview {
                     let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
-                    let (secs, png, coarse) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0, &mut parts)?;
+                    let t = Instant::now();
+                    let input = pipeline::gather_input(&plan, &traced.photons);
+                    u.gather = t.elapsed().as_secs_f64();
+                    let (secs, png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                     (u.coarse_render, u.png) = (secs, png);
                     coarse_done(&mut u);
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(count.2.iter().cloned());
-                    let emission = pipeline::gather(&plan, &traced.photons, voxel.0, nothing);
-                    u.gather = t.elapsed().as_secs_f64();
+                    let emission = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                    drop(input);
+                    u.gather += t.elapsed().as_secs_f64();
                     (times.beams, times.gather) = (u.trace, u.gather);
                     let g = Gathered {
                         photons: traced.photons,
