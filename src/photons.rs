@@ -1407,7 +1407,38 @@ pub const MERGE_CDF: f64 = 0.05;
 /// caps (two half balls, `4/3 pi (c r)^3` together, against `pi (c r)^2 L`
 /// for the body) are most of a short segment's voxels. Point photons and photons that do not
 /// touch are left alone. Deterministic (a pure function of the list).
-pub fn merge_segments(photons: &[Photon], radius: impl Fn(DVec3) -> f64, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
+///
+/// In parallel over chunks of about [`MERGE_CHUNK`] photons cut where no
+/// run can continue (a point photon on either side, or a photon that does
+/// not start where the previous one ends: between beams): the runs, and so
+/// the list, are those of one pass over the whole.
+pub fn merge_segments(photons: &[Photon], radius: impl Fn(DVec3) -> f64 + Sync, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
+    let breaks_at = |k: usize| {
+        let (a, b) = (&photons[k - 1], &photons[k]);
+        a.is_point() || b.is_point() || b.position != a.end
+    };
+    let mut cuts = vec![0];
+    let mut k = MERGE_CHUNK;
+    while k < photons.len() {
+        while k < photons.len() && !breaks_at(k) {
+            k += 1;
+        }
+        if k < photons.len() {
+            cuts.push(k);
+        }
+        k += MERGE_CHUNK;
+    }
+    cuts.push(photons.len());
+    let parts: Vec<Vec<Photon>> = cuts.par_windows(2).map(|w| merge_run_list(&photons[w[0]..w[1]], &radius, len_r, off_r, max_cdf)).collect();
+    parts.concat()
+}
+
+/// Photons per chunk of [`merge_segments`]' parallel pass (before the cut
+/// moves to the next beam's start).
+pub const MERGE_CHUNK: usize = 1 << 15;
+
+/// [`merge_segments`] in one pass.
+fn merge_run_list(photons: &[Photon], radius: &impl Fn(DVec3) -> f64, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
     let mut out = Vec::with_capacity(photons.len());
     let mut i = 0;
     while i < photons.len() {
@@ -1650,6 +1681,33 @@ mod tests {
         }
         let (l, b) = bin_photons_dense(&[], 0.5, |_| 1.0).unwrap();
         assert!(l.is_empty() && b.photons.is_empty() && b.start == [0]);
+    }
+
+    /// The parallel merge (chunks cut between beams) gives the one-pass
+    /// list: chains of contiguous steps of random lengths, straight and
+    /// bent, across many chunk boundaries, with point photons between.
+    #[test]
+    fn parallel_merge_equals_one_pass() {
+        let mut r = rng::rng(&[17]);
+        let mut photons = Vec::new();
+        while photons.len() < 3 * MERGE_CHUNK + 777 {
+            let mut a: [f32; 3] = std::array::from_fn(|_| r.random_range(-50.0f32..50.0));
+            for _ in 0..r.random_range(1..900) {
+                // Mostly straight and even (runs merge), now and then a kink.
+                let w = if r.random_range(0..10) == 0 { 0.3f32 } else { 0.005 };
+                let b = [a[0] + r.random_range(-w..w), a[1] + r.random_range(-w..w), a[2] - 0.5];
+                photons.push(Photon::segment(a, b, [1.0; 3]));
+                a = b;
+            }
+            if r.random_range(0..4) == 0 {
+                photons.push(Photon::point(a, [1.0; 3]));
+            }
+        }
+        let radius = |_: DVec3| 0.5;
+        let one = merge_run_list(&photons, &radius, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
+        let par = merge_segments(&photons, radius, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
+        assert!(one.len() < photons.len() / 2, "runs merged: {} of {}", one.len(), photons.len());
+        assert_eq!(par, one);
     }
 
     #[test]
