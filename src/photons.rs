@@ -79,13 +79,20 @@
 //!   `examples/gather_bench.rs`): each photon's kernel parameters once
 //!   (not once per leaf: the radius noise is a Perlin lookup), and its
 //!   leaves from its own reach `c r_i` rather than the largest radius's;
-//!   the bins by a stable counting sort; per leaf, a segment's closed form
-//!   over half z-rows of 4 voxels without branches (the capsule test
-//!   selects lanes, rows the capsule misses are skipped), the across
+//!   the candidate leaves and the bins in one go on a dense box of leaves
+//!   (counts, prefix sum, scatter in photon order: [`bin_photons_dense`];
+//!   a stable counting sort through hash maps for boxes too large); per
+//!   leaf, a segment's closed form over whole z-rows of 8 voxels (or half
+//!   rows of 4 where the leaf's box holds one half) without branches (the
+//!   capsule test selects lanes, rows the capsule misses are skipped),
+//!   compiled for AVX2 where the CPU has it (runtime check: the same IEEE
+//!   operations, so the same bits, 8 lanes in one instruction), the across
 //!   factor by [`exp_neg_f32`] and the along factor's two erfs by table
 //!   ([`erf_lut`]) with the index arithmetic vectorised; scratch sums
 //!   reused per thread. The per-voxel arithmetic is that of the scalar
-//!   path, so the tolerances below hold as they are.
+//!   path, so the tolerances below hold as they are. The merged runs and
+//!   kernels ([`GatherInput`]) can be made once for several gathers of
+//!   the same photons (the preview's coarse and refined pictures).
 //! - `report2014`: the report's estimate, a kernel-weighted *average*
 //!   `sum(w Phi) / sum(w)` (w the unnormalised Gaussian) of photons binned in a
 //!   uniform grid (the leaves). Not a density: its magnitude is a photon's
@@ -100,7 +107,8 @@
 //! beam's contiguous steps become one segment each ([`merge_segments`],
 //! with its error bounds): a short segment's kernel is mostly its two end
 //! caps, so one capsule per run instead of one per step cuts the voxels
-//! evaluated.
+//! evaluated. The merge runs in parallel over chunks cut between beams,
+//! where no run can continue (the same list as one pass).
 //!
 //! Every per-voxel sum runs over photons in ascending index order, so the
 //! grids are identical whatever the thread count.
@@ -1685,7 +1693,7 @@ mod tests {
 
     /// The parallel merge (chunks cut between beams) gives the one-pass
     /// list: chains of contiguous steps of random lengths, straight and
-    /// bent, across many chunk boundaries, with point photons between.
+    /// kinked, across many chunk boundaries, with point photons between.
     #[test]
     fn parallel_merge_equals_one_pass() {
         let mut r = rng::rng(&[17]);

@@ -2,8 +2,11 @@
 //!
 //! A [`Preview`] keeps every stage's output in memory: the
 //! [`BakePlan`](crate::pipeline::BakePlan) (footprints, atmosphere, colour
-//! table), the photons, the gathered emission grid before pruning, the
-//! finished grids, the renderer's structures ([`crate::render::Prepared`]:
+//! table), the photons, the finished grids and the leaves pruning dropped
+//! (with the finished emission they are the gathered grid, restored when a
+//! camera or grid edit refinishes: no copy of the gathered grid, some
+//! 340 MB on the default scene, on every rebuild), the renderer's
+//! structures ([`crate::render::Prepared`]:
 //! camera, medium, terrain, emission sampler, sky) and the last linear
 //! image. An edit is diffed against the last good scene section by section
 //! ([`stage_for_edit`]) and only the stages it touches are rerun:
@@ -28,8 +31,10 @@
 //! (`crate::render::film::write_png`), up to three pictures:
 //! 1. a coarse one: a quarter of the size, one sample per pixel. When the
 //!    edit rebuilds the grids it comes before the full gather, from every
-//!    [`COARSE_PHOTON_STRIDE`]-th photon (power multiplied as much) gathered
-//!    on voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
+//!    [`COARSE_PHOTON_STRIDE`]-th photon of the full gather's input (the
+//!    merged runs and their kernels, [`crate::photons::GatherInput`], made
+//!    once for both gathers; power multiplied by the stride) gathered on
+//!    voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
 //!    made from a photon subset. After a `[volume]` edit (the medium is
 //!    rebuilt) it is rendered from the last coarse grids, before the
 //!    medium's build; otherwise from the refined picture's structures
@@ -56,9 +61,12 @@
 //! `benchmarks/preview/default_320x180.txt`, numbers in the README's
 //! Preview section): a render edit is the pixel loop of picture 2 (230 k
 //! camera rays at 4 spp) and the coarse picture; a `[volume]` edit adds
-//! the medium's build; a beams edit is trace, coarse picture, gather
-//! (the largest part), finish, the medium's build and the pixel loop. The
-//! update reports every stage's time ([`Update`]).
+//! the medium's build; a beams edit is trace, the gather's input (merge,
+//! kernels), coarse picture, gather (the largest part: the splat's
+//! segment kernels, about 2.2 of the edit's 4 CPU seconds before the
+//! renderer), finish, the medium's build and the pixel loop. The update
+//! reports every stage's time ([`Update`]); `gather` includes the input
+//! made before the coarse picture.
 
 use crate::bake::{self, Bake, BakeError};
 use crate::photons::GatherInput;
@@ -263,6 +271,16 @@ fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volu
     let o = old.settings;
     let had_terrain = !matches!(old.terrain, TerrainModel::None);
     let same_medium = !grids_changed && o.volume == s.volume;
+    // TODO(lead, merge with lane R / s6-r): `Medium::set_scales(density_scale,
+    // emission_scale)` (src/render/medium.rs on s6-r) applies the volume
+    // scales at lookup without a rebuild. Once merged: when only
+    // `s.volume`'s scales changed and the grids did not (`!grids_changed`),
+    // keep `old.medium` and call `set_scales(s.volume.density_scale,
+    // s.volume.emission_scale)?` on it instead of `Medium::new`; rebuild the
+    // sampler only (it takes emission_scale); and in `Preview::update` do not
+    // count a scale-only `[volume]` edit as `rebuild` (its coarse picture is
+    // then the refined structures' at the coarse size). The test
+    // `cached_updates_equal_fresh_ones` ("scales") checks the result.
     let medium = if same_medium {
         old.medium
     } else {
