@@ -356,6 +356,26 @@ impl<T: VoxelValue> Grid<T> {
         self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
     }
 
+    /// Removes every leaf for which `keep` returns false and returns them,
+    /// in the grid's leaf order: [`Self::retain_leaves`] that gives back what
+    /// it drops, so the grid can be restored ([`Self::restore_leaves`])
+    /// without keeping a copy of the whole.
+    pub fn split_off_leaves(&mut self, mut keep: impl FnMut(&Leaf<T>) -> bool) -> Vec<Leaf<T>> {
+        // In place: kept leaves move down only past dropped ones.
+        let dropped = self.leaves.extract_if(.., |l| !keep(l)).collect();
+        self.index = self.leaves.iter().enumerate().map(|(i, l)| (l.origin, i as u32)).collect();
+        dropped
+    }
+
+    /// Puts back leaves taken by [`Self::split_off_leaves`] (origins not in
+    /// the grid); leaves end sorted by origin.
+    pub fn restore_leaves(&mut self, leaves: impl IntoIterator<Item = Leaf<T>>) {
+        for l in leaves {
+            self.insert_leaf(l);
+        }
+        self.sort_leaves();
+    }
+
     /// Sets voxel `ijk` to `value` and marks it active.
     pub fn set(&mut self, ijk: IVec3, value: T) {
         let origin = leaf_origin(ijk);
@@ -694,6 +714,14 @@ mod tests {
         assert_eq!(a, b);
         b.set(IVec3::new(1, 2, 3), 1.5);
         assert_ne!(a, b);
+        let whole = a.clone();
+        let dropped = a.split_off_leaves(|l| l.origin.x > 50);
+        assert_eq!((a.leaf_count(), dropped.len()), (1, 1));
+        assert_eq!(a.get(IVec3::new(1, 2, 3)), 0.0);
+        let mut restored = a.clone();
+        restored.restore_leaves(dropped);
+        assert_eq!(restored, whole);
+        assert_eq!(restored.leaves().iter().map(|l| l.origin.x).collect::<Vec<_>>(), [0, 96], "sorted");
         a.retain_leaves(|l| l.origin.x > 50);
         assert_eq!(a.active_voxel_count(), 1);
         assert_eq!(a.get(IVec3::new(100, 2, 3)), 2.0);

@@ -79,13 +79,20 @@
 //!   `examples/gather_bench.rs`): each photon's kernel parameters once
 //!   (not once per leaf: the radius noise is a Perlin lookup), and its
 //!   leaves from its own reach `c r_i` rather than the largest radius's;
-//!   the bins by a stable counting sort; per leaf, a segment's closed form
-//!   over half z-rows of 4 voxels without branches (the capsule test
-//!   selects lanes, rows the capsule misses are skipped), the across
+//!   the candidate leaves and the bins in one go on a dense box of leaves
+//!   (counts, prefix sum, scatter in photon order: [`bin_photons_dense`];
+//!   a stable counting sort through hash maps for boxes too large); per
+//!   leaf, a segment's closed form over whole z-rows of 8 voxels (or half
+//!   rows of 4 where the leaf's box holds one half) without branches (the
+//!   capsule test selects lanes, rows the capsule misses are skipped),
+//!   compiled for AVX2 where the CPU has it (runtime check: the same IEEE
+//!   operations, so the same bits, 8 lanes in one instruction), the across
 //!   factor by [`exp_neg_f32`] and the along factor's two erfs by table
 //!   ([`erf_lut`]) with the index arithmetic vectorised; scratch sums
 //!   reused per thread. The per-voxel arithmetic is that of the scalar
-//!   path, so the tolerances below hold as they are.
+//!   path, so the tolerances below hold as they are. The merged runs and
+//!   kernels ([`GatherInput`]) can be made once for several gathers of
+//!   the same photons (the preview's coarse and refined pictures).
 //! - `report2014`: the report's estimate, a kernel-weighted *average*
 //!   `sum(w Phi) / sum(w)` (w the unnormalised Gaussian) of photons binned in a
 //!   uniform grid (the leaves). Not a density: its magnitude is a photon's
@@ -100,7 +107,8 @@
 //! beam's contiguous steps become one segment each ([`merge_segments`],
 //! with its error bounds): a short segment's kernel is mostly its two end
 //! caps, so one capsule per run instead of one per step cuts the voxels
-//! evaluated.
+//! evaluated. The merge runs in parallel over chunks cut between beams,
+//! where no run can continue (the same list as one pass).
 //!
 //! Every per-voxel sum runs over photons in ascending index order, so the
 //! grids are identical whatever the thread count.
@@ -264,27 +272,27 @@ pub fn erf_lut(table: &[f32; ERF_LUT_LEN], x: f32) -> f32 {
     v.copysign(x)
 }
 
-/// [`erf_lut`] at 4 arguments, staged so the index and interpolation
-/// arithmetic vectorise (only the 8 table reads are scalar); the same
-/// operations per lane, so the same values.
+/// [`erf_lut`] at N arguments (4 or 8: half or whole z-rows), staged so
+/// the index and interpolation arithmetic vectorise (only the 2N table
+/// reads are scalar); the same operations per lane, so the same values.
 #[inline(always)]
-fn erf_lut4(table: &[f32; ERF_LUT_LEN], x: &[f32; 4]) -> [f32; 4] {
+fn erf_lut_lanes<const N: usize>(table: &[f32; ERF_LUT_LEN], x: &[f32; N]) -> [f32; N] {
     const MAGIC: f32 = 12_582_912.0;
-    let (mut k, mut f) = ([0usize; 4], [0.0f32; 4]);
-    for j in 0..4 {
+    let (mut k, mut f) = ([0usize; N], [0.0f32; N]);
+    for j in 0..N {
         let ax = (x[j].abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
         let t = (ax - 0.5) + MAGIC;
         let kj = (t.to_bits() as i32 - MAGIC.to_bits() as i32).max(0).min(ERF_LUT_LEN as i32 - 2);
         k[j] = kj as usize;
         f[j] = ax - kj as f32;
     }
-    let (mut a, mut b) = ([0.0f32; 4], [0.0f32; 4]);
-    for j in 0..4 {
+    let (mut a, mut b) = ([0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
         let kj = k[j].min(ERF_LUT_LEN - 2);
         (a[j], b[j]) = (table[kj], table[kj + 1]);
     }
-    let mut v = [0.0f32; 4];
-    for j in 0..4 {
+    let mut v = [0.0f32; N];
+    for j in 0..N {
         v[j] = (a[j] + f[j] * (b[j] - a[j])).copysign(x[j]);
     }
     v
@@ -649,6 +657,66 @@ pub fn bin_photons_by(photons: &[Photon], leaves: &[IVec3], voxel_size: f64, rea
     Bins { start, photons: out }
 }
 
+/// Largest leaf box (in leaves) that [`bin_photons_dense`] takes: 4 M
+/// cells, 32 MB of counts and slots. Beyond it the hashed path.
+pub const DENSE_BIN_CELLS: u64 = 1 << 22;
+
+/// [`candidate_leaves_by`] and [`bin_photons_by`] at once, on a dense box
+/// of leaves rather than hash maps: the same leaves (sorted by (x, y, z),
+/// the box's linear order) and the same bins (each leaf's photons
+/// ascending). Each photon's leaf range once; per cell a count (atomic
+/// adds: the counts do not depend on the order), the leaves where it is
+/// not zero, a prefix sum, then the photon indices scattered in photon
+/// order. None when the box holds more than [`DENSE_BIN_CELLS`] leaves.
+pub fn bin_photons_dense(photons: &[Photon], voxel_size: f64, reach: impl Fn(usize) -> f64 + Sync) -> Option<(Vec<IVec3>, Bins)> {
+    use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
+    let ranges: Vec<(IVec3, IVec3)> = photons.par_iter().enumerate().map(|(i, p)| leaf_range(p, voxel_size, reach(i))).collect();
+    let (lo, hi) = ranges
+        .par_iter()
+        .filter(|(a, b)| a.cmple(*b).all())
+        .map(|&r| r)
+        .reduce(|| (IVec3::MAX, IVec3::MIN), |(a, b), (c, d)| (a.min(c), b.max(d)));
+    if lo.x > hi.x {
+        return Some((Vec::new(), Bins { start: vec![0], photons: Vec::new() }));
+    }
+    let dims = ((hi.as_i64vec3() - lo.as_i64vec3()) / LEAF_DIM as i64 + 1).as_u64vec3();
+    if dims.x.saturating_mul(dims.y).saturating_mul(dims.z) > DENSE_BIN_CELLS {
+        return None;
+    }
+    let (ny, nz) = (dims.y as usize, dims.z as usize);
+    let cells = dims.x as usize * ny * nz;
+    let cell = |o: IVec3| {
+        let d = (o - lo) / LEAF_DIM;
+        (d.x as usize * ny + d.y as usize) * nz + d.z as usize
+    };
+    let counts: Vec<AtomicU32> = (0..cells).map(|_| AtomicU32::new(0)).collect();
+    ranges.par_iter().for_each(|&r| {
+        for_each_leaf(r, |o| {
+            counts[cell(o)].fetch_add(1, Relaxed);
+        })
+    });
+    let (mut leaves, mut start, mut slot) = (Vec::new(), vec![0usize], vec![u32::MAX; cells]);
+    for (c, n) in counts.iter().enumerate() {
+        let n = n.load(Relaxed) as usize;
+        if n > 0 {
+            let (x, y, z) = (c / (ny * nz), (c / nz) % ny, c % nz);
+            slot[c] = leaves.len() as u32;
+            leaves.push(lo + IVec3::new(x as i32, y as i32, z as i32) * LEAF_DIM);
+            start.push(start[start.len() - 1] + n);
+        }
+    }
+    let mut next = start.clone();
+    let mut out = vec![0u32; start[start.len() - 1]];
+    for (i, &r) in ranges.iter().enumerate() {
+        for_each_leaf(r, |o| {
+            let k = slot[cell(o)] as usize;
+            out[next[k]] = i as u32;
+            next[k] += 1;
+        });
+    }
+    Some((leaves, Bins { start, photons: out }))
+}
+
 /// exp(x) for x <= 0 in f32, deterministic and branch-free so loops
 /// vectorise: `2^(x log2 e)` split into an integer power (exponent bits) and
 /// 2^f for f in [-1/2, 1/2] by its degree-6 Taylor polynomial (truncation
@@ -694,16 +762,16 @@ fn kernel_lanes(dxy: f32, dz2: &[f32; 4], reach2: &[f32], norm: &[f32], inv_2r2:
     w
 }
 
-/// The segment kernel's geometry at 4 consecutive voxels of a z-row,
-/// offsets from the segment's start `w = (wx, wy, wz)` given as `s_xy = wx
-/// dx + wy dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`, `wz^2` per
-/// lane: `s` (along the segment), `perp^2` (across it), and 1 where the voxel
-/// lies inside the capsule (distance to the segment below `c r`), else 0.
-/// Branch-free so it vectorises.
+/// The segment kernel's geometry at N consecutive voxels of a z-row (4 or
+/// 8), offsets from the segment's start `w = (wx, wy, wz)` given as `s_xy
+/// = wx dx + wy dy` and `w2_xy = wx^2 + wy^2` for the row and `wz dz`,
+/// `wz^2` per lane: `s` (along the segment), `perp^2` (across it), and 1
+/// where the voxel lies inside the capsule (distance to the segment below
+/// `c r`), else 0. Branch-free so it vectorises.
 #[inline(always)]
-fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: &SegParams) -> ([f32; 4], [f32; 4], [f32; 4]) {
-    let (mut s4, mut p4, mut inside) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-    for j in 0..4 {
+fn segment_lanes<const N: usize>(sxy: f32, w2xy: f32, sz: &[f32; N], w2z: &[f32; N], l: f32, q: &SegParams) -> ([f32; N], [f32; N], [f32; N]) {
+    let (mut s4, mut p4, mut inside) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
         let s = sxy + sz[j];
         let w2 = w2xy + w2z[j];
         let perp2 = (w2 - s * s).max(0.0);
@@ -713,6 +781,32 @@ fn segment_lanes(sxy: f32, w2xy: f32, sz: &[f32; 4], w2z: &[f32; 4], l: f32, q: 
         (s4[j], p4[j]) = (s, perp2);
     }
     (s4, p4, inside)
+}
+
+/// The segment kernel's closed form at N lanes of a z-row from
+/// [`segment_lanes`]' `s`, `perp2` and `inside`, times the photon's power
+/// `phi`, added to the sums from voxel `n` on: `c inside exp(-perp2 / 2r^2)
+/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn add_segment_lanes<const N: usize>(acc: &mut LeafAcc, n: usize, s4: &[f32; N], perp2: &[f32; N], inside: &[f32; N], q: &SegParams, c: f32, l: f32, phi: &[f32; 3]) {
+    let erf = erf_table();
+    let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
+    for j in 0..N {
+        ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
+        u0[j] = s4[j] * q.inv_sqrt2r;
+        u1[j] = (s4[j] - l) * q.inv_sqrt2r;
+    }
+    let (e0, e1) = (erf_lut_lanes(erf, &u0), erf_lut_lanes(erf, &u1));
+    let mut v = [0.0f32; N];
+    for j in 0..N {
+        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
+    }
+    for (col, &ph) in acc.c.iter_mut().zip(phi) {
+        for (a, &vj) in col[n..n + N].iter_mut().zip(&v) {
+            *a += vj * ph;
+        }
+    }
 }
 
 /// Scratch space of the splat gather, one per thread: the per-voxel sums
@@ -821,7 +915,7 @@ pub struct GatherSetup<'a> {
     /// midpoint), computed once per photon rather than once per leaf it
     /// touches (the radius noise is a Perlin lookup); empty for the other
     /// gathers.
-    pub splat_kernels: Vec<SplatKernel>,
+    pub splat_kernels: &'a [SplatKernel],
 }
 
 /// A photon's kernel in the splat: its parameters (r at the point, or at
@@ -1004,7 +1098,7 @@ impl GatherSetup<'_> {
     /// rows the capsule misses and the half rows outside the segment's box
     /// widened by the reach are skipped whole. Offsets from the segment's
     /// start are taken in f64 then rounded to f32.
-    #[inline]
+    #[inline(always)]
     fn splat_segment(&self, origin: IVec3, p: &Photon, sk: &SplatKernel, k: &mut LeafKernels, acc: &mut LeafAcc) {
         let (a, b) = (pos(p), end(p));
         let q = sk.sp;
@@ -1039,7 +1133,6 @@ impl GatherSetup<'_> {
         let phi = p.power;
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
-        let erf = erf_table();
         let (px, py) = (l * dir.x, l * dir.y);
         let pxy2 = px * px + py * py;
         let reach2 = (reach * reach) as f32;
@@ -1047,6 +1140,7 @@ impl GatherSetup<'_> {
         let wys: [f32; 8] = std::array::from_fn(|y| off(1, y as i32));
         // Half rows (lanes 0-3, 4-7) meeting the z range lo.z..=hi.z.
         let halves = (if lo.z < 4 { 0 } else { 4 }..if hi.z >= 4 { 8 } else { 4 }).step_by(4);
+        let whole_rows = lo.z < 4 && hi.z >= 4;
         for x in lo.x..=hi.x {
             let wx = off(0, x);
             for y in lo.y..=hi.y {
@@ -1064,29 +1158,26 @@ impl GatherSetup<'_> {
                 let sxy = wx * dir.x + wy * dir.y;
                 let w2xy = wx * wx + wy * wy;
                 let row = ((x << 6) | (y << 3)) as usize;
+                if whole_rows {
+                    // Both halves at once (one 8-lane pass with AVX2,
+                    // `GatherSetup::leaf_splat`); a half the capsule misses
+                    // adds exact zeros (inside 0, every other factor finite
+                    // and e0 >= e1: erf_lut is monotone), which leaves the
+                    // non-negative sums as they are: the same values as
+                    // half rows.
+                    let (s8, perp2, inside) = segment_lanes(sxy, w2xy, &sz, &w2z, l, &q);
+                    if inside != [0.0; 8] {
+                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi);
+                    }
+                    continue;
+                }
                 for o in halves.clone() {
                     let (sz4, w2z4) = (sz[o..o + 4].try_into().unwrap(), w2z[o..o + 4].try_into().unwrap());
-                    let (s4, perp2, inside) = segment_lanes(sxy, w2xy, sz4, w2z4, l, &q);
+                    let (s4, perp2, inside) = segment_lanes::<4>(sxy, w2xy, sz4, w2z4, l, &q);
                     if inside == [0.0; 4] {
                         continue; // the half row misses the capsule
                     }
-                    let (mut ex, mut u0, mut u1) = ([0.0f32; 4], [0.0f32; 4], [0.0f32; 4]);
-                    for j in 0..4 {
-                        ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
-                        u0[j] = s4[j] * q.inv_sqrt2r;
-                        u1[j] = (s4[j] - l) * q.inv_sqrt2r;
-                    }
-                    let (e0, e1) = (erf_lut4(erf, &u0), erf_lut4(erf, &u1));
-                    let mut v = [0.0f32; 4];
-                    for j in 0..4 {
-                        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
-                    }
-                    let n = row + o;
-                    for (col, &ph) in acc.c.iter_mut().zip(&phi) {
-                        for (a, &vj) in col[n..n + 4].iter_mut().zip(&v) {
-                            *a += vj * ph;
-                        }
-                    }
+                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi);
                 }
             }
         }
@@ -1202,6 +1293,26 @@ impl GatherSetup<'_> {
     /// the sums are cleared after each leaf, and the per-voxel kernel rows
     /// are written before they are read.
     pub fn leaf_splat(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2 (checked just above).
+            return unsafe { self.leaf_splat_avx2(origin, photons, bufs) };
+        }
+        self.leaf_splat_body(origin, photons, bufs)
+    }
+
+    /// [`Self::leaf_splat`] compiled for AVX2: the 8-lane z-rows of the
+    /// segment path in one pass. IEEE arithmetic is the same at any vector
+    /// width and Rust fuses no multiply-add, so the values are the same
+    /// bits as without AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn leaf_splat_avx2(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
+        self.leaf_splat_body(origin, photons, bufs)
+    }
+
+    #[inline(always)]
+    fn leaf_splat_body(&self, origin: IVec3, photons: &[u32], bufs: &mut SplatBuffers) -> Option<Leaf<[f32; 3]>> {
         let SplatBuffers { acc, k } = bufs;
         for &i in photons {
             let p = &self.photons[i as usize];
@@ -1304,7 +1415,38 @@ pub const MERGE_CDF: f64 = 0.05;
 /// caps (two half balls, `4/3 pi (c r)^3` together, against `pi (c r)^2 L`
 /// for the body) are most of a short segment's voxels. Point photons and photons that do not
 /// touch are left alone. Deterministic (a pure function of the list).
-pub fn merge_segments(photons: &[Photon], radius: impl Fn(DVec3) -> f64, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
+///
+/// In parallel over chunks of about [`MERGE_CHUNK`] photons cut where no
+/// run can continue (a point photon on either side, or a photon that does
+/// not start where the previous one ends: between beams): the runs, and so
+/// the list, are those of one pass over the whole.
+pub fn merge_segments(photons: &[Photon], radius: impl Fn(DVec3) -> f64 + Sync, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
+    let breaks_at = |k: usize| {
+        let (a, b) = (&photons[k - 1], &photons[k]);
+        a.is_point() || b.is_point() || b.position != a.end
+    };
+    let mut cuts = vec![0];
+    let mut k = MERGE_CHUNK;
+    while k < photons.len() {
+        while k < photons.len() && !breaks_at(k) {
+            k += 1;
+        }
+        if k < photons.len() {
+            cuts.push(k);
+        }
+        k += MERGE_CHUNK;
+    }
+    cuts.push(photons.len());
+    let parts: Vec<Vec<Photon>> = cuts.par_windows(2).map(|w| merge_run_list(&photons[w[0]..w[1]], &radius, len_r, off_r, max_cdf)).collect();
+    parts.concat()
+}
+
+/// Photons per chunk of [`merge_segments`]' parallel pass (before the cut
+/// moves to the next beam's start).
+pub const MERGE_CHUNK: usize = 1 << 15;
+
+/// [`merge_segments`] in one pass.
+fn merge_run_list(photons: &[Photon], radius: &impl Fn(DVec3) -> f64, len_r: f64, off_r: f64, max_cdf: f64) -> Vec<Photon> {
     let mut out = Vec::with_capacity(photons.len());
     let mut i = 0;
     while i < photons.len() {
@@ -1377,34 +1519,80 @@ pub fn gather_grid(
     method: GatherMethod,
     progress: &dyn Progress,
 ) -> Grid<[f32; 3]> {
+    gather_prepared(&GatherInput::new(photons, radius, cutoff, method), transform, radius, cutoff, method, progress)
+}
+
+/// The photons as the gathers take them, made once for several gathers of
+/// the same photons (the preview's coarse picture and the refined one):
+/// straight, evenly lit runs of beam steps merged into one segment each
+/// ([`merge_segments`], all but `report2014`) and, for the splat, each
+/// photon's kernel (r at the point or the segment's midpoint: a Perlin
+/// lookup per photon).
+#[derive(Clone, Debug)]
+pub struct GatherInput {
+    pub photons: Vec<Photon>,
+    splat_kernels: Vec<SplatKernel>,
+    /// The segment kernel's masses for the cutoff (a table of some 4 k
+    /// numerical integrals).
+    seg: SegmentMass,
+}
+
+impl GatherInput {
+    pub fn new(photons: &[Photon], radius: &RadiusField, cutoff: f64, method: GatherMethod) -> Self {
+        let photons = if method == GatherMethod::Report2014 {
+            photons.to_vec()
+        } else {
+            merge_segments(photons, |p| radius.radius(p), MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF)
+        };
+        let mass = gaussian_mass_inside(cutoff);
+        let splat_kernels = if method == GatherMethod::Splat {
+            photons
+                .par_iter()
+                .map(|p| SplatKernel::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Self { photons, splat_kernels, seg: SegmentMass::new(cutoff) }
+    }
+
+    /// Every `k`-th photon (from the first), its power multiplied by `k`:
+    /// the same expected emission from `1/k` of the photons (the preview's
+    /// coarse picture). Kernels are kept.
+    pub fn every(&self, k: usize) -> Self {
+        let k = k.max(1);
+        let photons = self.photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
+        let splat_kernels = self.splat_kernels.iter().step_by(k).copied().collect();
+        Self { photons, splat_kernels, seg: self.seg.clone() }
+    }
+}
+
+/// [`gather_grid`] of photons made ready by [`GatherInput::new`] with the
+/// same radius field, cutoff and method.
+pub fn gather_prepared(
+    input: &GatherInput,
+    transform: Transform,
+    radius: &RadiusField,
+    cutoff: f64,
+    method: GatherMethod,
+    progress: &dyn Progress,
+) -> Grid<[f32; 3]> {
     let mut grid = Grid::new("emission", [0.0f32; 3], transform);
-    // Straight, evenly lit runs of beam steps as one segment each (the
-    // estimators that take segments).
-    let merged;
-    let photons = if method == GatherMethod::Report2014 {
-        photons
-    } else {
-        merged = merge_segments(photons, |p| radius.radius(p), MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
-        &merged[..]
-    };
+    let photons = &input.photons[..];
     let mass = gaussian_mass_inside(cutoff);
-    let splat_kernels = if method == GatherMethod::Splat {
-        photons
-            .par_iter()
-            .map(|p| SplatKernel::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
-            .collect()
-    } else {
-        Vec::new()
-    };
-    let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: SegmentMass::new(cutoff), splat_kernels };
+    let splat_kernels = &input.splat_kernels[..];
+    let setup = GatherSetup { photons, transform, radius, cutoff, mass, seg: input.seg.clone(), splat_kernels };
     let reach = cutoff * radius.max();
     // The splat bins each photon by its own reach (cutoff r_i, r at the
     // point or the segment's midpoint, as leaf_splat evaluates it); the
     // balloon's kernel takes r at the voxel, so the largest r's reach.
-    let leaves = if method == GatherMethod::Splat {
-        candidate_leaves_by(photons, transform.voxel_size, |i| setup.splat_kernels[i].reach)
+    let (leaves, dense_bins) = if method == GatherMethod::Splat {
+        match bin_photons_dense(photons, transform.voxel_size, |i| setup.splat_kernels[i].reach) {
+            Some((leaves, bins)) => (leaves, Some(bins)),
+            None => (candidate_leaves_by(photons, transform.voxel_size, |i| setup.splat_kernels[i].reach), None),
+        }
     } else {
-        candidate_leaves(photons, transform.voxel_size, reach)
+        (candidate_leaves(photons, transform.voxel_size, reach), None)
     };
     progress.start("gather", leaves.len() as u64);
     let out: Vec<Option<Leaf<[f32; 3]>>> = match method {
@@ -1425,7 +1613,9 @@ pub fn gather_grid(
                 .collect()
         }
         GatherMethod::Splat | GatherMethod::Report2014 => {
-            let bins = if method == GatherMethod::Splat {
+            let bins = if let Some(b) = dense_bins {
+                b
+            } else if method == GatherMethod::Splat {
                 bin_photons_by(photons, &leaves, transform.voxel_size, |i| setup.splat_kernels[i].reach)
             } else {
                 bin_photons(photons, &leaves, transform.voxel_size, reach)
@@ -1470,6 +1660,62 @@ mod tests {
                 Photon::point(p, [power, 0.5 * power, 0.25 * power])
             })
             .collect()
+    }
+
+    /// The dense binning gives the hashed path's leaves and bins: random
+    /// segments and points with a reach per photon, including negative
+    /// coordinates and leaves shared by many photons.
+    #[test]
+    fn dense_bins_equal_hashed_bins() {
+        let mut r = rng::rng(&[91]);
+        let photons: Vec<Photon> = (0..3000)
+            .map(|i| {
+                let a: [f32; 3] = std::array::from_fn(|_| r.random_range(-20.0f32..15.0));
+                if i % 3 == 0 {
+                    Photon::point(a, [1.0; 3])
+                } else {
+                    let b = std::array::from_fn(|k| a[k] + r.random_range(-2.0f32..2.0));
+                    Photon::segment(a, b, [1.0; 3])
+                }
+            })
+            .collect();
+        let reach: Vec<f64> = (0..photons.len()).map(|_| r.random_range(0.2..2.5)).collect();
+        for vs in [0.25, 0.5, 1.3] {
+            let leaves = candidate_leaves_by(&photons, vs, |i| reach[i]);
+            let bins = bin_photons_by(&photons, &leaves, vs, |i| reach[i]);
+            let (dl, db) = bin_photons_dense(&photons, vs, |i| reach[i]).unwrap();
+            assert_eq!(dl, leaves, "voxel {vs}");
+            assert_eq!(db, bins, "voxel {vs}");
+        }
+        let (l, b) = bin_photons_dense(&[], 0.5, |_| 1.0).unwrap();
+        assert!(l.is_empty() && b.photons.is_empty() && b.start == [0]);
+    }
+
+    /// The parallel merge (chunks cut between beams) gives the one-pass
+    /// list: chains of contiguous steps of random lengths, straight and
+    /// kinked, across many chunk boundaries, with point photons between.
+    #[test]
+    fn parallel_merge_equals_one_pass() {
+        let mut r = rng::rng(&[17]);
+        let mut photons = Vec::new();
+        while photons.len() < 3 * MERGE_CHUNK + 777 {
+            let mut a: [f32; 3] = std::array::from_fn(|_| r.random_range(-50.0f32..50.0));
+            for _ in 0..r.random_range(1..900) {
+                // Mostly straight and even (runs merge), now and then a kink.
+                let w = if r.random_range(0..10) == 0 { 0.3f32 } else { 0.005 };
+                let b = [a[0] + r.random_range(-w..w), a[1] + r.random_range(-w..w), a[2] - 0.5];
+                photons.push(Photon::segment(a, b, [1.0; 3]));
+                a = b;
+            }
+            if r.random_range(0..4) == 0 {
+                photons.push(Photon::point(a, [1.0; 3]));
+            }
+        }
+        let radius = |_: DVec3| 0.5;
+        let one = merge_run_list(&photons, &radius, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
+        let par = merge_segments(&photons, radius, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF);
+        assert!(one.len() < photons.len() / 2, "runs merged: {} of {}", one.len(), photons.len());
+        assert_eq!(par, one);
     }
 
     #[test]

@@ -632,6 +632,19 @@ pub fn gather(plan: &BakePlan, photons: &[Photon], voxel_km: f64, progress: &dyn
     gather_with(photons, voxel_km, &plan.radius, plan.photons.cutoff, plan.photons.gather, progress)
 }
 
+/// The photons made ready for [`gather_from`] with the plan's radius field,
+/// cutoff and gather method (merged runs, splat kernels): once for several
+/// gathers of the same photons.
+pub fn gather_input(plan: &BakePlan, photons: &[Photon]) -> photons::GatherInput {
+    photons::GatherInput::new(photons, &plan.radius, plan.photons.cutoff, plan.photons.gather)
+}
+
+/// [`gather`] of photons made ready by [`gather_input`] with the same plan:
+/// the same grid.
+pub fn gather_from(plan: &BakePlan, input: &photons::GatherInput, voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
+    photons::gather_prepared(input, grid_transform(voxel_km), &plan.radius, plan.photons.cutoff, plan.photons.gather, progress)
+}
+
 /// The transform + radius field + gather set-up, written once: the emission
 /// grid of `photons` on [`grid_transform`]`(voxel_km)`.
 pub fn gather_with(
@@ -728,10 +741,26 @@ pub fn finish(
     plan: &BakePlan,
     emission: Grid<[f32; 3]>,
     g: Gathered,
-    mut times: StageTimes,
+    times: StageTimes,
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<Bake, BakeError> {
+    finish_keeping(plan, emission, g, times, t_all, progress).map(|(b, _)| b)
+}
+
+/// [`finish`], also returning the leaves pruning dropped (leaf order; none
+/// when `grid.prune` is 0). Without the Cycles shell the bake's emission
+/// and these leaves are the gathered grid, so a caller that refinishes
+/// (the preview, after a camera or grid edit) keeps them instead of a copy
+/// of the gathered grid ([`Grid::restore_leaves`]).
+pub fn finish_keeping(
+    plan: &BakePlan,
+    emission: Grid<[f32; 3]>,
+    g: Gathered,
+    mut times: StageTimes,
+    t_all: Instant,
+    progress: &dyn Progress,
+) -> Result<(Bake, Vec<Leaf<[f32; 3]>>), BakeError> {
     let Gathered { photons, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
@@ -747,11 +776,12 @@ pub fn finish(
 
     let t = Instant::now();
     let mut emission = emission;
-    let prune_stats = if plan.grid.prune > 0.0 {
+    let (prune_stats, dropped) = if plan.grid.prune > 0.0 {
         let camera = plan.camera_model()?;
-        Some(prune::prune(&mut emission, &camera, plan.grid.prune))
+        let (st, dropped) = prune::prune_keeping(&mut emission, &camera, plan.grid.prune);
+        (Some(st), dropped)
     } else {
-        None
+        (None, Vec::new())
     };
     times.prune = t.elapsed().as_secs_f64();
 
@@ -811,5 +841,5 @@ pub fn finish(
         prune: prune_stats,
         warnings,
     };
-    Ok(Bake { emission, density, photons, stats })
+    Ok((Bake { emission, density, photons, stats }, dropped))
 }

@@ -2,8 +2,11 @@
 //!
 //! A [`Preview`] keeps every stage's output in memory: the
 //! [`BakePlan`](crate::pipeline::BakePlan) (footprints, atmosphere, colour
-//! table), the photons, the gathered emission grid before pruning, the
-//! finished grids, the renderer's structures ([`crate::render::Prepared`]:
+//! table), the photons, the finished grids and the leaves pruning dropped
+//! (with the finished emission they are the gathered grid, restored when a
+//! camera or grid edit refinishes: no copy of the gathered grid, some
+//! 340 MB on the default scene, on every rebuild), the renderer's
+//! structures ([`crate::render::Prepared`]:
 //! camera, medium, terrain, emission sampler, sky) and the last linear
 //! image. An edit is diffed against the last good scene section by section
 //! ([`stage_for_edit`]) and only the stages it touches are rerun:
@@ -28,8 +31,10 @@
 //! (`crate::render::film::write_png`), up to three pictures:
 //! 1. a coarse one: a quarter of the size, one sample per pixel. When the
 //!    edit rebuilds the grids it comes before the full gather, from every
-//!    [`COARSE_PHOTON_STRIDE`]-th photon (power multiplied as much) gathered
-//!    on voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
+//!    [`COARSE_PHOTON_STRIDE`]-th photon of the full gather's input (the
+//!    merged runs and their kernels, [`crate::photons::GatherInput`], made
+//!    once for both gathers; power multiplied by the stride) gathered on
+//!    voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
 //!    made from a photon subset. After a `[volume]` edit (the medium is
 //!    rebuilt) it is rendered from the last coarse grids, before the
 //!    medium's build; otherwise from the refined picture's structures
@@ -56,14 +61,17 @@
 //! `benchmarks/preview/default_320x180.txt`, numbers in the README's
 //! Preview section): a render edit is the pixel loop of picture 2 (230 k
 //! camera rays at 4 spp) and the coarse picture; a `[volume]` edit adds
-//! the medium's build; a beams edit is trace, coarse picture, gather
-//! (the largest part), finish, the medium's build and the pixel loop. The
-//! update reports every stage's time ([`Update`]).
+//! the medium's build; a beams edit is trace, the gather's input (merge,
+//! kernels), coarse picture, gather (the largest part: the splat's
+//! segment kernels, about 2.2 of the edit's 4 CPU seconds before the
+//! renderer), finish, the medium's build and the pixel loop. The update
+//! reports every stage's time ([`Update`]); `gather` includes the input
+//! made before the coarse picture.
 
 use crate::bake::{self, Bake, BakeError};
-use crate::beams::Photon;
+use crate::photons::GatherInput;
 use crate::camera::CameraModel;
-use crate::grid::Grid;
+use crate::grid::Leaf;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
 use crate::progress::NoProgress;
 use crate::render::shadow::EmissionSampler;
@@ -207,8 +215,13 @@ struct Cache {
     /// Beam count, pilot estimate and pilot warnings.
     count: (usize, Option<pipeline::NoiseEstimate>, Vec<String>),
     beam_stats: crate::beams::BeamStats,
-    /// The gathered emission before finishing, and its voxel size.
-    gathered: Grid<[f32; 3]>,
+    /// The leaves pruning dropped from the gathered emission: with
+    /// `bake.emission` (no Cycles shell) they are the gathered grid, which
+    /// a camera or grid edit refinishes ([`crate::grid::Grid::restore_leaves`]). Kept
+    /// instead of a copy of the gathered grid (some 340 MB on the default
+    /// scene, whose copy cost every beams edit 0.1-0.2 s).
+    dropped: Vec<Leaf<[f32; 3]>>,
+    /// The gathered emission's voxel size.
     voxel: (f64, String),
     bake: Bake,
     /// The coarse picture's grids ([`Preview::coarse_picture`]) while they
@@ -258,6 +271,16 @@ fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volu
     let o = old.settings;
     let had_terrain = !matches!(old.terrain, TerrainModel::None);
     let same_medium = !grids_changed && o.volume == s.volume;
+    // TODO(lead, merge with lane R / s6-r): `Medium::set_scales(density_scale,
+    // emission_scale)` (src/render/medium.rs on s6-r) applies the volume
+    // scales at lookup without a rebuild. Once merged: when only
+    // `s.volume`'s scales changed and the grids did not (`!grids_changed`),
+    // keep `old.medium` and call `set_scales(s.volume.density_scale,
+    // s.volume.emission_scale)?` on it instead of `Medium::new`; rebuild the
+    // sampler only (it takes emission_scale); and in `Preview::update` do not
+    // count a scale-only `[volume]` edit as `rebuild` (its coarse picture is
+    // then the refined structures' at the coarse size). The test
+    // `cached_updates_equal_fresh_ones` ("scales") checks the result.
     let medium = if same_medium {
         old.medium
     } else {
@@ -351,16 +374,14 @@ impl Preview {
         &self,
         scene: &Scene,
         plan: &BakePlan,
-        photons: &[Photon],
+        input: &GatherInput,
         voxel_km: f64,
         prev: &mut Option<Prepared>,
     ) -> Result<(f64, f64, Bake), PreviewError> {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
-        let k = COARSE_PHOTON_STRIDE;
-        let subset: Vec<Photon> = photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
-        let emission = pipeline::gather(plan, &subset, v, nothing);
+        let emission = pipeline::gather_from(plan, &input.every(COARSE_PHOTON_STRIDE), v, nothing);
         // Only the grids are used: no photons for the power sums, no warnings.
         let g = Gathered {
             photons: Vec::new(),
@@ -463,34 +484,40 @@ impl Preview {
                         c.plan = plan;
                         return Ok(false);
                     }
-                    if regather {
-                        c.voxel = plan.voxel_size(&c.bake.photons);
+                    let (gathered, voxel, coarse) = if regather {
+                        let voxel = plan.voxel_size(&c.bake.photons);
+                        let t = Instant::now();
+                        let input = pipeline::gather_input(&plan, &c.bake.photons);
+                        u.gather = t.elapsed().as_secs_f64();
                         let coarse;
-                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &c.bake.photons, c.voxel.0, &mut parts)?;
-                        c.coarse = Some(coarse);
+                        (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
-                        c.gathered = pipeline::gather(&plan, &c.bake.photons, c.voxel.0, nothing);
-                        u.gather = t.elapsed().as_secs_f64();
-                    }
-                    if !regather {
-                        // The coarse grids were finished otherwise.
-                        c.coarse = None;
-                    }
+                        let gathered = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                        u.gather += t.elapsed().as_secs_f64();
+                        (gathered, voxel, Some(coarse))
+                    } else {
+                        // The gathered grid again: the finished emission
+                        // and the leaves pruning dropped. (The coarse grids
+                        // were finished otherwise.)
+                        let mut gathered = c.bake.emission.clone();
+                        gathered.restore_leaves(c.dropped.iter().cloned());
+                        (gathered, c.voxel.clone(), None)
+                    };
                     let t = Instant::now();
-                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, c.voxel.0);
+                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(c.count.2.iter().cloned());
                     let g = Gathered {
                         photons: c.bake.photons.clone(),
                         beam_stats: c.beam_stats.clone(),
-                        voxel_km: c.voxel.0,
-                        voxel_source: c.voxel.1.clone(),
+                        voxel_km: voxel.0,
+                        voxel_source: voxel.1.clone(),
                         warnings,
                         noise: c.count.1.clone(),
                     };
-                    c.bake = pipeline::finish(&plan, c.gathered.clone(), g, times.clone(), t0, nothing)?;
+                    (c.bake, c.dropped) = pipeline::finish_keeping(&plan, gathered, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
-                    c.plan = plan;
+                    (c.plan, c.voxel, c.coarse) = (plan, voxel, coarse);
                     Ok(true)
                 })();
                 match r {
@@ -521,14 +548,18 @@ impl Preview {
                     let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
-                    let (secs, png, coarse) = self.coarse_picture(scene, &plan, &traced.photons, voxel.0, &mut parts)?;
+                    let t = Instant::now();
+                    let input = pipeline::gather_input(&plan, &traced.photons);
+                    u.gather = t.elapsed().as_secs_f64();
+                    let (secs, png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                     (u.coarse_render, u.png) = (secs, png);
                     coarse_done(&mut u);
                     let t = Instant::now();
                     let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(count.2.iter().cloned());
-                    let emission = pipeline::gather(&plan, &traced.photons, voxel.0, nothing);
-                    u.gather = t.elapsed().as_secs_f64();
+                    let emission = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                    drop(input);
+                    u.gather += t.elapsed().as_secs_f64();
                     (times.beams, times.gather) = (u.trace, u.gather);
                     let g = Gathered {
                         photons: traced.photons,
@@ -539,10 +570,10 @@ impl Preview {
                         noise: count.1.clone(),
                     };
                     let t = Instant::now();
-                    let (gathered, voxel, beam_stats) = (emission.clone(), (g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
-                    let bake = pipeline::finish(&plan, emission, g, times.clone(), t0, nothing)?;
+                    let (voxel, beam_stats) = ((g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
+                    let (bake, dropped) = pipeline::finish_keeping(&plan, emission, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
-                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, gathered, voxel, bake, coarse: Some(coarse) })
+                    Ok(Cache { scene: scene.clone(), plan, count, beam_stats, dropped, voxel, bake, coarse: Some(coarse) })
                 })();
                 match r {
                     Ok(c) => c,

@@ -46,7 +46,7 @@
 
 use crate::camera::CameraModel;
 use crate::scene::Projection;
-use crate::grid::{Grid, LEAF_NUM_VALUES};
+use crate::grid::{Grid, Leaf, LEAF_NUM_VALUES};
 use crate::spectrum::luminance;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -160,22 +160,30 @@ pub fn select(contributions: &[f64], origins: &[[i32; 3]], budget: f64) -> (Vec<
 /// Drops the emission's faintest leaves within `budget` (see the module
 /// documentation) for `camera` (the scene's camera at the render size).
 pub fn prune(emission: &mut Grid<[f32; 3]>, camera: &CameraModel, budget: f64) -> PruneStats {
+    prune_keeping(emission, camera, budget).0
+}
+
+/// [`prune`], also returning the dropped leaves in leaf order (the
+/// preview keeps them to restore the unpruned grid after a camera edit,
+/// [`Grid::restore_leaves`], rather than a copy of the whole grid).
+pub fn prune_keeping(emission: &mut Grid<[f32; 3]>, camera: &CameraModel, budget: f64) -> (PruneStats, Vec<Leaf<[f32; 3]>>) {
     let leaves_before = emission.leaf_count();
     let voxels_before = emission.active_voxel_count();
     let c = leaf_contributions(emission, camera);
     let origins: Vec<[i32; 3]> = emission.leaves().iter().map(|l| l.origin.to_array()).collect();
     let (keep, removed_fraction) = select(&c, &origins, budget);
     let mut it = keep.iter();
-    // retain_leaves visits the leaves in order, once each.
-    emission.retain_leaves(|_| *it.next().unwrap_or(&true));
-    PruneStats {
+    // split_off_leaves visits the leaves in order, once each.
+    let dropped = emission.split_off_leaves(|_| *it.next().unwrap_or(&true));
+    let stats = PruneStats {
         budget,
         leaves_before,
         leaves_removed: leaves_before - emission.leaf_count(),
         voxels_before,
         voxels_removed: voxels_before - emission.active_voxel_count(),
         removed_fraction,
-    }
+    };
+    (stats, dropped)
 }
 
 #[cfg(test)]
