@@ -15,7 +15,7 @@
 //! |---|---|
 //! | `render.exposure` only | nothing traced: the last linear image re-encoded (exposure is a tone map of the linear film, `crate::render::film::display_u8`) |
 //! | `[render]` spp, `[background]`, `[terrain]` | the pixels (the medium is kept; the terrain model unless its geometry changed, the sky unless `[background]` did) |
-//! | `[volume]` | the medium (`Medium::new` bakes both scales in), then the pixels |
+//! | `[volume]` | the pixels (the medium holds unit values and applies the scales at lookup: `Prepared::set_volume_scales`, no rebuild) |
 //! | `[camera]`, `[render]` width / height | the voxel size (`"auto"` follows the camera): the gather when it changed, pruning when `grid.prune > 0` (then the medium), then the pixels |
 //! | `[grid]` other than `voxel_size` | finish (checks, pruning, density), the medium, the pixels |
 //! | `grid.voxel_size`, `[photons]` other than `kernel` | gather and after |
@@ -35,10 +35,9 @@
 //!    merged runs and their kernels, [`crate::photons::GatherInput`], made
 //!    once for both gathers; power multiplied by the stride) gathered on
 //!    voxels [`COARSE_VOXEL_FACTOR`] times larger: only this picture is
-//!    made from a photon subset. After a `[volume]` edit (the medium is
-//!    rebuilt) it is rendered from the last coarse grids, before the
-//!    medium's build; otherwise from the refined picture's structures
-//!    with a smaller camera. Either way a few ms.
+//!    made from a photon subset. After any other edit it is rendered
+//!    from the refined picture's structures with a smaller camera: a few
+//!    ms.
 //! 2. the refined one: the preview size at the preview's spp
 //!    ([`DEFAULT_SPP`] = 4, two antithetic pairs; `aurora preview --spp`),
 //!    capped by the scene's `render.spp`. **The edit-to-picture targets
@@ -254,8 +253,9 @@ fn preview_plan(mut plan: BakePlan) -> BakePlan {
 /// `old`'s parts whose inputs are unchanged (`grids_changed`: `volume`
 /// holds other grids than the ones `old` was built from). As
 /// `crate::render::Prepared::new` builds them, part by part:
-/// - the medium (the costly part; `Medium::new` bakes both volume scales
-///   in): kept unless the grids or `[volume]` changed;
+/// - the medium (the costly part): kept unless the grids changed; a
+///   `[volume]` edit only sets its scales (`Prepared::set_volume_scales`,
+///   applied at lookup);
 /// - the emission sampler: with the medium, unless the terrain appeared or
 ///   vanished;
 /// - the terrain model: kept unless `[terrain]` other than `albedo` (read
@@ -270,21 +270,12 @@ fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volu
     };
     let o = old.settings;
     let had_terrain = !matches!(old.terrain, TerrainModel::None);
-    let same_medium = !grids_changed && o.volume == s.volume;
-    // TODO(lead, merge with lane R / s6-r): `Medium::set_scales(density_scale,
-    // emission_scale)` (src/render/medium.rs on s6-r) applies the volume
-    // scales at lookup without a rebuild. Once merged: when only
-    // `s.volume`'s scales changed and the grids did not (`!grids_changed`),
-    // keep `old.medium` and call `set_scales(s.volume.density_scale,
-    // s.volume.emission_scale)?` on it instead of `Medium::new`; rebuild the
-    // sampler only (it takes emission_scale); and in `Preview::update` do not
-    // count a scale-only `[volume]` edit as `rebuild` (its coarse picture is
-    // then the refined structures' at the coarse size). The test
-    // `cached_updates_equal_fresh_ones` ("scales") checks the result.
-    let medium = if same_medium {
-        old.medium
-    } else {
+    // The medium holds the grids' unit values and applies the volume scales
+    // at lookup, so a `[volume]` edit keeps it: `set_volume_scales` below.
+    let medium = if grids_changed {
         render::Medium::new(volume.density, volume.emission, s.volume.density_scale, s.volume.emission_scale)?
+    } else {
+        old.medium
     };
     let (mut t_old, mut t_new) = (o.terrain.clone(), s.terrain.clone());
     (t_old.albedo, t_new.albedo) = ([0.0; 3], [0.0; 3]);
@@ -293,7 +284,7 @@ fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volu
     } else {
         TerrainModel::from_terrain(&s.terrain, s.base_dir.as_deref())?
     };
-    let sampler = if same_medium && had_terrain == !matches!(terrain, TerrainModel::None) {
+    let sampler = if !grids_changed && had_terrain == !matches!(terrain, TerrainModel::None) {
         old.sampler
     } else {
         match (&terrain, volume.emission, &medium.emission) {
@@ -311,7 +302,12 @@ fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volu
     } else {
         CameraModel::new(&s.camera, s.render.width, s.render.height)?
     };
-    Ok(Prepared { camera, medium, terrain, sampler, sky, settings: s.clone() })
+    let mut prepared = Prepared { camera, medium, terrain, sampler, sky, settings: s.clone() };
+    if !grids_changed && o.volume != s.volume {
+        // The kept medium and sampler still carry the old scales.
+        prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
+    }
+    Ok(prepared)
 }
 
 /// The preview's state: the last good scene's stage outputs.
@@ -590,9 +586,9 @@ impl Preview {
         let volume = Volume { density: Some(&cache.bake.density), emission: Some(&cache.bake.emission) };
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
         let settings = self.settings(scene, w, h, spp);
-        // A `[volume]` edit rebuilds the medium: the coarse picture first,
-        // from the coarse grids.
-        let rebuild = grids_changed || parts.as_ref().is_none_or(|p| p.settings.volume != settings.volume);
+        // New grids: the coarse picture first, from the coarse grids. A
+        // `[volume]` edit keeps the medium (the scales apply at lookup).
+        let rebuild = grids_changed || parts.is_none();
         if let (true, 0.0, Some(coarse)) = (rebuild, u.to_coarse, &cache.coarse) {
             let t = Instant::now();
             u.png += self.coarse_from(scene, coarse, &mut parts)?;
@@ -809,7 +805,7 @@ mod tests {
     /// Every edit through the cached stages and renderer gives the picture
     /// a fresh preview of the edited scene gives: render edits that keep
     /// the medium (albedo, background, spp, stars, terrain geometry, the
-    /// terrain's presence: the sampler), rebuild it (volume scales) or
+    /// terrain's presence: the sampler), rescale it (volume scales) or
     /// only the camera (fov, with and without pruning), a grid edit and a
     /// beams edit.
     #[test]
