@@ -231,7 +231,7 @@ fn main() {
                 || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
                     use aurora::render::RenderError::*;
                     match r {
-                        Settings(_) | Grid { .. } | Source { .. } | Heightmap { .. } => true,
+                        Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } => true,
                         Output(a) => a.is_input(),
                         _ => false,
                     }

@@ -242,3 +242,40 @@ fn a_foreign_vdb_whose_scaled_values_would_overflow_is_refused_naming_the_scale(
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(img.exists());
 }
+
+#[test]
+fn a_vdb_whose_leaves_would_not_fit_in_memory_is_refused_before_they_are_read() {
+    // 150,000 leaves of one voxel each: a small file, but the renderer's
+    // medium holds every leaf as a dense block (512 voxels x 3 channels x 4
+    // bytes = 6 KiB): about 0.92 GB. Under a 1 GiB address-space cap the
+    // allocation would fail, which Rust turns into an abort; the medium's
+    // size is checked first against 3/4 of the limit
+    // (render::medium::MEDIUM_MEMORY_FRACTION; crate::memory::available
+    // reads RLIMIT_AS): exit 2 naming the leaves and the limit, no image.
+    let d = dir("too-many-leaves");
+    let path = d.join("many.vdb");
+    let tr = Transform::new(1.0, DVec3::ZERO);
+    let mut e: Grid<[f32; 3]> = Grid::new("emission", [0.0; 3], tr);
+    for i in 0..400 {
+        for j in 0..375 {
+            e.set(IVec3::new(8 * i, 8 * j, 100), [1.0, 1.0, 1.0]);
+        }
+    }
+    assert_eq!(e.leaf_count(), 150_000);
+    write_vdb(&path, &[GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
+    let scene = d.join("s.toml");
+    std::fs::write(&scene, "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n").unwrap();
+    let img = d.join("out.exr");
+    let _ = std::fs::remove_file(&img);
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1048576 && exec \"$0\" \"$@\"")
+        .arg(env!("CARGO_BIN_EXE_aurora"))
+        .args(["render", scene.to_str().unwrap(), "--vdb", path.to_str().unwrap(), "--out", img.to_str().unwrap(), "-q"])
+        .output()
+        .expect("run aurora under sh");
+    let m = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{m}");
+    assert!(m.contains("150000 leaves") && m.contains("RLIMIT_AS"), "{m}");
+    assert!(!img.exists());
+}

@@ -57,6 +57,11 @@ use super::RenderError;
 
 /// Values per channel of a block (one source leaf).
 pub const BLOCK_VALUES: usize = crate::grid::LEAF_NUM_VALUES;
+
+/// The share of this process's memory limit ([`crate::memory::available`])
+/// the medium's values may take; the rest is the mapped file, the image,
+/// the threads' stacks and heaps.
+pub const MEDIUM_MEMORY_FRACTION: f64 = 0.75;
 /// Empty child slot.
 pub const NONE: u32 = u32::MAX;
 /// log2 of the dual-leaf edge in voxels (OpenVDB LeafNode::LOG2DIM).
@@ -984,6 +989,18 @@ impl Medium {
                 }
                 check_header(*s)?;
             }
+        }
+        // The value storage is allocated before any leaf is read: refuse a
+        // source (a file's leaf table is its word) whose leaves would not
+        // fit, rather than abort on a failed allocation. Bound: a block of
+        // all the sources' channels per leaf of either (the build allocates
+        // one per leaf of their union, at most the sum).
+        let leaves: usize = srcs.iter().flatten().map(|s| s.leaf_count()).sum();
+        let channels: usize = srcs.iter().flatten().map(|s| s.channels()).sum();
+        let needed = (leaves + 2) as f64 * (BLOCK_VALUES * channels * std::mem::size_of::<f32>()) as f64;
+        let limit = crate::memory::available();
+        if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
+            return Err(RenderError::Memory { leaves, needed: crate::memory::gib(needed), available: limit.to_string() });
         }
         // Sources sharing a transform share a field.
         let groups: Vec<Vec<usize>> = match srcs {

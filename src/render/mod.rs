@@ -203,6 +203,11 @@ pub enum RenderError {
     /// A grid's leaf could not be read (a file's record would not decode).
     #[error("grid '{grid}': {source}")]
     Source { grid: String, source: medium::LeafError },
+    /// The grids' leaves would need more memory for the medium than this
+    /// process may use ([`crate::memory::available`]); refused before the
+    /// values are allocated or read.
+    #[error("the volume's {leaves} leaves would need about {needed} for the renderer's medium, but this process may use {available}")]
+    Memory { leaves: usize, needed: String, available: String },
     /// The terrain heightmap could not be read.
     #[error("heightmap {}: {message}", path.display())]
     Heightmap { path: PathBuf, message: String },
