@@ -349,6 +349,9 @@ impl Prepared {
             (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
         };
+        if let Some(s) = &sampler {
+            s.init_majorant(&medium);
+        }
         let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
     }
