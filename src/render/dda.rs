@@ -17,7 +17,7 @@
 //! ray in order, which is what both the exact integrator and shadow rays use.
 //!
 //! Robustness: every level computes the t of a cell boundary with the same
-//! expression `(plane - o) / d` (planes are integers in index space), so
+//! expression `(plane - o) * (1 / d)` (planes are integers in index space), so
 //! coinciding boundaries of different levels give identical t; a child DDA
 //! starts at its parent cell's entry and clamps its first cell to the parent,
 //! which resolves a start exactly on a boundary plane. A ray lying exactly in
@@ -37,6 +37,8 @@ use glam::{DVec3, IVec3};
 pub struct IndexRay {
     pub o: [f64; 3],
     pub d: [f64; 3],
+    /// `1 / d` per axis (infinite where `d` is 0).
+    pub inv_d: [f64; 3],
 }
 
 impl IndexRay {
@@ -44,7 +46,8 @@ impl IndexRay {
     pub fn new(field: &Field, origin: DVec3, dir: DVec3) -> Self {
         let o = field.transform.world_to_index(origin);
         let d = dir / field.transform.voxel_size;
-        IndexRay { o: o.to_array(), d: d.to_array() }
+        let d = d.to_array();
+        IndexRay { o: o.to_array(), d, inv_d: d.map(|v| 1.0 / v) }
     }
 
     #[inline]
@@ -52,10 +55,13 @@ impl IndexRay {
         DVec3::new(self.o[0] + self.d[0] * t, self.o[1] + self.d[1] * t, self.o[2] + self.d[2] * t)
     }
 
-    /// The t at which the ray crosses the plane `u[axis] = p`.
+    /// The t at which the ray crosses the plane `u[axis] = p`: `(p - o) / d`,
+    /// as a product with the reciprocal (a division would sit on the walk's
+    /// critical path once per cell). Every level uses this one expression,
+    /// so coinciding planes still give identical t.
     #[inline]
     fn t_plane(&self, axis: usize, p: f64) -> f64 {
-        (p - self.o[axis]) / self.d[axis]
+        (p - self.o[axis]) * self.inv_d[axis]
     }
 
     /// The ray's parameter range inside the index box `[lo, hi]`, within
