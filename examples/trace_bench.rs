@@ -61,7 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let (c0, t0) = (cpu_seconds(), Instant::now());
     let mu = pool.install(|| aurora::render::shadow::sigma_t_majorant(&prepared.medium));
     println!("# sigma_t majorant {mu:.6} per unit length: {:.3} s wall, {:.2} s CPU", t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
-    println!("run,wall_s,cpu_s,primary_rays,shadow_rays,terrain_hits,primary_per_cpu_s,shadow_cpu_s_per_thread_clock");
+    println!("run,wall_s,cpu_s,primary_rays,shadow_rays,terrain_hits,primary_per_cpu_s,shadow_cpu_s,volume_work_per_primary");
     for r in 0..repeats {
         let c0 = cpu_seconds();
         let t0 = Instant::now();
@@ -73,12 +73,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // applied to the CPU time: the shadow rays' CPU seconds.
         let shadow_share = st.shadow_thread_seconds / st.thread_seconds.max(1e-12);
         println!(
-            "{r},{wall:.3},{cpu:.2},{},{},{},{:.0},{:.3}",
+            "{r},{wall:.3},{cpu:.2},{},{},{},{:.0},{:.3},{:.1}",
             st.primary_rays,
             st.shadow_rays,
             st.terrain_hits,
             st.primary_rays as f64 / cpu,
-            cpu * shadow_share
+            cpu * shadow_share,
+            st.volume_work as f64 / st.primary_rays.max(1) as f64
         );
     }
     Ok(())

@@ -180,6 +180,66 @@ impl Along {
     /// channel's corners (the same operations in the same order).
     #[inline]
     pub fn cubic4(&self, v: [[f64; 4]; 8]) -> [Cubic; 4] {
+        // SAFETY: SSE2 is part of the x86-64 baseline: every x86-64 CPU has it.
+        #[cfg(target_arch = "x86_64")]
+        return unsafe { self.cubic4_sse2(v) };
+        #[cfg(not(target_arch = "x86_64"))]
+        return self.cubic4_scalar(v);
+    }
+
+    /// [`Along::cubic4`] with SSE2 (part of every x86-64): channels (0, 1)
+    /// and (2, 3) in one register each, every lane the same IEEE operations
+    /// in the same order as [`Along::cubic4_scalar`] (no fused multiply-add),
+    /// so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "sse2")]
+    #[inline]
+    pub fn cubic4_sse2(&self, v: [[f64; 4]; 8]) -> [Cubic; 4] {
+        use std::arch::x86_64::*;
+        let mut out = [Cubic::ZERO; 4];
+        let q = &self.q;
+        let k = |x: f64| _mm_set1_pd(x);
+        for half in 0..2 {
+            let j = 2 * half;
+            let ld = |c: usize| _mm_set_pd(v[c][j + 1], v[c][j]);
+            let (v000, v001, v010, v011) = (ld(0), ld(1), ld(2), ld(3));
+            let (v100, v101, v110, v111) = (ld(4), ld(5), ld(6), ld(7));
+            let (add, sub, mul) = (_mm_add_pd, _mm_sub_pd, _mm_mul_pd);
+            let a = v000;
+            let b = sub(v100, v000);
+            let c = sub(v010, v000);
+            let d = sub(v001, v000);
+            let e = add(sub(sub(v110, v100), v010), v000);
+            let f = add(sub(sub(v101, v100), v001), v000);
+            let g = add(sub(sub(v011, v010), v001), v000);
+            let h = sub(add(add(add(sub(sub(sub(v111, v110), v101), v011), v100), v010), v001), v000);
+            let c0 = add(
+                add(
+                    add(add(add(add(add(a, mul(b, k(self.x0))), mul(c, k(self.y0))), mul(d, k(self.z0))), mul(e, k(q[0]))), mul(f, k(q[1]))),
+                    mul(g, k(q[2])),
+                ),
+                mul(h, k(q[3])),
+            );
+            let c1 = add(
+                add(
+                    add(add(add(add(mul(b, k(self.xd)), mul(c, k(self.yd))), mul(d, k(self.zd))), mul(e, k(q[4]))), mul(f, k(q[5]))),
+                    mul(g, k(q[6])),
+                ),
+                mul(h, k(q[7])),
+            );
+            let c2 = add(add(add(mul(e, k(q[8])), mul(f, k(q[9]))), mul(g, k(q[10]))), mul(h, k(q[11])));
+            let c3 = mul(h, k(q[12]));
+            let lo = |x: __m128d| _mm_cvtsd_f64(x);
+            let hi = |x: __m128d| _mm_cvtsd_f64(_mm_unpackhi_pd(x, x));
+            out[j] = Cubic([lo(c0), lo(c1), lo(c2), lo(c3)]);
+            out[j + 1] = Cubic([hi(c0), hi(c1), hi(c2), hi(c3)]);
+        }
+        out
+    }
+
+    /// [`Along::cubic4`] lane by lane in plain f64.
+    #[inline]
+    pub fn cubic4_scalar(&self, v: [[f64; 4]; 8]) -> [Cubic; 4] {
         let [v000, v001, v010, v011, v100, v101, v110, v111] = v;
         let a = v000;
         let (mut b, mut c, mut d, mut e) = ([0.0; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
@@ -266,16 +326,7 @@ impl Accum {
             // T at the part's start; inside the part T = T_a exp(-K) with
             // K = len (P(s) - P(sa)) in [0, KAPPA_MAX] (module doc): [`exp_neg_small`].
             let ta = (-(self.tau + len * pa)).exp();
-            // The six nodes lane by lane (so the compiler can pair them in
-            // vector registers); the sum over nodes stays in node order.
-            let s: [f64; 6] = std::array::from_fn(|i| sa + h * GL_NODES[i]);
-            let t = exp_neg_small6(std::array::from_fn(|i| len * (big_p(s[i]) - pa)));
-            for i in 0..6 {
-                let wt = GL_WEIGHTS[i] * h * (ta * t[i]);
-                for c in 0..3 {
-                    l[c] += wt * p.e[c].eval(s[i]);
-                }
-            }
+            part_scalar(&q, &p.e, [sa, h, len, pa, ta], &mut l);
             self.parts += 1;
             // Everything further along is attenuated below exp(-TAU_CUTOFF).
             if self.tau + len * big_p(sa + h) > TAU_CUTOFF {
@@ -284,6 +335,25 @@ impl Accum {
         }
         for c in 0..3 {
             self.l[c] += len * l[c];
+        }
+    }
+}
+
+/// The six Gauss-Legendre nodes of one quadrature part (lane by lane, so
+/// the compiler can pair them in vector registers; sums in node order) `[sa, sa + h]` added
+/// to `l`: `l[c] += w_i h T_a exp(-K(s_i)) e_c(s_i)` in node order, with
+/// `K(s) = len (P(s) - P(sa))`, `P` the antiderivative of coefficients `q`
+/// ([`Accum::add_emission_quadrature`]); `v = [sa, h, len, P(sa), T_a]`.
+#[inline]
+fn part_scalar(q: &[f64; 4], e: &[Cubic; 3], v: [f64; 5], l: &mut [f64; 3]) {
+    let [sa, h, len, pa, ta] = v;
+    let big_p = |s: f64| s * (q[0] + s * (q[1] + s * (q[2] + s * q[3])));
+    let s: [f64; 6] = std::array::from_fn(|i| sa + h * GL_NODES[i]);
+    let t = exp_neg_small6(std::array::from_fn(|i| len * (big_p(s[i]) - pa)));
+    for i in 0..6 {
+        let wt = GL_WEIGHTS[i] * h * (ta * t[i]);
+        for c in 0..3 {
+            l[c] += wt * e[c].eval(s[i]);
         }
     }
 }
@@ -408,6 +478,7 @@ mod tests {
             let ub: [f64; 3] = std::array::from_fn(|_| r.random_range(0.0..1.0));
             let line = Along::new(ua, ub);
             let four = line.cubic4(v);
+            assert_eq!(four, line.cubic4_scalar(v));
             for c in 0..4 {
                 assert_eq!(four[c], line.cubic(std::array::from_fn(|k| v[k][c])));
             }
