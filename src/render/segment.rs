@@ -339,9 +339,9 @@ impl Accum {
     }
 }
 
-/// The six Gauss-Legendre nodes of one quadrature part (lane by lane, so
-/// the compiler can pair them in vector registers; sums in node order) `[sa, sa + h]` added
-/// to `l`: `l[c] += w_i h T_a exp(-K(s_i)) e_c(s_i)` in node order, with
+/// The six Gauss-Legendre nodes of one quadrature part `[sa, sa + h]` added
+/// to `l` (lane by lane, so the compiler can pair them in vector
+/// registers): `l[c] += w_i h T_a exp(-K(s_i)) e_c(s_i)` in node order, with
 /// `K(s) = len (P(s) - P(sa))`, `P` the antiderivative of coefficients `q`
 /// ([`Accum::add_emission_quadrature`]); `v = [sa, h, len, P(sa), T_a]`.
 #[inline]
