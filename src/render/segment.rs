@@ -191,10 +191,13 @@ impl Along {
     /// and (2, 3) in one register each, every lane the same IEEE operations
     /// in the same order as [`Along::cubic4_scalar`] (no fused multiply-add),
     /// so the same bits.
+    ///
+    /// # Safety
+    /// The CPU must have SSE2 (every x86-64 CPU does).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "sse2")]
     #[inline]
-    pub fn cubic4_sse2(&self, v: [[f64; 4]; 8]) -> [Cubic; 4] {
+    fn cubic4_sse2(&self, v: [[f64; 4]; 8]) -> [Cubic; 4] {
         use std::arch::x86_64::*;
         let mut out = [Cubic::ZERO; 4];
         let q = &self.q;
