@@ -44,7 +44,7 @@ use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform};
-use super::dda::LeafWalker;
+use super::dda::{IndexRay, LeafWalker};
 use super::medium::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
@@ -215,6 +215,11 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
     (e_sum.map(|v| v * inv), rays)
 }
 
+/// Majorant optical depth through the field's bounding box above which a
+/// shadow ray takes the exact walk instead of ratio tracking (bounds the
+/// lookups per ray; the default bake's rays stay far below it).
+pub const RATIO_TRACKING_MAX_DEPTH: f64 = 32.0;
+
 /// The largest sigma_t value stored in `medium` (0 without extinction): a
 /// majorant of the trilinear field, which is a convex combination of
 /// stored values (and 0 outside them).
@@ -272,6 +277,16 @@ pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(
         return 1.0;
     }
     let field = &medium.fields[c.field];
+    if field.is_empty() {
+        return 1.0;
+    }
+    // Expected lookups: at most mu times the length inside the field's box.
+    // Past RATIO_TRACKING_MAX_DEPTH (or for a non-finite mu) the exact walk
+    // is cheaper and bounded: it is used instead (also unbiased).
+    let Some((a, b)) = IndexRay::new(field, x, dir).clip(field.lo, field.hi, 0.0, r) else { return 1.0 };
+    if !(mu * (b - a) <= RATIO_TRACKING_MAX_DEPTH) {
+        return optical_depth_along_ray(medium, x, dir, r, Integration::Exact, 0.5).transmittance();
+    }
     let leaves = LeafWalker::new(field, x, dir, 0.0, r);
     let ray = leaves.ray;
     let mut t = 1.0;
@@ -342,6 +357,13 @@ mod tests {
             assert!(exact > 0.02 && exact < 0.98, "the ray must cross some medium: T = {exact}");
             assert!((mean - exact).abs() < 4.0 * se + 1e-12, "{mean} +- {se} vs {exact}");
         }
+        // Past RATIO_TRACKING_MAX_DEPTH: the exact walk's value itself (no
+        // endless lookups on an extreme density).
+        let dense = Medium::new(Some(&d), Some(&e), 1e6, 1.0).unwrap();
+        let (o, dir) = (DVec3::new(-3.0, 4.1, 3.3), DVec3::X);
+        let exact = optical_depth_along_ray(&dense, o, dir, 20.0, Integration::Exact, 0.5).transmittance();
+        let mu = sigma_t_majorant(&dense);
+        assert_eq!(transmittance_ratio_tracking(&dense, o, dir, 20.0, mu, &mut r), exact);
         let none = Medium::new(None, Some(&e), 1.0, 1.0).unwrap();
         assert_eq!(sigma_t_majorant(&none), 0.0);
         let t = transmittance_ratio_tracking(&none, DVec3::ZERO, DVec3::X, 10.0, 0.0, &mut r);
