@@ -109,6 +109,23 @@ fn local(ray: &IndexRay, t: f64, seg: &CellSeg) -> [f64; 3] {
 #[inline]
 fn fill_piece(piece: &mut Piece, field: &Field, ray: &IndexRay, seg: &CellSeg, sigma: Option<usize>, e: Option<usize>) {
     let line = Along::new(local(ray, piece.t0, seg), local(ray, piece.t1, seg));
+    if field.channels == 4 && sigma == Some(0) && e == Some(1) {
+        // sigma_t and emission in one field (the usual case): each corner's
+        // four channels in one load, the four cubics lane by lane (the same
+        // operations per channel as `Along::cubic`, so the same values).
+        // The field holds unit values; the volume scales apply here, to
+        // each corner as in `corners`.
+        let k = field.scale;
+        let mut v = [[0.0f64; 4]; 8];
+        for (vk, &i) in v.iter_mut().zip(&seg.at) {
+            let c = &field.values[i..i + 4];
+            *vk = [c[0] as f64 * k[0], c[1] as f64 * k[1], c[2] as f64 * k[2], c[3] as f64 * k[3]];
+        }
+        let [s, r, g, b] = line.cubic4(v);
+        piece.sigma_t = s;
+        piece.e = [r, g, b];
+        return;
+    }
     if let Some(ch) = sigma {
         piece.sigma_t = line.cubic(corners(field, &seg.at, ch));
     }

@@ -409,6 +409,9 @@ impl Prepared {
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
             (_, None, Some(_)) => EmissionSampler::from_medium(&medium),
         };
+        if let Some(s) = &sampler {
+            s.init_majorant(&medium);
+        }
         let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
     }
@@ -563,16 +566,25 @@ pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<I
     let (w, h) = (prepared.camera.width, prepared.camera.height);
     progress.start("render", h as u64);
     let start = Instant::now();
-    let rows: Vec<(Vec<[f32; 4]>, Counters, f64)> = (0..h)
+    let bands: Vec<(Vec<[f32; 4]>, Counters, f64, usize)> = (0..h.div_ceil(TILE))
         .into_par_iter()
-        .map(|py| {
+        .map(|b| {
             let t0 = Instant::now();
             let mut n = Counters::default();
-            let row: Vec<[f32; 4]> = (0..w).map(|px| prepared.pixel_counted(px, py, &mut n)).collect();
-            progress.inc(1);
-            (row, n, t0.elapsed().as_secs_f64())
+            let (y0, y1) = (b * TILE, ((b + 1) * TILE).min(h));
+            let mut band = vec![[0.0f32; 4]; (y1 - y0) * w];
+            for x0 in (0..w).step_by(TILE) {
+                for py in y0..y1 {
+                    for px in x0..(x0 + TILE).min(w) {
+                        band[(py - y0) * w + px] = prepared.pixel_counted(px, py, &mut n);
+                    }
+                }
+            }
+            progress.inc((y1 - y0) as u64);
+            (band, n, t0.elapsed().as_secs_f64(), y1 - y0)
         })
         .collect();
+    let rows: Vec<(Vec<[f32; 4]>, Counters, f64)> = bands.into_iter().map(|(b, n, s, _)| (b, n, s)).collect();
     let render_seconds = start.elapsed().as_secs_f64();
     progress.finish();
     let mut pixels = Vec::with_capacity(w * h);
@@ -583,6 +595,13 @@ pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<I
     }
     Ok(prepared.finish(pixels, &counts, build_seconds, render_seconds))
 }
+
+/// The pixel loops trace bands of `TILE` rows, `TILE x TILE` pixels at a
+/// time, so that rays traced one after the other cross neighbouring cells
+/// (cache reuse: 8 % less CPU than whole rows at 160x90, 8 spp; 8 x 8 tiles
+/// measured no better). Each pixel depends on (seed, pixel) only, so the
+/// order changes nothing in the image.
+const TILE: usize = 4;
 
 /// Least `render.spp` for [`render_adaptive`] to adapt (below it renders
 /// uniformly): its first pass needs at least two antithetic pairs a pixel.
@@ -645,20 +664,24 @@ pub fn render_adaptive_prepared(
     let n0 = 2 * (spp / 4);
     progress.start("render", 2 * h as u64);
     let start = Instant::now();
-    let rows: Vec<(Vec<PixelState>, Counters, f64)> = (0..h)
+    // Both passes trace bands of TILE rows in TILE x TILE tiles, as render_prepared.
+    let rows: Vec<(Vec<PixelState>, Counters, f64)> = (0..h.div_ceil(TILE))
         .into_par_iter()
-        .map(|py| {
+        .map(|b| {
             let t0 = Instant::now();
             let mut n = Counters::default();
-            let row: Vec<PixelState> = (0..w)
-                .map(|px| {
-                    let mut st = prepared.pixel_start(px, py);
-                    prepared.trace_samples(px, py, &mut st, n0, &mut n);
-                    st
-                })
-                .collect();
-            progress.inc(1);
-            (row, n, t0.elapsed().as_secs_f64())
+            let (y0, y1) = (b * TILE, ((b + 1) * TILE).min(h));
+            let mut band: Vec<PixelState> =
+                (y0..y1).flat_map(|py| (0..w).map(move |px| (px, py))).map(|(px, py)| prepared.pixel_start(px, py)).collect();
+            for x0 in (0..w).step_by(TILE) {
+                for py in y0..y1 {
+                    for px in x0..(x0 + TILE).min(w) {
+                        prepared.trace_samples(px, py, &mut band[(py - y0) * w + px], n0, &mut n);
+                    }
+                }
+            }
+            progress.inc((y1 - y0) as u64);
+            (band, n, t0.elapsed().as_secs_f64())
         })
         .collect();
     let mut states = Vec::with_capacity(w * h);
@@ -669,17 +692,23 @@ pub fn render_adaptive_prepared(
     }
     let extra = adaptive_pairs(&states, (spp - n0) / 2);
     let pass2: Vec<(Counters, f64)> = states
-        .par_chunks_mut(w)
-        .zip(extra.par_chunks(w))
+        .par_chunks_mut(TILE * w)
+        .zip(extra.par_chunks(TILE * w))
         .enumerate()
-        .map(|(py, (row, ex))| {
+        .map(|(b, (band, ex))| {
             let t0 = Instant::now();
             let mut n = Counters::default();
-            for (px, (st, &e)) in row.iter_mut().zip(ex).enumerate() {
-                let until = st.n + 2 * e;
-                prepared.trace_samples(px, py, st, until, &mut n);
+            let (y0, rows) = (b * TILE, band.len() / w);
+            for x0 in (0..w).step_by(TILE) {
+                for py in y0..y0 + rows {
+                    for px in x0..(x0 + TILE).min(w) {
+                        let i = (py - y0) * w + px;
+                        let until = band[i].n + 2 * ex[i];
+                        prepared.trace_samples(px, py, &mut band[i], until, &mut n);
+                    }
+                }
             }
-            progress.inc(1);
+            progress.inc(rows as u64);
             (n, t0.elapsed().as_secs_f64())
         })
         .collect();

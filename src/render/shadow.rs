@@ -26,14 +26,33 @@
 //!
 //! Background radiance does not light the terrain: it is only what camera
 //! rays see behind everything.
+//!
+//! The transmittance `T(x, y)` of a shadow ray is itself estimated, by ratio
+//! tracking against the medium's largest sigma_t ([`transmittance_ratio_tracking`]):
+//! an unbiased estimate from sigma_t at a few random points (about
+//! `mu L`: 0.019 per km on the default bake) instead of the exact optical
+//! depth through every dual cell the ray crosses. Shadow rays go in every
+//! direction, so each of those cells was a cache miss: on the default
+//! scene at 320x180, 4 spp, shadow rays took about 35 % of the pixel loop's
+//! CPU time and now about 13 %, for 4 % more variance in the picture
+//! (measured over three seeds; the emission sampling's own dominates).
+//! A ray whose majorant optical depth through the field's box exceeds
+//! [`RATIO_TRACKING_MAX_DEPTH`] takes the exact walk instead (bounded work
+//! on extreme densities). The fixed-step integrator
+//! (`Integration::FixedStep`, the Cycles-like comparison mode) keeps its own
+//! marched transmittance.
 
 use super::march::optical_depth_along_ray;
 use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform};
+use super::dda::{IndexRay, LeafWalker};
+use super::medium::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
+use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// Rec.709 luminance weights.
 pub const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
@@ -58,6 +77,10 @@ pub struct EmissionSampler {
     voxel_cdf: Vec<f64>,
     /// `P = int Y(e) dV` of the scaled emission.
     pub power: f64,
+    /// The largest sigma_t of the medium the shadow rays cross (a
+    /// majorant), found on the first shadow ray ([`sigma_t_majorant`]).
+    /// The sampler is built and kept with its medium, so it stays valid.
+    majorant: OnceLock<f64>,
 }
 
 impl EmissionSampler {
@@ -71,6 +94,7 @@ impl EmissionSampler {
             voxel_offset: Vec::new(),
             voxel_cdf: Vec::new(),
             power: 0.0,
+            majorant: OnceLock::new(),
         };
         let mut total = 0.0;
         for leaf in emission.leaves() {
@@ -116,6 +140,7 @@ impl EmissionSampler {
             voxel_offset: Vec::new(),
             voxel_cdf: Vec::new(),
             power: 0.0,
+            majorant: OnceLock::new(),
         };
         let mut total = 0.0;
         let per_block = super::medium::BLOCK_VALUES * f.channels;
@@ -145,8 +170,11 @@ impl EmissionSampler {
     /// Sets `volume.emission_scale` in place: afterwards the sampler equals
     /// what [`EmissionSampler::new`] gives with that scale. False (sampler
     /// unchanged) where `new` would give `None` (a zero or overflowing
-    /// power): the caller drops it.
+    /// power): the caller drops it. Forgets the sigma_t majorant either way:
+    /// a scale edit may have changed `volume.density_scale` too, and it is
+    /// found again on the next shadow ray.
     pub fn set_scale(&mut self, emission_scale: f64) -> bool {
+        self.majorant = OnceLock::new();
         let total = self.leaf_cdf.last().copied().unwrap_or(0.0);
         let h = self.transform.voxel_size;
         let power = emission_scale * total * h * h * h;
@@ -155,6 +183,12 @@ impl EmissionSampler {
             self.power = power;
         }
         ok
+    }
+
+    /// Finds the sigma_t majorant of `medium` now (it is otherwise found on
+    /// the first shadow ray, while the other threads wait).
+    pub fn init_majorant(&self, medium: &Medium) {
+        self.majorant.get_or_init(|| sigma_t_majorant(medium));
     }
 
     /// A point `y` (world space) with density `Y(e(y)) / power`.
@@ -229,7 +263,15 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
         if scene.terrain.intersect(x, dir, t_min, r).is_some() {
             continue;
         }
-        let t = optical_depth_along_ray(scene.medium, x, dir, r, scene.integration, offset).transmittance();
+        let t = match scene.integration {
+            Integration::Exact => {
+                let mu = *sampler.majorant.get_or_init(|| sigma_t_majorant(scene.medium));
+                transmittance_ratio_tracking(scene.medium, x, dir, r, mu, rng)
+            }
+            Integration::FixedStep(_) => {
+                optical_depth_along_ray(scene.medium, x, dir, r, scene.integration, offset).transmittance()
+            }
+        };
         let k = sampler.power * t * cos / (r2 * lum);
         for c in 0..3 {
             e_sum[c] += e[c] * k;
@@ -237,4 +279,164 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
     }
     let inv = 1.0 / samples.max(1) as f64;
     (e_sum.map(|v| v * inv), rays)
+}
+
+/// Majorant optical depth through the field's bounding box above which a
+/// shadow ray takes the exact walk instead of ratio tracking (bounds the
+/// lookups per ray; the default bake's rays stay far below it).
+pub const RATIO_TRACKING_MAX_DEPTH: f64 = 32.0;
+
+/// The largest sigma_t value stored in `medium` (0 without extinction): a
+/// majorant of the trilinear field, which is a convex combination of
+/// stored values (and 0 outside them).
+pub fn sigma_t_majorant(medium: &Medium) -> f64 {
+    let Some(c) = medium.sigma_t else { return 0.0 };
+    let f = &medium.fields[c.field];
+    let n = f.channels;
+    let unit = f
+        .values
+        .par_chunks(n * 4096)
+        .map(|chunk| chunk.iter().skip(c.channel).step_by(n).fold(0.0f32, |a, &v| a.max(v)))
+        .reduce(|| 0.0, f32::max) as f64;
+    // The field holds unit values; `volume.density_scale` applies at lookup.
+    unit * f.scale[c.channel]
+}
+
+/// sigma_t of `field` (channel `ch`) at index-space point `u` inside dual
+/// leaf `leaf` (trilinear in the leaf's dual cell holding `u`).
+#[inline]
+fn sigma_in_leaf(field: &Field, leaf: u32, ch: usize, u: DVec3) -> f64 {
+    let origin = (field.keys[leaf as usize] * 8).as_dvec3();
+    let l = (u - origin).floor().clamp(DVec3::ZERO, DVec3::splat(7.0));
+    let f = u - origin - l;
+    let at = field.corner_indices(leaf, l.x as usize, l.y as usize, l.z as usize);
+    let scale = field.scale[ch];
+    let v = |k: usize| field.values[at[k] + ch] as f64 * scale;
+    let (fx, fy, fz) = (f.x.clamp(0.0, 1.0), f.y.clamp(0.0, 1.0), f.z.clamp(0.0, 1.0));
+    let lerp = |a: f64, b: f64, t: f64| a + t * (b - a);
+    let x00 = lerp(v(0), v(4), fx);
+    let x01 = lerp(v(1), v(5), fx);
+    let x10 = lerp(v(2), v(6), fx);
+    let x11 = lerp(v(3), v(7), fx);
+    lerp(lerp(x00, x10, fy), lerp(x01, x11, fy), fz)
+}
+
+/// Unbiased estimate of the transmittance `exp(-int_0^r sigma_t)` along
+/// `x + s dir` by ratio tracking (Cramer 1978; Novak, Selle & Jarosz 2014,
+/// "Residual ratio tracking"): tentative collisions form a Poisson process
+/// of rate `mu >= sigma_t` on the occupied dual leaves (rate 0 elsewhere,
+/// where sigma_t is 0), and the estimate is the product of `1 - sigma_t/mu`
+/// over them. For a Poisson process of rate `mu(s)`,
+/// `E[prod f(s_i)] = exp(-int mu (1 - f))`, which with `f = 1 - sigma_t/mu`
+/// is the transmittance. It looks sigma_t up at about `mu L` points
+/// (`L` the occupied length) instead of in every dual cell crossed: on the
+/// default bake (sigma_t <= 0.04 per km, 0.5 km voxels) a few points per
+/// shadow ray instead of hundreds of cells, each a cache miss on rays that
+/// go in every direction. The price is variance: `Var/T^2 = exp(int sigma_t^2/mu) - 1
+/// <= exp(tau) - 1`, small beside the emission sampling's own.
+pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(
+    medium: &Medium,
+    x: DVec3,
+    dir: DVec3,
+    r: f64,
+    mu: f64,
+    rng: &mut R,
+) -> f64 {
+    let Some(c) = medium.sigma_t else { return 1.0 };
+    if !(mu > 0.0) {
+        return 1.0;
+    }
+    let field = &medium.fields[c.field];
+    if field.is_empty() {
+        return 1.0;
+    }
+    // Expected lookups: at most mu times the length inside the field's box.
+    // Past RATIO_TRACKING_MAX_DEPTH (or for a non-finite mu) the exact walk
+    // is cheaper and bounded: it is used instead (also unbiased).
+    let Some((a, b)) = IndexRay::new(field, x, dir).clip(field.lo, field.hi, 0.0, r) else { return 1.0 };
+    if !(mu * (b - a) <= RATIO_TRACKING_MAX_DEPTH) {
+        return optical_depth_along_ray(medium, x, dir, r, Integration::Exact, 0.5).transmittance();
+    }
+    let leaves = LeafWalker::new(field, x, dir, 0.0, r);
+    let ray = leaves.ray;
+    let mut t = 1.0;
+    // Distance to the next tentative collision, in occupied length.
+    let mut gap = -(1.0 - rng.random::<f64>()).ln() / mu;
+    for span in leaves {
+        let mut pos = span.t0;
+        while gap < span.t1 - pos {
+            pos += gap;
+            let sigma = sigma_in_leaf(field, span.leaf, c.channel, ray.at(pos));
+            t *= 1.0 - (sigma / mu).min(1.0);
+            if !(t > 0.0) {
+                return 0.0;
+            }
+            gap = -(1.0 - rng.random::<f64>()).ln() / mu;
+        }
+        gap -= span.t1 - pos;
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::{Grid, Transform};
+    use rand::SeedableRng;
+
+    /// Ratio tracking averages to the exact transmittance (the walker's
+    /// optical depth) on a lumpy medium, within 4 standard errors, on rays
+    /// that cross it at several depths; and a medium without extinction
+    /// gives exactly 1.
+    #[test]
+    fn ratio_tracking_is_unbiased() {
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let mut d = Grid::new("density", 0.0f32, tr);
+        let mut e = Grid::new("emission", [0.0f32; 3], tr);
+        let mut r = rand_pcg::Pcg64::seed_from_u64(7);
+        for x in 0..24 {
+            for y in 0..20 {
+                for z in 0..16 {
+                    let v = if r.random::<f64>() < 0.7 { r.random::<f32>() * 0.8 } else { 0.0 };
+                    d.set(IVec3::new(x, y, z), v);
+                    e.set(IVec3::new(x, y, z), [0.1, 0.2, 0.1]);
+                }
+            }
+        }
+        let m = Medium::new(Some(&d), Some(&e), 1.0, 1.0).unwrap();
+        let mu = sigma_t_majorant(&m);
+        assert!(mu > 0.7 && mu <= 0.8, "{mu}");
+        for (o, to) in [
+            (DVec3::new(-3.0, 4.1, 3.3), DVec3::new(14.0, 5.3, 4.9)),
+            (DVec3::new(2.2, -5.0, 1.7), DVec3::new(9.1, 12.0, 6.5)),
+            (DVec3::new(6.0, 5.0, -2.0), DVec3::new(6.3, 4.8, 3.0)),
+        ] {
+            let w = to - o;
+            let (dir, len) = (w.normalize(), w.length());
+            let exact = optical_depth_along_ray(&m, o, dir, len, Integration::Exact, 0.5).transmittance();
+            let n = 20000;
+            let (mut sum, mut sum2) = (0.0, 0.0);
+            for _ in 0..n {
+                let t = transmittance_ratio_tracking(&m, o, dir, len, mu, &mut r);
+                assert!((0.0..=1.0).contains(&t));
+                sum += t;
+                sum2 += t * t;
+            }
+            let mean = sum / n as f64;
+            let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+            assert!(exact > 0.02 && exact < 0.98, "the ray must cross some medium: T = {exact}");
+            assert!((mean - exact).abs() < 4.0 * se + 1e-12, "{mean} +- {se} vs {exact}");
+        }
+        // Past RATIO_TRACKING_MAX_DEPTH: the exact walk's value itself (no
+        // endless lookups on an extreme density).
+        let dense = Medium::new(Some(&d), Some(&e), 1e6, 1.0).unwrap();
+        let (o, dir) = (DVec3::new(-3.0, 4.1, 3.3), DVec3::X);
+        let exact = optical_depth_along_ray(&dense, o, dir, 20.0, Integration::Exact, 0.5).transmittance();
+        let mu = sigma_t_majorant(&dense);
+        assert_eq!(transmittance_ratio_tracking(&dense, o, dir, 20.0, mu, &mut r), exact);
+        let none = Medium::new(None, Some(&e), 1.0, 1.0).unwrap();
+        assert_eq!(sigma_t_majorant(&none), 0.0);
+        let t = transmittance_ratio_tracking(&none, DVec3::ZERO, DVec3::X, 10.0, 0.0, &mut r);
+        assert_eq!(t, 1.0);
+    }
 }
