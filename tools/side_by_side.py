@@ -26,7 +26,8 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    cycles_render.py) at equal error against a converged reference, as the
    Cycles cross-check sets them up (tests/python/test_cross_check.py): the
    default bake at 160x90, volume only and a plane lit by the aurora; both
-   average over the pixel square with jittered samples (box filter; [render]
+   average over the pixel square (box filter; aurora's samples are its
+   stratified antithetic set, Cycles' its own sequence; [render]
    spp > 1 in the scene file); 2 threads each. Reference: `aurora render`
    itself (exact ray integration; the only noise is pixel and shadow
    sampling), two independent seeds averaged; the volume's rendered at 8x8
@@ -801,8 +802,9 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
     return {
         "scene": str(scene),
         "what": {
-            "aurora": f"aurora render --spp N --shadow-samples {shadow} --threads {THREADS}: jittered uniform "
-                      "positions in the pixel square; time = wall of the process (read VDB, build, render, "
+            "aurora": f"aurora render --spp N --shadow-samples {shadow} --threads {THREADS}: stratified antithetic "
+                      "positions in the pixel square (render::pixel_position: Sobol (0,2) points and their "
+                      "reflections through the centre); time = wall of the process (read VDB, build, render, "
                       "write EXR)",
             "cycles": f"tools/cycles_render.render, Cycles CPU, {THREADS} threads, biased volume mode, step rate "
                       f"{step}, box filter, padded VDB{', terrain lit by emission point lights' if case == 'terrain' else ''}; "
