@@ -58,9 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pool.current_num_threads(),
         std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" ")
     );
-    let (c0, t0) = (cpu_seconds(), Instant::now());
-    let mu = pool.install(|| aurora::render::shadow::sigma_t_majorant(&prepared.medium));
-    println!("# sigma_t majorant {mu:.6} per unit length: {:.3} s wall, {:.2} s CPU", t0.elapsed().as_secs_f64(), cpu_seconds() - c0);
+    println!("# sigma_t majorant {:.6} per unit length", prepared.medium.sigma_t_majorant());
     println!("run,wall_s,cpu_s,primary_rays,shadow_rays,terrain_hits,primary_per_cpu_s,shadow_cpu_s,volume_work_per_primary");
     for r in 0..repeats {
         let c0 = cpu_seconds();

@@ -592,7 +592,18 @@ impl Field {
     /// all-zero block that nothing references and nothing writes: its
     /// memory is reserved, never touched. The result depends only on the
     /// sources' leaves and values, never on the thread count.
-    fn from_sources(sources: &[&dyn LeafSource]) -> (Field, Vec<SourceReport>) {
+    ///
+    /// The value array (one block of all channels per leaf of the union,
+    /// unwritten blocks included: they count against an address-space
+    /// limit) is checked before it is allocated: with `reserved` bytes
+    /// already held by other fields, at most [`MEDIUM_MEMORY_FRACTION`] of
+    /// `limit`, else [`RenderError::Memory`] (a file's leaf table is its
+    /// word, and a failed allocation would abort the process).
+    fn from_sources(
+        sources: &[&dyn LeafSource],
+        reserved: f64,
+        limit: &crate::memory::MemoryLimit,
+    ) -> Result<(Field, Vec<SourceReport>), RenderError> {
         assert!(!sources.is_empty() && sources.len() <= 2);
         let transform = sources[0].transform();
         debug_assert!(sources.iter().all(|s| s.transform() == transform));
@@ -617,6 +628,14 @@ impl Field {
         }
         drop(all);
         let per_block = BLOCK_VALUES * channels;
+        let needed = reserved + ((origins.len() + 1) * per_block * std::mem::size_of::<f32>()) as f64;
+        if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
+            return Err(RenderError::Memory {
+                leaves: origins.len(),
+                needed: crate::memory::gib(needed),
+                available: limit.to_string(),
+            });
+        }
         // Zeroed by the allocator (fresh pages): blocks not written cost
         // no memory.
         let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
@@ -725,7 +744,7 @@ impl Field {
             live_blocks,
             block_origins: origins,
         };
-        (field, reports)
+        Ok((field, reports))
     }
 
     pub fn is_empty(&self) -> bool {
@@ -990,18 +1009,10 @@ impl Medium {
                 check_header(*s)?;
             }
         }
-        // The value storage is allocated before any leaf is read: refuse a
-        // source (a file's leaf table is its word) whose leaves would not
-        // fit, rather than abort on a failed allocation. Bound: a block of
-        // all the sources' channels per leaf of either (the build allocates
-        // one per leaf of their union, at most the sum).
-        let leaves: usize = srcs.iter().flatten().map(|s| s.leaf_count()).sum();
-        let channels: usize = srcs.iter().flatten().map(|s| s.channels()).sum();
-        let needed = (leaves + 2) as f64 * (BLOCK_VALUES * channels * std::mem::size_of::<f32>()) as f64;
+        // Each field's value storage is checked against the process's
+        // memory limit before it is allocated ([`Field::from_sources`]).
         let limit = crate::memory::available();
-        if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
-            return Err(RenderError::Memory { leaves, needed: crate::memory::gib(needed), available: limit.to_string() });
-        }
+        let mut reserved = 0.0;
         // Sources sharing a transform share a field.
         let groups: Vec<Vec<usize>> = match srcs {
             [Some(d), Some(e)] if d.transform() == e.transform() => vec![vec![0, 1]],
@@ -1017,7 +1028,7 @@ impl Medium {
         };
         for group in groups {
             let list: Vec<&dyn LeafSource> = group.iter().filter_map(|&k| srcs[k]).collect();
-            let (mut field, reports) = Field::from_sources(&list);
+            let (mut field, reports) = Field::from_sources(&list, reserved, &limit)?;
             let mut peaks = [0.0f32; 2];
             for (r, &k) in reports.into_iter().zip(&group) {
                 if let Some(e) = r.fail {
@@ -1036,7 +1047,8 @@ impl Medium {
             }
             if live.len() < group.len() {
                 let list: Vec<&dyn LeafSource> = live.iter().filter_map(|&k| srcs[k]).collect();
-                field = Field::from_sources(&list).0;
+                drop(field); // never two copies at once
+                field = Field::from_sources(&list, reserved, &limit)?.0;
             }
             let fi = medium.fields.len();
             let mut ch = 0;
@@ -1046,6 +1058,7 @@ impl Medium {
                     Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
                 ch += src.channels();
             }
+            reserved += (field.values.len() * std::mem::size_of::<f32>()) as f64;
             medium.fields.push(field);
         }
         medium.set_scales(density_scale, emission_scale)?;
@@ -1087,6 +1100,19 @@ impl Medium {
         self.density_scale = density_scale;
         self.emission_scale = emission_scale;
         Ok(())
+    }
+
+    /// The largest sigma_t anywhere in the medium (0 without extinction):
+    /// the density grid's largest stored value times `volume.density_scale`,
+    /// a majorant of the trilinear field (a convex combination of stored
+    /// values, 0 outside them) for the shadow rays' ratio tracking. O(1):
+    /// the build keeps each source's peak, and a scale edit changes only
+    /// the factor, so nothing is cached that could go stale.
+    pub fn sigma_t_majorant(&self) -> f64 {
+        match (self.sigma_t, &self.stored[0]) {
+            (Some(c), Some(st)) => st.peak as f64 * self.fields[c.field].scale[c.channel],
+            _ => 0.0,
+        }
     }
 
     /// sigma_t at a world point (per unit length).

@@ -409,9 +409,6 @@ impl Prepared {
             (_, Some(g), Some(_)) => EmissionSampler::new(g, settings.volume.emission_scale),
             (_, None, Some(_)) => EmissionSampler::from_medium(&medium),
         };
-        if let Some(s) = &sampler {
-            s.init_majorant(&medium);
-        }
         let sky = sky::Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
     }

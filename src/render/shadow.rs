@@ -51,8 +51,6 @@ use super::dda::{IndexRay, LeafWalker};
 use super::medium::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
-use rayon::prelude::*;
-use std::sync::OnceLock;
 
 /// Rec.709 luminance weights.
 pub const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
@@ -77,10 +75,6 @@ pub struct EmissionSampler {
     voxel_cdf: Vec<f64>,
     /// `P = int Y(e) dV` of the scaled emission.
     pub power: f64,
-    /// The largest sigma_t of the medium the shadow rays cross (a
-    /// majorant), found on the first shadow ray ([`sigma_t_majorant`]).
-    /// The sampler is built and kept with its medium, so it stays valid.
-    majorant: OnceLock<f64>,
 }
 
 impl EmissionSampler {
@@ -94,7 +88,6 @@ impl EmissionSampler {
             voxel_offset: Vec::new(),
             voxel_cdf: Vec::new(),
             power: 0.0,
-            majorant: OnceLock::new(),
         };
         let mut total = 0.0;
         for leaf in emission.leaves() {
@@ -140,7 +133,6 @@ impl EmissionSampler {
             voxel_offset: Vec::new(),
             voxel_cdf: Vec::new(),
             power: 0.0,
-            majorant: OnceLock::new(),
         };
         let mut total = 0.0;
         let per_block = super::medium::BLOCK_VALUES * f.channels;
@@ -170,11 +162,8 @@ impl EmissionSampler {
     /// Sets `volume.emission_scale` in place: afterwards the sampler equals
     /// what [`EmissionSampler::new`] gives with that scale. False (sampler
     /// unchanged) where `new` would give `None` (a zero or overflowing
-    /// power): the caller drops it. Forgets the sigma_t majorant either way:
-    /// a scale edit may have changed `volume.density_scale` too, and it is
-    /// found again on the next shadow ray.
+    /// power): the caller drops it.
     pub fn set_scale(&mut self, emission_scale: f64) -> bool {
-        self.majorant = OnceLock::new();
         let total = self.leaf_cdf.last().copied().unwrap_or(0.0);
         let h = self.transform.voxel_size;
         let power = emission_scale * total * h * h * h;
@@ -183,12 +172,6 @@ impl EmissionSampler {
             self.power = power;
         }
         ok
-    }
-
-    /// Finds the sigma_t majorant of `medium` now (it is otherwise found on
-    /// the first shadow ray, while the other threads wait).
-    pub fn init_majorant(&self, medium: &Medium) {
-        self.majorant.get_or_init(|| sigma_t_majorant(medium));
     }
 
     /// A point `y` (world space) with density `Y(e(y)) / power`.
@@ -265,7 +248,7 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
         }
         let t = match scene.integration {
             Integration::Exact => {
-                let mu = *sampler.majorant.get_or_init(|| sigma_t_majorant(scene.medium));
+                let mu = scene.medium.sigma_t_majorant();
                 transmittance_ratio_tracking(scene.medium, x, dir, r, mu, rng)
             }
             Integration::FixedStep(_) => {
@@ -285,22 +268,6 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
 /// shadow ray takes the exact walk instead of ratio tracking (bounds the
 /// lookups per ray; the default bake's rays stay far below it).
 pub const RATIO_TRACKING_MAX_DEPTH: f64 = 32.0;
-
-/// The largest sigma_t value stored in `medium` (0 without extinction): a
-/// majorant of the trilinear field, which is a convex combination of
-/// stored values (and 0 outside them).
-pub fn sigma_t_majorant(medium: &Medium) -> f64 {
-    let Some(c) = medium.sigma_t else { return 0.0 };
-    let f = &medium.fields[c.field];
-    let n = f.channels;
-    let unit = f
-        .values
-        .par_chunks(n * 4096)
-        .map(|chunk| chunk.iter().skip(c.channel).step_by(n).fold(0.0f32, |a, &v| a.max(v)))
-        .reduce(|| 0.0, f32::max) as f64;
-    // The field holds unit values; `volume.density_scale` applies at lookup.
-    unit * f.scale[c.channel]
-}
 
 /// sigma_t of `field` (channel `ch`) at index-space point `u` inside dual
 /// leaf `leaf` (trilinear in the leaf's dual cell holding `u`).
@@ -383,6 +350,18 @@ mod tests {
     use super::*;
     use crate::grid::{Grid, Transform};
     use rand::SeedableRng;
+
+    /// The largest sigma_t value stored in `medium`, by scanning every
+    /// value: the oracle of `Medium::sigma_t_majorant`.
+    fn sigma_t_majorant(medium: &Medium) -> f64 {
+        let Some(c) = medium.sigma_t else { return 0.0 };
+        let f = &medium.fields[c.field];
+        let n = f.channels;
+        let unit = f.values.iter().skip(c.channel).step_by(n).fold(0.0f32, |a, &v| a.max(v)) as f64;
+        let o = unit * f.scale[c.channel];
+        assert_eq!(medium.sigma_t_majorant(), o, "the stored peak times the scale is the scan's maximum");
+        o
+    }
 
     /// Ratio tracking averages to the exact transmittance (the walker's
     /// optical depth) on a lumpy medium, within 4 standard errors, on rays
