@@ -562,46 +562,44 @@ fn render_cmd(
     let mut settings = aurora::render::RenderSettings::from_scene(scene);
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
-    // The medium straight from the file's records (no grids; the terrain's
-    // emission sampler is built from the medium).
-    if let Some(path) = vdb {
-        let read = aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
-            .map_err(|e| InputError(e.to_string()))?;
-        if let Some(read) = read {
-            let prepared = aurora::render::Prepared::with_medium(&settings, read.medium, None)?;
-            let image = if adaptive {
-                aurora::render::render_adaptive_prepared(&prepared, read.build_seconds, progress)?
-            } else {
-                let mut img = aurora::render::render_prepared(&prepared, progress)?;
-                img.stats.build_seconds = read.build_seconds;
-                img
-            };
-            return finish_render(scene, vdb, out, format, png, quiet, &image, read.open_seconds);
-        }
-    }
-    let (density, emission);
-    let open = std::time::Instant::now();
-    match vdb {
-        Some(path) => {
-            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
-            let (d, e) = aurora::vdb::read::render_grids(file)
-                .map_err(|e| InputError(format!("{}: {e}", path.display())))?;
-            density = d;
-            emission = e;
+    // From a VDB, the medium straight from the file's records (no grids;
+    // the terrain's emission sampler is built from the medium); from grids
+    // where that path does not apply (a float emission grid, active tiles)
+    // and after a bake.
+    let from_records = match vdb {
+        Some(path) => aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+            .map_err(|e| InputError(e.to_string()))?,
+        None => None,
+    };
+    let (prepared, open_seconds, build_seconds) = match from_records {
+        Some(read) => {
+            (aurora::render::Prepared::with_medium(&settings, read.medium, None)?, read.open_seconds, read.build_seconds)
         }
         None => {
-            let bake = aurora::bake::bake(scene, progress)?;
-            print_warnings(&bake.stats.warnings);
-            density = Some(bake.density);
-            emission = Some(bake.emission);
+            let open = std::time::Instant::now();
+            let (density, emission) = match vdb {
+                Some(path) => {
+                    let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+                    aurora::vdb::read::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+                }
+                None => {
+                    let bake = aurora::bake::bake(scene, progress)?;
+                    print_warnings(&bake.stats.warnings);
+                    (Some(bake.density), Some(bake.emission))
+                }
+            };
+            let open_seconds = open.elapsed().as_secs_f64();
+            let build = std::time::Instant::now();
+            let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
+            (aurora::render::Prepared::new(&settings, &volume)?, open_seconds, build.elapsed().as_secs_f64())
         }
-    }
-    let open_seconds = open.elapsed().as_secs_f64();
-    let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
+    };
     let image = if adaptive {
-        aurora::render::render_adaptive(&settings, &volume, progress)?
+        aurora::render::render_adaptive_prepared(&prepared, build_seconds, progress)?
     } else {
-        aurora::render::render(&settings, &volume, progress)?
+        let mut img = aurora::render::render_prepared(&prepared, progress)?;
+        img.stats.build_seconds = build_seconds;
+        img
     };
     finish_render(scene, vdb, out, format, png, quiet, &image, open_seconds)
 }

@@ -80,39 +80,11 @@ pub struct EmissionSampler {
 impl EmissionSampler {
     /// None when nothing emits.
     pub fn new(emission: &Grid<[f32; 3]>, emission_scale: f64) -> Option<EmissionSampler> {
-        let mut s = EmissionSampler {
-            transform: emission.transform,
-            leaf_origins: Vec::new(),
-            leaf_cdf: Vec::new(),
-            leaf_start: vec![0],
-            voxel_offset: Vec::new(),
-            voxel_cdf: Vec::new(),
-            power: 0.0,
-        };
-        let mut total = 0.0;
-        for leaf in emission.leaves() {
-            let before = s.voxel_offset.len();
-            for n in 0..crate::grid::LEAF_NUM_VALUES {
-                if !leaf.is_active(n) {
-                    continue;
-                }
-                let v = leaf.values[n];
-                let w = luminance([v[0] as f64, v[1] as f64, v[2] as f64]);
-                if w > 0.0 {
-                    total += w;
-                    s.voxel_offset.push(n as u16);
-                    s.voxel_cdf.push(total);
-                }
-            }
-            if s.voxel_offset.len() > before {
-                s.leaf_origins.push(leaf.origin);
-                s.leaf_cdf.push(total);
-                s.leaf_start.push(s.voxel_offset.len() as u32);
-            }
-        }
-        let h = emission.transform.voxel_size;
-        s.power = emission_scale * total * h * h * h;
-        (total > 0.0 && s.power > 0.0 && s.power.is_finite()).then_some(s)
+        let leaves = emission.leaves().iter().map(|leaf| {
+            let voxels = (0..crate::grid::LEAF_NUM_VALUES).filter(|&n| leaf.is_active(n)).map(|n| (n, leaf.values[n]));
+            (leaf.origin, voxels)
+        });
+        EmissionSampler::from_leaves(emission.transform, leaves, emission_scale)
     }
 
     /// [`EmissionSampler::new`] from the medium's emission channels instead
@@ -125,8 +97,25 @@ impl EmissionSampler {
     pub fn from_medium(medium: &super::Medium) -> Option<EmissionSampler> {
         let c = medium.emission?;
         let f = &medium.fields[c.field];
+        let per_block = super::medium::BLOCK_VALUES * f.channels;
+        let leaves = f.block_origins.iter().enumerate().map(|(b, &origin)| {
+            let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
+            let voxels = block.chunks_exact(f.channels).map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]]);
+            (origin, voxels.enumerate())
+        });
+        EmissionSampler::from_leaves(f.transform, leaves, medium.emission_scale)
+    }
+
+    /// The sampler over `leaves` (each its origin and its voxels' offsets
+    /// and unscaled emission, in offset order), with `emission_scale`:
+    /// every voxel of positive luminance, weighted by it.
+    fn from_leaves<V: Iterator<Item = (usize, [f32; 3])>>(
+        transform: Transform,
+        leaves: impl Iterator<Item = (IVec3, V)>,
+        emission_scale: f64,
+    ) -> Option<EmissionSampler> {
         let mut s = EmissionSampler {
-            transform: f.transform,
+            transform,
             leaf_origins: Vec::new(),
             leaf_cdf: Vec::new(),
             leaf_start: vec![0],
@@ -135,12 +124,9 @@ impl EmissionSampler {
             power: 0.0,
         };
         let mut total = 0.0;
-        let per_block = super::medium::BLOCK_VALUES * f.channels;
-        for (b, &origin) in f.block_origins.iter().enumerate() {
-            let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
+        for (origin, voxels) in leaves {
             let before = s.voxel_offset.len();
-            for (n, v) in block.chunks_exact(f.channels).enumerate() {
-                let v = &v[c.channel..c.channel + 3];
+            for (n, v) in voxels {
                 let w = luminance([v[0] as f64, v[1] as f64, v[2] as f64]);
                 if w > 0.0 {
                     total += w;
@@ -154,15 +140,12 @@ impl EmissionSampler {
                 s.leaf_start.push(s.voxel_offset.len() as u32);
             }
         }
-        let h = f.transform.voxel_size;
-        s.power = medium.emission_scale * total * h * h * h;
-        (total > 0.0 && s.power > 0.0 && s.power.is_finite()).then_some(s)
+        s.set_scale(emission_scale).then_some(s)
     }
 
-    /// Sets `volume.emission_scale` in place: afterwards the sampler equals
-    /// what [`EmissionSampler::new`] gives with that scale. False (sampler
-    /// unchanged) where `new` would give `None` (a zero or overflowing
-    /// power): the caller drops it.
+    /// Sets `volume.emission_scale` in place: `P = scale * sum Y(e) h^3`.
+    /// False (sampler unchanged) where the power would be zero or overflow
+    /// (no sampler: the constructors give `None`, the caller drops it).
     pub fn set_scale(&mut self, emission_scale: f64) -> bool {
         let total = self.leaf_cdf.last().copied().unwrap_or(0.0);
         let h = self.transform.voxel_size;
