@@ -10,24 +10,13 @@
 //! `valgrind --tool=callgrind --toggle-collect='*gather_grid*'` it gives the
 //! gather's instruction count, which the machine's load does not change.
 
+mod common;
+
+use common::{cpu_seconds as cpu, loadavg};
 use aurora::pipeline::{self, BakePlan};
 use aurora::progress::NoProgress;
 use aurora::scene::Scene;
 use std::time::Instant;
-
-fn loadavg() -> String {
-    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
-}
-
-/// CPU seconds of this process (user + system, /proc/self/stat, 100 Hz ticks).
-fn cpu() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let rest = s.rsplit(')').next().unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let tick = |i: usize| f.get(i).and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0);
-    // Fields after the command: state is 0, utime 11, stime 12.
-    (tick(11) + tick(12)) / 100.0
-}
 
 fn timed<R>(what: &str, f: impl FnOnce() -> R) -> R {
     let (t, c) = (Instant::now(), cpu());

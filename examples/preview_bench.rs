@@ -17,26 +17,11 @@
 //! Targets (issue 14 part 4), on the refined picture at the preview's spp:
 //! <= 1 s for a render edit, <= 3 s for a beams edit, on 2 cores.
 
+mod common;
+
+use common::{cpu_seconds, loadavg};
 use aurora::preview::{Preview, Update, DEFAULT_SIZE, DEFAULT_SPP};
 use aurora::scene::Scene;
-
-fn loadavg() -> String {
-    std::fs::read_to_string("/proc/loadavg").map(|s| s.split_whitespace().take(3).collect::<Vec<_>>().join(" ")).unwrap_or_default()
-}
-
-/// CPU seconds (user + system) of this process so far, all threads
-/// (`/proc/self/stat` fields 14 and 15, in clock ticks of 1/100 s).
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the command name, which is in parentheses.
-    let rest = stat.rsplit_once(')').map_or("", |(_, r)| r);
-    let f: Vec<f64> = rest.split_whitespace().map(|x| x.parse().unwrap_or(0.0)).collect();
-    if f.len() > 13 {
-        (f[11] + f[12]) / 100.0
-    } else {
-        0.0
-    }
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -15,6 +15,9 @@
 //! red tail, and the air's extinction 0.02 exp(-0.02 (h - 90)) per km on the
 //! same voxels. Camera: the default scene's (ground, 260 km south, 50 deg).
 
+mod common;
+
+use common::cpu_seconds;
 use aurora::grid::{Grid, Transform};
 use aurora::progress::NoProgress;
 use aurora::render::{render, Integration, Prepared, RenderSettings, Volume};
@@ -56,16 +59,6 @@ fn curtains(sheets: usize, thickness: i32, far_voxel: bool) -> (Grid<f32>, Grid<
     d.sort_leaves();
     e.sort_leaves();
     (d, e)
-}
-
-/// Process CPU time (user + system), seconds.
-fn cpu_seconds() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after = s.rsplit_once(')').map(|x| x.1).unwrap_or("");
-    let f: Vec<&str> = after.split_whitespace().collect();
-    // Fields 14 and 15 of stat are 12 and 13 after the ")" (state is 3rd field).
-    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
 }
 
 fn run(case: &str, s: &RenderSettings, d: &Grid<f32>, e: &Grid<[f32; 3]>, threads: usize) -> Vec<[f32; 4]> {

@@ -28,6 +28,9 @@
 //! With `--out`, writes `smoothness.json`, `smoothness.txt` and the four
 //! pictures (PNG) there.
 
+mod common;
+
+use common::cpu_seconds;
 use aurora::bake::{self, Bake};
 use aurora::bench::metrics::image_rel_error;
 use aurora::progress::NoProgress;
@@ -49,19 +52,6 @@ fn base_scene(beams: usize) -> Scene {
     s.terrain.kind = TerrainKind::None;
     s.background.radiance = [0.0; 3];
     s
-}
-
-
-/// CPU time of this process (user + system, all threads), seconds, from
-/// /proc/self/stat (clock ticks of 1/100 s); 0 where unavailable.
-fn cpu_seconds() -> f64 {
-    let stat = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    // Fields after the command name (which may hold spaces) end with ')'.
-    let rest = stat.rsplit_once(')').map(|x| x.1).unwrap_or("");
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let tick = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    // utime and stime are fields 14 and 15 of the line, 12 and 13 after ')'.
-    (tick(11) + tick(12)) / 100.0
 }
 
 /// A bake, its wall time and its CPU time. On a shared machine the wall time

@@ -10,20 +10,14 @@
 //! With `--repeats 1` it is also the harness for instruction counts
 //! (`valgrind --tool=callgrind --toggle-collect='*render_prepared*'`).
 
+mod common;
+
+use common::cpu_seconds;
 use aurora::progress::NoProgress;
 use aurora::render::{render_prepared, Prepared, RenderSettings, Volume};
 use aurora::scene::Scene;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Process CPU time (user + system), seconds.
-fn cpu_seconds() -> f64 {
-    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
-    let after = s.rsplit_once(')').map(|x| x.1).unwrap_or("");
-    let f: Vec<&str> = after.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    (ticks(11) + ticks(12)) / 100.0
-}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -56,7 +50,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         settings.render.height,
         settings.render.spp,
         pool.current_num_threads(),
-        std::fs::read_to_string("/proc/loadavg").unwrap_or_default().split_whitespace().take(3).collect::<Vec<_>>().join(" ")
+        common::loadavg()
     );
     println!("# sigma_t majorant {:.6} per unit length", prepared.medium.sigma_t_majorant());
     println!("run,wall_s,cpu_s,primary_rays,shadow_rays,terrain_hits,primary_per_cpu_s,shadow_cpu_s,volume_work_per_primary");
