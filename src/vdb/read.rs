@@ -663,21 +663,28 @@ pub use crate::render::grids::RenderGridsError;
 /// `density` grid, an `emission` grid, vec3 or float counted as grey; either
 /// may be absent, not both).
 pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
-    use crate::render::grids::{choose, GridType, Listed};
+    use crate::render::grids::{choose, Listed};
     let listing: Vec<Listed<'_>> = file
         .grids
         .iter()
         .map(|g| Listed {
             name: &g.name,
             type_name: &g.type_name,
-            kind: match g.kind {
-                Some(ValueKind::Float) => GridType::Float,
-                Some(ValueKind::Vec3) => GridType::Vec3,
-                None => GridType::Other,
-            },
+            kind: grid_type(g.kind),
         })
         .collect();
     choose(&listing, file.float_grids, file.vec3_grids)
+}
+
+/// The renderer's name for a grid's value type, as listed for
+/// [`crate::render::grids`] (both the grid and the records path).
+fn grid_type(kind: Option<ValueKind>) -> crate::render::grids::GridType {
+    use crate::render::grids::GridType;
+    match kind {
+        Some(ValueKind::Float) => GridType::Float,
+        Some(ValueKind::Vec3) => GridType::Vec3,
+        None => GridType::Other,
+    }
 }
 
 /// Why a VDB file's medium could not be built: the grid choice
@@ -856,7 +863,7 @@ fn render_medium_named(
     density_scale: f64,
     emission_scale: f64,
 ) -> Result<Option<RenderMedium>, RenderReadError> {
-    use crate::render::grids::{check_types, GridType, Listed};
+    use crate::render::grids::{check_types, Listed};
     let file = file.to_string();
     let invalid = |source: ParseError| VdbReadError::Invalid { file: file.clone(), source };
     let parsed = parse::parse_file_with(bytes, &|gh| {
@@ -875,11 +882,7 @@ fn render_medium_named(
         .map(|(g, name)| Listed {
             name,
             type_name: &g.header.type_name,
-            kind: match g.header.kind {
-                Some(ValueKind::Float) => GridType::Float,
-                Some(ValueKind::Vec3) => GridType::Vec3,
-                None => GridType::Other,
-            },
+            kind: grid_type(g.header.kind),
         })
         .collect();
     check_types(&listing).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
