@@ -25,7 +25,7 @@
 //!
 //! Identity. Beam i keeps its index and its random stream in every frame; its
 //! start is the same point of the unit square mapped through the frame's
-//! footprint by a continuous map ([`crate::footprint::StartMap`]), so as the
+//! footprint by a continuous map ([`crate::starts::StartMap`]), so as the
 //! footprint moves the beam moves with it and its noise (deflections,
 //! energy) moves with the curtain instead of being redrawn.
 //!

@@ -21,7 +21,7 @@
 //! `H_i (rho_i - rho_{i+1})`), so `-dC/dh = rho` holds everywhere.
 //!
 //! Units: altitude km, mass density g cm^-3, number density cm^-3, column
-//! mass g cm^-2 (the unit of the electron range-energy relation in `beams`).
+//! mass g cm^-2 (the unit of the electron range-energy relation in `csda`).
 
 /// Centimetres per kilometre.
 pub const CM_PER_KM: f64 = 1e5;

@@ -319,7 +319,7 @@ mod tests {
 #[cfg(test)]
 mod auto_voxel_tests {
     use super::*;
-    use crate::beams::Photon;
+    use crate::deposit::Photon;
     use crate::scene::{AutoTag, Projection, VoxelSize};
 
     fn photon_at(p: [f32; 3]) -> Photon {

@@ -14,7 +14,7 @@
 //!   step), plus, for Fang's depositions, one per [`ABOVE_START_SPAN_KM`] of
 //!   the column above the beam's start (what the spectrum leaves above the
 //!   start, laid along the field line up to at most the atmosphere table's
-//!   top, [`crate::beams::above_start_top`]); `beams.count` beams,
+//!   top, [`crate::beams::walk::above_start_top`]); `beams.count` beams,
 //!   [`Photon`] each; held three times at the peak (the per-beam vectors
 //!   while they are concatenated, the concatenation, and the kd-tree's copy
 //!   of the positions with indices).
@@ -48,7 +48,8 @@
 //! [`KernelRadius::max_reach_km`], the gather's.
 
 use crate::atmosphere::Atmosphere;
-use crate::beams::{above_start_top, Photon, ABOVE_START_SPAN_KM};
+use crate::beams::walk::{above_start_top, ABOVE_START_SPAN_KM};
+use crate::deposit::Photon;
 use crate::fang::SpectrumDeposition;
 use crate::memory::{gib, MemoryLimit};
 use crate::scene::{Curtain, Deposition, KernelRadius, Scene, VoxelSize};
@@ -102,7 +103,7 @@ pub struct TooLarge {
 /// The highest altitude a deposit of `curtain` can lie at, km: the beams'
 /// highest start, or above it for Fang's depositions, which lay what the
 /// spectrum leaves above a beam's start along the field line above it up
-/// to [`crate::beams::above_start_top`]: for `expected`, that altitude for
+/// to [`crate::beams::walk::above_start_top`]: for `expected`, that altitude for
 /// the curtain's own spectrum (the function the trace calls, so the same
 /// altitude: 412 km for the default curtains); for `sampled`, where each
 /// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS

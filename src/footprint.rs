@@ -536,76 +536,6 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
     Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width }
 }
 
-/// Where beams start: a continuous map from the unit square onto the
-/// footprint's cells above threshold, with density proportional to the
-/// footprint's (beams per area follow the energy flux).
-///
-/// Marginal-conditional inversion (Pharr, Jakob & Humphreys, PBRT 4th ed.,
-/// section A.5, "Sampling 2D functions"): xi_1 picks the column (u) through
-/// the marginal CDF of the column sums and lands at its linear position
-/// inside the column; xi_2 picks v through that column's conditional CDF,
-/// again linearly inside the cell. The map is continuous in the footprint's
-/// values, so as the footprint moves between frames a beam with fixed
-/// (xi_1, xi_2) moves with it instead of jumping (a flat CDF over all cells
-/// in row order would shift every beam when any upstream cell changes).
-#[derive(Clone, Debug)]
-pub struct StartMap {
-    nx: usize,
-    ny: usize,
-    /// Marginal CDF over columns, unnormalised; `col_cdf[i]` = mass of columns 0..=i.
-    col_cdf: Vec<f64>,
-    /// Per column, the conditional CDF over its rows (unnormalised), nx * ny.
-    row_cdf: Vec<f64>,
-    length: f64,
-    width: f64,
-}
-
-impl StartMap {
-    /// Cells at or below `threshold` weigh nothing.
-    pub fn new(f: &Footprint, threshold: f64) -> Self {
-        let (nx, ny) = (f.nx, f.ny);
-        let mut row_cdf = vec![0.0; nx * ny];
-        let mut col_cdf = vec![0.0; nx];
-        let mut acc_cols = 0.0;
-        for i in 0..nx {
-            let mut acc = 0.0;
-            for j in 0..ny {
-                let d = f.cell(i, j) as f64;
-                if d > threshold {
-                    acc += d;
-                }
-                row_cdf[i * ny + j] = acc;
-            }
-            acc_cols += acc;
-            col_cdf[i] = acc_cols;
-        }
-        Self { nx, ny, col_cdf, row_cdf, length: f.length, width: f.width }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.col_cdf.last().is_none_or(|&m| m <= 0.0)
-    }
-
-    /// The point (u, v), curtain frame, km, for (xi_1, xi_2) in [0, 1)^2.
-    pub fn map(&self, xi1: f64, xi2: f64) -> (f64, f64) {
-        let total = self.col_cdf[self.nx - 1];
-        let x = xi1 * total;
-        let i = self.col_cdf.partition_point(|&c| c <= x).min(self.nx - 1);
-        // Skip empty columns the partition point can land on only at x = 0.
-        let before = if i > 0 { self.col_cdf[i - 1] } else { 0.0 };
-        let mass = self.col_cdf[i] - before;
-        let fu = if mass > 0.0 { ((x - before) / mass).clamp(0.0, 1.0) } else { 0.5 };
-        let rows = &self.row_cdf[i * self.ny..(i + 1) * self.ny];
-        let y = xi2 * rows[self.ny - 1];
-        let j = rows.partition_point(|&c| c <= y).min(self.ny - 1);
-        let below = if j > 0 { rows[j - 1] } else { 0.0 };
-        let m = rows[j] - below;
-        let fv = if m > 0.0 { ((y - below) / m).clamp(0.0, 1.0) } else { 0.5 };
-        let (du, dv) = (self.length / self.nx as f64, self.width / self.ny as f64);
-        (-0.5 * self.length + (i as f64 + fu) * du, -0.5 * self.width + (j as f64 + fv) * dv)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -841,54 +771,6 @@ mod tests {
             let f = simulate_at(&c, &p, &anim, 7, k as f64 * 17.0);
             let d = ((f.center[0] - c.center[0]).powi(2) + (f.center[1] - c.center[1]).powi(2)).sqrt();
             assert!(d <= anim.drift_km + 1e-9);
-        }
-    }
-
-    /// The start map's oracle: mapping a uniform grid of (xi1, xi2) must put
-    /// into each cell a share of points equal to its share of the mass (cells
-    /// above threshold only). With an n x n stratified grid the column gets
-    /// n c +- 1 points across (c its share of the mass) and the cell
-    /// n q +- 1 of them along (q its share of the column), so the count is
-    /// exact to a relative 1 / (n c) + 1 / (n q) (plus a point for rounding).
-    #[test]
-    fn start_map_follows_the_density_and_is_continuous() {
-        let f = simulate(&Curtain::default(), &FootprintParams { resolution: [64, 24], steps: 4, pressure_iterations: 20, ..small_params() }, 3);
-        let thr = 0.03;
-        let m = StartMap::new(&f, thr);
-        let n = 2000;
-        let mut counts = vec![0usize; f.nx * f.ny];
-        let (du, dv) = f.cell_size();
-        for a in 0..n {
-            for b in 0..n {
-                let (u, v) = m.map((a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64);
-                let i = ((u + 0.5 * f.length) / du).floor() as usize;
-                let j = ((v + 0.5 * f.width) / dv).floor() as usize;
-                counts[j * f.nx + i] += 1;
-            }
-        }
-        let total: f64 = f.data.iter().map(|&d| d as f64).filter(|&d| d > thr).sum();
-        for (k, &d) in f.data.iter().enumerate() {
-            let share = if d as f64 > thr { d as f64 / total } else { 0.0 };
-            let got = counts[k] as f64 / (n * n) as f64;
-            if share == 0.0 {
-                assert_eq!(counts[k], 0, "cell {k} below threshold got points");
-            } else {
-                let i = k % f.nx;
-                let col: f64 = (0..f.ny).map(|j| f.cell(i, j) as f64).filter(|&d| d > thr).sum::<f64>();
-                let (c, q) = (col / total, d as f64 / col);
-                let tol = share * (1.0 / (n as f64 * c) + 1.0 / (n as f64 * q)) + 1.0 / (n * n) as f64;
-                assert!((got - share).abs() <= tol, "cell {k}: share {share}, got {got}, tolerance {tol}");
-            }
-        }
-        // Continuity in the footprint: scaling every value keeps every point.
-        let mut g = f.clone();
-        for d in &mut g.data {
-            *d *= 0.5;
-        }
-        let m2 = StartMap::new(&g, thr * 0.5);
-        for &(a, b) in &[(0.1, 0.2), (0.5, 0.5), (0.93, 0.07)] {
-            let (p, q) = (m.map(a, b), m2.map(a, b));
-            assert!((p.0 - q.0).abs() < 1e-9 && (p.1 - q.1).abs() < 1e-9);
         }
     }
 

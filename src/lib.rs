@@ -4,8 +4,8 @@
 //! scene -> footprint -> beams -> photons -> grids -> files (vdb, usd),
 //! and the renderer reads grids only.
 //!
-//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`, `camera`) know nothing of
-//! the stages above them.
+//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`, `camera`,
+//! `magnetic`, `deposit`) know nothing of the stages above them.
 
 pub mod animation;
 pub mod atmosphere;
@@ -16,9 +16,12 @@ pub mod budget;
 pub mod fang;
 pub mod beams;
 pub mod camera;
+pub mod csda;
+pub mod deposit;
 pub mod footprint;
 pub mod frames;
 pub mod grid;
+pub mod magnetic;
 pub mod memory;
 pub mod outputs;
 pub mod photons;

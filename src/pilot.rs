@@ -167,7 +167,7 @@ pub fn beams_for_noise(plan: &BakePlan, target: f64) -> Result<NoiseEstimate, Ba
     // The bake's own grid ("auto" resolved on the pilot's photons, which
     // sample the same distribution as the bake's).
     let (vs, _) = plan.voxel_size(&pa);
-    let grid = |photons: &[crate::beams::Photon]| pipeline::gather(plan, photons, vs, &NoProgress);
+    let grid = |photons: &[crate::deposit::Photon]| pipeline::gather(plan, photons, vs, &NoProgress);
     let pilot_noise = split_noise(&grid(&pa), &grid(&pb)).sqrt();
     let q = m / 4;
     let qa = pipeline::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;

@@ -38,10 +38,12 @@
 //! `photons.radius_km` is read in one place, [`KernelRadius::of`].
 
 use crate::atmosphere::Atmosphere;
-use crate::beams::{self, BeamError, BeamStats, Field, Photon, TraceParams, Traced};
+use crate::beams::{self, BeamError, BeamStats, TraceParams, Traced};
 use crate::camera::{CameraError, CameraModel};
+use crate::deposit::Photon;
 use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf, Transform};
+use crate::magnetic::MagneticField;
 use crate::photons::{self, RadiusField};
 use crate::progress::Progress;
 use crate::prune::{self, PruneStats};
@@ -507,7 +509,7 @@ pub struct BakePlan {
     pub footprint_seconds: f64,
     pub atmosphere: Atmosphere,
     pub colour_table: ColourTable,
-    pub field: Field,
+    pub field: MagneticField,
     pub kernel: KernelRadius,
     pub radius: RadiusField,
 }
@@ -550,7 +552,7 @@ impl BakePlan {
                 (a, c)
             }
         };
-        let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
+        let field = MagneticField::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
         let kernel = KernelRadius::of(&scene.photons);
         let radius = radius_field(kernel, &scene.photons, field.b, scene.beams.top_km, scene.seed);
         BakePlan {

@@ -16,7 +16,8 @@
 use crate::atmosphere::Atmosphere;
 use crate::bake::BakeError;
 use crate::pipeline::BakePlan;
-use crate::beams::{self, BeamStats, StepDeposit};
+use crate::beams::{self, BeamStats};
+use crate::deposit::StepDeposit;
 use crate::fang::KEV_PER_ION_PAIR;
 use crate::progress::Progress;
 use crate::scene::Scene;

@@ -5,10 +5,9 @@
 //! density of the footprint's flux: the piecewise-constant density `f` of
 //! the cells above threshold, uniform inside each cell.
 //!
-//! - `random` (the estimator before issue 10): independent points, a cell
-//!   drawn from the flux CDF then a uniform point in it
-//!   ([`crate::beams::FootprintCdf`]). The number of starts in a region of
-//!   expected count `n` is binomial, `n +- sqrt(n)`: Poisson noise of the
+//! - `random`: independent points, two uniform random numbers mapped
+//!   through the footprint's [`StartMap`]. The number of starts in a region
+//!   of expected count `n` is binomial, `n +- sqrt(n)`: Poisson noise of the
 //!   start positions that no kernel removes.
 //! - `stratified` (default): beam `i` takes point `i` of the R2 sequence
 //!   (Roberts 2018, "The unreasonable effectiveness of quasirandom
@@ -20,13 +19,23 @@
 //!   flux distribution: `x_1` through the marginal CDF of the columns (along
 //!   the curtain, u), `x_2` through the conditional CDF of the rows of that
 //!   column (across it, v), and the remainders place the point inside the
-//!   cell (the inversion of pbrt's `PiecewiseConstant2D`). The map is
-//!   monotone in each coordinate, so every cell is the image of an
-//!   axis-aligned box of the unit square whose area is the cell's share of
-//!   the flux, and the count of starts in it is off by the sequence's
+//!   cell ([`StartMap`], the inversion of pbrt's `PiecewiseConstant2D`).
+//!   The map is monotone in each coordinate, so every cell is the image of
+//!   an axis-aligned box of the unit square whose area is the cell's share
+//!   of the flux, and the count of starts in it is off by the sequence's
 //!   discrepancy (`O(log N)` points) instead of `sqrt(n)`.
 //!
-//! Each block of 2^40 indices has its own shift (`crate::beams`): the
+//! Two samplers of the flux density live here, and they differ:
+//! - [`StartMap`] (every bake, both modes): a continuous map of the unit
+//!   square, so a beam with a fixed point moves with its footprint from
+//!   frame to frame and the R2 points keep their stratification.
+//! - [`FootprintCdf`] (no bake uses it): one flat CDF over the cells in row
+//!   order and a uniform point in the drawn cell, three random numbers per
+//!   start; not continuous in the footprint (a change in one cell shifts
+//!   every later start), and an independent construction of the same
+//!   density: the tests' reference sampler and random control.
+//!
+//! Each block of 2^40 indices has its own shift ([`UnitPoints`]): the
 //! pilot's halves (`crate::pilot`) are then independent randomisations, so
 //! their difference measures the variance of a stratified bake.
 //!
@@ -35,6 +44,10 @@
 //! second half at 2^40): beam `i` is the same beam whatever the beam count,
 //! chunking or thread count, so a beam keeps its identity across frames of
 //! an animation.
+
+use crate::footprint::Footprint;
+use crate::scene::BeamStarts;
+use rand::Rng;
 
 /// R2's generator in 64-bit fixed point: `alpha * 2^64` for
 /// `alpha = (1/g, 1/g^2)`, g = 1.324717957244746 (the plastic number).
@@ -57,11 +70,169 @@ pub fn shift(parts: &[u64]) -> [u64; 2] {
     [a, crate::rng::splitmix64(a)]
 }
 
+/// The unit-square point of each beam of one curtain (`beams.starts`),
+/// which its [`StartMap`] takes to the footprint. Beam `index` draws two
+/// numbers from its own stream in either mode (so the rest of its stream,
+/// energy and path, is the same in both) and, stratified, takes R2 point
+/// `index` instead. Each block of 2^40 indices (the pilot's independent
+/// halves live in blocks 1-3) has its own Cranley-Patterson shift, so the
+/// blocks are independent randomisations of the sequence; block 0 (every
+/// bake) keeps the plain shift of `seeds`.
+#[derive(Clone, Copy, Debug)]
+pub struct UnitPoints {
+    mode: BeamStarts,
+    seeds: [u64; 3],
+    shift0: [u64; 2],
+}
+
+impl UnitPoints {
+    /// `seeds`: the scene's seed, the curtain's seed and the stream tag.
+    pub fn new(mode: BeamStarts, seeds: [u64; 3]) -> Self {
+        Self { mode, seeds, shift0: shift(&seeds) }
+    }
+
+    fn shift(&self, index: u64) -> [u64; 2] {
+        match index >> 40 {
+            0 => self.shift0,
+            k => shift(&[self.seeds[0], self.seeds[1], self.seeds[2], k]),
+        }
+    }
+
+    /// Beam `index`'s point of [0, 1)^2, drawing two numbers from `r`.
+    pub fn point(&self, index: u64, r: &mut impl Rng) -> (f64, f64) {
+        let (xi1, xi2) = (r.random::<f64>(), r.random::<f64>());
+        match self.mode {
+            BeamStarts::Random => (xi1, xi2),
+            BeamStarts::Stratified => {
+                let [a, b] = r2(index, self.shift(index));
+                (a, b)
+            }
+        }
+    }
+}
+
+/// Where beams start: a continuous map from the unit square onto the
+/// footprint's cells above threshold, with density proportional to the
+/// footprint's (beams per area follow the energy flux).
+///
+/// Marginal-conditional inversion (Pharr, Jakob & Humphreys, PBRT 4th ed.,
+/// section A.5, "Sampling 2D functions"): xi_1 picks the column (u) through
+/// the marginal CDF of the column sums and lands at its linear position
+/// inside the column; xi_2 picks v through that column's conditional CDF,
+/// again linearly inside the cell. The map is continuous in the footprint's
+/// values, so as the footprint moves between frames a beam with fixed
+/// (xi_1, xi_2) moves with it instead of jumping (a flat CDF over all cells
+/// in row order, [`FootprintCdf`], would shift every beam when any upstream
+/// cell changes). The bake's only start sampler, `random` and `stratified`.
+#[derive(Clone, Debug)]
+pub struct StartMap {
+    nx: usize,
+    ny: usize,
+    /// Marginal CDF over columns, unnormalised; `col_cdf[i]` = mass of columns 0..=i.
+    col_cdf: Vec<f64>,
+    /// Per column, the conditional CDF over its rows (unnormalised), nx * ny.
+    row_cdf: Vec<f64>,
+    length: f64,
+    width: f64,
+}
+
+impl StartMap {
+    /// Cells at or below `threshold` weigh nothing.
+    pub fn new(f: &Footprint, threshold: f64) -> Self {
+        let (nx, ny) = (f.nx, f.ny);
+        let mut row_cdf = vec![0.0; nx * ny];
+        let mut col_cdf = vec![0.0; nx];
+        let mut acc_cols = 0.0;
+        for i in 0..nx {
+            let mut acc = 0.0;
+            for j in 0..ny {
+                let d = f.cell(i, j) as f64;
+                if d > threshold {
+                    acc += d;
+                }
+                row_cdf[i * ny + j] = acc;
+            }
+            acc_cols += acc;
+            col_cdf[i] = acc_cols;
+        }
+        Self { nx, ny, col_cdf, row_cdf, length: f.length, width: f.width }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.col_cdf.last().is_none_or(|&m| m <= 0.0)
+    }
+
+    /// The point (u, v), curtain frame, km, for (xi_1, xi_2) in [0, 1)^2.
+    pub fn map(&self, xi1: f64, xi2: f64) -> (f64, f64) {
+        let total = self.col_cdf[self.nx - 1];
+        let x = xi1 * total;
+        let i = self.col_cdf.partition_point(|&c| c <= x).min(self.nx - 1);
+        // Skip empty columns the partition point can land on only at x = 0.
+        let before = if i > 0 { self.col_cdf[i - 1] } else { 0.0 };
+        let mass = self.col_cdf[i] - before;
+        let fu = if mass > 0.0 { ((x - before) / mass).clamp(0.0, 1.0) } else { 0.5 };
+        let rows = &self.row_cdf[i * self.ny..(i + 1) * self.ny];
+        let y = xi2 * rows[self.ny - 1];
+        let j = rows.partition_point(|&c| c <= y).min(self.ny - 1);
+        let below = if j > 0 { rows[j - 1] } else { 0.0 };
+        let m = rows[j] - below;
+        let fv = if m > 0.0 { ((y - below) / m).clamp(0.0, 1.0) } else { 0.5 };
+        let (du, dv) = (self.length / self.nx as f64, self.width / self.ny as f64);
+        (-0.5 * self.length + (i as f64 + fu) * du, -0.5 * self.width + (j as f64 + fv) * dv)
+    }
+}
+
+/// Cumulative distribution over the footprint cells above threshold, each
+/// cell weighted by its density (beams per area follow the energy flux).
+///
+/// The same density as [`StartMap`], built differently: one flat CDF over
+/// the cells in row order, then a uniform point in the drawn cell (three
+/// random numbers per start, no unit-square map, so not continuous in the
+/// footprint and not stratifiable). No bake uses it: it is the independent
+/// reference the tests check [`StartMap`] and the stratified starts against.
+#[derive(Clone, Debug)]
+pub struct FootprintCdf {
+    cells: Vec<u32>,
+    cdf: Vec<f64>,
+}
+
+impl FootprintCdf {
+    pub fn new(f: &Footprint, threshold: f64) -> Self {
+        let mut cells = Vec::new();
+        let mut cdf = Vec::new();
+        let mut acc = 0.0;
+        for (k, &d) in f.data.iter().enumerate() {
+            if d as f64 > threshold {
+                acc += d as f64;
+                cells.push(k as u32);
+                cdf.push(acc);
+            }
+        }
+        Self { cells, cdf }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.cells.is_empty()
+    }
+
+    /// A point (u, v) in the curtain frame: a cell drawn from the CDF, then a
+    /// uniform point inside it (no rejection).
+    pub fn sample(&self, f: &Footprint, r: &mut impl Rng) -> (f64, f64) {
+        let total = *self.cdf.last().unwrap_or(&0.0);
+        let x = r.random::<f64>() * total;
+        let i = self.cdf.partition_point(|&c| c <= x).min(self.cells.len() - 1);
+        let k = self.cells[i] as usize;
+        let (ci, cj) = (k % f.nx, k / f.nx);
+        let (du, dv) = f.cell_size();
+        let u = -0.5 * f.length + (ci as f64 + r.random::<f64>()) * du;
+        let v = -0.5 * f.width + (cj as f64 + r.random::<f64>()) * dv;
+        (u, v)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::beams::FootprintCdf;
-    use crate::footprint::{Footprint, StartMap};
     use crate::scene::{Curtain, FootprintParams};
 
     fn footprint() -> Footprint {
@@ -196,5 +367,83 @@ mod tests {
         assert_eq!(cell_of(&fp, m.map(0.5, 0.1)), (3, 0));
         assert_eq!(cell_of(&fp, m.map(0.5, 0.3)), (3, 1));
         assert!(StartMap::new(&fp, 5.0).is_empty());
+    }
+
+    /// The start map's oracle: mapping a uniform grid of (xi1, xi2) must put
+    /// into each cell a share of points equal to its share of the mass (cells
+    /// above threshold only). With an n x n stratified grid the column gets
+    /// n c +- 1 points across (c its share of the mass) and the cell
+    /// n q +- 1 of them along (q its share of the column), so the count is
+    /// exact to a relative 1 / (n c) + 1 / (n q) (plus a point for rounding).
+    #[test]
+    fn start_map_follows_the_density_and_is_continuous() {
+        let f = crate::footprint::simulate(&Curtain::default(), &FootprintParams { resolution: [64, 24], steps: 4, pressure_iterations: 20, ..FootprintParams::default() }, 3);
+        let thr = 0.03;
+        let m = StartMap::new(&f, thr);
+        let n = 2000;
+        let mut counts = vec![0usize; f.nx * f.ny];
+        let (du, dv) = f.cell_size();
+        for a in 0..n {
+            for b in 0..n {
+                let (u, v) = m.map((a as f64 + 0.5) / n as f64, (b as f64 + 0.5) / n as f64);
+                let i = ((u + 0.5 * f.length) / du).floor() as usize;
+                let j = ((v + 0.5 * f.width) / dv).floor() as usize;
+                counts[j * f.nx + i] += 1;
+            }
+        }
+        let total: f64 = f.data.iter().map(|&d| d as f64).filter(|&d| d > thr).sum();
+        for (k, &d) in f.data.iter().enumerate() {
+            let share = if d as f64 > thr { d as f64 / total } else { 0.0 };
+            let got = counts[k] as f64 / (n * n) as f64;
+            if share == 0.0 {
+                assert_eq!(counts[k], 0, "cell {k} below threshold got points");
+            } else {
+                let i = k % f.nx;
+                let col: f64 = (0..f.ny).map(|j| f.cell(i, j) as f64).filter(|&d| d > thr).sum::<f64>();
+                let (c, q) = (col / total, d as f64 / col);
+                let tol = share * (1.0 / (n as f64 * c) + 1.0 / (n as f64 * q)) + 1.0 / (n * n) as f64;
+                assert!((got - share).abs() <= tol, "cell {k}: share {share}, got {got}, tolerance {tol}");
+            }
+        }
+        // Continuity in the footprint: scaling every value keeps every point.
+        let mut g = f.clone();
+        for d in &mut g.data {
+            *d *= 0.5;
+        }
+        let m2 = StartMap::new(&g, thr * 0.5);
+        for &(a, b) in &[(0.1, 0.2), (0.5, 0.5), (0.93, 0.07)] {
+            let (p, q) = (m.map(a, b), m2.map(a, b));
+            assert!((p.0 - q.0).abs() < 1e-9 && (p.1 - q.1).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn start_points_land_only_above_threshold() {
+        let c = Curtain::default();
+        let fpp = FootprintParams { resolution: [128, 48], steps: 6, pressure_iterations: 30, ..FootprintParams::default() };
+        let fp = crate::footprint::simulate(&c, &fpp, 9);
+        let thr = 0.2;
+        let cdf = FootprintCdf::new(&fp, thr);
+        let mut r = crate::rng::rng(&[4]);
+        let mut hits = vec![0usize; fp.data.len()];
+        for _ in 0..20_000 {
+            let (u, v) = cdf.sample(&fp, &mut r);
+            let (x, y) = fp.to_world(u, v);
+            assert!(fp.cell_value_world(x, y) > thr);
+            let (du, dv) = fp.cell_size();
+            let k = ((v + 0.5 * fp.width) / dv) as usize * fp.nx + ((u + 0.5 * fp.length) / du) as usize;
+            hits[k] += 1;
+        }
+        // Cells are drawn in proportion to density: compare the hit share of
+        // the densest half of the eligible mass with its expected share, to
+        // 5 sigma of a binomial with N = 20000.
+        let mut eligible: Vec<(f64, usize)> = fp.data.iter().enumerate().filter(|(_, &d)| d as f64 > thr).map(|(k, &d)| (d as f64, k)).collect();
+        eligible.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let total: f64 = eligible.iter().map(|e| e.0).sum();
+        let top: Vec<_> = eligible.iter().take(eligible.len() / 4).collect();
+        let p: f64 = top.iter().map(|e| e.0).sum::<f64>() / total;
+        let got = top.iter().map(|e| hits[e.1]).sum::<usize>() as f64 / 20_000.0;
+        let sigma = (p * (1.0 - p) / 20_000.0).sqrt();
+        assert!((got - p).abs() < 5.0 * sigma, "{got} vs {p} +- {sigma}");
     }
 }

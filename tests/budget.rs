@@ -5,7 +5,7 @@
 //! photon term counts at least the photons the bake holds.
 
 use aurora::bake;
-use aurora::beams::Photon;
+use aurora::deposit::Photon;
 use aurora::budget;
 use aurora::progress::NoProgress;
 use aurora::scene::{Deposition, KernelRadius};

@@ -24,7 +24,7 @@
 //! 4. V projected back through the camera, compared with -B projected.
 
 use aurora::bake::bake;
-use aurora::beams::Field;
+use aurora::magnetic::MagneticField;
 use aurora::camera::CameraModel;
 use aurora::progress::NoProgress;
 use aurora::render::{render, Integration, RenderSettings, Volume};
@@ -191,7 +191,7 @@ fn corona_vanishing_point_is_the_magnetic_zenith() {
             sum += y;
         }
     }
-    let field = Field::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
+    let field = MagneticField::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
     let foot = field.foot(c / sum, 0.0);
     scene.camera = dome(foot.x, foot.y);
     let zenith = -field.b;

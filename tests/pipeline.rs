@@ -37,7 +37,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
                 photons.extend(part.photons);
             }
             assert_eq!(photons.len(), whole.photons.len(), "{starts:?} {cuts:?}");
-            let bytes = |p: &[aurora::beams::Photon]| {
+            let bytes = |p: &[aurora::deposit::Photon]| {
                 p.iter()
                     .flat_map(|p| p.position.iter().chain(&p.end).chain(&p.power).flat_map(|x| x.to_bits().to_le_bytes()).collect::<Vec<_>>())
                     .collect::<Vec<u8>>()

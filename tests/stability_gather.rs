@@ -19,7 +19,7 @@
 //! it against this prediction, and asserts its shape: up at both ends, a
 //! minimum in between, between the photon spacing and the thickness.
 
-use aurora::beams::Photon;
+use aurora::deposit::Photon;
 use aurora::photons::{Kernel, PhotonMap};
 use glam::DVec3;
 use rand::Rng;

@@ -43,7 +43,7 @@
 use super::chart::Measurement;
 use super::reduced::volume_camera;
 use crate::bake::{self, BakeError};
-use crate::beams::Photon;
+use crate::deposit::Photon;
 use crate::grid::Grid;
 use crate::pipeline::{self, BakePlan, KernelRadius};
 use crate::progress::NoProgress;
