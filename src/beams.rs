@@ -48,7 +48,7 @@
 //! `P_c = F * int f dA` over the cells above threshold. Its `N_c` beams (its
 //! `beam_weight` share of `beams.count`) each carry `P_c / N_c`. A beam's
 //! energy E is drawn from the *energy-flux* distribution of a Maxwellian:
-//! the number flux is `phi(E) ~ E exp(-E/E0)` (the brief's Gamma(2, E0)), so
+//! the number flux is `phi(E) ~ E exp(-E/E0)` (a Gamma(2, E0) density), so
 //! the energy flux is `E phi(E) ~ Gamma(3, E0)`; since every beam carries
 //! the same power, energies must follow the energy flux, else hard electrons
 //! would be under-weighted by E / <E>. A share `soft_fraction` of the energy

@@ -5,7 +5,7 @@
 //! density of the footprint's flux: the piecewise-constant density `f` of
 //! the cells above threshold, uniform inside each cell.
 //!
-//! - `random` (the estimator before issue 10): independent points, a cell
+//! - `random` (for comparison): independent points, a cell
 //!   drawn from the flux CDF then a uniform point in it
 //!   ([`crate::beams::FootprintCdf`]). The number of starts in a region of
 //!   expected count `n` is binomial, `n +- sqrt(n)`: Poisson noise of the
