@@ -7,7 +7,7 @@ Volume (emission-absorption, no scattering unless asked):
 
 so along a ray L = integral Le(s) T(s) ds + T L_behind with
 T(s) = exp(-integral_0^s sigma_t). Built from one Principled Volume
-(measured in ../shared/notes/cycles-conventions.md):
+(measured: docs/guide.md, "How Cycles reads the VDB"):
 - Density input = density_scale multiplies the `density` grid (Density
   Attribute), so sigma_t = density_scale * density;
 - Color = 0 turns scattering off; Absorption Color = 0 makes all of sigma_t

@@ -1,6 +1,6 @@
 """Cycles settings that make a render comparable with `aurora render`.
 
-Each one is a measured fact from ../shared/notes/cycles-conventions.md or
+Each one is a measured fact (docs/guide.md, "How Cycles reads the VDB") or
 from this add-on's tests:
 - film: Standard view transform, no look, exposure 0, gamma 1 (the EXR is
   linear anyway); film_transparent so alpha = 1 - T (the background then goes

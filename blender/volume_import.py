@@ -17,7 +17,7 @@ the scene's frame range and fps to the sequence's (fps from the frame's
 `aurora.NNNN.json`, or the stage's timeCodesPerSecond), and the current frame
 to the imported file's (a stage: its first frame).
 
-Render accuracy (../shared/notes/cycles-conventions.md): precision FULL (HALF
+Render accuracy (docs/guide.md, "How Cycles reads the VDB"): precision FULL (HALF
 is off by up to 0.34%), clipping 0 (the default 0.001 drops faint emission).
 """
 

@@ -2,7 +2,7 @@
 //! the default preset): traces once, then runs the gather and each part of
 //! the finish (scan, prune, density, Cycles shell) `--reps` times, printing
 //! wall and CPU seconds of each and the load average. The preview's beams
-//! edit pays trace + gather + finish (issue 14 part 4).
+//! edit pays trace + gather + finish.
 //!
 //! `cargo run --release --example gather_bench -- [SCENE] [--threads N] [--reps K] [--beams B]`
 //!

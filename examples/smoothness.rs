@@ -1,4 +1,4 @@
-//! Smoothness benchmark (issue 10, first "Done when" item): how far the
+//! Smoothness benchmark: how far the
 //! default bake's picture is from a converged one, and what the new
 //! estimators cost, measured side by side in one run.
 //!
@@ -22,8 +22,7 @@
 //!
 //! `--time-only` stops after the bake times (no references, no pictures).
 //! `--gather` overrides the new estimators' gather (default: the scene's).
-//! The old estimators always gather with the kd-tree, the default before
-//! issue 10.
+//! The old estimators always gather with the kd-tree, their own default.
 //!
 //! With `--out`, writes `smoothness.json`, `smoothness.txt` and the four
 //! pictures (PNG) there.

@@ -31,8 +31,7 @@
 //!
 //! The time scales behind the defaults (AnimationParams): rays up to about
 //! 25 km/s along the arc, spirals drifting about 4 km/s, surges about 2 km/s,
-//! pulsating aurora with periods of a few s to 20 s, most often 6-10 s
-//! (`../shared/notes/validation-and-animation.md`).
+//! pulsating aurora with periods of a few s to 20 s, most often 6-10 s.
 
 use crate::rng;
 use crate::scene::AnimationParams;

@@ -367,8 +367,8 @@ mod tests {
         assert!((250.0..275.0).contains(&h), "{h}");
     }
 
-    // ---- Oracles added for the mutation report (issue 11 part 8,
-    // docs/mutants/REPORT.md).
+    // ---- Oracles added for the mutation report
+    // (docs/mutants/REPORT.md).
 
     #[test]
     fn scale_height_is_minus_the_inverse_log_slope_of_density() {

@@ -7,7 +7,7 @@
 //! `beams.target_noise > 0`), then trace, gather and finish. [`bake_plan`]
 //! does the same from a plan already built (frame sequences reuse one).
 //! The stage functions, the types and the helpers live in
-//! [`crate::pipeline`] and are re-exported here under their old paths.
+//! [`crate::pipeline`] and are re-exported here.
 //!
 //! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
 //! camera's choice, [`auto_voxel_size`]: one pixel at the nearest aurora,

@@ -276,7 +276,7 @@ impl SpectrumDeposition {
     /// preview edit ask for the same few spectra, so the tables are kept:
     /// keyed by the three parameters' bits (the same parameters give the
     /// same table bit for bit), at most [`SPECTRUM_CACHE`] of them (a new
-    /// one beyond that empties the cache: a preview session editing
+    /// one beyond that empties the cache: a watching preview editing
     /// energies would otherwise grow it without bound).
     pub fn curtain(char_energy_kev: f64, soft_fraction: f64, soft_energy_kev: f64) -> std::sync::Arc<Self> {
         use std::collections::HashMap;

@@ -1,5 +1,5 @@
 //! Frame ranges, frame file names and shards: the contract every render farm
-//! speaks (see `../shared/notes/validation-and-animation.md`, "Farms").
+//! speaks (docs/guide.md, "Farms").
 //!
 //! - **Range syntax** ([`parse_range`]): Open Job Description's integer range
 //!   expression (specification `jobtemplate-2023-09`, "RangeExpressionString";

@@ -7,7 +7,7 @@
 //! into the 5-4-3 hierarchy, sorted the way OpenVDB's `std::map` orders them.
 //!
 //! Conventions (OpenVDB's, and what Cycles uses; see
-//! `../shared/notes/cycles-conventions.md`):
+//! docs/guide.md, "How Cycles reads the VDB"):
 //! - voxel (i, j, k) is centred at the *index point* (i, j, k): world position
 //!   `voxel_size * (i, j, k) + translation`, no half-voxel offset;
 //! - inactive voxels read as the background value;

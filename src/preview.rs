@@ -41,7 +41,7 @@
 //! 2. the refined one: the preview size at the preview's spp
 //!    ([`DEFAULT_SPP`] = 4, two antithetic pairs; `aurora preview --spp`),
 //!    capped by the scene's `render.spp`. **The edit-to-picture targets
-//!    (issue 14: <= 1 s after a render edit, <= 3 s after a beams edit) are
+//!    (<= 1 s after a render edit, <= 3 s after a beams edit, on 2 cores) are
 //!    judged on this picture.**
 //! 3. when the scene's `render.spp` is larger, the picture at the scene's
 //!    spp, the very image `aurora render` makes of `aurora bake` at that
@@ -57,8 +57,8 @@
 //!
 //! Where an edit's time goes on the default scene at 320x180, 2 cores
 //! (`cargo run --release --example preview_bench -- --threads 2`,
-//! `benchmarks/preview/default_320x180.txt`, numbers in the README's
-//! Preview section): a render edit is the pixel loop of picture 2 (230 k
+//! `benchmarks/preview/2026-11-29-default-320x180.txt`, numbers in
+//! docs/benchmarks.md): a render edit is the pixel loop of picture 2 (230 k
 //! camera rays at 4 spp) and the coarse picture; a `[volume]` edit adds
 //! the medium's build; a beams edit is trace, the gather's input (merge,
 //! kernels), coarse picture, gather (the largest part: the splat's

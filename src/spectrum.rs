@@ -487,8 +487,8 @@ mod tests {
         assert_eq!(t.rgb(1e4), [1.0, 0.0, 0.5]);
     }
 
-    // ---- Oracles added for the mutation report (issue 11 part 8,
-    // docs/mutants/REPORT.md): closed forms, literature numbers and
+    // ---- Oracles added for the mutation report
+    // (docs/mutants/REPORT.md): closed forms, literature numbers and
     // conservation, not the code's constants read back.
 
     #[test]

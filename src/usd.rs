@@ -1,7 +1,7 @@
 //! USD stage for the baked volume: `aurora.usda` beside the VDB, one
 //! `UsdVol.Volume` prim whose fields are `OpenVDBAsset` prims pointing into
 //! the single VDB file (Blender keeps only one file per volume; see
-//! `../shared/notes/cycles-conventions.md`).
+//! docs/guide.md, "How Cycles reads the VDB").
 //!
 //! A frame sequence (`aurora bake --frames`) gets one stage whose fields'
 //! `filePath` is time-sampled, one sample per frame file

@@ -1,4 +1,4 @@
-//! Issue 10's power criterion on `bake.json`: for the default scene the
+//! The power balance in `bake.json`: for the default scene the
 //! deposited power plus the backscatter Fang's parameterisation states
 //! matches the electron power within 1 %, per curtain and in total, and
 //! the grid holds the deposit above the beams' start (the soft spectrum's

@@ -1,4 +1,4 @@
-//! No panic, on anything (issue: hardening, part 1): every numeric scene key
+//! No panic, on anything: every numeric scene key
 //! and every command-line number is driven through zero, tiny, huge,
 //! negative, NaN and the infinities (and, for integer keys, through the edges
 //! of the integer range), the other keys kept small, and every run must end
@@ -288,7 +288,7 @@ fn every_command_line_number_at_its_extremes_exits_0_or_2() {
     assert!(failures.is_empty(), "{} of {n} cases failed:\n{}", failures.len(), failures.join("\n"));
 }
 
-/// The soak (issue: hardening, part 7): 200 seeded random scenes, every
+/// The soak: 200 seeded random scenes, every
 /// numeric key drawn from its valid range as `aurora scene --schema` states
 /// it (uniform, or log-uniform over a range wider than 100x; open ranges
 /// within a decade of the default), the sizes capped (beams, footprint and

@@ -1,4 +1,4 @@
-//! Outputs are ours and whole (issue: hardening, part 6), through the binary:
+//! Outputs are ours and whole, through the binary:
 //! device nodes, FIFOs and symlinks given as outputs survive; a killed bake's
 //! temporaries are gone once the next bake has run; two bakes into one folder
 //! never leave one's VDB beside the other's report; the output folder is

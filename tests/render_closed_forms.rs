@@ -1,6 +1,6 @@
 //! Rendered pixels against closed forms (spp = 1, no terrain: deterministic).
 //!
-//! Tolerance: 1e-4 relative, as the issue asks. The renderer's own error is
+//! Tolerance: 1e-4 relative, the bound the renderer states. Its own error is
 //! far smaller: optical depth is integrated exactly in f64 from the same f32
 //! voxel values, emission with Gauss-Legendre of relative error < 1e-9 (see
 //! `segment.rs`), and pixels are stored as f32 (relative rounding 6e-8).

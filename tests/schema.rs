@@ -1,11 +1,23 @@
-//! The add-on reads the scene schema from a committed copy
-//! (blender/scene_schema.json); this fails when it differs from what
-//! `aurora scene --schema` prints (regenerate it with
-//! `aurora scene --schema > blender/scene_schema.json`).
+//! One schema, three readers. `aurora scene --schema` (every scene key, its
+//! default and its allowed range, as JSON) is the source; the Blender
+//! add-on reads a committed copy (blender/scene_schema.json) and people read
+//! docs/scene.md, a table per section rendered here from the same JSON plus
+//! each key's unit and description ([`KEYS`]). Both tests fail when their
+//! file differs from what the binary prints:
+//! - `aurora scene --schema > blender/scene_schema.json` regenerates the copy;
+//! - `AURORA_UPDATE_DOCS=1 cargo test --release --test schema` rewrites
+//!   docs/scene.md.
+//!
+//! A key in the schema without a row in [`KEYS`], or a row naming no key,
+//! fails the docs test: a new key is documented the day it lands.
+
+use serde_json::{Map, Value};
+use std::fmt::Write as _;
+use std::path::Path;
 
 #[test]
 fn committed_schema_matches_the_binary() {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/scene_schema.json");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/scene_schema.json");
     let committed = std::fs::read_to_string(&path).expect("blender/scene_schema.json");
     let now = aurora::scene::schema::schema_json();
     assert!(
@@ -16,4 +28,271 @@ fn committed_schema_matches_the_binary() {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_aurora")).args(["scene", "--schema"]).output().unwrap();
     assert!(out.status.success());
     assert_eq!(String::from_utf8(out.stdout).unwrap(), now);
+}
+
+#[test]
+fn scene_doc_matches_the_schema() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_aurora")).args(["scene", "--schema"]).output().unwrap();
+    assert!(out.status.success());
+    let schema: Value = serde_json::from_slice(&out.stdout).expect("the schema is JSON");
+    let doc = scene_doc(&schema);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/scene.md");
+    if std::env::var_os("AURORA_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &doc).expect("write docs/scene.md");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    if committed != doc {
+        let line = committed.lines().zip(doc.lines()).position(|(a, b)| a != b).unwrap_or(committed.lines().count().min(doc.lines().count()));
+        panic!(
+            "docs/scene.md is stale (first difference at line {}): regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema",
+            line + 1
+        );
+    }
+}
+
+/// The sections in the order a scene file gives them: schema name (`""`
+/// for the top level), heading, and what the section is.
+const SECTIONS: &[(&str, &str, &str)] = &[
+    ("", "Top level", "Keys outside any table."),
+    ("curtain", "`[[curtain]]`", "One table per auroral curtain: where its footprint lies and how hard it is driven. A scene without any `[[curtain]]` has the default scene's three; the defaults below are those of one table that omits a key."),
+    ("footprint", "`[footprint]`", "The 2D stable-fluids simulation (Stam 1999) that makes each curtain's footprint, bent along a low-frequency noise curve."),
+    ("beams", "`[beams]`", "Electron beams traced down the geomagnetic field with random deflections (Baranoski et al. 2000), depositing energy by Fang et al. (2010)."),
+    ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in."),
+    ("colour", "`[colour]`", "How deposited energy becomes colour."),
+    ("photons", "`[photons]`", "Volumetric photon mapping: a Gaussian-kernel density estimate of the emission."),
+    ("grid", "`[grid]`", "The sparse grids written to the VDB."),
+    ("camera", "`[camera]`", "The camera of `aurora render` and of the Blender scene; pruning and the automatic voxel size follow it."),
+    ("render", "`[render]`", "The reference renderer's image."),
+    ("volume", "`[volume]`", "The volume material, as `aurora render` and the add-on's Cycles material apply it."),
+    ("background", "`[background]`", "What is seen behind the volume."),
+    ("terrain", "`[terrain]`", "The ground, lit by the aurora only (emissive shadow rays)."),
+    ("animation", "`[animation]`", "Motion in time, closed form in t, so any frame costs one bake; every motion key at 0 gives identical frames."),
+];
+
+/// Every key: section, key, unit (`""`: none), description. The order
+/// within a section is the table's.
+const KEYS: &[(&str, &str, &str, &str)] = &[
+    ("", "seed", "", "master seed: every random stream is derived from it and an index"),
+    ("curtain", "center", "km", "centre of the footprint on the ground plane, `[x, y]`"),
+    ("curtain", "length", "km", "length of the footprint box along the curtain's axis"),
+    ("curtain", "width", "km", "width of the footprint box across the axis (room for folds and bends)"),
+    ("curtain", "rotation_deg", "deg", "direction of the curtain's axis, counter-clockwise from +x"),
+    ("curtain", "energy_flux", "mW/m^2", "peak precipitating electron energy flux (1 mW/m^2 = 1 erg cm^-2 s^-1)"),
+    ("curtain", "char_energy_kev", "keV", "characteristic energy E0 of the Maxwellian electron spectrum: harder electrons reach lower"),
+    ("curtain", "soft_fraction", "", "share of the energy flux in a soft Maxwellian component (the electrons that light the red tops above 200 km)"),
+    ("curtain", "soft_energy_kev", "keV", "characteristic energy of the soft component"),
+    ("curtain", "beam_weight", "", "share of the scene's beams given to this curtain (a relative weight)"),
+    ("curtain", "bend_km", "km", "amplitude of the noise curve that bends the band (keep it below `width / 2`)"),
+    ("curtain", "seed", "", "seed offset, so that curtains differ"),
+    ("footprint", "resolution", "cells", "simulation grid along and across the curtain"),
+    ("footprint", "steps", "", "simulation steps"),
+    ("footprint", "dt", "cells", "time step (semi-Lagrangian advection: stable for any `dt`)"),
+    ("footprint", "pressure_iterations", "", "iterations of the pressure projection"),
+    ("footprint", "band_fraction", "", "initial band thickness, as a fraction of the footprint width"),
+    ("footprint", "velocity_waves", "", "sine periods of the initial velocity along the band"),
+    ("footprint", "velocity_amplitude", "cells per unit time", "amplitude of the initial velocity"),
+    ("footprint", "density_waves", "", "sine periods of the initial density modulation along the band"),
+    ("footprint", "bend_wavelength", "curtain lengths", "wavelength of the noise curve that bends the band"),
+    ("footprint", "threshold", "", "footprint density (of a peak of 1) below which no beam starts"),
+    ("beams", "count", "", "beams over all curtains; with `target_noise`, the most it may use"),
+    ("beams", "target_noise", "", "relative RMS noise of the emission grid to aim for (0 = off: use `count`): a pilot of 2 x 500 and 2 x 125 beams measures the scene's noise and sets the beam count from the law `noise^2 = a/N + b/N^1.5` fitted to them, at most `count`; `bake.json` `stats.noise` says what it measured and chose"),
+    ("beams", "top_km", "km", "altitude where beams start"),
+    ("beams", "top_noise_km", "km", "amplitude of the high-frequency 1D noise on the start height"),
+    ("beams", "top_noise_freq", "1/km", "spatial frequency of that noise along the curtain"),
+    ("beams", "alpha_d_deg", "deg", "upper bound alpha_D of the deflection angle"),
+    ("beams", "delta_alpha_deg", "deg", "width of the deflection range: alpha is uniform in [alpha_D - delta, alpha_D]"),
+    ("beams", "length_km", "km", "beam length L: a step is s = L dt u along B (u uniform)"),
+    ("beams", "dt", "", "step parameter: at most 1/dt deflections per beam (`csda` only: Fang beams go on until their deposition is complete)"),
+    ("beams", "b_inclination_deg", "deg", "the geomagnetic field's dip below the horizon (90 = vertical)"),
+    ("beams", "b_declination_deg", "deg", "azimuth of the field's horizontal part, from +y towards +x"),
+    ("beams", "deposition", "", "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
+    ("beams", "starts", "", "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
+    ("atmosphere", "model", "", "`nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15: `data/nrlmsis21.csv`, made by `tools/msis_table.py`) or `us1976` (U.S. Standard Atmosphere 1976, 80-500 km)"),
+    ("colour", "mode", "", "`physical` (the emission lines through the CIE 1931 colour matching functions) or `colormap` (the `colormap` table)"),
+    ("colour", "noise_km", "km", "amplitude of the low-frequency noise on the altitude used for colour (not intensity)"),
+    ("colour", "noise_freq", "1/km", "spatial frequency of that noise along the curtain"),
+    ("colour", "colormap", "km, linear Rec.709", "rows `[altitude_km, r, g, b]` (colour per unit deposited power), altitudes ascending, used when `mode = \"colormap\"`; the default is the 2014 report's look"),
+    ("photons", "radius_km", "km", "kernel radius r, the Gaussian's standard deviation"),
+    ("photons", "cutoff", "r", "the kernel is cut off at `cutoff` x r and renormalised"),
+    ("photons", "radius_noise", "", "relative amplitude of the medium-frequency 2D noise on the radius"),
+    ("photons", "radius_noise_freq", "1/km", "spatial frequency of that noise"),
+    ("photons", "gather", "", "`splat` (each photon adds its kernel to the voxels it covers), `kdtree` (each voxel gathers from a kd-tree: the same field) or `report2014` (the 2014 report's kernel-weighted average of colours, not a density estimate, for comparison)"),
+    ("photons", "kernel", "", "`segment` (each beam step's power spread along the step: the Gaussian convolved with the segment) or `point` (at the step's end, for comparison)"),
+    ("grid", "voxel_size", "km", "voxel edge, or `\"auto\"`: one voxel projects to about one pixel at the nearest aurora (never below half the kernel radius, never above twice its smallest value); `bake.json` says what it picked"),
+    ("grid", "density_a", "1/km", "extinction where the aurora is: `density = a exp(-b (h - base))`"),
+    ("grid", "density_b", "1/km", "fall-off of that extinction with altitude"),
+    ("grid", "density_base_km", "km", "base altitude of that extinction"),
+    ("grid", "half_emission", "", "store `emission` as half floats"),
+    ("grid", "cycles_shell", "", "a one-voxel shell of active zeros around the aurora, so that Cycles' biased volume mode renders its edges exactly, with or without the add-on (the field is unchanged)"),
+    ("grid", "compression", "", "VDB value compression; `blosc-active-mask` is OpenVDB's and Houdini's default (LZ4 with byte shuffle, about 8x faster to write than ZIP, the same size)"),
+    ("grid", "prune", "", "error budget of contribution-based pruning: the 8^3 blocks faintest in the camera's image are dropped while their share of the image's light stays within it (0 = keep all); `bake.json` `stats.prune` reports what went"),
+    ("camera", "position", "km", "camera position"),
+    ("camera", "look_at", "km", "the point the camera looks at"),
+    ("camera", "up", "", "up direction"),
+    ("camera", "projection", "", "`perspective`, `orthographic`, `fisheye` (equidistant, as Cycles' `FISHEYE_EQUIDISTANT`) or `equirectangular` (360 x 180 degrees, as Cycles' `EQUIRECTANGULAR`)"),
+    ("camera", "fov_deg", "deg", "vertical field of view (perspective); for `fisheye` the angle across the image circle (180 = a planetarium dome master); unused by `equirectangular`"),
+    ("camera", "ortho_height", "km", "height of the view (orthographic)"),
+    ("render", "width", "px", "image width"),
+    ("render", "height", "px", "image height (row 0 is the top)"),
+    ("render", "spp", "", "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
+    ("render", "exposure", "stops", "PNG only: sRGB of 2^exposure x the linear image, clipped"),
+    ("volume", "density_scale", "", "extinction = `density_scale` x the `density` grid"),
+    ("volume", "emission_scale", "", "emitted radiance per km = `emission_scale` x the `emission` grid"),
+    ("background", "radiance", "linear Rec.709", "constant radiance seen behind the volume where no terrain is hit (it does not light the terrain)"),
+    ("background", "image", "", "an equirectangular linear EXR of sky radiance added to `radiance` (relative to the scene file; mapped as Blender's Environment Texture: centre towards +x, top row the zenith); the add-on sets it as the World"),
+    ("background", "stars", "", "a procedural star field (`aurora render` only): counts log10 N(<m) ~ 0.45 m, V-band flux, blackbody colours; each star lights the one pixel that sees it; none in orthographic views"),
+    ("background", "limiting_magnitude", "mag", "faintest star drawn (6: the naked eye's limit)"),
+    ("background", "star_brightness", "", "scale on the stars' physical irradiance"),
+    ("terrain", "kind", "", "`none`, `plane` (z = `height`) or `heightfield`"),
+    ("terrain", "height", "km", "base height of the plane or heightfield"),
+    ("terrain", "albedo", "", "Lambertian albedo, linear Rec.709"),
+    ("terrain", "mountain_height", "km", "heightfield: peak height of the procedural fBm mountains above `height`"),
+    ("terrain", "mountain_scale", "km", "heightfield: horizontal feature size of the mountains"),
+    ("terrain", "heightmap", "", "heightfield: a 16- or 8-bit greyscale PNG instead of the procedural mountains (relative to the scene file)"),
+    ("terrain", "extent", "km", "heightfield: the ground covered, `[x0, y0, x1, y1]`"),
+    ("terrain", "seed", "", "heightfield: seed of the procedural mountains"),
+    ("animation", "fps", "1/s", "frames per second of a sequence (USD `timeCodesPerSecond`, Blender's scene fps)"),
+    ("animation", "time_s", "s", "time of the bake; frame N of `--frames` is baked at `time_s + (N - 1) / fps`"),
+    ("animation", "fold_speed_kms", "km/s", "phase speed of the folds along the curtain (spirals drift about 4 km/s, surges about 2 km/s); the footprint's three vortex modes travel at 1, -0.5 and 1.6 times it"),
+    ("animation", "fold_breathing", "", "relative swing of the fold-driving velocity (folds deepen and relax)"),
+    ("animation", "fold_breathing_period_s", "s", "period of that swing"),
+    ("animation", "bend_speed_kms", "km/s", "speed at which the bend curve travels along the curtain"),
+    ("animation", "bend_change_hz", "1/s", "rate at which the bend curve changes shape"),
+    ("animation", "drift_km", "km", "amplitude of the curtain's drift across its axis, `drift_km sin(2 pi t / drift_period_s)`: bounded, so it never leaves the view"),
+    ("animation", "drift_period_s", "s", "period of the drift"),
+    ("animation", "ray_speed_kms", "km/s", "speed of the rays (the start-height and colour noise) along the curtain (up to about 25 km/s observed)"),
+    ("animation", "pulsation", "", "depth of pulsating patches (0 = off): each patch's electron flux swings between `1 - pulsation` and 1 times its value"),
+    ("animation", "pulsation_patch_km", "km", "size of a pulsating patch"),
+    ("animation", "pulsation_period_s", "s", "range each patch's period is drawn from (observed: a few s to 20 s, mostly 6-10 s)"),
+];
+
+/// Types the default cannot tell: a key whose default is none, or one that
+/// takes a number or a word.
+const TYPES: &[(&str, &str, &str)] = &[
+    ("background", "image", "path"),
+    ("terrain", "heightmap", "path"),
+    ("grid", "voxel_size", "number or `\"auto\"`"),
+];
+
+/// docs/scene.md: a header, then per section a table of key, type,
+/// default, range, unit and description. Deterministic: the order is
+/// [`SECTIONS`]' and [`KEYS`]', and values print as serde_json prints them.
+fn scene_doc(schema: &Value) -> String {
+    let schema = schema.as_object().expect("the schema is an object");
+    for section in schema.keys() {
+        assert!(SECTIONS.iter().any(|s| s.0 == section), "schema section `{section}` has no entry in SECTIONS (tests/schema.rs)");
+    }
+    for (section, key, _, _) in KEYS {
+        let known = schema.get(*section).and_then(|s| s.get(*key)).is_some();
+        assert!(known, "KEYS (tests/schema.rs) documents `{section}.{key}`, which the schema does not have");
+    }
+    let mut out = String::new();
+    out.push_str("# Scene keys\n\n");
+    out.push_str("<!-- Generated from `aurora scene --schema` by tests/schema.rs; do not edit.\n");
+    out.push_str("     Regenerate: AURORA_UPDATE_DOCS=1 cargo test --release --test schema -->\n\n");
+    out.push_str(
+        "A scene is a TOML file. Every key is optional and takes the default below; an unknown key, a \
+         value out of range or an unknown word is an error naming the file, line, key, value and allowed \
+         range (exit status 2). `aurora scene default` prints the default scene with every key, \
+         `aurora scene FILE` prints FILE with every default filled in, and `aurora scene --schema` prints \
+         the facts of these tables as JSON (the Blender add-on reads its committed copy, \
+         `blender/scene_schema.json`). Lengths are kilometres, z up, x east, y north.\n\n",
+    );
+    out.push_str(
+        "Ranges: `[a, b]` includes both ends, `(a, b)` neither, `inf` is unbounded. A type \
+         `3 numbers` is a TOML array of three numbers.\n\n",
+    );
+    for (name, heading, about) in SECTIONS {
+        let Some(keys) = schema.get(*name).and_then(Value::as_object) else { continue };
+        let _ = write!(out, "## {heading}\n\n{about}\n\n");
+        out.push_str("| key | type | default | range | unit | description |\n|---|---|---|---|---|---|\n");
+        for key in keys.keys() {
+            assert!(
+                KEYS.iter().any(|k| k.0 == *name && k.1 == key),
+                "scene key `{name}.{key}` has no row in KEYS (tests/schema.rs): give it a unit and a description"
+            );
+        }
+        for (_, key, unit, text) in KEYS.iter().filter(|k| k.0 == *name) {
+            let entry = keys[*key].as_object().expect("a key's entry is an object");
+            let row = [
+                format!("`{key}`"),
+                type_of(name, key, entry),
+                default_of(name, entry),
+                range_of(entry),
+                unit.to_string(),
+                text.to_string(),
+            ];
+            let _ = writeln!(out, "| {} |", row.map(|c| cell(&c)).join(" | "));
+        }
+        out.push('\n');
+    }
+    out.truncate(out.trim_end().len());
+    out.push('\n');
+    out
+}
+
+/// A table cell: pipes escaped, never empty.
+fn cell(s: &str) -> String {
+    if s.is_empty() {
+        "-".into()
+    } else {
+        s.replace('|', "\\|")
+    }
+}
+
+fn type_of(section: &str, key: &str, entry: &Map<String, Value>) -> String {
+    if let Some((_, _, t)) = TYPES.iter().find(|t| t.0 == section && t.1 == key) {
+        return t.to_string();
+    }
+    let d = &entry["default"];
+    match d {
+        Value::Bool(_) => "bool".into(),
+        Value::Number(n) if n.is_u64() || n.is_i64() => "integer".into(),
+        Value::Number(_) => "number".into(),
+        Value::String(_) if entry.contains_key("values") => "word".into(),
+        Value::String(_) => "string".into(),
+        Value::Array(items) => match items.first() {
+            Some(Value::Array(row)) => format!("rows of {} numbers", row.len()),
+            Some(Value::Number(n)) if n.is_u64() || n.is_i64() => format!("{} integers", items.len()),
+            _ => format!("{} numbers", items.len()),
+        },
+        other => panic!("`{section}.{key}`: no type for a default of {other}; add it to TYPES (tests/schema.rs)"),
+    }
+}
+
+/// A value as TOML writes it: words quoted, arrays inline, none as `none`.
+fn toml_value(v: &Value) -> String {
+    match v {
+        Value::Null => "none".into(),
+        Value::String(s) => format!("\"{s}\""),
+        Value::Array(items) => format!("[{}]", items.iter().map(toml_value).collect::<Vec<_>>().join(", ")),
+        other => other.to_string(),
+    }
+}
+
+fn default_of(section: &str, entry: &Map<String, Value>) -> String {
+    let mut s = format!("`{}`", toml_value(&entry["default"]));
+    if let Some(t) = entry.get("default_in_table") {
+        let _ = write!(s, " (`{}` in a written `[{section}]` table)", toml_value(t));
+    }
+    s
+}
+
+fn range_of(entry: &Map<String, Value>) -> String {
+    if let Some(Value::Array(values)) = entry.get("values") {
+        return values.iter().map(|v| format!("`{}`", toml_value(v))).collect::<Vec<_>>().join(", ");
+    }
+    if let Some(Value::String(rule)) = entry.get("rule") {
+        return rule.clone();
+    }
+    let bound = |k: &str| entry.get(k).map(|v| v.as_str().map_or_else(|| v.to_string(), str::to_string));
+    match (bound("min"), bound("max")) {
+        (Some(lo), Some(hi)) => {
+            let open = if entry.get("min_inclusive") == Some(&Value::Bool(true)) { '[' } else { '(' };
+            let close = if entry.get("max_inclusive") == Some(&Value::Bool(true)) { ']' } else { ')' };
+            format!("{open}{lo}, {hi}{close}")
+        }
+        _ => String::new(),
+    }
 }

@@ -487,7 +487,7 @@ fn check(name: &str, scene: &Scene, expect: Expect) -> Result<(), String> {
         // A bake whose grids come out empty (a kernel too small for any voxel
         // centre, an energy flux whose emission underflows f32, beams that
         // leave before depositing) is an error naming how its beams ended
-        // (the hardening issue: empty results are loud), never an empty file.
+        // (empty results are loud), never an empty file.
         Err(e @ aurora::bake::BakeError::Empty(_)) => {
             let m = e.to_string();
             return if m.contains("beams made") { Ok(()) } else { Err(format!("unclear message: {m}")) };

@@ -120,7 +120,7 @@ fn fixed_step_error_follows_its_closed_form_and_exact_stays_exact() {
     // so tau by at most 2^-24 tau (6e-8 relative); the exact integrator's
     // own error is far below that. Ask for 1e-6.
     assert!((ex.tau / tau - 1.0).abs() < 1e-6, "exact tau {} vs closed form {tau}", ex.tau);
-    // The bound: within 1e-4 of the closed form (T and L). An
+    // The renderer's stated bound: within 1e-4 of the closed form (T and L). An
     // optical-depth error of 2^-24 tau is a relative T error of 1.2e-6.
     let t = (-tau).exp();
     assert!((ex.transmittance() / t - 1.0).abs() < 1e-4, "T {} vs {t}", ex.transmittance());

@@ -13,7 +13,7 @@
 // Prints one JSON line: {"mode", "flags", "seconds": [...], "best", "bytes"}.
 //
 // OpenVDB's Archive::setGridCompression drops ZIP for fog volumes and level
-// sets (see ../shared/notes/vdb-format.md), so for the ZIP modes the grid
+// sets (openvdb/io/Archive.cc), so for the ZIP modes the grid
 // class is set to "unknown" before writing: the value arrays are then
 // compressed exactly as aurora compresses them. Only the `class` metadata
 // string differs.

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Pins the bake's and the renderer's output bytes (issue 12: behaviour
-# unchanged across a refactor). Run from the repository root after
+# Pins the bake's and the renderer's output bytes, to show behaviour
+# unchanged across a refactor. Run from the repository root after
 # `cargo build --release`; prints one "sha256  name" line per output:
 #   tools/pin_outputs.sh > benchmarks/pins/before.txt   (before the first move)
 #   tools/pin_outputs.sh > benchmarks/pins/after.txt    (after the last)

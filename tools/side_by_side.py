@@ -5,7 +5,7 @@
         [--volume-target E] [--terrain-target E] [--size WxH] [--cases volume,terrain]
         [--render-only] [--repeats N]
 
-Four studies (issue 6 part 4), every number into DIR/side_by_side.json and a
+Four studies, every number into DIR/side_by_side.json and a
 table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
 
 1. VDB writer. `aurora bake default` once; then, best of N runs with the
@@ -132,7 +132,7 @@ FULL = {
         "terrain": {"aurora": [1, 2, 4, 8, 16, 32], "cycles": [2, 4, 8, 16, 32, 64, 128]},
     },
 }
-#: --size 640x360 (issue 14): 16x the pixels. The reference is aurora at
+#: --size 640x360: 16x the pixels. The reference is aurora at
 #: 128 spp per seed at the image's own pixels (x2 seeds: 256 per pixel), so
 #: it is noisier than at 160x90 (its error is measured and printed); Cycles'
 #: ladder stops at 32 samples (about 6 minutes a rung here), volume only, one
@@ -248,9 +248,8 @@ def machine_facts() -> dict:
 
 def git_facts() -> dict:
     head = run(["git", "-C", ROOT, "rev-parse", "HEAD"], "git rev-parse").stdout.strip()
-    branch = run(["git", "-C", ROOT, "rev-parse", "--abbrev-ref", "HEAD"], "git rev-parse").stdout.strip()
     dirty = run(["git", "-C", ROOT, "status", "--porcelain", "--untracked-files=no"], "git status").stdout.strip()
-    return {"commit": head, "branch": branch, "dirty": bool(dirty)}
+    return {"commit": head, "dirty": bool(dirty)}
 
 
 def load() -> list[float]:
@@ -441,7 +440,7 @@ def study_vdb(tools: Tools, cfg: dict, bake_dir: Path, out: Path) -> dict:
                                 "ZIP + active mask, f32, grid class set to unknown (OpenVDB drops ZIP for fog "
                                 "volumes); timed by the same example, alternating with ours"},
             "aurora_blosc": {"what": f"aurora vdb::write (Rust, {THREADS} threads), BLOSC + active mask (the "
-                                     "default since issue 14; tree bytes identical to OpenVDB's), f32, fog volume; "
+                                     "default writer; tree bytes identical to OpenVDB's), f32, fog volume; "
                                      "timed by examples/vdb_write_bench.rs"},
             "pyopenvdb_blosc": {"what": f"pyopenvdb {lib} write(path, grids, metadata) from Python; pyopenvdb has "
                                         "no compression setting: io::File's default, BLOSC + active mask, f32, "
@@ -988,7 +987,7 @@ def report_text(res: dict) -> str:
     L.append(f"machine: {m['cpu_model']}, nproc {m['nproc']}, MemTotal {m['mem_total_kb'] / 1048576:.1f} GiB, "
              f"load average {' '.join(map(str, res['load_start']))} at start, {' '.join(map(str, res['load_end']))} at end (shared with other jobs)")
     g = res["git"]
-    L.append(f"git {g['commit'][:12]} ({g['branch']}{', uncommitted changes' if g['dirty'] else ''}); {res['aurora_version']}; "
+    L.append(f"git {g['commit'][:12]}{' (uncommitted changes)' if g['dirty'] else ''}; {res['aurora_version']}; "
              f"OpenVDB {res['openvdb_version']}; Blender {res['render']['blender']}")
     L.append("ratios are ours / theirs: below 1, aurora is faster (or its file smaller)")
     L.append("")

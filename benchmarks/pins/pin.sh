@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Behaviour pins of the issue-12 part-4 moves (pure code moves: every hash
-# must be the same before and after). Prints `sha256  name` lines.
+# Behaviour pins for code moves: a pure move keeps every hash. Prints
+# `sha256  name` lines; run it before and after, and diff the two:
 #   benchmarks/pins/pin.sh [AURORA_BIN] > benchmarks/pins/rooms-after.txt
+#   diff benchmarks/pins/rooms-before.txt benchmarks/pins/rooms-after.txt
 # Pins: the default bake's aurora.vdb and aurora.usda, `aurora scene --schema`,
 # a 160x90 4-spp PNG render of that VDB, and a two-frame sequence's
 # aurora.usda (a reduced scene: 400 beams, 64x16 footprint) with its VDBs.

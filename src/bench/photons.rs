@@ -52,7 +52,7 @@ impl<'a> Bench<'a> {
         }
         let mut notes = vec![format!(
             "Pure noise: the reference has the same kernel and voxels, so the error is the Monte Carlo noise of the density estimate, expected to fall as beams^-1/2 (sigma sqrt(1/n - 1/M) with the shared first beams)."
-        ), format!("'{old_label}': the estimators before issue 10 (photons.kernel = \"point\", beams.starts = \"random\"), against the same reference: its error also holds the point-vs-segment kernel bias, and its streams share no beams with the reference's.")];
+        ), format!("'{old_label}': the earlier estimators (photons.kernel = \"point\", beams.starts = \"random\"), against the same reference: its error also holds the point-vs-segment kernel bias, and its streams share no beams with the reference's.")];
         if let Some(e) = err_n {
             notes.push(format!(
                 "Estimated noise of the reference itself ({m} beams): err(N = {n}) / sqrt(M/N - 1) = {:.3e}.",

@@ -15,7 +15,7 @@
 //!
 //! "Old estimators" ([`old_estimators`]: point kernels, random starts, one
 //! sampled energy per beam where the build has `beams.deposition`) are the
-//! estimators before issue 10, traced and gathered afresh at each beam count
+//! earlier estimators, traced and gathered afresh at each beam count
 //! and measured against the same reference (the scene's estimators), so
 //! their error also holds the small bias between point and segment kernels;
 //! both series share one chart, time against error.
@@ -213,9 +213,9 @@ pub(super) fn gather_key(n: usize, r: f64, v: f64, method: GatherMethod) -> Gath
     (n, r.to_bits(), v.to_bits(), method as u8)
 }
 
-/// The scene with the estimators before issue 10: point kernels, random
-/// beam starts, `beams.deposition = "sampled"` (one drawn energy per beam)
-/// and that time's default gather, the kd-tree.
+/// The scene with the earlier estimators: point kernels, random beam
+/// starts, `beams.deposition = "sampled"` (one drawn energy per beam) and
+/// the kd-tree gather.
 pub fn old_estimators(scene: &Scene) -> Scene {
     let mut s = scene.clone();
     s.photons.kernel = crate::scene::KernelShape::Point;

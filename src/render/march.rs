@@ -2,7 +2,7 @@
 //! primary rays (emission and transmittance) and shadow rays (transmittance).
 //!
 //! Primary rays: `L = int_0^d T(0,s) e(s) ds` and `T(0,d) = exp(-int_0^d sigma_t)`
-//! (the emission-absorption model of the brief; no scattering).
+//! (the emission-absorption model; no scattering).
 //!
 //! Two integrators:
 //! * [`Integration::Exact`]: walks the dual cells ([`dda::segments`]) and

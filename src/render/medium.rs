@@ -4,7 +4,7 @@
 //! # Dual leaves
 //! Cycles (like OpenVDB's `BoxSampler`) samples a grid trilinearly between the
 //! eight voxel centres around a point; voxel (i,j,k) sits at index point
-//! (i,j,k) and inactive voxels read as 0 (`../shared/notes/cycles-conventions.md`).
+//! (i,j,k) and inactive voxels read as 0 (docs/guide.md, "How Cycles reads the VDB").
 //! So the field is a trilinear polynomial inside each *dual cell* `[i,i+1] x
 //! [j,j+1] x [k,k+1]` of index space. We group dual cells into *dual leaves* of
 //! 8^3 cells: dual leaf `D` covers index space `[8D, 8D+8]^3` and needs the 9^3

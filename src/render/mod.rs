@@ -5,7 +5,7 @@
 //! `L = int_0^d T(0,s) e(s) ds + T(0,d) L_behind`, `T = exp(-int sigma_t)`,
 //! with `sigma_t = density_scale * density` and `e = emission_scale * emission`
 //! sampled as Cycles samples the same VDB: voxel (i,j,k) centred at index point
-//! (i,j,k), trilinear, inactive voxels 0 (`../shared/notes/cycles-conventions.md`).
+//! (i,j,k), trilinear, inactive voxels 0 (docs/guide.md, "How Cycles reads the VDB").
 //! `L_behind` is the background radiance, or, where the ray hits the terrain,
 //! `albedo / pi * E` with `E` the irradiance the volume's emission delivers
 //! through the volume's transmittance, estimated with emissive shadow rays

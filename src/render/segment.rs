@@ -426,7 +426,7 @@ pub fn exp_neg_small(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
-    //! Oracles for the segment kernel (issue 11 part 8, docs/mutants/REPORT.md):
+    //! Oracles for the segment kernel (docs/mutants/REPORT.md):
     //! the Gauss-Legendre rule's exactness on polynomials, the trilinear
     //! interpolant evaluated directly, and closed forms of the emission
     //! integral through an absorbing medium.

@@ -16,8 +16,7 @@
 //! `--schema` JSON drawn from those checks) and [`kernel`] (the photon
 //! kernel's radius range, read by the bake and the memory budget alike).
 //! Everything is re-exported here, so `crate::scene::Camera`,
-//! `crate::scene::MAX_SPP` and the like name the same items as before the
-//! split.
+//! `crate::scene::MAX_SPP` and the like are the paths callers use.
 
 pub mod kernel;
 pub mod presets;

@@ -63,9 +63,8 @@ pub struct FootprintParams {
 }
 
 /// Motion in time (`crate::animation`): closed form in t, so any frame costs
-/// one bake. Speeds from the time scales physicists quote (see
-/// `../shared/notes/validation-and-animation.md`); every motion parameter at 0
-/// gives identical frames.
+/// one bake. Speeds from the time scales observers report; every motion
+/// parameter at 0 gives identical frames.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct AnimationParams {
@@ -180,7 +179,7 @@ pub enum BeamStarts {
     /// Low-discrepancy: beam i takes point i of a randomly shifted R2
     /// sequence, mapped through the footprint's flux (default).
     Stratified,
-    /// Independent random points (the estimator before issue 10; for comparison).
+    /// Independent random points (for comparison).
     Random,
 }
 
@@ -232,7 +231,7 @@ pub struct PhotonParams {
     pub radius_noise_freq: f64,
     pub gather: GatherMethod,
     /// Kernel shape: each step's power spread along its segment, or at its
-    /// end point (the estimator before issue 10; for comparison).
+    /// end point (for comparison).
     pub kernel: KernelShape,
 }
 

@@ -13,7 +13,8 @@
 //!
 //! Each level has exactly one offset function (OpenVDB `coordToOffset`) and
 //! its inverse; the leaf's lives in `crate::grid` ([`crate::grid::leaf_offset`]).
-//! See `../shared/notes/vdb-format.md` for the byte layout.
+//! The byte layout is OpenVDB's `writeTopology` / `writeBuffers`
+//! (`tree/RootNode.h`, `InternalNode.h`, `LeafNode.h`, `io/Compression.h`).
 
 use glam::IVec3;
 

@@ -16,8 +16,7 @@
 //!
 //! [`read_vdb_bytes_with_vdbrs`] reads the plain `float` grids (no half
 //! floats, no active tiles, one of its three transform maps) with the vdb-rs
-//! crate instead, as this reader did before issue 14: it is kept as the
-//! tests' independent oracle for our decoder. vdb-rs runs inside
+//! crate instead: it is kept as the tests' independent oracle for our decoder. vdb-rs runs inside
 //! `std::panic::catch_unwind` with the panic message silenced (it still has
 //! `unwrap`s, `assert`s and indexing on input), and only on files our
 //! validation accepted, so it never sees a length that could make it

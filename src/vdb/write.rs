@@ -1,6 +1,6 @@
 //! Native OpenVDB writer: file format version 224, byte for byte what
 //! OpenVDB 10 to 12 write for fog-volume `float` and `vec3s` grids made of
-//! leaves (see `../shared/notes/vdb-format.md`).
+//! leaves (the byte layout: `super::layout`).
 //!
 //! File layout, in byte order (OpenVDB `io/Archive.cc`, `Archive::writeHeader`
 //! then `Archive::write` / `writeGrid`):
@@ -37,7 +37,7 @@
 use super::codec::{self, Encoder};
 use super::fileid::piece_hash;
 use super::layout::{self, INTERNAL16, INTERNAL32};
-/// The file-ID code, re-exported where it was first written.
+/// The file-ID code, re-exported for the writer's callers.
 pub use super::fileid::{content_uuid, xxh64};
 use crate::grid::{Grid, Leaf, VoxelValue, LEAF_NUM_VALUES};
 use crate::scene::Compression;

@@ -1,7 +1,7 @@
 """Synthetic inputs and closed forms for the Cycles tests.
 
 - VDB writing with pyopenvdb, as *leaf voxels* (an active tile is interpolated
-  differently at a box's low edge: ../shared/notes/cycles-conventions.md);
+  differently at a box's low edge: docs/guide.md, "How Cycles reads the VDB");
 - a small TOML writer for scene files;
 - the trilinear "box" field of an N^3 block of voxels and the pixel-averaged
   closed forms for emission, absorption and both;

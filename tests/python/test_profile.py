@@ -1,13 +1,13 @@
 """`aurora profile` against Fang et al. 2008 computed live by eppaurora on
-pymsis (NRLMSIS 2.1), the community's own implementations (issue 10).
+pymsis (NRLMSIS 2.1), the community's own implementations.
 
 Single curtains with Maxwellians of E0 = 0.5, 1, 3, 10, 30 keV (no soft
 component) on the default atmosphere (NRLMSIS 2.1, 67 N, 20 E,
 2020-01-15 00:00 UT, F10.7 = F10.7a = 150, Ap = 15). The reference is
 eppaurora.fang2008 with rho from pymsis and the hydrostatic scale height
 H = k T / (m g) (m the mean molecular mass of every species pymsis returns,
-g at altitude), evaluated at the profile's 0.5 km bin centres. Criteria from
-the issue: ionization peak within 1.5 km of Fang's, normalised profile
+g at altitude), evaluated at the profile's 0.5 km bin centres. Criteria:
+ionization peak within 1.5 km of Fang's, normalised profile
 (sum 1) within L1 0.15.
 
 Then the grid: a bake of one 3 keV curtain with colour noise off; its green

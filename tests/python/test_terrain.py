@@ -1,6 +1,6 @@
 """Terrain lit by an emissive slab, Cycles through tools/cycles_render.py.
 
-Closed form (issue 5): under an infinite non-absorbing slab of thickness H
+Closed form: under an infinite non-absorbing slab of thickness H
 and emission e, every direction of the upper hemisphere sees radiance
 e H / mu, so the irradiance is E = integral e H / mu * mu d omega = 2 pi e H
 and a Lambertian ground of albedo a has radiance a E / pi = 2 a e H. The
