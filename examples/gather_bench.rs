@@ -53,12 +53,12 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
         {
             // The gather's set-up steps alone (the gather repeats them).
-            use aurora::photons;
+            use aurora::photons::{bins, merge};
             let r = &plan.radius;
-            let merged = timed("merge", || photons::merge_segments(&traced.photons, |p| r.radius(p), photons::MERGE_LEN_R, photons::MERGE_OFF_R, photons::MERGE_CDF));
+            let merged = timed("merge", || merge::merge_segments(&traced.photons, |p| r.radius(p), merge::MERGE_LEN_R, merge::MERGE_OFF_R, merge::MERGE_CDF));
             let reach = plan.photons.cutoff * r.max();
-            let leaves = timed("leaves", || photons::candidate_leaves(&merged, voxel.0, reach));
-            let bins = timed("bins", || photons::bin_photons(&merged, &leaves, voxel.0, reach));
+            let leaves = timed("leaves", || bins::candidate_leaves(&merged, voxel.0, reach));
+            let bins = timed("bins", || bins::bin_photons(&merged, &leaves, voxel.0, reach));
             println!("# {} merged photons, {} candidate leaves, {} (leaf, photon) pairs", merged.len(), leaves.len(), bins.photons.len());
         }
         for rep in 0..reps {

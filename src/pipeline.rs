@@ -44,7 +44,7 @@ use crate::deposit::Photon;
 use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf, Transform};
 use crate::magnetic::MagneticField;
-use crate::photons::{self, RadiusField};
+use crate::photons::{self, radius::RadiusField};
 use crate::progress::Progress;
 use crate::prune::{self, PruneStats};
 use crate::scene::{
@@ -369,7 +369,7 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
                     // 1 - exp(-y / scale) in f32: within 2e-7 of the f64
                     // value (exp_neg_f32's 1.2e-7 relative plus rounding);
                     // 0 when scale is.
-                    let indicator = 1.0 - photons::exp_neg_f32(-(y as f32) * inv_scale);
+                    let indicator = 1.0 - photons::fast_math::exp_neg_f32(-(y as f32) * inv_scale);
                     out.values[n] = (air[n & 7] * indicator as f64) as f32;
                 }
             }

@@ -20,7 +20,7 @@
 //! minimum in between, between the photon spacing and the thickness.
 
 use aurora::deposit::Photon;
-use aurora::photons::{Kernel, PhotonMap};
+use aurora::photons::{kdtree::PhotonMap, kernel::Kernel};
 use glam::DVec3;
 use rand::Rng;
 

@@ -45,8 +45,7 @@ use rand::Rng;
 use rayon::prelude::*;
 use std::ops::Range;
 use walk::{trace_beam, BeamContext, BeamStart, DepositModel, EndReason};
-
-pub use crate::deposit::Photon; // TEMPORARY: photons.rs import, removed at merge
+use crate::deposit::Photon;
 
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
