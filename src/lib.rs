@@ -35,3 +35,4 @@ pub mod spectrum;
 pub mod starts;
 pub mod usd;
 pub mod vdb;
+pub mod watch;
