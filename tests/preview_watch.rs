@@ -153,8 +153,11 @@ fn start(name: &str, watch: Watch) -> Session {
     let child = Child::spawn(&mut cmd);
     let text_so_far = child.wait_for("the first picture", FIRST, |t| pictures(t) >= 1);
     let first = text_so_far.lines().next().unwrap();
-    let how = if watch == Watch::Events { "(inotify: " } else { "(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for 400 ms" };
-    assert!(first.starts_with("watching ") && first.contains(how), "{first}");
+    let how = match watch {
+        Watch::Events => "(inotify: ".to_string(),
+        Watch::Poll => format!("(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for {} ms", aurora::watch::SETTLE.as_millis()),
+    };
+    assert!(first.starts_with("watching ") && first.contains(&how), "{first}");
     Session { child, scene, path, png, saved: vec![text_hash(text.as_bytes())] }
 }
 
