@@ -518,7 +518,7 @@ mod tests {
             let l2 = UnitLock::acquire(&d2, "aurora", || tx.send("waiting").unwrap()).unwrap();
             drop(l2);
         });
-        assert_eq!(rx.recv_timeout(std::time::Duration::from_secs(10)).unwrap(), "waiting");
+        assert_eq!(rx.recv_timeout(std::time::Duration::from_secs(120)).unwrap(), "waiting");
         drop(l1);
         waiter.join().unwrap();
         // Released and removed: the folder is empty again.

@@ -38,3 +38,4 @@ pub mod spectrum;
 pub mod starts;
 pub mod usd;
 pub mod vdb;
+pub mod watch;

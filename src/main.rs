@@ -160,8 +160,10 @@ enum Command {
     },
     /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
     ///
-    /// With --watch the scene file is polled (~50 ms); each save is parsed and validated (a bad
-    /// edit prints the error and the watch goes on) and only the stages the edit touches are
+    /// With --watch each save of the scene file is taken once it has ended (on Linux a close after
+    /// writing or a rename onto the name, by inotify; elsewhere, or with AURORA_WATCH=poll, once
+    /// the file has been unchanged for 400 ms), then parsed and validated (a bad edit, or a file
+    /// saved empty, prints the error and the watch goes on) and only the stages the edit touches are
     /// rerun: an exposure edit re-encodes the last image (nothing traced), a render edit
     /// re-renders from the cached grids and renderer, a camera edit re-derives the voxel size and
     /// pruning, a beams or colour edit retraces the beams but keeps the footprints. A coarse
@@ -670,7 +672,7 @@ fn parse_size(text: &str) -> std::result::Result<[usize; 2], String> {
 /// killed. A bad edit is reported as `aurora bake` words it and the watch
 /// goes on with the last good scene.
 fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: usize, watch: bool, quiet: bool) -> Result<()> {
-    use aurora::preview::{FileStamp, Preview};
+    use aurora::preview::Preview;
     let mut preview = Preview::new(out, size, Some(dir.to_path_buf()));
     preview.spp = spp;
     let report = |u: &aurora::preview::Update| {
@@ -678,14 +680,16 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
             eprintln!("wrote {}: {}", out.display(), u.summary());
         }
     };
-    // The hash of the scene text being previewed (--watch): a picture at
-    // the scene's spp is skipped once the file has changed again.
+    // --watch: the watcher, and the hash of the scene text being previewed
+    // (a picture at the scene's spp is skipped once another save has ended).
+    let watcher = std::cell::RefCell::new(None::<aurora::watch::Watcher>);
     let previewing = std::cell::Cell::new(None::<u64>);
     let on_picture = |what: &str, secs: f64| {
         if !quiet {
             eprintln!("{what} in {secs:.2} s");
         }
-        previewing.get().is_none_or(|h| FileStamp::read(Path::new(scene_arg)).is_none_or(|(s, _)| s.hash == h))
+        let mut w = watcher.borrow_mut();
+        previewing.get().zip(w.as_mut()).is_none_or(|(h, w)| !w.changed_since(h))
     };
     if !watch {
         let scene = load_scene(scene_arg)?;
@@ -700,35 +704,42 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
     if !path.is_file() {
         return Err(InputError(format!("{scene_arg}: --watch needs a scene file (write a preset to one: aurora scene default > scene.toml)")).into());
     }
-    let mut last: Option<FileStamp> = None;
+    let w = aurora::watch::Watcher::new(path).map_err(|e| InputError(e.to_string()))?;
     if !quiet {
-        eprintln!("watching {} (Ctrl-C to stop)", path.display());
+        eprintln!("watching {} ({}; Ctrl-C to stop)", path.display(), w.describe());
     }
+    *watcher.borrow_mut() = Some(w);
     loop {
-        if let Some((stamp, text)) = FileStamp::read(path) {
-            if last.as_ref() != Some(&stamp) {
-                let changed = last.as_ref().is_none_or(|l| l.hash != stamp.hash);
-                let hash = stamp.hash;
-                last = Some(stamp);
-                if changed {
-                    previewing.set(Some(hash));
-                    match Scene::from_toml_str(&text, scene_arg) {
-                        // Worded as `aurora bake` words it.
-                        Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
-                        Ok(scene) => match preview.update(&scene, &on_picture) {
-                            Ok(u) => {
-                                if let Some(b) = preview.bake() {
-                                    print_warnings(&b.stats.warnings);
-                                }
-                                report(&u)
-                            }
-                            Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
-                        },
-                    }
-                }
+        // Only saves that ended and changed the text (src/watch.rs); a bad
+        // one is worded as `aurora bake` words it and the last good scene stays.
+        let save = watcher.borrow_mut().as_mut().expect("set above").next_save();
+        let save = match save {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("aurora: error: {e}");
+                continue;
             }
+        };
+        previewing.set(Some(save.hash));
+        if !quiet {
+            eprintln!("scene {}: text hash {:016x}, {} bytes", path.display(), save.hash, save.text.len());
         }
-        std::thread::sleep(std::time::Duration::from_millis(50));
+        if save.is_blank() {
+            eprintln!("aurora: error: {scene_arg}: the saved scene file is empty (only whitespace and comments); keeping the last good scene");
+            continue;
+        }
+        match Scene::from_toml_str(&save.text, scene_arg) {
+            Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
+            Ok(scene) => match preview.update(&scene, &on_picture) {
+                Ok(u) => {
+                    if let Some(b) = preview.bake() {
+                        print_warnings(&b.stats.warnings);
+                    }
+                    report(&u)
+                }
+                Err(e) => eprintln!("aurora: error: {:#}", anyhow::Error::from(e)),
+            },
+        }
     }
 }
 

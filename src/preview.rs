@@ -637,28 +637,6 @@ impl Preview {
     }
 }
 
-/// The identity of a file's contents for the watcher: modification time,
-/// size and an FNV-1a hash of the bytes (a save within the clock's
-/// resolution, or of the same size, is still seen).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct FileStamp {
-    pub modified: Option<std::time::SystemTime>,
-    pub len: u64,
-    pub hash: u64,
-}
-
-impl FileStamp {
-    /// The stamp and the text of `path` (None while it cannot be read, e.g.
-    /// in the middle of an editor's save).
-    pub fn read(path: &Path) -> Option<(FileStamp, String)> {
-        let meta = std::fs::metadata(path).ok()?;
-        let bytes = std::fs::read(path).ok()?;
-        let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
-        let text = String::from_utf8_lossy(&bytes).into_owned();
-        Some((FileStamp { modified: meta.modified().ok(), len: meta.len(), hash }, text))
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

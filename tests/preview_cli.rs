@@ -5,8 +5,8 @@
 
 use aurora::scene::Scene;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 mod common;
 
@@ -29,30 +29,6 @@ fn small_scene() -> Scene {
     s
 }
 
-/// Kills the watcher however the test ends.
-struct Watcher(Child);
-
-impl Drop for Watcher {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
-/// Waits until `cond` holds on the watcher's stderr so far (a file), or
-/// fails after `secs`.
-fn wait_for(log: &Path, secs: u64, what: &str, cond: impl Fn(&str) -> bool) -> String {
-    let t = Instant::now();
-    loop {
-        let text = std::fs::read_to_string(log).unwrap_or_default();
-        if cond(&text) {
-            return text;
-        }
-        assert!(t.elapsed() < Duration::from_secs(secs), "timed out waiting for {what}; stderr so far:\n{text}");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
 fn pictures(text: &str) -> usize {
     text.lines().filter(|l| l.starts_with("wrote ")).count()
 }
@@ -62,20 +38,16 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     let dir = scratch("watch");
     let scene_path = dir.join("scene.toml");
     let png = dir.join("p.png");
-    let log = dir.join("stderr.txt");
     let mut scene = small_scene();
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let child = Command::new(BIN)
-        .args(["preview", scene_path.to_str().unwrap(), "--watch", "--size", "64x36", "--spp", "1", "--threads", "2", "--out"])
-        .arg(&png)
-        .stdout(Stdio::null())
-        .stderr(std::fs::File::create(&log).unwrap())
-        .spawn()
-        .expect("aurora runs");
-    let mut w = Watcher(child);
+    let w = common::child::Child::spawn(
+        Command::new(BIN)
+            .args(["preview", scene_path.to_str().unwrap(), "--watch", "--size", "64x36", "--spp", "1", "--threads", "2", "--out"])
+            .arg(&png),
+    );
     // The first update: coarse, the preview-spp picture (--spp 1), then the
     // scene's spp (2).
-    let text = wait_for(&log, 300, "the first picture", |t| pictures(t) >= 1);
+    let text = w.wait_for("the first picture", Duration::from_secs(300), |t| pictures(t) >= 1);
     let lines: Vec<&str> = text.lines().collect();
     let at = |p: &str| lines.iter().position(|l| l.starts_with(p)).unwrap_or_else(|| panic!("no '{p}' in\n{text}"));
     assert!(at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "), "{text}");
@@ -86,7 +58,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     // 1. An exposure edit: brighter, a tone map of the last image, nothing traced.
     scene.render.exposure += 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let text = wait_for(&log, 120, "the exposure edit's picture", |t| pictures(t) >= 2);
+    let text = w.wait_for("the exposure edit's picture", Duration::from_secs(120), |t| pictures(t) >= 2);
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     for zero in ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"] {
         assert!(last.contains("edit (exposure)") && last.contains(zero), "{zero}: {last}");
@@ -97,7 +69,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     // 1b. A render edit that retraces: brighter emission, from the cached grids.
     scene.volume.emission_scale *= 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let text = wait_for(&log, 120, "the render edit's picture", |t| pictures(t) >= 3);
+    let text = w.wait_for("the render edit's picture", Duration::from_secs(120), |t| pictures(t) >= 3);
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"), "{last}");
     let second = std::fs::read(&png).unwrap();
@@ -106,27 +78,27 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     // 2. A syntax error: the error as `aurora bake` words it; the process lives on.
     let bad = format!("{}\n[render\n", scene.to_toml());
     std::fs::write(&scene_path, &bad).unwrap();
-    let text = wait_for(&log, 60, "the syntax error", |t| t.contains("aurora: error:"));
+    let text = w.wait_for("the syntax error", Duration::from_secs(60), |t| t.contains("aurora: error:"));
     let got = text.lines().find(|l| l.starts_with("aurora: error:")).unwrap().to_string();
     let bake = Command::new(BIN).args(["bake", scene_path.to_str().unwrap(), "--out"]).arg(dir.join("bake")).output().unwrap();
     assert_eq!(bake.status.code(), Some(2));
     let want = String::from_utf8_lossy(&bake.stderr);
     assert!(want.lines().any(|l| l == got), "preview: {got}\nbake: {want}");
-    std::thread::sleep(Duration::from_millis(500));
-    assert!(w.0.try_wait().unwrap().is_none(), "the watcher exited on a bad edit");
+    // The error is printed once the save is done with: no picture follows it.
+    assert!(w.running(), "the watcher exited on a bad edit");
     assert_eq!(std::fs::read(&png).unwrap(), second, "a bad edit must not touch the picture");
-    assert_eq!(pictures(&std::fs::read_to_string(&log).unwrap()), 3);
+    assert_eq!(pictures(&text), 3);
 
     // 3. The fix (and another exposure): a new picture, diffed against the
     // last good scene (an exposure edit again).
     scene.render.exposure -= 1.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
-    let text = wait_for(&log, 120, "the fix's picture", |t| pictures(t) >= 4);
+    let text = w.wait_for("the fix's picture", Duration::from_secs(120), |t| pictures(t) >= 4);
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (exposure)"), "{last}");
     let third = std::fs::read(&png).unwrap();
     assert_ne!(third, second);
-    assert!(w.0.try_wait().unwrap().is_none(), "the watcher must still run");
+    assert!(w.running(), "the watcher must still run");
     // PNG signature: a whole file, never a torn one.
     assert_eq!(&third[..8], b"\x89PNG\r\n\x1a\n");
 }

@@ -1,5 +1,5 @@
 //! Shared helpers of the integration tests (`mod common;`): the `aurora`
-//! binary and its stderr, scratch folders under `target/`, test grids, and
+//! binary and its stderr (a long-running child's, line by line: `child`), scratch folders under `target/`, test grids, and
 //! the external reference tools (pyopenvdb, vdb_print, bpy, usd-core), which
 //! must be installed by `tools/setup`: a missing tool is a test failure,
 //! never a skip.
@@ -11,6 +11,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+pub mod child;
 mod openvdb_tool;
 
 pub fn repo_root() -> PathBuf {

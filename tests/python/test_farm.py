@@ -85,6 +85,15 @@ def assert_same_frames(out: Path, ref: Path, frames: list[int]) -> None:
     assert (out / "aurora.usda").read_text() == (ref / "aurora.usda").read_text()
 
 
+def wait_until(what: str, cond, details, deadline_s: float = 120.0) -> None:
+    """Polls `cond` every 0.1 s until it holds; fails after `deadline_s`
+    (generous: daemons start slowly on a loaded machine) with `details()`."""
+    end = time.monotonic() + deadline_s
+    while not cond():
+        assert time.monotonic() < end, f"timed out after {deadline_s:.0f} s waiting for {what}: {details()}"
+        time.sleep(0.1)
+
+
 def stop(procs: list[subprocess.Popen]) -> None:
     for p in reversed(procs):
         if p.poll() is None:
@@ -100,7 +109,7 @@ def stop(procs: list[subprocess.Popen]) -> None:
 def test_slurm_array_bakes_frames_equal_to_one_process(tmp_path: Path) -> None:
     assert os.geteuid() == 0, "the Slurm test starts slurmd, which needs root"
     munged, slurmctld, slurmd = tool("munged"), tool("slurmctld"), tool("slurmd")
-    sbatch, sinfo = tool("sbatch"), tool("sinfo")
+    sbatch, sinfo, scontrol = tool("sbatch"), tool("sinfo"), tool("scontrol")
     scene = tmp_path / "small.toml"
     scene.write_text(SCENE)
     ref = reference(tmp_path, scene, "1-8")
@@ -153,26 +162,26 @@ PartitionName=test Nodes={host} Default=YES MaxTime=INFINITE State=UP
                  f"--seed-file={d / 'munge' / 'munged.seed'}"],
             )
         )
-        for _ in range(100):
-            if sock.exists():
-                break
-            time.sleep(0.1)
-        assert sock.exists(), "munged did not start: " + (d / "log" / "munged.log").read_text(errors="replace")
-        procs.append(subprocess.Popen([slurmctld, "-D", "-i", "-f", str(conf)], env=env))
-        time.sleep(1.0)
-        procs.append(subprocess.Popen([slurmd, "-D", "-f", str(conf)], env=env))
-        state = ""
-        for _ in range(120):
+
+        def alive() -> bool:
             for p in procs:
                 assert p.poll() is None, f"{p.args[0]} exited: " + "".join(
                     f.read_text(errors="replace")[-2000:] for f in (d / "log").glob("*.log")
                 )
-            r = subprocess.run([sinfo, "-h", "-o", "%t"], env=env, capture_output=True, text=True)
-            state = r.stdout.strip()
-            if state.startswith("idle"):
-                break
-            time.sleep(0.5)
-        assert state.startswith("idle"), f"node not idle: {state!r}"
+            return True
+
+        def run(*argv: str) -> str:
+            return subprocess.run(list(argv), env=env, capture_output=True, text=True).stdout.strip()
+
+        wait_until("munged's socket", lambda: alive() and sock.exists(),
+                   lambda: (d / "log" / "munged.log").read_text(errors="replace"))
+        procs.append(subprocess.Popen([slurmctld, "-D", "-i", "-f", str(conf)], env=env))
+        # slurmd registers with the controller: start it once that answers.
+        wait_until("slurmctld to answer", lambda: alive() and run(scontrol, "ping").endswith("is UP"),
+                   lambda: run(scontrol, "ping"))
+        procs.append(subprocess.Popen([slurmd, "-D", "-f", str(conf)], env=env))
+        wait_until("the node to be idle", lambda: alive() and run(sinfo, "-h", "-o", "%t").startswith("idle"),
+                   lambda: f"node state {run(sinfo, '-h', '-o', '%t')!r}")
 
         out = tmp_path / "shots"
         r = subprocess.run(
