@@ -11,6 +11,7 @@ use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+pub mod damaged;
 mod openvdb_tool;
 
 pub fn repo_root() -> PathBuf {
