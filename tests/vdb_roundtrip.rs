@@ -14,17 +14,8 @@ use aurora::vdb::read::{
 };
 use aurora::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
 use glam::{DVec3, IVec3};
-use rand::{Rng, SeedableRng};
+use common::damaged::{body_cuts, cut_body, random_changes, small_file, truncation_lengths, MODES};
 use std::time::{Duration, Instant};
-
-const MODES: [Compression; 6] = [
-    Compression::None,
-    Compression::Zip,
-    Compression::ActiveMask,
-    Compression::ZipActiveMask,
-    Compression::Blosc,
-    Compression::BloscActiveMask,
-];
 
 /// Every voxel of `b` is active exactly where it is in `a`, with bit-identical
 /// values (so -0.0 and +0.0 differ, NaN payloads would too); transform, name
@@ -202,25 +193,6 @@ fn write_vdb_is_atomic_and_reports_stats() {
     assert!(err.contains("junk.vdb") && err.contains("magic"), "{err}");
 }
 
-/// A small valid file with both grids, a few leaves, in the given mode.
-fn small_file(comp: Compression, half: bool) -> Vec<u8> {
-    let mut d = Grid::new("density", 0.0f32, Transform::new(0.5, DVec3::new(1.0, 2.0, 3.0)));
-    let mut e = Grid::new("emission", [0.0f32; 3], Transform::new(0.5, DVec3::new(1.0, 2.0, 3.0)));
-    for (i, p) in [IVec3::new(-1, 2, 3), IVec3::new(4096, 0, -5), IVec3::new(9, 9, 9), IVec3::new(10, 9, 9)]
-        .into_iter()
-        .enumerate()
-    {
-        d.set(p, 0.5 + i as f32);
-        e.set(p, [i as f32, 1.0, -0.5]);
-    }
-    let opts = WriteOptions {
-        compression: comp,
-        half: if half { vec!["emission".into()] } else { vec![] },
-        metadata: vec![],
-    };
-    write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap()
-}
-
 /// Reads, and fails the test on a hang. A read of these few-KB files takes
 /// milliseconds; a corrupted file may legitimately declare active tiles that
 /// densify into up to `MAX_TILE_VOXELS` voxels (~0.2 s alone), and the machine
@@ -241,12 +213,8 @@ fn every_truncation_is_an_error() {
         assert!(read_timed(&full).is_ok());
         eprintln!("{comp:?} half={half}: {} bytes", full.len());
         // Every length for files up to 64 KiB; for the larger uncompressed
-        // file, every length up to 64 KiB (header, metadata, descriptors and
-        // the first tree nodes), over the last 4 KiB, and a stride of 61
-        // (prime, so it hits every field alignment) in between.
-        let n = full.len();
-        let lengths = (0..n).filter(|&l| l < 65536 || l + 4096 >= n || l % 61 == 0);
-        for len in lengths {
+        // file, the lengths `truncation_lengths` keeps.
+        for len in truncation_lengths(full.len()) {
             let r = read_timed(&full[..len]);
             assert!(r.is_err(), "{comp:?}: truncation to {len} of {} bytes read successfully", full.len());
         }
@@ -255,22 +223,19 @@ fn every_truncation_is_an_error() {
 
 #[test]
 fn random_byte_changes_never_panic_or_hang() {
-    let mut rng = rand_pcg::Pcg64::seed_from_u64(0x5eed_2024);
     let (mut ok, mut err) = (0, 0);
-    for (comp, half) in [
+    for (seed, (comp, half)) in [
         (Compression::ZipActiveMask, false),
         (Compression::None, false),
         (Compression::ActiveMask, true),
         (Compression::Zip, true),
-    ] {
+    ]
+    .into_iter()
+    .enumerate()
+    {
         let full = small_file(comp, half);
-        for trial in 0..100 {
-            let mut b = full.clone();
-            // One to three bytes replaced by random values (a "flip" of a whole byte).
-            for _ in 0..rng.random_range(1..=3) {
-                let at = rng.random_range(0..b.len());
-                b[at] = rng.random();
-            }
+        // One to three bytes replaced by random values (a "flip" of a whole byte).
+        for b in random_changes(&full, 0x5eed_2024 + seed as u64, 100) {
             match read_timed(&b) {
                 Ok(_) => ok += 1,
                 Err(msg) => {
@@ -278,7 +243,6 @@ fn random_byte_changes_never_panic_or_hang() {
                     err += 1
                 }
             }
-            let _ = trial;
         }
         // The magic and the offsets flag are always checked.
         for at in (0..8).chain([20]) {
@@ -292,8 +256,9 @@ fn random_byte_changes_never_panic_or_hang() {
 }
 
 /// Truncations inside a grid body with the descriptor's offsets patched to the
-/// cut, so the parser gets past the offset check and must catch the missing
-/// bytes in the metadata, transform, topology or buffers themselves.
+/// cut (`cut_body`), so the parser gets past the offset check and must catch
+/// the missing bytes in the metadata, transform, topology or buffers
+/// themselves.
 #[test]
 fn truncated_grid_bodies_with_consistent_offsets_are_errors() {
     for comp in [Compression::ZipActiveMask, Compression::ActiveMask, Compression::Zip] {
@@ -306,22 +271,8 @@ fn truncated_grid_bodies_with_consistent_offsets_are_errors() {
         let full =
             write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() })
                 .unwrap();
-        // One grid: the descriptor offsets follow the name, type and parent strings.
-        let offsets_at = 65 + 4 + 7 + 4 + 16 + 4;
-        let at = |i: usize| {
-            i64::from_le_bytes(full[offsets_at + 8 * i..offsets_at + 8 * i + 8].try_into().unwrap()) as usize
-        };
-        let (grid_pos, block_pos) = (at(0), at(1));
-        assert_eq!(at(2), full.len());
-        // Every cut in the metadata, transform, first topology bytes and the
-        // whole buffers pass; a stride of 7 (prime: all field alignments)
-        // through the long runs of node masks in between.
-        let cuts = (grid_pos..full.len())
-            .filter(|&c| c < grid_pos + 2048 || c + 64 >= block_pos || (c - grid_pos) % 7 == 0);
-        for cut in cuts {
-            let mut b = full[..cut].to_vec();
-            b[offsets_at + 8..offsets_at + 16].copy_from_slice(&(block_pos.min(cut) as i64).to_le_bytes());
-            b[offsets_at + 16..offsets_at + 24].copy_from_slice(&(cut as i64).to_le_bytes());
+        for cut in body_cuts(&full) {
+            let b = cut_body(&full, cut);
             assert!(read_timed(&b).is_err(), "{comp:?}: cut at {cut} of {} read successfully", full.len());
         }
     }

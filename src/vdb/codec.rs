@@ -366,9 +366,13 @@ pub fn read_values<T: VoxelValue>(
 /// [`read_values`] writing straight into `out` (all `n` slots), with no
 /// allocation beyond `scratch` (reused for decompression): stored values
 /// are converted from the file's bytes, or from the decompressed bytes, in
-/// place. With `out = None` the record is only validated and skipped; a ZIP
-/// stream is then decompressed only if `check_zip` (the caller that decodes
-/// the record later may skip it: decoding checks it).
+/// place. With `out = None` the record is only validated and skipped; its
+/// ZIP or Blosc stream is then decompressed into `scratch` (and dropped)
+/// only if `check_streams`, which gives the verdict decoding would give
+/// (the caller that decodes the record later may skip it: decoding checks
+/// it). Without it a stream's length must fit in the file and a Blosc
+/// header must be valid and hold the expected size, but a damaged ZIP or
+/// LZ4 payload passes.
 #[allow(clippy::too_many_arguments)]
 pub fn read_values_into<T: VoxelValue>(
     cur: &mut Cursor,
@@ -378,7 +382,7 @@ pub fn read_values_into<T: VoxelValue>(
     background: T,
     out: Option<&mut [T]>,
     scratch: &mut Vec<u8>,
-    check_zip: bool,
+    check_streams: bool,
 ) -> Result<(), ParseError> {
     let m = cur.u8()?;
     if m > meta::NO_MASK_AND_ALL_VALS {
@@ -415,9 +419,9 @@ pub fn read_values_into<T: VoxelValue>(
     let raw: Option<&[u8]> = if fmt.half && count == 0 {
         Some(&[])
     } else if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, decode, scratch)?
+        read_blosc(cur, nbytes, decode, decode || check_streams, scratch)?
     } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_zip(cur, nbytes, decode, decode || check_zip, scratch)?
+        read_zip(cur, nbytes, decode, decode || check_streams, scratch)?
     } else {
         Some(cur.bytes(nbytes)?)
     };
@@ -555,10 +559,14 @@ where
 /// OpenVDB `io::bloscFromStream`. The Blosc header is validated
 /// (`blosc_cbuffer_validate`: its compressed size must equal the chunk length)
 /// before the C decompressor sees the bytes, so it never reads out of bounds.
+/// The frame is decompressed into `scratch` when `decompress` is set (Blosc1
+/// frames carry no checksum: running the decompressor is the only check of
+/// the LZ4 payload).
 fn read_blosc<'a, 's>(
     cur: &mut Cursor<'a>,
     nbytes: usize,
     decode: bool,
+    decompress: bool,
     scratch: &'s mut Vec<u8>,
 ) -> Result<Option<&'s [u8]>, ParseError>
 where
@@ -571,16 +579,16 @@ where
     };
     let frame = cur.bytes_len(len as u64)?;
     blosc_validate(cur, at, frame, nbytes)?;
-    if !decode {
+    if !decompress {
         return Ok(None);
     }
     if nbytes == 0 {
-        return Ok(Some(&[]));
+        return Ok(decode.then_some(&[]));
     }
     scratch.clear();
     scratch.resize(nbytes, 0);
     blosc_decompress(cur, at, frame, scratch)?;
-    Ok(Some(&scratch[..]))
+    Ok(decode.then_some(&scratch[..]))
 }
 
 /// Checks a Blosc frame's header: valid, and `nbytes` once decompressed.
@@ -682,7 +690,7 @@ pub fn read_stored_f32(
         return Ok(slots);
     }
     let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, true, scratch)?.unwrap_or(&[])
+        read_blosc(cur, nbytes, true, true, scratch)?.unwrap_or(&[])
     } else if fmt.flags & COMPRESS_ZIP != 0 {
         read_zip(cur, nbytes, true, true, scratch)?.unwrap_or(&[])
     } else {

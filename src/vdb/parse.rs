@@ -1,18 +1,29 @@
 //! Bounds-checked parser of OpenVDB files (file versions 222 to 225), used
-//! two ways by [`super::read`]:
+//! three ways by [`super::read`]:
 //!
 //! - *validation* (`decode = false`): walks every byte the way OpenVDB's
 //!   `io::File` does (header, metadata, descriptors, transform, topology and
-//!   buffers), checking every length, offset, count, mask and Blosc header
-//!   against the bytes that exist, without decompressing. A file that passes
-//!   cannot make vdb-rs allocate from a garbage length or read past the end;
+//!   buffers), checking every length, offset, count, mask, root origin
+//!   (aligned, one entry per origin: two would give two leaves one origin)
+//!   and Blosc header against the bytes that exist, and decompressing every
+//!   ZIP and Blosc stream into a scratch buffer that is then dropped (a
+//!   damaged ZIP payload or checksum, or LZ4 payload, shows only there).
+//!   A file that passes cannot make vdb-rs allocate from a garbage length
+//!   or read past the end;
 //! - *native decoding* (`decode = true`): the same walk, decoding values, for
 //!   the grids vdb-rs cannot read (vec3s grids, half grids, tiles, maps other
 //!   than its three);
 //! - *locating* ([`Decode::Locate`]): the validation walk, keeping each
 //!   leaf's origin, mask and record offset, for a caller that decodes the
 //!   records itself, in parallel, straight where it wants the values (the
-//!   renderer's medium, `super::read::read_render_medium`).
+//!   renderer's medium, `super::read::read_render_medium`). The leaf
+//!   records' streams are not decompressed here: the caller decodes them,
+//!   or checks them with [`check_located`] (the same verdict as decoding).
+//!
+//! Every mode makes every check above on every grid of a type we read, so
+//! a file gets the same verdict from each (with `Locate`, once the caller
+//! has decoded or checked every located record); each leaf record's stream
+//! is decompressed once, by whichever step reads it.
 //!
 //! Nothing here panics on input and every loop is bounded by bytes consumed:
 //! descriptors only move forward (`gridPos >= descriptor end`,
@@ -24,6 +35,7 @@ use super::codec::{self, RecordFormat};
 use super::layout::{self, INTERNAL16, INTERNAL32};
 use crate::grid::{Leaf, Transform, VoxelValue, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
+use std::collections::HashSet;
 
 /// One metadata value as stored (OpenVDB `TypedMetadata` type names).
 #[derive(Clone, Debug, PartialEq)]
@@ -172,6 +184,9 @@ pub struct Tree<T> {
     pub leaf_count: usize,
     /// Number of active tiles at any level, counted even when not decoding.
     pub active_tile_count: usize,
+    /// Voxels the active tiles cover (what densifying them would create),
+    /// counted even when not decoding.
+    pub tile_voxels: u128,
     /// With [`Decode::Locate`]: every leaf's origin, mask and record, in
     /// file order (empty otherwise), for the caller to decode
     /// (`codec::read_stored_f32` at `start`).
@@ -195,6 +210,23 @@ pub struct LeafSpan {
 pub enum AnyTree {
     Float(Tree<f32>),
     Vec3(Tree<[f32; 3]>),
+}
+
+impl AnyTree {
+    /// [`Tree::tile_voxels`].
+    pub fn tile_voxels(&self) -> u128 {
+        match self {
+            AnyTree::Float(t) => t.tile_voxels,
+            AnyTree::Vec3(t) => t.tile_voxels,
+        }
+    }
+    /// [`check_located`] of this tree.
+    pub fn check_located(&self, data: &[u8], name: &str) -> Result<(), ParseError> {
+        match self {
+            AnyTree::Float(t) => check_located(data, t, name),
+            AnyTree::Vec3(t) => check_located(data, t, name),
+        }
+    }
 }
 
 /// One grid of the file: header and, for grids of a kind we read, its tree.
@@ -374,9 +406,10 @@ fn read_grid(
             gh.transform = Some(transform);
             let fmt = RecordFormat { flags: compression, half };
             let dec = decode(&gh);
+            let named = |e| in_grid(e, &gh.unique_name);
             let tree = match kind {
-                ValueKind::Float => AnyTree::Float(read_tree::<f32>(cur, &gh, fmt, dec)?),
-                ValueKind::Vec3 => AnyTree::Vec3(read_tree::<[f32; 3]>(cur, &gh, fmt, dec)?),
+                ValueKind::Float => AnyTree::Float(read_tree::<f32>(cur, &gh, fmt, dec).map_err(named)?),
+                ValueKind::Vec3 => AnyTree::Vec3(read_tree::<[f32; 3]>(cur, &gh, fmt, dec).map_err(named)?),
             };
             if cur.pos() as u64 != gh.end_pos {
                 return Err(cur.err(format!(
@@ -392,6 +425,14 @@ fn read_grid(
     let _ = header;
     cur.seek(gh.end_pos)?;
     Ok(ParsedGrid { header: gh, tree })
+}
+
+/// `e` naming grid `name` (the record decoder's errors do not know it).
+fn in_grid(e: ParseError, name: &str) -> ParseError {
+    if e.message.starts_with("grid `") {
+        return e;
+    }
+    ParseError { offset: e.offset, message: format!("grid `{name}`: {}", e.message) }
 }
 
 /// Reads a transform (OpenVDB `Transform::read`: map type name, then the
@@ -486,6 +527,7 @@ fn read_internal<T: VoxelValue>(
             continue;
         }
         tree.active_tile_count += 1;
+        tree.tile_voxels += 1u128 << (3 * level.child_log2);
         if let Some(v) = &values {
             let o = if level == INTERNAL32 {
                 layout::internal32_child_origin(origin, n)
@@ -532,17 +574,34 @@ fn read_tree<T: VoxelValue>(
         tiles: Vec::new(),
         leaf_count: 0,
         active_tile_count: 0,
+        tile_voxels: 0,
         spans: Vec::new(),
         format: fmt,
     };
+    // A root holds one entry per origin (OpenVDB's root table is a map
+    // keyed by it, written aligned): an unaligned or repeated origin, tile
+    // or child, would make two nodes cover the same voxels, and so two
+    // leaves share an origin once the tiles are densified.
+    let mut root_tiles: HashSet<(i32, i32, i32)> = HashSet::new();
     for _ in 0..tile_count {
+        let at = cur.pos();
         let o = cur.ivec3()?;
+        if layout::root_child_origin(o) != o {
+            return Err(cur.err_at(at, format!("grid `{name}`: root tile origin {o} is not a multiple of 4096")));
+        }
+        if !root_tiles.insert((o.x, o.y, o.z)) {
+            return Err(cur.err_at(
+                at,
+                format!("grid `{name}`: two root tiles at {o}: duplicate leaf origins (a root holds one entry per origin)"),
+            ));
+        }
         let v: T = read_value(cur)?;
         let active = cur.u8()?;
         if active != 0 {
             tree.active_tile_count += 1;
+            tree.tile_voxels += 1u128 << (3 * layout::ROOT_CHILD_LOG2);
             if decode {
-                tree.tiles.push((o & IVec3::splat(!4095), layout::ROOT_CHILD_LOG2, v));
+                tree.tiles.push((o, layout::ROOT_CHILD_LOG2, v));
             }
         }
     }
@@ -554,6 +613,12 @@ fn read_tree<T: VoxelValue>(
         if layout::root_child_origin(origin) != origin {
             return Err(cur
                 .err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
+        }
+        if root_tiles.contains(&(origin.x, origin.y, origin.z)) {
+            return Err(cur.err_at(
+                at,
+                format!("grid `{name}`: a root tile and a root child both at {origin}: duplicate leaf origins (a root holds one entry per origin)"),
+            ));
         }
         if let Some(p) = prev {
             if (p.x, p.y, p.z) >= (origin.x, origin.y, origin.z) {
@@ -605,9 +670,10 @@ fn read_tree<T: VoxelValue>(
                 ));
             }
             let start = cur.pos();
-            // A located record is decoded (and its ZIP stream checked) later.
-            let check_zip = !decode && how != Decode::Locate;
-            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_zip)?;
+            // A located record is decoded (and its stream checked) later, by
+            // the caller or by [`check_located`].
+            let check_streams = !decode && how != Decode::Locate;
+            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_streams)?;
             if decode {
                 spans.push((layout::internal16_child_origin(node.origin, n16), mask, start));
             } else if how == Decode::Locate {
@@ -647,6 +713,41 @@ fn read_tree<T: VoxelValue>(
         tree.leaves = leaves.into_iter().flatten().collect();
     }
     Ok(tree)
+}
+
+/// Checks every record a [`Decode::Locate`] parse of `data` located in
+/// `tree` as decoding it would ([`Decode::All`] gives the same verdict),
+/// keeping no value: each record is walked again with its ZIP or Blosc
+/// stream decompressed into a per-thread scratch buffer and dropped. For a
+/// caller that decodes only some grids' records and must still refuse
+/// what the grid reader refuses. Costs a decompression of every record
+/// (nothing for uncompressed ones), in parallel; the first failing record
+/// in file order is reported, naming the grid as `name`, whatever the
+/// thread count.
+pub fn check_located<T: VoxelValue>(data: &[u8], tree: &Tree<T>, name: &str) -> Result<(), ParseError> {
+    use rayon::prelude::*;
+    let first_err = tree
+        .spans
+        .par_iter()
+        .map_init(Vec::new, |scratch, span| {
+            let mut c = Cursor::new(data);
+            c.seek(span.start as u64)?;
+            codec::read_values_into::<T>(
+                &mut c,
+                tree.format,
+                LEAF_NUM_VALUES,
+                &span.mask,
+                tree.background,
+                None,
+                scratch,
+                true,
+            )
+        })
+        .find_first(|r| r.is_err());
+    match first_err {
+        Some(Err(e)) => Err(in_grid(e, name)),
+        _ => Ok(()),
+    }
 }
 
 /// Whether some active voxel of `leaf` is not 0 (a NaN or negative value

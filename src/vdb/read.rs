@@ -14,6 +14,21 @@
 //!    densified into leaves; vec3s, half floats and every transform map of
 //!    `parse` are read.
 //!
+//! One definition of a valid file: this reader and the renderer's records
+//! path ([`read_render_medium`]) accept and refuse the same files. Both
+//! rest on the same parse (which also refuses repeated root origins, the
+//! only way two leaves could share an origin), apply [`MAX_TILE_VOXELS`]
+//! to every grid, and decompress every record of every grid once: here
+//! while decoding; on the records path, the chosen grids' records while
+//! the medium is built and the other grids' by `parse::check_located`
+//! (decompressed into a per-thread scratch buffer and dropped: a ZIP
+//! checksum or an LZ4 payload is checked only by running the decompressor;
+//! a header and size check would pass damaged payloads the grid reader
+//! refuses). That costs the records path nothing on aurora's bakes (both
+//! grids are used) and, on a file with other grids, one parallel
+//! decompression of their records in its open time, less than the grid
+//! reader spends decoding them (no values are scattered or kept).
+//!
 //! [`read_vdb_bytes_with_vdbrs`] reads the plain `float` grids (no half
 //! floats, no active tiles, one of its three transform maps) with the vdb-rs
 //! crate instead: it is kept as the tests' independent oracle for our decoder. vdb-rs runs inside
@@ -154,6 +169,11 @@ pub fn read_vdb_bytes(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
     read_vdb_named(bytes, "<memory>", false, false)
 }
 
+/// [`read_vdb_for_render`] of a file held in memory.
+pub fn read_vdb_bytes_for_render(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
+    read_vdb_named(bytes, "<memory>", false, true)
+}
+
 /// [`read_vdb_bytes`] with the plain float grids decoded by vdb-rs (module
 /// docs): the tests' oracle for our decoder.
 pub fn read_vdb_bytes_with_vdbrs(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
@@ -290,15 +310,7 @@ fn assemble<T: VoxelValue>(
     transform: Transform,
     file: &str,
 ) -> Result<Grid<T>, VdbReadError> {
-    let voxels: u128 = tree.tiles.iter().map(|(_, l, _)| 1u128 << (3 * l)).sum();
-    if voxels > MAX_TILE_VOXELS {
-        return Err(VdbReadError::TooManyTileVoxels {
-            file: file.into(),
-            grid: name.into(),
-            voxels,
-            limit: MAX_TILE_VOXELS,
-        });
-    }
+    check_tile_voxels(tree.tile_voxels, name, file)?;
     let mut g = Grid::new(name, tree.background, transform);
     for leaf in tree.leaves {
         g.insert_leaf(normalise(leaf, tree.background));
@@ -317,6 +329,21 @@ fn assemble<T: VoxelValue>(
     }
     g.sort_leaves();
     Ok(g)
+}
+
+/// Refuses a tree whose active tiles would densify into more than
+/// [`MAX_TILE_VOXELS`] voxels (both reading paths, whether or not they
+/// densify that grid).
+fn check_tile_voxels(voxels: u128, name: &str, file: &str) -> Result<(), VdbReadError> {
+    if voxels > MAX_TILE_VOXELS {
+        return Err(VdbReadError::TooManyTileVoxels {
+            file: file.into(),
+            grid: name.into(),
+            voxels,
+            limit: MAX_TILE_VOXELS,
+        });
+    }
+    Ok(())
 }
 
 thread_local! {
@@ -772,7 +799,9 @@ file_leaves!([f32; 3]);
 /// in parallel, each into a per-thread buffer, checks them and copies them
 /// into the medium's blocks: no [`Grid`] in between. The grids are the ones
 /// [`render_grids`] would choose and the medium equals `Medium::new` of
-/// those grids (read by [`read_vdb`]), field for field.
+/// those grids (read by [`read_vdb`]), field for field. The other grids'
+/// records are checked, not kept (module docs), so this path refuses
+/// exactly the files the grid path refuses.
 ///
 /// `Ok(None)` where this path does not apply and the caller should read
 /// grids instead ([`read_vdb_for_render`], [`render_grids`]): a float
@@ -889,12 +918,15 @@ fn render_medium_named(
     let mut density = None;
     let mut emission = None;
     let mut float_emission = false;
-    for (g, name) in parsed.grids.iter().zip(&names) {
+    let mut used = [None, None];
+    for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
         match (&g.tree, name.as_str()) {
             (Some(AnyTree::Float(t)), "density") if density.is_none() => {
+                used[0] = Some(i);
                 density = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
             }
             (Some(AnyTree::Vec3(t)), "emission") if emission.is_none() => {
+                used[1] = Some(i);
                 emission = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
             }
             (Some(AnyTree::Float(_)), "emission") => float_emission = true,
@@ -905,6 +937,17 @@ fn render_medium_named(
         || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
     if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles {
         return Ok(None);
+    }
+    // What the grid reader refuses is refused here too: its tile limit on
+    // every grid, and the records of the grids the medium does not use
+    // checked as decoding them would (`parse::check_located`); the builder
+    // checks the used grids' records as it decodes them.
+    for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
+        let Some(tree) = &g.tree else { continue };
+        check_tile_voxels(tree.tile_voxels(), name, &file)?;
+        if !used.contains(&Some(i)) {
+            tree.check_located(bytes, &g.header.unique_name).map_err(invalid)?;
+        }
     }
     let open_seconds = start.elapsed().as_secs_f64();
     let build = std::time::Instant::now();

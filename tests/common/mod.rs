@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 pub mod child;
+pub mod damaged;
 mod openvdb_tool;
 
 pub fn repo_root() -> PathBuf {
