@@ -1194,59 +1194,6 @@ mod tests {
         assert_eq!(scan_leaf(&leaf), Err(77));
     }
 
-    /// A scale edit through `Prepared::set_volume_scales` renders exactly
-    /// as a fresh `Prepared::new` with those scales, with and without the
-    /// terrain (whose emission sampler is rescaled, dropped at a zero
-    /// emission scale and rebuilt from the medium when it leaves 0).
-    #[test]
-    fn scale_edits_render_as_a_fresh_build() {
-        use crate::render::{render_prepared, Prepared, RenderSettings, Volume};
-        use crate::scene::TerrainKind;
-        let tr = Transform::new(0.5, DVec3::ZERO);
-        let mut d = Grid::new("density", 0.0f32, tr);
-        let mut e = Grid::new("emission", [0.0f32; 3], tr);
-        for x in -6..10 {
-            for y in -3..3 {
-                for z in 4..12 {
-                    let v = ((x * 7 + y * 3 + z) & 7) as f32 * 0.25;
-                    d.set(IVec3::new(x, y, z), 0.1 * v);
-                    e.set(IVec3::new(x, y, z), [v, 0.5 * v, 0.25]);
-                }
-            }
-        }
-        let volume = Volume { density: Some(&d), emission: Some(&e) };
-        let bits = |p: &Prepared| {
-            let img = render_prepared(p, &crate::progress::NoProgress).unwrap();
-            img.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>()
-        };
-        for terrain in [TerrainKind::None, TerrainKind::Plane] {
-            let mut scene = crate::scene::Scene::default();
-            scene.terrain.kind = terrain;
-            scene.terrain.height = 0.5;
-            scene.render.width = 16;
-            scene.render.height = 12;
-            scene.render.spp = 2;
-            scene.camera.position = [1.0, -20.0, 4.0];
-            scene.camera.look_at = [1.0, 0.0, 2.0];
-            let mut settings = RenderSettings::from_scene(&scene);
-            let mut p = Prepared::new(&settings, &volume).unwrap();
-            for (ds, es) in [(2.0, 0.5), (0.0, 3.0), (1.5, 0.0), (1.0, 1.0)] {
-                settings.volume.density_scale = ds;
-                settings.volume.emission_scale = es;
-                let fresh = Prepared::new(&settings, &volume).unwrap();
-                p.set_volume_scales(ds, es).unwrap();
-                assert!(p.medium == fresh.medium, "{terrain:?} {ds} {es}");
-                assert_eq!(p.sampler.as_ref().map(|s| s.power), fresh.sampler.as_ref().map(|s| s.power));
-                let want = bits(&fresh);
-                assert!(want.iter().any(|&b| b != 0), "the camera sees the volume");
-                assert_eq!(bits(&p), want, "{terrain:?} {ds} {es}");
-            }
-            if terrain == TerrainKind::Plane {
-                assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
-            }
-        }
-    }
-
     /// The word-wise dual-cell masks equal the brute-force ones on random
     /// blocks of every density, each block shared or absent (block 0).
     #[test]

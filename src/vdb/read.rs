@@ -604,7 +604,7 @@ mod tests {
         lit.terrain.height = -1.0;
         let want = render(&lit, &volume, &crate::progress::NoProgress).unwrap();
         let p = Prepared::with_medium(&lit, m, None).unwrap();
-        assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
+        assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
         assert_eq!(bits(&render_prepared(&p, &crate::progress::NoProgress).unwrap()), bits(&want));
         assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
     }
