@@ -76,7 +76,7 @@ pub enum RenderError {
     Grid { grid: String, message: String },
     /// A grid's leaf could not be read (a file's record would not decode).
     #[error("grid '{grid}': {source}")]
-    Source { grid: String, source: super::medium::LeafError },
+    Source { grid: String, source: crate::leaf_source::LeafError },
     /// The grids' leaves would need more memory for the medium than this
     /// process may use ([`crate::memory::available`]); refused before the
     /// values are allocated or read.

@@ -32,7 +32,7 @@
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
-use crate::render::medium::{LeafError, LeafSource, LeafValues, Medium, Scratch};
+use crate::{leaf_source::{LeafError, LeafSource, LeafValues, Scratch}, render::medium::Medium};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -407,7 +407,7 @@ fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
             let o4 = internal32_child_origin(o5, i5);
             for i4 in n4.child_mask.iter_ones() {
                 let n3 = n4.nodes.get(&(i4 as u32)).ok_or("missing leaf node")?;
-                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != 8
+                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != crate::grid::LEAF_MASK_WORDS
                 {
                     return Err(format!("leaf buffer of {} values", n3.buffer.len()));
                 }
