@@ -47,18 +47,11 @@ use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM};
+use crate::spectrum::luminance;
 use super::dda::{IndexRay, LeafWalker};
 use super::medium::field::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
-
-/// Rec.709 luminance weights.
-pub const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
-#[inline]
-pub fn luminance(c: [f64; 3]) -> f64 {
-    LUMA[0] * c[0] + LUMA[1] * c[1] + LUMA[2] * c[2]
-}
 
 /// Samples points of the volume in proportion to emitted luminance.
 #[derive(Clone, Debug)]
