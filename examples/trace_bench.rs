@@ -52,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pool.current_num_threads(),
         common::loadavg()
     );
-    println!("# sigma_t majorant {:.6} per unit length", prepared.medium.sigma_t_majorant());
+    println!("# sigma_t majorant {:.6} per unit length", prepared.medium().sigma_t_majorant());
     println!("run,wall_s,cpu_s,primary_rays,shadow_rays,terrain_hits,primary_per_cpu_s,shadow_cpu_s,volume_work_per_primary");
     for r in 0..repeats {
         let c0 = cpu_seconds();

@@ -22,6 +22,7 @@ pub mod footprint;
 pub mod frames;
 pub mod grid;
 pub mod magnetic;
+pub mod leaf_source;
 pub mod memory;
 pub mod outputs;
 pub mod photons;

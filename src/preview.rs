@@ -69,12 +69,10 @@
 
 use crate::bake::{self, Bake, BakeError};
 use crate::photons::GatherInput;
-use crate::camera::CameraModel;
 use crate::grid::Leaf;
 use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
 use crate::progress::NoProgress;
-use crate::render::shadow::EmissionSampler;
-use crate::render::{self, Image, Prepared, RenderError, RenderSettings, TerrainModel, Volume};
+use crate::render::{self, Image, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -249,67 +247,6 @@ fn preview_plan(mut plan: BakePlan) -> BakePlan {
     plan
 }
 
-/// The renderer's structures for `s` and the grids in `volume`, reusing
-/// `old`'s parts whose inputs are unchanged (`grids_changed`: `volume`
-/// holds other grids than the ones `old` was built from). As
-/// `crate::render::Prepared::new` builds them, part by part:
-/// - the medium (the costly part): kept unless the grids changed; a
-///   `[volume]` edit only sets its scales (`Prepared::set_volume_scales`,
-///   applied at lookup);
-/// - the emission sampler: with the medium, unless the terrain appeared or
-///   vanished;
-/// - the terrain model: kept unless `[terrain]` other than `albedo` (read
-///   per hit from the settings) changed; the sky, unless `[background]` or
-///   the seed did; the camera, unless `[camera]` or the size did.
-///
-/// Without `old`, `Prepared::new` builds (and validates) everything; with
-/// it, `s` comes from a validated scene as `old`'s settings did.
-fn assemble(old: Option<Prepared>, grids_changed: bool, s: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
-    let Some(old) = old.filter(|o| o.settings.integration == s.integration && o.settings.shadow_samples == s.shadow_samples) else {
-        return Prepared::new(s, volume);
-    };
-    let o = old.settings;
-    let had_terrain = !matches!(old.terrain, TerrainModel::None);
-    // The medium holds the grids' unit values and applies the volume scales
-    // at lookup, so a `[volume]` edit keeps it: `set_volume_scales` below.
-    let medium = if grids_changed {
-        render::Medium::new(volume.density, volume.emission, s.volume.density_scale, s.volume.emission_scale)?
-    } else {
-        old.medium
-    };
-    let (mut t_old, mut t_new) = (o.terrain.clone(), s.terrain.clone());
-    (t_old.albedo, t_new.albedo) = ([0.0; 3], [0.0; 3]);
-    let terrain = if t_old == t_new && o.base_dir == s.base_dir {
-        old.terrain
-    } else {
-        TerrainModel::from_terrain(&s.terrain, s.base_dir.as_deref())?
-    };
-    let sampler = if !grids_changed && had_terrain == !matches!(terrain, TerrainModel::None) {
-        old.sampler
-    } else {
-        match (&terrain, volume.emission, &medium.emission) {
-            (TerrainModel::None, _, _) | (_, None, _) | (_, _, None) => None,
-            (_, Some(g), Some(_)) => EmissionSampler::new(g, s.volume.emission_scale),
-        }
-    };
-    let sky = if o.background == s.background && o.seed == s.seed && o.base_dir == s.base_dir {
-        old.sky
-    } else {
-        render::sky::Sky::new(&s.background, s.seed, s.base_dir.as_deref())?
-    };
-    let camera = if o.camera == s.camera && (old.camera.width, old.camera.height) == (s.render.width, s.render.height) {
-        old.camera
-    } else {
-        CameraModel::new(&s.camera, s.render.width, s.render.height)?
-    };
-    let mut prepared = Prepared { camera, medium, terrain, sampler, sky, settings: s.clone() };
-    if !grids_changed && o.volume != s.volume {
-        // The kept medium and sampler still carry the old scales.
-        prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
-    }
-    Ok(prepared)
-}
-
 /// The preview's state: the last good scene's stage outputs.
 pub struct Preview {
     pub out: PathBuf,
@@ -400,7 +337,7 @@ impl Preview {
         let volume = Volume { density: Some(&coarse.density), emission: Some(&coarse.emission) };
         let [w, h] = self.size;
         let s = self.settings(scene, (w / COARSE_FACTOR).max(1), (h / COARSE_FACTOR).max(1), 1);
-        let p = assemble(prev.take(), true, &s, &volume)?;
+        let p = Prepared::reuse(prev.take(), true, &s, &volume)?;
         let img = render::render_prepared(&p, &NoProgress)?;
         *prev = Some(p);
         self.write(&img, scene.render.exposure)
@@ -437,7 +374,7 @@ impl Preview {
             if let Some(look) = &self.look {
                 // A tone map of the last linear image: nothing is traced.
                 u.png = self.write(&look.image, scene.render.exposure)?;
-                u.spp = look.prepared.settings.render.spp;
+                u.spp = look.prepared.settings().render.spp;
                 u.to_picture = t0.elapsed().as_secs_f64();
                 if let Some(c) = self.cache.as_mut() {
                     c.scene = scene.clone();
@@ -596,17 +533,14 @@ impl Preview {
             coarse_done(&mut u);
         }
         let t = Instant::now();
-        let mut prepared = assemble(parts, grids_changed || u.to_coarse > 0.0, &settings, &volume)?;
+        let mut prepared = Prepared::reuse(parts, grids_changed || u.to_coarse > 0.0, &settings, &volume)?;
         u.render_build = t.elapsed().as_secs_f64();
         if u.to_coarse == 0.0 {
             // From the refined picture's structures at the coarse size.
             let t = Instant::now();
-            let camera = CameraModel::new(&scene.camera, cw, ch).map_err(RenderError::from)?;
-            let fine = std::mem::replace(&mut prepared.camera, camera);
-            prepared.settings.render.spp = 1;
+            prepared.set_image(cw, ch, 1)?;
             let img = render::render_prepared(&prepared, nothing);
-            prepared.camera = fine;
-            prepared.settings.render.spp = spp;
+            prepared.set_image(w, h, spp)?;
             u.png += self.write(&img?, exposure)?;
             u.coarse_render = t.elapsed().as_secs_f64();
             coarse_done(&mut u);
@@ -624,7 +558,7 @@ impl Preview {
             // `spp` samples do not depend on the total), as `aurora render`
             // draws them.
             let t = Instant::now();
-            look.prepared.settings.render.spp = scene.render.spp;
+            look.prepared.set_image(w, h, scene.render.spp)?;
             let img = render::render_prepared(&look.prepared, nothing)?;
             u.full_render = t.elapsed().as_secs_f64();
             u.full_spp = scene.render.spp;

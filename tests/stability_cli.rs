@@ -250,7 +250,7 @@ fn a_vdb_whose_leaves_would_not_fit_in_memory_is_refused_before_they_are_read() 
     // bytes = 6 KiB): about 0.92 GB. Under a 1 GiB address-space cap the
     // allocation would fail, which Rust turns into an abort; the medium's
     // size is checked first against 3/4 of the limit
-    // (render::medium::MEDIUM_MEMORY_FRACTION; crate::memory::available
+    // (render::medium::build::MEDIUM_MEMORY_FRACTION; crate::memory::available
     // reads RLIMIT_AS): exit 2 naming the leaves and the limit, no image.
     let d = dir("too-many-leaves");
     let path = d.join("many.vdb");

@@ -23,8 +23,8 @@ impl<'a> Bench<'a> {
         let (w, h) = (s.render.width, s.render.height);
         let mask: Vec<bool> = (0..w * h)
             .map(|i| {
-                let ray = prepared.camera.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
-                prepared.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY).is_some()
+                let ray = prepared.camera().ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5);
+                prepared.terrain().intersect(ray.origin, ray.dir, 0.0, f64::INFINITY).is_some()
             })
             .collect();
         drop(prepared);

@@ -25,9 +25,11 @@
 //! trilinear field is continuous there and both cells hold the plane's values
 //! (dual leaves share their boundary planes), so the result is the same.
 
-use super::medium::{
-    cell_bit, mask_has, CellMask, Field, BLOCK_LOG2, BLOCK_VOXELS_LOG2, LEAF_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2,
+use super::medium::field::Field;
+use super::medium::layout::{
+    cell_bit, mask_has, slot, CellMask, BLOCK_LOG2, BLOCK_VOXELS_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2,
 };
+use crate::grid::LEAF_LOG2DIM;
 use glam::{DVec3, IVec3};
 
 /// A ray in a field's index space: `u(t) = o + t d`, with t the world-space
@@ -265,7 +267,7 @@ impl Iterator for LeafWalker<'_> {
                     let bi = f.supers[*si as usize][slot(c, SUPER_LOG2)];
                     if bi != NONE && t1 > t0 {
                         let lo = c * (1 << BLOCK_LOG2);
-                        let child = Dda::new(&self.ray, LEAF_LOG2, t0, t1, lo, lo + IVec3::splat(1 << BLOCK_LOG2));
+                        let child = Dda::new(&self.ray, LEAF_LOG2DIM, t0, t1, lo, lo + IVec3::splat(1 << BLOCK_LOG2));
                         self.blk = Some((child, bi));
                     }
                     continue;
@@ -302,12 +304,6 @@ impl Iterator for LeafWalker<'_> {
             }
         }
     }
-}
-
-#[inline]
-fn slot(c: IVec3, log2: u32) -> usize {
-    let m = (1 << log2) - 1;
-    (((c.x & m) << (2 * log2)) | ((c.y & m) << log2) | (c.z & m)) as usize
 }
 
 /// The part `[t0, t1]` of a ray inside one non-empty dual cell.
@@ -352,8 +348,8 @@ pub struct CellWalker<'a> {
 
 impl<'a> CellWalker<'a> {
     pub fn new(field: &'a Field, ray: IndexRay, span: LeafSpan, filter: CellFilter) -> Self {
-        let origin = field.keys[span.leaf as usize] * (1 << LEAF_LOG2);
-        let dda = Dda::new(&ray, 0, span.t0, span.t1, origin, origin + IVec3::splat(1 << LEAF_LOG2));
+        let origin = field.keys[span.leaf as usize] * (1 << LEAF_LOG2DIM);
+        let dda = Dda::new(&ray, 0, span.t0, span.t1, origin, origin + IVec3::splat(1 << LEAF_LOG2DIM));
         let mask = match filter {
             CellFilter::First => &field.mask_first[span.leaf as usize],
             CellFilter::Any => &field.mask_any[span.leaf as usize],

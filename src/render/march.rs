@@ -20,7 +20,7 @@
 //!   dual leaf are skipped: the field is 0 there, so this changes nothing.
 
 use super::dda::{segments, CellFilter, CellSeg, CellWalker, IndexRay, LeafWalker};
-use super::medium::{Channel, Field, Medium};
+use super::medium::{field::Field, Channel, Medium};
 use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
 use super::Integration;
 use glam::DVec3;

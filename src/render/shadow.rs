@@ -46,19 +46,12 @@ use super::march::optical_depth_along_ray;
 use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
-use crate::grid::{offset_to_local, Grid, Transform};
+use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM};
+use crate::spectrum::luminance;
 use super::dda::{IndexRay, LeafWalker};
-use super::medium::Field;
+use super::medium::field::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
-
-/// Rec.709 luminance weights.
-pub const LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
-#[inline]
-pub fn luminance(c: [f64; 3]) -> f64 {
-    LUMA[0] * c[0] + LUMA[1] * c[1] + LUMA[2] * c[2]
-}
 
 /// Samples points of the volume in proportion to emitted luminance.
 #[derive(Clone, Debug)]
@@ -97,7 +90,7 @@ impl EmissionSampler {
     pub fn from_medium(medium: &super::Medium) -> Option<EmissionSampler> {
         let c = medium.emission?;
         let f = &medium.fields[c.field];
-        let per_block = super::medium::BLOCK_VALUES * f.channels;
+        let per_block = crate::grid::LEAF_NUM_VALUES * f.channels;
         let leaves = f.block_origins.iter().enumerate().map(|(b, &origin)| {
             let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
             let voxels = block.chunks_exact(f.channels).map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]]);
@@ -256,7 +249,7 @@ pub const RATIO_TRACKING_MAX_DEPTH: f64 = 32.0;
 /// leaf `leaf` (trilinear in the leaf's dual cell holding `u`).
 #[inline]
 fn sigma_in_leaf(field: &Field, leaf: u32, ch: usize, u: DVec3) -> f64 {
-    let origin = (field.keys[leaf as usize] * 8).as_dvec3();
+    let origin = (field.keys[leaf as usize] * LEAF_DIM).as_dvec3();
     let l = (u - origin).floor().clamp(DVec3::ZERO, DVec3::splat(7.0));
     let f = u - origin - l;
     let at = field.corner_indices(leaf, l.x as usize, l.y as usize, l.z as usize);

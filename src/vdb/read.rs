@@ -46,7 +46,7 @@
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
-use crate::render::medium::{LeafError, LeafSource, LeafValues, Medium, Scratch};
+use crate::{leaf_source::{LeafError, LeafSource, LeafValues, Scratch}, render::medium::Medium};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -433,7 +433,7 @@ fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
             let o4 = internal32_child_origin(o5, i5);
             for i4 in n4.child_mask.iter_ones() {
                 let n3 = n4.nodes.get(&(i4 as u32)).ok_or("missing leaf node")?;
-                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != 8
+                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != crate::grid::LEAF_MASK_WORDS
                 {
                     return Err(format!("leaf buffer of {} values", n3.buffer.len()));
                 }
@@ -630,7 +630,7 @@ mod tests {
         lit.terrain.height = -1.0;
         let want = render(&lit, &volume, &crate::progress::NoProgress).unwrap();
         let p = Prepared::with_medium(&lit, m, None).unwrap();
-        assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
+        assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
         assert_eq!(bits(&render_prepared(&p, &crate::progress::NoProgress).unwrap()), bits(&want));
         assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
     }

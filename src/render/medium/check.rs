@@ -1,0 +1,161 @@
+//! What the renderer accepts from a grid, checked as Cycles would sample
+//! it: a finite voxel size, a zero background (a non-zero one fills all of
+//! space, which no renderer samples the same way), active values finite and
+//! >= 0 (inactive voxels read as 0 whatever they hold), and a largest value
+//! that times its volume scale stays below [`MAX_SCALED_VALUE`], so no
+//! finite input reaches an infinite pixel.
+//!
+//! The value check runs on the floats' bits: a finite value >= 0 has bits
+//! below +inf's (or is -0), and such bits order as the values, so one pass
+//! gives both the verdict and the leaf's largest value.
+
+use crate::render::RenderError;
+use crate::grid::{Grid, VoxelValue, LEAF_MASK_WORDS};
+use crate::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
+
+/// Whether a stored component is acceptable: finite and >= 0 (-0 included),
+/// on its bits: below +inf's bits, or -0's.
+#[inline]
+fn valid_bits(b: u32) -> bool {
+    b < 0x7f80_0000 || b == 0x8000_0000
+}
+
+/// First pass over a source leaf: its largest active component, or the
+/// offset of its first active voxel that is negative, infinite or NaN.
+/// Inactive voxels count as 0 whatever they hold. On a leaf's active values
+/// alone ([`LeafValues::Active`]) the check runs on the floats' bits, in
+/// SIMD lanes: a valid value's bits order as its value.
+pub(super) fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<f32, usize> {
+    match values {
+        LeafValues::Active(a) => {
+            let (mut peak, mut bad) = (0u32, 0u32);
+            for &x in a {
+                let b = x.to_bits();
+                bad |= u32::from(!valid_bits(b));
+                peak = peak.max(b & 0x7fff_ffff);
+            }
+            if bad != 0 {
+                // The first active voxel with a bad component.
+                let mut k = 0;
+                for (w, &word) in mask.iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        let n = w * 64 + bits.trailing_zeros() as usize;
+                        bits &= bits - 1;
+                        if a[k * channels..(k + 1) * channels].iter().any(|x| !valid_bits(x.to_bits())) {
+                            return Err(n);
+                        }
+                        k += 1;
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
+        }
+        LeafValues::All(a) => {
+            let mut peak = 0u32;
+            for (w, &word) in mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let n = w * 64 + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    for &x in &a[n * channels..(n + 1) * channels] {
+                        let b = x.to_bits();
+                        if !valid_bits(b) {
+                            return Err(n);
+                        }
+                        peak = peak.max(b & 0x7fff_ffff);
+                    }
+                }
+            }
+            Ok(f32::from_bits(peak))
+        }
+    }
+}
+
+/// Rejects grids the renderer cannot sample the way Cycles does.
+pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError>
+where
+    for<'a> GridSource<'a, T>: LeafSource,
+{
+    let src = GridSource(g);
+    check_header(&src)?;
+    let mut scratch = Scratch::default();
+    for i in 0..src.leaf_count() {
+        let v = src.values(i, &mut scratch).map_err(|e| RenderError::Grid { grid: g.name.clone(), message: e.to_string() })?;
+        if let Err(n) = leaf_peak(v, src.channels(), src.mask(i)) {
+            return Err(bad_voxel(&src, i, n, v));
+        }
+    }
+    Ok(())
+}
+
+/// The checks on a source that need no values: transform and background.
+pub(super) fn check_header(src: &dyn LeafSource) -> Result<(), RenderError> {
+    let err = |message: String| RenderError::Grid { grid: src.name().to_string(), message };
+    let t = src.transform();
+    let ts = t.voxel_size;
+    if !(ts.is_finite() && ts > 0.0 && t.translation.is_finite()) {
+        return Err(err(format!("transform must have a finite voxel size > 0 (got {ts})")));
+    }
+    let bg = src.background();
+    if bg[..src.channels()].iter().any(|&x| x != 0.0) {
+        return Err(err(format!(
+            "background {} is not 0: a non-zero background fills all of space, which no renderer samples the same way",
+            value_text(&bg[..src.channels()])
+        )));
+    }
+    Ok(())
+}
+
+/// A voxel value as `{:?}` prints the grid's value type (`1.5` or `[1.0, 2.0, 3.0]`).
+fn value_text(c: &[f32]) -> String {
+    if c.len() == 1 {
+        format!("{:?}", c[0])
+    } else {
+        format!("{c:?}")
+    }
+}
+
+/// The error for voxel `n` of leaf `i` of `src` (values `v`).
+pub(super) fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<'_>) -> RenderError {
+    let ch = src.channels();
+    let ijk = src.origin(i) + crate::grid::offset_to_local(n);
+    let at = match v {
+        LeafValues::All(a) => &a[n * ch..(n + 1) * ch],
+        LeafValues::Active(a) => {
+            // The voxel's rank among the active ones.
+            let mask = src.mask(i);
+            let k: usize = (0..n >> 6).map(|w| mask[w].count_ones() as usize).sum::<usize>()
+                + (mask[n >> 6] & ((1u64 << (n & 63)) - 1)).count_ones() as usize;
+            &a[k * ch..(k + 1) * ch]
+        }
+    };
+    RenderError::Grid {
+        grid: src.name().to_string(),
+        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(at)),
+    }
+}
+
+/// Largest scaled voxel value the renderer accepts. The film is f32 and a
+/// radiance of 10^30 per km integrated over 10^8 km of path still fits, so
+/// no finite input below this bound can reach an infinite pixel.
+pub const MAX_SCALED_VALUE: f64 = 1e30;
+
+/// Rejects a grid whose largest value times `scale` exceeds
+/// [`MAX_SCALED_VALUE`] (a foreign VDB near f32's limit with a large scale).
+pub(super) fn check_scaled_peak(grid: &str, peak: f32, key: &str, scale: f64) -> Result<(), RenderError> {
+    if scale == 0.0 {
+        return Ok(());
+    }
+    let peak = peak as f64;
+    if peak * scale > MAX_SCALED_VALUE {
+        return Err(RenderError::Grid {
+            grid: grid.to_string(),
+            message: format!(
+                "largest value {peak:e} times volume.{key} = {scale:e} is {:e}, above {MAX_SCALED_VALUE:e}: the image would overflow; lower volume.{key}",
+                peak * scale
+            ),
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,103 @@
+//! What a render is asked for: the grids ([`Volume`]), the scene's picture
+//! settings ([`RenderSettings`], with the integration method and the shadow
+//! rays per terrain hit), and why a render can fail ([`RenderError`]).
+
+use crate::grid::Grid;
+use crate::scene::{Background, Camera, RenderParams, Scene, Terrain, VolumeParams};
+use std::path::PathBuf;
+
+/// The grids to render. A VDB without a density grid has no extinction; one
+/// without emission emits nothing (a float emission grid is converted to grey
+/// by the loader).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Volume<'a> {
+    pub density: Option<&'a Grid<f32>>,
+    pub emission: Option<&'a Grid<[f32; 3]>>,
+}
+
+/// How rays integrate the volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Integration {
+    /// Exact optical depth per dual cell, Gauss-Legendre emission with a
+    /// bounded error (`segment.rs`).
+    Exact,
+    /// Fixed steps of this length (scene units), one sample per step, as
+    /// Cycles' biased ray marching (`march.rs`), on primary and shadow rays
+    /// alike. For comparisons and benchmarks; its error grows with the step.
+    FixedStep(f64),
+}
+
+/// Everything `render` needs besides the grids.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderSettings {
+    pub camera: Camera,
+    pub render: RenderParams,
+    pub volume: VolumeParams,
+    pub background: Background,
+    pub terrain: Terrain,
+    /// Seed of every random stream (with the pixel index).
+    pub seed: u64,
+    pub integration: Integration,
+    /// Emissive shadow rays per terrain hit per pixel sample (total per pixel:
+    /// `spp * shadow_samples` where the terrain is seen).
+    pub shadow_samples: usize,
+    /// Folder against which a relative `terrain.heightmap` is resolved (the
+    /// scene file's folder); None = the working directory.
+    pub base_dir: Option<PathBuf>,
+}
+
+impl RenderSettings {
+    /// The scene's camera, render, volume, background and terrain, its seed,
+    /// exact integration and one shadow ray per terrain hit and sample.
+    pub fn from_scene(scene: &Scene) -> RenderSettings {
+        RenderSettings {
+            camera: scene.camera.clone(),
+            render: scene.render.clone(),
+            volume: scene.volume.clone(),
+            background: scene.background.clone(),
+            terrain: scene.terrain.clone(),
+            seed: scene.seed,
+            integration: Integration::Exact,
+            shadow_samples: 1,
+            base_dir: None,
+        }
+    }
+}
+
+/// Why a render (or an image file) failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// A setting is out of range.
+    #[error("render settings: {0}")]
+    Settings(String),
+    /// A grid the renderer cannot sample like Cycles (non-zero background,
+    /// negative or non-finite values, bad transform).
+    #[error("grid '{grid}': {message}")]
+    Grid { grid: String, message: String },
+    /// A grid's leaf could not be read (a file's record would not decode).
+    #[error("grid '{grid}': {source}")]
+    Source { grid: String, source: crate::leaf_source::LeafError },
+    /// The grids' leaves would need more memory for the medium than this
+    /// process may use ([`crate::memory::available`]); refused before the
+    /// values are allocated or read.
+    #[error("the volume's {leaves} leaves would need about {needed} for the renderer's medium, but this process may use {available}")]
+    Memory { leaves: usize, needed: String, available: String },
+    /// The terrain heightmap could not be read.
+    #[error("heightmap {}: {message}", path.display())]
+    Heightmap { path: PathBuf, message: String },
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: EXR: {message}", path.display())]
+    Exr { path: PathBuf, message: String },
+    #[error("{}: PNG: {message}", path.display())]
+    Png { path: PathBuf, message: String },
+    /// The output is not ours to replace, or could not be staged or renamed.
+    #[error(transparent)]
+    Output(Box<crate::atomic::AtomicError>),
+}
+
+impl From<crate::camera::CameraError> for RenderError {
+    fn from(e: crate::camera::CameraError) -> Self {
+        RenderError::Settings(e.to_string())
+    }
+}
