@@ -19,6 +19,7 @@ pub mod camera;
 pub mod footprint;
 pub mod frames;
 pub mod grid;
+pub mod input_file;
 pub mod memory;
 pub mod outputs;
 pub mod photons;

@@ -231,7 +231,7 @@ fn main() {
                 || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
                     use aurora::render::RenderError::*;
                     match r {
-                        Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } => true,
+                        Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } | Input { .. } => true,
                         Output(a) => a.is_input(),
                         _ => false,
                     }
@@ -562,6 +562,9 @@ fn render_cmd(
     let mut settings = aurora::render::RenderSettings::from_scene(scene);
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
+    // A heightmap or sky image that is missing or not a regular file is
+    // refused before the bake or the medium build, not after.
+    settings.check_input_files()?;
     // From a VDB, the medium straight from the file's records (no grids;
     // the terrain's emission sampler is built from the medium); from grids
     // where that path does not apply (a float emission grid, active tiles)

@@ -652,7 +652,9 @@ impl FileStamp {
     /// in the middle of an editor's save).
     pub fn read(path: &Path) -> Option<(FileStamp, String)> {
         let meta = std::fs::metadata(path).ok()?;
-        let bytes = std::fs::read(path).ok()?;
+        // Only a regular file is read: a FIFO or a device put in the scene's
+        // place is never waited on (`crate::input_file`).
+        let bytes = crate::input_file::read(path).ok()?;
         let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ b as u64).wrapping_mul(0x100_0000_01b3));
         let text = String::from_utf8_lossy(&bytes).into_owned();
         Some((FileStamp { modified: meta.modified().ok(), len: meta.len(), hash }, text))
