@@ -22,8 +22,9 @@
 //! - with `--rebake` ([`Sequence::open`]'s `rebake`): every frame of another
 //!   bake in the folder, in the range or not, is deleted (its report first,
 //!   so no instant shows a report beside another bake's VDB; only regular
-//!   files are removed), the record becomes this bake's and the stage is
-//!   written;
+//!   files are removed), and so is every frame VDB without a report (an
+//!   interrupted frame, of no known bake); the record becomes this bake's
+//!   and the stage is written;
 //! - the record is this bake's: the stage is written (this run's range);
 //! - no record and no other bake's frame: nothing is written yet. The folder
 //!   is claimed by the first frame committed ([`Sequence::write_frame`]),
@@ -126,14 +127,11 @@ impl Sequence {
         if rebake {
             for (frame, report, _) in &others {
                 let (vdb, _) = outputs::frame_paths(dir, *frame);
-                for p in [report, &vdb] {
-                    crate::atomic::check_replaceable(p)?;
-                    match std::fs::remove_file(p) {
-                        Ok(()) => {}
-                        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                        Err(source) => return Err(AtomicError::Io { path: p.clone(), source }.into()),
-                    }
-                }
+                remove_regular(report)?;
+                remove_regular(&vdb)?;
+            }
+            for vdb in seq.orphan_vdbs()? {
+                remove_regular(&vdb)?;
             }
             seq.claim()?;
             return Ok(seq);
@@ -257,14 +255,31 @@ impl Sequence {
         Ok(())
     }
 
+    /// The frame numbers of the folder's names `aurora.NNNN.EXT`.
+    fn frames_named(&self, ext: &str) -> Result<Vec<i64>, SequenceError> {
+        let entries = std::fs::read_dir(&self.dir).map_err(|source| AtomicError::Io { path: self.dir.clone(), source })?;
+        Ok(entries.flatten().filter_map(|e| frame_of_name(&e.file_name().to_string_lossy(), ext)).collect())
+    }
+
+    /// Frame VDBs without a report: frames interrupted between their two
+    /// renames (or left so by hand), of no known bake; `--rebake` removes
+    /// them with the other bake's frames (in the range they would be baked
+    /// again anyway).
+    fn orphan_vdbs(&self) -> Result<Vec<PathBuf>, SequenceError> {
+        Ok(self
+            .frames_named("vdb")?
+            .into_iter()
+            .map(|f| outputs::frame_paths(&self.dir, f))
+            .filter(|(_, report)| std::fs::symlink_metadata(report).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound))
+            .map(|(vdb, _)| vdb)
+            .collect())
+    }
+
     /// The folder's complete frames (both files present) that are not of
     /// this bake, ascending: (frame, report path, why not).
     fn other_frames(&self) -> Result<Vec<(i64, PathBuf, String)>, SequenceError> {
-        let entries = std::fs::read_dir(&self.dir).map_err(|source| AtomicError::Io { path: self.dir.clone(), source })?;
         let mut out = Vec::new();
-        for e in entries.flatten() {
-            let name = e.file_name().to_string_lossy().into_owned();
-            let Some(frame) = frame_of_report(&name) else { continue };
+        for frame in self.frames_named("json")? {
             let (vdb, report) = outputs::frame_paths(&self.dir, frame);
             if std::fs::symlink_metadata(&vdb).is_err() {
                 // No VDB: not a frame (an interrupted one is baked again).
@@ -282,15 +297,26 @@ impl Sequence {
     }
 }
 
-/// The frame number of a frame report's name (`aurora.NNNN.json`, at least
-/// four digits), if it is one.
-fn frame_of_report(name: &str) -> Option<i64> {
-    let digits = name.strip_prefix(FRAME_STEM)?.strip_prefix('.')?.strip_suffix(".json")?;
+/// Removes `path` if it is a regular file (only those are ours to remove);
+/// gone already is fine.
+fn remove_regular(path: &Path) -> Result<(), SequenceError> {
+    crate::atomic::check_replaceable(path)?;
+    match std::fs::remove_file(path) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
+        Err(source) => Err(AtomicError::Io { path: path.to_path_buf(), source }.into()),
+    }
+}
+
+/// The frame number of a frame file's name (`aurora.NNNN.EXT`, at least
+/// four digits, as `crate::frames::frame_file_name` writes it), if it is one.
+fn frame_of_name(name: &str, ext: &str) -> Option<i64> {
+    let digits = name.strip_prefix(FRAME_STEM)?.strip_prefix('.')?.strip_suffix(ext)?.strip_suffix('.')?;
     if digits.len() < 4 || !digits.bytes().all(|b| b.is_ascii_digit()) {
         return None;
     }
     let frame = digits.parse().ok()?;
-    (crate::frames::frame_file_name(FRAME_STEM, frame, "json") == name).then_some(frame)
+    (crate::frames::frame_file_name(FRAME_STEM, frame, ext) == name).then_some(frame)
 }
 
 #[cfg(test)]
@@ -299,10 +325,11 @@ mod tests {
 
     #[test]
     fn frame_reports_are_recognised_by_name() {
-        assert_eq!(frame_of_report("aurora.0001.json"), Some(1));
-        assert_eq!(frame_of_report("aurora.12345.json"), Some(12345));
-        for n in ["aurora.001.json", "aurora.0001.vdb", "bake.json", ".aurora.sequence.json", "aurora.00a1.json", "aurora.00001.json"] {
-            assert_eq!(frame_of_report(n), None, "{n}");
+        assert_eq!(frame_of_name("aurora.0001.json", "json"), Some(1));
+        assert_eq!(frame_of_name("aurora.12345.json", "json"), Some(12345));
+        assert_eq!(frame_of_name("aurora.0007.vdb", "vdb"), Some(7));
+        for n in ["aurora.001.json", "aurora.0001.vdb", "bake.json", ".aurora.sequence.json", "aurora.00a1.json", "aurora.00001.json", "aurora.0001xjson"] {
+            assert_eq!(frame_of_name(n, "json"), None, "{n}");
         }
     }
 }

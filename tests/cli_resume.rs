@@ -199,7 +199,9 @@ fn rebake_replaces_every_frame_of_the_other_bake_and_keeps_its_own() {
     ok(&bake(&b, &reference, &["--frames", "1-2"]));
     let out = d.join("shot");
     ok(&bake(&a, &out, &["--frames", "1-3"]));
-    // Frames 1 and 2 rebaked, frame 3 (out of the range) deleted.
+    // A frame VDB without its report (interrupted between the renames).
+    std::fs::write(out.join("aurora.0009.vdb"), b"half").unwrap();
+    // Frames 1 and 2 rebaked, frame 3 (out of the range) and the lone VDB deleted.
     let e = ok(&bake(&b, &out, &["--frames", "1-2", "--rebake"]));
     assert!(e.contains("2 frames baked, 0 already complete"), "{e}");
     same_bake_as(&out, &reference);
