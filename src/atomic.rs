@@ -80,28 +80,8 @@ fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> AtomicError + '_ {
 /// What kind of thing sits at `path`, without following a final symlink;
 /// `None` when nothing does.
 fn kind_at(path: &Path) -> std::io::Result<Option<&'static str>> {
-    use std::os::unix::fs::FileTypeExt;
     match std::fs::symlink_metadata(path) {
-        Ok(m) => {
-            let t = m.file_type();
-            Ok(Some(if t.is_file() {
-                "regular"
-            } else if t.is_symlink() {
-                "a symbolic link"
-            } else if t.is_dir() {
-                "a directory"
-            } else if t.is_char_device() {
-                "a character device"
-            } else if t.is_block_device() {
-                "a block device"
-            } else if t.is_fifo() {
-                "a FIFO"
-            } else if t.is_socket() {
-                "a socket"
-            } else {
-                "not a regular file"
-            }))
-        }
+        Ok(m) => Ok(Some(crate::input_file::kind_name(m.file_type()))),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
         Err(e) => Err(e),
     }

@@ -41,7 +41,10 @@ enum Command {
     ///
     /// With --frames, a sequence: DIR/aurora.NNNN.vdb and DIR/aurora.NNNN.json per frame
     /// (frame N at [animation] time_s + (N - 1) / fps) and one DIR/aurora.usda time-sampled over
-    /// the whole range. Frames already complete are skipped, so a rerun resumes.
+    /// the whole range. Frames already complete are skipped, so a rerun resumes: a frame counts
+    /// as complete only if its report names the same bake (the scene's keys that change the bake,
+    /// not render-only ones such as [render] exposure, and the same build of aurora). A folder
+    /// holding frames of another bake is refused (exit 2): bake into a new folder, or --rebake.
     Bake {
         /// Scene file or preset name.
         #[arg(default_value = "default")]
@@ -65,6 +68,11 @@ enum Command {
         /// Default: --frames.
         #[arg(long, value_name = "SPEC", requires = "frames", allow_hyphen_values = true)]
         sequence: Option<String>,
+        /// When DIR holds frames of another bake (another scene, seed or build), delete every one
+        /// of them, in the range or not, and bake these frames; the frames of this bake are kept.
+        /// Without it such a folder is refused.
+        #[arg(long, requires = "frames")]
+        rebake: bool,
         #[command(flatten)]
         common: Common,
     },
@@ -228,12 +236,13 @@ fn main() {
                 || e.downcast_ref::<aurora::bake::BakeError>().is_some()
                 || e.downcast_ref::<aurora::atomic::AtomicError>().is_some_and(|a| a.is_input())
                 || e.downcast_ref::<aurora::outputs::OutputError>().is_some_and(|o| o.is_input())
+                || e.downcast_ref::<aurora::sequence::SequenceError>().is_some_and(|s| s.is_input())
                 || e.downcast_ref::<aurora::footprint::FootprintError>()
                     .is_some_and(|f| matches!(f, aurora::footprint::FootprintError::Output(a) if a.is_input()))
                 || e.downcast_ref::<aurora::render::RenderError>().is_some_and(|r| {
                     use aurora::render::RenderError::*;
                     match r {
-                        Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } => true,
+                        Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } | Input { .. } => true,
                         Output(a) => a.is_input(),
                         _ => false,
                     }
@@ -251,7 +260,7 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        Command::Bake { scene, out, seed, frames, shard, sequence, common } => {
+        Command::Bake { scene, out, seed, frames, shard, sequence, rebake, common } => {
             let mut scene = load_scene(&scene)?;
             if let Some(s) = seed {
                 scene.seed = s;
@@ -266,7 +275,7 @@ fn run(cli: Cli) -> Result<()> {
                         }
                         frames = all;
                     }
-                    with_threads(common.threads, || bake_frames_cmd(&scene, &out, &frames, &mine, common.quiet))
+                    with_threads(common.threads, || bake_frames_cmd(&scene, &out, &frames, &mine, rebake, common.quiet))
                 }
                 None => with_threads(common.threads, || bake_cmd(&scene, &out, common.quiet)),
             }
@@ -400,19 +409,26 @@ fn frame_name(path: &Path, frame: i64) -> PathBuf {
     path.with_file_name(aurora::frames::frame_file_name(&stem, frame, &ext))
 }
 
-/// Bakes this process's share `mine` of the sequence `frames` into `out`.
-fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quiet: bool) -> Result<()> {
+/// Bakes this process's share `mine` of the sequence `frames` into `out`
+/// (a folder of one bake: `aurora::sequence`; `rebake` deletes another's).
+fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
-    aurora::outputs::write_sequence_usda(out, frames, scene.animation.fps)?;
+    let identity = aurora::bake_identity::BakeIdentity::of(scene);
+    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, rebake, || {
+        if !quiet {
+            eprintln!("aurora: another bake is writing to {}; waiting", out.display())
+        }
+    })?;
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped) = (0usize, 0usize);
     let mut plan: Option<aurora::pipeline::BakePlan> = None;
     for &f in mine {
-        if aurora::outputs::frame_complete(out, f) {
+        if seq.frame_complete(f) {
             skipped += 1;
             continue;
         }
+        seq.check_still_ours()?;
         // One writer per frame: a shard that finds another baking it waits,
         // then finds it complete.
         let _lock = aurora::outputs::lock_frame(out, f, || {
@@ -420,7 +436,7 @@ fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quie
                 eprintln!("frame {f}: another process is baking it; waiting")
             }
         })?;
-        if aurora::outputs::frame_complete(out, f) {
+        if seq.frame_complete(f) {
             skipped += 1;
             continue;
         }
@@ -429,7 +445,7 @@ fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], quie
         let (bake, p) = aurora::bake::bake_reusing(&at, plan.as_ref(), progress)?;
         plan = Some(p);
         print_warnings(&bake.stats.warnings);
-        let report = aurora::outputs::write_frame(&at, &bake, out, f)?;
+        let report = seq.write_frame(&at, &bake, f)?;
         baked += 1;
         if !quiet {
             eprintln!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display());
@@ -564,6 +580,9 @@ fn render_cmd(
     let mut settings = aurora::render::RenderSettings::from_scene(scene);
     settings.base_dir = Some(dir.to_path_buf());
     settings.shadow_samples = shadow_samples;
+    // A heightmap or sky image that is missing or not a regular file is
+    // refused before the bake or the medium build, not after.
+    settings.check_input_files()?;
     // From a VDB, the medium straight from the file's records (no grids;
     // the terrain's emission sampler is built from the medium); from grids
     // where that path does not apply (a float emission grid, active tiles)

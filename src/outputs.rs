@@ -10,8 +10,14 @@
 //! `bake.json`, never a VDB beside another bake's report, and a killed bake's
 //! temporaries are removed by the next bake into that folder. Only regular
 //! files are ever replaced.
+//!
+//! A sequence's frames (`aurora.NNNN.vdb` and `aurora.NNNN.json`) are units
+//! too, staged here ([`stage_frame`]) and committed by `crate::sequence`,
+//! which keeps one bake per folder. Every report names its bake's
+//! [`BakeIdentity`] (`bake_identity`).
 
 use crate::bake::Bake;
+use crate::bake_identity::BakeIdentity;
 use crate::scene::Scene;
 use crate::usd;
 use crate::atomic::{AtomicError, TempFile, Unit, UnitLock};
@@ -177,13 +183,14 @@ pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<Ba
         json: out.join(JSON_NAME),
         options: write_options(scene),
     };
-    let mut report = unit_report(scene, bake);
-    write_unit(bake, files, |mut vdb_files, vdb_seconds| {
+    let mut report = unit_report(scene, bake, &BakeIdentity::of(scene));
+    let staged = stage_unit(bake, files, |mut vdb_files, vdb_seconds| {
         vdb_files["usda_bytes"] = json!(usda_len);
         report["files"] = vdb_files;
         report["total_seconds"] = json!(bake.stats.total_seconds() + vdb_seconds);
         report
-    })
+    })?;
+    staged.commit()
 }
 
 /// What one output unit holds: the VDB (its path, its name in the report,
@@ -197,10 +204,12 @@ struct UnitFiles {
 }
 
 /// The report's keys common to a bake and a frame (the rest is added by the
-/// caller).
-fn unit_report(scene: &Scene, bake: &Bake) -> serde_json::Value {
+/// caller). `identity` is the bake's ([`BakeIdentity`]; a frame's is its
+/// sequence's, the same for every frame).
+fn unit_report(scene: &Scene, bake: &Bake, identity: &BakeIdentity) -> serde_json::Value {
     json!({
         "aurora_version": env!("CARGO_PKG_VERSION"),
+        "bake_identity": identity.to_json(),
         "scene_hash": format!("{:016x}", scene.hash()),
         "seed": scene.seed,
         "units": "km",
@@ -209,16 +218,31 @@ fn unit_report(scene: &Scene, bake: &Bake) -> serde_json::Value {
     })
 }
 
-/// Writes one output unit: the VDB, then the USD stage if any, then the
-/// report (the manifest, renamed last). `report` receives the `files`
-/// object (VDB name, bytes, UUID and write time, the stage's name,
-/// compression, half floats) and the VDB write time, and returns the whole
-/// report.
-fn write_unit(
+/// An output unit written in full to temporaries, not yet visible: its
+/// files appear by [`StagedUnit::commit`]; dropped, they are removed.
+pub struct StagedUnit {
+    unit: Unit,
+    report: BakeReport,
+}
+
+impl StagedUnit {
+    /// Renames the unit's files into place, the report last.
+    pub fn commit(self) -> Result<BakeReport, OutputError> {
+        self.unit.commit()?;
+        Ok(self.report)
+    }
+}
+
+/// Stages one output unit: the VDB, then the USD stage if any, then the
+/// report (the manifest, renamed last by [`StagedUnit::commit`]). `report`
+/// receives the `files` object (VDB name, bytes, UUID and write time, the
+/// stage's name, compression, half floats) and the VDB write time, and
+/// returns the whole report.
+fn stage_unit(
     bake: &Bake,
     files: UnitFiles,
     report: impl FnOnce(serde_json::Value, f64) -> serde_json::Value,
-) -> Result<BakeReport, OutputError> {
+) -> Result<StagedUnit, OutputError> {
     use std::io::Write;
     let UnitFiles { vdb: vdb_path, vdb_name, usda, json: json_path, options } = files;
     let mut unit = Unit::new();
@@ -251,8 +275,7 @@ fn write_unit(
     let mut json_tmp = TempFile::create(&json_path)?;
     json_tmp.file().write_all(text.as_bytes()).map_err(|e| OutputError::Write { path: json_path.clone(), message: e.to_string() })?;
     unit.stage_manifest(json_tmp);
-    unit.commit()?;
-    Ok(BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report })
+    Ok(StagedUnit { unit, report: BakeReport { vdb: vdb_path, usda: usda_path, json_path, json: report } })
 }
 
 /// The frame files of a sequence: `DIR/aurora.NNNN.vdb` and its report
@@ -264,12 +287,22 @@ pub fn frame_paths(out: &Path, frame: i64) -> (PathBuf, PathBuf) {
     )
 }
 
-/// A frame is complete when both its final names exist. Final names only
-/// ever appear by rename (temporaries are `.NAME.tmpPID`), and the report is
-/// renamed last, so a frame interrupted anywhere is baked again.
-pub fn frame_complete(out: &Path, frame: i64) -> bool {
+/// A frame is complete when both its final names exist and its report
+/// names `identity` (`crate::sequence` keeps one bake per folder). Final
+/// names only ever appear by rename (temporaries are `.NAME.tmpPID`), and
+/// the report is renamed last, so a frame interrupted anywhere is baked
+/// again.
+pub fn frame_complete(out: &Path, frame: i64, identity: &BakeIdentity) -> bool {
     let (vdb, json) = frame_paths(out, frame);
-    vdb.is_file() && json.is_file()
+    vdb.is_file() && frame_identity(&json).is_ok_and(|id| id == *identity)
+}
+
+/// The bake identity a frame report names; Err says why there is none (the
+/// file is not a regular file, cannot be read, is not JSON, names none).
+pub fn frame_identity(report: &Path) -> Result<BakeIdentity, String> {
+    let bytes = crate::input_file::read(report).map_err(|e| e.reason())?;
+    let json: serde_json::Value = serde_json::from_slice(&bytes).map_err(|e| format!("not a JSON report: {e}"))?;
+    BakeIdentity::from_report(&json).ok_or_else(|| "it names no bake identity (written by an older aurora)".to_string())
 }
 
 /// Writes the sequence stage `DIR/aurora.usda` listing every frame of the
@@ -325,11 +358,13 @@ pub fn lock_frame(out: &Path, frame: i64, on_wait: impl FnOnce()) -> Result<Unit
     Ok(UnitLock::acquire(out, stem.trim_end_matches('.'), on_wait)?)
 }
 
-/// Writes frame `frame` of a sequence as one unit: the VDB (with
+/// Stages frame `frame` of a sequence as one unit: the VDB (with
 /// `aurora_frame` and `aurora_time_s` metadata), then its report, renamed
-/// last (see [`frame_complete`]), naming the VDB's size and UUID. `scene` is
-/// the scene at that frame's time. The caller holds [`lock_frame`].
-pub fn write_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64) -> Result<BakeReport, OutputError> {
+/// last (see [`frame_complete`]) by [`StagedUnit::commit`], naming the VDB's
+/// size and UUID and the sequence's `identity`. `scene` is the scene at that
+/// frame's time. The caller holds [`lock_frame`]; `crate::sequence` commits
+/// it once the folder is known to be this bake's.
+pub fn stage_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64, identity: &BakeIdentity) -> Result<StagedUnit, OutputError> {
     crate::atomic::prepare_folder(out)?;
     let (vdb, json) = frame_paths(out, frame);
     let mut options = write_options(scene);
@@ -337,11 +372,11 @@ pub fn write_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64) -> Result
     options.metadata.push(("aurora_time_s".into(), MetaValue::String(format!("{}", scene.animation.time_s))));
     let vdb_name = crate::frames::frame_file_name(FRAME_STEM, frame, "vdb");
     let files = UnitFiles { vdb, vdb_name, usda: None, json, options };
-    let mut report = unit_report(scene, bake);
+    let mut report = unit_report(scene, bake, identity);
     report["frame"] = json!(frame);
     report["time_s"] = json!(scene.animation.time_s);
     report["fps"] = json!(scene.animation.fps);
-    write_unit(bake, files, |vdb_files, vdb_seconds| {
+    stage_unit(bake, files, |vdb_files, vdb_seconds| {
         report["files"] = vdb_files;
         report["total_seconds"] = json!(bake.stats.total_seconds() + vdb_seconds);
         report

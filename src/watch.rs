@@ -164,7 +164,7 @@ impl Seen {
 /// non-blocking and checked with `fstat` before any read.
 fn observe(path: &Path) -> Seen {
     use std::io::Read;
-    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    use std::os::unix::fs::OpenOptionsExt;
     let io = |source| Seen::Failed(WatchError::Io { path: path.to_path_buf(), source });
     let mut f = match std::fs::OpenOptions::new().read(true).custom_flags(libc::O_NONBLOCK).open(path) {
         Ok(f) => f,
@@ -177,19 +177,7 @@ fn observe(path: &Path) -> Seen {
     };
     let t = meta.file_type();
     if !t.is_file() {
-        let kind = if t.is_dir() {
-            "a directory"
-        } else if t.is_fifo() {
-            "a FIFO"
-        } else if t.is_socket() {
-            "a socket"
-        } else if t.is_char_device() {
-            "a character device"
-        } else if t.is_block_device() {
-            "a block device"
-        } else {
-            "not a regular file"
-        };
+        let kind = crate::input_file::kind_name(t);
         return Seen::Failed(WatchError::NotRegular { path: path.to_path_buf(), kind });
     }
     let mut bytes = Vec::with_capacity(meta.len() as usize);

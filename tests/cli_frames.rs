@@ -103,7 +103,7 @@ fn frames_are_identical_alone_in_a_range_and_in_any_shard() {
         v.sort();
         v
     };
-    assert_eq!(names, ["aurora.0003.json", "aurora.0003.vdb", "aurora.0004.json", "aurora.0004.vdb", "aurora.usda"]);
+    assert_eq!(names, [".aurora.sequence.json", "aurora.0003.json", "aurora.0003.vdb", "aurora.0004.json", "aurora.0004.vdb", "aurora.usda"]);
     // Frame 3 alone.
     let alone = dir.join("alone");
     ok(&bake(&scene, &alone, &["--frames", "3"], &[]));

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 /// The bottom layer: these know nothing of the stages above, and import
 /// only one another.
-const LOWER: &[&str] = &["grid", "scene", "camera", "spectrum", "atmosphere", "atomic", "progress", "rng", "magnetic", "deposit", "watch", "leaf_source"];
+const LOWER: &[&str] = &["grid", "scene", "camera", "spectrum", "atmosphere", "atomic", "input_file", "progress", "rng", "magnetic", "deposit", "watch", "leaf_source"];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).expect("read src/") {

@@ -312,7 +312,7 @@ fn bad_inputs_are_typed_errors() {
     let mut t = s.clone();
     t.terrain.kind = TerrainKind::Heightfield;
     t.terrain.heightmap = Some("/nonexistent/heightmap.png".into());
-    assert!(matches!(err(&t, &vol), RenderError::Heightmap { .. }));
+    assert!(matches!(err(&t, &vol), RenderError::Input { key: "terrain.heightmap", .. }));
     // An empty volume renders the background.
     let empty = render(&s, &Volume::default(), &NoProgress).unwrap();
     assert!(empty.pixels.iter().all(|p| p[3] == 0.0));

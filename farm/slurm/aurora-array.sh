@@ -9,7 +9,9 @@
 # (--array=A-B, optionally %K to throttle): `aurora --shard auto` takes
 # I = SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN, N = SLURM_ARRAY_TASK_COUNT
 # and refuses stepped arrays. Resubmitting the same command resumes: frames
-# already complete are skipped. AURORA overrides the binary (default: aurora
+# already complete (of the same bake) are skipped; after an edit of the scene
+# that changes the bake, the folder is refused: use a new OUT, or set
+# AURORA_REBAKE=1 to rebake it. AURORA overrides the binary (default: aurora
 # on PATH).
 #SBATCH --job-name=aurora-frames
 #SBATCH --cpus-per-task=2
@@ -19,4 +21,4 @@ SCENE=${1:?scene file or preset}
 FRAMES=${2:?frame range, e.g. 1-720}
 OUT=${3:?output folder}
 exec "${AURORA:-aurora}" bake "$SCENE" --frames "$FRAMES" --out "$OUT" \
-    --shard auto --threads "${SLURM_CPUS_PER_TASK:-2}" --quiet
+    --shard auto --threads "${SLURM_CPUS_PER_TASK:-2}" --quiet ${AURORA_REBAKE:+--rebake}

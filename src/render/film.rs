@@ -16,7 +16,7 @@
 //! Both are written to a temporary file in the destination folder and renamed.
 
 use super::{Image, RenderError, RenderStats};
-use exr::prelude::{read_first_rgba_layer_from_file, SpecificChannels, Vec2, WritableImage};
+use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
 use std::path::Path;
 
 fn output_err(e: crate::atomic::AtomicError) -> RenderError {
@@ -53,14 +53,26 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
 /// Reads the first RGBA layer of an EXR (alpha 1 if absent). Stats are zero.
 pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
     let path = path.as_ref();
-    let img = read_first_rgba_layer_from_file(
-        path,
-        |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
-        |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
-            px[pos.1 * *w + pos.0] = [r, g, b, a];
-        },
-    )
-    .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let file = crate::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    read_exr_file(file, path)
+}
+
+/// [`read_exr`] of a file already opened (through `crate::input_file`);
+/// `path` names it in errors.
+pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderError> {
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
+            |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+                px[pos.1 * *w + pos.0] = [r, g, b, a];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_unbuffered(file)
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
     let size = img.layer_data.size;
     let (_, pixels) = img.layer_data.channel_data.pixels;
     Ok(Image { width: size.0, height: size.1, pixels, stats: RenderStats::default() })

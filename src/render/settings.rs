@@ -4,7 +4,7 @@
 
 use crate::grid::Grid;
 use crate::scene::{Background, Camera, RenderParams, Scene, Terrain, VolumeParams};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The grids to render. A VDB without a density grid has no extinction; one
 /// without emission emits nothing (a float emission grid is converted to grey
@@ -62,6 +62,36 @@ impl RenderSettings {
             base_dir: None,
         }
     }
+    /// The files the render reads, each with its scene key: a
+    /// heightfield's `terrain.heightmap` and `background.image`, resolved
+    /// against `base_dir`.
+    pub fn input_files(&self) -> Vec<(&'static str, PathBuf)> {
+        let base = self.base_dir.as_deref();
+        let heightmap = self.terrain.heightmap.as_deref().filter(|_| self.terrain.kind == crate::scene::TerrainKind::Heightfield);
+        let mut files: Vec<(&'static str, PathBuf)> = heightmap.map(|p| ("terrain.heightmap", input_path(base, p))).into_iter().collect();
+        files.extend(self.background.image.as_deref().map(|p| ("background.image", input_path(base, p))));
+        files
+    }
+
+    /// Checks, without opening them, that [`Self::input_files`] are regular
+    /// files (`crate::input_file::check`): a missing heightmap or a FIFO
+    /// given as the sky is refused before a bake or a medium build, not
+    /// after. They are opened, and checked again, when read.
+    pub fn check_input_files(&self) -> Result<(), RenderError> {
+        for (key, path) in self.input_files() {
+            crate::input_file::check(&path).map_err(|source| RenderError::Input { key, source })?;
+        }
+        Ok(())
+    }
+}
+
+/// A scene's file path (`terrain.heightmap`, `background.image`): relative
+/// ones against `base_dir` (the scene file's folder) when given.
+pub(crate) fn input_path(base_dir: Option<&Path>, p: &str) -> PathBuf {
+    match base_dir {
+        Some(d) if Path::new(p).is_relative() => d.join(p),
+        _ => PathBuf::from(p),
+    }
 }
 
 /// Why a render (or an image file) failed.
@@ -85,6 +115,10 @@ pub enum RenderError {
     /// The terrain heightmap could not be read.
     #[error("heightmap {}: {message}", path.display())]
     Heightmap { path: PathBuf, message: String },
+    /// An input file the scene names (`key`) is not a regular file, or
+    /// cannot be opened (`crate::input_file`).
+    #[error("{key} {source}")]
+    Input { key: &'static str, source: crate::input_file::InputFileError },
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: EXR: {message}", path.display())]

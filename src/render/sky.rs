@@ -182,11 +182,10 @@ impl Sky {
         let image = match &bg.image {
             None => None,
             Some(p) => {
-                let path = match base_dir {
-                    Some(d) if Path::new(p).is_relative() => d.join(p),
-                    _ => Path::new(p).to_path_buf(),
-                };
-                let img = super::film::read_exr(&path)?;
+                let path = super::settings::input_path(base_dir, p);
+                let file = crate::input_file::open(&path)
+                    .map_err(|source| RenderError::Input { key: "background.image", source })?;
+                let img = super::film::read_exr_file(file, &path)?;
                 Some(EnvMap::from_image(&img, &path)?)
             }
         };

@@ -31,7 +31,7 @@ use crate::scene::{Terrain, TerrainKind};
 use glam::DVec3;
 use noise::Perlin;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Samples per `mountain_scale` of the procedural heightfield.
 pub const SAMPLES_PER_FEATURE: f64 = 8.0;
@@ -181,11 +181,7 @@ impl Heightfield {
         }
         match &t.heightmap {
             Some(p) => {
-                let path = match base_dir {
-                    Some(b) if Path::new(p).is_relative() => b.join(p),
-                    _ => PathBuf::from(p),
-                };
-                Self::from_heightmap(&path, t)
+                Self::from_heightmap(&super::settings::input_path(base_dir, p), t)
             }
             None => Self::procedural(t),
         }
@@ -217,7 +213,7 @@ impl Heightfield {
     /// Heights from an 8- or 16-bit greyscale PNG (see the module doc).
     pub fn from_heightmap(path: &Path, t: &Terrain) -> Result<Heightfield, RenderError> {
         let err = |message: String| RenderError::Heightmap { path: path.to_path_buf(), message };
-        let file = std::fs::File::open(path).map_err(|e| err(e.to_string()))?;
+        let file = crate::input_file::open(path).map_err(|source| RenderError::Input { key: "terrain.heightmap", source })?;
         let mut dec = png::Decoder::new(std::io::BufReader::new(file));
         dec.set_transformations(png::Transformations::EXPAND);
         let mut reader = dec.read_info().map_err(|e| err(e.to_string()))?;

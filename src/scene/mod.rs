@@ -82,8 +82,10 @@ impl Scene {
                 return Ok(s);
             }
         }
-        let text = std::fs::read_to_string(path_or_preset)
-            .map_err(|source| SceneError::Io { file: path_or_preset.to_string(), source })?;
+        // Only a regular file is read (a FIFO or a device is refused, never
+        // waited on: `crate::input_file`).
+        let text = crate::input_file::read_to_string(Path::new(path_or_preset))
+            .map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
         Self::from_toml_str(&text, path_or_preset)
     }
 

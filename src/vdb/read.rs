@@ -147,8 +147,7 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 
 /// Reads a VDB file.
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
-    let bytes =
-        std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    let bytes = crate::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
     read_vdb_named(&bytes, &path.display().to_string(), false, false)
 }
 
@@ -159,8 +158,7 @@ pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
 /// the same; the default bake's shell of zero voxels for Cycles (a third of
 /// its leaves) then costs no memory.
 pub fn read_vdb_for_render(path: &Path) -> Result<VdbFile, VdbReadError> {
-    let bytes =
-        std::fs::read(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    let bytes = crate::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
     read_vdb_named(&bytes, &path.display().to_string(), false, true)
 }
 
@@ -835,7 +833,8 @@ enum FileBytes {
 
 impl FileBytes {
     fn open(path: &Path) -> std::io::Result<FileBytes> {
-        let file = std::fs::File::open(path)?;
+        // Only a regular file is mapped or read (`crate::input_file`).
+        let file = crate::input_file::open(path)?;
         let len = file.metadata()?.len();
         #[cfg(unix)]
         if len > 0 && len <= isize::MAX as u64 {

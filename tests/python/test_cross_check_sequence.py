@@ -30,7 +30,9 @@ def test_cycles_matches_aurora_render_on_two_frames_of_a_sequence(compare):
     scene = d / "scene.toml"
     scene.write_text(synth.toml_dumps(doc))
     shot = d / "shot"
-    run([binary, "bake", scene, "--frames", "1,25", "--out", shot, "-q"])
+    # The folder is kept between runs: --rebake replaces frames of another
+    # build or scene, and keeps those of this bake.
+    run([binary, "bake", scene, "--frames", "1,25", "--out", shot, "--rebake", "-q"])
     images = {}
     for f in (1, 25):
         vdb = shot / f"aurora.{f:04d}.vdb"
