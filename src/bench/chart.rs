@@ -147,15 +147,34 @@ pub fn draw_study(ms: &[Measurement], study: &str, stem: &Path) -> Result<(), Ch
     let png = stem.with_extension("png");
     let svg = stem.with_extension("svg");
     let err = |p: &Path, e: String| ChartError::Draw { path: p.display().to_string(), message: e };
+    // The bitmap is drawn into memory and encoded by the `png` crate (the
+    // renderer's PNG writer), not by plotters' `image`-based encoder.
+    let mut rgb = vec![0u8; CHART_W as usize * CHART_H as usize * 3];
     {
-        let root = BitMapBackend::new(&png, (900, 600)).into_drawing_area();
+        let root = BitMapBackend::with_buffer(&mut rgb, (CHART_W, CHART_H)).into_drawing_area();
         draw_on(root, ms, study).map_err(|e| err(&png, e))?;
     }
+    write_png(&png, &rgb).map_err(|e| err(&png, e))?;
     {
-        let root = SVGBackend::new(&svg, (900, 600)).into_drawing_area();
+        let root = SVGBackend::new(&svg, (CHART_W, CHART_H)).into_drawing_area();
         draw_on(root, ms, study).map_err(|e| err(&svg, e))?;
     }
     Ok(())
+}
+
+/// Chart size in pixels (PNG) and user units (SVG).
+const CHART_W: u32 = 900;
+const CHART_H: u32 = 600;
+
+/// Writes 8-bit RGB pixels (`CHART_W` x `CHART_H`, rows top to bottom) as a PNG.
+fn write_png(path: &Path, rgb: &[u8]) -> Result<(), String> {
+    let file = std::fs::File::create(path).map_err(|e| e.to_string())?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), CHART_W, CHART_H);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(|e| e.to_string())?;
+    w.write_image_data(rgb).map_err(|e| e.to_string())?;
+    w.finish().map_err(|e| e.to_string())
 }
 
 fn draw_on<DB: DrawingBackend>(
