@@ -13,7 +13,7 @@
 mod common;
 
 use common::{cpu_seconds as cpu, loadavg};
-use aurora::pipeline::{self, BakePlan};
+use aurora::bake::plan::{self, BakePlan};
 use aurora::progress::NoProgress;
 use aurora::scene::Scene;
 use std::time::Instant;
@@ -46,9 +46,9 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     pool.install(|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         println!("# gather bench: scene {name}, {} threads, load average {}", rayon::current_num_threads(), loadavg());
         let plan = BakePlan::new(&scene, &NoProgress);
-        let mut times = pipeline::StageTimes::default();
+        let mut times = aurora::bake::stats::StageTimes::default();
         let count = aurora::bake::beam_count(&plan, &mut times, &NoProgress)?;
-        let traced = timed("trace", || pipeline::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
+        let traced = timed("trace", || plan::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
         let voxel = plan.voxel_size(&traced.photons);
         println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
         {
@@ -64,14 +64,14 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         for rep in 0..reps {
             println!("rep {rep} (load {})", loadavg());
             let (t0, c0) = (Instant::now(), cpu());
-            let mut emission = timed("gather", || pipeline::gather(&plan, &traced.photons, voxel.0, &NoProgress));
+            let mut emission = timed("gather", || plan::gather(&plan, &traced.photons, voxel.0, &NoProgress));
             let t1 = Instant::now();
-            let (_, peak_y) = timed("scan", || pipeline::scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km))?;
+            let (_, peak_y) = timed("scan", || plan::scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km))?;
             if plan.grid.prune > 0.0 {
                 let camera = plan.camera_model()?;
                 timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));
             }
-            let mut density = timed("density", || pipeline::density_grid(&emission, &plan.grid, peak_y));
+            let mut density = timed("density", || aurora::bake::density::density_grid(&emission, &plan.grid, peak_y));
             let (n, _) = timed("shell", || {
                 let n = emission.dilate_active();
                 (n, density.activate_like(&emission))

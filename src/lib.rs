@@ -4,8 +4,9 @@
 //! scene -> footprint -> beams -> photons -> grids -> files (vdb, usd),
 //! and the renderer reads grids only.
 //!
-//! Lower layers (`grid`, `spectrum`, `atmosphere`, `scene`, `camera`,
-//! `magnetic`, `deposit`) know nothing of the stages above them.
+//! The bottom layer (`scene`, `rng`, `progress`, `atomic`, `memory`,
+//! `atmosphere`, `spectrum`, `camera`, `grid`, `magnetic`, `deposit`) knows
+//! nothing of the stages above it.
 
 pub mod animation;
 pub mod atmosphere;
@@ -28,8 +29,6 @@ pub mod input_file;
 pub mod memory;
 pub mod outputs;
 pub mod photons;
-pub mod pilot;
-pub mod pipeline;
 pub mod profile;
 pub mod progress;
 pub mod preview;

@@ -353,7 +353,7 @@ fn run(cli: Cli) -> Result<()> {
         Command::Footprint { scene, out } => {
             let scene = load_scene(&scene)?;
             aurora::atomic::prepare_folder(&out)?;
-            for (i, fp) in aurora::bake::footprints(&scene).iter().enumerate() {
+            for (i, fp) in aurora::bake::plan::footprints(&scene).iter().enumerate() {
                 let path = out.join(format!("footprint-{i}.png"));
                 fp.write_png(&path).with_context(|| format!("cannot write {}", path.display()))?;
                 eprintln!("wrote {}", path.display());
@@ -422,7 +422,7 @@ fn bake_frames_cmd(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], reba
     })?;
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped) = (0usize, 0usize);
-    let mut plan: Option<aurora::pipeline::BakePlan> = None;
+    let mut plan: Option<aurora::bake::plan::BakePlan> = None;
     for &f in mine {
         if seq.frame_complete(f) {
             skipped += 1;

@@ -320,36 +320,6 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathB
     Ok(path)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Eight writers (one process, as containers that are all PID 1 look to
-    /// a shared folder) write the stage 40 times each at once: every write
-    /// succeeds, the stage is whole, no temporary is left.
-    #[test]
-    fn concurrent_stage_writers_never_fail_or_leave_temporaries() {
-        let dir = std::env::temp_dir().join(format!("aurora-shared-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        let frames: Vec<i64> = (1..=500).collect();
-        std::thread::scope(|s| {
-            for _ in 0..8 {
-                s.spawn(|| {
-                    for _ in 0..40 {
-                        write_sequence_usda(&dir, &frames, 24.0).unwrap();
-                    }
-                });
-            }
-        });
-        let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
-        assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, [USDA_NAME]);
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
-}
-
 /// Takes frame `frame`'s lock (`.aurora.NNNN.lock`), waiting while another
 /// process (a shard sharing the folder) bakes it. Hold it while baking and
 /// writing the frame; check [`frame_complete`] again once it is held.
@@ -381,4 +351,34 @@ pub fn stage_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64, identity:
         report["total_seconds"] = json!(bake.stats.total_seconds() + vdb_seconds);
         report
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eight writers (one process, as containers that are all PID 1 look to
+    /// a shared folder) write the stage 40 times each at once: every write
+    /// succeeds, the stage is whole, no temporary is left.
+    #[test]
+    fn concurrent_stage_writers_never_fail_or_leave_temporaries() {
+        let dir = std::env::temp_dir().join(format!("aurora-shared-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let frames: Vec<i64> = (1..=500).collect();
+        std::thread::scope(|s| {
+            for _ in 0..8 {
+                s.spawn(|| {
+                    for _ in 0..40 {
+                        write_sequence_usda(&dir, &frames, 24.0).unwrap();
+                    }
+                });
+            }
+        });
+        let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
+        assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
+        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, [USDA_NAME]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

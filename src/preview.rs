@@ -1,7 +1,7 @@
 //! `aurora preview`: a picture of the scene that follows its edits.
 //!
 //! A [`Preview`] keeps every stage's output in memory: the
-//! [`BakePlan`](crate::pipeline::BakePlan) (footprints, atmosphere, colour
+//! [`BakePlan`](crate::bake::plan::BakePlan) (footprints, atmosphere, colour
 //! table), the photons, the finished grids and the leaves pruning dropped
 //! (with the finished emission they are the gathered grid, restored when a
 //! camera or grid edit refinishes: no copy of the gathered grid, some
@@ -25,7 +25,7 @@
 //! Colour edits retrace: a photon carries its RGB power, not the altitude
 //! and deposited power it was coloured from, so the data do not allow a
 //! recolour without the beams; the footprints (the fluid simulation) are
-//! kept ([`crate::pipeline::BakePlan::reusing`]).
+//! kept ([`crate::bake::plan::BakePlan::reusing`]).
 //!
 //! Each update writes, atomically to the output PNG
 //! (`crate::render::film::write_png`), up to three pictures:
@@ -70,7 +70,9 @@
 use crate::bake::{self, Bake, BakeError};
 use crate::photons::GatherInput;
 use crate::grid::Leaf;
-use crate::pipeline::{self, BakePlan, Gathered, StageTimes};
+use crate::bake::plan::{self, BakePlan, Gathered};
+use crate::bake::voxel;
+use crate::bake::stats::{NoiseEstimate, StageTimes};
 use crate::progress::NoProgress;
 use crate::render::{self, Image, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::Scene;
@@ -210,7 +212,7 @@ struct Cache {
     /// The scene's plan, with `grid.cycles_shell` off ([`preview_plan`]).
     plan: BakePlan,
     /// Beam count, pilot estimate and pilot warnings.
-    count: (usize, Option<pipeline::NoiseEstimate>, Vec<String>),
+    count: (usize, Option<NoiseEstimate>, Vec<String>),
     beam_stats: crate::beams::BeamStats,
     /// The leaves pruning dropped from the gathered emission: with
     /// `bake.emission` (no Cycles shell) they are the gathered grid, which
@@ -238,7 +240,7 @@ struct Look {
 
 /// The preview's copy of the scene's plan: without the Cycles shell. The
 /// shell is one voxel of active zeros around both grids for Cycles' sake
-/// (`crate::pipeline::finish`); the reference renderer samples inactive
+/// (`crate::bake::plan::finish`); the reference renderer samples inactive
 /// voxels as 0 too, so it changes no pixel (tested:
 /// `the_refined_picture_is_the_render_of_the_bake`) and only costs the
 /// dilation and a larger medium.
@@ -314,7 +316,7 @@ impl Preview {
         let t = Instant::now();
         let nothing = &NoProgress;
         let v = COARSE_VOXEL_FACTOR * voxel_km;
-        let emission = pipeline::gather_from(plan, &input.every(COARSE_PHOTON_STRIDE), v, nothing);
+        let emission = plan::gather_from(plan, &input.every(COARSE_PHOTON_STRIDE), v, nothing);
         // Only the grids are used: no photons for the power sums, no warnings.
         let g = Gathered {
             photons: Vec::new(),
@@ -324,7 +326,7 @@ impl Preview {
             warnings: Vec::new(),
             noise: None,
         };
-        let b = pipeline::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
+        let b = plan::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
         let png = self.coarse_from(scene, &b, prev)?;
         Ok((t.elapsed().as_secs_f64(), png, b))
     }
@@ -420,13 +422,13 @@ impl Preview {
                     let (gathered, voxel, coarse) = if regather {
                         let voxel = plan.voxel_size(&c.bake.photons);
                         let t = Instant::now();
-                        let input = pipeline::gather_input(&plan, &c.bake.photons);
+                        let input = plan::gather_input(&plan, &c.bake.photons);
                         u.gather = t.elapsed().as_secs_f64();
                         let coarse;
                         (u.coarse_render, u.png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                         coarse_done(&mut u);
                         let t = Instant::now();
-                        let gathered = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                        let gathered = plan::gather_from(&plan, &input, voxel.0, nothing);
                         u.gather += t.elapsed().as_secs_f64();
                         (gathered, voxel, Some(coarse))
                     } else {
@@ -438,7 +440,7 @@ impl Preview {
                         (gathered, c.voxel.clone(), None)
                     };
                     let t = Instant::now();
-                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
+                    let mut warnings = voxel::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(c.count.2.iter().cloned());
                     let g = Gathered {
                         photons: c.bake.photons.clone(),
@@ -448,7 +450,7 @@ impl Preview {
                         warnings,
                         noise: c.count.1.clone(),
                     };
-                    (c.bake, c.dropped) = pipeline::finish_keeping(&plan, gathered, g, times.clone(), t0, nothing)?;
+                    (c.bake, c.dropped) = plan::finish_keeping(&plan, gathered, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
                     (c.plan, c.voxel, c.coarse) = (plan, voxel, coarse);
                     Ok(true)
@@ -478,19 +480,19 @@ impl Preview {
                     let count = bake::beam_count(&plan, &mut times, nothing)?;
                     u.pilot = times.pilot;
                     let t = Instant::now();
-                    let traced = pipeline::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
+                    let traced = plan::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
                     let t = Instant::now();
-                    let input = pipeline::gather_input(&plan, &traced.photons);
+                    let input = plan::gather_input(&plan, &traced.photons);
                     u.gather = t.elapsed().as_secs_f64();
                     let (secs, png, coarse) = self.coarse_picture(scene, &plan, &input, voxel.0, &mut parts)?;
                     (u.coarse_render, u.png) = (secs, png);
                     coarse_done(&mut u);
                     let t = Instant::now();
-                    let mut warnings = pipeline::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
+                    let mut warnings = voxel::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(count.2.iter().cloned());
-                    let emission = pipeline::gather_from(&plan, &input, voxel.0, nothing);
+                    let emission = plan::gather_from(&plan, &input, voxel.0, nothing);
                     drop(input);
                     u.gather += t.elapsed().as_secs_f64();
                     (times.beams, times.gather) = (u.trace, u.gather);
@@ -504,7 +506,7 @@ impl Preview {
                     };
                     let t = Instant::now();
                     let (voxel, beam_stats) = ((g.voxel_km, g.voxel_source.clone()), g.beam_stats.clone());
-                    let (bake, dropped) = pipeline::finish_keeping(&plan, emission, g, times.clone(), t0, nothing)?;
+                    let (bake, dropped) = plan::finish_keeping(&plan, emission, g, times.clone(), t0, nothing)?;
                     u.finish = t.elapsed().as_secs_f64();
                     Ok(Cache { scene: scene.clone(), plan, count, beam_stats, dropped, voxel, bake, coarse: Some(coarse) })
                 })();

@@ -15,7 +15,7 @@
 
 use crate::atmosphere::Atmosphere;
 use crate::bake::BakeError;
-use crate::pipeline::BakePlan;
+use crate::bake::plan::BakePlan;
 use crate::beams::{self, BeamStats};
 use crate::deposit::StepDeposit;
 use crate::fang::KEV_PER_ION_PAIR;

@@ -36,7 +36,7 @@
 //!   density: the tests' reference sampler and random control.
 //!
 //! Each block of 2^40 indices has its own shift ([`UnitPoints`]): the
-//! pilot's halves (`crate::pilot`) are then independent randomisations, so
+//! pilot's halves (`crate::bake::pilot`) are then independent randomisations, so
 //! their difference measures the variance of a stratified bake.
 //!
 //! The sequence is indexed by the beam index alone, in 64-bit fixed point

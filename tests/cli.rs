@@ -227,9 +227,9 @@ fn target_noise_sets_the_beam_count_and_prune_zero_keeps_every_leaf() {
     // from the reported noise at m and m / 4 beams.
     let (m, noise_m) = (n["pilot_beams"].as_f64().unwrap(), n["pilot_noise"].as_f64().unwrap());
     let noise_q = n["quarter_noise"].as_f64().unwrap();
-    let (a, b) = aurora::pilot::fit_law((m as usize / 4) as f64, noise_q, m, noise_m);
+    let (a, b) = aurora::bake::pilot::fit_law((m as usize / 4) as f64, noise_q, m, noise_m);
     assert_eq!((a, b), (n["law_a"].as_f64().unwrap(), n["law_b"].as_f64().unwrap()));
-    let want = aurora::pilot::beams_for_law(a, b, 0.4).ceil() as u64;
+    let want = aurora::bake::pilot::beams_for_law(a, b, 0.4).ceil() as u64;
     assert_eq!(n["beams"].as_u64().unwrap(), want, "{n}");
     assert_eq!(stats["beams"].as_u64().unwrap(), want);
     assert_eq!(n["capped"], false);

@@ -1,20 +1,72 @@
-//! The layering rule of `docs/ARCHITECTURE.md`, enforced: the crate's
-//! top-level modules import one another without circles, and the bottom
-//! layer imports nothing from the stages above it.
+//! The layering rule of `docs/ARCHITECTURE.md`, enforced: every top-level
+//! module of the crate sits in one layer of [`LAYERS`], and imports only
+//!
+//! - modules of the layers its own layer may import ([`may_import`]):
+//!   the bottom imports no other layer; the stages and the renderer only the
+//!   bottom; the files the bottom and the stages; above all, everything;
+//! - modules listed before it in its own layer (each layer's list is an
+//!   order in which its modules are built on one another);
+//! - the renderer from the file layer only in the adapter files of
+//!   [`ADAPTERS`] (a file format read into the renderer's medium).
+//!
+//! The renderer so never imports a stage or a file format, and a stage
+//! never imports the renderer. A module in no layer fails the test: a new
+//! module must be placed. `main.rs` and the modules it declares (`mod x;`,
+//! the binary's own) sit above everything; `lib.rs` declares the modules.
+//! Import circles between top-level modules fail too.
 //!
 //! The graph is read from the source: every `crate::name` path in the code
 //! of `src/**/*.rs` (in `use` lines and inline, `use crate::{a, b}` groups
 //! included) is an edge from the file's top-level module (`src/x.rs` or
 //! `src/x/...`) to `name`. Comments, string literals and `#[cfg(test)]`
 //! items are skipped: a test may reach up to build its inputs (the graph is
-//! the library's). `main.rs` and `lib.rs` sit above everything.
+//! the library's). [`violations`] is the one checker; it runs on the tree
+//! and, with an upward import planted in each layer, on synthetic sources.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-/// The bottom layer: these know nothing of the stages above, and import
-/// only one another.
-const LOWER: &[&str] = &["grid", "scene", "camera", "spectrum", "atmosphere", "atomic", "input_file", "progress", "rng", "magnetic", "deposit", "watch", "leaf_source"];
+/// A layer of `docs/ARCHITECTURE.md`, lowest first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Layer {
+    Bottom,
+    Stages,
+    Renderer,
+    Files,
+    Above,
+}
+use Layer::*;
+
+/// Every top-level module, by layer. Within a layer a module imports only
+/// those listed before it.
+const LAYERS: &[(Layer, &[&str])] = &[
+    (
+        Bottom,
+        &["input_file", "scene", "rng", "progress", "atomic", "memory", "atmosphere", "spectrum", "camera", "grid", "magnetic", "deposit", "watch", "leaf_source"],
+    ),
+    (
+        Stages,
+        &["frames", "footprint", "starts", "animation", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"],
+    ),
+    (Renderer, &["render"]),
+    (Files, &["vdb", "usd", "bake_identity", "outputs", "sequence"]),
+    (Above, &["preview", "bench"]),
+];
+
+/// Whether a module of layer `from` may import a module of another layer
+/// `to` (its own layer: by the order of [`LAYERS`]).
+fn may_import(from: Layer, to: Layer) -> bool {
+    match from {
+        Bottom => false,
+        Stages | Renderer => to == Bottom,
+        Files => matches!(to, Bottom | Stages),
+        Above => true,
+    }
+}
+
+/// (file under `src/`, module): the files of the file layer that adapt a
+/// format to the renderer and so may import it.
+const ADAPTERS: &[(&str, &str)] = &[("vdb/read.rs", "render")];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).expect("read src/") {
@@ -206,25 +258,118 @@ fn crate_refs(code: &str) -> BTreeSet<String> {
     out
 }
 
-/// module -> the modules it refers to (itself excluded).
-fn graph() -> BTreeMap<String, BTreeSet<String>> {
+
+/// Every `.rs` file under `src/`, as (path relative to `src/`, text).
+fn tree() -> Vec<(String, String)> {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
     let mut files = Vec::new();
     rust_files(&src, &mut files);
-    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-    for f in files {
-        let rel = f.strip_prefix(&src).expect("under src/");
-        let first = rel.components().next().expect("non-empty").as_os_str().to_string_lossy().into_owned();
-        let module = first.trim_end_matches(".rs").to_string();
-        if module == "main" || module == "lib" {
+    files.sort();
+    files
+        .into_iter()
+        .map(|f| {
+            let rel = f.strip_prefix(&src).expect("under src/").to_string_lossy().replace('\\', "/");
+            (rel, std::fs::read_to_string(&f).expect("read a source file"))
+        })
+        .collect()
+}
+
+/// The top-level module of a file: `x` for `x.rs` and `x/...`.
+fn module_of(rel: &str) -> String {
+    rel.split('/').next().expect("non-empty").trim_end_matches(".rs").to_string()
+}
+
+/// The modules `main.rs` declares (`mod x;`): the binary's, above all.
+fn binary_modules(files: &[(String, String)]) -> BTreeSet<String> {
+    let Some((_, main)) = files.iter().find(|(rel, _)| rel == "main.rs") else { return BTreeSet::new() };
+    let code = code_only(main);
+    let mut out = BTreeSet::new();
+    for part in code.split(';') {
+        let words: Vec<&str> = part.split_whitespace().collect();
+        if let [.., m, name] = words[..] {
+            if m == "mod" && name.chars().all(|c| c.is_alphanumeric() || c == '_') {
+                out.insert(name.to_string());
+            }
+        }
+    }
+    out
+}
+
+/// Every import edge of the library as (from module, to module, file).
+fn edges(files: &[(String, String)]) -> Vec<(String, String, String)> {
+    let binary = binary_modules(files);
+    let mut out = Vec::new();
+    for (rel, text) in files {
+        let module = module_of(rel);
+        if module == "main" || module == "lib" || binary.contains(&module) {
             continue;
         }
-        let text = std::fs::read_to_string(&f).expect("read a source file");
-        let refs = crate_refs(&code_only(&text));
-        let e = g.entry(module.clone()).or_default();
-        e.extend(refs.into_iter().filter(|r| *r != module));
+        for r in crate_refs(&code_only(text)) {
+            if r != module {
+                out.push((module.clone(), r, rel.clone()));
+            }
+        }
+    }
+    out
+}
+
+/// module -> the modules it refers to (itself excluded).
+fn graph(files: &[(String, String)]) -> BTreeMap<String, BTreeSet<String>> {
+    let mut g: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (rel, _) in files {
+        let m = module_of(rel);
+        if m != "main" && m != "lib" {
+            g.entry(m).or_default();
+        }
+    }
+    for (from, to, _) in edges(files) {
+        g.entry(from).or_default().insert(to);
     }
     g
+}
+
+/// A module's layer and its place in the layer's list.
+fn place(module: &str) -> Option<(Layer, usize)> {
+    LAYERS.iter().find_map(|(layer, ms)| ms.iter().position(|m| *m == module).map(|i| (*layer, i)))
+}
+
+/// Every breach of the layering rule in `files`: modules in no layer
+/// (and layer entries with no module), and every import the rule forbids,
+/// as "from -> to (file): why".
+fn violations(files: &[(String, String)]) -> Vec<String> {
+    let binary = binary_modules(files);
+    let modules: BTreeSet<String> =
+        files.iter().map(|(rel, _)| module_of(rel)).filter(|m| m != "main" && m != "lib" && !binary.contains(m)).collect();
+    let mut bad = Vec::new();
+    for m in &modules {
+        if place(m).is_none() {
+            bad.push(format!("module `{m}` is in no layer: place it in LAYERS and docs/ARCHITECTURE.md"));
+        }
+    }
+    for (_, ms) in LAYERS {
+        for m in *ms {
+            if !modules.contains(*m) {
+                bad.push(format!("LAYERS lists `{m}`, which is not a module of src/"));
+            }
+        }
+    }
+    for (from, to, file) in edges(files) {
+        let (Some((lf, i)), Some((lt, j))) = (place(&from), place(&to)) else { continue };
+        let allowed = if lf == lt {
+            j < i
+        } else {
+            may_import(lf, lt) || (lf == Files && lt == Renderer && ADAPTERS.contains(&(file.as_str(), to.as_str())))
+        };
+        if !allowed {
+            let why = if lf == lt {
+                format!("`{to}` is listed after `{from}` in the {lf:?} layer")
+            } else {
+                format!("the {lf:?} layer may not import the {lt:?} layer")
+            };
+            bad.push(format!("{from} -> {to} ({file}): {why}"));
+        }
+    }
+    bad
 }
 
 /// Every edge that lies on a circle, as (from, to), found by reachability.
@@ -291,25 +436,97 @@ fn a_circle_is_found() {
     assert!(!c.contains(&("c".into(), "d".into())));
 }
 
+
 #[test]
 fn modules_import_each_other_without_circles() {
-    let g = graph();
+    let g = graph(&tree());
     assert!(g.len() > 15 && g.contains_key("bake") && g["vdb"].contains("grid"), "the graph was not read: {g:?}");
     let circles = circle_edges(&g);
     assert!(circles.is_empty(), "import circles (module -> module on a circle): {circles:?}\nthe graph: {g:#?}");
 }
 
 #[test]
-fn the_bottom_layer_imports_nothing_from_above() {
-    let g = graph();
-    let mut bad = Vec::new();
-    for low in LOWER {
-        let deps = g.get(*low).unwrap_or_else(|| panic!("no module `{low}` in src/: update LOWER"));
-        for d in deps {
-            if !LOWER.contains(&d.as_str()) {
-                bad.push(format!("{low} -> {d}"));
-            }
+fn every_module_is_in_a_layer_and_imports_only_what_its_layer_may() {
+    let files = tree();
+    assert!(edges(&files).len() > 40, "the edges were not read");
+    let bad = violations(&files);
+    assert!(bad.is_empty(), "the layering of docs/ARCHITECTURE.md is broken:\n{}", bad.join("\n"));
+}
+
+/// A clean synthetic tree: one file per module of [`LAYERS`], each
+/// importing only what the rule allows, and the adapter importing the
+/// renderer.
+fn synthetic() -> Vec<(String, String)> {
+    let mut files: BTreeMap<String, String> = BTreeMap::new();
+    for (_, ms) in LAYERS {
+        for m in *ms {
+            files.insert(format!("{m}.rs"), String::new());
         }
     }
-    assert!(bad.is_empty(), "lower layers reach up: {bad:?} (lower: {LOWER:?})");
+    for dir in ["vdb", "render", "bench"] {
+        files.remove(&format!("{dir}.rs"));
+    }
+    let with = [
+        ("lib.rs", ""),
+        ("main.rs", "mod cli;\n"),
+        ("cli/mod.rs", "use crate::anything;\n"),
+        ("spectrum.rs", "use crate::atmosphere::Atmosphere;\n"),
+        ("profile.rs", "use crate::{bake, beams::BeamStats};\n"),
+        ("render/mod.rs", "fn f() { crate::camera::CameraModel::new(); }\n"),
+        ("vdb/mod.rs", "use crate::grid::Grid;\n"),
+        ("vdb/read.rs", "use crate::render::medium::Medium;\nuse crate::bake::Bake;\n"),
+        ("outputs.rs", "use crate::{frames, usd, vdb};\n"),
+        ("bench/mod.rs", "use crate::{preview, render, outputs};\n"),
+    ];
+    for (rel, text) in with {
+        files.insert(rel.to_string(), text.to_string());
+    }
+    files.into_iter().collect()
+}
+
+/// Plants `line` in the file `rel` of the synthetic tree.
+fn planted(rel: &str, line: &str) -> Vec<(String, String)> {
+    let mut files = synthetic();
+    match files.iter_mut().find(|(r, _)| r == rel) {
+        Some((_, text)) => text.push_str(line),
+        None => files.push((rel.to_string(), line.to_string())),
+    }
+    files
+}
+
+#[test]
+fn the_checker_reports_an_upward_import_planted_in_each_layer() {
+    let clean = violations(&synthetic());
+    assert!(clean.is_empty(), "the clean synthetic tree: {clean:?}");
+    let cases: &[(&str, &str, &str)] = &[
+        // The bottom: onto a stage, and onto a bottom module listed after it.
+        ("grid.rs", "use crate::bake::Bake;\n", "grid -> bake (grid.rs)"),
+        ("scene.rs", "fn f() { crate::camera::x(); }\n", "scene -> camera (scene.rs)"),
+        // The stages: onto the files, the renderer, and a later stage.
+        ("beams.rs", "use crate::outputs;\n", "beams -> outputs (beams.rs)"),
+        ("bake.rs", "use crate::render::Prepared;\n", "bake -> render (bake.rs)"),
+        ("footprint.rs", "use crate::{rng, beams::Photon};\n", "footprint -> beams (footprint.rs)"),
+        // The renderer: onto a file format and onto a stage.
+        ("render/mod.rs", "use crate::vdb::read;\n", "render -> vdb (render/mod.rs)"),
+        ("render/mod.rs", "use crate::photons::GatherInput;\n", "render -> photons (render/mod.rs)"),
+        // The files: onto the layer above, onto the renderer outside the
+        // adapter, and onto a later file module.
+        ("usd.rs", "use crate::preview;\n", "usd -> preview (usd.rs)"),
+        ("vdb/write.rs", "use crate::render::medium::Medium;\n", "vdb -> render (vdb/write.rs)"),
+        ("vdb/mod.rs", "use crate::outputs::write;\n", "vdb -> outputs (vdb/mod.rs)"),
+        // Above all: onto a module listed after it.
+        ("preview.rs", "use crate::bench::Study;\n", "preview -> bench (preview.rs)"),
+    ];
+    for (rel, line, want) in cases {
+        let got = violations(&planted(rel, line));
+        assert!(got.len() == 1 && got[0].starts_with(want), "planted `{}` in {rel}: want `{want}`, got {got:?}", line.trim());
+    }
+    // A module placed in no layer.
+    let got = violations(&planted("newthing.rs", ""));
+    assert!(got.len() == 1 && got[0].contains("`newthing` is in no layer"), "{got:?}");
+    // A layer entry whose module is gone.
+    let mut files = synthetic();
+    files.retain(|(rel, _)| rel != "deposit.rs");
+    let got = violations(&files);
+    assert!(got.len() == 1 && got[0].contains("lists `deposit`"), "{got:?}");
 }

@@ -1,9 +1,10 @@
-//! The bake pipeline (`aurora::pipeline`): a beam is the same beam whatever
+//! The bake pipeline (`aurora::bake::plan`): a beam is the same beam whatever
 //! the chunking, and a bake composed from the plan's stages is `aurora
 //! bake`'s.
 
 use aurora::bake;
-use aurora::pipeline::{self, BakePlan, StageTimes};
+use aurora::bake::plan::{self, BakePlan};
+use aurora::bake::stats::StageTimes;
 use aurora::progress::NoProgress;
 use aurora::scene::{BeamStarts, Deposition};
 use std::time::Instant;
@@ -22,7 +23,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
         s.beams.deposition = deposition;
         let plan = BakePlan::new(&s, &NoProgress);
         let n = s.beams.count;
-        let whole = pipeline::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
+        let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
         assert!(whole.photons.len() > 1000, "{}", whole.photons.len());
         // Cuts inside the first curtain, at the curtain boundary (201 of
         // 301 beams go to the first, weight 1 : 0.5), inside the second.
@@ -30,7 +31,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             let mut photons = Vec::new();
             let (mut beams, mut electron, mut deposited) = (0, 0.0, 0.0);
             for w in cuts.windows(2) {
-                let part = pipeline::trace(&plan, n, 0, w[0]..w[1], &NoProgress).unwrap();
+                let part = plan::trace(&plan, n, 0, w[0]..w[1], &NoProgress).unwrap();
                 beams += part.stats.beams;
                 electron += part.stats.electron_power_w;
                 deposited += part.stats.deposited_power_w;
@@ -49,7 +50,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             assert!((deposited / whole.stats.deposited_power_w - 1.0).abs() < 1e-12, "{deposited}");
         }
         // An empty range traces nothing.
-        assert!(pipeline::trace(&plan, n, 0, 5..5, &NoProgress).unwrap().photons.is_empty());
+        assert!(plan::trace(&plan, n, 0, 5..5, &NoProgress).unwrap().photons.is_empty());
     }
 }
 
@@ -61,15 +62,15 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
     // finish.
     let plan = BakePlan::new(&s, &NoProgress);
     let n = plan.beams.count;
-    let mut photons = pipeline::trace(&plan, n, 0, 0..150, &NoProgress).unwrap().photons;
-    let rest = pipeline::trace(&plan, n, 0, 150..n, &NoProgress).unwrap();
+    let mut photons = plan::trace(&plan, n, 0, 0..150, &NoProgress).unwrap().photons;
+    let rest = plan::trace(&plan, n, 0, 150..n, &NoProgress).unwrap();
     photons.extend(rest.photons);
     let (v, source) = plan.voxel_size(&photons);
     assert_eq!((v, source.as_str()), (want.stats.voxel_size_km, want.stats.voxel_size_source.as_str()));
-    let emission = pipeline::gather(&plan, &photons, v, &NoProgress);
-    let whole = pipeline::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
+    let emission = plan::gather(&plan, &photons, v, &NoProgress);
+    let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
     assert_eq!(photons, whole.photons);
-    let g = pipeline::Gathered {
+    let g = plan::Gathered {
         photons,
         beam_stats: whole.stats,
         voxel_km: v,
@@ -77,7 +78,7 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
         warnings: Vec::new(),
         noise: None,
     };
-    let got = pipeline::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
+    let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);
     assert_eq!(got.density, want.density);
     assert_eq!(got.photons, want.photons);

@@ -133,7 +133,7 @@ pub struct BeamStats {
 /// What tracing needs of the scene, as plain data (no `Scene`): the
 /// curtains, the beam parameters, the seed, the footprint threshold, the
 /// animation time (pulsation, ray drift), the colour noise and the kernel
-/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline`
+/// shape. [`TraceParams::of`] reads them from a scene; `crate::bake::plan`
 /// keeps owned copies.
 #[derive(Clone, Copy, Debug)]
 pub struct TraceParams<'a> {
@@ -181,7 +181,7 @@ pub fn trace_all(
 
 /// [`trace_all`] with beam `i` of a curtain drawing the random stream of
 /// index `first_beam + i`: beams from disjoint index ranges are independent
-/// samples of the same scene (the pilot of `crate::pilot` uses two).
+/// samples of the same scene (the pilot of `crate::bake::pilot` uses two).
 pub fn trace_all_from(
     scene: &Scene,
     footprints: &[Footprint],
@@ -468,9 +468,9 @@ mod tests {
         // photon list is the same for 1 and 3 threads.
         let s1 = small_scene(300);
         let s2 = small_scene(600);
-        let fps = crate::bake::footprints(&s1);
+        let fps = crate::bake::plan::footprints(&s1);
         let atm = Atmosphere::us1976();
-        let colour = crate::bake::colour_table(&s1, &atm);
+        let colour = crate::bake::plan::colour_table(&s1, &atm);
         let run = |s: &Scene, threads: usize| {
             rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
                 trace_all(s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap().0
@@ -493,9 +493,9 @@ mod tests {
     #[test]
     fn steps_are_segments_and_the_point_kernel_collapses_them() {
         let mut s = small_scene(50);
-        let fps = crate::bake::footprints(&s);
+        let fps = crate::bake::plan::footprints(&s);
         let atm = Atmosphere::us1976();
-        let colour = crate::bake::colour_table(&s, &atm);
+        let colour = crate::bake::plan::colour_table(&s, &atm);
         let (seg, _) = trace_all(&s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap();
         assert!(seg.iter().filter(|p| !p.is_point()).count() > seg.len() / 2);
         // Consecutive steps of a beam chain: one ends where the next starts

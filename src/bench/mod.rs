@@ -25,7 +25,7 @@ pub mod voxel;
 pub mod vdb_write;
 
 use crate::bake::BakeError;
-use crate::pipeline::{self, BakePlan};
+use crate::bake::plan::{self, BakePlan};
 use crate::progress::NoProgress;
 use crate::scene::{Scene, VoxelSize};
 use report::{BenchRun, Machine};
@@ -45,7 +45,7 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
             // "auto" depends on the full scene's photons: trace them once.
             let plan = BakePlan::new(scene, &NoProgress);
             let n = plan.beams.count;
-            let photons = pipeline::trace(&plan, n, 0, 0..n, &NoProgress).map_err(BakeError::from)?.photons;
+            let photons = plan::trace(&plan, n, 0, 0..n, &NoProgress).map_err(BakeError::from)?.photons;
             Some(plan.voxel_size(&photons))
         }
     };

@@ -45,10 +45,10 @@ use super::reduced::volume_camera;
 use crate::bake::{self, BakeError};
 use crate::deposit::Photon;
 use crate::grid::Grid;
-use crate::pipeline::{self, BakePlan, KernelRadius};
+use crate::bake::plan::{self, BakePlan};
 use crate::progress::NoProgress;
 use crate::render::{self, Image, RenderError, RenderSettings, Volume};
-use crate::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
+use crate::scene::{GatherMethod, KernelRadius, Scene, TerrainKind, VoxelSize};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 use std::time::Instant;
@@ -272,7 +272,7 @@ impl<'a> Bench<'a> {
             return Ok(());
         }
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, secs) = timed(min, runs, || pipeline::trace(&self.bake, n, 0, 0..n, &NoProgress));
+        let (res, secs) = timed(min, runs, || plan::trace(&self.bake, n, 0, 0..n, &NoProgress));
         let ph = res.map_err(BakeError::from)?.photons;
         self.photons.insert(n, (ph, secs));
         Ok(())
@@ -360,11 +360,11 @@ impl<'a> Bench<'a> {
         method: GatherMethod,
     ) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
         let b = &self.bake;
-        let radius = pipeline::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
+        let radius = plan::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
         let cutoff = b.photons.cutoff;
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (photons, _) = self.photons_of(n)?;
-        Ok(timed(min, runs, || pipeline::gather_with(photons, v, &radius, cutoff, method, &NoProgress)))
+        Ok(timed(min, runs, || plan::gather_with(photons, v, &radius, cutoff, method, &NoProgress)))
     }
 
     pub(super) fn say(&self, s: &str) {
@@ -379,11 +379,11 @@ impl<'a> Bench<'a> {
         // Same curtains and footprint: the plan reuses the footprints.
         let old = BakePlan::reusing(&s, &self.bake, &NoProgress);
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, trace_s) = timed(min, runs, || pipeline::trace(&old, n, 0, 0..n, &NoProgress));
+        let (res, trace_s) = timed(min, runs, || plan::trace(&old, n, 0, 0..n, &NoProgress));
         let photons = res.map_err(BakeError::from)?.photons;
         let (v, cutoff) = (self.voxel(), self.bake.photons.cutoff);
         let (g, gather_s) = timed(min, runs, || {
-            pipeline::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress)
+            plan::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress)
         });
         Ok((g, trace_s, gather_s))
     }

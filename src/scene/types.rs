@@ -110,7 +110,7 @@ pub struct BeamParams {
     pub count: usize,
     /// Relative RMS noise of the emission grid to aim for (0 = off: use
     /// `count`). A pilot bake measures the scene's noise and sets the beam
-    /// count from it (`crate::pilot`), at most `count`.
+    /// count from it (`crate::bake::pilot`), at most `count`.
     pub target_noise: f64,
     /// Altitude where beams start, km.
     pub top_km: f64,
@@ -259,7 +259,7 @@ pub enum Compression {
 
 /// Voxel size: a number of km, or "auto": one voxel about one pixel of the
 /// scene's camera at the nearest aurora, resolved by the bake
-/// (`crate::bake::auto_voxel_size`).
+/// (`crate::bake::voxel::auto_voxel_size`).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {

@@ -1,30 +1,101 @@
 //! The bake: scene -> footprints -> beams -> photons -> grids.
 //!
-//! [`bake`] composes the stages of [`crate::pipeline`] for a scene: the
-//! memory check ([`crate::budget`]), a [`BakePlan`] (footprints, atmosphere,
-//! colour table, field, kernel radius field), the beam count (from
-//! `beams.count`, or from a pilot, [`crate::pilot`], when
-//! `beams.target_noise > 0`), then trace, gather and finish. [`bake_plan`]
-//! does the same from a plan already built (frame sequences reuse one).
-//! The stage functions, the types and the helpers live in
-//! [`crate::pipeline`] and are re-exported here.
+//! [`bake`] composes the stages for a scene: the memory check
+//! ([`crate::budget`]), a [`BakePlan`] (footprints, atmosphere, colour
+//! table, field, kernel radius field), the beam count ([`beam_count`]: from
+//! `beams.count`, or from the [`pilot`] when `beams.target_noise > 0`), then
+//! trace, gather and finish ([`plan`]). [`bake_plan`] does the same from a
+//! plan already built (frame sequences reuse one, [`bake_reusing`]).
 //!
-//! Grid transform: `voxel_size` from the scene (for `voxel_size = "auto"` the
-//! camera's choice, [`auto_voxel_size`]: one pixel at the nearest aurora,
-//! within [half the kernel radius, twice the smallest kernel radius]),
-//! translation 0, so voxel (i, j, k) is centred at
-//! `voxel_size * (i, j, k)` km.
+//! The rooms: [`plan`] the plan and its stages as functions of it and of
+//! plain data (`aurora preview` and the bench call them one by one);
+//! [`voxel`] the voxel size (the camera's choice for `voxel_size = "auto"`)
+//! and the resolution warnings; [`density`] the density grid and the air
+//! extinction; [`stats`] the numbers written as bake.json; [`pilot`] the
+//! beam count from a target noise. Here: the composition, its result
+//! [`Bake`] and its error [`BakeError`].
+//!
+//! Grid transform: translation 0, so voxel (i, j, k) is centred at
+//! `voxel_size * (i, j, k)` km ([`voxel::grid_transform`]).
 
-pub use crate::pipeline::{
-    atmosphere, auto_voxel_size, band_thickness_km, colour_table, density_grid, empty_reason, extinction,
-    extinction_warning, footprints, resolution_warnings, voxel_size, Bake, BakeError, BakePlan, BakeStats, StageTimes,
-    AURORA_FRACTION, MAX_EXTINCTION_PER_KM,
-};
-use crate::pilot;
-use crate::pipeline;
+pub mod density;
+pub mod pilot;
+pub mod plan;
+pub mod stats;
+pub mod voxel;
+
+use crate::beams::{BeamError, BeamStats};
+use crate::deposit::Photon;
+use crate::grid::Grid;
 use crate::progress::Progress;
 use crate::scene::Scene;
+use plan::BakePlan;
+use stats::{BakeStats, NoiseEstimate, StageTimes};
 use std::time::Instant;
+
+/// The baked volumes and what produced them.
+#[derive(Clone, Debug)]
+pub struct Bake {
+    /// Linear Rec.709 emission, kR per km (Y = 1: 1 kR of 557.7 nm per km).
+    pub emission: Grid<[f32; 3]>,
+    /// Extinction per km, on the emission's active voxels.
+    pub density: Grid<f32>,
+    pub photons: Vec<Photon>,
+    pub stats: BakeStats,
+}
+
+
+/// A bake failure.
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    #[error(transparent)]
+    Beams(#[from] BeamError),
+    /// The emission overflowed single precision (never written: a safety
+    /// net behind the scene's validation ranges).
+    #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
+    NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
+    /// The bake would need more memory than this process may use
+    /// ([`crate::budget`]); refused before anything is allocated. Boxed: its
+    /// six strings would otherwise set the size of every
+    /// `Result<_, BakeError>`.
+    #[error(transparent)]
+    Memory(#[from] Box<crate::budget::TooLarge>),
+    /// The bake produced no emission at all: an empty VDB is never written
+    /// silently. The message says where the beams' energy went.
+    #[error("the bake deposited no light: {0}")]
+    Empty(String),
+    /// `grid.half_emission` asks for half floats the emission exceeds.
+    #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
+    HalfOverflow { ijk: [i32; 3], peak: f32 },
+    /// The scene's camera is out of range (never with a validated scene).
+    #[error(transparent)]
+    Camera(#[from] crate::camera::CameraError),
+}
+
+
+/// Why a bake came out empty, in the user's terms: how its beams ended and
+/// which keys to look at.
+pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
+    let mut why = format!(
+        "{} beams made {} photons ({} left their footprint, {} spent their energy, {} took the most steps, 1 / beams.dt = {})",
+        stats.beams,
+        stats.photons,
+        stats.ended_left_footprint,
+        stats.ended_energy_spent,
+        stats.ended_max_steps,
+        (1.0 / beams.dt).round()
+    );
+    if stats.photons == 0 {
+        why += &format!(
+            "; no beam deposited energy before stopping: check beams.length_km = {} (a first step longer than the atmosphere leaves nothing) and beams.top_km = {}",
+            beams.length_km, beams.top_km
+        );
+    } else {
+        why += "; their emission is zero everywhere (curtain energy_flux, or an all-zero colour map)";
+    }
+    why
+}
+
 
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
@@ -53,8 +124,8 @@ pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progr
 pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
     let (count, noise, warnings) = beam_count(plan, &mut times, progress)?;
-    let (emission, gathered) = pipeline::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
-    pipeline::finish(plan, emission, gathered, times, t_all, progress)
+    let (emission, gathered) = plan::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
+    plan::finish(plan, emission, gathered, times, t_all, progress)
 }
 
 /// The beam count: `beams.count`, or the pilot's when `beams.target_noise >
@@ -64,7 +135,7 @@ pub fn beam_count(
     plan: &BakePlan,
     times: &mut StageTimes,
     progress: &dyn Progress,
-) -> Result<(usize, Option<pipeline::NoiseEstimate>, Vec<String>), BakeError> {
+) -> Result<(usize, Option<NoiseEstimate>, Vec<String>), BakeError> {
     if plan.beams.target_noise <= 0.0 {
         return Ok((plan.beams.count, None, Vec::new()));
     }
@@ -84,8 +155,10 @@ pub fn beam_count(
     Ok((est.beams, Some(est), warnings))
 }
 
+
 #[cfg(test)]
 mod tests {
+    use super::density::{extinction, extinction_warning, MAX_EXTINCTION_PER_KM};
     use super::*;
     use crate::grid::Grid;
     use crate::progress::NoProgress;
@@ -316,50 +389,3 @@ mod tests {
     }
 }
 
-#[cfg(test)]
-mod auto_voxel_tests {
-    use super::*;
-    use crate::deposit::Photon;
-    use crate::scene::{AutoTag, Projection, VoxelSize};
-
-    fn photon_at(p: [f32; 3]) -> Photon {
-        Photon::point(p, [1.0; 3])
-    }
-
-    /// A pixel at distance d covers d * 2 tan(fov/2) / height.
-    #[test]
-    fn auto_voxel_projects_to_one_pixel_at_the_nearest_aurora() {
-        let mut s = Scene::default();
-        s.grid.voxel_size = VoxelSize::Auto(AutoTag::Auto);
-        s.camera.position = [0.0, 0.0, 0.0];
-        s.camera.fov_deg = 90.0;
-        s.render.height = 100;
-        s.photons.radius_km = 2.0;
-        s.photons.radius_noise = 0.0;
-        // 1000 photons at 150, 151, ... km: the 1st percentile (index 10) is 160 km.
-        let photons: Vec<Photon> = (0..1000).map(|i| photon_at([0.0, 0.0, 150.0 + i as f32])).collect();
-        let (v, why) = voxel_size(&s, &photons);
-        assert!((v - 160.0 * 2.0 / 100.0).abs() < 1e-9, "{v} {why}");
-        assert!(why.starts_with("auto"));
-        // One stray photon near the camera moves the percentile by one photon
-        // (159 km instead of 160), not to 1 km.
-        let mut with_stray = photons.clone();
-        with_stray.push(photon_at([0.0, 0.0, 1.0]));
-        assert!((voxel_size(&s, &with_stray).0 - 1.59 * 2.0).abs() < 1e-9);
-        // Never below half the kernel radius.
-        s.photons.radius_km = 10.0;
-        assert_eq!(voxel_size(&s, &photons).0, 5.0);
-        // Never above twice the smallest radius (1.0 x (1 - 0.3) x 2 = 1.4 km).
-        s.photons.radius_km = 1.0;
-        s.photons.radius_noise = 0.3;
-        let (v, why) = voxel_size(&s, &photons);
-        assert!((v - 1.4).abs() < 1e-12 && why.contains("lowered"), "{v} {why}");
-        assert!(resolution_warnings(&s, &[], v).is_empty(), "the bake does not warn about its own choice");
-        // Orthographic: ortho_height / height.
-        s.photons.radius_km = 0.1;
-        s.photons.radius_noise = 0.0;
-        s.camera.projection = Projection::Orthographic;
-        s.camera.ortho_height = 20.0;
-        assert!((voxel_size(&s, &photons).0 - 0.2).abs() < 1e-12);
-    }
-}

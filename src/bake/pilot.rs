@@ -60,9 +60,10 @@
 //! not change, is not part of it. The pilot costs about `2.5 m` beams of
 //! tracing and gathering; the count is capped at `beams.count`.
 
-pub use crate::pipeline::NoiseEstimate;
+use super::plan::{self, BakePlan};
+use super::stats::NoiseEstimate;
+use super::BakeError;
 use crate::grid::Grid;
-use crate::pipeline::{self, BakeError, BakePlan};
 use crate::progress::NoProgress;
 
 /// Beams in each half of the pilot: about 6 % of the default scene's
@@ -157,21 +158,21 @@ pub fn split_noise(a: &Grid<[f32; 3]>, b: &Grid<[f32; 3]>) -> f64 {
 /// Measures the plan's noise with a pilot of `2 m` beams
 /// ([`PILOT_HALF_BEAMS`]) and picks the beam count for `target` relative
 /// RMS noise, at most the plan's `beams.count`. Traces and gathers through
-/// the plan ([`pipeline::trace`], [`pipeline::gather`]); the count is an
+/// the plan ([`plan::trace`], [`plan::gather`]); the count is an
 /// argument, the scene is never copied.
 pub fn beams_for_noise(plan: &BakePlan, target: f64) -> Result<NoiseEstimate, BakeError> {
     let t = std::time::Instant::now();
     let m = PILOT_HALF_BEAMS;
-    let pa = pipeline::trace(plan, m, 0, 0..m, &NoProgress)?.photons;
-    let pb = pipeline::trace(plan, m, SECOND_HALF_OFFSET, 0..m, &NoProgress)?.photons;
+    let pa = plan::trace(plan, m, 0, 0..m, &NoProgress)?.photons;
+    let pb = plan::trace(plan, m, SECOND_HALF_OFFSET, 0..m, &NoProgress)?.photons;
     // The bake's own grid ("auto" resolved on the pilot's photons, which
     // sample the same distribution as the bake's).
     let (vs, _) = plan.voxel_size(&pa);
-    let grid = |photons: &[crate::deposit::Photon]| pipeline::gather(plan, photons, vs, &NoProgress);
+    let grid = |photons: &[crate::deposit::Photon]| plan::gather(plan, photons, vs, &NoProgress);
     let pilot_noise = split_noise(&grid(&pa), &grid(&pb)).sqrt();
     let q = m / 4;
-    let qa = pipeline::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;
-    let qb = pipeline::trace(plan, q, QUARTER_OFFSETS[1], 0..q, &NoProgress)?.photons;
+    let qa = plan::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;
+    let qb = plan::trace(plan, q, QUARTER_OFFSETS[1], 0..q, &NoProgress)?.photons;
     let quarter_noise = split_noise(&grid(&qa), &grid(&qb)).sqrt();
     let (law_a, law_b) = fit_law(q as f64, quarter_noise, m as f64, pilot_noise);
     let beams_needed = beams_for_law(law_a, law_b, target);
@@ -240,8 +241,8 @@ mod tests {
     /// `noise(m)` of the plan measured by the split estimator.
     fn split_noise_at(plan: &BakePlan, m: usize) -> f64 {
         let grid = |first: u64| {
-            let ph = pipeline::trace(plan, m, first, 0..m, &NoProgress).unwrap().photons;
-            pipeline::gather(plan, &ph, 1.0, &NoProgress)
+            let ph = plan::trace(plan, m, first, 0..m, &NoProgress).unwrap().photons;
+            plan::gather(plan, &ph, 1.0, &NoProgress)
         };
         split_noise(&grid(0), &grid(SECOND_HALF_OFFSET)).sqrt()
     }
@@ -318,8 +319,8 @@ mod tests {
         assert!(!est.capped && est.beams > 4 * PILOT_HALF_BEAMS, "{est:?}");
         let n = est.beams;
         let grid = |first: u64| {
-            let ph = pipeline::trace(&plan, n, first, 0..n, &NoProgress).unwrap().photons;
-            pipeline::gather(&plan, &ph, 1.0, &NoProgress)
+            let ph = plan::trace(&plan, n, first, 0..n, &NoProgress).unwrap().photons;
+            plan::gather(&plan, &ph, 1.0, &NoProgress)
         };
         let measured = split_noise(&grid(1 << 20), &grid(3 << 40)).sqrt();
         eprintln!("target {target}: measured {measured}, {est:?}");

@@ -1,4 +1,4 @@
-//! The bake pipeline: one [`BakePlan`] built from a scene, and the stages
+//! One [`BakePlan`] built from a scene, and the stages
 //! as functions of it and of plain data.
 //!
 //! The bake is scene -> footprints -> beams -> photons -> grids:
@@ -11,7 +11,7 @@
 //!    beam is the same beam whatever range it is traced in, so chunks
 //!    concatenate to the whole, byte for byte); with
 //!    `beams.target_noise > 0` the count comes from a pilot
-//!    (`crate::pilot`, which traces and gathers through this plan);
+//!    ([`super::pilot`], which traces and gathers through this plan);
 //! 3. the emission grid by kernel density estimation over the photons
 //!    ([`gather`], on the transform `voxel_size * (i, j, k)` km of
 //!    [`BakePlan::voxel_size`]): candidate 8^3 leaves are those within
@@ -20,242 +20,47 @@
 //! 4. [`finish`]: the f32 / half-float range checks; with `grid.prune > 0`,
 //!    the leaves faintest at the camera dropped within that error budget
 //!    ([`crate::prune`]); the density grid on the (kept) active voxels
-//!    ([`density_grid`]); with `grid.cycles_shell`, both grids dilated by one
+//!    ([`super::density::density_grid`]); with `grid.cycles_shell`, both grids dilated by one
 //!    voxel of active zeros ([`crate::grid::Grid::dilate_active`]); the
 //!    stats.
 //!
-//! `crate::bake::bake` composes them for a scene; `crate::preview` keeps
+//! [`super::bake`] composes them for a scene; `crate::preview` keeps
 //! their outputs between edits; the bench and frame sequences reuse a plan
 //! ([`BakePlan::reusing`] keeps the footprints, atmosphere and colour table
 //! when the sections they depend on are unchanged: a new frame time
-//! recomputes only the footprints). Nothing here imports `bake` or `pilot`.
+//! recomputes only the footprints). Nothing here imports the
+//! composition or the pilot.
 //!
-//! [`resolution_warnings`] flags bakes whose voxels under-resolve the kernel
-//! or the curtains, [`extinction_warning`] air extinction clamped at
-//! [`MAX_EXTINCTION_PER_KM`] (`BakeStats::warnings`; the CLI prints them on
+//! [`super::voxel::resolution_warnings`] flags bakes whose voxels under-resolve the kernel
+//! or the curtains, [`super::density::extinction_warning`] air
+//! extinction clamped at [`super::density::MAX_EXTINCTION_PER_KM`] (`BakeStats::warnings`; the CLI prints them on
 //! stderr). Emission that overflows f32 is an error, never a file.
 //!
-//! `photons.radius_km` is read in one place, [`KernelRadius::of`].
+//! `photons.radius_km` is read in one place, [`crate::scene::KernelRadius::of`].
 
+use super::density::{density_grid, extinction_warning};
+use super::stats::{BakeStats, NoiseEstimate, StageTimes};
+use super::voxel::{grid_transform, resolution_warnings_for, voxel_size_for};
+use super::{empty_reason, Bake, BakeError};
 use crate::atmosphere::Atmosphere;
 use crate::beams::{self, BeamError, BeamStats, TraceParams, Traced};
 use crate::camera::{CameraError, CameraModel};
 use crate::deposit::Photon;
 use crate::footprint::{self, Footprint};
-use crate::grid::{Grid, Leaf, Transform};
+use crate::grid::{Grid, Leaf};
 use crate::magnetic::MagneticField;
 use crate::photons::{self, radius::RadiusField};
 use crate::progress::Progress;
-use crate::prune::{self, PruneStats};
+use crate::prune;
 use crate::scene::{
-    AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams,
-    GatherMethod, GridParams, PhotonParams, Scene, VoxelSize,
+    KernelRadius,     AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams,
+    GatherMethod, GridParams, PhotonParams, Scene,
 };
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
 use glam::DVec3;
 use rayon::prelude::*;
-use serde::Serialize;
 use std::ops::Range;
 use std::time::Instant;
-
-/// `indicator = 1 - exp(-Y / (AURORA_FRACTION * Y_peak))`, about 1 wherever
-/// the aurora is within a few percent of its peak, falling smoothly to 0 in
-/// its faint fringes.
-pub const AURORA_FRACTION: f64 = 0.01;
-
-/// Largest air extinction stored, per km (the top of `density_a`'s range).
-/// `density_a exp(-density_b (h - density_base_km))` grows without bound
-/// below the base altitude and overflows f32 (and then f64) for steep
-/// profiles; at 10^6 per km a metre of path has optical depth 10^3, so any
-/// voxel is opaque and larger values change nothing but the risk of
-/// infinity. Clamped voxels are reported by a warning.
-pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
-
-/// The baked volumes and what produced them.
-#[derive(Clone, Debug)]
-pub struct Bake {
-    /// Linear Rec.709 emission, kR per km (Y = 1: 1 kR of 557.7 nm per km).
-    pub emission: Grid<[f32; 3]>,
-    /// Extinction per km, on the emission's active voxels.
-    pub density: Grid<f32>,
-    pub photons: Vec<Photon>,
-    pub stats: BakeStats,
-}
-
-/// Wall time of each stage, seconds.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
-pub struct StageTimes {
-    pub footprints: f64,
-    pub pilot: f64,
-    pub beams: f64,
-    pub gather: f64,
-    pub prune: f64,
-    pub density: f64,
-    pub total: f64,
-}
-
-/// Numbers describing a bake (written as bake.json).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct BakeStats {
-    pub units: &'static str,
-    pub seed: u64,
-    /// FNV-1a hash of the scene's canonical TOML, hex.
-    pub scene_hash: String,
-    pub voxel_size_km: f64,
-    /// "scene" or "auto (photons.radius_km)".
-    pub voxel_size_source: String,
-    pub gather: GatherMethod,
-    pub beams: usize,
-    pub photons: usize,
-    /// Voxels (and leaves) holding aurora: non-zero emission.
-    pub active_voxels: u64,
-    pub leaves: usize,
-    /// Active zero voxels of the `grid.cycles_shell` (0 without it).
-    pub shell_voxels: u64,
-    /// Active voxels and leaves per grid in the file: the aurora's plus the shell.
-    pub file_voxels: u64,
-    pub file_leaves: usize,
-    /// Inclusive index bounding box of the file's active voxels (shell
-    /// included), [min, max].
-    pub index_bbox: Option<[[i32; 3]; 2]>,
-    /// World bounding box of the active voxel centres, km, [min, max].
-    pub world_bbox: Option<[[f64; 3]; 2]>,
-    /// Largest emission per component, and the largest luminance, kR/km.
-    pub peak_emission: [f32; 3],
-    pub peak_luminance: f64,
-    /// Sum of the photons' power, 557.7-equivalent photons per second, RGB.
-    pub total_emitted_power: [f64; 3],
-    /// The same as luminance, in 557.7 nm photons per second.
-    pub total_emitted_luminance: f64,
-    /// Electron power into the atmosphere, W, and how much the beams
-    /// deposited before stopping.
-    pub electron_power_w: f64,
-    pub deposited_power_w: f64,
-    pub beam_stats: BeamStats,
-    pub times_s: StageTimes,
-    /// How `beams.target_noise` set the beam count (None when it is 0).
-    pub noise: Option<NoiseEstimate>,
-    /// What `grid.prune` removed (None when it is 0).
-    pub prune: Option<PruneStats>,
-    /// Under-resolution warnings ([`resolution_warnings`]); empty when the
-    /// grid resolves the kernel and every curtain.
-    pub warnings: Vec<String>,
-}
-
-impl BakeStats {
-    /// Wall time of the whole bake, seconds.
-    pub fn total_seconds(&self) -> f64 {
-        self.times_s.total
-    }
-}
-
-/// A bake failure.
-#[derive(Debug, thiserror::Error)]
-pub enum BakeError {
-    #[error(transparent)]
-    Beams(#[from] BeamError),
-    /// The emission overflowed single precision (never written: a safety
-    /// net behind the scene's validation ranges).
-    #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
-    NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
-    /// The bake would need more memory than this process may use
-    /// ([`crate::budget`]); refused before anything is allocated. Boxed: its
-    /// six strings would otherwise set the size of every
-    /// `Result<_, BakeError>`.
-    #[error(transparent)]
-    Memory(#[from] Box<crate::budget::TooLarge>),
-    /// The bake produced no emission at all: an empty VDB is never written
-    /// silently. The message says where the beams' energy went.
-    #[error("the bake deposited no light: {0}")]
-    Empty(String),
-    /// `grid.half_emission` asks for half floats the emission exceeds.
-    #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
-    HalfOverflow { ijk: [i32; 3], peak: f32 },
-    /// The scene's camera is out of range (never with a validated scene).
-    #[error(transparent)]
-    Camera(#[from] crate::camera::CameraError),
-}
-
-/// The voxel size in km and where it came from. `"auto"` asks the camera:
-/// see [`auto_voxel_size`].
-pub fn voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
-    let camera = CameraModel::new(&scene.camera, scene.render.width, scene.render.height);
-    voxel_size_for(scene.grid.voxel_size, KernelRadius::of(&scene.photons), camera.as_ref().ok(), photons)
-}
-
-/// [`voxel_size`] from plain data: `grid.voxel_size`, the kernel radius and
-/// the camera (None: not valid).
-pub fn voxel_size_for(size: VoxelSize, kernel: KernelRadius, camera: Option<&CameraModel>, photons: &[Photon]) -> (f64, String) {
-    match size {
-        VoxelSize::Km(v) => (v, "scene".into()),
-        VoxelSize::Auto(_) => {
-            let (v, why) = auto_voxel_size_for(kernel, camera, photons);
-            (v, format!("auto: {why}"))
-        }
-    }
-}
-
-/// No more model than the picture needs: the voxel size at which one voxel
-/// projects to about one pixel at the nearest aurora.
-///
-/// A pixel at the image centre subtends an angle `a` (perspective:
-/// 2 tan(fov/2) / height; fisheye: fov / max(width, height); equirectangular:
-/// min(360 / width, 180 / height) degrees: `CameraModel::pixel_angle`), so at
-/// distance d it covers d a km; d is the 1st percentile
-/// of the photons' distances from the camera (robust to a few stray photons,
-/// which would otherwise shrink every voxel). Orthographic: ortho_height /
-/// height. Never below half the kernel radius: the kernel already blurs the
-/// field at that scale, so finer voxels add memory and no detail; never above
-/// twice the smallest kernel radius, where the voxels would alias it.
-/// Rounded to three significant digits (down, at that ceiling) so the size
-/// reads well in bake.json.
-pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
-    let camera = CameraModel::new(&scene.camera, scene.render.width, scene.render.height);
-    auto_voxel_size_for(KernelRadius::of(&scene.photons), camera.as_ref().ok(), photons)
-}
-
-/// [`auto_voxel_size`] from plain data.
-pub fn auto_voxel_size_for(kernel: KernelRadius, camera: Option<&CameraModel>, photons: &[Photon]) -> (f64, String) {
-    let floor = kernel.auto_voxel_floor_km();
-    // A validated scene always has a camera; should it not, the kernel
-    // radius is a size that neither aliases nor wastes.
-    let Some(cam) = camera else {
-        return (kernel.base_km, "no valid camera: kernel radius".into());
-    };
-    let (raw, why) = match cam.pixel_angle() {
-        None => (cam.pixel_footprint(0.0), "ortho_height / height".to_string()),
-        Some(_) => {
-            let eye = cam.position;
-            let mut d: Vec<f64> = photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect();
-            if d.is_empty() {
-                return (kernel.base_km, "no photons: kernel radius".into());
-            }
-            let k = d.len() / 100;
-            let (_, nth, _) = d.select_nth_unstable_by(k, f64::total_cmp);
-            let dist = *nth;
-            (cam.pixel_footprint(dist), format!("one pixel at {dist:.1} km (1st percentile of photon distances)"))
-        }
-    };
-    // Never above twice the smallest kernel radius either: coarser voxels
-    // alias the kernel (see [`resolution_warnings`]), so the bake would
-    // warn about its own choice.
-    let ceiling = 2.0 * kernel.min_km;
-    if raw > ceiling && ceiling >= floor {
-        let p = 10f64.powi(2 - ceiling.abs().log10().floor() as i32);
-        return ((ceiling * p).floor() / p, format!("{why}, lowered to twice the smallest kernel radius"));
-    }
-    let v = raw.max(floor);
-    let why = if raw < floor { format!("{why}, raised to half the kernel radius") } else { why };
-    (round_sig(v, 3), why)
-}
-
-fn round_sig(x: f64, digits: i32) -> f64 {
-    if x == 0.0 || !x.is_finite() {
-        return x;
-    }
-    let p = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
-    (x * p).round() / p
-}
 
 /// One footprint per curtain (in curtain order; simulated in parallel), at
 /// the scene's `animation.time_s`.
@@ -284,53 +89,6 @@ pub fn simulate_footprints(
     fps
 }
 
-/// Mean thickness, km, of the band the beams of a footprint start from: the
-/// area of the cells above `threshold` divided by the curtain's length (the
-/// sum of the band's widths across the curtain, averaged along it).
-pub fn band_thickness_km(fp: &Footprint, threshold: f64) -> f64 {
-    let cells = fp.data.iter().filter(|&&d| d as f64 > threshold).count();
-    cells as f64 * fp.cell_area_km2() / fp.length
-}
-
-/// Warnings for a bake at voxel size `voxel_km` whose grid under-resolves
-/// what it stores:
-/// - the smallest kernel radius, `r_min = radius_km (1 - radius_noise)`, is
-///   below half a voxel. Voxel centres sample the Gaussian kernel; by Poisson
-///   summation the sum of a Gaussian of sd r sampled every h differs from its
-///   integral by up to `2 exp(-2 pi^2 r^2 / h^2)` per axis: 1.4 % at
-///   r = h / 2, 22 % at r = h / 3, so below h / 2 each photon's contribution
-///   depends on where it falls between voxel centres (noise at the voxel
-///   scale, power no longer conserved voxel by voxel).
-/// - a curtain's beams start in a band thinner than a voxel
-///   ([`band_thickness_km`]): across its thickness the sheet is one voxel or
-///   less, so its profile is lost (beam deflections widen the sheet a
-///   little; the kernel blurs it to at least r).
-pub fn resolution_warnings(scene: &Scene, footprints: &[Footprint], voxel_km: f64) -> Vec<String> {
-    resolution_warnings_for(KernelRadius::of(&scene.photons), footprints, scene.footprint.threshold, voxel_km)
-}
-
-/// [`resolution_warnings`] from plain data: the kernel radius, the
-/// footprints and `footprint.threshold`.
-pub fn resolution_warnings_for(kernel: KernelRadius, footprints: &[Footprint], threshold: f64, voxel_km: f64) -> Vec<String> {
-    let mut w = Vec::new();
-    let r_min = kernel.min_km;
-    if r_min < 0.5 * voxel_km {
-        w.push(format!(
-            "under-resolved kernel: photons.radius_km = {} (smallest radius with radius_noise = {}: {:.4} km) is below half the voxel size ({} km); the emission is aliased at the voxel scale: use grid.voxel_size <= {:.4} or a larger radius",
-            kernel.base_km, kernel.noise, r_min, voxel_km, 2.0 * r_min
-        ));
-    }
-    for (i, fp) in footprints.iter().enumerate() {
-        let t = band_thickness_km(fp, threshold);
-        if t < voxel_km {
-            w.push(format!(
-                "under-resolved curtain: curtain[{i}]'s beams start in a band {t:.3} km thick on average (footprint above threshold), thinner than a voxel ({voxel_km} km); the sheet's profile across is lost: use grid.voxel_size <= {:.3}",
-                t
-            ));
-        }
-    }
-    w
-}
 
 /// The colour table the scene asks for.
 pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
@@ -345,89 +103,6 @@ pub fn colour_table_for(colour: &ColourParams, atmosphere: &Atmosphere) -> Colou
     }
 }
 
-/// The density grid on the emission's active voxels:
-/// `density_a exp(-density_b (h - density_base_km))` (the report's air
-/// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
-/// smoothly in the emission's luminance relative to [`AURORA_FRACTION`] of the
-/// peak. No fog box: only where the aurora is.
-pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64) -> Grid<f32> {
-    let tr = emission.transform;
-    let scale = AURORA_FRACTION * peak_luminance;
-    let inv_scale = if scale > 0.0 { (1.0 / scale) as f32 } else { 0.0 };
-    let leaves: Vec<Leaf<f32>> = emission
-        .leaves()
-        .par_iter()
-        .map(|l| {
-            // The air depends on the altitude only: once per z of the leaf.
-            let air: [f64; 8] = std::array::from_fn(|z| extinction(params, tr.index_to_world((l.origin + glam::IVec3::new(0, 0, z as i32)).as_dvec3()).z));
-            let mut out = Leaf::new(l.origin, 0.0f32);
-            out.mask = l.mask;
-            for n in 0..crate::grid::LEAF_NUM_VALUES {
-                if l.is_active(n) {
-                    let v = l.values[n];
-                    let y = luminance([v[0] as f64, v[1] as f64, v[2] as f64]).max(0.0);
-                    // 1 - exp(-y / scale) in f32: within 2e-7 of the f64
-                    // value (exp_neg_f32's 1.2e-7 relative plus rounding);
-                    // 0 when scale is.
-                    let indicator = 1.0 - photons::fast_math::exp_neg_f32(-(y as f32) * inv_scale);
-                    out.values[n] = (air[n & 7] * indicator as f64) as f32;
-                }
-            }
-            out
-        })
-        .collect();
-    let mut g = Grid::new("density", 0.0f32, tr);
-    for l in leaves {
-        g.insert_leaf(l);
-    }
-    g.sort_leaves();
-    g
-}
-
-/// The air extinction at altitude `h` km, per km:
-/// `density_a exp(-density_b (h - density_base_km))`, at most
-/// [`MAX_EXTINCTION_PER_KM`] (and 0, not NaN, when `density_a` is 0).
-pub fn extinction(params: &GridParams, h: f64) -> f64 {
-    if params.density_a > 0.0 {
-        (params.density_a * (-params.density_b * (h - params.density_base_km)).exp()).min(MAX_EXTINCTION_PER_KM)
-    } else {
-        0.0
-    }
-}
-
-/// A warning when the air extinction reaches [`MAX_EXTINCTION_PER_KM`] at
-/// the lowest altitude `h_min` km of the grid (it decreases with altitude).
-pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
-    let raw = params.density_a * (-params.density_b * (h_min - params.density_base_km)).exp();
-    (params.density_a > 0.0 && raw >= MAX_EXTINCTION_PER_KM).then(|| {
-        format!(
-            "air extinction clamped: grid.density_a exp(-density_b (h - density_base_km)) reaches {raw:.3e} per km at {h_min:.1} km, above the maximum {MAX_EXTINCTION_PER_KM:e} (opaque); density is clamped there"
-        )
-    })
-}
-
-/// Why a bake came out empty, in the user's terms: how its beams ended and
-/// which keys to look at.
-pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
-    let mut why = format!(
-        "{} beams made {} photons ({} left their footprint, {} spent their energy, {} took the most steps, 1 / beams.dt = {})",
-        stats.beams,
-        stats.photons,
-        stats.ended_left_footprint,
-        stats.ended_energy_spent,
-        stats.ended_max_steps,
-        (1.0 / beams.dt).round()
-    );
-    if stats.photons == 0 {
-        why += &format!(
-            "; no beam deposited energy before stopping: check beams.length_km = {} (a first step longer than the atmosphere leaves nothing) and beams.top_km = {}",
-            beams.length_km, beams.top_km
-        );
-    } else {
-        why += "; their emission is zero everywhere (curtain energy_flux, or an all-zero colour map)";
-    }
-    why
-}
 
 /// The scene's neutral atmosphere (`[atmosphere] model`).
 pub fn atmosphere(scene: &Scene) -> Atmosphere {
@@ -439,36 +114,6 @@ pub fn atmosphere_for(params: &AtmosphereParams) -> Atmosphere {
     Atmosphere::of_model(params.model)
 }
 
-/// What the pilot measured and chose (`crate::pilot`; kept here so the
-/// stats do not depend on the pilot's module).
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct NoiseEstimate {
-    /// `beams.target_noise`.
-    pub target: f64,
-    /// Beams per pilot half, `m`.
-    pub pilot_beams: usize,
-    /// Relative RMS noise of an `m`-beam grid, measured.
-    pub pilot_noise: f64,
-    /// Relative RMS noise of an `m / 4`-beam grid, measured.
-    pub quarter_noise: f64,
-    /// The fitted law `noise(N)^2 = law_a / N + law_b / N^(3/2)`.
-    pub law_a: f64,
-    pub law_b: f64,
-    /// The N of the fitted law at the target (`m (pilot_noise / target)^2`
-    /// when law_b = 0).
-    pub beams_needed: f64,
-    /// The count used: `beams_needed` rounded up, at most `beams.count`.
-    pub beams: usize,
-    /// The noise expected at `beams` by the fitted law.
-    pub expected_noise: f64,
-    /// `beams.count` capped the count.
-    pub capped: bool,
-    pub seconds: f64,
-}
-
-/// The kernel radius the scene asks for; it lives beside the scene
-/// (`crate::scene::kernel`) so that the memory budget reads it too.
-pub use crate::scene::KernelRadius;
 
 /// The kernel radius field at base radius `kernel.base_km` (noise from
 /// `photons.radius_noise_freq`, along the field `b` from the beams' top
@@ -477,11 +122,6 @@ pub fn radius_field(kernel: KernelRadius, p: &PhotonParams, b: DVec3, top_km: f6
     RadiusField::new(kernel.base_km, kernel.noise, p.radius_noise_freq, b, top_km, &[seed])
 }
 
-/// The grid transform of voxel size `voxel_km`: translation 0, so voxel
-/// (i, j, k) is centred at `voxel_km * (i, j, k)` km.
-pub fn grid_transform(voxel_km: f64) -> Transform {
-    Transform::new(voxel_km, DVec3::ZERO)
-}
 
 /// Everything the stages need, built once from a scene: its sections as
 /// plain data and what they determine (footprints, atmosphere, colour
@@ -845,3 +485,4 @@ pub fn finish_keeping(
     };
     Ok((Bake { emission, density, photons, stats }, dropped))
 }
+
