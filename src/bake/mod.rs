@@ -345,23 +345,27 @@ mod tests {
         s.colour.noise_km = 0.0;
         s.beams.count = 600;
         let b = bake(&s, &NoProgress).unwrap();
-        let band = |lo: f64, hi: f64| {
-            let mut c = [0.0f64; 3];
-            for (ijk, v) in b.emission.iter_active() {
-                let z = ijk.z as f64 * b.stats.voxel_size_km;
-                if (lo..hi).contains(&z) {
-                    for k in 0..3 {
-                        c[k] += v[k] as f64;
-                    }
-                }
-            }
-            c
-        };
+        let band = |lo: f64, hi: f64| emission_between(&b, lo, hi);
         let green = band(100.0, 120.0);
         assert!(green[1] > green[0] && green[1] > green[2], "100-120 km {green:?}");
         let border = band(76.0, 84.0);
         assert!(border[0] > border[1] && border[2] > border[1], "76-84 km {border:?}");
         assert!(border.iter().sum::<f64>() > 1e-3 * green.iter().sum::<f64>(), "a 30 keV spectrum lights 76-84 km: {border:?}");
+    }
+
+    /// The emission grid's RGB summed over voxels whose centre altitude lies
+    /// in `[lo, hi)` km.
+    fn emission_between(b: &Bake, lo: f64, hi: f64) -> [f64; 3] {
+        let mut c = [0.0f64; 3];
+        for (ijk, v) in b.emission.iter_active() {
+            let z = ijk.z as f64 * b.stats.voxel_size_km;
+            if (lo..hi).contains(&z) {
+                for k in 0..3 {
+                    c[k] += v[k] as f64;
+                }
+            }
+        }
+        c
     }
 
     #[test]
@@ -370,18 +374,7 @@ mod tests {
         let mut s = small_scene();
         s.beams.count = 1500;
         let b = bake(&s, &NoProgress).unwrap();
-        let band = |lo: f64, hi: f64| {
-            let mut c = [0.0f64; 3];
-            for (ijk, v) in b.emission.iter_active() {
-                let z = ijk.z as f64 * b.stats.voxel_size_km;
-                if (lo..hi).contains(&z) {
-                    for k in 0..3 {
-                        c[k] += v[k] as f64;
-                    }
-                }
-            }
-            c
-        };
+        let band = |lo: f64, hi: f64| emission_between(&b, lo, hi);
         let mid = band(105.0, 130.0);
         assert!(mid[1] > mid[0] && mid[1] > mid[2], "105-130 km {mid:?}");
         let top = band(230.0, 300.0);

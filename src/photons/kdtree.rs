@@ -109,7 +109,7 @@ impl LeafGather<'_> {
                 let mid = Photon::point((0.5 * (a + b)).as_vec3().to_array(), p.power);
                 self.accumulate(origin, &mid, reach, &k, &mut acc);
             } else {
-                // The scalar loop, voxel by voxel (a branch-free 8-lane
+                // The scalar loop, voxel by voxel (a branch-free 8-wide
                 // version is slower: it evaluates the voxels of each z-row
                 // that the scalar loop's z range skips).
                 self.accumulate_segment(origin, p, reach, &each, &mut acc);

@@ -25,7 +25,7 @@
 //! path and the gathers' tolerances hold for both.
 //!
 //! The leaf loop is compiled twice: as is, and for AVX2 (`#[target_feature]`),
-//! taken after a runtime check of the CPU; the 8-lane rows are then one
+//! taken after a runtime check of the CPU; the 8-wide rows are then one
 //! instruction wide. IEEE 754 arithmetic gives the same result at any
 //! vector width and Rust contracts no multiply-add, so both give the same
 //! bits. Scratch space ([`SplatScratch`]) is reused from leaf to leaf, one
@@ -120,7 +120,7 @@ impl LeafGather<'_> {
         self.splat_body(origin, photons, scratch)
     }
 
-    /// [`Self::splat`] compiled for AVX2: the 8-lane z-rows of the segment
+    /// [`Self::splat`] compiled for AVX2: the 8-wide z-rows of the segment
     /// path in one pass. IEEE arithmetic is the same at any vector width
     /// and Rust fuses no multiply-add, so the values are the same bits as
     /// without AVX2.
@@ -236,7 +236,7 @@ impl LeafGather<'_> {
                 let w2xy = wx * wx + wy * wy;
                 let row = ((x << 6) | (y << 3)) as usize;
                 if whole_rows {
-                    // Both halves at once (one 8-lane pass with AVX2,
+                    // Both halves at once (one 8-wide pass with AVX2,
                     // `LeafGather::splat`); a half the capsule misses
                     // adds exact zeros (inside 0, every other factor finite
                     // and e0 >= e1: erf_lut is monotone), which leaves the
