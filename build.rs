@@ -44,10 +44,8 @@ fn main() {
     files(&root.join("src"), &|p| p.extension().is_some_and(|e| e == "rs"), &mut list);
     files(&root.join("data"), &|_| true, &mut list);
     list.extend(["Cargo.toml", "Cargo.lock"].map(|n| root.join(n)).into_iter().filter(|p| p.is_file()));
-    let mut named: Vec<(String, PathBuf)> = list
-        .into_iter()
-        .map(|p| (p.strip_prefix(&root).unwrap_or(&p).to_string_lossy().replace('\\', "/"), p))
-        .collect();
+    let mut named: Vec<(String, PathBuf)> =
+        list.into_iter().map(|p| (p.strip_prefix(&root).unwrap_or(&p).to_string_lossy().replace('\\', "/"), p)).collect();
     named.sort();
     let mut h = 0xcbf29ce484222325u64;
     for (name, path) in &named {

@@ -12,10 +12,10 @@
 
 mod common;
 
-use common::{cpu_seconds as cpu, loadavg};
 use aurora::bake::plan::{self, BakePlan};
 use aurora::progress::NoProgress;
 use aurora::scene::Scene;
+use common::{cpu_seconds as cpu, loadavg};
 use std::time::Instant;
 
 fn timed<R>(what: &str, f: impl FnOnce() -> R) -> R {
@@ -55,7 +55,9 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             // The gather's set-up steps alone (the gather repeats them).
             use aurora::photons::{bins, merge};
             let r = &plan.radius;
-            let merged = timed("merge", || merge::merge_segments(&traced.photons, |p| r.radius(p), merge::MERGE_LEN_R, merge::MERGE_OFF_R, merge::MERGE_CDF));
+            let merged = timed("merge", || {
+                merge::merge_segments(&traced.photons, |p| r.radius(p), merge::MERGE_LEN_R, merge::MERGE_OFF_R, merge::MERGE_CDF)
+            });
             let reach = plan.photons.cutoff * r.max();
             let leaves = timed("leaves", || bins::candidate_leaves(&merged, voxel.0, reach));
             let bins = timed("bins", || bins::bin_photons(&merged, &leaves, voxel.0, reach));

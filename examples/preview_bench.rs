@@ -19,9 +19,9 @@
 
 mod common;
 
-use common::{cpu_seconds, loadavg};
 use aurora::preview::{Preview, Update, DEFAULT_SIZE, DEFAULT_SPP};
 use aurora::scene::Scene;
+use common::{cpu_seconds, loadavg};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -29,7 +29,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let threads = opt("--threads")?;
     let spp = opt("--spp")?.unwrap_or(DEFAULT_SPP);
     let values: Vec<usize> = args.iter().enumerate().filter(|(_, a)| a.starts_with("--")).map(|(i, _)| i + 1).collect();
-    let name = args.iter().enumerate().find(|(i, a)| !a.starts_with("--") && !values.contains(i)).map(|(_, a)| a.clone()).unwrap_or("default".into());
+    let name = args
+        .iter()
+        .enumerate()
+        .find(|(i, a)| !a.starts_with("--") && !values.contains(i))
+        .map(|(_, a)| a.clone())
+        .unwrap_or("default".into());
     let mut scene = Scene::load(&name)?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
@@ -54,7 +59,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("# load average before: {}", loadavg());
     println!("# cpu: CPU seconds (all threads) from the edit to the refined picture: on a loaded machine wall times stretch, CPU times much less; cpu / threads is a floor for a quiet machine's wall time");
     let row = |what: &str, u: &Update, cpu: f64| {
-        println!("{what:<22} picture {:6.2} s | cpu {:6.2} s | full {:6.2} s | coarse {:5.2} s | {}", u.to_picture, cpu, u.to_full, u.to_coarse, u.summary())
+        println!(
+            "{what:<22} picture {:6.2} s | cpu {:6.2} s | full {:6.2} s | coarse {:5.2} s | {}",
+            u.to_picture,
+            cpu,
+            u.to_full,
+            u.to_coarse,
+            u.summary()
+        )
     };
     let mut step = |what: &str, scene: &Scene| -> Result<(), Box<dyn std::error::Error>> {
         let c0 = cpu_seconds();

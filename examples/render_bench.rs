@@ -17,11 +17,11 @@
 
 mod common;
 
-use common::cpu_seconds;
 use aurora::grid::{Grid, Transform};
 use aurora::progress::NoProgress;
 use aurora::render::{render, Integration, Prepared, RenderSettings, Volume};
 use aurora::scene::{Scene, TerrainKind};
+use common::cpu_seconds;
 use glam::{DVec3, IVec3};
 
 const VS: f64 = 0.5;
@@ -114,8 +114,7 @@ fn main() {
     );
     println!("case,width,height,spp,active_voxels,dual_leaves,accel_MiB,threads,build_wall_s,render_wall_s,loop_cpu_s,primary_rays,shadow_samples,volume_work,primary_per_wall_s,primary_per_loop_cpu_s,primary_per_thread_s,shadow_per_thread_s");
     let (d3, e3) = curtains(3, 3, false);
-    let sizes: &[(usize, usize)] =
-        if quick { &[(320, 180), (640, 360)] } else { &[(320, 180), (640, 360), (1280, 720)] };
+    let sizes: &[(usize, usize)] = if quick { &[(320, 180), (640, 360)] } else { &[(320, 180), (640, 360), (1280, 720)] };
     // Image size, one thread.
     for &(w, h) in sizes {
         run("size", &base(w, h), &d3, &e3, 1);

@@ -29,12 +29,12 @@
 
 mod common;
 
-use common::cpu_seconds;
 use aurora::bake::{self, Bake};
 use aurora::bench::metrics::image_rel_error;
 use aurora::progress::NoProgress;
 use aurora::render::{self, RenderSettings, Volume};
 use aurora::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
+use common::cpu_seconds;
 use std::time::Instant;
 
 /// The default scene with today's settings written out.
@@ -141,7 +141,11 @@ fn main() {
     let load0 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     let t0 = Instant::now();
     // The commit when the run starts (the tree may move while it runs).
-    let commit = std::process::Command::new("git").args(["rev-parse", "--short", "HEAD"]).output().ok().map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
+    let commit = std::process::Command::new("git")
+        .args(["rev-parse", "--short", "HEAD"])
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string());
 
     // Bake times: alternate old and new, keep the fastest of each.
     let (mut t_new, mut t_old) = (f64::INFINITY, f64::INFINITY);
@@ -175,7 +179,10 @@ fn main() {
     let load1 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
     let dep = |s: &Scene| {
         let v: toml::Table = toml::from_str(&s.to_toml()).unwrap_or_default();
-        v.get("beams").and_then(|b| b.get("deposition")).map(|d| d.to_string()).unwrap_or_else(|| "(no key: one sampled energy per beam)".into())
+        v.get("beams")
+            .and_then(|b| b.get("deposition"))
+            .map(|d| d.to_string())
+            .unwrap_or_else(|| "(no key: one sampled energy per beam)".into())
     };
     let lines = vec![
         format!("smoothness benchmark: default scene, {beams} beams vs {}x, 0.5 km kernel and voxels, no pruning, volume only, 320x180, 16 spp", factor),

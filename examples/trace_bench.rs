@@ -12,10 +12,10 @@
 
 mod common;
 
-use common::cpu_seconds;
 use aurora::progress::NoProgress;
 use aurora::render::{render_prepared, Prepared, RenderSettings, Volume};
 use aurora::scene::Scene;
+use common::cpu_seconds;
 use std::path::PathBuf;
 use std::time::Instant;
 

@@ -17,10 +17,10 @@
 //! table and CSV lines
 //! (`csv,mode,voxels,threads,aurora_best,aurora_median,openvdb_best,openvdb_median,aurora_bytes,openvdb_bytes`).
 
+use aurora::bench::vdb_write::{bench_write, BenchWrite};
 use aurora::grid::{Grid, Transform};
 use aurora::scene::Compression;
 use aurora::vdb::read::read_vdb;
-use aurora::bench::vdb_write::{bench_write, BenchWrite};
 use aurora::vdb::write::{GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
 use std::path::{Path, PathBuf};
@@ -90,10 +90,8 @@ fn parse_args() -> anyhow::Result<Args> {
 
 /// Deterministic noise in [0, 1) from a voxel coordinate (a hash, no RNG state).
 fn noise(p: IVec3, salt: u32) -> f32 {
-    let mut h = (p.x as u32).wrapping_mul(0x8DA6_B343)
-        ^ (p.y as u32).wrapping_mul(0xD816_3841)
-        ^ (p.z as u32).wrapping_mul(0xCB1A_B31F)
-        ^ salt;
+    let mut h =
+        (p.x as u32).wrapping_mul(0x8DA6_B343) ^ (p.y as u32).wrapping_mul(0xD816_3841) ^ (p.z as u32).wrapping_mul(0xCB1A_B31F) ^ salt;
     h ^= h >> 15;
     h = h.wrapping_mul(0x2C1B_3C6D);
     h ^= h >> 12;
@@ -125,16 +123,8 @@ fn synthetic() -> (Grid<f32>, Grid<[f32; 3]>) {
     (d, e)
 }
 
-
 /// Runs OpenVDB's writer on `input` with the same settings; returns (best s, bytes).
-fn openvdb_write(
-    tool: &Path,
-    input: &Path,
-    out: &Path,
-    mode: Compression,
-    half: &[String],
-    repeat: usize,
-) -> anyhow::Result<(f64, u64)> {
+fn openvdb_write(tool: &Path, input: &Path, out: &Path, mode: Compression, half: &[String], repeat: usize) -> anyhow::Result<(f64, u64)> {
     let mut cmd = Command::new(tool);
     cmd.arg(input).arg(out).arg(mode_name(mode)).args(["--repeat", &repeat.to_string()]);
     for h in half {
@@ -159,15 +149,9 @@ fn main() -> anyhow::Result<()> {
             (vec![d], vec![e])
         }
     };
-    let grids: Vec<GridRef> =
-        floats.iter().map(GridRef::Float).chain(vec3s.iter().map(GridRef::Vec3)).collect();
-    let voxels: u64 = floats
-        .iter()
-        .map(|g| g.active_voxel_count())
-        .chain(vec3s.iter().map(|g| g.active_voxel_count()))
-        .sum();
-    let leaves: usize =
-        floats.iter().map(|g| g.leaf_count()).chain(vec3s.iter().map(|g| g.leaf_count())).sum();
+    let grids: Vec<GridRef> = floats.iter().map(GridRef::Float).chain(vec3s.iter().map(GridRef::Vec3)).collect();
+    let voxels: u64 = floats.iter().map(|g| g.active_voxel_count()).chain(vec3s.iter().map(|g| g.active_voxel_count())).sum();
+    let leaves: usize = floats.iter().map(|g| g.leaf_count()).chain(vec3s.iter().map(|g| g.leaf_count())).sum();
     let pool = rayon::ThreadPoolBuilder::new().num_threads(args.threads).build()?;
     let threads = pool.current_num_threads();
     println!(
@@ -179,10 +163,7 @@ fn main() -> anyhow::Result<()> {
         args.repeat
     );
     let tool = openvdb_tool::build(Path::new(env!("CARGO_MANIFEST_DIR"))).map_err(anyhow::Error::msg)?;
-    println!(
-        "{:<16} {:>10} {:>10} {:>7} {:>12} {:>12} {:>7}",
-        "mode", "aurora s", "openvdb s", "ratio", "aurora B", "openvdb B", "size"
-    );
+    println!("{:<16} {:>10} {:>10} {:>7} {:>12} {:>12} {:>7}", "mode", "aurora s", "openvdb s", "ratio", "aurora B", "openvdb B", "size");
     for &mode in &args.modes {
         let opts = WriteOptions { compression: mode, half: args.half.clone(), metadata: vec![] };
         let ours_path = args.out_dir.join(format!("aurora_{}.vdb", mode_name(mode)));

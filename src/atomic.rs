@@ -121,7 +121,11 @@ fn host_tag() -> String {
     TAG.get_or_init(|| {
         let h = std::fs::read_to_string("/proc/sys/kernel/hostname").or_else(|_| std::env::var("HOSTNAME")).unwrap_or_default();
         let h: String = h.trim().chars().filter(|c| c.is_ascii_alphanumeric() || *c == '-').take(64).collect();
-        if h.is_empty() { String::new() } else { format!(".{h}") }
+        if h.is_empty() {
+            String::new()
+        } else {
+            format!(".{h}")
+        }
     })
     .clone()
 }

@@ -137,8 +137,24 @@ mod tests {
     /// Every value a string leaf of the scene may take (enum names), and a
     /// path for an absent one.
     const STRINGS: &[&str] = &[
-        "sampled", "csda", "random", "colormap", "physical", "kdtree", "report2014", "point", "none", "zip", "auto",
-        "orthographic", "fisheye", "plane", "heightfield", "us1976", "nrlmsis21", "x.png",
+        "sampled",
+        "csda",
+        "random",
+        "colormap",
+        "physical",
+        "kdtree",
+        "report2014",
+        "point",
+        "none",
+        "zip",
+        "auto",
+        "orthographic",
+        "fisheye",
+        "plane",
+        "heightfield",
+        "us1976",
+        "nrlmsis21",
+        "x.png",
     ];
 
     /// The scenes that differ from `base` in the leaf at `path` alone.
@@ -197,10 +213,20 @@ mod tests {
             assert!(!scenes.is_empty(), "{dotted}: no other value tried");
             for s in scenes {
                 let same = BakeIdentity::of(&s) == id;
-                assert_eq!(same, render_only, "{dotted}: identity {} but the key is {}", if same { "kept" } else { "changed" }, if render_only { "render-only" } else { "a bake key" });
+                assert_eq!(
+                    same,
+                    render_only,
+                    "{dotted}: identity {} but the key is {}",
+                    if same { "kept" } else { "changed" },
+                    if render_only { "render-only" } else { "a bake key" }
+                );
                 let stage = stage_for_edit(&base_scene, &s);
                 assert_eq!(stage <= Stage::Render, same, "{dotted}: preview stage {stage:?}");
-                if same { kept += 1 } else { changed += 1 }
+                if same {
+                    kept += 1
+                } else {
+                    changed += 1
+                }
             }
         }
         // The default scene has over a hundred leaves; a dozen are render-only.

@@ -196,11 +196,8 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let step_photons = b.count as f64 * steps;
     let photons = b.count as f64 * (steps + column_segments);
     let photon_bytes = std::mem::size_of::<Photon>() as f64;
-    let (photon_key, photon_value) = if steps > 1000.0 {
-        ("beams.dt".to_string(), format!("{}", b.dt))
-    } else {
-        ("beams.count".to_string(), format!("{}", b.count))
-    };
+    let (photon_key, photon_value) =
+        if steps > 1000.0 { ("beams.dt".to_string(), format!("{}", b.dt)) } else { ("beams.count".to_string(), format!("{}", b.count)) };
 
     let (voxel, vkey, vvalue) = min_voxel_km(scene);
     let leaf_km = 8.0 * voxel;
@@ -244,8 +241,11 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let column_entries = b.count as f64 * (column / sin_dip / leaf_km + 2.0 * column_segments) * cross_c * cross_c;
     let entries = step_entries + column_entries;
     let candidates = entries * 12.0;
-    let (cand_key, cand_value) =
-        if per_photon > 64.0 { ("photons.radius_km".to_string(), format!("{}", p.radius_km)) } else { (photon_key.clone(), photon_value.clone()) };
+    let (cand_key, cand_value) = if per_photon > 64.0 {
+        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    } else {
+        (photon_key.clone(), photon_value.clone())
+    };
 
     let [nx, ny] = scene.footprint.resolution;
     let footprint = scene.curtains.len() as f64 * nx as f64 * ny as f64 * 12.0 * 8.0;
@@ -255,12 +255,7 @@ pub fn estimate(scene: &Scene) -> Estimate {
             Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
             Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
             Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
-            Term {
-                what: "footprints",
-                bytes: footprint,
-                key: "footprint.resolution".into(),
-                value: format!("[{nx}, {ny}]"),
-            },
+            Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
         ],
     }
 }

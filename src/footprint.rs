@@ -106,10 +106,7 @@ impl Fluid {
                 bilinear_wrap_x(&self.vy, self.nx, self.nx, self.ny + 1, 0.5, 0.0, x, y),
             );
         }
-        (
-            bilinear(&self.vx, self.nx + 1, self.ny, 0.0, 0.5, x, y),
-            bilinear(&self.vy, self.nx, self.ny + 1, 0.5, 0.0, x, y),
-        )
+        (bilinear(&self.vx, self.nx + 1, self.ny, 0.0, 0.5, x, y), bilinear(&self.vy, self.nx, self.ny + 1, 0.5, 0.0, x, y))
     }
 
     /// Sets the velocity from a stream function psi given at cell corners
@@ -194,8 +191,7 @@ impl Fluid {
         let mut d = vec![0.0; nx * ny];
         for j in 0..ny {
             for i in 0..nx {
-                d[j * nx + i] = self.vx[j * (nx + 1) + i + 1] - self.vx[j * (nx + 1) + i] + self.vy[(j + 1) * nx + i]
-                    - self.vy[j * nx + i];
+                d[j * nx + i] = self.vx[j * (nx + 1) + i + 1] - self.vx[j * (nx + 1) + i] + self.vy[(j + 1) * nx + i] - self.vy[j * nx + i];
             }
         }
         d
@@ -472,11 +468,8 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
     // amplitude breaks the regularity, and a third, short one confined to the
     // band (Gaussian across it, a few band widths wide) spins small vortices
     // that curl the band locally: their rotation rate A k is the fastest.
-    let breathing = if anim.fold_breathing > 0.0 {
-        1.0 + anim.fold_breathing * (tau * t / anim.fold_breathing_period_s).sin()
-    } else {
-        1.0
-    };
+    let breathing =
+        if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * (tau * t / anim.fold_breathing_period_s).sin() } else { 1.0 };
     let a = params.velocity_amplitude * breathing;
     let k1 = tau * params.velocity_waves / nx as f64;
     let k2 = tau * params.velocity_waves * 1.73 / nx as f64;
@@ -515,11 +508,7 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
         let bend_cells = curtain.bend_km * n / dv_km;
         for j in 0..ny {
             let y = j as f64 + 0.5 - bend_cells;
-            let v = if y < 0.5 || y > ny as f64 - 0.5 {
-                0.0
-            } else {
-                bilinear(&fluid.density, nx, ny, 0.5, 0.5, i as f64 + 0.5, y)
-            };
+            let v = if y < 0.5 || y > ny as f64 - 0.5 { 0.0 } else { bilinear(&fluid.density, nx, ny, 0.5, 0.5, i as f64 + 0.5, y) };
             data[j * nx + i] = v as f32;
         }
     }
@@ -663,7 +652,12 @@ mod tests {
             }
             let (t1, t2) = ((2.0 / sigma) as usize, (5.0 / sigma) as usize);
             let measured = (amps[t2] / amps[t1]).ln() / (t2 - t1) as f64;
-            eprintln!("KH nx {nx} m {m} h {h}: k {k:.4} sheet {:.5} rayleigh {sigma:.5} measured {measured:.5} ratio {:.3} amp {:.2e}", k * u0, measured / sigma, amps[t2]);
+            eprintln!(
+                "KH nx {nx} m {m} h {h}: k {k:.4} sheet {:.5} rayleigh {sigma:.5} measured {measured:.5} ratio {:.3} amp {:.2e}",
+                k * u0,
+                measured / sigma,
+                amps[t2]
+            );
             // Semi-Lagrangian interpolation smears the layer (a diffusivity
             // up to 1/8 cell^2 per step where |u| dt is half a cell), and a
             // thicker layer grows slower: measured 3-7 % below Rayleigh
@@ -754,9 +748,8 @@ mod tests {
         assert_eq!(simulate_at(&c, &p, &still(), 7, 37.5), simulate(&c, &p, 7));
         // Motion: a frame apart (1/24 s) the footprint changes by a little,
         // 10 s apart by much more (L1 per cell, density peak 1).
-        let l1 = |a: &Footprint, b: &Footprint| {
-            a.data.iter().zip(&b.data).map(|(x, y)| (x - y).abs() as f64).sum::<f64>() / a.data.len() as f64
-        };
+        let l1 =
+            |a: &Footprint, b: &Footprint| a.data.iter().zip(&b.data).map(|(x, y)| (x - y).abs() as f64).sum::<f64>() / a.data.len() as f64;
         // Continuity: a tenth of the time step gives well under half the
         // change (a jump would give the same change for any step; a smooth
         // motion a tenth of it).

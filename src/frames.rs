@@ -147,10 +147,7 @@ pub fn parse_range(text: &str) -> Result<Vec<i64>, FrameError> {
                 ));
             }
             if (item.end - item.start).signum() * item.step.signum() < 0 {
-                return Err(range_err(
-                    text,
-                    format!("item {}-{}:{}: the step walks away from the end", item.start, item.end, item.step),
-                ));
+                return Err(range_err(text, format!("item {}-{}:{}: the step walks away from the end", item.start, item.end, item.step)));
             }
         }
         items.push(item);
@@ -397,12 +394,21 @@ mod tests {
             let e = Shard::parse(bad).unwrap_err().to_string();
             assert!(e.contains(&format!("`{bad}`")), "{e}");
         }
-        let env = |vars: &'static [(&'static str, &'static str)]| {
-            move |k: &str| vars.iter().find(|(n, _)| *n == k).map(|(_, v)| v.to_string())
-        };
-        let slurm = env(&[("SLURM_ARRAY_TASK_ID", "7"), ("SLURM_ARRAY_TASK_MIN", "5"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_STEP", "1")]);
+        let env =
+            |vars: &'static [(&'static str, &'static str)]| move |k: &str| vars.iter().find(|(n, _)| *n == k).map(|(_, v)| v.to_string());
+        let slurm = env(&[
+            ("SLURM_ARRAY_TASK_ID", "7"),
+            ("SLURM_ARRAY_TASK_MIN", "5"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ("SLURM_ARRAY_TASK_STEP", "1"),
+        ]);
         assert_eq!(Shard::Slurm.resolve(slurm).unwrap(), (2, 4));
-        let stepped = env(&[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_STEP", "2")]);
+        let stepped = env(&[
+            ("SLURM_ARRAY_TASK_ID", "3"),
+            ("SLURM_ARRAY_TASK_MIN", "1"),
+            ("SLURM_ARRAY_TASK_COUNT", "4"),
+            ("SLURM_ARRAY_TASK_STEP", "2"),
+        ]);
         assert!(Shard::Slurm.resolve(stepped).unwrap_err().to_string().contains("stepped"));
         assert!(Shard::Slurm.resolve(env(&[])).unwrap_err().to_string().contains("SLURM_ARRAY_TASK_ID is not set"));
         let k8s = env(&[("JOB_COMPLETION_INDEX", "2")]);

@@ -173,9 +173,7 @@ impl<T: VoxelValue> Leaf<T> {
     }
     /// Active voxels as (global index, value), in offset order.
     pub fn iter_active(&self) -> impl Iterator<Item = (IVec3, T)> + '_ {
-        (0..LEAF_NUM_VALUES)
-            .filter(|&n| self.is_active(n))
-            .map(|n| (self.origin + offset_to_local(n), self.values[n]))
+        (0..LEAF_NUM_VALUES).filter(|&n| self.is_active(n)).map(|n| (self.origin + offset_to_local(n), self.values[n]))
     }
 }
 
@@ -420,7 +418,10 @@ impl<T: VoxelValue> Grid<T> {
     /// Inclusive index-space bounding box of the active voxels
     /// (OpenVDB's `file_bbox_min/max`), or `None` when nothing is active.
     pub fn index_bbox(&self) -> Option<(IVec3, IVec3)> {
-        self.leaves.iter().filter_map(|l| mask_bbox(&l.mask).map(|(lo, hi)| (l.origin + lo, l.origin + hi))).reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
+        self.leaves
+            .iter()
+            .filter_map(|l| mask_bbox(&l.mask).map(|(lo, hi)| (l.origin + lo, l.origin + hi)))
+            .reduce(|(a, b), (c, d)| (a.min(c), b.max(d)))
     }
 
     /// Active voxels as (index, value), leaf by leaf.
@@ -586,7 +587,8 @@ mod tests {
             assert_eq!(h.activate_like(&g), added);
             assert_eq!(h2.dilate_active(), added);
             assert_eq!(h, h2, "case {case}");
-            let (lh, lh2): (Vec<_>, Vec<_>) = (h.leaves().iter().map(|l| l.origin).collect(), h2.leaves().iter().map(|l| l.origin).collect());
+            let (lh, lh2): (Vec<_>, Vec<_>) =
+                (h.leaves().iter().map(|l| l.origin).collect(), h2.leaves().iter().map(|l| l.origin).collect());
             assert_eq!(lh, lh2);
         }
     }

@@ -112,11 +112,7 @@ fn open_descriptor_checked(path: &Path) -> Result<File, InputFileError> {
     use std::os::fd::AsRawFd;
     use std::os::unix::fs::OpenOptionsExt;
     let io = |source| InputFileError::Io { path: path.to_path_buf(), source };
-    let file = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY)
-        .open(path)
-        .map_err(io)?;
+    let file = std::fs::OpenOptions::new().read(true).custom_flags(libc::O_NONBLOCK | libc::O_NOCTTY).open(path).map_err(io)?;
     let t = file.metadata().map_err(io)?.file_type();
     if !t.is_file() {
         return Err(InputFileError::NotRegular { path: path.to_path_buf(), kind: kind_name(t) });

@@ -15,11 +15,15 @@ use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
 #[derive(Parser)]
-#[command(name = "aurora", version, about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
+#[command(
+    name = "aurora",
+    version,
+    about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
     long_about = "Bake physically plausible aurora into sparse OpenVDB volumes (an `emission` vec3 grid and a \
 `density` float grid) for Blender Cycles, Houdini or a USD pipeline, and render them with a reference raymarcher.\n\n\
 SCENE is a TOML scene file or the name of a built-in preset (default, seed2014); `aurora scene default` prints one to edit. \
-Units are kilometres, z up.")]
+Units are kilometres, z up."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -311,7 +315,17 @@ fn run(cli: Cli) -> Result<()> {
                             let (vdb_path, _) = aurora::outputs::frame_paths(&seq, f);
                             let exr = frame_name(&out, f);
                             let pngf = png.as_deref().map(|p| frame_name(p, f));
-                            render_cmd(&scene, &dir, Some(&vdb_path), &exr, format, pngf.as_deref(), shadow_samples, adaptive, common.quiet)?;
+                            render_cmd(
+                                &scene,
+                                &dir,
+                                Some(&vdb_path),
+                                &exr,
+                                format,
+                                pngf.as_deref(),
+                                shadow_samples,
+                                adaptive,
+                                common.quiet,
+                            )?;
                         }
                         Ok(())
                     })
@@ -363,7 +377,11 @@ fn run(cli: Cli) -> Result<()> {
         Command::Terrain { scene: scene_arg, out } => {
             let scene = load_scene(&scene_arg)?;
             if out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("obj") {
-                return Err(InputError(format!("--out {}: the terrain is written as a Wavefront OBJ; give a name ending in .obj", out.display())).into());
+                return Err(InputError(format!(
+                    "--out {}: the terrain is written as a Wavefront OBJ; give a name ending in .obj",
+                    out.display()
+                ))
+                .into());
             }
             aurora::atomic::check_replaceable(&out)?;
             if scene.terrain.kind != aurora::scene::TerrainKind::Heightfield {
@@ -394,9 +412,9 @@ fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec<i64
     }
     let (i, n) = match shard {
         None => (0, 1),
-        Some(t) => aurora::frames::Shard::parse(t)
-            .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
-            .map_err(|e| InputError(e.to_string()))?,
+        Some(t) => {
+            aurora::frames::Shard::parse(t).and_then(|s| s.resolve(|k| std::env::var(k).ok())).map_err(|e| InputError(e.to_string()))?
+        }
     };
     let mine = aurora::frames::select(&frames, i, n);
     Ok((frames, mine))
@@ -528,9 +546,8 @@ fn bake_cmd(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
     let progress: &dyn Progress = if quiet { &NoProgress } else { &bars };
     // The folder is checked and locked before the bake, not after it.
-    let _lock = aurora::outputs::prepare(out, || {
-        eprintln!("aurora: another bake is writing to {}; waiting for it to finish", out.display())
-    })?;
+    let _lock =
+        aurora::outputs::prepare(out, || eprintln!("aurora: another bake is writing to {}; waiting for it to finish", out.display()))?;
     let bake = aurora::bake::bake(scene, progress)?;
     print_warnings(&bake.stats.warnings);
     let report = aurora::outputs::write_outputs_locked(scene, &bake, out)?;
@@ -593,9 +610,7 @@ fn render_cmd(
         None => None,
     };
     let (prepared, open_seconds, build_seconds) = match from_records {
-        Some(read) => {
-            (aurora::render::Prepared::with_medium(&settings, read.medium, None)?, read.open_seconds, read.build_seconds)
-        }
+        Some(read) => (aurora::render::Prepared::with_medium(&settings, read.medium, None)?, read.open_seconds, read.build_seconds),
         None => {
             let open = std::time::Instant::now();
             let (density, emission) = match vdb {
@@ -643,8 +658,7 @@ fn finish_render(
     }
     .with_context(|| format!("cannot write {}", out.display()))?;
     if let Some(p) = png {
-        aurora::render::film::write_png(p, image, scene.render.exposure)
-            .with_context(|| format!("cannot write {}", p.display()))?;
+        aurora::render::film::write_png(p, image, scene.render.exposure).with_context(|| format!("cannot write {}", p.display()))?;
     }
     if !quiet {
         eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());
@@ -721,7 +735,10 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
     }
     let path = Path::new(scene_arg);
     if !path.is_file() {
-        return Err(InputError(format!("{scene_arg}: --watch needs a scene file (write a preset to one: aurora scene default > scene.toml)")).into());
+        return Err(InputError(format!(
+            "{scene_arg}: --watch needs a scene file (write a preset to one: aurora scene default > scene.toml)"
+        ))
+        .into());
     }
     let w = aurora::watch::Watcher::new(path).map_err(|e| InputError(e.to_string()))?;
     if !quiet {
@@ -744,7 +761,9 @@ fn preview_cmd(scene_arg: &str, dir: &Path, out: &Path, size: [usize; 2], spp: u
             eprintln!("scene {}: text hash {:016x}, {} bytes", path.display(), save.hash, save.text.len());
         }
         if save.is_blank() {
-            eprintln!("aurora: error: {scene_arg}: the saved scene file is empty (only whitespace and comments); keeping the last good scene");
+            eprintln!(
+                "aurora: error: {scene_arg}: the saved scene file is empty (only whitespace and comments); keeping the last good scene"
+            );
             continue;
         }
         match Scene::from_toml_str(&save.text, scene_arg) {

@@ -89,10 +89,7 @@ pub fn cgroup_limit() -> Option<f64> {
         let candidates: Vec<String> = if controllers.is_empty() {
             vec![format!("/sys/fs/cgroup/{path}/memory.max"), "/sys/fs/cgroup/memory.max".into()]
         } else if controllers.split(',').any(|c| c == "memory") {
-            vec![
-                format!("/sys/fs/cgroup/memory/{path}/memory.limit_in_bytes"),
-                "/sys/fs/cgroup/memory/memory.limit_in_bytes".into(),
-            ]
+            vec![format!("/sys/fs/cgroup/memory/{path}/memory.limit_in_bytes"), "/sys/fs/cgroup/memory/memory.limit_in_bytes".into()]
         } else {
             continue;
         };

@@ -16,11 +16,11 @@
 //! which keeps one bake per folder. Every report names its bake's
 //! [`BakeIdentity`] (`bake_identity`).
 
+use crate::atomic::{AtomicError, TempFile, Unit, UnitLock};
 use crate::bake::Bake;
 use crate::bake_identity::BakeIdentity;
 use crate::scene::Scene;
 use crate::usd;
-use crate::atomic::{AtomicError, TempFile, Unit, UnitLock};
 use crate::vdb::write::{write_vdb_into, GridRef, MetaValue, WriteOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -120,7 +120,10 @@ impl BakeReport {
         }
         format!(
             "\nbeams.target_noise = {}: pilot of 2 x {} beams measured {:.3} relative RMS noise; {} beams used{}, expected noise {:.3}",
-            n["target"], n["pilot_beams"], n["pilot_noise"].as_f64().unwrap_or(0.0), n["beams"],
+            n["target"],
+            n["pilot_beams"],
+            n["pilot_noise"].as_f64().unwrap_or(0.0),
+            n["beams"],
             if n["capped"].as_bool() == Some(true) { " (capped at beams.count)" } else { "" },
             n["expected_noise"].as_f64().unwrap_or(0.0)
         )
@@ -133,7 +136,11 @@ impl BakeReport {
         }
         format!(
             "\npruned (grid.prune = {}): {} of {} leaves, {} of {} voxels, {:.3e} of the image's light (estimated, extinction ignored)",
-            p["budget"], p["leaves_removed"], p["leaves_before"], p["voxels_removed"], p["voxels_before"],
+            p["budget"],
+            p["leaves_removed"],
+            p["leaves_before"],
+            p["voxels_removed"],
+            p["voxels_before"],
             p["removed_fraction"].as_f64().unwrap_or(0.0)
         )
     }
@@ -145,10 +152,7 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
         ("aurora_units".into(), MetaValue::String("km".into())),
         ("aurora_seed".into(), MetaValue::Int64(scene.seed as i64)),
         ("aurora_scene_hash".into(), MetaValue::String(format!("{:016x}", scene.hash()))),
-        (
-            "aurora_emission_units".into(),
-            MetaValue::String("linear Rec.709 radiance per km; Y = 1 for 1 kR of OI 557.7 nm per km".into()),
-        ),
+        ("aurora_emission_units".into(), MetaValue::String("linear Rec.709 radiance per km; Y = 1 for 1 kR of OI 557.7 nm per km".into())),
         ("aurora_density_units".into(), MetaValue::String("extinction per km".into())),
         // The add-on skips its own padding when this is true (blender/volume_import.py).
         ("aurora_cycles_shell".into(), MetaValue::Bool(scene.grid.cycles_shell)),
@@ -311,8 +315,7 @@ pub fn frame_identity(report: &Path) -> Result<BakeIdentity, String> {
 /// shard may rewrite it.
 pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathBuf, OutputError> {
     crate::atomic::prepare_folder(out)?;
-    let list: Vec<(i64, String)> =
-        frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
+    let list: Vec<(i64, String)> = frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
     let path = out.join(USDA_NAME);
     let err = |e: std::io::Error| OutputError::Write { path: path.clone(), message: e.to_string() };
     let text = usd::usda_sequence_checked(&list, &[("density", "float"), ("emission", "float3")], 1000.0, fps).map_err(err)?;

@@ -67,12 +67,12 @@
 //! reports every stage's time ([`Update`]); `gather` includes the input
 //! made before the coarse picture.
 
-use crate::bake::{self, Bake, BakeError};
-use crate::photons::GatherInput;
-use crate::grid::Leaf;
 use crate::bake::plan::{self, BakePlan, Gathered};
-use crate::bake::voxel;
 use crate::bake::stats::{NoiseEstimate, StageTimes};
+use crate::bake::voxel;
+use crate::bake::{self, Bake, BakeError};
+use crate::grid::Leaf;
+use crate::photons::GatherInput;
 use crate::progress::NoProgress;
 use crate::render::{self, Image, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::Scene;
@@ -193,11 +193,8 @@ impl Update {
     /// One line for the terminal.
     pub fn summary(&self) -> String {
         let st = self.stage.map_or("first".to_string(), |s| format!("{s:?}").to_lowercase());
-        let full = if self.full_spp > 0 {
-            format!(", full render {:.2} s ({} spp)", self.full_render, self.full_spp)
-        } else {
-            String::new()
-        };
+        let full =
+            if self.full_spp > 0 { format!(", full render {:.2} s ({} spp)", self.full_render, self.full_spp) } else { String::new() };
         let to_full = if self.full_spp > 0 { format!(", to full picture {:.2} s", self.to_full) } else { String::new() };
         format!(
             "edit ({st}): footprints {:.2} s, pilot {:.2} s, trace {:.2} s, gather {:.2} s, finish {:.2} s, coarse render {:.2} s, render {:.2} s (build {:.2} s, pixels {:.2} s, {} spp){full}, png {:.2} s; edit to coarse picture {:.2} s, to picture {:.2} s{to_full}",
@@ -587,7 +584,13 @@ mod tests {
         };
         assert_eq!(edit(&|_| {}), Stage::Nothing);
         assert_eq!(edit(&|s| s.render.exposure += 1.0), Stage::Exposure);
-        assert_eq!(edit(&|s| { s.render.exposure += 1.0; s.render.spp += 1 }), Stage::Render);
+        assert_eq!(
+            edit(&|s| {
+                s.render.exposure += 1.0;
+                s.render.spp += 1
+            }),
+            Stage::Render
+        );
         assert_eq!(edit(&|s| s.render.spp += 1), Stage::Render);
         assert_eq!(edit(&|s| s.volume.emission_scale *= 2.0), Stage::Render);
         assert_eq!(edit(&|s| s.render.width += 2), Stage::Camera);
@@ -601,7 +604,13 @@ mod tests {
         assert_eq!(edit(&|s| s.curtains[0].energy_flux *= 2.0), Stage::Footprints);
         assert_eq!(edit(&|s| s.seed += 1), Stage::Footprints);
         // The earliest stage wins.
-        assert_eq!(edit(&|s| { s.render.exposure += 1.0; s.beams.count += 1 }), Stage::Trace);
+        assert_eq!(
+            edit(&|s| {
+                s.render.exposure += 1.0;
+                s.beams.count += 1
+            }),
+            Stage::Trace
+        );
     }
 
     /// A scene that bakes in about a second, 4 samples per pixel.

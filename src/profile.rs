@@ -14,8 +14,8 @@
 //! volume): the curtain's area times the height-resolved rate.
 
 use crate::atmosphere::Atmosphere;
-use crate::bake::BakeError;
 use crate::bake::plan::BakePlan;
+use crate::bake::BakeError;
 use crate::beams::{self, BeamStats};
 use crate::deposit::StepDeposit;
 use crate::fang::KEV_PER_ION_PAIR;
@@ -159,10 +159,7 @@ mod tests {
     #[test]
     fn csv_has_the_promised_header_and_one_row_per_curtain_and_bin() {
         let p = Profile {
-            curtains: vec![
-                CurtainProfile { z0: 50.0, bins: vec![[1.0; 7]; 3] },
-                CurtainProfile { z0: 50.0, bins: vec![[0.0; 7]; 3] },
-            ],
+            curtains: vec![CurtainProfile { z0: 50.0, bins: vec![[1.0; 7]; 3] }, CurtainProfile { z0: 50.0, bins: vec![[0.0; 7]; 3] }],
             beam_stats: BeamStats::default(),
         };
         let csv = to_csv(&p);

@@ -45,8 +45,8 @@
 //! emission's active voxels), so both grids lose the same leaves.
 
 use crate::camera::CameraModel;
-use crate::scene::Projection;
 use crate::grid::{Grid, Leaf, LEAF_NUM_VALUES};
+use crate::scene::Projection;
 use crate::spectrum::luminance;
 use glam::DVec3;
 use rayon::prelude::*;

@@ -328,7 +328,15 @@ mod tests {
         assert_eq!(frame_of_name("aurora.0001.json", "json"), Some(1));
         assert_eq!(frame_of_name("aurora.12345.json", "json"), Some(12345));
         assert_eq!(frame_of_name("aurora.0007.vdb", "vdb"), Some(7));
-        for n in ["aurora.001.json", "aurora.0001.vdb", "bake.json", ".aurora.sequence.json", "aurora.00a1.json", "aurora.00001.json", "aurora.0001xjson"] {
+        for n in [
+            "aurora.001.json",
+            "aurora.0001.vdb",
+            "bake.json",
+            ".aurora.sequence.json",
+            "aurora.00a1.json",
+            "aurora.00001.json",
+            "aurora.0001xjson",
+        ] {
             assert_eq!(frame_of_name(n, "json"), None, "{n}");
         }
     }

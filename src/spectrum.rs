@@ -35,11 +35,7 @@ pub fn cie1931_xyz(lambda_nm: f64) -> [f64; 3] {
 }
 
 /// XYZ to linear Rec.709 (sRGB primaries, D65 white), IEC 61966-2-1.
-pub const XYZ_TO_REC709: [[f64; 3]; 3] = [
-    [3.2406, -1.5372, -0.4986],
-    [-0.9689, 1.8758, 0.0415],
-    [0.0557, -0.2040, 1.0570],
-];
+pub const XYZ_TO_REC709: [[f64; 3]; 3] = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]];
 
 /// Luminance Y of a linear Rec.709 colour (the Y row of the inverse matrix).
 pub const REC709_LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];

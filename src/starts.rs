@@ -51,10 +51,8 @@ use rand::Rng;
 
 /// R2's generator in 64-bit fixed point: `alpha * 2^64` for
 /// `alpha = (1/g, 1/g^2)`, g = 1.324717957244746 (the plastic number).
-const R2_A: [u64; 2] = [
-    (0.754_877_666_246_692_7 * 18_446_744_073_709_551_616.0) as u64,
-    (0.569_840_290_998_053_2 * 18_446_744_073_709_551_616.0) as u64,
-];
+const R2_A: [u64; 2] =
+    [(0.754_877_666_246_692_7 * 18_446_744_073_709_551_616.0) as u64, (0.569_840_290_998_053_2 * 18_446_744_073_709_551_616.0) as u64];
 
 /// Point `i` of the R2 sequence shifted by `shift` (fixed point, 2^64 =
 /// 1), as two numbers in [0, 1).
@@ -354,7 +352,15 @@ mod tests {
 
     #[test]
     fn the_unit_square_maps_inside_cells_with_flux() {
-        let fp = Footprint { nx: 4, ny: 2, data: vec![0.0, 1.0, 0.0, 0.5, 0.0, 0.0, 0.0, 2.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 4.0, width: 2.0 };
+        let fp = Footprint {
+            nx: 4,
+            ny: 2,
+            data: vec![0.0, 1.0, 0.0, 0.5, 0.0, 0.0, 0.0, 2.0],
+            center: [0.0, 0.0],
+            rotation_rad: 0.0,
+            length: 4.0,
+            width: 2.0,
+        };
         let m = StartMap::new(&fp, 0.1);
         // The map's domain is [0, 1)^2 (what r2 returns).
         for x in [[0.0, 0.0], [1.0 - 1e-16, 1.0 - 1e-16], [0.5, 0.999], [0.3, 0.0]] {
@@ -377,7 +383,11 @@ mod tests {
     /// exact to a relative 1 / (n c) + 1 / (n q) (plus a point for rounding).
     #[test]
     fn start_map_follows_the_density_and_is_continuous() {
-        let f = crate::footprint::simulate(&Curtain::default(), &FootprintParams { resolution: [64, 24], steps: 4, pressure_iterations: 20, ..FootprintParams::default() }, 3);
+        let f = crate::footprint::simulate(
+            &Curtain::default(),
+            &FootprintParams { resolution: [64, 24], steps: 4, pressure_iterations: 20, ..FootprintParams::default() },
+            3,
+        );
         let thr = 0.03;
         let m = StartMap::new(&f, thr);
         let n = 2000;
@@ -437,7 +447,8 @@ mod tests {
         // Cells are drawn in proportion to density: compare the hit share of
         // the densest half of the eligible mass with its expected share, to
         // 5 sigma of a binomial with N = 20000.
-        let mut eligible: Vec<(f64, usize)> = fp.data.iter().enumerate().filter(|(_, &d)| d as f64 > thr).map(|(k, &d)| (d as f64, k)).collect();
+        let mut eligible: Vec<(f64, usize)> =
+            fp.data.iter().enumerate().filter(|(_, &d)| d as f64 > thr).map(|(k, &d)| (d as f64, k)).collect();
         eligible.sort_by(|a, b| b.0.total_cmp(&a.0));
         let total: f64 = eligible.iter().map(|e| e.0).sum();
         let top: Vec<_> = eligible.iter().take(eligible.len() / 4).collect();

@@ -30,8 +30,7 @@ const DATA_TYPES: &[&str] = &["float", "float3", "half", "half3", "double", "dou
 
 fn is_identifier(s: &str) -> bool {
     let mut chars = s.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
-        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 fn invalid(msg: String) -> std::io::Error {
@@ -41,13 +40,8 @@ fn invalid(msg: String) -> std::io::Error {
 /// Checks what goes into the text: prim names must be USD identifiers, the
 /// asset path must not contain `@` or line breaks, data types must be known.
 fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
-    if vdb_file_name.is_empty()
-        || vdb_file_name.contains(['@', '\n', '\r'])
-        || Path::new(vdb_file_name).is_absolute()
-    {
-        return Err(invalid(format!(
-            "VDB file name `{vdb_file_name}` must be a non-empty relative path without `@`"
-        )));
+    if vdb_file_name.is_empty() || vdb_file_name.contains(['@', '\n', '\r']) || Path::new(vdb_file_name).is_absolute() {
+        return Err(invalid(format!("VDB file name `{vdb_file_name}` must be a non-empty relative path without `@`")));
     }
     for (i, (name, ty)) in fields.iter().enumerate() {
         if !is_identifier(name) || fields[..i].iter().any(|(n, _)| n == name) {
@@ -230,12 +224,7 @@ fn fmt_number(x: f64) -> String {
 
 /// Writes the stage of a single bake atomically (temporary file in the same
 /// folder, then rename).
-pub fn write_usda(
-    path: &Path,
-    vdb_file_name: &str,
-    fields: &[(&str, &str)],
-    meters_per_unit: f64,
-) -> Result<(), std::io::Error> {
+pub fn write_usda(path: &Path, vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
     let text = stage_checked(&single(vdb_file_name), fields, meters_per_unit)?;
     crate::atomic::write_atomic(path, text.as_bytes()).map_err(Into::into)
 }

@@ -42,11 +42,8 @@ fn num(r: &Row, k: &str) -> f64 {
 /// The rows of `study` and `method`, sorted by the swept parameter, as
 /// (param, error).
 fn curve(rows: &[Row], study: &str, method: &str) -> Vec<(f64, f64)> {
-    let mut v: Vec<(f64, f64)> = rows
-        .iter()
-        .filter(|r| r["study"] == study && r["method"] == method)
-        .map(|r| (num(r, "param"), num(r, "error")))
-        .collect();
+    let mut v: Vec<(f64, f64)> =
+        rows.iter().filter(|r| r["study"] == study && r["method"] == method).map(|r| (num(r, "param"), num(r, "error"))).collect();
     v.sort_by(|a, b| a.0.total_cmp(&b.0));
     assert!(v.len() >= 2, "{study} / {method}: {v:?}");
     v
@@ -74,15 +71,9 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         .output()
         .expect("run aurora bench");
     let stdout = String::from_utf8_lossy(&run.stdout);
-    assert!(
-        run.status.success(),
-        "status {:?}\nstdout:\n{stdout}\nstderr:\n{}",
-        run.status,
-        String::from_utf8_lossy(&run.stderr)
-    );
+    assert!(run.status.success(), "status {:?}\nstdout:\n{stdout}\nstderr:\n{}", run.status, String::from_utf8_lossy(&run.stderr));
     // The summary table names every study.
-    let studies =
-        [
+    let studies = [
         "photon count",
         "gather radius",
         "gather method",
@@ -120,10 +111,8 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         // unflagged one is dominated (or repeats an earlier flagged point).
         let pts: Vec<(f64, f64)> = sel.iter().map(|r| (num(r, "seconds"), num(r, "error"))).collect();
         for (i, r) in sel.iter().enumerate() {
-            let dominated = pts
-                .iter()
-                .enumerate()
-                .any(|(j, q)| j != i && q.0 <= pts[i].0 && q.1 <= pts[i].1 && (q.0 < pts[i].0 || q.1 < pts[i].1));
+            let dominated =
+                pts.iter().enumerate().any(|(j, q)| j != i && q.0 <= pts[i].0 && q.1 <= pts[i].1 && (q.0 < pts[i].0 || q.1 < pts[i].1));
             let duplicate = pts[..i].iter().any(|q| *q == pts[i]);
             assert_eq!(r["pareto"] == "1", !dominated && !duplicate, "{st}: {r:?}");
         }
@@ -172,9 +161,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     // r, v) appears in three gather-timed studies with the same seconds.
     let scene_gather: Vec<f64> = rows
         .iter()
-        .filter(|r| {
-            r["scene_setting"] == "1" && ["gather radius", "gather method", "voxel size"].contains(&r["study"].as_str())
-        })
+        .filter(|r| r["scene_setting"] == "1" && ["gather radius", "gather method", "voxel size"].contains(&r["study"].as_str()))
         .map(|r| num(r, "seconds"))
         .collect();
     assert_eq!(scene_gather.len(), 3);
@@ -199,8 +186,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     }
 
     // --- bench.json
-    let j: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).expect("bench.json")).expect("json");
+    let j: Value = serde_json::from_str(&std::fs::read_to_string(out.join("bench.json")).expect("bench.json")).expect("json");
     assert!(j["machine"]["nproc"].as_u64().unwrap() >= 1);
     assert!(!j["machine"]["model_name"].as_str().unwrap().is_empty());
     let date = j["date"].as_str().unwrap();

@@ -5,8 +5,8 @@
 //! photon term counts at least the photons the bake holds.
 
 use aurora::bake;
-use aurora::deposit::Photon;
 use aurora::budget;
+use aurora::deposit::Photon;
 use aurora::progress::NoProgress;
 use aurora::scene::{Deposition, KernelRadius};
 
@@ -34,7 +34,10 @@ fn a_bake_stays_inside_the_budget_bounds() {
             assert!(p.z <= top + slack, "{deposition:?}: a voxel at {:.1} km, the deposits' top {top:.1} km", p.z);
             if p.z <= start_top + slack {
                 for i in 0..2 {
-                    assert!(p[i] >= lo[i] - slack && p[i] <= hi[i] + slack, "{deposition:?}: voxel {p:?} outside the world box {lo:?}..{hi:?}");
+                    assert!(
+                        p[i] >= lo[i] - slack && p[i] <= hi[i] + slack,
+                        "{deposition:?}: voxel {p:?} outside the world box {lo:?}..{hi:?}"
+                    );
                 }
             } else {
                 above.insert(ijk.to_array().map(|c| c.div_euclid(8)));
@@ -53,6 +56,11 @@ fn a_bake_stays_inside_the_budget_bounds() {
         let e = budget::estimate(&s);
         let term = e.terms.iter().find(|t| t.what == "photons").unwrap();
         let held = 3.0 * (b.photons.len() * std::mem::size_of::<Photon>()) as f64;
-        assert!(held <= term.bytes, "{deposition:?}: {} photons held, the budget counts {}", b.photons.len(), term.bytes / 3.0 / std::mem::size_of::<Photon>() as f64);
+        assert!(
+            held <= term.bytes,
+            "{deposition:?}: {} photons held, the budget counts {}",
+            b.photons.len(),
+            term.bytes / 3.0 / std::mem::size_of::<Photon>() as f64
+        );
     }
 }

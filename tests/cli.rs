@@ -59,14 +59,8 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     assert_eq!(pr["budget"], 0.001);
     let removed = pr["removed_fraction"].as_f64().unwrap();
     assert!(removed > 0.0 && removed <= 0.001, "{pr}");
-    assert_eq!(
-        pr["voxels_before"].as_u64().unwrap() - pr["voxels_removed"].as_u64().unwrap(),
-        stats["active_voxels"].as_u64().unwrap()
-    );
-    assert_eq!(
-        pr["leaves_before"].as_u64().unwrap() - pr["leaves_removed"].as_u64().unwrap(),
-        stats["leaves"].as_u64().unwrap()
-    );
+    assert_eq!(pr["voxels_before"].as_u64().unwrap() - pr["voxels_removed"].as_u64().unwrap(), stats["active_voxels"].as_u64().unwrap());
+    assert_eq!(pr["leaves_before"].as_u64().unwrap() - pr["leaves_removed"].as_u64().unwrap(), stats["leaves"].as_u64().unwrap());
     assert!(stats["noise"].is_null());
     assert_eq!(stats["voxel_size_km"], 1.0);
     assert_eq!(report["units"], "km");
@@ -210,10 +204,8 @@ fn footprint_and_terrain_commands_write_files() {
 fn target_noise_sets_the_beam_count_and_prune_zero_keeps_every_leaf() {
     let dir = scratch("noise");
     let scene = dir.join("noise.toml");
-    let text = SMALL.replace("count = 400", "count = 100000\ntarget_noise = 0.4").replace(
-        "voxel_size = 1.0",
-        "voxel_size = 1.0\nprune = 0.0",
-    );
+    let text =
+        SMALL.replace("count = 400", "count = 100000\ntarget_noise = 0.4").replace("voxel_size = 1.0", "voxel_size = 1.0\nprune = 0.0");
     std::fs::write(&scene, text).unwrap();
     let out = dir.join("out");
     let o = run(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);

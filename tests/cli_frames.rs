@@ -95,15 +95,20 @@ fn frames_are_identical_alone_in_a_range_and_in_any_shard() {
     // Slurm's array variables (task 7 of 5..8 is shard 2 of 4: frame 3) and
     // a Kubernetes Indexed Job's index (shard 3 of 4: frame 4).
     let slurm = dir.join("slurm");
-    let vars = [("SLURM_ARRAY_TASK_ID", "7"), ("SLURM_ARRAY_TASK_MIN", "5"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_STEP", "1")];
+    let vars =
+        [("SLURM_ARRAY_TASK_ID", "7"), ("SLURM_ARRAY_TASK_MIN", "5"), ("SLURM_ARRAY_TASK_COUNT", "4"), ("SLURM_ARRAY_TASK_STEP", "1")];
     ok(&bake(&scene, &slurm, &["--frames", "1-4", "--shard", "auto"], &vars));
     ok(&bake(&scene, &slurm, &["--frames", "1-4", "--shard", "auto/4"], &[("JOB_COMPLETION_INDEX", "3")]));
     let names: Vec<String> = {
-        let mut v: Vec<String> = std::fs::read_dir(&slurm).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let mut v: Vec<String> =
+            std::fs::read_dir(&slurm).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
         v.sort();
         v
     };
-    assert_eq!(names, [".aurora.sequence.json", "aurora.0003.json", "aurora.0003.vdb", "aurora.0004.json", "aurora.0004.vdb", "aurora.usda"]);
+    assert_eq!(
+        names,
+        [".aurora.sequence.json", "aurora.0003.json", "aurora.0003.vdb", "aurora.0004.json", "aurora.0004.vdb", "aurora.usda"]
+    );
     // Frame 3 alone.
     let alone = dir.join("alone");
     ok(&bake(&scene, &alone, &["--frames", "3"], &[]));
@@ -178,7 +183,12 @@ fn bad_ranges_and_shards_exit_2_naming_the_text() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {msg}");
         assert!(msg.contains(needle), "{args:?}: {msg}");
     }
-    let o = bake(Path::new("default"), &out, &["--frames", "1-4", "--shard", "auto"], &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1"), ("SLURM_ARRAY_TASK_COUNT", "2"), ("SLURM_ARRAY_TASK_STEP", "2")]);
+    let o = bake(
+        Path::new("default"),
+        &out,
+        &["--frames", "1-4", "--shard", "auto"],
+        &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1"), ("SLURM_ARRAY_TASK_COUNT", "2"), ("SLURM_ARRAY_TASK_STEP", "2")],
+    );
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("stepped"));
     assert!(!out.exists(), "a refused bake wrote {}", out.display());
@@ -193,16 +203,33 @@ fn render_frame_renders_one_frame_or_a_range_of_a_sequence_folder() {
     ok(&bake(&scene, &out, &["--frames", "1-2"], &[]));
     let img = dir.join("f.exr");
     let o = Command::new(BIN)
-        .arg("render").arg(&scene).arg("--vdb").arg(&out).args(["--frame", "1-2", "--out"]).arg(&img)
-        .arg("--png").arg(dir.join("f.png")).arg("-q")
-        .output().unwrap();
+        .arg("render")
+        .arg(&scene)
+        .arg("--vdb")
+        .arg(&out)
+        .args(["--frame", "1-2", "--out"])
+        .arg(&img)
+        .arg("--png")
+        .arg(dir.join("f.png"))
+        .arg("-q")
+        .output()
+        .unwrap();
     ok(&o);
     for f in ["f.0001.exr", "f.0002.exr", "f.0001.png", "f.0002.png"] {
         assert!(dir.join(f).is_file(), "{f} missing");
     }
     assert_ne!(std::fs::read(dir.join("f.0001.exr")).unwrap(), std::fs::read(dir.join("f.0002.exr")).unwrap());
     // A frame the folder does not hold is an input error naming the file.
-    let o = Command::new(BIN).arg("render").arg(&scene).arg("--vdb").arg(&out).args(["--frame", "7", "--out"]).arg(&img).arg("-q").output().unwrap();
+    let o = Command::new(BIN)
+        .arg("render")
+        .arg(&scene)
+        .arg("--vdb")
+        .arg(&out)
+        .args(["--frame", "7", "--out"])
+        .arg(&img)
+        .arg("-q")
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("aurora.0007.vdb"));
 }

@@ -111,10 +111,7 @@ fn report(dir: &Path, frame: i64) -> serde_json::Value {
 
 /// The frame numbers a folder holds (reports), ascending.
 fn frames_in(dir: &Path) -> Vec<i64> {
-    file_names(dir)
-        .iter()
-        .filter_map(|n| n.strip_prefix("aurora.")?.strip_suffix(".json")?.parse().ok())
-        .collect()
+    file_names(dir).iter().filter_map(|n| n.strip_prefix("aurora.")?.strip_suffix(".json")?.parse().ok()).collect()
 }
 
 /// The folder holds exactly `reference`'s frames (same VDB bytes, reports
@@ -146,11 +143,24 @@ fn a_bake_key_edit_is_refused_and_a_render_only_edit_or_none_keeps_the_frames() 
     let before = snapshot(&out);
     assert_eq!(
         before.iter().map(|b| b.0.as_str()).collect::<Vec<_>>(),
-        [".aurora.sequence.json", "aurora.0001.json", "aurora.0001.vdb", "aurora.0002.json", "aurora.0002.vdb", "aurora.0003.json", "aurora.0003.vdb", "aurora.usda"]
+        [
+            ".aurora.sequence.json",
+            "aurora.0001.json",
+            "aurora.0001.vdb",
+            "aurora.0002.json",
+            "aurora.0002.vdb",
+            "aurora.0003.json",
+            "aurora.0003.vdb",
+            "aurora.usda"
+        ]
     );
 
     // The same scene, and the same scene spelled otherwise: kept.
-    let respelled = write(&d, "a2.toml", &format!("# the same scene\n{}", SMALL.replace("count = 400", "count = 400 # beams").replace("fps = 24.0", "fps = 24")));
+    let respelled = write(
+        &d,
+        "a2.toml",
+        &format!("# the same scene\n{}", SMALL.replace("count = 400", "count = 400 # beams").replace("fps = 24.0", "fps = 24")),
+    );
     for scene in [&a, &respelled] {
         let e = ok(&bake(scene, &out, &["--frames", "1-3"]));
         assert!(e.contains("0 frames baked, 3 already complete"), "{e}");
@@ -267,7 +277,11 @@ fn concurrent_shards_of_two_scenes_into_one_folder_end_with_one_bake() {
     ok(&bake(&b, &rb, &["--frames", "1-3"]));
     let out = d.join("shot");
     let start = |scene: &Path, frames: &str, shard: &str| {
-        command(scene, &out, &["--frames", frames, "--shard", shard]).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().expect("aurora starts")
+        command(scene, &out, &["--frames", frames, "--shard", shard])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("aurora starts")
     };
     let children = [start(&a, "1-4", "0/2"), start(&b, "1-3", "0/2"), start(&a, "1-4", "1/2"), start(&b, "1-3", "1/2")];
     let outs: Vec<Output> = children.into_iter().map(wait).collect();

@@ -24,8 +24,8 @@
 //! 4. V projected back through the camera, compared with -B projected.
 
 use aurora::bake::bake;
-use aurora::magnetic::MagneticField;
 use aurora::camera::CameraModel;
+use aurora::magnetic::MagneticField;
 use aurora::progress::NoProgress;
 use aurora::render::{render, Integration, RenderSettings, Volume};
 use aurora::scene::{Camera, Curtain, Projection, Scene, TerrainKind, VoxelSize};
@@ -41,7 +41,15 @@ fn rayed_scene() -> Scene {
         .map(|i| {
             let phi = i as f64 * 60.0;
             let (sn, cs) = phi.to_radians().sin_cos();
-            Curtain { center: [50.0 * cs, 50.0 * sn], length: 40.0, width: 20.0, bend_km: 3.0, rotation_deg: phi + 90.0, seed: i + 1, ..Curtain::default() }
+            Curtain {
+                center: [50.0 * cs, 50.0 * sn],
+                length: 40.0,
+                width: 20.0,
+                bend_km: 3.0,
+                rotation_deg: phi + 90.0,
+                seed: i + 1,
+                ..Curtain::default()
+            }
         })
         .collect();
     s.beams.count = 3000;
@@ -138,7 +146,13 @@ fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
             }
             // Eigenvector of the smaller eigenvalue (along the streak).
             let l2 = 0.5 * (tr - disc);
-            let t = if b.abs() > 1e-30 { DVec3::new(b, l2 - a, 0.0) } else if a < c { DVec3::X } else { DVec3::Y };
+            let t = if b.abs() > 1e-30 {
+                DVec3::new(b, l2 - a, 0.0)
+            } else if a < c {
+                DVec3::X
+            } else {
+                DVec3::Y
+            };
             let t = t.normalize();
             let (fx, fy) = (x as f64 + 0.5, y as f64 + 0.5);
             // Film y runs down: the gradient's y is the film's.

@@ -38,7 +38,13 @@ fn default_scene_deposits_the_electron_power_less_backscatter_within_one_percent
         let e = f(c, "electron_power_w");
         let (dep, back, above, undep) =
             (f(c, "deposited_power_w"), f(c, "backscattered_power_w"), f(c, "above_top_power_w"), f(c, "undeposited_power_w"));
-        eprintln!("electron {e:.4e} W: deposited {:.2} %, backscattered {:.2} %, above the top {:.3} %, undeposited {:.3} %", 100.0 * dep / e, 100.0 * back / e, 100.0 * above / e, 100.0 * undep / e);
+        eprintln!(
+            "electron {e:.4e} W: deposited {:.2} %, backscattered {:.2} %, above the top {:.3} %, undeposited {:.3} %",
+            100.0 * dep / e,
+            100.0 * back / e,
+            100.0 * above / e,
+            100.0 * undep / e
+        );
         assert!(e > 0.0);
         assert!(((dep + back + above + undep) / e - 1.0).abs() < 1e-9, "the four add up: {c}");
         assert!(((dep + back) / e - 1.0).abs() < 0.01, "deposited + backscattered within 1 % of the electron power: {c}");

@@ -42,12 +42,24 @@ use Layer::*;
 const LAYERS: &[(Layer, &[&str])] = &[
     (
         Bottom,
-        &["input_file", "scene", "rng", "progress", "atomic", "memory", "atmosphere", "spectrum", "camera", "grid", "magnetic", "deposit", "watch", "leaf_source"],
+        &[
+            "input_file",
+            "scene",
+            "rng",
+            "progress",
+            "atomic",
+            "memory",
+            "atmosphere",
+            "spectrum",
+            "camera",
+            "grid",
+            "magnetic",
+            "deposit",
+            "watch",
+            "leaf_source",
+        ],
     ),
-    (
-        Stages,
-        &["frames", "footprint", "starts", "animation", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"],
-    ),
+    (Stages, &["frames", "footprint", "starts", "animation", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"]),
     (Renderer, &["render"]),
     (Files, &["vdb", "usd", "bake_identity", "outputs", "sequence"]),
     (Above, &["preview", "bench"]),
@@ -258,7 +270,6 @@ fn crate_refs(code: &str) -> BTreeSet<String> {
     out
 }
 
-
 /// Every `.rs` file under `src/`, as (path relative to `src/`, text).
 fn tree() -> Vec<(String, String)> {
     let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
@@ -419,8 +430,7 @@ use crate::frames;
 fn h() { crate::vdb::read(); }
 "####;
     let refs = crate_refs(&code_only(src));
-    let want: BTreeSet<String> =
-        ["grid", "atmosphere", "beams", "spectrum", "camera", "vdb"].iter().map(|s| s.to_string()).collect();
+    let want: BTreeSet<String> = ["grid", "atmosphere", "beams", "spectrum", "camera", "vdb"].iter().map(|s| s.to_string()).collect();
     assert_eq!(refs, want);
 }
 
@@ -435,7 +445,6 @@ fn a_circle_is_found() {
     assert_eq!(c.len(), 3, "{c:?}");
     assert!(!c.contains(&("c".into(), "d".into())));
 }
-
 
 #[test]
 fn modules_import_each_other_without_circles() {

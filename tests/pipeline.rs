@@ -14,10 +14,7 @@ use common::small_scene;
 
 #[test]
 fn chunked_tracing_equals_one_call_byte_for_byte() {
-    for (starts, deposition) in [
-        (BeamStarts::Stratified, Deposition::Expected),
-        (BeamStarts::Random, Deposition::Sampled),
-    ] {
+    for (starts, deposition) in [(BeamStarts::Stratified, Deposition::Expected), (BeamStarts::Random, Deposition::Sampled)] {
         let mut s = small_scene();
         s.beams.starts = starts;
         s.beams.deposition = deposition;
@@ -40,7 +37,9 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             assert_eq!(photons.len(), whole.photons.len(), "{starts:?} {cuts:?}");
             let bytes = |p: &[aurora::deposit::Photon]| {
                 p.iter()
-                    .flat_map(|p| p.position.iter().chain(&p.end).chain(&p.power).flat_map(|x| x.to_bits().to_le_bytes()).collect::<Vec<_>>())
+                    .flat_map(|p| {
+                        p.position.iter().chain(&p.end).chain(&p.power).flat_map(|x| x.to_bits().to_le_bytes()).collect::<Vec<_>>()
+                    })
                     .collect::<Vec<u8>>()
             };
             assert!(bytes(&photons) == bytes(&whole.photons), "{starts:?} {cuts:?}: photons differ");
@@ -70,14 +69,7 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
     let emission = plan::gather(&plan, &photons, v, &NoProgress);
     let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
     assert_eq!(photons, whole.photons);
-    let g = plan::Gathered {
-        photons,
-        beam_stats: whole.stats,
-        voxel_km: v,
-        voxel_source: source,
-        warnings: Vec::new(),
-        noise: None,
-    };
+    let g = plan::Gathered { photons, beam_stats: whole.stats, voxel_km: v, voxel_source: source, warnings: Vec::new(), noise: None };
     let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);
     assert_eq!(got.density, want.density);
@@ -115,6 +107,9 @@ fn a_reused_plan_is_the_fresh_plan() {
         let b = bake::bake_plan(&fresh, Instant::now(), &NoProgress).unwrap();
         assert_eq!(a.emission, b.emission);
         assert_eq!(a.density, b.density);
-        assert_eq!(reused.footprints.iter().map(|f| f.data.clone()).collect::<Vec<_>>(), fresh.footprints.iter().map(|f| f.data.clone()).collect::<Vec<_>>());
+        assert_eq!(
+            reused.footprints.iter().map(|f| f.data.clone()).collect::<Vec<_>>(),
+            fresh.footprints.iter().map(|f| f.data.clone()).collect::<Vec<_>>()
+        );
     }
 }

@@ -50,7 +50,10 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     let text = w.wait_for("the first picture", Duration::from_secs(300), |t| pictures(t) >= 1);
     let lines: Vec<&str> = text.lines().collect();
     let at = |p: &str| lines.iter().position(|l| l.starts_with(p)).unwrap_or_else(|| panic!("no '{p}' in\n{text}"));
-    assert!(at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "), "{text}");
+    assert!(
+        at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "),
+        "{text}"
+    );
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
     assert!(last.contains("edit (first)") && last.contains("1 spp), full render") && last.contains("(2 spp)"), "{last}");
     let first = std::fs::read(&png).unwrap();
@@ -60,7 +63,9 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = w.wait_for("the exposure edit's picture", Duration::from_secs(120), |t| pictures(t) >= 2);
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
-    for zero in ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"] {
+    for zero in
+        ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"]
+    {
         assert!(last.contains("edit (exposure)") && last.contains(zero), "{zero}: {last}");
     }
     let exposed = std::fs::read(&png).unwrap();
@@ -71,7 +76,10 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = w.wait_for("the render edit's picture", Duration::from_secs(120), |t| pictures(t) >= 3);
     let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
-    assert!(last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"), "{last}");
+    assert!(
+        last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"),
+        "{last}"
+    );
     let second = std::fs::read(&png).unwrap();
     assert_ne!(exposed, second, "the render edit must change the picture");
 
@@ -109,11 +117,7 @@ fn without_watch_one_picture_then_exit() {
     let scene_path = dir.join("scene.toml");
     std::fs::write(&scene_path, small_scene().to_toml()).unwrap();
     let png = dir.join("once.png");
-    let out = Command::new(BIN)
-        .args(["preview", scene_path.to_str().unwrap(), "--size", "32x18", "--out"])
-        .arg(&png)
-        .output()
-        .unwrap();
+    let out = Command::new(BIN).args(["preview", scene_path.to_str().unwrap(), "--size", "32x18", "--out"]).arg(&png).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");

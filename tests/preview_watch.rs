@@ -155,7 +155,9 @@ fn start(name: &str, watch: Watch) -> Session {
     let first = text_so_far.lines().next().unwrap();
     let how = match watch {
         Watch::Events => "(inotify: ".to_string(),
-        Watch::Poll => format!("(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for {} ms", aurora::watch::SETTLE.as_millis()),
+        Watch::Poll => {
+            format!("(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for {} ms", aurora::watch::SETTLE.as_millis())
+        }
     };
     assert!(first.starts_with("watching ") && first.contains(&how), "{first}");
     Session { child, scene, path, png, saved: vec![text_hash(text.as_bytes())] }

@@ -268,7 +268,21 @@ fn every_command_line_number_at_its_extremes_exits_0_or_2() {
     let scene = d.join("small.toml");
     std::fs::write(&scene, toml::to_string(&base()).unwrap()).unwrap();
     let s = scene.to_str().unwrap().to_string();
-    let values = ["0", "1", "-1", "2", "1e9", "1000000000", "9223372036854775807", "9223372036854775808", "18446744073709551616", "nan", "inf", "", "x"];
+    let values = [
+        "0",
+        "1",
+        "-1",
+        "2",
+        "1e9",
+        "1000000000",
+        "9223372036854775807",
+        "9223372036854775808",
+        "18446744073709551616",
+        "nan",
+        "inf",
+        "",
+        "x",
+    ];
     let mut cases = Vec::new();
     for v in values {
         for (cmd, flag) in [
@@ -280,7 +294,10 @@ fn every_command_line_number_at_its_extremes_exits_0_or_2() {
             ("render", "--threads"),
         ] {
             let out = if cmd == "bake" { "out" } else { "x.exr" };
-            cases.push((format!("{cmd} {flag} {v:?}"), vec![cmd.into(), s.clone(), flag.into(), v.into(), "--out".into(), out.into(), "-q".into()]));
+            cases.push((
+                format!("{cmd} {flag} {v:?}"),
+                vec![cmd.into(), s.clone(), flag.into(), v.into(), "--out".into(), out.into(), "-q".into()],
+            ));
         }
     }
     let n = cases.len();
@@ -363,7 +380,10 @@ fn soak_200_random_valid_scenes() {
         }
         // Small footprints whatever was drawn.
         if let Some(toml::Value::Table(f)) = t.get_mut("footprint") {
-            f.insert("resolution".into(), toml::Value::Array(vec![toml::Value::Integer(r.random_range(8..=48)), toml::Value::Integer(r.random_range(8..=24))]));
+            f.insert(
+                "resolution".into(),
+                toml::Value::Array(vec![toml::Value::Integer(r.random_range(8..=48)), toml::Value::Integer(r.random_range(8..=24))]),
+            );
         }
         // Rules across keys: the bend within the width, delta alpha within alpha_D.
         if let Some(toml::Value::Array(cs)) = t.get_mut("curtain") {
@@ -382,7 +402,10 @@ fn soak_200_random_valid_scenes() {
         let file = d.join(format!("soak{i}.toml"));
         std::fs::write(&file, toml::to_string(&t).unwrap()).unwrap();
         let f = file.to_str().unwrap().to_string();
-        cases.push((format!("soak{i}"), vec!["render".into(), f, "--out".into(), "x.png".into(), "-q".into(), "--threads".into(), "1".into()]));
+        cases.push((
+            format!("soak{i}"),
+            vec!["render".into(), f, "--out".into(), "x.png".into(), "-q".into(), "--threads".into(), "1".into()],
+        ));
     }
     let (failures, succeeded) = run_all_counting(cases, &d);
     assert!(failures.is_empty(), "{} of 200 scenes failed:\n{}", failures.len(), failures.join("\n"));

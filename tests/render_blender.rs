@@ -69,7 +69,10 @@ fn blender_camera_projects_like_ours() {
             let target = DVec3::from_array(cam.look_at)
                 + DVec3::new(rng.random_range(-6.0..6.0), rng.random_range(-3.0..3.0), rng.random_range(-4.0..4.0));
             let want = project(&m, target);
-            script += &format!("v = world_to_camera_view(scene, ob, Vector(({:.17e}, {:.17e}, {:.17e})))\nprint('P {k} {i}', repr(v.x), repr(v.y))\n", target.x, target.y, target.z);
+            script += &format!(
+                "v = world_to_camera_view(scene, ob, Vector(({:.17e}, {:.17e}, {:.17e})))\nprint('P {k} {i}', repr(v.x), repr(v.y))\n",
+                target.x, target.y, target.z
+            );
             cases.push((k, i, want));
         }
     }
@@ -81,15 +84,9 @@ fn blender_camera_projects_like_ours() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8_lossy(&out.stdout);
     for (k, i, want) in cases {
-        let line = text
-            .lines()
-            .find(|l| l.starts_with(&format!("P {k} {i} ")))
-            .unwrap_or_else(|| panic!("no output for {k} {i}: {text}"));
+        let line = text.lines().find(|l| l.starts_with(&format!("P {k} {i} "))).unwrap_or_else(|| panic!("no output for {k} {i}: {text}"));
         let f: Vec<f64> = line.split(' ').skip(3).map(|v| v.parse().unwrap()).collect();
         // Blender computes in f32 (matrices, vectors): 1e-5 of the frame.
-        assert!(
-            (f[0] - want.0).abs() < 1e-5 && (f[1] - want.1).abs() < 1e-5,
-            "camera {k} point {i}: Blender {f:?} vs ours {want:?}"
-        );
+        assert!((f[0] - want.0).abs() < 1e-5 && (f[1] - want.1).abs() < 1e-5, "camera {k} point {i}: Blender {f:?} vs ours {want:?}");
     }
 }

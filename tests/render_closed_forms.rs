@@ -171,8 +171,7 @@ fn check_image(s: &RenderSettings, vol: &Volume, f: impl Fn(f64) -> ([f64; 3], f
 fn homogeneous_box_transmittance_is_exp_of_optical_depth() {
     let d = density_box(SIGMA);
     let vol = Volume { density: Some(&d), emission: None };
-    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())]
-    {
+    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())] {
         s.background.radiance = [1.0; 3];
         let n = check_image(
             &s,
@@ -206,8 +205,7 @@ fn emission_with_absorption_same_shape_closed_form() {
     let e = emission_box(E);
     let vol = Volume { density: Some(&d), emission: Some(&e) };
     let b = 0.3;
-    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())]
-    {
+    for (name, mut s) in [("persp", oblique_persp()), ("ortho-axis", axis_ortho()), ("ortho-oblique", oblique_ortho())] {
         s.background.radiance = [b; 3];
         s.volume.density_scale = 1.25; // sigma_t = 1.25 * 0.8 = 1.0 per km
         s.volume.emission_scale = 2.0;
@@ -282,10 +280,7 @@ fn exponential_atmosphere_along_a_slanted_ray() {
     let predicted = h * h / (12.0 * hs) * (rho0 - rho_top);
     let rendered_tau = -(img.pixels[0][0] as f64).ln() * cos;
     let diff = rendered_tau - continuous;
-    assert!(
-        (diff - predicted).abs() <= 1e-3 * predicted + 1e-6,
-        "trapezoid error {diff:.3e} vs Euler-Maclaurin {predicted:.3e}"
-    );
+    assert!((diff - predicted).abs() <= 1e-3 * predicted + 1e-6, "trapezoid error {diff:.3e} vs Euler-Maclaurin {predicted:.3e}");
 }
 
 #[test]
@@ -332,14 +327,7 @@ fn single_voxel_footprint_is_exactly_one_voxel() {
         assert_eq!(r.transmittance(), 1.0, "offset {off:?}");
     }
     // ... and a hair inside: tau = 3 h * 1e-3.
-    let r = radiance_along_ray(
-        &medium,
-        c + DVec3::new(0.5 * (1.0 - 1e-3), 0.0, -3.0),
-        DVec3::Z,
-        f64::INFINITY,
-        Integration::Exact,
-        0.5,
-    );
+    let r = radiance_along_ray(&medium, c + DVec3::new(0.5 * (1.0 - 1e-3), 0.0, -3.0), DVec3::Z, f64::INFINITY, Integration::Exact, 0.5);
     assert!(rel(r.tau, 3.0 * 0.5 * 1e-3, 0.0) < 1e-9, "{}", r.tau);
 }
 

@@ -195,8 +195,7 @@ fn row_0_is_the_top_and_column_0_the_left() {
     e.set(IVec3::new(3, 10, 3), [1.0; 3]);
     let s = settings(persp([0.0, 0.0, 0.0], [0.0, 10.0, 0.0], [0.0, 0.0, 1.0], 60.0), 20, 20, 1);
     let img = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
-    let lit: Vec<(usize, usize)> =
-        (0..20).flat_map(|y| (0..20).map(move |x| (x, y))).filter(|&(x, y)| img.pixel(x, y)[0] > 0.0).collect();
+    let lit: Vec<(usize, usize)> = (0..20).flat_map(|y| (0..20).map(move |x| (x, y))).filter(|&(x, y)| img.pixel(x, y)[0] > 0.0).collect();
     assert!(!lit.is_empty());
     assert!(lit.iter().all(|&(x, y)| x >= 10 && y < 10), "{lit:?}");
 }
@@ -239,11 +238,7 @@ fn same_image_whatever_the_thread_count() {
     let (d, e, s) = busy_scene();
     let vol = Volume { density: Some(&d), emission: Some(&e) };
     let run = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| render(&s, &vol, &NoProgress).unwrap())
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| render(&s, &vol, &NoProgress).unwrap())
     };
     let (a, b, c) = (run(1), run(2), run(5));
     assert!(a.stats.terrain_hits > 0 && a.stats.shadow_rays > 0);
@@ -260,16 +255,8 @@ fn same_image_whatever_the_thread_count() {
     // Fixed-step integration is deterministic too.
     let mut s3 = s.clone();
     s3.integration = Integration::FixedStep(0.1);
-    let f1 = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap()
-        .install(|| render(&s3, &vol, &NoProgress).unwrap());
-    let f3 = rayon::ThreadPoolBuilder::new()
-        .num_threads(3)
-        .build()
-        .unwrap()
-        .install(|| render(&s3, &vol, &NoProgress).unwrap());
+    let f1 = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap().install(|| render(&s3, &vol, &NoProgress).unwrap());
+    let f3 = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap().install(|| render(&s3, &vol, &NoProgress).unwrap());
     assert_eq!(f1.pixels, f3.pixels);
 }
 
@@ -332,23 +319,13 @@ fn four_samples_are_exact_where_radiance_is_linear_across_the_pixel() {
     let tr = Transform::new(h, DVec3::ZERO);
     let zmax = 5;
     let field = |x: f64, y: f64| [8.0 + 0.25 * x + 0.125 * y, 9.0 - 0.1 * x + 0.3 * y, 3.0 + 0.05 * (x + y)];
-    let e = box_vec3(
-        IVec3::new(-20, -20, 0),
-        IVec3::new(20, 20, zmax),
-        |p| field(p.x as f64, p.y as f64).map(|v| v as f32),
-        tr,
-    );
+    let e = box_vec3(IVec3::new(-20, -20, 0), IVec3::new(20, 20, zmax), |p| field(p.x as f64, p.y as f64).map(|v| v as f32), tr);
     // 16 x 16 pixels over 12 x 12 voxels (0.75 voxel per pixel), centred at
     // index (2.3, -1.7): every pixel is at least 12 voxels from the slab's side.
     let c = tr.index_to_world(DVec3::new(2.3, -1.7, 2.5));
     let mut worst = 0.0f64;
     for seed in [1u64, 2, 3] {
-        let mut s = settings(
-            ortho((c + DVec3::new(0.0, 0.0, 20.0)).to_array(), c.to_array(), [0.0, 1.0, 0.0], 12.0 * h),
-            16,
-            16,
-            4,
-        );
+        let mut s = settings(ortho((c + DVec3::new(0.0, 0.0, 20.0)).to_array(), c.to_array(), [0.0, 1.0, 0.0], 12.0 * h), 16, 16, 4);
         s.seed = seed;
         let img = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
         for py in 0..16 {

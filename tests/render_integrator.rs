@@ -22,13 +22,7 @@ use render_util::*;
 
 /// A sparse random grid: clusters of voxels (about 40% of each cluster box
 /// active) around the given index centres, values in [0, vmax).
-fn random_grids(
-    rng: &mut Pcg64,
-    centres: &[IVec3],
-    radius: i32,
-    vmax: f32,
-    tr: Transform,
-) -> (Grid<f32>, Grid<[f32; 3]>) {
+fn random_grids(rng: &mut Pcg64, centres: &[IVec3], radius: i32, vmax: f32, tr: Transform) -> (Grid<f32>, Grid<[f32; 3]>) {
     let mut d = Grid::new("density", 0.0f32, tr);
     let mut e = Grid::new("emission", [0.0f32; 3], tr);
     for &c in centres {
@@ -51,11 +45,7 @@ fn random_grids(
 
 fn random_dir(rng: &mut Pcg64) -> DVec3 {
     loop {
-        let v = DVec3::new(
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-            rng.random::<f64>() * 2.0 - 1.0,
-        );
+        let v = DVec3::new(rng.random::<f64>() * 2.0 - 1.0, rng.random::<f64>() * 2.0 - 1.0, rng.random::<f64>() * 2.0 - 1.0);
         let l = v.length();
         if l > 0.1 && l <= 1.0 {
             return v / l;
@@ -84,14 +74,7 @@ fn random_ray<T: aurora::grid::VoxelValue>(rng: &mut Pcg64, g: &Grid<T>) -> (DVe
 /// 6e-8 per voxel) while the oracle multiplies in f64, and the emission
 /// quadrature errs below 1e-9 relative: 3e-7 relative (plus 1e-12 absolute
 /// for values that vanish).
-fn compare(
-    density: Option<&Grid<f32>>,
-    emission: Option<&Grid<[f32; 3]>>,
-    ds: f64,
-    es: f64,
-    rays: usize,
-    seed: u64,
-) -> usize {
+fn compare(density: Option<&Grid<f32>>, emission: Option<&Grid<[f32; 3]>>, ds: f64, es: f64, rays: usize, seed: u64) -> usize {
     let medium = Medium::new(density, emission, ds, es).unwrap();
     let mut rng = Pcg64::seed_from_u64(seed);
     let mut nonzero = 0;
@@ -108,19 +91,10 @@ fn compare(
             // is left of L is below exp(-40) times the rest of the emission.
             assert!(got.tau > TAU_CUTOFF && got.tau <= tau * (1.0 + 3e-7), "tau {} vs oracle {tau}", got.tau);
         } else {
-            assert!(
-                (got.tau - tau).abs() <= 3e-7 * tau + 1e-12,
-                "tau {} vs oracle {tau} (ray {o} {d} {t_max})",
-                got.tau
-            );
+            assert!((got.tau - tau).abs() <= 3e-7 * tau + 1e-12, "tau {} vs oracle {tau} (ray {o} {d} {t_max})", got.tau);
         }
         for c in 0..3 {
-            assert!(
-                (got.l[c] - l[c]).abs() <= 3e-7 * l[c] + 1e-12,
-                "L[{c}] {} vs oracle {} (ray {o} {d} {t_max})",
-                got.l[c],
-                l[c]
-            );
+            assert!((got.l[c] - l[c]).abs() <= 3e-7 * l[c] + 1e-12, "L[{c}] {} vs oracle {} (ray {o} {d} {t_max})", got.l[c], l[c]);
         }
         // Shadow rays use the same walker; with density and emission on
         // different transforms the radiance walk splits pieces further, so
@@ -150,10 +124,8 @@ fn exact_matches_brute_force_on_random_sparse_grids() {
 #[test]
 fn exact_matches_brute_force_with_density_and_emission_on_different_transforms() {
     let mut rng = Pcg64::seed_from_u64(12);
-    let (d, _) =
-        random_grids(&mut rng, &[IVec3::new(2, 3, -4)], 6, 2.0, Transform::new(0.5, DVec3::new(0.1, 0.0, -0.3)));
-    let (_, e) =
-        random_grids(&mut rng, &[IVec3::new(4, 2, -3)], 5, 1.0, Transform::new(0.61, DVec3::new(-0.2, 0.35, 0.0)));
+    let (d, _) = random_grids(&mut rng, &[IVec3::new(2, 3, -4)], 6, 2.0, Transform::new(0.5, DVec3::new(0.1, 0.0, -0.3)));
+    let (_, e) = random_grids(&mut rng, &[IVec3::new(4, 2, -3)], 5, 1.0, Transform::new(0.61, DVec3::new(-0.2, 0.35, 0.0)));
     let medium = Medium::new(Some(&d), Some(&e), 1.0, 1.0).unwrap();
     assert_eq!(medium.fields.len(), 2, "different transforms need two fields");
     let n = compare(Some(&d), Some(&e), 1.0, 1.0, 300, 4);
@@ -184,8 +156,7 @@ fn gauss_legendre_emission_error_is_below_the_documented_bound() {
         let ua = [rng.random(), rng.random(), rng.random()];
         let ub = [rng.random(), rng.random(), rng.random()];
         let len = rng.random::<f64>() * 2.0;
-        let piece =
-            Piece { t0: 0.0, t1: len, sigma_t: Cubic::along(sig, ua, ub), e: em.map(|v| Cubic::along(v, ua, ub)) };
+        let piece = Piece { t0: 0.0, t1: len, sigma_t: Cubic::along(sig, ua, ub), e: em.map(|v| Cubic::along(v, ua, ub)) };
         let mut a = Accum::default();
         a.add(&piece, true);
         // Reference: 64 sub-pieces, each re-parametrised to its own [0, 1].
@@ -247,12 +218,7 @@ fn fixed_step_error_grows_with_step_size_while_exact_stays_exact() {
             thick += 1;
         }
         let exact = radiance_along_ray(&medium, o, dir, f64::INFINITY, Integration::Exact, 0.5);
-        assert!(
-            rel(exact.transmittance(), (-tau).exp(), 0.0) < 1e-4,
-            "exact T {} vs {}",
-            exact.transmittance(),
-            (-tau).exp()
-        );
+        assert!(rel(exact.transmittance(), (-tau).exp(), 0.0) < 1e-4, "exact T {} vs {}", exact.transmittance(), (-tau).exp());
         assert!(rel(exact.l[0], l[0], 0.0) < 1e-4, "exact L {} vs {}", exact.l[0], l[0]);
         for (k, &h) in steps.iter().enumerate() {
             let off: f64 = rng.random();
@@ -277,8 +243,7 @@ fn fixed_step_converges_to_exact_on_pixels() {
     // approaches the exact one as h shrinks (midpoint rule, O(h^2)).
     let d = blob();
     let c = d.transform.index_to_world(DVec3::splat(12.0));
-    let mut s =
-        settings(persp((c + DVec3::new(0.0, -15.0, 2.0)).to_array(), c.to_array(), [0.0, 0.0, 1.0], 40.0), 16, 16, 1);
+    let mut s = settings(persp((c + DVec3::new(0.0, -15.0, 2.0)).to_array(), c.to_array(), [0.0, 0.0, 1.0], 40.0), 16, 16, 1);
     s.background.radiance = [1.0; 3];
     let vol = Volume { density: Some(&d), emission: None };
     let exact = render(&s, &vol, &NoProgress).unwrap();
@@ -286,8 +251,7 @@ fn fixed_step_converges_to_exact_on_pixels() {
     for h in [0.8, 0.2, 0.05] {
         s.integration = Integration::FixedStep(h);
         let img = render(&s, &vol, &NoProgress).unwrap();
-        let err: f64 =
-            img.pixels.iter().zip(&exact.pixels).map(|(a, b)| (a[0] as f64 - b[0] as f64).abs()).sum::<f64>() / 256.0;
+        let err: f64 = img.pixels.iter().zip(&exact.pixels).map(|(a, b)| (a[0] as f64 - b[0] as f64).abs()).sum::<f64>() / 256.0;
         assert!(err < last, "h = {h}: mean error {err} did not decrease");
         last = err;
     }
@@ -338,11 +302,7 @@ fn dda_visits_exactly_the_non_empty_cells_in_order() {
     // leaf, block and super-node boundaries.
     let mut centres = vec![IVec3::new(0, 0, 0), IVec3::new(128, -1, 4095), IVec3::new(-4097, 127, -129)];
     for _ in 0..24 {
-        centres.push(IVec3::new(
-            rng.random_range(-9000..9000),
-            rng.random_range(-9000..9000),
-            rng.random_range(-9000..9000),
-        ));
+        centres.push(IVec3::new(rng.random_range(-9000..9000), rng.random_range(-9000..9000), rng.random_range(-9000..9000)));
     }
     let (g, _) = random_grids(&mut rng, &centres, 2, 1.0, tr);
     let medium = Medium::new(Some(&g), None, 1.0, 1.0).unwrap();
@@ -351,11 +311,8 @@ fn dda_visits_exactly_the_non_empty_cells_in_order() {
     let mut checked = 0;
     for i in 0..400 {
         // Rays aimed at one cluster from another (crossing lots of empty space).
-        let a =
-            centres[i % centres.len()].as_dvec3() + DVec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
-        let b = centres[(i * 7 + 3) % centres.len()].as_dvec3()
-            + DVec3::new(rng.random(), rng.random(), rng.random()) * 4.0
-            - 2.0;
+        let a = centres[i % centres.len()].as_dvec3() + DVec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
+        let b = centres[(i * 7 + 3) % centres.len()].as_dvec3() + DVec3::new(rng.random(), rng.random(), rng.random()) * 4.0 - 2.0;
         let (pa, pb) = (tr.index_to_world(a), tr.index_to_world(b));
         if (pb - pa).length() < 1e-6 {
             continue;
@@ -368,10 +325,7 @@ fn dda_visits_exactly_the_non_empty_cells_in_order() {
         for (x, y) in got.iter().zip(&want) {
             assert_eq!(x.corner, y.0, "ray {i}: cell order");
             let scale = 1.0 + x.t1.abs();
-            assert!(
-                (x.t0 - y.1).abs() < 1e-9 * scale && (x.t1 - y.2).abs() < 1e-9 * scale,
-                "ray {i}: span {x:?} vs {y:?}"
-            );
+            assert!((x.t0 - y.1).abs() < 1e-9 * scale && (x.t1 - y.2).abs() < 1e-9 * scale, "ray {i}: span {x:?} vs {y:?}");
         }
         checked += want.len();
     }
@@ -395,8 +349,7 @@ fn cost_does_not_grow_with_an_empty_bounding_box() {
         (d, e, p)
     };
     let c = tr.index_to_world(DVec3::splat(4.0));
-    let s =
-        settings(persp((c + DVec3::new(3.0, -20.0, 5.0)).to_array(), c.to_array(), [0.0, 0.0, 1.0], 30.0), 32, 32, 1);
+    let s = settings(persp((c + DVec3::new(3.0, -20.0, 5.0)).to_array(), c.to_array(), [0.0, 0.0, 1.0], 30.0), 32, 32, 1);
     let a = render(&s, &Volume { density: Some(&near), emission: Some(&near_e) }, &NoProgress).unwrap();
     let (fd, fe, _) = with_far(2);
     let b = render(&s, &Volume { density: Some(&fd), emission: Some(&fe) }, &NoProgress).unwrap();

@@ -169,9 +169,7 @@ fn j_absorbing(sigma: f64) -> f64 {
     let g8 = gauss(8);
     let depth = |w: DVec3| -> f64 {
         let mut ts = vec![];
-        for (k, planes) in
-            [(0, [-m - 1.0, -m, m, m + 1.0]), (1, [-m - 1.0, -m, m, m + 1.0]), (2, [z0 - 1.0, z0, z1, z1 + 1.0])]
-        {
+        for (k, planes) in [(0, [-m - 1.0, -m, m, m + 1.0]), (1, [-m - 1.0, -m, m, m + 1.0]), (2, [z0 - 1.0, z0, z1, z1 + 1.0])] {
             if w[k] != 0.0 {
                 for p in planes {
                     let t = p / w[k];

@@ -20,10 +20,7 @@ fn committed_schema_matches_the_binary() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/scene_schema.json");
     let committed = std::fs::read_to_string(&path).expect("blender/scene_schema.json");
     let now = aurora::scene::schema::schema_json();
-    assert!(
-        committed == now,
-        "blender/scene_schema.json is stale: run `aurora scene --schema > blender/scene_schema.json`"
-    );
+    assert!(committed == now, "blender/scene_schema.json is stale: run `aurora scene --schema > blender/scene_schema.json`");
     // And the binary prints the same.
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_aurora")).args(["scene", "--schema"]).output().unwrap();
     assert!(out.status.success());
@@ -43,7 +40,8 @@ fn scene_doc_matches_the_schema() {
     }
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
     if committed != doc {
-        let line = committed.lines().zip(doc.lines()).position(|(a, b)| a != b).unwrap_or(committed.lines().count().min(doc.lines().count()));
+        let line =
+            committed.lines().zip(doc.lines()).position(|(a, b)| a != b).unwrap_or(committed.lines().count().min(doc.lines().count()));
         panic!(
             "docs/scene.md is stale (first difference at line {}): regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema",
             line + 1
@@ -169,11 +167,8 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
 
 /// Types the default cannot tell: a key whose default is none, or one that
 /// takes a number or a word.
-const TYPES: &[(&str, &str, &str)] = &[
-    ("background", "image", "path"),
-    ("terrain", "heightmap", "path"),
-    ("grid", "voxel_size", "number or `\"auto\"`"),
-];
+const TYPES: &[(&str, &str, &str)] =
+    &[("background", "image", "path"), ("terrain", "heightmap", "path"), ("grid", "voxel_size", "number or `\"auto\"`")];
 
 /// docs/scene.md: a header, then per section a table of key, type,
 /// default, range, unit and description. Deterministic: the order is

@@ -11,8 +11,8 @@
 mod common;
 
 use aurora::grid::{Grid, Transform};
-use common::{aurora, file_names as files_in, stderr};
 use aurora::vdb::write::{write_vdb, GridRef, VdbWriteError, WriteOptions};
+use common::{aurora, file_names as files_in, stderr};
 use glam::{DVec3, IVec3};
 use std::path::PathBuf;
 use std::process::Output;
@@ -49,11 +49,7 @@ fn deflection_of_90_degrees_is_refused_naming_key_and_range_and_nothing_is_writt
     }
     // Just below 90 is accepted (and baked: see stability_extremes.rs).
     let scene = d.join("alpha-89.toml");
-    std::fs::write(
-        &scene,
-        small_scene("count = 10\nalpha_d_deg = 89.9\ndelta_alpha_deg = 10.0", "", "", "steps = 2", ""),
-    )
-    .unwrap();
+    std::fs::write(&scene, small_scene("count = 10\nalpha_d_deg = 89.9\ndelta_alpha_deg = 10.0", "", "", "steps = 2", "")).unwrap();
     let o = aurora(&["bake", scene.to_str().unwrap(), "--out", d.join("out-89").to_str().unwrap(), "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
@@ -150,20 +146,11 @@ fn under_resolved_kernels_and_curtains_are_warned_on_stderr() {
     // (0.7 km), on 1 km voxels.
     let (o, _) = run(
         "curtain",
-        small_scene(
-            "count = 20",
-            "radius_km = 1.0",
-            "voxel_size = 1.0",
-            "steps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02",
-            "",
-        ),
+        small_scene("count = 20", "radius_km = 1.0", "voxel_size = 1.0", "steps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02", ""),
     );
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");
-    assert!(
-        e.contains("aurora: warning: under-resolved curtain: curtain[0]") && e.contains("thinner than a voxel (1 km)"),
-        "{e}"
-    );
+    assert!(e.contains("aurora: warning: under-resolved curtain: curtain[0]") && e.contains("thinner than a voxel (1 km)"), "{e}");
     assert!(!e.contains("under-resolved kernel"), "{e}");
 }
 
@@ -219,25 +206,14 @@ fn a_foreign_vdb_whose_scaled_values_would_overflow_is_refused_naming_the_scale(
     .unwrap();
     let img = d.join("out.exr");
     let _ = std::fs::remove_file(&img);
-    let o = aurora(&[
-        "render",
-        scene.to_str().unwrap(),
-        "--vdb",
-        path.to_str().unwrap(),
-        "--out",
-        img.to_str().unwrap(),
-        "-q",
-    ]);
+    let o = aurora(&["render", scene.to_str().unwrap(), "--vdb", path.to_str().unwrap(), "--out", img.to_str().unwrap(), "-q"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     let m = stderr(&o);
     assert!(m.contains("emission") && m.contains("volume.emission_scale") && m.contains("overflow"), "{m}");
     assert!(!img.exists());
     // The same file at scale 1 renders, every pixel finite.
-    std::fs::write(
-        &scene,
-        "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n",
-    )
-    .unwrap();
+    std::fs::write(&scene, "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n")
+        .unwrap();
     let o = aurora(&["render", scene.to_str().unwrap(), "--vdb", path.to_str().unwrap(), "--out", img.to_str().unwrap(), "-q"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(img.exists());
@@ -264,7 +240,8 @@ fn a_vdb_whose_leaves_would_not_fit_in_memory_is_refused_before_they_are_read() 
     assert_eq!(e.leaf_count(), 150_000);
     write_vdb(&path, &[GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
     let scene = d.join("s.toml");
-    std::fs::write(&scene, "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n").unwrap();
+    std::fs::write(&scene, "[camera]\nposition = [0, -50, 100]\nlook_at = [0, 0, 100]\n[render]\nwidth = 8\nheight = 8\nspp = 1\n")
+        .unwrap();
     let img = d.join("out.exr");
     let _ = std::fs::remove_file(&img);
     let o = std::process::Command::new("sh")

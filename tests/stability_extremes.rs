@@ -21,11 +21,8 @@ use serde_json::Value;
 /// One 8 km curtain seen from 60 km away, 20 beams, coarse voxels, an
 /// 8 x 6 image with terrain and shadow rays.
 fn base() -> Scene {
-    let mut s = Scene {
-        seed: 11,
-        curtains: vec![Curtain { length: 8.0, width: 4.0, bend_km: 1.0, ..Curtain::default() }],
-        ..Scene::default()
-    };
+    let mut s =
+        Scene { seed: 11, curtains: vec![Curtain { length: 8.0, width: 4.0, bend_km: 1.0, ..Curtain::default() }], ..Scene::default() };
     s.footprint.resolution = [32, 16];
     s.footprint.steps = 4;
     s.footprint.pressure_iterations = 10;
@@ -291,11 +288,7 @@ fn cases() -> Vec<Case> {
             }),
             Finite,
         ),
-        (
-            "grid.voxel_size auto",
-            Box::new(|s| s.grid.voxel_size = VoxelSize::Auto(aurora::scene::AutoTag::Auto)),
-            Finite,
-        ),
+        ("grid.voxel_size auto", Box::new(|s| s.grid.voxel_size = VoxelSize::Auto(aurora::scene::AutoTag::Auto)), Finite),
         ("grid.voxel_size huge", Box::new(|s| s.grid.voxel_size = VoxelSize::Km(1e4)), Finite),
         // grid: air density
         (
@@ -387,11 +380,7 @@ fn cases() -> Vec<Case> {
             Finite,
         ),
         ("background.radiance max", Box::new(|s| s.background.radiance = [1e9, 0.0, 1e-300]), Finite),
-        (
-            "background.radiance beyond f32",
-            Box::new(|s| s.background.radiance = [1e300, 0.0, 0.0]),
-            Refused("background.radiance"),
-        ),
+        ("background.radiance beyond f32", Box::new(|s| s.background.radiance = [1e300, 0.0, 0.0]), Refused("background.radiance")),
         (
             "terrain plane high above",
             Box::new(|s| {
@@ -460,9 +449,7 @@ fn cases() -> Vec<Case> {
 /// infinity as null): no null outside the keys that may be absent.
 fn no_null_numbers(v: &Value, path: &str, bad: &mut Vec<String>) {
     match v {
-        Value::Null
-            if !["index_bbox", "world_bbox", "stats.noise", "stats.prune"].iter().any(|k| path.ends_with(k)) =>
-        {
+        Value::Null if !["index_bbox", "world_bbox", "stats.noise", "stats.prune"].iter().any(|k| path.ends_with(k)) => {
             bad.push(path.to_string())
         }
         Value::Array(a) => a.iter().enumerate().for_each(|(i, x)| no_null_numbers(x, &format!("{path}[{i}]"), bad)),
@@ -521,9 +508,7 @@ fn check(name: &str, scene: &Scene, expect: Expect) -> Result<(), String> {
             return Err("expected a half-range refusal by the bake, the bake and the write succeeded".into())
         }
         Ok(_) => {}
-        Err(e @ VdbWriteError::HalfOverflow { .. }) => {
-            return Err(format!("the writer refused half storage the bake let through: {e}"))
-        }
+        Err(e @ VdbWriteError::HalfOverflow { .. }) => return Err(format!("the writer refused half storage the bake let through: {e}")),
         Err(e) => return Err(format!("vdb write: {e}")),
     }
     let mut settings = RenderSettings::from_scene(scene);

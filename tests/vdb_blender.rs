@@ -70,16 +70,8 @@ fn check_volume(v: &Value, d: &Grid<f32>, e: &Grid<[f32; 3]>, vdb_path: &Path, o
     let size = (hi - lo + IVec3::ONE).as_dvec3() * s * object_scale;
     let lo_world = d.transform.index_to_world(lo.as_dvec3() - DVec3::splat(0.5));
     for a in 0..3 {
-        assert!(
-            close(num(&v["dimensions"][a]), size[a], size.max_element()),
-            "dimension {a}: {} vs {}",
-            v["dimensions"][a],
-            size[a]
-        );
-        assert!(
-            close(num(&v["bound_box"][0][a]), lo_world[a], lo_world.abs().max_element()),
-            "bound_box min {a}"
-        );
+        assert!(close(num(&v["dimensions"][a]), size[a], size.max_element()), "dimension {a}: {} vs {}", v["dimensions"][a], size[a]);
+        assert!(close(num(&v["bound_box"][0][a]), lo_world[a], lo_world.abs().max_element()), "bound_box min {a}");
         assert!(close(num(&v["scale"][a]), object_scale, object_scale), "scale {a}");
         assert_eq!(num(&v["rotation_euler"][a]), 0.0, "Z-up stage: no rotation");
     }
@@ -145,17 +137,9 @@ fn blender_loads_our_vdb_and_imports_our_usd_stage() {
     assert_eq!(u["default_prim"], json!("/aurora"));
     assert_eq!(u["meters_per_unit"], json!(1000.0));
     assert_eq!(u["up_axis"], json!("Z"));
-    assert_eq!(
-        u["prims"],
-        json!([
-            ["/aurora", "Volume"],
-            ["/aurora/density", "OpenVDBAsset"],
-            ["/aurora/emission", "OpenVDBAsset"]
-        ])
-    );
+    assert_eq!(u["prims"], json!([["/aurora", "Volume"], ["/aurora/density", "OpenVDBAsset"], ["/aurora/emission", "OpenVDBAsset"]]));
     let v = &u["volumes"][0];
-    let identity =
-        json!([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]);
+    let identity = json!([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]);
     assert_eq!(v["local_transform"], identity);
     for (name, ty) in [("density", "float"), ("emission", "float3")] {
         let f = &v["fields"][name];
@@ -165,10 +149,7 @@ fn blender_loads_our_vdb_and_imports_our_usd_stage() {
         assert_eq!(resolved, std::fs::canonicalize(&vdb).unwrap(), "{name}");
         assert_eq!(f["field_name"], json!(name));
         assert_eq!(f["field_class"], json!("fogVolume"));
-        assert!(
-            f["field_class_allowed"].as_array().unwrap().contains(&json!("fogVolume")),
-            "fogVolume is a schema token"
-        );
+        assert!(f["field_class_allowed"].as_array().unwrap().contains(&json!("fogVolume")), "fogVolume is a schema token");
         assert_eq!(f["field_data_type"], json!(ty));
     }
 }

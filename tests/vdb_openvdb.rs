@@ -25,8 +25,7 @@ const MODES: [Compression; 6] = [
 ];
 
 fn ivec(v: &Value) -> IVec3 {
-    let a: Vec<i32> =
-        v.as_array().expect("coordinate").iter().map(|x| x.as_i64().expect("int") as i32).collect();
+    let a: Vec<i32> = v.as_array().expect("coordinate").iter().map(|x| x.as_i64().expect("int") as i32).collect();
     IVec3::new(a[0], a[1], a[2])
 }
 
@@ -105,11 +104,7 @@ fn rounded<T: VoxelValue>(g: &Grid<T>) -> Grid<T> {
 /// Coordinates to sample: every 7th active voxel and the voxel next to it
 /// (often inactive), plus far-away empty space.
 fn samples<T: VoxelValue>(g: &Grid<T>) -> Vec<[i32; 3]> {
-    let mut s: Vec<[i32; 3]> = g
-        .iter_active()
-        .step_by(7)
-        .flat_map(|(p, _)| [p.to_array(), (p + IVec3::new(0, 0, 1)).to_array()])
-        .collect();
+    let mut s: Vec<[i32; 3]> = g.iter_active().step_by(7).flat_map(|(p, _)| [p.to_array(), (p + IVec3::new(0, 0, 1)).to_array()]).collect();
     s.push([123456, -98765, 4321]);
     s
 }
@@ -120,8 +115,7 @@ fn openvdb_reads_every_file_we_write() {
     let d = common::test_density();
     let e = common::test_emission();
     let samples_path = dir.join("samples.json");
-    std::fs::write(&samples_path, json!({"density": samples(&d), "emission": samples(&e)}).to_string())
-        .unwrap();
+    std::fs::write(&samples_path, json!({"density": samples(&d), "emission": samples(&e)}).to_string()).unwrap();
     let mut files = Vec::new();
     for comp in MODES {
         for half in [false, true] {
@@ -129,10 +123,7 @@ fn openvdb_reads_every_file_we_write() {
             let opts = WriteOptions {
                 compression: comp,
                 half: if half { vec!["density".into(), "emission".into()] } else { vec![] },
-                metadata: vec![
-                    ("units".into(), MetaValue::String("km".into())),
-                    ("seed".into(), MetaValue::Int64(7)),
-                ],
+                metadata: vec![("units".into(), MetaValue::String("km".into())), ("seed".into(), MetaValue::Int64(7))],
             };
             write_vdb(&path, &[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
             files.push((comp, half, path));
@@ -154,8 +145,7 @@ fn openvdb_reads_every_file_we_write() {
         check_grid(by_name["density"], &dd, "float", *half, &format!("{what} density"));
         check_grid(by_name["emission"], &ee, "vec3s", *half, &format!("{what} emission"));
         let printed = common::vdb_print_ok(path);
-        for needle in ["density", "emission", "Tree_float_5_4_3", "Tree_vec3s_5_4_3", "VDB version: 10.0/224"]
-        {
+        for needle in ["density", "emission", "Tree_float_5_4_3", "Tree_vec3s_5_4_3", "VDB version: 10.0/224"] {
             assert!(printed.contains(needle), "{what}: vdb_print output lacks `{needle}`:\n{printed}");
         }
     }
@@ -168,12 +158,8 @@ fn openvdb_reads_empty_grids() {
     let d = Grid::new("density", 0.0f32, aurora::grid::Transform::new(1.0, DVec3::ZERO));
     let e = Grid::new("emission", [0.0f32; 3], aurora::grid::Transform::new(1.0, DVec3::ZERO));
     let path = dir.join("empty.vdb");
-    write_vdb(
-        &path,
-        &[GridRef::Float(&d), GridRef::Vec3(&e)],
-        &WriteOptions { half: vec!["emission".into()], ..Default::default() },
-    )
-    .unwrap();
+    write_vdb(&path, &[GridRef::Float(&d), GridRef::Vec3(&e)], &WriteOptions { half: vec!["emission".into()], ..Default::default() })
+        .unwrap();
     let r = common::run_json(&common::system_python(), "vdb_probe.py", &[path.to_str().unwrap()]);
     let grids = r[0]["grids"].as_array().unwrap_or_else(|| panic!("OpenVDB failed: {r}"));
     assert_eq!(grids.len(), 2);
@@ -191,11 +177,7 @@ fn openvdb_reads_empty_grids() {
 fn our_reader_reads_files_openvdb_writes() {
     let dir = common::temp_dir("openvdb_writes");
     let path = dir.join("reference.vdb");
-    let r = common::run_json(
-        &common::system_python(),
-        "vdb_probe.py",
-        &["--write-reference", path.to_str().unwrap()],
-    );
+    let r = common::run_json(&common::system_python(), "vdb_probe.py", &["--write-reference", path.to_str().unwrap()]);
     let f = read_vdb(&path).unwrap_or_else(|e| panic!("{e}"));
     let grids = r["grids"].as_array().unwrap();
     assert_eq!(f.grids.len(), grids.len());
@@ -244,11 +226,7 @@ fn check_reference<T: VoxelValue>(j: &Value, g: &Grid<T>) {
             }
         }
     }
-    assert_eq!(
-        expect.len() as u64,
-        j["active_voxels"].as_u64().unwrap(),
-        "{name}: dump covers every active voxel"
-    );
+    assert_eq!(expect.len() as u64, j["active_voxels"].as_u64().unwrap(), "{name}: dump covers every active voxel");
     assert_eq!(g.active_voxel_count(), expect.len() as u64, "{name}: active count");
     for (p, v) in &expect {
         assert!(g.is_active(*p), "{name}: {p} inactive in our grid");
@@ -258,11 +236,7 @@ fn check_reference<T: VoxelValue>(j: &Value, g: &Grid<T>) {
     assert_eq!(bits(g.background), bits(bg), "{name}: background");
     for (key, p) in [("0,0,0", [0, 0, 0]), ("1,2,3", [1, 2, 3]), ("-7,100,-1000", [-7, 100, -1000])] {
         let w = g.transform.index_to_world(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
-        assert_eq!(
-            j["transform"]["index_to_world"][key],
-            json!(w.to_array()),
-            "{name}: index_to_world({key})"
-        );
+        assert_eq!(j["transform"]["index_to_world"][key], json!(w.to_array()), "{name}: index_to_world({key})");
     }
 }
 
@@ -319,8 +293,7 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
     for comp in MODES {
         for half in [false, true] {
             let what = format!("{comp:?} half={half}");
-            let half_names: Vec<String> =
-                if half { vec!["density".into(), "emission".into(), "mask_cases".into()] } else { vec![] };
+            let half_names: Vec<String> = if half { vec!["density".into(), "emission".into(), "mask_cases".into()] } else { vec![] };
             let ours = dir.join(format!("ours_{comp:?}_{half}.vdb"));
             let theirs = dir.join(format!("theirs_{comp:?}_{half}.vdb"));
             let opts = WriteOptions { compression: comp, half: half_names.clone(), metadata: vec![] };
@@ -342,33 +315,19 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
             assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
             let (a, b) = (std::fs::read(&ours).unwrap(), std::fs::read(&theirs).unwrap());
             let pa = aurora::vdb::parse::parse_file(&a, &|_| false).unwrap();
-            let pb = aurora::vdb::parse::parse_file(&b, &|_| false)
-                .unwrap_or_else(|e| panic!("{what}: OpenVDB's file: {e}"));
+            let pb = aurora::vdb::parse::parse_file(&b, &|_| false).unwrap_or_else(|e| panic!("{what}: OpenVDB's file: {e}"));
             assert_eq!(pa.grids.len(), pb.grids.len());
             for ga in &pa.grids {
-                let gb = pb
-                    .grids
-                    .iter()
-                    .find(|g| g.header.unique_name == ga.header.unique_name)
-                    .expect("same grids");
+                let gb = pb.grids.iter().find(|g| g.header.unique_name == ga.header.unique_name).expect("same grids");
                 let (ha, hb) = (&ga.header, &gb.header);
                 assert_eq!(ha.type_name, hb.type_name, "{what}");
                 assert_eq!(ha.compression, hb.compression, "{what}");
                 let (sa, sb) = (transform_start(&a, ha.grid_pos), transform_start(&b, hb.grid_pos));
                 let tree_a = &a[sa..ha.end_pos as usize];
                 let tree_b = &b[sb..hb.end_pos as usize];
-                assert_eq!(
-                    ha.block_pos as usize - sa,
-                    hb.block_pos as usize - sb,
-                    "{what} {}: topology length",
-                    ha.unique_name
-                );
+                assert_eq!(ha.block_pos as usize - sa, hb.block_pos as usize - sb, "{what} {}: topology length", ha.unique_name);
                 if tree_a != tree_b {
-                    let i = tree_a
-                        .iter()
-                        .zip(tree_b)
-                        .position(|(x, y)| x != y)
-                        .unwrap_or(tree_a.len().min(tree_b.len()));
+                    let i = tree_a.iter().zip(tree_b).position(|(x, y)| x != y).unwrap_or(tree_a.len().min(tree_b.len()));
                     panic!(
                         "{what} {}: bytes differ at offset {i} after the metadata (lengths {} vs {})",
                         ha.unique_name,

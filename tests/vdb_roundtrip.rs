@@ -9,12 +9,10 @@ mod common;
 use aurora::grid::{Grid, Transform, VoxelValue};
 use aurora::scene::Compression;
 use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{
-    read_native_float_grids, read_vdb, read_vdb_bytes, read_vdb_bytes_with_vdbrs, Decoder, RawMeta,
-};
+use aurora::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, read_vdb_bytes_with_vdbrs, Decoder, RawMeta};
 use aurora::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
-use glam::{DVec3, IVec3};
 use common::damaged::{body_cuts, cut_body, random_changes, small_file, truncation_lengths, MODES};
+use glam::{DVec3, IVec3};
 use std::time::{Duration, Instant};
 
 /// Every voxel of `b` is active exactly where it is in `a`, with bit-identical
@@ -23,23 +21,14 @@ use std::time::{Duration, Instant};
 fn assert_same<T: VoxelValue>(a: &Grid<T>, b: &Grid<T>, what: &str) {
     assert_eq!(a.name, b.name, "{what}: name");
     assert_eq!(a.transform, b.transform, "{what}: transform");
-    assert_eq!(
-        a.background.components().map(f32::to_bits),
-        b.background.components().map(f32::to_bits),
-        "{what}: background"
-    );
+    assert_eq!(a.background.components().map(f32::to_bits), b.background.components().map(f32::to_bits), "{what}: background");
     assert_eq!(a.leaf_count(), b.leaf_count(), "{what}: leaf count");
     for la in a.leaves() {
         let lb = b.leaf(la.origin).unwrap_or_else(|| panic!("{what}: leaf {} missing", la.origin));
         assert_eq!(la.mask, lb.mask, "{what}: mask of leaf {}", la.origin);
         for n in 0..la.values.len() {
             let (va, vb) = (la.values[n].components(), lb.values[n].components());
-            assert_eq!(
-                va.map(f32::to_bits),
-                vb.map(f32::to_bits),
-                "{what}: value {n} of leaf {}: {va:?} vs {vb:?}",
-                la.origin
-            );
+            assert_eq!(va.map(f32::to_bits), vb.map(f32::to_bits), "{what}: value {n} of leaf {}: {va:?} vs {vb:?}", la.origin);
         }
     }
 }
@@ -131,9 +120,7 @@ fn round_trip_special_values_and_background() {
     g.set(IVec3::new(0, 0, 0), -f32::MAX);
     g.set(IVec3::new(5, 5, 5), 0.25); // equal to the background but active
     for comp in MODES {
-        let bytes =
-            write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() })
-                .unwrap();
+        let bytes = write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         let f = read_vdb_bytes(&bytes).unwrap();
         assert_same(&g, &f.float_grids[0], &format!("{comp:?}"));
         let v = read_vdb_bytes_with_vdbrs(&bytes).unwrap();
@@ -206,9 +193,7 @@ fn read_timed(bytes: &[u8]) -> Result<aurora::vdb::read::VdbFile, String> {
 
 #[test]
 fn every_truncation_is_an_error() {
-    for (comp, half) in
-        [(Compression::ZipActiveMask, false), (Compression::None, true), (Compression::ActiveMask, false)]
-    {
+    for (comp, half) in [(Compression::ZipActiveMask, false), (Compression::None, true), (Compression::ActiveMask, false)] {
         let full = small_file(comp, half);
         assert!(read_timed(&full).is_ok());
         eprintln!("{comp:?} half={half}: {} bytes", full.len());
@@ -224,14 +209,10 @@ fn every_truncation_is_an_error() {
 #[test]
 fn random_byte_changes_never_panic_or_hang() {
     let (mut ok, mut err) = (0, 0);
-    for (seed, (comp, half)) in [
-        (Compression::ZipActiveMask, false),
-        (Compression::None, false),
-        (Compression::ActiveMask, true),
-        (Compression::Zip, true),
-    ]
-    .into_iter()
-    .enumerate()
+    for (seed, (comp, half)) in
+        [(Compression::ZipActiveMask, false), (Compression::None, false), (Compression::ActiveMask, true), (Compression::Zip, true)]
+            .into_iter()
+            .enumerate()
     {
         let full = small_file(comp, half);
         // One to three bytes replaced by random values (a "flip" of a whole byte).
@@ -263,14 +244,10 @@ fn random_byte_changes_never_panic_or_hang() {
 fn truncated_grid_bodies_with_consistent_offsets_are_errors() {
     for comp in [Compression::ZipActiveMask, Compression::ActiveMask, Compression::Zip] {
         let mut g = Grid::new("density", 0.0f32, Transform::new(0.5, DVec3::ZERO));
-        for (i, p) in
-            [IVec3::new(-1, 2, 3), IVec3::new(9, 9, 9), IVec3::new(10, 9, 200)].into_iter().enumerate()
-        {
+        for (i, p) in [IVec3::new(-1, 2, 3), IVec3::new(9, 9, 9), IVec3::new(10, 9, 200)].into_iter().enumerate() {
             g.set(p, 0.5 + i as f32);
         }
-        let full =
-            write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() })
-                .unwrap();
+        let full = write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         for cut in body_cuts(&full) {
             let b = cut_body(&full, cut);
             assert!(read_timed(&b).is_err(), "{comp:?}: cut at {cut} of {} read successfully", full.len());
@@ -285,11 +262,8 @@ fn parallel_decoding_is_thread_count_independent() {
     let d = common::test_density();
     let e = common::test_emission();
     for comp in MODES {
-        let bytes = write_vdb_bytes(
-            &[GridRef::Float(&d), GridRef::Vec3(&e)],
-            &WriteOptions { compression: comp, ..Default::default() },
-        )
-        .unwrap();
+        let bytes =
+            write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         let read = |threads: usize| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             pool.install(|| read_vdb_bytes(&bytes).unwrap())
@@ -298,9 +272,8 @@ fn parallel_decoding_is_thread_count_independent() {
         let what = format!("{comp:?}");
         assert_same(one.float("density").unwrap(), many.float("density").unwrap(), &what);
         assert_same(one.vec3("emission").unwrap(), many.vec3("emission").unwrap(), &what);
-        let origins = |f: &aurora::vdb::read::VdbFile| -> Vec<IVec3> {
-            f.vec3("emission").unwrap().leaves().iter().map(|l| l.origin).collect()
-        };
+        let origins =
+            |f: &aurora::vdb::read::VdbFile| -> Vec<IVec3> { f.vec3("emission").unwrap().leaves().iter().map(|l| l.origin).collect() };
         assert_eq!(origins(&one), origins(&many), "{what}: leaf order");
         assert_same(&d, one.float("density").unwrap(), &what);
     }

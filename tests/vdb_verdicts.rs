@@ -16,8 +16,8 @@ mod common;
 
 use aurora::render::medium::Medium;
 use aurora::vdb::read::{
-    read_render_medium, read_render_medium_bytes, read_vdb, read_vdb_bytes, read_vdb_bytes_for_render,
-    read_vdb_for_render, render_grids, RenderMedium, RenderReadError, VdbFile, VdbReadError,
+    read_render_medium, read_render_medium_bytes, read_vdb, read_vdb_bytes, read_vdb_bytes_for_render, read_vdb_for_render, render_grids,
+    RenderMedium, RenderReadError, VdbFile, VdbReadError,
 };
 use common::damaged::{damaged_files, four_grids, grids_of, with_root_tiles, Damaged, Expect};
 use std::path::Path;
@@ -147,10 +147,7 @@ fn both_readers_give_every_damaged_file_the_same_verdict() {
 /// origin.
 #[test]
 fn file_damage_is_refused_whichever_grid_it_is_in() {
-    for (comp, what) in [
-        (aurora::scene::Compression::ZipActiveMask, "zip"),
-        (aurora::scene::Compression::BloscActiveMask, "Blosc"),
-    ] {
+    for (comp, what) in [(aurora::scene::Compression::ZipActiveMask, "zip"), (aurora::scene::Compression::BloscActiveMask, "Blosc")] {
         let base = four_grids(comp, false);
         for g in grids_of(&base) {
             // The records path decodes density and emission; it must check
@@ -199,7 +196,8 @@ fn the_render_command_refuses_damage_in_any_grid() {
     .unwrap();
     let base = four_grids(aurora::scene::Compression::ZipActiveMask, false);
     let temperature = grids_of(&base).into_iter().find(|g| g.name == "temperature").unwrap();
-    let at = temperature.spans.iter().map(|s| s.start + 1).max_by_key(|&at| i64::from_le_bytes(base[at..at + 8].try_into().unwrap())).unwrap();
+    let at =
+        temperature.spans.iter().map(|s| s.start + 1).max_by_key(|&at| i64::from_le_bytes(base[at..at + 8].try_into().unwrap())).unwrap();
     let len = i64::from_le_bytes(base[at..at + 8].try_into().unwrap()) as usize;
     let mut checksum = base.clone();
     checksum[at + 8 + len - 1] ^= 1;

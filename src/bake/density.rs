@@ -20,7 +20,6 @@ pub const AURORA_FRACTION: f64 = 0.01;
 /// infinity. Clamped voxels are reported by a warning.
 pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
 
-
 /// The density grid on the emission's active voxels:
 /// `density_a exp(-density_b (h - density_base_km))` (the report's air
 /// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
@@ -35,7 +34,8 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
         .par_iter()
         .map(|l| {
             // The air depends on the altitude only: once per z of the leaf.
-            let air: [f64; 8] = std::array::from_fn(|z| extinction(params, tr.index_to_world((l.origin + glam::IVec3::new(0, 0, z as i32)).as_dvec3()).z));
+            let air: [f64; 8] =
+                std::array::from_fn(|z| extinction(params, tr.index_to_world((l.origin + glam::IVec3::new(0, 0, z as i32)).as_dvec3()).z));
             let mut out = Leaf::new(l.origin, 0.0f32);
             out.mask = l.mask;
             for n in 0..crate::grid::LEAF_NUM_VALUES {
@@ -81,4 +81,3 @@ pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
         )
     })
 }
-

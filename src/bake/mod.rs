@@ -44,7 +44,6 @@ pub struct Bake {
     pub stats: BakeStats,
 }
 
-
 /// A bake failure.
 #[derive(Debug, thiserror::Error)]
 pub enum BakeError {
@@ -72,7 +71,6 @@ pub enum BakeError {
     Camera(#[from] crate::camera::CameraError),
 }
 
-
 /// Why a bake came out empty, in the user's terms: how its beams ended and
 /// which keys to look at.
 pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
@@ -95,7 +93,6 @@ pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> Stri
     }
     why
 }
-
 
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
@@ -155,7 +152,6 @@ pub fn beam_count(
     Ok((est.beams, Some(est), warnings))
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::density::{extinction, extinction_warning, MAX_EXTINCTION_PER_KM};
@@ -172,9 +168,8 @@ mod tests {
     #[test]
     fn bake_is_deterministic_across_thread_counts() {
         let s = small_scene();
-        let run = |threads| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| bake(&s, &NoProgress).unwrap())
-        };
+        let run =
+            |threads| rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| bake(&s, &NoProgress).unwrap());
         let (a, b) = (run(1), run(2));
         assert_eq!(a.photons, b.photons);
         assert_eq!(a.emission, b.emission);
@@ -222,11 +217,8 @@ mod tests {
         assert_eq!(b.stats.file_leaves, b.emission.leaf_count());
         // The shell is exactly the 26-neighbourhood of the non-zero voxels.
         for (ijk, v) in b.emission.iter_active() {
-            let near = (-1..=1).any(|dx| {
-                (-1..=1).any(|dy| {
-                    (-1..=1).any(|dz| b.emission.get(ijk + glam::IVec3::new(dx, dy, dz)) != [0.0; 3])
-                })
-            });
+            let near =
+                (-1..=1).any(|dx| (-1..=1).any(|dy| (-1..=1).any(|dz| b.emission.get(ijk + glam::IVec3::new(dx, dy, dz)) != [0.0; 3])));
             assert!(near, "active voxel {ijk} = {v:?} is not next to the aurora");
         }
         assert_eq!(b.stats.photons, b.photons.len());
@@ -313,7 +305,11 @@ mod tests {
             let sum = c.deposited_power_w + c.backscattered_power_w + c.above_top_power_w + c.undeposited_power_w;
             assert!((sum / c.electron_power_w - 1.0).abs() < 1e-9, "{c:?}");
             assert_eq!(c.undeposited_power_w, 0.0);
-            let g = crate::fang::SpectrumDeposition::curtain(s.curtains[0].char_energy_kev, s.curtains[0].soft_fraction, s.curtains[0].soft_energy_kev);
+            let g = crate::fang::SpectrumDeposition::curtain(
+                s.curtains[0].char_energy_kev,
+                s.curtains[0].soft_fraction,
+                s.curtains[0].soft_energy_kev,
+            );
             assert!((c.backscattered_power_w / c.electron_power_w - (1.0 - g.total())).abs() < 1e-9, "{c:?}");
             let expect = c.electron_power_w - c.backscattered_power_w - c.above_top_power_w;
             assert!((c.deposited_power_w / expect - 1.0).abs() < 0.01, "{c:?}");
@@ -381,4 +377,3 @@ mod tests {
         assert!(top[0] > top[1] && top[0] > top[2], "230-300 km {top:?}");
     }
 }
-

@@ -268,11 +268,7 @@ mod tests {
         let (a, b) = (split_noise_at(&pr, 250), split_noise_at(&pr, 1000));
         eprintln!("random: noise(250) {a:.4}, noise(1000) {b:.4}, ratio {:.3}", a / b);
         assert!((a / b - 2.0).abs() < 0.2, "random: noise(250) / noise(1000) = {}", a / b);
-        let (n125, n500, n2000) = (
-            split_noise_at(&plan, 125),
-            split_noise_at(&plan, 500),
-            split_noise_at(&plan, 2000),
-        );
+        let (n125, n500, n2000) = (split_noise_at(&plan, 125), split_noise_at(&plan, 500), split_noise_at(&plan, 2000));
         let (la, lb) = fit_law(125.0, n125, 500.0, n500);
         let fitted = law_noise(la, lb, 2000.0);
         let plain = n500 * 0.5;

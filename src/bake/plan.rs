@@ -53,8 +53,8 @@ use crate::photons::{self, radius::RadiusField};
 use crate::progress::Progress;
 use crate::prune;
 use crate::scene::{
-    KernelRadius,     AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams,
-    GatherMethod, GridParams, PhotonParams, Scene,
+    AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams,
+    KernelRadius, PhotonParams, Scene,
 };
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
 use glam::DVec3;
@@ -89,7 +89,6 @@ pub fn simulate_footprints(
     fps
 }
 
-
 /// The colour table the scene asks for.
 pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
     colour_table_for(&scene.colour, atmosphere)
@@ -103,7 +102,6 @@ pub fn colour_table_for(colour: &ColourParams, atmosphere: &Atmosphere) -> Colou
     }
 }
 
-
 /// The scene's neutral atmosphere (`[atmosphere] model`).
 pub fn atmosphere(scene: &Scene) -> Atmosphere {
     atmosphere_for(&scene.atmosphere)
@@ -114,14 +112,12 @@ pub fn atmosphere_for(params: &AtmosphereParams) -> Atmosphere {
     Atmosphere::of_model(params.model)
 }
 
-
 /// The kernel radius field at base radius `kernel.base_km` (noise from
 /// `photons.radius_noise_freq`, along the field `b` from the beams' top
 /// `top_km`, seeded by the scene seed).
 pub fn radius_field(kernel: KernelRadius, p: &PhotonParams, b: DVec3, top_km: f64, seed: u64) -> RadiusField {
     RadiusField::new(kernel.base_km, kernel.noise, p.radius_noise_freq, b, top_km, &[seed])
 }
-
 
 /// Everything the stages need, built once from a scene: its sections as
 /// plain data and what they determine (footprints, atmosphere, colour
@@ -248,13 +244,7 @@ impl BakePlan {
 /// Traces beams `[first, first + n)` of a bake of `count` beams, beam `i` of
 /// a curtain on random stream `stream_offset + i`
 /// ([`crate::beams::trace_range`]): the same beam whatever the chunking.
-pub fn trace(
-    plan: &BakePlan,
-    count: usize,
-    stream_offset: u64,
-    beams: Range<usize>,
-    progress: &dyn Progress,
-) -> Result<Traced, BeamError> {
+pub fn trace(plan: &BakePlan, count: usize, stream_offset: u64, beams: Range<usize>, progress: &dyn Progress) -> Result<Traced, BeamError> {
     beams::trace_range(
         &plan.trace_params(),
         &plan.footprints,
@@ -468,9 +458,8 @@ pub fn finish_keeping(
         file_voxels: emission.active_voxel_count(),
         file_leaves: emission.leaf_count(),
         index_bbox: bbox.map(|(a, b)| [a.to_array(), b.to_array()]),
-        world_bbox: bbox.map(|(a, b)| {
-            [transform.index_to_world(a.as_dvec3()).to_array(), transform.index_to_world(b.as_dvec3()).to_array()]
-        }),
+        world_bbox: bbox
+            .map(|(a, b)| [transform.index_to_world(a.as_dvec3()).to_array(), transform.index_to_world(b.as_dvec3()).to_array()]),
         peak_emission: peak,
         peak_luminance: peak_y,
         total_emitted_power: total,
@@ -485,4 +474,3 @@ pub fn finish_keeping(
     };
     Ok((Bake { emission, density, photons, stats }, dropped))
 }
-

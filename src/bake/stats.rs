@@ -73,7 +73,6 @@ impl BakeStats {
     }
 }
 
-
 /// What the pilot measured and chose ([`super::pilot`]; kept here so the
 /// stats do not depend on the pilot's module).
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -100,4 +99,3 @@ pub struct NoiseEstimate {
     pub capped: bool,
     pub seconds: f64,
 }
-

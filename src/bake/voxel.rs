@@ -61,7 +61,10 @@ pub fn auto_voxel_size_for(kernel: KernelRadius, camera: Option<&CameraModel>, p
         None => (cam.pixel_footprint(0.0), "ortho_height / height".to_string()),
         Some(_) => {
             let eye = cam.position;
-            let mut d: Vec<f64> = photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect();
+            let mut d: Vec<f64> = photons
+                .iter()
+                .map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length())
+                .collect();
             if d.is_empty() {
                 return (kernel.base_km, "no photons: kernel radius".into());
             }
@@ -91,7 +94,6 @@ fn round_sig(x: f64, digits: i32) -> f64 {
     let p = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
     (x * p).round() / p
 }
-
 
 /// Mean thickness, km, of the band the beams of a footprint start from: the
 /// area of the cells above `threshold` divided by the curtain's length (the
@@ -141,13 +143,11 @@ pub fn resolution_warnings_for(kernel: KernelRadius, footprints: &[Footprint], t
     w
 }
 
-
 /// The grid transform of voxel size `voxel_km`: translation 0, so voxel
 /// (i, j, k) is centred at `voxel_km * (i, j, k)` km.
 pub fn grid_transform(voxel_km: f64) -> Transform {
     Transform::new(voxel_km, DVec3::ZERO)
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -196,4 +196,3 @@ mod tests {
         assert!((voxel_size(&s, &photons).0 - 0.2).abs() < 1e-12);
     }
 }
-

@@ -30,6 +30,7 @@
 pub mod walk;
 
 use crate::atmosphere::Atmosphere;
+use crate::deposit::Photon;
 use crate::deposit::StepDeposit;
 use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
@@ -45,7 +46,6 @@ use rand::Rng;
 use rayon::prelude::*;
 use std::ops::Range;
 use walk::{trace_beam, BeamContext, BeamStart, DepositModel, EndReason};
-use crate::deposit::Photon;
 
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
@@ -339,7 +339,14 @@ struct Tracer<'a> {
 impl Tracer<'_> {
     /// Curtain `ci`'s local beams `local` (of its `n`), in parallel, in index
     /// order, and the curtain's whole electron power, W.
-    fn curtain(&self, ci: usize, curtain: &Curtain, fp: &Footprint, n: usize, local: Range<usize>) -> Result<(f64, Vec<BeamOut>), BeamError> {
+    fn curtain(
+        &self,
+        ci: usize,
+        curtain: &Curtain,
+        fp: &Footprint,
+        n: usize,
+        local: Range<usize>,
+    ) -> Result<(f64, Vec<BeamOut>), BeamError> {
         let p = self.params;
         // Beam i maps the same point of the unit square through every
         // frame's footprint (crate::animation: identity across frames).
@@ -472,9 +479,11 @@ mod tests {
         let atm = Atmosphere::us1976();
         let colour = crate::bake::plan::colour_table(&s1, &atm);
         let run = |s: &Scene, threads: usize| {
-            rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| {
-                trace_all(s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap().0
-            })
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| trace_all(s, &fps, &atm, &colour, &crate::progress::NoProgress).unwrap().0)
         };
         let (a, b) = (run(&s1, 1), run(&s2, 3));
         assert_eq!(a, run(&s1, 3));

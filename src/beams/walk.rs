@@ -415,7 +415,16 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = BeamParams { alpha_d_deg: 25.0, delta_alpha_deg: 12.0, b_inclination_deg: 70.0, b_declination_deg: 20.0, ..params() };
-        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: MagneticField::new(70.0, 20.0), params: &p, footprint: &fp, threshold: 0.03, record_path: true };
+        let ctx = BeamContext {
+            atmosphere: &atm,
+            model: DepositModel::Csda,
+            colour: &colour,
+            field: MagneticField::new(70.0, 20.0),
+            params: &p,
+            footprint: &fp,
+            threshold: 0.03,
+            record_path: true,
+        };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
         let mut n = 0;
@@ -443,7 +452,16 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: MagneticField::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext {
+            atmosphere: &atm,
+            model: DepositModel::Csda,
+            colour: &colour,
+            field: MagneticField::new(78.0, 0.0),
+            params: &p,
+            footprint: &fp,
+            threshold: 0.03,
+            record_path: false,
+        };
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
             let t = trace_beam(&ctx, &start(e0), &mut r);
@@ -464,7 +482,16 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: MagneticField::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext {
+            atmosphere: &atm,
+            model: DepositModel::Csda,
+            colour: &colour,
+            field: MagneticField::new(78.0, 0.0),
+            params: &p,
+            footprint: &fp,
+            threshold: 0.03,
+            record_path: false,
+        };
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
             let n = 50;
@@ -479,8 +506,23 @@ mod tests {
         assert!(z10 < z3 && z3 < z1);
     }
 
-    fn fang_ctx<'a>(atm: &'a Atmosphere, colour: &'a ColourTable, fp: &'a Footprint, p: &'a BeamParams, model: DepositModel<'a>) -> BeamContext<'a> {
-        BeamContext { atmosphere: atm, model, colour, field: MagneticField::new(p.b_inclination_deg, p.b_declination_deg), params: p, footprint: fp, threshold: 0.03, record_path: false }
+    fn fang_ctx<'a>(
+        atm: &'a Atmosphere,
+        colour: &'a ColourTable,
+        fp: &'a Footprint,
+        p: &'a BeamParams,
+        model: DepositModel<'a>,
+    ) -> BeamContext<'a> {
+        BeamContext {
+            atmosphere: atm,
+            model,
+            colour,
+            field: MagneticField::new(p.b_inclination_deg, p.b_declination_deg),
+            params: p,
+            footprint: fp,
+            threshold: 0.03,
+            record_path: false,
+        }
     }
 
     #[test]
@@ -531,11 +573,15 @@ mod tests {
             let t = trace_beam(&ctx, &start(30.0), &mut r);
             assert_eq!(t.end, EndReason::EnergySpent);
             assert_eq!(t.undeposited_kev_s, 0.0);
-            outside += t.photons.iter().filter(|ph| {
-                let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
-                let foot = ctx.field.foot(q, 260.0);
-                fp.cell_value_world(foot.x, foot.y) <= 0.03
-            }).count();
+            outside += t
+                .photons
+                .iter()
+                .filter(|ph| {
+                    let q = DVec3::new(ph.position[0] as f64, ph.position[1] as f64, ph.position[2] as f64);
+                    let foot = ctx.field.foot(q, 260.0);
+                    fp.cell_value_world(foot.x, foot.y) <= 0.03
+                })
+                .count();
         }
         assert!(outside > 100, "only {outside} photons beyond the strip: the test does not test");
     }
@@ -587,7 +633,10 @@ mod tests {
         let p = params();
         let (e0, soft, e_soft) = (3.0, 0.2, 0.3);
         let g = SpectrumDeposition::curtain(e0, soft, e_soft);
-        let (ce, cs) = (fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g)), fang_ctx(&atm, &colour, &fp, &p, DepositModel::Sampled(MonoDeposition::get())));
+        let (ce, cs) = (
+            fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g)),
+            fang_ctx(&atm, &colour, &fp, &p, DepositModel::Sampled(MonoDeposition::get())),
+        );
         let n = 4000;
         let nb = 80;
         let bin = |z: f64| (((z - 80.0) / 2.0).floor() as isize).clamp(0, nb as isize - 1) as usize;
@@ -633,7 +682,16 @@ mod tests {
         // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
         let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0 };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
-        let ctx = BeamContext { atmosphere: &atm, model: DepositModel::Csda, colour: &colour, field: MagneticField::new(78.0, 0.0), params: &p, footprint: &fp, threshold: 0.03, record_path: false };
+        let ctx = BeamContext {
+            atmosphere: &atm,
+            model: DepositModel::Csda,
+            colour: &colour,
+            field: MagneticField::new(78.0, 0.0),
+            params: &p,
+            footprint: &fp,
+            threshold: 0.03,
+            record_path: false,
+        };
         let mut r = rng::rng(&[6]);
         let mut left = 0;
         for _ in 0..50 {

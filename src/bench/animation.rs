@@ -15,9 +15,9 @@
 //! the still (t = 0): motion is closed form in t, so they cost the same;
 //! the ratios go into the study's notes, with frames per second.
 
-use super::sweeps::{timed, Plan, Study, SweepError};
 use super::chart::Measurement;
 use super::metrics::grid_rel_rms;
+use super::sweeps::{timed, Plan, Study, SweepError};
 use crate::bake;
 use crate::progress::NoProgress;
 use crate::scene::Scene;

@@ -35,8 +35,7 @@ pub struct Measurement {
 /// minimised: no other point is at least as good in both and better in one.
 /// Returned in ascending time.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut idx: Vec<usize> =
-        (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
+    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
     idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
@@ -177,11 +176,7 @@ fn write_png(path: &Path, rgb: &[u8]) -> Result<(), String> {
     w.finish().map_err(|e| e.to_string())
 }
 
-fn draw_on<DB: DrawingBackend>(
-    root: DrawingArea<DB, plotters::coord::Shift>,
-    ms: &[Measurement],
-    study: &str,
-) -> Result<(), String>
+fn draw_on<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, ms: &[Measurement], study: &str) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
@@ -248,20 +243,14 @@ where
         chart.draw_series(series.iter().map(|&p| Circle::new(p, 4, color.filled()))).map_err(|e| e.to_string())?;
         // Error 0: a triangle on the bottom edge.
         chart
-            .draw_series(
-                pts.iter().filter(|m| m.error == 0.0).map(|m| TriangleMarker::new(shown(m), 7, color.filled())),
-            )
+            .draw_series(pts.iter().filter(|m| m.error == 0.0).map(|m| TriangleMarker::new(shown(m), 7, color.filled())))
             .map_err(|e| e.to_string())?;
         // Label each point with its parameter value; the scene's own setting
         // is marked with a star.
         chart
             .draw_series(pts.iter().map(|m| {
                 let star = if m.scene_setting { " *" } else { "" };
-                let text = if m.error == 0.0 {
-                    format!("reference, error 0{star}")
-                } else {
-                    format!("{}{star}", short_num(m.param))
-                };
+                let text = if m.error == 0.0 { format!("reference, error 0{star}") } else { format!("{}{star}", short_num(m.param)) };
                 EmptyElement::at(shown(m)) + Text::new(text, (6, -14), ("sans-serif", 12).into_font().color(&color))
             }))
             .map_err(|e| e.to_string())?;
@@ -356,12 +345,8 @@ mod tests {
             fast.sort();
             let mut brute: Vec<usize> = (0..pts.len())
                 .filter(|&i| {
-                    !(0..pts.len()).any(|j| {
-                        j != i
-                            && pts[j].0 <= pts[i].0
-                            && pts[j].1 <= pts[i].1
-                            && (pts[j].0 < pts[i].0 || pts[j].1 < pts[i].1)
-                    })
+                    !(0..pts.len())
+                        .any(|j| j != i && pts[j].0 <= pts[i].0 && pts[j].1 <= pts[i].1 && (pts[j].0 < pts[i].0 || pts[j].1 < pts[i].1))
                 })
                 .collect();
             // Exact duplicates: keep the first only, as the sweep does.
@@ -379,8 +364,7 @@ mod tests {
 
     #[test]
     fn log_ticks_are_one_two_five_unless_the_range_is_narrow() {
-        let close =
-            |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x / y - 1.0).abs() < 1e-12);
+        let close = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x / y - 1.0).abs() < 1e-12);
         assert!(close(&nice_ticks(0.03, 3.0), &[0.05, 0.1, 0.2, 0.5, 1.0, 2.0]), "{:?}", nice_ticks(0.03, 3.0));
         assert!(close(&nice_ticks(0.045, 0.12), &[0.05, 0.06, 0.07, 0.08, 0.09, 0.1]), "{:?}", nice_ticks(0.045, 0.12));
         assert!(nice_ticks(0.0, 1.0).is_empty());

@@ -17,8 +17,7 @@ impl<'a> Bench<'a> {
         s.integration = Integration::Exact;
         let (exact, exact_s) = self.render_timed(&s, &vol)?;
         let all = vec![true; exact.pixels.len()];
-        let mut ms =
-            vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
+        let mut ms = vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
         let mut flux = Vec::new();
         for f in self.plan.step_factors.clone() {
             let h = v * f;

@@ -106,8 +106,7 @@ pub fn image_rel_error(a: &[[f32; 4]], b: &[[f32; 4]], floor: f64) -> (f64, f64)
 /// [`image_rel_error`] over the pixels where `mask` is true (e.g. terrain).
 pub fn image_rel_error_masked(a: &[[f32; 4]], b: &[[f32; 4]], mask: &[bool], floor: f64) -> (f64, f64) {
     assert!(a.len() == mask.len() && b.len() == mask.len(), "images and mask differ in size");
-    let pick =
-        |img: &[[f32; 4]]| -> Vec<[f32; 4]> { img.iter().zip(mask).filter(|(_, &m)| m).map(|(p, _)| *p).collect() };
+    let pick = |img: &[[f32; 4]]| -> Vec<[f32; 4]> { img.iter().zip(mask).filter(|(_, &m)| m).map(|(p, _)| *p).collect() };
     image_rel_error(&pick(a), &pick(b), floor)
 }
 

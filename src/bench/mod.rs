@@ -21,11 +21,11 @@ pub mod reduced;
 pub mod report;
 pub mod shadow;
 pub mod sweeps;
-pub mod voxel;
 pub mod vdb_write;
+pub mod voxel;
 
-use crate::bake::BakeError;
 use crate::bake::plan::{self, BakePlan};
+use crate::bake::BakeError;
 use crate::progress::NoProgress;
 use crate::scene::{Scene, VoxelSize};
 use report::{BenchRun, Machine};

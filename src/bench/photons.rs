@@ -27,17 +27,7 @@ impl<'a> Bench<'a> {
             if k == n {
                 err_n = Some(e);
             }
-            ms.push(self.measure(
-                name,
-                &method,
-                "beams",
-                k as f64,
-                "beams+gather",
-                trace_s + gather_s,
-                e,
-                metric,
-                k == n,
-            ));
+            ms.push(self.measure(name, &method, "beams", k as f64, "beams+gather", trace_s + gather_s, e, metric, k == n));
             self.note_last(&ms, gather_key(k, r, v, gm), trace_s);
         }
         // The old estimators over the same beam counts, on the same chart.
@@ -89,31 +79,11 @@ impl<'a> Bench<'a> {
                 let k = self.beams_times(f);
                 let (g, secs) = self.gather(k, r, v, method)?;
                 let here = method == scene_gather && k == n;
-                ms.push(self.measure(
-                    name,
-                    label,
-                    "beams",
-                    k as f64,
-                    "gather",
-                    secs,
-                    grid_rel_rms(&g, &reference),
-                    metric,
-                    here,
-                ));
+                ms.push(self.measure(name, label, "beams", k as f64, "gather", secs, grid_rel_rms(&g, &reference), metric, here));
                 self.note_last(&ms, gather_key(k, r, v, method), 0.0);
                 if method == GatherMethod::Report2014 {
                     let (e, s) = grid_rel_rms_best_scale(&g, &reference);
-                    scaled.push(self.measure(
-                        name,
-                        "report2014, best-fit scale",
-                        "beams",
-                        k as f64,
-                        "gather",
-                        secs,
-                        e,
-                        metric,
-                        false,
-                    ));
+                    scaled.push(self.measure(name, "report2014, best-fit scale", "beams", k as f64, "gather", secs, e, metric, false));
                     self.note_last(&scaled, gather_key(k, r, v, method), 0.0);
                     self.say(&format!("  (report2014 best-fit scale factor {s:.4e})"));
                 }

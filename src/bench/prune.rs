@@ -6,8 +6,8 @@ use super::sweeps::{timed, Bench, Study, SweepError};
 use crate::bake::{self};
 use crate::grid::Grid;
 use crate::progress::NoProgress;
-use crate::vdb::write::GridRef;
 use crate::render::{Integration, RenderError, Volume};
+use crate::vdb::write::GridRef;
 
 impl<'a> Bench<'a> {
     /// Contribution-based pruning ([`crate::prune`]): the reduced scene
@@ -45,9 +45,8 @@ impl<'a> Bench<'a> {
         let (min, max_runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         // (bytes, fastest write time)
         let write = |e: &Grid<[f32; 3]>, d: &Grid<f32>| -> (usize, f64) {
-            let (len, secs) = timed(min, max_runs, || {
-                crate::vdb::write::write_vdb_bytes(&[GridRef::Float(d), GridRef::Vec3(e)], &opts).map(|b| b.len())
-            });
+            let (len, secs) =
+                timed(min, max_runs, || crate::vdb::write::write_vdb_bytes(&[GridRef::Float(d), GridRef::Vec3(e)], &opts).map(|b| b.len()));
             (len.unwrap_or(0), secs)
         };
         let name = "pruning";
@@ -57,8 +56,7 @@ impl<'a> Bench<'a> {
         let all = vec![true; full.pixels.len()];
         let (full_bytes, full_s) = write(&full_e, &full_d);
         let scene_budget = self.scene.grid.prune;
-        let mut ms =
-            vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", full_s, 0.0, metric, scene_budget == 0.0)];
+        let mut ms = vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", full_s, 0.0, metric, scene_budget == 0.0)];
         let mut notes = vec![format!(
             "Unpruned: {} aurora voxels, {} leaves, {full_bytes} bytes (VDB, scene compression, Cycles shell: {}). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
             base.emission.active_voxel_count(),

@@ -29,10 +29,7 @@ impl Machine {
         let model_name = std::fs::read_to_string("/proc/cpuinfo")
             .ok()
             .and_then(|t| {
-                t.lines()
-                    .find(|l| l.starts_with("model name"))
-                    .and_then(|l| l.split_once(':'))
-                    .map(|(_, v)| v.trim().to_string())
+                t.lines().find(|l| l.starts_with("model name")).and_then(|l| l.split_once(':')).map(|(_, v)| v.trim().to_string())
             })
             .unwrap_or_else(|| "unknown".into());
         Machine {
@@ -118,8 +115,7 @@ pub fn study_json(st: &Study) -> Value {
     let front: Vec<Value> = ms.iter().zip(&flags).filter(|(_, &f)| f).map(|(m, _)| point(m)).collect();
     let scene = ms.iter().zip(&flags).find(|(m, _)| m.scene_setting);
     let most_accurate = ms.iter().min_by(|a, b| a.error.total_cmp(&b.error).then(a.seconds.total_cmp(&b.seconds)));
-    let as_good = scene
-        .and_then(|(s, _)| ms.iter().filter(|m| m.error <= s.error).min_by(|a, b| a.seconds.total_cmp(&b.seconds)));
+    let as_good = scene.and_then(|(s, _)| ms.iter().filter(|m| m.error <= s.error).min_by(|a, b| a.seconds.total_cmp(&b.seconds)));
     json!({
         "study": st.name,
         "timed_stage": st.stage,

@@ -42,10 +42,10 @@
 
 use super::chart::Measurement;
 use super::reduced::volume_camera;
+use crate::bake::plan::{self, BakePlan};
 use crate::bake::{self, BakeError};
 use crate::deposit::Photon;
 use crate::grid::Grid;
-use crate::bake::plan::{self, BakePlan};
 use crate::progress::NoProgress;
 use crate::render::{self, Image, RenderError, RenderSettings, Volume};
 use crate::scene::{GatherMethod, KernelRadius, Scene, TerrainKind, VoxelSize};
@@ -232,15 +232,7 @@ impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
     pub fn new(scene: Scene, plan: Plan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
         let bake = BakePlan::new(&scene, &NoProgress);
-        Bench {
-            scene,
-            plan,
-            bake,
-            photons: BTreeMap::new(),
-            gathers: HashMap::new(),
-            gather_timed: Vec::new(),
-            log,
-        }
+        Bench { scene, plan, bake, photons: BTreeMap::new(), gathers: HashMap::new(), gather_timed: Vec::new(), log }
     }
 
     /// N, the reduced scene's beam count.
@@ -333,13 +325,7 @@ impl<'a> Bench<'a> {
 
     /// [`Bench::gather_uncached`], kept for the other studies that use the
     /// same setting (test settings only: references are used once).
-    pub(super) fn gather(
-        &mut self,
-        n: usize,
-        r: f64,
-        v: f64,
-        method: GatherMethod,
-    ) -> Result<Timed<Arc<Grid<[f32; 3]>>>, SweepError> {
+    pub(super) fn gather(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<Timed<Arc<Grid<[f32; 3]>>>, SweepError> {
         let key = gather_key(n, r, v, method);
         if let Some((g, s)) = self.gathers.get(&key) {
             return Ok((g.clone(), *s));
@@ -352,13 +338,7 @@ impl<'a> Bench<'a> {
 
     /// The emission grid of `n` beams gathered with base radius `r`, voxel
     /// `v` and `method` (radius noise as in the scene), and the gather time.
-    pub(super) fn gather_uncached(
-        &mut self,
-        n: usize,
-        r: f64,
-        v: f64,
-        method: GatherMethod,
-    ) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
+    pub(super) fn gather_uncached(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
         let b = &self.bake;
         let radius = plan::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
         let cutoff = b.photons.cutoff;
@@ -382,9 +362,8 @@ impl<'a> Bench<'a> {
         let (res, trace_s) = timed(min, runs, || plan::trace(&old, n, 0, 0..n, &NoProgress));
         let photons = res.map_err(BakeError::from)?.photons;
         let (v, cutoff) = (self.voxel(), self.bake.photons.cutoff);
-        let (g, gather_s) = timed(min, runs, || {
-            plan::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress)
-        });
+        let (g, gather_s) =
+            timed(min, runs, || plan::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress));
         Ok((g, trace_s, gather_s))
     }
 
@@ -467,5 +446,4 @@ impl<'a> Bench<'a> {
         s.background.radiance = [0.0; 3];
         s
     }
-
 }

@@ -33,12 +33,7 @@ impl BenchWrite {
 }
 
 /// Writes `grids` to `path` `repeats` times and times each write.
-pub fn bench_write(
-    path: &Path,
-    grids: &[GridRef],
-    opts: &WriteOptions,
-    repeats: usize,
-) -> Result<BenchWrite, VdbWriteError> {
+pub fn bench_write(path: &Path, grids: &[GridRef], opts: &WriteOptions, repeats: usize) -> Result<BenchWrite, VdbWriteError> {
     let mut seconds = Vec::with_capacity(repeats);
     let mut bytes = 0;
     for _ in 0..repeats.max(1) {

@@ -58,15 +58,7 @@ pub fn exp_neg_f32(x: f32) -> f32 {
     let y = (x * std::f32::consts::LOG2_E).max(-126.0);
     let (i_bits, yi) = round_nearest(y);
     let f = y - yi;
-    const C: [f32; 7] = [
-        1.0,
-        std::f32::consts::LN_2,
-        0.240_226_5,
-        0.055_504_11,
-        0.009_618_129,
-        0.001_333_355_8,
-        0.000_154_035_3,
-    ];
+    const C: [f32; 7] = [1.0, std::f32::consts::LN_2, 0.240_226_5, 0.055_504_11, 0.009_618_129, 0.001_333_355_8, 0.000_154_035_3];
     let p = C[0] + f * (C[1] + f * (C[2] + f * (C[3] + f * (C[4] + f * (C[5] + f * C[6])))));
     let scale = f32::from_bits(((i_bits + 127) as u32) << 23);
     p * scale

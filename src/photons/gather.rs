@@ -66,7 +66,13 @@ impl GatherInput {
         let splat_kernels = if method == GatherMethod::Splat {
             photons
                 .par_iter()
-                .map(|p| KernelF32::new(&Kernel::with_mass(radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }), cutoff, mass)))
+                .map(|p| {
+                    KernelF32::new(&Kernel::with_mass(
+                        radius.radius(if p.is_point() { pos(p) } else { 0.5 * (pos(p) + end(p)) }),
+                        cutoff,
+                        mass,
+                    ))
+                })
                 .collect()
         } else {
             Vec::new()
@@ -316,7 +322,11 @@ mod tests {
         let tr = Transform::new(0.5, DVec3::ZERO);
         for method in [GatherMethod::Kdtree, GatherMethod::Splat] {
             let run = |threads| {
-                rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| gather_grid(&photons, tr, &rf, 3.0, method, &NoProgress))
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| gather_grid(&photons, tr, &rf, 3.0, method, &NoProgress))
             };
             let (a, b) = (run(1), run(3));
             assert_eq!(a, b, "{method:?}");

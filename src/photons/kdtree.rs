@@ -59,8 +59,7 @@ impl<'a> PhotonMap<'a> {
         let q = [x.x as f32, x.y as f32, x.z as f32];
         let radius = radius + self.max_half;
         let r = (radius * (1.0 + 1e-5) + 1e-5 * x.abs().max_element()) as f32;
-        let mut idx: Vec<usize> =
-            self.tree.within_unsorted::<SquaredEuclidean>(&q, r * r).into_iter().map(|n| n.item as usize).collect();
+        let mut idx: Vec<usize> = self.tree.within_unsorted::<SquaredEuclidean>(&q, r * r).into_iter().map(|n| n.item as usize).collect();
         idx.sort_unstable();
         idx
     }
@@ -193,7 +192,9 @@ impl LeafGather<'_> {
                         if dist2 >= q.reach2 {
                             continue;
                         }
-                        q.inv_2pi_r2 * inv_2l * self.seg.inv_mass_f32(lam)
+                        q.inv_2pi_r2
+                            * inv_2l
+                            * self.seg.inv_mass_f32(lam)
                             * exp_neg_f32(-perp2 * q.inv_2r2)
                             * (erf_lut(erf, s * q.inv_sqrt2r) - erf_lut(erf, (s - l) * q.inv_sqrt2r))
                     };
@@ -209,11 +210,11 @@ impl LeafGather<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::Transform;
+    use crate::photons::gather_grid;
     use crate::photons::kernel::{estimate_brute_force, gaussian_mass_inside};
     use crate::photons::radius::RadiusField;
     use crate::photons::test_photons::uniform_box;
-    use crate::photons::gather_grid;
-    use crate::grid::Transform;
     use crate::progress::NoProgress;
     use crate::rng;
     use crate::scene::GatherMethod;
@@ -239,11 +240,7 @@ mod tests {
         let mut r_ = rng::rng(&[8]);
         for _ in 0..20 {
             // Points at least c r from every face.
-            let x = DVec3::new(
-                4.0 + 12.0 * r_.random::<f64>(),
-                4.0 + 12.0 * r_.random::<f64>(),
-                4.0 + 12.0 * r_.random::<f64>(),
-            );
+            let x = DVec3::new(4.0 + 12.0 * r_.random::<f64>(), 4.0 + 12.0 * r_.random::<f64>(), 4.0 + 12.0 * r_.random::<f64>());
             let e = map.estimate(x, &k);
             assert!((e[0] - mean).abs() < 5.0 * sigma, "{} vs {mean} +- {sigma}", e[0]);
             assert!((e[1] - 0.5 * e[0]).abs() < 1e-12 * e[0]);

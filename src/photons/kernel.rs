@@ -174,7 +174,6 @@ impl SegmentMass {
     }
 }
 
-
 /// Below this lambda = L / r a segment is gathered as a point at its
 /// midpoint (see the module documentation).
 pub const MIDPOINT_LAMBDA: f64 = 0.004;
@@ -198,14 +197,19 @@ pub fn segment_kernel_with_mass(kernel: &Kernel, m: f64, a: DVec3, b: DVec3, x: 
     let w = x - a;
     let s = w.dot(d);
     let perp2 = (w.length_squared() - s * s).max(0.0);
-    let dist2 = if s < 0.0 { w.length_squared() } else if s > len { x.distance_squared(b) } else { perp2 };
+    let dist2 = if s < 0.0 {
+        w.length_squared()
+    } else if s > len {
+        x.distance_squared(b)
+    } else {
+        perp2
+    };
     if dist2 >= kernel.reach2 {
         return 0.0;
     }
     let r = kernel.r;
     let k = 1.0 / std::f64::consts::SQRT_2 / r;
-    (-perp2 * kernel.inv_2r2).exp() / (2.0 * std::f64::consts::PI * r * r) * (libm::erf(s * k) - libm::erf((s - len) * k))
-        / (2.0 * len * m)
+    (-perp2 * kernel.inv_2r2).exp() / (2.0 * std::f64::consts::PI * r * r) * (libm::erf(s * k) - libm::erf((s - len) * k)) / (2.0 * len * m)
 }
 
 /// The truncated, renormalised 3D Gaussian kernel of standard deviation `r`.
@@ -258,7 +262,6 @@ impl Kernel {
         }
     }
 }
-
 
 /// A [`Kernel`]'s constants in f32, as the leaf loops read them (the point
 /// form's and the segment form's), and its reach in f64: the kernel at a
@@ -360,7 +363,6 @@ mod tests {
         }
     }
 
-
     #[test]
     fn inverse_mass_table_matches_the_direct_mass() {
         // Linear interpolation in the table of 1 / M_seg: below 3e-7 (see
@@ -459,7 +461,8 @@ mod tests {
         // gradient (G / r per r) makes that 3e-5 of the peak.
         let mut rr = rng::rng(&[21]);
         for _ in 0..200 {
-            let x = a + DVec3::new(rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5) * 4.0 * r
+            let x = a
+                + DVec3::new(rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5, rr.random::<f64>() - 0.5) * 4.0 * r
                 + (b - a) * rr.random::<f64>();
             let want = estimate_brute_force(&pts, x, &k)[0];
             let got = segment_kernel(&k, a, b, x);

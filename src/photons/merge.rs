@@ -72,7 +72,8 @@ pub fn merge_segments(photons: &[Photon], radius: impl Fn(DVec3) -> f64 + Sync, 
         k += MERGE_CHUNK;
     }
     cuts.push(photons.len());
-    let parts: Vec<Vec<Photon>> = cuts.par_windows(2).map(|w| merge_run_list(&photons[w[0]..w[1]], &radius, len_r, off_r, max_cdf)).collect();
+    let parts: Vec<Vec<Photon>> =
+        cuts.par_windows(2).map(|w| merge_run_list(&photons[w[0]..w[1]], &radius, len_r, off_r, max_cdf)).collect();
     parts.concat()
 }
 
@@ -218,18 +219,17 @@ mod tests {
         let loose = segment_photons(200, 3);
         assert_eq!(merge_segments(&loose, |_| 0.5, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF), loose);
         // A kink (joint far off the chord) is not merged.
-        let kink = [
-            Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -0.5], [1.0; 3]),
-            Photon::segment([0.0, 0.0, -0.5], [0.3, 0.0, -1.0], [1.0; 3]),
-        ];
+        let kink =
+            [Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -0.5], [1.0; 3]), Photon::segment([0.0, 0.0, -0.5], [0.3, 0.0, -1.0], [1.0; 3])];
         assert_eq!(merge_segments(&kink, |_| 0.5, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF).len(), 2);
         // Uneven power (all of it on the first of two equal steps) is not.
-        let uneven = [
-            Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -0.5], [1.0; 3]),
-            Photon::segment([0.0, 0.0, -0.5], [0.0, 0.0, -1.0], [0.01; 3]),
-        ];
+        let uneven =
+            [Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -0.5], [1.0; 3]), Photon::segment([0.0, 0.0, -0.5], [0.0, 0.0, -1.0], [0.01; 3])];
         assert_eq!(merge_segments(&uneven, |_| 0.5, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF).len(), 2);
         let even = [uneven[0], Photon::segment([0.0, 0.0, -0.5], [0.0, 0.0, -1.0], [1.0; 3])];
-        assert_eq!(merge_segments(&even, |_| 0.5, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF), vec![Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [2.0; 3])]);
+        assert_eq!(
+            merge_segments(&even, |_| 0.5, MERGE_LEN_R, MERGE_OFF_R, MERGE_CDF),
+            vec![Photon::segment([0.0, 0.0, 0.0], [0.0, 0.0, -1.0], [2.0; 3])]
+        );
     }
 }

@@ -64,14 +64,27 @@ impl Default for SplatScratch {
 /// where the voxel lies inside the capsule (distance to the segment below
 /// `c r`), else 0. Branch-free so it vectorises.
 #[inline(always)]
-fn segment_lanes<const N: usize>(sxy: f32, w2xy: f32, sz: &[f32; N], w2z: &[f32; N], l: f32, q: &KernelF32) -> ([f32; N], [f32; N], [f32; N]) {
+fn segment_lanes<const N: usize>(
+    sxy: f32,
+    w2xy: f32,
+    sz: &[f32; N],
+    w2z: &[f32; N],
+    l: f32,
+    q: &KernelF32,
+) -> ([f32; N], [f32; N], [f32; N]) {
     let (mut s4, mut p4, mut inside) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for j in 0..N {
         let s = sxy + sz[j];
         let w2 = w2xy + w2z[j];
         let perp2 = (w2 - s * s).max(0.0);
         let end2 = (w2 - 2.0 * s * l + l * l).max(0.0);
-        let dist2 = if s < 0.0 { w2 } else if s > l { end2 } else { perp2 };
+        let dist2 = if s < 0.0 {
+            w2
+        } else if s > l {
+            end2
+        } else {
+            perp2
+        };
         inside[j] = if dist2 < q.reach2 { 1.0 } else { 0.0 };
         (s4[j], p4[j]) = (s, perp2);
     }
@@ -84,7 +97,17 @@ fn segment_lanes<const N: usize>(sxy: f32, w2xy: f32, sz: &[f32; N], w2z: &[f32;
 /// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn add_segment_lanes<const N: usize>(acc: &mut LeafSums, n: usize, s4: &[f32; N], perp2: &[f32; N], inside: &[f32; N], q: &KernelF32, c: f32, l: f32, phi: &[f32; 3]) {
+fn add_segment_lanes<const N: usize>(
+    acc: &mut LeafSums,
+    n: usize,
+    s4: &[f32; N],
+    perp2: &[f32; N],
+    inside: &[f32; N],
+    q: &KernelF32,
+    c: f32,
+    l: f32,
+    phi: &[f32; 3],
+) {
     let erf = erf_table();
     let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for j in 0..N {

@@ -52,7 +52,11 @@ pub fn beam_path(n: usize, seed: u64) -> Vec<Photon> {
             let q = p + b * s + (u * beta.cos() + v * beta.sin()) * s * alpha.tan();
             let rate = 1.0 + 0.5 * (0.3 * q.z).sin();
             let w = (p.z - q.z) * rate * 1e19;
-            let ph = Photon::segment(p.as_vec3().to_array(), q.as_vec3().to_array(), [w as f32, (0.5 * w * (1.0 + 0.01 * q.z)) as f32, (0.2 * w) as f32]);
+            let ph = Photon::segment(
+                p.as_vec3().to_array(),
+                q.as_vec3().to_array(),
+                [w as f32, (0.5 * w * (1.0 + 0.01 * q.z)) as f32, (0.2 * w) as f32],
+            );
             p = q;
             ph
         })

@@ -41,11 +41,7 @@ pub const ADAPTIVE_FLOOR: f64 = 0.01;
 /// sampling, as in Cycles' own); pixels with no spread in pass 1 (empty
 /// sky) get no more samples. If every pixel's spread is 0 the budget is
 /// shared evenly.
-pub fn render_adaptive(
-    settings: &RenderSettings,
-    volume: &Volume<'_>,
-    progress: &dyn Progress,
-) -> Result<Image, RenderError> {
+pub fn render_adaptive(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Progress) -> Result<Image, RenderError> {
     let spp = settings.render.spp;
     if spp < ADAPTIVE_MIN_SPP {
         return render(settings, volume, progress);
@@ -58,11 +54,7 @@ pub fn render_adaptive(
 /// [`render_adaptive`] from an already built [`Prepared`] (for instance
 /// one whose medium was read straight from a file,
 /// [`Prepared::with_medium`]); `build_seconds` goes into the stats.
-pub fn render_adaptive_prepared(
-    prepared: &Prepared,
-    build_seconds: f64,
-    progress: &dyn Progress,
-) -> Result<Image, RenderError> {
+pub fn render_adaptive_prepared(prepared: &Prepared, build_seconds: f64, progress: &dyn Progress) -> Result<Image, RenderError> {
     let spp = prepared.settings.render.spp;
     if spp < ADAPTIVE_MIN_SPP {
         let mut img = render_prepared(prepared, progress)?;

@@ -26,9 +26,7 @@
 //! (dual leaves share their boundary planes), so the result is the same.
 
 use super::medium::field::Field;
-use super::medium::layout::{
-    cell_bit, mask_has, slot, CellMask, BLOCK_LOG2, BLOCK_VOXELS_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2,
-};
+use super::medium::layout::{cell_bit, mask_has, slot, CellMask, BLOCK_LOG2, BLOCK_VOXELS_LOG2, NONE, SUPER_LOG2, SUPER_VOXELS_LOG2};
 use crate::grid::LEAF_LOG2DIM;
 use glam::{DVec3, IVec3};
 
@@ -231,9 +229,7 @@ impl<'a> LeafWalker<'a> {
                 // Root boxes are disjoint, so entry order is ray order; ties
                 // (a ray along a shared face) are broken by coordinates so the
                 // order never depends on the hash map's.
-                list.sort_by(|x, y| {
-                    y.0.total_cmp(&x.0).then_with(|| (y.3.x, y.3.y, y.3.z).cmp(&(x.3.x, x.3.y, x.3.z)))
-                });
+                list.sort_by(|x, y| y.0.total_cmp(&x.0).then_with(|| (y.3.x, y.3.y, y.3.z).cmp(&(x.3.x, x.3.y, x.3.z))));
                 RootWalk::List(list)
             }
             Some((a, b)) => RootWalk::Dda(Dda::new(&ray, SUPER_VOXELS_LOG2, a, b, field.root_lo, field.root_hi)),

@@ -47,9 +47,7 @@ pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
     for g in listing {
         let expected = match g.name {
             "density" if g.kind != GridType::Float => "a float grid (extinction per unit length)",
-            "emission" if !matches!(g.kind, GridType::Float | GridType::Vec3) => {
-                "a vec3 grid (or a float grid, taken as grey)"
-            }
+            "emission" if !matches!(g.kind, GridType::Float | GridType::Vec3) => "a vec3 grid (or a float grid, taken as grey)",
             _ => continue,
         };
         return Err(RenderGridsError::WrongType { name: g.name.to_string(), type_name: g.type_name.to_string(), expected });

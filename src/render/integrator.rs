@@ -196,7 +196,6 @@ impl PixelState {
             self.pair_sum2 += m * m;
         }
     }
-
 }
 
 /// Renders the volume (and terrain) with `settings`. Multithreaded with rayon
@@ -261,13 +260,7 @@ pub(super) const TILE: usize = 4;
 
 impl Prepared {
     /// The image from its pixels and the per-row work counters: stats, then stars.
-    pub(super) fn finish(
-        &self,
-        mut pixels: Vec<[f32; 4]>,
-        counts: &[(Counters, f64)],
-        build_seconds: f64,
-        render_seconds: f64,
-    ) -> Image {
+    pub(super) fn finish(&self, mut pixels: Vec<[f32; 4]>, counts: &[(Counters, f64)], build_seconds: f64, render_seconds: f64) -> Image {
         let mut stats = RenderStats {
             leaves: self.medium.leaf_count() as u64,
             accel_bytes: self.medium.memory_bytes() as u64,

@@ -47,14 +47,7 @@ impl RayIntegral {
 /// transmittance over that range. `dir` must have unit length (so `s` is a
 /// world length); `t_max` may be infinite. `offset` in [0,1) is the sample
 /// position inside each fixed step (ignored by the exact integrator).
-pub fn radiance_along_ray(
-    medium: &Medium,
-    origin: DVec3,
-    dir: DVec3,
-    t_max: f64,
-    integration: Integration,
-    offset: f64,
-) -> RayIntegral {
+pub fn radiance_along_ray(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, integration: Integration, offset: f64) -> RayIntegral {
     integrate(medium, origin, dir, t_max, integration, offset, true)
 }
 
@@ -85,9 +78,7 @@ fn integrate(
     if t_max > 0.0 {
         match integration {
             Integration::Exact => work = walk_exact(medium, origin, dir, t_max, with_emission, &mut acc),
-            Integration::FixedStep(h) => {
-                work = walk_fixed(medium, origin, dir, t_max, h, offset, with_emission, &mut acc)
-            }
+            Integration::FixedStep(h) => work = walk_fixed(medium, origin, dir, t_max, h, offset, with_emission, &mut acc),
         }
     }
     RayIntegral { l: acc.l, tau: acc.tau, work: work.max(acc.parts) }
@@ -221,16 +212,7 @@ fn walk_exact(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, with_emiss
 }
 
 #[allow(clippy::too_many_arguments)]
-fn walk_fixed(
-    medium: &Medium,
-    origin: DVec3,
-    dir: DVec3,
-    t_max: f64,
-    h: f64,
-    offset: f64,
-    with_emission: bool,
-    acc: &mut Accum,
-) -> u64 {
+fn walk_fixed(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, h: f64, offset: f64, with_emission: bool, acc: &mut Accum) -> u64 {
     let mut fields: Vec<usize> = Vec::with_capacity(2);
     for c in [medium.sigma_t, if with_emission { medium.emission } else { None }].into_iter().flatten() {
         if !fields.contains(&c.field) {

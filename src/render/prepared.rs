@@ -29,12 +29,7 @@ impl Prepared {
     /// Validates the settings and builds everything the pixel loop reads.
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
         let camera = Self::check(settings)?;
-        let medium = Medium::new(
-            volume.density,
-            volume.emission,
-            settings.volume.density_scale,
-            settings.volume.emission_scale,
-        )?;
+        let medium = Medium::new(volume.density, volume.emission, settings.volume.density_scale, settings.volume.emission_scale)?;
         Self::assemble(settings, camera, medium, volume.emission)
     }
 
@@ -43,11 +38,7 @@ impl Prepared {
     /// to the settings'. `emission` is the emission grid for the terrain's
     /// emission sampler if the caller has it; without it the sampler is
     /// built from the medium (the same sampler).
-    pub fn with_medium(
-        settings: &RenderSettings,
-        mut medium: Medium,
-        emission: Option<&Grid<[f32; 3]>>,
-    ) -> Result<Prepared, RenderError> {
+    pub fn with_medium(settings: &RenderSettings, mut medium: Medium, emission: Option<&Grid<[f32; 3]>>) -> Result<Prepared, RenderError> {
         let camera = Self::check(settings)?;
         medium.set_scales(settings.volume.density_scale, settings.volume.emission_scale)?;
         Self::assemble(settings, camera, medium, emission)
@@ -76,9 +67,7 @@ impl Prepared {
         volume: &Volume<'_>,
     ) -> Result<Prepared, RenderError> {
         let s = settings;
-        let Some(old) =
-            old.filter(|o| o.settings.integration == s.integration && o.settings.shadow_samples == s.shadow_samples)
-        else {
+        let Some(old) = old.filter(|o| o.settings.integration == s.integration && o.settings.shadow_samples == s.shadow_samples) else {
             return Prepared::new(s, volume);
         };
         Self::check_settings(s)?;
@@ -223,12 +212,7 @@ impl Prepared {
     }
 
     pub(super) fn shadow_scene(&self) -> ShadowScene<'_> {
-        ShadowScene {
-            medium: &self.medium,
-            terrain: &self.terrain,
-            sampler: self.sampler.as_ref(),
-            integration: self.settings.integration,
-        }
+        ShadowScene { medium: &self.medium, terrain: &self.terrain, sampler: self.sampler.as_ref(), integration: self.settings.integration }
     }
 }
 

@@ -49,17 +49,10 @@ const GL6_X: [f64; 3] = [0.238_619_186_083_196_9, 0.661_209_386_466_264_5, 0.932
 const GL6_W: [f64; 3] = [0.467_913_934_572_691_0, 0.360_761_573_048_138_6, 0.171_324_492_379_170_4];
 
 /// 6-point Gauss-Legendre nodes on [0, 1].
-pub const GL_NODES: [f64; 6] = [
-    0.5 - 0.5 * GL6_X[2],
-    0.5 - 0.5 * GL6_X[1],
-    0.5 - 0.5 * GL6_X[0],
-    0.5 + 0.5 * GL6_X[0],
-    0.5 + 0.5 * GL6_X[1],
-    0.5 + 0.5 * GL6_X[2],
-];
+pub const GL_NODES: [f64; 6] =
+    [0.5 - 0.5 * GL6_X[2], 0.5 - 0.5 * GL6_X[1], 0.5 - 0.5 * GL6_X[0], 0.5 + 0.5 * GL6_X[0], 0.5 + 0.5 * GL6_X[1], 0.5 + 0.5 * GL6_X[2]];
 /// 6-point Gauss-Legendre weights on [0, 1] (sum to 1).
-pub const GL_WEIGHTS: [f64; 6] =
-    [0.5 * GL6_W[2], 0.5 * GL6_W[1], 0.5 * GL6_W[0], 0.5 * GL6_W[0], 0.5 * GL6_W[1], 0.5 * GL6_W[2]];
+pub const GL_WEIGHTS: [f64; 6] = [0.5 * GL6_W[2], 0.5 * GL6_W[1], 0.5 * GL6_W[0], 0.5 * GL6_W[0], 0.5 * GL6_W[1], 0.5 * GL6_W[2]];
 
 /// `c[0] + c[1] s + c[2] s^2 + c[3] s^3`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -218,7 +211,10 @@ impl Along {
             let h = sub(add(add(add(sub(sub(sub(v111, v110), v101), v011), v100), v010), v001), v000);
             let c0 = add(
                 add(
-                    add(add(add(add(add(a, mul(b, k(self.x0))), mul(c, k(self.y0))), mul(d, k(self.z0))), mul(e, k(q[0]))), mul(f, k(q[1]))),
+                    add(
+                        add(add(add(add(a, mul(b, k(self.x0))), mul(c, k(self.y0))), mul(d, k(self.z0))), mul(e, k(q[0]))),
+                        mul(f, k(q[1])),
+                    ),
                     mul(g, k(q[2])),
                 ),
                 mul(h, k(q[3])),
@@ -366,19 +362,8 @@ fn part_scalar(q: &[f64; 4], e: &[Cubic; 3], v: [f64; 5], l: &mut [f64; 3]) {
 const EXP_NEG_QUARTER: f64 = 0.778_800_783_071_404_868_3;
 
 /// `1 / k!`, k = 0..=10.
-const INV_FACTORIAL: [f64; 11] = [
-    1.0,
-    1.0,
-    1.0 / 2.0,
-    1.0 / 6.0,
-    1.0 / 24.0,
-    1.0 / 120.0,
-    1.0 / 720.0,
-    1.0 / 5040.0,
-    1.0 / 40320.0,
-    1.0 / 362880.0,
-    1.0 / 3628800.0,
-];
+const INV_FACTORIAL: [f64; 11] =
+    [1.0, 1.0, 1.0 / 2.0, 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0, 1.0 / 720.0, 1.0 / 5040.0, 1.0 / 40320.0, 1.0 / 362880.0, 1.0 / 3628800.0];
 
 /// [`exp_neg_small`] of six exponents at once: the same values, evaluated
 /// lane by lane when all six are in `[0, 1/2]`.

@@ -42,14 +42,14 @@
 //! (`Integration::FixedStep`, the Cycles-like comparison mode) keeps its own
 //! marched transmittance.
 
+use super::dda::{IndexRay, LeafWalker};
 use super::march::optical_depth_along_ray;
+use super::medium::field::Field;
 use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM};
 use crate::spectrum::luminance;
-use super::dda::{IndexRay, LeafWalker};
-use super::medium::field::Field;
 use glam::{DVec3, IVec3};
 use rand::Rng;
 
@@ -186,13 +186,7 @@ pub struct ShadowScene<'a> {
 
 /// Monte Carlo estimate of the irradiance `E(x)` (see the module doc) from
 /// `samples` points, and the number of shadow rays traced.
-pub fn estimate_irradiance<R: Rng + ?Sized>(
-    scene: &ShadowScene<'_>,
-    x: DVec3,
-    n: DVec3,
-    samples: usize,
-    rng: &mut R,
-) -> ([f64; 3], u64) {
+pub fn estimate_irradiance<R: Rng + ?Sized>(scene: &ShadowScene<'_>, x: DVec3, n: DVec3, samples: usize, rng: &mut R) -> ([f64; 3], u64) {
     let Some(sampler) = scene.sampler else { return ([0.0; 3], 0) };
     let mut e_sum = [0.0; 3];
     let mut rays = 0;
@@ -227,9 +221,7 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(
                 let mu = scene.medium.sigma_t_majorant();
                 transmittance_ratio_tracking(scene.medium, x, dir, r, mu, rng)
             }
-            Integration::FixedStep(_) => {
-                optical_depth_along_ray(scene.medium, x, dir, r, scene.integration, offset).transmittance()
-            }
+            Integration::FixedStep(_) => optical_depth_along_ray(scene.medium, x, dir, r, scene.integration, offset).transmittance(),
         };
         let k = sampler.power * t * cos / (r2 * lum);
         for c in 0..3 {
@@ -277,14 +269,7 @@ fn sigma_in_leaf(field: &Field, leaf: u32, ch: usize, u: DVec3) -> f64 {
 /// shadow ray instead of hundreds of cells, each a cache miss on rays that
 /// go in every direction. The price is variance: `Var/T^2 = exp(int sigma_t^2/mu) - 1
 /// <= exp(tau) - 1`, small beside the emission sampling's own.
-pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(
-    medium: &Medium,
-    x: DVec3,
-    dir: DVec3,
-    r: f64,
-    mu: f64,
-    rng: &mut R,
-) -> f64 {
+pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(medium: &Medium, x: DVec3, dir: DVec3, r: f64, mu: f64, rng: &mut R) -> f64 {
     let Some(c) = medium.sigma_t else { return 1.0 };
     if !(mu > 0.0) {
         return 1.0;

@@ -106,9 +106,7 @@ impl EnvMap {
         let row = |j: f64| j.clamp(0.0, h - 1.0) as usize;
         let p = |i: f64, j: f64| self.pixels[row(j) * self.width + col(i)];
         let (a, b, c, d) = (p(x0, y0), p(x0 + 1.0, y0), p(x0, y0 + 1.0), p(x0 + 1.0, y0 + 1.0));
-        [0, 1, 2].map(|k| {
-            (1.0 - fy) * ((1.0 - fx) * a[k] as f64 + fx * b[k] as f64) + fy * ((1.0 - fx) * c[k] as f64 + fx * d[k] as f64)
-        })
+        [0, 1, 2].map(|k| (1.0 - fy) * ((1.0 - fx) * a[k] as f64 + fx * b[k] as f64) + fy * ((1.0 - fx) * c[k] as f64 + fx * d[k] as f64))
     }
 }
 
@@ -183,8 +181,7 @@ impl Sky {
             None => None,
             Some(p) => {
                 let path = super::settings::input_path(base_dir, p);
-                let file = crate::input_file::open(&path)
-                    .map_err(|source| RenderError::Input { key: "background.image", source })?;
+                let file = crate::input_file::open(&path).map_err(|source| RenderError::Input { key: "background.image", source })?;
                 let img = super::film::read_exr_file(file, &path)?;
                 Some(EnvMap::from_image(&img, &path)?)
             }
@@ -257,9 +254,24 @@ mod tests {
     /// and projection, and it lands on one pixel.
     #[test]
     fn a_star_keeps_its_flux_at_any_resolution() {
-        let sky = Sky { image: None, stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0] }] };
-        for (p, w, h) in [(Projection::Fisheye, 64, 64), (Projection::Fisheye, 512, 512), (Projection::Equirectangular, 128, 64), (Projection::Perspective, 300, 200)] {
-            let cam = Camera { position: [0.0; 3], look_at: [0.0, 0.0, 1.0], up: [0.0, 1.0, 0.0], projection: p, fov_deg: if p == Projection::Fisheye { 180.0 } else { 90.0 }, ortho_height: 1.0 };
+        let sky = Sky {
+            image: None,
+            stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0] }],
+        };
+        for (p, w, h) in [
+            (Projection::Fisheye, 64, 64),
+            (Projection::Fisheye, 512, 512),
+            (Projection::Equirectangular, 128, 64),
+            (Projection::Perspective, 300, 200),
+        ] {
+            let cam = Camera {
+                position: [0.0; 3],
+                look_at: [0.0, 0.0, 1.0],
+                up: [0.0, 1.0, 0.0],
+                projection: p,
+                fov_deg: if p == Projection::Fisheye { 180.0 } else { 90.0 },
+                ortho_height: 1.0,
+            };
             let m = CameraModel::new(&cam, w, h).unwrap();
             let mut img = vec![[0.0f32; 4]; w * h];
             sky.add_stars(&mut img, &m, |_| Some(0.5));

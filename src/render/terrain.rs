@@ -169,20 +169,13 @@ impl Heightfield {
     pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<Heightfield, RenderError> {
         let [x0, y0, x1, y1] = t.extent;
         if !(x1 > x0 && y1 > y0 && t.extent.iter().all(|v| v.is_finite())) {
-            return Err(RenderError::Settings(format!(
-                "terrain.extent {:?} must be [x0, y0, x1, y1] with x1 > x0, y1 > y0",
-                t.extent
-            )));
+            return Err(RenderError::Settings(format!("terrain.extent {:?} must be [x0, y0, x1, y1] with x1 > x0, y1 > y0", t.extent)));
         }
         if !(t.height.is_finite() && t.mountain_height.is_finite() && t.mountain_height >= 0.0) {
-            return Err(RenderError::Settings(
-                "terrain.height and mountain_height must be finite, mountain_height >= 0".into(),
-            ));
+            return Err(RenderError::Settings("terrain.height and mountain_height must be finite, mountain_height >= 0".into()));
         }
         match &t.heightmap {
-            Some(p) => {
-                Self::from_heightmap(&super::settings::input_path(base_dir, p), t)
-            }
+            Some(p) => Self::from_heightmap(&super::settings::input_path(base_dir, p), t),
             None => Self::procedural(t),
         }
     }
@@ -190,10 +183,7 @@ impl Heightfield {
     /// Procedural fBm mountains (see the module doc).
     pub fn procedural(t: &Terrain) -> Result<Heightfield, RenderError> {
         if !(t.mountain_scale > 0.0 && t.mountain_scale.is_finite()) {
-            return Err(RenderError::Settings(format!(
-                "terrain.mountain_scale = {} must be finite and > 0",
-                t.mountain_scale
-            )));
+            return Err(RenderError::Settings(format!("terrain.mountain_scale = {} must be finite and > 0", t.mountain_scale)));
         }
         let [x0, y0, x1, y1] = t.extent;
         let cx = procedural_cells(x1 - x0, t.mountain_scale);

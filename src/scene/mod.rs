@@ -27,8 +27,8 @@ pub mod validation;
 pub use kernel::KernelRadius;
 pub use types::*;
 pub use validation::{
-    check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED,
-    MAX_SHADOW_SAMPLES, MAX_SPP, MAX_THREADS,
+    check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED, MAX_SHADOW_SAMPLES,
+    MAX_SPP, MAX_THREADS,
 };
 
 use serde::{Deserialize, Serialize};
@@ -69,8 +69,7 @@ impl Scene {
     /// `file` names the source in messages.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
         check_shapes(text, file)?;
-        let scene: Scene = toml::from_str(text)
-            .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
+        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
         scene.validate(file, Some(text))?;
         Ok(scene)
     }

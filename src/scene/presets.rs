@@ -28,11 +28,7 @@ pub fn default_scene() -> Scene {
     };
     Scene {
         seed: 2014,
-        curtains: vec![
-            sheet(-20.0, 0.0, 4.0, 6.0, 4.0, 1),
-            sheet(25.0, 45.0, -6.0, 4.0, 2.5, 2),
-            sheet(-5.0, 95.0, 2.0, 3.0, 1.5, 3),
-        ],
+        curtains: vec![sheet(-20.0, 0.0, 4.0, 6.0, 4.0, 1), sheet(25.0, 45.0, -6.0, 4.0, 2.5, 2), sheet(-5.0, 95.0, 2.0, 3.0, 1.5, 3)],
         footprint: FootprintParams::default(),
         beams: BeamParams::default(),
         colour: ColourParams::default(),
@@ -85,10 +81,7 @@ pub fn seed2014() -> Scene {
 /// variant: integration tests do not see `cfg(test)` items.)
 #[cfg(test)]
 pub(crate) fn small_test_scene() -> Scene {
-    let mut s = Scene {
-        curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
-        ..Scene::default()
-    };
+    let mut s = Scene { curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }], ..Scene::default() };
     s.footprint.resolution = [128, 48];
     s.beams.count = 300;
     s.photons.radius_km = 1.0;

@@ -37,12 +37,7 @@ pub fn enum_values() -> Vec<(String, Value)> {
             let text = format!("{header}\n{key} = \"not a variant\"\n");
             let Err(SceneError::Parse { message, .. }) = Scene::from_toml_str(&text, "enum") else { continue };
             let Some(list) = message.split("expected one of ").nth(1).or_else(|| message.split("expected ").nth(1)) else { continue };
-            let values: Vec<Value> = list
-                .split('`')
-                .enumerate()
-                .filter(|(i, _)| i % 2 == 1)
-                .map(|(_, v)| json!(v))
-                .collect();
+            let values: Vec<Value> = list.split('`').enumerate().filter(|(i, _)| i % 2 == 1).map(|(_, v)| json!(v)).collect();
             if !values.is_empty() {
                 out.push((format!("{table}.{key}"), Value::Array(values)));
             }
@@ -136,7 +131,7 @@ mod tests {
             for (key, k) in keys.as_object().unwrap() {
                 let d = &k["default"];
                 if d.is_number() && key != "seed" && key != "count" || d.is_array() {
-                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table == "" , "{table}.{key} has no range");
+                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table == "", "{table}.{key} has no range");
                 }
             }
         }

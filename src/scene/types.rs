@@ -305,7 +305,6 @@ pub enum AutoTag {
     Auto,
 }
 
-
 /// Default `grid.prune`, from the pruning study of `aurora bench` and the
 /// default scene (640x360): at 10^-3 the file is 11 % smaller (9 % fewer
 /// voxels, 28 % fewer leaves) and the image differs from the unpruned one by
@@ -351,7 +350,6 @@ pub enum Projection {
     /// `EQUIRECTANGULAR`); `fov_deg` is not used.
     Equirectangular,
 }
-
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
@@ -523,12 +521,7 @@ pub fn report_colormap() -> Vec<[f64; 4]> {
 
 impl Default for ColourParams {
     fn default() -> Self {
-        Self {
-            mode: ColourMode::Physical,
-            noise_km: 8.0,
-            noise_freq: 0.02,
-            colormap: report_colormap(),
-        }
+        Self { mode: ColourMode::Physical, noise_km: 8.0, noise_freq: 0.02, colormap: report_colormap() }
     }
 }
 

@@ -77,7 +77,6 @@ impl Camera {
     }
 }
 
-
 // ---------------------------------------------------------------- errors
 
 /// A scene that could not be read or is out of range.
@@ -152,7 +151,12 @@ impl Scene {
             v.allow(t, "center", Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
             v.allow(t, "bend_km", Allowed::Rule("in [0, 1e4], less than width / 2".into()));
             if c.bend_km * 2.0 >= c.width {
-                v.push(t, "bend_km", c.bend_km.to_string(), format!("must be less than curtain[{i}].width / 2 = {} (raise width or lower bend_km)", c.width / 2.0));
+                v.push(
+                    t,
+                    "bend_km",
+                    c.bend_km.to_string(),
+                    format!("must be less than curtain[{i}].width / 2 = {} (raise width or lower bend_km)", c.width / 2.0),
+                );
             }
         }
         if self.curtains.is_empty() {
@@ -204,7 +208,12 @@ impl Scene {
         v.range(t, "pulsation_patch_km", a.pulsation_patch_km, 0.0, 1e4, false);
         let [p0, p1] = a.pulsation_period_s;
         if !(p0.is_finite() && p1.is_finite() && p0 > 0.0 && p1 >= p0 && p1 <= 1e4) {
-            v.push(t, "pulsation_period_s", format!("[{}, {}]", fmt_num(p0), fmt_num(p1)), "must be [min, max] with 0 < min <= max <= 10000".into());
+            v.push(
+                t,
+                "pulsation_period_s",
+                format!("[{}, {}]", fmt_num(p0), fmt_num(p1)),
+                "must be [min, max] with 0 < min <= max <= 10000".into(),
+            );
         }
 
         let b = &self.beams;
@@ -231,7 +240,11 @@ impl Scene {
         let t = Some(("colour", 0));
         v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);
         v.range(t, "noise_freq", c.noise_freq, 0.0, 1e3, true);
-        v.allow(t, "colormap", Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()));
+        v.allow(
+            t,
+            "colormap",
+            Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()),
+        );
         if c.mode == ColourMode::Colormap {
             if c.colormap.len() < 2 {
                 v.push(t, "colormap", format!("{} rows", c.colormap.len()), "needs at least 2 rows of [altitude_km, r, g, b]".into());
@@ -243,7 +256,12 @@ impl Scene {
             }
             for (i, r) in c.colormap.iter().enumerate() {
                 if r.iter().any(|x| !x.is_finite()) || r[1..].iter().any(|&x| !(0.0..=MAX_COLORMAP_VALUE).contains(&x)) {
-                    v.push(t, "colormap", format!("row {i}: {r:?}"), format!("values must be finite, colours in [0, {MAX_COLORMAP_VALUE:e}]"));
+                    v.push(
+                        t,
+                        "colormap",
+                        format!("row {i}: {r:?}"),
+                        format!("values must be finite, colours in [0, {MAX_COLORMAP_VALUE:e}]"),
+                    );
                 }
             }
         }
@@ -376,7 +394,6 @@ fn shapes_table(user: &toml::Table, reference: &toml::Table, table: Option<(&str
         }
     }
 }
-
 
 struct Validator<'a> {
     file: &'a str,

@@ -24,8 +24,8 @@
 //! `-rawBytes` form is only a fallback for an internal Blosc error, as in
 //! OpenVDB. Zero values (non-half) give a 16-byte header-only frame.
 
-use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
 use super::cursor::{Cursor, ParseError};
+use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
 use crate::grid::VoxelValue;
 use flate2::{Compress, Compression, Decompress, FlushCompress, FlushDecompress, Status};
 use half::f16;
@@ -61,12 +61,7 @@ fn eq<T: VoxelValue>(a: T, b: T) -> bool {
 /// OpenVDB `io::MaskCompress`: scans the inactive slots that are not child
 /// pointers, in index order, for up to three distinct values and chooses the
 /// metadata byte. Returns `(meta, [inactive0, inactive1])`.
-pub fn mask_compress<T: VoxelValue>(
-    values: &[T],
-    value_mask: &[u64],
-    child_mask: Option<&[u64]>,
-    background: T,
-) -> (u8, [T; 2]) {
+pub fn mask_compress<T: VoxelValue>(values: &[T], value_mask: &[u64], child_mask: Option<&[u64]>, background: T) -> (u8, [T; 2]) {
     let mut inactive = [background, background];
     let mut unique = 0usize;
     'scan: for (w, &word) in value_mask.iter().enumerate() {
@@ -135,8 +130,7 @@ impl Encoder {
     /// `writeData`), and/or ACTIVE_MASK.
     pub fn new(flags: u32, half: bool) -> Self {
         let blosc = flags & COMPRESS_BLOSC != 0;
-        let zlib = (!blosc && flags & COMPRESS_ZIP != 0)
-            .then(|| Compress::new(Compression::new(ZIP_LEVEL), true));
+        let zlib = (!blosc && flags & COMPRESS_ZIP != 0).then(|| Compress::new(Compression::new(ZIP_LEVEL), true));
         Self { flags, half, zlib, blosc, raw: Vec::new(), zbuf: Vec::new(), selection: Vec::new() }
     }
 
@@ -153,18 +147,10 @@ impl Encoder {
         background: T,
     ) {
         let masked = self.flags & COMPRESS_ACTIVE_MASK != 0;
-        let (m, inactive) = if masked {
-            mask_compress(values, value_mask, child_mask, background)
-        } else {
-            (meta::NO_MASK_AND_ALL_VALS, [background; 2])
-        };
+        let (m, inactive) =
+            if masked { mask_compress(values, value_mask, child_mask, background) } else { (meta::NO_MASK_AND_ALL_VALS, [background; 2]) };
         out.push(m);
-        if matches!(
-            m,
-            meta::NO_MASK_AND_ONE_INACTIVE_VAL
-                | meta::MASK_AND_ONE_INACTIVE_VAL
-                | meta::MASK_AND_TWO_INACTIVE_VALS
-        ) {
+        if matches!(m, meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
             let n_inactive = if m == meta::MASK_AND_TWO_INACTIVE_VALS { 2 } else { 1 };
             for &v in &inactive[..n_inactive] {
                 let v = if self.half { round_half_value(v) } else { v };
@@ -173,12 +159,7 @@ impl Encoder {
         }
         let all = m == meta::NO_MASK_AND_ALL_VALS;
         let count = if all { values.len() } else { layout::mask_count(value_mask) };
-        if matches!(
-            m,
-            meta::MASK_AND_NO_INACTIVE_VALS
-                | meta::MASK_AND_ONE_INACTIVE_VAL
-                | meta::MASK_AND_TWO_INACTIVE_VALS
-        ) {
+        if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
             // Selection mask: bit set where an inactive slot holds inactive1.
             self.selection.clear();
             self.selection.resize(values.len() / 64, 0);
@@ -222,13 +203,7 @@ fn gather<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: boo
     }
 }
 
-fn gather_as<T: VoxelValue, const HALF: bool>(
-    dst: &mut Vec<u8>,
-    values: &[T],
-    mask: &[u64],
-    all: bool,
-    count: usize,
-) {
+fn gather_as<T: VoxelValue, const HALF: bool>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize) {
     let stride = T::COMPONENTS * if HALF { 2 } else { 4 };
     let start = dst.len();
     dst.resize(start + count * stride, 0);
@@ -390,26 +365,19 @@ pub fn read_values_into<T: VoxelValue>(
     }
     let mut inactive0 = if m == meta::NO_MASK_OR_INACTIVE_VALS { background } else { negative(background) };
     let mut inactive1 = background;
-    if matches!(
-        m,
-        meta::NO_MASK_AND_ONE_INACTIVE_VAL
-            | meta::MASK_AND_ONE_INACTIVE_VAL
-            | meta::MASK_AND_TWO_INACTIVE_VALS
-    ) {
+    if matches!(m, meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
         inactive0 = read_full(cur)?;
         if m == meta::MASK_AND_TWO_INACTIVE_VALS {
             inactive1 = read_full(cur)?;
         }
     }
     // Selection mask as stored bytes: bit i is byte i >> 3, bit i & 7.
-    let selection: Option<&[u8]> = if matches!(
-        m,
-        meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
-    ) {
-        Some(cur.bytes(n / 8)?)
-    } else {
-        None
-    };
+    let selection: Option<&[u8]> =
+        if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
+            Some(cur.bytes(n / 8)?)
+        } else {
+            None
+        };
     let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
     let count = if masked { layout::mask_count(value_mask) } else { n };
     let comp = T::COMPONENTS;
@@ -430,21 +398,27 @@ pub fn read_values_into<T: VoxelValue>(
     debug_assert_eq!(raw.len(), count * elem);
     let scatter = Scatter { value_mask, selection, inactive: [inactive0, inactive1], full: !masked || count == n };
     if fmt.half {
-        scatter.run(out, raw.chunks_exact(elem).map(|chunk| {
-            let mut c = [0f32; 3];
-            for (j, x) in c[..comp].iter_mut().enumerate() {
-                *x = f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32();
-            }
-            T::from_components(&c)
-        }));
+        scatter.run(
+            out,
+            raw.chunks_exact(elem).map(|chunk| {
+                let mut c = [0f32; 3];
+                for (j, x) in c[..comp].iter_mut().enumerate() {
+                    *x = f16::from_bits(u16::from_le_bytes([chunk[2 * j], chunk[2 * j + 1]])).to_f32();
+                }
+                T::from_components(&c)
+            }),
+        );
     } else {
-        scatter.run(out, raw.chunks_exact(elem).map(|chunk| {
-            let mut c = [0f32; 3];
-            for (x, b) in c[..comp].iter_mut().zip(chunk.chunks_exact(4)) {
-                *x = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
-            }
-            T::from_components(&c)
-        }));
+        scatter.run(
+            out,
+            raw.chunks_exact(elem).map(|chunk| {
+                let mut c = [0f32; 3];
+                for (x, b) in c[..comp].iter_mut().zip(chunk.chunks_exact(4)) {
+                    *x = f32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+                }
+                T::from_components(&c)
+            }),
+        );
     }
     Ok(())
 }
@@ -596,8 +570,7 @@ fn blosc_validate(cur: &Cursor, at: usize, frame: &[u8], nbytes: usize) -> Resul
     let mut header_nbytes: usize = 0;
     // SAFETY: `blosc_cbuffer_validate` reads at most `frame.len()` bytes of the
     // frame (it first checks `cbytes >= BLOSC_MIN_HEADER_LENGTH`).
-    let ok =
-        unsafe { blosc_src::blosc_cbuffer_validate(frame.as_ptr().cast(), frame.len(), &mut header_nbytes) };
+    let ok = unsafe { blosc_src::blosc_cbuffer_validate(frame.as_ptr().cast(), frame.len(), &mut header_nbytes) };
     if ok != 0 {
         return Err(cur.err_at(at, "invalid Blosc chunk header".to_string()));
     }
@@ -655,10 +628,7 @@ pub fn read_stored_f32(
         _ => 0,
     };
     cur.bytes(n_inactive * 4 * comps)?;
-    if matches!(
-        m,
-        meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS
-    ) {
+    if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
         cur.bytes(n / 8)?;
     }
     let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
@@ -717,14 +687,7 @@ fn le_floats(raw: &[u8], out: &mut [f32]) {
 mod tests {
     use super::*;
 
-    fn record<T: VoxelValue>(
-        flags: u32,
-        half: bool,
-        values: &[T],
-        mask: &[u64],
-        child: Option<&[u64]>,
-        bg: T,
-    ) -> Vec<u8> {
+    fn record<T: VoxelValue>(flags: u32, half: bool, values: &[T], mask: &[u64], child: Option<&[u64]>, bg: T) -> Vec<u8> {
         let mut out = Vec::new();
         Encoder::new(flags, half).write_values(&mut out, values, mask, child, bg);
         out
@@ -862,8 +825,7 @@ mod tests {
             let b = record(f, false, &vecs, &full, None, [0.0; 3]);
             assert_eq!(decode(&b, f, false, 512, &full, [0.0f32; 3]), vecs);
         }
-        let noise: Vec<f32> =
-            (0..512u32).map(|i| f32::from_bits(0x3f80_0000 | (i.wrapping_mul(2654435761) >> 9))).collect();
+        let noise: Vec<f32> = (0..512u32).map(|i| f32::from_bits(0x3f80_0000 | (i.wrapping_mul(2654435761) >> 9))).collect();
         let b = record(flags, false, &noise, &full, None, 0.0);
         let len = i64::from_le_bytes(b[1..9].try_into().unwrap());
         assert!(len > 0 && len <= 512 * 4 + 16, "stored in a frame, {len} bytes");
@@ -905,8 +867,7 @@ mod tests {
     fn malformed_records_are_errors() {
         let mask = vec![u64::MAX; 8];
         let fmt = |flags| RecordFormat { flags, half: false };
-        let try_read =
-            |b: &[u8], flags| read_values::<f32>(&mut Cursor::new(b), fmt(flags), 512, &mask, 0.0, true);
+        let try_read = |b: &[u8], flags| read_values::<f32>(&mut Cursor::new(b), fmt(flags), 512, &mask, 0.0, true);
         assert!(try_read(&[7], 2).is_err());
         assert!(try_read(&[0, 1, 2, 3], 2).is_err());
         let mut b = vec![0u8];

@@ -44,9 +44,7 @@ impl<'a> Cursor<'a> {
     /// Moves to absolute offset `pos`, which must lie within the data.
     pub fn seek(&mut self, pos: u64) -> Result<(), ParseError> {
         if pos > self.data.len() as u64 {
-            return Err(
-                self.err(format!("offset {pos} is past the end of the file ({} bytes)", self.data.len()))
-            );
+            return Err(self.err(format!("offset {pos} is past the end of the file ({} bytes)", self.data.len())));
         }
         self.pos = pos as usize;
         Ok(())
@@ -105,9 +103,7 @@ impl<'a> Cursor<'a> {
         let at = self.pos;
         let len = self.u32()? as usize;
         if len > self.remaining() {
-            return Err(
-                self.err_at(at, format!("string length {len} exceeds the {} bytes left", self.remaining()))
-            );
+            return Err(self.err_at(at, format!("string length {len} exceeds the {} bytes left", self.remaining())));
         }
         self.bytes(len)
     }

@@ -31,8 +31,7 @@ pub fn xxh64(data: &[u8], seed: u64) -> u64 {
     let u64_at = |b: &[u8]| u64::from_le_bytes(b[..8].try_into().expect("8 bytes"));
     let mut rest = data;
     let mut h = if data.len() >= 32 {
-        let mut v =
-            [seed.wrapping_add(P1).wrapping_add(P2), seed.wrapping_add(P2), seed, seed.wrapping_sub(P1)];
+        let mut v = [seed.wrapping_add(P1).wrapping_add(P2), seed.wrapping_add(P2), seed, seed.wrapping_sub(P1)];
         let mut stripes = data.chunks_exact(32);
         for s in &mut stripes {
             for (k, lane) in v.iter_mut().enumerate() {
@@ -40,11 +39,8 @@ pub fn xxh64(data: &[u8], seed: u64) -> u64 {
             }
         }
         rest = stripes.remainder();
-        let mut h = v[0]
-            .rotate_left(1)
-            .wrapping_add(v[1].rotate_left(7))
-            .wrapping_add(v[2].rotate_left(12))
-            .wrapping_add(v[3].rotate_left(18));
+        let mut h =
+            v[0].rotate_left(1).wrapping_add(v[1].rotate_left(7)).wrapping_add(v[2].rotate_left(12)).wrapping_add(v[3].rotate_left(18));
         for lane in v {
             h = (h ^ xxh_round(0, lane)).wrapping_mul(P1).wrapping_add(P4);
         }

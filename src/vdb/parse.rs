@@ -30,8 +30,8 @@
 //! `endPos >= blockPos >= gridPos`) and every count is checked against the
 //! bytes left before it is used.
 
-pub use super::cursor::{Cursor, ParseError};
 use super::codec::{self, RecordFormat};
+pub use super::cursor::{Cursor, ParseError};
 use super::layout::{self, INTERNAL16, INTERNAL32};
 use crate::grid::{Leaf, Transform, VoxelValue, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
@@ -64,8 +64,7 @@ pub fn read_meta_map(cur: &mut Cursor) -> Result<Vec<(String, RawMeta)>, ParseEr
     let count = cur.u32()? as usize;
     // Each entry takes at least 12 bytes (three u32 lengths).
     if count > cur.remaining() / 12 {
-        return Err(cur
-            .err_at(at, format!("metadata count {count} cannot fit in the {} bytes left", cur.remaining())));
+        return Err(cur.err_at(at, format!("metadata count {count} cannot fit in the {} bytes left", cur.remaining())));
     }
     let mut out = Vec::with_capacity(count);
     for _ in 0..count {
@@ -84,10 +83,7 @@ pub fn read_meta_map(cur: &mut Cursor) -> Result<Vec<(String, RawMeta)>, ParseEr
         };
         if let Some(w) = want {
             if size != w {
-                return Err(cur.err_at(
-                    size_at,
-                    format!("metadata `{key}` of type {type_name} has size {size}, expected {w}"),
-                ));
+                return Err(cur.err_at(size_at, format!("metadata `{key}` of type {type_name} has size {size}, expected {w}")));
             }
         }
         let f32_at = |i: usize| f32::from_le_bytes(v[4 * i..4 * i + 4].try_into().expect("4 bytes"));
@@ -276,10 +272,7 @@ pub fn parse_file_with(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> Decode) -> 
     let grid_count = cur.i32()?;
     // A descriptor takes at least 3 string lengths and 3 offsets (36 bytes).
     if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
-        return Err(cur.err_at(
-            at,
-            format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining()),
-        ));
+        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
     }
     let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count as usize);
     for _ in 0..grid_count {
@@ -299,13 +292,9 @@ pub fn parse_file_with(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> Decode) -> 
 /// 2) file version, 3) library version, 4) has-grid-offsets flag, 5) (no
 /// compression byte since 222), 6) UUID; then the file MetaMap.
 fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
-    let magic = cur
-        .i64()
-        .map_err(|_| cur.err_at(0, "not a VDB file: shorter than the 8-byte magic number".into()))?;
+    let magic = cur.i64().map_err(|_| cur.err_at(0, "not a VDB file: shorter than the 8-byte magic number".into()))?;
     if magic != layout::MAGIC {
-        return Err(
-            cur.err_at(0, format!("not a VDB file: magic number {magic:#x}, expected {:#x}", layout::MAGIC))
-        );
+        return Err(cur.err_at(0, format!("not a VDB file: magic number {magic:#x}, expected {:#x}", layout::MAGIC)));
     }
     let file_version = cur.u32()?;
     if !(layout::MIN_READ_VERSION..=layout::MAX_READ_VERSION).contains(&file_version) {
@@ -322,23 +311,14 @@ fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
     let library_minor = cur.u32()?;
     let has_offsets = cur.u8()?;
     if has_offsets != 1 {
-        return Err(cur.err_at(
-            20,
-            format!(
-                "has-grid-offsets flag is {has_offsets}: streamed archives without offsets are not supported"
-            ),
-        ));
+        return Err(cur.err_at(20, format!("has-grid-offsets flag is {has_offsets}: streamed archives without offsets are not supported")));
     }
     let uuid = String::from_utf8_lossy(cur.bytes(layout::UUID_LEN)?).into_owned();
     let metadata = read_meta_map(cur)?;
     Ok(Header { file_version, library_major, library_minor, uuid, metadata })
 }
 
-fn read_grid(
-    cur: &mut Cursor,
-    header: &Header,
-    decode: &dyn Fn(&GridHeader) -> Decode,
-) -> Result<ParsedGrid, ParseError> {
+fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> Decode) -> Result<ParsedGrid, ParseError> {
     let desc_at = cur.pos();
     let unique_name_raw = cur.string_bytes()?.to_vec();
     let unique_name = String::from_utf8_lossy(&unique_name_raw).into_owned();
@@ -368,9 +348,7 @@ fn read_grid(
     let comp_at = cur.pos();
     let compression = cur.u32()?;
     if compression & !(layout::COMPRESS_ZIP | layout::COMPRESS_ACTIVE_MASK | layout::COMPRESS_BLOSC) != 0 {
-        return Err(
-            cur.err_at(comp_at, format!("grid `{unique_name}`: invalid compression flags {compression:#x}"))
-        );
+        return Err(cur.err_at(comp_at, format!("grid `{unique_name}`: invalid compression flags {compression:#x}")));
     }
     let metadata = read_meta_map(cur)?;
     let half = metadata.iter().any(|(k, v)| k == layout::META_HALF && *v == RawMeta::Bool(true));
@@ -395,10 +373,7 @@ fn read_grid(
             if !gh.instance_parent.is_empty() {
                 return Err(cur.err_at(
                     desc_at,
-                    format!(
-                        "grid `{}` is an instance of `{}`: instanced grids are not supported",
-                        gh.unique_name, gh.instance_parent
-                    ),
+                    format!("grid `{}` is an instance of `{}`: instanced grids are not supported", gh.unique_name, gh.instance_parent),
                 ));
             }
             let (map_name, transform) = read_transform(cur, &gh.unique_name)?;
@@ -412,12 +387,7 @@ fn read_grid(
                 ValueKind::Vec3 => AnyTree::Vec3(read_tree::<[f32; 3]>(cur, &gh, fmt, dec).map_err(named)?),
             };
             if cur.pos() as u64 != gh.end_pos {
-                return Err(cur.err(format!(
-                    "grid `{}`: data end at {} but endPos says {}",
-                    gh.unique_name,
-                    cur.pos(),
-                    gh.end_pos
-                )));
+                return Err(cur.err(format!("grid `{}`: data end at {} but endPos says {}", gh.unique_name, cur.pos(), gh.end_pos)));
             }
             Some(tree)
         }
@@ -478,15 +448,10 @@ fn read_transform(cur: &mut Cursor, grid: &str) -> Result<(String, Transform), P
         }
     };
     if !(scale.x == scale.y && scale.y == scale.z) {
-        return Err(
-            cur.err_at(at, format!("grid `{grid}`: non-uniform voxel scale {scale} is not supported"))
-        );
+        return Err(cur.err_at(at, format!("grid `{grid}`: non-uniform voxel scale {scale} is not supported")));
     }
     if !(scale.x.is_finite() && scale.x != 0.0 && translation.is_finite()) {
-        return Err(cur.err_at(
-            at,
-            format!("grid `{grid}`: degenerate transform (scale {}, translation {translation})", scale.x),
-        ));
+        return Err(cur.err_at(at, format!("grid `{grid}`: degenerate transform (scale {}, translation {translation})", scale.x)));
     }
     Ok((name, Transform::new(scale.x, translation)))
 }
@@ -529,11 +494,8 @@ fn read_internal<T: VoxelValue>(
         tree.active_tile_count += 1;
         tree.tile_voxels += 1u128 << (3 * level.child_log2);
         if let Some(v) = &values {
-            let o = if level == INTERNAL32 {
-                layout::internal32_child_origin(origin, n)
-            } else {
-                layout::internal16_child_origin(origin, n)
-            };
+            let o =
+                if level == INTERNAL32 { layout::internal32_child_origin(origin, n) } else { layout::internal16_child_origin(origin, n) };
             tree.tiles.push((o, level.child_log2, v[n]));
         }
     }
@@ -542,12 +504,7 @@ fn read_internal<T: VoxelValue>(
 
 /// Reads topology and buffers of a tree (OpenVDB `RootNode::readTopology`,
 /// then `Tree::readBuffers`), in the depth-first order both passes share.
-fn read_tree<T: VoxelValue>(
-    cur: &mut Cursor,
-    gh: &GridHeader,
-    fmt: RecordFormat,
-    how: Decode,
-) -> Result<Tree<T>, ParseError> {
+fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat, how: Decode) -> Result<Tree<T>, ParseError> {
     let decode = matches!(how, Decode::All | Decode::NonZero);
     let name = &gh.unique_name;
     let at = cur.pos();
@@ -561,12 +518,7 @@ fn read_tree<T: VoxelValue>(
     let child_count = cur.u32()? as usize;
     let full = 4 * T::COMPONENTS;
     if tile_count > cur.remaining() / (12 + full + 1) || child_count > cur.remaining() / 12 {
-        return Err(cur.err_at(
-            at,
-            format!(
-                "grid `{name}`: {tile_count} root tiles and {child_count} children cannot fit in the file"
-            ),
-        ));
+        return Err(cur.err_at(at, format!("grid `{name}`: {tile_count} root tiles and {child_count} children cannot fit in the file")));
     }
     let mut tree = Tree {
         background,
@@ -590,10 +542,9 @@ fn read_tree<T: VoxelValue>(
             return Err(cur.err_at(at, format!("grid `{name}`: root tile origin {o} is not a multiple of 4096")));
         }
         if !root_tiles.insert((o.x, o.y, o.z)) {
-            return Err(cur.err_at(
-                at,
-                format!("grid `{name}`: two root tiles at {o}: duplicate leaf origins (a root holds one entry per origin)"),
-            ));
+            return Err(
+                cur.err_at(at, format!("grid `{name}`: two root tiles at {o}: duplicate leaf origins (a root holds one entry per origin)"))
+            );
         }
         let v: T = read_value(cur)?;
         let active = cur.u8()?;
@@ -611,8 +562,7 @@ fn read_tree<T: VoxelValue>(
         let at = cur.pos();
         let origin = cur.ivec3()?;
         if layout::root_child_origin(origin) != origin {
-            return Err(cur
-                .err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
+            return Err(cur.err_at(at, format!("grid `{name}`: root child origin {origin} is not a multiple of 4096")));
         }
         if root_tiles.contains(&(origin.x, origin.y, origin.z)) {
             return Err(cur.err_at(
@@ -647,11 +597,7 @@ fn read_tree<T: VoxelValue>(
         }
     }
     if cur.pos() as u64 != gh.block_pos {
-        return Err(cur.err(format!(
-            "grid `{name}`: topology ends at {} but blockPos says {}",
-            cur.pos(),
-            gh.block_pos
-        )));
+        return Err(cur.err(format!("grid `{name}`: topology ends at {} but blockPos says {}", cur.pos(), gh.block_pos)));
     }
     // Buffers: per leaf, a copy of the value mask and the value record. The
     // records are located in one serial pass (their lengths chain); when
@@ -664,10 +610,7 @@ fn read_tree<T: VoxelValue>(
             let at = cur.pos();
             let copy = cur.u64s(LEAF_MASK_WORDS)?;
             if copy[..] != mask[..] {
-                return Err(cur.err_at(
-                    at,
-                    format!("grid `{name}`: leaf value mask in the buffers differs from the topology"),
-                ));
+                return Err(cur.err_at(at, format!("grid `{name}`: leaf value mask in the buffers differs from the topology")));
             }
             let start = cur.pos();
             // A located record is decoded (and its stream checked) later, by
@@ -692,16 +635,7 @@ fn read_tree<T: VoxelValue>(
                 c.seek(start as u64)?;
                 let mut leaf = Leaf::new(origin, background);
                 leaf.mask = *mask;
-                codec::read_values_into(
-                    &mut c,
-                    fmt,
-                    LEAF_NUM_VALUES,
-                    mask,
-                    background,
-                    Some(&mut leaf.values[..]),
-                    scratch,
-                    true,
-                )?;
+                codec::read_values_into(&mut c, fmt, LEAF_NUM_VALUES, mask, background, Some(&mut leaf.values[..]), scratch, true)?;
                 if how == Decode::NonZero && !has_nonzero_active(&leaf) {
                     return Ok(None);
                 }
@@ -732,16 +666,7 @@ pub fn check_located<T: VoxelValue>(data: &[u8], tree: &Tree<T>, name: &str) -> 
         .map_init(Vec::new, |scratch, span| {
             let mut c = Cursor::new(data);
             c.seek(span.start as u64)?;
-            codec::read_values_into::<T>(
-                &mut c,
-                tree.format,
-                LEAF_NUM_VALUES,
-                &span.mask,
-                tree.background,
-                None,
-                scratch,
-                true,
-            )
+            codec::read_values_into::<T>(&mut c, tree.format, LEAF_NUM_VALUES, &span.mask, tree.background, None, scratch, true)
         })
         .find_first(|r| r.is_err());
     match first_err {
@@ -769,7 +694,6 @@ fn has_nonzero_active<T: VoxelValue>(leaf: &Leaf<T>) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
 
     #[test]
     fn meta_map_sizes_are_checked() {

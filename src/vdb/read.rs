@@ -46,7 +46,10 @@
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
-use crate::{leaf_source::{LeafError, LeafSource, LeafValues, Scratch}, render::medium::Medium};
+use crate::{
+    leaf_source::{LeafError, LeafSource, LeafValues, Scratch},
+    render::medium::Medium,
+};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::collections::HashSet;
@@ -182,10 +185,7 @@ pub fn read_vdb_bytes_with_vdbrs(bytes: &[u8]) -> Result<VdbFile, VdbReadError> 
 fn vdbrs_reads(gh: &GridHeader) -> bool {
     gh.kind == Some(ValueKind::Float)
         && !gh.half
-        && matches!(
-            gh.map_name.as_str(),
-            "UniformScaleMap" | "UniformScaleTranslateMap" | "ScaleTranslateMap"
-        )
+        && matches!(gh.map_name.as_str(), "UniformScaleMap" | "UniformScaleTranslateMap" | "ScaleTranslateMap")
 }
 
 fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) -> Result<VdbFile, VdbReadError> {
@@ -193,8 +193,7 @@ fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) 
     let vdbrs_reads = |gh: &GridHeader| allow_vdbrs && vdbrs_reads(gh);
     let native = if drop_zero { parse::Decode::NonZero } else { parse::Decode::All };
     // 1. Validate everything; decode natively what vdb-rs cannot read.
-    let mut parsed = parse::parse_file_with(bytes, &|gh| if vdbrs_reads(gh) { parse::Decode::Skip } else { native })
-        .map_err(invalid)?;
+    let mut parsed = parse::parse_file_with(bytes, &|gh| if vdbrs_reads(gh) { parse::Decode::Skip } else { native }).map_err(invalid)?;
     // Grids with active tiles go native too (vdb-rs drops root tiles).
     let retry: HashSet<Vec<u8>> = parsed
         .grids
@@ -302,12 +301,7 @@ fn normalise<T: VoxelValue>(mut leaf: Leaf<T>, background: T) -> Leaf<T> {
 }
 
 /// Builds a grid from a natively decoded tree, densifying active tiles.
-fn assemble<T: VoxelValue>(
-    tree: Tree<T>,
-    name: &str,
-    transform: Transform,
-    file: &str,
-) -> Result<Grid<T>, VdbReadError> {
+fn assemble<T: VoxelValue>(tree: Tree<T>, name: &str, transform: Transform, file: &str) -> Result<Grid<T>, VdbReadError> {
     check_tile_voxels(tree.tile_voxels, name, file)?;
     let mut g = Grid::new(name, tree.background, transform);
     for leaf in tree.leaves {
@@ -334,12 +328,7 @@ fn assemble<T: VoxelValue>(
 /// densify that grid).
 fn check_tile_voxels(voxels: u128, name: &str, file: &str) -> Result<(), VdbReadError> {
     if voxels > MAX_TILE_VOXELS {
-        return Err(VdbReadError::TooManyTileVoxels {
-            file: file.into(),
-            grid: name.into(),
-            voxels,
-            limit: MAX_TILE_VOXELS,
-        });
+        return Err(VdbReadError::TooManyTileVoxels { file: file.into(), grid: name.into(), voxels, limit: MAX_TILE_VOXELS });
     }
     Ok(())
 }
@@ -366,10 +355,7 @@ fn catch_silently<R>(f: impl FnOnce() -> R) -> Result<R, String> {
     let r = catch_unwind(AssertUnwindSafe(f));
     SILENCE_PANICS.with(|s| s.set(false));
     r.map_err(|p| {
-        p.downcast_ref::<String>()
-            .cloned()
-            .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
-            .unwrap_or_else(|| "panic".into())
+        p.downcast_ref::<String>().cloned().or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_else(|| "panic".into())
     })
 }
 
@@ -383,19 +369,13 @@ type VdbRsGrid = (Vec<Leaf<f32>>, Transform);
 
 /// Reads the named float grids (display name, descriptor name bytes) with
 /// vdb-rs: for each, its leaves (mask and values) and transform.
-fn read_with_vdbrs(
-    bytes: &[u8],
-    names: &[(String, Vec<u8>)],
-    file: &str,
-) -> Result<Vec<VdbRsGrid>, VdbReadError> {
+fn read_with_vdbrs(bytes: &[u8], names: &[(String, Vec<u8>)], file: &str) -> Result<Vec<VdbRsGrid>, VdbReadError> {
     if names.is_empty() {
         return Ok(Vec::new());
     }
-    let fail =
-        |grid: &str, message: String| VdbReadError::VdbRs { file: file.into(), grid: grid.into(), message };
+    let fail = |grid: &str, message: String| VdbReadError::VdbRs { file: file.into(), grid: grid.into(), message };
     let result = catch_silently(|| -> Result<Vec<_>, (String, String)> {
-        let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes))
-            .map_err(|e| (String::new(), e.to_string()))?;
+        let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes)).map_err(|e| (String::new(), e.to_string()))?;
         let mut out = Vec::with_capacity(names.len());
         for (name, raw) in names {
             let g = reader.read_grid::<f32>(&vdbrs_key(raw)).map_err(|e| (name.clone(), e.to_string()))?;
@@ -418,9 +398,7 @@ fn read_with_vdbrs(
 fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
     use super::layout::{internal16_child_origin, internal32_child_origin};
     let transform = match &g.transform {
-        vdb_rs::Map::ScaleTranslateMap { translation: t, scale_values: s, .. } => {
-            Transform::new(s.x, DVec3::new(t.x, t.y, t.z))
-        }
+        vdb_rs::Map::ScaleTranslateMap { translation: t, scale_values: s, .. } => Transform::new(s.x, DVec3::new(t.x, t.y, t.z)),
         vdb_rs::Map::UniformScaleMap { scale_values: s, .. } => Transform::new(s.x, DVec3::ZERO),
     };
     let mut leaves = Vec::new();
@@ -431,8 +409,7 @@ fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
             let o4 = internal32_child_origin(o5, i5);
             for i4 in n4.child_mask.iter_ones() {
                 let n3 = n4.nodes.get(&(i4 as u32)).ok_or("missing leaf node")?;
-                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != crate::grid::LEAF_MASK_WORDS
-                {
+                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != crate::grid::LEAF_MASK_WORDS {
                     return Err(format!("leaf buffer of {} values", n3.buffer.len()));
                 }
                 let mut leaf = Leaf::new(internal16_child_origin(o4, i4), 0.0f32);
@@ -470,9 +447,7 @@ mod tests {
     fn panics_are_contained() {
         assert_eq!(catch_silently(|| 7), Ok(7));
         assert_eq!(catch_silently(|| -> i32 { panic!("boom {}", 1) }), Err("boom 1".to_string()));
-        let handles: Vec<_> = (0..4)
-            .map(|i| std::thread::spawn(move || catch_silently(move || -> u8 { panic!("thread {i}") })))
-            .collect();
+        let handles: Vec<_> = (0..4).map(|i| std::thread::spawn(move || catch_silently(move || -> u8 { panic!("thread {i}") }))).collect();
         for (i, h) in handles.into_iter().enumerate() {
             assert_eq!(h.join().unwrap(), Err(format!("thread {i}")));
         }
@@ -567,7 +542,14 @@ mod tests {
         let tr = Transform::new(0.5, DVec3::new(1.0, -2.0, 3.0));
         for tr_e in [tr, Transform::new(0.25, DVec3::ZERO)] {
             let (d, e) = medium_grids(tr, tr_e);
-            for c in [Compression::None, Compression::Zip, Compression::ActiveMask, Compression::ZipActiveMask, Compression::Blosc, Compression::BloscActiveMask] {
+            for c in [
+                Compression::None,
+                Compression::Zip,
+                Compression::ActiveMask,
+                Compression::ZipActiveMask,
+                Compression::Blosc,
+                Compression::BloscActiveMask,
+            ] {
                 for half in [false, true] {
                     let opts = WriteOptions {
                         compression: c,
@@ -688,15 +670,8 @@ pub use crate::render::grids::RenderGridsError;
 /// may be absent, not both).
 pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
     use crate::render::grids::{choose, Listed};
-    let listing: Vec<Listed<'_>> = file
-        .grids
-        .iter()
-        .map(|g| Listed {
-            name: &g.name,
-            type_name: &g.type_name,
-            kind: grid_type(g.kind),
-        })
-        .collect();
+    let listing: Vec<Listed<'_>> =
+        file.grids.iter().map(|g| Listed { name: &g.name, type_name: &g.type_name, kind: grid_type(g.kind) }).collect();
     choose(&listing, file.float_grids, file.vec3_grids)
 }
 
@@ -805,11 +780,7 @@ file_leaves!([f32; 3]);
 /// grids instead ([`read_vdb_for_render`], [`render_grids`]): a float
 /// `emission` grid (read as grey), active tiles in a chosen grid, or no
 /// grid to render (the grid path reports it).
-pub fn read_render_medium(
-    path: &Path,
-    density_scale: f64,
-    emission_scale: f64,
-) -> Result<Option<RenderMedium>, RenderReadError> {
+pub fn read_render_medium(path: &Path, density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
     let start = std::time::Instant::now();
     let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
     render_medium_named(bytes.bytes(), &path.display().to_string(), start, density_scale, emission_scale)
@@ -827,7 +798,10 @@ pub fn read_render_medium(
 /// cannot do this to a file being read.
 enum FileBytes {
     #[cfg(unix)]
-    Mapped { ptr: *mut libc::c_void, len: usize },
+    Mapped {
+        ptr: *mut libc::c_void,
+        len: usize,
+    },
     Read(Vec<u8>),
 }
 
@@ -842,9 +816,7 @@ impl FileBytes {
             let len = len as usize;
             // SAFETY: a fresh private read-only mapping of `len` bytes of an
             // open file; the result is checked against MAP_FAILED.
-            let ptr = unsafe {
-                libc::mmap(std::ptr::null_mut(), len, libc::PROT_READ, libc::MAP_PRIVATE, file.as_raw_fd(), 0)
-            };
+            let ptr = unsafe { libc::mmap(std::ptr::null_mut(), len, libc::PROT_READ, libc::MAP_PRIVATE, file.as_raw_fd(), 0) };
             if ptr != libc::MAP_FAILED {
                 return Ok(FileBytes::Mapped { ptr, len });
             }
@@ -875,11 +847,7 @@ impl Drop for FileBytes {
 }
 
 /// [`read_render_medium`] of a file held in memory.
-pub fn read_render_medium_bytes(
-    bytes: &[u8],
-    density_scale: f64,
-    emission_scale: f64,
-) -> Result<Option<RenderMedium>, RenderReadError> {
+pub fn read_render_medium_bytes(bytes: &[u8], density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
     render_medium_named(bytes, "<memory>", std::time::Instant::now(), density_scale, emission_scale)
 }
 
@@ -906,11 +874,7 @@ fn render_medium_named(
         .grids
         .iter()
         .zip(&names)
-        .map(|(g, name)| Listed {
-            name,
-            type_name: &g.header.type_name,
-            kind: grid_type(g.header.kind),
-        })
+        .map(|(g, name)| Listed { name, type_name: &g.header.type_name, kind: grid_type(g.header.kind) })
         .collect();
     check_types(&listing).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
     let transform_of = |g: &parse::ParsedGrid| g.header.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
@@ -932,8 +896,8 @@ fn render_medium_named(
             _ => {}
         }
     }
-    let tiles = density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0)
-        || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
+    let tiles =
+        density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0) || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
     if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles {
         return Ok(None);
     }

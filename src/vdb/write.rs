@@ -36,9 +36,9 @@
 
 use super::codec::{self, Encoder};
 use super::fileid::piece_hash;
-use super::layout::{self, INTERNAL16, INTERNAL32};
 /// The file-ID code, re-exported for the writer's callers.
 pub use super::fileid::{content_uuid, xxh64};
+use super::layout::{self, INTERNAL16, INTERNAL32};
 use crate::grid::{Grid, Leaf, VoxelValue, LEAF_NUM_VALUES};
 use crate::scene::Compression;
 use glam::IVec3;
@@ -274,10 +274,7 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
         }
     }
     for (i, (k, _)) in opts.metadata.iter().enumerate() {
-        if k.is_empty()
-            || RESERVED_KEYS.contains(&k.as_str())
-            || opts.metadata[..i].iter().any(|(o, _)| o == k)
-        {
+        if k.is_empty() || RESERVED_KEYS.contains(&k.as_str()) || opts.metadata[..i].iter().any(|(o, _)| o == k) {
             return Err(VdbWriteError::ReservedMetadata(k.clone()));
         }
     }
@@ -286,11 +283,7 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
 
 /// Streams the whole file into `target`; IO errors name `<output>` and are
 /// renamed by the caller.
-fn encode_file(
-    target: &mut dyn Target,
-    grids: &[GridRef],
-    opts: &WriteOptions,
-) -> Result<WriteStats, VdbWriteError> {
+fn encode_file(target: &mut dyn Target, grids: &[GridRef], opts: &WriteOptions) -> Result<WriteStats, VdbWriteError> {
     check_options(grids, opts)?;
     let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     let flags = compression_flags(opts.compression);
@@ -394,16 +387,7 @@ fn build_tree<T: VoxelValue>(grid: &Grid<T>) -> Tree<'_, T> {
         .iter()
         .map(|l| {
             let r = layout::root_child_origin(l.origin);
-            (
-                (
-                    r.x,
-                    r.y,
-                    r.z,
-                    layout::internal32_offset(l.origin) as u32,
-                    layout::internal16_offset(l.origin) as u32,
-                ),
-                l,
-            )
+            ((r.x, r.y, r.z, layout::internal32_offset(l.origin) as u32, layout::internal16_offset(l.origin) as u32), l)
         })
         .collect();
     keyed.sort_unstable_by_key(|(k, _)| *k);
@@ -447,8 +431,7 @@ fn write_grid<T: VoxelValue>(
         });
     }
     let bg = grid.background;
-    let bg_ok =
-        bg.is_finite() && (!half || bg.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= HALF_MAX));
+    let bg_ok = bg.is_finite() && (!half || bg.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= HALF_MAX));
     if !bg_ok {
         return Err(VdbWriteError::BadBackground { grid: name.clone(), value: format!("{bg:?}") });
     }
@@ -457,11 +440,7 @@ fn write_grid<T: VoxelValue>(
 
     // Descriptor: name, type, instance parent, then gridPos/blockPos/endPos.
     let mut head = Vec::new();
-    let type_name = if half {
-        format!("{}{}", T::TREE_TYPE, layout::HALF_FLOAT_SUFFIX)
-    } else {
-        T::TREE_TYPE.to_string()
-    };
+    let type_name = if half { format!("{}{}", T::TREE_TYPE, layout::HALF_FLOAT_SUFFIX) } else { T::TREE_TYPE.to_string() };
     push_string(&mut head, name);
     push_string(&mut head, &type_name);
     push_string(&mut head, "");
@@ -566,8 +545,7 @@ fn write_internal_values<T: VoxelValue>(
             return;
         }
     }
-    let values: Vec<T> =
-        (0..level.num_values()).map(|n| if layout::mask_bit(child_mask, n) { T::ZERO } else { bg }).collect();
+    let values: Vec<T> = (0..level.num_values()).map(|n| if layout::mask_bit(child_mask, n) { T::ZERO } else { bg }).collect();
     let value_mask = vec![0u64; level.mask_words()];
     let start = out.len();
     enc.write_values(out, &values, &value_mask, Some(child_mask), bg);
@@ -798,11 +776,7 @@ mod tests {
         let uuid = std::str::from_utf8(&a[21..57]).unwrap();
         assert_eq!(uuid.len(), 36);
         assert_eq!(uuid.as_bytes()[14], b'8');
-        assert!(uuid.chars().enumerate().all(|(i, c)| if [8, 13, 18, 23].contains(&i) {
-            c == '-'
-        } else {
-            c.is_ascii_hexdigit()
-        }));
+        assert!(uuid.chars().enumerate().all(|(i, c)| if [8, 13, 18, 23].contains(&i) { c == '-' } else { c.is_ascii_hexdigit() }));
         // Empty file MetaMap, one grid; the descriptor starts at 65.
         assert_eq!(&a[57..65], &[0, 0, 0, 0, 1, 0, 0, 0]);
         let desc = 65 + 4 + 7 + 4 + 16 + 4;
@@ -839,18 +813,12 @@ mod tests {
         assert!(msg.contains("`density`") && msg.contains("(-9, 4, 100)") && msg.contains("NaN"), "{msg}");
         let mut g = grid_with(&[]);
         g.set(IVec3::new(0, 0, 0), f32::INFINITY);
-        assert!(matches!(
-            write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions::default()),
-            Err(VdbWriteError::NonFinite { .. })
-        ));
+        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions::default()), Err(VdbWriteError::NonFinite { .. })));
         let mut e = Grid::new("emission", [0.0f32; 3], Transform::new(1.0, DVec3::ZERO));
         e.set(IVec3::new(3, -4, 5), [1.0, 70000.0, 0.0]);
         let opts = WriteOptions { half: vec!["emission".into()], ..Default::default() };
         let err = write_vdb_bytes(&[GridRef::Vec3(&e)], &opts).unwrap_err();
-        assert!(
-            matches!(err, VdbWriteError::HalfOverflow { ref grid, ijk: [3, -4, 5], .. } if grid == "emission"),
-            "{err}"
-        );
+        assert!(matches!(err, VdbWriteError::HalfOverflow { ref grid, ijk: [3, -4, 5], .. } if grid == "emission"), "{err}");
         // 65504 itself is the largest half and is accepted.
         e.set(IVec3::new(3, -4, 5), [1.0, 65504.0, -65504.0]);
         assert!(write_vdb_bytes(&[GridRef::Vec3(&e)], &opts).is_ok());
@@ -863,26 +831,13 @@ mod tests {
     fn option_errors() {
         let g = grid_with(&[(IVec3::ZERO, 1.0)]);
         let opts = WriteOptions { half: vec!["nope".into()], ..Default::default() };
-        assert!(matches!(
-            write_vdb_bytes(&[GridRef::Float(&g)], &opts),
-            Err(VdbWriteError::UnknownHalfGrid(_))
-        ));
-        let opts =
-            WriteOptions { metadata: vec![("name".into(), MetaValue::Bool(true))], ..Default::default() };
-        assert!(matches!(
-            write_vdb_bytes(&[GridRef::Float(&g)], &opts),
-            Err(VdbWriteError::ReservedMetadata(_))
-        ));
-        assert!(matches!(
-            write_vdb_bytes(&[GridRef::Float(&g), GridRef::Float(&g)], &Default::default()),
-            Err(VdbWriteError::BadName(_))
-        ));
+        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &opts), Err(VdbWriteError::UnknownHalfGrid(_))));
+        let opts = WriteOptions { metadata: vec![("name".into(), MetaValue::Bool(true))], ..Default::default() };
+        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g)], &opts), Err(VdbWriteError::ReservedMetadata(_))));
+        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&g), GridRef::Float(&g)], &Default::default()), Err(VdbWriteError::BadName(_))));
         let mut bad = g.clone();
         bad.transform.voxel_size = 0.0;
-        assert!(matches!(
-            write_vdb_bytes(&[GridRef::Float(&bad)], &Default::default()),
-            Err(VdbWriteError::BadTransform { .. })
-        ));
+        assert!(matches!(write_vdb_bytes(&[GridRef::Float(&bad)], &Default::default()), Err(VdbWriteError::BadTransform { .. })));
     }
 
     /// The mask-derived leaf bbox equals brute force over random masks.
@@ -904,7 +859,4 @@ mod tests {
             assert_eq!(leaf_active_bbox(origin, &leaf.mask), brute);
         }
     }
-
-
-
 }

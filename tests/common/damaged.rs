@@ -58,18 +58,11 @@ pub struct Damaged {
 pub fn small_file(comp: Compression, half: bool) -> Vec<u8> {
     let mut d = Grid::new("density", 0.0f32, Transform::new(0.5, DVec3::new(1.0, 2.0, 3.0)));
     let mut e = Grid::new("emission", [0.0f32; 3], Transform::new(0.5, DVec3::new(1.0, 2.0, 3.0)));
-    for (i, p) in [IVec3::new(-1, 2, 3), IVec3::new(4096, 0, -5), IVec3::new(9, 9, 9), IVec3::new(10, 9, 9)]
-        .into_iter()
-        .enumerate()
-    {
+    for (i, p) in [IVec3::new(-1, 2, 3), IVec3::new(4096, 0, -5), IVec3::new(9, 9, 9), IVec3::new(10, 9, 9)].into_iter().enumerate() {
         d.set(p, 0.5 + i as f32);
         e.set(p, [i as f32, 1.0, -0.5]);
     }
-    let opts = WriteOptions {
-        compression: comp,
-        half: if half { vec!["emission".into()] } else { vec![] },
-        metadata: vec![],
-    };
+    let opts = WriteOptions { compression: comp, half: if half { vec!["emission".into()] } else { vec![] }, metadata: vec![] };
     write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap()
 }
 
@@ -110,11 +103,8 @@ pub fn four_grids(comp: Compression, half: bool) -> Vec<u8> {
         e.set(p, [0.0, 2.0, 1.0]);
         v.set(p, [1.0, -1.0, 0.5]);
     }
-    let opts = WriteOptions {
-        compression: comp,
-        half: if half { vec!["emission".into(), "velocity".into()] } else { vec![] },
-        metadata: vec![],
-    };
+    let opts =
+        WriteOptions { compression: comp, half: if half { vec!["emission".into(), "velocity".into()] } else { vec![] }, metadata: vec![] };
     write_vdb_bytes(&[GridRef::Float(&d), GridRef::Float(&t), GridRef::Vec3(&e), GridRef::Vec3(&v)], &opts).unwrap()
 }
 
@@ -265,9 +255,7 @@ pub fn body_cuts(full: &[u8]) -> Vec<usize> {
     let grids = grids_of(full);
     let g = grids.last().expect("a grid");
     assert_eq!(g.end_pos, full.len());
-    (g.grid_pos..full.len())
-        .filter(|&c| c < g.grid_pos + 2048 || c + 64 >= g.block_pos || (c - g.grid_pos) % 7 == 0)
-        .collect()
+    (g.grid_pos..full.len()).filter(|&c| c < g.grid_pos + 2048 || c + 64 >= g.block_pos || (c - g.grid_pos) % 7 == 0).collect()
 }
 
 /// `full` truncated at `cut` inside its last grid's body, with the grid's

@@ -64,9 +64,7 @@ pub fn system_python() -> PathBuf {
 
 /// The project venv's Python (bpy, usd-core): `$AURORA_PYTHON` or `<repo>/.venv/bin/python`.
 pub fn venv_python() -> PathBuf {
-    let p = std::env::var_os("AURORA_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| repo_root().join(".venv/bin/python"));
+    let p = std::env::var_os("AURORA_PYTHON").map(PathBuf::from).unwrap_or_else(|| repo_root().join(".venv/bin/python"));
     assert!(p.exists(), "{} is missing: run tools/setup (or set AURORA_PYTHON)", p.display());
     p
 }
@@ -97,18 +95,11 @@ pub fn run_json(python: &Path, script: &str, args: &[&str]) -> Value {
 
 /// `vdb_print -l FILE` must exit 0 *and* print no error (it exits 0 even after ERROR).
 pub fn vdb_print_ok(file: &Path) -> String {
-    let out = Command::new("vdb_print")
-        .arg("-l")
-        .arg(file)
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run vdb_print: {e}; run tools/setup"));
+    let out =
+        Command::new("vdb_print").arg("-l").arg(file).output().unwrap_or_else(|e| panic!("cannot run vdb_print: {e}; run tools/setup"));
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "vdb_print -l {} failed: {text}", file.display());
-    assert!(
-        !text.to_lowercase().contains("error"),
-        "vdb_print -l {} reported an error:\n{text}",
-        file.display()
-    );
+    assert!(!text.to_lowercase().contains("error"), "vdb_print -l {} reported an error:\n{text}", file.display());
     text
 }
 

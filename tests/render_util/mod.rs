@@ -178,10 +178,7 @@ fn plane_crossings(tr: &Transform, o: DVec3, d: DVec3, t0: f64, t1: f64, out: &m
 /// World box of a grid's support (active bbox widened by one voxel).
 pub fn support<T: aurora::grid::VoxelValue>(g: &Grid<T>) -> Option<(DVec3, DVec3)> {
     let (lo, hi) = g.index_bbox()?;
-    Some((
-        g.transform.index_to_world(lo.as_dvec3() - DVec3::ONE),
-        g.transform.index_to_world(hi.as_dvec3() + DVec3::ONE),
-    ))
+    Some((g.transform.index_to_world(lo.as_dvec3() - DVec3::ONE), g.transform.index_to_world(hi.as_dvec3() + DVec3::ONE)))
 }
 
 /// Brute-force `(tau, L)` along `o + t d`, t in `[0, t_max]`: breakpoints at
@@ -223,8 +220,7 @@ pub fn oracle(
     let emit = |t: f64| emission.map_or([0.0; 3], |g| g.sample_world(o + d * t).map(|v| es * v as f64));
     let g3 = gauss(3);
     let g8 = gauss(8);
-    let tau_over =
-        |x: f64, y: f64| -> f64 { g3.iter().map(|(s, w)| w * sigma(x + (y - x) * s)).sum::<f64>() * (y - x) };
+    let tau_over = |x: f64, y: f64| -> f64 { g3.iter().map(|(s, w)| w * sigma(x + (y - x) * s)).sum::<f64>() * (y - x) };
     let mut tau = 0.0;
     let mut l = [0.0; 3];
     for w2 in ts.windows(2) {

@@ -52,13 +52,7 @@ struct BlockScan {
 /// stores the leaves of one block: `leaves[k]` is source `k`'s leaf at the
 /// block's origin ([`NONE`] if it has none). A block with no non-zero voxel
 /// is never written, so its pages are never touched.
-fn scan_block(
-    sources: &[&dyn LeafSource],
-    leaves: &[u32; 2],
-    dst: &mut [f32],
-    channels: usize,
-    scratch: &mut [Scratch; 2],
-) -> BlockScan {
+fn scan_block(sources: &[&dyn LeafSource], leaves: &[u32; 2], dst: &mut [f32], channels: usize, scratch: &mut [Scratch; 2]) -> BlockScan {
     let mut scan = BlockScan { feeds: 0, masks: ([0; LEAF_MASK_WORDS], [0; LEAF_MASK_WORDS]), peaks: [0.0; 2], fails: [None, None] };
     let mut got: [Option<LeafValues<'_>>; 2] = [None, None];
     for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {
@@ -68,9 +62,7 @@ fn scan_block(
         }
         let li = li as usize;
         match src.values(li, scr) {
-            Err(source) => {
-                scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source }))
-            }
+            Err(source) => scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source })),
             Ok(v) => match leaf_peak(v, src.channels(), src.mask(li)) {
                 Err(n) => scan.fails[k] = Some(Box::new(bad_voxel(*src, li, n, v))),
                 Ok(peak) => {
@@ -153,11 +145,7 @@ impl Field {
         let per_block = LEAF_NUM_VALUES * channels;
         let needed = reserved + ((origins.len() + 1) * per_block * std::mem::size_of::<f32>()) as f64;
         if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
-            return Err(RenderError::Memory {
-                leaves: origins.len(),
-                needed: crate::memory::gib(needed),
-                available: limit.to_string(),
-            });
+            return Err(RenderError::Memory { leaves: origins.len(), needed: crate::memory::gib(needed), available: limit.to_string() });
         }
         // Zeroed by the allocator (fresh pages): blocks not written cost
         // no memory.
@@ -165,9 +153,7 @@ impl Field {
         let mut scans: Vec<BlockScan> = values[per_block..]
             .par_chunks_mut(per_block)
             .zip(leaf_of.par_iter())
-            .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| {
-                scan_block(sources, leaves, dst, channels, scratch)
-            })
+            .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| scan_block(sources, leaves, dst, channels, scratch))
             .collect();
         drop(leaf_of);
         let mut reports: Vec<SourceReport> = sources.iter().map(|_| SourceReport { peak: 0.0, fail: None }).collect();
@@ -207,8 +193,7 @@ impl Field {
         nonzero.push(([0; LEAF_MASK_WORDS], [0; LEAF_MASK_WORDS]));
         nonzero.extend(scans.iter().map(|s| s.masks));
         drop(scans);
-        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) =
-            neighbours.par_iter().map(|nb| cell_masks(nb, &nonzero)).unzip();
+        let (mask_first, mask_any): (Vec<CellMask>, Vec<CellMask>) = neighbours.par_iter().map(|nb| cell_masks(nb, &nonzero)).unzip();
 
         // The tree: blocks of 16^3 dual leaves, super nodes of 32^3 blocks.
         let Tree { blocks, supers, root, super_bounds, lo, hi, root_lo, root_hi } = Tree::new(&keys);

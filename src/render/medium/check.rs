@@ -9,9 +9,9 @@
 //! below +inf's (or is -0), and such bits order as the values, so one pass
 //! gives both the verdict and the leaf's largest value.
 
-use crate::render::RenderError;
 use crate::grid::{Grid, VoxelValue, LEAF_MASK_WORDS};
 use crate::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
+use crate::render::RenderError;
 
 /// Whether a stored component is acceptable: finite and >= 0 (-0 included),
 /// on its bits: below +inf's bits, or -0's.

@@ -20,15 +20,19 @@ use crate::grid::{LEAF_LOG2DIM, LEAF_MASK_WORDS};
 use crate::leaf_source::LeafValues;
 use glam::IVec3;
 #[cfg(test)]
-use {super::check::leaf_peak, super::layout::{block_offset, cell_bit}, crate::grid::VoxelValue};
+use {
+    super::check::leaf_peak,
+    super::layout::{block_offset, cell_bit},
+    crate::grid::VoxelValue,
+};
 
 /// Every dual leaf a source leaf at `origin` feeds (bit `d` of `feeds`:
 /// dual leaf `key - (dx,dy,dz)`, see [`feeds_from_nonzero`]), appended.
 pub(super) fn push_dual_keys(origin: IVec3, feeds: u8, out: &mut Vec<IVec3>) {
     let key = shr(origin, LEAF_LOG2DIM);
-    out.extend((0..8u8).filter(|d| feeds >> d & 1 == 1).map(|d| {
-        key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)
-    }));
+    out.extend(
+        (0..8u8).filter(|d| feeds >> d & 1 == 1).map(|d| key - IVec3::new((d >> 2 & 1) as i32, (d >> 1 & 1) as i32, (d & 1) as i32)),
+    );
 }
 
 /// The feeds byte of a leaf from its 512-bit set of non-zero active voxels
@@ -238,7 +242,13 @@ mod tests {
                 for n in 0..LEAF_NUM_VALUES {
                     let on = rng.random::<f64>() < p;
                     leaf.set_active(n, on);
-                    leaf.values[n] = if on && rng.random::<f64>() < 0.7 { rng.random::<f32>() } else if on { 0.0 } else { 5.0 };
+                    leaf.values[n] = if on && rng.random::<f64>() < 0.7 {
+                        rng.random::<f32>()
+                    } else if on {
+                        0.0
+                    } else {
+                        5.0
+                    };
                 }
                 check(&leaf);
             }

@@ -108,12 +108,7 @@ impl Tree {
         let (lo, hi, root_lo, root_hi) = if keys.is_empty() {
             (IVec3::ZERO, IVec3::ZERO, IVec3::ZERO, IVec3::ZERO)
         } else {
-            (
-                lo * LEAF_DIM,
-                (hi + IVec3::ONE) * LEAF_DIM,
-                shr(lo, BLOCK_LOG2 + SUPER_LOG2),
-                shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE,
-            )
+            (lo * LEAF_DIM, (hi + IVec3::ONE) * LEAF_DIM, shr(lo, BLOCK_LOG2 + SUPER_LOG2), shr(hi, BLOCK_LOG2 + SUPER_LOG2) + IVec3::ONE)
         };
         Tree { blocks, supers, root, super_bounds, lo, hi, root_lo, root_hi }
     }

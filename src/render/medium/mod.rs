@@ -40,10 +40,10 @@ mod dual;
 pub mod field;
 pub mod layout;
 
-use check::{check_header, check_scaled_peak};
-use field::Field;
 use crate::grid::Grid;
 use crate::leaf_source::{GridSource, LeafSource};
+use check::{check_header, check_scaled_peak};
+use field::Field;
 use glam::DVec3;
 
 use super::RenderError;
@@ -152,14 +152,7 @@ impl Medium {
             [Some(d), Some(e)] if d.transform() == e.transform() => vec![vec![0, 1]],
             _ => (0..2).filter(|&k| srcs[k].is_some()).map(|k| vec![k]).collect(),
         };
-        let mut medium = Medium {
-            fields: Vec::new(),
-            sigma_t: None,
-            emission: None,
-            stored: [None, None],
-            density_scale,
-            emission_scale,
-        };
+        let mut medium = Medium { fields: Vec::new(), sigma_t: None, emission: None, stored: [None, None], density_scale, emission_scale };
         for group in groups {
             let list: Vec<&dyn LeafSource> = group.iter().filter_map(|&k| srcs[k]).collect();
             let (mut field, reports) = Field::from_sources(&list, reserved, &limit)?;
@@ -188,8 +181,7 @@ impl Medium {
             let mut ch = 0;
             for &k in &live {
                 let src = srcs[k].expect("live sources exist");
-                medium.stored[k] =
-                    Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
+                medium.stored[k] = Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
                 ch += src.channels();
             }
             reserved += (field.values.len() * std::mem::size_of::<f32>()) as f64;
@@ -278,10 +270,6 @@ impl Medium {
 
     /// World-space box enclosing every field's support, if any.
     pub fn world_bounds(&self) -> Option<(DVec3, DVec3)> {
-        self.fields
-            .iter()
-            .filter(|f| !f.is_empty())
-            .map(Field::world_bounds)
-            .reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
+        self.fields.iter().filter(|f| !f.is_empty()).map(Field::world_bounds).reduce(|a, b| (a.0.min(b.0), a.1.max(b.1)))
     }
 }
