@@ -157,7 +157,7 @@ fn motion_off_gives_identical_grids() {
     // grids, voxel by voxel.
     let grids = |f: i64| {
         let file = aurora::vdb::read::read_vdb(&out.join(format!("aurora.{f:04}.vdb"))).unwrap();
-        let (d, e) = aurora::vdb::read::render_grids(file).unwrap();
+        let (d, e) = aurora::vdb_medium::render_grids(file).unwrap();
         let (d, e) = (d.unwrap(), e.unwrap());
         (d.iter_active().collect::<Vec<_>>(), e.iter_active().collect::<Vec<_>>())
     };

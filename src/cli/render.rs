@@ -139,7 +139,7 @@ fn prepare(
     progress: &dyn Progress,
 ) -> Result<(Prepared, f64, f64)> {
     let from_records = match vdb {
-        Some(path) => aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+        Some(path) => aurora::vdb_medium::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
             .map_err(|e| InputError(e.to_string()))?,
         None => None,
     };
@@ -150,7 +150,7 @@ fn prepare(
     let (density, emission) = match vdb {
         Some(path) => {
             let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
-            aurora::vdb::read::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+            aurora::vdb_medium::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
         }
         None => {
             let bake = aurora::bake::bake(scene, progress)?;

@@ -7,7 +7,7 @@
 //!
 //! The choice is made over a plain listing of the file's grids ([`Listed`])
 //! and the decoded grids, so the renderer knows nothing of file formats:
-//! `crate::vdb::read::render_grids` lists a VDB file and calls [`choose`].
+//! `crate::vdb_medium::render_grids` lists a VDB file and calls [`choose`].
 
 use crate::grid::{Grid, Leaf};
 
