@@ -13,9 +13,9 @@
 //!   of every grid, every record of the unused grids decompressed once), so
 //!   both paths accept and refuse the same files (`vdb::read`'s module doc).
 
-use crate::grid::{Grid, Transform};
+use crate::grid::Transform;
 use crate::leaf_source::LeafSource;
-use crate::render::grids::{check_types, choose, GridType, Listed, RenderGridsError};
+use crate::render::grids::{check_types, choose, ChosenGrids, GridType, Listed, RenderGridsError};
 use crate::render::medium::Medium;
 use crate::render::RenderError;
 use crate::vdb::parse::{self, AnyTree, ParseError, ValueKind};
@@ -28,7 +28,7 @@ use std::path::Path;
 /// renderer's grid choice ([`crate::render::grids::choose`]: a float
 /// `density` grid, an `emission` grid, vec3 or float counted as grey; either
 /// may be absent, not both).
-pub fn render_grids(file: VdbFile) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
+pub fn render_grids(file: VdbFile) -> Result<ChosenGrids, RenderGridsError> {
     let listing: Vec<Listed<'_>> =
         file.grids.iter().map(|g| Listed { name: &g.name, type_name: &g.type_name, kind: grid_type(g.kind) }).collect();
     choose(&listing, file.float_grids, file.vec3_grids)
@@ -81,7 +81,7 @@ pub struct RenderMedium {
 /// command's path): the file is parsed once, validating every record and
 /// locating each leaf's, then [`Medium::from_sources`] decodes the records
 /// in parallel, each into a per-thread buffer, checks them and copies them
-/// into the medium's blocks: no [`Grid`] in between. The grids are the ones
+/// into the medium's blocks: no [`crate::grid::Grid`] in between. The grids are the ones
 /// [`render_grids`] would choose and the medium equals `Medium::new` of
 /// those grids (read by [`read_vdb`]), field for field. The other grids'
 /// records are checked, not kept (module docs), so this path refuses
@@ -177,6 +177,7 @@ fn render_medium_named(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grid::Grid;
     use crate::vdb::read::read_vdb_bytes;
     use glam::IVec3;
 

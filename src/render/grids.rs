@@ -62,6 +62,10 @@ pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
     Ok(())
 }
 
+/// The density and emission grids [`choose`] takes from a file; either may
+/// be absent, not both.
+pub type ChosenGrids = (Option<Grid<f32>>, Option<Grid<[f32; 3]>>);
+
 /// The grids a renderer needs: from `listing` (every grid of the file, in
 /// file order) and the file's decoded `float_grids` and `vec3_grids` (each
 /// in file order), the first float `density` and the first `emission`
@@ -70,7 +74,7 @@ pub fn choose(
     listing: &[Listed<'_>],
     float_grids: Vec<Grid<f32>>,
     vec3_grids: Vec<Grid<[f32; 3]>>,
-) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
+) -> Result<ChosenGrids, RenderGridsError> {
     check_types(listing)?;
     let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
     let mut density = None;

@@ -357,8 +357,7 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
         // Syntax errors are reported by the parser proper, with its message.
         Err(_) => return Ok(()),
     };
-    let mut reference = Scene::default();
-    reference.curtains = vec![Curtain::default()];
+    let reference = Scene { curtains: vec![Curtain::default()], ..Scene::default() };
     let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
     let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
     shapes_table(&user, &reference, None, &mut v);
