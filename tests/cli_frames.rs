@@ -56,8 +56,7 @@ fn bake(scene: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Outpu
         c.env_remove(v);
     }
     c.envs(env.iter().copied());
-    let o = c.output().expect("aurora runs");
-    o
+    c.output().expect("aurora runs")
 }
 
 fn ok(o: &Output) {
