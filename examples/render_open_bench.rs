@@ -2,7 +2,7 @@
 //! (the command prints them to 10 ms): *open* (map the file, validate every
 //! record, locate the leaves: `RenderMedium::open_seconds`) and *build*
 //! (decode the chosen grids' records into the medium: `build_seconds`), as
-//! `aurora::vdb::read::read_render_medium` reports them, the wall time of
+//! `aurora::vdb_medium::read_render_medium` reports them, the wall time of
 //! the whole call, and the CPU time of the calling thread over the call
 //! (`CLOCK_THREAD_CPUTIME_ID`): the open phase runs on it, the build's
 //! parallel loops on rayon's workers, so on a loaded machine it tracks the
@@ -65,7 +65,7 @@ fn main() {
     for _ in 0..runs {
         let c = thread_cpu();
         let t = Instant::now();
-        let m = aurora::vdb::read::read_render_medium(std::path::Path::new(path), 1.0, 1.0)
+        let m = aurora::vdb_medium::read_render_medium(std::path::Path::new(path), 1.0, 1.0)
             .expect("the file renders")
             .expect("the records path applies to this file");
         let wall = t.elapsed().as_secs_f64();

@@ -66,7 +66,7 @@ fn bake_timed(s: &Scene) -> (Bake, f64, f64) {
 
 fn render(s: &Scene, b: &Bake) -> render::Image {
     let settings = RenderSettings::from_scene(s);
-    let vol = Volume { density: Some(&b.density), emission: Some(&b.emission), ..Default::default() };
+    let vol = Volume { density: Some(&b.density), emission: Some(&b.emission) };
     render::render(&settings, &vol, &NoProgress).unwrap_or_else(|e| {
         eprintln!("render failed: {e}");
         std::process::exit(1);

@@ -41,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let pool = pool.build()?;
     let file = aurora::vdb::read::read_vdb_for_render(&vdb)?;
-    let (d, e) = aurora::vdb::read::render_grids(file)?;
+    let (d, e) = aurora::vdb_medium::render_grids(file)?;
     let volume = Volume { density: d.as_ref(), emission: e.as_ref() };
     let prepared = pool.install(|| Prepared::new(&settings, &volume))?;
     println!(

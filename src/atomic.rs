@@ -182,7 +182,7 @@ pub fn sweep_stale(path: &Path) -> Result<usize, AtomicError> {
         let p = entry.path();
         if entry_name.starts_with(&fresh) {
             let old = std::fs::symlink_metadata(&p).ok().and_then(|m| m.modified().ok()).and_then(|t| t.elapsed().ok());
-            if !old.is_some_and(|age| age > FRESH_GRACE) {
+            if old.is_none_or(|age| age <= FRESH_GRACE) {
                 continue;
             }
         } else if !entry_name.starts_with(&prefix) {

@@ -48,7 +48,7 @@ pub struct Fluid {
 /// [`bilinear`] on a grid periodic in x with period `w` samples (sample i at
 /// i + ox, sample w at the same place as sample 0); clamped in y.
 #[inline]
-fn bilinear_wrap_x(f: &[f64], stride: usize, w: usize, h: usize, ox: f64, oy: f64, x: f64, y: f64) -> f64 {
+fn bilinear_wrap_x(f: &[f64], stride: usize, w: usize, h: usize, [ox, oy]: [f64; 2], x: f64, y: f64) -> f64 {
     let gx = (x - ox).rem_euclid(w as f64);
     let gy = (y - oy).clamp(0.0, (h - 1) as f64);
     let i0 = (gx as usize).min(w - 1);
@@ -91,7 +91,7 @@ impl Fluid {
     #[inline]
     pub fn density_at(&self, x: f64, y: f64) -> f64 {
         if self.periodic_x {
-            bilinear_wrap_x(&self.density, self.nx, self.nx, self.ny, 0.5, 0.5, x, y)
+            bilinear_wrap_x(&self.density, self.nx, self.nx, self.ny, [0.5, 0.5], x, y)
         } else {
             bilinear(&self.density, self.nx, self.ny, 0.5, 0.5, x, y)
         }
@@ -102,8 +102,8 @@ impl Fluid {
     pub fn velocity(&self, x: f64, y: f64) -> (f64, f64) {
         if self.periodic_x {
             return (
-                bilinear_wrap_x(&self.vx, self.nx + 1, self.nx, self.ny, 0.0, 0.5, x, y),
-                bilinear_wrap_x(&self.vy, self.nx, self.nx, self.ny + 1, 0.5, 0.0, x, y),
+                bilinear_wrap_x(&self.vx, self.nx + 1, self.nx, self.ny, [0.0, 0.5], x, y),
+                bilinear_wrap_x(&self.vy, self.nx, self.nx, self.ny + 1, [0.5, 0.0], x, y),
             );
         }
         (bilinear(&self.vx, self.nx + 1, self.ny, 0.0, 0.5, x, y), bilinear(&self.vy, self.nx, self.ny + 1, 0.5, 0.0, x, y))
@@ -299,6 +299,13 @@ pub enum FootprintError {
     Png { path: String, message: String },
     #[error(transparent)]
     Output(Box<crate::atomic::AtomicError>),
+}
+
+impl FootprintError {
+    /// True when the user's choice of output is at fault (exit status 2).
+    pub fn is_input(&self) -> bool {
+        matches!(self, FootprintError::Output(a) if a.is_input())
+    }
 }
 
 impl Footprint {

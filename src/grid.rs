@@ -139,9 +139,9 @@ impl<T: VoxelValue> Leaf<T> {
     /// here, a mask word at a time; returns how many.
     fn switch_on(&mut self, mask: &[u64; LEAF_MASK_WORDS], bg: T) -> u64 {
         let mut added = 0u64;
-        for w in 0..LEAF_MASK_WORDS {
-            let mut new = mask[w] & !self.mask[w];
-            self.mask[w] |= new;
+        for (w, (&want, have)) in mask.iter().zip(self.mask.iter_mut()).enumerate() {
+            let mut new = want & !*have;
+            *have |= new;
             while new != 0 {
                 let b = new.trailing_zeros() as usize;
                 self.values[w * 64 + b] = bg;
@@ -247,9 +247,8 @@ pub fn dilate_mask(m: &[u64; LEAF_MASK_WORDS]) -> [[u64; LEAF_MASK_WORDS]; 27] {
     // x: [dx + 1][dy + 1][dz + 1][x].
     let mut out = [[0u64; LEAF_MASK_WORDS]; 27];
     let last = LEAF_MASK_WORDS - 1;
-    for dy in 0..3 {
-        for dz in 0..3 {
-            let v = &b[dy][dz];
+    for (dy, row) in b.iter().enumerate() {
+        for (dz, v) in row.iter().enumerate() {
             let (lo, mid, hi) = (dy * 3 + dz, 9 + dy * 3 + dz, 18 + dy * 3 + dz);
             for x in 0..LEAF_MASK_WORDS {
                 let prev = if x > 0 { v[x - 1] } else { 0 };

@@ -41,4 +41,5 @@ pub mod spectrum;
 pub mod starts;
 pub mod usd;
 pub mod vdb;
+pub mod vdb_medium;
 pub mod watch;

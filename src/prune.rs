@@ -30,6 +30,7 @@
 //!   circle's edge): off-screen aurora lights the
 //!   terrain in frame and a lighting artist may re-frame the shot, so a
 //!   block is dropped for being faint, not for being off screen.
+//!
 //! When all the aurora is in frame the bound is a bound on the image's flux
 //! (background aside) up to the reconstruction filter: measured on the
 //! default scene, budget 10^-3 removed 1.26 x 10^-3 of the image's flux,
@@ -286,7 +287,7 @@ mod tests {
         for case in 0..200 {
             let n = 1 + case % 37;
             let c: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(3)).collect();
-            let origins: Vec<[i32; 3]> = (0..n as i32).map(|i| [8 * i, 0, 0]).collect();
+            let origins: Vec<[i32; 3]> = (0..n).map(|i| [8 * i, 0, 0]).collect();
             let budget = rng.random::<f64>() * 0.3;
             let (keep, frac) = select(&c, &origins, budget);
             let total: f64 = c.iter().sum();

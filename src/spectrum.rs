@@ -520,8 +520,8 @@ mod tests {
             let c = cie1931_xyz(l as f64);
             [a[0] + c[0], a[1] + c[1], a[2] + c[2]]
         });
-        for k in 0..3 {
-            assert!((int[k] / 106.86 - 1.0).abs() < 0.005, "integral {k}: {}", int[k]);
+        for (k, v) in int.iter().enumerate() {
+            assert!((v / 106.86 - 1.0).abs() < 0.005, "integral {k}: {v}");
         }
     }
 

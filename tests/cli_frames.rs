@@ -56,8 +56,7 @@ fn bake(scene: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Outpu
         c.env_remove(v);
     }
     c.envs(env.iter().copied());
-    let o = c.output().expect("aurora runs");
-    o
+    c.output().expect("aurora runs")
 }
 
 fn ok(o: &Output) {
@@ -157,7 +156,7 @@ fn motion_off_gives_identical_grids() {
     // grids, voxel by voxel.
     let grids = |f: i64| {
         let file = aurora::vdb::read::read_vdb(&out.join(format!("aurora.{f:04}.vdb"))).unwrap();
-        let (d, e) = aurora::vdb::read::render_grids(file).unwrap();
+        let (d, e) = aurora::vdb_medium::render_grids(file).unwrap();
         let (d, e) = (d.unwrap(), e.unwrap());
         (d.iter_active().collect::<Vec<_>>(), e.iter_active().collect::<Vec<_>>())
     };

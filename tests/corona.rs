@@ -36,22 +36,24 @@ use glam::{DMat3, DVec3};
 /// every side and stand well away from it: few beams (each a separate
 /// streak), nearly undeflected (alpha_D 1 degree), a small fixed kernel.
 fn rayed_scene() -> Scene {
-    let mut s = Scene::default();
-    s.curtains = (0..6)
-        .map(|i| {
-            let phi = i as f64 * 60.0;
-            let (sn, cs) = phi.to_radians().sin_cos();
-            Curtain {
-                center: [50.0 * cs, 50.0 * sn],
-                length: 40.0,
-                width: 20.0,
-                bend_km: 3.0,
-                rotation_deg: phi + 90.0,
-                seed: i + 1,
-                ..Curtain::default()
-            }
-        })
-        .collect();
+    let mut s = Scene {
+        curtains: (0..6)
+            .map(|i| {
+                let phi = i as f64 * 60.0;
+                let (sn, cs) = phi.to_radians().sin_cos();
+                Curtain {
+                    center: [50.0 * cs, 50.0 * sn],
+                    length: 40.0,
+                    width: 20.0,
+                    bend_km: 3.0,
+                    rotation_deg: phi + 90.0,
+                    seed: i + 1,
+                    ..Curtain::default()
+                }
+            })
+            .collect(),
+        ..Scene::default()
+    };
     s.beams.count = 3000;
     s.beams.alpha_d_deg = 1.0;
     s.beams.delta_alpha_deg = 0.5;

@@ -54,7 +54,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
         at("coarse picture (16x9, 1 spp) in ") < at("picture (64x36, 1 spp) in ") && at("picture (64x36, 1 spp) in ") < at("wrote "),
         "{text}"
     );
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    let last = text.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
     assert!(last.contains("edit (first)") && last.contains("1 spp), full render") && last.contains("(2 spp)"), "{last}");
     let first = std::fs::read(&png).unwrap();
 
@@ -62,7 +62,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.render.exposure += 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = w.wait_for("the exposure edit's picture", Duration::from_secs(120), |t| pictures(t) >= 2);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    let last = text.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
     for zero in
         ["trace 0.00 s", "gather 0.00 s", "finish 0.00 s", "coarse render 0.00 s", "render 0.00 s (build 0.00 s, pixels 0.00 s, 2 spp)"]
     {
@@ -75,7 +75,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.volume.emission_scale *= 2.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = w.wait_for("the render edit's picture", Duration::from_secs(120), |t| pictures(t) >= 3);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    let last = text.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
     assert!(
         last.contains("edit (render)") && last.contains("trace 0.00 s") && last.contains("gather 0.00 s") && last.contains("full render"),
         "{last}"
@@ -102,7 +102,7 @@ fn watch_follows_good_edits_and_survives_a_bad_one() {
     scene.render.exposure -= 1.0;
     std::fs::write(&scene_path, scene.to_toml()).unwrap();
     let text = w.wait_for("the fix's picture", Duration::from_secs(120), |t| pictures(t) >= 4);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    let last = text.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
     assert!(last.contains("edit (exposure)"), "{last}");
     let third = std::fs::read(&png).unwrap();
     assert_ne!(third, second);

@@ -246,7 +246,7 @@ fn an_empty_save_is_an_error(name: &str, watch: Watch) {
     s.scene.render.exposure += 1.0;
     save(&s.path, &s.scene.to_toml(), Style::Chunks, 2);
     let text = s.child.wait_for("the good save's picture", EACH, |t| pictures(t) >= 2);
-    let last = text.lines().filter(|l| l.starts_with("wrote ")).next_back().unwrap();
+    let last = text.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
     assert!(last.contains("edit (exposure)"), "{text}");
     assert_eq!(pictures(&text), 2, "{text}");
     assert_eq!(acted(&text).len(), 4, "{text}");

@@ -380,6 +380,9 @@ pub fn finish(
     finish_keeping(plan, emission, g, times, t_all, progress).map(|(b, _)| b)
 }
 
+/// The leaves pruning dropped, in leaf order ([`finish_keeping`]).
+pub type DroppedLeaves = Vec<Leaf<[f32; 3]>>;
+
 /// [`finish`], also returning the leaves pruning dropped (leaf order; none
 /// when `grid.prune` is 0). Without the Cycles shell the bake's emission
 /// and these leaves are the gathered grid, so a caller that refinishes
@@ -392,7 +395,7 @@ pub fn finish_keeping(
     mut times: StageTimes,
     t_all: Instant,
     progress: &dyn Progress,
-) -> Result<(Bake, Vec<Leaf<[f32; 3]>>), BakeError> {
+) -> Result<(Bake, DroppedLeaves), BakeError> {
     let Gathered { photons, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));

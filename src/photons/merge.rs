@@ -106,8 +106,8 @@ fn merge_run_list(photons: &[Photon], radius: &impl Fn(DVec3) -> f64, len_r: f64
                 let d = chord / len;
                 let mut sum = [0.0f64; 3];
                 for q in &photons[i..=j + 1] {
-                    for k in 0..3 {
-                        sum[k] += q.power[k] as f64;
+                    for (s, &p) in sum.iter_mut().zip(&q.power) {
+                        *s += p as f64;
                     }
                 }
                 let mut acc = [0.0f64; 3];
@@ -133,8 +133,8 @@ fn merge_run_list(photons: &[Photon], radius: &impl Fn(DVec3) -> f64, len_r: f64
         } else {
             let mut power = [0.0f32; 3];
             for q in &photons[i..=j] {
-                for k in 0..3 {
-                    power[k] += q.power[k];
+                for (s, &p) in power.iter_mut().zip(&q.power) {
+                    *s += p;
                 }
             }
             out.push(Photon::segment(first.position, photons[j].end, power));

@@ -7,7 +7,7 @@
 //!
 //! The choice is made over a plain listing of the file's grids ([`Listed`])
 //! and the decoded grids, so the renderer knows nothing of file formats:
-//! `crate::vdb::read::render_grids` lists a VDB file and calls [`choose`].
+//! `crate::vdb_medium::render_grids` lists a VDB file and calls [`choose`].
 
 use crate::grid::{Grid, Leaf};
 
@@ -40,6 +40,13 @@ pub enum RenderGridsError {
     WrongType { name: String, type_name: String, expected: &'static str },
 }
 
+impl RenderGridsError {
+    /// Always the user's input: the file given to render (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Refuses a grid the renderer would use but cannot (a vec3 or bool
 /// `density`, a bool `emission`): the type check of [`choose`], on the
 /// listing alone.
@@ -55,6 +62,10 @@ pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
     Ok(())
 }
 
+/// The density and emission grids [`choose`] takes from a file; either may
+/// be absent, not both.
+pub type ChosenGrids = (Option<Grid<f32>>, Option<Grid<[f32; 3]>>);
+
 /// The grids a renderer needs: from `listing` (every grid of the file, in
 /// file order) and the file's decoded `float_grids` and `vec3_grids` (each
 /// in file order), the first float `density` and the first `emission`
@@ -63,7 +74,7 @@ pub fn choose(
     listing: &[Listed<'_>],
     float_grids: Vec<Grid<f32>>,
     vec3_grids: Vec<Grid<[f32; 3]>>,
-) -> Result<(Option<Grid<f32>>, Option<Grid<[f32; 3]>>), RenderGridsError> {
+) -> Result<ChosenGrids, RenderGridsError> {
     check_types(listing)?;
     let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
     let mut density = None;

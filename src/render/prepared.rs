@@ -34,7 +34,7 @@ impl Prepared {
     }
 
     /// [`Prepared::new`] with a medium already built (for instance straight
-    /// from a file, `crate::vdb::read::read_render_medium`), its scales set
+    /// from a file, `crate::vdb_medium::read_render_medium`), its scales set
     /// to the settings'. `emission` is the emission grid for the terrain's
     /// emission sampler if the caller has it; without it the sampler is
     /// built from the medium (the same sampler).

@@ -131,7 +131,7 @@ mod tests {
             for (key, k) in keys.as_object().unwrap() {
                 let d = &k["default"];
                 if d.is_number() && key != "seed" && key != "count" || d.is_array() {
-                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table == "", "{table}.{key} has no range");
+                    assert!(k.get("min").is_some() || k.get("rule").is_some() || table.is_empty(), "{table}.{key} has no range");
                 }
             }
         }

@@ -92,6 +92,13 @@ pub enum SceneError {
     Invalid(Vec<RangeError>),
 }
 
+impl SceneError {
+    /// Always the user's input: the scene file or preset named (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// One value outside its allowed range.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RangeError {
@@ -350,8 +357,7 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
         // Syntax errors are reported by the parser proper, with its message.
         Err(_) => return Ok(()),
     };
-    let mut reference = Scene::default();
-    reference.curtains = vec![Curtain::default()];
+    let reference = Scene { curtains: vec![Curtain::default()], ..Scene::default() };
     let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
     let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
     shapes_table(&user, &reference, None, &mut v);

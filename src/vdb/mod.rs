@@ -7,10 +7,13 @@
 //! - [`fileid`]: the content-derived file UUID and its hash (XXH64);
 //! - [`write`](mod@write): grids -> file bytes;
 //! - [`parse`]: bounds-checked parser (validation and native decoding);
-//! - [`read`]: file -> grids (vdb-rs where it is right, our parser elsewhere).
+//! - [`read`]: file -> grids (vdb-rs where it is right, our parser elsewhere);
+//! - [`records`]: a file's located leaf records as a `LeafSource`, decoded on
+//!   demand (the renderer's medium is built from them by `crate::vdb_medium`,
+//!   above this module: `vdb` knows nothing of the renderer).
 //!
 //! Imports point one way: layout, cursor and fileid at the bottom; codec on
-//! them; write and parse on codec; read on parse. The write benchmark's timer
+//! them; write and parse on codec; read and records on parse. The write benchmark's timer
 //! is not here but in `crate::bench::vdb_write`.
 pub mod codec;
 pub mod cursor;
@@ -18,4 +21,5 @@ pub mod fileid;
 pub mod layout;
 pub mod parse;
 pub mod read;
+pub mod records;
 pub mod write;

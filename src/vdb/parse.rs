@@ -16,7 +16,7 @@
 //! - *locating* ([`Decode::Locate`]): the validation walk, keeping each
 //!   leaf's origin, mask and record offset, for a caller that decodes the
 //!   records itself, in parallel, straight where it wants the values (the
-//!   renderer's medium, `super::read::read_render_medium`). The leaf
+//!   renderer's medium, `crate::vdb_medium::read_render_medium`). The leaf
 //!   records' streams are not decompressed here: the caller decodes them,
 //!   or checks them with [`check_located`] (the same verdict as decoding).
 //!

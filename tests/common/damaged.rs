@@ -97,12 +97,11 @@ pub fn four_grids(comp: Compression, half: bool) -> Vec<u8> {
             v.set(p, [-x, 0.0, x]);
         }
     }
-    for p in [IVec3::new(-4097, 5, 9)] {
-        d.set(p, 1.5);
-        t.set(p, 250.0);
-        e.set(p, [0.0, 2.0, 1.0]);
-        v.set(p, [1.0, -1.0, 0.5]);
-    }
+    let p = IVec3::new(-4097, 5, 9);
+    d.set(p, 1.5);
+    t.set(p, 250.0);
+    e.set(p, [0.0, 2.0, 1.0]);
+    v.set(p, [1.0, -1.0, 0.5]);
     let opts =
         WriteOptions { compression: comp, half: if half { vec!["emission".into(), "velocity".into()] } else { vec![] }, metadata: vec![] };
     write_vdb_bytes(&[GridRef::Float(&d), GridRef::Float(&t), GridRef::Vec3(&e), GridRef::Vec3(&v)], &opts).unwrap()
@@ -255,7 +254,7 @@ pub fn body_cuts(full: &[u8]) -> Vec<usize> {
     let grids = grids_of(full);
     let g = grids.last().expect("a grid");
     assert_eq!(g.end_pos, full.len());
-    (g.grid_pos..full.len()).filter(|&c| c < g.grid_pos + 2048 || c + 64 >= g.block_pos || (c - g.grid_pos) % 7 == 0).collect()
+    (g.grid_pos..full.len()).filter(|&c| c < g.grid_pos + 2048 || c + 64 >= g.block_pos || (c - g.grid_pos).is_multiple_of(7)).collect()
 }
 
 /// `full` truncated at `cut` inside its last grid's body, with the grid's

@@ -1,7 +1,7 @@
 //! What the renderer accepts from a grid, checked as Cycles would sample
 //! it: a finite voxel size, a zero background (a non-zero one fills all of
-//! space, which no renderer samples the same way), active values finite and
-//! >= 0 (inactive voxels read as 0 whatever they hold), and a largest value
+//! space, which no renderer samples the same way), active values finite
+//! and >= 0 (inactive voxels read as 0 whatever they hold), and a largest value
 //! that times its volume scale stays below [`MAX_SCALED_VALUE`], so no
 //! finite input reaches an infinite pixel.
 //!
