@@ -14,7 +14,7 @@
 //!   step), plus, for Fang's depositions, one per [`ABOVE_START_SPAN_KM`] of
 //!   the column above the beam's start (what the spectrum leaves above the
 //!   start, laid along the field line up to at most the atmosphere table's
-//!   top, [`crate::beams::walk::above_start_top`]); `beams.count` beams,
+//!   top, [`crate::beams::walk::above_start_column_top`]); `beams.count` beams,
 //!   [`Photon`] each; held three times at the peak (the per-beam vectors
 //!   while they are concatenated, the concatenation, and the kd-tree's copy
 //!   of the positions with indices).
@@ -48,7 +48,7 @@
 //! [`KernelRadius::max_reach_km`], the gather's.
 
 use crate::atmosphere::Atmosphere;
-use crate::beams::walk::{above_start_top, ABOVE_START_SPAN_KM};
+use crate::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM};
 use crate::deposit::Photon;
 use crate::fang::SpectrumDeposition;
 use crate::memory::{gib, MemoryLimit};
@@ -110,7 +110,7 @@ impl TooLarge {
 /// The highest altitude a deposit of `curtain` can lie at, km: the beams'
 /// highest start, or above it for Fang's depositions, which lay what the
 /// spectrum leaves above a beam's start along the field line above it up
-/// to [`crate::beams::walk::above_start_top`]: for `expected`, that altitude for
+/// to [`crate::beams::walk::above_start_column_top`]: for `expected`, that altitude for
 /// the curtain's own spectrum (the function the trace calls, so the same
 /// altitude: 412 km for the default curtains); for `sampled`, where each
 /// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS
@@ -123,7 +123,7 @@ pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
         Deposition::Sampled => start_top.max(atm.top_km()),
         Deposition::Expected => {
             let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
-            start_top.max(above_start_top(&atm, &|m| g.fraction_above(m), g.total()))
+            above_start_column_top(&atm, &|m| g.fraction_above(m), g.total(), start_top)
         }
     }
 }

@@ -441,12 +441,21 @@ pub fn simulate(curtain: &Curtain, params: &FootprintParams, seed: u64) -> Footp
 ///
 /// Every term is a smooth function of t and the fluid's update is continuous
 /// in its initial state, so consecutive frames differ by little.
+///
+/// With `params.uniform` (for validation) the density is 1 in every cell,
+/// with no fluid and no bend; the drift still applies.
 pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams, seed: u64, t: f64) -> Footprint {
     let [nx, ny] = params.resolution;
+    let tau = std::f64::consts::TAU;
+    let rot = curtain.rotation_deg.to_radians();
+    let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
+    let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
+    if params.uniform {
+        return Footprint { nx, ny, data: vec![1.0; nx * ny], center, rotation_rad: rot, length: curtain.length, width: curtain.width };
+    }
     let mut fluid = Fluid::new(nx, ny);
     let mut r = rng::rng(&[seed, curtain.seed, rng::tag::FOOTPRINT_VELOCITY]);
     use rand::Rng;
-    let tau = std::f64::consts::TAU;
     let du_km = curtain.length / nx as f64;
     // Travel of a phase pattern at speed c km/s: k (x - c t / du).
     let shift = |speed_kms: f64| speed_kms * t / du_km;
@@ -525,10 +534,7 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
             *d /= peak;
         }
     }
-    // Drift across the axis (the curtain frame's +v), bounded.
-    let rot = curtain.rotation_deg.to_radians();
-    let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
-    let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
+    // Drift across the axis (the curtain frame's +v), bounded: `center` above.
     Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width }
 }
 
@@ -705,6 +711,22 @@ mod tests {
         // A different curtain seed gives a different footprint.
         let c2 = Curtain { seed: 9, ..c };
         assert_ne!(simulate(&c2, &p, 42).data, a.data);
+    }
+
+    #[test]
+    fn uniform_footprint_is_one_everywhere_and_still_drifts() {
+        let c = Curtain { bend_km: 8.0, ..Curtain::default() };
+        let p = FootprintParams { uniform: true, ..small_params() };
+        let f = simulate(&c, &p, 5);
+        assert_eq!((f.nx, f.ny), (128, 48));
+        assert!(f.data.iter().all(|&d| d == 1.0));
+        assert!((f.integral_above(p.threshold) - f.length * f.width).abs() < 1e-9 * f.length * f.width);
+        // The drift moves the box as it moves the simulated footprint.
+        let anim = AnimationParams { drift_km: 5.0, drift_period_s: 40.0, ..AnimationParams::default() };
+        let (a, b) =
+            (simulate_at(&c, &p, &anim, 5, 10.0), simulate_at(&c, &FootprintParams { uniform: false, ..p.clone() }, &anim, 5, 10.0));
+        assert_eq!(a.center, b.center);
+        assert_ne!(a.center, f.center);
     }
 
     #[test]

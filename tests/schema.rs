@@ -93,6 +93,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("footprint", "density_waves", "", "sine periods of the initial density modulation along the band"),
     ("footprint", "bend_wavelength", "curtain lengths", "wavelength of the noise curve that bends the band"),
     ("footprint", "threshold", "", "footprint density (of a peak of 1) below which no beam starts"),
+    ("footprint", "uniform", "", "for validation only: density 1 over the whole footprint box (no fluid, no band, no bend), so every beam carries the curtain's `energy_flux`; `tests/python/test_glow.py` compares such a curtain with NCAR GLOW"),
     ("beams", "count", "", "beams over all curtains; with `target_noise`, the most it may use"),
     ("beams", "target_noise", "", "relative RMS noise of the emission grid to aim for (0 = off: use `count`): a pilot of 2 x 500 and 2 x 125 beams measures the scene's noise and sets the beam count from the law `noise^2 = a/N + b/N^1.5` fitted to them, at most `count`; `bake.json` `stats.noise` says what it measured and chose"),
     ("beams", "top_km", "km", "altitude where beams start"),

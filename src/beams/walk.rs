@@ -281,17 +281,26 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
 /// What the spectrum deposits above the start altitude (soft electrons,
 /// high up), `done` the fraction above the start's column: along the field
 /// line above the start, in spans of [`ABOVE_START_SPAN_KM`] altitude, up
-/// to where at most [`ABOVE_START_TOL`] of the total lies higher (or the
-/// atmosphere's top); that rest is reported as `above_top_kev_s`.
+/// to `z_up`, the higher of [`above_start_top`] (where at most
+/// [`ABOVE_START_TOL`] of the total lies higher) and one span above the
+/// start (capped at the atmosphere's top). What lies above `z_up` is laid
+/// in the top span: the tail above 250 km, which lights the red tops, keeps
+/// its whole column (the cut-off share used to be dropped: 40 % of a 3 keV
+/// Maxwellian's ionization above 250 km, all of a 10 keV one's), at the
+/// price of its top 0.2 % sitting a few scale heights low, where the grid
+/// already reaches. `above_top_kev_s` is zero, except for a beam starting
+/// at the atmosphere's top, with no field line above it in the table.
 fn deposit_above_start(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, frac: &impl Fn(f64) -> f64, total: f64, done: f64) {
     let pw = start.power_kev_s;
     let p = start.position;
-    let z_up = above_start_top(ctx.atmosphere, frac, total);
-    out.above_top_kev_s = pw * frac(ctx.atmosphere.column_mass(z_up)).min(done);
+    let z_up = above_start_column_top(ctx.atmosphere, frac, total, p.z);
+    out.above_top_kev_s = 0.0;
     if z_up > p.z && done > 0.0 {
         let n = ((z_up - p.z) / ABOVE_START_SPAN_KM).ceil().max(1.0) as usize;
         let along = |z: f64| p + ctx.field.b * ((z - p.z) / ctx.field.b.z);
-        let mut f_hi = out.above_top_kev_s / pw;
+        // The top span starts from nothing deposited above it: it takes
+        // everything above its bottom.
+        let mut f_hi = 0.0;
         for k in (0..n).rev() {
             let (z_lo, z_hi) = (p.z + (z_up - p.z) * k as f64 / n as f64, p.z + (z_up - p.z) * (k + 1) as f64 / n as f64);
             let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
@@ -305,9 +314,18 @@ fn deposit_above_start(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace
     }
 }
 
-/// A Fang beam deposits what its spectrum leaves above its start along the
-/// field line above it, up to the altitude where at most this share of the
-/// spectrum's total deposition lies higher ([`above_start_top`]).
+/// The top of the column above a beam starting at `z_start` km:
+/// [`above_start_top`], and at least one [`ABOVE_START_SPAN_KM`] above the
+/// start (a hard spectrum's share above the start, under
+/// [`ABOVE_START_TOL`], gets one span), within the atmosphere's table.
+pub fn above_start_column_top(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f64, z_start: f64) -> f64 {
+    above_start_top(atm, frac, total).max((z_start + ABOVE_START_SPAN_KM).min(atm.top_km()))
+}
+
+/// A Fang beam lays what its spectrum leaves above its start along the
+/// field line above it, spread up to the altitude where at most this share
+/// of the spectrum's total deposition lies higher ([`above_start_top`]);
+/// that share goes into the top span.
 pub const ABOVE_START_TOL: f64 = 2e-3;
 
 /// Altitude span of each segment of that deposit, km: the deposition
@@ -537,19 +555,23 @@ mod tests {
             let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[7]));
             assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
             let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
-            // Above the start it deposits up to z_up, where at most
-            // ABOVE_START_TOL of the total lies higher: that rest is
-            // reported. A finished beam deposits exactly G(inf) - G(m(z_up)):
-            // sums of telescoping differences, rounding only.
-            let z_up = above_start_top(&atm, &|m| g.fraction_above(m), g.total());
-            let above = g.fraction_above(atm.column_mass(z_up.max(260.0)));
-            assert!(z_up <= atm.top_km() && above <= ABOVE_START_TOL * g.total(), "{e0}: {z_up} km, {above}");
-            assert!((dep - (g.total() - above)).abs() < 1e-12, "{e0}: {dep} vs {}", g.total() - above);
-            assert!((t.above_top_kev_s - above).abs() < 1e-15 && t.undeposited_kev_s == 0.0);
-            // What lies above the start is on the field line above it.
+            // Above the start it lays its share up to z_up (where at most
+            // ABOVE_START_TOL of the total lies higher, at least one span
+            // above the start), the rest above z_up in the top span: a
+            // finished beam deposits exactly G(inf) (sums of telescoping
+            // differences, rounding only) and reports nothing above.
+            let z_up = above_start_column_top(&atm, &|m| g.fraction_above(m), g.total(), 260.0);
+            let above = g.fraction_above(atm.column_mass(z_up));
+            assert!(z_up <= atm.top_km() && z_up >= 270.0 && above <= ABOVE_START_TOL * g.total().max(1.0), "{e0}: {z_up} km, {above}");
+            assert!((dep - g.total()).abs() < 1e-12, "{e0}: {dep} vs {}", g.total());
+            assert!(t.above_top_kev_s == 0.0 && t.undeposited_kev_s == 0.0);
+            // What lies above the start is on the field line above it, and
+            // the top span holds what lies above its bottom.
             let up: f64 = t.deposits.iter().filter(|d| d.z_end >= 260.0 - 1e-9).map(|d| d.power_kev_s).sum();
-            let want = g.fraction_above(atm.column_mass(260.0)) - above;
+            let want = g.fraction_above(atm.column_mass(260.0));
             assert!((up - want).abs() < 1e-12, "{e0}: above the start {up} vs {want}");
+            let top = t.deposits.iter().map(|d| d.z_start.max(d.z_end)).fold(0.0, f64::max);
+            assert!((top - z_up).abs() < 1e-6, "{e0}: highest deposit {top} km, column top {z_up} km");
             assert!((dep + t.backscatter_kev_s + t.above_top_kev_s - 1.0).abs() < 1e-12);
             assert!(t.deposits.iter().all(|d| d.power_kev_s > 0.0));
         }

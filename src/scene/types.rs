@@ -60,6 +60,11 @@ pub struct FootprintParams {
     pub bend_wavelength: f64,
     /// Footprint densities below this (of a peak of 1) emit no beams.
     pub threshold: f64,
+    /// For validation: a footprint of density 1 over the whole box (no
+    /// fluid, no band, no bend), so every beam carries the curtain's
+    /// `energy_flux` and line yields that depend on the local flux can be
+    /// compared with a one-dimensional model (NCAR GLOW) at a known flux.
+    pub uniform: bool,
 }
 
 /// Motion in time (`crate::animation`): closed form in t, so any frame costs
@@ -462,6 +467,7 @@ impl Default for FootprintParams {
             density_waves: 9.0,
             bend_wavelength: 0.6,
             threshold: 0.03,
+            uniform: false,
         }
     }
 }
