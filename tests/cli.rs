@@ -9,23 +9,9 @@ use common::{aurora as run, stderr};
 use std::path::PathBuf;
 
 /// A scene small enough to bake in about a second.
-const SMALL: &str = r#"
-seed = 7
-[[curtain]]
-center = [0.0, 0.0]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 400
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-[camera]
+const SMALL: &str = concat!(
+    small_bake_toml!(),
+    r#"[camera]
 position = [0.0, -120.0, 20.0]
 look_at = [0.0, 0.0, 120.0]
 fov_deg = 60.0
@@ -35,7 +21,8 @@ height = 32
 spp = 2
 [terrain]
 kind = "plane"
-"#;
+"#
+);
 
 fn scratch(name: &str) -> PathBuf {
     common::scratch("tmp/cli", name)

@@ -13,27 +13,14 @@ use std::process::{Command, Output};
 
 /// A small scene (about a second a frame) whose motion is fast enough that
 /// consecutive frames differ at its 1 km voxels.
-const SMALL: &str = r#"
-seed = 7
-[[curtain]]
-center = [0.0, 0.0]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 400
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-[animation]
+const SMALL: &str = concat!(
+    small_bake_toml!(),
+    r#"[animation]
 fps = 24.0
 ray_speed_kms = 20.0
 pulsation = 0.5
-"#;
+"#
+);
 
 const STILL: &str = r#"
 fold_speed_kms = 0.0
@@ -50,12 +37,8 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn bake(scene: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
-    let mut c = Command::new(BIN);
-    c.arg("bake").arg(scene).arg("--out").arg(out).arg("-q").args(extra);
-    for v in ["SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_STEP", "JOB_COMPLETION_INDEX"] {
-        c.env_remove(v);
-    }
-    c.envs(env.iter().copied());
+    let mut c = common::small::bake_command(scene, out);
+    c.arg("-q").args(extra).envs(env.iter().copied());
     c.output().expect("aurora runs")
 }
 

@@ -13,32 +13,19 @@
 
 mod common;
 
-use common::{file_names, stderr, AURORA_BIN as BIN};
+use common::{file_names, stderr};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant, SystemTime};
 
 /// A small scene: about half a second a frame.
-const SMALL: &str = r#"
-seed = 7
-[[curtain]]
-center = [0.0, 0.0]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 400
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-[animation]
+const SMALL: &str = concat!(
+    small_bake_toml!(),
+    r#"[animation]
 fps = 24.0
 ray_speed_kms = 20.0
-"#;
+"#
+);
 
 /// Generous: every run here takes seconds.
 const DEADLINE: Duration = Duration::from_secs(300);
@@ -48,11 +35,8 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn command(scene: &Path, out: &Path, extra: &[&str]) -> Command {
-    let mut c = Command::new(BIN);
-    c.arg("bake").arg(scene).arg("--out").arg(out).args(["--threads", "1"]).args(extra);
-    for v in ["SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_STEP", "JOB_COMPLETION_INDEX"] {
-        c.env_remove(v);
-    }
+    let mut c = common::small::bake_command(scene, out);
+    c.args(["--threads", "1"]).args(extra);
     c
 }
 

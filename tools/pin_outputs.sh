@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
-# Pins the bake's and the renderer's output bytes, to show behaviour
-# unchanged across a refactor. Run from the repository root after
-# `cargo build --release`; prints one "sha256  name" line per output:
-#   tools/pin_outputs.sh > benchmarks/pins/before.txt   (before the first move)
-#   tools/pin_outputs.sh > benchmarks/pins/after.txt    (after the last)
-# and the two files must be identical. The default bake with --threads 1 and
-# --threads 2 (must agree: determinism), a 160x90 4 spp PNG render of it at a
-# fixed seed (PNG: byte-deterministic, unlike tiled EXR), and the VDBs of a
-# --frames 1-3 sequence.
+# Pins the bake's and the renderer's output bytes, a second set beside
+# benchmarks/pins/pin.sh (whose hashes benchmarks/pins/current.txt holds),
+# with determinism checked on the way. Run from the repository root after
+# `cargo build --release`; prints one "sha256  name" line per output. Save
+# its output before a change that must not alter behaviour and diff it with
+# the output after: every line must be the same. The default bake with
+# --threads 1 and --threads 2 (must agree: determinism), a 160x90 4 spp PNG
+# render of it at a fixed seed (PNG: byte-deterministic, unlike tiled EXR),
+# and the VDBs of a --frames 1-3 sequence.
 set -euo pipefail
 BIN=${AURORA_BIN:-./target/release/aurora}
 TMP=$(mktemp -d)

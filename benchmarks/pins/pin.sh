@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
-# Behaviour pins for code moves: a pure move keeps every hash. Prints
-# `sha256  name` lines; run it before and after, and diff the two:
-#   benchmarks/pins/pin.sh [AURORA_BIN] > benchmarks/pins/rooms-after.txt
-#   diff benchmarks/pins/rooms-before.txt benchmarks/pins/rooms-after.txt
+# Behaviour pins: SHA-256 hashes of outputs that a change which must not
+# alter behaviour keeps, byte for byte. Prints `sha256  name` lines;
+# benchmarks/pins/current.txt holds them for the tree as committed:
+#   benchmarks/pins/pin.sh [AURORA_BIN] | diff benchmarks/pins/current.txt -
+# A change that alters outputs on purpose (new physics, a new default)
+# rewrites current.txt with it and says why.
 # Pins: the default bake's aurora.vdb and aurora.usda, `aurora scene --schema`,
 # a 160x90 4-spp PNG render of that VDB, and a two-frame sequence's
 # aurora.usda (a reduced scene: 400 beams, 64x16 footprint) with its VDBs.

@@ -14,6 +14,7 @@ use std::process::{Command, Output};
 pub mod child;
 pub mod damaged;
 mod openvdb_tool;
+pub mod small;
 
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
