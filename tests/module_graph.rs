@@ -51,6 +51,8 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "memory",
             "atmosphere",
             "spectrum",
+            "lifetime",
+            "lines",
             "camera",
             "grid",
             "magnetic",
