@@ -7,7 +7,10 @@ use aurora::bake::{self, plan, Bake};
 use aurora::grid::Grid;
 use aurora::lines::{line_lifetimes, LINE_KEYS};
 use aurora::progress::NoProgress;
-use aurora::scene::{Curtain, Scene, VoxelSize};
+use aurora::scene::{Curtain, Scene, TerrainKind, VoxelSize};
+
+mod common;
+mod render_util;
 
 /// One 40 x 16 km curtain in the middle of a 200 km pulsation patch (its
 /// window there is 1 within 2 %), 400 beams, 1 km voxels, nothing pruned.
@@ -150,4 +153,82 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
             _ => assert!((0.75..0.9).contains(&measured), "557.7 nm kept {measured}"),
         }
     }
+}
+
+#[test]
+fn render_grid_is_the_line_grid_integrated_along_each_ray() {
+    // `aurora render --grid line_6300` of a baked VDB, spp 1 (each pixel's
+    // ray through its centre), against the brute-force integral of the
+    // file's line grid (taken as grey) through its density along the same
+    // rays (`render_util::oracle`: Gauss quadrature between every
+    // index-plane crossing, independent of the renderer). The renderer's
+    // exact integration is accurate to about 1e-11 (its own tests); the
+    // f32 image and the grid's f32 values leave some 1e-7: 1e-3 relative,
+    // against a floor of 1e-3 of the brightest pixel, is a generous bound
+    // that a wrong scale, a missed density or a lost leaf all break.
+    let dir = common::scratch("lines", "render_grid");
+    let mut s = patch_scene();
+    s.grid.lines = vec!["6300".into()];
+    s.grid.density_a = 0.5; // thick enough that the density matters
+    s.terrain.kind = TerrainKind::None;
+    s.render.width = 48;
+    s.render.height = 27;
+    s.render.spp = 1;
+    s.camera.position = [100.0, 20.0, 60.0];
+    s.camera.look_at = [100.0, 100.0, 180.0];
+    s.camera.fov_deg = 70.0;
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, s.to_toml()).unwrap();
+    let sc = scene.to_str().unwrap();
+    let out = dir.join("bake");
+    let o = common::aurora(&["bake", "-q", "--out", out.to_str().unwrap(), sc]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let vdb = out.join("aurora.vdb");
+    let exr = dir.join("line.exr");
+    let o = common::aurora(&["render", "-q", "--vdb", vdb.to_str().unwrap(), "--grid", "line_6300", "--out", exr.to_str().unwrap(), sc]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let (w, h, px) = aurora::render::film::read_exr_grey(&exr).unwrap();
+    assert_eq!((w, h), (48, 27));
+    let file = aurora::vdb::read::read_vdb(&vdb).unwrap();
+    let density = file.float("density").unwrap();
+    let line = aurora::render::grids::grey(file.float("line_6300").unwrap());
+    let peak = px.iter().cloned().fold(0.0f32, f32::max) as f64;
+    assert!(peak > 0.0);
+    let (mut lit, mut attenuated) = (0, 0);
+    for y in 0..h {
+        for x in 0..w {
+            let (o, d) = render_util::camera_ray(&s.camera, w, h, x as f64 + 0.5, y as f64 + 0.5);
+            let (tau, l) = render_util::oracle(Some(density), Some(&line), 1.0, 1.0, o, d, f64::INFINITY, 4);
+            let got = px[y * w + x] as f64;
+            assert!(render_util::rel(got, l[0], 1e-3 * peak) < 1e-3, "pixel ({x}, {y}): {got} R vs brute force {} R", l[0]);
+            if l[0] > 0.02 * peak {
+                lit += 1;
+                attenuated += (tau > 0.05) as usize;
+            }
+        }
+    }
+    assert!(lit > 50 && attenuated > 10, "{lit} lit pixels, {attenuated} through density: the test does not test");
+    // A name the file does not hold is the user's error, naming what is there.
+    let o = common::aurora(&["render", "-q", "--vdb", vdb.to_str().unwrap(), "--grid", "line_5577", "--out", exr.to_str().unwrap(), sc]);
+    assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));
+    assert!(common::stderr(&o).contains("line_6300"), "{}", common::stderr(&o));
+    // PNG: greyscale at the stated scale.
+    let png = dir.join("line.png");
+    let o = common::aurora(&[
+        "render",
+        "-q",
+        "--vdb",
+        vdb.to_str().unwrap(),
+        "--grid",
+        "line_6300",
+        "--grid-max",
+        "1e9",
+        "--out",
+        png.to_str().unwrap(),
+        sc,
+    ]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&png).unwrap()));
+    let reader = dec.read_info().unwrap();
+    assert_eq!(reader.info().color_type, png::ColorType::Grayscale);
 }

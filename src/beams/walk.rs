@@ -472,6 +472,8 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: true,
+            lines: None,
+            line_outputs: &[],
         };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
