@@ -167,9 +167,13 @@ mod tests {
 
     #[test]
     fn scale_height_temperature_is_the_ideal_gas_law() {
-        // Pure N2 at the surface with H = 8.435 km: T = 28 amu g H / k = 290 K.
+        // Pure N2 at the surface with H = 8.721 km: T = m g H / k = 288.15 K
+        // (k T / m g for N2 at 15 C is 8.7211 km).
         let c = Composition { n2: 1.0, o2: 0.0, o: 0.0 };
-        let t = scale_height_temperature(&c, 0.0, 8.435);
-        assert!((t - 28.0134 * AMU * G0 * 8435.0 / K_B).abs() < 1e-9 && (t - 290.0).abs() < 1.0, "{t}");
+        let t = scale_height_temperature(&c, 0.0, 8.7211);
+        assert!((t - 288.15).abs() < 0.05, "{t}");
+        // At 300 km gravity is (6371 / 6671)^2 = 0.912 of the surface's.
+        let t300 = scale_height_temperature(&c, 300.0, 8.7211);
+        assert!((t300 / t - (6371.0f64 / 6671.0).powi(2)).abs() < 1e-12);
     }
 }

@@ -323,12 +323,16 @@ pub fn frame_identity(report: &Path) -> Result<BakeIdentity, String> {
 /// range (whichever shard bakes it): the same bytes from every shard, written
 /// to a temporary name and renamed, so it is never half-written and any
 /// shard may rewrite it.
-pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathBuf, OutputError> {
+/// The stage lists `density`, `emission` and the float grids `line_grids`
+/// (the per-line grids of `grid.lines`, by VDB name).
+pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, line_grids: &[String]) -> Result<PathBuf, OutputError> {
     crate::atomic::prepare_folder(out)?;
     let list: Vec<(i64, String)> = frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
     let path = out.join(USDA_NAME);
     let err = |e: std::io::Error| OutputError::Write { path: path.clone(), message: e.to_string() };
-    let text = usd::usda_sequence_checked(&list, &[("density", "float"), ("emission", "float3")], 1000.0, fps).map_err(err)?;
+    let mut fields = vec![("density", "float"), ("emission", "float3")];
+    fields.extend(line_grids.iter().map(|g| (g.as_str(), "float")));
+    let text = usd::usda_sequence_checked(&list, &fields, 1000.0, fps).map_err(err)?;
     crate::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
@@ -383,7 +387,7 @@ mod tests {
             for _ in 0..8 {
                 s.spawn(|| {
                     for _ in 0..40 {
-                        write_sequence_usda(&dir, &frames, 24.0).unwrap();
+                        write_sequence_usda(&dir, &frames, 24.0, &[]).unwrap();
                     }
                 });
             }
