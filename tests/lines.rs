@@ -232,3 +232,38 @@ fn render_grid_is_the_line_grid_integrated_along_each_ray() {
     let reader = dec.read_info().unwrap();
     assert_eq!(reader.info().color_type, png::ColorType::Grayscale);
 }
+
+#[test]
+fn line_grids_are_the_same_for_any_thread_count_and_a_frame_is_the_plain_bake_at_its_time() {
+    // Pulsation on (each line follows its lifetime), two per-line grids:
+    // 1 and 3 threads give the same grids, and frame 3 of a 2-fps
+    // sequence (`aurora bake --frames`) holds what a plain bake at
+    // t = 1 s does, line grids included, listed in the sequence's stage.
+    let mut s = patch_scene();
+    s.beams.count = 150;
+    s.animation.pulsation = 0.6;
+    s.animation.fps = 2.0;
+    s.grid.lines = vec!["6300".into(), "5577".into()];
+    let run = |threads: usize, s: &Scene| {
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| bake::bake(s, &NoProgress).unwrap())
+    };
+    let at_1s = Scene { animation: aurora::scene::AnimationParams { time_s: 1.0, ..s.animation.clone() }, ..s.clone() };
+    let (a, b) = (run(1, &at_1s), run(3, &at_1s));
+    assert_eq!(a.lines.len(), 2);
+    for (x, y) in a.lines.iter().zip(&b.lines) {
+        assert!(x == y, "{} differs between 1 and 3 threads", x.name);
+    }
+    let dir = common::scratch("lines", "sequence");
+    let scene = dir.join("scene.toml");
+    std::fs::write(&scene, s.to_toml()).unwrap();
+    let out = dir.join("seq");
+    let o = common::aurora(&["bake", "-q", "--out", out.to_str().unwrap(), "--frames", "3-3", scene.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let file = aurora::vdb::read::read_vdb(&out.join("aurora.0003.vdb")).unwrap();
+    for g in &a.lines {
+        let read = file.float(&g.name).unwrap_or_else(|| panic!("frame 3 has no {}", g.name));
+        assert!(read == g, "frame 3's {} is not the plain bake's at t = 1 s", g.name);
+    }
+    let stage = std::fs::read_to_string(out.join("aurora.usda")).unwrap();
+    assert!(stage.contains("def OpenVDBAsset \"line_6300\"") && stage.contains("def OpenVDBAsset \"line_5577\""), "{stage}");
+}
