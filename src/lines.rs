@@ -120,8 +120,8 @@ impl LineTable {
         let mut rgb = [0.0; 3];
         for i in 0..N_LINES {
             let n = l.yields[i] * factor(l.tau_s[i]);
-            for k in 0..3 {
-                rgb[k] += n * self.colours[i][k];
+            for (c, line) in rgb.iter_mut().zip(self.colours[i]) {
+                *c += n * line;
             }
         }
         rgb
