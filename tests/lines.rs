@@ -267,3 +267,21 @@ fn line_grids_are_the_same_for_any_thread_count_and_a_frame_is_the_plain_bake_at
     let stage = std::fs::read_to_string(out.join("aurora.usda")).unwrap();
     assert!(stage.contains("def OpenVDBAsset \"line_6300\"") && stage.contains("def OpenVDBAsset \"line_5577\""), "{stage}");
 }
+
+#[test]
+fn bad_line_names_are_refused_naming_the_key_the_value_and_the_names() {
+    let dir = common::scratch("lines", "bad_names");
+    for (lines, colour, want) in [
+        (r#"["630"]"#, "physical", r#"grid.lines = "630" is out of range: must be one of "5577", "6300""#),
+        (r#"["6300", "6300"]"#, "physical", r#"grid.lines = "6300" is out of range: is listed twice"#),
+        (r#"["6300"]"#, "colormap", "needs colour.mode = \"physical\""),
+    ] {
+        let scene = dir.join("scene.toml");
+        std::fs::write(&scene, format!("[grid]\nlines = {lines}\n\n[colour]\nmode = \"{colour}\"\n")).unwrap();
+        let out = dir.join("out");
+        let o = common::aurora(&["bake", "-q", "--out", out.to_str().unwrap(), scene.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "{lines}: {}", common::stderr(&o));
+        assert!(common::stderr(&o).contains(want), "{lines}: {}", common::stderr(&o));
+        assert!(!out.join("aurora.vdb").exists(), "{lines}: a refused scene wrote output");
+    }
+}
