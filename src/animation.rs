@@ -69,14 +69,68 @@ pub fn pulsation(anim: &AnimationParams, seed: u64, x: f64, y: f64) -> f64 {
     let (gx, gy) = (x / anim.pulsation_patch_km, y / anim.pulsation_patch_km);
     let (a, b) = (gx.floor(), gy.floor());
     let (fx, fy) = (gx - a, gy - b);
-    let h = rng::stream_seed(&[seed, rng::tag::PULSATION, a as i64 as u64, b as i64 as u64]);
-    let unit = |bits: u64| (bits >> 11) as f64 / (1u64 << 53) as f64;
-    let [t0, t1] = anim.pulsation_period_s;
-    let period = t0 + (t1 - t0) * unit(h);
-    let phase = std::f64::consts::TAU * unit(rng::splitmix64(h));
+    let (period, phase) = patch_period_phase(anim, seed, a, b);
     let s = 0.5 * (1.0 + (std::f64::consts::TAU * anim.time_s / period + phase).sin());
     let w = ((std::f64::consts::PI * fx).sin() * (std::f64::consts::PI * fy).sin()).powi(2);
     1.0 - anim.pulsation * w * (1.0 - s)
+}
+
+/// A pulsating patch's flux at one place as a wave in time:
+/// `m(t) = mean + amplitude sin(theta)` with `theta = omega t + phi`, the
+/// closed form of [`pulsation`] written as a sine (mean `1 - p w / 2`,
+/// amplitude `p w / 2`): what a line of lifetime tau follows with
+/// [`Wave::at_lifetime`] (`crate::lifetime`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wave {
+    pub mean: f64,
+    pub amplitude: f64,
+    /// Angular frequency, rad/s.
+    pub omega: f64,
+    /// Phase at the frame's time, rad, and its sine and cosine.
+    pub theta: f64,
+    pub sin_theta: f64,
+    pub cos_theta: f64,
+}
+
+impl Wave {
+    /// The modulation a line of upper-state lifetime `tau_s` shows at the
+    /// frame's time: `mean + amplitude g sin(theta - lag)` with `(g, lag)`
+    /// the first-order response ([`crate::lifetime::response`]). At tau = 0
+    /// it is the flux itself. With x = omega tau, `cos(lag) = g` and
+    /// `sin(lag) = x g`, so `g sin(theta - lag) = (sin theta - x cos theta)
+    /// / (1 + x^2)`: no trigonometry per call.
+    #[inline]
+    pub fn at_lifetime(&self, tau_s: f64) -> f64 {
+        let x = self.omega * tau_s;
+        self.mean + self.amplitude * (self.sin_theta - x * self.cos_theta) / (1.0 + x * x)
+    }
+}
+
+/// [`pulsation`] at world (x, y) km as a [`Wave`]; `None` when `pulsation`
+/// is 0 (nothing moves).
+pub fn pulsation_wave(anim: &AnimationParams, seed: u64, x: f64, y: f64) -> Option<Wave> {
+    if anim.pulsation <= 0.0 {
+        return None;
+    }
+    let (gx, gy) = (x / anim.pulsation_patch_km, y / anim.pulsation_patch_km);
+    let (a, b) = (gx.floor(), gy.floor());
+    let (fx, fy) = (gx - a, gy - b);
+    let (period, phase) = patch_period_phase(anim, seed, a, b);
+    let w = ((std::f64::consts::PI * fx).sin() * (std::f64::consts::PI * fy).sin()).powi(2);
+    let omega = std::f64::consts::TAU / period;
+    let half = 0.5 * anim.pulsation * w;
+    let theta = omega * anim.time_s + phase;
+    let (sin_theta, cos_theta) = theta.sin_cos();
+    Some(Wave { mean: 1.0 - half, amplitude: half, omega, theta, sin_theta, cos_theta })
+}
+
+/// Patch (a, b)'s period in `pulsation_period_s` and phase, hashed from the
+/// seed and the patch.
+fn patch_period_phase(anim: &AnimationParams, seed: u64, a: f64, b: f64) -> (f64, f64) {
+    let h = rng::stream_seed(&[seed, rng::tag::PULSATION, a as i64 as u64, b as i64 as u64]);
+    let unit = |bits: u64| (bits >> 11) as f64 / (1u64 << 53) as f64;
+    let [t0, t1] = anim.pulsation_period_s;
+    (t0 + (t1 - t0) * unit(h), std::f64::consts::TAU * unit(rng::splitmix64(h)))
 }
 
 #[cfg(test)]
@@ -112,5 +166,29 @@ mod tests {
         assert!((pulsation(&a, 3, 25.0, 10.0) - 1.0).abs() < 1e-12);
         a.pulsation = 0.0;
         assert_eq!(pulsation(&a, 3, 12.3, -40.1), 1.0);
+    }
+
+    #[test]
+    fn the_wave_is_the_pulsation_and_follows_lifetimes() {
+        let mut a = AnimationParams { pulsation: 0.7, pulsation_period_s: [6.0, 9.0], ..AnimationParams::default() };
+        for k in 0..300 {
+            a.time_s = 0.37 * k as f64;
+            let (x, y) = (3.0 + 0.5 * k as f64, -7.0);
+            let w = pulsation_wave(&a, 5, x, y).unwrap();
+            // Lifetime 0: the flux itself (sin written two ways: rounding).
+            assert!((w.at_lifetime(0.0) - pulsation(&a, 5, x, y)).abs() < 1e-12);
+            // A long lifetime keeps the mean: 1e5 s at a 9 s period keeps
+            // 1.4e-4 of the swing.
+            assert!((w.at_lifetime(1e5) - w.mean).abs() <= 1.5e-4 * w.amplitude + 1e-15);
+            // The closed form without trigonometry is the response law.
+            for tau in [0.9, 30.0] {
+                let (g, lag) = crate::lifetime::response(w.omega, tau);
+                assert!((w.at_lifetime(tau) - (w.mean + w.amplitude * g * (w.theta - lag).sin())).abs() < 1e-12);
+            }
+            let period = std::f64::consts::TAU / w.omega;
+            assert!((6.0..=9.0).contains(&period));
+        }
+        a.pulsation = 0.0;
+        assert!(pulsation_wave(&a, 5, 1.0, 1.0).is_none());
     }
 }

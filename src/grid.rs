@@ -301,6 +301,27 @@ impl<T: VoxelValue> PartialEq for Grid<T> {
     }
 }
 
+impl Grid<[f32; 3]> {
+    /// Component `k` of every voxel as a float grid named `name`, on the
+    /// same transform, active where that component is nonzero (the
+    /// emission's rule), in this grid's leaf order.
+    pub fn component(&self, k: usize, name: impl Into<String>) -> Grid<f32> {
+        let mut g = Grid::new(name, 0.0f32, self.transform);
+        for l in &self.leaves {
+            let mut out = Leaf::new(l.origin, 0.0f32);
+            for n in 0..LEAF_NUM_VALUES {
+                let v = l.values[n][k];
+                if l.is_active(n) && v != 0.0 {
+                    out.values[n] = v;
+                    out.set_active(n, true);
+                }
+            }
+            g.insert_leaf(out);
+        }
+        g
+    }
+}
+
 impl<T: VoxelValue> Grid<T> {
     pub fn new(name: impl Into<String>, background: T, transform: Transform) -> Self {
         Self { name: name.into(), background, transform, leaves: Vec::new(), index: OriginMap::default() }

@@ -25,6 +25,8 @@ pub mod frames;
 pub mod grid;
 pub mod input_file;
 pub mod leaf_source;
+pub mod lifetime;
+pub mod lines;
 pub mod magnetic;
 pub mod memory;
 pub mod outputs;

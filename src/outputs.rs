@@ -148,7 +148,7 @@ impl BakeReport {
 
 /// Grid metadata that identifies the bake inside the VDB.
 pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
-    vec![
+    let mut m = vec![
         ("aurora_units".into(), MetaValue::String("km".into())),
         ("aurora_seed".into(), MetaValue::Int64(scene.seed as i64)),
         ("aurora_scene_hash".into(), MetaValue::String(format!("{:016x}", scene.hash()))),
@@ -156,7 +156,13 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
         ("aurora_density_units".into(), MetaValue::String("extinction per km".into())),
         // The add-on skips its own padding when this is true (blender/volume_import.py).
         ("aurora_cycles_shell".into(), MetaValue::Bool(scene.grid.cycles_shell)),
-    ]
+    ];
+    if !scene.grid.lines.is_empty() {
+        // Only with per-line grids, so the default file is unchanged.
+        let units = "line_NAME grids: volume emission rate in rayleigh per km (10 photons cm^-3 s^-1), no colour noise, not pruned";
+        m.push(("aurora_line_units".into(), MetaValue::String(units.into())));
+    }
+    m
 }
 
 /// The VDB write options the scene asks for.
@@ -178,7 +184,9 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
 
 /// [`write_outputs`] for a caller that holds the folder's lock from [`prepare`].
 pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
-    let usda = usd::usda_text(VDB_NAME, &[("density", "float"), ("emission", "float3")], 1000.0);
+    let mut fields = vec![("density", "float"), ("emission", "float3")];
+    fields.extend(bake.lines.iter().map(|g| (g.name.as_str(), "float")));
+    let usda = usd::usda_text(VDB_NAME, &fields, 1000.0);
     let usda_len = usda.len();
     let files = UnitFiles {
         vdb: out.join(VDB_NAME),
@@ -252,7 +260,9 @@ fn stage_unit(
     let mut unit = Unit::new();
     let t0 = Instant::now();
     let mut vdb_tmp = TempFile::create(&vdb_path)?;
-    let stats = write_vdb_into(&mut vdb_tmp, &[GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)], &options)
+    let mut grids = vec![GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)];
+    grids.extend(bake.lines.iter().map(GridRef::Float));
+    let stats = write_vdb_into(&mut vdb_tmp, &grids, &options)
         .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
     let vdb_seconds = t0.elapsed().as_secs_f64();
     unit.stage(vdb_tmp);
@@ -313,12 +323,16 @@ pub fn frame_identity(report: &Path) -> Result<BakeIdentity, String> {
 /// range (whichever shard bakes it): the same bytes from every shard, written
 /// to a temporary name and renamed, so it is never half-written and any
 /// shard may rewrite it.
-pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64) -> Result<PathBuf, OutputError> {
+/// The stage lists `density`, `emission` and the float grids `line_grids`
+/// (the per-line grids of `grid.lines`, by VDB name).
+pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, line_grids: &[String]) -> Result<PathBuf, OutputError> {
     crate::atomic::prepare_folder(out)?;
     let list: Vec<(i64, String)> = frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
     let path = out.join(USDA_NAME);
     let err = |e: std::io::Error| OutputError::Write { path: path.clone(), message: e.to_string() };
-    let text = usd::usda_sequence_checked(&list, &[("density", "float"), ("emission", "float3")], 1000.0, fps).map_err(err)?;
+    let mut fields = vec![("density", "float"), ("emission", "float3")];
+    fields.extend(line_grids.iter().map(|g| (g.as_str(), "float")));
+    let text = usd::usda_sequence_checked(&list, &fields, 1000.0, fps).map_err(err)?;
     crate::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(path)
 }
@@ -373,7 +387,7 @@ mod tests {
             for _ in 0..8 {
                 s.spawn(|| {
                     for _ in 0..40 {
-                        write_sequence_usda(&dir, &frames, 24.0).unwrap();
+                        write_sequence_usda(&dir, &frames, 24.0, &[]).unwrap();
                     }
                 });
             }

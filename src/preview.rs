@@ -326,6 +326,7 @@ impl Preview {
         let emission = plan::gather_from(plan, &input.every(COARSE_PHOTON_STRIDE), v, nothing);
         // Only the grids are used: no photons for the power sums, no warnings.
         let g = Gathered {
+            lines: Vec::new(),
             photons: Vec::new(),
             beam_stats: Default::default(),
             voxel_km: v,
@@ -450,6 +451,7 @@ impl Preview {
                     let mut warnings = voxel::resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel.0);
                     warnings.extend(c.count.2.iter().cloned());
                     let g = Gathered {
+                        lines: Vec::new(),
                         photons: c.bake.photons.clone(),
                         beam_stats: c.beam_stats.clone(),
                         voxel_km: voxel.0,
@@ -504,6 +506,7 @@ impl Preview {
                     u.gather += t.elapsed().as_secs_f64();
                     (times.beams, times.gather) = (u.trace, u.gather);
                     let g = Gathered {
+                        lines: Vec::new(),
                         photons: traced.photons,
                         beam_stats: traced.stats,
                         voxel_km: voxel.0,

@@ -50,6 +50,8 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "memory",
             "atmosphere",
             "spectrum",
+            "lifetime",
+            "lines",
             "camera",
             "grid",
             "magnetic",

@@ -69,7 +69,15 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
     let emission = plan::gather(&plan, &photons, v, &NoProgress);
     let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
     assert_eq!(photons, whole.photons);
-    let g = plan::Gathered { photons, beam_stats: whole.stats, voxel_km: v, voxel_source: source, warnings: Vec::new(), noise: None };
+    let g = plan::Gathered {
+        photons,
+        lines: Vec::new(),
+        beam_stats: whole.stats,
+        voxel_km: v,
+        voxel_source: source,
+        warnings: Vec::new(),
+        noise: None,
+    };
     let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);
     assert_eq!(got.density, want.density);

@@ -126,6 +126,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("grid", "cycles_shell", "", "a one-voxel shell of active zeros around the aurora, so that Cycles' biased volume mode renders its edges exactly, with or without the add-on (the field is unchanged)"),
     ("grid", "compression", "", "VDB value compression; `blosc-active-mask` is OpenVDB's and Houdini's default (LZ4 with byte shuffle, about 8x faster to write than ZIP, the same size)"),
     ("grid", "prune", "", "error budget of contribution-based pruning: the 8^3 blocks faintest in the camera's image are dropped while their share of the image's light stays within it (0 = keep all); `bake.json` `stats.prune` reports what went"),
+    ("grid", "lines", "", "emission lines written as float grids of their own in the same `.vdb`, `line_NAME`, in rayleigh per km (a ray's integral is the line's brightness in R; 1 R/km = 10 photons cm^-3 s^-1): `5577`, `6300` (630.0 nm alone), `6364`, `4278`, `n2_1p`; empty by default; colour noise applies to `emission` only; every three lines cost one more gather"),
     ("camera", "position", "km", "camera position"),
     ("camera", "look_at", "km", "the point the camera looks at"),
     ("camera", "up", "", "up direction"),
@@ -168,8 +169,12 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
 
 /// Types the default cannot tell: a key whose default is none, or one that
 /// takes a number or a word.
-const TYPES: &[(&str, &str, &str)] =
-    &[("background", "image", "path"), ("terrain", "heightmap", "path"), ("grid", "voxel_size", "number or `\"auto\"`")];
+const TYPES: &[(&str, &str, &str)] = &[
+    ("background", "image", "path"),
+    ("terrain", "heightmap", "path"),
+    ("grid", "voxel_size", "number or `\"auto\"`"),
+    ("grid", "lines", "list of words"),
+];
 
 /// docs/scene.md: a header, then per section a table of key, type,
 /// default, range, unit and description. Deterministic: the order is

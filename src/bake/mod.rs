@@ -40,6 +40,9 @@ pub struct Bake {
     pub emission: Grid<[f32; 3]>,
     /// Extinction per km, on the emission's active voxels.
     pub density: Grid<f32>,
+    /// The per-line grids of `grid.lines`, rayleigh per km
+    /// (`crate::lines`), unpruned; empty by default.
+    pub lines: Vec<Grid<f32>>,
     pub photons: Vec<Photon>,
     pub stats: BakeStats,
 }

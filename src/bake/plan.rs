@@ -48,6 +48,7 @@ use crate::camera::{CameraError, CameraModel};
 use crate::deposit::Photon;
 use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf};
+use crate::lines::{grid_name, line_index, LineTable};
 use crate::magnetic::MagneticField;
 use crate::photons::{self, radius::RadiusField};
 use crate::progress::Progress;
@@ -148,6 +149,30 @@ pub struct BakePlan {
     pub field: MagneticField,
     pub kernel: KernelRadius,
     pub radius: RadiusField,
+    /// The lines one at a time ([`line_table_for`]): with a physical colour
+    /// and a pulsation or `grid.lines`; `None` otherwise (the default bake
+    /// builds none).
+    pub line_table: Option<LineTable>,
+    /// `grid.lines` as indices in `crate::spectrum::LINES`.
+    pub line_outputs: Vec<usize>,
+}
+
+/// The per-line table a scene needs: with `colour.mode = "physical"`, when
+/// something pulses (each line then follows its lifetime) or `grid.lines`
+/// asks for per-line grids; `None` otherwise.
+pub fn line_table_for(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams, atmosphere: &Atmosphere) -> Option<LineTable> {
+    needs_line_table(colour, animation, grid).then(|| LineTable::new(&EmissionModel::new(atmosphere.clone())))
+}
+
+/// Whether [`line_table_for`] builds a table.
+pub fn needs_line_table(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams) -> bool {
+    colour.mode == ColourMode::Physical && (animation.pulsation > 0.0 || !grid.lines.is_empty())
+}
+
+/// `grid.lines` as indices in `crate::spectrum::LINES` (the scene has
+/// checked the names).
+pub fn line_outputs(grid: &GridParams) -> Vec<usize> {
+    grid.lines.iter().filter_map(|k| line_index(k)).collect()
 }
 
 impl BakePlan {
@@ -188,6 +213,11 @@ impl BakePlan {
                 (a, c)
             }
         };
+        // Same atmosphere and colour mode: the same table, if any was built.
+        let line_table = match same_colour.and_then(|p| p.line_table.as_ref()) {
+            Some(t) if needs_line_table(&scene.colour, &scene.animation, &scene.grid) => Some(t.clone()),
+            _ => line_table_for(&scene.colour, &scene.animation, &scene.grid, &atmosphere),
+        };
         let field = MagneticField::new(scene.beams.b_inclination_deg, scene.beams.b_declination_deg);
         let kernel = KernelRadius::of(&scene.photons);
         let radius = radius_field(kernel, &scene.photons, field.b, scene.beams.top_km, scene.seed);
@@ -212,6 +242,8 @@ impl BakePlan {
             field,
             kernel,
             radius,
+            line_table,
+            line_outputs: line_outputs(&scene.grid),
         }
     }
 
@@ -226,6 +258,8 @@ impl BakePlan {
             colour_noise_km: self.colour.noise_km,
             colour_noise_freq: self.colour.noise_freq,
             kernel: self.photons.kernel,
+            lines: self.line_table.as_ref(),
+            line_outputs: if self.line_table.is_some() { &self.line_outputs } else { &[] },
         }
     }
 
@@ -290,10 +324,44 @@ pub fn gather_with(
     photons::gather_grid(photons, grid_transform(voxel_km), radius, cutoff, method, progress)
 }
 
+/// The per-line grids of `grid.lines` (named [`grid_name`], in rayleigh
+/// per km: `crate::lines`): the photons' segments carrying each line's
+/// power (`line_power`, `outputs.len()` values a photon) gathered by
+/// [`gather`] with the plan's kernel on the same transform, three lines a
+/// gather. Empty without outputs.
+pub fn line_grids(plan: &BakePlan, photons: &[Photon], line_power: &[f32], voxel_km: f64, progress: &dyn Progress) -> Vec<Grid<f32>> {
+    let n = plan.line_outputs.len();
+    if n == 0 || plan.line_table.is_none() {
+        return Vec::new();
+    }
+    debug_assert_eq!(line_power.len(), n * photons.len());
+    let mut grids = Vec::with_capacity(n);
+    for first in (0..n).step_by(3) {
+        let take = (n - first).min(3);
+        let lined: Vec<Photon> = photons
+            .par_iter()
+            .enumerate()
+            .map(|(j, p)| {
+                let row = &line_power[j * n + first..j * n + first + take];
+                let mut power = [0.0f32; 3];
+                power[..take].copy_from_slice(row);
+                Photon { power, ..*p }
+            })
+            .collect();
+        let g = gather(plan, &lined, voxel_km, progress);
+        for k in 0..take {
+            grids.push(g.component(k, grid_name(&plan.grid.lines[first + k])));
+        }
+    }
+    grids
+}
+
 /// What [`finish`] needs besides the plan and the emission grid.
 #[derive(Clone, Debug)]
 pub struct Gathered {
     pub photons: Vec<Photon>,
+    /// The per-line grids ([`line_grids`]; empty without `grid.lines`).
+    pub lines: Vec<Grid<f32>>,
     pub beam_stats: BeamStats,
     pub voxel_km: f64,
     pub voxel_source: String,
@@ -320,8 +388,9 @@ pub fn trace_and_gather(
     let mut w = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
     w.append(&mut warnings);
     let emission = gather(plan, &traced.photons, voxel_km, progress);
+    let lines = line_grids(plan, &traced.photons, &traced.line_power, voxel_km, progress);
     times.gather = t.elapsed().as_secs_f64();
-    Ok((emission, Gathered { photons: traced.photons, beam_stats: traced.stats, voxel_km, voxel_source, warnings: w, noise }))
+    Ok((emission, Gathered { photons: traced.photons, lines, beam_stats: traced.stats, voxel_km, voxel_source, warnings: w, noise }))
 }
 
 /// The emission's checks and peaks, the first step of [`finish`]: every
@@ -396,7 +465,7 @@ pub fn finish_keeping(
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<(Bake, DroppedLeaves), BakeError> {
-    let Gathered { photons, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
+    let Gathered { photons, lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
     }
@@ -475,5 +544,5 @@ pub fn finish_keeping(
         prune: prune_stats,
         warnings,
     };
-    Ok((Bake { emission, density, photons, stats }, dropped))
+    Ok((Bake { emission, density, lines, photons, stats }, dropped))
 }

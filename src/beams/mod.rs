@@ -34,6 +34,7 @@ use crate::deposit::Photon;
 use crate::deposit::StepDeposit;
 use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
+use crate::lines::LineTable;
 use crate::magnetic::MagneticField;
 use crate::progress::Progress;
 use crate::rng;
@@ -155,6 +156,12 @@ pub struct TraceParams<'a> {
     pub colour_noise_freq: f64,
     /// `photons.kernel`.
     pub kernel: KernelShape,
+    /// The lines one at a time (physical colour with pulsation or
+    /// `grid.lines`; `None` otherwise): each line follows the pulsation
+    /// through its lifetime, and the lines of `line_outputs` (indices in
+    /// `crate::spectrum::LINES`) leave per-line photon powers.
+    pub lines: Option<&'a LineTable>,
+    pub line_outputs: &'a [usize],
 }
 
 impl<'a> TraceParams<'a> {
@@ -168,6 +175,8 @@ impl<'a> TraceParams<'a> {
             colour_noise_km: scene.colour.noise_km,
             colour_noise_freq: scene.colour.noise_freq,
             kernel: scene.photons.kernel,
+            lines: None,
+            line_outputs: &[],
         }
     }
 }
@@ -223,11 +232,15 @@ pub struct Traced {
     pub stats: BeamStats,
     /// Per curtain (empty vectors unless recorded).
     pub deposits: Vec<Vec<StepDeposit>>,
+    /// Per photon, the powers of `TraceParams::line_outputs` in that order
+    /// (`line_outputs.len()` values a photon; empty without outputs).
+    pub line_power: Vec<f32>,
 }
 
 /// One beam's result, kept until the curtain's beams are concatenated.
 struct BeamOut {
     photons: Vec<Photon>,
+    line_power: Vec<f32>,
     deposits: Vec<StepDeposit>,
     end: EndReason,
     /// keV/s: deposited, backscattered, above the top, undeposited.
@@ -261,6 +274,7 @@ pub fn trace_range(
     let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
     let mut stats = BeamStats::default();
     let mut photons = Vec::new();
+    let mut line_power = Vec::new();
     let mut all_deposits = vec![Vec::new(); params.curtains.len()];
     stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
     let range = range.start.min(count)..range.end.min(count);
@@ -276,13 +290,13 @@ pub fn trace_range(
         let (power_w, traces) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
         // The range's share of the curtain's power (all of it for a whole bake).
         stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
-        tally(&mut stats, ci, traces, &mut photons, &mut all_deposits[ci]);
+        tally(&mut stats, ci, traces, &mut photons, &mut line_power, &mut all_deposits[ci]);
         stats.beams += local.len();
     }
     sum_curtains(&mut stats);
     stats.photons = photons.len();
     progress.finish();
-    Ok(Traced { photons, stats, deposits: all_deposits })
+    Ok(Traced { photons, stats, deposits: all_deposits, line_power })
 }
 
 /// The beams of `range` (bake indices) that belong to the curtain whose `n`
@@ -303,7 +317,14 @@ fn curtain_power_w(curtain: &Curtain, fp: &Footprint, threshold: f64) -> f64 {
 
 /// Adds curtain `ci`'s beams to the stage's counts and power (W), and
 /// appends their photons and deposits in beam order.
-fn tally(stats: &mut BeamStats, ci: usize, traces: Vec<BeamOut>, photons: &mut Vec<Photon>, deposits: &mut Vec<StepDeposit>) {
+fn tally(
+    stats: &mut BeamStats,
+    ci: usize,
+    traces: Vec<BeamOut>,
+    photons: &mut Vec<Photon>,
+    line_power: &mut Vec<f32>,
+    deposits: &mut Vec<StepDeposit>,
+) {
     for b in traces {
         match b.end {
             EndReason::LeftFootprint => stats.ended_left_footprint += 1,
@@ -317,6 +338,7 @@ fn tally(stats: &mut BeamStats, ci: usize, traces: Vec<BeamOut>, photons: &mut V
         cp.above_top_power_w += b.power[2] / KEV_PER_J;
         cp.undeposited_power_w += b.power[3] / KEV_PER_J;
         photons.extend_from_slice(&b.photons);
+        line_power.extend_from_slice(&b.line_power);
         deposits.extend_from_slice(&b.deposits);
     }
 }
@@ -382,6 +404,8 @@ impl Tracer<'_> {
             footprint: fp,
             threshold: p.threshold,
             record_path: false,
+            lines: p.lines,
+            line_outputs: p.line_outputs,
         };
         let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();
         Ok((power_w, traces))
@@ -403,6 +427,7 @@ impl Tracer<'_> {
         BeamOut {
             power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s],
             photons,
+            line_power: t.line_power,
             deposits: if self.record_deposits { t.deposits } else { Vec::new() },
             end: t.end,
         }
@@ -455,11 +480,21 @@ impl<'a> CurtainStarts<'a> {
         let ur = u - self.ray_shift_km;
         let z = b.top_km + b.top_noise_km * rng::noise1(&self.top_noise, ur * b.top_noise_freq);
         let colour_offset_km = p.colour_noise_km * rng::noise1(&self.colour_noise, ur * p.colour_noise_freq);
+        // The deposit follows the flux at once; with the lines at hand each
+        // line follows it through its upper state's lifetime (`wave`).
         let power_kev_s = self.power_kev_s * crate::animation::pulsation(p.animation, p.seed, x, y);
+        let wave = p.lines.and_then(|_| crate::animation::pulsation_wave(p.animation, p.seed, x, y));
         // Drawn in every model, so a beam's path is the same in all.
         let c = self.curtain;
         let e0 = if r.random::<f64>() < c.soft_fraction { c.soft_energy_kev } else { c.char_energy_kev };
-        BeamStart { position: DVec3::new(x, y, z), energy_kev: sample_gamma3(e0, r), power_kev_s, colour_offset_km }
+        BeamStart {
+            position: DVec3::new(x, y, z),
+            energy_kev: sample_gamma3(e0, r),
+            power_kev_s,
+            base_power_kev_s: self.power_kev_s,
+            wave,
+            colour_offset_km,
+        }
     }
 }
 

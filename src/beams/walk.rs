@@ -48,11 +48,13 @@
 //!   deposit is reported ([`CurtainPower`](super::CurtainPower)), so
 //!   nothing is lost silently.
 
+use crate::animation::Wave;
 use crate::atmosphere::Atmosphere;
 use crate::csda::{energy_from_range, range_g_cm2, step_column};
 use crate::deposit::{Photon, StepDeposit};
 use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
+use crate::lines::{LineTable, R_PER_KM_SCALE};
 use crate::magnetic::MagneticField;
 use crate::scene::BeamParams;
 use crate::spectrum::ColourTable;
@@ -90,8 +92,16 @@ pub struct BeamStart {
     /// The beam's electron energy (sampled and CSDA models; unused by the
     /// expected model, which carries the whole spectrum).
     pub energy_kev: f64,
-    /// Electron power of the beam, keV/s.
+    /// Electron power of the beam, keV/s (at the frame's time: with
+    /// pulsation, `base_power_kev_s` times the flux's modulation).
     pub power_kev_s: f64,
+    /// The beam's power without the pulsation, keV/s.
+    pub base_power_kev_s: f64,
+    /// The pulsation at the beam's start as a wave in time, when each line
+    /// follows it through its lifetime (`crate::lines`); `None` when nothing
+    /// pulses or the colour is a colour map (the colour then follows
+    /// `power_kev_s`).
+    pub wave: Option<Wave>,
     /// Colour altitude offset of this beam, km (the report's low-frequency
     /// colour noise; it shifts colour, not intensity).
     pub colour_offset_km: f64,
@@ -101,6 +111,9 @@ pub struct BeamStart {
 #[derive(Clone, Debug, PartialEq)]
 pub struct BeamTrace {
     pub photons: Vec<Photon>,
+    /// Per photon, the powers of `BeamContext::line_outputs` in that order,
+    /// photons per second times [`R_PER_KM_SCALE`] (empty without outputs).
+    pub line_power: Vec<f32>,
     /// One entry per photon, in step order: the step's altitudes and the
     /// power it deposited.
     pub deposits: Vec<StepDeposit>,
@@ -126,6 +139,7 @@ impl BeamTrace {
     fn begin(p: DVec3, backscatter_kev_s: f64, record_path: bool) -> Self {
         let mut out = BeamTrace {
             photons: Vec::new(),
+            line_power: Vec::new(),
             deposits: Vec::new(),
             backscatter_kev_s,
             above_top_kev_s: 0.0,
@@ -164,6 +178,10 @@ pub struct BeamContext<'a> {
     pub threshold: f64,
     /// Keep the path (off in the bake: memory).
     pub record_path: bool,
+    /// The lines one at a time (`crate::beams::TraceParams::lines`) and
+    /// the ones that leave per-line photon powers.
+    pub lines: Option<&'a LineTable>,
+    pub line_outputs: &'a [usize],
 }
 
 /// The photon of one beam step: `power` spread along the step from `start`
@@ -209,12 +227,34 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
     (p + f.b * s + (f.u * cb + f.v * sb) * t, s / alpha.cos())
 }
 
-/// Pushes the photon and deposit record of one step.
+/// Pushes the photon and deposit record of one step: `kev_s` deposited at
+/// the frame's time, `base_kev_s` the same without the pulsation. The
+/// colour is the lines' at the step's end. Under a pulsation each line's
+/// photons are its yield times the unmodulated deposit times the
+/// modulation a line of its lifetime shows (`crate::lines`); otherwise the
+/// colour table's colour times the deposit. Per-line powers take each
+/// line's yield at the step's midpoint (the altitude a step spread along
+/// its length averages to second order, as `aurora profile` bins it), with
+/// no colour noise.
 #[inline]
-fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64) {
-    let rgb = ctx.colour.rgb_with_colour_altitude(to.z, to.z + start.colour_offset_km);
-    out.photons.push(deposit(from, to, [(rgb[0] * kev_s) as f32, (rgb[1] * kev_s) as f32, (rgb[2] * kev_s) as f32]));
+fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64, base_kev_s: f64) {
+    let h_colour = to.z + start.colour_offset_km;
+    let rgb = match (start.wave, ctx.lines) {
+        (Some(w), Some(t)) => t.rgb_in_motion(to.z, h_colour, |tau| w.at_lifetime(tau)).map(|c| c * base_kev_s),
+        _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour).map(|c| c * kev_s),
+    };
+    out.photons.push(deposit(from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]));
     out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s });
+    if let (Some(t), false) = (ctx.lines, ctx.line_outputs.is_empty()) {
+        let l = t.at(0.5 * (from.z + to.z));
+        for &i in ctx.line_outputs {
+            let n = match start.wave {
+                Some(w) => base_kev_s * w.at_lifetime(l.tau_s[i]),
+                None => kev_s,
+            };
+            out.line_power.push((l.yields[i] * n * R_PER_KM_SCALE) as f32);
+        }
+    }
 }
 
 /// The Fang models: `frac(m)` is the fraction of the beam's power deposited
@@ -260,7 +300,7 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
         let complete = total - f_new <= COMPLETE_TOL * total;
         let f_new = if complete { total } else { f_new };
         if f_new > done {
-            emit(ctx, start, &mut out, p, p_new, pw * (f_new - done));
+            emit(ctx, start, &mut out, p, p_new, pw * (f_new - done), start.base_power_kev_s * (f_new - done));
         }
         done = f_new;
         p = p_new;
@@ -305,7 +345,7 @@ fn deposit_above_start(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace
             let (z_lo, z_hi) = (p.z + (z_up - p.z) * k as f64 / n as f64, p.z + (z_up - p.z) * (k + 1) as f64 / n as f64);
             let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
             if f_lo > f_hi {
-                emit(ctx, start, out, along(z_hi), along(z_lo), pw * (f_lo - f_hi));
+                emit(ctx, start, out, along(z_hi), along(z_lo), pw * (f_lo - f_hi), start.base_power_kev_s * (f_lo - f_hi));
             }
             f_hi = f_hi.max(f_lo);
         }
@@ -366,6 +406,7 @@ fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTra
     let mut e = start.energy_kev;
     let mut r_res = range_g_cm2(e);
     let power_per_kev = if start.energy_kev > 0.0 { start.power_kev_s / start.energy_kev } else { 0.0 };
+    let base_per_kev = if start.energy_kev > 0.0 { start.base_power_kev_s / start.energy_kev } else { 0.0 };
     let mut col_p = ctx.atmosphere.column_mass(p.z);
     let mut out = BeamTrace::begin(p, 0.0, ctx.record_path);
     if e <= 0.0 {
@@ -394,7 +435,7 @@ fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTra
             out.path.push(p);
         }
         if de > 0.0 {
-            emit(ctx, start, &mut out, from, p, de * power_per_kev);
+            emit(ctx, start, &mut out, from, p, de * power_per_kev, de * base_per_kev);
         }
         e = e_after;
         if e <= 0.0 {
@@ -424,7 +465,14 @@ mod tests {
     }
 
     fn start(e: f64) -> BeamStart {
-        BeamStart { position: DVec3::new(0.0, 0.0, 260.0), energy_kev: e, power_kev_s: 1.0, colour_offset_km: 0.0 }
+        BeamStart {
+            position: DVec3::new(0.0, 0.0, 260.0),
+            energy_kev: e,
+            power_kev_s: 1.0,
+            base_power_kev_s: 1.0,
+            wave: None,
+            colour_offset_km: 0.0,
+        }
     }
 
     #[test]
@@ -442,6 +490,8 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: true,
+            lines: None,
+            line_outputs: &[],
         };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
@@ -479,6 +529,8 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            lines: None,
+            line_outputs: &[],
         };
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
@@ -509,6 +561,8 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            lines: None,
+            line_outputs: &[],
         };
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
@@ -540,6 +594,8 @@ mod tests {
             footprint: fp,
             threshold: 0.03,
             record_path: false,
+            lines: None,
+            line_outputs: &[],
         }
     }
 
@@ -713,6 +769,8 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            lines: None,
+            line_outputs: &[],
         };
         let mut r = rng::rng(&[6]);
         let mut left = 0;

@@ -153,6 +153,17 @@ pub struct RenderArgs {
     /// README "The reference renderer").
     #[arg(long)]
     pub adaptive: bool,
+    /// Render the float grid NAME alone as a one-channel image: a per-line grid of
+    /// grid.lines (line_5577, line_6300, ...: an all-sky imager's narrow-band filter image,
+    /// in rayleigh) or any float emission grid, through the file's density. EXR: one
+    /// channel Y, the grid integrated along each ray; PNG: greyscale, linear, 255 = --grid-max
+    /// (default: the image's largest value; the scale is printed and stored in the PNG).
+    /// Background and stars are left out. Without --vdb the scene is baked with its grid.lines.
+    #[arg(long, value_name = "NAME")]
+    pub grid: Option<String>,
+    /// With --grid: the value PNG 255 stands for (e.g. rayleigh).
+    #[arg(long, value_name = "VALUE", requires = "grid")]
+    pub grid_max: Option<f64>,
     #[command(flatten)]
     pub common: Common,
 }

@@ -53,7 +53,8 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
     let bars = Bars::new(quiet);
     let progress = bars.progress();
     let identity = aurora::bake_identity::BakeIdentity::of(scene);
-    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, rebake, || {
+    let line_grids = scene.grid.lines.iter().map(|k| aurora::lines::grid_name(k)).collect();
+    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, line_grids, rebake, || {
         if !quiet {
             eprintln!("aurora: another bake is writing to {}; waiting", out.display())
         }

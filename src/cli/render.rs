@@ -2,7 +2,9 @@
 //! image or one per frame of a sequence folder. The volume comes from one of
 //! three sources ([`prepare`]): a VDB's records read straight into the
 //! renderer's medium, a VDB read into grids where that path does not apply,
-//! or a bake in memory.
+//! or a bake in memory. With `--grid NAME` one float grid alone is the
+//! emission (grey) and the image is written with one channel
+//! ([`prepare_grid`], `aurora::render::film::write_exr_grey`).
 
 use super::args::RenderArgs;
 use super::bars::Bars;
@@ -47,6 +49,9 @@ struct Job {
     shadow_samples: usize,
     adaptive: bool,
     quiet: bool,
+    /// `--grid NAME` and `--grid-max`.
+    grid: Option<String>,
+    grid_max: Option<f64>,
 }
 
 /// One image's files: the volume to render (none: bake the scene), the
@@ -59,7 +64,12 @@ struct Files<'a> {
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    let RenderArgs { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, common } = a;
+    let RenderArgs { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, grid, grid_max, common } = a;
+    if let Some(m) = grid_max {
+        if !(m.is_finite() && m > 0.0) {
+            return Err(InputError(format!("--grid-max {m}: must be a finite number > 0")).into());
+        }
+    }
     let mut scene = load_scene(&scene_arg)?;
     if let Some(s) = seed {
         scene.seed = s;
@@ -77,7 +87,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         aurora::atomic::check_replaceable(p)?;
     }
     aurora::atomic::check_replaceable(&out)?;
-    let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet };
+    let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {
             let (frames, _) = frame_selection(&spec, None)?;
@@ -111,10 +121,19 @@ fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
     let mut settings = aurora::render::RenderSettings::from_scene(&job.scene);
     settings.base_dir = Some(job.dir.clone());
     settings.shadow_samples = job.shadow_samples;
+    if job.grid.is_some() {
+        // A filter image holds the grid's light alone: no sky, no stars.
+        settings.background.radiance = [0.0; 3];
+        settings.background.image = None;
+        settings.background.stars = false;
+    }
     // A heightmap or sky image that is missing or not a regular file is
     // refused before the bake or the medium build, not after.
     settings.check_input_files()?;
-    let (prepared, open_seconds, build_seconds) = prepare(&job.scene, &settings, files.vdb, progress)?;
+    let (prepared, open_seconds, build_seconds) = match &job.grid {
+        Some(name) => prepare_grid(&job.scene, &settings, files.vdb, name, progress)?,
+        None => prepare(&job.scene, &settings, files.vdb, progress)?,
+    };
     let image = if job.adaptive {
         aurora::render::render_adaptive_prepared(&prepared, build_seconds, progress)?
     } else {
@@ -164,17 +183,79 @@ fn prepare(
     Ok((Prepared::new(settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
 }
 
+/// The renderer prepared for `--grid NAME`: the float grid `name` as a
+/// grey emission and the `density` grid, from the VDB or from a bake of
+/// the scene (its `grid.lines`), with the seconds spent opening and
+/// building. A missing grid is the user's error, naming the float grids
+/// there are.
+fn prepare_grid(
+    scene: &Scene,
+    settings: &aurora::render::RenderSettings,
+    vdb: Option<&Path>,
+    name: &str,
+    progress: &dyn Progress,
+) -> Result<(Prepared, f64, f64)> {
+    let open = std::time::Instant::now();
+    let (density, floats, source) = match vdb {
+        Some(path) => {
+            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            let density = file.float("density").cloned();
+            (density, file.float_grids, path.display().to_string())
+        }
+        None => {
+            let bake = aurora::bake::bake(scene, progress)?;
+            print_warnings(&bake.stats.warnings);
+            (Some(bake.density), bake.lines, "the bake (grid.lines)".to_string())
+        }
+    };
+    let Some(g) = floats.iter().find(|g| g.name == name) else {
+        let there: Vec<&str> = floats.iter().map(|g| g.name.as_str()).filter(|n| *n != "density").collect();
+        let there = if there.is_empty() { "none".to_string() } else { there.join(", ") };
+        return Err(InputError(format!("--grid {name}: {source} has no float grid of that name (float emission grids: {there})")).into());
+    };
+    let emission = aurora::render::grids::grey(g);
+    let open_seconds = open.elapsed().as_secs_f64();
+    let build = std::time::Instant::now();
+    let volume = aurora::render::Volume { density: density.as_ref(), emission: Some(&emission) };
+    Ok((Prepared::new(settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
+}
+
+/// Writes a one-channel `--grid` image (EXR `Y`, or greyscale PNG at
+/// `--grid-max` or the image's largest value), its scale printed.
+fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Image) -> Result<()> {
+    let grey_png = |p: &Path| -> Result<()> {
+        let largest = image.pixels.iter().map(|p| p[0] as f64).fold(0.0, f64::max);
+        let scale = job.grid_max.unwrap_or(if largest > 0.0 { largest } else { 1.0 });
+        aurora::render::film::write_png_grey(p, image, scale).with_context(|| format!("cannot write {}", p.display()))?;
+        if !job.quiet {
+            eprintln!("{}: greyscale, linear, 255 = {scale:.6e} (the grid integrated along the ray)", p.display());
+        }
+        Ok(())
+    };
+    if png_only {
+        return grey_png(path);
+    }
+    aurora::render::film::write_exr_grey(path, image).with_context(|| format!("cannot write {}", path.display()))
+}
+
 /// Writes a render's image (and PNG) and prints its statistics.
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
     let Files { vdb, out, png } = *files;
     let exposure = job.scene.render.exposure;
-    match job.format {
-        ImageFormat::Exr => aurora::render::film::write_exr(out, image),
-        ImageFormat::Png => aurora::render::film::write_png(out, image, exposure),
-    }
-    .with_context(|| format!("cannot write {}", out.display()))?;
-    if let Some(p) = png {
-        aurora::render::film::write_png(p, image, exposure).with_context(|| format!("cannot write {}", p.display()))?;
+    if job.grid.is_some() {
+        write_grey(job, out, job.format == ImageFormat::Png, image)?;
+        if let Some(p) = png {
+            write_grey(job, p, true, image)?;
+        }
+    } else {
+        match job.format {
+            ImageFormat::Exr => aurora::render::film::write_exr(out, image),
+            ImageFormat::Png => aurora::render::film::write_png(out, image, exposure),
+        }
+        .with_context(|| format!("cannot write {}", out.display()))?;
+        if let Some(p) = png {
+            aurora::render::film::write_png(p, image, exposure).with_context(|| format!("cannot write {}", p.display()))?;
+        }
     }
     if !job.quiet {
         eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());

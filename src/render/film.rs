@@ -13,7 +13,14 @@
 //!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), quantised as
 //!   `round(255 v)`; alpha is dropped (8-bit RGB).
 //!
-//! Both are written to a temporary file in the destination folder and renamed.
+//! * One-channel images of a float grid (`aurora render --grid`): the red
+//!   channel (the grid is rendered as grey) as an EXR of one 32-bit float
+//!   channel `Y` in the grid's units integrated along the ray (rayleigh for
+//!   a per-line grid in R/km), or an 8-bit greyscale PNG, linear:
+//!   `round(255 clamp(v / scale, 0, 1))`, the scale stated by the caller
+//!   and stored in the PNG's `aurora_scale` text chunk.
+//!
+//! All are written to a temporary file in the destination folder and renamed.
 
 use super::{Image, RenderError, RenderStats};
 use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
@@ -47,6 +54,83 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
         .write()
         .to_buffered(std::io::BufWriter::new(tmp.file()))
         .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    tmp.commit().map_err(output_err)
+}
+
+/// Writes the red channel of `image` as a one-channel (`Y`) f32 OpenEXR
+/// (module doc).
+pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    let channels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|Vec2(x, y): Vec2<usize>| (image.pixels[y * w + x][0],));
+    let mut exr_image = exr::image::Image::from_channels((w, h), channels);
+    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
+    exr_image
+        .write()
+        .to_buffered(std::io::BufWriter::new(tmp.file()))
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    tmp.commit().map_err(output_err)
+}
+
+/// Reads the `Y` channel of a one-channel EXR written by [`write_exr_grey`]:
+/// (width, height, values row by row from the top).
+pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>), RenderError> {
+    use exr::prelude::ReadSpecificChannel;
+    let path = path.as_ref();
+    let file = crate::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required("Y")
+        .collect_pixels(
+            |res: Vec2<usize>, _| (res.0, vec![0.0f32; res.0 * res.1]),
+            |(w, px): &mut (usize, Vec<f32>), pos: Vec2<usize>, (y,): (f32,)| px[pos.1 * *w + pos.0] = y,
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_unbuffered(file)
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let size = img.layer_data.size;
+    let (_, values) = img.layer_data.channel_data.pixels;
+    Ok((size.0, size.1, values))
+}
+
+/// Writes the red channel of `image` as an 8-bit greyscale PNG, linear with
+/// 255 = `scale` (module doc; `scale` > 0 and finite).
+pub fn write_png_grey(path: impl AsRef<Path>, image: &Image, scale: f64) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(RenderError::Settings(format!("greyscale scale {scale} must be finite and > 0")));
+    }
+    let data: Vec<u8> = image
+        .pixels
+        .iter()
+        .map(|p| {
+            let v = p[0] as f64 / scale;
+            (if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) } * 255.0).round() as u8
+        })
+        .collect();
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
+    let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
+    let r = (|| -> Result<(), RenderError> {
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.file()), w as u32, h as u32);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.add_text_chunk("aurora_scale".into(), format!("255 = {scale:e} (linear)")).map_err(|e| png_err(e.to_string()))?;
+        let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
+        writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
+        writer.finish().map_err(|e| png_err(e.to_string()))
+    })();
+    r?;
     tmp.commit().map_err(output_err)
 }
 

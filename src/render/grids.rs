@@ -88,23 +88,27 @@ pub fn choose(
     }
     let mut emission = vec3_grids.into_iter().find(|g| g.name == "emission");
     if emission.is_none() {
-        if let Some(f) = float_emission {
-            let mut grey = Grid::new("emission", [f.background; 3], f.transform);
-            for leaf in f.leaves() {
-                let mut l = Leaf::new(leaf.origin, [f.background; 3]);
-                l.mask = leaf.mask;
-                for (dst, src) in l.values.iter_mut().zip(leaf.values.iter()) {
-                    *dst = [*src; 3];
-                }
-                grey.insert_leaf(l);
-            }
-            emission = Some(grey);
-        }
+        emission = float_emission.as_ref().map(grey);
     }
     if density.is_none() && emission.is_none() {
         return Err(RenderGridsError::NoAuroraGrids(if names.is_empty() { "none".into() } else { names.join(", ") }));
     }
     Ok((density, emission))
+}
+
+/// A float grid as a grey `emission` grid: its value in all three
+/// channels, the same leaves and masks.
+pub fn grey(f: &Grid<f32>) -> Grid<[f32; 3]> {
+    let mut grey = Grid::new("emission", [f.background; 3], f.transform);
+    for leaf in f.leaves() {
+        let mut l = Leaf::new(leaf.origin, [f.background; 3]);
+        l.mask = leaf.mask;
+        for (dst, src) in l.values.iter_mut().zip(leaf.values.iter()) {
+            *dst = [*src; 3];
+        }
+        grey.insert_leaf(l);
+    }
+    grey
 }
 
 #[cfg(test)]

@@ -341,6 +341,9 @@ pub struct GridParams {
     /// share of the light reaching it stays below this fraction
     /// (0 = keep every leaf with any emission).
     pub prune: f64,
+    /// Emission lines written as float grids of their own (`line_5577`,
+    /// ...), in rayleigh per km: names of [`LINE_KEYS`].
+    pub lines: Vec<String>,
 }
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -557,6 +560,7 @@ impl Default for GridParams {
             // Blender 5 and our reader; writes ~8x faster than ZIP, same size.
             compression: Compression::BloscActiveMask,
             prune: DEFAULT_PRUNE,
+            lines: Vec::new(),
         }
     }
 }

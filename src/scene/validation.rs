@@ -9,6 +9,11 @@
 use super::*;
 use std::fmt;
 
+/// The line names `grid.lines` takes, in `crate::spectrum::LINES` order
+/// (557.7, 630.0, 636.4, 427.8 nm, the N2 1P bands; `crate::lines` reads
+/// them from here).
+pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
+
 /// Largest seed: TOML integers are signed 64-bit, so a scene (and the
 /// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
 pub const MAX_SEED: u64 = i64::MAX as u64;
@@ -290,6 +295,18 @@ impl Scene {
         v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
         v.finite(t, "density_base_km", g.density_base_km);
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
+        let keys = LINE_KEYS.map(|k| format!("\"{k}\"")).join(", ");
+        v.allow(t, "lines", Allowed::Rule(format!("a list of distinct line names from {keys}; needs colour.mode = \"physical\"")));
+        for (i, name) in g.lines.iter().enumerate() {
+            if !LINE_KEYS.contains(&name.as_str()) {
+                v.push(t, "lines", format!("\"{name}\""), format!("must be one of {keys}"));
+            } else if g.lines[..i].contains(name) {
+                v.push(t, "lines", format!("\"{name}\""), "is listed twice".into());
+            }
+        }
+        if !g.lines.is_empty() && self.colour.mode != ColourMode::Physical {
+            v.push(t, "lines", format!("{:?}", g.lines), "needs colour.mode = \"physical\" (a colour map has no lines)".into());
+        }
 
         let t = Some(("camera", 0));
         v.allow(t, "fov_deg", Allowed::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\"".into()));
