@@ -291,3 +291,27 @@ fn range_of(entry: &Map<String, Value>) -> String {
         _ => String::new(),
     }
 }
+
+/// `blender/scene_keys.json`: each key's unit and description from
+/// [`KEYS`], `{section: {key: {"unit", "description"}}}`, which the add-on's
+/// panel shows beside the schema's defaults and ranges. Regenerated with
+/// the docs (`AURORA_UPDATE_DOCS=1`).
+#[test]
+fn committed_key_docs_match_the_table() {
+    let mut out = Map::new();
+    for (section, key, unit, description) in KEYS {
+        let entry = out.entry(section.to_string()).or_insert_with(|| Value::Object(Map::new()));
+        let mut k = Map::new();
+        k.insert("unit".into(), Value::String(unit.to_string()));
+        k.insert("description".into(), Value::String(description.to_string()));
+        entry.as_object_mut().expect("object").insert(key.to_string(), Value::Object(k));
+    }
+    let text = serde_json::to_string_pretty(&Value::Object(out)).expect("serialises") + "\n";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/scene_keys.json");
+    if std::env::var_os("AURORA_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &text).expect("write blender/scene_keys.json");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(committed == text, "blender/scene_keys.json is stale: regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema");
+}
