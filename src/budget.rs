@@ -100,6 +100,13 @@ pub struct TooLarge {
     pub available: String,
 }
 
+impl TooLarge {
+    /// Always the user's input: the key named asks for too much memory (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// The highest altitude a deposit of `curtain` can lie at, km: the beams'
 /// highest start, or above it for Fang's depositions, which lay what the
 /// spectrum leaves above a beam's start along the field line above it up

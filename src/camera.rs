@@ -80,6 +80,13 @@ pub struct CameraError {
     pub allowed: String,
 }
 
+impl CameraError {
+    /// Always the user's input: a camera key out of range (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// A validated camera for an image of `width x height` pixels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CameraModel {

@@ -301,6 +301,13 @@ pub enum FootprintError {
     Output(Box<crate::atomic::AtomicError>),
 }
 
+impl FootprintError {
+    /// True when the user's choice of output is at fault (exit status 2).
+    pub fn is_input(&self) -> bool {
+        matches!(self, FootprintError::Output(a) if a.is_input())
+    }
+}
+
 impl Footprint {
     /// Cell size along u and v, km.
     pub fn cell_size(&self) -> (f64, f64) {

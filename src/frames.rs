@@ -31,6 +31,13 @@ pub enum FrameError {
     Shard { text: String, why: String },
 }
 
+impl FrameError {
+    /// Always the user's input: the range or shard given (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Largest number of frames one expression may expand to (a guard against
 /// `1-9999999999`: a 10-minute show at 60 fps is 36,000 frames).
 pub const MAX_FRAMES: usize = 10_000_000;

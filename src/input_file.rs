@@ -42,6 +42,13 @@ pub enum InputFileError {
 }
 
 impl InputFileError {
+    /// Always the user's input: the file the scene names (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
+impl InputFileError {
     /// The reason without the path, for error types that name the path
     /// themselves: "is a FIFO, not a regular file", or the I/O error.
     pub fn reason(&self) -> String {

@@ -154,6 +154,16 @@ pub enum PreviewError {
     Render(#[from] RenderError),
 }
 
+impl PreviewError {
+    /// True when the scene or the output is at fault, as for a bake or a render (exit status 2).
+    pub fn is_input(&self) -> bool {
+        match self {
+            PreviewError::Bake(e) => e.is_input(),
+            PreviewError::Render(e) => e.is_input(),
+        }
+    }
+}
+
 /// What one update did and how long it took, seconds.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Update {

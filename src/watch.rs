@@ -86,6 +86,13 @@ pub enum WatchError {
     NotText { path: PathBuf },
 }
 
+impl WatchError {
+    /// Always the user's input: the scene file watched or the watch asked for (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// How the watcher learns of saves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {

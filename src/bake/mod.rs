@@ -71,6 +71,13 @@ pub enum BakeError {
     Camera(#[from] crate::camera::CameraError),
 }
 
+impl BakeError {
+    /// Always the user's input: every variant comes from the scene's parameters and names the keys to change (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Why a bake came out empty, in the user's terms: how its beams ended and
 /// which keys to look at.
 pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {

@@ -90,6 +90,13 @@ pub enum BeamError {
     EmptyFootprint { curtain: usize, threshold: f64, peak: f32 },
 }
 
+impl BeamError {
+    /// Always the user's input: the scene's parameters (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Where one curtain's electron power went, W. `electron = deposited +
 /// backscattered + above_top + undeposited` (to rounding).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]

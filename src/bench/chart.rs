@@ -131,6 +131,13 @@ pub enum ChartError {
     Draw { path: String, message: String },
 }
 
+impl ChartError {
+    /// Never the user's input: a font or drawing failure (exit status 1).
+    pub fn is_input(&self) -> bool {
+        false
+    }
+}
+
 const PALETTE: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
     RGBColor(214, 39, 40),

@@ -212,6 +212,13 @@ pub enum ReportError {
     Chart(#[from] chart::ChartError),
 }
 
+impl ReportError {
+    /// Never the user's input: writing the report or drawing a chart failed (exit status 1).
+    pub fn is_input(&self) -> bool {
+        false
+    }
+}
+
 /// Writes `bench.csv`, `bench.json` and a PNG and an SVG chart per study into
 /// `dir` (created if missing), each through a temporary name and a rename.
 /// Returns the paths written.

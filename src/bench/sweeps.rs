@@ -171,6 +171,16 @@ pub enum SweepError {
     Render(#[from] RenderError),
 }
 
+impl SweepError {
+    /// True when the scene is at fault, as for a bake or a render (exit status 2).
+    pub fn is_input(&self) -> bool {
+        match self {
+            SweepError::Bake(e) => e.is_input(),
+            SweepError::Render(e) => e.is_input(),
+        }
+    }
+}
+
 /// Runs `f` until it has used `min_seconds` (at most `max_runs` times) and
 /// returns its first result with the fastest run's wall time.
 pub fn timed<T>(min_seconds: f64, max_runs: usize, mut f: impl FnMut() -> T) -> (T, f64) {

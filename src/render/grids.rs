@@ -40,6 +40,13 @@ pub enum RenderGridsError {
     WrongType { name: String, type_name: String, expected: &'static str },
 }
 
+impl RenderGridsError {
+    /// Always the user's input: the file given to render (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Refuses a grid the renderer would use but cannot (a vec3 or bool
 /// `density`, a bool `emission`): the type check of [`choose`], on the
 /// listing alone.

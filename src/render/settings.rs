@@ -130,6 +130,18 @@ pub enum RenderError {
     Output(Box<crate::atomic::AtomicError>),
 }
 
+impl RenderError {
+    /// True when the scene, the volume or a file it names, or the choice of output is at fault (exit status 2); false for a failure writing the image.
+    pub fn is_input(&self) -> bool {
+        use RenderError::*;
+        match self {
+            Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } | Input { .. } => true,
+            Output(a) => a.is_input(),
+            Io { .. } | Exr { .. } | Png { .. } => false,
+        }
+    }
+}
+
 impl From<crate::camera::CameraError> for RenderError {
     fn from(e: crate::camera::CameraError) -> Self {
         RenderError::Settings(e.to_string())

@@ -92,6 +92,13 @@ pub enum SceneError {
     Invalid(Vec<RangeError>),
 }
 
+impl SceneError {
+    /// Always the user's input: the scene file or preset named (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// One value outside its allowed range.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RangeError {

@@ -14,6 +14,13 @@ pub struct ParseError {
     pub message: String,
 }
 
+impl ParseError {
+    /// Always the user's input: the bytes of the file given (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// A read position in a byte slice; every read checks the bytes left.
 pub struct Cursor<'a> {
     data: &'a [u8],

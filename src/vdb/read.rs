@@ -79,6 +79,13 @@ pub enum VdbReadError {
     TooManyTileVoxels { file: String, grid: String, voxels: u128, limit: u128 },
 }
 
+impl VdbReadError {
+    /// Always the user's input: the file given to read (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
 /// Which decoder produced a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Decoder {
@@ -696,6 +703,17 @@ pub enum RenderReadError {
     Grids { file: String, source: RenderGridsError },
     #[error("{file}: {source}")]
     Render { file: String, source: crate::render::RenderError },
+}
+
+impl RenderReadError {
+    /// True when the file, or a grid the renderer refuses, is at fault (exit status 2).
+    pub fn is_input(&self) -> bool {
+        match self {
+            RenderReadError::Read(e) => e.is_input(),
+            RenderReadError::Grids { source, .. } => source.is_input(),
+            RenderReadError::Render { source, .. } => source.is_input(),
+        }
+    }
 }
 
 /// The renderer's medium read straight from a VDB file, and the split of

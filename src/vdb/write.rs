@@ -123,6 +123,13 @@ pub enum VdbWriteError {
     Output(Box<crate::atomic::AtomicError>),
 }
 
+impl VdbWriteError {
+    /// True when the user's choice of output is at fault (exit status 2); the other variants are values or I/O this process failed to write.
+    pub fn is_input(&self) -> bool {
+        matches!(self, VdbWriteError::Output(a) if a.is_input())
+    }
+}
+
 /// What was written, per grid.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GridStats {

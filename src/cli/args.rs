@@ -1,0 +1,259 @@
+//! The command line's arguments: the `clap` definitions of every command
+//! and its flags, checked as far as clap can (ranges, `--size` syntax). Each
+//! command's help is the doc of its [`Command`] variant.
+
+use clap::{Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(
+    name = "aurora",
+    version,
+    about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
+    long_about = "Bake physically plausible aurora into sparse OpenVDB volumes (an `emission` vec3 grid and a \
+`density` float grid) for Blender Cycles, Houdini or a USD pipeline, and render them with a reference raymarcher.\n\n\
+SCENE is a TOML scene file or the name of a built-in preset (default, seed2014); `aurora scene default` prints one to edit. \
+Units are kilometres, z up."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(clap::Args)]
+pub struct Common {
+    /// Worker threads (default: all cores). Output is identical for any count.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_THREADS))]
+    pub threads: Option<u64>,
+    /// No progress bars or summary on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Bake a scene into DIR/aurora.vdb, DIR/aurora.usda and DIR/bake.json.
+    ///
+    /// With --frames, a sequence: DIR/aurora.NNNN.vdb and DIR/aurora.NNNN.json per frame
+    /// (frame N at [animation] time_s + (N - 1) / fps) and one DIR/aurora.usda time-sampled over
+    /// the whole range. Frames already complete are skipped, so a rerun resumes: a frame counts
+    /// as complete only if its report names the same bake (the scene's keys that change the bake,
+    /// not render-only ones such as [render] exposure, and the same build of aurora). A folder
+    /// holding frames of another bake is refused (exit 2): bake into a new folder, or --rebake.
+    Bake(BakeArgs),
+    /// Render a scene with the reference raymarcher to linear OpenEXR (and an optional PNG preview).
+    ///
+    /// Without --vdb the scene is baked first, in memory. With --vdb the file is rendered,
+    /// whoever wrote it: a float `density` grid gives extinction, a vec3 `emission` grid emission
+    /// (a float `emission` grid counts as grey). The scene's [camera], [render], [volume],
+    /// [background] and [terrain] sections set up the picture.
+    Render(RenderArgs),
+    /// Measure speed against accuracy of every method choice (photon count, gather radius and
+    /// method, voxel size, ray integration, shadow rays) on a reduced copy of the scene.
+    ///
+    /// Writes DIR/bench.csv, DIR/bench.json and a PNG and SVG chart per study (time against
+    /// error, Pareto front marked), and prints a summary table. A few minutes on 2 cores;
+    /// under a minute with --quick.
+    Bench(BenchArgs),
+    /// Altitude profiles per curtain from the bake's own beam deposits: CSV with columns
+    /// curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300,oi_6364,n2_1p,deposited_kev_s
+    /// (0.5 km bin centres; ion pairs/s, photons/s, keV/s summed over the curtain).
+    Profile(ProfileArgs),
+    /// Print a built-in scene as TOML, to copy and edit; or a scene file with every default filled in.
+    Scene(SceneArgs),
+    /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
+    ///
+    /// With --watch each save of the scene file is taken once it has ended (on Linux a close after
+    /// writing or a rename onto the name, by inotify; elsewhere, or with AURORA_WATCH=poll, once
+    /// the file has been unchanged for 400 ms), then parsed and validated (a bad edit, or a file
+    /// saved empty, prints the error and the watch goes on) and only the stages the edit touches are
+    /// rerun: an exposure edit re-encodes the last image (nothing traced), a render edit
+    /// re-renders from the cached grids and renderer, a camera edit re-derives the voxel size and
+    /// pruning, a beams or colour edit retraces the beams but keeps the footprints. A coarse
+    /// picture (1/4 size, 1 spp) is written first, then the refined one (--size, --spp), then,
+    /// when [render] spp is larger, one at the scene's spp, each atomically; each update prints
+    /// its stage times. The bake uses the scene's own settings. Without --watch: one update, then
+    /// exit.
+    Preview(PreviewArgs),
+    /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
+    Footprint(FootprintArgs),
+    /// Write the scene's terrain as an OBJ mesh (km, z up), exactly the triangles `aurora render` traces.
+    Terrain(TerrainArgs),
+}
+
+// The arguments of `aurora bake` (its help is the doc of [`Command::Bake`]).
+#[derive(clap::Args)]
+pub struct BakeArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "aurora-out", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Override the scene's seed.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
+    pub seed: Option<u64>,
+    /// Frames to bake, in Open Job Description range syntax: 4, 1-100, 1,3,7-20:2.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub frames: Option<String>,
+    /// Bake only a share of the frames: I/N (I from 0), auto (a Slurm job array's
+    /// SLURM_ARRAY_TASK_ID, _MIN and _COUNT) or auto/N (JOB_COMPLETION_INDEX of a
+    /// Kubernetes Indexed Job). Shards share one output folder.
+    #[arg(long, value_name = "I/N|auto|auto/N", requires = "frames")]
+    pub shard: Option<String>,
+    /// The whole range aurora.usda lists, when --frames is one farm task's part of it
+    /// (an Open Job Description task baking frame 7 of 1-100: --frames 7 --sequence 1-100).
+    /// Default: --frames.
+    #[arg(long, value_name = "SPEC", requires = "frames", allow_hyphen_values = true)]
+    pub sequence: Option<String>,
+    /// When DIR holds frames of another bake (another scene, seed or build), delete every one
+    /// of them, in the range or not, and bake these frames; the frames of this bake are kept.
+    /// Without it such a folder is refused.
+    #[arg(long, requires = "frames")]
+    pub rebake: bool,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora render` (its help is the doc of [`Command::Render`]).
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Render this VDB instead of baking the scene (with --frame: the sequence folder).
+    #[arg(long, value_name = "FILE.vdb")]
+    pub vdb: Option<PathBuf>,
+    /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,
+    /// or a range (1-48) for an image sequence. The frame number goes before the extension
+    /// of --out and --png (aurora.0003.exr).
+    #[arg(long, value_name = "SPEC", requires = "vdb", allow_hyphen_values = true)]
+    pub frame: Option<String>,
+    /// Output image, its format from the extension: .exr (linear Rec.709 RGBA, A = volume
+    /// coverage 1 - T) or .png (sRGB preview at [render] exposure). Only a new name or a
+    /// regular file is ever replaced.
+    #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr|IMAGE.png")]
+    pub out: PathBuf,
+    /// Also write an sRGB PNG preview (exposure from [render] exposure).
+    #[arg(long, value_name = "PREVIEW.png")]
+    pub png: Option<PathBuf>,
+    /// Override [render] spp.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
+    pub spp: Option<u64>,
+    /// Emissive shadow-ray samples per terrain hit per pixel sample (default 1):
+    /// more makes lit terrain less noisy at less cost than more spp.
+    #[arg(long, value_name = "N", default_value_t = 1,
+          value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SHADOW_SAMPLES))]
+    pub shadow_samples: u64,
+    /// Override the scene's seed.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
+    pub seed: Option<u64>,
+    /// Adaptive sampling by pixel variance: spp becomes the average per pixel; half goes
+    /// to every pixel, the rest to the pixels with the largest relative spread (spp >= 8;
+    /// README "The reference renderer").
+    #[arg(long)]
+    pub adaptive: bool,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora bench` (its help is the doc of [`Command::Bench`]).
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "aurora-bench", value_name = "DIR")]
+    pub out: PathBuf,
+    /// Fewer settings and cheaper references (a smoke test of the bench).
+    #[arg(long)]
+    pub quick: bool,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora profile` (its help is the doc of [`Command::Profile`]).
+#[derive(clap::Args)]
+pub struct ProfileArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output CSV (written atomically); standard output without it.
+    #[arg(long, value_name = "FILE.csv")]
+    pub out: Option<PathBuf>,
+    /// Override the scene's seed.
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora scene` (its help is the doc of [`Command::Scene`]).
+#[derive(clap::Args)]
+pub struct SceneArgs {
+    /// Preset name (default, seed2014) or a scene file.
+    #[arg(default_value = "default")]
+    pub name: String,
+    /// Print every scene key's default and allowed range as JSON instead
+    /// (the Blender add-on reads a copy: blender/scene_schema.json).
+    #[arg(long)]
+    pub schema: bool,
+}
+
+// The arguments of `aurora preview` (its help is the doc of [`Command::Preview`]).
+#[derive(clap::Args)]
+pub struct PreviewArgs {
+    /// Scene file or preset name (a file for --watch).
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output PNG (replaced atomically on every update).
+    #[arg(long, default_value = "preview.png", value_name = "IMAGE.png")]
+    pub out: PathBuf,
+    /// Picture size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "320x180", value_name = "WxH", value_parser = parse_size)]
+    pub size: [usize; 2],
+    /// Keep watching the scene file and update the picture on every save.
+    #[arg(long)]
+    pub watch: bool,
+    /// Samples per pixel of the refined picture; when [render] spp is larger, a picture at
+    /// the scene's spp follows it (when smaller, it caps this).
+    #[arg(long, value_name = "N", default_value_t = aurora::preview::DEFAULT_SPP as u64,
+          value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
+    pub spp: u64,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora footprint` (its help is the doc of [`Command::Footprint`]).
+#[derive(clap::Args)]
+pub struct FootprintArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output folder: footprint-<N>.png per curtain.
+    #[arg(long, default_value = "aurora-out", value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+// The arguments of `aurora terrain` (its help is the doc of [`Command::Terrain`]).
+#[derive(clap::Args)]
+pub struct TerrainArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    #[arg(long, default_value = "terrain.obj", value_name = "FILE.obj")]
+    pub out: PathBuf,
+}
+
+/// `--size WxH`: two positive integers up to the scene's image limit.
+fn parse_size(text: &str) -> std::result::Result<[usize; 2], String> {
+    let max = aurora::scene::MAX_IMAGE_SIDE;
+    let bad = || format!("`{text}`: expected WIDTHxHEIGHT, each 1..={max} (e.g. 320x180)");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (usize, usize) = (w.trim().parse().map_err(|_| bad())?, h.trim().parse().map_err(|_| bad())?);
+    if w == 0 || h == 0 || w > max || h > max {
+        return Err(bad());
+    }
+    Ok([w, h])
+}

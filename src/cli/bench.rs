@@ -1,0 +1,26 @@
+//! `aurora bench`: the speed-against-accuracy studies of `aurora::bench`,
+//! their files written and their summary table printed.
+
+use super::args::BenchArgs;
+use super::{load_scene, with_threads};
+use anyhow::Result;
+
+pub fn run(a: BenchArgs) -> Result<()> {
+    let BenchArgs { scene: scene_arg, out, quick, common } = a;
+    let scene = load_scene(&scene_arg)?;
+    let quiet = common.quiet;
+    with_threads(common.threads, || {
+        let log = |line: &str| {
+            if !quiet {
+                eprintln!("bench: {line}");
+            }
+        };
+        let run = aurora::bench::run(&scene, &scene_arg, quick, &log)?;
+        let written = aurora::bench::report::write(&run, &out)?;
+        print!("{}", aurora::bench::report::summary(&run));
+        if !quiet {
+            eprintln!("wrote {} files to {}", written.len(), out.display());
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,70 @@
+//! Exit statuses, in one place: 0 on success, 2 when the user's input is at
+//! fault (the scene file, the arguments, an unreadable VDB or one the renderer
+//! refuses, a scene the bake cannot honour, an output that is not ours to
+//! replace), 1 for anything else.
+//!
+//! One rule decides between 2 and 1: every library error type answers
+//! `is_input()`, and [`is_input`] asks the error that reached `main`. The
+//! binary's own refusals are [`InputError`]s.
+
+/// The process succeeded.
+pub const SUCCESS: i32 = 0;
+/// Something other than the input failed (an I/O error writing, say).
+pub const FAILURE: i32 = 1;
+/// The user's input is at fault.
+pub const BAD_INPUT: i32 = 2;
+
+/// An error that is the user's input: exit status 2.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct InputError(pub String);
+
+impl InputError {
+    /// Always the user's input (the same question as the library's errors).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
+/// The exit status of a command's result; an error is printed on stderr
+/// (with its causes) first.
+pub fn code(result: anyhow::Result<()>) -> i32 {
+    match result {
+        Ok(()) => SUCCESS,
+        Err(e) => {
+            eprintln!("aurora: error: {e:#}");
+            if is_input(&e) {
+                BAD_INPUT
+            } else {
+                FAILURE
+            }
+        }
+    }
+}
+
+/// Whether the error that reached `main` is the user's input: the answer of
+/// its own type's `is_input()` (a context added on the way keeps the type).
+/// Errors of any other type are not.
+pub fn is_input(e: &anyhow::Error) -> bool {
+    macro_rules! ask {
+        ($($t:ty),* $(,)?) => {
+            $(if let Some(x) = e.downcast_ref::<$t>() {
+                return x.is_input();
+            })*
+        };
+    }
+    ask!(
+        InputError,
+        aurora::scene::SceneError,
+        aurora::bake::BakeError,
+        aurora::atomic::AtomicError,
+        aurora::outputs::OutputError,
+        aurora::sequence::SequenceError,
+        aurora::footprint::FootprintError,
+        aurora::render::RenderError,
+        aurora::preview::PreviewError,
+        aurora::bench::sweeps::SweepError,
+        aurora::bench::report::ReportError,
+    );
+    false
+}

@@ -1,0 +1,41 @@
+//! `aurora profile`: the altitude profiles of the bake's beam deposits as
+//! CSV, on stdout or into a file, and where the electron power went.
+
+use super::args::ProfileArgs;
+use super::bars::Bars;
+use super::{load_scene, with_threads};
+use anyhow::{Context, Result};
+use aurora::scene::Scene;
+use std::path::Path;
+
+pub fn run(a: ProfileArgs) -> Result<()> {
+    let ProfileArgs { scene, out, seed, common } = a;
+    let mut scene = load_scene(&scene)?;
+    if let Some(s) = seed {
+        scene.seed = s;
+    }
+    with_threads(common.threads, || profile(&scene, out.as_deref(), common.quiet))
+}
+
+fn profile(scene: &Scene, out: Option<&Path>, quiet: bool) -> Result<()> {
+    let bars = Bars::new(quiet);
+    let p = aurora::profile::profile(scene, bars.progress())?;
+    let csv = aurora::profile::to_csv(&p);
+    match out {
+        Some(path) => {
+            aurora::atomic::write_atomic(path, csv.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+            if !quiet {
+                eprintln!("wrote {}", path.display());
+            }
+        }
+        None => print!("{csv}"),
+    }
+    if !quiet {
+        let s = &p.beam_stats;
+        eprintln!(
+            "electron power {:.4e} W: deposited {:.4e}, backscattered {:.4e}, above the beams' top {:.4e}, undeposited {:.4e}",
+            s.electron_power_w, s.deposited_power_w, s.backscattered_power_w, s.above_top_power_w, s.undeposited_power_w
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,199 @@
+//! `aurora render`: the outputs checked before anything is traced, then one
+//! image or one per frame of a sequence folder. The volume comes from one of
+//! three sources ([`prepare`]): a VDB's records read straight into the
+//! renderer's medium, a VDB read into grids where that path does not apply,
+//! or a bake in memory.
+
+use super::args::RenderArgs;
+use super::bars::Bars;
+use super::exit::InputError;
+use super::frames::{frame_name, frame_selection};
+use super::{load_scene, print_warnings, scene_dir, with_threads};
+use anyhow::{Context, Result};
+use aurora::progress::Progress;
+use aurora::render::Prepared;
+use aurora::scene::Scene;
+use std::path::{Path, PathBuf};
+
+/// The image formats `aurora render` writes, chosen by the file name's extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// Linear Rec.709 RGBA f32 OpenEXR.
+    Exr,
+    /// sRGB 8-bit preview at the scene's exposure.
+    Png,
+}
+
+/// The format an output name asks for: `.exr` or `.png` (any case); anything
+/// else is an error naming the flag, so `--out x.png` never gets EXR bytes.
+pub fn image_format(flag: &str, path: &Path) -> Result<ImageFormat> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("exr") => Ok(ImageFormat::Exr),
+        Some("png") => Ok(ImageFormat::Png),
+        _ => Err(InputError(format!(
+            "{flag} {}: unknown image format; the name must end in .exr (linear OpenEXR) or .png (sRGB preview)",
+            path.display()
+        ))
+        .into()),
+    }
+}
+
+/// What every image of one `aurora render` shares.
+struct Job {
+    scene: Scene,
+    /// The folder the scene's relative paths are resolved against.
+    dir: PathBuf,
+    format: ImageFormat,
+    shadow_samples: usize,
+    adaptive: bool,
+    quiet: bool,
+}
+
+/// One image's files: the volume to render (none: bake the scene), the
+/// image and the optional PNG preview.
+#[derive(Clone, Copy)]
+struct Files<'a> {
+    vdb: Option<&'a Path>,
+    out: &'a Path,
+    png: Option<&'a Path>,
+}
+
+pub fn run(a: RenderArgs) -> Result<()> {
+    let RenderArgs { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, common } = a;
+    let mut scene = load_scene(&scene_arg)?;
+    if let Some(s) = seed {
+        scene.seed = s;
+    }
+    if let Some(n) = spp {
+        scene.render.spp = n as usize;
+    }
+    let dir = scene_dir(&scene_arg);
+    // Refuse a bad output before rendering, not after.
+    let format = image_format("--out", &out)?;
+    if let Some(p) = &png {
+        if image_format("--png", p)? != ImageFormat::Png {
+            return Err(InputError(format!("--png {}: the preview is a PNG; give a name ending in .png", p.display())).into());
+        }
+        aurora::atomic::check_replaceable(p)?;
+    }
+    aurora::atomic::check_replaceable(&out)?;
+    let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet };
+    match frame {
+        Some(spec) => {
+            let (frames, _) = frame_selection(&spec, None)?;
+            let seq = vdb.expect("clap requires --vdb with --frame");
+            for &f in &frames {
+                aurora::atomic::check_replaceable(&frame_name(&out, f))?;
+            }
+            with_threads(common.threads, || render_frames(&job, &seq, &frames, &out, png.as_deref()))
+        }
+        None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref() })),
+    }
+}
+
+/// Renders each frame of the sequence folder `seq` to `out` and `png` with
+/// the frame number before the extension.
+fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<&Path>) -> Result<()> {
+    for &f in frames {
+        let (vdb_path, _) = aurora::outputs::frame_paths(seq, f);
+        let exr = frame_name(out, f);
+        let pngf = png.map(|p| frame_name(p, f));
+        render_one(job, &Files { vdb: Some(&vdb_path), out: &exr, png: pngf.as_deref() })?;
+    }
+    Ok(())
+}
+
+/// Renders one image: the volume prepared from its source, traced (with
+/// adaptive sampling if asked), written.
+fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
+    let bars = Bars::new(job.quiet);
+    let progress = bars.progress();
+    let mut settings = aurora::render::RenderSettings::from_scene(&job.scene);
+    settings.base_dir = Some(job.dir.clone());
+    settings.shadow_samples = job.shadow_samples;
+    // A heightmap or sky image that is missing or not a regular file is
+    // refused before the bake or the medium build, not after.
+    settings.check_input_files()?;
+    let (prepared, open_seconds, build_seconds) = prepare(&job.scene, &settings, files.vdb, progress)?;
+    let image = if job.adaptive {
+        aurora::render::render_adaptive_prepared(&prepared, build_seconds, progress)?
+    } else {
+        let mut img = aurora::render::render_prepared(&prepared, progress)?;
+        img.stats.build_seconds = build_seconds;
+        img
+    };
+    finish(job, files, &image, open_seconds)
+}
+
+/// The renderer prepared from the image's source, with the seconds spent
+/// opening it (reading the file, or baking) and building the medium.
+///
+/// From a VDB, the medium straight from the file's records (no grids; the
+/// terrain's emission sampler is built from the medium); from grids where
+/// that path does not apply (a float emission grid, active tiles) and after
+/// a bake.
+fn prepare(
+    scene: &Scene,
+    settings: &aurora::render::RenderSettings,
+    vdb: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<(Prepared, f64, f64)> {
+    let from_records = match vdb {
+        Some(path) => aurora::vdb::read::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+            .map_err(|e| InputError(e.to_string()))?,
+        None => None,
+    };
+    if let Some(read) = from_records {
+        return Ok((Prepared::with_medium(settings, read.medium, None)?, read.open_seconds, read.build_seconds));
+    }
+    let open = std::time::Instant::now();
+    let (density, emission) = match vdb {
+        Some(path) => {
+            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            aurora::vdb::read::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+        }
+        None => {
+            let bake = aurora::bake::bake(scene, progress)?;
+            print_warnings(&bake.stats.warnings);
+            (Some(bake.density), Some(bake.emission))
+        }
+    };
+    let open_seconds = open.elapsed().as_secs_f64();
+    let build = std::time::Instant::now();
+    let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
+    Ok((Prepared::new(settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
+}
+
+/// Writes a render's image (and PNG) and prints its statistics.
+fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
+    let Files { vdb, out, png } = *files;
+    let exposure = job.scene.render.exposure;
+    match job.format {
+        ImageFormat::Exr => aurora::render::film::write_exr(out, image),
+        ImageFormat::Png => aurora::render::film::write_png(out, image, exposure),
+    }
+    .with_context(|| format!("cannot write {}", out.display()))?;
+    if let Some(p) = png {
+        aurora::render::film::write_png(p, image, exposure).with_context(|| format!("cannot write {}", p.display()))?;
+    }
+    if !job.quiet {
+        eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());
+        let st = &image.stats;
+        eprintln!(
+            "{} primary rays in {:.2} s ({:.0}/s), {} shadow samples, {} threads",
+            st.primary_rays,
+            st.render_seconds,
+            st.primary_rays_per_second(),
+            st.shadow_samples,
+            st.threads
+        );
+        eprintln!(
+            "times: {} {:.2} s, build {:.2} s, trace {:.2} s",
+            if vdb.is_some() { "open VDB" } else { "bake" },
+            open_seconds,
+            st.build_seconds,
+            st.render_seconds
+        );
+    }
+    Ok(())
+}
