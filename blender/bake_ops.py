@@ -82,22 +82,27 @@ def latest_progress(events: list[Event]) -> Event | None:
 
 
 def load_result(scene: bpy.types.Scene, job: BakeJob) -> list[bpy.types.Object]:
-    """Replace the Volume that showed `job.output_dir` by the new bake."""
+    """Show the new bake: the Volume object that showed `job.output_dir`
+    keeps its identity (name, collections, parent, selection) and gets the
+    new volume data; without one a new object is made."""
     key = str(job.output_dir)
-    name = VOLUME_NAME
-    for obj in [o for o in scene.objects if o.get("aurora_bake_dir") == key]:
-        name = obj.name
-        data = obj.data
-        bpy.data.objects.remove(obj)
-        if data is not None and data.users == 0:
-            data.grids.unload()
-            bpy.data.volumes.remove(data)
+    old = [o for o in scene.objects if o.get("aurora_bake_dir") == key and o.type == "VOLUME"]
     vol = scene.aurora.volume
-    objects = import_aurora(job.result_file(), vol.density_scale, vol.emission_scale, scene=scene, name=name)
-    for obj in objects:
-        obj.name = name
-        obj["aurora_bake_dir"] = key
-    return objects
+    fresh = import_aurora(job.result_file(), vol.density_scale, vol.emission_scale, scene=scene, name=VOLUME_NAME)
+    if not old:
+        for obj in fresh:
+            obj["aurora_bake_dir"] = key
+        return fresh
+    target, new = old[0], fresh[0]
+    stale = target.data
+    target.data = new.data
+    target["aurora_source"] = new.get("aurora_source", "")
+    bpy.data.objects.remove(new)
+    if stale.users == 0:
+        stale.grids.unload()
+        bpy.data.volumes.remove(stale)
+    target.data.name = target.name
+    return [target]
 
 
 class AURORA_OT_bake(bpy.types.Operator):

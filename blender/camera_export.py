@@ -40,13 +40,16 @@ def _spans_width(cam: bpy.types.Camera, aspect: float) -> bool:
     return fit == "HORIZONTAL" or (fit == "AUTO" and aspect >= 1.0)
 
 
-def camera_table(obj: bpy.types.Object, scene: bpy.types.Scene) -> dict:
+def camera_table(obj: bpy.types.Object, scene: bpy.types.Scene, depsgraph=None) -> dict:
     """`[camera]` of the scene file for camera object `obj` rendered at the
-    scene's resolution."""
+    scene's resolution (its evaluated transform: constraints, parents and
+    animation at the current frame applied)."""
+    depsgraph = depsgraph or bpy.context.evaluated_depsgraph_get()
     cam = obj.data
+    ev = obj.evaluated_get(depsgraph)
     w, h = render_size(scene)
     aspect = (w * scene.render.pixel_aspect_x) / (h * scene.render.pixel_aspect_y)
-    m = obj.matrix_world.normalized()
+    m = ev.matrix_world.normalized()
     pos = m.translation
     fwd = -m.col[2].xyz
     up = m.col[1].xyz

@@ -50,7 +50,7 @@ def scene_document(scene: bpy.types.Scene, depsgraph=None) -> dict:
     doc.setdefault("render", {}).update({"width": w, "height": h})
     doc.setdefault("animation", {})["fps"] = scene.render.fps / scene.render.fps_base
     if scene.camera is not None:
-        doc["camera"] = camera_table(scene.camera, scene)
+        doc["camera"] = camera_table(scene.camera, scene, depsgraph)
     if len(s.curtains):
         doc["curtain"] = [curtain_table(c, depsgraph) for c in s.curtains]
     return doc

@@ -313,5 +313,8 @@ fn committed_key_docs_match_the_table() {
         return;
     }
     let committed = std::fs::read_to_string(&path).unwrap_or_default();
-    assert!(committed == text, "blender/scene_keys.json is stale: regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema");
+    assert!(
+        committed == text,
+        "blender/scene_keys.json is stale: regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema"
+    );
 }
