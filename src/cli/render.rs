@@ -167,14 +167,14 @@ fn prepare(
 /// Writes a render's image (and PNG) and prints its statistics.
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
     let Files { vdb, out, png } = *files;
-    let exposure = job.scene.render.exposure;
+    let (exposure, view) = (job.scene.render.exposure, job.scene.render.view_transform);
     match job.format {
         ImageFormat::Exr => aurora::render::film::write_exr(out, image),
-        ImageFormat::Png => aurora::render::film::write_png(out, image, exposure),
+        ImageFormat::Png => aurora::render::film::write_png(out, image, exposure, view),
     }
     .with_context(|| format!("cannot write {}", out.display()))?;
     if let Some(p) = png {
-        aurora::render::film::write_png(p, image, exposure).with_context(|| format!("cannot write {}", p.display()))?;
+        aurora::render::film::write_png(p, image, exposure, view).with_context(|| format!("cannot write {}", p.display()))?;
     }
     if !job.quiet {
         eprintln!("wrote {}{}", out.display(), png.map(|p| format!(" and {}", p.display())).unwrap_or_default());
