@@ -195,7 +195,9 @@ class BakeJob:
         if rc != 0:
             shutil.rmtree(self.staging, ignore_errors=True)
             msg = "; ".join(self.errors) or f"aurora bake exited with status {rc}"
-            raise BakeError(msg)
+            # Name the scene file where it would have been kept, not the
+            # staging folder just removed.
+            raise BakeError(msg.replace(str(self.staging), str(self.output_dir)))
         old = self.output_dir.parent / f".{self.output_dir.name}.old-{os.getpid()}-{id(self):x}"
         if self.output_dir.exists():
             self.output_dir.rename(old)

@@ -125,8 +125,8 @@ impl<W: Write + Send> Progress for JsonProgress<W> {
     fn inc(&self, n: u64) {
         let done = self.done.fetch_add(n, Ordering::Relaxed) + n;
         let total = self.total.load(Ordering::Relaxed);
-        if total > 0 {
-            let pct = (done.min(total) * 100) / total;
+        // `None`: the total is unknown (0).
+        if let Some(pct) = (done.min(total) * 100).checked_div(total) {
             let last = self.reported.load(Ordering::Relaxed);
             // One thread wins each new percent; the others go on working.
             if pct > last && self.reported.compare_exchange(last, pct, Ordering::Relaxed, Ordering::Relaxed).is_ok() {
