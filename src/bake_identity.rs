@@ -154,6 +154,7 @@ mod tests {
         "plane",
         "heightfield",
         "us1976",
+        "standard",
         "nrlmsis21",
         "x.png",
     ];
