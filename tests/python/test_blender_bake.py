@@ -235,6 +235,8 @@ def test_a_curve_becomes_the_curtains_path_in_world_km(sc, panel, bpy):
 
 
 def test_bake_with_a_bezier_path_loads_a_volume_whose_emission_follows_the_curve(sc, panel, bpy, tmp_path):
+    """Needs a binary with the `[[curtain]] path` key: against one without
+    it the bake is refused (`unknown field path`) and this fails."""
     s = sc.aurora
     s.output_dir = str(tmp_path / "bake")
     set_small(s)
