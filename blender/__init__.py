@@ -1,4 +1,9 @@
-"""Aurora importer for Blender: File > Import > Aurora (.vdb / .usda).
+"""Aurora for Blender: bake from the Aurora panel, import with File > Import.
+
+The Aurora panel (3D viewport sidebar) edits `scene.aurora`, every scene key
+(properties.py), and `bpy.ops.aurora.bake()` bakes it for the active camera
+with the `aurora` binary and loads the result (bake_ops.py); in background
+mode it runs synchronously, so scripts use it.
 
 Imports an `aurora bake` as a Volume object whose material reproduces
 `aurora render`'s emission-absorption model, and optionally builds the scene
@@ -22,8 +27,8 @@ bl_info = {
     "author": "aurora project",
     "version": (0, 1, 0),
     "blender": (4, 2, 0),
-    "location": "File > Import > Aurora (.vdb / .usda)",
-    "description": "Import aurora volumes with the reference radiance model",
+    "location": "View3D > Sidebar > Aurora; File > Import > Aurora (.vdb / .usda)",
+    "description": "Bake aurora from a panel, import aurora volumes with the reference radiance model",
     "category": "Import-Export",
 }
 
@@ -40,13 +45,17 @@ __all__ = [
 ]
 
 
-def register():
-    from . import operators
+def _modules():
+    from . import bake_ops, operators, panel, properties
 
-    operators.register()
+    return [properties, operators, bake_ops, panel]
+
+
+def register():
+    for m in _modules():
+        m.register()
 
 
 def unregister():
-    from . import operators
-
-    operators.unregister()
+    for m in reversed(_modules()):
+        m.unregister()

@@ -60,6 +60,9 @@ class Render:
     height: int = _default("render", "height")
     spp: int = _default("render", "spp")
     exposure: float = _default("render", "exposure")
+    #: The PNG view transform of `aurora render` ("agx" or "standard"; the
+    #: EXR it writes and Cycles' EXR are linear either way).
+    view_transform: str = _default("render", "view_transform")
 
 
 @dataclass(frozen=True)
@@ -188,7 +191,11 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         height=int(_checked(src, "render", "height", r)),
         spp=int(_checked(src, "render", "spp", r)),
         exposure=_checked(src, "render", "exposure", r),
+        view_transform=r.get("view_transform", Render().view_transform),
     )
+    views = SCHEMA["render"]["view_transform"]["values"]
+    if ren.view_transform not in views:
+        raise SceneFileError(f"{src}: render.view_transform = {ren.view_transform!r} must be one of {', '.join(views)}")
     for k in ("width", "height", "spp"):
         if k in r and (isinstance(r[k], float) and r[k] != int(r[k])):
             raise SceneFileError(f"{src}: render.{k} must be an integer, got {r[k]!r}")

@@ -39,6 +39,7 @@ use serde::{Deserialize, Serialize};
 pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.spp", "samples per pixel of the reference renderer; the bake traces no pixel"),
     ("render.exposure", "the PNG preview's exposure, a tone map of the rendered image"),
+    ("render.view_transform", "the PNG preview's view transform, a tone map of the rendered image"),
     ("volume", "density_scale and emission_scale are applied by the renderer at lookup; the files hold the unscaled grids"),
     ("background", "radiance, image and stars are seen by camera rays only; the bake never reads the image"),
     ("terrain", "the ground is traced by the renderer only; the bake neither reads the heightmap nor shades or occludes with it"),
@@ -153,6 +154,7 @@ mod tests {
         "plane",
         "heightfield",
         "us1976",
+        "standard",
         "nrlmsis21",
         "x.png",
     ];

@@ -10,6 +10,8 @@ mod cli;
 use clap::Parser;
 
 fn main() {
-    let code = cli::exit::code(cli::run(cli::args::Cli::parse()));
+    let args = cli::args::Cli::parse();
+    let json = args.json_errors();
+    let code = cli::exit::code(cli::run(args), json);
     std::process::exit(code);
 }

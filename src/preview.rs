@@ -13,7 +13,7 @@
 //!
 //! | the edit touches | rerun |
 //! |---|---|
-//! | `render.exposure` only | nothing traced: the last linear image re-encoded (exposure is a tone map of the linear film, `crate::render::film::display_u8`) |
+//! | `render.exposure` or `render.view_transform` only | nothing traced: the last linear image re-encoded (a tone map of the linear film, `crate::render::film::display_rgb`) |
 //! | `[render]` spp, `[background]`, `[terrain]` | the pixels (the medium is kept; the terrain model unless its geometry changed, the sky unless `[background]` did) |
 //! | `[volume]` | the pixels (the medium holds unit values and applies the scales at lookup: `Prepared::set_volume_scales`, no rebuild) |
 //! | `[camera]`, `[render]` width / height | the voxel size (`"auto"` follows the camera): the gather when it changed, pruning when `grid.prune > 0` (then the medium), then the pixels |
@@ -140,8 +140,9 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     at(old.camera != new.camera || (old.render.width, old.render.height) != (new.render.width, new.render.height), Stage::Camera);
     let mut render = old.render.clone();
     render.exposure = new.render.exposure;
+    render.view_transform = new.render.view_transform;
     at(render != new.render || old.volume != new.volume || old.background != new.background || old.terrain != new.terrain, Stage::Render);
-    at(old.render.exposure != new.render.exposure, Stage::Exposure);
+    at(old.render.exposure != new.render.exposure || old.render.view_transform != new.render.view_transform, Stage::Exposure);
     s
 }
 
@@ -296,10 +297,10 @@ impl Preview {
         s
     }
 
-    /// Writes `img` at `exposure` to the output PNG; returns its seconds.
-    fn write(&self, img: &Image, exposure: f64) -> Result<f64, RenderError> {
+    /// Writes `img` at `exposure` through `view` to the output PNG; returns its seconds.
+    fn write(&self, img: &Image, exposure: f64, view: crate::scene::ViewTransform) -> Result<f64, RenderError> {
         let t = Instant::now();
-        render::film::write_png(&self.out, img, exposure)?;
+        render::film::write_png(&self.out, img, exposure, view)?;
         Ok(t.elapsed().as_secs_f64())
     }
 
@@ -350,7 +351,7 @@ impl Preview {
         let p = Prepared::reuse(prev.take(), true, &s, &volume)?;
         let img = render::render_prepared(&p, &NoProgress)?;
         *prev = Some(p);
-        self.write(&img, scene.render.exposure)
+        self.write(&img, scene.render.exposure, scene.render.view_transform)
     }
 
     /// Brings the pictures up to date with `scene` (validated), rerunning
@@ -383,7 +384,7 @@ impl Preview {
         if stage == Stage::Exposure {
             if let Some(look) = &self.look {
                 // A tone map of the last linear image: nothing is traced.
-                u.png = self.write(&look.image, scene.render.exposure)?;
+                u.png = self.write(&look.image, scene.render.exposure, scene.render.view_transform)?;
                 u.spp = look.prepared.settings().render.spp;
                 u.to_picture = t0.elapsed().as_secs_f64();
                 if let Some(c) = self.cache.as_mut() {
@@ -531,7 +532,7 @@ impl Preview {
         };
         self.cache = Some(next);
         let cache = self.cache.as_ref().expect("just set");
-        let exposure = scene.render.exposure;
+        let (exposure, view) = (scene.render.exposure, scene.render.view_transform);
         let volume = Volume { density: Some(&cache.bake.density), emission: Some(&cache.bake.emission) };
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
         let settings = self.settings(scene, w, h, spp);
@@ -553,7 +554,7 @@ impl Preview {
             prepared.set_image(cw, ch, 1)?;
             let img = render::render_prepared(&prepared, nothing);
             prepared.set_image(w, h, spp)?;
-            u.png += self.write(&img?, exposure)?;
+            u.png += self.write(&img?, exposure, view)?;
             u.coarse_render = t.elapsed().as_secs_f64();
             coarse_done(&mut u);
         }
@@ -562,7 +563,7 @@ impl Preview {
         u.render_pixels = t.elapsed().as_secs_f64();
         u.render = u.render_build + u.render_pixels;
         u.spp = spp;
-        u.png += self.write(&img, exposure)?;
+        u.png += self.write(&img, exposure, view)?;
         u.to_picture = t0.elapsed().as_secs_f64();
         let mut look = Look { prepared, image: img };
         if scene.render.spp > spp && on_picture(&format!("picture ({w}x{h}, {spp} spp)"), u.to_picture) {
@@ -574,7 +575,7 @@ impl Preview {
             let img = render::render_prepared(&look.prepared, nothing)?;
             u.full_render = t.elapsed().as_secs_f64();
             u.full_spp = scene.render.spp;
-            u.png += self.write(&img, exposure)?;
+            u.png += self.write(&img, exposure, view)?;
             u.to_full = t0.elapsed().as_secs_f64();
             look.image = img;
         }
@@ -728,7 +729,7 @@ mod tests {
         let after = std::fs::read(&out).unwrap();
         assert_ne!(after, before, "the picture follows the exposure");
         let want = out.with_file_name("want.png");
-        render::film::write_png(&want, &image, scene.render.exposure).unwrap();
+        render::film::write_png(&want, &image, scene.render.exposure, scene.render.view_transform).unwrap();
         assert_eq!(after, std::fs::read(&want).unwrap());
         // The next render edit is diffed against the new exposure.
         scene.render.exposure += 0.5;

@@ -123,7 +123,7 @@ fn srgb8(x: f64) -> u8 {
 }
 
 #[test]
-fn png_preview_applies_exposure_then_srgb_and_clamps() {
+fn standard_png_preview_applies_exposure_then_srgb_and_clamps() {
     let vals = [0.0f32, 0.001, 0.0031308, 0.05, 0.18, 0.5, 1.0, 3.0, -1.0];
     let img = Image {
         width: vals.len(),
@@ -133,7 +133,7 @@ fn png_preview_applies_exposure_then_srgb_and_clamps() {
     };
     for exposure in [0.0, 1.0, -2.5] {
         let path = tmp(&format!("p{exposure}.png"));
-        write_png(&path, &img, exposure).unwrap();
+        write_png(&path, &img, exposure, aurora::scene::ViewTransform::Standard).unwrap();
         let dec = png::Decoder::new(std::fs::File::open(&path).unwrap());
         let mut r = dec.read_info().unwrap();
         let mut buf = vec![0; r.output_buffer_size()];

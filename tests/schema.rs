@@ -136,7 +136,8 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("render", "width", "px", "image width"),
     ("render", "height", "px", "image height (row 0 is the top)"),
     ("render", "spp", "", "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
-    ("render", "exposure", "stops", "PNG only: sRGB of 2^exposure x the linear image, clipped"),
+    ("render", "exposure", "stops", "PNG only: the view transform of 2^exposure x the linear image"),
+    ("render", "view_transform", "", "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction) or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),
     ("volume", "density_scale", "", "extinction = `density_scale` x the `density` grid"),
     ("volume", "emission_scale", "", "emitted radiance per km = `emission_scale` x the `emission` grid"),
     ("background", "radiance", "linear Rec.709", "constant radiance seen behind the volume where no terrain is hit (it does not light the terrain)"),
@@ -296,4 +297,31 @@ fn range_of(entry: &Map<String, Value>) -> String {
         }
         _ => String::new(),
     }
+}
+
+/// `blender/scene_keys.json`: each key's unit and description from
+/// [`KEYS`], `{section: {key: {"unit", "description"}}}`, which the add-on's
+/// panel shows beside the schema's defaults and ranges. Regenerated with
+/// the docs (`AURORA_UPDATE_DOCS=1`).
+#[test]
+fn committed_key_docs_match_the_table() {
+    let mut out = Map::new();
+    for (section, key, unit, description) in KEYS {
+        let entry = out.entry(section.to_string()).or_insert_with(|| Value::Object(Map::new()));
+        let mut k = Map::new();
+        k.insert("unit".into(), Value::String(unit.to_string()));
+        k.insert("description".into(), Value::String(description.to_string()));
+        entry.as_object_mut().expect("object").insert(key.to_string(), Value::Object(k));
+    }
+    let text = serde_json::to_string_pretty(&Value::Object(out)).expect("serialises") + "\n";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/scene_keys.json");
+    if std::env::var_os("AURORA_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &text).expect("write blender/scene_keys.json");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == text,
+        "blender/scene_keys.json is stale: regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test schema"
+    );
 }

@@ -111,8 +111,27 @@ pub struct BakeArgs {
     /// Without it such a folder is refused.
     #[arg(long, requires = "frames")]
     pub rebake: bool,
+    /// Progress on stderr: `bars` (a terminal's bars and summaries) or `json` (for a host
+    /// program such as the Blender add-on: stderr then carries only JSON objects, one per line,
+    /// progress, warnings and errors; docs/guide.md, "Progress as JSON").
+    #[arg(long, value_enum, default_value_t = ProgressFormat::Bars, value_name = "FORMAT")]
+    pub progress: ProgressFormat,
     #[command(flatten)]
     pub common: Common,
+}
+
+/// `aurora bake --progress`.
+#[derive(Clone, Copy, PartialEq, Eq, Debug, clap::ValueEnum)]
+pub enum ProgressFormat {
+    Bars,
+    Json,
+}
+
+impl Cli {
+    /// Whether errors go to stderr as JSON (`aurora bake --progress json`).
+    pub fn json_errors(&self) -> bool {
+        matches!(&self.command, Command::Bake(a) if a.progress == ProgressFormat::Json)
+    }
 }
 
 // The arguments of `aurora render` (its help is the doc of [`Command::Render`]).

@@ -2,24 +2,75 @@
 //! sequence ([`bake_frames`]), resumed frame by frame: a frame already
 //! complete for this bake is skipped, one another process is baking is
 //! waited for (`aurora::sequence`, `aurora::outputs::lock_frame`).
+//!
+//! What it says on stderr goes through one [`Report`]: bars, summaries and
+//! warning lines for a terminal, or with `--progress json` only JSON objects
+//! (`aurora::progress::JsonProgress`: stage lines, one `frame` line per
+//! frame of a sequence, warnings; the error line is `exit::code`'s).
 
-use super::args::BakeArgs;
+use super::args::{BakeArgs, ProgressFormat};
 use super::bars::Bars;
 use super::exit::InputError;
 use super::frames::frame_selection;
 use super::{load_scene, print_warnings, with_threads};
 use anyhow::Result;
+use aurora::progress::{JsonProgress, Progress};
 use aurora::scene::Scene;
 use std::path::Path;
 
+/// Where the bake's progress and messages go.
+enum Report {
+    Text { bars: Bars, quiet: bool },
+    Json(JsonProgress<std::io::Stderr>),
+}
+
+impl Report {
+    fn new(format: ProgressFormat, quiet: bool) -> Self {
+        match format {
+            ProgressFormat::Bars => Report::Text { bars: Bars::new(quiet), quiet },
+            ProgressFormat::Json => Report::Json(JsonProgress::new(std::io::stderr())),
+        }
+    }
+
+    fn progress(&self) -> &dyn Progress {
+        match self {
+            Report::Text { bars, .. } => bars.progress(),
+            Report::Json(j) => j,
+        }
+    }
+
+    /// Warnings: shown even with --quiet.
+    fn warnings(&self, warnings: &[String]) {
+        match self {
+            Report::Text { .. } => print_warnings(warnings),
+            Report::Json(j) => warnings.iter().for_each(|w| j.warning(w)),
+        }
+    }
+
+    /// A line for a person at a terminal (not with --quiet, not as JSON).
+    fn say(&self, line: impl FnOnce() -> String) {
+        if let Report::Text { quiet: false, .. } = self {
+            eprintln!("{}", line());
+        }
+    }
+
+    /// `done` of `total` frames of a sequence are complete.
+    fn frames(&self, done: usize, total: usize) {
+        if let Report::Json(j) = self {
+            j.step("frame", done as u64, total as u64);
+        }
+    }
+}
+
 pub fn run(a: BakeArgs) -> Result<()> {
-    let BakeArgs { scene, out, seed, frames, shard, sequence, rebake, common } = a;
+    let BakeArgs { scene, out, seed, frames, shard, sequence, rebake, progress, common } = a;
+    let report = Report::new(progress, common.quiet);
     let mut scene = load_scene(&scene)?;
     if let Some(s) = seed {
         scene.seed = s;
     }
     let Some(spec) = frames else {
-        return with_threads(common.threads, || bake_one(&scene, &out, common.quiet));
+        return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };
     let (mut frames, mine) = frame_selection(&spec, shard.as_deref())?;
     if let Some(seq) = sequence {
@@ -29,76 +80,69 @@ pub fn run(a: BakeArgs) -> Result<()> {
         }
         frames = all;
     }
-    with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, common.quiet))
+    with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, &report))
 }
 
 /// One bake into `out`: aurora.vdb, aurora.usda and bake.json.
-fn bake_one(scene: &Scene, out: &Path, quiet: bool) -> Result<()> {
-    let bars = Bars::new(quiet);
+fn bake_one(scene: &Scene, out: &Path, say: &Report) -> Result<()> {
     // The folder is checked and locked before the bake, not after it.
-    let _lock =
-        aurora::outputs::prepare(out, || eprintln!("aurora: another bake is writing to {}; waiting for it to finish", out.display()))?;
-    let bake = aurora::bake::bake(scene, bars.progress())?;
-    print_warnings(&bake.stats.warnings);
+    let _lock = aurora::outputs::prepare(out, || {
+        say.say(|| format!("aurora: another bake is writing to {}; waiting for it to finish", out.display()))
+    })?;
+    let bake = aurora::bake::bake(scene, say.progress())?;
+    say.warnings(&bake.stats.warnings);
     let report = aurora::outputs::write_outputs_locked(scene, &bake, out)?;
-    if !quiet {
-        eprintln!("{}", report.summary());
-    }
+    say.say(|| report.summary());
     Ok(())
 }
 
 /// Bakes this process's share `mine` of the sequence `frames` into `out`
 /// (a folder of one bake: `aurora::sequence`; `rebake` deletes another's).
-fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, quiet: bool) -> Result<()> {
-    let bars = Bars::new(quiet);
-    let progress = bars.progress();
+fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, say: &Report) -> Result<()> {
+    let progress = say.progress();
     let identity = aurora::bake_identity::BakeIdentity::of(scene);
     let line_grids = scene.grid.lines.iter().map(|k| aurora::lines::grid_name(k)).collect();
     let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, line_grids, rebake, || {
-        if !quiet {
-            eprintln!("aurora: another bake is writing to {}; waiting", out.display())
-        }
+        say.say(|| format!("aurora: another bake is writing to {}; waiting", out.display()))
     })?;
+    say.frames(0, mine.len());
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped) = (0usize, 0usize);
     let mut plan: Option<aurora::bake::plan::BakePlan> = None;
     for &f in mine {
         if seq.frame_complete(f) {
             skipped += 1;
+            say.frames(baked + skipped, mine.len());
             continue;
         }
         seq.check_still_ours()?;
         // One writer per frame: a shard that finds another baking it waits,
         // then finds it complete.
-        let _lock = aurora::outputs::lock_frame(out, f, || {
-            if !quiet {
-                eprintln!("frame {f}: another process is baking it; waiting")
-            }
-        })?;
+        let _lock = aurora::outputs::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
         if seq.frame_complete(f) {
             skipped += 1;
+            say.frames(baked + skipped, mine.len());
             continue;
         }
         let at = Scene { animation: aurora::animation::at_frame(&scene.animation, f), ..scene.clone() };
         // One plan, carried from frame to frame (only the time changes).
         let (bake, p) = aurora::bake::bake_reusing(&at, plan.as_ref(), progress)?;
         plan = Some(p);
-        print_warnings(&bake.stats.warnings);
+        say.warnings(&bake.stats.warnings);
         let report = seq.write_frame(&at, &bake, f)?;
         baked += 1;
-        if !quiet {
-            eprintln!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display());
-        }
+        say.say(|| format!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display()));
+        say.frames(baked + skipped, mine.len());
     }
-    if !quiet {
+    say.say(|| {
         let secs = t0.elapsed().as_secs_f64();
-        eprintln!(
+        format!(
             "{baked} frames baked, {skipped} already complete, of {} for this shard ({} in the sequence) in {secs:.2} s ({:.3} frames/s); stage {}",
             mine.len(),
             frames.len(),
             if secs > 0.0 { baked as f64 / secs } else { 0.0 },
             out.join(aurora::outputs::USDA_NAME).display()
-        );
-    }
+        )
+    });
     Ok(())
 }

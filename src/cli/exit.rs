@@ -27,17 +27,19 @@ impl InputError {
 }
 
 /// The exit status of a command's result; an error is printed on stderr
-/// (with its causes) first.
-pub fn code(result: anyhow::Result<()>) -> i32 {
+/// (with its causes) first, as a line of text or, with `json`, as the
+/// object `{"error", "status", "seconds"}` (`--progress json`).
+pub fn code(result: anyhow::Result<()>, json: bool) -> i32 {
     match result {
         Ok(()) => SUCCESS,
         Err(e) => {
-            eprintln!("aurora: error: {e:#}");
-            if is_input(&e) {
-                BAD_INPUT
+            let status = if is_input(&e) { BAD_INPUT } else { FAILURE };
+            if json {
+                aurora::progress::JsonProgress::new(std::io::stderr()).error(&format!("{e:#}"), status);
             } else {
-                FAILURE
+                eprintln!("aurora: error: {e:#}");
             }
+            status
         }
     }
 }

@@ -241,7 +241,7 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
 /// Writes a render's image (and PNG) and prints its statistics.
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
     let Files { vdb, out, png } = *files;
-    let exposure = job.scene.render.exposure;
+    let (exposure, view) = (job.scene.render.exposure, job.scene.render.view_transform);
     if job.grid.is_some() {
         write_grey(job, out, job.format == ImageFormat::Png, image)?;
         if let Some(p) = png {
@@ -250,11 +250,11 @@ fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seco
     } else {
         match job.format {
             ImageFormat::Exr => aurora::render::film::write_exr(out, image),
-            ImageFormat::Png => aurora::render::film::write_png(out, image, exposure),
+            ImageFormat::Png => aurora::render::film::write_png(out, image, exposure, view),
         }
         .with_context(|| format!("cannot write {}", out.display()))?;
         if let Some(p) = png {
-            aurora::render::film::write_png(p, image, exposure).with_context(|| format!("cannot write {}", p.display()))?;
+            aurora::render::film::write_png(p, image, exposure, view).with_context(|| format!("cannot write {}", p.display()))?;
         }
     }
     if !job.quiet {

@@ -8,10 +8,13 @@
 //!   parallel and, with its default "unspecified" line order, writes them in
 //!   the order they finish, so the same image gave different bytes from run
 //!   to run; with `LineOrder::Increasing` it sorts them first.
-//! * PNG preview, display transform: `v = clamp(sRGB_OETF(2^exposure * linear), 0, 1)`
+//! * PNG preview of `2^exposure * linear` through the view transform
+//!   (`render.view_transform`): `standard` is `v = clamp(sRGB_OETF(x), 0, 1)`
 //!   per RGB channel, with the sRGB OETF `12.92 x` for `x <= 0.0031308` and
-//!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), quantised as
-//!   `round(255 v)`; alpha is dropped (8-bit RGB).
+//!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), Blender's "Standard";
+//!   `agx` (the default) is Blender's AgX view for an sRGB display
+//!   ([`super::agx`]); quantised as `round(255 v)`, no dither; alpha is
+//!   dropped (8-bit RGB).
 //!
 //! * One-channel images of a float grid (`aurora render --grid`): the red
 //!   channel (the grid is rendered as grey) as an EXR of one 32-bit float
@@ -23,6 +26,7 @@
 //! All are written to a temporary file in the destination folder and renamed.
 
 use super::{Image, RenderError, RenderStats};
+use crate::scene::ViewTransform;
 use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
 use std::path::Path;
 
@@ -171,15 +175,31 @@ pub fn srgb_oetf(x: f64) -> f64 {
     }
 }
 
-/// The preview's display transform of one linear channel value (module doc).
+/// The standard display transform of one linear channel value (module doc).
 pub fn display_u8(linear: f32, exposure: f64) -> u8 {
-    let v = srgb_oetf(linear as f64 * exposure.exp2());
+    to_u8(srgb_oetf(linear as f64 * exposure.exp2()))
+}
+
+fn to_u8(v: f64) -> u8 {
     let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
     (v * 255.0).round() as u8
 }
 
-/// Writes an 8-bit sRGB PNG preview with the documented display transform.
-pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result<(), RenderError> {
+/// One pixel's RGB code values through `view` at `exposure` (module doc).
+pub fn display_rgb(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u8; 3] {
+    match view {
+        ViewTransform::Standard => [0, 1, 2].map(|c| display_u8(p[c], exposure)),
+        ViewTransform::Agx => {
+            let k = exposure.exp2();
+            // A NaN or infinite pixel is black, as in the standard transform.
+            let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
+            super::agx::Agx::get().display(c).map(to_u8)
+        }
+    }
+}
+
+/// Writes an 8-bit sRGB PNG preview through the view transform (module doc).
+pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64, view: ViewTransform) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -188,7 +208,7 @@ pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64) -> Result
     if !exposure.is_finite() {
         return Err(RenderError::Settings(format!("exposure {exposure} must be finite")));
     }
-    let data: Vec<u8> = image.pixels.iter().flat_map(|p| [0, 1, 2].map(|c| display_u8(p[c], exposure))).collect();
+    let data: Vec<u8> = image.pixels.iter().flat_map(|&p| display_rgb(p, exposure, view)).collect();
     let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
     let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
     let r = (|| -> Result<(), RenderError> {

@@ -52,6 +52,7 @@
 
 pub use crate::camera;
 pub mod adaptive;
+pub mod agx;
 pub mod dda;
 pub mod film;
 pub mod grids;

@@ -382,6 +382,19 @@ pub struct RenderParams {
     pub spp: usize,
     /// Exposure of the PNG preview, in stops.
     pub exposure: f64,
+    /// The PNG preview's view transform (the EXR stays linear).
+    pub view_transform: ViewTransform,
+}
+
+/// How a linear image becomes PNG code values (`crate::render::film`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ViewTransform {
+    /// The sRGB OETF of the linear value, clipped (Blender's "Standard").
+    Standard,
+    /// AgX, Blender's default view (`crate::render::agx`).
+    #[default]
+    Agx,
 }
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -580,7 +593,7 @@ impl Default for Camera {
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 16, exposure: 3.0 }
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx }
     }
 }
 

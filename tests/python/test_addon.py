@@ -102,12 +102,21 @@ def assert_aurora_volume(obj, density_scale, emission_scale):
     assert mat.cycles.volume_interpolation == "LINEAR"
 
 
-def test_installs_and_enables_as_extension_and_imports(bpy, fresh, tmp_path, aurora_vdb, blender_user_dir):
-    z = tmp_path / "aurora_importer.zip"
-    with zipfile.ZipFile(z, "w") as f:
-        for p in sorted(ADDON.rglob("*")):
-            if p.is_file() and "__pycache__" not in p.parts:
-                f.write(p, p.relative_to(ADDON))
+def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_path, aurora_vdb, blender_user_dir, monkeypatch):
+    """The zip tools/build_extension writes, installed into the throw-away
+    user folder (conftest.py), enabled, importing and baking from the panel's
+    operator with the binary set in the add-on's preferences."""
+    out = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--out", str(tmp_path / "dist")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    z = Path(out.stdout.strip())
+    assert z.name == "aurora_importer-0.1.0.zip" and z.is_file()
+    names = zipfile.ZipFile(z).namelist()
+    assert "blender_manifest.toml" in names and "scene_schema.json" in names and "scene_keys.json" in names
+    assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
+    again = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--out", str(tmp_path / "dist2")],
+                           capture_output=True, text=True, check=True)
+    assert Path(again.stdout.strip()).read_bytes() == z.read_bytes()  # reproducible
     result = bpy.ops.extensions.package_install_files(filepath=str(z), repo="user_default", enable_on_install=True)
     assert result == {"FINISHED"}
     module = "bl_ext.user_default.aurora_importer"
@@ -124,6 +133,19 @@ def test_installs_and_enables_as_extension_and_imports(bpy, fresh, tmp_path, aur
         assert_aurora_volume(vols[0], 2.0, 3.0)
         assert np.allclose(np.array(vols[0].matrix_world), np.eye(4))
         assert bpy.context.scene.unit_settings.scale_length == 1000.0  # 1 BU = 1 km
+        # A bake from the panel's operator, the binary found through the preferences.
+        binary = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
+        monkeypatch.delenv("AURORA_BIN", raising=False)
+        monkeypatch.setenv("PATH", str(tmp_path))  # no aurora on PATH either
+        assert binary.is_file(), f"{binary}: the aurora binary is missing (cargo build --release)"
+        bpy.context.preferences.addons[module].preferences.binary = str(binary)
+        s = bpy.context.scene.aurora
+        s.output_dir = str(tmp_path / "bake")
+        s.beams.count, s.footprint.resolution, s.grid.voxel_size = 300, (64, 16), 2.0
+        assert bpy.ops.aurora.bake() == {"FINISHED"}
+        baked = [o for o in bpy.data.objects if o.get("aurora_bake_dir") == str(tmp_path / "bake")]
+        assert len(baked) == 1 and baked[0].data.grids.load()
+        assert (tmp_path / "bake" / "aurora.vdb").is_file() and (tmp_path / "bake" / "scene.toml").is_file()
     finally:
         bpy.ops.preferences.addon_disable(module=module)
     assert module not in bpy.context.preferences.addons

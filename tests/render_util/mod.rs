@@ -49,7 +49,7 @@ pub fn persp(position: [f64; 3], look_at: [f64; 3], up: [f64; 3], fov_deg: f64) 
 pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> RenderSettings {
     RenderSettings {
         camera,
-        render: RenderParams { width, height, spp, exposure: 0.0 },
+        render: RenderParams { width, height, spp, exposure: 0.0, ..Default::default() },
         volume: VolumeParams { density_scale: 1.0, emission_scale: 1.0 },
         background: Background { radiance: [0.0; 3], ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },

@@ -1,0 +1,179 @@
+"""`aurora render`'s AgX PNGs against Blender's own AgX view of the same EXR.
+
+The linear EXR `aurora render` writes is shown through Blender's colour
+management with bpy (display sRGB, view AgX, look None, exposure the
+scene's, gamma 1, dither 0) and saved as an 8-bit PNG; `aurora render`'s
+PNG of the same render (`render.view_transform = "agx"`, the default) must
+agree within 3/255 per channel on 99% of the pixels (8-bit quantisation
+alone differs by 1 where the two sides round a value near a half step
+differently; the rest is the LUT's float precision). Two images: a reduced
+aurora bake, and a chart of saturated colour lines (pure primaries and
+secondaries, the aurora's green and red) over 16 stops, which is where a
+view transform's gamut handling shows.
+"""
+
+from __future__ import annotations
+
+import os
+import struct
+import subprocess
+import zlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import synth
+
+ROOT = Path(__file__).resolve().parent.parent.parent
+
+
+def aurora_bin() -> Path:
+    p = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
+    assert p.is_file() and os.access(p, os.X_OK), f"{p}: the aurora binary is missing (cargo build --release)"
+    return p
+
+
+def read_png_rgb8(path: Path) -> np.ndarray:
+    """An 8-bit RGB (or RGBA) non-interlaced PNG as (H, W, 3) uint8."""
+    data = Path(path).read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    pos, idat, head = 8, b"", None
+    while pos < len(data):
+        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        if kind == b"IHDR":
+            head = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    w, h, depth, ctype, _, _, interlace = head
+    assert depth == 8 and ctype in (2, 6) and interlace == 0, head
+    bpp = 3 if ctype == 2 else 4
+    raw = zlib.decompress(idat)
+    out = np.zeros((h, w * bpp), np.uint8)
+    prev = np.zeros(w * bpp, np.int32)
+    stride = w * bpp + 1
+    for y in range(h):
+        f, line = raw[y * stride], np.frombuffer(raw[y * stride + 1:(y + 1) * stride], np.uint8).astype(np.int32)
+        cur = np.zeros_like(line)
+        for x in range(len(line)):
+            a = cur[x - bpp] if x >= bpp else 0
+            b = prev[x]
+            c = prev[x - bpp] if x >= bpp else 0
+            if f == 0:
+                pred = 0
+            elif f == 1:
+                pred = a
+            elif f == 2:
+                pred = b
+            elif f == 3:
+                pred = (a + b) // 2
+            else:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
+            cur[x] = (line[x] + pred) & 0xFF
+        out[y] = cur
+        prev = cur
+    return out.reshape(h, w, bpp)[..., :3]
+
+
+def blender_agx_png(bpy, exr: Path, png: Path, exposure: float) -> np.ndarray:
+    """`exr` through Blender's AgX view for an sRGB display, as 8-bit PNG."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    img = bpy.data.images.load(str(exr))
+    sc = bpy.context.scene
+    sc.display_settings.display_device = "sRGB"
+    vs = sc.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = "AgX", "None", exposure, 1.0
+    sc.render.dither_intensity = 0.0
+    s = sc.render.image_settings
+    s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"
+    img.save_render(str(png), scene=sc)
+    return read_png_rgb8(png)
+
+
+def compare_png(ours: np.ndarray, theirs: np.ndarray, what: str):
+    assert ours.shape == theirs.shape, (ours.shape, theirs.shape)
+    d = np.abs(ours.astype(int) - theirs.astype(int)).max(-1)
+    within = (d <= 3).mean()
+    print(f"{what}: {within:.4%} of pixels within 3/255, {(d <= 1).mean():.4%} within 1/255, max {d.max()}")
+    assert within >= 0.99, f"{what}: only {within:.3%} of pixels within 3/255 of Blender's AgX (max {d.max()})"
+    return d
+
+
+def saturated_share(exr: Path, compare_mod) -> float:
+    rgb = compare_mod.read_rgba(exr)[..., :3].astype(np.float64)
+    mx = rgb.max(-1)
+    bright = mx > 0.18 * 2.0 ** -6
+    chroma = np.where(mx > 0, (mx - rgb.min(-1)) / np.where(mx > 0, mx, 1), 0)
+    return float((bright & (chroma > 0.9)).mean())
+
+
+def test_agx_png_matches_blender_on_an_aurora_render(bpy, compare, tmp_path):
+    scene = tmp_path / "aurora.toml"
+    scene.write_text(synth.toml_dumps({
+        "beams": {"count": 3000},
+        "footprint": {"resolution": [128, 32]},
+        "grid": {"voxel_size": 1.0},
+        "photons": {"radius_km": 1.0},
+        "render": {"width": 160, "height": 90, "spp": 4, "exposure": 4.0},
+    }))
+    exr, png = tmp_path / "a.exr", tmp_path / "a.png"
+    r = subprocess.run([aurora_bin(), "render", scene, "--out", exr, "--png", png, "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    ours = read_png_rgb8(png)
+    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 4.0)
+    d = compare_png(ours, theirs, "aurora render")
+    # The picture is not black: the comparison covers lit pixels.
+    assert (ours.max(-1) > 30).mean() > 0.05
+    assert d.max() <= 8
+
+
+def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
+    # Eight bars of colour, each an emission ramp over 16 stops (bottom to
+    # top), seen orthographically through a 2 km thick slab.
+    colours = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1), (1, 0, 1), (0.06, 1.0, 0.03), (1.0, 0.02, 0.05)]
+    h, nz, bar, ny = 0.5, 64, 6, 4
+    em = np.zeros((len(colours) * bar, ny, nz, 3), np.float32)
+    level = 0.18 * 2.0 ** np.linspace(-10.0, 6.0, nz) / (ny * h)
+    for i, c in enumerate(colours):
+        em[i * bar:(i + 1) * bar - 1] = np.asarray(c, np.float32)[None, None, None, :] * level[None, None, :, None]
+    vdb = synth.write_vdb(tmp_path / "lines.vdb", h, (0.0, 0.0, 0.0), None, em)
+    cx, cz = (em.shape[0] - 1) * h / 2, (nz - 1) * h / 2
+    cam = {"position": [cx, -50.0, cz], "look_at": [cx, 0.0, cz], "up": [0, 0, 1], "projection": "orthographic",
+           "ortho_height": nz * h}
+    scene = synth.write_scene(tmp_path / "lines.toml", cam, 96, 128, spp=4)
+    exr, png = tmp_path / "l.exr", tmp_path / "l.png"
+    r = subprocess.run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", exr, "--png", png, "--quiet"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert saturated_share(exr, compare) > 0.3  # the chart is mostly saturated colour
+    ours = read_png_rgb8(png)
+    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 0.0)
+    compare_png(ours, theirs, "saturated lines")
+
+
+def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):
+    """`view_transform = "standard"` keeps the old preview: Blender's
+    Standard view of the same EXR."""
+    scene = tmp_path / "s.toml"
+    scene.write_text(synth.toml_dumps({
+        "beams": {"count": 1000}, "footprint": {"resolution": [64, 16]}, "grid": {"voxel_size": 2.0},
+        "photons": {"radius_km": 1.5}, "render": {"width": 64, "height": 36, "spp": 2, "exposure": 5.0,
+                                                    "view_transform": "standard"},
+    }))
+    exr, png = tmp_path / "s.exr", tmp_path / "s.png"
+    r = subprocess.run([aurora_bin(), "render", scene, "--out", exr, "--png", png, "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    img = bpy.data.images.load(str(exr))
+    sc = bpy.context.scene
+    sc.display_settings.display_device = "sRGB"
+    sc.view_settings.view_transform, sc.view_settings.look, sc.view_settings.exposure = "Standard", "None", 5.0
+    sc.render.dither_intensity = 0.0
+    sc.render.image_settings.file_format, sc.render.image_settings.color_mode = "PNG", "RGB"
+    img.save_render(str(tmp_path / "b.png"), scene=sc)
+    d = np.abs(read_png_rgb8(png).astype(int) - read_png_rgb8(tmp_path / "b.png").astype(int)).max(-1)
+    assert (d <= 1).mean() >= 0.999, f"max {d.max()}"
