@@ -39,7 +39,17 @@
 //!   box dilated by the reach; one more per axis for the shift within a
 //!   slab, which is below a leaf for dips above 45 degrees), not the far
 //!   larger axis-aligned box around the whole slanted column.
-//! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell.
+//! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell (a
+//!   path's cells along it from [`crate::footprint::cells_along`]).
+//!
+//! A curtain along a path (`crate::curve`) is bounded by its band, not its
+//! bounding box: the leaves meeting the set of points within rho of a curve
+//! of length L lie within rho + sqrt(2) a of it (a the leaf side), a set of
+//! area at most `2 (rho + sqrt 2 a) L + pi (rho + sqrt 2 a)^2` (the area of
+//! a curve's parallel set), so at most that over a^2 leaves per leaf-thick
+//! slab, rho the half width, the reach and the slab's shift along the field
+//! within a leaf (below a leaf for dips above 45 degrees; each slab is the
+//! band shifted, as for the columns).
 //!
 //! With `voxel_size = "auto"` the voxel is at least half the kernel radius
 //! `photons.radius_km` ([`KernelRadius::auto_voxel_floor_km`], the floor the
@@ -49,6 +59,7 @@
 
 use crate::atmosphere::Atmosphere;
 use crate::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM};
+use crate::curve::{lift_km, polyline_length, vertices};
 use crate::deposit::Photon;
 use crate::fang::SpectrumDeposition;
 use crate::memory::{gib, MemoryLimit};
@@ -148,12 +159,33 @@ pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
                 return 0.0;
             }
             let slabs = h / leaf_km + 2.0;
+            if let Some((length, _)) = path_curve(scene, c) {
+                let rho = 0.5 * c.width + reach + std::f64::consts::SQRT_2 * leaf_km + leaf_km;
+                return band_leaves(length, rho, leaf_km) * slabs;
+            }
             let (s, co) = c.rotation_deg.to_radians().sin_cos();
             let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * reach;
             let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * reach;
             (dx / leaf_km + 3.0) * (dy / leaf_km + 3.0) * slabs
         })
         .sum()
+}
+
+/// A path curtain's curve lifted to the start altitude: its length and
+/// vertices (None for a straight curtain).
+fn path_curve(scene: &Scene, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
+    let p = c.path.as_ref()?;
+    let lift = lift_km(&scene.beams);
+    let lifted: Vec<[f64; 2]> = p.iter().map(|q| [q[0] + lift[0], q[1] + lift[1]]).collect();
+    let v = vertices(&lifted);
+    Some((polyline_length(&v), v))
+}
+
+/// Leaves of side `leaf` per slab within `rho` of a curve of `length`
+/// (module documentation).
+fn band_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
+    let r = rho + std::f64::consts::SQRT_2 * leaf;
+    (2.0 * r * length + std::f64::consts::PI * r * r) / (leaf * leaf)
 }
 
 /// A conservative world box around every curtain, km: footprint boxes
@@ -168,6 +200,16 @@ pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY, f64::INFINITY, z0];
     let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
     for c in &scene.curtains {
+        if let Some((_, v)) = path_curve(scene, c) {
+            let h = 0.5 * c.width;
+            for p in v {
+                lo[0] = lo[0].min(p[0] - h - tilt);
+                lo[1] = lo[1].min(p[1] - h - tilt);
+                hi[0] = hi[0].max(p[0] + h + tilt);
+                hi[1] = hi[1].max(p[1] + h + tilt);
+            }
+            continue;
+        }
         let (s, co) = c.rotation_deg.to_radians().sin_cos();
         for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
             let (u, w) = (a * c.length, b * c.width);
@@ -213,7 +255,27 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
     let (lo, hi) = world_bounds(scene);
     let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
-    let leaves = box_leaves.min(step_photons * per_photon) + column_leaves(scene, leaf_km, reach);
+    // With a path, the sum of the curtains' own bounds (a path's band) when smaller than the box.
+    let area_leaves = if scene.curtains.iter().any(|c| c.path.is_some()) {
+        let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
+        let own: f64 = scene
+            .curtains
+            .iter()
+            .map(|c| match path_curve(scene, c) {
+                Some((length, _)) => band_leaves(length, 0.5 * c.width + reach + leaf_km, leaf_km) * slabs,
+                None => {
+                    let (s, co) = c.rotation_deg.to_radians().sin_cos();
+                    let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + leaf_km);
+                    let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * (reach + leaf_km);
+                    ((dx / leaf_km).ceil() + 1.0) * ((dy / leaf_km).ceil() + 1.0) * slabs
+                }
+            })
+            .sum();
+        box_leaves.min(own)
+    } else {
+        box_leaves
+    };
+    let leaves = area_leaves.min(step_photons * per_photon) + column_leaves(scene, leaf_km, reach);
     // Blame the kernel when its reach, not the voxel or the curtains, makes the grid large.
     let box_without_reach: f64 = (0..3).map(|i| ((hi[i] - lo[i]) / leaf_km).ceil() + 1.0).product();
     let (grid_key, grid_value) = if box_leaves > 4.0 * box_without_reach && reach > leaf_km {
@@ -255,7 +317,15 @@ pub fn estimate(scene: &Scene) -> Estimate {
     };
 
     let [nx, ny] = scene.footprint.resolution;
-    let footprint = scene.curtains.len() as f64 * nx as f64 * ny as f64 * 12.0 * 8.0;
+    let cells: f64 = scene
+        .curtains
+        .iter()
+        .map(|c| {
+            let length = path_curve(scene, c).map_or(c.length, |(l, _)| l);
+            crate::footprint::cells_along(c, length, &scene.footprint) as f64 * ny as f64
+        })
+        .sum();
+    let footprint = cells * 12.0 * 8.0;
 
     Estimate {
         terms: vec![

@@ -20,10 +20,43 @@
 //! 3. Remap along a noise curve: `out(u, v) = sim(u, v - bend(u))`, `bend` a
 //!    1D Perlin noise of amplitude `bend_km` and wavelength
 //!    `bend_wavelength * length`; normalised to a peak of 1.
+//!
+//! A curtain with a `path` runs the same simulation in the path's arc length
+//! and normal (`crate::curve::PathFrame`), the path lifted from its altitude
+//! to the beams' start altitude along the field ([`crate::curve::lift_km`]).
+//! Along a long path the cells stay at most twice as long as they are wide
+//! ([`cells_along`], up to [`MAX_PATH_CELLS`]), and the fluid's patterns
+//! along u (its waves, the bend's wavelength) keep their size in cells: they
+//! are set per `resolution[0]` cells, so a path of one resolution's worth of
+//! cells is simulated exactly as the straight curtain of its length.
 
+use crate::curve::PathFrame;
 use crate::rng;
 use crate::scene::{AnimationParams, Curtain, FootprintParams};
 use std::path::Path;
+use std::sync::Arc;
+
+/// Most cells along a path's footprint.
+pub const MAX_PATH_CELLS: usize = 16_384;
+
+/// Cells along a curtain's footprint: `resolution[0]`, or along a path of
+/// `length` km at least enough for cells at most twice the cell width
+/// across, up to [`MAX_PATH_CELLS`].
+pub fn cells_along(curtain: &Curtain, length: f64, params: &FootprintParams) -> usize {
+    let [nx, ny] = params.resolution;
+    if curtain.path.is_none() {
+        return nx;
+    }
+    let dv = curtain.width / ny as f64;
+    nx.max(((length / (2.0 * dv)).ceil() as usize).min(MAX_PATH_CELLS))
+}
+
+/// A footprint placed along a path: its frame and the drift across it, km.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedPath {
+    pub frame: PathFrame,
+    pub drift_km: f64,
+}
 
 /// A 2D fluid on a MAC grid: density at cell centres, `vx` on the nx+1
 /// vertical faces of each row, `vy` on the ny+1 horizontal faces of each
@@ -288,6 +321,9 @@ pub struct Footprint {
     /// Extent along u and across v, km.
     pub length: f64,
     pub width: f64,
+    /// Along a path instead of the straight frame of `center` and
+    /// `rotation_rad` (which then give the path's middle and its direction).
+    pub path: Option<Arc<PlacedPath>>,
 }
 
 /// A footprint PNG could not be written.
@@ -322,6 +358,10 @@ impl Footprint {
     /// World (x, y) to curtain frame (u, v), km.
     #[inline]
     pub fn to_local(&self, x: f64, y: f64) -> (f64, f64) {
+        if let Some(p) = &self.path {
+            let (u, v) = p.frame.to_local(x, y);
+            return (u, v - p.drift_km);
+        }
         let (s, c) = self.rotation_rad.sin_cos();
         let (dx, dy) = (x - self.center[0], y - self.center[1]);
         (dx * c + dy * s, -dx * s + dy * c)
@@ -330,6 +370,9 @@ impl Footprint {
     /// Curtain frame (u, v) to world (x, y), km.
     #[inline]
     pub fn to_world(&self, u: f64, v: f64) -> (f64, f64) {
+        if let Some(p) = &self.path {
+            return p.frame.to_world(u, v + p.drift_km);
+        }
         let (s, c) = self.rotation_rad.sin_cos();
         (self.center[0] + u * c - v * s, self.center[1] + u * s + v * c)
     }
@@ -421,8 +464,9 @@ impl Footprint {
 /// Simulates one curtain's footprint. `seed` is the scene seed; the
 /// curtain's own seed is mixed in, so curtains differ. The still: the same as
 /// [`simulate_at`] at t = 0, whatever the motion.
+/// A path is taken as given (no lift).
 pub fn simulate(curtain: &Curtain, params: &FootprintParams, seed: u64) -> Footprint {
-    simulate_at(curtain, params, &AnimationParams::default(), seed, 0.0)
+    simulate_at(curtain, params, &AnimationParams::default(), seed, 0.0, [0.0, 0.0])
 }
 
 /// The footprint at time `t` s (closed form in t: its cost does not grow
@@ -444,19 +488,27 @@ pub fn simulate(curtain: &Curtain, params: &FootprintParams, seed: u64) -> Footp
 ///
 /// With `params.uniform` (for validation) the density is 1 in every cell,
 /// with no fluid and no bend; the drift still applies.
-pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams, seed: u64, t: f64) -> Footprint {
-    let [nx, ny] = params.resolution;
+///
+/// `lift` (km) moves a path from its altitude to the beams' start altitude
+/// ([`crate::curve::lift_km`]); a straight curtain's `center` is already there.
+pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams, seed: u64, t: f64, lift: [f64; 2]) -> Footprint {
+    let frame = curtain.path.as_ref().map(|p| {
+        let lifted: Vec<[f64; 2]> = p.iter().map(|q| [q[0] + lift[0], q[1] + lift[1]]).collect();
+        PathFrame::new(&lifted, curtain.width)
+    });
+    let length = frame.as_ref().map_or(curtain.length, |f| f.length);
+    let nx = cells_along(curtain, length, params);
+    let ny = params.resolution[1];
     let tau = std::f64::consts::TAU;
-    let rot = curtain.rotation_deg.to_radians();
-    let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
-    let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
     if params.uniform {
-        return Footprint { nx, ny, data: vec![1.0; nx * ny], center, rotation_rad: rot, length: curtain.length, width: curtain.width };
+        return place(curtain, anim, t, frame, length, nx, ny, vec![1.0; nx * ny]);
     }
+    // Patterns along u are set per resolution[0] cells (module documentation).
+    let along = nx as f64 / params.resolution[0] as f64;
     let mut fluid = Fluid::new(nx, ny);
     let mut r = rng::rng(&[seed, curtain.seed, rng::tag::FOOTPRINT_VELOCITY]);
     use rand::Rng;
-    let du_km = curtain.length / nx as f64;
+    let du_km = length / nx as f64;
     // Travel of a phase pattern at speed c km/s: k (x - c t / du).
     let shift = |speed_kms: f64| speed_kms * t / du_km;
     let phase_d: f64 = r.random::<f64>() * tau;
@@ -473,7 +525,7 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
         let edge = (half - (y - yc).abs() + 0.5).clamp(0.0, 1.0);
         for i in 0..nx {
             let x = (i as f64 + 0.5 - xd) / nx as f64;
-            let m = 0.55 + 0.45 * (tau * params.density_waves * x + phase_d).sin();
+            let m = 0.55 + 0.45 * (tau * params.density_waves * along * x + phase_d).sin();
             fluid.density[j * nx + i] = edge * m;
         }
     }
@@ -487,9 +539,9 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
     let breathing =
         if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * (tau * t / anim.fold_breathing_period_s).sin() } else { 1.0 };
     let a = params.velocity_amplitude * breathing;
-    let k1 = tau * params.velocity_waves / nx as f64;
-    let k2 = tau * params.velocity_waves * 1.73 / nx as f64;
-    let k3 = tau * params.velocity_waves * 3.7 / nx as f64;
+    let k1 = tau * params.velocity_waves * along / nx as f64;
+    let k2 = tau * params.velocity_waves * along * 1.73 / nx as f64;
+    let k3 = tau * params.velocity_waves * along * 3.7 / nx as f64;
     let (x1, x2, x3) = (shift(anim.fold_speed_kms), shift(-0.5 * anim.fold_speed_kms), shift(1.6 * anim.fold_speed_kms));
     let sigma3 = (3.0 * half).max(2.0);
     fluid.set_stream_function(|x, y| {
@@ -512,10 +564,10 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
     // curve travelling and changing shape in time.
     let noise = rng::perlin(&[seed, curtain.seed, rng::tag::FOOTPRINT_BEND]);
     let dv_km = curtain.width / ny as f64;
-    let wavelength = params.bend_wavelength * curtain.length;
+    let wavelength = params.bend_wavelength * length / along;
     let mut data = vec![0.0f32; nx * ny];
     for i in 0..nx {
-        let u_km = (i as f64 + 0.5) / nx as f64 * curtain.length - anim.bend_speed_kms * t;
+        let u_km = (i as f64 + 0.5) / nx as f64 * length - anim.bend_speed_kms * t;
         let n = if anim.bend_change_hz > 0.0 && t != 0.0 {
             rng::noise2(&noise, u_km / wavelength, rng::NOISE1_Y + anim.bend_change_hz * t)
         } else {
@@ -534,8 +586,25 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
             *d /= peak;
         }
     }
-    // Drift across the axis (the curtain frame's +v), bounded: `center` above.
-    Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width }
+    place(curtain, anim, t, frame, length, nx, ny, data)
+}
+
+/// The footprint placed at time `t`: along its path, or about `center`,
+/// moved across its axis (the curtain frame's +v) by the bounded drift.
+#[allow(clippy::too_many_arguments)]
+fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFrame>, length: f64, nx: usize, ny: usize, data: Vec<f32>) -> Footprint {
+    let tau = std::f64::consts::TAU;
+    let rot = curtain.rotation_deg.to_radians();
+    let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
+    if let Some(frame) = frame {
+        let path = PlacedPath { frame, drift_km: drift };
+        let mid = path.frame.to_world(0.0, drift);
+        let ahead = path.frame.to_world(1e-3, drift);
+        let rotation_rad = (ahead.1 - mid.1).atan2(ahead.0 - mid.0);
+        return Footprint { nx, ny, data, center: [mid.0, mid.1], rotation_rad, length, width: curtain.width, path: Some(Arc::new(path)) };
+    }
+    let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
+    Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width, path: None }
 }
 
 #[cfg(test)]
@@ -724,7 +793,7 @@ mod tests {
         // The drift moves the box as it moves the simulated footprint.
         let anim = AnimationParams { drift_km: 5.0, drift_period_s: 40.0, ..AnimationParams::default() };
         let (a, b) =
-            (simulate_at(&c, &p, &anim, 5, 10.0), simulate_at(&c, &FootprintParams { uniform: false, ..p.clone() }, &anim, 5, 10.0));
+            (simulate_at(&c, &p, &anim, 5, 10.0, [0.0; 2]), simulate_at(&c, &FootprintParams { uniform: false, ..p.clone() }, &anim, 5, 10.0, [0.0; 2]));
         assert_eq!(a.center, b.center);
         assert_ne!(a.center, f.center);
     }
@@ -772,9 +841,9 @@ mod tests {
         let p = small_params();
         let anim = AnimationParams::default();
         // t = 0 is the still, whatever the motion.
-        assert_eq!(simulate_at(&c, &p, &anim, 7, 0.0), simulate(&c, &p, 7));
+        assert_eq!(simulate_at(&c, &p, &anim, 7, 0.0, [0.0; 2]), simulate(&c, &p, 7));
         // No motion: every time gives the same footprint.
-        assert_eq!(simulate_at(&c, &p, &still(), 7, 37.5), simulate(&c, &p, 7));
+        assert_eq!(simulate_at(&c, &p, &still(), 7, 37.5, [0.0; 2]), simulate(&c, &p, 7));
         // Motion: a frame apart (1/24 s) the footprint changes by a little,
         // 10 s apart by much more (L1 per cell, density peak 1).
         let l1 =
@@ -782,15 +851,15 @@ mod tests {
         // Continuity: a tenth of the time step gives well under half the
         // change (a jump would give the same change for any step; a smooth
         // motion a tenth of it).
-        let f0 = simulate_at(&c, &p, &anim, 7, 100.0);
-        let f1 = simulate_at(&c, &p, &anim, 7, 100.0 + 1.0 / 24.0);
-        let f_tenth = simulate_at(&c, &p, &anim, 7, 100.0 + 1.0 / 240.0);
-        let f2 = simulate_at(&c, &p, &anim, 7, 110.0);
+        let f0 = simulate_at(&c, &p, &anim, 7, 100.0, [0.0; 2]);
+        let f1 = simulate_at(&c, &p, &anim, 7, 100.0 + 1.0 / 24.0, [0.0; 2]);
+        let f_tenth = simulate_at(&c, &p, &anim, 7, 100.0 + 1.0 / 240.0, [0.0; 2]);
+        let f2 = simulate_at(&c, &p, &anim, 7, 110.0, [0.0; 2]);
         let (near, tenth, far) = (l1(&f0, &f1), l1(&f0, &f_tenth), l1(&f0, &f2));
         assert!(near > 0.0 && tenth < 0.3 * near && far > 3.0 * near, "1/240 s {tenth}, 1/24 s {near}, 10 s {far}");
         // The drift is bounded by drift_km, across the axis.
         for k in 0..50 {
-            let f = simulate_at(&c, &p, &anim, 7, k as f64 * 17.0);
+            let f = simulate_at(&c, &p, &anim, 7, k as f64 * 17.0, [0.0; 2]);
             let d = ((f.center[0] - c.center[0]).powi(2) + (f.center[1] - c.center[1]).powi(2)).sqrt();
             assert!(d <= anim.drift_km + 1e-9);
         }

@@ -133,6 +133,12 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     };
     at(old.seed != new.seed || old.curtains != new.curtains || old.footprint != new.footprint, Stage::Footprints);
     at(old.animation != new.animation, Stage::Footprints);
+    // A path is placed up the field line from its altitude: the field and
+    // the start altitude move it.
+    at(
+        new.curtains.iter().any(|c| c.path.is_some()) && crate::curve::lift_km(&old.beams) != crate::curve::lift_km(&new.beams),
+        Stage::Footprints,
+    );
     at(old.beams != new.beams || old.colour != new.colour || old.atmosphere != new.atmosphere, Stage::Trace);
     at(old.photons.kernel != new.photons.kernel, Stage::Trace);
     at(old.photons != new.photons || old.grid.voxel_size != new.grid.voxel_size, Stage::Gather);

@@ -360,6 +360,7 @@ mod tests {
             rotation_rad: 0.0,
             length: 4.0,
             width: 2.0,
+            path: None,
         };
         let m = StartMap::new(&fp, 0.1);
         // The map's domain is [0, 1)^2 (what r2 returns).

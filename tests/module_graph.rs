@@ -55,6 +55,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "camera",
             "grid",
             "magnetic",
+            "curve",
             "deposit",
             "watch",
             "leaf_source",

@@ -66,22 +66,25 @@ use std::time::Instant;
 /// One footprint per curtain (in curtain order; simulated in parallel), at
 /// the scene's `animation.time_s`.
 pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, &crate::progress::NoProgress)
+    let lift = crate::curve::lift_km(&scene.beams);
+    simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, lift, &crate::progress::NoProgress)
 }
 
-/// One footprint per curtain at `animation.time_s`, in parallel.
+/// One footprint per curtain at `animation.time_s`, in parallel; paths
+/// lifted by `lift` km to the start altitude ([`crate::curve::lift_km`]).
 pub fn simulate_footprints(
     seed: u64,
     curtains: &[Curtain],
     params: &FootprintParams,
     animation: &AnimationParams,
+    lift: [f64; 2],
     progress: &dyn Progress,
 ) -> Vec<Footprint> {
     progress.start("footprints", curtains.len() as u64);
     let fps = curtains
         .par_iter()
         .map(|c| {
-            let f = footprint::simulate_at(c, params, animation, seed, animation.time_s);
+            let f = footprint::simulate_at(c, params, animation, seed, animation.time_s, lift);
             progress.inc(1);
             f
         })
@@ -198,7 +201,14 @@ impl BakePlan {
         let (footprints, footprint_seconds) = match same_fp {
             Some(p) => (p.footprints.clone(), 0.0),
             None => {
-                let f = simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, progress);
+                let f = simulate_footprints(
+                    scene.seed,
+                    &scene.curtains,
+                    &scene.footprint,
+                    &scene.animation,
+                    crate::curve::lift_km(&scene.beams),
+                    progress,
+                );
                 (f, t.elapsed().as_secs_f64())
             }
         };

@@ -457,7 +457,7 @@ mod tests {
 
     /// A footprint that is 1 everywhere in a huge box: beams never leave it.
     fn flat_footprint(size: f64) -> Footprint {
-        Footprint { nx: 4, ny: 4, data: vec![1.0; 16], center: [0.0, 0.0], rotation_rad: 0.0, length: size, width: size }
+        Footprint { nx: 4, ny: 4, data: vec![1.0; 16], center: [0.0, 0.0], rotation_rad: 0.0, length: size, width: size, path: None }
     }
 
     fn params() -> BeamParams {
@@ -641,7 +641,7 @@ mod tests {
         // below) in the middle of an 18 km box.
         let mut data = vec![0.0; 9];
         data[4] = 1.0;
-        let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0 };
+        let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0, path: None };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
         let g = SpectrumDeposition::curtain(30.0, 0.0, 0.2);
         let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
@@ -668,7 +668,7 @@ mod tests {
     fn runaway_fang_steps_end_at_the_bottom_or_the_enlarged_box() {
         let atm = Atmosphere::nrlmsis21();
         let colour = ColourTable::physical(&EmissionModel::new(atm.clone()));
-        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 10.0, width: 4.0 };
+        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 10.0, width: 4.0, path: None };
         let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
         // Straight down in steps of up to 2.5e6 km: the first step is cut at
         // the atmosphere's bottom (where a 3 keV spectrum is complete).
@@ -758,7 +758,7 @@ mod tests {
         let atm = Atmosphere::us1976();
         let colour = ColourTable::physical(&EmissionModel::default());
         // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
-        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0 };
+        let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0, path: None };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
         let ctx = BeamContext {
             atmosphere: &atm,

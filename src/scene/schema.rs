@@ -103,6 +103,16 @@ pub fn schema() -> Value {
             entry.as_object_mut().expect("object").insert(key, Value::Object(k));
         }
     }
+    // `path` has no default (None is not written): listed with its rule.
+    if let Some(Value::Object(c)) = out.get_mut("curtain") {
+        let rule = checks.iter().find(|(k, _)| k == "curtain.path").map(|(_, a)| a.clone());
+        let mut k = Map::new();
+        k.insert("default".into(), Value::Null);
+        if let Some(Allowed::Rule(r)) = rule {
+            k.insert("rule".into(), json!(r));
+        }
+        c.insert("path".into(), Value::Object(k));
+    }
     Value::Object(out)
 }
 

@@ -7,8 +7,10 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// One auroral curtain: where its footprint lies and how hard it is driven.
+/// Serialised through [`CurtainToml`], which leaves out `center`, `length`
+/// and `rotation_deg` when `path` places the curtain.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
+#[serde(deny_unknown_fields, default, into = "CurtainToml")]
 pub struct Curtain {
     /// Centre of the footprint on the ground plane, km.
     pub center: [f64; 2],
@@ -34,6 +36,51 @@ pub struct Curtain {
     pub bend_km: f64,
     /// Seed offset so curtains differ.
     pub seed: u64,
+    /// The ground track of the curtain's lower border (at 110 km), km: a
+    /// centripetal Catmull-Rom curve through these points (`crate::curve`),
+    /// instead of `center`, `length` and `rotation_deg`.
+    pub path: Option<Vec<[f64; 2]>>,
+}
+
+/// [`Curtain`] as written: the straight placement's keys only without a path.
+#[derive(Serialize)]
+pub struct CurtainToml {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    center: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    length: Option<f64>,
+    width: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    rotation_deg: Option<f64>,
+    energy_flux: f64,
+    char_energy_kev: f64,
+    soft_fraction: f64,
+    soft_energy_kev: f64,
+    beam_weight: f64,
+    bend_km: f64,
+    seed: u64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    path: Option<Vec<[f64; 2]>>,
+}
+
+impl From<Curtain> for CurtainToml {
+    fn from(c: Curtain) -> Self {
+        let straight = c.path.is_none();
+        Self {
+            center: straight.then_some(c.center),
+            length: straight.then_some(c.length),
+            width: c.width,
+            rotation_deg: straight.then_some(c.rotation_deg),
+            energy_flux: c.energy_flux,
+            char_energy_kev: c.char_energy_kev,
+            soft_fraction: c.soft_fraction,
+            soft_energy_kev: c.soft_energy_kev,
+            beam_weight: c.beam_weight,
+            bend_km: c.bend_km,
+            seed: c.seed,
+            path: c.path,
+        }
+    }
 }
 
 /// The 2D stable-fluids footprint simulation (Stam 1999), per curtain.
@@ -466,6 +513,7 @@ impl Default for Curtain {
             beam_weight: 1.0,
             bend_km: 12.0,
             seed: 0,
+            path: None,
         }
     }
 }

@@ -162,6 +162,10 @@ impl Scene {
             }
             v.allow(t, "center", Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
             v.allow(t, "bend_km", Allowed::Rule("in [0, 1e4], less than width / 2".into()));
+            v.allow(t, "path", Allowed::Rule(PATH_RULE.into()));
+            if let Some(p) = &c.path {
+                v.path(t, p);
+            }
             if c.bend_km * 2.0 >= c.width {
                 v.push(
                     t,
@@ -359,6 +363,13 @@ impl Scene {
     }
 }
 
+/// What `curtain.path` accepts.
+pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
+     total length at most 1e4 km; replaces center, length and rotation_deg";
+
+/// Keys a `path` replaces.
+const STRAIGHT_KEYS: [&str; 3] = ["center", "length", "rotation_deg"];
+
 /// Refuses arrays of the wrong length before serde sees them (serde fills a
 /// fixed-size array from the first N values of a longer TOML array and drops
 /// the rest silently: `center = [-20, 0, 999]` would bake at (-20, 0)).
@@ -378,6 +389,24 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
     let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
     let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
     shapes_table(&user, &reference, None, &mut v);
+    if let Some(toml::Value::Array(curtains)) = user.get("curtain") {
+        for (i, c) in curtains.iter().enumerate() {
+            let toml::Value::Table(c) = c else { continue };
+            let Some(path) = c.get("path") else { continue };
+            let t = Some(("curtain", i));
+            let both: Vec<&str> = STRAIGHT_KEYS.iter().copied().filter(|k| c.contains_key(*k)).collect();
+            if !both.is_empty() {
+                v.push(t, "path", "given".into(), format!("path replaces {}: give path or them, not both", both.join(", ")));
+            }
+            if let toml::Value::Array(rows) = path {
+                for (k, r) in rows.iter().enumerate() {
+                    if !matches!(r, toml::Value::Array(a) if a.len() == 2) {
+                        v.push(t, "path", format!("point {k}: {r}"), "every point must be [x, y] (2 values, km)".into());
+                    }
+                }
+            }
+        }
+    }
     if v.errors.is_empty() {
         Ok(())
     } else {
@@ -461,6 +490,31 @@ impl Validator<'_> {
         self.allow(t, key, Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
         if !(x.is_finite() && x > 0.0) {
             self.push(t, key, fmt_num(x), "must be a finite number > 0".into());
+        }
+    }
+    /// The checks of a curtain's `path` ([`PATH_RULE`]).
+    fn path(&mut self, t: Option<(&str, usize)>, p: &[[f64; 2]]) {
+        if p.len() < 2 {
+            self.push(t, "path", format!("{} points", p.len()), "needs at least 2 points [x, y]".into());
+            return;
+        }
+        if let Some(k) = p.iter().position(|q| !q.iter().all(|x| x.is_finite() && x.abs() <= 1e4)) {
+            self.push(t, "path", format!("point {k}: {:?}", p[k]), "each coordinate must be in [-1e4, 1e4] km".into());
+            return;
+        }
+        for (k, w) in p.windows(2).enumerate() {
+            if ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt() < 1e-3 {
+                self.push(
+                    t,
+                    "path",
+                    format!("points {k} and {}: {:?}", k + 1, w[1]),
+                    "consecutive points must be at least 1 m (0.001 km) apart (a repeated point)".into(),
+                );
+            }
+        }
+        let length: f64 = p.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt()).sum();
+        if length > 1e4 {
+            self.push(t, "path", format!("{length:.1} km long"), "must be at most 1e4 km long".into());
         }
     }
     fn finite(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
