@@ -50,6 +50,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "atomic",
             "memory",
             "atmosphere",
+            "chemistry",
             "spectrum",
             "camera",
             "grid",
