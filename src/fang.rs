@@ -56,6 +56,8 @@
 //! 1.24516. The difference scales C1 by exp(0.001), 0.1 %, below the fit's
 //! own accuracy, so the choice cannot be told from profiles.
 
+use crate::atmosphere::Atmosphere;
+
 /// Energy lost per ion pair produced in air, keV (35 eV).
 pub const KEV_PER_ION_PAIR: f64 = 0.035;
 
@@ -323,6 +325,54 @@ impl SpectrumDeposition {
         let target = self.total() * (1.0 - tol);
         let i = self.g.partition_point(|&g| g < target).min(self.g.len() - 1);
         (LN_M.0 + i as f64 * D_LN_M).exp()
+    }
+}
+
+/// The ionization rate a spectrum makes per unit incident energy flux, over
+/// altitude: `q(h) = F (-dG/dh) / 35 eV`, with `G` the fraction deposited
+/// above the column mass at `h` ([`SpectrumDeposition::fraction_above`]) and
+/// F the energy flux in keV cm^-2 s^-1; tabulated every
+/// [`IONIZATION_DH_KM`] from 50 to 700 km as the difference of `G` across
+/// each node's half steps (exact for the energy in each cell: the cells'
+/// sum is the spectrum's deposit), interpolated linearly, clamped outside.
+#[derive(Clone, Debug)]
+pub struct IonizationProfile {
+    h0: f64,
+    v: Vec<f64>,
+}
+
+/// Altitude step of [`IonizationProfile`], km.
+pub const IONIZATION_DH_KM: f64 = 0.25;
+
+/// keV per erg.
+pub const KEV_PER_ERG: f64 = 6.241_509_074e8;
+
+impl IonizationProfile {
+    /// Ion pairs cm^-3 s^-1 per keV cm^-2 s^-1 at `h_km`.
+    #[inline]
+    pub fn per_flux(&self, h_km: f64) -> f64 {
+        let u = ((h_km - self.h0) / IONIZATION_DH_KM).clamp(0.0, (self.v.len() - 1) as f64);
+        let i = (u as usize).min(self.v.len() - 2);
+        let f = u - i as f64;
+        self.v[i] + f * (self.v[i + 1] - self.v[i])
+    }
+}
+
+impl SpectrumDeposition {
+    /// This spectrum's [`IonizationProfile`] on `atm`.
+    pub fn ionization_profile(&self, atm: &Atmosphere) -> IonizationProfile {
+        let (h0, h1) = (50.0, 700.0);
+        let n = ((h1 - h0) / IONIZATION_DH_KM).round() as usize + 1;
+        let dz_cm = IONIZATION_DH_KM * crate::atmosphere::CM_PER_KM;
+        let v = (0..n)
+            .map(|i| {
+                let h = h0 + i as f64 * IONIZATION_DH_KM;
+                let below = self.fraction_above(atm.column_mass(h - 0.5 * IONIZATION_DH_KM));
+                let above = self.fraction_above(atm.column_mass(h + 0.5 * IONIZATION_DH_KM));
+                ((below - above) / dz_cm / KEV_PER_ION_PAIR).max(0.0)
+            })
+            .collect();
+        IonizationProfile { h0, v }
     }
 }
 

@@ -357,11 +357,16 @@ impl Tracer<'_> {
         };
         let power_w = curtain_power_w(curtain, fp, p.threshold);
         let starts = CurtainStarts::new(p, curtain, fp, map, power_w * KEV_PER_J / n as f64);
-        let spectrum;
+        let spectrum = || SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+        // The chemistry's colours need the local ionization rate: the
+        // curtain spectrum's ionization per unit flux (whatever the
+        // deposition model: q is the mean over the spectrum's electrons).
+        let ionization = self.colour.needs_q().then(|| spectrum().ionization_profile(self.atmosphere));
+        let expected;
         let model = match p.beams.deposition {
             Deposition::Expected => {
-                spectrum = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
-                DepositModel::Expected(&spectrum)
+                expected = spectrum();
+                DepositModel::Expected(&expected)
             }
             Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
             Deposition::Csda => DepositModel::Csda,
@@ -375,6 +380,7 @@ impl Tracer<'_> {
             footprint: fp,
             threshold: p.threshold,
             record_path: false,
+            ionization: ionization.as_ref(),
         };
         let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();
         Ok((power_w, traces))
@@ -415,6 +421,9 @@ struct CurtainStarts<'a> {
     top_noise: Perlin,
     colour_noise: Perlin,
     power_kev_s: f64,
+    /// The curtain's peak energy flux, keV cm^-2 s^-1, over the footprint's
+    /// peak density: times the density at a start, the flux there.
+    flux_per_density: f64,
 }
 
 impl<'a> CurtainStarts<'a> {
@@ -430,6 +439,14 @@ impl<'a> CurtainStarts<'a> {
             top_noise: rng::perlin(&[seed, cs, rng::tag::BEAM_TOP_NOISE]),
             colour_noise: rng::perlin(&[seed, cs, rng::tag::COLOUR_NOISE]),
             power_kev_s,
+            flux_per_density: {
+                let peak = footprint.data.iter().cloned().fold(0.0f32, f32::max) as f64;
+                if peak > 0.0 {
+                    curtain.energy_flux * crate::fang::KEV_PER_ERG / peak
+                } else {
+                    0.0
+                }
+            },
         }
     }
 
@@ -448,11 +465,13 @@ impl<'a> CurtainStarts<'a> {
         let ur = u - self.ray_shift_km;
         let z = b.top_km + b.top_noise_km * rng::noise1(&self.top_noise, ur * b.top_noise_freq);
         let colour_offset_km = p.colour_noise_km * rng::noise1(&self.colour_noise, ur * p.colour_noise_freq);
-        let power_kev_s = self.power_kev_s * crate::animation::pulsation(p.animation, p.seed, x, y);
+        let pulsation = crate::animation::pulsation(p.animation, p.seed, x, y);
+        let power_kev_s = self.power_kev_s * pulsation;
+        let flux_kev_cm2_s = self.flux_per_density * self.footprint.cell_value_world(x, y) * pulsation;
         // Drawn in every model, so a beam's path is the same in all.
         let c = self.curtain;
         let e0 = if r.random::<f64>() < c.soft_fraction { c.soft_energy_kev } else { c.char_energy_kev };
-        BeamStart { position: DVec3::new(x, y, z), energy_kev: sample_gamma3(e0, r), power_kev_s, colour_offset_km }
+        BeamStart { position: DVec3::new(x, y, z), energy_kev: sample_gamma3(e0, r), power_kev_s, colour_offset_km, flux_kev_cm2_s }
     }
 }
 

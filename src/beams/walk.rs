@@ -51,7 +51,7 @@
 use crate::atmosphere::Atmosphere;
 use crate::csda::{energy_from_range, range_g_cm2, step_column};
 use crate::deposit::{Photon, StepDeposit};
-use crate::fang::{MonoDeposition, SpectrumDeposition};
+use crate::fang::{IonizationProfile, MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::magnetic::MagneticField;
 use crate::scene::BeamParams;
@@ -95,6 +95,12 @@ pub struct BeamStart {
     /// Colour altitude offset of this beam, km (the report's low-frequency
     /// colour noise; it shifts colour, not intensity).
     pub colour_offset_km: f64,
+    /// Energy flux entering the atmosphere at the beam's foot, keV cm^-2
+    /// s^-1: the curtain's peak flux times the footprint's density at the
+    /// start (relative to its peak) times the pulsation. With the curtain's
+    /// [`IonizationProfile`] it gives the local ionization rate at every
+    /// deposit, which the chemistry's colours need.
+    pub flux_kev_cm2_s: f64,
 }
 
 /// The result of tracing one beam.
@@ -164,6 +170,10 @@ pub struct BeamContext<'a> {
     pub threshold: f64,
     /// Keep the path (off in the bake: memory).
     pub record_path: bool,
+    /// The curtain spectrum's ionization per unit flux over altitude, when
+    /// the colours need the ionization rate (the chemistry); `None` leaves
+    /// q = 0 on every deposit.
+    pub ionization: Option<&'a IonizationProfile>,
 }
 
 /// The photon of one beam step: `power` spread along the step from `start`
@@ -210,11 +220,18 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
 }
 
 /// Pushes the photon and deposit record of one step.
+/// The step's colour is that of its end altitude at the local ionization
+/// rate `q = flux * q_per_flux(end)` (ion pairs cm^-3 s^-1), which the
+/// deposit record keeps for `aurora profile`.
 #[inline]
 fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64) {
-    let rgb = ctx.colour.rgb_with_colour_altitude(to.z, to.z + start.colour_offset_km);
+    let q = match ctx.ionization {
+        Some(p) => start.flux_kev_cm2_s * p.per_flux(to.z),
+        None => 0.0,
+    };
+    let rgb = ctx.colour.rgb_with_colour_altitude(to.z, to.z + start.colour_offset_km, q);
     out.photons.push(deposit(from, to, [(rgb[0] * kev_s) as f32, (rgb[1] * kev_s) as f32, (rgb[2] * kev_s) as f32]));
-    out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s });
+    out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s, q });
 }
 
 /// The Fang models: `frac(m)` is the fraction of the beam's power deposited
@@ -406,7 +423,7 @@ mod tests {
     }
 
     fn start(e: f64) -> BeamStart {
-        BeamStart { position: DVec3::new(0.0, 0.0, 260.0), energy_kev: e, power_kev_s: 1.0, colour_offset_km: 0.0 }
+        BeamStart { position: DVec3::new(0.0, 0.0, 260.0), energy_kev: e, power_kev_s: 1.0, colour_offset_km: 0.0, flux_kev_cm2_s: 0.0 }
     }
 
     #[test]
@@ -424,6 +441,7 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: true,
+            ionization: None,
         };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
@@ -461,6 +479,7 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            ionization: None,
         };
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
@@ -491,6 +510,7 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            ionization: None,
         };
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
@@ -522,6 +542,7 @@ mod tests {
             footprint: fp,
             threshold: 0.03,
             record_path: false,
+            ionization: None,
         }
     }
 
@@ -691,6 +712,7 @@ mod tests {
             footprint: &fp,
             threshold: 0.03,
             record_path: false,
+            ionization: None,
         };
         let mut r = rng::rng(&[6]);
         let mut left = 0;

@@ -96,6 +96,7 @@
 //! `tests/data/glow_chemistry.csv` from `tools/glow_tables.py`).
 
 pub mod ambient;
+pub mod table;
 
 use crate::atmosphere::Composition;
 pub use ambient::{Ambient, AmbientTable};
