@@ -142,6 +142,7 @@ mod tests {
         "random",
         "colormap",
         "physical",
+        "simple",
         "kdtree",
         "report2014",
         "point",

@@ -39,7 +39,11 @@
 //!   40 % high against GLOW).
 //! - O2+: made by O2 ionization, O+ + O2, N2+ + O2, N+ + O2 and O+(2D,2P) +
 //!   O2; lost by dissociative recombination (alpha2 = 1.95e-7 (300/Te)^0.7),
-//!   to NO (-> NO+, 4.4e-10) and N(4S) (-> NO+ + O, 1.2e-10).
+//!   to NO (-> NO+, 4.4e-10), N(4S) (-> NO+ + O, 1.2e-10) and N2 (-> NO+ +
+//!   NO, 5e-16, Rees 1989, "Physics and chemistry of the upper atmosphere",
+//!   table 8.x: slow, but below 85 km [N2] makes it the O2+ sink that keeps
+//!   O2+ recombination, and with it 557.7 nm, off the lower border; GLOW's
+//!   557.7/427.8 there is 0.03-0.11 from 80 to 84 km).
 //! - NO+: made by all of the above; lost by recombination
 //!   (3.5e-7 (300/Te)^0.69, 0.76 N(2D) per recombination).
 //!
@@ -207,6 +211,7 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     let a_o2p = 1.95e-7 * te3.powf(0.7);
     let k30 = 4.4e-10;
     let k37 = 1.2e-10;
+    let k71 = 5e-16;
     let a_nop = 3.5e-7 * te3.powf(0.69);
     let (kx_n2, kx_o2, kx_o, kx_e) = (8e-10, 7e-10, 5e-12, 6.6e-8 * te3.sqrt());
     // N+ does not depend on ne.
@@ -223,8 +228,8 @@ pub fn solve(q: f64, air: &Air) -> Emission {
         let p_op = 0.4 * q_o + x_to_op + 0.19 * q_o2 + k39 * n2p * o + k32 * n_p * o + 0.06 * k25 * n_p * o2;
         let op = (p_op / (k1 * n2 + k2 * o2 + k40 * no)).min(cap);
         let p_o2p = 0.81 * q_o2 + k2 * op * o2 + k4 * n2p * o2 + 0.51 * k25 * n_p * o2 + x_to_o2p;
-        let o2p = p_o2p / (a_o2p * ne + k30 * no + k37 * n4s);
-        let p_nop = k1 * op * n2 + k40 * op * no + k3 * n2p * o + 0.43 * k25 * n_p * o2 + (k30 * no + k37 * n4s) * o2p;
+        let o2p = p_o2p / (a_o2p * ne + k30 * no + k37 * n4s + k71 * n2);
+        let p_nop = k1 * op * n2 + k40 * op * no + k3 * n2p * o + 0.43 * k25 * n_p * o2 + (k30 * no + k37 * n4s + k71 * n2) * o2p;
         let nop = p_nop / (a_nop * ne);
         [n2p, n_p, op, o2p, nop]
     };
