@@ -380,6 +380,26 @@ impl SpectrumDeposition {
 mod tests {
     use super::*;
 
+    #[test]
+    fn ionization_profile_integrates_to_the_deposit_over_35_ev() {
+        // The chemistry tabulates yields per keV with the same 35 eV.
+        assert_eq!(KEV_PER_ION_PAIR, crate::chemistry::table::KEV_PER_ION_PAIR);
+        // Sum over the profile's cells of q dz (per unit flux) is the
+        // spectrum's deposit between 50 and 700 km over 35 eV: the cells
+        // are differences of G across each half step.
+        let atm = Atmosphere::nrlmsis21();
+        let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+        let p = g.ionization_profile(&atm);
+        let dz = IONIZATION_DH_KM * crate::atmosphere::CM_PER_KM;
+        let sum: f64 = p.v.iter().map(|v| v * dz).sum::<f64>() * KEV_PER_ION_PAIR;
+        let want = g.fraction_above(atm.column_mass(49.875)) - g.fraction_above(atm.column_mass(700.125));
+        assert!((sum / want - 1.0).abs() < 1e-9, "{sum} vs {want}");
+        // Peak near 110 km for 3 keV (Fang 2008's Maxwellian peak).
+        let peak = (0..p.v.len()).max_by(|&a, &b| p.v[a].total_cmp(&p.v[b])).unwrap();
+        let h = 50.0 + peak as f64 * IONIZATION_DH_KM;
+        assert!((100.0..120.0).contains(&h), "{h}");
+    }
+
     /// Rows of data/fang_reference.csv (made by tools/fang_reference.py with
     /// eppaurora 0.3.1): model, energy keV, column g cm^-2, H cm, dissipation
     /// per unit energy flux 1/cm.

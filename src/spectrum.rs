@@ -644,6 +644,27 @@ mod tests {
     }
 
     #[test]
+    fn chemistry_shares_the_simple_models_1p_ratio_and_its_table_has_its_colours() {
+        assert_eq!(crate::chemistry::R_1P, R_1P);
+        let atm = Atmosphere::nrlmsis21();
+        let t = ColourTable::chemistry(&atm);
+        assert!(t.needs_q() && !ColourTable::physical(&EmissionModel::default()).needs_q());
+        // rgb_q is the colour of line_yields (bilinear on both: the same
+        // weights), green at 110 km, red at 250 km.
+        for (h, q) in [(110.3, 2e3), (251.1, 1.5)] {
+            let y = t.line_yields(h, q).unwrap().as_array();
+            let (a, b) = (t.rgb_q(h, q), lines_rgb(y));
+            for k in 0..3 {
+                assert!((a[k] - b[k]).abs() <= 1e-9 * (b[k].abs() + 1e-9), "{h}: {a:?} {b:?}");
+            }
+        }
+        let g = t.rgb_q(110.0, 2e3);
+        assert!(g[1] > g[0] && g[1] > g[2], "{g:?}");
+        let r = t.rgb_q(250.0, 1.5);
+        assert!(r[0] > r[1] && r[0] > r[2], "{r:?}");
+    }
+
+    #[test]
     fn line_yields_as_array_follow_the_lines_order() {
         let y = LineYields { oi_5577: 1.0, oi_6300: 2.0, oi_6364: 3.0, n2p_4278: 4.0, n2_1p: 5.0 };
         assert_eq!(y.as_array(), [1.0, 2.0, 3.0, 4.0, 5.0]);
