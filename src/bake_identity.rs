@@ -143,6 +143,7 @@ mod tests {
         "random",
         "colormap",
         "physical",
+        "simple",
         "kdtree",
         "report2014",
         "point",

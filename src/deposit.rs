@@ -48,10 +48,13 @@ impl Photon {
     }
 }
 
-/// One step's deposit: from altitude `z_start` to `z_end` km, `power_kev_s`.
+/// One step's deposit: from altitude `z_start` to `z_end` km, `power_kev_s`,
+/// and the local ionization rate `q` (ion pairs cm^-3 s^-1) its colour was
+/// taken at (0 when the colours do not depend on it).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepDeposit {
     pub z_start: f64,
     pub z_end: f64,
     pub power_kev_s: f64,
+    pub q: f64,
 }

@@ -56,6 +56,8 @@
 //! 1.24516. The difference scales C1 by exp(0.001), 0.1 %, below the fit's
 //! own accuracy, so the choice cannot be told from profiles.
 
+use crate::atmosphere::Atmosphere;
+
 /// Energy lost per ion pair produced in air, keV (35 eV).
 pub const KEV_PER_ION_PAIR: f64 = 0.035;
 
@@ -326,9 +328,77 @@ impl SpectrumDeposition {
     }
 }
 
+/// The ionization rate a spectrum makes per unit incident energy flux, over
+/// altitude: `q(h) = F (-dG/dh) / 35 eV`, with `G` the fraction deposited
+/// above the column mass at `h` ([`SpectrumDeposition::fraction_above`]) and
+/// F the energy flux in keV cm^-2 s^-1; tabulated every
+/// [`IONIZATION_DH_KM`] from 50 to 700 km as the difference of `G` across
+/// each node's half steps (exact for the energy in each cell: the cells'
+/// sum is the spectrum's deposit), interpolated linearly, clamped outside.
+#[derive(Clone, Debug)]
+pub struct IonizationProfile {
+    h0: f64,
+    v: Vec<f64>,
+}
+
+/// Altitude step of [`IonizationProfile`], km.
+pub const IONIZATION_DH_KM: f64 = 0.25;
+
+/// keV per erg.
+pub const KEV_PER_ERG: f64 = 6.241_509_074e8;
+
+impl IonizationProfile {
+    /// Ion pairs cm^-3 s^-1 per keV cm^-2 s^-1 at `h_km`.
+    #[inline]
+    pub fn per_flux(&self, h_km: f64) -> f64 {
+        let u = ((h_km - self.h0) / IONIZATION_DH_KM).clamp(0.0, (self.v.len() - 1) as f64);
+        let i = (u as usize).min(self.v.len() - 2);
+        let f = u - i as f64;
+        self.v[i] + f * (self.v[i + 1] - self.v[i])
+    }
+}
+
+impl SpectrumDeposition {
+    /// This spectrum's [`IonizationProfile`] on `atm`.
+    pub fn ionization_profile(&self, atm: &Atmosphere) -> IonizationProfile {
+        let (h0, h1) = (50.0, 700.0);
+        let n = ((h1 - h0) / IONIZATION_DH_KM).round() as usize + 1;
+        let dz_cm = IONIZATION_DH_KM * crate::atmosphere::CM_PER_KM;
+        let v = (0..n)
+            .map(|i| {
+                let h = h0 + i as f64 * IONIZATION_DH_KM;
+                let below = self.fraction_above(atm.column_mass(h - 0.5 * IONIZATION_DH_KM));
+                let above = self.fraction_above(atm.column_mass(h + 0.5 * IONIZATION_DH_KM));
+                ((below - above) / dz_cm / KEV_PER_ION_PAIR).max(0.0)
+            })
+            .collect();
+        IonizationProfile { h0, v }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ionization_profile_integrates_to_the_deposit_over_35_ev() {
+        // The chemistry tabulates yields per keV with the same 35 eV.
+        assert_eq!(KEV_PER_ION_PAIR, crate::chemistry::table::KEV_PER_ION_PAIR);
+        // Sum over the profile's cells of q dz (per unit flux) is the
+        // spectrum's deposit between 50 and 700 km over 35 eV: the cells
+        // are differences of G across each half step.
+        let atm = Atmosphere::nrlmsis21();
+        let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+        let p = g.ionization_profile(&atm);
+        let dz = IONIZATION_DH_KM * crate::atmosphere::CM_PER_KM;
+        let sum: f64 = p.v.iter().map(|v| v * dz).sum::<f64>() * KEV_PER_ION_PAIR;
+        let want = g.fraction_above(atm.column_mass(49.875)) - g.fraction_above(atm.column_mass(700.125));
+        assert!((sum / want - 1.0).abs() < 1e-9, "{sum} vs {want}");
+        // Peak near 110 km for 3 keV (Fang 2008's Maxwellian peak).
+        let peak = (0..p.v.len()).max_by(|&a, &b| p.v[a].total_cmp(&p.v[b])).unwrap();
+        let h = 50.0 + peak as f64 * IONIZATION_DH_KM;
+        assert!((100.0..120.0).contains(&h), "{h}");
+    }
 
     /// Rows of data/fang_reference.csv (made by tools/fang_reference.py with
     /// eppaurora 0.3.1): model, energy keV, column g cm^-2, H cm, dissipation

@@ -592,7 +592,16 @@ pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &Animation
 /// The footprint placed at time `t`: along its path, or about `center`,
 /// moved across its axis (the curtain frame's +v) by the bounded drift.
 #[allow(clippy::too_many_arguments)]
-fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFrame>, length: f64, nx: usize, ny: usize, data: Vec<f32>) -> Footprint {
+fn place(
+    curtain: &Curtain,
+    anim: &AnimationParams,
+    t: f64,
+    frame: Option<PathFrame>,
+    length: f64,
+    nx: usize,
+    ny: usize,
+    data: Vec<f32>,
+) -> Footprint {
     let tau = std::f64::consts::TAU;
     let rot = curtain.rotation_deg.to_radians();
     let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
@@ -792,8 +801,10 @@ mod tests {
         assert!((f.integral_above(p.threshold) - f.length * f.width).abs() < 1e-9 * f.length * f.width);
         // The drift moves the box as it moves the simulated footprint.
         let anim = AnimationParams { drift_km: 5.0, drift_period_s: 40.0, ..AnimationParams::default() };
-        let (a, b) =
-            (simulate_at(&c, &p, &anim, 5, 10.0, [0.0; 2]), simulate_at(&c, &FootprintParams { uniform: false, ..p.clone() }, &anim, 5, 10.0, [0.0; 2]));
+        let (a, b) = (
+            simulate_at(&c, &p, &anim, 5, 10.0, [0.0; 2]),
+            simulate_at(&c, &FootprintParams { uniform: false, ..p.clone() }, &anim, 5, 10.0, [0.0; 2]),
+        );
         assert_eq!(a.center, b.center);
         assert_ne!(a.center, f.center);
     }

@@ -17,6 +17,7 @@ pub mod beams;
 pub mod bench;
 pub mod budget;
 pub mod camera;
+pub mod chemistry;
 pub mod csda;
 pub mod curve;
 pub mod deposit;

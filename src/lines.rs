@@ -112,11 +112,26 @@ impl LineTable {
         LinesAt { yields: lerp(&self.yields[i], &self.yields[i + 1]), tau_s: lerp(&self.tau[i], &self.tau[i + 1]) }
     }
 
-    /// Colour per keV at `h_km` with each line's photons times `factor(tau)`
-    /// of its lifetime tau.
+    /// Yields and lifetimes at `h_km` and ionization rate `q` (ion pairs
+    /// cm^-3 s^-1): the chemistry's node when `colour` carries the chemistry
+    /// (`crate::spectrum::ColourTable::line_node`: its yields per keV and
+    /// its O(1S) and O(1D) lifetimes with quenching), else this table's
+    /// simple-model values at `h_km` (q unused).
     #[inline]
-    pub fn rgb_filtered(&self, h_km: f64, factor: impl Fn(f64) -> f64) -> [f64; 3] {
-        let l = self.at(h_km);
+    pub fn at_q(&self, colour: &crate::spectrum::ColourTable, h_km: f64, q: f64) -> LinesAt {
+        match colour.line_node(h_km, q) {
+            Some(n) => {
+                let (t1d, t1s) = (n.tau[0] as f64, n.tau[1] as f64);
+                LinesAt { yields: n.per_kev, tau_s: [t1s, t1d, t1d, 0.0, 0.0] }
+            }
+            None => self.at(h_km),
+        }
+    }
+
+    /// Colour per keV of the lines `l` with each line's photons times
+    /// `factor(tau)` of its lifetime tau.
+    #[inline]
+    pub fn rgb_of(&self, l: &LinesAt, factor: impl Fn(f64) -> f64) -> [f64; 3] {
         let mut rgb = [0.0; 3];
         for i in 0..N_LINES {
             let n = l.yields[i] * factor(l.tau_s[i]);
@@ -127,17 +142,24 @@ impl LineTable {
         rgb
     }
 
+    /// Colour per keV at `h_km` with each line's photons times `factor(tau)`
+    /// of its lifetime tau (this table's values).
+    #[inline]
+    pub fn rgb_filtered(&self, h_km: f64, factor: impl Fn(f64) -> f64) -> [f64; 3] {
+        self.rgb_of(&self.at(h_km), factor)
+    }
+
     /// The colour per keV of *unmodulated* deposit at `h_km` under a
     /// modulation that a line of lifetime tau shows as `factor(tau)`
-    /// (module doc), with the chromaticity of `h_colour_km` and the
-    /// luminance of `h_km` (the colour noise, as
-    /// `ColourTable::rgb_with_colour_altitude`).
-    pub fn rgb_in_motion(&self, h_km: f64, h_colour_km: f64, factor: impl Fn(f64) -> f64 + Copy) -> [f64; 3] {
-        let rgb = self.rgb_filtered(h_km, factor);
+    /// (module doc), with the lines of each altitude from `at`, the
+    /// chromaticity of `h_colour_km` and the luminance of `h_km` (the colour
+    /// noise, as `ColourTable::rgb_with_colour_altitude`).
+    pub fn rgb_in_motion(&self, at: impl Fn(f64) -> LinesAt, h_km: f64, h_colour_km: f64, factor: impl Fn(f64) -> f64 + Copy) -> [f64; 3] {
+        let rgb = self.rgb_of(&at(h_km), factor);
         if h_colour_km == h_km {
             return rgb;
         }
-        let c = self.rgb_filtered(h_colour_km, factor);
+        let c = self.rgb_of(&at(h_colour_km), factor);
         let (y, yc) = (crate::spectrum::luminance(rgb), crate::spectrum::luminance(c));
         if yc > 0.0 {
             c.map(|x| x * y / yc)

@@ -15,6 +15,8 @@
 //! - Yields and quenching: see [`EmissionModel`].
 
 use crate::atmosphere::Atmosphere;
+use crate::chemistry::table::LineTable;
+use std::sync::Arc;
 
 /// Piecewise Gaussian of Wyman, Sloan & Shirley (2013): width `s1` left of the
 /// mean, `s2` right of it.
@@ -228,25 +230,38 @@ impl EmissionModel {
 
     /// Linear Rec.709 colour emitted per keV deposited at `h_km`.
     pub fn rgb_per_kev(&self, h_km: f64) -> [f64; 3] {
-        let y = self.yields(h_km).as_array();
-        let mut rgb = [0.0; 3];
-        for (line, n) in LINES.iter().zip(y) {
-            let c = if *line == N2_1P { n2_1p_rgb() } else { line_rgb(line.lambda_nm) };
-            for k in 0..3 {
-                rgb[k] += n * c[k];
-            }
-        }
-        rgb
+        lines_rgb(self.yields(h_km).as_array())
     }
 }
 
-/// Altitude -> colour per keV, tabulated for fast lookup along beams, from
-/// either the physical model or an artist colour map.
+/// Colour per keV tabulated for fast lookup along beams: over altitude from
+/// the simple physical model or an artist colour map, or over altitude and
+/// ionization rate from the chemistry ([`ColourTable::chemistry`]).
 #[derive(Clone, Debug)]
 pub struct ColourTable {
     h0: f64,
     dh: f64,
     rgb: Vec<[f64; 3]>,
+    chem: Option<Arc<ChemColour>>,
+}
+
+/// The chemistry's line table and the colour per keV at each of its nodes.
+#[derive(Debug)]
+struct ChemColour {
+    lines: LineTable,
+    rgb: Vec<[f64; 3]>,
+}
+
+/// Linear Rec.709 colour of `y` photons of each line of [`LINES`].
+pub fn lines_rgb(y: [f64; 5]) -> [f64; 3] {
+    let mut rgb = [0.0; 3];
+    for (line, n) in LINES.iter().zip(y) {
+        let c = if *line == N2_1P { n2_1p_rgb() } else { line_rgb(line.lambda_nm) };
+        for k in 0..3 {
+            rgb[k] += n * c[k];
+        }
+    }
+    rgb
 }
 
 /// Altitude range of the physical table, km (clamped outside).
@@ -259,7 +274,60 @@ impl ColourTable {
         let dh = 0.05;
         let n = ((TABLE_H.1 - TABLE_H.0) / dh).round() as usize + 1;
         let rgb = (0..n).map(|i| model.rgb_per_kev(TABLE_H.0 + i as f64 * dh)).collect();
-        Self { h0: TABLE_H.0, dh, rgb }
+        Self { h0: TABLE_H.0, dh, rgb, chem: None }
+    }
+
+    /// The chemistry (`crate::chemistry`) on `atmosphere`, over altitude and
+    /// ionization rate ([`crate::chemistry::table`]: its grid, error and
+    /// cost), with each node's colour per keV. Its altitude-only lookups
+    /// ([`ColourTable::rgb`]) read the simple model's table, built beside it.
+    pub fn chemistry(atmosphere: &Atmosphere) -> Self {
+        let lines = LineTable::build(atmosphere);
+        let rgb = lines.nodes().iter().map(|n| lines_rgb(n.per_kev)).collect();
+        let simple = Self::physical(&EmissionModel::new(atmosphere.clone()));
+        Self { chem: Some(Arc::new(ChemColour { lines, rgb })), ..simple }
+    }
+
+    /// Whether colours depend on the ionization rate (the chemistry).
+    #[inline]
+    pub fn needs_q(&self) -> bool {
+        self.chem.is_some()
+    }
+
+    /// Photons per keV deposited of each line at `h_km` and ionization rate
+    /// `q` (ion pairs cm^-3 s^-1) from the chemistry table; `None` for the
+    /// simple model and colour maps (whose yields are [`EmissionModel`]'s).
+    /// The one function every per-line consumer calls at a deposit.
+    #[inline]
+    pub fn line_yields(&self, h_km: f64, q: f64) -> Option<LineYields> {
+        let c = self.chem.as_ref()?;
+        let y = c.lines.at(h_km, q).per_kev;
+        Some(LineYields { oi_5577: y[0], oi_6300: y[1], oi_6364: y[2], n2p_4278: y[3], n2_1p: y[4] })
+    }
+
+    /// The chemistry's whole interpolated node (yields, channels, lifetimes)
+    /// at (`h_km`, `q`); `None` without the chemistry.
+    pub fn line_node(&self, h_km: f64, q: f64) -> Option<crate::chemistry::table::Node> {
+        self.chem.as_ref().map(|c| c.lines.at(h_km, q))
+    }
+
+    /// Colour per keV at `h_km` and ionization rate `q`: the chemistry's
+    /// bilinear lookup, or [`ColourTable::rgb`] (q unused) without it.
+    #[inline]
+    pub fn rgb_q(&self, h_km: f64, q: f64) -> [f64; 3] {
+        match &self.chem {
+            Some(c) => {
+                let cell = c.lines.cell(h_km, q);
+                let mut out = [0.0; 3];
+                for (&i, &w) in cell.i.iter().zip(&cell.w) {
+                    for k in 0..3 {
+                        out[k] += w * c.rgb[i][k];
+                    }
+                }
+                out
+            }
+            None => self.rgb(h_km),
+        }
     }
 
     /// An artist colour map: rows of [altitude_km, r, g, b] with ascending
@@ -268,12 +336,12 @@ impl ColourTable {
     pub fn colormap(rows: &[[f64; 4]]) -> Self {
         let (lo, hi) = match (rows.first(), rows.last()) {
             (Some(a), Some(b)) => (a[0], b[0]),
-            _ => return Self { h0: 0.0, dh: 1.0, rgb: vec![[0.0; 3]] },
+            _ => return Self { h0: 0.0, dh: 1.0, rgb: vec![[0.0; 3]], chem: None },
         };
         let dh = 0.05;
         let n = (((hi - lo) / dh).ceil() as usize).max(1) + 1;
         let rgb = (0..n).map(|i| colormap_rgb(rows, lo + i as f64 * dh)).collect();
-        Self { h0: lo, dh, rgb }
+        Self { h0: lo, dh, rgb, chem: None }
     }
 
     /// Colour per keV at `h_km` (linear between samples, clamped at the ends).
@@ -289,19 +357,21 @@ impl ColourTable {
         std::array::from_fn(|k| a[k] + (b[k] - a[k]) * f)
     }
 
-    /// Colour of energy deposited at the true altitude `h_km`, with the
-    /// chromaticity taken at `h_colour_km` (the report's colour noise perturbs
-    /// the colour, not the intensity): luminance of `rgb(h)`, hue and
-    /// saturation of `rgb(h_colour)`.
+    /// Colour of energy deposited at the true altitude `h_km` and
+    /// ionization rate `q`, with the chromaticity taken at `h_colour_km` (the
+    /// report's colour noise perturbs the colour, not the intensity):
+    /// luminance of `rgb_q(h, q)`, hue and saturation of
+    /// `rgb_q(h_colour, q)`.
     #[inline]
-    pub fn rgb_with_colour_altitude(&self, h_km: f64, h_colour_km: f64) -> [f64; 3] {
-        let c = self.rgb(h_colour_km);
-        let y = luminance(self.rgb(h_km));
+    pub fn rgb_with_colour_altitude(&self, h_km: f64, h_colour_km: f64, q: f64) -> [f64; 3] {
+        let c = self.rgb_q(h_colour_km, q);
+        let own = self.rgb_q(h_km, q);
+        let y = luminance(own);
         let yc = luminance(c);
         if yc > 0.0 {
             c.map(|x| x * y / yc)
         } else {
-            self.rgb(h_km)
+            own
         }
     }
 }
@@ -462,7 +532,7 @@ mod tests {
         assert_eq!(t.rgb(10.0), t.rgb(TABLE_H.0));
         assert_eq!(t.rgb(5000.0), t.rgb(TABLE_H.1));
         // Colour altitude changes chromaticity only.
-        let c = t.rgb_with_colour_altitude(110.0, 250.0);
+        let c = t.rgb_with_colour_altitude(110.0, 250.0, 0.0);
         assert!((luminance(c) - luminance(t.rgb(110.0))).abs() < 1e-12);
         assert!(c[0] > c[1]);
     }
@@ -574,6 +644,27 @@ mod tests {
     }
 
     #[test]
+    fn chemistry_shares_the_simple_models_1p_ratio_and_its_table_has_its_colours() {
+        assert_eq!(crate::chemistry::R_1P, R_1P);
+        let atm = Atmosphere::nrlmsis21();
+        let t = ColourTable::chemistry(&atm);
+        assert!(t.needs_q() && !ColourTable::physical(&EmissionModel::default()).needs_q());
+        // rgb_q is the colour of line_yields (bilinear on both: the same
+        // weights), green at 110 km, red at 250 km.
+        for (h, q) in [(110.3, 2e3), (251.1, 1.5)] {
+            let y = t.line_yields(h, q).unwrap().as_array();
+            let (a, b) = (t.rgb_q(h, q), lines_rgb(y));
+            for k in 0..3 {
+                assert!((a[k] - b[k]).abs() <= 1e-9 * (b[k].abs() + 1e-9), "{h}: {a:?} {b:?}");
+            }
+        }
+        let g = t.rgb_q(110.0, 2e3);
+        assert!(g[1] > g[0] && g[1] > g[2], "{g:?}");
+        let r = t.rgb_q(250.0, 1.5);
+        assert!(r[0] > r[1] && r[0] > r[2], "{r:?}");
+    }
+
+    #[test]
     fn line_yields_as_array_follow_the_lines_order() {
         let y = LineYields { oi_5577: 1.0, oi_6300: 2.0, oi_6364: 3.0, n2p_4278: 4.0, n2_1p: 5.0 };
         assert_eq!(y.as_array(), [1.0, 2.0, 3.0, 4.0, 5.0]);
@@ -680,7 +771,7 @@ mod tests {
         // altitude is kept.
         let rows = [[100.0, 0.0, 0.0, 0.0], [200.0, 1.0, 0.5, 0.25], [250.0, 0.2, 0.3, 0.4]];
         let t = ColourTable::colormap(&rows);
-        assert_eq!(t.rgb_with_colour_altitude(150.0, 100.0), t.rgb(150.0));
+        assert_eq!(t.rgb_with_colour_altitude(150.0, 100.0, 0.0), t.rgb(150.0));
         let (end, mid) = (t.rgb(250.0), t.rgb(225.0));
         for k in 0..3 {
             assert!((end[k] - rows[2][k + 1]).abs() < 1e-12, "{end:?}");

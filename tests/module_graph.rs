@@ -49,6 +49,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "atomic",
             "memory",
             "atmosphere",
+            "chemistry",
             "spectrum",
             "lifetime",
             "lines",

@@ -35,7 +35,7 @@ fn profile_writes_the_promised_csv_and_matches_stdout() {
     }
     assert!(((rows[0][1] * 4.0).round() as i64) % 2 == 1, "bin centre {}", rows[0][1]);
     // Ionization = deposited keV/s / 0.035 keV per pair, bin by bin.
-    let last = rows[0].len() - 1;
+    let last = header.split(',').position(|c| c == "deposited_kev_s").unwrap();
     for r in &rows {
         assert!((r[2] * 0.035 - r[last]).abs() <= 1e-5 * r[last].abs() + 1e-300, "{r:?}");
     }

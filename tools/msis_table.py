@@ -5,7 +5,9 @@ default (`[atmosphere] model = "nrlmsis21"`, src/atmosphere.rs).
 An auroral-zone winter night: 67 N, 20 E, 2020-01-15 00:00 UT,
 F10.7 = F10.7a = 150 sfu, Ap = 15 (all seven Ap slots), 50-700 km every 0.5 km.
 Columns: altitude_km, rho_g_cm3 (total mass density), n2_cm3, o2_cm3, o_cm3
-(number densities), temperature_k. Six significant digits.
+(number densities), temperature_k, then n4s_cm3 (ground-state atomic
+nitrogen N(4S)) and no_cm3 (nitric oxide, NRLMSIS 2.1's new NO model), which
+the emission chemistry (src/chemistry/) needs. Six significant digits.
 
 Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
 incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the
@@ -28,7 +30,7 @@ ALTITUDES = np.arange(50.0, 700.0 + 0.25, 0.5)
 
 
 def table(altitudes=ALTITUDES):
-    """Rows [alt km, rho g/cm^3, n(N2), n(O2), n(O) cm^-3, T K]."""
+    """Rows [alt km, rho g/cm^3, n(N2), n(O2), n(O) cm^-3, T K, n(N), n(NO) cm^-3]."""
     out = pymsis.calculate(
         np.full(len(altitudes), DATE), np.full(len(altitudes), LON), np.full(len(altitudes), LAT),
         altitudes, np.full(len(altitudes), F107), np.full(len(altitudes), F107A),
@@ -37,12 +39,15 @@ def table(altitudes=ALTITUDES):
     v = pymsis.Variable
     rho = out[:, v.MASS_DENSITY] * 1e-3  # kg/m^3 -> g/cm^3
     n = [out[:, s] * 1e-6 for s in (v.N2, v.O2, v.O)]  # m^-3 -> cm^-3
-    rows = np.column_stack([altitudes, rho, *n, out[:, v.TEMPERATURE]])
+    minor = [out[:, s] * 1e-6 for s in (v.N, v.NO)]
+    rows = np.column_stack([altitudes, rho, *n, out[:, v.TEMPERATURE], *minor])
     # NRLMSIS leaves atomic oxygen undefined (NaN) at its 50 km boundary:
     # extend the next two rows' exponential down to it (flagged in the header).
-    o = rows[:, 4]
-    for i in np.flatnonzero(~np.isfinite(o))[::-1]:
-        o[i] = o[i + 1] * (o[i + 1] / o[i + 2]) ** ((altitudes[i + 1] - altitudes[i]) / (altitudes[i + 2] - altitudes[i + 1]))
+    # The same for N(4S) and NO where undefined.
+    for k in (4, 6, 7):
+        o = rows[:, k]
+        for i in np.flatnonzero(~np.isfinite(o))[::-1]:
+            o[i] = o[i + 1] * (o[i + 1] / o[i + 2]) ** ((altitudes[i + 1] - altitudes[i]) / (altitudes[i + 2] - altitudes[i + 1]))
     return rows
 
 
@@ -53,8 +58,8 @@ def main():
     with io.StringIO() as f:
         f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
                 f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
-                f"O at 50 km extrapolated (NRLMSIS leaves it undefined there); made by tools/msis_table.py\n")
-        f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k\n")
+                f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/msis_table.py\n")
+        f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,n4s_cm3,no_cm3\n")
         for r in rows:
             f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")
         write_atomic(path, f.getvalue().encode())

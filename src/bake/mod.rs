@@ -342,21 +342,32 @@ mod tests {
 
     #[test]
     fn hard_spectrum_shows_the_pink_n2_first_positive_lower_border() {
-        // 30 keV Maxwellian, no soft part, no colour noise: below 84 km the
-        // grid is red and violet over green (N2 1P and N2+ 1N stay with N2,
+        // 30 keV Maxwellian, no soft part, no colour noise: with the simple
+        // line model, below 84 km the grid is red and violet over green (N2 1P and N2+ 1N stay with N2,
         // 557.7 nm fades with O), while the green layer is green.
+        // With the chemistry, O2+ recombination under a bright hard arc's
+        // electron density (1e5-1e6 cm^-3) keeps some 557.7 nm down there
+        // (GLOW's rule too): the border is red over green and over blue,
+        // and still redder than the green layer.
         let mut s = small_scene();
         s.curtains[0].char_energy_kev = 30.0;
         s.curtains[0].soft_fraction = 0.0;
         s.colour.noise_km = 0.0;
         s.beams.count = 600;
-        let b = bake(&s, &NoProgress).unwrap();
-        let band = |lo: f64, hi: f64| emission_between(&b, lo, hi);
-        let green = band(100.0, 120.0);
-        assert!(green[1] > green[0] && green[1] > green[2], "100-120 km {green:?}");
-        let border = band(76.0, 84.0);
-        assert!(border[0] > border[1] && border[2] > border[1], "76-84 km {border:?}");
-        assert!(border.iter().sum::<f64>() > 1e-3 * green.iter().sum::<f64>(), "a 30 keV spectrum lights 76-84 km: {border:?}");
+        for lines in [crate::scene::LineModel::Simple, crate::scene::LineModel::Chemistry] {
+            s.colour.lines = lines;
+            let b = bake(&s, &NoProgress).unwrap();
+            let band = |lo: f64, hi: f64| emission_between(&b, lo, hi);
+            let green = band(100.0, 120.0);
+            assert!(green[1] > green[0] && green[1] > green[2], "{lines:?} 100-120 km {green:?}");
+            let border = band(76.0, 84.0);
+            assert!(border[0] > border[1], "{lines:?} 76-84 km {border:?}");
+            if lines == crate::scene::LineModel::Simple {
+                assert!(border[2] > border[1], "76-84 km {border:?}");
+            }
+            assert!(border[0] / border[1] > 2.0 * green[0] / green[1], "{lines:?}: {border:?} {green:?}");
+            assert!(border.iter().sum::<f64>() > 1e-3 * green.iter().sum::<f64>(), "a 30 keV spectrum lights 76-84 km: {border:?}");
+        }
     }
 
     /// The emission grid's RGB summed over voxels whose centre altitude lies

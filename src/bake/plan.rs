@@ -55,7 +55,7 @@ use crate::progress::Progress;
 use crate::prune;
 use crate::scene::{
     AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams,
-    KernelRadius, PhotonParams, Scene,
+    KernelRadius, LineModel, PhotonParams, Scene,
 };
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
 use glam::DVec3;
@@ -101,7 +101,10 @@ pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
 /// The colour table of `[colour]` (its mode and colour map).
 pub fn colour_table_for(colour: &ColourParams, atmosphere: &Atmosphere) -> ColourTable {
     match colour.mode {
-        ColourMode::Physical => ColourTable::physical(&EmissionModel::new(atmosphere.clone())),
+        ColourMode::Physical => match colour.lines {
+            LineModel::Chemistry => ColourTable::chemistry(atmosphere),
+            LineModel::Simple => ColourTable::physical(&EmissionModel::new(atmosphere.clone())),
+        },
         ColourMode::Colormap => ColourTable::colormap(&colour.colormap),
     }
 }
@@ -213,7 +216,10 @@ impl BakePlan {
             }
         };
         let same_colour = prev.filter(|p| {
-            p.atmosphere_params == scene.atmosphere && p.colour.mode == scene.colour.mode && p.colour.colormap == scene.colour.colormap
+            p.atmosphere_params == scene.atmosphere
+                && p.colour.mode == scene.colour.mode
+                && p.colour.lines == scene.colour.lines
+                && p.colour.colormap == scene.colour.colormap
         });
         let (atmosphere, colour_table) = match same_colour {
             Some(p) => (p.atmosphere.clone(), p.colour_table.clone()),

@@ -386,11 +386,16 @@ impl Tracer<'_> {
         };
         let power_w = curtain_power_w(curtain, fp, p.threshold);
         let starts = CurtainStarts::new(p, curtain, fp, map, power_w * KEV_PER_J / n as f64);
-        let spectrum;
+        let spectrum = || SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+        // The chemistry's colours need the local ionization rate: the
+        // curtain spectrum's ionization per unit flux (whatever the
+        // deposition model: q is the mean over the spectrum's electrons).
+        let ionization = self.colour.needs_q().then(|| spectrum().ionization_profile(self.atmosphere));
+        let expected;
         let model = match p.beams.deposition {
             Deposition::Expected => {
-                spectrum = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
-                DepositModel::Expected(&spectrum)
+                expected = spectrum();
+                DepositModel::Expected(&expected)
             }
             Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
             Deposition::Csda => DepositModel::Csda,
@@ -406,6 +411,7 @@ impl Tracer<'_> {
             record_path: false,
             lines: p.lines,
             line_outputs: p.line_outputs,
+            ionization: ionization.as_ref(),
         };
         let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();
         Ok((power_w, traces))
@@ -447,6 +453,9 @@ struct CurtainStarts<'a> {
     top_noise: Perlin,
     colour_noise: Perlin,
     power_kev_s: f64,
+    /// The curtain's peak energy flux, keV cm^-2 s^-1, over the footprint's
+    /// peak density: times the density at a start, the flux there.
+    flux_per_density: f64,
 }
 
 impl<'a> CurtainStarts<'a> {
@@ -462,6 +471,14 @@ impl<'a> CurtainStarts<'a> {
             top_noise: rng::perlin(&[seed, cs, rng::tag::BEAM_TOP_NOISE]),
             colour_noise: rng::perlin(&[seed, cs, rng::tag::COLOUR_NOISE]),
             power_kev_s,
+            flux_per_density: {
+                let peak = footprint.data.iter().cloned().fold(0.0f32, f32::max) as f64;
+                if peak > 0.0 {
+                    curtain.energy_flux * crate::fang::KEV_PER_ERG / peak
+                } else {
+                    0.0
+                }
+            },
         }
     }
 
@@ -482,7 +499,9 @@ impl<'a> CurtainStarts<'a> {
         let colour_offset_km = p.colour_noise_km * rng::noise1(&self.colour_noise, ur * p.colour_noise_freq);
         // The deposit follows the flux at once; with the lines at hand each
         // line follows it through its upper state's lifetime (`wave`).
-        let power_kev_s = self.power_kev_s * crate::animation::pulsation(p.animation, p.seed, x, y);
+        let pulsation = crate::animation::pulsation(p.animation, p.seed, x, y);
+        let power_kev_s = self.power_kev_s * pulsation;
+        let flux_kev_cm2_s = self.flux_per_density * self.footprint.cell_value_world(x, y) * pulsation;
         let wave = p.lines.and_then(|_| crate::animation::pulsation_wave(p.animation, p.seed, x, y));
         // Drawn in every model, so a beam's path is the same in all.
         let c = self.curtain;
@@ -494,6 +513,7 @@ impl<'a> CurtainStarts<'a> {
             base_power_kev_s: self.power_kev_s,
             wave,
             colour_offset_km,
+            flux_kev_cm2_s,
         }
     }
 }

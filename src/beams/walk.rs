@@ -52,7 +52,7 @@ use crate::animation::Wave;
 use crate::atmosphere::Atmosphere;
 use crate::csda::{energy_from_range, range_g_cm2, step_column};
 use crate::deposit::{Photon, StepDeposit};
-use crate::fang::{MonoDeposition, SpectrumDeposition};
+use crate::fang::{IonizationProfile, MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::lines::{LineTable, R_PER_KM_SCALE};
 use crate::magnetic::MagneticField;
@@ -105,6 +105,12 @@ pub struct BeamStart {
     /// Colour altitude offset of this beam, km (the report's low-frequency
     /// colour noise; it shifts colour, not intensity).
     pub colour_offset_km: f64,
+    /// Energy flux entering the atmosphere at the beam's foot, keV cm^-2
+    /// s^-1: the curtain's peak flux times the footprint's density at the
+    /// start (relative to its peak) times the pulsation. With the curtain's
+    /// [`IonizationProfile`] it gives the local ionization rate at every
+    /// deposit, which the chemistry's colours need.
+    pub flux_kev_cm2_s: f64,
 }
 
 /// The result of tracing one beam.
@@ -182,6 +188,10 @@ pub struct BeamContext<'a> {
     /// the ones that leave per-line photon powers.
     pub lines: Option<&'a LineTable>,
     pub line_outputs: &'a [usize],
+    /// The curtain spectrum's ionization per unit flux over altitude, when
+    /// the colours need the ionization rate (the chemistry); `None` leaves
+    /// q = 0 on every deposit.
+    pub ionization: Option<&'a IonizationProfile>,
 }
 
 /// The photon of one beam step: `power` spread along the step from `start`
@@ -229,24 +239,34 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
 
 /// Pushes the photon and deposit record of one step: `kev_s` deposited at
 /// the frame's time, `base_kev_s` the same without the pulsation. The
-/// colour is the lines' at the step's end. Under a pulsation each line's
-/// photons are its yield times the unmodulated deposit times the
-/// modulation a line of its lifetime shows (`crate::lines`); otherwise the
-/// colour table's colour times the deposit. Per-line powers take each
-/// line's yield at the step's midpoint (the altitude a step spread along
-/// its length averages to second order, as `aurora profile` bins it), with
-/// no colour noise.
+/// step's colour is that of its end altitude at the local ionization rate
+/// `q = flux * q_per_flux(end)` (ion pairs cm^-3 s^-1), which the deposit
+/// record keeps for `aurora profile`. Under a pulsation each line's photons
+/// are its yield times the unmodulated deposit times the modulation a line
+/// of its lifetime shows (`crate::lines`); otherwise the colour table's
+/// colour times the deposit. Per-line powers take each line's yield at the
+/// step's midpoint (the altitude a step spread along its length averages to
+/// second order, as `aurora profile` bins it), with no colour noise.
 #[inline]
+#[allow(clippy::too_many_arguments)]
 fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64, base_kev_s: f64) {
+    let q_at = |z: f64| match ctx.ionization {
+        Some(p) => start.flux_kev_cm2_s * p.per_flux(z),
+        None => 0.0,
+    };
+    let q = q_at(to.z);
     let h_colour = to.z + start.colour_offset_km;
     let rgb = match (start.wave, ctx.lines) {
-        (Some(w), Some(t)) => t.rgb_in_motion(to.z, h_colour, |tau| w.at_lifetime(tau)).map(|c| c * base_kev_s),
-        _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour).map(|c| c * kev_s),
+        (Some(w), Some(t)) => {
+            t.rgb_in_motion(|z| t.at_q(ctx.colour, z, q), to.z, h_colour, |tau| w.at_lifetime(tau)).map(|c| c * base_kev_s)
+        }
+        _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour, q).map(|c| c * kev_s),
     };
     out.photons.push(deposit(from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]));
-    out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s });
+    out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s, q });
     if let (Some(t), false) = (ctx.lines, ctx.line_outputs.is_empty()) {
-        let l = t.at(0.5 * (from.z + to.z));
+        let zm = 0.5 * (from.z + to.z);
+        let l = t.at_q(ctx.colour, zm, q_at(zm));
         for &i in ctx.line_outputs {
             let n = match start.wave {
                 Some(w) => base_kev_s * w.at_lifetime(l.tau_s[i]),
@@ -472,6 +492,7 @@ mod tests {
             base_power_kev_s: 1.0,
             wave: None,
             colour_offset_km: 0.0,
+            flux_kev_cm2_s: 0.0,
         }
     }
 
@@ -492,6 +513,7 @@ mod tests {
             record_path: true,
             lines: None,
             line_outputs: &[],
+            ionization: None,
         };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
@@ -531,6 +553,7 @@ mod tests {
             record_path: false,
             lines: None,
             line_outputs: &[],
+            ionization: None,
         };
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
@@ -563,6 +586,7 @@ mod tests {
             record_path: false,
             lines: None,
             line_outputs: &[],
+            ionization: None,
         };
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
@@ -596,6 +620,7 @@ mod tests {
             record_path: false,
             lines: None,
             line_outputs: &[],
+            ionization: None,
         }
     }
 
@@ -771,6 +796,7 @@ mod tests {
             record_path: false,
             lines: None,
             line_outputs: &[],
+            ionization: None,
         };
         let mut r = rng::rng(&[6]);
         let mut left = 0;

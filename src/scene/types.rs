@@ -244,10 +244,23 @@ pub enum ColourMode {
     Colormap,
 }
 
+/// The line model of `mode = "physical"`.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum LineModel {
+    /// The ion and excited-state chemistry (`crate::chemistry`), driven by
+    /// the local ionization rate at each deposit (default).
+    Chemistry,
+    /// The altitude-only parameterisation (`spectrum::EmissionModel`).
+    Simple,
+}
+
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct ColourParams {
     pub mode: ColourMode,
+    /// Line model of the physical colours: "chemistry" or "simple".
+    pub lines: LineModel,
     /// Amplitude of the low-frequency 1D noise on the altitude used for colour, km.
     pub noise_km: f64,
     /// Spatial frequency of that noise, cycles per km (along the curtain).
@@ -591,7 +604,7 @@ pub fn report_colormap() -> Vec<[f64; 4]> {
 
 impl Default for ColourParams {
     fn default() -> Self {
-        Self { mode: ColourMode::Physical, noise_km: 8.0, noise_freq: 0.02, colormap: report_colormap() }
+        Self { mode: ColourMode::Physical, lines: LineModel::Chemistry, noise_km: 8.0, noise_freq: 0.02, colormap: report_colormap() }
     }
 }
 
