@@ -73,6 +73,7 @@ const SECTIONS: &[(&str, &str, &str)] = &[
 const KEYS: &[(&str, &str, &str, &str)] = &[
     ("", "seed", "", "master seed: every random stream is derived from it and an index"),
     ("curtain", "center", "km", "centre of the footprint on the ground plane, `[x, y]`"),
+    ("curtain", "path", "km", "the curtain along a smooth curve (centripetal Catmull-Rom) through these `[x, y]` points: the ground track of its lower border (110 km), lifted up the field to the beams' start; replaces `center`, `length` and `rotation_deg` (giving both is an error)"),
     ("curtain", "length", "km", "length of the footprint box along the curtain's axis"),
     ("curtain", "width", "km", "width of the footprint box across the axis (room for folds and bends)"),
     ("curtain", "rotation_deg", "deg", "direction of the curtain's axis, counter-clockwise from +x"),
@@ -109,6 +110,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("beams", "starts", "", "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
     ("atmosphere", "model", "", "`nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15: `data/nrlmsis21.csv`, made by `tools/msis_table.py`) or `us1976` (U.S. Standard Atmosphere 1976, 80-500 km)"),
     ("colour", "mode", "", "`physical` (the emission lines through the CIE 1931 colour matching functions) or `colormap` (the `colormap` table)"),
+    ("colour", "lines", "", "the line model of `mode = \"physical\"`: `chemistry` (steady-state ion and excited-state chemistry driven by the local ionization rate, after NCAR GLOW's; docs/physics.md) or `simple` (yields in proportion to mole fractions, one quencher per state: the older rule of thumb)"),
     ("colour", "noise_km", "km", "amplitude of the low-frequency noise on the altitude used for colour (not intensity)"),
     ("colour", "noise_freq", "1/km", "spatial frequency of that noise along the curtain"),
     ("colour", "colormap", "km, linear Rec.709", "rows `[altitude_km, r, g, b]` (colour per unit deposited power), altitudes ascending, used when `mode = \"colormap\"`; the default is the 2014 report's look"),
@@ -175,6 +177,7 @@ const TYPES: &[(&str, &str, &str)] = &[
     ("terrain", "heightmap", "path"),
     ("grid", "voxel_size", "number or `\"auto\"`"),
     ("grid", "lines", "list of words"),
+    ("curtain", "path", "rows of 2 numbers"),
 ];
 
 /// docs/scene.md: a header, then per section a table of key, type,
