@@ -320,8 +320,8 @@ impl ColourTable {
                 let cell = c.lines.cell(h_km, q);
                 let mut out = [0.0; 3];
                 for (&i, &w) in cell.i.iter().zip(&cell.w) {
-                    for k in 0..3 {
-                        out[k] += w * c.rgb[i][k];
+                    for (o, x) in out.iter_mut().zip(c.rgb[i]) {
+                        *o += w * x;
                     }
                 }
                 out

@@ -166,6 +166,7 @@ fn band_thickness_is_the_band_area_over_the_length() {
         rotation_rad: 0.0,
         length: 8.0,
         width: 4.0,
+        path: None,
     };
     for j in 7..10 {
         for i in 0..32 {
