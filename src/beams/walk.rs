@@ -542,19 +542,7 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext {
-            atmosphere: &atm,
-            model: DepositModel::Csda,
-            colour: &colour,
-            field: MagneticField::new(78.0, 0.0),
-            params: &p,
-            footprint: &fp,
-            threshold: 0.03,
-            record_path: false,
-            lines: None,
-            line_outputs: &[],
-            ionization: None,
-        };
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Csda);
         let mut r = rng::rng(&[2]);
         for e0 in [0.5, 3.0, 10.0, 30.0] {
             let t = trace_beam(&ctx, &start(e0), &mut r);
@@ -575,19 +563,7 @@ mod tests {
         let colour = ColourTable::physical(&EmissionModel::default());
         let fp = flat_footprint(1e5);
         let p = params();
-        let ctx = BeamContext {
-            atmosphere: &atm,
-            model: DepositModel::Csda,
-            colour: &colour,
-            field: MagneticField::new(78.0, 0.0),
-            params: &p,
-            footprint: &fp,
-            threshold: 0.03,
-            record_path: false,
-            lines: None,
-            line_outputs: &[],
-            ionization: None,
-        };
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Csda);
         let mut r = rng::rng(&[3]);
         let mut mean_end = |e0: f64| {
             let n = 50;
@@ -602,7 +578,9 @@ mod tests {
         assert!(z10 < z3 && z3 < z1);
     }
 
-    fn fang_ctx<'a>(
+    /// A beam context for the tests: `p`'s field, no per-line output, no
+    /// ionization profile (q = 0 at every deposit).
+    fn context<'a>(
         atm: &'a Atmosphere,
         colour: &'a ColourTable,
         fp: &'a Footprint,
@@ -632,7 +610,7 @@ mod tests {
         let p = params();
         for (e0, soft) in [(1.0, 0.0), (3.0, 0.1), (30.0, 0.0)] {
             let g = SpectrumDeposition::curtain(e0, soft, 0.2);
-            let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+            let ctx = context(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
             let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[7]));
             assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
             let dep: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
@@ -669,7 +647,7 @@ mod tests {
         let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0, path: None };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
         let g = SpectrumDeposition::curtain(30.0, 0.0, 0.2);
-        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
         let mut r = rng::rng(&[6]);
         let mut outside = 0;
         for _ in 0..20 {
@@ -698,7 +676,7 @@ mod tests {
         // Straight down in steps of up to 2.5e6 km: the first step is cut at
         // the atmosphere's bottom (where a 3 keV spectrum is complete).
         let p = BeamParams { length_km: 1e9, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, b_inclination_deg: 90.0, ..params() };
-        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
         let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut rng::rng(&[9]));
         assert!(matches!(t.end, EndReason::Bottom | EndReason::EnergySpent), "{:?}", t.end);
         assert!(t.photons.iter().all(|ph| ph.position[2] >= 50.0 - 1e-4), "{:?}", t.photons);
@@ -708,7 +686,7 @@ mod tests {
         // its size (|u| <= 10, |v| <= 4 at the start altitude), never placing
         // a photon whose foot is further out.
         let p = BeamParams { length_km: 1e9, alpha_d_deg: 89.999, delta_alpha_deg: 0.0, b_inclination_deg: 10.0, ..params() };
-        let ctx = fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
         let mut r = rng::rng(&[10]);
         for _ in 0..20 {
             let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(3.0) }, &mut r);
@@ -737,8 +715,8 @@ mod tests {
         let (e0, soft, e_soft) = (3.0, 0.2, 0.3);
         let g = SpectrumDeposition::curtain(e0, soft, e_soft);
         let (ce, cs) = (
-            fang_ctx(&atm, &colour, &fp, &p, DepositModel::Expected(&g)),
-            fang_ctx(&atm, &colour, &fp, &p, DepositModel::Sampled(MonoDeposition::get())),
+            context(&atm, &colour, &fp, &p, DepositModel::Expected(&g)),
+            context(&atm, &colour, &fp, &p, DepositModel::Sampled(MonoDeposition::get())),
         );
         let n = 4000;
         let nb = 80;
@@ -785,19 +763,7 @@ mod tests {
         // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
         let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0, path: None };
         let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
-        let ctx = BeamContext {
-            atmosphere: &atm,
-            model: DepositModel::Csda,
-            colour: &colour,
-            field: MagneticField::new(78.0, 0.0),
-            params: &p,
-            footprint: &fp,
-            threshold: 0.03,
-            record_path: false,
-            lines: None,
-            line_outputs: &[],
-            ionization: None,
-        };
+        let ctx = context(&atm, &colour, &fp, &p, DepositModel::Csda);
         let mut r = rng::rng(&[6]);
         let mut left = 0;
         for _ in 0..50 {
