@@ -9,7 +9,7 @@ mod common;
 use aurora::grid::{Grid, VoxelValue};
 use aurora::scene::Compression;
 use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_vdb, read_vdb_bytes_with_vdbrs, Decoder};
+use aurora::vdb::read::{read_vdb, Decoder};
 use aurora::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use glam::{DVec3, IVec3};
 use serde_json::{json, Value};
@@ -195,8 +195,8 @@ fn our_reader_reads_files_openvdb_writes() {
     // Our decoder reads every grid; vdb-rs (the oracle) reads the tile-free
     // float grid the same.
     assert_eq!(f.info("density_plain").unwrap().decoder, Decoder::Native);
-    let v = read_vdb_bytes_with_vdbrs(&std::fs::read(&path).unwrap()).unwrap();
-    assert_eq!(v.info("density_plain").unwrap().decoder, Decoder::VdbRs);
+    let v = common::vdbrs::read_vdb_bytes_with_vdbrs(&std::fs::read(&path).unwrap()).unwrap();
+    assert_eq!(v.info("density_plain").unwrap().decoder, Decoder::External);
     let (a, b) = (f.float("density_plain").unwrap(), v.float("density_plain").unwrap());
     assert_eq!(a.active_voxel_count(), b.active_voxel_count());
     for (p, x) in a.iter_active() {

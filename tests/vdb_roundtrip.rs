@@ -9,7 +9,7 @@ mod common;
 use aurora::grid::{Grid, Transform, VoxelValue};
 use aurora::scene::Compression;
 use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, read_vdb_bytes_with_vdbrs, Decoder, RawMeta};
+use aurora::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, Decoder, RawMeta};
 use aurora::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
 use common::damaged::{body_cuts, cut_body, random_changes, small_file, truncation_lengths, MODES};
 use glam::{DVec3, IVec3};
@@ -81,9 +81,9 @@ fn round_trip_every_mode_bit_exact() {
             let di = f.info("density").unwrap();
             assert_eq!(di.decoder, Decoder::Native, "{what}");
             assert_eq!(f.info("emission").unwrap().decoder, Decoder::Native);
-            let v = read_vdb_bytes_with_vdbrs(&bytes).unwrap();
+            let v = common::vdbrs::read_vdb_bytes_with_vdbrs(&bytes).unwrap();
             let vi = v.info("density").unwrap();
-            assert_eq!(vi.decoder, if half { Decoder::Native } else { Decoder::VdbRs }, "{what}");
+            assert_eq!(vi.decoder, if half { Decoder::Native } else { Decoder::External }, "{what}");
             assert_same(v.float("density").unwrap(), f.float("density").unwrap(), &format!("{what}: native vs vdb-rs"));
             let native = read_native_float_grids(&bytes).unwrap();
             assert_same(f.float("density").unwrap(), &native[0], &format!("{what}: native"));
@@ -123,8 +123,8 @@ fn round_trip_special_values_and_background() {
         let bytes = write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         let f = read_vdb_bytes(&bytes).unwrap();
         assert_same(&g, &f.float_grids[0], &format!("{comp:?}"));
-        let v = read_vdb_bytes_with_vdbrs(&bytes).unwrap();
-        assert_eq!(v.grids[0].decoder, Decoder::VdbRs);
+        let v = common::vdbrs::read_vdb_bytes_with_vdbrs(&bytes).unwrap();
+        assert_eq!(v.grids[0].decoder, Decoder::External);
         assert_same(&g, &v.float_grids[0], &format!("{comp:?} vdb-rs"));
         assert_same(&g, &read_native_float_grids(&bytes).unwrap()[0], &format!("{comp:?} native"));
     }
@@ -277,4 +277,27 @@ fn parallel_decoding_is_thread_count_independent() {
         assert_eq!(origins(&one), origins(&many), "{what}: leaf order");
         assert_same(&d, one.float("density").unwrap(), &what);
     }
+}
+
+/// A panic inside the oracle's contained region comes back as an error with
+/// its message, on this thread and on concurrent ones, and the silencing
+/// flag is reset afterwards.
+#[test]
+fn vdbrs_panics_are_contained() {
+    use common::vdbrs::{catch_silently, silenced};
+    assert_eq!(catch_silently(|| 7), Ok(7));
+    assert_eq!(catch_silently(|| -> i32 { panic!("boom {}", 1) }), Err("boom 1".to_string()));
+    let handles: Vec<_> = (0..4).map(|i| std::thread::spawn(move || catch_silently(move || -> u8 { panic!("thread {i}") }))).collect();
+    for (i, h) in handles.into_iter().enumerate() {
+        assert_eq!(h.join().unwrap(), Err(format!("thread {i}")));
+    }
+    assert!(!silenced());
+}
+
+/// vdb-rs's descriptor keys are the name's bytes as chars.
+#[test]
+fn vdbrs_keys_are_latin1() {
+    use common::vdbrs::vdbrs_key;
+    assert_eq!(vdbrs_key(b"density"), "density");
+    assert_eq!(vdbrs_key("dé".as_bytes()), "d\u{c3}\u{a9}");
 }

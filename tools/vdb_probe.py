@@ -129,7 +129,7 @@ def write_reference(path):
     for i in range(0, 30, 2):
         acc.setValueOn((i, -i, 3 * i), (i / 3.0, 1.0 / (i + 1), -2.0 * i))
 
-    # No tiles: this one goes through vdb-rs (with Blosc) in our reader.
+    # No tiles: the tests' vdb-rs oracle reads this one too (with Blosc).
     plain = vdb.FloatGrid()
     plain.name = "density_plain"
     plain.gridClass = vdb.GridClass.FOG_VOLUME

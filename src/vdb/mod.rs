@@ -1,5 +1,5 @@
 //! OpenVDB file I/O: a native writer (file format 224, what OpenVDB 10-12
-//! write) and a reader built on vdb-rs with our own validation and decoding.
+//! write) and a reader with our own validation and decoding.
 //!
 //! - [`layout`]: format constants and the per-level node offset functions;
 //! - [`cursor`]: the bounds-checked byte reader and its [`cursor::ParseError`];
@@ -7,7 +7,8 @@
 //! - [`fileid`]: the content-derived file UUID and its hash (XXH64);
 //! - [`write`](mod@write): grids -> file bytes;
 //! - [`parse`]: bounds-checked parser (validation and native decoding);
-//! - [`read`]: file -> grids (vdb-rs where it is right, our parser elsewhere);
+//! - [`read`]: file -> grids (our parser; a second decoder can be plugged in
+//!   for the plain float grids, which the tests do with vdb-rs as an oracle);
 //! - [`records`]: a file's located leaf records as a `LeafSource`, decoded on
 //!   demand (the renderer's medium is built from them by `crate::vdb_medium`,
 //!   above this module: `vdb` knows nothing of the renderer).

@@ -8,11 +8,10 @@
 //!   and Blosc header against the bytes that exist, and decompressing every
 //!   ZIP and Blosc stream into a scratch buffer that is then dropped (a
 //!   damaged ZIP payload or checksum, or LZ4 payload, shows only there).
-//!   A file that passes cannot make vdb-rs allocate from a garbage length
-//!   or read past the end;
+//!   A file that passes cannot make a second decoder (the tests' vdb-rs)
+//!   allocate from a garbage length or read past the end;
 //! - *native decoding* (`decode = true`): the same walk, decoding values, for
-//!   the grids vdb-rs cannot read (vec3s grids, half grids, tiles, maps other
-//!   than its three);
+//!   every grid the reader is not told to leave to a second decoder;
 //! - *locating* ([`Decode::Locate`]): the validation walk, keeping each
 //!   leaf's origin, mask and record offset, for a caller that decodes the
 //!   records itself, in parallel, straight where it wants the values (the

@@ -30,29 +30,22 @@
 //! decompression of their records in its open time, less than the grid
 //! reader spends decoding them (no values are scattered or kept).
 //!
-//! [`read_vdb_bytes_with_vdbrs`] reads the plain `float` grids (no half
-//! floats, no active tiles, one of its three transform maps) with the vdb-rs
-//! crate instead: it is kept as the tests' independent oracle for our decoder. vdb-rs runs inside
-//! `std::panic::catch_unwind` with the panic message silenced (it still has
-//! `unwrap`s, `assert`s and indexing on input), and only on files our
-//! validation accepted, so it never sees a length that could make it
-//! allocate without bound. It gets vec3s trees (every root background and
-//! tile value read as 4 bytes), half grids and root tiles wrong, and panics on
-//! `ScaleMap`, `TranslationMap` and `AffineMap`.
+//! [`read_vdb_bytes_with`] hands the plain `float` grids a second decoder
+//! accepts to that decoder instead of ours ([`ExternalFloatDecoder`]): the
+//! tests plug in the vdb-rs crate there as an independent oracle for our
+//! decoder (`tests/common/vdbrs.rs`; vdb-rs is a dev-dependency only, so
+//! the product never builds it). It runs only on files our validation
+//! accepted and gets the located grids' names; its leaves replace ours.
 //!
 //! Every grid comes back with its inactive voxels at the background value
-//! (the [`Grid`] invariant). Note vdb-rs's magic-number check is inverted in
-//! effect (it rejects only the byte-swapped magic and accepts anything else),
-//! so the magic is checked here.
+//! (the [`Grid`] invariant). The magic is always checked here, whichever
+//! decoder reads the values.
 
 use super::parse::{self, AnyTree, GridHeader, ParseError, ParsedFile, Tree, ValueKind};
 use crate::grid::{Grid, Leaf, Transform, VoxelValue, LEAF_DIM};
 use glam::{DVec3, IVec3};
-use std::cell::Cell;
 use std::collections::HashSet;
-use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
-use std::sync::Once;
 
 pub use super::parse::RawMeta;
 
@@ -68,9 +61,10 @@ pub enum VdbReadError {
         #[source]
         source: ParseError,
     },
-    /// vdb-rs failed or panicked on a file our validation accepted.
-    #[error("`{file}`: grid `{grid}`: vdb-rs could not read it: {message}")]
-    VdbRs { file: String, grid: String, message: String },
+    /// A second decoder ([`ExternalFloatDecoder`]) failed on a file our
+    /// validation accepted.
+    #[error("`{file}`: grid `{grid}`: the external decoder could not read it: {message}")]
+    External { file: String, grid: String, message: String },
     /// Tiles would densify into too many voxels.
     #[error("`{file}`: grid `{grid}`: active tiles cover {voxels} voxels, more than the {limit} this reader densifies into leaves")]
     TooManyTileVoxels { file: String, grid: String, voxels: u128, limit: u128 },
@@ -86,8 +80,8 @@ impl VdbReadError {
 /// Which decoder produced a grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Decoder {
-    /// The vdb-rs crate.
-    VdbRs,
+    /// An [`ExternalFloatDecoder`] (the tests' oracle).
+    External,
     /// Our parser ([`super::parse`]).
     Native,
     /// Not read: a grid type other than `float` / `vec3s`.
@@ -155,7 +149,7 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 /// Reads a VDB file.
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
     let bytes = crate::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
-    read_vdb_named(&bytes, &path.display().to_string(), false, false)
+    read_vdb_named(&bytes, &path.display().to_string(), None, false)
 }
 
 /// [`read_vdb`] for the renderer: leaves whose active voxels are all 0 are
@@ -166,48 +160,63 @@ pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
 /// its leaves) then costs no memory.
 pub fn read_vdb_for_render(path: &Path) -> Result<VdbFile, VdbReadError> {
     let bytes = crate::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
-    read_vdb_named(&bytes, &path.display().to_string(), false, true)
+    read_vdb_named(&bytes, &path.display().to_string(), None, true)
 }
 
 /// Reads a VDB file held in memory.
 pub fn read_vdb_bytes(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>", false, false)
+    read_vdb_named(bytes, "<memory>", None, false)
 }
 
 /// [`read_vdb_for_render`] of a file held in memory.
 pub fn read_vdb_bytes_for_render(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>", false, true)
+    read_vdb_named(bytes, "<memory>", None, true)
 }
 
-/// [`read_vdb_bytes`] with the plain float grids decoded by vdb-rs (module
-/// docs): the tests' oracle for our decoder.
-pub fn read_vdb_bytes_with_vdbrs(bytes: &[u8]) -> Result<VdbFile, VdbReadError> {
-    read_vdb_named(bytes, "<memory>", true, false)
+/// One grid's leaves (mask and values) and transform, as a second decoder
+/// read them.
+pub type FloatLeaves = (Vec<Leaf<f32>>, Transform);
+
+/// A second decoder's answer for the named grids: their leaves in the order
+/// asked, or the grid it failed on and why.
+pub type ExternalDecode = Result<Vec<FloatLeaves>, (String, String)>;
+
+/// Grids to decode: each one's display name and its descriptor name's bytes.
+pub type GridNames = [(String, Vec<u8>)];
+
+/// A second decoder for plain `float` grids, for tests that check ours
+/// against an independent one.
+pub struct ExternalFloatDecoder<'a> {
+    /// Whether it reads this grid (the others are decoded by ours). Grids
+    /// with active tiles are always ours.
+    pub reads: &'a dyn Fn(&GridHeader) -> bool,
+    /// Decodes the named grids (display name, descriptor name bytes) of the
+    /// file's bytes, in the order given; an error names the grid and says why.
+    pub decode: &'a dyn Fn(&[u8], &GridNames) -> ExternalDecode,
 }
 
-/// Whether vdb-rs reads this grid correctly (see the module docs).
-fn vdbrs_reads(gh: &GridHeader) -> bool {
-    gh.kind == Some(ValueKind::Float)
-        && !gh.half
-        && matches!(gh.map_name.as_str(), "UniformScaleMap" | "UniformScaleTranslateMap" | "ScaleTranslateMap")
+/// [`read_vdb_bytes`] with the plain float grids `external` reads decoded
+/// by it (module docs): how the tests run an oracle for our decoder.
+pub fn read_vdb_bytes_with(bytes: &[u8], external: &ExternalFloatDecoder) -> Result<VdbFile, VdbReadError> {
+    read_vdb_named(bytes, "<memory>", Some(external), false)
 }
 
-fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) -> Result<VdbFile, VdbReadError> {
+fn read_vdb_named(bytes: &[u8], file: &str, external: Option<&ExternalFloatDecoder>, drop_zero: bool) -> Result<VdbFile, VdbReadError> {
     let invalid = |source: ParseError| VdbReadError::Invalid { file: file.to_string(), source };
-    let vdbrs_reads = |gh: &GridHeader| allow_vdbrs && vdbrs_reads(gh);
+    let external_reads = |gh: &GridHeader| external.is_some_and(|x| gh.kind == Some(ValueKind::Float) && (x.reads)(gh));
     let native = if drop_zero { parse::Decode::NonZero } else { parse::Decode::All };
-    // 1. Validate everything; decode natively what vdb-rs cannot read.
-    let mut parsed = parse::parse_file_with(bytes, &|gh| if vdbrs_reads(gh) { parse::Decode::Skip } else { native }).map_err(invalid)?;
-    // Grids with active tiles go native too (vdb-rs drops root tiles).
+    // 1. Validate everything; decode natively what the external decoder does not read.
+    let mut parsed = parse::parse_file_with(bytes, &|gh| if external_reads(gh) { parse::Decode::Skip } else { native }).map_err(invalid)?;
+    // Grids with active tiles go native too (a second decoder may drop root tiles).
     let retry: HashSet<Vec<u8>> = parsed
         .grids
         .iter()
-        .filter(|g| vdbrs_reads(&g.header) && tree_tile_count(g.tree.as_ref()) > 0)
+        .filter(|g| external_reads(&g.header) && tree_tile_count(g.tree.as_ref()) > 0)
         .map(|g| g.header.unique_name_raw.clone())
         .collect();
     if !retry.is_empty() {
         parsed = parse::parse_file_with(bytes, &|gh| {
-            if !vdbrs_reads(gh) || retry.contains(&gh.unique_name_raw) {
+            if !external_reads(gh) || retry.contains(&gh.unique_name_raw) {
                 native
             } else {
                 parse::Decode::Skip
@@ -215,15 +224,20 @@ fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) 
         })
         .map_err(invalid)?;
     }
-    let use_vdbrs = |gh: &GridHeader| vdbrs_reads(gh) && !retry.contains(&gh.unique_name_raw);
-    // 2. vdb-rs for the plain float grids.
-    let vdbrs_names: Vec<(String, Vec<u8>)> = parsed
+    let use_external = |gh: &GridHeader| external_reads(gh) && !retry.contains(&gh.unique_name_raw);
+    // 2. The external decoder for the plain float grids it reads.
+    let external_names: Vec<(String, Vec<u8>)> = parsed
         .grids
         .iter()
-        .filter(|g| use_vdbrs(&g.header))
+        .filter(|g| use_external(&g.header))
         .map(|g| (g.header.unique_name.clone(), g.header.unique_name_raw.clone()))
         .collect();
-    let mut from_vdbrs = read_with_vdbrs(bytes, &vdbrs_names, file)?.into_iter();
+    let mut from_external = match external {
+        Some(x) if !external_names.is_empty() => (x.decode)(bytes, &external_names)
+            .map_err(|(grid, message)| VdbReadError::External { file: file.into(), grid, message })?
+            .into_iter(),
+        _ => Vec::new().into_iter(),
+    };
     // 3. Assemble in file order.
     let ParsedFile { header, grids: parsed_grids } = parsed;
     let mut out = VdbFile {
@@ -238,22 +252,22 @@ fn read_vdb_named(bytes: &[u8], file: &str, allow_vdbrs: bool, drop_zero: bool) 
     for pg in parsed_grids {
         let gh = pg.header;
         let name = gh.name();
-        let decoder = match (&pg.tree, use_vdbrs(&gh)) {
+        let decoder = match (&pg.tree, use_external(&gh)) {
             (None, _) => Decoder::Skipped,
-            (Some(_), true) => Decoder::VdbRs,
+            (Some(_), true) => Decoder::External,
             (Some(_), false) => Decoder::Native,
         };
         let transform = gh.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
         match (pg.tree, decoder) {
-            (Some(AnyTree::Float(tree)), Decoder::VdbRs) => {
-                let Some((leaves, vdbrs_transform)) = from_vdbrs.next() else {
-                    return Err(VdbReadError::VdbRs {
+            (Some(AnyTree::Float(tree)), Decoder::External) => {
+                let Some((leaves, external_transform)) = from_external.next() else {
+                    return Err(VdbReadError::External {
                         file: file.into(),
                         grid: name,
                         message: "returned fewer grids than asked for".into(),
                     });
                 };
-                let mut g = Grid::new(name.clone(), tree.background, vdbrs_transform);
+                let mut g = Grid::new(name.clone(), tree.background, external_transform);
                 for leaf in leaves {
                     g.insert_leaf(normalise(leaf, tree.background));
                 }
@@ -337,97 +351,8 @@ pub(crate) fn check_tile_voxels(voxels: u128, name: &str, file: &str) -> Result<
     Ok(())
 }
 
-thread_local! {
-    /// Set while this thread runs vdb-rs: its panics are expected and caught.
-    static SILENCE_PANICS: Cell<bool> = const { Cell::new(false) };
-}
-static INSTALL_HOOK: Once = Once::new();
-
-/// Runs `f`, catching a panic. While it runs, panic messages from this thread
-/// are not printed; other threads' panics still are (the hook is installed
-/// once and consults a thread-local flag, so concurrent readers are safe).
-fn catch_silently<R>(f: impl FnOnce() -> R) -> Result<R, String> {
-    INSTALL_HOOK.call_once(|| {
-        let previous = std::panic::take_hook();
-        std::panic::set_hook(Box::new(move |info| {
-            if !SILENCE_PANICS.with(|s| s.get()) {
-                previous(info);
-            }
-        }));
-    });
-    SILENCE_PANICS.with(|s| s.set(true));
-    let r = catch_unwind(AssertUnwindSafe(f));
-    SILENCE_PANICS.with(|s| s.set(false));
-    r.map_err(|p| {
-        p.downcast_ref::<String>().cloned().or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string())).unwrap_or_else(|| "panic".into())
-    })
-}
-
-/// vdb-rs keys grids by descriptor name read byte by byte as `char`s.
-fn vdbrs_key(name: &[u8]) -> String {
-    name.iter().map(|&b| char::from(b)).collect()
-}
-
-/// Leaves and transform of one grid as vdb-rs read it.
-type VdbRsGrid = (Vec<Leaf<f32>>, Transform);
-
-/// Reads the named float grids (display name, descriptor name bytes) with
-/// vdb-rs: for each, its leaves (mask and values) and transform.
-fn read_with_vdbrs(bytes: &[u8], names: &[(String, Vec<u8>)], file: &str) -> Result<Vec<VdbRsGrid>, VdbReadError> {
-    if names.is_empty() {
-        return Ok(Vec::new());
-    }
-    let fail = |grid: &str, message: String| VdbReadError::VdbRs { file: file.into(), grid: grid.into(), message };
-    let result = catch_silently(|| -> Result<Vec<_>, (String, String)> {
-        let mut reader = vdb_rs::VdbReader::new(std::io::Cursor::new(bytes)).map_err(|e| (String::new(), e.to_string()))?;
-        let mut out = Vec::with_capacity(names.len());
-        for (name, raw) in names {
-            let g = reader.read_grid::<f32>(&vdbrs_key(raw)).map_err(|e| (name.clone(), e.to_string()))?;
-            out.push(convert_vdbrs(&g).map_err(|m| (name.clone(), m))?);
-        }
-        Ok(out)
-    });
-    match result {
-        Ok(Ok(v)) => Ok(v),
-        Ok(Err((grid, message))) => Err(fail(&grid, message)),
-        Err(panic) => {
-            let all: Vec<&str> = names.iter().map(|(n, _)| n.as_str()).collect();
-            Err(fail(&all.join(", "), format!("panicked: {panic}")))
-        }
-    }
-}
-
-/// Extracts leaves and transform from a vdb-rs grid. Leaf origins are derived
-/// from the slot indices with our offset functions.
-fn convert_vdbrs(g: &vdb_rs::Grid<f32>) -> Result<VdbRsGrid, String> {
-    use super::layout::{internal16_child_origin, internal32_child_origin};
-    let transform = match &g.transform {
-        vdb_rs::Map::ScaleTranslateMap { translation: t, scale_values: s, .. } => Transform::new(s.x, DVec3::new(t.x, t.y, t.z)),
-        vdb_rs::Map::UniformScaleMap { scale_values: s, .. } => Transform::new(s.x, DVec3::ZERO),
-    };
-    let mut leaves = Vec::new();
-    for n5 in &g.tree.root_nodes {
-        let o5 = IVec3::new(n5.origin.x, n5.origin.y, n5.origin.z);
-        for i5 in n5.child_mask.iter_ones() {
-            let n4 = n5.nodes.get(&(i5 as u32)).ok_or("missing Internal16 node")?;
-            let o4 = internal32_child_origin(o5, i5);
-            for i4 in n4.child_mask.iter_ones() {
-                let n3 = n4.nodes.get(&(i4 as u32)).ok_or("missing leaf node")?;
-                if n3.buffer.len() != crate::grid::LEAF_NUM_VALUES || n3.value_mask.as_raw_slice().len() != crate::grid::LEAF_MASK_WORDS {
-                    return Err(format!("leaf buffer of {} values", n3.buffer.len()));
-                }
-                let mut leaf = Leaf::new(internal16_child_origin(o4, i4), 0.0f32);
-                leaf.mask.copy_from_slice(n3.value_mask.as_raw_slice());
-                leaf.values.copy_from_slice(&n3.buffer);
-                leaves.push(leaf);
-            }
-        }
-    }
-    Ok((leaves, transform))
-}
-
-/// Decodes every `float` grid of a file with our parser alone (no vdb-rs):
-/// the oracle the tests compare vdb-rs against.
+/// Decodes every `float` grid of a file with our parser alone: what the
+/// tests compare a second decoder against.
 pub fn read_native_float_grids(bytes: &[u8]) -> Result<Vec<Grid<f32>>, VdbReadError> {
     let invalid = |source: ParseError| VdbReadError::Invalid { file: "<memory>".into(), source };
     let parsed = parse::parse_file(bytes, &|_| true).map_err(invalid)?;
@@ -444,21 +369,6 @@ pub fn read_native_float_grids(bytes: &[u8]) -> Result<Vec<Grid<f32>>, VdbReadEr
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A panic inside the contained region comes back as an error with its
-    /// message, on this thread and on concurrent ones.
-    #[test]
-    fn panics_are_contained() {
-        assert_eq!(catch_silently(|| 7), Ok(7));
-        assert_eq!(catch_silently(|| -> i32 { panic!("boom {}", 1) }), Err("boom 1".to_string()));
-        let handles: Vec<_> = (0..4).map(|i| std::thread::spawn(move || catch_silently(move || -> u8 { panic!("thread {i}") }))).collect();
-        for (i, h) in handles.into_iter().enumerate() {
-            assert_eq!(h.join().unwrap(), Err(format!("thread {i}")));
-        }
-        // The flag is reset: a later panic outside is not silenced (not
-        // observable here beyond the flag itself).
-        assert!(!SILENCE_PANICS.with(|s| s.get()));
-    }
 
     /// The renderer's read drops exactly the leaves whose active voxels are
     /// all 0 (float and vec3, every compression) and keeps the others
@@ -480,8 +390,8 @@ mod tests {
         for c in [Compression::None, Compression::Zip, Compression::ZipActiveMask, Compression::BloscActiveMask] {
             let opts = WriteOptions { compression: c, ..WriteOptions::default() };
             let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
-            let all = read_vdb_named(&bytes, "t", false, false).unwrap();
-            let some = read_vdb_named(&bytes, "t", false, true).unwrap();
+            let all = read_vdb_named(&bytes, "t", None, false).unwrap();
+            let some = read_vdb_named(&bytes, "t", None, true).unwrap();
             let origins = |g: &Grid<f32>| g.leaves().iter().map(|l| l.origin).collect::<Vec<_>>();
             assert_eq!(origins(&all.float_grids[0]).len(), 5, "{c:?}");
             assert_eq!(origins(&some.float_grids[0]), vec![IVec3::ZERO, IVec3::new(0, 8, 0)], "{c:?}");
@@ -491,12 +401,5 @@ mod tests {
             }
             assert_eq!(some.vec3_grids[0].leaves().len(), 2, "{c:?}");
         }
-    }
-
-    /// vdb-rs's descriptor keys are the name's bytes as chars.
-    #[test]
-    fn vdbrs_keys_are_latin1() {
-        assert_eq!(vdbrs_key(b"density"), "density");
-        assert_eq!(vdbrs_key("dé".as_bytes()), "d\u{c3}\u{a9}");
     }
 }

@@ -15,6 +15,7 @@ pub mod child;
 pub mod damaged;
 mod openvdb_tool;
 pub mod small;
+pub mod vdbrs;
 
 pub fn repo_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
