@@ -64,7 +64,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
     ),
     (Stages, &["frames", "footprint", "starts", "animation", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"]),
     (Renderer, &["render"]),
-    (Files, &["vdb", "usd", "bake_identity", "outputs", "sequence"]),
+    (Files, &["vdb", "usd", "bake_identity", "outputs", "sequence", "farm_plan"]),
     (Above, &["vdb_medium", "preview", "bench"]),
 ];
 

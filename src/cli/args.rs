@@ -116,6 +116,16 @@ pub struct BakeArgs {
     /// progress, warnings and errors; docs/guide.md, "Progress as JSON").
     #[arg(long, value_enum, default_value_t = ProgressFormat::Bars, value_name = "FORMAT")]
     pub progress: ProgressFormat,
+    /// Do not bake the range: bake a few of its frames (--plan-samples, spread over it) in a
+    /// scratch folder and print the estimated bytes per frame and in total, peak memory per
+    /// task and CPU time per frame and in total, then exit 0 (nothing is written to DIR).
+    /// With --progress json the plan is one JSON object on stdout.
+    #[arg(long, requires = "frames")]
+    pub plan: bool,
+    /// Frames --plan bakes to calibrate (first, last and evenly between).
+    #[arg(long, value_name = "N", default_value_t = 3, requires = "plan",
+          value_parser = clap::value_parser!(u64).range(1..=aurora::farm_plan::MAX_SAMPLES as u64))]
+    pub plan_samples: u64,
     #[command(flatten)]
     pub common: Common,
 }

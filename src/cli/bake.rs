@@ -63,7 +63,7 @@ impl Report {
 }
 
 pub fn run(a: BakeArgs) -> Result<()> {
-    let BakeArgs { scene, out, seed, frames, shard, sequence, rebake, progress, common } = a;
+    let BakeArgs { scene, out, seed, frames, shard, sequence, rebake, progress, plan, plan_samples, common } = a;
     let report = Report::new(progress, common.quiet);
     let mut scene = load_scene(&scene)?;
     if let Some(s) = seed {
@@ -80,7 +80,21 @@ pub fn run(a: BakeArgs) -> Result<()> {
         }
         frames = all;
     }
+    if plan {
+        // This process's share: what one farm task of the range costs.
+        return with_threads(common.threads, || plan_frames(&scene, &mine, plan_samples as usize, progress, &report));
+    }
     with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, &report))
+}
+
+/// `--plan`: the estimate for `frames` on stdout (`aurora::farm_plan`).
+fn plan_frames(scene: &Scene, frames: &[i64], samples: usize, format: ProgressFormat, say: &Report) -> Result<()> {
+    let plan = aurora::farm_plan::plan(scene, frames, samples, say.progress())?;
+    match format {
+        ProgressFormat::Json => println!("{}", plan.json()),
+        ProgressFormat::Bars => println!("{}", plan.text()),
+    }
+    Ok(())
 }
 
 /// One bake into `out`: aurora.vdb, aurora.usda and bake.json.

@@ -62,6 +62,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::atomic::AtomicError,
         aurora::outputs::OutputError,
         aurora::sequence::SequenceError,
+        aurora::farm_plan::PlanError,
         aurora::footprint::FootprintError,
         aurora::render::RenderError,
         aurora::preview::PreviewError,
