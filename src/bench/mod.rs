@@ -65,6 +65,9 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     if plan.retime {
         b.retime(&mut studies)?;
     }
+    log("throughput: the full scene's frames 1 and 18000 of a ten-minute range at its fps");
+    let show: Vec<i64> = (1..=(600.0 * scene.animation.fps).round().max(2.0) as i64).collect();
+    let throughput = crate::farm_plan::plan(scene, &show, 2, &NoProgress).map_err(|e| SweepError::Plan(Box::new(e)))?;
     machine.loadavg_end = report::loadavg();
     Ok(BenchRun {
         machine,
@@ -75,5 +78,6 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
         reduced_toml: red.scene.to_toml(),
         reduction: red.changes,
         studies,
+        throughput,
     })
 }

@@ -88,6 +88,9 @@ pub struct BenchRun {
     pub reduced_toml: String,
     pub reduction: Vec<String>,
     pub studies: Vec<Study>,
+    /// The full scene's throughput as a sequence: two frames of a ten-minute
+    /// range at the scene's fps baked and written ([`crate::farm_plan`]).
+    pub throughput: crate::farm_plan::Plan,
 }
 
 impl BenchRun {
@@ -144,7 +147,51 @@ pub fn to_json(run: &BenchRun) -> Value {
         "reduced_scene_toml": run.reduced_toml,
         "plan": run.plan,
         "studies": run.studies.iter().map(study_json).collect::<Vec<_>>(),
+        "throughput": throughput_json(&run.throughput),
     })
+}
+
+/// Frames per hour (one task on this machine's threads, and per CPU-hour)
+/// and bytes per frame of the full scene.
+pub fn throughput_json(p: &crate::farm_plan::Plan) -> Value {
+    json!({
+        "frames_per_hour": frames_per_hour(p.wall_per_frame_s),
+        "frames_per_cpu_hour": frames_per_hour(p.cpu_per_frame_s),
+        "bytes_per_frame": p.bytes_per_frame,
+        "wall_per_frame_s": p.wall_per_frame_s,
+        "cpu_per_frame_s": p.cpu_per_frame_s,
+        "setup_cpu_s": p.setup_cpu_s,
+        "peak_rss_bytes": p.peak_rss_bytes,
+        "threads": p.threads,
+        "plan": p.json(),
+    })
+}
+
+fn frames_per_hour(seconds: f64) -> f64 {
+    if seconds > 0.0 {
+        3600.0 / seconds
+    } else {
+        0.0
+    }
+}
+
+/// The throughput lines of the summary.
+pub fn throughput_summary(p: &crate::farm_plan::Plan) -> String {
+    format!(
+        "\n== throughput of the full scene as a sequence (frames {} and {} of {}-{}, baked and written)\n   {:.0} frames per hour on {} threads ({:.2} s a frame), {:.0} frames per CPU-hour ({:.2} CPU-s a frame, + {:.2} once per task), {} a frame, peak {}\n",
+        p.samples.first().map_or(0, |s| s.frame),
+        p.samples.last().map_or(0, |s| s.frame),
+        p.first,
+        p.last,
+        frames_per_hour(p.wall_per_frame_s),
+        p.threads,
+        p.wall_per_frame_s,
+        frames_per_hour(p.cpu_per_frame_s),
+        p.cpu_per_frame_s,
+        p.setup_cpu_s,
+        crate::farm_plan::human_bytes(p.bytes_per_frame),
+        crate::memory::gib(p.peak_rss_bytes),
+    )
 }
 
 /// The table printed on stdout: one block per study, one line per
@@ -178,7 +225,7 @@ pub fn summary(run: &BenchRun) -> String {
             let _ = writeln!(s, "   scene setting on the Pareto front: {}", if on { "yes" } else { "no" });
         }
     }
-    s
+    s + &throughput_summary(&run.throughput)
 }
 
 fn short(name: &str) -> &str {

@@ -169,6 +169,8 @@ pub enum SweepError {
     Bake(#[from] BakeError),
     #[error("bench render: {0}")]
     Render(#[from] RenderError),
+    #[error("bench throughput: {0}")]
+    Plan(Box<crate::farm_plan::PlanError>),
 }
 
 impl SweepError {
@@ -177,6 +179,7 @@ impl SweepError {
         match self {
             SweepError::Bake(e) => e.is_input(),
             SweepError::Render(e) => e.is_input(),
+            SweepError::Plan(e) => e.is_input(),
         }
     }
 }
