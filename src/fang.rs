@@ -47,6 +47,14 @@
 //! slightly above 1 (1.008) at 100 keV, within the fit's stated 4 % on total
 //! ionization ([`MonoDeposition::total`]); we keep it as published.
 //!
+//! **Low energies.** The table the beams use ([`MonoDeposition::get`])
+//! carries the shape correction of [`crate::fang_glow`]: below a few keV the
+//! deposit is smeared towards higher altitudes, as NCAR GLOW's transport
+//! puts it, with the total unchanged; [`MonoDeposition::published`] is Fang
+//! 2010 as published (the comparisons above and the tests against
+//! eppaurora use it). With it the Maxwellian peaks stay within 1 km of Fang
+//! 2008's, the L1 at E0 = 0.5 keV rises to 0.07.
+//!
 //! Below 0.1 keV (the fit's range) the coefficients of 0.1 keV are used with
 //! the true E in y: the profile keeps its 0.1 keV shape and scales in column
 //! as `E^(1/0.7)`, like a range-energy law.
