@@ -47,6 +47,14 @@
 //! slightly above 1 (1.008) at 100 keV, within the fit's stated 4 % on total
 //! ionization ([`MonoDeposition::total`]); we keep it as published.
 //!
+//! **Low energies.** The table the beams use ([`MonoDeposition::get`])
+//! carries the shape correction of [`crate::fang_glow`]: below a few keV the
+//! deposit is smeared towards higher altitudes, as NCAR GLOW's transport
+//! puts it, with the total unchanged; [`MonoDeposition::published`] is Fang
+//! 2010 as published (the comparisons above and the tests against
+//! eppaurora use it). With it the Maxwellian peaks stay within 1 km of Fang
+//! 2008's, the L1 at E0 = 0.5 keV rises to 0.07.
+//!
 //! Below 0.1 keV (the fit's range) the coefficients of 0.1 keV are used with
 //! the true E in y: the profile keeps its 0.1 keV shape and scales in column
 //! as `E^(1/0.7)`, like a range-energy law.
@@ -151,13 +159,21 @@ pub struct MonoDeposition {
 }
 
 impl MonoDeposition {
-    /// The table, built on first use (about 0.1 s on one core).
+    /// The table the beams deposit with: Fang 2010 with the low-energy
+    /// shape correction of [`crate::fang_glow`], built on first use (about
+    /// 0.1 s on one core).
     pub fn get() -> &'static MonoDeposition {
         static TABLE: std::sync::OnceLock<MonoDeposition> = std::sync::OnceLock::new();
-        TABLE.get_or_init(MonoDeposition::build)
+        TABLE.get_or_init(|| MonoDeposition::build(true))
     }
 
-    fn build() -> Self {
+    /// Fang 2010 as published, without the correction.
+    pub fn published() -> &'static MonoDeposition {
+        static TABLE: std::sync::OnceLock<MonoDeposition> = std::sync::OnceLock::new();
+        TABLE.get_or_init(|| MonoDeposition::build(false))
+    }
+
+    fn build(corrected: bool) -> Self {
         use rayon::prelude::*;
         let n_e = ((E_MAX_KEV / E_MIN_KEV).ln() / D_LN_E).round() as usize + 1;
         let n_y = ((LN_Y.1 - LN_Y.0) / D_LN_Y).round() as usize + 1;
@@ -183,7 +199,11 @@ impl MonoDeposition {
                     }
                     *d = acc / 0.7;
                 }
-                row
+                if corrected {
+                    crate::fang_glow::correct_row(&row, D_LN_Y, e)
+                } else {
+                    row
+                }
             })
             .collect();
         Self { n_e, n_y, d: rows.concat() }
@@ -240,9 +260,14 @@ pub struct SpectrumDeposition {
 }
 
 impl SpectrumDeposition {
-    /// Tabulates `G` for `components` (shares summing to 1).
+    /// Tabulates `G` for `components` (shares summing to 1) over the
+    /// beams' table ([`MonoDeposition::get`]).
     pub fn new(components: &[Maxwellian]) -> Self {
-        let mono = MonoDeposition::get();
+        Self::with_table(components, MonoDeposition::get())
+    }
+
+    /// Tabulates `G` for `components` over the monoenergetic table `mono`.
+    pub fn with_table(components: &[Maxwellian], mono: &MonoDeposition) -> Self {
         let n = ((LN_M.1 - LN_M.0) / D_LN_M).round() as usize + 1;
         // Trapezoid weights of w(x) = x^2 e^-x / 2, normalised to sum to 1 so
         // the spectrum's total is exact whatever the quadrature error.
@@ -445,7 +470,7 @@ mod tests {
         // error ~ 0.01^2/6 of d^3G, < 0.1 %). Allow 1 % of the profile's peak.
         let rows = reference();
         for e0 in [1.0, 3.0, 10.0, 30.0] {
-            let sd = SpectrumDeposition::new(&[Maxwellian { share: 1.0, e0_kev: e0 }]);
+            let sd = SpectrumDeposition::with_table(&[Maxwellian { share: 1.0, e0_kev: e0 }], MonoDeposition::published());
             let pts: Vec<_> = rows.iter().filter(|r| r.0 == "fang2010_maxw" && r.1 == e0).collect();
             assert!(pts.len() >= 20, "{e0}: {} rows", pts.len());
             let peak = pts.iter().map(|r| r.4 * r.3).fold(0.0, f64::max);
@@ -463,7 +488,7 @@ mod tests {
     fn cumulative_is_the_integral_of_the_mono_profile() {
         // D_E(m2) - D_E(m1) = int f(y(m)) dm/m, checked by a fine midpoint
         // rule in ln m (step 1e-3: error ~ 1e-7 relative).
-        let t = MonoDeposition::get();
+        let t = MonoDeposition::published();
         for e in [0.05f64, 0.3, 1.0, 4.0, 20.0, 300.0] {
             let c = coefficients(&P_2010, e.clamp(E_MIN_KEV, E_MAX_KEV));
             let (m1, m2): (f64, f64) = (1e-7, 1e-3);

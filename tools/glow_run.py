@@ -24,7 +24,7 @@ dropped (listed in `dropped_km`); a NaN above `NAN_FLOOR_KM`, where a
 Maxwellian of up to 30 keV deposits energy, is an error, not a zero.
 
 Run in .venv-glow (tools/setup makes it):
-    .venv-glow/bin/python tools/glow_run.py --e0 3 --q 1 [--csv out.csv] [--json]
+    .venv-glow/bin/python tools/glow_run.py --e0 3 --q 1 [--mono] [--csv out.csv] [--json]
 """
 
 from __future__ import annotations
@@ -51,12 +51,16 @@ def _column(z_km: np.ndarray, rate: np.ndarray) -> float:
     return float(np.sum(0.5 * (rate[1:] + rate[:-1]) * np.diff(z_km)) * 1e5)
 
 
-def run(e0_kev: float, q_erg: float) -> dict:
+def run(e0_kev: float, q_erg: float, mono: bool = False) -> dict:
     """GLOW's aurora (precipitation minus nightglow) for a Maxwellian of
-    characteristic energy `e0_kev` and energy flux `q_erg` erg cm^-2 s^-1."""
+    characteristic energy `e0_kev` and energy flux `q_erg` erg cm^-2 s^-1,
+    or (`mono`) for electrons of the one energy `e0_kev`."""
     import glowpython
 
-    aur = glowpython.maxwellian(TIME, GLAT, GLON, NBINS, q_erg, e0_kev * 1e3, geomag_params=GEOMAG)
+    if mono:
+        aur = glowpython.monoenergetic(TIME, GLAT, GLON, NBINS, q_erg, e0_kev * 1e3, geomag_params=GEOMAG)
+    else:
+        aur = glowpython.maxwellian(TIME, GLAT, GLON, NBINS, q_erg, e0_kev * 1e3, geomag_params=GEOMAG)
     quiet = glowpython.no_precipitation(TIME, GLAT, GLON, NBINS, geomag_params=GEOMAG)
     z = aur.alt_km.values.astype(float)
     if not np.allclose(z, quiet.alt_km.values):
@@ -82,6 +86,7 @@ def run(e0_kev: float, q_erg: float) -> dict:
     # and excitation took is not an output; report the incident flux instead.
     return {
         "e0_kev": e0_kev,
+        "spectrum": "monoenergetic" if mono else "maxwellian",
         "q_erg_cm2_s": q_erg,
         "incident_kev_cm2_s": q_erg * KEV_PER_ERG,
         "dropped_km": [float(v) for v in aur.alt_km.values[bad]],
@@ -97,10 +102,11 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--e0", type=float, required=True, help="characteristic energy, keV")
     ap.add_argument("--q", type=float, default=1.0, help="energy flux, erg cm^-2 s^-1")
+    ap.add_argument("--mono", action="store_true", help="monoenergetic electrons of energy --e0 instead of a Maxwellian")
     ap.add_argument("--csv", help="write the altitude profile here")
     ap.add_argument("--json", action="store_true", help="print everything as JSON on stdout")
     a = ap.parse_args(argv)
-    r = run(a.e0, a.q)
+    r = run(a.e0, a.q, a.mono)
     if a.csv:
         keys = list(r["rates"])
         with open(a.csv, "w") as f:

@@ -5,9 +5,10 @@
 - data/ionosphere.csv: the ambient (IRI) night-time ionosphere GLOW keeps at
   the place and time of data/nrlmsis21.csv (67 N, 20 E, 2020-01-15 00:00 UT,
   F10.7 = F10.7a = F10.7p = 150, Ap = 15): per GLOW altitude, the electron
-  temperature Te, the ion temperature Ti and the electron density of the
-  same GLOW call without precipitation (`glowpython.no_precipitation`).
-  src/chemistry/ionosphere.rs reads it.
+  temperature Te, the ion temperature Ti, the electron density and the NO
+  density (GLOW's empirical NO, the Marsh et al. 2004 NOEM model; the same
+  with and without precipitation) of the GLOW call without precipitation
+  (`glowpython.no_precipitation`). src/chemistry/ambient.rs reads it.
 - tests/data/glow_chemistry.csv: GLOW's own auroral runs
   (`glowpython.maxwellian`, E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2 s^-1)
   with their ionization rate, neutral densities, temperatures and the
@@ -46,13 +47,13 @@ def main():
     z = night.alt_km.values.astype(float)
     with io.StringIO() as f:
         f.write(header().rstrip("\n") + "; ambient ionosphere (IRI above 200 km, GLOW's chemistry below), no precipitation\n")
-        f.write("altitude_km,te_k,ti_k,ne_cm3\n")
+        f.write("altitude_km,te_k,ti_k,ne_cm3,no_cm3\n")
         for i in range(len(z)):
             # GLOW leaves the lowest levels undefined (NaN): rows start where
             # every value is finite (the chemistry holds the first row below).
-            if not all(np.isfinite(float(x)) and float(x) > 0 for x in (night.Te[i], night.Ti[i], night.NeOut[i])):
+            if not all(np.isfinite(float(x)) and float(x) > 0 for x in (night.Te[i], night.Ti[i], night.NeOut[i], night.NO[i])):
                 continue
-            f.write(f"{z[i]:.3f},{float(night.Te[i]):.6g},{float(night.Ti[i]):.6g},{float(night.NeOut[i]):.6g}\n")
+            f.write(f"{z[i]:.3f},{float(night.Te[i]):.6g},{float(night.Ti[i]):.6g},{float(night.NeOut[i]):.6g},{float(night.NO[i]):.6g}\n")
         write_atomic(str(ROOT / "data" / "ionosphere.csv"), f.getvalue().encode())
     ver0 = night.ver
     with io.StringIO() as f:

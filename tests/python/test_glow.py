@@ -30,23 +30,33 @@ integrated over altitude; the curtain's area cancels in every ratio):
 - the ionization profile (report, and bounds a regression would break):
   peak within 3 km of GLOW's for E0 >= 1 keV (measured 1-2.5 km, ours
   lower), at 0.5 keV where GLOW is within 10 % of its flat peak; normalised
-  L1 within 0.25 (measured 0.14-0.22). Fang et al. (2008, 2010) fitted
+  L1 within 0.25 (measured 0.14-0.17). Fang et al. (2008, 2010) fitted
   their parameterisations to their own multi-stream transport runs; GLOW's
   two-stream transport (Banks & Nagy) differs from them by that much, most
   at low energies, where GLOW also reflects more (deposits 0.80-0.92 of the
-  incident energy, Fang 0.94-0.99). The tail is checked separately: the
-  share of the ionization above 250 km within 30 % of GLOW's for E0 = 0.5-10
-  keV (measured 0.81-0.96; docs/physics.md, "The deposition above 250 km").
+  incident energy, Fang 0.94-0.99). Below a few keV the deposition's upper
+  side is stretched towards GLOW's (src/fang_glow.rs), its peak kept at
+  Fang 2008's (tests/python/test_profile.py). The tail is checked
+  separately: the share of the ionization above 250 km within 30 % of
+  GLOW's for E0 = 0.5-10 keV (measured 0.95-0.97; docs/physics.md, "The
+  deposition above 250 km").
 
-Not met yet, and bounded as measured: at E0 <= 1 keV the chemistry on our
-deposition gives 557.7 / 427.8 at 0.77-0.81 of GLOW's, 630.0 / 427.8 at
-0.73 and a 557.7 nm shape L1 of 0.24-0.28 (the green peak 2-18 km below
-GLOW's). The chemistry driven by GLOW's own ionization and densities meets
-GLOW to 1-8 % in every line (tests/chemistry_glow.rs), so the gap is the
-deposition's shape below 1 keV (Fang's fits against GLOW's two-stream
-transport). `SOFT` holds those cases' bounds: the targets above still
-apply to every case above 1 keV and to 427.8 nm and the 630.0 nm centroid
-everywhere; a case below the line that reaches the target still passes.
+Every target holds for every case (measured: 427.8 nm per ion pair
+0.99-1.06 of GLOW's, 557.7 / 427.8 0.92-0.93, 630.0 / 427.8 0.79-0.92,
+557.7 nm shape L1 0.10-0.17, 630.0 nm centroid within 9 km) but one: the
+557.7 nm shape at E0 = 0.5 keV, measured L1 0.202 and held to
+`SHAPE_BOUND_0_5_KEV`. There GLOW's ionization is flat from 141 to 154 km
+and its green peaks at 156 km; Fang 2008's Maxwellian peaks at 141.75 km,
+and test_profile.py holds ours to it within 1.5 km. A deposition that
+stretches further up (a larger smear in src/fang_glow.rs) brings the
+shape to 0.19 but puts the ionization peak 1.5 km above Fang 2008's, at
+that test's limit: the two references disagree by more than the two
+tolerances leave room for, and the Fang 2008 peak is kept.
+
+The green's agreement below 3 keV comes mostly from the chemistry's
+ambient NO being GLOW's own (src/chemistry/ambient.rs): with NRLMSIS
+2.1's NO, 2.7-4.4 times lower above 120 km, 557.7 / 427.8 was 0.77-0.81
+of GLOW's at E0 <= 1 keV; the deposition's shape moves it by 1-2 %.
 
 Each test prints the numbers it compares. The line targets are what the
 chemistry line model must meet; the simple line model (yields proportional
@@ -71,11 +81,10 @@ MAIN = [(1.0, 1.0), (3.0, 1.0), (10.0, 1.0), (1.0, 10.0), (3.0, 10.0), (10.0, 10
 OTHERS = [(0.5, 1.0), (2.0, 5.0), (5.0, 20.0), (7.0, 2.0)]
 CASES = MAIN + OTHERS
 
-# Cases at or below this energy have the measured bounds of the module doc
-# (557.7 / 427.8 within 25 %, 630.0 / 427.8 within 30 %, 557.7 nm shape L1
-# within 0.30) instead of the targets: a regression past today's agreement
-# fails.
-SOFT = 1.0
+# The 557.7 nm shape's bound at E0 = 0.5 keV, the one case off the target
+# (module doc: measured 0.202; GLOW's flat-topped deposition against Fang
+# 2008's peak). Every other case and check has the target.
+SHAPE_BOUND_0_5_KEV = 0.22
 IDS = [f"E0={e}keV-Q={q}" for e, q in CASES]
 
 
@@ -174,8 +183,7 @@ def test_5577_over_4278(e0, q):
     ours = a["oi_5577"].sum() / a["n2p_4278"].sum()
     theirs = g["columns"]["oi_5577"] / g["columns"]["n2p_4278"]
     print(f"E0 {e0} keV Q {q}: 557.7/427.8 {ours:.3f}, GLOW {theirs:.3f}, ratio {ours / theirs:.3f}")
-    tol = 0.25 if e0 <= SOFT else 0.15
-    assert abs(ours / theirs - 1) <= tol, f"557.7/427.8 {ours:.3f} vs GLOW {theirs:.3f} (ratio {ours / theirs:.3f}, allowed +-{tol:.0%})"
+    assert abs(ours / theirs - 1) <= 0.15, f"557.7/427.8 {ours:.3f} vs GLOW {theirs:.3f} (ratio {ours / theirs:.3f}, allowed +-15%)"
 
 
 @pytest.mark.parametrize("e0,q", CASES, ids=IDS)
@@ -183,7 +191,7 @@ def test_6300_over_4278(e0, q):
     a, g, _ = both(e0, q)
     ours = a["oi_6300"].sum() / a["n2p_4278"].sum()
     theirs = g["columns"]["oi_6300"] / g["columns"]["n2p_4278"]
-    tol = 0.30 if e0 <= SOFT else 0.25 if e0 <= 2.5 else 0.40
+    tol = 0.25 if e0 <= 2.5 else 0.40
     print(f"E0 {e0} keV Q {q}: 630.0/427.8 {ours:.4f}, GLOW {theirs:.4f}, ratio {ours / theirs:.3f} (allowed +-{tol:.0%})")
     assert abs(ours / theirs - 1) <= tol, f"630.0/427.8 {ours:.4f} vs GLOW {theirs:.4f} (ratio {ours / theirs:.3f}, allowed +-{tol:.0%})"
 
@@ -195,7 +203,7 @@ def test_5577_profile_shape(e0, q):
     z = a["altitude_km"]
     pk, pk_g = z[a["oi_5577"].argmax()], z[gi["oi_5577"].argmax()]
     print(f"E0 {e0} keV Q {q}: 557.7 nm shape L1 {l1:.3f} (peak {pk:.2f} km, GLOW {pk_g:.2f} km)")
-    bound = 0.30 if e0 <= SOFT else 0.2
+    bound = SHAPE_BOUND_0_5_KEV if e0 == 0.5 else 0.2
     assert l1 <= bound, f"557.7 nm profile shape: normalised L1 {l1:.3f} against GLOW (allowed {bound}); peaks {pk:.2f} / {pk_g:.2f} km"
 
 
