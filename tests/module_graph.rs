@@ -62,7 +62,10 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "leaf_source",
         ],
     ),
-    (Stages, &["frames", "footprint", "starts", "animation", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"]),
+    (
+        Stages,
+        &["frames", "footprint", "starts", "animation", "trail", "fang", "csda", "beams", "photons", "prune", "budget", "bake", "profile"],
+    ),
     (Renderer, &["render"]),
     (Files, &["vdb", "usd", "bake_identity", "outputs", "sequence"]),
     (Above, &["vdb_medium", "preview", "bench"]),

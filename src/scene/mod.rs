@@ -64,6 +64,12 @@ impl Default for Scene {
 
 // ---------------------------------------------------------------- loading
 
+/// Keys added with a default of 0 that means "off", left out of
+/// [`Scene::hash`] and of the bake identity (`crate::bake_identity`) while
+/// 0: a scene that does not set them keeps the hash it had before they
+/// existed, and its bake is the same.
+pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples"];
+
 impl Scene {
     /// Parses TOML text (unknown keys are errors), then validates it.
     /// `file` names the source in messages.
@@ -94,8 +100,24 @@ impl Scene {
     }
 
     /// 64-bit FNV-1a hash of the canonical TOML: identifies a bake's inputs.
+    /// Keys added later whose default means "off" ([`OFF_WHEN_ZERO`]) are
+    /// left out while off, so a scene that does not use them keeps the hash
+    /// (and the files) it had before they existed.
     pub fn hash(&self) -> u64 {
-        fnv1a(self.to_toml().as_bytes())
+        let mut text = self.to_toml();
+        for key in OFF_WHEN_ZERO {
+            let (table, name) = key.split_once('.').expect("a dotted key");
+            let line = format!("{name} = 0\n");
+            if let Some(start) = text.find(&format!("[{table}]\n")) {
+                let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
+                if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
+                    if text[..i].ends_with('\n') {
+                        text.replace_range(i..i + line.len(), "");
+                    }
+                }
+            }
+        }
+        fnv1a(text.as_bytes())
     }
 
     /// The voxel size in km, once resolved (`auto` is resolved by the bake).
