@@ -310,6 +310,15 @@ pub fn trace(plan: &BakePlan, count: usize, stream_offset: u64, beams: Range<usi
     )
 }
 
+/// The bake's photons: `count` beams ([`trace`]), or with the red trail on
+/// (`animation.trail_samples > 0` and a physical colour) [`trace_trail`].
+pub fn trace_bake(plan: &BakePlan, count: usize, progress: &dyn Progress) -> Result<Traced, BeamError> {
+    match (plan.animation.trail_samples, &plan.line_table) {
+        (n, Some(_)) if n > 0 => trace_trail(plan, count, n, progress),
+        _ => trace(plan, count, 0, 0..count, progress),
+    }
+}
+
 /// The red trail's trace (`crate::trail`): the beams at the plan's time with
 /// every line (the O(1D) lines weighted by the first sample), then for each
 /// of `n` earlier times `t - s_k` the footprints of that time and the same
@@ -432,10 +441,7 @@ pub fn trace_and_gather(
     progress: &dyn Progress,
 ) -> Result<(Grid<[f32; 3]>, Gathered), BakeError> {
     let t = Instant::now();
-    let traced = match (plan.animation.trail_samples, &plan.line_table) {
-        (n, Some(_)) if n > 0 => trace_trail(plan, count, n, progress)?,
-        _ => trace(plan, count, 0, 0..count, progress)?,
-    };
+    let traced = trace_bake(plan, count, progress)?;
     times.beams = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let (voxel_km, voxel_source) = plan.voxel_size(&traced.photons);

@@ -250,7 +250,9 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
 /// of its lifetime shows (`crate::lines`); otherwise the colour table's
 /// colour times the deposit. Per-line powers take each line's yield at the
 /// step's midpoint (the altitude a step spread along its length averages to
-/// second order, as `aurora profile` bins it), with no colour noise.
+/// second order, as `aurora profile` bins it), with no colour noise. In a
+/// sample of the red trail (`ctx.trail`) each line's photons are the
+/// unmodulated deposit times [`trail_factor`].
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64, base_kev_s: f64) {
@@ -260,13 +262,12 @@ fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, 
     };
     let q = q_at(to.z);
     let h_colour = to.z + start.colour_offset_km;
-    let rgb = match (start.wave, ctx.lines) {
-        (wave, Some(t)) if ctx.trail.is_some() => {
-            let tr = ctx.trail.expect("checked");
+    let rgb = match (ctx.trail, start.wave, ctx.lines) {
+        (Some(tr), wave, Some(t)) => {
             let factor = |i: usize, tau: f64| trail_factor(&tr, wave.as_ref(), i, tau);
             t.rgb_trail(|z| t.at_q(ctx.colour, z, q), to.z, h_colour, factor).map(|c| c * base_kev_s)
         }
-        (Some(w), Some(t)) => {
+        (None, Some(w), Some(t)) => {
             t.rgb_in_motion(|z| t.at_q(ctx.colour, z, q), to.z, h_colour, |tau| w.at_lifetime(tau)).map(|c| c * base_kev_s)
         }
         _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour, q).map(|c| c * kev_s),
