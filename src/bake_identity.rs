@@ -91,7 +91,17 @@ pub fn bake_keys_json(scene: &Scene) -> String {
     for (key, _) in RENDER_ONLY {
         remove_key(&mut v, key);
     }
+    for key in crate::scene::OFF_WHEN_ZERO {
+        if lookup(&v, key).is_some_and(|x| x.as_u64() == Some(0)) {
+            remove_key(&mut v, key);
+        }
+    }
     serde_json::to_string(&v).expect("JSON serialises")
+}
+
+/// The value at the dotted `key` of `v`.
+fn lookup<'a>(v: &'a serde_json::Value, key: &str) -> Option<&'a serde_json::Value> {
+    key.split('.').try_fold(v, |v, k| v.get(k))
 }
 
 /// Removes the dotted `key` from `v`; true if it was there.
@@ -191,6 +201,7 @@ mod tests {
         s.curtains.push(s.curtains[0].clone());
         s.terrain.heightmap = Some("h.png".into());
         s.background.image = Some("sky.exr".into());
+        s.animation.trail_samples = 4;
         s
     }
 

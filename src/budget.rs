@@ -41,6 +41,17 @@
 //!   larger axis-aligned box around the whole slanted column.
 //! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell (a
 //!   path's cells along it from [`crate::footprint::cells_along`]).
+//! - **per-line grids** (`grid.lines`, with a physical colour): each line's
+//!   float grid on at most the grids' leaves (512 x 4 bytes and masks a
+//!   leaf), and while they are gathered, three lines at a time, one more
+//!   colour grid of those leaves and a copy of the photons carrying the
+//!   lines' powers, beside the emission grid and the photons
+//!   (`crate::bake::plan::line_grids`).
+//! - **the red trail** (`animation.trail_samples = N`, physical colour): N
+//!   more traces of every beam whose photons join the bake's
+//!   (`crate::trail`): N times the photons and their candidate leaves
+//!   again; the grids do not grow (the earlier times' deposits fall in
+//!   the same world box the bound already covers: the motion is inside it).
 //!
 //! A curtain along a path (`crate::curve`) is bounded by its band, not its
 //! bounding box: the leaves meeting the set of points within rho of a curve
@@ -68,6 +79,10 @@ use crate::scene::{Curtain, Deposition, KernelRadius, Scene, VoxelSize};
 /// Bytes per leaf of both grids: emission values, density values, two masks
 /// and bookkeeping.
 const LEAF_BYTES: f64 = 512.0 * 12.0 + 512.0 * 4.0 + 2.0 * 64.0 + 64.0;
+/// Bytes per leaf of one per-line float grid: values, mask, bookkeeping.
+const LINE_LEAF_BYTES: f64 = 512.0 * 4.0 + 64.0 + 64.0;
+/// Bytes per leaf of the colour grid a per-line gather makes.
+const RGB_LEAF_BYTES: f64 = 512.0 * 12.0 + 64.0 + 64.0;
 /// Share of the limit the estimate may use (the rest: the program, the
 /// allocator's slack, the output writer's buffers).
 pub const USABLE_FRACTION: f64 = 0.8;
@@ -327,14 +342,30 @@ pub fn estimate(scene: &Scene) -> Estimate {
         .sum();
     let footprint = cells * 12.0 * 8.0;
 
-    Estimate {
-        terms: vec![
-            Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
-            Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
-            Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
-            Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
-        ],
+    let physical = scene.colour.mode == crate::scene::ColourMode::Physical;
+    // The red trail: N more traces, their photons and candidates beside the bake's.
+    let trail = if physical { scene.animation.trail_samples as f64 } else { 0.0 };
+    let all_photons = photons * (1.0 + trail);
+    let n_lines = if physical { scene.grid.lines.len() as f64 } else { 0.0 };
+    let mut terms = vec![
+        Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
+        Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
+        Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
+        Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
+    ];
+    if n_lines > 0.0 {
+        let bytes = 1.3 * leaves * (n_lines * LINE_LEAF_BYTES + RGB_LEAF_BYTES) + all_photons * photon_bytes;
+        terms.push(Term { what: "per-line grids", bytes, key: "grid.lines".into(), value: format!("{:?}", scene.grid.lines) });
     }
+    if trail > 0.0 {
+        terms.push(Term {
+            what: "red trail",
+            bytes: trail * (3.0 * photons * photon_bytes + candidates),
+            key: "animation.trail_samples".into(),
+            value: format!("{trail}"),
+        });
+    }
+    Estimate { terms }
 }
 
 /// Refuses a bake whose estimate exceeds [`USABLE_FRACTION`] of `limit`.
@@ -396,6 +427,40 @@ mod tests {
         let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
         assert_eq!(e.key, "grid.voxel_size", "{e}");
         assert!(e.to_string().contains("GiB") && e.to_string().contains("test"), "{e}");
+    }
+
+    #[test]
+    fn per_line_grids_and_the_trail_are_counted() {
+        // A scene sized to fit only without its per-line grids: the
+        // estimate without them is 0.8 of a limit that the five lines'
+        // grids (about 5 x 2.2 kB a leaf over the grids' 8.3 kB, plus a
+        // colour grid and a photon copy) push well past.
+        let mut s = Scene::default();
+        let plain = estimate(&s).total();
+        let l = limit(plain / USABLE_FRACTION / (1u64 << 30) as f64 * 1.01);
+        check(&estimate(&s), &l).unwrap();
+        s.grid.lines = crate::lines::LINE_KEYS.iter().map(|k| k.to_string()).collect();
+        let e = estimate(&s);
+        let lines = e.terms.iter().find(|t| t.what == "per-line grids").expect("a per-line term");
+        let grids = e.terms.iter().find(|t| t.what == "grids").unwrap();
+        // Five float grids and a colour grid on the same leaves: (5 x 2176 +
+        // 6272) / 8384 = 2.05 of the grids' term, plus the photons' copy.
+        assert!(lines.bytes > 2.05 * grids.bytes, "{} vs {}", lines.bytes, grids.bytes);
+        let err = check(&e, &l).unwrap_err();
+        assert!(err.to_string().contains("GiB"), "{err}");
+        // A colour map makes no per-line grids: nothing counted.
+        s.colour.mode = crate::scene::ColourMode::Colormap;
+        assert_eq!(estimate(&s).total(), plain);
+
+        // The trail: N more photon sets and candidate lists.
+        let mut s = Scene::default();
+        s.animation.trail_samples = 8;
+        let e = estimate(&s);
+        let t = e.terms.iter().find(|t| t.what == "red trail").expect("a trail term");
+        let (ph, ca) = (e.terms[0].bytes, e.terms[1].bytes);
+        assert!((t.bytes - 8.0 * (ph + ca)).abs() <= 1e-9 * t.bytes, "{} vs {}", t.bytes, 8.0 * (ph + ca));
+        assert_eq!(t.key, "animation.trail_samples");
+        assert!(check(&e, &l).is_err());
     }
 
     #[test]

@@ -45,6 +45,7 @@ pub mod scene;
 pub mod sequence;
 pub mod spectrum;
 pub mod starts;
+pub mod trail;
 pub mod usd;
 pub mod vdb;
 pub mod vdb_medium;

@@ -61,6 +61,10 @@ pub fn line_lifetimes(atm: &Atmosphere, h_km: f64) -> [f64; N_LINES] {
     [l.o1s_s, l.o1d_s, l.o1d_s, 0.0, 0.0]
 }
 
+/// Which lines come from O(1D) (630.0 and 636.4 nm), in [`LINES`] order:
+/// the ones the red trail sums over earlier times (`crate::trail`).
+pub const O1D_LINES: [bool; N_LINES] = [false, true, true, false, false];
+
 /// The linear Rec.709 colour of one photon per second of each line
 /// (`crate::spectrum`'s units).
 pub fn line_colours() -> [[f64; 3]; N_LINES] {
@@ -132,9 +136,16 @@ impl LineTable {
     /// `factor(tau)` of its lifetime tau.
     #[inline]
     pub fn rgb_of(&self, l: &LinesAt, factor: impl Fn(f64) -> f64) -> [f64; 3] {
+        self.rgb_of_each(l, |_, tau| factor(tau))
+    }
+
+    /// Colour per keV of the lines `l` with line i's photons times
+    /// `factor(i, tau)` of its index and lifetime.
+    #[inline]
+    pub fn rgb_of_each(&self, l: &LinesAt, factor: impl Fn(usize, f64) -> f64) -> [f64; 3] {
         let mut rgb = [0.0; 3];
         for i in 0..N_LINES {
-            let n = l.yields[i] * factor(l.tau_s[i]);
+            let n = l.yields[i] * factor(i, l.tau_s[i]);
             for (c, line) in rgb.iter_mut().zip(self.colours[i]) {
                 *c += n * line;
             }
@@ -165,6 +176,34 @@ impl LineTable {
             c.map(|x| x * y / yc)
         } else {
             rgb
+        }
+    }
+
+    /// The colour per keV of one sample of the red trail (`crate::trail`):
+    /// line i's photons times `factor(i, tau)`, with the lines of each
+    /// altitude from `at`, the chromaticity of `h_colour_km` and the colour
+    /// noise's luminance ratio taken from the *unweighted* lines (the
+    /// steady state's `Y(h) / Y(h_colour)`, as
+    /// `ColourTable::rgb_with_colour_altitude`). The result is linear in the
+    /// factors, so the samples of a still scene, whose factors sum to 1,
+    /// add up to the colour without the trail.
+    pub fn rgb_trail(
+        &self,
+        at: impl Fn(f64) -> LinesAt,
+        h_km: f64,
+        h_colour_km: f64,
+        factor: impl Fn(usize, f64) -> f64 + Copy,
+    ) -> [f64; 3] {
+        let own = at(h_km);
+        if h_colour_km == h_km {
+            return self.rgb_of_each(&own, factor);
+        }
+        let c = at(h_colour_km);
+        let (y, yc) = (crate::spectrum::luminance(self.rgb_of(&own, |_| 1.0)), crate::spectrum::luminance(self.rgb_of(&c, |_| 1.0)));
+        if yc > 0.0 {
+            self.rgb_of_each(&c, factor).map(|x| x * y / yc)
+        } else {
+            self.rgb_of_each(&own, factor)
         }
     }
 }

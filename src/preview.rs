@@ -496,7 +496,7 @@ impl Preview {
                     let count = bake::beam_count(&plan, &mut times, nothing)?;
                     u.pilot = times.pilot;
                     let t = Instant::now();
-                    let traced = plan::trace(&plan, count.0, 0, 0..count.0, nothing).map_err(BakeError::from)?;
+                    let traced = plan::trace_bake(&plan, count.0, nothing).map_err(BakeError::from)?;
                     u.trace = t.elapsed().as_secs_f64();
                     let voxel = plan.voxel_size(&traced.photons);
                     let t = Instant::now();

@@ -44,6 +44,17 @@
 //!
 //! The density grid is built afterwards on the kept voxels (it lives on the
 //! emission's active voxels), so both grids lose the same leaves.
+//!
+//! The per-line grids (`grid.lines`) follow the emission, leaf by leaf
+//! ([`prune_like`]): a per-line grid keeps exactly those of its leaves
+//! whose origin the emission kept. The emission is the lines' sum (each
+//! line's photons times its colour), so the picture is what decides: a
+//! line grid holding a leaf the picture lost would give a physicist light
+//! the render does not show (its brightness along a ray would exceed the
+//! picture's), and one losing a leaf the picture kept would drop light the
+//! render shows. A line grid may still lack a leaf the emission has (a
+//! line that is zero there, such as the green in the red trail's earlier
+//! samples): the rule never adds a leaf.
 
 use crate::camera::CameraModel;
 use crate::grid::{Grid, Leaf, LEAF_NUM_VALUES};
@@ -185,6 +196,15 @@ pub fn prune_keeping(emission: &mut Grid<[f32; 3]>, camera: &CameraModel, budget
         removed_fraction,
     };
     (stats, dropped)
+}
+
+/// Drops the leaves of `grid` whose origin `kept` does not hold (the
+/// per-line grids after the emission was pruned: module doc); returns how
+/// many were dropped.
+pub fn prune_like<T: crate::grid::VoxelValue, U: crate::grid::VoxelValue>(grid: &mut Grid<T>, kept: &Grid<U>) -> usize {
+    let before = grid.leaf_count();
+    grid.retain_leaves(|l| kept.leaf(l.origin).is_some());
+    before - grid.leaf_count()
 }
 
 #[cfg(test)]

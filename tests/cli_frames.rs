@@ -215,3 +215,26 @@ fn render_frame_renders_one_frame_or_a_range_of_a_sequence_folder() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("aurora.0007.vdb"));
 }
+
+#[test]
+fn red_trail_frames_are_identical_alone_and_in_shards() {
+    // With the red trail each frame traces its own earlier times of the
+    // closed-form motion: frame 3 alone, in a range and in a shard (one
+    // thread against two) are the same bytes, and the trail changes them.
+    let dir = scratch("trail");
+    let scene = dir.join("trail.toml");
+    std::fs::write(&scene, format!("{SMALL}trail_samples = 2\n")).unwrap();
+    let range = dir.join("range");
+    ok(&bake(&scene, &range, &["--frames", "2-3", "--threads", "2"], &[]));
+    let sharded = dir.join("sharded");
+    ok(&bake(&scene, &sharded, &["--frames", "2-3", "--shard", "1/2", "--threads", "1"], &[]));
+    let alone = dir.join("alone");
+    ok(&bake(&scene, &alone, &["--frames", "3", "--threads", "1"], &[]));
+    assert_eq!(read(&sharded, 3), read(&range, 3), "frame 3 of shard 1/2 differs from the range's");
+    assert_eq!(read(&alone, 3), read(&range, 3), "frame 3 alone differs from the range's");
+    let plain_scene = dir.join("plain.toml");
+    std::fs::write(&plain_scene, SMALL).unwrap();
+    let plain = dir.join("plain");
+    ok(&bake(&plain_scene, &plain, &["--frames", "3"], &[]));
+    assert_ne!(read(&plain, 3), read(&range, 3), "the trail changed nothing");
+}

@@ -69,6 +69,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "footprint",
             "starts",
             "animation",
+            "trail",
             "fang_glow",
             "fang",
             "csda",

@@ -168,6 +168,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("animation", "pulsation", "", "depth of pulsating patches (0 = off): each patch's electron flux swings between `1 - pulsation` and 1 times its value"),
     ("animation", "pulsation_patch_km", "km", "size of a pulsating patch"),
     ("animation", "pulsation_period_s", "s", "range each patch's period is drawn from (observed: a few s to 20 s, mostly 6-10 s)"),
+    ("animation", "trail_samples", "", "the red trail: earlier times of the motion the O(1D) lines (630.0, 636.4 nm) sum, weighted by O(1D)'s decay at each deposit's altitude, so moving curtains leave red behind (0 = off; each sample traces the beams once more)"),
 ];
 
 /// Types the default cannot tell: a key whose default is none, or one that

@@ -164,15 +164,16 @@ pub struct BakePlan {
 }
 
 /// The per-line table a scene needs: with `colour.mode = "physical"`, when
-/// something pulses (each line then follows its lifetime) or `grid.lines`
-/// asks for per-line grids; `None` otherwise.
+/// something pulses (each line then follows its lifetime), the red trail is
+/// on (`animation.trail_samples`) or `grid.lines` asks for per-line grids;
+/// `None` otherwise.
 pub fn line_table_for(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams, atmosphere: &Atmosphere) -> Option<LineTable> {
     needs_line_table(colour, animation, grid).then(|| LineTable::new(&EmissionModel::new(atmosphere.clone())))
 }
 
 /// Whether [`line_table_for`] builds a table.
 pub fn needs_line_table(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams) -> bool {
-    colour.mode == ColourMode::Physical && (animation.pulsation > 0.0 || !grid.lines.is_empty())
+    colour.mode == ColourMode::Physical && (animation.pulsation > 0.0 || animation.trail_samples > 0 || !grid.lines.is_empty())
 }
 
 /// `grid.lines` as indices in `crate::spectrum::LINES` (the scene has
@@ -276,6 +277,7 @@ impl BakePlan {
             kernel: self.photons.kernel,
             lines: self.line_table.as_ref(),
             line_outputs: if self.line_table.is_some() { &self.line_outputs } else { &[] },
+            trail: None,
         }
     }
 
@@ -306,6 +308,48 @@ pub fn trace(plan: &BakePlan, count: usize, stream_offset: u64, beams: Range<usi
         false,
         progress,
     )
+}
+
+/// The bake's photons: `count` beams ([`trace`]), or with the red trail on
+/// (`animation.trail_samples > 0` and a physical colour) [`trace_trail`].
+pub fn trace_bake(plan: &BakePlan, count: usize, progress: &dyn Progress) -> Result<Traced, BeamError> {
+    match (plan.animation.trail_samples, &plan.line_table) {
+        (n, Some(_)) if n > 0 => trace_trail(plan, count, n, progress),
+        _ => trace(plan, count, 0, 0..count, progress),
+    }
+}
+
+/// The red trail's trace (`crate::trail`): the beams at the plan's time with
+/// every line (the O(1D) lines weighted by the first sample), then for each
+/// of `n` earlier times `t - s_k` the footprints of that time and the same
+/// beams again carrying only the O(1D) lines with that sample's weight;
+/// the photons (and per-line powers) concatenated in sample order. The
+/// stats are the plan's time's.
+pub fn trace_trail(plan: &BakePlan, count: usize, n: u32, progress: &dyn Progress) -> Result<Traced, BeamError> {
+    let lift = crate::curve::lift_km(&plan.beams);
+    let mut out: Option<Traced> = None;
+    for sample in crate::trail::samples(n) {
+        let animation = AnimationParams { time_s: plan.animation.time_s - sample.lag_s, ..plan.animation.clone() };
+        let earlier;
+        let footprints = if sample.is_now() {
+            &plan.footprints
+        } else {
+            earlier = simulate_footprints(plan.seed, &plan.curtains, &plan.footprint, &animation, lift, &crate::progress::NoProgress);
+            &earlier
+        };
+        let params = TraceParams { animation: &animation, trail: Some(sample), ..plan.trace_params() };
+        let t = beams::trace_range(&params, footprints, &plan.atmosphere, &plan.colour_table, count, 0, 0..count, false, progress)?;
+        match out.as_mut() {
+            None => out = Some(t),
+            Some(o) => {
+                o.photons.extend(t.photons);
+                o.line_power.extend(t.line_power);
+            }
+        }
+    }
+    let mut out = out.expect("a trail has its own time's sample");
+    out.stats.photons = out.photons.len();
+    Ok(out)
 }
 
 /// The emission grid of `photons` at voxel size `voxel_km`, with the plan's
@@ -397,7 +441,7 @@ pub fn trace_and_gather(
     progress: &dyn Progress,
 ) -> Result<(Grid<[f32; 3]>, Gathered), BakeError> {
     let t = Instant::now();
-    let traced = trace(plan, count, 0, 0..count, progress)?;
+    let traced = trace_bake(plan, count, progress)?;
     times.beams = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let (voxel_km, voxel_source) = plan.voxel_size(&traced.photons);
@@ -481,7 +525,7 @@ pub fn finish_keeping(
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<(Bake, DroppedLeaves), BakeError> {
-    let Gathered { photons, lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
+    let Gathered { photons, mut lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
     }
@@ -499,6 +543,10 @@ pub fn finish_keeping(
     let (prune_stats, dropped) = if plan.grid.prune > 0.0 {
         let camera = plan.camera_model()?;
         let (st, dropped) = prune::prune_keeping(&mut emission, &camera, plan.grid.prune);
+        // The per-line grids keep the leaves the emission kept (crate::prune).
+        for g in &mut lines {
+            prune::prune_like(g, &emission);
+        }
         (Some(st), dropped)
     } else {
         (None, Vec::new())

@@ -162,6 +162,9 @@ pub struct TraceParams<'a> {
     /// `crate::spectrum::LINES`) leave per-line photon powers.
     pub lines: Option<&'a LineTable>,
     pub line_outputs: &'a [usize],
+    /// The red trail's sample this trace makes (`crate::trail`, with
+    /// `lines`); `None` keeps every line at the animation's time.
+    pub trail: Option<crate::trail::TrailSample>,
 }
 
 impl<'a> TraceParams<'a> {
@@ -177,6 +180,7 @@ impl<'a> TraceParams<'a> {
             kernel: scene.photons.kernel,
             lines: None,
             line_outputs: &[],
+            trail: None,
         }
     }
 }
@@ -411,6 +415,7 @@ impl Tracer<'_> {
             record_path: false,
             lines: p.lines,
             line_outputs: p.line_outputs,
+            trail: p.lines.and(p.trail),
             ionization: ionization.as_ref(),
         };
         let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();

@@ -54,10 +54,11 @@ use crate::csda::{energy_from_range, range_g_cm2, step_column};
 use crate::deposit::{Photon, StepDeposit};
 use crate::fang::{IonizationProfile, MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
-use crate::lines::{LineTable, R_PER_KM_SCALE};
+use crate::lines::{LineTable, O1D_LINES, R_PER_KM_SCALE};
 use crate::magnetic::MagneticField;
 use crate::scene::BeamParams;
 use crate::spectrum::ColourTable;
+use crate::trail::TrailSample;
 use glam::DVec3;
 use rand::Rng;
 
@@ -188,6 +189,9 @@ pub struct BeamContext<'a> {
     /// the ones that leave per-line photon powers.
     pub lines: Option<&'a LineTable>,
     pub line_outputs: &'a [usize],
+    /// The red trail's sample this trace makes (`crate::trail`; with
+    /// `lines`): `None` keeps every line at the bake's time.
+    pub trail: Option<TrailSample>,
     /// The curtain spectrum's ionization per unit flux over altitude, when
     /// the colours need the ionization rate (the chemistry); `None` leaves
     /// q = 0 on every deposit.
@@ -246,7 +250,9 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
 /// of its lifetime shows (`crate::lines`); otherwise the colour table's
 /// colour times the deposit. Per-line powers take each line's yield at the
 /// step's midpoint (the altitude a step spread along its length averages to
-/// second order, as `aurora profile` bins it), with no colour noise.
+/// second order, as `aurora profile` bins it), with no colour noise. In a
+/// sample of the red trail (`ctx.trail`) each line's photons are the
+/// unmodulated deposit times [`trail_factor`].
 #[inline]
 #[allow(clippy::too_many_arguments)]
 fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, to: DVec3, kev_s: f64, base_kev_s: f64) {
@@ -256,8 +262,12 @@ fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, 
     };
     let q = q_at(to.z);
     let h_colour = to.z + start.colour_offset_km;
-    let rgb = match (start.wave, ctx.lines) {
-        (Some(w), Some(t)) => {
+    let rgb = match (ctx.trail, start.wave, ctx.lines) {
+        (Some(tr), wave, Some(t)) => {
+            let factor = |i: usize, tau: f64| trail_factor(&tr, wave.as_ref(), i, tau);
+            t.rgb_trail(|z| t.at_q(ctx.colour, z, q), to.z, h_colour, factor).map(|c| c * base_kev_s)
+        }
+        (None, Some(w), Some(t)) => {
             t.rgb_in_motion(|z| t.at_q(ctx.colour, z, q), to.z, h_colour, |tau| w.at_lifetime(tau)).map(|c| c * base_kev_s)
         }
         _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour, q).map(|c| c * kev_s),
@@ -268,12 +278,28 @@ fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, 
         let zm = 0.5 * (from.z + to.z);
         let l = t.at_q(ctx.colour, zm, q_at(zm));
         for &i in ctx.line_outputs {
-            let n = match start.wave {
-                Some(w) => base_kev_s * w.at_lifetime(l.tau_s[i]),
-                None => kev_s,
+            let n = match (ctx.trail, start.wave) {
+                (Some(tr), wave) => base_kev_s * trail_factor(&tr, wave.as_ref(), i, l.tau_s[i]),
+                (None, Some(w)) => base_kev_s * w.at_lifetime(l.tau_s[i]),
+                (None, None) => kev_s,
             };
             out.line_power.push((l.yields[i] * n * R_PER_KM_SCALE) as f32);
         }
+    }
+}
+
+/// What line i of lifetime `tau` keeps of a deposit in the red trail's
+/// sample `tr` (`crate::trail`): the O(1D) lines the sample's weight, the
+/// others their value at the bake's time (under a pulsation, what a line of
+/// their lifetime shows) in sample 0 and nothing in the earlier ones.
+#[inline]
+fn trail_factor(tr: &TrailSample, wave: Option<&Wave>, i: usize, tau: f64) -> f64 {
+    if O1D_LINES[i] {
+        tr.weight(tau, wave)
+    } else if tr.is_now() {
+        wave.map_or(1.0, |w| w.at_lifetime(tau))
+    } else {
+        0.0
     }
 }
 
@@ -512,6 +538,7 @@ mod tests {
             threshold: 0.03,
             record_path: true,
             lines: None,
+            trail: None,
             line_outputs: &[],
             ionization: None,
         };
@@ -597,6 +624,7 @@ mod tests {
             threshold: 0.03,
             record_path: false,
             lines: None,
+            trail: None,
             line_outputs: &[],
             ionization: None,
         }

@@ -64,6 +64,12 @@ impl Default for Scene {
 
 // ---------------------------------------------------------------- loading
 
+/// Keys added with a default of 0 that means "off", left out of
+/// [`Scene::hash`] and of the bake identity (`crate::bake_identity`) while
+/// 0: a scene that does not set them keeps the hash it had before they
+/// existed, and its bake is the same.
+pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples"];
+
 impl Scene {
     /// Parses TOML text (unknown keys are errors), then validates it.
     /// `file` names the source in messages.
@@ -94,8 +100,24 @@ impl Scene {
     }
 
     /// 64-bit FNV-1a hash of the canonical TOML: identifies a bake's inputs.
+    /// Keys added later whose default means "off" ([`OFF_WHEN_ZERO`]) are
+    /// left out while off, so a scene that does not use them keeps the hash
+    /// (and the files) it had before they existed.
     pub fn hash(&self) -> u64 {
-        fnv1a(self.to_toml().as_bytes())
+        let mut text = self.to_toml();
+        for key in OFF_WHEN_ZERO {
+            let (table, name) = key.split_once('.').expect("a dotted key");
+            let line = format!("{name} = 0\n");
+            if let Some(start) = text.find(&format!("[{table}]\n")) {
+                let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
+                if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
+                    if text[..i].ends_with('\n') {
+                        text.replace_range(i..i + line.len(), "");
+                    }
+                }
+            }
+        }
+        fnv1a(text.as_bytes())
     }
 
     /// The voxel size in km, once resolved (`auto` is resolved by the bake).
@@ -132,5 +154,21 @@ mod tests {
         assert_eq!(s.camera.projection, Projection::Orthographic);
         assert_eq!(s.render.width, 8);
         assert_eq!(s.curtains.len(), 3);
+    }
+
+    #[test]
+    fn keys_off_at_zero_leave_the_hash_alone() {
+        // The default scene's hash from before `animation.trail_samples`
+        // existed (its bake.json's `scene_hash`): unchanged, so the default
+        // bake's files are too.
+        let s = Scene::default();
+        assert!(s.to_toml().contains("\ntrail_samples = 0\n"));
+        assert_eq!(format!("{:016x}", s.hash()), "062c920b153d4c77");
+        let mut t = s.clone();
+        t.animation.trail_samples = 4;
+        assert_ne!(t.hash(), s.hash());
+        // Read back, the TOML without the line is the same scene.
+        let back = Scene::from_toml_str(&s.to_toml().replace("\ntrail_samples = 0\n", "\n"), "t.toml").unwrap();
+        assert_eq!(back, s);
     }
 }

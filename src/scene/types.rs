@@ -114,6 +114,9 @@ pub struct FootprintParams {
     pub uniform: bool,
 }
 
+/// The most earlier times `animation.trail_samples` may ask for.
+pub const MAX_TRAIL_SAMPLES: u32 = 16;
+
 /// Motion in time (`crate::animation`): closed form in t, so any frame costs
 /// one bake. Speeds from the time scales observers report; every motion
 /// parameter at 0 gives identical frames.
@@ -151,6 +154,13 @@ pub struct AnimationParams {
     pub pulsation_patch_km: f64,
     /// Range of patch periods, s (most often 6-10 s; a few s to 20 s).
     pub pulsation_period_s: [f64; 2],
+    /// The red trail (`crate::trail`): how many earlier times of the
+    /// motion the O(1D) lines (630.0, 636.4 nm) of a bake at `time_s` sum,
+    /// each weighted by the decay of O(1D) at the deposit's altitude;
+    /// 0 (the default) is off: every line at `time_s`. At most
+    /// [`MAX_TRAIL_SAMPLES`]; each costs one more trace of the beams (the
+    /// red only).
+    pub trail_samples: u32,
 }
 
 /// Electron beams traced down the geomagnetic field (Baranoski et al. 2000).
@@ -565,6 +575,7 @@ impl Default for AnimationParams {
             pulsation: 0.0,
             pulsation_patch_km: 25.0,
             pulsation_period_s: [6.0, 10.0],
+            trail_samples: 0,
         }
     }
 }

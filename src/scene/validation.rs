@@ -232,6 +232,8 @@ impl Scene {
             );
         }
 
+        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::MAX_TRAIL_SAMPLES as f64, true);
+
         let b = &self.beams;
         let t = Some(("beams", 0));
         v.range(t, "count", b.count as f64, 1.0, 1e8, true);
