@@ -20,6 +20,19 @@
 //!   pixel, column 0 at `x0`, **row 0 at `y1`** (north up, as the image is
 //!   viewed), height `height + mountain_height * v` with `v` in [0, 1].
 //!
+//! # On a round Earth
+//! With `earth.radius_km = R > 0` (`crate::earth`: the centre at `(0, 0,
+//! -R)`) the plane is the sphere of radius `R + height`
+//! ([`TerrainModel::Sphere`], an exact ray-sphere intersection), and a
+//! heightfield's sample `(x, y)` of height `z` sits at `z` above the sphere,
+//! over the grid point: its height becomes `(R + z) cos(d / R) - R` with
+//! `d = |(x, y)|` ([`Heightfield::on_sphere`]), the ground point's drop
+//! below the origin's tangent plane taken off. The grid stays regular in x
+//! and y (the DDA and the OBJ need it); the sphere's point at ground
+//! distance d lies `d - R sin(d / R)`, about `d^3 / 6R^2`, closer to the
+//! axis (4 m at 100 km, 0.5 km at 500 km): a heightfield is meant for the
+//! ground near the camera.
+//!
 //! Rays are traced with a 2D DDA over the cells the ray's ground projection
 //! crosses (cells culled by their height range) and an f64 Moller-Trumbore
 //! test of the two triangles of each cell. The shading normal is the
@@ -60,9 +73,30 @@ pub enum TerrainModel {
         height: f64,
     },
     Heightfield(Heightfield),
+    /// The sphere of `radius` km about `centre`: the plane on a round Earth.
+    Sphere {
+        centre: DVec3,
+        radius: f64,
+    },
 }
 
 impl TerrainModel {
+    /// [`TerrainModel::from_terrain`] on the Earth of radius `earth_radius_km`
+    /// (module doc; 0: the flat ground, the same model).
+    pub fn on_earth(t: &Terrain, base_dir: Option<&Path>, earth_radius_km: f64) -> Result<TerrainModel, RenderError> {
+        let m = Self::from_terrain(t, base_dir)?;
+        if earth_radius_km == 0.0 {
+            return Ok(m);
+        }
+        Ok(match m {
+            TerrainModel::Plane { height } => {
+                TerrainModel::Sphere { centre: DVec3::new(0.0, 0.0, -earth_radius_km), radius: earth_radius_km + height }
+            }
+            TerrainModel::Heightfield(h) => TerrainModel::Heightfield(h.on_sphere(earth_radius_km)?),
+            other => other,
+        })
+    }
+
     /// Builds the terrain of a scene; a heightmap path is resolved against
     /// `base_dir` (the scene file's folder) when relative.
     pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<TerrainModel, RenderError> {
@@ -94,12 +128,38 @@ impl TerrainModel {
                 })
             }
             TerrainModel::Heightfield(h) => h.intersect(o, d, t_min, t_max),
+            TerrainModel::Sphere { centre, radius } => intersect_sphere(*centre, *radius, o, d, t_min, t_max),
         }
     }
 
     pub fn is_none(&self) -> bool {
         matches!(self, TerrainModel::None)
     }
+}
+
+/// The nearest hit of `o + t d` with the sphere, `t` in `(t_min, t_max)`: the
+/// roots of `|o - c + t d|^2 = r^2`, the smaller by the numerically stable
+/// form (no cancellation between `b` and the root of the discriminant); the
+/// normal faces the ray.
+pub fn intersect_sphere(c: DVec3, r: f64, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+    let oc = o - c;
+    let a = d.length_squared();
+    let half_b = oc.dot(d);
+    // |oc|^2 - r^2 as (|oc| - r)(|oc| + r): the altitude times 2R, without
+    // the cancellation of two numbers of size R^2.
+    let l = oc.length();
+    let cc = (l - r) * (l + r);
+    let disc = half_b * half_b - a * cc;
+    if a == 0.0 || disc < 0.0 {
+        return None;
+    }
+    let q = -(half_b + half_b.signum() * disc.sqrt());
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (cc / q, q / a) };
+    let (t0, t1) = (t0.min(t1), t0.max(t1));
+    let t = [t0, t1].into_iter().find(|&t| t > t_min && t < t_max)?;
+    let p = o + d * t;
+    let n = (p - c) / r;
+    Some(SurfaceHit { t, p, n: if n.dot(d) > 0.0 { -n } else { n } })
 }
 
 /// A triangulated regular grid of heights (see the module doc).
@@ -163,6 +223,23 @@ impl Heightfield {
         let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
         let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         Ok(Heightfield { xs, ys, z, zmin, zmax })
+    }
+
+    /// The heightfield laid on the sphere of radius `r` km about `(0, 0, -r)`
+    /// (module doc): each sample's height above the sphere, over its grid
+    /// point.
+    pub fn on_sphere(self, r: f64) -> Result<Heightfield, RenderError> {
+        let nx = self.xs.len();
+        let z = self
+            .z
+            .iter()
+            .enumerate()
+            .map(|(k, &h)| {
+                let (x, y) = (self.xs[k % nx], self.ys[k / nx]);
+                (r + h) * (x.hypot(y) / r).cos() - r
+            })
+            .collect();
+        Self::from_samples(self.xs, self.ys, z)
     }
 
     /// The heightfield of a scene's `[terrain]` (kind must be "heightfield").
