@@ -47,6 +47,13 @@
 //!   footprint, `1/dt` steps, or energy spent. Whatever a beam did not
 //!   deposit is reported ([`CurtainPower`](super::CurtainPower)), so
 //!   nothing is lost silently.
+//!
+//! On a round Earth (`crate::earth`) the walk is in the curved frame:
+//! positions are ground coordinates and altitude, so `z` is the altitude the
+//! atmosphere, the deposition and the colour read, and the field's angles
+//! are relative to the local vertical and north; each photon is mapped to
+//! the scene frame as it is made ([`deposit`]). On a flat ground the map is
+//! the identity.
 
 use crate::animation::Wave;
 use crate::atmosphere::Atmosphere;

@@ -30,8 +30,9 @@
 //! below the origin's tangent plane taken off. The grid stays regular in x
 //! and y (the DDA and the OBJ need it); the sphere's point at ground
 //! distance d lies `d - R sin(d / R)`, about `d^3 / 6R^2`, closer to the
-//! axis (4 m at 100 km, 0.5 km at 500 km): a heightfield is meant for the
-//! ground near the camera.
+//! axis (4 m at 100 km, 0.5 km at 500 km), and a sample of height z sits
+//! `z (d / R)^2` low (1 m for 4 km at 110 km): a heightfield is meant for
+//! the ground near the camera.
 //!
 //! Rays are traced with a 2D DDA over the cells the ray's ground projection
 //! crosses (cells culled by their height range) and an f64 Moller-Trumbore
@@ -521,4 +522,54 @@ pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderE
     })();
     result.map_err(io)?;
     tmp.commit().map_err(|e| RenderError::Output(Box::new(e)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_hits_are_the_closed_form_ones() {
+        let r = 6371.0;
+        let c = DVec3::new(0.0, 0.0, -r);
+        // Straight down from 10 km: the ground at t = 10.
+        let h = intersect_sphere(c, r, DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, -1.0), 0.0, f64::INFINITY).unwrap();
+        assert!((h.t - 10.0).abs() < 1e-9 && (h.n - DVec3::Z).length() < 1e-12);
+        // From 2 m up, 1 degree down: the chord to the sphere,
+        // t = (R + h) sin(a) - sqrt((R + h)^2 sin(a)^2 - (2 R h + h^2)).
+        let (h0, a) = (0.002, 1f64.to_radians());
+        let d = DVec3::new(0.0, a.cos(), -a.sin());
+        let hit = intersect_sphere(c, r, DVec3::new(0.0, 0.0, h0), d, 0.0, f64::INFINITY).unwrap();
+        let rs = (r + h0) * a.sin();
+        let want = rs - (rs * rs - (2.0 * r * h0 + h0 * h0)).sqrt();
+        assert!((hit.t - want).abs() < 1e-9 * want.max(1.0), "{} vs {want}", hit.t);
+        assert!(((hit.p - c).length() - r).abs() < 1e-9);
+        // Horizontal from 2 m up: the ray rises above the sphere everywhere
+        // (its lowest altitude is its start), no hit.
+        assert!(intersect_sphere(c, r, DVec3::new(0.0, 0.0, h0), DVec3::Y, 0.0, f64::INFINITY).is_none());
+        // The flat plane stays the plane.
+        let t = Terrain { kind: TerrainKind::Plane, height: 0.5, ..Terrain::default() };
+        assert_eq!(TerrainModel::on_earth(&t, None, 0.0).unwrap(), TerrainModel::Plane { height: 0.5 });
+        assert_eq!(TerrainModel::on_earth(&t, None, r).unwrap(), TerrainModel::Sphere { centre: c, radius: r + 0.5 });
+    }
+
+    #[test]
+    fn a_heightfield_on_the_sphere_sits_its_height_above_it() {
+        let r = 6371.0;
+        let hf = Heightfield::from_samples(vec![0.0, 100.0], vec![0.0, 50.0], vec![1.0, 2.0, 3.0, 4.0]).unwrap();
+        let on = hf.clone().on_sphere(r).unwrap();
+        for k in 0..4 {
+            let (x, y) = (on.xs[k % 2], on.ys[k / 2]);
+            // Above the grid point, at altitude z over the sphere: to first
+            // order the vertex sits d, not (R + z) sin(d / R), from the axis,
+            // which lowers it by z (d / R)^2 (1.2 m for 4 km at 112 km); the
+            // f32 heights add under 1e-6 km.
+            let p = DVec3::new(x, y, on.z[k]);
+            let alt = (p - DVec3::new(0.0, 0.0, -r)).length() - r;
+            let theta = x.hypot(y) / r;
+            assert!((alt - hf.z[k]).abs() <= 1.01 * hf.z[k] * theta * theta + 1e-6, "{k}: {alt} vs {}", hf.z[k]);
+        }
+        // The corner 111.8 km away drops (R + z) (1 - cos(d / R)) = 0.98 km.
+        assert!((hf.z[3] - on.z[3] - (r + hf.z[3]) * (1.0 - (100f64.hypot(50.0) / r).cos())).abs() < 1e-5);
+    }
 }
