@@ -73,7 +73,9 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
                 let camera = plan.camera_model()?;
                 timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));
             }
-            let mut density = timed("density", || aurora::bake::density::density_grid(&emission, &plan.grid, peak_y));
+            let mut density = timed("density", || {
+                aurora::bake::density::density_grid(&emission, &plan.grid, peak_y, &aurora::earth::Earth::new(plan.earth.radius_km))
+            });
             let (n, _) = timed("shell", || {
                 let n = emission.dilate_active();
                 (n, density.activate_like(&emission))

@@ -70,7 +70,7 @@
 
 use crate::atmosphere::Atmosphere;
 use crate::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM};
-use crate::curve::{lift_km, polyline_length, vertices};
+use crate::curve::{polyline_length, vertices, Lift};
 use crate::deposit::Photon;
 use crate::fang::SpectrumDeposition;
 use crate::memory::{gib, MemoryLimit};
@@ -190,9 +190,7 @@ pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
 /// vertices (None for a straight curtain).
 fn path_curve(scene: &Scene, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
     let p = c.path.as_ref()?;
-    let lift = lift_km(&scene.beams);
-    let lifted: Vec<[f64; 2]> = p.iter().map(|q| [q[0] + lift[0], q[1] + lift[1]]).collect();
-    let v = vertices(&lifted);
+    let v = vertices(&Lift::of(&scene.beams, &scene.earth).path(p));
     Some((polyline_length(&v), v))
 }
 

@@ -29,10 +29,13 @@
 //!
 //! **Where the path lies.** The path is the ground track of the curtain's
 //! lower border at [`PATH_ALTITUDE_KM`]; the beams start at `beams.top_km`,
-//! up the field line, [`lift_km`] away horizontally.
+//! up the field line, [`lift_km`] away horizontally; with a dipole pole
+//! (`earth.magnetic_pole`) each point is lifted along the dipole's field
+//! there ([`Lift`]).
 
+use crate::earth::Earth;
 use crate::magnetic::MagneticField;
-use crate::scene::BeamParams;
+use crate::scene::{BeamParams, EarthParams};
 use glam::DVec3;
 
 /// The altitude of a path, km: the lower border of the green curtain, where
@@ -52,6 +55,51 @@ pub fn lift_km(beams: &BeamParams) -> [f64; 2] {
     let f = MagneticField::new(beams.b_inclination_deg, beams.b_declination_deg);
     let p = f.foot(DVec3::new(0.0, 0.0, PATH_ALTITUDE_KM), beams.top_km);
     [p.x, p.y]
+}
+
+/// How a path's points move from [`PATH_ALTITUDE_KM`] to the beams' start
+/// altitude: one offset ([`lift_km`]) for a uniform field, or, with a
+/// dipole pole, the offset of the dipole's field at each point (on the
+/// scale of an oval the field turns with the arc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lift {
+    Constant([f64; 2]),
+    Dipole { earth: Earth, pole: [f64; 2], top_km: f64 },
+}
+
+impl From<[f64; 2]> for Lift {
+    fn from(d: [f64; 2]) -> Self {
+        Lift::Constant(d)
+    }
+}
+
+impl Lift {
+    /// The scene's lift: the dipole's with `earth.magnetic_pole`, else
+    /// [`lift_km`].
+    pub fn of(beams: &BeamParams, earth: &EarthParams) -> Lift {
+        match earth.magnetic_pole {
+            Some(pole) if earth.radius_km > 0.0 => Lift::Dipole { earth: Earth::new(earth.radius_km), pole, top_km: beams.top_km },
+            _ => Lift::Constant(lift_km(beams)),
+        }
+    }
+
+    /// The point `q` lifted.
+    pub fn apply(&self, q: [f64; 2]) -> [f64; 2] {
+        let d = match *self {
+            Lift::Constant(d) => d,
+            Lift::Dipole { earth, pole, top_km } => {
+                let f = MagneticField::dipole(&earth, pole, q);
+                let p = f.foot(DVec3::new(0.0, 0.0, PATH_ALTITUDE_KM), top_km);
+                [p.x, p.y]
+            }
+        };
+        [q[0] + d[0], q[1] + d[1]]
+    }
+
+    /// A path's points lifted.
+    pub fn path(&self, p: &[[f64; 2]]) -> Vec<[f64; 2]> {
+        p.iter().map(|&q| self.apply(q)).collect()
+    }
 }
 
 fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {

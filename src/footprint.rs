@@ -491,11 +491,16 @@ pub fn simulate(curtain: &Curtain, params: &FootprintParams, seed: u64) -> Footp
 ///
 /// `lift` (km) moves a path from its altitude to the beams' start altitude
 /// ([`crate::curve::lift_km`]); a straight curtain's `center` is already there.
-pub fn simulate_at(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams, seed: u64, t: f64, lift: [f64; 2]) -> Footprint {
-    let frame = curtain.path.as_ref().map(|p| {
-        let lifted: Vec<[f64; 2]> = p.iter().map(|q| [q[0] + lift[0], q[1] + lift[1]]).collect();
-        PathFrame::new(&lifted, curtain.width)
-    });
+pub fn simulate_at(
+    curtain: &Curtain,
+    params: &FootprintParams,
+    anim: &AnimationParams,
+    seed: u64,
+    t: f64,
+    lift: impl Into<crate::curve::Lift>,
+) -> Footprint {
+    let lift = lift.into();
+    let frame = curtain.path.as_ref().map(|p| PathFrame::new(&lift.path(p), curtain.width));
     let length = frame.as_ref().map_or(curtain.length, |f| f.length);
     let nx = cells_along(curtain, length, params);
     let ny = params.resolution[1];

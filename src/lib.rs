@@ -21,6 +21,7 @@ pub mod chemistry;
 pub mod csda;
 pub mod curve;
 pub mod deposit;
+pub mod earth;
 pub mod fang;
 pub mod fang_glow;
 pub mod farm_plan;

@@ -20,7 +20,20 @@
 //! pointing down, the way precipitating electrons move. [`MagneticField`]
 //! completes it to an orthonormal frame for the beams' deflections and
 //! traces a point's field line to an altitude ([`MagneticField::foot`]).
+//!
+//! **On a round Earth** (`crate::earth`) the angles are relative to the
+//! local vertical and north: the beams walk in the curved frame (ground
+//! coordinates and altitude, where the local frame is the frame's axes) and
+//! their deposits are mapped onto the sphere, so a curtain 2000 km long
+//! keeps its inclination along its length. **With a dipole pole**
+//! (`earth.magnetic_pole`) the field at a point is the centred dipole's
+//! about that pole (e.g. Kivelson & Russell 1995, "Introduction to Space
+//! Physics", section 6.2): at magnetic latitude `lambda` (90 degrees less
+//! the central angle to the pole) the dip is `tan I = 2 tan(lambda)`, and the
+//! horizontal part points toward the pole, `D` the pole's azimuth
+//! ([`MagneticField::dipole`]).
 
+use crate::earth::Earth;
 use glam::DVec3;
 
 /// The geomagnetic frame: `b` the unit field direction (pointing down, the
@@ -48,6 +61,15 @@ impl MagneticField {
         Self { b, u, v }
     }
 
+    /// The dipole's field at ground point `at` for the pole at ground point
+    /// `pole` (module doc): inclination `atan(2 tan(lambda))`, declination
+    /// the pole's azimuth. Within 1e-9 rad of the pole the field is
+    /// vertical.
+    pub fn dipole(earth: &Earth, pole: [f64; 2], at: [f64; 2]) -> Self {
+        let (inc, dec) = dipole_angles_deg(earth, pole, at);
+        Self::new(inc, dec)
+    }
+
     /// The point where the field line through `p` crosses altitude `z`
     /// (traced back up along -B for z above p).
     #[inline]
@@ -55,6 +77,18 @@ impl MagneticField {
         // p + b * t has altitude z when t = (z - p.z) / b.z.
         p + self.b * ((z - p.z) / self.b.z)
     }
+}
+
+/// The dipole's inclination and declination, degrees, at ground point `at`
+/// for the pole at `pole` ([`MagneticField::dipole`]).
+pub fn dipole_angles_deg(earth: &Earth, pole: [f64; 2], at: [f64; 2]) -> (f64, f64) {
+    let colat = earth.central_angle(at, pole);
+    if colat < 1e-9 {
+        return (90.0, 0.0);
+    }
+    let lat = std::f64::consts::FRAC_PI_2 - colat;
+    let inc = (2.0 * lat.tan()).atan().to_degrees();
+    (inc, earth.azimuth_deg(at, pole))
 }
 
 #[cfg(test)]
@@ -77,5 +111,22 @@ mod tests {
         let p = DVec3::new(1.0, 2.0, 150.0);
         let foot = f.foot(p, 260.0);
         assert!((foot.z - 260.0).abs() < 1e-9 && (foot - p).normalize().dot(-f.b) > 1.0 - 1e-12);
+    }
+
+    #[test]
+    fn dipole_dip_follows_tan_i_equals_two_tan_latitude() {
+        let e = Earth::new(crate::earth::MEAN_RADIUS_KM);
+        // The pole 2000 km north: magnetic latitude 90 - 2000 / R rad =
+        // 72.01 degrees; tan I = 2 tan(72.01 deg) = 6.160, I = 80.78
+        // degrees, the horizontal part due north.
+        let (i, d) = dipole_angles_deg(&e, [0.0, 2000.0], [0.0, 0.0]);
+        let lat = 90.0 - (2000.0 / e.radius_km).to_degrees();
+        assert!((i.to_radians().tan() - 2.0 * lat.to_radians().tan()).abs() < 1e-9, "{i}");
+        assert!((i - 80.78).abs() < 0.005 && d.abs() < 1e-9, "{i} {d}");
+        // East of the pole's meridian the field points back toward it.
+        let (_, d) = dipole_angles_deg(&e, [0.0, 2000.0], [1000.0, 0.0]);
+        assert!(d < -20.0 && d > -90.0, "{d}");
+        // At the pole, vertical.
+        assert_eq!(dipole_angles_deg(&e, [0.0, 2000.0], [0.0, 2000.0]), (90.0, 0.0));
     }
 }

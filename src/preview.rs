@@ -136,10 +136,11 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     // A path is placed up the field line from its altitude: the field and
     // the start altitude move it.
     at(
-        new.curtains.iter().any(|c| c.path.is_some()) && crate::curve::lift_km(&old.beams) != crate::curve::lift_km(&new.beams),
+        new.curtains.iter().any(|c| c.path.is_some())
+            && crate::curve::Lift::of(&old.beams, &old.earth) != crate::curve::Lift::of(&new.beams, &new.earth),
         Stage::Footprints,
     );
-    at(old.beams != new.beams || old.colour != new.colour || old.atmosphere != new.atmosphere, Stage::Trace);
+    at(old.beams != new.beams || old.colour != new.colour || old.atmosphere != new.atmosphere || old.earth != new.earth, Stage::Trace);
     at(old.photons.kernel != new.photons.kernel, Stage::Trace);
     at(old.photons != new.photons || old.grid.voxel_size != new.grid.voxel_size, Stage::Gather);
     at(old.grid != new.grid, Stage::Finish);

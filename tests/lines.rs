@@ -92,6 +92,9 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
     let period = 8.0;
     let n = 8;
     let mut s = patch_scene();
+    // The layers below are the grid's z rows, which are altitudes on a
+    // flat ground only.
+    s.earth.radius_km = 0.0;
     s.animation.pulsation = 0.8;
     s.animation.pulsation_patch_km = 200.0;
     s.animation.pulsation_period_s = [period, period];

@@ -43,6 +43,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
         Bottom,
         &[
             "input_file",
+            "earth",
             "scene",
             "rng",
             "progress",

@@ -57,6 +57,7 @@ const SECTIONS: &[(&str, &str, &str)] = &[
     ("footprint", "`[footprint]`", "The 2D stable-fluids simulation (Stam 1999) that makes each curtain's footprint, bent along a low-frequency noise curve."),
     ("beams", "`[beams]`", "Electron beams traced down the geomagnetic field with random deflections (Baranoski et al. 2000), depositing energy by Fang et al. (2010)."),
     ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in."),
+    ("earth", "`[earth]`", "The ground's shape: a sphere (curtain positions and paths are ground distances from the origin, azimuthal equidistant) or a flat plane."),
     ("colour", "`[colour]`", "How deposited energy becomes colour."),
     ("photons", "`[photons]`", "Volumetric photon mapping: a Gaussian-kernel density estimate of the emission."),
     ("grid", "`[grid]`", "The sparse grids written to the VDB."),
@@ -109,6 +110,8 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("beams", "deposition", "", "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
     ("beams", "starts", "", "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
     ("atmosphere", "model", "", "`nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15: `data/nrlmsis21.csv`, made by `tools/msis_table.py`) or `us1976` (U.S. Standard Atmosphere 1976, 80-500 km)"),
+    ("earth", "radius_km", "km", "radius of the spherical Earth centred at `(0, 0, -radius_km)`: altitude is the distance from its centre minus the radius everywhere (atmosphere, deposition, colour, density grid, terrain); curtain positions and paths are ground distances from the origin mapped onto it (azimuthal equidistant); the field's angles are relative to the local vertical and north; 0 is a flat ground, altitude = z"),
+    ("earth", "magnetic_pole", "km", "ground coordinates `[x, y]` of the geomagnetic dipole's pole: the field at each beam's start is the dipole's (dip `tan I = 2 tan(magnetic latitude)`, horizontal part toward the pole), replacing `beams.b_inclination_deg` and `b_declination_deg`; none by default"),
     ("colour", "mode", "", "`physical` (the emission lines through the CIE 1931 colour matching functions) or `colormap` (the `colormap` table)"),
     ("colour", "lines", "", "the line model of `mode = \"physical\"`: `chemistry` (steady-state ion and excited-state chemistry driven by the local ionization rate, after NCAR GLOW's; docs/physics.md) or `simple` (yields in proportion to mole fractions, one quencher per state: the older rule of thumb)"),
     ("colour", "noise_km", "km", "amplitude of the low-frequency noise on the altitude used for colour (not intensity)"),
@@ -179,6 +182,7 @@ const TYPES: &[(&str, &str, &str)] = &[
     ("grid", "voxel_size", "number or `\"auto\"`"),
     ("grid", "lines", "list of words"),
     ("curtain", "path", "rows of 2 numbers"),
+    ("earth", "magnetic_pole", "2 numbers"),
 ];
 
 /// docs/scene.md: a header, then per section a table of key, type,

@@ -1,6 +1,7 @@
 //! The density grid: air extinction on the emission's active voxels, and the
 //! aurora indicator that keeps it to where the aurora is.
 
+use crate::earth::Earth;
 use crate::grid::{Grid, Leaf};
 use crate::photons;
 use crate::scene::GridParams;
@@ -24,8 +25,9 @@ pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
 /// `density_a exp(-density_b (h - density_base_km))` (the report's air
 /// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
 /// smoothly in the emission's luminance relative to [`AURORA_FRACTION`] of the
-/// peak. No fog box: only where the aurora is.
-pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64) -> Grid<f32> {
+/// peak. No fog box: only where the aurora is. `h` is the voxel's altitude
+/// above `earth` (`crate::earth`: z when flat).
+pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64, earth: &Earth) -> Grid<f32> {
     let tr = emission.transform;
     let scale = AURORA_FRACTION * peak_luminance;
     let inv_scale = if scale > 0.0 { (1.0 / scale) as f32 } else { 0.0 };
@@ -33,9 +35,11 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
         .leaves()
         .par_iter()
         .map(|l| {
-            // The air depends on the altitude only: once per z of the leaf.
+            // The air depends on the altitude only: on a flat ground once
+            // per z of the leaf, on a sphere per voxel.
             let air: [f64; 8] =
                 std::array::from_fn(|z| extinction(params, tr.index_to_world((l.origin + glam::IVec3::new(0, 0, z as i32)).as_dvec3()).z));
+            let round = !earth.is_flat();
             let mut out = Leaf::new(l.origin, 0.0f32);
             out.mask = l.mask;
             for n in 0..crate::grid::LEAF_NUM_VALUES {
@@ -46,7 +50,13 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
                     // value (exp_neg_f32's 1.2e-7 relative plus rounding);
                     // 0 when scale is.
                     let indicator = 1.0 - photons::fast_math::exp_neg_f32(-(y as f32) * inv_scale);
-                    out.values[n] = (air[n & 7] * indicator as f64) as f32;
+                    let a = if round {
+                        let ijk = l.origin + crate::grid::offset_to_local(n);
+                        extinction(params, earth.altitude(tr.index_to_world(ijk.as_dvec3())))
+                    } else {
+                        air[n & 7]
+                    };
+                    out.values[n] = (a * indicator as f64) as f32;
                 }
             }
             out

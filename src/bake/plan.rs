@@ -46,6 +46,7 @@ use crate::atmosphere::Atmosphere;
 use crate::beams::{self, BeamError, BeamStats, TraceParams, Traced};
 use crate::camera::{CameraError, CameraModel};
 use crate::deposit::Photon;
+use crate::earth::Earth;
 use crate::footprint::{self, Footprint};
 use crate::grid::{Grid, Leaf};
 use crate::lines::{grid_name, line_index, LineTable};
@@ -54,8 +55,8 @@ use crate::photons::{self, radius::RadiusField};
 use crate::progress::Progress;
 use crate::prune;
 use crate::scene::{
-    AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams,
-    KernelRadius, LineModel, PhotonParams, Scene,
+    AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, EarthParams, FootprintParams, GatherMethod,
+    GridParams, KernelRadius, LineModel, PhotonParams, Scene,
 };
 use crate::spectrum::{luminance, ColourTable, EmissionModel};
 use glam::DVec3;
@@ -66,18 +67,18 @@ use std::time::Instant;
 /// One footprint per curtain (in curtain order; simulated in parallel), at
 /// the scene's `animation.time_s`.
 pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    let lift = crate::curve::lift_km(&scene.beams);
+    let lift = crate::curve::Lift::of(&scene.beams, &scene.earth);
     simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, lift, &crate::progress::NoProgress)
 }
 
 /// One footprint per curtain at `animation.time_s`, in parallel; paths
-/// lifted by `lift` km to the start altitude ([`crate::curve::lift_km`]).
+/// lifted by `lift` to the start altitude ([`crate::curve::Lift`]).
 pub fn simulate_footprints(
     seed: u64,
     curtains: &[Curtain],
     params: &FootprintParams,
     animation: &AnimationParams,
-    lift: [f64; 2],
+    lift: crate::curve::Lift,
     progress: &dyn Progress,
 ) -> Vec<Footprint> {
     progress.start("footprints", curtains.len() as u64);
@@ -140,6 +141,8 @@ pub struct BakePlan {
     pub beams: BeamParams,
     pub colour: ColourParams,
     pub atmosphere_params: AtmosphereParams,
+    /// `[earth]`: the ground's shape and the dipole pole.
+    pub earth: EarthParams,
     pub photons: PhotonParams,
     pub grid: GridParams,
     /// The camera and image size (pruning, the automatic voxel size).
@@ -200,7 +203,11 @@ impl BakePlan {
     fn build(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> BakePlan {
         let t = Instant::now();
         let same_fp = prev.filter(|p| {
-            p.seed == scene.seed && p.curtains == scene.curtains && p.footprint == scene.footprint && p.animation == scene.animation
+            p.seed == scene.seed
+                && p.curtains == scene.curtains
+                && p.footprint == scene.footprint
+                && p.animation == scene.animation
+                && p.earth == scene.earth
         });
         let (footprints, footprint_seconds) = match same_fp {
             Some(p) => (p.footprints.clone(), 0.0),
@@ -210,7 +217,7 @@ impl BakePlan {
                     &scene.curtains,
                     &scene.footprint,
                     &scene.animation,
-                    crate::curve::lift_km(&scene.beams),
+                    crate::curve::Lift::of(&scene.beams, &scene.earth),
                     progress,
                 );
                 (f, t.elapsed().as_secs_f64())
@@ -247,6 +254,7 @@ impl BakePlan {
             beams: scene.beams.clone(),
             colour: scene.colour.clone(),
             atmosphere_params: scene.atmosphere.clone(),
+            earth: scene.earth.clone(),
             photons: scene.photons.clone(),
             grid: scene.grid.clone(),
             camera: scene.camera.clone(),
@@ -278,6 +286,8 @@ impl BakePlan {
             lines: self.line_table.as_ref(),
             line_outputs: if self.line_table.is_some() { &self.line_outputs } else { &[] },
             trail: None,
+            earth: Earth::new(self.earth.radius_km),
+            magnetic_pole: self.earth.magnetic_pole,
         }
     }
 
@@ -326,7 +336,7 @@ pub fn trace_bake(plan: &BakePlan, count: usize, progress: &dyn Progress) -> Res
 /// the photons (and per-line powers) concatenated in sample order. The
 /// stats are the plan's time's.
 pub fn trace_trail(plan: &BakePlan, count: usize, n: u32, progress: &dyn Progress) -> Result<Traced, BeamError> {
-    let lift = crate::curve::lift_km(&plan.beams);
+    let lift = crate::curve::Lift::of(&plan.beams, &plan.earth);
     let mut out: Option<Traced> = None;
     for sample in crate::trail::samples(n) {
         let animation = AnimationParams { time_s: plan.animation.time_s - sample.lag_s, ..plan.animation.clone() };
@@ -533,8 +543,13 @@ pub fn finish_keeping(
 
     let t = Instant::now();
     let (peak, peak_y) = scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km)?;
-    if let Some((lo, _)) = emission.index_bbox() {
-        warnings.extend(extinction_warning(&plan.grid, transform.index_to_world(lo.as_dvec3()).z));
+    if let Some((lo, hi)) = emission.index_bbox() {
+        // The lowest altitude in the grid's box: at the box's point nearest
+        // the Earth's centre (the lowest z when flat).
+        let (lo, hi) = (transform.index_to_world(lo.as_dvec3()), transform.index_to_world(hi.as_dvec3()));
+        let earth = Earth::new(plan.earth.radius_km);
+        let h_min = if earth.is_flat() { lo.z } else { earth.altitude(earth.centre().clamp(lo, hi)) };
+        warnings.extend(extinction_warning(&plan.grid, h_min));
     }
     let scan_s = t.elapsed().as_secs_f64();
 
@@ -555,7 +570,7 @@ pub fn finish_keeping(
 
     let t = Instant::now();
     progress.start("density", emission.leaf_count() as u64);
-    let mut density = density_grid(&emission, &plan.grid, peak_y);
+    let mut density = density_grid(&emission, &plan.grid, peak_y, &Earth::new(plan.earth.radius_km));
     progress.inc(emission.leaf_count() as u64);
     progress.finish();
     let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());

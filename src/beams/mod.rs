@@ -32,6 +32,7 @@ pub mod walk;
 use crate::atmosphere::Atmosphere;
 use crate::deposit::Photon;
 use crate::deposit::StepDeposit;
+use crate::earth::Earth;
 use crate::fang::{MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::lines::LineTable;
@@ -165,6 +166,12 @@ pub struct TraceParams<'a> {
     /// The red trail's sample this trace makes (`crate::trail`, with
     /// `lines`); `None` keeps every line at the animation's time.
     pub trail: Option<crate::trail::TrailSample>,
+    /// `[earth]`: the beams walk in its curved frame, their photons mapped
+    /// onto it (`crate::earth`).
+    pub earth: Earth,
+    /// `earth.magnetic_pole`: the dipole's field at each beam's start
+    /// instead of `beams`' angles.
+    pub magnetic_pole: Option<[f64; 2]>,
 }
 
 impl<'a> TraceParams<'a> {
@@ -181,6 +188,8 @@ impl<'a> TraceParams<'a> {
             lines: None,
             line_outputs: &[],
             trail: None,
+            earth: Earth::new(scene.earth.radius_km),
+            magnetic_pole: scene.earth.magnetic_pole,
         }
     }
 }
@@ -417,6 +426,7 @@ impl Tracer<'_> {
             line_outputs: p.line_outputs,
             trail: p.lines.and(p.trail),
             ionization: ionization.as_ref(),
+            earth: p.earth,
         };
         let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();
         Ok((power_w, traces))
@@ -427,7 +437,16 @@ impl Tracer<'_> {
     fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64) -> BeamOut {
         let mut r = rng::rng(&[self.params.seed, starts.curtain.seed, rng::tag::BEAM, index]);
         let start = starts.start(index, &mut r);
-        let t = trace_beam(ctx, &start, &mut r);
+        let t = match self.params.magnetic_pole {
+            // The dipole's field at the beam's start: over a beam's path
+            // (some 50 km across the field at I = 78 deg, from 260 to 100 km)
+            // its direction turns by about 50 / R rad = 0.5 degrees.
+            Some(pole) => {
+                let field = MagneticField::dipole(&self.params.earth, pole, [start.position.x, start.position.y]);
+                trace_beam(&BeamContext { field, ..*ctx }, &start, &mut r)
+            }
+            None => trace_beam(ctx, &start, &mut r),
+        };
         self.progress.inc(1);
         let deposited: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
         let mut photons = t.photons;

@@ -47,11 +47,19 @@
 //!   footprint, `1/dt` steps, or energy spent. Whatever a beam did not
 //!   deposit is reported ([`CurtainPower`](super::CurtainPower)), so
 //!   nothing is lost silently.
+//!
+//! On a round Earth (`crate::earth`) the walk is in the curved frame:
+//! positions are ground coordinates and altitude, so `z` is the altitude the
+//! atmosphere, the deposition and the colour read, and the field's angles
+//! are relative to the local vertical and north; each photon is mapped to
+//! the scene frame as it is made ([`deposit`]). On a flat ground the map is
+//! the identity.
 
 use crate::animation::Wave;
 use crate::atmosphere::Atmosphere;
 use crate::csda::{energy_from_range, range_g_cm2, step_column};
 use crate::deposit::{Photon, StepDeposit};
+use crate::earth::Earth;
 use crate::fang::{IonizationProfile, MonoDeposition, SpectrumDeposition};
 use crate::footprint::Footprint;
 use crate::lines::{LineTable, O1D_LINES, R_PER_KM_SCALE};
@@ -196,13 +204,21 @@ pub struct BeamContext<'a> {
     /// the colours need the ionization rate (the chemistry); `None` leaves
     /// q = 0 on every deposit.
     pub ionization: Option<&'a IonizationProfile>,
+    /// The Earth: the walk is in its curved frame (ground coordinates and
+    /// altitude, `crate::earth`), and each photon is mapped to the scene
+    /// frame as it is made ([`deposit`]); the identity when flat.
+    pub earth: Earth,
 }
 
 /// The photon of one beam step: `power` spread along the step from `start`
-/// to `end` (km). The gather's segment kernel smooths it along the step;
-/// `photons.kernel = "point"` collapses it to a point at `end`.
+/// to `end` (km, the curved frame of `earth`, mapped to the scene frame:
+/// a step of at most a few km is a chord of the mapped curve, off it by
+/// its sagitta, under a metre on the scale of R). The gather's segment
+/// kernel smooths it along the step; `photons.kernel = "point"` collapses
+/// it to a point at `end`.
 #[inline]
-pub fn deposit(start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
+pub fn deposit(earth: &Earth, start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
+    let (start, end) = (earth.to_scene(start), earth.to_scene(end));
     Photon::segment([start.x as f32, start.y as f32, start.z as f32], [end.x as f32, end.y as f32, end.z as f32], power)
 }
 
@@ -272,7 +288,7 @@ fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, 
         }
         _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour, q).map(|c| c * kev_s),
     };
-    out.photons.push(deposit(from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]));
+    out.photons.push(deposit(&ctx.earth, from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]));
     out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s, q });
     if let (Some(t), false) = (ctx.lines, ctx.line_outputs.is_empty()) {
         let zm = 0.5 * (from.z + to.z);
@@ -541,6 +557,7 @@ mod tests {
             trail: None,
             line_outputs: &[],
             ionization: None,
+            earth: Earth::FLAT,
         };
         let (lo, hi) = ((25.0f64 - 12.0).to_radians(), 25.0f64.to_radians());
         let mut r = rng::rng(&[1]);
@@ -627,6 +644,7 @@ mod tests {
             trail: None,
             line_outputs: &[],
             ionization: None,
+            earth: Earth::FLAT,
         }
     }
 

@@ -30,7 +30,7 @@ impl<'a> Bench<'a> {
         let peak = base.stats.peak_luminance;
         let finish = |e: &Grid<[f32; 3]>| -> (Grid<[f32; 3]>, Grid<f32>) {
             let mut e = e.clone();
-            let mut d = bake::density::density_grid(&e, &self.scene.grid, peak);
+            let mut d = bake::density::density_grid(&e, &self.scene.grid, peak, &crate::earth::Earth::new(self.scene.earth.radius_km));
             if self.scene.grid.cycles_shell {
                 e.dilate_active();
                 d.dilate_active();

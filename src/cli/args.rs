@@ -12,7 +12,7 @@ use std::path::PathBuf;
     about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
     long_about = "Bake physically plausible aurora into sparse OpenVDB volumes (an `emission` vec3 grid and a \
 `density` float grid) for Blender Cycles, Houdini or a USD pipeline, and render them with a reference raymarcher.\n\n\
-SCENE is a TOML scene file or the name of a built-in preset (default, seed2014); `aurora scene default` prints one to edit. \
+SCENE is a TOML scene file or the name of a built-in preset (default, seed2014, oval); `aurora scene default` prints one to edit. \
 Units are kilometres, z up."
 )]
 pub struct Cli {
@@ -232,7 +232,7 @@ pub struct ProfileArgs {
 // The arguments of `aurora scene` (its help is the doc of [`Command::Scene`]).
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Preset name (default, seed2014) or a scene file.
+    /// Preset name (default, seed2014, oval) or a scene file.
     #[arg(default_value = "default")]
     pub name: String,
     /// Print every scene key's default and allowed range as JSON instead

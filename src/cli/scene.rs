@@ -56,8 +56,12 @@ pub fn terrain(a: TerrainArgs) -> Result<()> {
         ))
         .into());
     }
-    let hf = aurora::render::terrain::Heightfield::from_terrain(&scene.terrain, Some(&scene_dir(&scene_arg)))
+    // On a round Earth the mesh lies on the sphere, as the renderer traces it.
+    let mut hf = aurora::render::terrain::Heightfield::from_terrain(&scene.terrain, Some(&scene_dir(&scene_arg)))
         .map_err(|e| InputError(e.to_string()))?;
+    if scene.earth.radius_km > 0.0 {
+        hf = hf.on_sphere(scene.earth.radius_km).map_err(|e| InputError(e.to_string()))?;
+    }
     aurora::render::terrain::write_obj(&out, &hf).with_context(|| format!("cannot write {}", out.display()))?;
     eprintln!("wrote {}", out.display());
     Ok(())

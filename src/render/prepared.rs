@@ -82,10 +82,10 @@ impl Prepared {
         };
         let (mut t_old, mut t_new) = (o.terrain.clone(), s.terrain.clone());
         (t_old.albedo, t_new.albedo) = ([0.0; 3], [0.0; 3]);
-        let terrain = if t_old == t_new && o.base_dir == s.base_dir {
+        let terrain = if t_old == t_new && o.base_dir == s.base_dir && o.earth_radius_km == s.earth_radius_km {
             old.terrain
         } else {
-            TerrainModel::from_terrain(&s.terrain, s.base_dir.as_deref())?
+            TerrainModel::on_earth(&s.terrain, s.base_dir.as_deref(), s.earth_radius_km)?
         };
         let sampler = if !grids_changed && had_terrain == !matches!(terrain, TerrainModel::None) {
             old.sampler
@@ -205,7 +205,7 @@ impl Prepared {
         medium: Medium,
         emission: Option<&Grid<[f32; 3]>>,
     ) -> Result<Prepared, RenderError> {
-        let terrain = TerrainModel::from_terrain(&settings.terrain, settings.base_dir.as_deref())?;
+        let terrain = TerrainModel::on_earth(&settings.terrain, settings.base_dir.as_deref(), settings.earth_radius_km)?;
         let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
         let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })

@@ -35,6 +35,9 @@ pub struct RenderSettings {
     pub volume: VolumeParams,
     pub background: Background,
     pub terrain: Terrain,
+    /// `earth.radius_km`: the terrain lies on the sphere of this radius
+    /// about `(0, 0, -radius)` (`terrain`); 0 is the flat ground.
+    pub earth_radius_km: f64,
     /// Seed of every random stream (with the pixel index).
     pub seed: u64,
     pub integration: Integration,
@@ -56,6 +59,7 @@ impl RenderSettings {
             volume: scene.volume.clone(),
             background: scene.background.clone(),
             terrain: scene.terrain.clone(),
+            earth_radius_km: scene.earth.radius_km,
             seed: scene.seed,
             integration: Integration::Exact,
             shadow_samples: 1,

@@ -20,6 +20,20 @@
 //!   pixel, column 0 at `x0`, **row 0 at `y1`** (north up, as the image is
 //!   viewed), height `height + mountain_height * v` with `v` in [0, 1].
 //!
+//! # On a round Earth
+//! With `earth.radius_km = R > 0` (`crate::earth`: the centre at `(0, 0,
+//! -R)`) the plane is the sphere of radius `R + height`
+//! ([`TerrainModel::Sphere`], an exact ray-sphere intersection), and a
+//! heightfield's sample `(x, y)` of height `z` sits at `z` above the sphere,
+//! over the grid point: its height becomes `(R + z) cos(d / R) - R` with
+//! `d = |(x, y)|` ([`Heightfield::on_sphere`]), the ground point's drop
+//! below the origin's tangent plane taken off. The grid stays regular in x
+//! and y (the DDA and the OBJ need it); the sphere's point at ground
+//! distance d lies `d - R sin(d / R)`, about `d^3 / 6R^2`, closer to the
+//! axis (4 m at 100 km, 0.5 km at 500 km), and a sample of height z sits
+//! `z (d / R)^2` low (1 m for 4 km at 110 km): a heightfield is meant for
+//! the ground near the camera.
+//!
 //! Rays are traced with a 2D DDA over the cells the ray's ground projection
 //! crosses (cells culled by their height range) and an f64 Moller-Trumbore
 //! test of the two triangles of each cell. The shading normal is the
@@ -60,9 +74,30 @@ pub enum TerrainModel {
         height: f64,
     },
     Heightfield(Heightfield),
+    /// The sphere of `radius` km about `centre`: the plane on a round Earth.
+    Sphere {
+        centre: DVec3,
+        radius: f64,
+    },
 }
 
 impl TerrainModel {
+    /// [`TerrainModel::from_terrain`] on the Earth of radius `earth_radius_km`
+    /// (module doc; 0: the flat ground, the same model).
+    pub fn on_earth(t: &Terrain, base_dir: Option<&Path>, earth_radius_km: f64) -> Result<TerrainModel, RenderError> {
+        let m = Self::from_terrain(t, base_dir)?;
+        if earth_radius_km == 0.0 {
+            return Ok(m);
+        }
+        Ok(match m {
+            TerrainModel::Plane { height } => {
+                TerrainModel::Sphere { centre: DVec3::new(0.0, 0.0, -earth_radius_km), radius: earth_radius_km + height }
+            }
+            TerrainModel::Heightfield(h) => TerrainModel::Heightfield(h.on_sphere(earth_radius_km)?),
+            other => other,
+        })
+    }
+
     /// Builds the terrain of a scene; a heightmap path is resolved against
     /// `base_dir` (the scene file's folder) when relative.
     pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<TerrainModel, RenderError> {
@@ -94,12 +129,38 @@ impl TerrainModel {
                 })
             }
             TerrainModel::Heightfield(h) => h.intersect(o, d, t_min, t_max),
+            TerrainModel::Sphere { centre, radius } => intersect_sphere(*centre, *radius, o, d, t_min, t_max),
         }
     }
 
     pub fn is_none(&self) -> bool {
         matches!(self, TerrainModel::None)
     }
+}
+
+/// The nearest hit of `o + t d` with the sphere, `t` in `(t_min, t_max)`: the
+/// roots of `|o - c + t d|^2 = r^2`, the smaller by the numerically stable
+/// form (no cancellation between `b` and the root of the discriminant); the
+/// normal faces the ray.
+pub fn intersect_sphere(c: DVec3, r: f64, o: DVec3, d: DVec3, t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+    let oc = o - c;
+    let a = d.length_squared();
+    let half_b = oc.dot(d);
+    // |oc|^2 - r^2 as (|oc| - r)(|oc| + r): the altitude times 2R, without
+    // the cancellation of two numbers of size R^2.
+    let l = oc.length();
+    let cc = (l - r) * (l + r);
+    let disc = half_b * half_b - a * cc;
+    if a == 0.0 || disc < 0.0 {
+        return None;
+    }
+    let q = -(half_b + half_b.signum() * disc.sqrt());
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (cc / q, q / a) };
+    let (t0, t1) = (t0.min(t1), t0.max(t1));
+    let t = [t0, t1].into_iter().find(|&t| t > t_min && t < t_max)?;
+    let p = o + d * t;
+    let n = (p - c) / r;
+    Some(SurfaceHit { t, p, n: if n.dot(d) > 0.0 { -n } else { n } })
 }
 
 /// A triangulated regular grid of heights (see the module doc).
@@ -163,6 +224,23 @@ impl Heightfield {
         let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
         let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         Ok(Heightfield { xs, ys, z, zmin, zmax })
+    }
+
+    /// The heightfield laid on the sphere of radius `r` km about `(0, 0, -r)`
+    /// (module doc): each sample's height above the sphere, over its grid
+    /// point.
+    pub fn on_sphere(self, r: f64) -> Result<Heightfield, RenderError> {
+        let nx = self.xs.len();
+        let z = self
+            .z
+            .iter()
+            .enumerate()
+            .map(|(k, &h)| {
+                let (x, y) = (self.xs[k % nx], self.ys[k / nx]);
+                (r + h) * (x.hypot(y) / r).cos() - r
+            })
+            .collect();
+        Self::from_samples(self.xs, self.ys, z)
     }
 
     /// The heightfield of a scene's `[terrain]` (kind must be "heightfield").
@@ -444,4 +522,54 @@ pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderE
     })();
     result.map_err(io)?;
     tmp.commit().map_err(|e| RenderError::Output(Box::new(e)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_hits_are_the_closed_form_ones() {
+        let r = 6371.0;
+        let c = DVec3::new(0.0, 0.0, -r);
+        // Straight down from 10 km: the ground at t = 10.
+        let h = intersect_sphere(c, r, DVec3::new(0.0, 0.0, 10.0), DVec3::new(0.0, 0.0, -1.0), 0.0, f64::INFINITY).unwrap();
+        assert!((h.t - 10.0).abs() < 1e-9 && (h.n - DVec3::Z).length() < 1e-12);
+        // From 2 m up, 1 degree down: the chord to the sphere,
+        // t = (R + h) sin(a) - sqrt((R + h)^2 sin(a)^2 - (2 R h + h^2)).
+        let (h0, a) = (0.002, 1f64.to_radians());
+        let d = DVec3::new(0.0, a.cos(), -a.sin());
+        let hit = intersect_sphere(c, r, DVec3::new(0.0, 0.0, h0), d, 0.0, f64::INFINITY).unwrap();
+        let rs = (r + h0) * a.sin();
+        let want = rs - (rs * rs - (2.0 * r * h0 + h0 * h0)).sqrt();
+        assert!((hit.t - want).abs() < 1e-9 * want.max(1.0), "{} vs {want}", hit.t);
+        assert!(((hit.p - c).length() - r).abs() < 1e-9);
+        // Horizontal from 2 m up: the ray rises above the sphere everywhere
+        // (its lowest altitude is its start), no hit.
+        assert!(intersect_sphere(c, r, DVec3::new(0.0, 0.0, h0), DVec3::Y, 0.0, f64::INFINITY).is_none());
+        // The flat plane stays the plane.
+        let t = Terrain { kind: TerrainKind::Plane, height: 0.5, ..Terrain::default() };
+        assert_eq!(TerrainModel::on_earth(&t, None, 0.0).unwrap(), TerrainModel::Plane { height: 0.5 });
+        assert_eq!(TerrainModel::on_earth(&t, None, r).unwrap(), TerrainModel::Sphere { centre: c, radius: r + 0.5 });
+    }
+
+    #[test]
+    fn a_heightfield_on_the_sphere_sits_its_height_above_it() {
+        let r = 6371.0;
+        let hf = Heightfield::from_samples(vec![0.0, 100.0], vec![0.0, 50.0], vec![1.0, 2.0, 3.0, 4.0]).unwrap();
+        let on = hf.clone().on_sphere(r).unwrap();
+        for k in 0..4 {
+            let (x, y) = (on.xs[k % 2], on.ys[k / 2]);
+            // Above the grid point, at altitude z over the sphere: to first
+            // order the vertex sits d, not (R + z) sin(d / R), from the axis,
+            // which lowers it by z (d / R)^2 (1.2 m for 4 km at 112 km); the
+            // f32 heights add under 1e-6 km.
+            let p = DVec3::new(x, y, on.z[k]);
+            let alt = (p - DVec3::new(0.0, 0.0, -r)).length() - r;
+            let theta = x.hypot(y) / r;
+            assert!((alt - hf.z[k]).abs() <= 1.01 * hf.z[k] * theta * theta + 1e-6, "{k}: {alt} vs {}", hf.z[k]);
+        }
+        // The corner 111.8 km away drops (R + z) (1 - cos(d / R)) = 0.98 km.
+        assert!((hf.z[3] - on.z[3] - (r + hf.z[3]) * (1.0 - (100f64.hypot(50.0) / r).cos())).abs() < 1e-5);
+    }
 }

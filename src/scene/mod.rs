@@ -54,6 +54,7 @@ pub struct Scene {
     pub terrain: Terrain,
     pub animation: AnimationParams,
     pub atmosphere: AtmosphereParams,
+    pub earth: EarthParams,
 }
 
 impl Default for Scene {

@@ -1,14 +1,16 @@
 //! Built-in scenes: `default` (three sheets, as in the report's final
-//! image) and `seed2014` (the report's final scene parameters).
+//! image), `seed2014` (the report's final scene parameters) and `oval` (a
+//! 2500 km arc along a circle of magnetic latitude, overhead, for a dome).
 use super::*;
 
 /// Names accepted by `aurora scene NAME` and as a scene argument.
-pub const NAMES: &[&str] = &["default", "seed2014"];
+pub const NAMES: &[&str] = &["default", "seed2014", "oval"];
 
 pub fn by_name(name: &str) -> Option<Scene> {
     match name {
         "default" => Some(default_scene()),
         "seed2014" => Some(seed2014()),
+        "oval" => Some(oval()),
         _ => None,
     }
 }
@@ -41,6 +43,7 @@ pub fn default_scene() -> Scene {
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
         animation: AnimationParams::default(),
         atmosphere: AtmosphereParams::default(),
+        earth: EarthParams::default(),
     }
 }
 
@@ -71,6 +74,70 @@ pub fn seed2014() -> Scene {
     s.render.width = 640;
     s.render.height = 438;
     s.render.spp = 8;
+    s
+}
+
+/// Ground distance from the oval's dipole pole to its arc, km: magnetic
+/// latitude 90 deg - 2200 / 6371 rad = 70.2 deg, the auroral oval's night
+/// side.
+pub const OVAL_POLE_DISTANCE_KM: f64 = 2200.0;
+/// Length of the oval's arc along its circle of magnetic latitude, km.
+pub const OVAL_LENGTH_KM: f64 = 2500.0;
+
+/// An arc of the auroral oval for a planetarium dome: the lower border
+/// (the path, at 110 km) runs 2500 km along the small circle of magnetic
+/// latitude 70.2 deg about a dipole pole 2200 km north
+/// (`earth.magnetic_pole`), its middle overhead; seen by a 180-degree
+/// fisheye looking at the zenith, north up, with stars. On the round
+/// Earth its ends go down behind the horizon, some 1250 km away.
+pub fn oval() -> Scene {
+    let earth = crate::earth::Earth::new(crate::earth::MEAN_RADIUS_KM);
+    let pole = [0.0, OVAL_POLE_DISTANCE_KM];
+    // The small circle's radius in space, R sin(rho / R): its azimuths from
+    // the pole span the arc's length; 33 points, 78 km apart.
+    let rho = OVAL_POLE_DISTANCE_KM;
+    let span_deg = (OVAL_LENGTH_KM / (earth.radius_km * (rho / earth.radius_km).sin())).to_degrees();
+    let south = earth.azimuth_deg(pole, [0.0, 0.0]);
+    let n = 33;
+    let path: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let az = south + span_deg * (0.5 - k as f64 / (n - 1) as f64);
+            let [x, y] = earth.destination(pole, az, rho);
+            // Rounded to metres: the TOML stays readable.
+            [(x * 1e3).round() / 1e3, (y * 1e3).round() / 1e3]
+        })
+        .collect();
+    let mut s = Scene {
+        curtains: vec![Curtain {
+            path: Some(path),
+            width: 40.0,
+            energy_flux: 12.0,
+            char_energy_kev: 4.0,
+            bend_km: 8.0,
+            seed: 1,
+            ..Curtain::default()
+        }],
+        ..default_scene()
+    };
+    s.earth.magnetic_pole = Some(pole);
+    s.beams.count = 50_000;
+    s.photons.radius_km = 1.5;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s.camera = Camera {
+        position: [0.0, 0.0, 0.002],
+        look_at: [0.0, 0.0, 1.0],
+        up: [0.0, 1.0, 0.0],
+        projection: Projection::Fisheye,
+        fov_deg: 180.0,
+        ..Camera::default()
+    };
+    s.render.width = 1024;
+    s.render.height = 1024;
+    // A bright arc (12 mW/m^2) straight overhead: 1.5 stops under the
+    // default exposure keeps its core out of the view transform's shoulder.
+    s.render.exposure = 1.5;
+    s.background.stars = true;
+    s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s
 }
 

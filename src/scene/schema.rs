@@ -60,6 +60,7 @@ pub fn schema() -> Value {
         "photons": PhotonParams::default(), "grid": GridParams::default(), "camera": Camera::default(),
         "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(),
         "terrain": Terrain::default(), "atmosphere": AtmosphereParams::default(), "animation": AnimationParams::default(),
+        "earth": EarthParams::default(),
     });
     let enums = enum_values();
     let mut out = Map::new();

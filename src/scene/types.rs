@@ -234,6 +234,26 @@ impl Default for AtmosphereParams {
     }
 }
 
+/// The Earth under the scene (`crate::earth`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EarthParams {
+    /// Radius of the spherical Earth, km (6371, the mean radius); 0 is a
+    /// flat ground where altitude is z.
+    pub radius_km: f64,
+    /// Ground coordinates `[x, y]` km of the geomagnetic (dipole) pole:
+    /// when given the field at each beam's start follows the dipole
+    /// (`crate::magnetic`) and `beams.b_inclination_deg` and
+    /// `b_declination_deg` are unused; none by default.
+    pub magnetic_pole: Option<[f64; 2]>,
+}
+
+impl Default for EarthParams {
+    fn default() -> Self {
+        Self { radius_km: crate::earth::MEAN_RADIUS_KM, magnetic_pole: None }
+    }
+}
+
 /// Placement of beam starts over the footprint, in proportion to its flux.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]

@@ -254,6 +254,21 @@ impl Scene {
         v.range(t, "b_inclination_deg", b.b_inclination_deg, 10.0, 90.0, true);
         v.finite(t, "b_declination_deg", b.b_declination_deg);
 
+        let e = &self.earth;
+        let t = Some(("earth", 0));
+        v.allow(t, "radius_km", Allowed::Rule("0 (a flat ground) or in [1000, 100000] km".into()));
+        if !(e.radius_km == 0.0 || (1000.0..=1e5).contains(&e.radius_km)) {
+            v.push(t, "radius_km", fmt_num(e.radius_km), "must be 0 (a flat ground) or in [1000, 100000] km".into());
+        }
+        v.allow(t, "magnetic_pole", Allowed::Rule("[x, y] km, each in [-2e4, 2e4]; needs radius_km > 0".into()));
+        if let Some(pole) = e.magnetic_pole {
+            if pole.iter().any(|x| !(x.is_finite() && x.abs() <= 2e4)) {
+                v.push(t, "magnetic_pole", format!("{pole:?}"), "each coordinate must be in [-2e4, 2e4] km".into());
+            } else if e.radius_km == 0.0 {
+                v.push(t, "magnetic_pole", format!("{pole:?}"), "a dipole pole needs a round Earth: set earth.radius_km > 0".into());
+            }
+        }
+
         let c = &self.colour;
         let t = Some(("colour", 0));
         v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);

@@ -53,6 +53,7 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         volume: VolumeParams { density_scale: 1.0, emission_scale: 1.0 },
         background: Background { radiance: [0.0; 3], ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },
+        earth_radius_km: 0.0,
         seed: 7,
         integration: Integration::Exact,
         shadow_samples: 1,
