@@ -207,7 +207,7 @@ pub fn pulsating_patches() -> Scene {
     s.photons.radius_km = 1.5;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.camera = Camera { up: [0.0, 1.0, 0.0], ..camera([0.0, 20.0, 0.5], [0.0, 30.0, 100.0], 100.0) };
-    s.render.exposure = 2.0;
+    s.render.exposure = 0.5;
     s.animation.pulsation = 0.9;
     s.animation.pulsation_patch_km = 40.0;
     s.animation.pulsation_period_s = [4.0, 12.0];
@@ -247,7 +247,7 @@ pub fn type_a_red() -> Scene {
     s.photons.radius_km = 1.0;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.camera = camera([0.0, -150.0, 0.5], [0.0, 90.0, 180.0], 70.0);
-    s.render.exposure = 1.5;
+    s.render.exposure = 0.0;
     s
 }
 
