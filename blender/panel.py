@@ -31,8 +31,12 @@ def _binary(context) -> str:
 
 
 def list_presets(binary: str) -> list[str]:
-    """`aurora scene --list`: one preset per line, its name first."""
-    out = subprocess.run([binary, "scene", "--list"], capture_output=True, text=True, timeout=60)
+    """`aurora scene --list`: one preset per line, its name first; the
+    fallback names when the binary cannot be run or predates `--list`."""
+    try:
+        out = subprocess.run([binary, "scene", "--list"], capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return list(FALLBACK_PRESETS)
     if out.returncode != 0:
         return list(FALLBACK_PRESETS)
     names = [line.split()[0] for line in out.stdout.splitlines() if line.strip()]

@@ -331,9 +331,127 @@ impl PathFrame {
     }
 }
 
+/// One stretch of a path that bends tighter than a radius: its tightest
+/// vertex.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TightBend {
+    /// Where, km.
+    pub at: [f64; 2],
+    /// Arc length from the first point, km.
+    pub along_km: f64,
+    /// The radius of curvature there, km.
+    pub radius_km: f64,
+}
+
+/// The stretches of the curve through `points` whose radius of curvature
+/// falls below `min_radius_km`, the tightest vertex of each. The radius at
+/// a vertex is that of the circle through it and its two neighbours,
+/// `R = |a| |b| |c| / (2 |a x b|)` with a, b, c the triangle's sides (the
+/// circumradius: exact on a circle, within `O(h^2 / R^2)` of the curve's
+/// own for vertices h apart, at most [`MAX_SPACING_KM`]).
+pub fn tight_bends(points: &[[f64; 2]], min_radius_km: f64) -> Vec<TightBend> {
+    let v = vertices(points);
+    let mut s = vec![0.0];
+    for w in v.windows(2) {
+        s.push(s[s.len() - 1] + norm(sub(w[1], w[0])));
+    }
+    let mut out: Vec<TightBend> = Vec::new();
+    let mut in_run = false;
+    for i in 1..v.len().saturating_sub(1) {
+        let (a, b) = (sub(v[i], v[i - 1]), sub(v[i + 1], v[i]));
+        let twice_area = cross(a, b).abs();
+        let r = if twice_area > 0.0 { norm(a) * norm(b) * norm(sub(v[i + 1], v[i - 1])) / (2.0 * twice_area) } else { f64::INFINITY };
+        if r < min_radius_km {
+            let here = TightBend { at: v[i], along_km: s[i], radius_km: r };
+            match out.last_mut() {
+                Some(last) if in_run => {
+                    if r < last.radius_km {
+                        *last = here;
+                    }
+                }
+                _ => out.push(here),
+            }
+            in_run = true;
+        } else {
+            in_run = false;
+        }
+    }
+    out
+}
+
+/// Warnings for curtains whose path bends tighter than half their width:
+/// there the inner edge of the footprint's frame (v = -width / 2 on the
+/// inside of the bend) passes the bend's centre and the band overlaps
+/// itself. A warning, not an error: the bake is still defined, the overlap
+/// is only brighter than intended. Each names the curtain, the place and the
+/// radius (at most three places a curtain, then how many more).
+pub fn bend_warnings(curtains: &[crate::scene::Curtain]) -> Vec<String> {
+    let mut w = Vec::new();
+    for (i, c) in curtains.iter().enumerate() {
+        let Some(points) = &c.path else { continue };
+        let half = 0.5 * c.width;
+        let bends = tight_bends(points, half);
+        for b in bends.iter().take(3) {
+            w.push(format!(
+                "tight bend: curtain[{i}].path bends with a radius of curvature of {:.1} km at ({:.1}, {:.1}) km, {:.1} km along it, below half its width (curtain[{i}].width / 2 = {half} km): the band overlaps itself on the inside of the bend; space the points wider there or narrow the curtain",
+                b.radius_km, b.at[0], b.at[1], b.along_km
+            ));
+        }
+        if bends.len() > 3 {
+            w.push(format!("tight bend: curtain[{i}].path has {} more bends tighter than {half} km", bends.len() - 3));
+        }
+    }
+    w
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Points 30 degrees apart on a circle of radius 20 km (chords of
+    /// 10.35 km, so centripetal is uniform Catmull-Rom here).
+    fn circle() -> Vec<[f64; 2]> {
+        (0..10).map(|k| (k as f64 * 30.0).to_radians()).map(|a| [20.0 * a.cos(), 20.0 * a.sin()]).collect()
+    }
+
+    #[test]
+    fn tight_bends_find_the_radius_and_the_place() {
+        let pts = circle();
+        let chord = 40.0 * 15f64.to_radians().sin();
+        let length = polyline_length(&vertices(&pts));
+        // Inside, the cubic spans stay near the circle (tightest at the
+        // points: 17.0 km there): below a 16 km limit only the end spans are
+        // tight. There the phantom end points (reflections through the
+        // ends) start the curve along the chord, so it turns the span's 30
+        // degrees in about half the distance: a radius near R / 2.
+        let ends = tight_bends(&pts, 16.0);
+        assert_eq!(ends.len(), 2, "{ends:?}");
+        assert!(ends[0].along_km < chord && ends[1].along_km > length - chord, "{ends:?}");
+        assert!(ends.iter().all(|b| b.radius_km > 0.4 * 20.0 && b.radius_km < 0.75 * 20.0), "{ends:?}");
+        // Above 25 km every vertex is tight: one stretch, the whole curve.
+        assert_eq!(tight_bends(&pts, 25.0).len(), 1);
+        // A straight path never bends.
+        assert!(tight_bends(&[[0.0, 0.0], [50.0, 0.0], [100.0, 0.0]], 1e6).is_empty());
+        // A right-angle corner at (100, 0) between two long legs: the
+        // tightest place is at the corner.
+        let b = tight_bends(&[[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]], 30.0);
+        assert_eq!(b.len(), 1, "{b:?}");
+        let d = norm(sub(b[0].at, [100.0, 0.0]));
+        assert!(d < 5.0 && b[0].radius_km < 30.0 && (b[0].along_km - 100.0).abs() < 5.0, "{b:?}");
+    }
+
+    #[test]
+    fn bend_warnings_name_the_curtain_and_the_place() {
+        use crate::scene::Curtain;
+        let tightest = tight_bends(&circle(), 1e3)[0].clone();
+        let narrow = Curtain { path: Some(circle()), width: 1.9 * tightest.radius_km, bend_km: 2.0, ..Curtain::default() };
+        let wide = Curtain { path: Some(circle()), width: 50.0, bend_km: 2.0, ..Curtain::default() };
+        let w = bend_warnings(&[Curtain::default(), narrow, wide]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        let place = format!("{:.1} km at ({:.1}, {:.1}) km", tightest.radius_km, tightest.at[0], tightest.at[1]);
+        assert!(w[0].starts_with("tight bend: curtain[2].path") && w[0].contains("curtain[2].width / 2 = 25 km"), "{}", w[0]);
+        assert!(w[0].contains(&place), "{} lacks {place}", w[0]);
+    }
 
     #[test]
     fn two_points_give_the_straight_segment_and_a_rigid_frame() {

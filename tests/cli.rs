@@ -161,7 +161,7 @@ fn bad_input_exits_2_names_the_problem_and_writes_nothing() {
 
 #[test]
 fn printed_presets_parse_back_to_themselves() {
-    for name in aurora::scene::presets::NAMES {
+    for name in aurora::scene::presets::names() {
         let o = run(&["scene", name]);
         assert!(o.status.success());
         let text = String::from_utf8(o.stdout).unwrap();

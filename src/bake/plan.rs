@@ -32,7 +32,8 @@
 //! composition or the pilot.
 //!
 //! [`super::voxel::resolution_warnings`] flags bakes whose voxels under-resolve the kernel
-//! or the curtains, [`super::density::extinction_warning`] air
+//! or the curtains, [`crate::curve::bend_warnings`] paths bent tighter than half their
+//! curtain's width, [`super::density::extinction_warning`] air
 //! extinction clamped at [`super::density::MAX_EXTINCTION_PER_KM`] (`BakeStats::warnings`; the CLI prints them on
 //! stderr). Emission that overflows f32 is an error, never a file.
 //!
@@ -456,6 +457,7 @@ pub fn trace_and_gather(
     let t = Instant::now();
     let (voxel_km, voxel_source) = plan.voxel_size(&traced.photons);
     let mut w = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
+    w.extend(crate::curve::bend_warnings(&plan.curtains));
     w.append(&mut warnings);
     let emission = gather(plan, &traced.photons, voxel_km, progress);
     let lines = line_grids(plan, &traced.photons, &traced.line_power, voxel_km, progress);

@@ -232,9 +232,12 @@ pub struct ProfileArgs {
 // The arguments of `aurora scene` (its help is the doc of [`Command::Scene`]).
 #[derive(clap::Args)]
 pub struct SceneArgs {
-    /// Preset name (default, seed2014, oval) or a scene file.
+    /// Preset name (`aurora scene --list` names them) or a scene file.
     #[arg(default_value = "default")]
     pub name: String,
+    /// List the presets instead, one a line: the name, then what it shows.
+    #[arg(long, conflicts_with = "schema")]
+    pub list: bool,
     /// Print every scene key's default and allowed range as JSON instead
     /// (the Blender add-on reads a copy: blender/scene_schema.json).
     #[arg(long)]

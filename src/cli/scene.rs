@@ -7,8 +7,13 @@ use super::exit::InputError;
 use super::{load_scene, scene_dir};
 use anyhow::{Context, Result};
 
-/// `aurora scene`: a preset or file with every default filled in, or `--schema`.
+/// `aurora scene`: a preset or file with every default filled in, or
+/// `--list` (the presets) or `--schema`.
 pub fn print(a: SceneArgs) -> Result<()> {
+    if a.list {
+        print!("{}", aurora::scene::presets::list());
+        return Ok(());
+    }
     if a.schema {
         print!("{}", aurora::scene::schema::schema_json());
         return Ok(());

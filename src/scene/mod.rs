@@ -81,7 +81,8 @@ impl Scene {
         Ok(scene)
     }
 
-    /// Reads a scene file, or a preset by name (`default`, `seed2014`).
+    /// Reads a scene file, or a preset by name ([`presets::PRESETS`]); a
+    /// name that is neither is [`SceneError::Unknown`], naming the presets.
     pub fn load(path_or_preset: &str) -> Result<Scene, SceneError> {
         if let Some(s) = presets::by_name(path_or_preset) {
             if !Path::new(path_or_preset).exists() {
@@ -90,8 +91,12 @@ impl Scene {
         }
         // Only a regular file is read (a FIFO or a device is refused, never
         // waited on: `crate::input_file`).
-        let text = crate::input_file::read_to_string(Path::new(path_or_preset))
-            .map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
+        let path = Path::new(path_or_preset);
+        if !path.exists() && path.symlink_metadata().is_err() {
+            return Err(SceneError::Unknown { name: path_or_preset.to_string(), presets: presets::names().collect() });
+        }
+        let text =
+            crate::input_file::read_to_string(path).map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
         Self::from_toml_str(&text, path_or_preset)
     }
 

@@ -91,6 +91,9 @@ pub enum SceneError {
     /// `source`, so `{:#}` does not print it twice).
     #[error("{file}: cannot read: {error}")]
     Io { file: String, error: std::io::Error },
+    /// Neither a file nor a preset: the message names every preset.
+    #[error("{name}: no such file, and no preset of that name (presets: {}; `aurora scene --list` says what each shows)", .presets.join(", "))]
+    Unknown { name: String, presets: Vec<&'static str> },
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
     #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))]

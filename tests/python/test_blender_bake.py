@@ -179,6 +179,25 @@ def test_a_preset_loads_into_the_panel_and_writes_back_the_same_bake(sc, panel, 
     assert len(sc.aurora.curtains) == len(preset["curtain"])
 
 
+def test_the_preset_menu_lists_the_binarys_presets_and_falls_back_without_it(sc, panel, tmp_path, bpy):
+    pm = sub(panel, "panel")
+    out = subprocess.run([aurora_bin(), "scene", "--list"], capture_output=True, text=True, check=True).stdout
+    names = [line.split()[0] for line in out.splitlines()]
+    assert pm.list_presets(str(aurora_bin())) == names
+    forms = {"quiet_arc", "rayed_band", "corona", "pulsating_patches", "type_a_red", "type_b_pink", "surge"}
+    assert forms <= set(names), names
+    # Every listed preset loads into the panel.
+    for name in names:
+        assert bpy.ops.aurora.load_preset(name=name) == {"FINISHED"}, name
+        assert sc.aurora.preset == name
+    # A binary that predates --list (an error exit) or one that cannot run: the fixed names.
+    old = tmp_path / "old-aurora"
+    old.write_text("#!/bin/sh\necho 'unexpected argument --list' >&2\nexit 2\n")
+    old.chmod(0o755)
+    assert pm.list_presets(str(old)) == list(pm.FALLBACK_PRESETS)
+    assert pm.list_presets(str(tmp_path / "missing")) == list(pm.FALLBACK_PRESETS)
+
+
 def test_camera_export_inverts_the_importer_and_honours_sensor_fit(sc, panel, bpy):
     cam_mod, ce, st = sub(panel, "camera"), sub(panel, "camera_export"), sub(panel, "scene_toml")
     c = st.Camera(position=(5.0, -80.0, 2.0), look_at=(0.0, 30.0, 110.0), up=(0.0, 0.0, 1.0), fov_deg=40.0)

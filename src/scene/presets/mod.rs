@@ -1,18 +1,58 @@
 //! Built-in scenes: `default` (three sheets, as in the report's final
-//! image), `seed2014` (the report's final scene parameters) and `oval` (a
-//! 2500 km arc along a circle of magnetic latitude, overhead, for a dome).
+//! image), `seed2014` (the report's final scene parameters), `oval` (a
+//! 2500 km arc along a circle of magnetic latitude, overhead, for a dome)
+//! and the classic auroral forms ([`forms`]: a quiet arc, a rayed band, a corona, pulsating
+//! patches, red type-A and pink type-B aurora, a westward travelling surge).
+//!
+//! Every preset is a [`Preset`] row of [`PRESETS`]: its name (what `aurora
+//! scene NAME` and any scene argument accept), a one-line description
+//! (`aurora scene --list`) and the function that builds its [`Scene`].
 use super::*;
 
-/// Names accepted by `aurora scene NAME` and as a scene argument.
-pub const NAMES: &[&str] = &["default", "seed2014", "oval"];
+pub mod forms;
 
+/// A built-in scene: its name, what it shows, and how it is built.
+#[derive(Clone, Copy, Debug)]
+pub struct Preset {
+    pub name: &'static str,
+    /// One line for `aurora scene --list`: what the scene shows.
+    pub description: &'static str,
+    pub build: fn() -> Scene,
+}
+
+/// Every preset, in the order `aurora scene --list` prints them.
+pub const PRESETS: &[Preset] = &[
+    Preset { name: "default", description: "three curtains seen from the ground, mountains lit by the aurora", build: default_scene },
+    Preset { name: "seed2014", description: "the 2014 report's final scene: 500,000 beams, CSDA, its colour map", build: seed2014 },
+    Preset {
+        name: "oval",
+        description: "a 2500 km arc along a circle of magnetic latitude about a dipole pole, overhead, seen as a dome master",
+        build: oval,
+    },
+    Preset { name: "quiet_arc", description: forms::QUIET_ARC, build: forms::quiet_arc },
+    Preset { name: "rayed_band", description: forms::RAYED_BAND, build: forms::rayed_band },
+    Preset { name: "corona", description: forms::CORONA, build: forms::corona },
+    Preset { name: "pulsating_patches", description: forms::PULSATING_PATCHES, build: forms::pulsating_patches },
+    Preset { name: "type_a_red", description: forms::TYPE_A_RED, build: forms::type_a_red },
+    Preset { name: "type_b_pink", description: forms::TYPE_B_PINK, build: forms::type_b_pink },
+    Preset { name: "surge", description: forms::SURGE, build: forms::surge },
+];
+
+/// The presets' names, in [`PRESETS`] order.
+pub fn names() -> impl Iterator<Item = &'static str> {
+    PRESETS.iter().map(|p| p.name)
+}
+
+/// The preset called `name`, built.
 pub fn by_name(name: &str) -> Option<Scene> {
-    match name {
-        "default" => Some(default_scene()),
-        "seed2014" => Some(seed2014()),
-        "oval" => Some(oval()),
-        _ => None,
-    }
+    PRESETS.iter().find(|p| p.name == name).map(|p| (p.build)())
+}
+
+/// `aurora scene --list`: one line per preset, its name padded to the
+/// longest, two spaces, its description.
+pub fn list() -> String {
+    let w = names().map(str::len).max().unwrap_or(0);
+    PRESETS.iter().map(|p| format!("{:w$}  {}\n", p.name, p.description)).collect()
 }
 
 /// The report's colour map (defined beside [`ColourParams`], whose default it is).
@@ -162,12 +202,31 @@ mod tests {
     use super::*;
     #[test]
     fn presets_validate_and_round_trip_through_toml() {
-        for name in presets::NAMES {
+        let names: Vec<&str> = presets::names().collect();
+        assert!(names.len() >= 9, "{names:?}");
+        for name in names {
             let s = presets::by_name(name).unwrap();
             s.validate(name, None).unwrap();
             let text = s.to_toml();
             let back = Scene::from_toml_str(&text, name).unwrap();
             assert_eq!(back, s, "{name}");
         }
+    }
+
+    #[test]
+    fn names_are_distinct_and_the_list_has_one_line_each() {
+        let names: Vec<&str> = presets::names().collect();
+        let mut sorted = names.clone();
+        sorted.sort();
+        sorted.dedup();
+        assert_eq!(sorted.len(), names.len(), "{names:?}");
+        let list = presets::list();
+        let lines: Vec<&str> = list.lines().collect();
+        assert_eq!(lines.len(), names.len());
+        for (line, p) in lines.iter().zip(presets::PRESETS) {
+            assert_eq!(line.split_whitespace().next(), Some(p.name));
+            assert!(line.ends_with(p.description) && !p.description.is_empty(), "{line}");
+        }
+        assert!(presets::by_name("no_such_preset").is_none());
     }
 }

@@ -1,0 +1,330 @@
+//! The classic auroral forms as presets, each a scene whose numbers come
+//! from what the form is observed to be, with a camera set for its picture.
+//!
+//! What sets each form apart is the electrons' spectrum (how deep they
+//! reach, and so which lines dominate), the footprint's shape (how thin,
+//! how folded, how broken into rays) and where it is seen from:
+//!
+//! | preset | E0 (keV) | energy flux (mW/m^2) | footprint | seen from |
+//! |---|---|---|---|---|
+//! | `quiet_arc` | 3 | 3 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
+//! | `rayed_band` | 5 | 15 | folded band, start heights broken into rays | the ground, 150 km south |
+//! | `corona` | 4-6 | 15-30 | four rayed bands overhead | the ground beneath, looking up the field |
+//! | `pulsating_patches` | 10 | 2 | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
+//! | `type_a_red` | 0.15 | 10 | a band high up, soft spectrum | the ground, 240 km south |
+//! | `type_b_pink` | 25 | 30 | a folded band, hard spectrum | the ground, 220 km south |
+//! | `surge` | 6 | 25 | an arc curling into a spiral at its western end | 700 km up, to the south |
+//!
+//! Energies and fluxes: a few eV to 1 keV lights the red above 200 km, about
+//! 1 keV the yellow-green, above 10 keV electrons reach below 100 km
+//! (Physics Today 61(7):68, 2008); 1 mW/m^2 of 3 keV electrons gives about
+//! 1 kR of 557.7 nm (weak aurora), bright displays tens of kR. Arcs are
+//! 100 m to 10 km thick and can be over 1000 km long (Borovsky 1993,
+//! J. Geophys. Res. 98(A4), 6101: the compilation of measured arc
+//! thicknesses). The field's dip is the default 78 degrees (northern
+//! Scandinavia), so the magnetic zenith lies 12 degrees south of the zenith.
+//!
+//! Every preset bakes in under a minute at its own size on two cores
+//! (beam counts of 12,000-16,000, footprints of at most 512 x 128 cells
+//! per curtain, voxels of 0.4-1 km); the numbers each form takes are in its
+//! function's documentation.
+
+use super::super::*;
+use super::default_scene;
+
+/// A perspective camera at `position` looking at `look_at`, z up.
+fn camera(position: [f64; 3], look_at: [f64; 3], fov_deg: f64) -> Camera {
+    Camera { position, look_at, up: [0.0, 0.0, 1.0], projection: Projection::Perspective, fov_deg, ortho_height: 10.0 }
+}
+
+/// The scene every form starts from: the default's keys, a star field, a
+/// flat dark ground lit by the aurora, and the given curtains.
+fn base(seed: u64, curtains: Vec<Curtain>) -> Scene {
+    Scene {
+        seed,
+        curtains,
+        background: Background { stars: true, ..Background::default() },
+        terrain: Terrain { kind: TerrainKind::Plane, ..Terrain::default() },
+        ..default_scene()
+    }
+}
+
+pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 km long, low over the northern horizon";
+
+/// A quiet homogeneous arc. Quiet arcs are the aurora of the evening before
+/// a substorm: long (here a 1000 km path with a 1600 km radius of
+/// curvature, east-west), thin (a band of 0.12 x 24 km = 3 km, within
+/// Borovsky 1993's 0.1-10 km), structureless (folds and the start-height
+/// noise all but off: `velocity_amplitude` 0.3, `top_noise_km` 1) and weak
+/// (3 mW/m^2 of E0 = 3 keV electrons: a few kR of 557.7 nm, the lower
+/// border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
+/// drift. Seen from 300 km south, its lower border 20 degrees up.
+pub fn quiet_arc() -> Scene {
+    let arc = Curtain {
+        path: Some(vec![[-500.0, 0.0], [-250.0, 60.0], [0.0, 80.0], [250.0, 60.0], [500.0, 0.0]]),
+        width: 24.0,
+        energy_flux: 3.0,
+        char_energy_kev: 3.0,
+        soft_fraction: 0.02,
+        bend_km: 2.0,
+        ..Curtain::default()
+    };
+    let mut s = base(1, vec![arc]);
+    s.footprint.resolution = [512, 64];
+    s.footprint.band_fraction = 0.12;
+    s.footprint.velocity_amplitude = 0.3;
+    s.footprint.velocity_waves = 2.0;
+    s.footprint.density_waves = 0.0;
+    s.beams.count = 16_000;
+    s.beams.top_noise_km = 1.0;
+    s.beams.top_noise_freq = 0.05;
+    s.photons.radius_km = 0.8;
+    s.grid.voxel_size = VoxelSize::Km(0.5);
+    s.camera = camera([0.0, -300.0, 0.5], [0.0, 80.0, 75.0], 45.0);
+    s.render.exposure = 0.5;
+    s.animation.fold_speed_kms = 0.5;
+    s.animation.drift_km = 2.0;
+    s.animation.ray_speed_kms = 1.0;
+    s
+}
+
+pub const RAYED_BAND: &str = "a rayed band: a folded active band broken into field-aligned rays, seen from the south";
+
+/// A rayed band: an active arc broken into rays, each a bundle of field
+/// lines lit from its own start height. The start heights vary by 30 km
+/// over about 1.4 km along the band (`top_noise_km` 30 at 0.7 / km), the
+/// beams are hardly deflected (alpha_D 2 degrees), so each ray stays a
+/// thin streak along the field; the band folds (`velocity_amplitude` 3,
+/// 8 waves) and is bright (15 mW/m^2 of E0 = 5 keV: tens of kR). Rays run
+/// along the band at 15 km/s (observed up to about 25 km/s).
+pub fn rayed_band() -> Scene {
+    let band = Curtain {
+        path: Some(vec![[-180.0, 20.0], [-60.0, 50.0], [60.0, 35.0], [180.0, 60.0]]),
+        width: 40.0,
+        energy_flux: 15.0,
+        char_energy_kev: 5.0,
+        bend_km: 6.0,
+        ..Curtain::default()
+    };
+    let mut s = base(2, vec![band]);
+    s.footprint.velocity_amplitude = 3.0;
+    s.footprint.velocity_waves = 8.0;
+    s.footprint.density_waves = 14.0;
+    s.beams.count = 12_000;
+    s.beams.top_noise_km = 30.0;
+    s.beams.top_noise_freq = 0.7;
+    s.beams.alpha_d_deg = 2.0;
+    s.beams.delta_alpha_deg = 1.0;
+    s.photons.radius_km = 0.4;
+    s.grid.voxel_size = VoxelSize::Km(0.4);
+    s.camera = camera([0.0, -150.0, 0.5], [0.0, 40.0, 100.0], 60.0);
+    s.render.exposure = 1.0;
+    s.animation.ray_speed_kms = 15.0;
+    s
+}
+
+pub const CORONA: &str = "a corona: rayed bands overhead, seen from beneath, the rays converging on the magnetic zenith";
+
+/// A corona: rays are field lines, and parallel lines seen in perspective
+/// meet at their vanishing point, the magnetic zenith (the direction -B,
+/// here 12 degrees south of the zenith; `tests/corona.rs` finds it in the
+/// image). Four rayed bands (as [`rayed_band`], 15-30 mW/m^2 of 4-6 keV)
+/// lie across the sky from 60 km south to 60 km north of the observer,
+/// who looks up the field line through a 180-degree fisheye (north at the
+/// top of the image): the rays fan out from one point, as at the height of
+/// a substorm's breakup.
+pub fn corona() -> Scene {
+    let band = |y: f64, flux: f64, e0: f64, seed: u64| Curtain {
+        path: Some(vec![[-160.0, y - 8.0], [-50.0, y + 6.0], [50.0, y - 4.0], [160.0, y + 8.0]]),
+        width: 30.0,
+        energy_flux: flux,
+        char_energy_kev: e0,
+        bend_km: 5.0,
+        seed,
+        ..Curtain::default()
+    };
+    let mut s = base(3, vec![band(-60.0, 15.0, 4.0, 1), band(-20.0, 30.0, 6.0, 2), band(20.0, 25.0, 5.0, 3), band(60.0, 15.0, 4.0, 4)]);
+    s.footprint.resolution = [512, 96];
+    s.footprint.velocity_amplitude = 3.0;
+    s.footprint.velocity_waves = 8.0;
+    s.footprint.density_waves = 14.0;
+    s.beams.count = 16_000;
+    s.beams.top_noise_km = 40.0;
+    s.beams.top_noise_freq = 0.6;
+    s.beams.alpha_d_deg = 2.0;
+    s.beams.delta_alpha_deg = 1.0;
+    s.photons.radius_km = 0.5;
+    s.grid.voxel_size = VoxelSize::Km(0.5);
+    // Up the field line: -B = (0, -cos I, sin I) at declination 0.
+    let dip = s.beams.b_inclination_deg.to_radians();
+    s.camera = Camera {
+        position: [0.0, 0.0, 0.3],
+        look_at: [0.0, -100.0 * dip.cos(), 0.3 + 100.0 * dip.sin()],
+        up: [0.0, 1.0, 0.0],
+        projection: Projection::Fisheye,
+        fov_deg: 180.0,
+        ortho_height: 10.0,
+    };
+    s.render.width = 512;
+    s.render.height = 512;
+    s.render.exposure = 0.0;
+    s.terrain.kind = TerrainKind::None;
+    s.animation.ray_speed_kms = 15.0;
+    s
+}
+
+pub const PULSATING_PATCHES: &str = "pulsating patches: diffuse hard aurora overhead, 40 km patches blinking with 4-12 s periods";
+
+/// Pulsating aurora: diffuse patches tens of km across that switch on and
+/// off with periods of 2-20 s, most often 6-10 s (Royrvik & Davis 1977,
+/// J. Geophys. Res. 82(29), 4720; Lessard 2012, "A review of pulsating
+/// aurora", AGU Monograph 197), in the morning sector after a substorm.
+/// Their electrons are hard (10-100 keV: Johnstone 1978) and the energy
+/// flux small (a few mW/m^2), so the patches are faint and low (lower
+/// border near 95 km). Here: a broad diffuse band (200 km wide, 60 % of it
+/// lit, barely folded), 2 mW/m^2 of E0 = 10 keV, `animation.pulsation` 0.9
+/// on 40 km patches with periods drawn in 4-12 s; seen from beneath,
+/// looking up through a 100-degree view.
+pub fn pulsating_patches() -> Scene {
+    let diffuse = Curtain {
+        center: [0.0, 60.0],
+        length: 300.0,
+        width: 200.0,
+        energy_flux: 2.0,
+        char_energy_kev: 10.0,
+        soft_fraction: 0.05,
+        bend_km: 10.0,
+        ..Curtain::default()
+    };
+    let mut s = base(4, vec![diffuse]);
+    s.footprint.resolution = [256, 128];
+    s.footprint.band_fraction = 0.6;
+    s.footprint.velocity_amplitude = 0.5;
+    s.footprint.velocity_waves = 3.0;
+    s.footprint.density_waves = 4.0;
+    s.beams.count = 12_000;
+    s.beams.top_noise_km = 0.0;
+    s.photons.radius_km = 1.5;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s.camera = Camera { up: [0.0, 1.0, 0.0], ..camera([0.0, 20.0, 0.5], [0.0, 30.0, 100.0], 100.0) };
+    s.render.exposure = 0.5;
+    s.animation.pulsation = 0.9;
+    s.animation.pulsation_patch_km = 40.0;
+    s.animation.pulsation_period_s = [4.0, 12.0];
+    s.animation.fold_speed_kms = 0.3;
+    s.animation.drift_km = 2.0;
+    s.animation.ray_speed_kms = 0.0;
+    s
+}
+
+pub const TYPE_A_RED: &str = "a red type-A aurora: a soft spectrum (E0 0.15 keV) lighting OI 630 nm at 200-400 km";
+
+/// A type-A aurora (the IAGA classification's red upper border): soft
+/// electrons, 0.1-0.5 keV, stop above 200 km, where O(1D) lives long
+/// enough (110-130 s) to radiate 630.0 / 636.4 nm before a collision
+/// quenches it; the display is red, high (250-450 km) and tall. Here:
+/// 10 mW/m^2, half of it at E0 = 0.05 keV and half at 0.15 keV, beams
+/// starting at 500 km (above where the softest deposit), seen from 240 km
+/// south.
+pub fn type_a_red() -> Scene {
+    let band = Curtain {
+        path: Some(vec![[-200.0, 60.0], [0.0, 90.0], [200.0, 60.0]]),
+        width: 50.0,
+        energy_flux: 10.0,
+        char_energy_kev: 0.15,
+        soft_fraction: 0.5,
+        soft_energy_kev: 0.05,
+        bend_km: 8.0,
+        ..Curtain::default()
+    };
+    let mut s = base(5, vec![band]);
+    s.footprint.band_fraction = 0.15;
+    s.footprint.velocity_amplitude = 1.5;
+    s.beams.count = 10_000;
+    s.beams.top_km = 500.0;
+    s.beams.top_noise_km = 15.0;
+    s.beams.top_noise_freq = 0.2;
+    s.photons.radius_km = 1.0;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s.camera = camera([0.0, -150.0, 0.5], [0.0, 90.0, 180.0], 70.0);
+    s.render.exposure = 0.0;
+    s
+}
+
+pub const TYPE_B_PINK: &str = "a hard type-B aurora: E0 25 keV electrons reach 85-95 km, a pink N2 lower border under the green";
+
+/// A type-B aurora: hard electrons (tens of keV) reach 85-95 km, where
+/// O(1S) is quenched by O2 before it emits 557.7 nm and what is left is
+/// the N2 first positive bands (red) and the N2+ first negative (violet):
+/// a pink or magenta lower border under the green, in bright active
+/// displays. Here: 30 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV), a
+/// folded band seen nearly edge-on from 220 km south, so the lower border
+/// shows as a line under the green.
+pub fn type_b_pink() -> Scene {
+    let band = Curtain {
+        path: Some(vec![[-150.0, 40.0], [-50.0, 60.0], [50.0, 50.0], [150.0, 70.0]]),
+        width: 40.0,
+        energy_flux: 30.0,
+        char_energy_kev: 25.0,
+        soft_fraction: 0.03,
+        bend_km: 6.0,
+        ..Curtain::default()
+    };
+    let mut s = base(6, vec![band]);
+    s.footprint.velocity_amplitude = 2.0;
+    s.footprint.density_waves = 10.0;
+    s.beams.count = 12_000;
+    s.beams.top_noise_km = 12.0;
+    s.beams.top_noise_freq = 0.5;
+    s.photons.radius_km = 0.4;
+    s.grid.voxel_size = VoxelSize::Km(0.4);
+    s.camera = camera([0.0, -160.0, 0.5], [0.0, 60.0, 95.0], 60.0);
+    s.render.exposure = 1.5;
+    s
+}
+
+pub const SURGE: &str = "a westward travelling surge: a bright arc curling into a spiral at its western end, seen from above";
+
+/// A westward travelling surge: at a substorm's onset the arc brightens and
+/// its western end rolls up into a bright fold, the surge head, which
+/// travels westward at 1-2 km/s (Akasofu 1964, Planet. Space Sci. 12, 273;
+/// the surge is the western edge of the substorm's bulge). Here: one arc
+/// from 400 km east to a hook 190 km west that curls poleward and back
+/// east (radius of curvature about 40 km, above the width's half, 15 km),
+/// 25 mW/m^2 of E0 = 6 keV (the inverted-V electrons of a substorm arc),
+/// folds running westward along it at 2 km/s; seen as an imager in orbit
+/// sees it, from 700 km up and 700 km south.
+pub fn surge() -> Scene {
+    let arc = Curtain {
+        path: Some(vec![
+            [400.0, -20.0],
+            [200.0, -5.0],
+            [0.0, 10.0],
+            [-120.0, 30.0],
+            [-190.0, 80.0],
+            [-170.0, 150.0],
+            [-100.0, 170.0],
+            [-50.0, 130.0],
+        ]),
+        width: 30.0,
+        energy_flux: 25.0,
+        char_energy_kev: 6.0,
+        bend_km: 4.0,
+        ..Curtain::default()
+    };
+    let mut s = base(7, vec![arc]);
+    s.footprint.velocity_amplitude = 2.0;
+    s.footprint.velocity_waves = 10.0;
+    s.footprint.density_waves = 12.0;
+    s.beams.count = 14_000;
+    s.beams.top_noise_km = 10.0;
+    s.photons.radius_km = 0.8;
+    s.grid.voxel_size = VoxelSize::Km(0.8);
+    s.camera = camera([0.0, -700.0, 750.0], [30.0, 80.0, 130.0], 40.0);
+    s.render.exposure = 1.0;
+    s.background.stars = false;
+    s.terrain.albedo = [0.15, 0.15, 0.15];
+    s.animation.fold_speed_kms = 2.0;
+    s.animation.bend_speed_kms = 2.0;
+    s
+}

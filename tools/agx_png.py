@@ -1,0 +1,43 @@
+#!/usr/bin/env python3
+"""A linear EXR through Blender's own AgX view for an sRGB display, as an 8-bit PNG.
+
+    .venv/bin/python tools/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS]
+
+Blender's colour management (display sRGB, view AgX, look None, no dither),
+the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
+a Cycles render and an `aurora render` PNG of the same scene are shown alike.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("exr", help="linear OpenEXR (RGB or RGBA)")
+    p.add_argument("png", help="output PNG")
+    p.add_argument("--exposure", type=float, default=0.0, help="stops, as [render] exposure (default 0)")
+    a = p.parse_args(argv)
+    if not Path(a.exr).is_file():
+        print(f"agx_png: error: {a.exr}: no such file", file=sys.stderr)
+        return 2
+    import bpy
+
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    img = bpy.data.images.load(str(Path(a.exr).resolve()))
+    sc = bpy.context.scene
+    sc.display_settings.display_device = "sRGB"
+    vs = sc.view_settings
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = "AgX", "None", a.exposure, 1.0
+    sc.render.dither_intensity = 0.0
+    s = sc.render.image_settings
+    s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"
+    img.save_render(str(Path(a.png).resolve()), scene=sc)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
