@@ -21,6 +21,7 @@ pub mod chemistry;
 pub mod csda;
 pub mod curve;
 pub mod deposit;
+pub mod extinction;
 pub mod fang;
 pub mod footprint;
 pub mod frames;

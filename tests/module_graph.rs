@@ -53,6 +53,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "spectrum",
             "lifetime",
             "lines",
+            "extinction",
             "camera",
             "grid",
             "magnetic",

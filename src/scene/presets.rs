@@ -38,6 +38,7 @@ pub fn default_scene() -> Scene {
         render: RenderParams::default(),
         volume: VolumeParams::default(),
         background: Background::default(),
+        sky: SkyParams::default(),
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
         animation: AnimationParams::default(),
         atmosphere: AtmosphereParams::default(),
