@@ -2,7 +2,8 @@
 
 `setup_scene_from_toml(path, vdb=...)` gives the same picture as
 `aurora render path --vdb ...`: camera, resolution and pixel footprint,
-volume material with the file's density/emission scales, background seen only
+volume material with the file's density/emission scales and the sky's air
+(air.py: the emission dimmed towards each camera ray), background seen only
 by camera rays, terrain (plane or heightfield OBJ), and the Cycles settings of
 render_settings.py. The pixel footprint follows the scene's `render.spp`
 (1: pixel centres; more: the pixel square); the number of Cycles samples is
@@ -16,6 +17,7 @@ from pathlib import Path
 
 import bpy
 
+from .air import line_depths, weights
 from .camera import build_camera
 from .emission_lights import build_emission_lights, emission_clusters
 from .render_settings import CyclesSettings, configure_cycles, set_scene_units
@@ -35,6 +37,16 @@ class AuroraScene:
     settings: CyclesSettings
     #: Point lights standing in for the emission (terrain_lighting "lights").
     lights: list
+
+
+def camera_air(spec: SceneSpec):
+    """The air as the camera sees it (air.py), or None with `sky.extinction`
+    off: each line's zenith depth above the camera and the channel weights.
+    The observer's altitude is the camera's z (flat ground, up +z), as in
+    `aurora render`."""
+    if not spec.sky.extinction:
+        return None
+    return line_depths(spec.sky, spec.camera.position[2]), weights()
 
 
 def setup_scene_from_toml(
@@ -82,7 +94,7 @@ def setup_scene_from_toml(
     lights = []
     if vdb is not None:
         vols = import_aurora(vdb, spec.volume.density_scale, spec.volume.emission_scale, scene=scene,
-                             pad_dir=pad_dir)
+                             pad_dir=pad_dir, air=camera_air(spec))
     if ter is not None and settings.terrain_lighting == "lights":
         for obj in vols:
             if "emission" not in {g.name for g in obj.data.grids}:

@@ -286,3 +286,50 @@ fn extinction_off_ignores_the_other_sky_keys() {
     let c = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
     assert_ne!(a.pixels, c.pixels);
 }
+
+/// `blender/extinction.json`: what the add-on needs to apply the same air
+/// in Cycles (blender/air.py): per line its sea-level Rayleigh depth, its
+/// ozone depth per Dobson unit and the wavelengths its aerosol depth is
+/// averaged over; each channel's weights over the lines; and, as the
+/// add-on's test oracle, the transmittance per channel at a few
+/// elevations for the default sky at two observer altitudes. Regenerated
+/// with `AURORA_UPDATE_DOCS=1 cargo test --release --test extinction`.
+#[test]
+fn committed_addon_table_matches_the_library() {
+    use aurora::spectrum::{LINES, N2_1P, N2_1P_BANDS_NM};
+    use serde_json::{json, Value};
+    let air = default_air();
+    let per_du = Air { ozone_du: 1.0, ..air };
+    let lines: Vec<Value> = (0..aurora::lines::N_LINES)
+        .map(|i| {
+            let d = per_du.line_depths(i);
+            let wl: Vec<f64> = if LINES[i] == N2_1P { N2_1P_BANDS_NM.to_vec() } else { vec![LINES[i].lambda_nm] };
+            json!({"name": LINES[i].name, "rayleigh": d.rayleigh, "ozone_per_du": d.ozone, "aerosol_wavelengths_nm": wl})
+        })
+        .collect();
+    let mut checks = Vec::new();
+    for z in [0.0, 1.0] {
+        let ext = Extinction::for_observer(air, DVec3::new(0.0, 0.0, z), None);
+        for e in [90.0f64, 30.0, 10.0, 2.0] {
+            let dir = DVec3::new(e.to_radians().cos(), 0.0, e.to_radians().sin());
+            checks.push(json!({"observer_km": z, "elevation_deg": e, "transmittance": ext.towards(dir)}));
+        }
+    }
+    let doc = json!({
+        "reference_mix": REFERENCE_MIX,
+        "weights": aurora::extinction::channel_weights(),
+        "lines": lines,
+        "checks": checks,
+    });
+    let text = serde_json::to_string_pretty(&doc).expect("serialises") + "\n";
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/extinction.json");
+    if std::env::var_os("AURORA_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &text).expect("write blender/extinction.json");
+        return;
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(
+        committed == text,
+        "blender/extinction.json is stale: regenerate it with\n    AURORA_UPDATE_DOCS=1 cargo test --release --test extinction"
+    );
+}
