@@ -25,7 +25,10 @@
 //! with `P = W h^3 = int Y(e) dV`, is unbiased.
 //!
 //! Background radiance does not light the terrain: it is only what camera
-//! rays see behind everything.
+//! rays see behind everything. With `[sky] extinction` each sample is also
+//! dimmed by the air between the terrain point and the aurora
+//! (`crate::extinction::Extinction::towards_from`: the air-mass law with the
+//! column above the point).
 //!
 //! The transmittance `T(x, y)` of a shadow ray is itself estimated, by ratio
 //! tracking against the medium's largest sigma_t ([`transmittance_ratio_tracking`]):

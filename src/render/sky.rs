@@ -32,8 +32,8 @@
 //!
 //! Stars are points: each adds its flux to the one pixel whose area holds
 //! its projection, as radiance `E T / Omega_p` (`Omega_p` the pixel's solid
-//! angle, from the camera; `T` the volume's transmittance towards the star,
-//! 0 behind terrain), so they stay one pixel wide and keep their flux at
+//! angle, from the camera; `T` the volume's transmittance towards the star
+//! times the air's per channel with `[sky] extinction`, 0 behind terrain), so they stay one pixel wide and keep their flux at
 //! any resolution. An orthographic camera sees no stars (its pixels have no
 //! solid angle). Same seed, same stars; the pixel sums are done star by
 //! star in a fixed order after the pixel loop, so the image does not
