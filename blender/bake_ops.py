@@ -14,7 +14,7 @@ sequence and loads it as Blender's volume sequence.
 After a bake the Volume object that showed this output folder before (the
 object whose `aurora_bake_dir` names it) is replaced by the new one, under
 the same name, with the aurora material (volume_import.py) at the panel's
-`[volume]` scales.
+`[volume]` scales and its `[sky]` air (air.py).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from pathlib import Path
 import bpy
 from bpy.props import BoolProperty
 
+from .air import line_depths, weights
 from .bake_job import BakeError, BakeJob, Event, find_binary
 from .camera_export import CameraExportError
 from .curve_path import CurvePathError
@@ -81,6 +82,17 @@ def latest_progress(events: list[Event]) -> Event | None:
     return None
 
 
+def panel_air(scene: bpy.types.Scene):
+    """The panel's `[sky]` air as the active camera sees it (air.py; the
+    camera's z is the observer's altitude, as in `aurora render`), or None
+    with `extinction` off."""
+    sky = scene.aurora.sky
+    if not sky.extinction:
+        return None
+    z = scene.camera.matrix_world.translation.z if scene.camera is not None else 0.0
+    return line_depths(sky, z), weights()
+
+
 def load_result(scene: bpy.types.Scene, job: BakeJob) -> list[bpy.types.Object]:
     """Show the new bake: the Volume object that showed `job.output_dir`
     keeps its identity (name, collections, parent, selection) and gets the
@@ -88,7 +100,8 @@ def load_result(scene: bpy.types.Scene, job: BakeJob) -> list[bpy.types.Object]:
     key = str(job.output_dir)
     old = [o for o in scene.objects if o.get("aurora_bake_dir") == key and o.type == "VOLUME"]
     vol = scene.aurora.volume
-    fresh = import_aurora(job.result_file(), vol.density_scale, vol.emission_scale, scene=scene, name=VOLUME_NAME)
+    fresh = import_aurora(job.result_file(), vol.density_scale, vol.emission_scale, scene=scene, name=VOLUME_NAME,
+                          air=panel_air(scene))
     if not old:
         for obj in fresh:
             obj["aurora_bake_dir"] = key

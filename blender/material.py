@@ -19,6 +19,10 @@ T(s) = exp(-integral_0^s sigma_t). Built from one Principled Volume
 - Blackbody Intensity = 0, or Cycles adds blackbody light.
 With `scattering_albedo` a > 0, Color = a: sigma_s = a sigma_t,
 sigma_a = (1 - a) sigma_t; sigma_t is unchanged.
+With `air` (`[sky] extinction`, air.py), the emission is multiplied by the
+air's transmittance towards the camera ray's direction,
+T_c = sum_i w_ic exp(-tau_i X(e)), sin e = -Incoming.z (the Geometry node's
+Incoming points back along the ray), as `aurora render` applies it.
 
 Terrain: Lambertian diffuse with the albedo (roughness 0 is Lambert in
 Cycles), plus an almost-1 holdout so that the film alpha of camera rays
@@ -49,12 +53,16 @@ def volume_material(
     has_emission: bool = True,
     scattering_albedo=0.0,
     anisotropy: float = 0.0,
+    air=None,
 ) -> bpy.types.Material:
     """A material for a Volume object holding `density` and/or `emission`.
 
     A missing `density` grid gives Density 0 (Principled would otherwise fill
     the padded bounds with its constant Density); a missing `emission` grid
-    gives Emission Strength 0.
+    gives Emission Strength 0. `air`: None, or (tau, weights, up) with tau the
+    zenith depth above the camera of each line, weights[c][i] channel c's
+    share of line i (air.py) and up the camera's local vertical, dimming the
+    emission as seen by camera rays.
     """
     if density_scale < 0 or emission_scale < 0:
         raise ValueError("density_scale and emission_scale must be >= 0")
@@ -80,7 +88,10 @@ def volume_material(
         attr.location = (-250, -200)
         attr.attribute_type = "GEOMETRY"
         attr.attribute_name = "emission"
-        tree.links.new(attr.outputs["Color"], pv.inputs["Emission Color"])
+        colour = attr.outputs["Color"]
+        if air is not None:
+            colour = _air_transmittance(tree, colour, *air)
+        tree.links.new(colour, pv.inputs["Emission Color"])
     out = tree.nodes.new("ShaderNodeOutputMaterial")
     out.location = (300, 0)
     out.target = "ALL"
@@ -90,6 +101,55 @@ def volume_material(
     mat["aurora_density_scale"] = float(density_scale)
     mat["aurora_emission_scale"] = float(emission_scale)
     return mat
+
+
+def _math(tree, op, a, b=None, clamp=False):
+    n = tree.nodes.new("ShaderNodeMath")
+    n.operation = op
+    n.use_clamp = clamp
+    for k, v in enumerate((a, b)):
+        if v is None:
+            continue
+        if isinstance(v, (int, float)):
+            n.inputs[k].default_value = float(v)
+        else:
+            tree.links.new(v, n.inputs[k])
+    return n.outputs["Value"]
+
+
+def _air_transmittance(tree, colour, tau, weights, up=(0.0, 0.0, 1.0)):
+    """`colour` times T_c of the ray's direction (see the module doc); `up`
+    is the camera's local vertical."""
+    geo = tree.nodes.new("ShaderNodeNewGeometry")
+    dot = tree.nodes.new("ShaderNodeVectorMath")
+    dot.operation = "DOT_PRODUCT"
+    tree.links.new(geo.outputs["Incoming"], dot.inputs[0])
+    dot.inputs[1].default_value = tuple(float(u) for u in up)
+    # sin e = -Incoming . up, clamped to [0, 1]: below the horizon, the horizon.
+    sin_e = _math(tree, "MULTIPLY", dot.outputs["Value"], -1.0, clamp=True)
+    e_deg = _math(tree, "DEGREES", _math(tree, "ARCSINE", sin_e))
+    term = _math(tree, "MULTIPLY", _math(tree, "POWER", _math(tree, "ADD", e_deg, 6.07995), -1.6364), 0.50572)
+    x = _math(tree, "DIVIDE", 1.0, _math(tree, "ADD", term, sin_e))
+    acc = None
+    for i, t in enumerate(tau):
+        ti = _math(tree, "EXPONENT", _math(tree, "MULTIPLY", x, -float(t)))
+        v = tree.nodes.new("ShaderNodeVectorMath")
+        v.operation = "SCALE"
+        v.inputs["Vector"].default_value = tuple(float(weights[c][i]) for c in range(3))
+        tree.links.new(ti, v.inputs["Scale"])
+        if acc is None:
+            acc = v.outputs["Vector"]
+        else:
+            add = tree.nodes.new("ShaderNodeVectorMath")
+            add.operation = "ADD"
+            tree.links.new(acc, add.inputs[0])
+            tree.links.new(v.outputs["Vector"], add.inputs[1])
+            acc = add.outputs["Vector"]
+    mul = tree.nodes.new("ShaderNodeVectorMath")
+    mul.operation = "MULTIPLY"
+    tree.links.new(colour, mul.inputs[0])
+    tree.links.new(acc, mul.inputs[1])
+    return mul.outputs["Vector"]
 
 
 def terrain_material(name: str, albedo, volume_alpha: bool = True) -> bpy.types.Material:

@@ -2,7 +2,8 @@
 
 `setup_scene_from_toml(path, vdb=...)` gives the same picture as
 `aurora render path --vdb ...`: camera, resolution and pixel footprint,
-volume material with the file's density/emission scales, background seen only
+volume material with the file's density/emission scales and the sky's air
+(air.py: the emission dimmed towards each camera ray), background seen only
 by camera rays, terrain (plane or heightfield OBJ), and the Cycles settings of
 render_settings.py. The pixel footprint follows the scene's `render.spp`
 (1: pixel centres; more: the pixel square); the number of Cycles samples is
@@ -11,11 +12,13 @@ separate (Cycles needs many more than the reference raymarcher).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import bpy
 
+from .air import line_depths, weights
 from .camera import build_camera
 from .emission_lights import build_emission_lights, emission_clusters
 from .render_settings import CyclesSettings, configure_cycles, set_scene_units
@@ -35,6 +38,25 @@ class AuroraScene:
     settings: CyclesSettings
     #: Point lights standing in for the emission (terrain_lighting "lights").
     lights: list
+
+
+def camera_air(spec: SceneSpec):
+    """The air as the camera sees it (air.py), or None with `sky.extinction`
+    off: each line's zenith depth above the camera, the channel weights and
+    the camera's local up. On a round Earth (`earth.radius_km` > 0, centre
+    (0, 0, -R)) the camera's altitude is its distance from the centre minus
+    R and its up the radial direction; on flat ground its z and +z, as in
+    `aurora render` (`Extinction::for_observer_at`)."""
+    if not spec.sky.extinction:
+        return None
+    x, y, z = spec.camera.position
+    r = spec.earth.radius_km
+    if r > 0.0:
+        d = math.sqrt(x * x + y * y + (z + r) ** 2)
+        altitude, up = d - r, (x / d, y / d, (z + r) / d)
+    else:
+        altitude, up = z, (0.0, 0.0, 1.0)
+    return line_depths(spec.sky, altitude), weights(), up
 
 
 def setup_scene_from_toml(
@@ -82,7 +104,7 @@ def setup_scene_from_toml(
     lights = []
     if vdb is not None:
         vols = import_aurora(vdb, spec.volume.density_scale, spec.volume.emission_scale, scene=scene,
-                             pad_dir=pad_dir)
+                             pad_dir=pad_dir, air=camera_air(spec))
     if ter is not None and settings.terrain_lighting == "lights":
         for obj in vols:
             if "emission" not in {g.name for g in obj.data.grids}:

@@ -1,8 +1,8 @@
 """The render-relevant part of an aurora scene file, read without bpy.
 
 `aurora render` and the Blender side must agree on the camera, the film,
-the volume scales, the background and the terrain. This module reads those
-five tables of the scene TOML into plain dataclasses. `src/scene/` is the
+the volume scales, the background, the terrain and the sky's air. This module reads those
+six tables of the scene TOML into plain dataclasses. `src/scene/` is the
 authority: the defaults and ranges below come from its schema
 (`aurora scene --schema`, committed as scene_schema.json next to this file
 and checked against the binary by tests/schema.rs), not restated here. The bake tables
@@ -86,6 +86,23 @@ class Background:
 
 
 @dataclass(frozen=True)
+class Sky:
+    #: The air between the aurora and the camera (air.py): on by default.
+    extinction: bool = _default("sky", "extinction")
+    ozone_du: float = _default("sky", "ozone_du")
+    aerosol_optical_depth: float = _default("sky", "aerosol_optical_depth")
+    angstrom: float = _default("sky", "angstrom")
+    aerosol_scale_height_km: float = _default("sky", "aerosol_scale_height_km")
+
+
+@dataclass(frozen=True)
+class Earth:
+    #: The sphere the camera stands on, centre (0, 0, -radius_km); 0 is flat
+    #: ground. The air's altitude and local up at the camera follow it.
+    radius_km: float = _default("earth", "radius_km")
+
+
+@dataclass(frozen=True)
 class Terrain:
     #: A scene file without [terrain] gets aurora's default scene terrain.
     kind: str = _default("terrain", "kind")
@@ -102,6 +119,8 @@ class SceneSpec:
     volume: Volume = field(default_factory=Volume)
     background: Background = field(default_factory=Background)
     terrain: Terrain = field(default_factory=Terrain)
+    sky: Sky = field(default_factory=Sky)
+    earth: Earth = field(default_factory=Earth)
     #: The file it came from (None for a scene built in code).
     path: Path | None = None
 
@@ -114,6 +133,9 @@ _TABLES = {
     # `terrain` has more keys (mountains, heightmap) that only the terrain
     # generator uses; they are accepted and ignored here.
     "terrain": Terrain,
+    "sky": Sky,
+    # `earth.magnetic_pole` shapes the bake only; accepted and ignored here.
+    "earth": Earth,
 }
 _TERRAIN_GENERATOR_KEYS = {"mountain_height", "mountain_scale", "heightmap", "extent", "seed"}
 
@@ -154,6 +176,8 @@ def _table(doc: dict, name: str, src: str) -> dict:
     known = set(cls.__dataclass_fields__)
     if name == "terrain":
         known |= _TERRAIN_GENERATOR_KEYS
+    if name == "earth":
+        known |= {"magnetic_pole"}
     unknown = sorted(set(t) - known)
     if unknown:
         raise SceneFileError(f"{src}: unknown key(s) in [{name}]: {', '.join(unknown)}")
@@ -236,7 +260,17 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     if any(not 0.0 <= a <= 1.0 for a in ter.albedo):
         raise SceneFileError(f"{src}: terrain.albedo components must be in [0, 1], got {list(ter.albedo)}")
 
-    return SceneSpec(cam, ren, vol, bg, ter, path)
+    k = _table(doc, "sky", src)
+    ext = k.get("extinction", Sky().extinction)
+    if not isinstance(ext, bool):
+        raise SceneFileError(f"{src}: sky.extinction must be true or false, got {ext!r}")
+    sky = Sky(ext, *(_checked(src, "sky", key, k) for key in ("ozone_du", "aerosol_optical_depth", "angstrom",
+                                                              "aerosol_scale_height_km")))
+
+    e = _table(doc, "earth", src)
+    earth = Earth(_checked(src, "earth", "radius_km", e))
+
+    return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path)
 
 
 def load_scene(path: str | Path) -> SceneSpec:

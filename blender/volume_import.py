@@ -54,6 +54,7 @@ def import_aurora(
     name: str | None = None,
     set_units: bool = True,
     pad_dir=None,
+    air=None,
 ) -> list[bpy.types.Object]:
     """Import `filepath` (.vdb or .usd[a|c|z]) into `scene` (default: the
     context scene) and give every imported Volume the aurora material.
@@ -111,6 +112,7 @@ def import_aurora(
             has_emission=has_emission,
             scattering_albedo=scattering_albedo,
             anisotropy=anisotropy,
+            air=air,
         )
         vol.materials.clear()
         vol.materials.append(mat)

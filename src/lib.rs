@@ -22,6 +22,7 @@ pub mod csda;
 pub mod curve;
 pub mod deposit;
 pub mod earth;
+pub mod extinction;
 pub mod fang;
 pub mod fang_glow;
 pub mod farm_plan;

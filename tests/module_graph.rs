@@ -54,6 +54,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "spectrum",
             "lifetime",
             "lines",
+            "extinction",
             "camera",
             "grid",
             "magnetic",

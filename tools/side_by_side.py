@@ -660,7 +660,8 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
     w, h = cfg["size"]
     d.mkdir(parents=True, exist_ok=True)
     # As tests/python/test_cross_check.py: no terrain, or a plane with the
-    # camera's look-at lowered to 40 km so the ground fills the lower third.
+    # camera's look-at lowered to 40 km so the ground fills the lower third
+    # (and no air).
     # [render] spp > 1: both renderers average over the pixel square (box).
     edits = {("render", "width"): w, ("render", "height"): h, ("render", "spp"): 16}
     if case == "volume":
@@ -670,6 +671,9 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
         cam = re.search(r"(?m)^look_at\s*=\s*\[([^\]]*)\]", scene_text.split("[camera]", 1)[1])
         x, y, _ = (float(v) for v in cam.group(1).split(","))
         edits[("camera", "look_at")] = [x, y, 40.0]
+        # The add-on dims the volume's emission by the air, not the
+        # terrain's light (blender/air.py): compare the lighting alone.
+        edits[("sky", "extinction")] = False
     scene = d / "scene.toml"
     write_atomic(scene, edit_toml(scene_text, edits).encode())
     shadow = SHADOW_SAMPLES[case]

@@ -214,10 +214,13 @@ fn prepare_grid(
         return Err(InputError(format!("--grid {name}: {source} has no float grid of that name (float emission grids: {there})")).into());
     };
     let emission = aurora::render::grids::grey(g);
+    // A line's own grid sees the air at that line's optical depth.
+    let mut settings = settings.clone();
+    settings.line = name.strip_prefix("line_").and_then(aurora::lines::line_index);
     let open_seconds = open.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: Some(&emission) };
-    Ok((Prepared::new(settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
+    Ok((Prepared::new(&settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
 }
 
 /// Writes a one-channel `--grid` image (EXR `Y`, or greyscale PNG at

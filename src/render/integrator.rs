@@ -149,16 +149,33 @@ impl Prepared {
                     n.shadow_nanos += start.elapsed().as_nanos() as u64;
                     n.shadow_samples += s.shadow_samples as u64;
                     n.shadow_rays += rays;
-                    [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c])
+                    let l = [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c]);
+                    match &self.air {
+                        // The terrain's light crosses the air to the camera.
+                        Some(a) => {
+                            let ta = a.along(ray.origin, h.p);
+                            [0, 1, 2].map(|c| l[c] * ta[c])
+                        }
+                        None => l,
+                    }
                 }
                 None => {
                     let s = self.sky.radiance(ray.dir);
                     [0, 1, 2].map(|c| background[c] + s[c])
                 }
             };
+            // The volume's emission lies above the air: its transmittance
+            // towards the ray's direction (`crate::extinction`).
+            let l_vol = match &self.air {
+                Some(a) => {
+                    let ta = a.towards(ray.dir);
+                    [0, 1, 2].map(|c| vol.l[c] * ta[c])
+                }
+                None => vol.l,
+            };
             let mut lum = 0.0;
             for c in 0..3 {
-                let v = vol.l[c] + t * behind[c];
+                let v = l_vol[c] + t * behind[c];
                 st.sum[c] += v;
                 lum += v;
             }
@@ -285,7 +302,7 @@ impl Prepared {
 
 impl Prepared {
     /// The star field's points (`sky.rs`), seen through the volume's
-    /// transmittance, hidden by the terrain.
+    /// transmittance and the air's, hidden by the terrain.
     fn add_stars(&self, pixels: &mut [[f32; 4]]) {
         let s = &self.settings;
         let o = self.camera.position;
@@ -293,7 +310,11 @@ impl Prepared {
             if self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
                 return None;
             }
-            Some(optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance())
+            let t = optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance();
+            Some(match &self.air {
+                Some(a) => a.towards(dir).map(|ta| t * ta),
+                None => [t; 3],
+            })
         });
     }
 }

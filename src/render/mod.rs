@@ -13,6 +13,13 @@
 //! radiance does not light the terrain**: it is only what camera rays see
 //! behind everything.
 //!
+//! **The air** (`[sky] extinction`, `crate::extinction`): the volume's
+//! emission lies above the lower atmosphere, so `L` is multiplied per channel
+//! by the air's transmittance towards the ray's direction, the terrain's
+//! light by the transmittance of its straight path to the camera, and the
+//! stars like the emission; the background radiance and the sky image are
+//! not dimmed (they are the sky as seen).
+//!
 //! Stages (each a function of plain data):
 //! `settings.rs` (what is asked, [`RenderError`]) -> `prepared.rs` (built
 //! once per scene, camera and medium: [`Prepared`]) with `crate::camera`

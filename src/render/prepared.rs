@@ -1,7 +1,8 @@
 //! What is built once per scene, camera and medium before any pixel is
 //! traced ([`Prepared`]): the camera model, the medium (`medium/`), the
-//! terrain, the terrain's emission sampler (`shadow.rs`) and the sky, with
-//! the settings they were built for. Every way to make or change one
+//! terrain, the terrain's emission sampler (`shadow.rs`), the sky and the
+//! air between the volume and the camera (`crate::extinction`), with the
+//! settings they were built for. Every way to make or change one
 //! ([`Prepared::new`], [`Prepared::with_medium`], [`Prepared::reuse`],
 //! [`Prepared::set_volume_scales`], [`Prepared::set_image`]) runs the same
 //! checks, so the pixel loop (`integrator.rs`) never sees a setting out of
@@ -13,7 +14,9 @@ use super::settings::{Integration, RenderError, RenderSettings, Volume};
 use super::shadow::{EmissionSampler, ShadowScene};
 use super::sky::Sky;
 use super::terrain::TerrainModel;
+use crate::extinction::{Air, Extinction};
 use crate::grid::Grid;
+use glam::DVec3;
 
 /// A scene ready to render: camera, medium, terrain and emission sampler.
 pub struct Prepared {
@@ -22,6 +25,8 @@ pub struct Prepared {
     pub(super) terrain: TerrainModel,
     pub(super) sampler: Option<EmissionSampler>,
     pub(super) sky: Sky,
+    /// The air's transmittance (`[sky] extinction`), None without it.
+    pub(super) air: Option<Extinction>,
     pub(super) settings: RenderSettings,
 }
 
@@ -102,7 +107,8 @@ impl Prepared {
         } else {
             CameraModel::new(&s.camera, s.render.width, s.render.height)?
         };
-        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, settings: s.clone() };
+        let air = observer_air(s);
+        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, settings: s.clone() };
         if !grids_changed && o.volume != s.volume {
             // The kept medium and sampler still carry the old scales.
             prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
@@ -208,12 +214,33 @@ impl Prepared {
         let terrain = TerrainModel::on_earth(&settings.terrain, settings.base_dir.as_deref(), settings.earth_radius_km)?;
         let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
         let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
-        Ok(Prepared { camera, medium, terrain, sampler, sky, settings: settings.clone() })
+        let air = observer_air(settings);
+        Ok(Prepared { camera, medium, terrain, sampler, sky, air, settings: settings.clone() })
     }
 
     pub(super) fn shadow_scene(&self) -> ShadowScene<'_> {
-        ShadowScene { medium: &self.medium, terrain: &self.terrain, sampler: self.sampler.as_ref(), integration: self.settings.integration }
+        ShadowScene {
+            medium: &self.medium,
+            terrain: &self.terrain,
+            sampler: self.sampler.as_ref(),
+            integration: self.settings.integration,
+            air: self.air.as_ref(),
+        }
     }
+
+    /// The air's transmittance model, if `[sky] extinction` is on.
+    pub fn air(&self) -> Option<&Extinction> {
+        self.air.as_ref()
+    }
+}
+
+/// The air as the camera sees it: the one place the observer's altitude and
+/// local up are taken from the camera (`Extinction::for_observer`).
+fn observer_air(s: &RenderSettings) -> Option<Extinction> {
+    let air = Air::from_sky(&s.sky)?;
+    let earth = crate::earth::Earth::new(s.earth_radius_km);
+    let at = DVec3::from_array(s.camera.position);
+    Some(Extinction::for_observer_at(air, at, earth.altitude(at), earth.local_up(at), s.line))
 }
 
 /// The terrain's emission sampler: none without a terrain or emission;

@@ -3,7 +3,7 @@
 //! rays per terrain hit), and why a render can fail ([`RenderError`]).
 
 use crate::grid::Grid;
-use crate::scene::{Background, Camera, RenderParams, Scene, Terrain, VolumeParams};
+use crate::scene::{Background, Camera, RenderParams, Scene, SkyParams, Terrain, VolumeParams};
 use std::path::{Path, PathBuf};
 
 /// The grids to render. A VDB without a density grid has no extinction; one
@@ -38,6 +38,12 @@ pub struct RenderSettings {
     /// `earth.radius_km`: the terrain lies on the sphere of this radius
     /// about `(0, 0, -radius)` (`terrain`); 0 is the flat ground.
     pub earth_radius_km: f64,
+    /// The air between the volume and the camera (`crate::extinction`).
+    pub sky: SkyParams,
+    /// The line (index in `crate::spectrum::LINES`) a one-line grid holds
+    /// (`aurora render --grid line_*`): the air takes that line's optical
+    /// depth in every channel; None: the per-channel depths of the lines' mix.
+    pub line: Option<usize>,
     /// Seed of every random stream (with the pixel index).
     pub seed: u64,
     pub integration: Integration,
@@ -50,7 +56,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The scene's camera, render, volume, background and terrain, its seed,
+    /// The scene's camera, render, volume, background, sky and terrain, its seed,
     /// exact integration and one shadow ray per terrain hit and sample.
     pub fn from_scene(scene: &Scene) -> RenderSettings {
         RenderSettings {
@@ -60,6 +66,8 @@ impl RenderSettings {
             background: scene.background.clone(),
             terrain: scene.terrain.clone(),
             earth_radius_km: scene.earth.radius_km,
+            sky: scene.sky.clone(),
+            line: None,
             seed: scene.seed,
             integration: Integration::Exact,
             shadow_samples: 1,

@@ -25,7 +25,10 @@
 //! with `P = W h^3 = int Y(e) dV`, is unbiased.
 //!
 //! Background radiance does not light the terrain: it is only what camera
-//! rays see behind everything.
+//! rays see behind everything. With `[sky] extinction` each sample is also
+//! dimmed by the air between the terrain point and the aurora
+//! (`crate::extinction::Extinction::towards_from`: the air-mass law with the
+//! column above the point).
 //!
 //! The transmittance `T(x, y)` of a shadow ray is itself estimated, by ratio
 //! tracking against the medium's largest sigma_t ([`transmittance_ratio_tracking`]):
@@ -182,6 +185,8 @@ pub struct ShadowScene<'a> {
     pub terrain: &'a TerrainModel,
     pub sampler: Option<&'a EmissionSampler>,
     pub integration: Integration,
+    /// The air between the terrain and the volume (`crate::extinction`).
+    pub air: Option<&'a crate::extinction::Extinction>,
 }
 
 /// Monte Carlo estimate of the irradiance `E(x)` (see the module doc) from
@@ -224,8 +229,12 @@ pub fn estimate_irradiance<R: Rng + ?Sized>(scene: &ShadowScene<'_>, x: DVec3, n
             Integration::FixedStep(_) => optical_depth_along_ray(scene.medium, x, dir, r, scene.integration, offset).transmittance(),
         };
         let k = sampler.power * t * cos / (r2 * lum);
+        // The aurora's light crosses the air above the terrain point: the
+        // observer's air mass law at the point's altitude (an emission
+        // point far above the layer, seen from `x`).
+        let air = scene.air.map_or([1.0; 3], |a| a.towards_from(x, dir));
         for c in 0..3 {
-            e_sum[c] += e[c] * k;
+            e_sum[c] += e[c] * k * air[c];
         }
     }
     let inv = 1.0 / samples.max(1) as f64;

@@ -32,8 +32,8 @@
 //!
 //! Stars are points: each adds its flux to the one pixel whose area holds
 //! its projection, as radiance `E T / Omega_p` (`Omega_p` the pixel's solid
-//! angle, from the camera; `T` the volume's transmittance towards the star,
-//! 0 behind terrain), so they stay one pixel wide and keep their flux at
+//! angle, from the camera; `T` the volume's transmittance towards the star
+//! times the air's per channel with `[sky] extinction`, 0 behind terrain), so they stay one pixel wide and keep their flux at
 //! any resolution. An orthographic camera sees no stars (its pixels have no
 //! solid angle). Same seed, same stars; the pixel sums are done star by
 //! star in a fixed order after the pixel loop, so the image does not
@@ -195,9 +195,9 @@ impl Sky {
         self.image.as_ref().map_or([0.0; 3], |m| m.radiance(dir))
     }
 
-    /// Adds every star to the pixel that sees it: `E T / Omega_p`, `T` from
-    /// `transmittance(dir)` (None when terrain hides the star).
-    pub fn add_stars(&self, img: &mut [[f32; 4]], camera: &CameraModel, transmittance: impl Fn(DVec3) -> Option<f64>) {
+    /// Adds every star to the pixel that sees it: `E T / Omega_p`, `T` per
+    /// channel from `transmittance(dir)` (None when terrain hides the star).
+    pub fn add_stars(&self, img: &mut [[f32; 4]], camera: &CameraModel, transmittance: impl Fn(DVec3) -> Option<[f64; 3]>) {
         for s in &self.stars {
             let Some(omega) = camera.pixel_solid_angle(s.dir) else { return };
             let Some((fx, fy)) = camera.project(camera.position + s.dir) else { continue };
@@ -205,7 +205,7 @@ impl Sky {
             let Some(t) = transmittance(s.dir) else { continue };
             let p = &mut img[py * camera.width + px];
             for k in 0..3 {
-                p[k] += (s.irradiance[k] * t / omega) as f32;
+                p[k] += (s.irradiance[k] * t[k] / omega) as f32;
             }
         }
     }
@@ -274,7 +274,7 @@ mod tests {
             };
             let m = CameraModel::new(&cam, w, h).unwrap();
             let mut img = vec![[0.0f32; 4]; w * h];
-            sky.add_stars(&mut img, &m, |_| Some(0.5));
+            sky.add_stars(&mut img, &m, |_| Some([0.5; 3]));
             let lit: Vec<usize> = (0..w * h).filter(|&i| img[i][0] > 0.0).collect();
             assert_eq!(lit.len(), 1, "{p:?} {w}x{h}");
             // Flux = radiance x the pixel's solid angle (numerically, from

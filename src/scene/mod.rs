@@ -51,6 +51,7 @@ pub struct Scene {
     pub render: RenderParams,
     pub volume: VolumeParams,
     pub background: Background,
+    pub sky: SkyParams,
     pub terrain: Terrain,
     pub animation: AnimationParams,
     pub atmosphere: AtmosphereParams,

@@ -513,6 +513,23 @@ pub struct Background {
     pub star_brightness: f64,
 }
 
+/// The air between the aurora and the observer (`crate::extinction`).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SkyParams {
+    /// Dim and redden what is seen through the lower atmosphere (Rayleigh,
+    /// ozone, aerosol along each camera ray); false: no air.
+    pub extinction: bool,
+    /// Ozone column, Dobson units.
+    pub ozone_du: f64,
+    /// Aerosol optical depth at 550 nm, at sea level.
+    pub aerosol_optical_depth: f64,
+    /// Angstrom exponent of the aerosol's optical depth.
+    pub angstrom: f64,
+    /// Scale height of the aerosol's density, km.
+    pub aerosol_scale_height_km: f64,
+}
+
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum TerrainKind {
@@ -698,6 +715,12 @@ impl Default for VolumeParams {
 impl Default for Background {
     fn default() -> Self {
         Self { radiance: [0.0, 0.0, 0.0], image: None, stars: false, limiting_magnitude: 6.0, star_brightness: 1.0 }
+    }
+}
+
+impl Default for SkyParams {
+    fn default() -> Self {
+        Self { extinction: true, ozone_du: 300.0, aerosol_optical_depth: 0.05, angstrom: 1.3, aerosol_scale_height_km: 1.2 }
     }
 }
 

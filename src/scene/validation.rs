@@ -361,6 +361,15 @@ impl Scene {
         // (and the count passes 38,000).
         v.range(t, "limiting_magnitude", self.background.limiting_magnitude, -1.5, 8.0, true);
         v.range(t, "star_brightness", self.background.star_brightness, 0.0, 1e6, true);
+        let sky = &self.sky;
+        let t = Some(("sky", 0));
+        // Ozone columns observed: about 100 (the deepest Antarctic hole) to
+        // 600 DU; aerosol depths from clean polar air to heavy haze; Angstrom
+        // exponents from coarse dust (about 0) to fine smoke (about 2.5).
+        v.range(t, "ozone_du", sky.ozone_du, 0.0, 1000.0, true);
+        v.range(t, "aerosol_optical_depth", sky.aerosol_optical_depth, 0.0, 5.0, true);
+        v.range(t, "angstrom", sky.angstrom, -1.0, 4.0, true);
+        v.range(t, "aerosol_scale_height_km", sky.aerosol_scale_height_km, 0.1, 20.0, true);
         let ter = &self.terrain;
         let t = Some(("terrain", 0));
         v.finite(t, "height", ter.height);

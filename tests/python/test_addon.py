@@ -93,9 +93,15 @@ def assert_aurora_volume(obj, density_scale, emission_scale):
     assert not pv.inputs["Temperature"].is_linked
     links = pv.inputs["Emission Color"].links
     assert len(links) == 1
-    attr = links[0].from_node
+    attr, sock = links[0].from_node, links[0].from_socket
+    if attr.bl_idname == "ShaderNodeVectorMath":
+        # A scene file's `[sky] extinction` (on by default): the emission
+        # times the air's transmittance (blender/air.py).
+        assert attr.operation == "MULTIPLY"
+        first = attr.inputs[0].links[0]
+        attr, sock = first.from_node, first.from_socket
     assert attr.bl_idname == "ShaderNodeAttribute"
-    assert (attr.attribute_type, attr.attribute_name, links[0].from_socket.name) == ("GEOMETRY", "emission", "Color")
+    assert (attr.attribute_type, attr.attribute_name, sock.name) == ("GEOMETRY", "emission", "Color")
     out = [n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
     assert len(out) == 1 and out[0].inputs["Volume"].links[0].from_node == pv
     assert not out[0].inputs["Surface"].is_linked

@@ -120,8 +120,10 @@ def test_aurora_render_matches_cycles_on_the_default_bake(compare):
     assert abs(m["flux_ratio"] - 1.0) <= 0.01, m
     assert m["max_alpha_diff"] <= 0.01, m
 
-    # Terrain lit by the aurora.
-    ter = {**doc, "terrain": {**doc["terrain"], "kind": "plane"}}
+    # Terrain lit by the aurora, without the air: the add-on dims the
+    # volume's emission towards the camera, not the terrain's light
+    # (blender/air.py), so this check compares the terrain's lighting alone.
+    ter = {**doc, "terrain": {**doc["terrain"], "kind": "plane"}, "sky": {**doc.get("sky", {}), "extinction": False}}
     ter["camera"] = {**doc["camera"], "look_at": [doc["camera"]["look_at"][0], doc["camera"]["look_at"][1], 40.0]}
     scene, a, b = render_both(binary, ter, "terrain", vdb)
     mask = compare.terrain_mask(scene, WIDTH, HEIGHT)

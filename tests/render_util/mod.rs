@@ -6,7 +6,7 @@
 
 use aurora::grid::{Grid, Transform};
 use aurora::render::{Integration, RenderSettings};
-use aurora::scene::{Background, Camera, Projection, RenderParams, Terrain, TerrainKind, VolumeParams};
+use aurora::scene::{Background, Camera, Projection, RenderParams, SkyParams, Terrain, TerrainKind, VolumeParams};
 use glam::{DVec3, IVec3};
 
 /// A float grid with every voxel of the inclusive index box `[lo, hi]` set.
@@ -45,7 +45,8 @@ pub fn persp(position: [f64; 3], look_at: [f64; 3], up: [f64; 3], fov_deg: f64) 
     Camera { position, look_at, up, projection: Projection::Perspective, fov_deg, ortho_height: 1.0 }
 }
 
-/// Settings with unit scales, no terrain, black background, exact integration.
+/// Settings with unit scales, no terrain, black background, no air
+/// (`sky.extinction = false`: the volume's closed forms), exact integration.
 pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> RenderSettings {
     RenderSettings {
         camera,
@@ -54,6 +55,8 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         background: Background { radiance: [0.0; 3], ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },
         earth_radius_km: 0.0,
+        sky: SkyParams { extinction: false, ..SkyParams::default() },
+        line: None,
         seed: 7,
         integration: Integration::Exact,
         shadow_samples: 1,

@@ -84,6 +84,7 @@ pub fn default_scene() -> Scene {
         animation: AnimationParams::default(),
         atmosphere: AtmosphereParams::default(),
         earth: EarthParams::default(),
+        sky: SkyParams::default(),
     }
 }
 
