@@ -7,7 +7,7 @@
 # rewrites current.txt with it and says why.
 # Pins: the default bake's aurora.vdb and aurora.usda, `aurora scene --schema`,
 # a 160x90 4-spp PNG render of that VDB (and the same with `[sky] extinction
-# = false`), and a two-frame sequence's
+# = false`; and of a flat-ground bake without the air), and a two-frame sequence's
 # aurora.usda (a reduced scene: 400 beams, 64x16 footprint) with its VDBs.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -24,9 +24,16 @@ grep -q '^width = 160$' "$T/small.toml" && grep -q '^spp = 4$' "$T/small.toml"
 sed -e 's/^extinction = true$/extinction = false/' "$T/small.toml" >"$T/noair.toml"
 grep -q '^extinction = false$' "$T/noair.toml"
 "$BIN" render -q --vdb "$T/bake/aurora.vdb" --threads 2 --out "$T/render-noair.png" "$T/noair.toml" >/dev/null 2>&1
+# Flat ground and no air (`[earth] radius_km = 0`, `[sky] extinction =
+# false`): the default bake and its render as they were before the round
+# Earth and the air (grid values and pixels; the VDB's scene hash differs).
+sed -e 's/^radius_km = 6371.0$/radius_km = 0.0/' "$T/noair.toml" >"$T/flat.toml"
+grep -q '^radius_km = 0.0$' "$T/flat.toml"
+"$BIN" bake -q --out "$T/flat" "$T/flat.toml" >/dev/null 2>&1
+"$BIN" render -q --vdb "$T/flat/aurora.vdb" --threads 2 --out "$T/render-flat-noair.png" "$T/flat.toml" >/dev/null 2>&1
 "$BIN" scene default | sed -e 's/^count = 8000$/count = 400/' -e 's/^resolution = \[512, 128\]$/resolution = [64, 16]/' \
   >"$T/seq.toml"
 grep -q '^count = 400$' "$T/seq.toml"
 "$BIN" bake -q --out "$T/seq" --frames 1-2 "$T/seq.toml" >/dev/null 2>&1
 cd "$T"
-sha256sum bake/aurora.vdb bake/aurora.usda schema.json render.png render-noair.png seq/aurora.usda seq/aurora.0001.vdb seq/aurora.0002.vdb
+sha256sum bake/aurora.vdb bake/aurora.usda schema.json render.png render-noair.png render-flat-noair.png seq/aurora.usda seq/aurora.0001.vdb seq/aurora.0002.vdb
