@@ -195,14 +195,15 @@ mod tests {
             .collect()
     }
 
-    /// A scene with every optional part present (two curtains, a heightmap
-    /// and a sky image), so every key has a leaf.
+    /// A scene with every optional part present (two curtains, a heightmap,
+    /// a sky image, the trail, a magnetic pole), so every key has a leaf.
     fn full_scene() -> Scene {
         let mut s = Scene::default();
         s.curtains.push(s.curtains[0].clone());
         s.terrain.heightmap = Some("h.png".into());
         s.background.image = Some("sky.exr".into());
         s.animation.trail_samples = 4;
+        s.earth.magnetic_pole = Some([0.0, 2200.0]);
         s
     }
 
