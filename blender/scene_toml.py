@@ -268,7 +268,9 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
                                                               "aerosol_scale_height_km")))
 
     e = _table(doc, "earth", src)
-    earth = Earth(_checked(src, "earth", "radius_km", e))
+    # The schema states this range as a rule (0, or 1000 to 100000 km):
+    # aurora checks it; here a number >= 0 is enough.
+    earth = Earth(_number(f"{src}: earth.radius_km", e.get("radius_km", Earth().radius_km), 0.0, math.inf))
 
     return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path)
 
