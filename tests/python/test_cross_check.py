@@ -123,7 +123,15 @@ def test_aurora_render_matches_cycles_on_the_default_bake(compare):
     # Terrain lit by the aurora, without the air: the add-on dims the
     # volume's emission towards the camera, not the terrain's light
     # (blender/air.py), so this check compares the terrain's lighting alone.
-    ter = {**doc, "terrain": {**doc["terrain"], "kind": "plane"}, "sky": {**doc.get("sky", {}), "extinction": False}}
+    # The add-on builds a `plane` terrain as a flat plane, while `aurora
+    # render` lays it on the round Earth's sphere: the lighting is compared
+    # on flat ground (`earth.radius_km = 0`).
+    ter = {
+        **doc,
+        "terrain": {**doc["terrain"], "kind": "plane"},
+        "sky": {**doc.get("sky", {}), "extinction": False},
+        "earth": {**doc.get("earth", {}), "radius_km": 0.0},
+    }
     ter["camera"] = {**doc["camera"], "look_at": [doc["camera"]["look_at"][0], doc["camera"]["look_at"][1], 40.0]}
     scene, a, b = render_both(binary, ter, "terrain", vdb)
     mask = compare.terrain_mask(scene, WIDTH, HEIGHT)
