@@ -24,6 +24,13 @@ air's transmittance towards the camera ray's direction,
 T_c = sum_i w_ic exp(-tau_i X(e)), sin e = -Incoming.z (the Geometry node's
 Incoming points back along the ray), as `aurora render` applies it.
 
+High column (`grid.high_voxel_factor` > 1, the default): the bake stores
+the faint column above `grid.high_above_km` in grids of their own at a
+coarser voxel size, `density_high` and `emission_high`, which the field is
+the sum of: density = density + density_high, emission = emission +
+emission_high, each grid trilinear on its own transform (Cycles keeps a
+transform per grid).
+
 Terrain: Lambertian diffuse with the albedo (roughness 0 is Lambert in
 Cycles), plus an almost-1 holdout so that the film alpha of camera rays
 that end on the terrain is the volume coverage 1 - T (see `terrain_material`).
@@ -54,8 +61,13 @@ def volume_material(
     scattering_albedo=0.0,
     anisotropy: float = 0.0,
     air=None,
+    has_high: bool = False,
 ) -> bpy.types.Material:
     """A material for a Volume object holding `density` and/or `emission`.
+
+    `has_high`: the file also holds the high column (`density_high`,
+    `emission_high`: the same fields above `grid.high_above_km`, at a coarser
+    voxel size, see the module doc), added to `density` and `emission`.
 
     A missing `density` grid gives Density 0 (Principled would otherwise fill
     the padded bounds with its constant Density); a missing `emission` grid
@@ -80,15 +92,24 @@ def volume_material(
     pv.inputs["Blackbody Intensity"].default_value = 0.0
     pv.inputs["Density"].default_value = density_scale if has_density else 0.0
     pv.inputs["Density Attribute"].default_value = "density" if has_density else ""
+    if has_density and has_high:
+        # Principled multiplies Density by one attribute; a sum of two grids is
+        # linked into Density instead (an empty attribute name is not found,
+        # and Cycles then leaves Density as it is).
+        pv.inputs["Density Attribute"].default_value = ""
+        total = _math(tree, "ADD", _attribute(tree, "density", "Fac"), _attribute(tree, "density_high", "Fac"))
+        tree.links.new(_math(tree, "MULTIPLY", total, density_scale), pv.inputs["Density"])
     pv.inputs["Temperature Attribute"].default_value = ""
     pv.inputs["Emission Strength"].default_value = emission_scale if has_emission else 0.0
     pv.inputs["Emission Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     if has_emission:
-        attr = tree.nodes.new("ShaderNodeAttribute")
-        attr.location = (-250, -200)
-        attr.attribute_type = "GEOMETRY"
-        attr.attribute_name = "emission"
-        colour = attr.outputs["Color"]
+        colour = _attribute(tree, "emission", "Color")
+        if has_high:
+            add = tree.nodes.new("ShaderNodeVectorMath")
+            add.operation = "ADD"
+            tree.links.new(colour, add.inputs[0])
+            tree.links.new(_attribute(tree, "emission_high", "Color"), add.inputs[1])
+            colour = add.outputs["Vector"]
         if air is not None:
             colour = _air_transmittance(tree, colour, *air)
         tree.links.new(colour, pv.inputs["Emission Color"])
@@ -101,6 +122,16 @@ def volume_material(
     mat["aurora_density_scale"] = float(density_scale)
     mat["aurora_emission_scale"] = float(emission_scale)
     return mat
+
+
+def _attribute(tree, name, output):
+    """The geometry attribute `name` (a grid of the Volume object), its
+    `output` socket ("Fac" for a float grid, "Color" for a vec3 grid)."""
+    attr = tree.nodes.new("ShaderNodeAttribute")
+    attr.location = (-250, -200)
+    attr.attribute_type = "GEOMETRY"
+    attr.attribute_name = name
+    return attr.outputs[output]
 
 
 def _math(tree, op, a, b=None, clamp=False):

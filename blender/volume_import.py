@@ -100,6 +100,7 @@ def import_aurora(
             raise AuroraImportError(f"{path}: grid `emission` is {grids['emission']}, expected VECTOR_FLOAT or FLOAT")
         if not (has_density or has_emission):
             raise AuroraImportError(f"{path}: no `density` or `emission` grid (found: {sorted(grids) or 'none'})")
+        has_high = _high_column(path, grids, has_density, has_emission)
         vol.render.precision = "FULL"
         vol.render.clipping = 0.0
         vol.render.space = "OBJECT"
@@ -113,6 +114,7 @@ def import_aurora(
             scattering_albedo=scattering_albedo,
             anisotropy=anisotropy,
             air=air,
+            has_high=has_high,
         )
         vol.materials.clear()
         vol.materials.append(mat)
@@ -186,6 +188,23 @@ def set_scene_fps(scene: bpy.types.Scene, fps: float) -> None:
     whole = max(1, round(fps))
     scene.render.fps = whole
     scene.render.fps_base = whole / fps
+
+
+def _high_column(path, grids: dict[str, str], has_density: bool, has_emission: bool) -> bool:
+    """Whether the file holds the high column (`density_high` and
+    `emission_high`, beside the grids they add to); a half column is an error."""
+    high = {n: grids[n] for n in ("density_high", "emission_high") if n in grids}
+    if not high:
+        return False
+    want = {"density_high": ("FLOAT",), "emission_high": ("VECTOR_FLOAT",)}
+    for n, t in high.items():
+        if t not in want[n]:
+            raise AuroraImportError(f"{path}: grid `{n}` is {t}, expected {want[n][0]}")
+    if len(high) != 2 or not (has_density and has_emission):
+        raise AuroraImportError(
+            f"{path}: the high column needs `density`, `emission`, `density_high` and `emission_high` (found: {sorted(grids)})"
+        )
+    return True
 
 
 def _load_grids(vol: bpy.types.Volume, path: Path) -> dict[str, str]:

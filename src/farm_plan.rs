@@ -191,8 +191,7 @@ pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progre
         });
         drop(b);
     }
-    let line_grids: Vec<String> = scene.grid.lines.iter().map(|k| crate::lines::grid_name(k)).collect();
-    let stage = outputs::write_sequence_usda(&scratch.0, frames, scene.animation.fps, &line_grids)?;
+    let stage = outputs::write_sequence_usda(&scratch.0, frames, scene.animation.fps, &outputs::stage_fields(scene))?;
     let stage_bytes = file_len(&stage)?;
     let (_, peak_rss_bytes) = usage();
     Ok(estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes))

@@ -18,6 +18,7 @@ pub mod bench;
 pub mod budget;
 pub mod camera;
 pub mod chemistry;
+pub mod column;
 pub mod csda;
 pub mod curve;
 pub mod deposit;

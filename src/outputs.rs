@@ -19,6 +19,7 @@
 use crate::atomic::{AtomicError, TempFile, Unit, UnitLock};
 use crate::bake::Bake;
 use crate::bake_identity::BakeIdentity;
+use crate::grid::Grid;
 use crate::scene::Scene;
 use crate::usd;
 use crate::vdb::write::{write_vdb_into, GridRef, MetaValue, WriteOptions};
@@ -165,13 +166,87 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
     m
 }
 
-/// The VDB write options the scene asks for.
+/// The VDB write options the scene asks for, for `density` and
+/// `emission` (the high column's grids follow their fine grids:
+/// [`with_high_column`]).
 pub fn write_options(scene: &Scene) -> WriteOptions {
-    WriteOptions {
-        compression: scene.grid.compression,
-        half: if scene.grid.half_emission { vec!["emission".to_string()] } else { vec![] },
-        metadata: vdb_metadata(scene),
+    let half = [(scene.grid.half_density, "density"), (scene.grid.half_emission, "emission")]
+        .into_iter()
+        .filter(|(on, _)| *on)
+        .map(|(_, name)| name.to_string())
+        .collect();
+    WriteOptions { compression: scene.grid.compression, half, metadata: vdb_metadata(scene) }
+}
+
+/// `options` without the half-float requests for grids whose values do
+/// not fit a half (|x| > 65504): those are stored as full floats (the bake
+/// warns, `crate::bake::plan`), so a half-float default never refuses a
+/// valid scene. Returns the names dropped.
+pub fn fit_half(mut options: WriteOptions, grids: &[GridRef<'_>]) -> (WriteOptions, Vec<String>) {
+    let max = half::f16::MAX.to_f32();
+    let too_big = |g: &GridRef<'_>| match g {
+        GridRef::Float(g) => g.iter_active().any(|(_, v)| v.abs() > max),
+        GridRef::Vec3(g) => g.iter_active().any(|(_, v)| v.iter().any(|x| x.abs() > max)),
+    };
+    let dropped: Vec<String> =
+        grids.iter().filter(|g| options.half.iter().any(|h| h == g.name()) && too_big(g)).map(|g| g.name().to_string()).collect();
+    options.half.retain(|h| !dropped.contains(h));
+    (options, dropped)
+}
+
+/// `options` for a file that also holds the high column: `NAME_high` is
+/// stored as half floats where `NAME` is.
+pub fn with_high_column(mut options: WriteOptions) -> WriteOptions {
+    let high: Vec<String> = options.half.iter().map(|n| format!("{n}{}", crate::column::HIGH_SUFFIX)).collect();
+    options.half.extend(high);
+    options
+}
+
+/// Whether the scene's files store the high column in grids of their own
+/// (`grid.high_voxel_factor > 1`, [`crate::column`]).
+pub fn has_high_column(scene: &Scene) -> bool {
+    scene.grid.high_voxel_factor > 1
+}
+
+/// The fields a USD stage lists for the scene's files: `density`,
+/// `emission`, the high column's grids when stored apart, and the
+/// per-line grids, each with its USD data type.
+pub fn stage_fields(scene: &Scene) -> Vec<(String, &'static str)> {
+    let mut f = vec![("density".to_string(), "float"), ("emission".to_string(), "float3")];
+    if has_high_column(scene) {
+        f.push((format!("density{}", crate::column::HIGH_SUFFIX), "float"));
+        f.push((format!("emission{}", crate::column::HIGH_SUFFIX), "float3"));
     }
+    f.extend(scene.grid.lines.iter().map(|k| (crate::lines::grid_name(k), "float")));
+    f
+}
+
+/// The high column's grids of a bake (`density_high`, `emission_high`)
+/// and the fine grids that go with them ([`crate::column::split`]), when
+/// the scene stores it apart; with `grid.cycles_shell` each grid gets its
+/// own shell (the bake's grids already carry theirs).
+pub struct HighColumn {
+    pub column: crate::column::Column,
+    pub density: Grid<f32>,
+    pub emission: Grid<[f32; 3]>,
+    pub density_high: Grid<f32>,
+    pub emission_high: Grid<[f32; 3]>,
+}
+
+/// [`HighColumn`] of `bake` for `scene` (None without one).
+pub fn high_column(scene: &Scene, bake: &Bake) -> Option<HighColumn> {
+    if !has_high_column(scene) {
+        return None;
+    }
+    let col = crate::column::Column::new(scene.grid.high_above_km, scene.grid.high_voxel_factor as i32, bake.emission.transform.voxel_size);
+    let earth = crate::earth::Earth::new(scene.earth.radius_km);
+    let ((density, mut density_high), (emission, mut emission_high)) =
+        rayon::join(|| crate::column::split(&bake.density, &col, &earth), || crate::column::split(&bake.emission, &col, &earth));
+    if scene.grid.cycles_shell {
+        emission_high.dilate_active();
+        density_high.dilate_active();
+    }
+    Some(HighColumn { column: col, density, emission, density_high, emission_high })
 }
 
 /// Writes the three files into `out` as one unit (see the module docs).
@@ -184,8 +259,8 @@ pub fn write_outputs(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeRepor
 
 /// [`write_outputs`] for a caller that holds the folder's lock from [`prepare`].
 pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<BakeReport, OutputError> {
-    let mut fields = vec![("density", "float"), ("emission", "float3")];
-    fields.extend(bake.lines.iter().map(|g| (g.name.as_str(), "float")));
+    let fields = stage_fields(scene);
+    let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
     let usda = usd::usda_text(VDB_NAME, &fields, 1000.0);
     let usda_len = usda.len();
     let files = UnitFiles {
@@ -194,6 +269,7 @@ pub fn write_outputs_locked(scene: &Scene, bake: &Bake, out: &Path) -> Result<Ba
         usda: Some((out.join(USDA_NAME), usda)),
         json: out.join(JSON_NAME),
         options: write_options(scene),
+        high: high_column(scene, bake),
     };
     let mut report = unit_report(scene, bake, &BakeIdentity::of(scene));
     let staged = stage_unit(bake, files, |mut vdb_files, vdb_seconds| {
@@ -213,6 +289,8 @@ struct UnitFiles {
     usda: Option<(PathBuf, String)>,
     json: PathBuf,
     options: WriteOptions,
+    /// The grids split at the high column, when the scene stores it apart.
+    high: Option<HighColumn>,
 }
 
 /// The report's keys common to a bake and a frame (the rest is added by the
@@ -256,12 +334,19 @@ fn stage_unit(
     report: impl FnOnce(serde_json::Value, f64) -> serde_json::Value,
 ) -> Result<StagedUnit, OutputError> {
     use std::io::Write;
-    let UnitFiles { vdb: vdb_path, vdb_name, usda, json: json_path, options } = files;
+    let UnitFiles { vdb: vdb_path, vdb_name, usda, json: json_path, options, high } = files;
     let mut unit = Unit::new();
     let t0 = Instant::now();
     let mut vdb_tmp = TempFile::create(&vdb_path)?;
-    let mut grids = vec![GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)];
+    let options = if high.is_some() { with_high_column(options) } else { options };
+    let mut grids = match &high {
+        Some(h) => {
+            vec![GridRef::Float(&h.density), GridRef::Vec3(&h.emission), GridRef::Float(&h.density_high), GridRef::Vec3(&h.emission_high)]
+        }
+        None => vec![GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)],
+    };
     grids.extend(bake.lines.iter().map(GridRef::Float));
+    let (options, full_float) = fit_half(options, &grids);
     let stats = write_vdb_into(&mut vdb_tmp, &grids, &options)
         .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;
     let vdb_seconds = t0.elapsed().as_secs_f64();
@@ -282,7 +367,16 @@ fn stage_unit(
         "vdb_write_seconds": vdb_seconds,
         "usda": USDA_NAME,
         "compression": options.compression,
-        "half_emission": !options.half.is_empty(),
+        "half_emission": options.half.iter().any(|g| g == "emission"),
+        "half_density": options.half.iter().any(|g| g == "density"),
+        "full_float_beyond_half_range": full_float,
+        "high_column": high.as_ref().map(|h| json!({
+            "above_km": h.column.above_km,
+            "band_km": h.column.band_km,
+            "voxel_km": h.emission_high.transform.voxel_size,
+            "voxels": h.emission.active_voxel_count(),
+            "high_voxels": h.emission_high.active_voxel_count(),
+        })),
     });
     let report = report(vdb_files, vdb_seconds);
     let text = serde_json::to_string_pretty(&report).expect("json serialises") + "\n";
@@ -323,15 +417,13 @@ pub fn frame_identity(report: &Path) -> Result<BakeIdentity, String> {
 /// range (whichever shard bakes it): the same bytes from every shard, written
 /// to a temporary name and renamed, so it is never half-written and any
 /// shard may rewrite it.
-/// The stage lists `density`, `emission` and the float grids `line_grids`
-/// (the per-line grids of `grid.lines`, by VDB name).
-pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, line_grids: &[String]) -> Result<PathBuf, OutputError> {
+/// The stage lists `fields` (VDB grid name, USD data type: [`stage_fields`]).
+pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(String, &'static str)]) -> Result<PathBuf, OutputError> {
     crate::atomic::prepare_folder(out)?;
     let list: Vec<(i64, String)> = frames.iter().map(|&f| (f, crate::frames::frame_file_name(FRAME_STEM, f, "vdb"))).collect();
     let path = out.join(USDA_NAME);
     let err = |e: std::io::Error| OutputError::Write { path: path.clone(), message: e.to_string() };
-    let mut fields = vec![("density", "float"), ("emission", "float3")];
-    fields.extend(line_grids.iter().map(|g| (g.as_str(), "float")));
+    let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
     let text = usd::usda_sequence_checked(&list, &fields, 1000.0, fps).map_err(err)?;
     crate::atomic::write_atomic(&path, text.as_bytes())?;
     Ok(path)
@@ -358,7 +450,7 @@ pub fn stage_frame(scene: &Scene, bake: &Bake, out: &Path, frame: i64, identity:
     options.metadata.push(("aurora_frame".into(), MetaValue::Int64(frame)));
     options.metadata.push(("aurora_time_s".into(), MetaValue::String(format!("{}", scene.animation.time_s))));
     let vdb_name = crate::frames::frame_file_name(FRAME_STEM, frame, "vdb");
-    let files = UnitFiles { vdb, vdb_name, usda: None, json, options };
+    let files = UnitFiles { vdb, vdb_name, usda: None, json, options, high: high_column(scene, bake) };
     let mut report = unit_report(scene, bake, identity);
     report["frame"] = json!(frame);
     report["time_s"] = json!(scene.animation.time_s);
@@ -387,7 +479,7 @@ mod tests {
             for _ in 0..8 {
                 s.spawn(|| {
                     for _ in 0..40 {
-                        write_sequence_usda(&dir, &frames, 24.0, &[]).unwrap();
+                        write_sequence_usda(&dir, &frames, 24.0, &stage_fields(&Scene::default())).unwrap();
                     }
                 });
             }

@@ -634,10 +634,12 @@ mod tests {
         );
     }
 
-    /// A scene that bakes in about a second, 4 samples per pixel.
+    /// A scene that bakes in about a second, 4 samples per pixel, with the
+    /// Cycles shell (the preview drops it: the pictures must not change).
     fn small_scene() -> Scene {
         let mut s = crate::scene::presets::small_test_scene();
         s.render.spp = 4;
+        s.grid.cycles_shell = true;
         s
     }
 

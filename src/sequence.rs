@@ -104,7 +104,7 @@ pub struct Sequence {
     frames: Vec<i64>,
     fps: f64,
     /// The per-line grids each frame holds (VDB names), listed in the stage.
-    line_grids: Vec<String>,
+    fields: Vec<(String, &'static str)>,
     /// This run has seen the record name its bake (and written the stage).
     claimed: bool,
 }
@@ -112,7 +112,7 @@ pub struct Sequence {
 impl Sequence {
     /// Opens `dir` (created if missing) for the sequence `frames` at `fps`
     /// of the bake `identity` (module docs, "Opening"), whose frames hold
-    /// the per-line grids `line_grids` (VDB names; listed in the stage).
+    /// the grids `fields` (VDB name, USD type: `outputs::stage_fields`; listed in the stage).
     /// `on_wait` is called once if another process holds the folder's lock.
     #[allow(clippy::too_many_arguments)]
     pub fn open(
@@ -120,12 +120,12 @@ impl Sequence {
         identity: BakeIdentity,
         frames: &[i64],
         fps: f64,
-        line_grids: Vec<String>,
+        fields: Vec<(String, &'static str)>,
         rebake: bool,
         on_wait: impl FnOnce(),
     ) -> Result<Sequence, SequenceError> {
         crate::atomic::prepare_folder(dir)?;
-        let mut seq = Sequence { dir: dir.to_path_buf(), identity, frames: frames.to_vec(), fps, line_grids, claimed: false };
+        let mut seq = Sequence { dir: dir.to_path_buf(), identity, frames: frames.to_vec(), fps, fields, claimed: false };
         let _lock = UnitLock::acquire(dir, LOCK_STEM, on_wait)?;
         let owner = seq.owner();
         let others = seq.other_frames()?;
@@ -256,7 +256,7 @@ impl Sequence {
     }
 
     fn write_stage(&self) -> Result<(), SequenceError> {
-        outputs::write_sequence_usda(&self.dir, &self.frames, self.fps, &self.line_grids)?;
+        outputs::write_sequence_usda(&self.dir, &self.frames, self.fps, &self.fields)?;
         Ok(())
     }
 

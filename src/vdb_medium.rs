@@ -90,7 +90,8 @@ pub struct RenderMedium {
 /// `Ok(None)` where this path does not apply and the caller should read
 /// grids instead ([`read_vdb_for_render`], [`render_grids`]): a float
 /// `emission` grid (read as grey), active tiles in a chosen grid, or no
-/// grid to render (the grid path reports it).
+/// grid to render (the grid path reports it), a high-column grid
+/// (`density_high`, `emission_high`: the grid path adds it to its fine grid).
 pub fn read_render_medium(path: &Path, density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
     let start = std::time::Instant::now();
     let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
@@ -148,7 +149,10 @@ fn render_medium_named(
     }
     let tiles =
         density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0) || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
-    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles {
+    // The high column (`crate::column`) is added to its fine grid in memory:
+    // the grid path does it.
+    let high = names.iter().any(|n| n.ends_with(crate::column::HIGH_SUFFIX));
+    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles || high {
         return Ok(None);
     }
     // What the grid reader refuses is refused here too: its tile limit on

@@ -54,23 +54,33 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     assert_eq!(report["seed"], 7);
 
     let file = aurora::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
-    let e = file.vec3("emission").expect("emission grid");
-    let d = file.float("density").expect("density grid");
-    // The file holds the aurora's voxels plus the Cycles shell of active zeros.
-    assert_eq!(e.active_voxel_count(), stats["file_voxels"].as_u64().unwrap());
-    assert_eq!(e.leaf_count() as u64, stats["file_leaves"].as_u64().unwrap());
-    let nonzero = e.iter_active().filter(|(_, v)| *v != [0.0; 3]).count() as u64;
-    assert_eq!(nonzero, stats["active_voxels"].as_u64().unwrap());
-    assert_eq!(nonzero + stats["shell_voxels"].as_u64().unwrap(), e.active_voxel_count());
-    assert!(stats["shell_voxels"].as_u64().unwrap() > 0);
+    // By default the file holds the aurora's voxels, no Cycles shell, split
+    // at grid.high_above_km: `emission` below (and across the blend band),
+    // `emission_high` above at twice the voxel size (aurora::column); the
+    // report counts both, and the two added back are the bake's field.
+    let fine = file.vec3("emission").expect("emission grid");
+    let high = file.vec3("emission_high").expect("emission_high grid");
+    let column = &report["files"]["high_column"];
+    assert_eq!(column["above_km"], 240.0);
+    assert_eq!(column["voxel_km"], 2.0);
+    assert_eq!(fine.active_voxel_count(), column["voxels"].as_u64().unwrap());
+    assert_eq!(high.active_voxel_count(), column["high_voxels"].as_u64().unwrap());
+    assert!(high.active_voxel_count() > 0, "the small scene's soft electrons reach above 240 km");
+    assert_eq!(stats["shell_voxels"], 0);
+    assert_eq!(stats["file_voxels"], stats["active_voxels"]);
+    let e = aurora::column::merge(fine, high).unwrap();
+    let d = aurora::column::merge(file.float("density").expect("density grid"), file.float("density_high").expect("density_high grid"))
+        .unwrap();
     // The density lives on the aurora's own voxels only: no fog box.
     assert!(d.active_voxel_count() <= e.active_voxel_count());
     for (ijk, _) in d.iter_active() {
         assert!(e.is_active(ijk), "density outside the aurora at {ijk}");
     }
     assert!(e.first_non_finite().is_none() && d.first_non_finite().is_none());
-    let peak = e.iter_active().map(|(_, v)| v[1]).fold(0.0f32, f32::max);
-    assert!((peak as f64 - stats["peak_emission"][1].as_f64().unwrap()).abs() <= 1e-6 * peak as f64);
+    // The peak lies in the curtain, far below the split, stored as half
+    // floats: within half a unit in the last place (2^-11 relative).
+    let peak = fine.iter_active().map(|(_, v)| v[1]).fold(0.0f32, f32::max);
+    assert!((peak as f64 - stats["peak_emission"][1].as_f64().unwrap()).abs() <= 4.9e-4 * peak as f64);
 
     let usda = std::fs::read_to_string(out.join("aurora.usda")).unwrap();
     assert!(usda.contains("@./aurora.vdb@") && usda.contains("metersPerUnit = 1000"), "{usda}");

@@ -57,6 +57,7 @@ const LAYERS: &[(Layer, &[&str])] = &[
             "extinction",
             "camera",
             "grid",
+            "column",
             "magnetic",
             "curve",
             "deposit",

@@ -66,9 +66,6 @@ pub enum BakeError {
     /// silently. The message says where the beams' energy went.
     #[error("the bake deposited no light: {0}")]
     Empty(String),
-    /// `grid.half_emission` asks for half floats the emission exceeds.
-    #[error("grid.half_emission = true, but the emission reaches {peak} at voxel ({}, {}, {}), beyond the half-float range (|x| <= 65504): set grid.half_emission = false, or lower the curtains' energy_flux or raise photons.radius_km", ijk[0], ijk[1], ijk[2])]
-    HalfOverflow { ijk: [i32; 3], peak: f32 },
     /// The scene's camera is out of range (never with a validated scene).
     #[error(transparent)]
     Camera(#[from] crate::camera::CameraError),

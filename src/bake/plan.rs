@@ -467,12 +467,10 @@ pub fn trace_and_gather(
 
 /// The emission's checks and peaks, the first step of [`finish`]: every
 /// active value finite (else [`BakeError::NonFinite`] at the first bad voxel
-/// in leaf order), within the half-float range when `half_emission`, and the
-/// largest component and luminance. Per leaf in parallel; the first error in
+/// in leaf order), and the largest component and luminance. Per leaf in parallel; the first error in
 /// leaf order wins and maxima do not depend on the order, so the outcome is
 /// the same whatever the thread count.
-pub fn scan_emission(emission: &Grid<[f32; 3]>, half_emission: bool, radius_km: f64) -> Result<([f32; 3], f64), BakeError> {
-    let half_max = half::f16::MAX.to_f32();
+pub fn scan_emission(emission: &Grid<[f32; 3]>, radius_km: f64) -> Result<([f32; 3], f64), BakeError> {
     let per_leaf: Vec<Result<([f32; 3], f64), BakeError>> = emission
         .leaves()
         .par_iter()
@@ -482,10 +480,6 @@ pub fn scan_emission(emission: &Grid<[f32; 3]>, half_emission: bool, radius_km: 
             for (ijk, v) in l.iter_active() {
                 if v.iter().any(|x| !x.is_finite()) {
                     return Err(BakeError::NonFinite { ijk: ijk.to_array(), value: format!("{v:?}"), radius_km });
-                }
-                if half_emission && v.iter().any(|x| x.abs() > half_max) {
-                    let peak = v.iter().fold(0.0f32, |m, x| m.max(x.abs()));
-                    return Err(BakeError::HalfOverflow { ijk: ijk.to_array(), peak });
                 }
                 for k in 0..3 {
                     peak[k] = peak[k].max(v[k]);
@@ -505,6 +499,25 @@ pub fn scan_emission(emission: &Grid<[f32; 3]>, half_emission: bool, radius_km: 
         peak_y = peak_y.max(y);
     }
     Ok((peak, peak_y))
+}
+
+/// Where `grid.half_emission` or `grid.half_density` asks for half floats
+/// a grid's values exceed (|x| > 65504, the largest half): that grid is
+/// written as full floats ([`crate::outputs::fit_half`]) and the bake says so.
+fn half_warnings(grid: &crate::scene::GridParams, peak: [f32; 3], density: &Grid<f32>) -> Vec<String> {
+    let max = half::f16::MAX.to_f32();
+    let mut w = Vec::new();
+    let e = peak.iter().fold(0.0f32, |m, x| m.max(*x));
+    if grid.half_emission && e > max {
+        w.push(format!("the emission reaches {e} (beyond the half-float range, |x| <= 65504): `emission` is stored as full floats although grid.half_emission = true"));
+    }
+    if grid.half_density {
+        let d = density.iter_active().fold(0.0f32, |m, (_, x)| m.max(x.abs()));
+        if d > max {
+            w.push(format!("the density reaches {d} (beyond the half-float range, |x| <= 65504): `density` is stored as full floats although grid.half_density = true"));
+        }
+    }
+    w
 }
 
 /// Stage 4: checks the emission, prunes it, builds the density grid and the
@@ -544,7 +557,7 @@ pub fn finish_keeping(
     let transform = emission.transform;
 
     let t = Instant::now();
-    let (peak, peak_y) = scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km)?;
+    let (peak, peak_y) = scan_emission(&emission, plan.kernel.base_km)?;
     if let Some((lo, hi)) = emission.index_bbox() {
         // The lowest altitude in the grid's box: at the box's point nearest
         // the Earth's centre (the lowest z when flat).
@@ -575,6 +588,7 @@ pub fn finish_keeping(
     let mut density = density_grid(&emission, &plan.grid, peak_y, &Earth::new(plan.earth.radius_km));
     progress.inc(emission.leaf_count() as u64);
     progress.finish();
+    warnings.extend(half_warnings(&plan.grid, peak, &density));
     let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
     let shell_voxels = if plan.grid.cycles_shell {
         // Both grids live on the same voxels: the density takes the

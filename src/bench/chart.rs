@@ -22,7 +22,8 @@ pub struct Measurement {
     pub param: f64,
     /// The stage whose wall time `seconds` is, e.g. "gather" or "render".
     pub stage: String,
-    /// Wall time, seconds.
+    /// Wall time, seconds; for the storage studies (`stage` =
+    /// [`super::storage::SIZE_STAGE`]) the file's size in MB.
     pub seconds: f64,
     /// Error against the reference (relative RMS unless `metric` says otherwise).
     pub error: f64,
@@ -209,8 +210,15 @@ where
     let floor = e0 * 1.05;
     let shown = |m: &Measurement| (m.seconds, if m.error > 0.0 { m.error } else { floor });
     let metric = sel[0].metric.clone();
+    let stage = sel[0].stage.clone();
+    // The storage studies put the file's size where the others put a time.
+    let (against, x_desc) = if stage == super::storage::SIZE_STAGE {
+        ("size", "file size (MB)".to_string())
+    } else {
+        ("time", format!("wall time of {stage} (s)"))
+    };
     let mut chart = ChartBuilder::on(&root)
-        .caption(format!("{study}: time against error"), ("sans-serif", 24))
+        .caption(format!("{study}: {against} against error"), ("sans-serif", 24))
         .margin(15)
         .x_label_area_size(50)
         .y_label_area_size(80)
@@ -219,12 +227,11 @@ where
             (e0..e1).log_scale().with_key_points(nice_ticks(e0, e1)),
         )
         .map_err(|e| e.to_string())?;
-    let stage = sel[0].stage.clone();
     chart
         .configure_mesh()
         .x_label_formatter(&|x| sig(*x))
         .y_label_formatter(&|y| sig(*y))
-        .x_desc(format!("wall time of {stage} (s)"))
+        .x_desc(x_desc)
         .y_desc(format!("error ({metric})"))
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))

@@ -2,7 +2,8 @@
 //!
 //! [`run`] reduces the scene ([`reduced`]), runs every study ([`sweeps`]):
 //! photon count, gather radius, gather method, voxel size, primary-ray
-//! integration, pruning, shadow rays and animation flicker
+//! integration, pruning, storage (bytes against picture error,
+//! [`storage`]), shadow rays and animation flicker
 //! ([`animation`]), each measuring wall time of the affected
 //! stage against error relative to a converged reference, and returns a
 //! [`report::BenchRun`]; [`report::write`] leaves `bench.csv`, `bench.json`
@@ -20,6 +21,7 @@ pub mod radius;
 pub mod reduced;
 pub mod report;
 pub mod shadow;
+pub mod storage;
 pub mod sweeps;
 pub mod vdb_write;
 pub mod voxel;
@@ -31,6 +33,50 @@ use crate::scene::{Scene, VoxelSize};
 use report::{BenchRun, Machine};
 use std::time::{Instant, SystemTime};
 use sweeps::{Bench, Plan, SweepError};
+
+/// The storage studies alone on the full `scene` (not reduced): its
+/// camera at its own image size and a 1024 x 1024 dome master, each picture
+/// rendered at the scene's spp and integration, fewer settings per lever
+/// ([`storage`]), with the throughput of the full scene as in [`run`].
+pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
+    let start = Instant::now();
+    let date = report::utc_date(SystemTime::now());
+    let mut machine = Machine::probe();
+    let mut plan = Plan::full();
+    plan.dome_image = [1024, 1024];
+    plan.storage_as_rendered = true;
+    plan.prune_budgets = vec![1e-3];
+    plan.storage_high_km = vec![220.0, 240.0, 260.0];
+    plan.min_timing_seconds = 0.0;
+    plan.max_timing_runs = 1;
+    plan.retime = false;
+    let b = Bench::new(scene.clone(), plan.clone(), log);
+    let studies = vec![
+        b.storage_study(storage::View::Scene, [scene.render.width, scene.render.height])?,
+        b.storage_study(storage::View::Dome, plan.dome_image)?,
+    ];
+    let throughput = throughput(scene, log)?;
+    machine.loadavg_end = report::loadavg();
+    Ok(BenchRun {
+        machine,
+        date,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        plan,
+        scene_name: scene_name.to_string(),
+        reduced_toml: scene.to_toml(),
+        reduction: vec!["none: the storage studies run on the full scene".into()],
+        studies,
+        throughput,
+    })
+}
+
+/// The full scene's frames 1 and 18000 of a ten-minute range at its fps,
+/// baked and written ([`crate::farm_plan::plan`]).
+fn throughput(scene: &Scene, log: &(dyn Fn(&str) + Sync)) -> Result<crate::farm_plan::Plan, SweepError> {
+    log("throughput: the full scene's frames 1 and 18000 of a ten-minute range at its fps");
+    let show: Vec<i64> = (1..=(600.0 * scene.animation.fps).round().max(2.0) as i64).collect();
+    crate::farm_plan::plan(scene, &show, 2, &NoProgress).map_err(|e| SweepError::Plan(Box::new(e)))
+}
 
 /// Runs every study on `scene` (validated), full or `quick`. `scene_name`
 /// names it in the outputs; `log` receives a line per measurement.
@@ -60,14 +106,14 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     let grids = b.bake_grids()?;
     studies.push(b.integration_study(&grids)?);
     studies.push(b.prune_study()?);
+    studies.push(b.storage_study(storage::View::Scene, plan.volume_image)?);
+    studies.push(b.storage_study(storage::View::Dome, plan.dome_image)?);
     studies.push(b.shadow_study(&grids)?);
     studies.push(animation::animation_study(&red.scene, &plan, log)?);
     if plan.retime {
         b.retime(&mut studies)?;
     }
-    log("throughput: the full scene's frames 1 and 18000 of a ten-minute range at its fps");
-    let show: Vec<i64> = (1..=(600.0 * scene.animation.fps).round().max(2.0) as i64).collect();
-    let throughput = crate::farm_plan::plan(scene, &show, 2, &NoProgress).map_err(|e| SweepError::Plan(Box::new(e)))?;
+    let throughput = throughput(scene, log)?;
     machine.loadavg_end = report::loadavg();
     Ok(BenchRun {
         machine,

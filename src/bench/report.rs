@@ -205,13 +205,16 @@ pub fn summary(run: &BenchRun) -> String {
     );
     for st in &run.studies {
         let flags = front_flags(&st.measurements);
-        let _ = writeln!(s, "\n== {} (time: {}; error: {})", st.name, st.stage, st.metric);
-        let _ = writeln!(s, "   reference: {} ({:.2} s)", st.reference, st.reference_seconds);
-        let _ = writeln!(s, "   {:<36} {:>12} {:>10} {:>11}  front scene", "method", "param", "seconds", "error");
+        // The storage studies measure a file's size, not a time.
+        let size = st.stage == super::storage::SIZE_STAGE;
+        let (what, unit, col) = if size { ("size", "MB", "MB") } else { ("time", "s", "seconds") };
+        let _ = writeln!(s, "\n== {} ({what}: {}; error: {})", st.name, st.stage, st.metric);
+        let _ = writeln!(s, "   reference: {} ({:.2} {unit})", st.reference, st.reference_seconds);
+        let _ = writeln!(s, "   {:<44} {:>12} {:>10} {:>11}  front scene", "method", "param", col, "error");
         for (m, f) in st.measurements.iter().zip(&flags) {
             let _ = writeln!(
                 s,
-                "   {:<36} {:>12} {:>10.4} {:>11.4e}  {:^5} {:^5}",
+                "   {:<44} {:>12} {:>10.4} {:>11.4e}  {:^5} {:^5}",
                 m.method,
                 format!("{}={}", short(&m.param_name), m.param),
                 m.seconds,

@@ -11,6 +11,7 @@
 //! | voxel size | voxel, per gather method | gather | same photons and method, fine voxels | rel. RMS of `emission` |
 //! | primary-ray integration | fixed step h, exact | render (pixel loop) | exact integration | mean rel. luminance error, pixels > 1 % of peak |
 //! | pruning | error budget `grid.prune` | VDB write (in memory) | the unpruned bake's image | mean rel. luminance error, pixels > 1 % of peak |
+//! | storage (scene camera, dome master) | half floats, pruning budget, high-column altitude, Cycles shell | file size (MB, not a time) | the unpruned full-float file's image | mean rel. luminance error, pixels > 1 % of peak |
 //! | shadow rays | shadow rays per hit, pixel samples | render (pixel loop) | same estimator, many samples | mean rel. luminance error, terrain pixels > 1 % of peak |
 //!
 //! "Old estimators" ([`old_estimators`]: point kernels, random starts, one
@@ -78,6 +79,13 @@ pub struct Plan {
     /// Pruning study: error budgets (`grid.prune`), the unpruned bake as the
     /// reference.
     pub prune_budgets: Vec<f64>,
+    /// Storage study ([`super::storage`]): altitudes of the high column, km,
+    /// and the dome master's image size.
+    pub storage_high_km: Vec<f64>,
+    pub dome_image: [usize; 2],
+    /// Storage study: render the pictures at the scene's spp and
+    /// integration instead of point-sampled ([`super::storage`]).
+    pub storage_as_rendered: bool,
     /// Shadow study: samples per pixel or per hit; reference count; image size.
     pub shadow_counts: Vec<usize>,
     pub shadow_reference: usize,
@@ -108,6 +116,9 @@ impl Plan {
             step_factors: vec![4.0, 2.0, 1.0, 0.5, 0.25],
             volume_image: [128, 128],
             prune_budgets: vec![1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1],
+            storage_high_km: vec![200.0, 220.0, 240.0, 260.0, 280.0],
+            dome_image: [256, 256],
+            storage_as_rendered: false,
             shadow_counts: vec![1, 2, 4, 8, 16, 32, 64],
             shadow_reference: 512,
             ground_image: [64, 40],
@@ -133,6 +144,9 @@ impl Plan {
             step_factors: vec![4.0, 2.0, 1.0, 0.5],
             volume_image: [64, 64],
             prune_budgets: vec![1e-3, 1e-2, 0.1],
+            storage_high_km: vec![200.0, 240.0],
+            dome_image: [64, 64],
+            storage_as_rendered: false,
             shadow_counts: vec![1, 4, 16],
             shadow_reference: 256,
             ground_image: [32, 20],
@@ -171,6 +185,10 @@ pub enum SweepError {
     Render(#[from] RenderError),
     #[error("bench throughput: {0}")]
     Plan(Box<crate::farm_plan::PlanError>),
+    /// Writing or reading back a file of the storage study (never the
+    /// scene's fault: the bake it writes has been validated).
+    #[error("bench storage: {0}")]
+    Storage(String),
 }
 
 impl SweepError {
@@ -180,6 +198,7 @@ impl SweepError {
             SweepError::Bake(e) => e.is_input(),
             SweepError::Render(e) => e.is_input(),
             SweepError::Plan(e) => e.is_input(),
+            SweepError::Storage(_) => false,
         }
     }
 }
@@ -407,8 +426,9 @@ impl<'a> Bench<'a> {
         metric: &str,
         scene_setting: bool,
     ) -> Measurement {
+        let unit = if stage == super::storage::SIZE_STAGE { "MB" } else { "s" };
         self.say(&format!(
-            "{study}: {method}, {param_name} = {param}: {seconds:.3} s ({stage}), error {error:.4e}{}",
+            "{study}: {method}, {param_name} = {param}: {seconds:.3} {unit} ({stage}), error {error:.4e}{}",
             if scene_setting { " [scene setting]" } else { "" }
         ));
         Measurement {

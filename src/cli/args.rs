@@ -209,6 +209,10 @@ pub struct BenchArgs {
     /// Fewer settings and cheaper references (a smoke test of the bench).
     #[arg(long)]
     pub quick: bool,
+    /// Only the storage studies (bytes per frame against picture error), on the full scene,
+    /// not reduced: its own camera and image size, and a 1024 x 1024 dome master.
+    #[arg(long, conflicts_with = "quick")]
+    pub storage: bool,
     #[command(flatten)]
     pub common: Common,
 }

@@ -115,8 +115,8 @@ fn bake_one(scene: &Scene, out: &Path, say: &Report) -> Result<()> {
 fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, say: &Report) -> Result<()> {
     let progress = say.progress();
     let identity = aurora::bake_identity::BakeIdentity::of(scene);
-    let line_grids = scene.grid.lines.iter().map(|k| aurora::lines::grid_name(k)).collect();
-    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, line_grids, rebake, || {
+    let fields = aurora::outputs::stage_fields(scene);
+    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, fields, rebake, || {
         say.say(|| format!("aurora: another bake is writing to {}; waiting", out.display()))
     })?;
     say.frames(0, mine.len());

@@ -6,7 +6,7 @@ use super::{load_scene, with_threads};
 use anyhow::Result;
 
 pub fn run(a: BenchArgs) -> Result<()> {
-    let BenchArgs { scene: scene_arg, out, quick, common } = a;
+    let BenchArgs { scene: scene_arg, out, quick, storage, common } = a;
     let scene = load_scene(&scene_arg)?;
     let quiet = common.quiet;
     with_threads(common.threads, || {
@@ -15,7 +15,11 @@ pub fn run(a: BenchArgs) -> Result<()> {
                 eprintln!("bench: {line}");
             }
         };
-        let run = aurora::bench::run(&scene, &scene_arg, quick, &log)?;
+        let run = if storage {
+            aurora::bench::run_storage(&scene, &scene_arg, &log)?
+        } else {
+            aurora::bench::run(&scene, &scene_arg, quick, &log)?
+        };
         let written = aurora::bench::report::write(&run, &out)?;
         print!("{}", aurora::bench::report::summary(&run));
         if !quiet {

@@ -38,6 +38,10 @@ pub enum RenderGridsError {
     /// `density`, say): refused rather than silently ignored.
     #[error("grid `{name}` is {type_name}; the renderer needs {expected}")]
     WrongType { name: String, type_name: String, expected: &'static str },
+    /// A high-column grid (`density_high`, `emission_high`) that cannot be
+    /// added to its fine grid, or one without its fine grid.
+    #[error("{0}")]
+    High(String),
 }
 
 impl RenderGridsError {
@@ -55,6 +59,8 @@ pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
         let expected = match g.name {
             "density" if g.kind != GridType::Float => "a float grid (extinction per unit length)",
             "emission" if !matches!(g.kind, GridType::Float | GridType::Vec3) => "a vec3 grid (or a float grid, taken as grey)",
+            "density_high" if g.kind != GridType::Float => "a float grid (the density's high column, crate::column)",
+            "emission_high" if g.kind != GridType::Vec3 => "a vec3 grid (the emission's high column, crate::column)",
             _ => continue,
         };
         return Err(RenderGridsError::WrongType { name: g.name.to_string(), type_name: g.type_name.to_string(), expected });
@@ -69,7 +75,10 @@ pub type ChosenGrids = (Option<Grid<f32>>, Option<Grid<[f32; 3]>>);
 /// The grids a renderer needs: from `listing` (every grid of the file, in
 /// file order) and the file's decoded `float_grids` and `vec3_grids` (each
 /// in file order), the first float `density` and the first `emission`
-/// (vec3, else float taken as grey).
+/// (vec3, else float taken as grey). A `density_high` or `emission_high`
+/// grid (the high column at a resolution of its own, `crate::column`) is
+/// added to its fine grid ([`crate::column::merge`]), as a renderer
+/// sampling both grids sees them.
 pub fn choose(
     listing: &[Listed<'_>],
     float_grids: Vec<Grid<f32>>,
@@ -78,22 +87,47 @@ pub fn choose(
     check_types(listing)?;
     let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
     let mut density = None;
+    let mut density_high = None;
     let mut float_emission = None;
     for g in float_grids {
         match g.name.as_str() {
             "density" if density.is_none() => density = Some(g),
+            "density_high" if density_high.is_none() => density_high = Some(g),
             "emission" if float_emission.is_none() => float_emission = Some(g),
             _ => {}
         }
     }
-    let mut emission = vec3_grids.into_iter().find(|g| g.name == "emission");
+    let mut emission = None;
+    let mut emission_high = None;
+    for g in vec3_grids {
+        match g.name.as_str() {
+            "emission" if emission.is_none() => emission = Some(g),
+            "emission_high" if emission_high.is_none() => emission_high = Some(g),
+            _ => {}
+        }
+    }
     if emission.is_none() {
         emission = float_emission.as_ref().map(grey);
     }
+    let density = with_high(density, density_high, "density")?;
+    let emission = with_high(emission, emission_high, "emission")?;
     if density.is_none() && emission.is_none() {
         return Err(RenderGridsError::NoAuroraGrids(if names.is_empty() { "none".into() } else { names.join(", ") }));
     }
     Ok((density, emission))
+}
+
+/// `fine` plus its high column, when the file has one.
+fn with_high<T: crate::grid::VoxelValue>(
+    fine: Option<Grid<T>>,
+    high: Option<Grid<T>>,
+    name: &str,
+) -> Result<Option<Grid<T>>, RenderGridsError> {
+    match (fine, high) {
+        (Some(f), Some(h)) => crate::column::merge(&f, &h).map(Some).map_err(|e| RenderGridsError::High(e.to_string())),
+        (None, Some(_)) => Err(RenderGridsError::High(format!("grid `{name}_high` has no `{name}` grid to add to"))),
+        (f, None) => Ok(f),
+    }
 }
 
 /// A float grid as a grey `emission` grid: its value in all three

@@ -408,6 +408,17 @@ pub enum AutoTag {
 /// is 2.7 %, visible in the faint fringes.
 pub const DEFAULT_PRUNE: f64 = 1e-3;
 
+/// Default `grid.high_above_km`, from the storage study on the default
+/// scene (`docs/storage.md`): above it lies about half of the bake's voxels
+/// and a small share of its light. At 240 km, with half floats and the
+/// default pruning, the default frame is 61.0 MB and its picture within
+/// 0.43 % of the full-precision unpruned file's (the dome master: 59.9 MB,
+/// 0.34 %); at 250 km 63.8 MB and 0.37 %, at 230 km 58.1 MB and 0.52 %.
+pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
+
+/// Largest `grid.high_voxel_factor`.
+pub const MAX_HIGH_VOXEL_FACTOR: u32 = 4;
+
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct GridParams {
@@ -417,14 +428,31 @@ pub struct GridParams {
     pub density_a: f64,
     pub density_b: f64,
     pub density_base_km: f64,
-    /// Store `emission` as half floats in the VDB.
+    /// Store `emission` (and `emission_high`) as half floats in the VDB:
+    /// 11 significant bits, a relative rounding error of at most 2^-11 per
+    /// voxel, 10^-5 of the picture on the default scene (`docs/storage.md`).
+    /// A grid whose values pass the half range (65504) is stored as full
+    /// floats instead, with a warning (`crate::outputs::fit_half`).
     pub half_emission: bool,
+    /// Store `density` (and `density_high`) as half floats in the VDB (as
+    /// `half_emission`).
+    pub half_density: bool,
     /// Also store a one-voxel shell of active zero voxels around the aurora
     /// (the 26-neighbourhood of its voxels): Cycles' biased volume mode
     /// marches only the active voxels grown across faces, so without it the
     /// low-index edges lose up to half a voxel of their trilinear ramp
-    /// (`blender/vdb_pad.py`). The field is unchanged.
+    /// (`blender/vdb_pad.py`). The field is unchanged. Off by default: the
+    /// aurora's own edges are its faint kernel tails, and the Cycles
+    /// cross-check agrees without it (`docs/storage.md`).
     pub cycles_shell: bool,
+    /// Altitude, km, above which the grids are stored at
+    /// `high_voxel_factor` times the voxel size, in grids of their own
+    /// (`emission_high`, `density_high`) that a renderer adds to `emission`
+    /// and `density` (`crate::column`): the faint soft-electron column.
+    pub high_above_km: f64,
+    /// Voxel size of the high column over `voxel_size` (1 = no high
+    /// column: one grid each at the voxel size).
+    pub high_voxel_factor: u32,
     pub compression: Compression,
     /// Error budget of contribution-based pruning (`crate::prune`): the
     /// faintest leaves, as seen from the camera, are dropped while their
@@ -676,8 +704,11 @@ impl Default for GridParams {
             density_a: 0.02,
             density_b: 0.02,
             density_base_km: 90.0,
-            half_emission: false,
-            cycles_shell: true,
+            half_emission: true,
+            half_density: true,
+            cycles_shell: false,
+            high_above_km: DEFAULT_HIGH_ABOVE_KM,
+            high_voxel_factor: 2,
             // OpenVDB's and Houdini's default; read by OpenVDB 10-12,
             // Blender 5 and our reader; writes ~8x faster than ZIP, same size.
             compression: Compression::BloscActiveMask,
