@@ -45,6 +45,22 @@ fn bits<T: VoxelValue>(v: T) -> Vec<u32> {
 /// Checks what OpenVDB reports for one grid against our grid `g` (values
 /// already rounded to half if stored as half).
 fn check_grid<T: VoxelValue>(j: &Value, g: &Grid<T>, value_type: &str, half: bool, what: &str) {
+    check_metadata(j, g, value_type, what);
+    check_tree(j, g, value_type, half, what);
+}
+
+/// The metadata the writer tests give every grid (units km, seed 7).
+fn check_metadata<T: VoxelValue>(j: &Value, g: &Grid<T>, value_type: &str, what: &str) {
+    let m = &j["metadata"];
+    assert_eq!(m["name"], json!(g.name), "{what}");
+    assert_eq!(m["file_voxel_count"].as_u64(), Some(g.active_voxel_count()), "{what}");
+    assert_eq!(m["units"], json!("km"), "{what}");
+    assert_eq!(m["seed"], json!(7), "{what}");
+    assert_eq!(m["value_type"], json!(value_type), "{what}");
+}
+
+/// The grid's class, transform and every voxel, as OpenVDB reads them.
+fn check_tree<T: VoxelValue>(j: &Value, g: &Grid<T>, value_type: &str, half: bool, what: &str) {
     assert_eq!(j["name"], json!(g.name), "{what}");
     assert_eq!(j["value_type"], json!(value_type), "{what}");
     assert_eq!(j["class"], json!("fog volume"), "{what}");
@@ -63,12 +79,6 @@ fn check_grid<T: VoxelValue>(j: &Value, g: &Grid<T>, value_type: &str, half: boo
         let w = g.transform.index_to_world(DVec3::new(p[0] as f64, p[1] as f64, p[2] as f64));
         assert_eq!(t["index_to_world"][key], json!(w.to_array()), "{what}: index_to_world({key})");
     }
-    let m = &j["metadata"];
-    assert_eq!(m["name"], json!(g.name), "{what}");
-    assert_eq!(m["file_voxel_count"].as_u64(), Some(g.active_voxel_count()), "{what}");
-    assert_eq!(m["units"], json!("km"), "{what}");
-    assert_eq!(m["seed"], json!(7), "{what}");
-    assert_eq!(m["value_type"], json!(value_type), "{what}");
     // Every active voxel OpenVDB reads equals ours, bit for bit, and there are no tiles.
     assert_eq!(j["tiles"], json!([]), "{what}");
     let voxels = j["voxels"].as_array().expect("voxels");
@@ -337,5 +347,43 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
                 }
             }
         }
+    }
+}
+
+/// The file a default bake writes (both grids as half floats, the high
+/// column above `grid.high_above_km` in grids of its own at twice the voxel
+/// size, no Cycles shell) opens in OpenVDB with all four grids, each on its
+/// own transform, bit for bit as our reader sees them; `vdb_print` lists them.
+#[test]
+fn openvdb_reads_the_default_bake_with_its_high_column() {
+    let dir = common::temp_dir("openvdb_default_bake");
+    let scene = aurora::scene::Scene::from_toml_str(small_bake_toml!(), "small.toml").unwrap();
+    assert!(scene.grid.half_emission && scene.grid.half_density && scene.grid.high_voxel_factor == 2 && !scene.grid.cycles_shell);
+    let baked = aurora::bake::bake(&scene, &aurora::progress::NoProgress).unwrap();
+    let out = dir.join("out");
+    aurora::outputs::write_outputs(&scene, &baked, &out).unwrap();
+    let path = out.join("aurora.vdb");
+    let ours = read_vdb(&path).unwrap();
+    let (d, e) = (ours.float("density").unwrap(), ours.vec3("emission").unwrap());
+    let (dh, eh) = (ours.float("density_high").unwrap(), ours.vec3("emission_high").unwrap());
+    assert_eq!(eh.transform.voxel_size, 2.0 * e.transform.voxel_size);
+    assert!(eh.active_voxel_count() > 0, "the small scene reaches above the split");
+    let samples_path = dir.join("samples.json");
+    let s = json!({"density": samples(d), "emission": samples(e), "density_high": samples(dh), "emission_high": samples(eh)});
+    std::fs::write(&samples_path, s.to_string()).unwrap();
+    let args = ["--dump", "--samples", samples_path.to_str().unwrap(), path.to_str().unwrap()];
+    let report = common::run_json(&common::system_python(), "vdb_probe.py", &args);
+    let r = &report.as_array().expect("one entry per file")[0];
+    assert!(r.get("error").is_none(), "OpenVDB failed: {}", r["error"]);
+    let grids = r["grids"].as_array().unwrap();
+    let by_name: HashMap<&str, &Value> = grids.iter().map(|g| (g["name"].as_str().unwrap(), g)).collect();
+    assert_eq!(grids.len(), 4, "{:?}", by_name.keys());
+    check_tree(by_name["density"], d, "float", true, "density");
+    check_tree(by_name["emission"], e, "vec3s", true, "emission");
+    check_tree(by_name["density_high"], dh, "float", true, "density_high");
+    check_tree(by_name["emission_high"], eh, "vec3s", true, "emission_high");
+    let printed = common::vdb_print_ok(&path);
+    for needle in ["density_high", "emission_high", "VDB version: 10.0/224"] {
+        assert!(printed.contains(needle), "vdb_print output lacks `{needle}`:\n{printed}");
     }
 }
