@@ -103,6 +103,9 @@ pub struct Atmosphere {
     scale: Vec<f64>,
     /// Column mass above node i, g cm^-2.
     col: Vec<f64>,
+    /// rho at node i, g cm^-3: `exp(ln[i][0])`, made once (the column mass
+    /// takes it at every call).
+    rho_node: Vec<f64>,
 }
 
 impl Default for Atmosphere {
@@ -155,7 +158,8 @@ impl Atmosphere {
             // Exact integral of rho_i exp(-(h - h_i)/H_i) over the segment.
             col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
         }
-        Self { h, ln, scale, col }
+        let rho_node = ln.iter().map(|l| l[0].exp()).collect();
+        Self { h, ln, scale, col, rho_node }
     }
 
     /// Index of the segment holding `h` (end segments extrapolate).
@@ -168,7 +172,12 @@ impl Atmosphere {
     /// Log-linear interpolation of column `k` of `ln`.
     #[inline]
     fn interp(&self, h: f64, k: usize) -> f64 {
-        let i = self.segment(h);
+        self.interp_in(self.segment(h), h, k)
+    }
+
+    /// [`Self::interp`] in segment `i` (`self.segment(h)`).
+    #[inline]
+    fn interp_in(&self, i: usize, h: f64, k: usize) -> f64 {
         let t = (h - self.h[i]) / (self.h[i + 1] - self.h[i]);
         (self.ln[i][k] + t * (self.ln[i + 1][k] - self.ln[i][k])).exp()
     }
@@ -194,14 +203,14 @@ impl Atmosphere {
     #[inline]
     pub fn column_mass(&self, h: f64) -> f64 {
         let i = self.segment(h);
-        let rho = self.rho(h);
+        let rho = self.interp_in(i, h, 0);
         let h_i = self.scale[i];
         if h >= self.h[self.h.len() - 1] {
             return rho * h_i * CM_PER_KM;
         }
         // col(h) = col_{i+1} + H_i (rho(h) - rho_{i+1}); below the table the
         // first segment's exponential continues (the same formula).
-        self.col[i + 1] + h_i * (rho - self.ln[i + 1][0].exp()) * CM_PER_KM
+        self.col[i + 1] + h_i * (rho - self.rho_node[i + 1]) * CM_PER_KM
     }
 
     /// Column mass along a straight path of length `len_km` from altitude
@@ -237,6 +246,22 @@ mod tests {
 
     fn sweep() -> impl Iterator<Item = f64> {
         (0..=4200).map(|i| 80.0 + i as f64 * 0.1)
+    }
+
+    #[test]
+    fn column_mass_is_its_formula_bit_for_bit() {
+        // The node densities made once give the bits of exp at each call.
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            for h in (0..=7000).map(|i| 40.0 + i as f64 * 0.1) {
+                let i = a.segment(h);
+                let want = if h >= a.top_km() {
+                    a.rho(h) * a.scale[i] * CM_PER_KM
+                } else {
+                    a.col[i + 1] + a.scale[i] * (a.rho(h) - a.ln[i + 1][0].exp()) * CM_PER_KM
+                };
+                assert_eq!(a.column_mass(h).to_bits(), want.to_bits(), "{h}");
+            }
+        }
     }
 
     #[test]
