@@ -38,6 +38,25 @@ use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::Leaf;
 use glam::IVec3;
 
+/// How many photons ahead of the one being added [`LeafGather::splat`]
+/// prefetches.
+const PREFETCH_AHEAD: usize = 4;
+
+/// A hint that the bytes at `p` will be read soon (no effect on results; a
+/// no-op off x86-64). Any address may be given: a prefetch never faults.
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` only hints the cache; it reads nothing the
+    // program sees and never faults, whatever the address (SSE, which it
+    // needs, is part of x86-64's baseline).
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p as *const i8)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
+
 /// Scratch space of the splat, one per thread: the per-voxel sums (zero
 /// between leaves) and the point kernel's per-voxel constants.
 pub struct SplatScratch {
@@ -162,7 +181,14 @@ impl LeafGather<'_> {
     #[inline(always)]
     fn splat_body(&self, origin: IVec3, photons: &[u32], scratch: &mut SplatScratch) -> Option<Leaf<[f32; 3]>> {
         let SplatScratch { acc, k } = scratch;
-        for &i in photons {
+        for (j, &i) in photons.iter().enumerate() {
+            // The bin's photons are scattered over the photon array: ask
+            // for the one a few ahead (and its kernel) to be in cache by
+            // the time it is read.
+            if let Some(&ahead) = photons.get(j + PREFETCH_AHEAD) {
+                prefetch(self.photons.as_ptr().wrapping_add(ahead as usize));
+                prefetch(self.splat_kernels.as_ptr().wrapping_add(ahead as usize));
+            }
             let p = &self.photons[i as usize];
             if !p.is_point() {
                 self.splat_segment(origin, p, &self.splat_kernels[i as usize], k, acc);
