@@ -31,7 +31,7 @@
 //! bits. Scratch space ([`SplatScratch`]) is reused from leaf to leaf, one
 //! per thread.
 
-use super::fast_math::{erf_lut_lanes, erf_table, exp_neg_f32};
+use super::fast_math::{erf_lut_lanes, erf_table, exp_neg_f32, ERF_LUT_LEN};
 use super::kernel::{Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums};
 use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
@@ -113,7 +113,8 @@ fn segment_lanes<const N: usize>(
 /// The segment kernel's closed form at N lanes of a z-row from
 /// [`segment_lanes`]' `s`, `perp2` and `inside`, times the photon's power
 /// `phi`, added to the sums from voxel `n` on: `c inside exp(-perp2 / 2r^2)
-/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor.
+/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor,
+/// the erfs from `erf` ([`erf_table`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn add_segment_lanes<const N: usize>(
@@ -126,8 +127,8 @@ fn add_segment_lanes<const N: usize>(
     c: f32,
     l: f32,
     phi: &[f32; 3],
+    erf: &[f32; ERF_LUT_LEN],
 ) {
-    let erf = erf_table();
     let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for j in 0..N {
         ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
@@ -257,6 +258,9 @@ impl LeafGather<'_> {
             (sz[z], w2z[z]) = (w * dir.z, w * w);
         }
         let phi = p.power;
+        // The erf table, once per photon (not per row: its first use
+        // builds it).
+        let erf = erf_table();
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
         let (px, py) = (l * dir.x, l * dir.y);
@@ -293,7 +297,7 @@ impl LeafGather<'_> {
                     // half rows.
                     let (s8, perp2, inside) = segment_lanes(sxy, w2xy, &sz, &w2z, l, &q);
                     if inside != [0.0; 8] {
-                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi);
+                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi, erf);
                     }
                     continue;
                 }
@@ -303,7 +307,7 @@ impl LeafGather<'_> {
                     if inside == [0.0; 4] {
                         continue; // the half row misses the capsule
                     }
-                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi);
+                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi, erf);
                 }
             }
         }
