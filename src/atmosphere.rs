@@ -106,6 +106,10 @@ pub struct Atmosphere {
     /// rho at node i, g cm^-3: `exp(ln[i][0])`, made once (the column mass
     /// takes it at every call).
     rho_node: Vec<f64>,
+    /// `1 / dh` when the nodes are evenly spaced (`h[i] = h[0] + i dh`
+    /// exactly, NRLMSIS's 0.5 km), for [`Self::segment`]'s first guess; 0
+    /// otherwise.
+    inv_dh: f64,
 }
 
 impl Default for Atmosphere {
@@ -159,14 +163,31 @@ impl Atmosphere {
             col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
         }
         let rho_node = ln.iter().map(|l| l[0].exp()).collect();
-        Self { h, ln, scale, col, rho_node }
+        let dh = (h[n - 1] - h[0]) / (n - 1) as f64;
+        let even = dh > 0.0 && h.iter().enumerate().all(|(i, &x)| x == h[0] + i as f64 * dh);
+        let inv_dh = if even { 1.0 / dh } else { 0.0 };
+        Self { h, ln, scale, col, rho_node, inv_dh }
     }
 
     /// Index of the segment holding `h` (end segments extrapolate).
     #[inline]
     fn segment(&self, h: f64) -> usize {
-        let i = self.h.partition_point(|&x| x <= h);
-        i.saturating_sub(1).min(self.h.len() - 2)
+        let n = self.h.len();
+        if self.inv_dh == 0.0 {
+            let i = self.h.partition_point(|&x| x <= h);
+            return i.saturating_sub(1).min(n - 2);
+        }
+        // Evenly spaced nodes: the node below h by its offset (a float to
+        // integer cast saturates, NaN gives 0), then corrected to the last
+        // node at or below h (0 if none), as the search finds it.
+        let mut i = (((h - self.h[0]) * self.inv_dh) as usize).min(n - 1);
+        while i + 1 < n && self.h[i + 1] <= h {
+            i += 1;
+        }
+        while i > 0 && self.h[i] > h {
+            i -= 1;
+        }
+        i.min(n - 2)
     }
 
     /// Log-linear interpolation of column `k` of `ln`.
@@ -246,6 +267,19 @@ mod tests {
 
     fn sweep() -> impl Iterator<Item = f64> {
         (0..=4200).map(|i| 80.0 + i as f64 * 0.1)
+    }
+
+    #[test]
+    fn segments_are_the_searched_ones() {
+        let a = Atmosphere::nrlmsis21();
+        assert!(a.inv_dh > 0.0, "NRLMSIS's nodes are evenly spaced");
+        let searched = |h: f64| a.h.partition_point(|&x| x <= h).saturating_sub(1).min(a.h.len() - 2);
+        let nodes = a.h.iter().flat_map(|&x| [x, x.next_down(), x.next_up()]);
+        let sweep = (0..=80_000).map(|i| 30.0 + i as f64 * 0.01);
+        let odd = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1e300, 1e300, 0.0, -0.0];
+        for h in nodes.chain(sweep).chain(odd) {
+            assert_eq!(a.segment(h), searched(h), "{h}");
+        }
     }
 
     #[test]
