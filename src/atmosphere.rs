@@ -103,6 +103,13 @@ pub struct Atmosphere {
     scale: Vec<f64>,
     /// Column mass above node i, g cm^-2.
     col: Vec<f64>,
+    /// rho at node i, g cm^-3: `exp(ln[i][0])`, made once (the column mass
+    /// takes it at every call).
+    rho_node: Vec<f64>,
+    /// `1 / dh` when the nodes are evenly spaced (`h[i] = h[0] + i dh`
+    /// exactly, NRLMSIS's 0.5 km), for [`Self::segment`]'s first guess; 0
+    /// otherwise.
+    inv_dh: f64,
 }
 
 impl Default for Atmosphere {
@@ -155,20 +162,43 @@ impl Atmosphere {
             // Exact integral of rho_i exp(-(h - h_i)/H_i) over the segment.
             col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
         }
-        Self { h, ln, scale, col }
+        let rho_node = ln.iter().map(|l| l[0].exp()).collect();
+        let dh = (h[n - 1] - h[0]) / (n - 1) as f64;
+        let even = dh > 0.0 && h.iter().enumerate().all(|(i, &x)| x == h[0] + i as f64 * dh);
+        let inv_dh = if even { 1.0 / dh } else { 0.0 };
+        Self { h, ln, scale, col, rho_node, inv_dh }
     }
 
     /// Index of the segment holding `h` (end segments extrapolate).
     #[inline]
     fn segment(&self, h: f64) -> usize {
-        let i = self.h.partition_point(|&x| x <= h);
-        i.saturating_sub(1).min(self.h.len() - 2)
+        let n = self.h.len();
+        if self.inv_dh == 0.0 {
+            let i = self.h.partition_point(|&x| x <= h);
+            return i.saturating_sub(1).min(n - 2);
+        }
+        // Evenly spaced nodes: the node below h by its offset (a float to
+        // integer cast saturates, NaN gives 0), then corrected to the last
+        // node at or below h (0 if none), as the search finds it.
+        let mut i = (((h - self.h[0]) * self.inv_dh) as usize).min(n - 1);
+        while i + 1 < n && self.h[i + 1] <= h {
+            i += 1;
+        }
+        while i > 0 && self.h[i] > h {
+            i -= 1;
+        }
+        i.min(n - 2)
     }
 
     /// Log-linear interpolation of column `k` of `ln`.
     #[inline]
     fn interp(&self, h: f64, k: usize) -> f64 {
-        let i = self.segment(h);
+        self.interp_in(self.segment(h), h, k)
+    }
+
+    /// [`Self::interp`] in segment `i` (`self.segment(h)`).
+    #[inline]
+    fn interp_in(&self, i: usize, h: f64, k: usize) -> f64 {
         let t = (h - self.h[i]) / (self.h[i + 1] - self.h[i]);
         (self.ln[i][k] + t * (self.ln[i + 1][k] - self.ln[i][k])).exp()
     }
@@ -194,14 +224,14 @@ impl Atmosphere {
     #[inline]
     pub fn column_mass(&self, h: f64) -> f64 {
         let i = self.segment(h);
-        let rho = self.rho(h);
+        let rho = self.interp_in(i, h, 0);
         let h_i = self.scale[i];
         if h >= self.h[self.h.len() - 1] {
             return rho * h_i * CM_PER_KM;
         }
         // col(h) = col_{i+1} + H_i (rho(h) - rho_{i+1}); below the table the
         // first segment's exponential continues (the same formula).
-        self.col[i + 1] + h_i * (rho - self.ln[i + 1][0].exp()) * CM_PER_KM
+        self.col[i + 1] + h_i * (rho - self.rho_node[i + 1]) * CM_PER_KM
     }
 
     /// Column mass along a straight path of length `len_km` from altitude
@@ -237,6 +267,35 @@ mod tests {
 
     fn sweep() -> impl Iterator<Item = f64> {
         (0..=4200).map(|i| 80.0 + i as f64 * 0.1)
+    }
+
+    #[test]
+    fn segments_are_the_searched_ones() {
+        let a = Atmosphere::nrlmsis21();
+        assert!(a.inv_dh > 0.0, "NRLMSIS's nodes are evenly spaced");
+        let searched = |h: f64| a.h.partition_point(|&x| x <= h).saturating_sub(1).min(a.h.len() - 2);
+        let nodes = a.h.iter().flat_map(|&x| [x, x.next_down(), x.next_up()]);
+        let sweep = (0..=80_000).map(|i| 30.0 + i as f64 * 0.01);
+        let odd = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1e300, 1e300, 0.0, -0.0];
+        for h in nodes.chain(sweep).chain(odd) {
+            assert_eq!(a.segment(h), searched(h), "{h}");
+        }
+    }
+
+    #[test]
+    fn column_mass_is_its_formula_bit_for_bit() {
+        // The node densities made once give the bits of exp at each call.
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            for h in (0..=7000).map(|i| 40.0 + i as f64 * 0.1) {
+                let i = a.segment(h);
+                let want = if h >= a.top_km() {
+                    a.rho(h) * a.scale[i] * CM_PER_KM
+                } else {
+                    a.col[i + 1] + a.scale[i] * (a.rho(h) - a.ln[i + 1][0].exp()) * CM_PER_KM
+                };
+                assert_eq!(a.column_mass(h).to_bits(), want.to_bits(), "{h}");
+            }
+        }
     }
 
     #[test]

@@ -102,6 +102,40 @@ pub fn cgroup_limit() -> Option<f64> {
     None
 }
 
+/// Tunes glibc's allocator for the bake, which allocates and frees a few
+/// large buffers (photons, bins, VDB batches) and many leaves from its
+/// threads, then exits:
+/// - one arena (`M_ARENA_MAX`): the threads' leaves share the main heap,
+///   which grows by `brk`, instead of per-thread heaps that grow by
+///   `mprotect` and shrink by `madvise` (pages faulted in again at the next
+///   leaf); peak memory falls too (744 MB against 788 MB for the default
+///   bake, whose threads allocate little at once);
+/// - no trimming (`M_TRIM_THRESHOLD`) and 64 MiB of padding on each heap
+///   extension (`M_TOP_PAD`): freed memory stays mapped for the next stage
+///   instead of going back to the kernel and being faulted in again;
+/// - a fixed `mmap` threshold of 32 MiB (`M_MMAP_THRESHOLD`, the largest
+///   glibc allows; setting it stops glibc's own adjustment): only the
+///   largest buffers get their own mapping, returned when freed.
+///
+/// The bake's system time falls from 0.9-1.2 s to 0.55-0.65 s (page faults,
+/// `mprotect`); results do not depend on it. Returns whether every setting
+/// was taken; a no-op returning false off glibc.
+pub fn tune_allocator() -> bool {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        let settings =
+            [(libc::M_ARENA_MAX, 1), (libc::M_TRIM_THRESHOLD, i32::MAX), (libc::M_TOP_PAD, 64 << 20), (libc::M_MMAP_THRESHOLD, 32 << 20)];
+        // SAFETY: mallopt only changes glibc's allocator parameters (it takes
+        // the arena lock itself); these values are within its documented
+        // ranges, and no memory is handed out or freed by the call.
+        settings.iter().all(|&(param, value)| unsafe { libc::mallopt(param, value) } == 1)
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    {
+        false
+    }
+}
+
 fn parse_cgroup_value(text: &str) -> Option<f64> {
     let t = text.trim();
     if t == "max" {
@@ -127,6 +161,23 @@ mod tests {
         assert_eq!(parse_cgroup_value("max\n"), None);
         assert_eq!(parse_cgroup_value("1073741824\n"), Some(1073741824.0));
         assert_eq!(parse_cgroup_value("9223372036854771712"), None);
+    }
+
+    #[test]
+    fn the_tuned_allocator_gives_the_same_values() {
+        // The settings are taken on glibc; allocations after them, large
+        // (beyond the mmap threshold) and small, hold what was written, as
+        // before them.
+        let fill = || -> (Vec<u64>, Vec<Box<[f32; 512]>>) {
+            let big: Vec<u64> = (0..(40u64 << 20) / 8).map(|i| i * 2654435761).collect();
+            let small = (0..1000).map(|i| Box::new([i as f32; 512])).collect();
+            (big, small)
+        };
+        let before = fill();
+        let tuned = tune_allocator();
+        assert_eq!(tuned, cfg!(all(target_os = "linux", target_env = "gnu")));
+        let after = fill();
+        assert!(before == after);
     }
 
     #[test]

@@ -315,9 +315,15 @@ impl ColourTable {
     /// bilinear lookup, or [`ColourTable::rgb`] (q unused) without it.
     #[inline]
     pub fn rgb_q(&self, h_km: f64, q: f64) -> [f64; 3] {
+        self.rgb_lq(h_km, crate::chemistry::table::LineTable::log_q(q))
+    }
+
+    /// [`Self::rgb_q`] at `lq`, the chemistry table's log of `q`.
+    #[inline]
+    fn rgb_lq(&self, h_km: f64, lq: f64) -> [f64; 3] {
         match &self.chem {
             Some(c) => {
-                let cell = c.lines.cell(h_km, q);
+                let cell = c.lines.cell_log(h_km, lq);
                 let mut out = [0.0; 3];
                 for (&i, &w) in cell.i.iter().zip(&cell.w) {
                     for (o, x) in out.iter_mut().zip(c.rgb[i]) {
@@ -364,8 +370,9 @@ impl ColourTable {
     /// `rgb_q(h_colour, q)`.
     #[inline]
     pub fn rgb_with_colour_altitude(&self, h_km: f64, h_colour_km: f64, q: f64) -> [f64; 3] {
-        let c = self.rgb_q(h_colour_km, q);
-        let own = self.rgb_q(h_km, q);
+        let lq = crate::chemistry::table::LineTable::log_q(q);
+        let c = self.rgb_lq(h_colour_km, lq);
+        let own = self.rgb_lq(h_km, lq);
         let y = luminance(own);
         let yc = luminance(c);
         if yc > 0.0 {

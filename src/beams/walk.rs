@@ -146,6 +146,9 @@ pub struct BeamTrace {
     pub end_position: DVec3,
     /// Deflection points, including the start (for tests and debugging).
     pub path: Vec<DVec3>,
+    /// The last photon's end: in the walk's frame and mapped to the scene
+    /// (f32), for the next step, which starts there ([`emit`]).
+    last_end: Option<(DVec3, [f32; 3])>,
 }
 
 impl BeamTrace {
@@ -162,6 +165,7 @@ impl BeamTrace {
             end: EndReason::MaxSteps,
             end_position: p,
             path: Vec::new(),
+            last_end: None,
         };
         if record_path {
             out.path.push(p);
@@ -218,8 +222,29 @@ pub struct BeamContext<'a> {
 /// it to a point at `end`.
 #[inline]
 pub fn deposit(earth: &Earth, start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
-    let (start, end) = (earth.to_scene(start), earth.to_scene(end));
-    Photon::segment([start.x as f32, start.y as f32, start.z as f32], [end.x as f32, end.y as f32, end.z as f32], power)
+    Photon::segment(scene_f32(earth, start), scene_f32(earth, end), power)
+}
+
+/// A walk-frame point mapped to the scene frame, in f32 (a photon's end).
+#[inline]
+fn scene_f32(earth: &Earth, q: DVec3) -> [f32; 3] {
+    let p = earth.to_scene(q);
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+/// [`deposit`] for the next photon of `out`: a step starting where the
+/// last one ended (the same bits) takes that end's mapping rather than
+/// mapping it again (on a round Earth a square root and a sine and cosine).
+#[inline]
+fn deposit_next(earth: &Earth, out: &mut BeamTrace, start: DVec3, end: DVec3, power: [f32; 3]) -> Photon {
+    let same = |a: DVec3, b: DVec3| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits);
+    let s = match out.last_end {
+        Some((q, s)) if same(q, start) => s,
+        _ => scene_f32(earth, start),
+    };
+    let e = scene_f32(earth, end);
+    out.last_end = Some((end, e));
+    Photon::segment(s, e, power)
 }
 
 /// Traces one beam (Baranoski et al. 2000, eq. for p_new) from `start`.
@@ -288,7 +313,8 @@ fn emit(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, from: DVec3, 
         }
         _ => ctx.colour.rgb_with_colour_altitude(to.z, h_colour, q).map(|c| c * kev_s),
     };
-    out.photons.push(deposit(&ctx.earth, from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]));
+    let photon = deposit_next(&ctx.earth, out, from, to, [rgb[0] as f32, rgb[1] as f32, rgb[2] as f32]);
+    out.photons.push(photon);
     out.deposits.push(StepDeposit { z_start: from.z, z_end: to.z, power_kev_s: kev_s, q });
     if let (Some(t), false) = (ctx.lines, ctx.line_outputs.is_empty()) {
         let zm = 0.5 * (from.z + to.z);
@@ -516,6 +542,22 @@ mod tests {
     use crate::beams::sample_gamma3;
     use crate::rng;
     use crate::spectrum::EmissionModel;
+
+    #[test]
+    fn chained_deposits_are_the_mapped_ends() {
+        // Steps that start where the last one ended reuse its mapping; a
+        // step that does not (a new start) maps its own; on a round Earth
+        // and a flat one, every photon is `deposit`'s.
+        for earth in [Earth::new(crate::earth::MEAN_RADIUS_KM), Earth::new(0.0)] {
+            let mut out = BeamTrace::begin(DVec3::ZERO, 0.0, false);
+            let pts = [DVec3::new(10.0, -3.0, 200.0), DVec3::new(10.2, -3.1, 198.5), DVec3::new(10.3, -3.0, 197.0)];
+            let steps = [(pts[0], pts[1]), (pts[1], pts[2]), (pts[0], pts[2]), (pts[2], DVec3::new(-0.0, 0.0, 120.0))];
+            for (a, b) in steps {
+                let got = deposit_next(&earth, &mut out, a, b, [1.0, 2.0, 3.0]);
+                assert_eq!(got, deposit(&earth, a, b, [1.0, 2.0, 3.0]), "{a} {b}");
+            }
+        }
+    }
 
     /// A footprint that is 1 everywhere in a huge box: beams never leave it.
     fn flat_footprint(size: f64) -> Footprint {

@@ -102,8 +102,24 @@ impl LineTable {
     /// The bilinear cell of (`h_km`, `q`), clamped to the grid.
     #[inline]
     pub fn cell(&self, h_km: f64, q: f64) -> Cell {
+        self.cell_log(h_km, Self::log_q(q))
+    }
+
+    /// The table's log q of `q` (its lowest for q <= 0), for [`Self::cell_log`].
+    #[inline]
+    pub fn log_q(q: f64) -> f64 {
+        if q > 0.0 {
+            q.log10()
+        } else {
+            LOG_Q.0
+        }
+    }
+
+    /// [`Self::cell`] at `lq = Self::log_q(q)`: several cells at one
+    /// ionization rate take its logarithm once.
+    #[inline]
+    pub fn cell_log(&self, h_km: f64, lq: f64) -> Cell {
         let u = ((h_km - H_KM.0) / DH_KM).clamp(0.0, (self.nh - 1) as f64);
-        let lq = if q > 0.0 { q.log10() } else { LOG_Q.0 };
         let v = ((lq - LOG_Q.0) / D_LOG_Q).clamp(0.0, (self.nq - 1) as f64);
         let (ih, iq) = ((u as usize).min(self.nh - 2), (v as usize).min(self.nq - 2));
         let (fu, fv) = (u - ih as f64, v - iq as f64);

@@ -209,13 +209,10 @@ impl LeafSums {
         if mask.iter().all(|&w| w == 0) {
             return None;
         }
-        let mut leaf = Leaf::new(origin, [0.0f32; 3]);
-        leaf.mask = mask;
-        for (n, x) in leaf.values.iter_mut().enumerate() {
-            if leaf.mask[n >> 6] >> (n & 63) & 1 == 1 {
-                *x = [v[0][n], v[1][n], v[2][n]];
-            }
-        }
-        Some(leaf)
+        // Each value written once: the sums where active, the background
+        // (zero) elsewhere, with no zeroed leaf first.
+        let values =
+            Box::new(std::array::from_fn(|n| if mask[n >> 6] >> (n & 63) & 1 == 1 { [v[0][n], v[1][n], v[2][n]] } else { [0.0f32; 3] }));
+        Some(Leaf { origin, mask, values })
     }
 }

@@ -31,12 +31,31 @@
 //! bits. Scratch space ([`SplatScratch`]) is reused from leaf to leaf, one
 //! per thread.
 
-use super::fast_math::{erf_lut_lanes, erf_table, exp_neg_f32};
+use super::fast_math::{erf_lut_lanes, erf_table, exp_neg_f32, ERF_LUT_LEN};
 use super::kernel::{Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums};
 use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::Leaf;
 use glam::IVec3;
+
+/// How many photons ahead of the one being added [`LeafGather::splat`]
+/// prefetches.
+const PREFETCH_AHEAD: usize = 4;
+
+/// A hint that the bytes at `p` will be read soon (no effect on results; a
+/// no-op off x86-64). Any address may be given: a prefetch never faults.
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` only hints the cache; it reads nothing the
+    // program sees and never faults, whatever the address (SSE, which it
+    // needs, is part of x86-64's baseline).
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p as *const i8)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
+}
 
 /// Scratch space of the splat, one per thread: the per-voxel sums (zero
 /// between leaves) and the point kernel's per-voxel constants.
@@ -94,7 +113,8 @@ fn segment_lanes<const N: usize>(
 /// The segment kernel's closed form at N lanes of a z-row from
 /// [`segment_lanes`]' `s`, `perp2` and `inside`, times the photon's power
 /// `phi`, added to the sums from voxel `n` on: `c inside exp(-perp2 / 2r^2)
-/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor.
+/// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor,
+/// the erfs from `erf` ([`erf_table`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn add_segment_lanes<const N: usize>(
@@ -107,8 +127,8 @@ fn add_segment_lanes<const N: usize>(
     c: f32,
     l: f32,
     phi: &[f32; 3],
+    erf: &[f32; ERF_LUT_LEN],
 ) {
-    let erf = erf_table();
     let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for j in 0..N {
         ex[j] = exp_neg_f32(-perp2[j] * q.inv_2r2);
@@ -162,7 +182,14 @@ impl LeafGather<'_> {
     #[inline(always)]
     fn splat_body(&self, origin: IVec3, photons: &[u32], scratch: &mut SplatScratch) -> Option<Leaf<[f32; 3]>> {
         let SplatScratch { acc, k } = scratch;
-        for &i in photons {
+        for (j, &i) in photons.iter().enumerate() {
+            // The bin's photons are scattered over the photon array: ask
+            // for the one a few ahead (and its kernel) to be in cache by
+            // the time it is read.
+            if let Some(&ahead) = photons.get(j + PREFETCH_AHEAD) {
+                prefetch(self.photons.as_ptr().wrapping_add(ahead as usize));
+                prefetch(self.splat_kernels.as_ptr().wrapping_add(ahead as usize));
+            }
             let p = &self.photons[i as usize];
             if !p.is_point() {
                 self.splat_segment(origin, p, &self.splat_kernels[i as usize], k, acc);
@@ -231,6 +258,9 @@ impl LeafGather<'_> {
             (sz[z], w2z[z]) = (w * dir.z, w * w);
         }
         let phi = p.power;
+        // The erf table, once per photon (not per row: its first use
+        // builds it).
+        let erf = erf_table();
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
         let (px, py) = (l * dir.x, l * dir.y);
@@ -267,7 +297,7 @@ impl LeafGather<'_> {
                     // half rows.
                     let (s8, perp2, inside) = segment_lanes(sxy, w2xy, &sz, &w2z, l, &q);
                     if inside != [0.0; 8] {
-                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi);
+                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi, erf);
                     }
                     continue;
                 }
@@ -277,7 +307,7 @@ impl LeafGather<'_> {
                     if inside == [0.0; 4] {
                         continue; // the half row misses the capsule
                     }
-                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi);
+                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi, erf);
                 }
             }
         }
