@@ -48,8 +48,9 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    --render-only skips the VDB writer, gather and seed2014 studies.
    --cases dome (not in the default cases) adds a dome master: the `oval`
    preset's own camera (180-degree equidistant fisheye looking up) at
-   1024x1024 (DOME), baked for it, without the stars Cycles does not draw; reference aurora render at 32 spp x 2
-   seeds at the image's own pixels; errors (RGB, and alpha) over the pixels
+   1024x1024 (DOME), baked for it, without the stars Cycles does not draw;
+   reference aurora render at 32 spp x 2 seeds at the image's own pixels;
+   errors (RGB, and alpha) over the pixels
    wholly inside the image circle, since outside it aurora's alpha is 0 (no
    ray) and Cycles' 1; one run per rung. Its figure is Cycles against
    aurora's lowest rung: Cycles' time to that rung's error, interpolated
