@@ -6,12 +6,16 @@
 Blender's colour management (display sRGB, view AgX, look None, no dither),
 the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
 a Cycles render and an `aurora render` PNG of the same scene are shown alike.
+The PNG is written to a temporary name in the output folder and renamed, so
+a reader never sees a half-written picture.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import tempfile
 from pathlib import Path
 
 
@@ -35,7 +39,21 @@ def main(argv=None) -> int:
     sc.render.dither_intensity = 0.0
     s = sc.render.image_settings
     s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"
-    img.save_render(str(Path(a.png).resolve()), scene=sc)
+    out = Path(a.png).resolve()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp.png", dir=out.parent)
+    os.close(fd)
+    try:
+        img.save_render(tmp, scene=sc)
+        if os.path.getsize(tmp) == 0:
+            raise RuntimeError(f"Blender wrote nothing to {tmp}")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600
+        os.replace(tmp, out)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
     return 0
 
 

@@ -2,7 +2,7 @@
 """Side by side, in one run, on one machine: aurora against the reference tools.
 
     .venv/bin/python tools/side_by_side.py [--out DIR] [--quick] [--skip-seed2014]
-        [--volume-target E] [--terrain-target E] [--size WxH] [--cases volume,terrain]
+        [--volume-target E] [--terrain-target E] [--size WxH] [--cases volume,terrain,dome]
         [--render-only] [--repeats N]
 
 Four studies, every number into DIR/side_by_side.json and a
@@ -46,6 +46,16 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    run in the time at hand: keep the rungs that bracket the targets). --size 640x360 runs the volume case
    at 640x360 with its own ladders and a 1x1 sub-pixel reference (SIZE_640);
    --render-only skips the VDB writer, gather and seed2014 studies.
+   --cases dome (not in the default cases) adds a dome master: the `oval`
+   preset's own camera (180-degree equidistant fisheye looking up) at
+   1024x1024 (DOME), baked for it, without the stars Cycles does not draw;
+   reference aurora render at 32 spp x 2 seeds at the image's own pixels;
+   errors (RGB, and alpha) over the pixels
+   wholly inside the image circle, since outside it aurora's alpha is 0 (no
+   ray) and Cycles' 1; one run per rung. Its figure is Cycles against
+   aurora's lowest rung: Cycles' time to that rung's error, interpolated
+   between its bracketing rungs, or a bound (">=": Cycles' last rung has not
+   reached it) when its ladder does not bracket it; nothing is extrapolated.
    Times: `aurora render` = wall time of the whole process (read the VDB,
    build, render, write the EXR); Cycles = wall time of bpy.ops.render.render
    inside one long-lived bpy process (Cycles' sync, loading the VDB, sampling,
@@ -107,6 +117,17 @@ class Failure(Exception):
 
 # ---------------------------------------------------------------- settings
 
+#: The dome case: the `oval` preset (its 180-degree equidistant fisheye
+#: looking up, a dome master) at SIZE pixels, baked for that camera from
+#: the preset with `scene_edits`; the reference is aurora at `ref_spp` per
+#: seed at the image's own pixels, both renderers without the preset's stars
+#: (aurora render draws them, Cycles does not). Errors are over the pixels
+#: wholly inside the image circle (outside it aurora's alpha is 0 and
+#: Cycles' 1).
+DOME = {"preset": "oval", "size": (1024, 1024), "ref_spp": 32, "scene_edits": {}}
+DOME_QUICK = {"preset": "oval", "size": (64, 64), "ref_spp": 16,
+              "scene_edits": {("beams", "count"): 1000, ("grid", "voxel_size"): 2.0}}
+
 #: What each mode runs. Ladders are sample counts (aurora: --spp with
 #: SHADOW_SAMPLES shadow samples per terrain hit; Cycles: --samples).
 FULL = {
@@ -118,9 +139,9 @@ FULL = {
     "ref_factor": 8,  # volume reference: 8x8 sub-pixels ...
     "ref_spp_volume": 8,  # ... at this many jittered samples each, per seed
     "ref_spp_terrain": 128,  # terrain reference: samples per pixel, per seed
-    "target": {"volume": 0.02, "terrain": 0.05},
+    "target": {"volume": 0.02, "terrain": 0.05, "dome": 0.01},
     # Further targets per case, each timed from one run of its bracketing rungs.
-    "extra_targets": {"volume": [0.005], "terrain": []},
+    "extra_targets": {"volume": [0.005], "terrain": [], "dome": []},
     # Which statistic of a rung's runs the equal-error times use.
     "stat": "best",
     "ladder": {
@@ -130,7 +151,11 @@ FULL = {
                    "cycles": [1, 2, 4, 8, 16, 32, 64, 128, 256],
                    "cycles_adaptive": [4, 8, 16, 32, 64, 128, 256]},
         "terrain": {"aurora": [1, 2, 4, 8, 16, 32], "cycles": [2, 4, 8, 16, 32, 64, 128]},
+        # Cycles takes about 50 s a sample at 1024x1024 on 2 cores: its
+        # ladder stops at 8 (about 12 minutes with the warm-up).
+        "dome": {"aurora": [1, 2, 4, 16], "cycles": [2, 4, 8]},
     },
+    "dome": DOME,
 }
 #: --size 640x360: 16x the pixels. The reference is aurora at
 #: 128 spp per seed at the image's own pixels (x2 seeds: 256 per pixel), so
@@ -141,11 +166,12 @@ SIZE_640 = {
     "size": (640, 360),
     "ref_factor": 1,
     "ref_spp_volume": 128,
-    "extra_targets": {"volume": [], "terrain": []},
+    "extra_targets": {"volume": [], "terrain": [], "dome": []},
     "bracket_repeats": 0,
     "ladder": {
         "volume": {"aurora": [4, 16, 64], "cycles": [4, 8, 16, 32]},
         "terrain": FULL["ladder"]["terrain"],
+        "dome": FULL["ladder"]["dome"],
     },
 }
 #: The renderers of the render study, in the order their rungs alternate:
@@ -164,26 +190,31 @@ QUICK = {
     "ref_spp_volume": 4,
     "ref_spp_terrain": 32,
     # Tiny images, noisy references: targets the short ladders reach.
-    "target": {"volume": 0.2, "terrain": 0.1},
-    "extra_targets": {"volume": [], "terrain": []},
+    "target": {"volume": 0.2, "terrain": 0.1, "dome": 0.1},
+    "extra_targets": {"volume": [], "terrain": [], "dome": []},
     "stat": "best",
     "ladder": {
         "volume": {"aurora": [4, 16, 64], "aurora_adaptive": [8, 16], "cycles": [1, 4, 16]},
         "terrain": {"aurora": [1, 4, 16], "cycles": [2, 8, 32]},
+        "dome": {"aurora": [1, 4, 16], "cycles": [1, 4, 16]},
     },
+    "dome": DOME_QUICK,
 }
 #: Emissive shadow samples per terrain hit (the cross-check's setting: at 1,
 #: aurora's terrain noise per pixel sample is 4x higher for little saving).
-SHADOW_SAMPLES = {"volume": 1, "terrain": 8}
+SHADOW_SAMPLES = {"volume": 1, "terrain": 8, "dome": 1}
 #: Cycles' biased-mode step, in voxels (the cross-check's: 0.1 resolves the
 #: one-voxel curtains; the terrain pixels see no volume, 0.25 is as exact there).
-STEP_RATE = {"volume": 0.1, "terrain": 0.25}
+STEP_RATE = {"volume": 0.1, "terrain": 0.25, "dome": 0.1}
 #: FULL["target"]: target errors (mean relative error) above both renderers'
 #: bias floors (cross-check: volume 0.42 %, terrain 2.4 %) and well above the
 #: reference's own error (measured and reported each run).
 #: Bias measured by the Cycles cross-check (README "Measured"); Cycles' flux
 #: against the reference must agree within this plus 1 % for noise.
-KNOWN_BIAS = {"volume": 0.0042, "terrain": 0.024}
+KNOWN_BIAS = {"volume": 0.0042, "terrain": 0.024, "dome": 0.0042}
+#: The render study's cases: the default bake volume only and over a plane,
+#: and the oval preset's dome master (DOME).
+CASES = ("volume", "terrain", "dome")
 REF_SEEDS = (9101, 9102)
 THREADS = 2
 
@@ -646,12 +677,62 @@ def study_render(tools: Tools, cfg: dict, worker: CyclesWorker, scene_text: str,
     d = out / "render"
     d.mkdir(parents=True, exist_ok=True)
     res = {"blender": worker.info["blender"], "size": [w, h], "threads": THREADS, "cases": {}}
+    cases = cfg.get("cases", ("volume", "terrain"))
     padded = d / "aurora.cycles-padded.vdb"
-    pad = worker.ask(op="pad", src=str(vdb), dst=str(padded))
-    res["cycles_padding_s"] = pad["seconds"]
-    for case in cfg.get("cases", ("volume", "terrain")):
+    res["cycles_padding_s"] = 0.0
+    if any(c != "dome" for c in cases):
+        pad = worker.ask(op="pad", src=str(vdb), dst=str(padded))
+        res["cycles_padding_s"] = pad["seconds"]
+    for case in cases:
+        if case == "dome":
+            res["cases"][case] = dome_case(tools, cfg, worker, compare, np, write_rgba_exr, d / case,
+                                           targets[case])
+            res["cycles_padding_s"] += res["cases"][case]["bake"]["cycles_padding_s"]
+            continue
         res["cases"][case] = render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb,
                                          padded, d / case, case, targets[case])
+    return res
+
+
+def fisheye_mask(width: int, height: int) -> "np.ndarray":
+    """Pixels of an equidistant fisheye wholly inside its image circle (all
+    four corners within it: src/camera.rs maps the raster to u, v in [-1, 1]
+    per axis and has no ray beyond r = 1)."""
+    import numpy as np
+
+    ys, xs = np.mgrid[0:height, 0:width]
+    inside = np.ones((height, width), bool)
+    for dx, dy in ((0, 0), (1, 0), (0, 1), (1, 1)):
+        u = 2.0 * (xs + dx) / width - 1.0
+        v = 1.0 - 2.0 * (ys + dy) / height
+        inside &= u * u + v * v <= 1.0
+    return inside
+
+
+def dome_case(tools, cfg, worker, compare, np, write_rgba_exr, d: Path, target: float) -> dict:
+    """The DOME preset at its size, baked for that camera, then render_case."""
+    dome = cfg["dome"]
+    w, h = dome["size"]
+    d.mkdir(parents=True, exist_ok=True)
+    text = run([tools.aurora, "scene", dome["preset"]], f"aurora scene {dome['preset']}").stdout
+    cam = text.split("[camera]", 1)[1]
+    if not re.search(r'(?m)^projection\s*=\s*"fisheye"', cam.split("\n[", 1)[0]):
+        raise Failure(f"the {dome['preset']} preset's camera is not a fisheye")
+    text = edit_toml(text, {**dome["scene_edits"], ("render", "width"): w, ("render", "height"): h})
+    scene = d / "bake-scene.toml"
+    write_atomic(scene, text.encode())
+    log(f"render dome: bake {dome['preset']} at {w}x{h}")
+    b = bake(tools, scene, d / "bake")
+    vdb = d / "bake" / "aurora.vdb"
+    padded = d / "aurora.cycles-padded.vdb"
+    pad = worker.ask(op="pad", src=str(vdb), dst=str(padded))
+    # One run per rung: a 1024x1024 Cycles rung takes minutes.
+    res = render_case(tools, {**cfg, "size": (w, h), "ref_factor": 1, "bracket_repeats": 0,
+                              "ref_spp_dome": dome["ref_spp"]}, worker, compare, np, write_rgba_exr, text, vdb,
+                      padded, d, "dome", target)
+    res["bake"] = {"preset": dome["preset"], "edits": {f"{k[0]}.{k[1]}": v for k, v in dome["scene_edits"].items()},
+                   "wall_s": b["wall_s"], "cpu_s": b["cpu_s"], "times_s": b["bake"]["stats"]["times_s"],
+                   "active_voxels": b["bake"]["stats"]["active_voxels"], "cycles_padding_s": pad["seconds"]}
     return res
 
 
@@ -666,6 +747,10 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
     edits = {("render", "width"): w, ("render", "height"): h, ("render", "spp"): 16}
     if case == "volume":
         edits[("terrain", "kind")] = "none"
+    elif case == "dome":
+        # The preset as baked (its camera, air and ground) without the
+        # procedural stars, which aurora render draws and Cycles does not.
+        edits[("background", "stars")] = False
     else:
         edits[("terrain", "kind")] = "plane"
         cam = re.search(r"(?m)^look_at\s*=\s*\[([^\]]*)\]", scene_text.split("[camera]", 1)[1])
@@ -684,12 +769,21 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
         mpath = d / "terrain-mask.npy"
         worker.ask(op="terrain_mask", scene=str(scene), width=w, height=h, out=str(mpath))
         mask = np.load(mpath)
+    elif case == "dome":
+        mask = fisheye_mask(w, h)
 
     def error(path) -> dict:
-        m = compare.metrics(compare.read_rgba(path), ref, mask)
+        img = compare.read_rgba(path)
+        m = compare.metrics(img, ref, mask)
         if case == "terrain":
             return {"error": m["mask_mean_rel_err"], "flux_ratio": m["mask_flux_ratio"],
                     "pixels": m["mask_bright_pixels"]}
+        if case == "dome":
+            # RGB and alpha inside the image circle only: outside it aurora
+            # writes alpha 0 (no ray), Cycles alpha 1.
+            da = np.abs(img[..., 3] - ref[..., 3])[mask]
+            return {"error": m["mask_mean_rel_err"], "flux_ratio": m["mask_flux_ratio"],
+                    "pixels": m["mask_bright_pixels"], "max_alpha_diff": float(da.max())}
         return {"error": m["mean_rel_err"], "flux_ratio": m["flux_ratio"], "pixels": m["bright_pixels"],
                 "max_alpha_diff": m["max_alpha_diff"]}
 
@@ -702,7 +796,7 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
         ref_scene = d / "reference-scene.toml"
         write_atomic(ref_scene, edit_toml(scene.read_text(), {("render", "width"): w * f,
                                                               ("render", "height"): h * f}).encode())
-    spp_ref = cfg["ref_spp_volume"] if case == "volume" else cfg["ref_spp_terrain"]
+    spp_ref = cfg[f"ref_spp_{case}"]
     for s in REF_SEEDS:
         p = d / f"reference-seed{s}.exr"
         ref_runs.append(aurora_render(tools, ref_scene, vdb, p, spp_ref, shadow, seed=s))
@@ -711,7 +805,7 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
     ref = 0.5 * (refs[0] + refs[1])
     write_rgba_exr(d / "reference.exr", ref.astype(np.float32), {"aurora_reference": f"mean of seeds {REF_SEEDS}"})
     mutual = compare.metrics(refs[0], refs[1], mask)
-    mutual_err = mutual["mask_mean_rel_err"] if case == "terrain" else mutual["mean_rel_err"]
+    mutual_err = mutual["mask_mean_rel_err"] if mask is not None else mutual["mean_rel_err"]
     reference = {
         "renderer": "aurora render",
         "why": "exact ray integration (closed-form tests to 1e-4): its only error is Monte Carlo noise, which "
@@ -800,10 +894,18 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
     for t in targets[1:]:
         for k, v in ratios_at(eq_all[t]).items():
             ratios[f"at_{100 * t:g}pct.{k}"] = v
+    low = lowest_rung(ladders, stat)
+    if case == "dome":
+        # aurora's first rung already beats any target Cycles' ladder reaches
+        # in the time at hand: the dome's figure is Cycles' time to aurora's
+        # error at that rung, measured if Cycles reached it, else a bound
+        # (nothing extrapolated).
+        ratios = dict(low["ratios"])
     top = ladders["cycles"][-1]
     agree_tol = KNOWN_BIAS[case] + 0.01
     return {
         "scene": str(scene),
+        "size": [w, h],
         "what": {
             "aurora": f"aurora render --spp N --shadow-samples {shadow} --threads {THREADS}: stratified antithetic "
                       "positions in the pixel square (render::pixel_position: Sobol (0,2) points and their "
@@ -813,7 +915,9 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
                       f"{step}, box filter, padded VDB{', terrain lit by emission point lights' if case == 'terrain' else ''}; "
                       "time = wall of bpy.ops.render.render in one bpy process (set-up excluded, in setup_s)",
             "metric": "mean relative error over pixels above 1% of the peak (tools/compare.py)"
-                      + ("; over the pixels wholly on the plane" if case == "terrain" else ""),
+                      + ("; over the pixels wholly on the plane" if case == "terrain" else "")
+                      + ("; RGB and alpha over the pixels wholly inside the fisheye's image circle"
+                         if case == "dome" else ""),
         },
         "shadow_samples": shadow,
         "step_rate": step,
@@ -826,6 +930,7 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
         "equal_error": eq,
         "targets": [{"target_error": t, "equal_error": eq_all[t], "ratios": ratios_at(eq_all[t])} for t in targets],
         "ratios": ratios,
+        "at_aurora_lowest_rung": low,
         "cycles_converged": {
             "samples": top["samples"], "error": top["error"], "flux_ratio": top["flux_ratio"],
             "known_cross_check_bias": KNOWN_BIAS[case],
@@ -833,6 +938,38 @@ def render_case(tools, cfg, worker, compare, np, write_rgba_exr, scene_text, vdb
             "rule": f"|Cycles flux / reference flux - 1| <= known bias + 1% = {agree_tol:.4f}",
         },
     }
+
+
+def lowest_rung(ladders: dict, stat: str) -> dict:
+    """Cycles against aurora's lowest rung (its error e and time t): Cycles'
+    time to e interpolated between the two rungs that bracket it; if its
+    last rung is still above e, that rung's time is a lower bound on it
+    (relation ">="), and if its first rung is already below e, an upper bound
+    ("<="). Nothing is extrapolated. The ratios are aurora / Cycles."""
+    a = ladders["aurora"][0]
+    cyc = ladders["cycles"]
+    out = {"aurora": {"samples": a["samples"], "error": a["error"], "wall_s": a[f"{stat}_wall_s"],
+                      "cpu_s": a[f"{stat}_cpu_s"]}}
+    if cyc[-1]["error"] > a["error"]:
+        c, out["relation"] = cyc[-1], ">="
+        how = "its last rung, still above aurora's error: Cycles needs at least this"
+    elif cyc[0]["error"] <= a["error"]:
+        c, out["relation"] = cyc[0], "<="
+        how = "its first rung, already at or below aurora's error: Cycles needs at most this"
+    else:
+        c, out["relation"] = None, "="
+    if c is None:
+        e = interpolate(cyc, a["error"], stat)
+        out["cycles"] = {"how": e["how"], "samples": e["samples"], "between": e["between"], "wall_s": e["wall_s"],
+                         "cpu_s": e["cpu_s"]}
+    else:
+        out["cycles"] = {"how": how, "samples": c["samples"], "error": c["error"], "wall_s": c[f"{stat}_wall_s"],
+                         "cpu_s": c[f"{stat}_cpu_s"]}
+    # A lower bound on Cycles' time is an upper bound on aurora / Cycles.
+    key = {"=": "", ">=": "_at_most", "<=": "_at_least"}[out["relation"]]
+    out["ratios"] = {f"aurora_over_cycles_wall{key}": out["aurora"]["wall_s"] / out["cycles"]["wall_s"],
+                     f"aurora_over_cycles_cpu{key}": out["aurora"]["cpu_s"] / out["cycles"]["cpu_s"]}
+    return out
 
 
 # ---------------------------------------------------------------- 4. seed2014
@@ -933,10 +1070,17 @@ def report_vdb_gather(res: dict, L: list) -> None:
 
 def report_render(res: dict, L: list) -> None:
     rr = res["render"]
-    L.append(f"3. aurora render against Cycles at equal error ({rr['size'][0]}x{rr['size'][1]}, {rr['threads']} threads "
+    # The dome case has its own size, printed on its own line.
+    size = f"{rr['size'][0]}x{rr['size'][1]}, " if any(c != "dome" for c in rr["cases"]) else ""
+    L.append(f"3. aurora render against Cycles at equal error ({size}{rr['threads']} threads "
              f"each, pixel-area sampling in both)")
     for case, c in rr["cases"].items():
         ref = c["reference"]
+        if case == "dome":
+            b = c["bake"]
+            L.append(f"   dome: the {b['preset']} preset's dome master at {c['size'][0]}x{c['size'][1]} (180-degree "
+                     f"equidistant fisheye looking up), baked for it{' with ' + str(b['edits']) if b['edits'] else ''} "
+                     f"in {b['wall_s']:.1f} s; errors inside the image circle")
         L.append(f"   {case}: reference = aurora render, {ref['samples_per_pixel_total']} samples/pixel "
                  f"({ref['subpixels'] + ' sub-pixels x ' if ref['subpixels'] != '1' else ''}{ref['spp_per_seed']} spp x 2 seeds"
                  f"{', %d shadow samples per terrain hit' % ref['shadow_samples'] if case == 'terrain' else ''}); its own error ~{100 * ref['own_error_estimate']:.2f}%")
@@ -953,8 +1097,10 @@ def report_render(res: dict, L: list) -> None:
         if c.get("cycles_adaptive_threshold") is not None:
             L.append(f"     cycles+ad: Cycles with adaptive sampling on (noise threshold {c['cycles_adaptive_threshold']}, "
                      "automatic minimum samples; samples = the maximum per pixel)")
-        for tt in c.get("targets") or [{"target_error": c["target_error"], "equal_error": c["equal_error"],
-                                        "ratios": c["ratios"]}]:
+        # The dome's figure is the comparison at aurora's lowest rung (below).
+        for tt in [] if case == "dome" else c.get("targets") or [{"target_error": c["target_error"],
+                                                                  "equal_error": c["equal_error"],
+                                                                  "ratios": c["ratios"]}]:
             eqs, rt = tt["equal_error"], tt["ratios"]
             ea = eqs["aurora"]
             L.append(f"     at {100 * tt['target_error']:.1f}% error: aurora {ea['samples']:.0f} spp, {ea['wall_s']:.2f} s "
@@ -974,6 +1120,16 @@ def report_render(res: dict, L: list) -> None:
                     k = "aurora_adaptive_over_" + who
                     L.append(f"         against {names[who]:<9}: wall {rt[k + '_wall']:.3f}, cpu {rt[k + '_cpu']:.3f} "
                              f"(Cycles / aurora+ad {1 / rt[k + '_wall']:.1f}x wall, {1 / rt[k + '_cpu']:.1f}x cpu)")
+        lo = c.get("at_aurora_lowest_rung")
+        if lo:
+            la, lc = lo["aurora"], lo["cycles"]
+            rel = "" if lo["relation"] == "=" else lo["relation"] + " "
+            L.append(f"     at aurora's lowest rung ({la['samples']} spp, {100 * la['error']:.3f}% error, "
+                     f"{la['wall_s']:.2f} s wall, {la['cpu_s']:.2f} s cpu): Cycles {lc['samples']:.0f} samples"
+                     + (f" ({100 * lc['error']:.3f}% error)" if "error" in lc else "")
+                     + f", {lc['wall_s']:.1f} s wall, {lc['cpu_s']:.1f} s cpu ({lc['how']})")
+            L.append(f"       Cycles / aurora {rel}{lc['wall_s'] / la['wall_s']:.1f}x wall, "
+                     f"{rel}{lc['cpu_s'] / la['cpu_s']:.1f}x cpu")
         cc = c["cycles_converged"]
         L.append(f"     Cycles at {cc['samples']} samples: {100 * cc['error']:.2f}% from the reference, flux "
                  f"{cc['flux_ratio']:.4f} (cross-check bias {100 * cc['known_cross_check_bias']:.2f}%): "
@@ -1031,7 +1187,8 @@ def main(argv=None) -> int:
     p.add_argument("--terrain-target", type=float, help="target error, terrain (default 0.05; quick 0.1)")
     p.add_argument("--size", help="render study image size WxH (default 160x90; 640x360 selects its own ladders, "
                                   "reference and one run per rung: SIZE_640)")
-    p.add_argument("--cases", default="volume,terrain", help="render study cases (comma-separated: volume,terrain)")
+    p.add_argument("--cases", default="volume,terrain", help="render study cases (comma-separated: volume, terrain, "
+                                                             "dome: the oval preset's 1024x1024 dome master)")
     p.add_argument("--render-only", action="store_true", help="bake, then only the render study (no VDB writer, "
                                                                 "gather or seed2014 study)")
     p.add_argument("--repeats", type=int, help="runs of the rungs that bracket the headline target (default 2; "
@@ -1079,8 +1236,8 @@ def run_all(a) -> int:
         lad["volume"][who] = [int(x) for x in ns.split(",") if x]
         cfg["ladder"] = lad
     cases = tuple(c for c in a.cases.split(",") if c)
-    if not cases or any(c not in ("volume", "terrain") for c in cases):
-        raise Failure(f"--cases {a.cases}: expected volume and/or terrain")
+    if not cases or any(c not in CASES for c in cases):
+        raise Failure(f"--cases {a.cases}: expected some of {', '.join(CASES)}")
     cfg["cases"] = cases
     if a.repeats is not None:
         if a.repeats < 1:
@@ -1129,13 +1286,16 @@ def run_studies(a, cfg, out, res, tools, vdb, worker, t_start) -> int:
         scene_arg = "default"
     res["scene"] = {"preset": "default", "edits": {f"{s}.{k}": v for (s, k), v in cfg["scene_edits"].items()}}
 
-    log(f"bake {scene_arg}")
     t = time.perf_counter()
-    main_bake = bake(tools, scene_arg, out / "bake")
-    res["bake"] = {"wall_s": main_bake["wall_s"], "times_s": main_bake["bake"]["stats"]["times_s"],
-                   "photons": main_bake["bake"]["stats"]["photons"],
-                   "active_voxels": main_bake["bake"]["stats"]["active_voxels"],
-                   "vdb_bytes": main_bake["bake"]["files"]["vdb_bytes"]}
+    if a.render_only and set(cfg["cases"]) == {"dome"}:
+        res["bake"] = {"skipped": "only the dome case, which bakes its own scene"}
+    else:
+        log(f"bake {scene_arg}")
+        main_bake = bake(tools, scene_arg, out / "bake")
+        res["bake"] = {"wall_s": main_bake["wall_s"], "times_s": main_bake["bake"]["stats"]["times_s"],
+                       "photons": main_bake["bake"]["stats"]["photons"],
+                       "active_voxels": main_bake["bake"]["stats"]["active_voxels"],
+                       "vdb_bytes": main_bake["bake"]["files"]["vdb_bytes"]}
 
     if not a.render_only:
         res["vdb_write"] = study_vdb(tools, cfg, out / "bake", out)
@@ -1145,7 +1305,7 @@ def run_studies(a, cfg, out, res, tools, vdb, worker, t_start) -> int:
         res["sections_s"]["gather"] = time.perf_counter() - t
     t = time.perf_counter()
     targets = {"volume": a.volume_target or cfg["target"]["volume"],
-               "terrain": a.terrain_target or cfg["target"]["terrain"]}
+               "terrain": a.terrain_target or cfg["target"]["terrain"], "dome": cfg["target"]["dome"]}
     res["render"] = study_render(tools, cfg, worker, scene_text, out / "bake" / "aurora.vdb", out, targets)
     res["sections_s"]["render"] = time.perf_counter() - t
     worker.close()  # free bpy's memory before seed2014

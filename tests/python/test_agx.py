@@ -17,6 +17,7 @@ from __future__ import annotations
 import os
 import struct
 import subprocess
+import sys
 import zlib
 from pathlib import Path
 
@@ -177,3 +178,26 @@ def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):
     img.save_render(str(tmp_path / "b.png"), scene=sc)
     d = np.abs(read_png_rgb8(png).astype(int) - read_png_rgb8(tmp_path / "b.png").astype(int)).max(-1)
     assert (d <= 1).mean() >= 0.999, f"max {d.max()}"
+
+
+def test_agx_png_tool_writes_through_a_temporary_and_renames(bpy, compare, tmp_path):
+    """tools/agx_png.py gives Blender's AgX picture of the EXR, replaces an
+    existing PNG and leaves no temporary file beside it."""
+    scene = tmp_path / "t.toml"
+    scene.write_text(synth.toml_dumps({
+        "beams": {"count": 1000}, "footprint": {"resolution": [64, 16]}, "grid": {"voxel_size": 2.0},
+        "photons": {"radius_km": 1.5}, "render": {"width": 64, "height": 36, "spp": 2, "exposure": 5.0},
+    }))
+    exr = tmp_path / "t.exr"
+    r = subprocess.run([aurora_bin(), "render", scene, "--out", exr, "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    out_dir = tmp_path / "pictures"
+    out_dir.mkdir()
+    png = out_dir / "t.png"
+    png.write_bytes(b"an older picture")
+    tool = ROOT / "tools" / "agx_png.py"
+    r = subprocess.run([sys.executable, tool, exr, png, "--exposure", "5"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in out_dir.iterdir()) == ["t.png"]
+    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 5.0)
+    assert np.array_equal(read_png_rgb8(png), theirs)

@@ -27,6 +27,7 @@ def test_cli_writes_rgba_float_exr_with_background_in_rgb(tmp_path):
     r = subprocess.run([sys.executable, TOOL, scene, "--vdb", vdb, "--out", out, "--samples", "16", "-q"],
                        capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
+    assert "Saved:" not in r.stdout, r.stdout  # -q: not even Blender's own lines
     assert sorted(p.name for p in out.parent.iterdir()) == ["o.exr"]  # no temporary file left
     with OpenEXR.File(str(out), separate_channels=True) as f:
         ch = f.channels()

@@ -2,11 +2,15 @@
 
 The quick mode bakes a reduced default scene (1,000 beams, 1 km voxels),
 times the VDB writers once, bakes the three gather methods, renders 64x36
-ladders with `aurora render` and Cycles, and skips seed2014. Asserted here:
+ladders with `aurora render` and Cycles, and skips seed2014; `--cases
+volume,terrain,dome` adds the dome master (the oval preset reduced to 1,000
+beams and 2 km voxels, baked and rendered at 64x64). Asserted here:
 the JSON's structure; every ratio finite and positive; the files of the
 three OpenVDB writers read back (pyopenvdb) with our file's active voxels and
 values; errors fall with samples for both renderers; Cycles' flux agrees with
-the reference. The speed numbers themselves are the full run's business
+the reference; the dome's errors are taken inside the fisheye's image circle
+and its figure against aurora's lowest rung is a measured time or a bound,
+never an extrapolation. The speed numbers themselves are the full run's business
 (benchmarks/side_by_side/), never a timed test's.
 """
 
@@ -27,8 +31,8 @@ def test_quick_side_by_side_runs_and_is_consistent(tmp_path):
     out = tmp_path / "sbs"
     env = dict(os.environ)
     env.setdefault("AURORA_BIN", str(ROOT / "target" / "release" / "aurora"))
-    r = subprocess.run([sys.executable, TOOL, "--quick", "--out", out], capture_output=True, text=True, env=env,
-                       timeout=600)
+    r = subprocess.run([sys.executable, TOOL, "--quick", "--cases", "volume,terrain,dome", "--out", out],
+                       capture_output=True, text=True, env=env, timeout=900)
     assert r.returncode == 0, f"side_by_side --quick failed ({r.returncode}):\n{r.stdout[-3000:]}\n{r.stderr[-5000:]}"
     res = json.loads((out / "side_by_side.json").read_text())
     text = (out / "side_by_side.txt").read_text()
@@ -94,3 +98,22 @@ def test_quick_side_by_side_runs_and_is_consistent(tmp_path):
                 # samples are antithetic): the equal-error point lies below it.
                 assert lad[0]["error"] <= c["target_error"] and 0 < eq["samples"] <= lad[0]["samples"], (case, who, eq, lad[0])
         assert c["cycles_converged"]["agrees"], (case, c["cycles_converged"])
+
+    # The dome master: its own bake, errors inside the image circle, the
+    # figure at aurora's lowest rung.
+    dome = res["render"]["cases"]["dome"]
+    assert dome["size"] == [64, 64] and dome["bake"]["preset"] == "oval"
+    assert dome["bake"]["active_voxels"] > 0
+    assert "image circle" in dome["what"]["metric"]
+    for who in ("aurora", "cycles"):
+        lad = dome["ladders"][who]
+        assert len(lad) >= 3, who
+        errs = [e["error"] for e in lad]
+        assert all(a > b for a, b in zip(errs, errs[1:])), (who, errs)
+        assert all(e["max_alpha_diff"] < 0.5 for e in lad), (who, [e["max_alpha_diff"] for e in lad])
+    low = dome["at_aurora_lowest_rung"]
+    assert low["relation"] in ("=", ">=", "<="), low
+    assert low["cycles"]["how"] != "extrapolated: the ladder does not reach the target", low
+    assert set(dome["ratios"]) == set(low["ratios"]) and dome["ratios"], dome["ratios"]
+    assert dome["cycles_converged"]["agrees"], dome["cycles_converged"]
+    assert "dome: the oval preset's dome master at 64x64" in text

@@ -21,6 +21,8 @@ written to a temporary name in the output folder and renamed.
 
 from __future__ import annotations
 
+import contextlib
+import os
 import resource
 import sys
 import tempfile
@@ -76,7 +78,8 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         scene.render.filepath = str(raw)
         t1 = time.perf_counter()
         cpu1 = _cpu_seconds()
-        bpy.ops.render.render(write_still=True)
+        with _stdout_to_devnull(quiet):
+            bpy.ops.render.render(write_still=True)
         t_render = time.perf_counter() - t1
         cpu_render = _cpu_seconds() - cpu1
         layers = read_exr_layers(raw)
@@ -106,6 +109,26 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         print(f"cycles_render: wrote {out} ({rgba.shape[1]}x{rgba.shape[0]}, {s.samples} spp, "
               f"{meta['aurora_volume_mode']} step rate {s.step_rate}) render {t_render:.2f} s", file=sys.stderr)
     return info
+
+
+@contextlib.contextmanager
+def _stdout_to_devnull(on: bool):
+    """With `on`, file descriptor 1 points at /dev/null for the block:
+    Blender's C code prints its "Saved: ..." and "Time: ..." lines there,
+    past sys.stdout."""
+    if not on:
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(1)
+    null = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(null, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+        os.close(null)
 
 
 def _cpu_seconds() -> float:
