@@ -15,7 +15,7 @@ unchanged) the biased mode matches trilinear interpolation exactly.
 `pad_vdb(src, dst)` writes such a copy (all grids, file metadata kept); it
 uses Blender's bundled `openvdb` module (or Debian's `pyopenvdb`).
 `has_cycles_shell(path)` tells whether a file already carries the shell:
-`aurora bake` writes it (`grid.cycles_shell = true`, the default) and marks
+`aurora bake` writes it with `grid.cycles_shell = true` (off by default) and marks
 every grid with the metadata `aurora_cycles_shell = true`, so the add-on
 need not copy it.
 """

@@ -68,7 +68,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             let (t0, c0) = (Instant::now(), cpu());
             let mut emission = timed("gather", || plan::gather(&plan, &traced.photons, voxel.0, &NoProgress));
             let t1 = Instant::now();
-            let (_, peak_y) = timed("scan", || plan::scan_emission(&emission, plan.grid.half_emission, plan.kernel.base_km))?;
+            let (_, peak_y) = timed("scan", || plan::scan_emission(&emission, plan.kernel.base_km))?;
             if plan.grid.prune > 0.0 {
                 let camera = plan.camera_model()?;
                 timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));

@@ -408,12 +408,13 @@ pub enum AutoTag {
 /// is 2.7 %, visible in the faint fringes.
 pub const DEFAULT_PRUNE: f64 = 1e-3;
 
-/// Default `grid.high_above_km`, from the storage study on the default
-/// scene (`docs/storage.md`): above it lies about half of the bake's voxels
-/// and a small share of its light. At 240 km, with half floats and the
-/// default pruning, the default frame is 61.0 MB and its picture within
-/// 0.43 % of the full-precision unpruned file's (the dome master: 59.9 MB,
-/// 0.34 %); at 250 km 63.8 MB and 0.37 %, at 230 km 58.1 MB and 0.52 %.
+/// Default `grid.high_above_km` (used with `grid.high_voxel_factor > 1`),
+/// from the storage study on the default scene (`docs/storage.md`): above
+/// it lies about half of the bake's voxels and a small share of its light.
+/// At 240 km, with half floats and the default pruning, the default frame
+/// is 61.0 MB and its picture (640x360, 16 spp) within 0.43 % of the
+/// full-precision unpruned file's; the dome master from the scene camera's
+/// position 0.63 %.
 pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
 
 /// Largest `grid.high_voxel_factor`.
@@ -708,7 +709,10 @@ impl Default for GridParams {
             half_density: true,
             cycles_shell: false,
             high_above_km: DEFAULT_HIGH_ABOVE_KM,
-            high_voxel_factor: 2,
+            // One grid per field by default: with the high column apart,
+            // Cycles lights terrain with up to 9 % less of the column's red
+            // light than `aurora render` (docs/storage.md).
+            high_voxel_factor: 1,
             // OpenVDB's and Houdini's default; read by OpenVDB 10-12,
             // Blender 5 and our reader; writes ~8x faster than ZIP, same size.
             compression: Compression::BloscActiveMask,
