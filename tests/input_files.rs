@@ -127,6 +127,13 @@ impl Writer {
 /// message (the path and its kind) and that the FIFO is untouched; returns
 /// the longest run.
 fn refuse_all(specials: &Specials, what: &str, args_for: &dyn Fn(&Path) -> Vec<std::ffi::OsString>) -> Duration {
+    // A new FIFO for every round: the last round released its writer by
+    // opening the FIFO for reading, and a child spawned meanwhile by another
+    // test's thread holds a copy of that descriptor until its `exec`. On the
+    // same FIFO this round's writer could then find a reader and return at
+    // once, as if aurora had opened it. A fresh inode has no such reader.
+    std::fs::remove_file(&specials.fifo).expect("remove the last round's FIFO");
+    mkfifo(&specials.fifo);
     let before = stamp(&specials.fifo);
     let writer = Writer::start(&specials.fifo);
     let mut longest = Duration::ZERO;
