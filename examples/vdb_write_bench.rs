@@ -165,7 +165,7 @@ fn main() -> anyhow::Result<()> {
     let tool = openvdb_tool::build(Path::new(env!("CARGO_MANIFEST_DIR"))).map_err(anyhow::Error::msg)?;
     println!("{:<16} {:>10} {:>10} {:>7} {:>12} {:>12} {:>7}", "mode", "aurora s", "openvdb s", "ratio", "aurora B", "openvdb B", "size");
     for &mode in &args.modes {
-        let opts = WriteOptions { compression: mode, half: args.half.clone(), metadata: vec![] };
+        let opts = WriteOptions { compression: mode, half: args.half.clone(), metadata: vec![], ..Default::default() };
         let ours_path = args.out_dir.join(format!("aurora_{}.vdb", mode_name(mode)));
         // Alternate the two writers run by run so that load from other
         // processes on the machine hits both alike; compare the best runs.

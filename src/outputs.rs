@@ -22,6 +22,7 @@ use crate::bake_identity::BakeIdentity;
 use crate::grid::Grid;
 use crate::scene::Scene;
 use crate::usd;
+use crate::vdb::codec::Deflate;
 use crate::vdb::write::{write_vdb_into, GridRef, MetaValue, WriteOptions};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -168,14 +169,17 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
 
 /// The VDB write options the scene asks for, for `density` and
 /// `emission` (the high column's grids follow their fine grids:
-/// [`with_high_column`]).
+/// [`with_high_column`]): half floats, mantissa bits, and libdeflate for
+/// ZIP (a valid zlib stream, three to four times faster to write than
+/// OpenVDB's zlib at level 6).
 pub fn write_options(scene: &Scene) -> WriteOptions {
     let half = [(scene.grid.half_density, "density"), (scene.grid.half_emission, "emission")]
         .into_iter()
         .filter(|(on, _)| *on)
         .map(|(_, name)| name.to_string())
         .collect();
-    WriteOptions { compression: scene.grid.compression, half, metadata: vdb_metadata(scene) }
+    let mantissa_bits = ["density", "emission"].map(|g| (g.to_string(), scene.grid.mantissa_bits)).to_vec();
+    WriteOptions { compression: scene.grid.compression, half, mantissa_bits, deflate: Deflate::Fast, metadata: vdb_metadata(scene) }
 }
 
 /// `options` without the half-float requests for grids whose values do
@@ -195,10 +199,13 @@ pub fn fit_half(mut options: WriteOptions, grids: &[GridRef<'_>]) -> (WriteOptio
 }
 
 /// `options` for a file that also holds the high column: `NAME_high` is
-/// stored as half floats where `NAME` is.
+/// stored as `NAME` is (half floats, mantissa bits).
 pub fn with_high_column(mut options: WriteOptions) -> WriteOptions {
-    let high: Vec<String> = options.half.iter().map(|n| format!("{n}{}", crate::column::HIGH_SUFFIX)).collect();
-    options.half.extend(high);
+    let high = |n: &str| format!("{n}{}", crate::column::HIGH_SUFFIX);
+    let half: Vec<String> = options.half.iter().map(|n| high(n)).collect();
+    let bits: Vec<(String, u32)> = options.mantissa_bits.iter().map(|(n, b)| (high(n), *b)).collect();
+    options.half.extend(half);
+    options.mantissa_bits.extend(bits);
     options
 }
 
@@ -369,6 +376,7 @@ fn stage_unit(
         "compression": options.compression,
         "half_emission": options.half.iter().any(|g| g == "emission"),
         "half_density": options.half.iter().any(|g| g == "density"),
+        "mantissa_bits": options.mantissa_bits.iter().find(|(g, _)| g == "emission").map(|(_, b)| *b),
         "full_float_beyond_half_range": full_float,
         "high_column": high.as_ref().map(|h| json!({
             "above_km": h.column.above_km,

@@ -134,6 +134,7 @@ fn openvdb_reads_every_file_we_write() {
                 compression: comp,
                 half: if half { vec!["density".into(), "emission".into()] } else { vec![] },
                 metadata: vec![("units".into(), MetaValue::String("km".into())), ("seed".into(), MetaValue::Int64(7))],
+                ..Default::default()
             };
             write_vdb(&path, &[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
             files.push((comp, half, path));
@@ -306,7 +307,7 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
             let half_names: Vec<String> = if half { vec!["density".into(), "emission".into(), "mask_cases".into()] } else { vec![] };
             let ours = dir.join(format!("ours_{comp:?}_{half}.vdb"));
             let theirs = dir.join(format!("theirs_{comp:?}_{half}.vdb"));
-            let opts = WriteOptions { compression: comp, half: half_names.clone(), metadata: vec![] };
+            let opts = WriteOptions { compression: comp, half: half_names.clone(), metadata: vec![], ..Default::default() };
             write_vdb(&ours, &[GridRef::Float(&d), GridRef::Vec3(&e), GridRef::Float(&m)], &opts).unwrap();
             let mode = match comp {
                 Compression::None => "none",
@@ -383,6 +384,12 @@ fn openvdb_reads_the_default_bake_with_its_high_column() {
     check_tree(by_name["emission"], e, "vec3s", true, "emission");
     check_tree(by_name["density_high"], dh, "float", true, "density_high");
     check_tree(by_name["emission_high"], eh, "vec3s", true, "emission_high");
+    // The default bake's ZIP (libdeflate) and rounded mantissas, as OpenVDB sees them.
+    for g in ["density", "emission", "density_high", "emission_high"] {
+        let m = &by_name[g]["metadata"];
+        assert_eq!(m["file_compression"], json!("zip + active values"), "{g}");
+        assert_eq!(m["aurora_mantissa_bits"], json!(scene.grid.mantissa_bits), "{g}");
+    }
     let printed = common::vdb_print_ok(&path);
     for needle in ["density_high", "emission_high", "VDB version: 10.0/224"] {
         assert!(printed.contains(needle), "vdb_print output lacks `{needle}`:\n{printed}");

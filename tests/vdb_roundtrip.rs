@@ -70,6 +70,7 @@ fn round_trip_every_mode_bit_exact() {
                 compression: comp,
                 half: if half { vec!["density".into(), "emission".into()] } else { vec![] },
                 metadata: extra_meta(),
+                ..Default::default()
             };
             let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
             let f = read_vdb_bytes(&bytes).unwrap_or_else(|err| panic!("{what}: {err}"));
@@ -135,7 +136,7 @@ fn empty_grids_and_empty_files_are_valid() {
     let d = Grid::new("density", 0.0f32, Transform::new(0.5, DVec3::ZERO));
     let e = Grid::new("emission", [0.0f32; 3], Transform::new(0.5, DVec3::ZERO));
     for comp in MODES {
-        let opts = WriteOptions { compression: comp, half: vec!["emission".into()], metadata: vec![] };
+        let opts = WriteOptions { compression: comp, half: vec!["emission".into()], metadata: vec![], ..Default::default() };
         let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
         let f = read_vdb_bytes(&bytes).unwrap();
         assert_eq!(f.float("density").unwrap().active_voxel_count(), 0);

@@ -216,9 +216,11 @@ KNOWN_BIAS = {"volume": 0.0042, "terrain": 0.024, "dome": 0.0042}
 #: and the oval preset's dome master (DOME).
 CASES = ("volume", "terrain", "dome")
 
-#: The grid layout of the VDB writer study: full floats, one grid per field
-#: (no high column), with the Cycles shell.
+#: The grid layout of the VDB writer study: full floats with every mantissa
+#: bit, Blosc (what OpenVDB writes by default), one grid per field (no high
+#: column), with the Cycles shell.
 F32_LAYOUT = {("grid", "half_emission"): False, ("grid", "half_density"): False,
+              ("grid", "mantissa_bits"): 23, ("grid", "compression"): "blosc-active-mask",
               ("grid", "high_voxel_factor"): 1, ("grid", "cycles_shell"): True}
 REF_SEEDS = (9101, 9102)
 THREADS = 2

@@ -46,7 +46,8 @@ pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync))
     plan.dome_image = [1024, 1024];
     plan.storage_as_rendered = true;
     plan.prune_budgets = vec![1e-3];
-    plan.storage_high_km = vec![220.0, 240.0, 260.0];
+    plan.storage_high_km = vec![240.0, 260.0];
+    plan.storage_mantissa_bits = vec![10, 6, 5, 4];
     plan.min_timing_seconds = 0.0;
     plan.max_timing_runs = 1;
     plan.retime = false;

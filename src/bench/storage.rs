@@ -13,10 +13,14 @@
 //!
 //! | lever | swept | file |
 //! |---|---|---|
-//! | half floats | none, `emission`, both grids | unpruned |
-//! | pruning | `grid.prune` budget | half floats |
-//! | high column | `grid.high_above_km` (factor 2) | half floats, the scene's pruning |
+//! | half floats | none, `emission`, both grids | unpruned, every bit |
+//! | pruning | `grid.prune` budget | half floats, every bit |
+//! | mantissa bits | `grid.mantissa_bits` | half floats, the scene's pruning |
+//! | high column | `grid.high_above_km` (factor 2) | half floats, the scene's pruning and bits |
 //! | Cycles shell | the scene's settings with `grid.cycles_shell` | as the bake writes it |
+//!
+//! Every file is compressed as the bake compresses (`grid.compression`,
+//! libdeflate for ZIP).
 //!
 //! Pictures are point-sampled (one sample per pixel, exact integration), or
 //! with `aurora bench --storage` rendered as the scene renders them (its
@@ -111,16 +115,17 @@ impl<'a> Bench<'a> {
             "spp 1, exact integration".to_string()
         };
         let camera = crate::camera::CameraModel::new(&s.camera, s.render.width, s.render.height).map_err(RenderError::from)?;
-        let compression = self.scene.grid.compression;
-        let options = |half: &[&str]| WriteOptions {
-            compression,
+        // The bake's options with `half` grids and `bits` mantissa bits.
+        let options = |half: &[&str], bits: u32| WriteOptions {
             half: half.iter().map(|h| h.to_string()).collect(),
-            metadata: crate::outputs::vdb_metadata(&self.scene),
+            mantissa_bits: ["density", "emission"].map(|g| (g.to_string(), bits)).to_vec(),
+            ..crate::outputs::write_options(&self.scene)
         };
         let density = |e: &Grid<[f32; 3]>| bake::density::density_grid(e, &self.scene.grid, peak, &earth);
         // Writes `e` (and its density) as one grid each, or split at a high
-        // column, with half floats or not, optionally with the shell.
-        let write = |e: &Grid<[f32; 3]>, half: &[&str], col: Option<Column>, shell: bool| -> Result<Vec<u8>, SweepError> {
+        // column, with half floats or not, `bits` mantissa bits, optionally
+        // with the shell.
+        let write = |e: &Grid<[f32; 3]>, half: &[&str], bits: u32, col: Option<Column>, shell: bool| -> Result<Vec<u8>, SweepError> {
             let mut d = density(e);
             let mut e = e.clone();
             if shell {
@@ -128,11 +133,11 @@ impl<'a> Bench<'a> {
                 d.dilate_active();
             }
             match col {
-                None => write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &options(half)),
+                None => write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &options(half, bits)),
                 Some(c) => {
                     let (df, dh) = column::split(&d, &c, &earth);
                     let (ef, eh) = column::split(&e, &c, &earth);
-                    let opts = crate::outputs::with_high_column(options(half));
+                    let opts = crate::outputs::with_high_column(options(half, bits));
                     write_vdb_bytes(&[GridRef::Float(&df), GridRef::Vec3(&ef), GridRef::Float(&dh), GridRef::Vec3(&eh)], &opts)
                 }
             }
@@ -154,7 +159,8 @@ impl<'a> Bench<'a> {
             let (img, _) = self.render_timed(&s, &Volume { density: d.as_ref(), emission: e.as_ref() })?;
             Ok(img)
         };
-        let reference_file = write(&base.emission, &[], None, false)?;
+        let all_bits = crate::vdb::mantissa::FLOAT_MANTISSA_BITS;
+        let reference_file = write(&base.emission, &[], all_bits, None, false)?;
         let reference = render(&reference_file)?;
         let all = vec![true; reference.pixels.len()];
         let mb = |w: &[u8]| w.len() as f64 / 1e6;
@@ -177,9 +183,9 @@ impl<'a> Bench<'a> {
             [(g.half_density, "density"), (g.half_emission, "emission")].into_iter().filter(|x| x.0).map(|x| x.1).collect();
         measure("half floats", "half grids", 0.0, &reference_file, false)?;
         if !self.plan.storage_as_rendered {
-            measure("half floats", "half grids", 1.0, &write(&base.emission, &["emission"], None, false)?, false)?;
+            measure("half floats", "half grids", 1.0, &write(&base.emission, &["emission"], all_bits, None, false)?, false)?;
         }
-        measure("half floats", "half grids", 2.0, &write(&base.emission, &["density", "emission"], None, false)?, false)?;
+        measure("half floats", "half grids", 2.0, &write(&base.emission, &["density", "emission"], all_bits, None, false)?, false)?;
         let pruned = |b: f64| {
             let mut e = base.emission.clone();
             if b > 0.0 {
@@ -188,9 +194,16 @@ impl<'a> Bench<'a> {
             e
         };
         for &b in &self.plan.prune_budgets {
-            measure("pruning (half floats)", "budget", b, &write(&pruned(b), &["density", "emission"], None, false)?, false)?;
+            measure("pruning (half floats)", "budget", b, &write(&pruned(b), &["density", "emission"], all_bits, None, false)?, false)?;
         }
         let scene_pruned = pruned(g.prune);
+        let col =
+            (g.high_voxel_factor > 1).then(|| Column::new(g.high_above_km, g.high_voxel_factor as i32, base.emission.transform.voxel_size));
+        for &bits in &self.plan.storage_mantissa_bits {
+            let on = bits == g.mantissa_bits && !g.cycles_shell && scene_half.len() == 2;
+            let method = format!("mantissa bits (half floats, pruned {}{})", g.prune, if col.is_some() { ", high column" } else { "" });
+            measure(&method, "bits", bits as f64, &write(&scene_pruned, &["density", "emission"], bits, col, false)?, on)?;
+        }
         let f = g.high_voxel_factor.max(2) as i32;
         for &h in &self.plan.storage_high_km {
             let col = Column::new(h, f, base.emission.transform.voxel_size);
@@ -199,22 +212,20 @@ impl<'a> Bench<'a> {
                 &format!("high column x{f} (half floats, pruned {})", g.prune),
                 "above km",
                 h,
-                &write(&scene_pruned, &["density", "emission"], Some(col), false)?,
+                &write(&scene_pruned, &["density", "emission"], g.mantissa_bits, Some(col), false)?,
                 on,
             )?;
         }
-        let col =
-            (g.high_voxel_factor > 1).then(|| Column::new(g.high_above_km, g.high_voxel_factor as i32, base.emission.transform.voxel_size));
         for shell in [false, true] {
             let on = shell == g.cycles_shell;
-            if self.plan.storage_as_rendered && !shell {
-                continue; // the scene's own file, measured above
+            if !shell && self.plan.storage_mantissa_bits.contains(&g.mantissa_bits) {
+                continue; // the scene's own file, measured with the bits
             }
             measure(
                 "Cycles shell (scene's other settings)",
                 "shell",
                 shell as u8 as f64,
-                &write(&scene_pruned, &scene_half, col, shell)?,
+                &write(&scene_pruned, &scene_half, g.mantissa_bits, col, shell)?,
                 on,
             )?;
         }

@@ -80,8 +80,9 @@ pub struct Plan {
     /// reference.
     pub prune_budgets: Vec<f64>,
     /// Storage study ([`super::storage`]): altitudes of the high column, km,
-    /// and the dome master's image size.
+    /// the mantissa bits kept, and the dome master's image size.
     pub storage_high_km: Vec<f64>,
+    pub storage_mantissa_bits: Vec<u32>,
     pub dome_image: [usize; 2],
     /// Storage study: render the pictures at the scene's spp and
     /// integration instead of point-sampled ([`super::storage`]).
@@ -117,6 +118,7 @@ impl Plan {
             volume_image: [128, 128],
             prune_budgets: vec![1e-4, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1],
             storage_high_km: vec![200.0, 220.0, 240.0, 260.0, 280.0],
+            storage_mantissa_bits: vec![10, 7, 6, 5, 4, 3],
             dome_image: [256, 256],
             storage_as_rendered: false,
             shadow_counts: vec![1, 2, 4, 8, 16, 32, 64],
@@ -145,6 +147,7 @@ impl Plan {
             volume_image: [64, 64],
             prune_budgets: vec![1e-3, 1e-2, 0.1],
             storage_high_km: vec![200.0, 240.0],
+            storage_mantissa_bits: vec![10, 5, 3],
             dome_image: [64, 64],
             storage_as_rendered: false,
             shadow_counts: vec![1, 4, 16],

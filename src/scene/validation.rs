@@ -319,6 +319,7 @@ impl Scene {
         v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
         v.finite(t, "density_base_km", g.density_base_km);
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
+        v.range(t, "mantissa_bits", g.mantissa_bits as f64, 1.0, crate::scene::types::MAX_MANTISSA_BITS as f64, true);
         v.range(t, "high_above_km", g.high_above_km, 0.0, 1e4, true);
         v.range(t, "high_voxel_factor", g.high_voxel_factor as f64, 1.0, crate::scene::types::MAX_HIGH_VOXEL_FACTOR as f64, true);
         let keys = LINE_KEYS.map(|k| format!("\"{k}\"")).join(", ");

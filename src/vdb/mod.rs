@@ -3,7 +3,10 @@
 //!
 //! - [`layout`]: format constants and the per-level node offset functions;
 //! - [`cursor`]: the bounds-checked byte reader and its [`cursor::ParseError`];
-//! - [`codec`]: the compressed-values record (mask compression, ZIP, half);
+//! - [`mantissa`]: rounding values to fewer mantissa bits (what ZIP then
+//!   compresses away);
+//! - [`codec`]: the compressed-values record (mask compression, ZIP, half,
+//!   rounded mantissas);
 //! - [`fileid`]: the content-derived file UUID and its hash (XXH64);
 //! - [`write`](mod@write): grids -> file bytes;
 //! - [`parse`]: bounds-checked parser (validation and native decoding);
@@ -13,13 +16,14 @@
 //!   demand (the renderer's medium is built from them by `crate::vdb_medium`,
 //!   above this module: `vdb` knows nothing of the renderer).
 //!
-//! Imports point one way: layout, cursor and fileid at the bottom; codec on
+//! Imports point one way: layout, cursor, fileid and mantissa at the bottom; codec on
 //! them; write and parse on codec; read and records on parse. The write benchmark's timer
 //! is not here but in `crate::bench::vdb_write`.
 pub mod codec;
 pub mod cursor;
 pub mod fileid;
 pub mod layout;
+pub mod mantissa;
 pub mod parse;
 pub mod read;
 pub mod records;

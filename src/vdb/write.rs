@@ -34,11 +34,12 @@
 //! before anything is renamed into place: NaN or infinity, and in half mode
 //! magnitudes above 65504, are refused with the grid name and voxel.
 
-use super::codec::{self, Encoder};
+use super::codec::{self, Deflate, Encoder, Storage};
 use super::fileid::piece_hash;
 /// The file-ID code, re-exported for the writer's callers.
 pub use super::fileid::{content_uuid, xxh64};
 use super::layout::{self, INTERNAL16, INTERNAL32};
+use super::mantissa;
 use crate::grid::{Grid, Leaf, VoxelValue, LEAF_NUM_VALUES};
 use crate::scene::Compression;
 use glam::IVec3;
@@ -80,6 +81,13 @@ pub struct WriteOptions {
     pub compression: Compression,
     /// Names of grids stored as half floats (typically `emission`).
     pub half: Vec<String>,
+    /// Grids whose values are rounded to fewer mantissa bits
+    /// ([`super::mantissa`]), with the bits kept (1 to 23; a half float
+    /// keeps at most its 10). The grid's metadata `aurora_mantissa_bits`
+    /// records the width.
+    pub mantissa_bits: Vec<(String, u32)>,
+    /// The deflate of ZIP records (OpenVDB's zlib by default).
+    pub deflate: Deflate,
     /// Extra metadata added to every grid (units, seed, scene hash...).
     pub metadata: Vec<(String, MetaValue)>,
 }
@@ -88,7 +96,13 @@ impl Default for WriteOptions {
     /// Blosc + active-mask compression (OpenVDB's default), no half grids,
     /// no extra metadata.
     fn default() -> Self {
-        Self { compression: Compression::BloscActiveMask, half: Vec::new(), metadata: Vec::new() }
+        Self {
+            compression: Compression::BloscActiveMask,
+            half: Vec::new(),
+            mantissa_bits: Vec::new(),
+            deflate: Deflate::OpenVdb,
+            metadata: Vec::new(),
+        }
     }
 }
 
@@ -113,6 +127,12 @@ pub enum VdbWriteError {
     /// `WriteOptions::half` names a grid that is not being written.
     #[error("half-float storage requested for grid `{0}`, which is not among the grids written")]
     UnknownHalfGrid(String),
+    /// `WriteOptions::mantissa_bits` names a grid that is not being written,
+    /// twice, or a width outside 1..=23.
+    #[error(
+        "mantissa rounding to {bits} bits for grid `{grid}`: the grid must be among those written, named once, and the bits in 1..=23"
+    )]
+    BadMantissaBits { grid: String, bits: u32 },
     /// Extra metadata may not replace what the writer sets itself.
     #[error("metadata key `{0}` is reserved by the writer, empty, or given twice")]
     ReservedMetadata(String),
@@ -151,8 +171,13 @@ pub struct WriteStats {
     pub grids: Vec<GridStats>,
 }
 
+/// Grid metadata naming the mantissa bits kept ([`WriteOptions::mantissa_bits`]),
+/// written only when some were cleared.
+pub const META_MANTISSA_BITS: &str = "aurora_mantissa_bits";
+
 /// Metadata keys the writer sets itself.
 const RESERVED_KEYS: &[&str] = &[
+    META_MANTISSA_BITS,
     "class",
     "creator",
     "file_bbox_max",
@@ -269,6 +294,13 @@ impl Stream<'_> {
     }
 }
 
+/// How `opts` stores the grid `name`.
+fn storage(opts: &WriteOptions, name: &str) -> Storage {
+    let half = opts.half.iter().any(|h| h == name);
+    let kept = opts.mantissa_bits.iter().find(|(g, _)| g == name).map(|&(_, b)| b);
+    Storage { half, mantissa_bits: kept.unwrap_or(mantissa::FLOAT_MANTISSA_BITS), deflate: opts.deflate }
+}
+
 fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteError> {
     for (i, g) in grids.iter().enumerate() {
         if g.name().is_empty() || grids[..i].iter().any(|o| o.name() == g.name()) {
@@ -278,6 +310,12 @@ fn check_options(grids: &[GridRef], opts: &WriteOptions) -> Result<(), VdbWriteE
     for h in &opts.half {
         if !grids.iter().any(|g| g.name() == h) {
             return Err(VdbWriteError::UnknownHalfGrid(h.clone()));
+        }
+    }
+    for (i, (g, bits)) in opts.mantissa_bits.iter().enumerate() {
+        let named_once = grids.iter().any(|x| x.name() == g) && !opts.mantissa_bits[..i].iter().any(|(o, _)| o == g);
+        if !named_once || !(1..=mantissa::FLOAT_MANTISSA_BITS).contains(bits) {
+            return Err(VdbWriteError::BadMantissaBits { grid: g.clone(), bits: *bits });
         }
     }
     for (i, (k, _)) in opts.metadata.iter().enumerate() {
@@ -305,11 +343,11 @@ fn encode_file(target: &mut dyn Target, grids: &[GridRef], opts: &WriteOptions) 
     out.put(&head).map_err(io)?;
     let mut stats = Vec::with_capacity(grids.len());
     for g in grids {
-        let half = opts.half.iter().any(|h| h == g.name());
+        let st = storage(opts, g.name());
         let start = out.pos;
         let (active_voxels, leaves) = match g {
-            GridRef::Float(g) => write_grid(&mut out, g, flags, half, &opts.metadata)?,
-            GridRef::Vec3(g) => write_grid(&mut out, g, flags, half, &opts.metadata)?,
+            GridRef::Float(g) => write_grid(&mut out, g, flags, st, &opts.metadata)?,
+            GridRef::Vec3(g) => write_grid(&mut out, g, flags, st, &opts.metadata)?,
         };
         stats.push(GridStats { name: g.name().to_string(), active_voxels, leaves, bytes: out.pos - start });
     }
@@ -424,9 +462,10 @@ fn write_grid<T: VoxelValue>(
     out: &mut Stream,
     grid: &Grid<T>,
     flags: u32,
-    half: bool,
+    st: Storage,
     extra: &[(String, MetaValue)],
 ) -> Result<(u64, usize), VdbWriteError> {
+    let half = st.half;
     let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     let name = &grid.name;
     let tr = grid.transform;
@@ -474,14 +513,18 @@ fn write_grid<T: VoxelValue>(
     if half {
         meta.push((layout::META_HALF.into(), MetaValue::Bool(true)));
     }
+    let full_width = if half { mantissa::HALF_MANTISSA_BITS } else { mantissa::FLOAT_MANTISSA_BITS };
+    if st.mantissa_bits < full_width {
+        meta.push((META_MANTISSA_BITS.into(), MetaValue::Int64(st.mantissa_bits as i64)));
+    }
     meta.extend(extra.iter().cloned());
     write_meta_map(&mut head, meta);
     write_transform(&mut head, tr.voxel_size, tr.translation.to_array());
-    write_root_topology(&mut head, &tree, bg, flags, half);
+    write_root_topology(&mut head, &tree, bg, flags, st);
     out.put(&head).map_err(io)?;
     drop(head);
     let block_pos = out.pos;
-    write_buffers(out, &tree.leaves, name, bg, flags, half)?;
+    write_buffers(out, &tree.leaves, name, bg, flags, st)?;
     let end_pos = out.pos;
     let mut offsets = [0u8; 24];
     for (i, p) in [grid_pos, block_pos, end_pos].into_iter().enumerate() {
@@ -511,12 +554,13 @@ const HALF_MAX: f32 = 65504.0;
 /// Root node topology (OpenVDB `RootNode::writeTopology`): background (rounded
 /// to half in half mode, stored full), tile count 0, child count, then each
 /// child's origin and Internal32 topology in ascending (x, y, z) order.
-fn write_root_topology<T: VoxelValue>(out: &mut Vec<u8>, tree: &Tree<T>, bg: T, flags: u32, half: bool) {
+fn write_root_topology<T: VoxelValue>(out: &mut Vec<u8>, tree: &Tree<T>, bg: T, flags: u32, st: Storage) {
     out.extend_from_slice(&1i32.to_le_bytes()); // buffer count
-    codec::push_full(out, if half { codec::round_half_value(bg) } else { bg });
+    codec::push_full(out, if st.half { codec::round_half_value(bg) } else { bg });
     out.extend_from_slice(&0u32.to_le_bytes());
     out.extend_from_slice(&(tree.roots.len() as u32).to_le_bytes());
-    let mut enc = Encoder::new(flags, half);
+    // Internal nodes hold the background and zeros: stored exactly.
+    let mut enc = Encoder::new(flags, Storage { mantissa_bits: mantissa::FLOAT_MANTISSA_BITS, ..st });
     let mut cache = InternalCache::default();
     for root in &tree.roots {
         for c in root.origin.to_array() {
@@ -695,15 +739,16 @@ fn write_buffers<T: VoxelValue>(
     grid: &str,
     bg: T,
     flags: u32,
-    half: bool,
+    st: Storage,
 ) -> Result<(), VdbWriteError> {
+    let half = st.half;
     let io = |source| VdbWriteError::Io { path: PathBuf::from("<output>"), source };
     for batch in leaves.chunks(LEAVES_PER_CHUNK * CHUNKS_PER_BATCH) {
         type Encoded = Result<(Vec<u8>, (u64, u64)), VdbWriteError>;
         let chunks: Vec<Encoded> = batch
             .par_chunks(LEAVES_PER_CHUNK)
             .map(|chunk| {
-                let mut enc = Encoder::new(flags, half);
+                let mut enc = Encoder::new(flags, st);
                 let elem = if half { 2 } else { 4 } * T::COMPONENTS;
                 let mut bytes = Vec::with_capacity(chunk.len() * (64 + 1 + 8 + LEAF_NUM_VALUES * elem));
                 for leaf in chunk {

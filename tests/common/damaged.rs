@@ -62,7 +62,12 @@ pub fn small_file(comp: Compression, half: bool) -> Vec<u8> {
         d.set(p, 0.5 + i as f32);
         e.set(p, [i as f32, 1.0, -0.5]);
     }
-    let opts = WriteOptions { compression: comp, half: if half { vec!["emission".into()] } else { vec![] }, metadata: vec![] };
+    let opts = WriteOptions {
+        compression: comp,
+        half: if half { vec!["emission".into()] } else { vec![] },
+        metadata: vec![],
+        ..Default::default()
+    };
     write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap()
 }
 
@@ -102,8 +107,12 @@ pub fn four_grids(comp: Compression, half: bool) -> Vec<u8> {
     t.set(p, 250.0);
     e.set(p, [0.0, 2.0, 1.0]);
     v.set(p, [1.0, -1.0, 0.5]);
-    let opts =
-        WriteOptions { compression: comp, half: if half { vec!["emission".into(), "velocity".into()] } else { vec![] }, metadata: vec![] };
+    let opts = WriteOptions {
+        compression: comp,
+        half: if half { vec!["emission".into(), "velocity".into()] } else { vec![] },
+        metadata: vec![],
+        ..Default::default()
+    };
     write_vdb_bytes(&[GridRef::Float(&d), GridRef::Float(&t), GridRef::Vec3(&e), GridRef::Vec3(&v)], &opts).unwrap()
 }
 
