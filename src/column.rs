@@ -165,11 +165,7 @@ pub fn split<T: VoxelValue>(g: &Grid<T>, col: &Column, earth: &Earth) -> (Grid<T
             (out.active_count() > 0).then_some(out)
         })
         .collect();
-    let mut fine = Grid::new(g.name.clone(), T::ZERO, tr);
-    for l in fine_leaves {
-        fine.insert_leaf(l);
-    }
-    fine.sort_leaves();
+    let fine = Grid::from_leaves(g.name.clone(), T::ZERO, tr, fine_leaves);
 
     let coarse =
         restrict(g, f, Restriction::Injection, &|i| col.blend(h_of(i)), Some(col.above_km), earth, format!("{}{HIGH_SUFFIX}", g.name));
@@ -311,12 +307,7 @@ fn restrict<T: VoxelValue>(
             Some(out)
         })
         .collect();
-    let mut coarse = Grid::new(name, T::ZERO, ctr);
-    for l in coarse_leaves {
-        coarse.insert_leaf(l);
-    }
-    coarse.sort_leaves();
-    coarse
+    Grid::from_leaves(name, T::ZERO, ctr, coarse_leaves)
 }
 
 /// The coarse leaf at `co` by injection: coarse voxel `c` is `weight * g`
@@ -437,12 +428,7 @@ pub fn merge<T: VoxelValue>(fine: &Grid<T>, high: &Grid<T>) -> Result<Grid<T>, M
             (out.active_count() > 0).then_some(out)
         })
         .collect();
-    let mut g = Grid::new(fine.name.clone(), T::ZERO, tf);
-    for l in leaves {
-        g.insert_leaf(l);
-    }
-    g.sort_leaves();
-    Ok(g)
+    Ok(Grid::from_leaves(fine.name.clone(), T::ZERO, tf, leaves))
 }
 
 #[cfg(test)]

@@ -327,6 +327,19 @@ impl<T: VoxelValue> Grid<T> {
         Self { name: name.into(), background, transform, leaves: Vec::new(), index: OriginMap::default() }
     }
 
+    /// A grid of `leaves` (each inserted as [`Grid::insert_leaf`] does: a
+    /// later leaf at the same origin replaces an earlier one, an empty leaf
+    /// is dropped), sorted by origin ([`Grid::sort_leaves`]): the one order,
+    /// whatever order the leaves came in.
+    pub fn from_leaves(name: impl Into<String>, background: T, transform: Transform, leaves: impl IntoIterator<Item = Leaf<T>>) -> Self {
+        let mut g = Self::new(name, background, transform);
+        for l in leaves {
+            g.insert_leaf(l);
+        }
+        g.sort_leaves();
+        g
+    }
+
     pub fn leaves(&self) -> &[Leaf<T>] {
         &self.leaves
     }

@@ -32,12 +32,7 @@ pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminan
     let scale = AURORA_FRACTION * peak_luminance;
     let inv_scale = if scale > 0.0 { (1.0 / scale) as f32 } else { 0.0 };
     let leaves: Vec<Leaf<f32>> = emission.leaves().par_iter().map(|l| density_leaf(l, params, inv_scale, earth, tr)).collect();
-    let mut g = Grid::new("density", 0.0f32, tr);
-    for l in leaves {
-        g.insert_leaf(l);
-    }
-    g.sort_leaves();
-    g
+    Grid::from_leaves("density", 0.0f32, tr, leaves)
 }
 
 /// One leaf of [`density_grid`]. The air depends on the altitude only: on a
