@@ -39,9 +39,7 @@ use sweeps::{Bench, Plan, SweepError};
 /// rendered at the scene's spp and integration, fewer settings per lever
 /// ([`storage`]), with the throughput of the full scene as in [`run`].
 pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
-    let start = Instant::now();
-    let date = report::utc_date(SystemTime::now());
-    let mut machine = Machine::probe();
+    let started = Started::now();
     let mut plan = Plan::full();
     plan.dome_image = [1024, 1024];
     plan.storage_as_rendered = true;
@@ -56,19 +54,49 @@ pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync))
         b.storage_study(storage::View::Scene, [scene.render.width, scene.render.height])?,
         b.storage_study(storage::View::Dome, plan.dome_image)?,
     ];
-    let throughput = throughput(scene, log)?;
-    machine.loadavg_end = report::loadavg();
-    Ok(BenchRun {
-        machine,
-        date,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        plan,
-        scene_name: scene_name.to_string(),
-        reduced_toml: scene.to_toml(),
-        reduction: vec!["none: the storage studies run on the full scene".into()],
-        studies,
-        throughput,
-    })
+    let reduction = vec!["none: the storage studies run on the full scene".into()];
+    started.finish(scene, scene_name, plan, (scene.to_toml(), reduction), studies, log)
+}
+
+/// A run's clock, date and machine as it starts; [`Started::finish`] adds
+/// the full scene's throughput and the load at the end.
+struct Started {
+    start: Instant,
+    /// [`report::utc_date`] of the start.
+    date: (String, String),
+    machine: Machine,
+}
+
+impl Started {
+    fn now() -> Started {
+        Started { start: Instant::now(), date: report::utc_date(SystemTime::now()), machine: Machine::probe() }
+    }
+
+    /// The run's record: `studies` measured on the scene `reduced` (its TOML
+    /// and the changes from `scene`), then the throughput of `scene` itself.
+    fn finish(
+        mut self,
+        scene: &Scene,
+        scene_name: &str,
+        plan: Plan,
+        reduced: (String, Vec<String>),
+        studies: Vec<sweeps::Study>,
+        log: &(dyn Fn(&str) + Sync),
+    ) -> Result<BenchRun, SweepError> {
+        let throughput = throughput(scene, log)?;
+        self.machine.loadavg_end = report::loadavg();
+        Ok(BenchRun {
+            machine: self.machine,
+            date: self.date,
+            wall_seconds: self.start.elapsed().as_secs_f64(),
+            plan,
+            scene_name: scene_name.to_string(),
+            reduced_toml: reduced.0,
+            reduction: reduced.1,
+            studies,
+            throughput,
+        })
+    }
 }
 
 /// The full scene's frames 1 and 18000 of a ten-minute range at its fps,
@@ -82,9 +110,7 @@ fn throughput(scene: &Scene, log: &(dyn Fn(&str) + Sync)) -> Result<crate::farm_
 /// Runs every study on `scene` (validated), full or `quick`. `scene_name`
 /// names it in the outputs; `log` receives a line per measurement.
 pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
-    let start = Instant::now();
-    let date = report::utc_date(SystemTime::now());
-    let mut machine = Machine::probe();
+    let started = Started::now();
     let plan = if quick { Plan::quick() } else { Plan::full() };
     let auto_voxel = match scene.grid.voxel_size {
         VoxelSize::Km(_) => None,
@@ -114,17 +140,5 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     if plan.retime {
         b.retime(&mut studies)?;
     }
-    let throughput = throughput(scene, log)?;
-    machine.loadavg_end = report::loadavg();
-    Ok(BenchRun {
-        machine,
-        date,
-        wall_seconds: start.elapsed().as_secs_f64(),
-        plan,
-        scene_name: scene_name.to_string(),
-        reduced_toml: red.scene.to_toml(),
-        reduction: red.changes,
-        studies,
-        throughput,
-    })
+    started.finish(scene, scene_name, plan, (red.scene.to_toml(), red.changes), studies, log)
 }
