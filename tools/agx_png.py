@@ -15,8 +15,9 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import tempfile
 from pathlib import Path
+
+from aurora_tools.files import replace_atomic
 
 
 def main(argv=None) -> int:
@@ -39,21 +40,13 @@ def main(argv=None) -> int:
     sc.render.dither_intensity = 0.0
     s = sc.render.image_settings
     s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"
-    out = Path(a.png).resolve()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp.png", dir=out.parent)
-    os.close(fd)
-    try:
+
+    def save(tmp: str) -> None:
         img.save_render(tmp, scene=sc)
         if os.path.getsize(tmp) == 0:
             raise RuntimeError(f"Blender wrote nothing to {tmp}")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600
-        os.replace(tmp, out)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+
+    replace_atomic(Path(a.png).resolve(), save, suffix=".tmp.png")
     return 0
 
 

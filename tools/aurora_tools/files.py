@@ -7,15 +7,16 @@ import tempfile
 from pathlib import Path
 
 
-def write_atomic(path, data: bytes) -> None:
-    """Write `data` to a temporary file beside `path` and rename it there
-    (readers never see a half-written file), with the usual file mode."""
+def replace_atomic(path, write, suffix: str = ".tmp") -> None:
+    """Let `write(tmp)` fill a temporary file beside `path` (named with
+    `suffix`), give it the usual file mode and rename it to `path`: readers
+    never see a half-written file, and on any error the temporary goes."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
+    os.close(fd)
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
+        write(tmp)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600
@@ -23,3 +24,8 @@ def write_atomic(path, data: bytes) -> None:
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def write_atomic(path, data: bytes) -> None:
+    """Write `data` to `path` through a temporary file ([`replace_atomic`])."""
+    replace_atomic(path, lambda tmp: Path(tmp).write_bytes(data))
