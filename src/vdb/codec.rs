@@ -305,41 +305,36 @@ enum Zip {
 /// OpenVDB `io::zipToStream`: `i64 L` and the zlib stream when it is shorter
 /// than the raw bytes, else `-rawBytes` and the raw bytes.
 fn zip_to_stream(z: &mut Zip, zbuf: &mut Vec<u8>, raw: &[u8], out: &mut Vec<u8>) {
-    match z {
-        Zip::Zlib(z) => zlib_to_stream(z, zbuf, raw, out),
+    let stream = match z {
+        Zip::Zlib(z) => zlib_stream(z, zbuf, raw),
         Zip::Fast(c) => {
             zbuf.clear();
             zbuf.resize(c.zlib_compress_bound(raw.len()), 0);
-            match c.zlib_compress(raw, zbuf) {
-                Ok(n) if n < raw.len() => {
-                    out.extend_from_slice(&(n as i64).to_le_bytes());
-                    out.extend_from_slice(&zbuf[..n]);
-                }
-                _ => {
-                    out.extend_from_slice(&(-(raw.len() as i64)).to_le_bytes());
-                    out.extend_from_slice(raw);
-                }
-            }
+            c.zlib_compress(raw, zbuf).ok().map(|n| &zbuf[..n])
+        }
+    };
+    match stream {
+        Some(z) if z.len() < raw.len() => {
+            out.extend_from_slice(&(z.len() as i64).to_le_bytes());
+            out.extend_from_slice(z);
+        }
+        _ => {
+            out.extend_from_slice(&(-(raw.len() as i64)).to_le_bytes());
+            out.extend_from_slice(raw);
         }
     }
 }
 
-/// [`zip_to_stream`] with zlib's `compress2` (OpenVDB's bytes).
-fn zlib_to_stream(z: &mut Compress, zbuf: &mut Vec<u8>, raw: &[u8], out: &mut Vec<u8>) {
+/// zlib's `compress2` of `raw` (OpenVDB's bytes) into `zbuf`, if it ends
+/// within `raw.len()` bytes.
+fn zlib_stream<'z>(z: &mut Compress, zbuf: &'z mut Vec<u8>, raw: &[u8]) -> Option<&'z [u8]> {
     z.reset();
     // Only a stream shorter than the raw bytes is kept, so `raw.len()` bytes of
     // output space suffice: if deflate does not finish within them, store raw.
     zbuf.clear();
     zbuf.resize(raw.len(), 0);
     let finished = matches!(z.compress(raw, zbuf, FlushCompress::Finish), Ok(Status::StreamEnd));
-    let zlen = z.total_out() as usize;
-    if finished && zlen < raw.len() {
-        out.extend_from_slice(&(zlen as i64).to_le_bytes());
-        out.extend_from_slice(&zbuf[..zlen]);
-    } else {
-        out.extend_from_slice(&(-(raw.len() as i64)).to_le_bytes());
-        out.extend_from_slice(raw);
-    }
+    finished.then(|| &zbuf[..z.total_out() as usize])
 }
 
 /// Blosc level of OpenVDB's `bloscCompress` (0..9, 9 = most effort).
