@@ -462,6 +462,20 @@ fn a_circle_is_found() {
     assert!(!c.contains(&("c".into(), "d".into())));
 }
 
+/// The size rule of `docs/ARCHITECTURE.md`: a file of `src/` that grows past
+/// [`MAX_LINES`] lines is doing more than one job and is split.
+const MAX_LINES: usize = 1000;
+
+#[test]
+fn no_source_file_is_over_the_line_limit() {
+    let long: Vec<String> = tree()
+        .iter()
+        .filter(|(_, text)| text.lines().count() > MAX_LINES)
+        .map(|(rel, text)| format!("src/{rel}: {} lines", text.lines().count()))
+        .collect();
+    assert!(long.is_empty(), "over {MAX_LINES} lines (split by job): {long:?}");
+}
+
 #[test]
 fn modules_import_each_other_without_circles() {
     let g = graph(&tree());

@@ -5,8 +5,9 @@
 //! - [`cursor`]: the bounds-checked byte reader and its [`cursor::ParseError`];
 //! - [`mantissa`]: rounding values to fewer mantissa bits (what ZIP then
 //!   compresses away);
-//! - [`codec`]: the compressed-values record (mask compression, ZIP, half,
-//!   rounded mantissas);
+//! - [`codec`]: the compressed-values record and its writer (mask
+//!   compression, ZIP, Blosc, half, rounded mantissas);
+//! - [`decode`]: the record's reader (bounds-checked; ZIP and Blosc);
 //! - [`fileid`]: the content-derived file UUID and its hash (XXH64);
 //! - [`write`](mod@write): grids -> file bytes;
 //! - [`parse`]: bounds-checked parser (validation and native decoding);
@@ -17,10 +18,11 @@
 //!   above this module: `vdb` knows nothing of the renderer).
 //!
 //! Imports point one way: layout, cursor, fileid and mantissa at the bottom; codec on
-//! them; write and parse on codec; read and records on parse. The write benchmark's timer
+//! them, decode on codec; write on codec, parse on decode; read on parse, records on parse and decode. The write benchmark's timer
 //! is not here but in `crate::bench::vdb_write`.
 pub mod codec;
 pub mod cursor;
+pub mod decode;
 pub mod fileid;
 pub mod layout;
 pub mod mantissa;

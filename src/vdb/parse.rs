@@ -29,8 +29,8 @@
 //! `endPos >= blockPos >= gridPos`) and every count is checked against the
 //! bytes left before it is used.
 
-use super::codec::{self, RecordFormat};
 pub use super::cursor::{Cursor, ParseError};
+use super::decode::{self, RecordFormat};
 use super::layout::{self, INTERNAL16, INTERNAL32};
 use crate::grid::{Leaf, Transform, VoxelValue, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
@@ -184,7 +184,7 @@ pub struct Tree<T> {
     pub tile_voxels: u128,
     /// With [`Decode::Locate`]: every leaf's origin, mask and record, in
     /// file order (empty otherwise), for the caller to decode
-    /// (`codec::read_stored_f32` at `start`).
+    /// (`decode::read_stored_f32` at `start`).
     pub spans: Vec<LeafSpan>,
     /// How the records are stored.
     pub format: RecordFormat,
@@ -485,7 +485,7 @@ fn read_internal<T: VoxelValue>(
 ) -> Result<Vec<u64>, ParseError> {
     let child_mask = cur.u64s(level.mask_words())?;
     let value_mask = cur.u64s(level.mask_words())?;
-    let values = codec::read_values::<T>(cur, fmt, level.num_values(), &value_mask, background, decode)?;
+    let values = decode::read_values::<T>(cur, fmt, level.num_values(), &value_mask, background, decode)?;
     for n in layout::mask_ones(&value_mask) {
         if layout::mask_bit(&child_mask, n) {
             continue;
@@ -615,7 +615,7 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
             // A located record is decoded (and its stream checked) later, by
             // the caller or by [`check_located`].
             let check_streams = !decode && how != Decode::Locate;
-            codec::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_streams)?;
+            decode::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_streams)?;
             if decode {
                 spans.push((layout::internal16_child_origin(node.origin, n16), mask, start));
             } else if how == Decode::Locate {
@@ -634,7 +634,7 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
                 c.seek(start as u64)?;
                 let mut leaf = Leaf::new(origin, background);
                 leaf.mask = *mask;
-                codec::read_values_into(&mut c, fmt, LEAF_NUM_VALUES, mask, background, Some(&mut leaf.values[..]), scratch, true)?;
+                decode::read_values_into(&mut c, fmt, LEAF_NUM_VALUES, mask, background, Some(&mut leaf.values[..]), scratch, true)?;
                 if how == Decode::NonZero && !has_nonzero_active(&leaf) {
                     return Ok(None);
                 }
@@ -665,7 +665,7 @@ pub fn check_located<T: VoxelValue>(data: &[u8], tree: &Tree<T>, name: &str) -> 
         .map_init(Vec::new, |scratch, span| {
             let mut c = Cursor::new(data);
             c.seek(span.start as u64)?;
-            codec::read_values_into::<T>(&mut c, tree.format, LEAF_NUM_VALUES, &span.mask, tree.background, None, scratch, true)
+            decode::read_values_into::<T>(&mut c, tree.format, LEAF_NUM_VALUES, &span.mask, tree.background, None, scratch, true)
         })
         .find_first(|r| r.is_err());
     match first_err {

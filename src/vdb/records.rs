@@ -52,7 +52,7 @@ macro_rules! file_leaves {
                 let span = &self.tree.spans[i];
                 let mut c = super::cursor::Cursor::new(self.data);
                 c.seek(span.start as u64)?;
-                let slots = super::codec::read_stored_f32(
+                let slots = super::decode::read_stored_f32(
                     &mut c,
                     self.tree.format,
                     crate::grid::LEAF_NUM_VALUES,
@@ -62,8 +62,8 @@ macro_rules! file_leaves {
                     &mut scratch.bytes,
                 )?;
                 Ok(match slots {
-                    super::codec::StoredSlots::All => LeafValues::All(&scratch.values),
-                    super::codec::StoredSlots::Active => LeafValues::Active(&scratch.values),
+                    super::decode::StoredSlots::All => LeafValues::All(&scratch.values),
+                    super::decode::StoredSlots::Active => LeafValues::Active(&scratch.values),
                 })
             }
         }
