@@ -261,6 +261,19 @@ pub fn human_seconds(s: f64) -> String {
 }
 
 impl Plan {
+    /// What a task pays once, before its frames (the first sample's CPU time
+    /// above the later ones': the plan, atmosphere and colour table that the
+    /// later frames reuse), in words; a first frame that cost no more than
+    /// the others (a difference lost in the timing noise) says so rather
+    /// than print a zero.
+    pub fn setup_words(&self) -> String {
+        if self.setup_cpu_s >= 0.05 {
+            format!("+ {} once per task for the plan", human_seconds(self.setup_cpu_s))
+        } else {
+            "the first frame took no more CPU than the others: no cost once per task measured".into()
+        }
+    }
+
     /// The plan as a table for a terminal.
     pub fn text(&self) -> String {
         let mut t = format!(
@@ -289,11 +302,7 @@ impl Plan {
             crate::memory::gib(self.peak_rss_bytes),
             crate::memory::gib(self.budget_bytes)
         );
-        t += &format!(
-            "CPU per frame        {} (+ {} once per task for the plan)\n",
-            human_seconds(self.cpu_per_frame_s),
-            human_seconds(self.setup_cpu_s)
-        );
+        t += &format!("CPU per frame        {} ({})\n", human_seconds(self.cpu_per_frame_s), self.setup_words());
         t += &format!("CPU in total         {} ({:.0} CPU-hours)\n", human_seconds(self.total_cpu_s), self.total_cpu_s / 3600.0);
         t += &format!(
             "wall per frame       {} on {} threads here ({:.0} frames per hour per task)",
@@ -365,6 +374,9 @@ mod tests {
         assert_eq!(p.wall_per_frame_s, 1.5);
         let one = estimate(&s, 10, 1, 10, vec![sample(1, 100, 5.0)], 0, 1e9);
         assert_eq!((one.cpu_per_frame_s, one.setup_cpu_s, one.total_cpu_s), (5.0, 0.0, 50.0));
+        assert_eq!(p.setup_words(), "+ 2.0 s once per task for the plan");
+        assert!(one.setup_words().starts_with("the first frame took no more CPU"), "{}", one.setup_words());
+        assert!(one.text().contains(&one.setup_words()));
     }
 
     #[test]

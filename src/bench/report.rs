@@ -178,7 +178,7 @@ fn frames_per_hour(seconds: f64) -> f64 {
 /// The throughput lines of the summary.
 pub fn throughput_summary(p: &crate::farm_plan::Plan) -> String {
     format!(
-        "\n== throughput of the full scene as a sequence (frames {} and {} of {}-{}, baked and written)\n   {:.0} frames per hour on {} threads ({:.2} s a frame), {:.0} frames per CPU-hour ({:.2} CPU-s a frame, + {:.2} once per task), {} a frame, peak {}\n",
+        "\n== throughput of the full scene as a sequence (frames {} and {} of {}-{}, baked and written)\n   {:.0} frames per hour on {} threads ({:.2} s a frame), {:.0} frames per CPU-hour ({:.2} CPU-s a frame; {}), {} a frame, peak {}\n",
         p.samples.first().map_or(0, |s| s.frame),
         p.samples.last().map_or(0, |s| s.frame),
         p.first,
@@ -188,7 +188,7 @@ pub fn throughput_summary(p: &crate::farm_plan::Plan) -> String {
         p.wall_per_frame_s,
         frames_per_hour(p.cpu_per_frame_s),
         p.cpu_per_frame_s,
-        p.setup_cpu_s,
+        p.setup_words(),
         crate::farm_plan::human_bytes(p.bytes_per_frame),
         crate::memory::gib(p.peak_rss_bytes),
     )

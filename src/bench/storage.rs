@@ -209,7 +209,7 @@ impl<'a> Bench<'a> {
             let col = Column::new(h, f, base.emission.transform.voxel_size);
             let on = g.high_voxel_factor > 1 && h == g.high_above_km && !g.cycles_shell && scene_half.len() == 2;
             measure(
-                &format!("high column x{f} (half floats, pruned {})", g.prune),
+                &format!("high column x{f} (half floats, {} mantissa bits, pruned {})", g.mantissa_bits, g.prune),
                 "above km",
                 h,
                 &write(&scene_pruned, &["density", "emission"], g.mantissa_bits, Some(col), false)?,
