@@ -747,17 +747,21 @@ fn write_buffers<T: VoxelValue>(
         type Encoded = Result<(Vec<u8>, (u64, u64)), VdbWriteError>;
         let chunks: Vec<Encoded> = batch
             .par_chunks(LEAVES_PER_CHUNK)
-            .map(|chunk| {
-                let mut enc = Encoder::new(flags, st);
-                let elem = if half { 2 } else { 4 } * T::COMPONENTS;
-                let mut bytes = Vec::with_capacity(chunk.len() * (64 + 1 + 8 + LEAF_NUM_VALUES * elem));
-                for leaf in chunk {
-                    check_leaf(leaf, grid, half)?;
-                    write_leaf_buffers(&mut bytes, leaf, bg, &mut enc);
-                }
-                let h = piece_hash(&bytes);
-                Ok((bytes, h))
-            })
+            // One encoder (and its deflate state) per worker, not per chunk:
+            // every record resets it, so the bytes are the same.
+            .map_init(
+                || Encoder::new(flags, st),
+                |enc, chunk| {
+                    let elem = if half { 2 } else { 4 } * T::COMPONENTS;
+                    let mut bytes = Vec::with_capacity(chunk.len() * (64 + 1 + 8 + LEAF_NUM_VALUES * elem));
+                    for leaf in chunk {
+                        check_leaf(leaf, grid, half)?;
+                        write_leaf_buffers(&mut bytes, leaf, bg, enc);
+                    }
+                    let h = piece_hash(&bytes);
+                    Ok((bytes, h))
+                },
+            )
             .collect();
         for c in chunks {
             let (bytes, h) = c?;
