@@ -93,9 +93,9 @@ pub fn read_values_into<T: VoxelValue>(
     let raw: Option<&[u8]> = if fmt.half && count == 0 {
         Some(&[])
     } else if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, decode, decode || check_streams, scratch)?
+        read_chunk(cur, Codec::Blosc, nbytes, decode, decode || check_streams, scratch)?
     } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_zip(cur, nbytes, decode, decode || check_streams, scratch)?
+        read_chunk(cur, Codec::Zip, nbytes, decode, decode || check_streams, scratch)?
     } else {
         Some(cur.bytes(nbytes)?)
     };
@@ -199,14 +199,34 @@ fn read_chunk_len<'a>(cur: &mut Cursor<'a>, nbytes: usize) -> Result<ChunkLen<'a
     Ok(ChunkLen::Stored(cur.bytes(nbytes)?))
 }
 
-/// OpenVDB `io::unzipFromStream`: the decompressed size must be exactly
-/// `nbytes`. Stored chunks come back as the file's bytes; streams are
-/// decompressed into `scratch` when `inflate` is set.
-fn read_zip<'a, 's>(
+/// A compressed chunk's codec, from the grid's compression flags.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Codec {
+    Zip,
+    Blosc,
+}
+
+/// One compressed chunk of `nbytes` uncompressed bytes: OpenVDB
+/// `io::unzipFromStream` or `io::bloscFromStream`. Stored chunks come back
+/// as the file's bytes; a stream is expanded into `scratch` when `expand`
+/// is set, and returned when `decode` is.
+///
+/// ZIP: the decompressed size must be exactly `nbytes`. The stream is
+/// inflated even when only validating: vdb-rs reads just the first `nbytes`
+/// of a stream and never reaches its Adler-32 checksum, so a damaged stream
+/// would otherwise pass unnoticed. OpenVDB's `uncompress` checks the whole
+/// stream.
+///
+/// Blosc: the header is validated (`blosc_cbuffer_validate`: its compressed
+/// size must equal the chunk length) before the C decompressor sees the
+/// bytes, so it never reads out of bounds; Blosc1 frames carry no checksum,
+/// so running the decompressor is the only check of the LZ4 payload.
+fn read_chunk<'a, 's>(
     cur: &mut Cursor<'a>,
+    codec: Codec,
     nbytes: usize,
     decode: bool,
-    inflate: bool,
+    expand: bool,
     scratch: &'s mut Vec<u8>,
 ) -> Result<Option<&'s [u8]>, ParseError>
 where
@@ -218,56 +238,28 @@ where
         ChunkLen::Compressed(len) => len,
     };
     let stream = cur.bytes_len(len as u64)?;
-    if !inflate {
+    if codec == Codec::Blosc {
+        blosc_validate(cur, at, stream, nbytes)?;
+    }
+    if !expand {
         return Ok(None);
     }
-    // Decompressed even when only validating: vdb-rs reads just the first
-    // `nbytes` of a stream and never reaches its Adler-32 checksum, so a
-    // damaged stream would otherwise pass unnoticed. OpenVDB's `uncompress`
-    // checks the whole stream.
-    scratch.clear();
-    scratch.resize(nbytes, 0);
-    let mut z = Decompress::new(true);
-    let status = z.decompress(stream, scratch, FlushDecompress::Finish);
-    match status {
-        Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => Ok(decode.then_some(&scratch[..])),
-        Ok(_) => Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
-        Err(e) => Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
-    }
-}
-
-/// OpenVDB `io::bloscFromStream`. The Blosc header is validated
-/// (`blosc_cbuffer_validate`: its compressed size must equal the chunk length)
-/// before the C decompressor sees the bytes, so it never reads out of bounds.
-/// The frame is decompressed into `scratch` when `decompress` is set (Blosc1
-/// frames carry no checksum: running the decompressor is the only check of
-/// the LZ4 payload).
-fn read_blosc<'a, 's>(
-    cur: &mut Cursor<'a>,
-    nbytes: usize,
-    decode: bool,
-    decompress: bool,
-    scratch: &'s mut Vec<u8>,
-) -> Result<Option<&'s [u8]>, ParseError>
-where
-    'a: 's,
-{
-    let at = cur.pos();
-    let len = match read_chunk_len(cur, nbytes)? {
-        ChunkLen::Stored(raw) => return Ok(decode.then_some(raw)),
-        ChunkLen::Compressed(len) => len,
-    };
-    let frame = cur.bytes_len(len as u64)?;
-    blosc_validate(cur, at, frame, nbytes)?;
-    if !decompress {
-        return Ok(None);
-    }
-    if nbytes == 0 {
+    if codec == Codec::Blosc && nbytes == 0 {
         return Ok(decode.then_some(&[]));
     }
     scratch.clear();
     scratch.resize(nbytes, 0);
-    blosc_decompress(cur, at, frame, scratch)?;
+    match codec {
+        Codec::Blosc => blosc_decompress(cur, at, stream, scratch)?,
+        Codec::Zip => {
+            let mut z = Decompress::new(true);
+            match z.decompress(stream, scratch, FlushDecompress::Finish) {
+                Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => {}
+                Ok(_) => return Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
+                Err(e) => return Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
+            }
+        }
+    }
     Ok(decode.then_some(&scratch[..]))
 }
 
@@ -366,9 +358,9 @@ pub fn read_stored_f32(
         return Ok(slots);
     }
     let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_blosc(cur, nbytes, true, true, scratch)?.unwrap_or(&[])
+        read_chunk(cur, Codec::Blosc, nbytes, true, true, scratch)?.unwrap_or(&[])
     } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_zip(cur, nbytes, true, true, scratch)?.unwrap_or(&[])
+        read_chunk(cur, Codec::Zip, nbytes, true, true, scratch)?.unwrap_or(&[])
     } else {
         cur.bytes(nbytes)?
     };
