@@ -3,7 +3,7 @@
 //! beyond half-float range in half storage (refused, never written as inf),
 //! and grids too coarse for the kernel or the curtain (warned).
 //!
-//! The fluid step far past its CFL limit is pinned in `src/footprint.rs`
+//! The fluid step far past its CFL limit is pinned in `src/footprint/fluid.rs`
 //! (`advection_is_bounded_and_finite_far_above_the_cfl_limit`: dt = 100
 //! cells, density stays within its initial bounds); `stability_extremes.rs`
 //! bakes with the largest `footprint.dt` the scene accepts.

@@ -145,7 +145,7 @@ fn cases() -> Vec<Case> {
         ),
         // Far past the CFL limit (dt = 1e6 cells per unit velocity, or a
         // velocity of 1e6 cells per unit time): the semi-Lagrangian step
-        // stays bounded (src/footprint.rs tests) but carries the band out of
+        // stays bounded (src/footprint/fluid.rs tests) but carries the band out of
         // the footprint, so no cell is left above threshold: a clear error.
         ("footprint.dt max", Box::new(|s| s.footprint.dt = 1e6), BakeError),
         ("footprint.velocity_amplitude max", Box::new(|s| s.footprint.velocity_amplitude = 1e6), BakeError),
