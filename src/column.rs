@@ -192,6 +192,16 @@ pub fn coarsen<T: VoxelValue>(g: &Grid<T>, f: i32) -> Grid<T> {
     restrict(g, f, Restriction::FullWeighting, &|_| 1.0, None, &Earth::new(0.0), g.name.clone())
 }
 
+/// Appends the origins of the leaves from origin `lo` to origin `hi`
+/// (both leaf origins, inclusive), x outermost and z innermost.
+fn push_leaf_origins(lo: IVec3, hi: IVec3, out: &mut Vec<IVec3>) {
+    for x in (lo.x..=hi.x).step_by(LEAF_DIM as usize) {
+        for y in (lo.y..=hi.y).step_by(LEAF_DIM as usize) {
+            out.extend((lo.z..=hi.z).step_by(LEAF_DIM as usize).map(|z| IVec3::new(x, y, z)));
+        }
+    }
+}
+
 /// The coarse grid of `weight * g` at `f` times the voxel size; only fine
 /// leaves reaching above `above_km` (all when None) are read.
 fn restrict<T: VoxelValue>(
@@ -222,19 +232,7 @@ fn restrict<T: VoxelValue>(
             let lo = leaf_origin(IVec3::new(ceil_div(a.x, f), ceil_div(a.y, f), ceil_div(a.z, f)));
             let hi = leaf_origin((l.origin + IVec3::splat(LEAF_DIM - 1 + f - 1)).div_euclid(IVec3::splat(f)));
             let mut v = Vec::new();
-            let mut o = lo;
-            while o.x <= hi.x {
-                o.y = lo.y;
-                while o.y <= hi.y {
-                    o.z = lo.z;
-                    while o.z <= hi.z {
-                        v.push(o);
-                        o.z += LEAF_DIM;
-                    }
-                    o.y += LEAF_DIM;
-                }
-                o.x += LEAF_DIM;
-            }
+            push_leaf_origins(lo, hi, &mut v);
             v
         })
         .collect();
@@ -374,19 +372,7 @@ pub fn merge<T: VoxelValue>(fine: &Grid<T>, high: &Grid<T>) -> Result<Grid<T>, M
     for l in high.leaves() {
         let lo = leaf_origin(l.origin * f - IVec3::splat(f - 1));
         let hi = leaf_origin((l.origin + IVec3::splat(LEAF_DIM - 1)) * f + IVec3::splat(f - 1));
-        let mut o = lo;
-        while o.x <= hi.x {
-            o.y = lo.y;
-            while o.y <= hi.y {
-                o.z = lo.z;
-                while o.z <= hi.z {
-                    origins.push(o);
-                    o.z += LEAF_DIM;
-                }
-                o.y += LEAF_DIM;
-            }
-            o.x += LEAF_DIM;
-        }
+        push_leaf_origins(lo, hi, &mut origins);
     }
     origins.sort_unstable_by_key(|o| (o.x, o.y, o.z));
     origins.dedup();
