@@ -34,6 +34,23 @@ fn output_err(e: crate::atomic::AtomicError) -> RenderError {
     RenderError::Output(Box::new(e))
 }
 
+/// Writes a one-layer EXR image to a temporary in `path`'s folder, tiles in
+/// increasing order (module documentation: the same bytes every run), and
+/// renames it to `path`.
+fn write_exr_image<'i, C>(path: &Path, exr_image: &'i mut exr::image::Image<exr::image::Layer<C>>) -> Result<(), RenderError>
+where
+    exr::image::Layer<C>: exr::image::write::layers::WritableLayers<'i>,
+{
+    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
+    let exr_image: &'i exr::image::Image<_> = exr_image;
+    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
+    exr_image
+        .write()
+        .to_buffered(std::io::BufWriter::new(tmp.file()))
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    tmp.commit().map_err(output_err)
+}
+
 /// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
 pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
     let path = path.as_ref();
@@ -52,13 +69,7 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
         blue: Vec2(0.15, 0.06),
         white: Vec2(0.3127, 0.3290),
     });
-    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
-    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
-    exr_image
-        .write()
-        .to_buffered(std::io::BufWriter::new(tmp.file()))
-        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
-    tmp.commit().map_err(output_err)
+    write_exr_image(path, &mut exr_image)
 }
 
 /// Writes the red channel of `image` as a one-channel (`Y`) f32 OpenEXR
@@ -71,13 +82,7 @@ pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image) -> Result<(), Rende
     }
     let channels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|Vec2(x, y): Vec2<usize>| (image.pixels[y * w + x][0],));
     let mut exr_image = exr::image::Image::from_channels((w, h), channels);
-    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
-    let mut tmp = crate::atomic::TempFile::create(path).map_err(output_err)?;
-    exr_image
-        .write()
-        .to_buffered(std::io::BufWriter::new(tmp.file()))
-        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
-    tmp.commit().map_err(output_err)
+    write_exr_image(path, &mut exr_image)
 }
 
 /// Reads the `Y` channel of a one-channel EXR written by [`write_exr_grey`]:
