@@ -15,10 +15,11 @@ use rand_pcg::Pcg64;
 use render_util::*;
 use std::path::PathBuf;
 
+/// `name` in a fresh folder of its own, `target/test-film/<name>/` (a test's
+/// files never share a folder with another test's, which runs at the same
+/// time).
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aurora-film-tests-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    common::scratch("test-film", name).join(name)
 }
 
 fn test_image(w: usize, h: usize) -> Image {
@@ -47,16 +48,12 @@ fn exr_round_trips_exactly_and_is_rec709_rgba_f32() {
     assert!(h.channels.list.iter().all(|c| c.sample_type == exr::meta::attribute::SampleType::F32));
     let ch = h.shared_attributes.chromaticities.expect("chromaticities attribute");
     assert_eq!((ch.red.0, ch.red.1, ch.white.0, ch.white.1), (0.64, 0.33, 0.3127, 0.329));
-    // Written atomically: no temporary of this file is left behind (the
-    // folder is shared with the other tests of this process, which write
-    // their own files at the same time: only names of round.exr count).
+    // Written atomically: no temporary file is left behind (the folder is
+    // this test's own).
     let left: Vec<_> = std::fs::read_dir(path.parent().unwrap())
         .unwrap()
         .filter_map(|e| e.ok())
-        .filter(|e| {
-            let n = e.file_name().to_string_lossy().into_owned();
-            n.contains("round.exr") && n != "round.exr"
-        })
+        .filter(|e| e.file_name().to_string_lossy().starts_with('.'))
         .collect();
     assert!(left.is_empty(), "{left:?}");
     // A bad destination is a typed error.

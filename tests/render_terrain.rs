@@ -16,10 +16,11 @@ use render_util::*;
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
+/// `name` in a fresh folder of its own, `target/test-terrain/<name>/` (a test's
+/// files never share a folder with another test's, which runs at the same
+/// time).
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("aurora-render-tests-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
+    common::scratch("test-terrain", name).join(name)
 }
 
 // ------------------------------------------------------------ the slab
