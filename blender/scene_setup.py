@@ -95,7 +95,8 @@ def setup_scene_from_toml(
         scene.world = wld
     ter = None
     if terrain and spec.terrain.kind == "plane":
-        ter = plane_terrain(scene, spec.terrain.height, spec.terrain.albedo, spec.camera.position[:2], volume_alpha)
+        ter = plane_terrain(scene, spec.terrain.height, spec.terrain.albedo, spec.camera.position,
+                            spec.earth.radius_km, volume_alpha)
     elif terrain and spec.terrain.kind == "heightfield":
         if terrain_obj is None:
             raise ValueError(f"{path}: terrain.kind = \"heightfield\" needs the OBJ from `aurora terrain`")

@@ -1,9 +1,23 @@
 """The scene file's terrain: a plane or the heightfield mesh `aurora terrain` writes.
 
-- "plane": `aurora render` intersects the plane z = height. Blender gets a
-  square of half-size PLANE_HALF_SIZE_KM centred under the camera; its edge is
-  atan(h / 1e4 km) below the horizon (1.5e-4 rad for a camera 1.5 km up,
-  a tenth of a pixel at 50 degrees over 360 rows).
+- "plane" on flat ground (`earth.radius_km = 0`): `aurora render` intersects
+  the plane z = height. Blender gets a square of half-size PLANE_HALF_SIZE_KM
+  centred under the camera; its edge is atan(h / 1e4 km) below the horizon
+  (1.5e-4 rad for a camera 1.5 km up, a tenth of a pixel at 50 degrees over
+  360 rows).
+- "plane" on a round Earth: `aurora render` intersects the sphere of radius
+  R' = R + height about (0, 0, -R). Blender gets a cap of that sphere about
+  the camera's nadir (`sphere_cap`), out to twice the central angle of the
+  camera's horizon, so every camera ray that meets the sphere meets the cap
+  and nothing beyond the horizon shows through. Its vertices lie on the
+  sphere; its rings and the facets round them are spaced so that each chord
+  sags below the sphere by at most delta = 1e-3 of the camera's altitude a
+  (a chord of central angle d theta sags R' d theta^2 / 8), a facet's middle
+  by at most 2 delta. That lowers the horizon as a camera 2 delta higher
+  would: its dip, about sqrt(2 a / R'), grows by at most the factor
+  1 + delta / a, 1e-3 of it (0.0012 degrees for a camera 1.5 km up). With
+  delta proportional to a the cap has about 32 rings of 200 facets at any
+  altitude.
 - "heightfield": the OBJ written by `aurora terrain SCENE --out terrain.obj`
   (km, z up) is imported with forward +Y, up +Z so no axis is swapped, and
   shaded flat: `aurora render` shades each triangle with its geometric normal.
@@ -12,6 +26,7 @@ Both get the Lambertian terrain material (material.terrain_material).
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import bpy
@@ -19,23 +34,83 @@ import bpy
 from .material import terrain_material
 
 PLANE_HALF_SIZE_KM = 1.0e4
+#: The cap's largest sagitta as a share of the camera's altitude.
+CAP_SAG_PER_ALTITUDE = 1.0e-3
+#: The camera altitude the cap assumes for a camera on or below the ground, km.
+CAP_MIN_ALTITUDE_KM = 1.0e-3
+#: Most facets of a cap (for a camera so high that its horizon is far round
+#: the sphere): beyond it the sagitta grows instead.
+CAP_MAX_FACETS = 1_000_000
 
 
 class TerrainError(RuntimeError):
     """The terrain cannot be built (missing or unreadable OBJ)."""
 
 
-def plane_terrain(scene, height: float, albedo, center_xy=(0.0, 0.0), volume_alpha: bool = True,
-                  name: str = "AuroraTerrain") -> bpy.types.Object:
-    cx, cy = center_xy
-    r = PLANE_HALF_SIZE_KM
-    verts = [(cx - r, cy - r, height), (cx + r, cy - r, height), (cx + r, cy + r, height), (cx - r, cy + r, height)]
+def sphere_cap(radius: float, centre, camera):
+    """The vertices and faces of the cap of the sphere (`radius` km about
+    `centre`) that the camera at `camera` can see, with margin: about the
+    camera's nadir out to twice the central angle of its horizon,
+    acos(R' / (R' + a)) (at most pi), in rings of equal central angle; the
+    sagitta bound of the module doc sets the spacing of the rings and of the
+    facets round them. Coordinates in km, computed in double precision."""
+    c = [float(v) for v in centre]
+    d = [float(camera[i]) - c[i] for i in range(3)]
+    dist = math.sqrt(sum(v * v for v in d))
+    n = [v / dist for v in d] if dist > 0.0 else [0.0, 0.0, 1.0]
+    a = max(dist - radius, CAP_MIN_ALTITUDE_KM)
+    theta_max = min(2.0 * math.acos(radius / (radius + a)), math.pi)
+    sag = CAP_SAG_PER_ALTITUDE * a
+    step = math.sqrt(8.0 * sag / radius)  # a chord of central angle `step` sags `sag`
+    rings = max(8, math.ceil(theta_max / step))
+    around = max(64, math.ceil(2.0 * math.pi * math.sin(min(theta_max, math.pi / 2)) / step))
+    if rings * around > CAP_MAX_FACETS:
+        k = math.sqrt(CAP_MAX_FACETS / (rings * around))
+        rings, around = max(8, int(rings * k)), max(64, int(around * k))
+    # An orthonormal pair across the nadir.
+    t = [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]
+    e1 = [n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0]]
+    norm = math.sqrt(sum(v * v for v in e1))
+    e1 = [v / norm for v in e1]
+    e2 = [n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2], n[0] * e1[1] - n[1] * e1[0]]
+
+    def point(theta, phi):
+        ct, st = math.cos(theta), math.sin(theta)
+        cp, sp = math.cos(phi), math.sin(phi)
+        return tuple(c[i] + radius * (ct * n[i] + st * (cp * e1[i] + sp * e2[i])) for i in range(3))
+
+    verts = [point(0.0, 0.0)]
+    for k in range(1, rings + 1):
+        theta = theta_max * k / rings
+        verts += [point(theta, 2.0 * math.pi * j / around) for j in range(around)]
+    ring = lambda k, j: 1 + (k - 1) * around + j % around  # noqa: E731 (vertex j of ring k >= 1)
+    faces = [(0, ring(1, j), ring(1, j + 1)) for j in range(around)]
+    for k in range(1, rings):
+        faces += [(ring(k, j), ring(k + 1, j), ring(k + 1, j + 1), ring(k, j + 1)) for j in range(around)]
+    return verts, faces
+
+
+def plane_terrain(scene, height: float, albedo, camera=(0.0, 0.0, 0.0), earth_radius_km: float = 0.0,
+                  volume_alpha: bool = True, name: str = "AuroraTerrain") -> bpy.types.Object:
+    """The plane at `height` (module doc): on flat ground a square under the
+    camera, on a round Earth the visible cap of the sphere of radius
+    `earth_radius_km + height` about (0, 0, -earth_radius_km)."""
+    if earth_radius_km > 0.0:
+        verts, faces = sphere_cap(earth_radius_km + height, (0.0, 0.0, -earth_radius_km), camera)
+    else:
+        cx, cy = camera[0], camera[1]
+        r = PLANE_HALF_SIZE_KM
+        verts = [(cx - r, cy - r, height), (cx + r, cy - r, height), (cx + r, cy + r, height), (cx - r, cy + r, height)]
+        faces = [(0, 1, 2, 3)]
     mesh = bpy.data.meshes.new(name)
-    mesh.from_pydata(verts, [], [(0, 1, 2, 3)])
+    mesh.from_pydata(verts, [], faces)
     mesh.validate()
     mesh.materials.append(terrain_material(name + "Material", albedo, volume_alpha))
+    # The sphere is smooth: vertex normals are its radial directions (the
+    # normal `aurora render` shades with); the square is one flat face.
+    smooth = earth_radius_km > 0.0
     for p in mesh.polygons:
-        p.use_smooth = False
+        p.use_smooth = smooth
     obj = bpy.data.objects.new(name, mesh)
     scene.collection.objects.link(obj)
     return obj

@@ -307,15 +307,84 @@ def test_setup_scene_from_toml_perspective(addon, fresh, bpy, tmp_path, aurora_v
     assert mix.inputs["Fac"].links[0].from_socket.name == "Is Camera Ray"
     # Volume scales from [volume]; terrain plane with the albedo; lights for the terrain.
     assert_aurora_volume(built.volumes[0], 0.7, 1.3)
+    # The scene's Earth is the default sphere: the plane at 0.25 km is its
+    # cap, every vertex 0.25 km above it (float32 coordinates: 1e-6 km).
     ter = built.terrain
-    zs = {round(v.co.z, 9) for v in ter.data.vertices}
-    assert zs == {0.25}
+    R = 6371.0
+    radii = [math.dist(ter.matrix_world @ v.co, (0.0, 0.0, -R)) for v in ter.data.vertices]
+    assert max(abs(r - (R + 0.25)) for r in radii) < 1e-5
     diffuse = [n for n in ter.data.materials[0].node_tree.nodes if n.bl_idname == "ShaderNodeBsdfDiffuse"][0]
     assert tuple(diffuse.inputs["Color"].default_value)[:3] == pytest.approx((0.2, 0.3, 0.4))
     assert len(built.lights) > 0 and not built.volumes[0].visible_diffuse
     total = sum(o.data.energy * np.array(o.data.color) for o in built.lights)
     # P = 4 pi I, I = emission_scale * h^3 * sum(emission): 1.3 * 0.125 * 144 * sum(linspace(0.1, 1, 12)).
     assert total[1] == pytest.approx(4 * math.pi * 1.3 * 0.125 * 144 * 6.6, rel=1e-5)
+
+
+def horizon_fan(bpy, obj, camera, radius, centre, offsets_deg):
+    """Rays from `camera` in the vertical plane of the cap's nadir at the
+    given angles from the sphere's horizon (negative: below it), against the
+    cap's mesh: whether each hits it and the hit's distance from `centre`."""
+    from mathutils import Vector
+    from mathutils.bvhtree import BVHTree
+
+    tree = BVHTree.FromObject(obj, bpy.context.evaluated_depsgraph_get())
+    cam, c = np.array(camera, float), np.array(centre, float)
+    rho = np.linalg.norm(cam - c)
+    down = (c - cam) / rho
+    side = np.cross(down, [1.0, 0.0, 0.0] if abs(down[0]) < 0.9 else [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+    out = np.cross(side, down)  # horizontal, in the plane of the fan
+    tangent = math.asin(radius / rho)  # the horizon ray's angle from the nadir
+    rows = []
+    for off in offsets_deg:
+        psi = tangent + math.radians(off)  # more than the tangent: above the horizon
+        d = math.cos(psi) * down + math.sin(psi) * out
+        loc, _, _, _ = tree.ray_cast(Vector(cam), Vector(d))
+        rows.append((off, loc is not None, None if loc is None else float(np.linalg.norm(np.array(loc) - c))))
+    return rows
+
+
+@pytest.mark.parametrize("camera", [(0.0, -260.0, 1.5), (300.0, 200.0, 40.0), (0.0, 0.0, 0.3)])
+def test_plane_on_a_round_earth_is_the_sphere_to_its_horizon(addon, fresh, bpy, tmp_path, camera):
+    """On a round Earth the "plane" terrain is the cap of the sphere of
+    radius R + height that `aurora render` intersects: a fan of rays across
+    the horizon meets the cap exactly when it meets the sphere, to within
+    the cap's bound (the horizon at most 1e-3 of its dip low, terrain.py)
+    and 0.001 degrees of the ray tracer's rounding, and the hits lie on the
+    sphere within 2e-3 of the camera's altitude. A flat plane fails it: its
+    horizon is off by about the dip, 0.2 to 7 degrees here."""
+    R, h = 6371.0, 0.25
+    cam = {"position": list(camera), "look_at": [camera[0], camera[1] + 100.0, camera[2]], "up": [0, 0, 1],
+           "projection": "perspective", "fov_deg": 50.0}
+    scene_path = synth.write_scene(tmp_path / "r.toml", cam, 16, 9,
+                                   terrain={"kind": "plane", "height": h, "albedo": [0.2, 0.3, 0.4]})
+    built = addon.setup_scene_from_toml(scene_path)
+    ter = built.terrain
+    centre, radius = (0.0, 0.0, -R), R + h
+    a = math.dist(camera, centre) - radius
+    dip = math.degrees(math.acos(radius / (radius + a)))
+    tol = 1e-3 * dip + 1e-3
+    offsets = [-3 * tol, -1.5 * tol, 1.5 * tol, 3 * tol, -0.5 * dip, -0.9 * dip, 0.5, 5.0]
+    for off, hit, r in horizon_fan(bpy, ter, camera, radius, centre, offsets):
+        assert hit == (off < 0), f"camera {camera}: ray {off:+.4f} deg from the horizon (dip {dip:.3f}) hit={hit}"
+        if hit:
+            assert abs(r - radius) <= 2e-3 * a + 5e-5, f"camera {camera}: hit {r - radius:+.6f} km off the sphere"
+    assert len(ter.data.polygons) <= 200_000
+    assert all(p.use_smooth for p in ter.data.polygons)
+
+
+def test_plane_on_flat_ground_is_a_square(addon, fresh, tmp_path):
+    cam = {"position": [3.0, -40.0, 1.5], "look_at": [3.0, 0.0, 1.5], "up": [0, 0, 1],
+           "projection": "perspective", "fov_deg": 50.0}
+    scene_path = synth.write_scene(tmp_path / "f.toml", cam, 16, 9,
+                                   terrain={"kind": "plane", "height": 0.25, "albedo": [0.2, 0.3, 0.4]})
+    text = scene_path.read_text() + "\n[earth]\nradius_km = 0.0\n"
+    scene_path.write_text(text)
+    ter = addon.setup_scene_from_toml(scene_path).terrain
+    verts = sorted((round(v.co.x, 3), round(v.co.y, 3), round(v.co.z, 6)) for v in ter.data.vertices)
+    r = 1.0e4
+    assert verts == sorted([(3 - r, -40 - r, 0.25), (3 + r, -40 - r, 0.25), (3 + r, -40 + r, 0.25), (3 - r, -40 + r, 0.25)])
 
 
 def test_setup_scene_orthographic_point_sampled_heightfield(addon, fresh, bpy, tmp_path):

@@ -8,7 +8,8 @@ at 160x90, for two scenes derived from `aurora scene default`:
 - volume only (no terrain): mean relative error over pixels brighter than 1%
   of the peak <= 2%, total flux within 1%, alpha within 0.01 everywhere;
 - terrain ("plane") lit by the aurora, the camera's look-at lowered from
-  110 to 40 km so the ground fills the lower third of the frame: mean
+  110 to 40 km so the ground fills the lower third of the frame, on flat
+  ground and on the round Earth (its sphere up to the horizon): mean
   relative error over the pixels wholly on the terrain <= 5%.
 The binary is target/release/aurora (AURORA_BIN overrides); without it this
 test fails. Images, difference pictures and figures are kept under
@@ -84,10 +85,13 @@ def default_scene(binary: Path) -> dict:
     return doc
 
 
-def render_both(binary, scene_doc: dict, name: str, vdb: Path, extra=()):
+def render_both(binary, scene_doc: dict, name: str, vdb: Path, extra=(), kind=None):
+    """Both renders of `scene_doc` under OUT/name, with the sample counts of
+    `kind` (the name unless given)."""
     d = OUT / name
     d.mkdir(parents=True, exist_ok=True)
     scene = d / "scene.toml"
+    name = kind or name
     scene_doc = {**scene_doc, "render": {**scene_doc.get("render", {}), "spp": AURORA_SPP[name]}}
     scene.write_text(synth.toml_dumps(scene_doc))
     a, b = d / "aurora.exr", d / "cycles.exr"
@@ -122,24 +126,25 @@ def test_aurora_render_matches_cycles_on_the_default_bake(compare):
 
     # Terrain lit by the aurora, without the air: the add-on dims the
     # volume's emission towards the camera, not the terrain's light
-    # (blender/air.py), so this check compares the terrain's lighting alone.
-    # The add-on builds a `plane` terrain as a flat plane, while `aurora
-    # render` lays it on the round Earth's sphere: the lighting is compared
-    # on flat ground (`earth.radius_km = 0`).
-    ter = {
-        **doc,
-        "terrain": {**doc["terrain"], "kind": "plane"},
-        "sky": {**doc.get("sky", {}), "extinction": False},
-        "earth": {**doc.get("earth", {}), "radius_km": 0.0},
-    }
-    ter["camera"] = {**doc["camera"], "look_at": [doc["camera"]["look_at"][0], doc["camera"]["look_at"][1], 40.0]}
-    scene, a, b = render_both(binary, ter, "terrain", vdb)
-    mask = compare.terrain_mask(scene, WIDTH, HEIGHT)
-    assert mask.sum() > 0.2 * WIDTH * HEIGHT
-    m = compare.compare(a, b, OUT / "terrain" / "diff.png", OUT / "terrain" / "figures.json", mask=mask)
-    print("terrain:", json.dumps(m))
-    assert m["mask_mean_rel_err"] <= 0.05, m
-    assert np.isfinite(m["mask_flux_ratio"]), m
+    # (blender/air.py), so this check compares the terrain's lighting alone:
+    # the `plane` terrain on flat ground (`earth.radius_km = 0`: the plane)
+    # and on the default round Earth (its sphere, which the camera sees out
+    # to a horizon 1 degree down and 113 km away; the add-on's cap of it).
+    for name, earth in (("terrain", {"radius_km": 0.0}), ("terrain-round", {})):
+        ter = {
+            **doc,
+            "terrain": {**doc["terrain"], "kind": "plane"},
+            "sky": {**doc.get("sky", {}), "extinction": False},
+            "earth": {**doc.get("earth", {}), **earth},
+        }
+        ter["camera"] = {**doc["camera"], "look_at": [doc["camera"]["look_at"][0], doc["camera"]["look_at"][1], 40.0]}
+        scene, a, b = render_both(binary, ter, name, vdb, kind="terrain")
+        mask = compare.terrain_mask(scene, WIDTH, HEIGHT)
+        assert mask.sum() > 0.2 * WIDTH * HEIGHT
+        m = compare.compare(a, b, OUT / name / "diff.png", OUT / name / "figures.json", mask=mask)
+        print(f"{name}:", json.dumps(m))
+        assert m["mask_mean_rel_err"] <= 0.05, (name, m)
+        assert np.isfinite(m["mask_flux_ratio"]), (name, m)
 
 
 def test_panoramic_cameras_match_cycles(compare):

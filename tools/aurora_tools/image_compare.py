@@ -102,8 +102,10 @@ def relative_difference(a, b, threshold: float = 0.01):
 
 
 def terrain_mask(scene_toml, width: int, height: int) -> np.ndarray:
-    """Pixels whose centre and four corners all see the "plane" terrain
-    (z = terrain.height, in front of the camera)."""
+    """Pixels whose centre and four corners all see the "plane" terrain in
+    front of the camera: the plane z = terrain.height on flat ground, the
+    sphere of radius R + terrain.height about (0, 0, -R) on a round Earth
+    (`earth.radius_km` = R > 0), as `aurora render` and the add-on lay it."""
     st = addon.scene_toml()
     load_scene, pixel_ray = st.load_scene, st.pixel_ray
 
@@ -113,13 +115,24 @@ def terrain_mask(scene_toml, width: int, height: int) -> np.ndarray:
     if (spec.render.width, spec.render.height) != (width, height):
         raise ValueError(f"{scene_toml}: scene is {spec.render.width}x{spec.render.height}, images {width}x{height}")
     z = spec.terrain.height
+    R = spec.earth.radius_km
+
+    def hits(o, d):
+        if R <= 0.0:
+            return d[2] != 0 and (z - o[2]) / d[2] > 0
+        # |o + t d - c|^2 = (R + z)^2, c = (0, 0, -R): a root with t > 0.
+        oc = (o[0], o[1], o[2] + R)
+        b = sum(oc[i] * d[i] for i in range(3))
+        cc = sum(v * v for v in oc) - (R + z) ** 2
+        disc = b * b - cc * sum(v * v for v in d)
+        return disc >= 0.0 and (-b + disc ** 0.5) > 0.0
+
     mask = np.ones((height, width), bool)
     for dx, dy in ((0.5, 0.5), (0, 0), (1, 0), (0, 1), (1, 1)):
         for r in range(height):
             for c in range(width):
                 o, d = pixel_ray(spec.camera, width, height, c + dx, r + dy)
-                hit = d[2] != 0 and (z - o[2]) / d[2] > 0
-                mask[r, c] &= hit
+                mask[r, c] &= hits(o, d)
     return mask
 
 
