@@ -57,10 +57,10 @@
 //! samples): the rule never adds a leaf.
 
 use crate::camera::CameraModel;
-use crate::grid::{Grid, Leaf, LEAF_NUM_VALUES};
+use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_NUM_VALUES};
 use crate::scene::Projection;
 use crate::spectrum::luminance;
-use glam::DVec3;
+use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -117,6 +117,19 @@ impl Weight<'_> {
     }
 }
 
+impl Weight<'_> {
+    /// [`Weight::at`] at every voxel of the leaf at `origin` (offset order),
+    /// positions from [`Transform::index_to_world`]: the same values, in a
+    /// loop without branches that vectorises.
+    fn leaf(&self, tr: Transform, origin: IVec3) -> Box<[f64; LEAF_NUM_VALUES]> {
+        let mut out = Box::new([0.0f64; LEAF_NUM_VALUES]);
+        for (n, o) in out.iter_mut().enumerate() {
+            *o = self.at(tr.index_to_world((origin + offset_to_local(n)).as_dvec3()));
+        }
+        out
+    }
+}
+
 /// Each leaf's contribution to the light at the camera, in leaf order:
 /// `sum over active voxels of Y(epsilon) V w(d)` (see the module
 /// documentation). Each leaf's sum runs in voxel order, so the result does
@@ -129,14 +142,14 @@ pub fn leaf_contributions(emission: &Grid<[f32; 3]>, camera: &CameraModel) -> Ve
         .leaves()
         .par_iter()
         .map(|l| {
+            let weights = w.leaf(tr, l.origin);
             let mut c = 0.0f64;
             for n in 0..LEAF_NUM_VALUES {
                 if l.is_active(n) {
                     let e = l.values[n];
                     let y = luminance([e[0] as f64, e[1] as f64, e[2] as f64]).max(0.0);
                     if y > 0.0 {
-                        let p = tr.index_to_world((l.origin + crate::grid::offset_to_local(n)).as_dvec3());
-                        c += y * v * w.at(p);
+                        c += y * v * weights[n];
                     }
                 }
             }

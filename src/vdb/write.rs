@@ -663,8 +663,9 @@ fn write_mask(out: &mut Vec<u8>, mask: &[u64]) {
 /// offset order.
 fn check_leaf<T: VoxelValue>(leaf: &Leaf<T>, grid: &str, half: bool) -> Result<(), VdbWriteError> {
     let limit = if half { HALF_MAX } else { f32::MAX };
-    // Fast path: `x.abs() <= limit` is false for NaN and infinities.
-    let all_ok = leaf.values.iter().all(|v| v.components()[..T::COMPONENTS].iter().all(|x| x.abs() <= limit));
+    // Fast path: `x.abs() <= limit` is false for NaN and infinities. Every
+    // value is tested, without an early exit, so the loop vectorises.
+    let all_ok = leaf.values.iter().fold(true, |ok, v| v.components()[..T::COMPONENTS].iter().fold(ok, |ok, x| ok & (x.abs() <= limit)));
     if all_ok {
         return Ok(());
     }
