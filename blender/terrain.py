@@ -32,6 +32,7 @@ from pathlib import Path
 import bpy
 
 from .material import terrain_material
+from .scene_toml import _cross, _normalize
 
 PLANE_HALF_SIZE_KM = 1.0e4
 #: The cap's largest sagitta as a share of the camera's altitude.
@@ -57,7 +58,7 @@ def sphere_cap(radius: float, centre, camera):
     c = [float(v) for v in centre]
     d = [float(camera[i]) - c[i] for i in range(3)]
     dist = math.sqrt(sum(v * v for v in d))
-    n = [v / dist for v in d] if dist > 0.0 else [0.0, 0.0, 1.0]
+    n = _normalize(d) if dist > 0.0 else [0.0, 0.0, 1.0]
     a = max(dist - radius, CAP_MIN_ALTITUDE_KM)
     theta_max = min(2.0 * math.acos(radius / (radius + a)), math.pi)
     sag = CAP_SAG_PER_ALTITUDE * a
@@ -68,11 +69,8 @@ def sphere_cap(radius: float, centre, camera):
         k = math.sqrt(CAP_MAX_FACETS / (rings * around))
         rings, around = max(8, int(rings * k)), max(64, int(around * k))
     # An orthonormal pair across the nadir.
-    t = [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]
-    e1 = [n[1] * t[2] - n[2] * t[1], n[2] * t[0] - n[0] * t[2], n[0] * t[1] - n[1] * t[0]]
-    norm = math.sqrt(sum(v * v for v in e1))
-    e1 = [v / norm for v in e1]
-    e2 = [n[1] * e1[2] - n[2] * e1[1], n[2] * e1[0] - n[0] * e1[2], n[0] * e1[1] - n[1] * e1[0]]
+    e1 = _normalize(_cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]))
+    e2 = _cross(n, e1)
 
     def point(theta, phi):
         ct, st = math.cos(theta), math.sin(theta)

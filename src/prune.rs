@@ -115,9 +115,7 @@ impl Weight<'_> {
             None => self.camera.pixel_weight(p, self.d2_min),
         }
     }
-}
 
-impl Weight<'_> {
     /// [`Weight::at`] at every voxel of the leaf at `origin` (offset order),
     /// positions from [`Transform::index_to_world`]: the same values, in a
     /// loop without branches that vectorises.

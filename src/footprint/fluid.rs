@@ -333,6 +333,12 @@ impl RedBlack {
         Self { h, cells }
     }
 
+    /// Zero everywhere.
+    fn zeros(nx: usize, ny: usize) -> Self {
+        let h = nx / 2;
+        Self { h, cells: [vec![0.0; ny * h], vec![0.0; ny * h]] }
+    }
+
     #[inline]
     fn get(&self, i: usize, j: usize) -> f64 {
         self.cells[(i + j) % 2][j * self.h + i / 2]
@@ -346,7 +352,7 @@ impl RedBlack {
     /// plain sweep of [`Fluid::project_with`]), returned as a plain array.
     fn solve(div: &[f64], nx: usize, ny: usize, periodic: bool, omega: f64, iterations: usize) -> Vec<f64> {
         let d = Self::from_plain(div, nx, ny);
-        let mut p = Self::from_plain(&vec![0.0; nx * ny], nx, ny);
+        let mut p = Self::zeros(nx, ny);
         let h = p.h;
         for _ in 0..iterations {
             for c in 0..2 {
