@@ -164,6 +164,7 @@ pub struct Encoder {
     raw: Vec<u8>,
     zbuf: Vec<u8>,
     selection: Vec<u64>,
+    halves: HalfScratch,
 }
 
 impl Encoder {
@@ -178,7 +179,17 @@ impl Encoder {
             ))),
         });
         let keep = storage.mantissa_bits;
-        Self { flags, half: storage.half, keep, zlib, blosc, raw: Vec::new(), zbuf: Vec::new(), selection: Vec::new() }
+        Self {
+            flags,
+            half: storage.half,
+            keep,
+            zlib,
+            blosc,
+            raw: Vec::new(),
+            zbuf: Vec::new(),
+            selection: Vec::new(),
+            halves: HalfScratch::default(),
+        }
     }
 
     /// Appends the record of `values` (all N slots of a node) to `out`.
@@ -225,66 +236,99 @@ impl Encoder {
         }
         if self.blosc {
             self.raw.clear();
-            gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep);
+            gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep, &mut self.halves);
             blosc_to_stream(&self.raw, out);
             return;
         }
         match self.zlib.as_mut() {
             Some(z) => {
                 self.raw.clear();
-                gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep);
+                gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep, &mut self.halves);
                 zip_to_stream(z, &mut self.zbuf, &self.raw, out);
             }
-            None => gather(out, values, value_mask, all, count, self.half, self.keep),
+            None => gather(out, values, value_mask, all, count, self.half, self.keep, &mut self.halves),
         }
     }
+}
+
+/// Buffers of the half-float gather: the components as `f32`, then as
+/// binary16 bit patterns.
+#[derive(Default)]
+struct HalfScratch {
+    floats: Vec<f32>,
+    bits: Vec<u16>,
 }
 
 /// Appends the `count` values to store (all of them, or the active ones in
 /// index order) as little-endian `f32` or binary16 components, each rounded
 /// to `keep` mantissa bits.
-fn gather<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, half: bool, keep: u32) {
+#[allow(clippy::too_many_arguments)]
+fn gather<T: VoxelValue>(
+    dst: &mut Vec<u8>,
+    values: &[T],
+    mask: &[u64],
+    all: bool,
+    count: usize,
+    half: bool,
+    keep: u32,
+    scratch: &mut HalfScratch,
+) {
     if half {
-        gather_as::<T, true>(dst, values, mask, all, count, keep)
+        gather_half(dst, values, mask, all, count, keep, scratch)
     } else {
-        gather_as::<T, false>(dst, values, mask, all, count, keep)
+        gather_float(dst, values, mask, all, count, keep)
     }
 }
 
-fn gather_as<T: VoxelValue, const HALF: bool>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, keep: u32) {
-    let stride = T::COMPONENTS * if HALF { 2 } else { 4 };
-    let start = dst.len();
-    dst.resize(start + count * stride, 0);
-    let mut slots = dst[start..].chunks_exact_mut(stride);
+/// Calls `f` on the `count` values to store, in index order.
+#[inline(always)]
+fn for_each_stored<T: VoxelValue>(values: &[T], mask: &[u64], all: bool, count: usize, mut f: impl FnMut(&T)) {
     if all {
-        for (slot, v) in (&mut slots).zip(values) {
-            put::<T, HALF>(slot, v, keep);
-        }
+        values.iter().take(count).for_each(f);
     } else {
         for (w, &word) in mask.iter().enumerate() {
             let mut bits = word;
             while bits != 0 {
-                let v = &values[w * 64 + bits.trailing_zeros() as usize];
+                f(&values[w * 64 + bits.trailing_zeros() as usize]);
                 bits &= bits - 1;
-                match slots.next() {
-                    Some(slot) => put::<T, HALF>(slot, v, keep),
-                    None => return, // count was the mask's popcount: unreachable
-                }
             }
         }
     }
 }
 
-#[inline(always)]
-fn put<T: VoxelValue, const HALF: bool>(slot: &mut [u8], v: &T, keep: u32) {
-    let c = v.components();
-    for k in 0..T::COMPONENTS {
-        if HALF {
-            let b = mantissa::round_half_bits(f16::from_f32(c[k]).to_bits(), keep);
-            slot[2 * k..2 * k + 2].copy_from_slice(&b.to_le_bytes());
-        } else {
-            slot[4 * k..4 * k + 4].copy_from_slice(&mantissa::round_float_bits(c[k].to_bits(), keep).to_le_bytes());
+fn gather_float<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, keep: u32) {
+    let stride = T::COMPONENTS * 4;
+    let start = dst.len();
+    dst.resize(start + count * stride, 0);
+    let mut slots = dst[start..].chunks_exact_mut(stride);
+    for_each_stored(values, mask, all, count, |v| {
+        if let Some(slot) = slots.next() {
+            let c = v.components();
+            for k in 0..T::COMPONENTS {
+                slot[4 * k..4 * k + 4].copy_from_slice(&mantissa::round_float_bits(c[k].to_bits(), keep).to_le_bytes());
+            }
         }
+    });
+}
+
+/// The half-float gather: the components are collected as `f32`, converted
+/// to binary16 as one slice (`half`'s slice conversion uses the CPU's F16C
+/// instructions where it has them, four values at a time; the rounding is
+/// IEEE round-to-nearest-even either way, so the bits are those of
+/// `f16::from_f32` per value), then rounded to `keep` mantissa bits.
+fn gather_half<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, keep: u32, s: &mut HalfScratch) {
+    use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
+    s.floats.clear();
+    for_each_stored(values, mask, all, count, |v| s.floats.extend_from_slice(&v.components()[..T::COMPONENTS]));
+    let n = s.floats.len();
+    s.bits.clear();
+    s.bits.resize(n, 0);
+    let halves: &mut [f16] = s.bits.reinterpret_cast_mut();
+    halves.convert_from_f32_slice(&s.floats);
+    let start = dst.len();
+    dst.resize(start + 2 * n, 0);
+    for (d, &b) in dst[start..].chunks_exact_mut(2).zip(&s.bits) {
+        d.copy_from_slice(&mantissa::round_half_bits(b, keep).to_le_bytes());
     }
 }
 
@@ -571,6 +615,49 @@ mod tests {
         let len = i64::from_le_bytes(b[1..9].try_into().unwrap());
         assert!(len > 0 && len <= 512 * 4 + 16, "stored in a frame, {len} bytes");
         assert_eq!(decode(&b, flags, false, 512, &full, 0.0f32), noise);
+    }
+
+    /// The slice conversion of the half-float gather gives, bit for bit, the
+    /// per-value `f16::from_f32` then mantissa rounding: over normal,
+    /// subnormal, tie, signed-zero and near-overflow values, for vec3 and
+    /// float, every mask shape, and every kept width.
+    #[test]
+    fn half_gather_matches_per_value_conversion() {
+        let mut s = 0x2545_f491u32;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 17;
+            s ^= s << 5;
+            s
+        };
+        let specials = [0.0f32, -0.0, 1.0, -2.5, 65504.0, -65504.0, 65519.0, 6.1e-5, 5.96e-8, 2.98e-8, 1.0e-7, 2049.0, 2051.0, 1.0009766];
+        let mut floats: Vec<f32> = specials.to_vec();
+        while floats.len() < 3 * 512 {
+            let r = next();
+            // Exponents spanning the half range, subnormals included.
+            let x = f32::from_bits((r & 0x807f_ffff) | ((103 + (r >> 23) % 40) << 23));
+            floats.push(x);
+        }
+        let vecs: Vec<[f32; 3]> = floats.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+        let mut sparse = vec![0u64; 8];
+        for n in (0..512).filter(|n| n % 3 != 1) {
+            layout::set_mask_bit(&mut sparse, n);
+        }
+        for keep in [1, 5, 9, 10] {
+            for (mask, all) in [(vec![u64::MAX; 8], true), (sparse.clone(), false)] {
+                let count = if all { 512 } else { layout::mask_count(&mask) };
+                let want = |xs: &mut dyn Iterator<Item = f32>| -> Vec<u8> {
+                    xs.flat_map(|x| mantissa::round_half_bits(f16::from_f32(x).to_bits(), keep).to_le_bytes()).collect()
+                };
+                let mut got = Vec::new();
+                gather(&mut got, &vecs, &mask, all, count, true, keep, &mut HalfScratch::default());
+                let stored = layout::mask_ones(&mask).flat_map(|n| vecs[n]);
+                assert_eq!(got, want(&mut stored.into_iter()), "vec3 keep {keep} all {all}");
+                let mut got = Vec::new();
+                gather(&mut got, &floats[..512], &mask, all, count, true, keep, &mut HalfScratch::default());
+                assert_eq!(got, want(&mut layout::mask_ones(&mask).map(|n| floats[n])), "float keep {keep} all {all}");
+            }
+        }
     }
 
     fn hex(s: &str) -> Vec<u8> {
