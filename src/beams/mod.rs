@@ -47,7 +47,7 @@ use noise::Perlin;
 use rand::Rng;
 use rayon::prelude::*;
 use std::ops::Range;
-use walk::{trace_beam, BeamContext, BeamStart, DepositModel, EndReason};
+use walk::{trace_beam_into, BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
 
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
@@ -250,15 +250,28 @@ pub struct Traced {
     pub line_power: Vec<f32>,
 }
 
-/// One beam's result, kept until the curtain's beams are concatenated.
+/// How a beam ended and where its power went, kept until the curtain's
+/// beams are tallied.
 struct BeamOut {
-    photons: Vec<Photon>,
-    line_power: Vec<f32>,
-    deposits: Vec<StepDeposit>,
     end: EndReason,
     /// keV/s: deposited, backscattered, above the top, undeposited.
     power: [f64; 4],
 }
+
+/// Consecutive beams of a curtain traced on one thread: their photons,
+/// line powers and deposits (if recorded) one beam after the other, and
+/// each beam's [`BeamOut`] in order.
+#[derive(Default)]
+struct ChunkOut {
+    bufs: BeamBuffers,
+    beams: Vec<BeamOut>,
+}
+
+/// Beams per [`ChunkOut`]: fixed, so which beams share a chunk does not
+/// depend on the thread count (the output never does: chunks are
+/// concatenated in order); small enough to balance the threads, large
+/// enough that a chunk's vectors grow a few times rather than each beam's.
+const CHUNK_BEAMS: usize = 64;
 
 /// Traces beams `range` of a bake of `count` beams. The bake's beams are
 /// numbered curtain by curtain (curtain 0's share of `count` by
@@ -286,13 +299,12 @@ pub fn trace_range(
     let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
     let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
     let mut stats = BeamStats::default();
-    let mut photons = Vec::new();
-    let mut line_power = Vec::new();
     let mut all_deposits = vec![Vec::new(); params.curtains.len()];
     stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
     let range = range.start.min(count)..range.end.min(count);
     progress.start("beams", range.len() as u64);
     let mut curtain_first = 0usize;
+    let mut traced = Vec::new();
     for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
         let n = counts[ci];
         let local = local_beams(&range, curtain_first, n);
@@ -300,11 +312,18 @@ pub fn trace_range(
         if local.is_empty() {
             continue;
         }
-        let (power_w, traces) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
+        let (power_w, chunks) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
         // The range's share of the curtain's power (all of it for a whole bake).
         stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
-        tally(&mut stats, ci, traces, &mut photons, &mut line_power, &mut all_deposits[ci]);
         stats.beams += local.len();
+        traced.push((ci, chunks));
+    }
+    // Every curtain's photons into one allocation of the final size.
+    let chunks = || traced.iter().flat_map(|(_, c)| c);
+    let mut photons = Vec::with_capacity(chunks().map(|c| c.bufs.photons.len()).sum());
+    let mut line_power = Vec::with_capacity(chunks().map(|c| c.bufs.line_power.len()).sum());
+    for (ci, chunks) in traced {
+        tally(&mut stats, ci, chunks, &mut photons, &mut line_power, &mut all_deposits[ci]);
     }
     sum_curtains(&mut stats);
     stats.photons = photons.len();
@@ -333,12 +352,22 @@ fn curtain_power_w(curtain: &Curtain, fp: &Footprint, threshold: f64) -> f64 {
 fn tally(
     stats: &mut BeamStats,
     ci: usize,
-    traces: Vec<BeamOut>,
+    chunks: Vec<ChunkOut>,
     photons: &mut Vec<Photon>,
     line_power: &mut Vec<f32>,
     deposits: &mut Vec<StepDeposit>,
 ) {
-    for b in traces {
+    for c in chunks {
+        photons.extend_from_slice(&c.bufs.photons);
+        line_power.extend_from_slice(&c.bufs.line_power);
+        deposits.extend_from_slice(&c.bufs.deposits);
+        tally_beams(stats, ci, &c.beams);
+    }
+}
+
+/// Adds beams' ends and power (W) to curtain `ci`'s counts, in order.
+fn tally_beams(stats: &mut BeamStats, ci: usize, beams: &[BeamOut]) {
+    for b in beams {
         match b.end {
             EndReason::LeftFootprint => stats.ended_left_footprint += 1,
             EndReason::EnergySpent => stats.ended_energy_spent += 1,
@@ -350,9 +379,6 @@ fn tally(
         cp.backscattered_power_w += b.power[1] / KEV_PER_J;
         cp.above_top_power_w += b.power[2] / KEV_PER_J;
         cp.undeposited_power_w += b.power[3] / KEV_PER_J;
-        photons.extend_from_slice(&b.photons);
-        line_power.extend_from_slice(&b.line_power);
-        deposits.extend_from_slice(&b.deposits);
     }
 }
 
@@ -380,7 +406,8 @@ struct Tracer<'a> {
 
 impl Tracer<'_> {
     /// Curtain `ci`'s local beams `local` (of its `n`), in parallel, in index
-    /// order, and the curtain's whole electron power, W.
+    /// order (chunks of [`CHUNK_BEAMS`]), and the curtain's whole electron
+    /// power, W.
     fn curtain(
         &self,
         ci: usize,
@@ -388,7 +415,7 @@ impl Tracer<'_> {
         fp: &Footprint,
         n: usize,
         local: Range<usize>,
-    ) -> Result<(f64, Vec<BeamOut>), BeamError> {
+    ) -> Result<(f64, Vec<ChunkOut>), BeamError> {
         let p = self.params;
         // Beam i maps the same point of the unit square through every
         // frame's footprint (crate::animation: identity across frames).
@@ -428,39 +455,50 @@ impl Tracer<'_> {
             ionization: ionization.as_ref(),
             earth: p.earth,
         };
-        let traces = local.into_par_iter().map(|i| self.beam(&ctx, &starts, self.stream_offset + i as u64)).collect();
+        let chunks: Vec<Range<usize>> = local.clone().step_by(CHUNK_BEAMS).map(|a| a..(a + CHUNK_BEAMS).min(local.end)).collect();
+        let traces = chunks
+            .into_par_iter()
+            .map(|c| {
+                let mut out = ChunkOut { beams: Vec::with_capacity(c.len()), ..ChunkOut::default() };
+                for i in c {
+                    self.beam(&ctx, &starts, self.stream_offset + i as u64, &mut out);
+                }
+                out
+            })
+            .collect();
         Ok((power_w, traces))
     }
 
     /// The beam of stream `index`: its start and its walk, on its own random
-    /// stream.
-    fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64) -> BeamOut {
+    /// stream, appended to `out` (its deposits only while it is summed,
+    /// unless they are recorded).
+    fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64, out: &mut ChunkOut) {
         let mut r = rng::rng(&[self.params.seed, starts.curtain.seed, rng::tag::BEAM, index]);
         let start = starts.start(index, &mut r);
+        let bufs = std::mem::take(&mut out.bufs);
+        let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
         let t = match self.params.magnetic_pole {
             // The dipole's field at the beam's start: over a beam's path
             // (some 50 km across the field at I = 78 deg, from 260 to 100 km)
             // its direction turns by about 50 / R rad = 0.5 degrees.
             Some(pole) => {
                 let field = MagneticField::dipole(&self.params.earth, pole, [start.position.x, start.position.y]);
-                trace_beam(&BeamContext { field, ..*ctx }, &start, &mut r)
+                trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs)
             }
-            None => trace_beam(ctx, &start, &mut r),
+            None => trace_beam_into(ctx, &start, &mut r, bufs),
         };
         self.progress.inc(1);
-        let deposited: f64 = t.deposits.iter().map(|d| d.power_kev_s).sum();
-        let mut photons = t.photons;
+        let mut bufs = BeamBuffers { photons: t.photons, line_power: t.line_power, deposits: t.deposits };
+        let deposited: f64 = bufs.deposits[first_deposit..].iter().map(|d| d.power_kev_s).sum();
+        if !self.record_deposits {
+            bufs.deposits.clear();
+        }
         if self.params.kernel == KernelShape::Point {
             // The point estimator: each step's power at its end.
-            photons.iter_mut().for_each(|p| *p = p.to_point());
+            bufs.photons[first_photon..].iter_mut().for_each(|p| *p = p.to_point());
         }
-        BeamOut {
-            power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s],
-            photons,
-            line_power: t.line_power,
-            deposits: if self.record_deposits { t.deposits } else { Vec::new() },
-            end: t.end,
-        }
+        out.bufs = bufs;
+        out.beams.push(BeamOut { power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s], end: t.end });
     }
 }
 

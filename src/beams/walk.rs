@@ -153,12 +153,12 @@ pub struct BeamTrace {
 
 impl BeamTrace {
     /// A beam at `p` that has not stepped yet (its path starting at `p` if
-    /// recorded), `backscatter_kev_s` set by its model.
-    fn begin(p: DVec3, backscatter_kev_s: f64, record_path: bool) -> Self {
+    /// recorded), `backscatter_kev_s` set by its model, appending to `bufs`.
+    fn begin(p: DVec3, backscatter_kev_s: f64, record_path: bool, bufs: BeamBuffers) -> Self {
         let mut out = BeamTrace {
-            photons: Vec::new(),
-            line_power: Vec::new(),
-            deposits: Vec::new(),
+            photons: bufs.photons,
+            line_power: bufs.line_power,
+            deposits: bufs.deposits,
             backscatter_kev_s,
             above_top_kev_s: 0.0,
             undeposited_kev_s: 0.0,
@@ -172,6 +172,17 @@ impl BeamTrace {
         }
         out
     }
+}
+
+/// Vectors a trace appends its photons, line powers and deposits to
+/// ([`trace_beam_into`]): empty for a beam of its own, or those of the
+/// beams before it, so many beams fill one allocation instead of each
+/// growing its own.
+#[derive(Clone, Debug, Default)]
+pub struct BeamBuffers {
+    pub photons: Vec<Photon>,
+    pub line_power: Vec<f32>,
+    pub deposits: Vec<StepDeposit>,
 }
 
 /// How a curtain's beams deposit energy (module doc).
@@ -256,15 +267,22 @@ fn deposit_next(earth: &Earth, out: &mut BeamTrace, start: DVec3, end: DVec3, po
 /// becomes one photon ([`deposit`]), coloured by the emission lines at the
 /// step's end altitude.
 pub fn trace_beam(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTrace {
+    trace_beam_into(ctx, start, r, BeamBuffers::default())
+}
+
+/// [`trace_beam`] appending to `bufs`: the trace's `photons`, `line_power`
+/// and `deposits` are `bufs`' followed by this beam's (the same values as
+/// [`trace_beam`]'s).
+pub fn trace_beam_into(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, bufs: BeamBuffers) -> BeamTrace {
     match ctx.model {
-        DepositModel::Csda => trace_csda(ctx, start, r),
+        DepositModel::Csda => trace_csda(ctx, start, r, bufs),
         DepositModel::Expected(g) => {
             let total = g.total();
-            trace_fang(ctx, start, r, total, |m| g.fraction_above(m))
+            trace_fang(ctx, start, r, total, |m| g.fraction_above(m), bufs)
         }
         DepositModel::Sampled(d) => {
             let e = start.energy_kev;
-            trace_fang(ctx, start, r, d.total(e), |m| d.fraction_above(e, m))
+            trace_fang(ctx, start, r, d.total(e), |m| d.fraction_above(e, m), bufs)
         }
     }
 }
@@ -350,15 +368,23 @@ fn trail_factor(tr: &TrailSample, wave: Option<&Wave>, i: usize, tau: f64) -> f6
 /// per step with m the deepest column so far; stops when complete (the
 /// remaining <= COMPLETE_TOL of the total goes into that last step) or below
 /// the atmosphere's table.
-fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64, frac: impl Fn(f64) -> f64) -> BeamTrace {
+fn trace_fang(
+    ctx: &BeamContext,
+    start: &BeamStart,
+    r: &mut impl Rng,
+    total: f64,
+    frac: impl Fn(f64) -> f64,
+    bufs: BeamBuffers,
+) -> BeamTrace {
     let pw = start.power_kev_s;
     let mut p = start.position;
     let mut done = frac(ctx.atmosphere.column_mass(p.z));
-    let mut out = BeamTrace::begin(p, pw * (1.0 - total), ctx.record_path);
+    let mut out = BeamTrace::begin(p, pw * (1.0 - total), ctx.record_path, bufs);
     deposit_above_start(ctx, start, &mut out, &frac, total, done);
     let bottom = ctx.atmosphere.bottom_km();
     let z0 = start.position.z;
     let (half_l, half_w) = (0.5 * ctx.footprint.length, 0.5 * ctx.footprint.width);
+    let local = ctx.footprint.local_map();
     for _ in 0..FANG_MAX_STEPS {
         if total - done <= COMPLETE_TOL * total {
             out.end = EndReason::EnergySpent;
@@ -370,7 +396,7 @@ fn trace_fang(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, total: f64
         // only runaway steps (deflections near 90 degrees, huge lengths)
         // get that far; what they carry is reported as undeposited.
         let foot = ctx.field.foot(p_new, z0);
-        let (u, v) = ctx.footprint.to_local(foot.x, foot.y);
+        let (u, v) = local.to_local(foot.x, foot.y);
         if !(u.abs() <= 2.0 * half_l && v.abs() <= 2.0 * half_w) {
             out.end = EndReason::LeftFootprint;
             break;
@@ -486,7 +512,7 @@ pub fn above_start_top(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f64)
 /// [`crate::csda`]): the step's column mass shrinks the residual range; the
 /// energy lost is the deposit. Stops after 1/dt steps, when the energy is
 /// spent, or when the field-line foot leaves the footprint.
-fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTrace {
+fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng, bufs: BeamBuffers) -> BeamTrace {
     let max_steps = (1.0 / ctx.params.dt).round().max(1.0) as usize;
     let z0 = start.position.z;
     let f = ctx.field;
@@ -496,7 +522,7 @@ fn trace_csda(ctx: &BeamContext, start: &BeamStart, r: &mut impl Rng) -> BeamTra
     let power_per_kev = if start.energy_kev > 0.0 { start.power_kev_s / start.energy_kev } else { 0.0 };
     let base_per_kev = if start.energy_kev > 0.0 { start.base_power_kev_s / start.energy_kev } else { 0.0 };
     let mut col_p = ctx.atmosphere.column_mass(p.z);
-    let mut out = BeamTrace::begin(p, 0.0, ctx.record_path);
+    let mut out = BeamTrace::begin(p, 0.0, ctx.record_path, bufs);
     if e <= 0.0 {
         out.end = EndReason::EnergySpent;
         return out;
@@ -549,7 +575,7 @@ mod tests {
         // step that does not (a new start) maps its own; on a round Earth
         // and a flat one, every photon is `deposit`'s.
         for earth in [Earth::new(crate::earth::MEAN_RADIUS_KM), Earth::new(0.0)] {
-            let mut out = BeamTrace::begin(DVec3::ZERO, 0.0, false);
+            let mut out = BeamTrace::begin(DVec3::ZERO, 0.0, false, BeamBuffers::default());
             let pts = [DVec3::new(10.0, -3.0, 200.0), DVec3::new(10.2, -3.1, 198.5), DVec3::new(10.3, -3.0, 197.0)];
             let steps = [(pts[0], pts[1]), (pts[1], pts[2]), (pts[0], pts[2]), (pts[2], DVec3::new(-0.0, 0.0, 120.0))];
             for (a, b) in steps {

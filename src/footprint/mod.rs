@@ -78,6 +78,30 @@ pub struct Footprint {
     pub path: Option<Arc<PlacedPath>>,
 }
 
+/// A footprint's map from world (x, y) to its curtain frame (u, v)
+/// ([`Footprint::local_map`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LocalMap<'a> {
+    path: Option<&'a PlacedPath>,
+    center: [f64; 2],
+    /// Sine and cosine of the rotation (unused along a path).
+    sin_cos: (f64, f64),
+}
+
+impl LocalMap<'_> {
+    /// World (x, y) to curtain frame (u, v), km.
+    #[inline]
+    pub fn to_local(&self, x: f64, y: f64) -> (f64, f64) {
+        if let Some(p) = self.path {
+            let (u, v) = p.frame.to_local(x, y);
+            return (u, v - p.drift_km);
+        }
+        let (s, c) = self.sin_cos;
+        let (dx, dy) = (x - self.center[0], y - self.center[1]);
+        (dx * c + dy * s, -dx * s + dy * c)
+    }
+}
+
 /// A footprint PNG could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum FootprintError {
@@ -110,13 +134,15 @@ impl Footprint {
     /// World (x, y) to curtain frame (u, v), km.
     #[inline]
     pub fn to_local(&self, x: f64, y: f64) -> (f64, f64) {
-        if let Some(p) = &self.path {
-            let (u, v) = p.frame.to_local(x, y);
-            return (u, v - p.drift_km);
-        }
-        let (s, c) = self.rotation_rad.sin_cos();
-        let (dx, dy) = (x - self.center[0], y - self.center[1]);
-        (dx * c + dy * s, -dx * s + dy * c)
+        self.local_map().to_local(x, y)
+    }
+
+    /// [`Self::to_local`] for many points: the rotation's sine and cosine
+    /// taken once (the same values, so the same bits).
+    #[inline]
+    pub fn local_map(&self) -> LocalMap<'_> {
+        let sin_cos = if self.path.is_some() { (0.0, 1.0) } else { self.rotation_rad.sin_cos() };
+        LocalMap { path: self.path.as_deref(), center: self.center, sin_cos }
     }
 
     /// Curtain frame (u, v) to world (x, y), km.
