@@ -117,8 +117,29 @@ pub fn f_of_y(c: &[f64; 8], y: f64) -> f64 {
 /// Fang 2010 eq. 1: y of electrons of energy `e_kev` at column mass `m` g cm^-2.
 #[inline]
 pub fn y_2010(e_kev: f64, m: f64) -> f64 {
-    2.0 / e_kev * (m / 6e-6).powf(0.7)
+    2.0 / e_kev * mass_power(m)
 }
+
+/// The column mass's factor of [`y_2010`], `(m / 6e-6)^0.7`.
+#[inline]
+fn mass_power(m: f64) -> f64 {
+    (m / 6e-6).powf(0.7)
+}
+
+/// An energy's share of a [`MonoDeposition`] lookup
+/// ([`MonoDeposition::fraction_above`]), computed once for the many column
+/// masses a spectrum's table visits.
+#[derive(Clone, Copy, Debug)]
+struct EnergyNode {
+    two_over_e: f64,
+    k: usize,
+    a: f64,
+}
+
+/// A spectrum component's share and its quadrature nodes: each node's
+/// weight and its energy's lookup (`None` where the energy is not positive:
+/// no deposit).
+type ComponentNodes = (f64, Vec<(f64, Option<EnergyNode>)>);
 
 /// Fang 2008 eq. 4: y of a Maxwellian of characteristic energy `e0_kev`.
 #[inline]
@@ -215,11 +236,26 @@ impl MonoDeposition {
         if !(m > 0.0) || !(e_kev > 0.0) {
             return 0.0;
         }
-        let ly = y_2010(e_kev, m).ln();
+        self.fraction_above_at(&self.energy_node(e_kev), mass_power(m))
+    }
+
+    /// What [`MonoDeposition::fraction_above`] takes from the energy alone
+    /// (`e_kev > 0`): `2 / E` of [`y_2010`] and the cell and weight in ln E.
+    fn energy_node(&self, e_kev: f64) -> EnergyNode {
         let u = ((e_kev.clamp(E_MIN_KEV, E_MAX_KEV) / E_MIN_KEV).ln() / D_LN_E).clamp(0.0, (self.n_e - 1) as f64);
+        let k = (u as usize).min(self.n_e - 2);
+        EnergyNode { two_over_e: 2.0 / e_kev, k, a: u - k as f64 }
+    }
+
+    /// [`MonoDeposition::fraction_above`] at the energy `node` and
+    /// `p = `[`mass_power`]`(m)`: `y = (2 / E) p`, the product [`y_2010`]
+    /// forms, so the same value bit for bit.
+    #[inline]
+    fn fraction_above_at(&self, node: &EnergyNode, p: f64) -> f64 {
+        let ly = (node.two_over_e * p).ln();
         let v = ((ly - LN_Y.0) / D_LN_Y).clamp(0.0, (self.n_y - 1) as f64);
-        let (k, l) = ((u as usize).min(self.n_e - 2), (v as usize).min(self.n_y - 2));
-        let (a, b) = (u - k as f64, v - l as f64);
+        let (k, l) = (node.k, (v as usize).min(self.n_y - 2));
+        let (a, b) = (node.a, v - l as f64);
         let at = |k: usize, l: usize| self.d[k * self.n_y + l];
         (1.0 - a) * ((1.0 - b) * at(k, l) + b * at(k, l + 1)) + a * ((1.0 - b) * at(k + 1, l) + b * at(k + 1, l + 1))
     }
@@ -281,15 +317,38 @@ impl SpectrumDeposition {
             .collect();
         let sum: f64 = nodes.iter().map(|n| n.1).sum();
         nodes.iter_mut().for_each(|n| n.1 /= sum);
+        // Each component's energies E = x E0 looked up once (`None` where
+        // E <= 0: no deposit), each column mass's power once per mass: the
+        // same terms as `mono.fraction_above(x E0, m)`, in the same order.
+        let parts: Vec<ComponentNodes> = components
+            .iter()
+            .filter(|c| c.share > 0.0)
+            .map(|c| {
+                let nodes = nodes
+                    .iter()
+                    .map(|&(x, w)| {
+                        let e = x * c.e0_kev;
+                        (w, (e > 0.0).then(|| mono.energy_node(e)))
+                    })
+                    .collect();
+                (c.share, nodes)
+            })
+            .collect();
         use rayon::prelude::*;
         let g = (0..n)
             .into_par_iter()
             .map(|i| {
                 let m = (LN_M.0 + i as f64 * D_LN_M).exp();
-                components
+                let p = mass_power(m);
+                parts
                     .iter()
-                    .filter(|c| c.share > 0.0)
-                    .map(|c| c.share * nodes.iter().map(|&(x, w)| w * mono.fraction_above(x * c.e0_kev, m)).sum::<f64>())
+                    .map(|(share, nodes)| {
+                        share
+                            * nodes
+                                .iter()
+                                .map(|(w, node)| w * node.as_ref().map_or(0.0, |node| mono.fraction_above_at(node, p)))
+                                .sum::<f64>()
+                    })
                     .sum()
             })
             .collect();
@@ -515,6 +574,31 @@ mod tests {
             let c = coefficients(&P_2010, e);
             let peak = (0..1700).map(|i| f_of_y(&c, (LN_Y.0 + i as f64 * 0.01).exp())).fold(0.0, f64::max);
             assert!(f_of_y(&c, LN_Y.0.exp()) < 1e-6 * peak && f_of_y(&c, LN_Y.1.exp()) < 1e-30 * peak, "{e} keV");
+        }
+    }
+
+    #[test]
+    fn spectrum_table_is_the_sum_of_mono_lookups_bit_for_bit() {
+        // The table hoists each energy's and each mass's share of the
+        // lookup: every node equals the quadrature of `fraction_above`
+        // calls written out.
+        let mono = MonoDeposition::get();
+        let comps = [Maxwellian { share: 0.7, e0_kev: 2.5 }, Maxwellian { share: 0.3, e0_kev: 0.2 }];
+        let g = SpectrumDeposition::with_table(&comps, mono);
+        let dx = X_MAX / N_X as f64;
+        let mut nodes: Vec<(f64, f64)> = (1..=N_X)
+            .map(|i| {
+                let x = i as f64 * dx;
+                (x, 0.5 * x * x * (-x).exp() * if i == N_X { 0.5 } else { 1.0 })
+            })
+            .collect();
+        let sum: f64 = nodes.iter().map(|n| n.1).sum();
+        nodes.iter_mut().for_each(|n| n.1 /= sum);
+        for i in (0..g.g.len()).step_by(7) {
+            let m = (LN_M.0 + i as f64 * D_LN_M).exp();
+            let want: f64 =
+                comps.iter().map(|c| c.share * nodes.iter().map(|&(x, w)| w * mono.fraction_above(x * c.e0_kev, m)).sum::<f64>()).sum();
+            assert_eq!(g.g[i].to_bits(), want.to_bits(), "node {i}");
         }
     }
 

@@ -57,7 +57,7 @@
 //! samples): the rule never adds a leaf.
 
 use crate::camera::CameraModel;
-use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_NUM_VALUES};
+use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_DIM, LEAF_NUM_VALUES};
 use crate::scene::Projection;
 use crate::spectrum::luminance;
 use glam::{DVec3, IVec3};
@@ -119,10 +119,35 @@ impl Weight<'_> {
     /// [`Weight::at`] at every voxel of the leaf at `origin` (offset order),
     /// positions from [`Transform::index_to_world`]: the same values, in a
     /// loop without branches that vectorises.
+    ///
+    /// In perspective, the camera-relative coordinates per axis once per
+    /// leaf and the x and y terms of the squared distance and of the
+    /// forward projection once per z-row (glam sums x, y then z, so the same
+    /// sums), the z-rows in loops without branches.
     fn leaf(&self, tr: Transform, origin: IVec3) -> Box<[f64; LEAF_NUM_VALUES]> {
         let mut out = Box::new([0.0f64; LEAF_NUM_VALUES]);
-        for (n, o) in out.iter_mut().enumerate() {
-            *o = self.at(tr.index_to_world((origin + offset_to_local(n)).as_dvec3()));
+        let Some(cos_corner) = self.cos_corner else {
+            for (n, o) in out.iter_mut().enumerate() {
+                *o = self.at(tr.index_to_world((origin + offset_to_local(n)).as_dvec3()));
+            }
+            return out;
+        };
+        let (c, f) = (self.camera.position, self.camera.forward);
+        // `index_to_world` then `- position`, one axis at a time.
+        let rel = |axis: usize, l: usize| (origin[axis] + l as i32) as f64 * tr.voxel_size + tr.translation[axis] - c[axis];
+        let vz: [f64; LEAF_DIM as usize] = std::array::from_fn(|z| rel(2, z));
+        let (vz2, fz): ([f64; 8], [f64; 8]) = (vz.map(|v| v * v), vz.map(|v| v * f.z));
+        for (x, slab) in out.chunks_exact_mut(64).enumerate() {
+            let vx = rel(0, x);
+            for (y, row) in slab.chunks_exact_mut(8).enumerate() {
+                let vy = rel(1, y);
+                let (sxy, dxy) = (vx * vx + vy * vy, vx * f.x + vy * f.y);
+                for (z, o) in row.iter_mut().enumerate() {
+                    let d2 = (sxy + vz2[z]).max(self.d2_min);
+                    let cos = ((dxy + fz[z]) / d2.sqrt()).max(cos_corner);
+                    *o = 1.0 / (d2 * cos * cos * cos);
+                }
+            }
         }
         out
     }
@@ -141,15 +166,14 @@ pub fn leaf_contributions(emission: &Grid<[f32; 3]>, camera: &CameraModel) -> Ve
         .par_iter()
         .map(|l| {
             let weights = w.leaf(tr, l.origin);
+            // Voxels off or unlit add +0, which leaves the sum (never -0:
+            // it starts at +0 and adds positive terms) as it is: the sum
+            // over the lit active voxels, without branches.
             let mut c = 0.0f64;
             for n in 0..LEAF_NUM_VALUES {
-                if l.is_active(n) {
-                    let e = l.values[n];
-                    let y = luminance([e[0] as f64, e[1] as f64, e[2] as f64]).max(0.0);
-                    if y > 0.0 {
-                        c += y * v * weights[n];
-                    }
-                }
+                let e = l.values[n];
+                let y = luminance([e[0] as f64, e[1] as f64, e[2] as f64]).max(0.0);
+                c += if l.is_active(n) && y > 0.0 { y * v * weights[n] } else { 0.0 };
             }
             c
         })
@@ -271,6 +295,25 @@ mod tests {
                 assert_eq!(w.at(p), m.pixel_weight(p, 0.25 * 0.5 * 0.5), "{projection:?} {p}");
             }
             assert_eq!(w.at(m.position), m.pixel_weight(m.position, 0.0625));
+        }
+    }
+
+    #[test]
+    fn leaf_weights_are_the_weight_at_each_voxel_bit_for_bit() {
+        let mut rng = crate::rng::rng(&[6]);
+        use rand::Rng;
+        let tr = Transform::new(0.37, DVec3::new(0.1, -0.25, 0.05));
+        for projection in [Projection::Perspective, Projection::Orthographic] {
+            let m = CameraModel::new(&Camera { projection, fov_deg: 70.0, ..camera_at([1.0, -2.0, 3.0]) }, 160, 90).unwrap();
+            let w = Weight::new(&m, tr.voxel_size);
+            for _ in 0..50 {
+                let origin = IVec3::new(rng.random_range(-40..40), rng.random_range(-40..40), rng.random_range(-5..40)) * 8;
+                let leaf = w.leaf(tr, origin);
+                for (n, &got) in leaf.iter().enumerate() {
+                    let want = w.at(tr.index_to_world((origin + offset_to_local(n)).as_dvec3()));
+                    assert_eq!(got.to_bits(), want.to_bits(), "{projection:?} {origin} {n}");
+                }
+            }
         }
     }
 
