@@ -1,5 +1,5 @@
 //! The f32 maths of the gather's inner loops: `exp(x)` for `x <= 0`, `erf`
-//! by table, and integer `ceil` / `floor`. Each is deterministic (the same
+//! by a rational function, and integer `ceil` / `floor`. Each is deterministic (the same
 //! IEEE 754 operations whatever the vector width, so the same bits) and
 //! branch-free, so the loops calling them vectorise; each error bound is
 //! stated here and tested against libm.
@@ -21,13 +21,18 @@
 //! in the exponent bits and 2^f by its degree-6 Taylor polynomial
 //! `sum_k (f ln 2)^k / k!`: truncation `(ln2 / 2)^7 / 7! = 1.2e-7` relative.
 //!
-//! **erf.** [`erf_lut`]: linear interpolation in a table of erf at steps h
-//! = 1/1024 on [0, 4] (1 beyond: erfc(4) = 1.5e-8). Interpolation errs by
-//! at most `h^2 / 8 max|erf''| = 1.2e-7` (`erf''(x) = -4x e^{-x^2} /
-//! sqrt(pi)`, at most 0.97 at x = 1/sqrt 2), plus f32 rounding. The segment
-//! kernel takes two per voxel and photon; a lookup costs far less than a
-//! rational approximation's exponential and division (Abramowitz & Stegun
-//! 7.1.26 measured slower). [`erf_lut_lanes`] is the same at 4 or 8 lanes.
+//! **erf.** [`erf_rational`]: `erf(x) ~ x P(x^2) / Q(x^2)` on |x| <= 4
+//! (1 beyond: erfc(4) = 1.5e-8), P of degree 6 and Q of degree 5 in x^2,
+//! odd like erf. The coefficients are a near-minimax fit on [0, 4]
+//! (weighted linear least squares on 4,000 Chebyshev nodes, reweighted
+//! toward equal ripple; `tools/fit_erf.py` refits them): 1.5e-9 in f64,
+//! 4e-7 after Horner's rule in f32 (tested against libm). The segment
+//! kernel takes two per voxel and photon, as their difference
+//! ([`erf_diff`]) over one common denominator. Straight-line arithmetic
+//! with one division vectorises whole; a table lookup (linear
+//! interpolation at steps of 1/1024) needed 16 scalar reads per 8-lane
+//! row and made the default bake's gather 1.13x slower, Abramowitz &
+//! Stegun 7.1.26 an exponential and a division per erf.
 //!
 //! **ceil and floor.** [`ceil_i`], [`floor_i`]: truncation and a
 //! correction, exact for |x| < 2^31 (`f64::ceil` is a libm call on the
@@ -64,59 +69,65 @@ pub fn exp_neg_f32(x: f32) -> f32 {
     p * scale
 }
 
-/// Table steps per unit of the erf table (h = 1/1024).
-const ERF_LUT_STEPS: usize = 1024;
+/// The coefficients of [`erf_rational`]: `erf(x) ~ x P(x^2) / Q(x^2)`,
+/// P of degree 6 and Q of degree 5 in x^2 (Q's constant term 1). The fit's
+/// P(0) rounds to the f32 of 2 / sqrt(pi), erf's slope at 0.
+const ERF_P: [f32; 7] =
+    [std::f32::consts::FRAC_2_SQRT_PI, 0.184_710_37, 0.054_332_614, 0.003_839_532, 0.000_382_692_93, 4.780_557e-6, -1.366_687_5e-8];
+const ERF_Q: [f32; 6] = [1.0, 0.497_028_86, 0.113_826_334, 0.015_453_524, 0.001_309_580_5, 6.400_944e-5];
 
-/// Entries of the erf table: erf(k / 1024) for k = 0..=4097.
-pub const ERF_LUT_LEN: usize = ERF_LUT_STEPS * 4 + 2;
-
-/// erf on [0, 4] at steps of 1/1024, f32, for [`erf_lut`]; made once.
-pub fn erf_table() -> &'static [f32; ERF_LUT_LEN] {
-    static T: std::sync::OnceLock<[f32; ERF_LUT_LEN]> = std::sync::OnceLock::new();
-    T.get_or_init(|| std::array::from_fn(|k| libm::erf(k as f64 / ERF_LUT_STEPS as f64) as f32))
+/// erf in f32 by a rational function of x^2 on |x| <= 4 (1 beyond, to
+/// erfc(4) = 1.5e-8): `x P(x^2) / Q(x^2)`, straight-line arithmetic so a
+/// loop over lanes vectorises whole (no table reads).
+#[inline(always)]
+pub fn erf_rational(x: f32) -> f32 {
+    let ax = x.abs().min(4.0);
+    let t = ax * ax;
+    (ax * erf_p(t) / erf_q(t)).copysign(x)
 }
 
-/// The table cell of erf(x) and the interpolation weight in it: the cell
-/// index is `|x| / h - 1/2` rounded to nearest ([`round_nearest`]: floor of
-/// `|x| / h`, or one less at a cell boundary, where the weight is then 1:
-/// the same value), clamped to the table, so there is no saturating
-/// float-to-integer conversion and no bounds check in the inner loop.
+/// [`erf_rational`]'s numerator polynomial P(t), Horner's rule.
 #[inline(always)]
-fn erf_cell(x: f32) -> (i32, f32) {
-    let ax = (x.abs() * ERF_LUT_STEPS as f32).min((ERF_LUT_STEPS * 4) as f32);
-    let k = round_nearest(ax - 0.5).0.max(0).min(ERF_LUT_LEN as i32 - 2);
-    (k, ax - k as f32)
+fn erf_p(t: f32) -> f32 {
+    let c = ERF_P;
+    c[0] + t * (c[1] + t * (c[2] + t * (c[3] + t * (c[4] + t * (c[5] + t * c[6])))))
 }
 
-/// erf in f32 by linear interpolation in [`erf_table`] (module
-/// documentation: error at most 1.2e-7 plus f32 rounding).
+/// [`erf_rational`]'s denominator polynomial Q(t), Horner's rule.
 #[inline(always)]
-pub fn erf_lut(table: &[f32; ERF_LUT_LEN], x: f32) -> f32 {
-    let (k, f) = erf_cell(x);
-    let k = (k as usize).min(ERF_LUT_LEN - 2);
-    let v = table[k] + f * (table[k + 1] - table[k]);
-    v.copysign(x)
+fn erf_q(t: f32) -> f32 {
+    let c = ERF_Q;
+    c[0] + t * (c[1] + t * (c[2] + t * (c[3] + t * (c[4] + t * c[5]))))
 }
 
-/// [`erf_lut`] at N arguments (4 or 8: half or whole z-rows), staged so
-/// the index and interpolation arithmetic vectorise (only the 2N table
-/// reads are scalar); the same operations per lane, so the same values.
+/// `erf(a) - erf(b)`, the segment kernel's along factor, by
+/// [`erf_rational`]'s rational function over one common denominator:
+/// `(a P(a^2) Q(b^2) - b P(b^2) Q(a^2)) / (Q(a^2) Q(b^2))`, one division
+/// instead of two. erf is odd and so is `x P(x^2) / Q(x^2)`: no sign
+/// handling, only the clamp to [-4, 4]. Q is below 260 there, a product of
+/// two below 6.8e4: no overflow. Both numerator terms are within a few
+/// roundings of `erf Q(a^2) Q(b^2)`, so the difference errs by a few
+/// 2^-24 of the larger |erf|, as two separate quotients would. Meant for
+/// `a >= b` (the segment's start side minus its end side): where both lie
+/// near the clamp that rounding could make the difference a few 1e-7 below
+/// zero, so it is floored at 0 (the kernel is never negative).
 #[inline(always)]
-pub fn erf_lut_lanes<const N: usize>(table: &[f32; ERF_LUT_LEN], x: &[f32; N]) -> [f32; N] {
-    let (mut k, mut f) = ([0usize; N], [0.0f32; N]);
-    for j in 0..N {
-        let (kj, fj) = erf_cell(x[j]);
-        k[j] = kj as usize;
-        f[j] = fj;
-    }
-    let (mut a, mut b) = ([0.0f32; N], [0.0f32; N]);
-    for j in 0..N {
-        let kj = k[j].min(ERF_LUT_LEN - 2);
-        (a[j], b[j]) = (table[kj], table[kj + 1]);
-    }
+pub fn erf_diff(a: f32, b: f32) -> f32 {
+    let (xa, xb) = (a.clamp(-4.0, 4.0), b.clamp(-4.0, 4.0));
+    let (ta, tb) = (xa * xa, xb * xb);
+    let (pa, qa) = (erf_p(ta), erf_q(ta));
+    let (pb, qb) = (erf_p(tb), erf_q(tb));
+    ((xa * pa * qb - xb * pb * qa) / (qa * qb)).max(0.0)
+}
+
+/// [`erf_diff`] at N lanes (4 or 8: half or whole z-rows): straight-line
+/// arithmetic, so the loop vectorises whole; the same operations per lane,
+/// so the same values.
+#[inline(always)]
+pub fn erf_diff_lanes<const N: usize>(a: &[f32; N], b: &[f32; N]) -> [f32; N] {
     let mut v = [0.0f32; N];
     for j in 0..N {
-        v[j] = (a[j] + f[j] * (b[j] - a[j])).copysign(x[j]);
+        v[j] = erf_diff(a[j], b[j]);
     }
     v
 }
@@ -196,16 +207,47 @@ mod tests {
     }
 
     #[test]
-    fn erf_table_matches_libm() {
-        // h^2 / 8 max|erf''| = 1.2e-7, f32 storage and interpolation 1.2e-7.
-        let t = erf_table();
-        for i in -100_000..=100_000 {
-            let x = 6.0 * i as f64 / 100_000.0;
-            let err = (erf_lut(t, x as f32) as f64 - libm::erf(x as f32 as f64)).abs();
-            assert!(err < 2.5e-7, "erf({x}): error {err}");
+    fn rational_erf_matches_libm() {
+        // The fit's f64 error is 1.5e-9; Horner's rule in f32 (13 roundings
+        // of values below 1.2 after the quotient's scaling) adds up to about
+        // 4e-7: 6e-7 leaves room, near the table it replaces (2.5e-7).
+        let mut worst = 0.0f64;
+        for i in -200_000..=200_000 {
+            let x = 6.0 * i as f64 / 200_000.0;
+            let want = libm::erf(x as f32 as f64);
+            worst = worst.max((erf_rational(x as f32) as f64 - want).abs());
         }
-        // The lanes are the scalar lookup, bit for bit.
-        let x: [f32; 8] = std::array::from_fn(|j| -4.5 + 1.3 * j as f32);
-        assert_eq!(erf_lut_lanes(t, &x), x.map(|x| erf_lut(t, x)));
+        assert!(worst < 6e-7, "worst error {worst}");
+        eprintln!("erf_rational worst {worst:e}");
+    }
+
+    #[test]
+    fn erf_difference_matches_libm_and_keeps_its_sign() {
+        // The along factor's arguments: a = s / (sqrt2 r), b = a - lambda /
+        // sqrt2, lambda >= 0.004. The common denominator's error is that of
+        // two separate quotients: a few 2^-24 of the larger |erf|.
+        let mut r = crate::rng::rng(&[11]);
+        let mut worst = 0.0f64;
+        for k in 0..400_000 {
+            let a: f32 = r.random_range(-6.0..6.0);
+            let gap: f32 = if k % 2 == 0 { r.random_range(0.0028..0.05) } else { r.random_range(0.0028..12.0) };
+            let b = a - gap;
+            let want = libm::erf(a as f64) - libm::erf(b as f64);
+            let got = erf_diff(a, b) as f64;
+            worst = worst.max((got - want).abs());
+            assert!(got >= 0.0, "erf({a}) - erf({b}) = {got} < 0");
+        }
+        assert!(worst < 1e-6, "worst error {worst}");
+        eprintln!("erf_diff worst {worst:e}");
+        // The lanes are the scalar function, bit for bit; -0 and the clamp.
+        let a: [f32; 8] = std::array::from_fn(|j| -4.5 + 1.3 * j as f32);
+        let b = a.map(|x| x - 0.7);
+        let lanes = erf_diff_lanes(&a, &b);
+        for j in 0..8 {
+            assert_eq!(lanes[j].to_bits(), erf_diff(a[j], b[j]).to_bits());
+        }
+        assert_eq!(erf_diff(9.0, 5.0), 0.0);
+        assert_eq!(erf_rational(7.5), erf_rational(4.0));
+        assert_eq!(erf_rational(-0.3), -erf_rational(0.3));
     }
 }

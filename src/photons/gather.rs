@@ -185,8 +185,8 @@ mod tests {
         assert!(g.active_voxel_count() > 1000);
         let vmax = g.iter_active().map(|(_, v)| v[0]).fold(0.0f32, f32::max) as f64;
         // Per voxel: each term's f32 kernel is within 1e-5 relative of the
-        // f64 closed form where the erf difference is large (erf 2.5e-7
-        // absolute, exp 1e-6, the table 1e-6), within 1e-4 of the point
+        // f64 closed form where the erf difference is large (the
+        // difference 6e-7 absolute, exp 1e-6, the mass table 1e-6), within 1e-4 of the point
         // kernel's peak for lambda below MIDPOINT_LAMBDA (module
         // documentation); so 1e-4 of the voxel plus an absolute 1e-6 of the
         // grid's largest value for the erf's absolute error at the caps.

@@ -19,7 +19,7 @@
 //! each voxel's own r, over the z range of each row that the capsule
 //! meets. [`PhotonMap::estimate`] is the same sum at one point in f64.
 
-use super::fast_math::{erf_lut, erf_table, exp_neg_f32};
+use super::fast_math::{erf_diff, exp_neg_f32};
 use super::kernel::{photon_kernel, Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums};
 use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
@@ -139,7 +139,6 @@ impl LeafGather<'_> {
         let wz0 = off(2, 0);
         let phi = p.power;
         let inv_2l = 0.5 / l;
-        let erf = erf_table();
         // Rows along z: a voxel within `reach` of the segment lies within it
         // in (x, y) of the segment's (x, y) projection, at a distance e, and
         // within sqrt(reach^2 - e^2) in z of the segment's z range. Rows and
@@ -196,7 +195,7 @@ impl LeafGather<'_> {
                             * inv_2l
                             * self.seg.inv_mass_f32(lam)
                             * exp_neg_f32(-perp2 * q.inv_2r2)
-                            * (erf_lut(erf, s * q.inv_sqrt2r) - erf_lut(erf, (s - l) * q.inv_sqrt2r))
+                            * erf_diff(s * q.inv_sqrt2r, (s - l) * q.inv_sqrt2r)
                     };
                     for (col, &ph) in acc.c.iter_mut().zip(&phi) {
                         col[n] += v * ph;

@@ -20,8 +20,8 @@
 //! or half rows of 4 where the leaf's range holds one half, without
 //! branches: the capsule test `dist^2 < (c r)^2` selects the lanes, the
 //! rows the capsule misses are skipped. The across factor is
-//! [`exp_neg_f32`], the two erfs [`erf_lut_lanes`] (the index arithmetic
-//! vectorised), so the per-voxel arithmetic is that of the balloon's scalar
+//! [`exp_neg_f32`], the two erfs' difference [`erf_diff_lanes`] (a
+//! rational function, vectorised whole), so the per-voxel arithmetic is that of the balloon's scalar
 //! path and the gathers' tolerances hold for both.
 //!
 //! The leaf loop is compiled twice: as is, and for AVX2 (`#[target_feature]`),
@@ -31,7 +31,7 @@
 //! bits. Scratch space ([`SplatScratch`]) is reused from leaf to leaf, one
 //! per thread.
 
-use super::fast_math::{erf_lut_lanes, erf_table, exp_neg_f32, ERF_LUT_LEN};
+use super::fast_math::{erf_diff_lanes, exp_neg_f32};
 use super::kernel::{Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums};
 use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
@@ -114,7 +114,7 @@ fn segment_lanes<const N: usize>(
 /// [`segment_lanes`]' `s`, `perp2` and `inside`, times the photon's power
 /// `phi`, added to the sums from voxel `n` on: `c inside exp(-perp2 / 2r^2)
 /// (erf(s / sqrt2 r) - erf((s - L) / sqrt2 r))`, `c` the constant factor,
-/// the erfs from `erf` ([`erf_table`]).
+/// the erfs' difference by [`erf_diff_lanes`].
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn add_segment_lanes<const N: usize>(
@@ -127,7 +127,6 @@ fn add_segment_lanes<const N: usize>(
     c: f32,
     l: f32,
     phi: &[f32; 3],
-    erf: &[f32; ERF_LUT_LEN],
 ) {
     let (mut ex, mut u0, mut u1) = ([0.0f32; N], [0.0f32; N], [0.0f32; N]);
     for j in 0..N {
@@ -135,10 +134,10 @@ fn add_segment_lanes<const N: usize>(
         u0[j] = s4[j] * q.inv_sqrt2r;
         u1[j] = (s4[j] - l) * q.inv_sqrt2r;
     }
-    let (e0, e1) = (erf_lut_lanes(erf, &u0), erf_lut_lanes(erf, &u1));
+    let de = erf_diff_lanes(&u0, &u1);
     let mut v = [0.0f32; N];
     for j in 0..N {
-        v[j] = c * inside[j] * ex[j] * (e0[j] - e1[j]);
+        v[j] = c * inside[j] * ex[j] * de[j];
     }
     for (col, &ph) in acc.c.iter_mut().zip(phi) {
         for (a, &vj) in col[n..n + N].iter_mut().zip(&v) {
@@ -258,9 +257,6 @@ impl LeafGather<'_> {
             (sz[z], w2z[z]) = (w * dir.z, w * w);
         }
         let phi = p.power;
-        // The erf table, once per photon (not per row: its first use
-        // builds it).
-        let erf = erf_table();
         // The closed form's constant factor: 1 / (2 pi r^2) / (2 L M_seg).
         let c = q.inv_2pi_r2 * (0.5 / l) * self.seg.inv_mass_f32(lam);
         let (px, py) = (l * dir.x, l * dir.y);
@@ -292,12 +288,12 @@ impl LeafGather<'_> {
                     // Both halves at once (one 8-wide pass with AVX2,
                     // `LeafGather::splat`); a half the capsule misses
                     // adds exact zeros (inside 0, every other factor finite
-                    // and e0 >= e1: erf_lut is monotone), which leaves the
+                    // and the erf difference >= 0: erf_diff is floored at 0), which leaves the
                     // non-negative sums as they are: the same values as
                     // half rows.
                     let (s8, perp2, inside) = segment_lanes(sxy, w2xy, &sz, &w2z, l, &q);
                     if inside != [0.0; 8] {
-                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi, erf);
+                        add_segment_lanes(acc, row, &s8, &perp2, &inside, &q, c, l, &phi);
                     }
                     continue;
                 }
@@ -307,7 +303,7 @@ impl LeafGather<'_> {
                     if inside == [0.0; 4] {
                         continue; // the half row misses the capsule
                     }
-                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi, erf);
+                    add_segment_lanes(acc, row + o, &s4, &perp2, &inside, &q, c, l, &phi);
                 }
             }
         }
