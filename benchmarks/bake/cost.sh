@@ -33,7 +33,7 @@ old_c=() new_c=() old_w=() new_w=() old_m=() new_m=()
 echo "old: $OLD"
 echo "new: $NEW"
 echo "scene: $SCENE, $N runs each, alternating"
-echo "nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "cpu: $(lscpu | sed -n 's/^Model name: *//p' | head -n 1), nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%-4s %-3s %8s %8s %8s %8s %10s\n' run bin user_s sys_s cpu_s wall_s peak_MB
 for i in $(seq "$N"); do
   for which in old new; do

@@ -21,7 +21,7 @@ trap 'rm -rf "$T"' EXIT
 echo "old: $OLD"
 echo "new: $NEW"
 echo "scene: $SCENE, $N runs each at --threads 1, alternating"
-echo "nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "cpu: $(lscpu | sed -n 's/^Model name: *//p' | head -n 1), nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 for i in $(seq "$N"); do
   for which in old new; do
     if [ "$which" = old ]; then bin=$OLD; else bin=$NEW; fi
