@@ -10,15 +10,9 @@
 # machine's load over both.
 # Usage: benchmarks/bake/cost.sh OLD_BIN NEW_BIN SCENE [N]   (N = 5)
 set -euo pipefail
-[ $# -ge 3 ] || { echo "usage: $0 OLD_BIN NEW_BIN SCENE [N]" >&2; exit 2; }
-OLD=$1
-NEW=$2
-SCENE=$3
-N=${4:-5}
-TIME=/usr/bin/time
-[ -x "$TIME" ] || { echo "needs GNU time at $TIME" >&2; exit 1; }
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
+DEFAULT_N=5
+# shellcheck source=benchmarks/bake/two_builds.sh
+source "$(dirname "$0")/two_builds.sh"
 # One bake by binary $1; prints "user sys wall peak_kb".
 run() {
   "$TIME" -f '%U %S %e %M' -o "$T/time" "$1" bake -q --out "$T/out" "$SCENE" >/dev/null 2>"$T/err" || {
@@ -30,10 +24,6 @@ run() {
 }
 median() { printf '%s\n' "$@" | sort -g | awk '{a[NR]=$1} END {print (NR % 2) ? a[(NR+1)/2] : (a[NR/2] + a[NR/2+1]) / 2}'; }
 old_c=() new_c=() old_w=() new_w=() old_m=() new_m=()
-echo "old: $OLD"
-echo "new: $NEW"
-echo "scene: $SCENE, $N runs each, alternating"
-echo "cpu: $(lscpu | sed -n 's/^Model name: *//p' | head -n 1), nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 printf '%-4s %-3s %8s %8s %8s %8s %10s\n' run bin user_s sys_s cpu_s wall_s peak_MB
 for i in $(seq "$N"); do
   for which in old new; do

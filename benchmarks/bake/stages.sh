@@ -9,19 +9,10 @@
 # difference between the CPU time and the stages' sum.
 # Usage: benchmarks/bake/stages.sh OLD_BIN NEW_BIN SCENE [N]   (N = 3)
 set -euo pipefail
-[ $# -ge 3 ] || { echo "usage: $0 OLD_BIN NEW_BIN SCENE [N]" >&2; exit 2; }
-OLD=$1
-NEW=$2
-SCENE=$3
-N=${4:-3}
-TIME=/usr/bin/time
-[ -x "$TIME" ] || { echo "needs GNU time at $TIME" >&2; exit 1; }
-T=$(mktemp -d)
-trap 'rm -rf "$T"' EXIT
-echo "old: $OLD"
-echo "new: $NEW"
-echo "scene: $SCENE, $N runs each at --threads 1, alternating"
-echo "cpu: $(lscpu | sed -n 's/^Model name: *//p' | head -n 1), nproc $(nproc), load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+DEFAULT_N=3
+RUNS_AT="at --threads 1"
+# shellcheck source=benchmarks/bake/two_builds.sh
+source "$(dirname "$0")/two_builds.sh"
 for i in $(seq "$N"); do
   for which in old new; do
     if [ "$which" = old ]; then bin=$OLD; else bin=$NEW; fi
