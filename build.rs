@@ -1,5 +1,5 @@
 //! Exports `AURORA_BUILD_HASH`: a hash of the source the binary is built
-//! from, the build part of a bake's identity (`src/bake_identity.rs`). The
+//! from, the build part of a bake's identity (`src/pipeline/bake/identity.rs`). The
 //! crate's version is the same on every commit, so it cannot tell two builds
 //! apart; the git revision is not always there (a source tarball) and does
 //! not see uncommitted edits. So the bytes are hashed: every `.rs` file under

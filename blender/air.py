@@ -1,5 +1,5 @@
 """The air between the aurora and the camera (`[sky]`), as `aurora render`
-applies it (src/extinction.rs is the model and its derivation; this is a
+applies it (src/physics/air_extinction.rs is the model and its derivation; this is a
 port of its few formulas, checked against the library's own numbers by
 tests/python/test_air.py).
 

@@ -14,7 +14,7 @@ or EQUIRECTANGULAR over the full sphere; Cycles turns its panoramic camera
 space so that the image centre looks down the object's -Z, the same matrix
 serves. The equidistant fisheye ignores the sensor: its image circle spans
 the frame (an ellipse when the image is not square), as `aurora render`'s
-does (src/camera.rs).
+does (src/geometry/camera.rs).
 """
 
 from __future__ import annotations

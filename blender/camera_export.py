@@ -14,7 +14,7 @@ spanning the width gives a vertical half-angle
 tan(fov_v / 2) = tan(fov_h / 2) / a and an `ortho_scale` spanning the width
 a vertical extent ortho_scale / a. Lens shift has no counterpart in
 `aurora render` and is refused, as are panoramas other than the equidistant
-fisheye and the full-sphere equirectangular (src/camera.rs).
+fisheye and the full-sphere equirectangular (src/geometry/camera.rs).
 """
 
 from __future__ import annotations

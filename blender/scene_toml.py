@@ -311,7 +311,7 @@ def pixel_ray(cam: Camera, width: int, height: int, px: float, py: float):
     """Origin and unit direction of the camera ray through raster point
     (px, py), measured in pixels from the top-left corner (pixel centres at
     half-integers, row 0 at the top). Used by tests to predict images.
-    None outside a fisheye's image circle (src/camera.rs)."""
+    None outside a fisheye's image circle (src/geometry/camera.rs)."""
     right, up, forward = camera_basis(cam)
     if cam.projection in ("fisheye", "equirectangular"):
         u, v = 2.0 * px / width - 1.0, 1.0 - 2.0 * py / height

@@ -17,7 +17,7 @@ fn main() {
                 std::process::exit(2);
             }
         };
-        let b = match aurora::bake::bake(&scene, &aurora::progress::NoProgress) {
+        let b = match aurora::pipeline::bake::bake(&scene, &aurora::util::progress::NoProgress) {
             Ok(b) => b,
             Err(e) => {
                 eprintln!("{name}: {e}");

@@ -12,9 +12,9 @@
 
 mod common;
 
-use aurora::bake::plan::{self, BakePlan};
-use aurora::progress::NoProgress;
+use aurora::pipeline::bake::plan::{self, BakePlan};
 use aurora::scene::Scene;
+use aurora::util::progress::NoProgress;
 use common::{cpu_seconds as cpu, loadavg};
 use std::time::Instant;
 
@@ -46,14 +46,14 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
     pool.install(|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         println!("# gather bench: scene {name}, {} threads, load average {}", rayon::current_num_threads(), loadavg());
         let plan = BakePlan::new(&scene, &NoProgress);
-        let mut times = aurora::bake::stats::StageTimes::default();
-        let count = aurora::bake::beam_count(&plan, &mut times, &NoProgress)?;
+        let mut times = aurora::pipeline::bake::stats::StageTimes::default();
+        let count = aurora::pipeline::bake::beam_count(&plan, &mut times, &NoProgress)?;
         let traced = timed("trace", || plan::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
         let voxel = plan.voxel_size(&traced.photons);
         println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
         {
             // The gather's set-up steps alone (the gather repeats them).
-            use aurora::photons::{bins, merge};
+            use aurora::pipeline::photons::{bins, merge};
             let r = &plan.radius;
             let merged = timed("merge", || {
                 merge::merge_segments(&traced.photons, |p| r.radius(p), merge::MERGE_LEN_R, merge::MERGE_OFF_R, merge::MERGE_CDF)
@@ -71,10 +71,15 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             let (_, peak_y) = timed("scan", || plan::scan_emission(&emission, plan.kernel.base_km))?;
             if plan.grid.prune > 0.0 {
                 let camera = plan.camera_model()?;
-                timed("prune", || aurora::prune::prune(&mut emission, &camera, plan.grid.prune));
+                timed("prune", || aurora::pipeline::prune::prune(&mut emission, &camera, plan.grid.prune));
             }
             let mut density = timed("density", || {
-                aurora::bake::density::density_grid(&emission, &plan.grid, peak_y, &aurora::earth::Earth::new(plan.earth.radius_km))
+                aurora::pipeline::bake::density::density_grid(
+                    &emission,
+                    &plan.grid,
+                    peak_y,
+                    &aurora::geometry::earth::Earth::new(plan.earth.radius_km),
+                )
             });
             let (n, _) = timed("shell", || {
                 let n = emission.dilate_active();

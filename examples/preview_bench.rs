@@ -1,4 +1,4 @@
-//! Edit-to-picture times of `aurora preview` (src/preview.rs) on a scene
+//! Edit-to-picture times of `aurora preview` (src/app/preview.rs) on a scene
 //! (default: the default preset) at 320x180: the first picture, then
 //! - an exposure edit (`render.exposure`): a tone map of the last linear
 //!   image, nothing traced;
@@ -19,7 +19,7 @@
 
 mod common;
 
-use aurora::preview::{Preview, Update, DEFAULT_SIZE, DEFAULT_SPP};
+use aurora::app::preview::{Preview, Update, DEFAULT_SIZE, DEFAULT_SPP};
 use aurora::scene::Scene;
 use common::{cpu_seconds, loadavg};
 

@@ -18,9 +18,9 @@
 mod common;
 
 use aurora::grid::{Grid, Transform};
-use aurora::progress::NoProgress;
 use aurora::render::{render, Integration, Prepared, RenderSettings, Volume};
 use aurora::scene::{Scene, TerrainKind};
+use aurora::util::progress::NoProgress;
 use common::cpu_seconds;
 use glam::{DVec3, IVec3};
 

@@ -2,7 +2,7 @@
 //! (the command prints them to 10 ms): *open* (map the file, validate every
 //! record, locate the leaves: `RenderMedium::open_seconds`) and *build*
 //! (decode the chosen grids' records into the medium: `build_seconds`), as
-//! `aurora::vdb_medium::read_render_medium` reports them, the wall time of
+//! `aurora::app::vdb_for_render::read_render_medium` reports them, the wall time of
 //! the whole call, and the CPU time of the calling thread over the call
 //! (`CLOCK_THREAD_CPUTIME_ID`): the open phase runs on it, the build's
 //! parallel loops on rayon's workers, so on a loaded machine it tracks the
@@ -33,8 +33,8 @@ fn thread_cpu() -> f64 {
 }
 
 fn write_copies(input: &str, output: &str) {
-    use aurora::vdb::write::{write_vdb, GridRef, WriteOptions};
-    let f = aurora::vdb::read::read_vdb(std::path::Path::new(input)).expect("a readable VDB");
+    use aurora::io::vdb::write::{write_vdb, GridRef, WriteOptions};
+    let f = aurora::io::vdb::read::read_vdb(std::path::Path::new(input)).expect("a readable VDB");
     let d = f.float("density").expect("a density grid").clone();
     let e = f.vec3("emission").expect("an emission grid").clone();
     let mut t = d.clone();
@@ -65,7 +65,7 @@ fn main() {
     for _ in 0..runs {
         let c = thread_cpu();
         let t = Instant::now();
-        let m = aurora::vdb_medium::read_render_medium(std::path::Path::new(path), 1.0, 1.0)
+        let m = aurora::app::vdb_for_render::read_render_medium(std::path::Path::new(path), 1.0, 1.0)
             .expect("the file renders")
             .expect("the records path applies to this file");
         let wall = t.elapsed().as_secs_f64();

@@ -29,11 +29,11 @@
 
 mod common;
 
-use aurora::bake::{self, Bake};
-use aurora::bench::metrics::image_rel_error;
-use aurora::progress::NoProgress;
+use aurora::app::bench::metrics::image_rel_error;
+use aurora::pipeline::bake::{self, Bake};
 use aurora::render::{self, RenderSettings, Volume};
 use aurora::scene::{GatherMethod, Scene, TerrainKind, VoxelSize};
+use aurora::util::progress::NoProgress;
 use common::cpu_seconds;
 use std::time::Instant;
 
@@ -135,7 +135,7 @@ fn main() {
     if let Some(g) = gather {
         new.photons.gather = g;
     }
-    let old = aurora::bench::sweeps::old_estimators(&new);
+    let old = aurora::app::bench::sweeps::old_estimators(&new);
     let scaled = |s: &Scene| Scene { beams: aurora::scene::BeamParams { count: beams * factor, ..s.beams.clone() }, ..s.clone() };
     let threads = rayon::current_num_threads();
     let load0 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();
@@ -228,7 +228,7 @@ fn main() {
             "git_commit": commit,
         });
         std::fs::write(dir.join("smoothness.json"), serde_json::to_string_pretty(&json).unwrap() + "\n").expect("write json");
-        let lum = |p: &[f32; 4]| aurora::spectrum::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
+        let lum = |p: &[f32; 4]| aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
         let peak = i_ref_new.pixels.iter().map(lum).fold(0.0, f64::max).max(1e-30);
         for (name, img) in [("new", &i_new), ("old", &i_old), ("new_ref", &i_ref_new), ("old_ref", &i_ref_old)] {
             write_png(&dir.join(format!("{name}.png")), img, 1.0 / peak);

@@ -12,9 +12,9 @@
 
 mod common;
 
-use aurora::progress::NoProgress;
 use aurora::render::{render_prepared, Prepared, RenderSettings, Volume};
 use aurora::scene::Scene;
+use aurora::util::progress::NoProgress;
 use common::cpu_seconds;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -40,8 +40,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pool = pool.num_threads(n);
     }
     let pool = pool.build()?;
-    let file = aurora::vdb::read::read_vdb_for_render(&vdb)?;
-    let (d, e) = aurora::vdb_medium::render_grids(file)?;
+    let file = aurora::io::vdb::read::read_vdb_for_render(&vdb)?;
+    let (d, e) = aurora::app::vdb_for_render::render_grids(file)?;
     let volume = Volume { density: d.as_ref(), emission: e.as_ref() };
     let prepared = pool.install(|| Prepared::new(&settings, &volume))?;
     println!(

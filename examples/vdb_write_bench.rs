@@ -17,11 +17,11 @@
 //! table and CSV lines
 //! (`csv,mode,voxels,threads,aurora_best,aurora_median,openvdb_best,openvdb_median,aurora_bytes,openvdb_bytes`).
 
-use aurora::bench::vdb_write::{bench_write, BenchWrite};
+use aurora::app::bench::vdb_write::{bench_write, BenchWrite};
 use aurora::grid::{Grid, Transform};
+use aurora::io::vdb::read::read_vdb;
+use aurora::io::vdb::write::{GridRef, WriteOptions};
 use aurora::scene::Compression;
-use aurora::vdb::read::read_vdb;
-use aurora::vdb::write::{GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -10,7 +10,7 @@ mod cli;
 use clap::Parser;
 
 fn main() {
-    aurora::memory::tune_allocator();
+    aurora::util::memory::tune_allocator();
     let args = cli::args::Cli::parse();
     let json = args.json_errors();
     let code = cli::exit::code(cli::run(args), json);

@@ -104,7 +104,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let text = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
     let mut lines = text.lines();
     let header = parse_csv_line(lines.next().expect("header"));
-    assert_eq!(header, aurora::bench::chart::CSV_HEADER.split(',').collect::<Vec<_>>());
+    assert_eq!(header, aurora::app::bench::chart::CSV_HEADER.split(',').collect::<Vec<_>>());
     let rows: Vec<Row> = lines
         .map(|l| {
             let f = parse_csv_line(l);
@@ -185,7 +185,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
 
     // --- charts
     for st in studies {
-        let stem = aurora::bench::report::slug(st);
+        let stem = aurora::app::bench::report::slug(st);
         let png = std::fs::File::open(out.join(format!("{stem}.png"))).expect("png chart");
         let mut reader = png::Decoder::new(std::io::BufReader::new(png)).read_info().expect("png parses");
         let mut buf = vec![0; reader.output_buffer_size()];

@@ -3,7 +3,7 @@
 //! from `tools/glow_tables.py`: E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2
 //! s^-1, Maxwellian, 67 N 20 E 2020-01-15 00 UT, nightglow subtracted).
 
-use aurora::chemistry::{solve, Air, Ambient, AmbientTable};
+use aurora::physics::chemistry::{solve, Air, Ambient, AmbientTable};
 
 struct Row {
     e0: f64,

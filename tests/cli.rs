@@ -53,10 +53,10 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     assert_eq!(report["units"], "km");
     assert_eq!(report["seed"], 7);
 
-    let file = aurora::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
+    let file = aurora::io::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
     // By default the file holds the aurora's voxels, no Cycles shell, one
     // grid per field (the high column apart is `grid.high_voxel_factor > 1`:
-    // tests/vdb_openvdb.rs, aurora::column).
+    // tests/vdb_openvdb.rs, aurora::grid::high_column).
     assert!(report["files"]["high_column"].is_null(), "{}", report["files"]);
     assert!(file.vec3("emission_high").is_none() && file.float("density_high").is_none());
     assert_eq!(stats["shell_voxels"], 0);
@@ -101,7 +101,7 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
         "--quiet",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let img = aurora::render::film::read_exr(&exr).unwrap();
+    let img = aurora::render::image_file::read_exr(&exr).unwrap();
     assert_eq!((img.width, img.height), (48, 32));
     assert!(img.pixels.iter().flatten().all(|c| c.is_finite()));
     assert!(img.pixels.iter().any(|p| p[1] > 0.0), "the aurora is in view");
@@ -214,9 +214,9 @@ fn target_noise_sets_the_beam_count_and_prune_zero_keeps_every_leaf() {
     // from the reported noise at m and m / 4 beams.
     let (m, noise_m) = (n["pilot_beams"].as_f64().unwrap(), n["pilot_noise"].as_f64().unwrap());
     let noise_q = n["quarter_noise"].as_f64().unwrap();
-    let (a, b) = aurora::bake::pilot::fit_law((m as usize / 4) as f64, noise_q, m, noise_m);
+    let (a, b) = aurora::pipeline::bake::pilot::fit_law((m as usize / 4) as f64, noise_q, m, noise_m);
     assert_eq!((a, b), (n["law_a"].as_f64().unwrap(), n["law_b"].as_f64().unwrap()));
-    let want = aurora::bake::pilot::beams_for_law(a, b, 0.4).ceil() as u64;
+    let want = aurora::pipeline::bake::pilot::beams_for_law(a, b, 0.4).ceil() as u64;
     assert_eq!(n["beams"].as_u64().unwrap(), want, "{n}");
     assert_eq!(stats["beams"].as_u64().unwrap(), want);
     assert_eq!(n["capped"], false);

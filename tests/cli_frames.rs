@@ -138,8 +138,8 @@ fn motion_off_gives_identical_grids() {
     // aurora_time_s, the frame's scene hash, the content UUID): compare the
     // grids, voxel by voxel.
     let grids = |f: i64| {
-        let file = aurora::vdb::read::read_vdb(&out.join(format!("aurora.{f:04}.vdb"))).unwrap();
-        let (d, e) = aurora::vdb_medium::render_grids(file).unwrap();
+        let file = aurora::io::vdb::read::read_vdb(&out.join(format!("aurora.{f:04}.vdb"))).unwrap();
+        let (d, e) = aurora::app::vdb_for_render::render_grids(file).unwrap();
         let (d, e) = (d.unwrap(), e.unwrap());
         (d.iter_active().collect::<Vec<_>>(), e.iter_active().collect::<Vec<_>>())
     };

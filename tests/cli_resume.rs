@@ -1,5 +1,5 @@
 //! Resuming a sequence keeps only frames of the same bake
-//! (`src/sequence.rs`, `src/bake_identity.rs`): a rerun after an edit of a
+//! (`src/farm/sequence_folder.rs`, `src/pipeline/bake/identity.rs`): a rerun after an edit of a
 //! key the bake reads is refused with exit 2 naming the first frame of the
 //! other bake and how to go on, and writes nothing; an edit of a
 //! render-only key (`render.exposure`, ...) or no edit keeps every frame

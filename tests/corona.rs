@@ -23,12 +23,12 @@
 //!    passing through it (edges and folds that are not field lines);
 //! 4. V projected back through the camera, compared with -B projected.
 
-use aurora::bake::bake;
-use aurora::camera::CameraModel;
-use aurora::magnetic::MagneticField;
-use aurora::progress::NoProgress;
+use aurora::geometry::camera::CameraModel;
+use aurora::physics::geomagnetic_field::MagneticField;
+use aurora::pipeline::bake::bake;
 use aurora::render::{render, Integration, RenderSettings, Volume};
 use aurora::scene::{Camera, Curtain, Projection, Scene, TerrainKind, VoxelSize};
+use aurora::util::progress::NoProgress;
 use glam::{DMat3, DVec3};
 
 /// Six short rayed curtains in a ring 50 km around the observer's field
@@ -224,7 +224,8 @@ fn corona_vanishing_point_is_the_magnetic_zenith() {
         let mut settings = RenderSettings::from_scene(&scene);
         settings.integration = Integration::Exact;
         let img = render(&settings, &Volume { density: Some(&baked.density), emission: Some(&baked.emission) }, &NoProgress).unwrap();
-        let lum: Vec<f64> = img.pixels.iter().map(|p| aurora::spectrum::luminance([p[0] as f64, p[1] as f64, p[2] as f64])).collect();
+        let lum: Vec<f64> =
+            img.pixels.iter().map(|p| aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])).collect();
         let cam = CameraModel::new(&scene.camera, side, side).unwrap();
         let (fx, fy) = vanishing_point(&cam, &lum);
         let (zx, zy) = cam.project(cam.position + zenith).unwrap();

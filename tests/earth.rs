@@ -3,15 +3,15 @@
 //! `earth.radius_km = 0`), and a long curtain's beams stay along the local
 //! field from one end to the other.
 
-use aurora::bake::bake;
-use aurora::beams::trace_all;
-use aurora::camera::CameraModel;
-use aurora::earth::Earth;
-use aurora::magnetic::{dipole_angles_deg, MagneticField};
-use aurora::progress::NoProgress;
+use aurora::geometry::camera::CameraModel;
+use aurora::geometry::earth::Earth;
+use aurora::physics::emission::line_colour::luminance;
+use aurora::physics::geomagnetic_field::{dipole_angles_deg, MagneticField};
+use aurora::pipeline::bake::bake;
+use aurora::pipeline::beams::trace_all;
 use aurora::render::{render, RenderSettings, Volume};
 use aurora::scene::{Camera, Curtain, Projection, Scene, TerrainKind, VoxelSize};
-use aurora::spectrum::luminance;
+use aurora::util::progress::NoProgress;
 use glam::DVec3;
 
 /// Ground distance of the curtain's start line north of the observer, km.
@@ -58,7 +58,7 @@ fn arc_scene(radius_km: f64) -> Scene {
 /// The lowest elevation, degrees, along the image column toward north
 /// where the luminance exceeds 20 % of the column's peak (linear between
 /// the rows that straddle it), and the baked grids.
-fn lower_border_elevation(s: &Scene) -> (f64, aurora::bake::Bake) {
+fn lower_border_elevation(s: &Scene) -> (f64, aurora::pipeline::bake::Bake) {
     let b = bake(s, &NoProgress).unwrap();
     let img =
         render(&RenderSettings::from_scene(s), &Volume { density: Some(&b.density), emission: Some(&b.emission) }, &NoProgress).unwrap();
@@ -85,7 +85,7 @@ fn lower_border_elevation(s: &Scene) -> (f64, aurora::bake::Bake) {
 /// summed over the voxels of |x| < 3 km (across the curtain) exceeds 20 % of
 /// its peak over altitude, and the luminance-weighted ground distance of
 /// those voxels within 10 km of that altitude.
-fn grid_lower_border(b: &aurora::bake::Bake) -> (f64, f64) {
+fn grid_lower_border(b: &aurora::pipeline::bake::Bake) -> (f64, f64) {
     let tr = b.emission.transform;
     let mut prof = std::collections::BTreeMap::<i32, f64>::new();
     let mut pts = Vec::new();
@@ -121,7 +121,7 @@ fn an_arcs_lower_border_sits_where_its_altitude_puts_it_on_the_sphere_and_on_the
     assert!((e_flat - want_flat).abs() < 0.3, "flat: {e_flat} deg, {h} km at {d} km is at {want_flat} deg");
     // The altitude from the flat render, on the sphere.
     let h_flat = EYE_KM + d * e_flat.to_radians().tan();
-    let earth = Earth::new(aurora::earth::MEAN_RADIUS_KM);
+    let earth = Earth::new(aurora::geometry::earth::MEAN_RADIUS_KM);
     let want_round = earth.elevation_deg(EYE_KM, h_flat, d);
     let (e_round, _) = lower_border_elevation(&arc_scene(earth.radius_km));
     eprintln!("lower border {h:.2} km at {d:.1} km: flat {e_flat:.3} deg (closed form {want_flat:.3}), round {e_round:.3} deg (closed form {want_round:.3} for {h_flat:.2} km)");
@@ -145,8 +145,8 @@ fn a_long_curtains_beams_stay_along_the_local_field_at_both_ends() {
     // 2000 km along x through the origin; no deflection (alpha = 0): every
     // step goes along the field, so each photon's segment is the field
     // direction where it lies, up to the curved frame's metric (module doc
-    // of `aurora::earth`: about 0.2 degree at I = 78 deg).
-    let earth = Earth::new(aurora::earth::MEAN_RADIUS_KM);
+    // of `aurora::geometry::earth`: about 0.2 degree at I = 78 deg).
+    let earth = Earth::new(aurora::geometry::earth::MEAN_RADIUS_KM);
     for pole in [None, Some([0.0, 2200.0])] {
         let mut s =
             Scene { curtains: vec![Curtain { length: 2000.0, width: 16.0, bend_km: 0.0, ..Curtain::default() }], ..Scene::default() };
@@ -157,9 +157,9 @@ fn a_long_curtains_beams_stay_along_the_local_field_at_both_ends() {
         s.beams.delta_alpha_deg = 0.0;
         s.earth.magnetic_pole = pole;
         s.validate("t", None).unwrap();
-        let fps = aurora::bake::plan::footprints(&s);
-        let atm = aurora::bake::plan::atmosphere(&s);
-        let colour = aurora::bake::plan::colour_table(&s, &atm);
+        let fps = aurora::pipeline::bake::plan::footprints(&s);
+        let atm = aurora::pipeline::bake::plan::atmosphere(&s);
+        let colour = aurora::pipeline::bake::plan::colour_table(&s, &atm);
         let (photons, _) = trace_all(&s, &fps, &atm, &colour, &NoProgress).unwrap();
         let (mut worst, mut n, mut global) = (0.0f64, 0, 0.0f64);
         let b0 = MagneticField::new(s.beams.b_inclination_deg, s.beams.b_declination_deg).b;

@@ -50,7 +50,7 @@ fn default_scene_deposits_the_electron_power_less_backscatter_within_one_percent
         assert!(((dep + back) / e - 1.0).abs() < 0.01, "deposited + backscattered within 1 % of the electron power: {c}");
         // The rest above the deposit's top is at most ABOVE_START_TOL of
         // the spectrum's deposition.
-        assert!(above <= aurora::beams::walk::ABOVE_START_TOL * e, "{c}");
+        assert!(above <= aurora::pipeline::beams::walk::ABOVE_START_TOL * e, "{c}");
     }
     // The grid reaches above the beams' start: the above-start deposit is in it.
     let z_max = report["stats"]["world_bbox"][1][2].as_f64().unwrap();

@@ -1,4 +1,4 @@
-//! The air between the aurora and the eye (`aurora::extinction`, `[sky]`):
+//! The air between the aurora and the eye (`aurora::physics::air_extinction`, `[sky]`):
 //! Rayleigh's optical depth against its derivation, the standard
 //! atmosphere's pressures, Kasten & Young's air mass, the ozone table, the
 //! exact slant path, and the renderer's brightness ratios against
@@ -9,14 +9,14 @@
 
 mod render_util;
 
-use aurora::extinction::{
+use aurora::grid::{Grid, Transform};
+use aurora::physics::air_extinction::{
     air_mass, ozone_cross_section_cm2, pressure_ratio, rayleigh_tau_sea_level, Air, Extinction, DOBSON_CM2, O3_SIGMA_CM2,
     O3_SIGMA_FIRST_NM, REFERENCE_MIX,
 };
-use aurora::grid::{Grid, Transform};
-use aurora::progress::NoProgress;
 use aurora::render::{render, Volume};
 use aurora::scene::{Scene, SkyParams};
+use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use render_util::{persp, settings};
 use std::f64::consts::PI;
@@ -146,9 +146,9 @@ fn slant_path_depth_is_the_integral_along_the_path() {
 /// reference mix and each line's depths: `sum_i w_ic exp(-tau_i X)`.
 fn channel_t(c: usize, x: f64) -> f64 {
     let air = default_air();
-    let colours = aurora::lines::line_colours();
+    let colours = aurora::physics::emission::line_table::line_colours();
     let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..aurora::lines::N_LINES {
+    for i in 0..aurora::physics::emission::line_table::N_LINES {
         let w = REFERENCE_MIX[i] * colours[i][c];
         let d = air.line_depths(i);
         num += w * (-(d.rayleigh + d.ozone + d.aerosol) * x).exp();
@@ -296,11 +296,11 @@ fn extinction_off_ignores_the_other_sky_keys() {
 /// with `AURORA_UPDATE_DOCS=1 cargo test --release --test extinction`.
 #[test]
 fn committed_addon_table_matches_the_library() {
-    use aurora::spectrum::{LINES, N2_1P, N2_1P_BANDS_NM};
+    use aurora::physics::emission::line_colour::{LINES, N2_1P, N2_1P_BANDS_NM};
     use serde_json::{json, Value};
     let air = default_air();
     let per_du = Air { ozone_du: 1.0, ..air };
-    let lines: Vec<Value> = (0..aurora::lines::N_LINES)
+    let lines: Vec<Value> = (0..aurora::physics::emission::line_table::N_LINES)
         .map(|i| {
             let d = per_du.line_depths(i);
             let wl: Vec<f64> = if LINES[i] == N2_1P { N2_1P_BANDS_NM.to_vec() } else { vec![LINES[i].lambda_nm] };
@@ -317,7 +317,7 @@ fn committed_addon_table_matches_the_library() {
     }
     let doc = json!({
         "reference_mix": REFERENCE_MIX,
-        "weights": aurora::extinction::channel_weights(),
+        "weights": aurora::physics::air_extinction::channel_weights(),
         "lines": lines,
         "checks": checks,
     });

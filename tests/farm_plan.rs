@@ -1,5 +1,5 @@
 //! `aurora bake --frames SPEC --plan`: the estimate of a frame range from a
-//! few calibration frames (`aurora::farm_plan`) against what baking the
+//! few calibration frames (`aurora::farm::cost_plan`) against what baking the
 //! range then writes.
 
 mod common;

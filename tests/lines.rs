@@ -1,13 +1,13 @@
 //! The lines one at a time: per-line grids (`grid.lines`) in rayleigh per
 //! km that add up to `aurora profile`'s photons, and each line following a
-//! pulsating patch through its upper state's lifetime (`aurora::lines`,
-//! `aurora::lifetime`).
+//! pulsating patch through its upper state's lifetime (`aurora::physics::emission::line_table`,
+//! `aurora::physics::emission::lifetime`).
 
-use aurora::bake::{self, plan, Bake};
 use aurora::grid::Grid;
-use aurora::lines::{line_lifetimes, LINE_KEYS};
-use aurora::progress::NoProgress;
+use aurora::physics::emission::line_table::{line_lifetimes, LINE_KEYS};
+use aurora::pipeline::bake::{self, plan, Bake};
 use aurora::scene::{Curtain, Scene, TerrainKind, VoxelSize};
+use aurora::util::progress::NoProgress;
 
 mod common;
 mod render_util;
@@ -45,7 +45,7 @@ fn layers(g: &Grid<f32>) -> std::collections::BTreeMap<i32, f64> {
 #[test]
 fn per_line_grids_sum_to_the_profiles_photons() {
     // Summed over voxels, a grid in R/km (1e3 photons s^-1 / 1e19 per km^3,
-    // `aurora::lines`) times the voxel volume in km^3 times 1e16 is the
+    // `aurora::physics::emission::line_table`) times the voxel volume in km^3 times 1e16 is the
     // line's photons per second: `aurora profile`'s total of that line for
     // the same beams. The gather's kernel integrates to 1 and is sampled at
     // one voxel per kernel radius (the discrete sum of a Gaussian of
@@ -57,7 +57,7 @@ fn per_line_grids_sum_to_the_profiles_photons() {
     s.grid.lines = LINE_KEYS.iter().map(|k| k.to_string()).collect();
     let b = bake::bake(&s, &NoProgress).unwrap();
     assert_eq!(b.lines.len(), 5);
-    let prof = aurora::profile::profile(&s, &NoProgress).unwrap();
+    let prof = aurora::pipeline::altitude_profile::profile(&s, &NoProgress).unwrap();
     let voxel_km3 = b.emission.transform.voxel_size.powi(3);
     // Profile columns: ion pairs, then n2p_4278, oi_5577, oi_6300, oi_6364, n2_1p.
     for (key, col) in [("5577", 2), ("6300", 3), ("6364", 4), ("4278", 1), ("n2_1p", 5)] {
@@ -109,7 +109,7 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
     let mut frames = Vec::new();
     for k in 0..n {
         let mut f = s.clone();
-        f.animation = aurora::animation::at_frame(&anim, k as i64 + 1);
+        f.animation = aurora::pipeline::motion::at_frame(&anim, k as i64 + 1);
         frames.push(bake::bake(&f, &NoProgress).unwrap());
     }
     // Per line: mean, first harmonic (complex), mean layer profile.
@@ -141,7 +141,7 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
         let (mut re, mut im, mut sum) = (0.0, 0.0, 0.0);
         for (z, e) in &prof {
             let tau = line_lifetimes(&atm, *z)[line];
-            let (g, lag) = aurora::lifetime::response(omega, tau);
+            let (g, lag) = aurora::physics::emission::lifetime::response(omega, tau);
             re += e * g * lag.cos();
             im += e * g * lag.sin();
             sum += e;
@@ -190,9 +190,9 @@ fn render_grid_is_the_line_grid_integrated_along_each_ray() {
     let exr = dir.join("line.exr");
     let o = common::aurora(&["render", "-q", "--vdb", vdb.to_str().unwrap(), "--grid", "line_6300", "--out", exr.to_str().unwrap(), sc]);
     assert!(o.status.success(), "{}", common::stderr(&o));
-    let (w, h, px) = aurora::render::film::read_exr_grey(&exr).unwrap();
+    let (w, h, px) = aurora::render::image_file::read_exr_grey(&exr).unwrap();
     assert_eq!((w, h), (48, 27));
-    let file = aurora::vdb::read::read_vdb(&vdb).unwrap();
+    let file = aurora::io::vdb::read::read_vdb(&vdb).unwrap();
     let density = file.float("density").unwrap();
     let line = aurora::render::grids::grey(file.float("line_6300").unwrap());
     let peak = px.iter().cloned().fold(0.0f32, f32::max) as f64;
@@ -262,7 +262,7 @@ fn line_grids_are_the_same_for_any_thread_count_and_a_frame_is_the_plain_bake_at
     let out = dir.join("seq");
     let o = common::aurora(&["bake", "-q", "--out", out.to_str().unwrap(), "--frames", "3-3", scene.to_str().unwrap()]);
     assert!(o.status.success(), "{}", common::stderr(&o));
-    let file = aurora::vdb::read::read_vdb(&out.join("aurora.0003.vdb")).unwrap();
+    let file = aurora::io::vdb::read::read_vdb(&out.join("aurora.0003.vdb")).unwrap();
     for g in &a.lines {
         let read = file.float(&g.name).unwrap_or_else(|| panic!("frame 3 has no {}", g.name));
         assert!(read == g, "frame 3's {} is not the plain bake's at t = 1 s", g.name);

@@ -4,10 +4,10 @@
 
 mod common;
 
-use aurora::bake::bake;
-use aurora::curve::{lift_km, vertices, PATH_ALTITUDE_KM};
-use aurora::progress::NoProgress;
+use aurora::pipeline::bake::bake;
+use aurora::pipeline::footprint::curtain_path::{lift_km, vertices, PATH_ALTITUDE_KM};
 use aurora::scene::{Curtain, Scene, VoxelSize};
+use aurora::util::progress::NoProgress;
 
 /// One curtain, a coarse footprint and few beams on 1 km voxels.
 fn scene_with(c: Curtain) -> Scene {
@@ -80,7 +80,7 @@ fn a_straight_two_point_path_is_the_straight_curtain() {
         Curtain { center: [lift[0], 10.0 + lift[1]], length: 80.0, width: 20.0, rotation_deg: 20.0, bend_km: 3.0, ..Curtain::default() };
     let along = Curtain { path: Some(vec![a, b]), ..straight.clone() };
     let (s1, s2) = (scene_with(straight), scene_with(along));
-    let (f1, f2) = (aurora::bake::plan::footprints(&s1), aurora::bake::plan::footprints(&s2));
+    let (f1, f2) = (aurora::pipeline::bake::plan::footprints(&s1), aurora::pipeline::bake::plan::footprints(&s2));
     assert_eq!((f1[0].nx, f1[0].ny), (f2[0].nx, f2[0].ny));
     assert!((f1[0].length - f2[0].length).abs() < 1e-9);
     let worst = f1[0].data.iter().zip(&f2[0].data).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
@@ -91,7 +91,7 @@ fn a_straight_two_point_path_is_the_straight_curtain() {
         assert!((p.0 - q.0).abs() < 1e-6 && (p.1 - q.1).abs() < 1e-6, "{p:?} {q:?}");
     }
     let (b1, b2) = (bake(&s1, &NoProgress).unwrap(), bake(&s2, &NoProgress).unwrap());
-    let total = |b: &aurora::bake::Bake| b.emission.iter_active().map(|(_, e)| (e[0] + e[1] + e[2]) as f64).sum::<f64>();
+    let total = |b: &aurora::pipeline::bake::Bake| b.emission.iter_active().map(|(_, e)| (e[0] + e[1] + e[2]) as f64).sum::<f64>();
     let (t1, t2) = (total(&b1), total(&b2));
     assert!((t1 - t2).abs() <= 1e-4 * t1, "{t1} {t2}");
     assert_eq!(b1.emission.active_voxel_count(), b2.emission.active_voxel_count());
@@ -136,13 +136,13 @@ fn a_3000_km_path_fits_the_memory_budget() {
     s.beams.count = 20_000;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.validate("t", None).unwrap();
-    let e = aurora::budget::estimate(&s);
+    let e = aurora::pipeline::memory_budget::estimate(&s);
     // Default width 40 km, 128 cells across: 0.3125 km, so about 4800 cells along at 0.625 km.
     let fp = e.terms.iter().find(|t| t.what == "footprints").unwrap();
     assert!(fp.bytes > 4000.0 * 128.0 * 96.0 && fp.bytes < 5000.0 * 128.0 * 96.0, "{}", fp.bytes);
     // The band bound at 1 km voxels, far below the 2000 x 2000 km box's leaves.
-    assert!(e.total() < 8.0 * (1u64 << 30) as f64, "{}: {:?}", aurora::memory::gib(e.total()), e.terms);
-    let f = &aurora::bake::plan::footprints(&s)[0];
+    assert!(e.total() < 8.0 * (1u64 << 30) as f64, "{}: {:?}", aurora::util::memory::gib(e.total()), e.terms);
+    let f = &aurora::pipeline::bake::plan::footprints(&s)[0];
     assert!((f.length - 3000.0).abs() < 5.0 && f.nx >= 4000, "{} km, {} cells", f.length, f.nx);
     assert!(f.data.iter().any(|&d| d > 0.5));
 }

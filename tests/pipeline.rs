@@ -1,12 +1,12 @@
-//! The bake pipeline (`aurora::bake::plan`): a beam is the same beam whatever
+//! The bake pipeline (`aurora::pipeline::bake::plan`): a beam is the same beam whatever
 //! the chunking, and a bake composed from the plan's stages is `aurora
 //! bake`'s.
 
-use aurora::bake;
-use aurora::bake::plan::{self, BakePlan};
-use aurora::bake::stats::StageTimes;
-use aurora::progress::NoProgress;
+use aurora::pipeline::bake;
+use aurora::pipeline::bake::plan::{self, BakePlan};
+use aurora::pipeline::bake::stats::StageTimes;
 use aurora::scene::{BeamStarts, Deposition};
+use aurora::util::progress::NoProgress;
 use std::time::Instant;
 
 mod common;
@@ -35,7 +35,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
                 photons.extend(part.photons);
             }
             assert_eq!(photons.len(), whole.photons.len(), "{starts:?} {cuts:?}");
-            let bytes = |p: &[aurora::deposit::Photon]| {
+            let bytes = |p: &[aurora::pipeline::deposit::Photon]| {
                 p.iter()
                     .flat_map(|p| {
                         p.position.iter().chain(&p.end).chain(&p.power).flat_map(|x| x.to_bits().to_le_bytes()).collect::<Vec<_>>()
@@ -86,10 +86,10 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
     a.times_s = want.stats.times_s.clone();
     assert_eq!(a, want.stats);
     // And the written file's bytes: the same VDB as `aurora bake` writes.
-    let opts = aurora::outputs::write_options(&s);
+    let opts = aurora::io::bake_folder::write_options(&s);
     let file = |b: &bake::Bake| {
-        aurora::vdb::write::write_vdb_bytes(
-            &[aurora::vdb::write::GridRef::Float(&b.density), aurora::vdb::write::GridRef::Vec3(&b.emission)],
+        aurora::io::vdb::write::write_vdb_bytes(
+            &[aurora::io::vdb::write::GridRef::Float(&b.density), aurora::io::vdb::write::GridRef::Vec3(&b.emission)],
             &opts,
         )
         .unwrap()

@@ -16,10 +16,10 @@
 //! - no preset's path bends tighter than half its width (no `tight bend`
 //!   warning).
 
-use aurora::bake::{bake, Bake};
-use aurora::progress::NoProgress;
+use aurora::pipeline::bake::{bake, Bake};
 use aurora::render::{render, Image, RenderSettings, Volume};
 use aurora::scene::{presets, Scene, TerrainKind, VoxelSize};
+use aurora::util::progress::NoProgress;
 use std::process::Command;
 
 /// The preset at test size: 1,500 beams, a 128 x 32 footprint, a 1 km
@@ -58,7 +58,7 @@ fn render_of(s: &Scene, b: &Bake, aurora_only: bool) -> Image {
 }
 
 fn luminance(p: &[f32; 4]) -> f64 {
-    aurora::spectrum::luminance([p[0] as f64, p[1] as f64, p[2] as f64])
+    aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])
 }
 
 /// Sums of R, G and B over rows `rows` of `img`.

@@ -18,7 +18,7 @@
 //! sleeps are the editor's pauses between chunks.
 
 use aurora::scene::Scene;
-use aurora::watch::text_hash;
+use aurora::util::file_watch::text_hash;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -147,8 +147,8 @@ fn start(name: &str, watch: Watch) -> Session {
     let mut cmd = Command::new(BIN);
     cmd.args(["preview", path.to_str().unwrap(), "--watch", "--size", "32x18", "--spp", "1", "--threads", "2", "--out"]).arg(&png);
     match watch {
-        Watch::Events => cmd.env_remove(aurora::watch::ENV),
-        Watch::Poll => cmd.env(aurora::watch::ENV, "poll"),
+        Watch::Events => cmd.env_remove(aurora::util::file_watch::ENV),
+        Watch::Poll => cmd.env(aurora::util::file_watch::ENV, "poll"),
     };
     let child = Child::spawn(&mut cmd);
     let text_so_far = child.wait_for("the first picture", FIRST, |t| pictures(t) >= 1);
@@ -156,7 +156,10 @@ fn start(name: &str, watch: Watch) -> Session {
     let how = match watch {
         Watch::Events => "(inotify: ".to_string(),
         Watch::Poll => {
-            format!("(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for {} ms", aurora::watch::SETTLE.as_millis())
+            format!(
+                "(polling every 50 ms (AURORA_WATCH=poll): a save counts once unchanged for {} ms",
+                aurora::util::file_watch::SETTLE.as_millis()
+            )
         }
     };
     assert!(first.starts_with("watching ") && first.contains(&how), "{first}");
@@ -268,7 +271,8 @@ fn an_unknown_watch_mode_exits_2_naming_the_variable() {
     let dir = common::scratch("preview-watch", "env");
     let path = dir.join("scene.toml");
     std::fs::write(&path, small_scene().to_toml()).unwrap();
-    let o = Command::new(BIN).args(["preview", path.to_str().unwrap(), "--watch"]).env(aurora::watch::ENV, "fast").output().unwrap();
+    let o =
+        Command::new(BIN).args(["preview", path.to_str().unwrap(), "--watch"]).env(aurora::util::file_watch::ENV, "fast").output().unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", common::stderr(&o));
     let e = common::stderr(&o);
     assert!(e.contains("AURORA_WATCH=`fast`") && e.contains("`poll`"), "{e}");

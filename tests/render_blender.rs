@@ -1,5 +1,5 @@
 //! The camera as Blender builds it: the settings documented in
-//! `src/camera.rs` (sensor_fit 'VERTICAL', angle_y = fov, ortho_scale =
+//! `src/geometry/camera.rs` (sensor_fit 'VERTICAL', angle_y = fov, ortho_scale =
 //! ortho_height, basis columns right, up', -forward) must project world
 //! points to the same film positions in Blender 5.0 as our camera.
 

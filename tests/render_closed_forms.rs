@@ -22,8 +22,8 @@
 mod render_util;
 
 use aurora::grid::{Grid, Transform};
-use aurora::progress::NoProgress;
 use aurora::render::{radiance_along_ray, render, Integration, Medium, RenderSettings, Volume};
+use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use render_util::*;
 

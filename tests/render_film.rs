@@ -5,10 +5,10 @@ mod common;
 mod render_util;
 
 use aurora::grid::{Grid, Transform};
-use aurora::progress::NoProgress;
-use aurora::render::film::{read_exr, write_exr, write_png};
+use aurora::render::image_file::{read_exr, write_exr, write_png};
 use aurora::render::{render, CameraModel, Image, Integration, RenderError, RenderStats, Volume};
 use aurora::scene::{Projection, Terrain, TerrainKind};
+use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

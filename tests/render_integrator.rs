@@ -11,10 +11,10 @@
 mod render_util;
 
 use aurora::grid::{Grid, Transform};
-use aurora::progress::NoProgress;
 use aurora::render::dda::{segments, CellFilter, LeafWalker};
 use aurora::render::segment::{Accum, Cubic, Piece, TAU_CUTOFF};
 use aurora::render::{optical_depth_along_ray, radiance_along_ray, render, Integration, Medium, Volume};
+use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

@@ -5,10 +5,10 @@ mod common;
 mod render_util;
 
 use aurora::grid::Transform;
-use aurora::progress::NoProgress;
 use aurora::render::terrain::{intersect_triangle, procedural_cells, write_obj, Heightfield};
 use aurora::render::{render, Image, RenderSettings, Volume};
 use aurora::scene::{Terrain, TerrainKind};
+use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;

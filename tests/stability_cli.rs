@@ -3,7 +3,7 @@
 //! beyond half-float range in half storage (refused, never written as inf),
 //! and grids too coarse for the kernel or the curtain (warned).
 //!
-//! The fluid step far past its CFL limit is pinned in `src/footprint/fluid.rs`
+//! The fluid step far past its CFL limit is pinned in `src/pipeline/footprint/fluid.rs`
 //! (`advection_is_bounded_and_finite_far_above_the_cfl_limit`: dt = 100
 //! cells, density stays within its initial bounds); `stability_extremes.rs`
 //! bakes with the largest `footprint.dt` the scene accepts.
@@ -11,7 +11,7 @@
 mod common;
 
 use aurora::grid::{Grid, Transform};
-use aurora::vdb::write::{write_vdb, GridRef, VdbWriteError, WriteOptions};
+use aurora::io::vdb::write::{write_vdb, GridRef, VdbWriteError, WriteOptions};
 use common::{aurora, file_names as files_in, stderr};
 use glam::{DVec3, IVec3};
 use std::path::PathBuf;
@@ -73,7 +73,7 @@ fn values_beyond_half_range_are_refused_by_the_writer_and_no_file_is_left() {
     assert!(files_in(&d).is_empty());
     e.set(IVec3::new(-7, 0, 40), [65_504.0, -65_504.0, 0.0]);
     write_vdb(&path, &[GridRef::Vec3(&e)], &opts).unwrap();
-    let back = aurora::vdb::read::read_vdb(&path).unwrap();
+    let back = aurora::io::vdb::read::read_vdb(&path).unwrap();
     let g = back.vec3("emission").unwrap();
     assert_eq!(g.get(IVec3::new(-7, 0, 40)), [65_504.0, -65_504.0, 0.0], "stored exactly, never inf");
 }
@@ -108,7 +108,7 @@ fn a_bake_beyond_half_range_is_written_as_full_floats_with_a_warning() {
     let report: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("bake.json")).unwrap()).unwrap();
     assert_eq!(report["files"]["half_emission"], false, "{}", report["files"]);
     assert!(report["files"]["full_float_beyond_half_range"].as_array().unwrap().iter().any(|n| n == "emission"));
-    let f = aurora::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
+    let f = aurora::io::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
     let g = f.vec3("emission").unwrap();
     let peak = g.iter_active().flat_map(|(_, v)| v).fold(0.0f32, f32::max);
     assert!(peak > 65_504.0 && peak.is_finite(), "the values are there, finite: {peak}");
@@ -157,7 +157,7 @@ fn under_resolved_kernels_and_curtains_are_warned_on_stderr() {
 fn band_thickness_is_the_band_area_over_the_length() {
     // The library measure behind the curtain warning, against a footprint
     // built by hand: 3 of 16 rows above threshold, rows 0.25 km apart.
-    let mut fp = aurora::footprint::Footprint {
+    let mut fp = aurora::pipeline::footprint::Footprint {
         nx: 32,
         ny: 16,
         data: vec![0.0; 32 * 16],
@@ -173,16 +173,16 @@ fn band_thickness_is_the_band_area_over_the_length() {
         }
     }
     // Cells at 0.5 in three rows: 3 * 0.25 km. The threshold is strict.
-    assert!((aurora::bake::voxel::band_thickness_km(&fp, 0.03) - 0.75).abs() < 1e-12);
-    assert_eq!(aurora::bake::voxel::band_thickness_km(&fp, 0.5), 0.0);
+    assert!((aurora::pipeline::bake::voxel::band_thickness_km(&fp, 0.03) - 0.75).abs() < 1e-12);
+    assert_eq!(aurora::pipeline::bake::voxel::band_thickness_km(&fp, 0.5), 0.0);
     let mut s = aurora::scene::Scene::default();
     s.photons.radius_noise = 0.0;
     s.photons.radius_km = 0.5;
-    let w = aurora::bake::voxel::resolution_warnings(&s, &[fp.clone()], 0.7);
+    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[fp.clone()], 0.7);
     assert!(w.is_empty(), "{w:?}");
-    let w = aurora::bake::voxel::resolution_warnings(&s, &[fp.clone(), fp], 0.8);
+    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[fp.clone(), fp], 0.8);
     assert_eq!(w.len(), 2, "one per thin curtain: {w:?}");
-    let w = aurora::bake::voxel::resolution_warnings(&s, &[], 1.01);
+    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[], 1.01);
     assert_eq!(w.len(), 1, "r = 0.5 < 1.01 / 2: {w:?}");
 }
 
@@ -226,7 +226,7 @@ fn a_vdb_whose_leaves_would_not_fit_in_memory_is_refused_before_they_are_read() 
     // bytes = 6 KiB): about 0.92 GB. Under a 1 GiB address-space cap the
     // allocation would fail, which Rust turns into an abort; the medium's
     // size is checked first against 3/4 of the limit
-    // (render::medium::build::MEDIUM_MEMORY_FRACTION; crate::memory::available
+    // (render::medium::build::MEDIUM_MEMORY_FRACTION; crate::util::memory::available
     // reads RLIMIT_AS): exit 2 naming the leaves and the limit, no image.
     let d = dir("too-many-leaves");
     let path = d.join("many.vdb");

@@ -11,11 +11,11 @@
 //! the reason) and must not succeed silently, and values just beyond the
 //! accepted ranges where a float would overflow are refused by validation.
 
-use aurora::bake::bake;
-use aurora::progress::NoProgress;
+use aurora::io::vdb::write::{write_vdb_bytes, GridRef, VdbWriteError};
+use aurora::pipeline::bake::bake;
 use aurora::render::{render, Integration, RenderSettings, Volume};
 use aurora::scene::{ColourMode, Curtain, GatherMethod, Projection, Scene, TerrainKind, VoxelSize};
-use aurora::vdb::write::{write_vdb_bytes, GridRef, VdbWriteError};
+use aurora::util::progress::NoProgress;
 use serde_json::Value;
 
 /// One 8 km curtain seen from 60 km away, 20 beams, coarse voxels, an
@@ -52,7 +52,7 @@ enum Expect {
     Finite,
     /// Values beyond the half-float range in half mode: baked with a
     /// warning naming `grid.half_emission`, and written as full floats
-    /// (`aurora::outputs::fit_half`; the writer itself refuses half
+    /// (`aurora::io::bake_folder::fit_half`; the writer itself refuses half
     /// storage of such values, a safety net).
     HalfOverflow,
     /// Fail with a typed bake error (e.g. an empty footprint).
@@ -145,7 +145,7 @@ fn cases() -> Vec<Case> {
         ),
         // Far past the CFL limit (dt = 1e6 cells per unit velocity, or a
         // velocity of 1e6 cells per unit time): the semi-Lagrangian step
-        // stays bounded (src/footprint/fluid.rs tests) but carries the band out of
+        // stays bounded (src/pipeline/footprint/fluid.rs tests) but carries the band out of
         // the footprint, so no cell is left above threshold: a clear error.
         ("footprint.dt max", Box::new(|s| s.footprint.dt = 1e6), BakeError),
         ("footprint.velocity_amplitude max", Box::new(|s| s.footprint.velocity_amplitude = 1e6), BakeError),
@@ -474,7 +474,7 @@ fn check(name: &str, scene: &Scene, expect: Expect) -> Result<(), String> {
         // centre, an energy flux whose emission underflows f32, beams that
         // leave before depositing) is an error naming how its beams ended
         // (empty results are loud), never an empty file.
-        Err(e @ aurora::bake::BakeError::Empty(_)) => {
+        Err(e @ aurora::pipeline::bake::BakeError::Empty(_)) => {
             let m = e.to_string();
             return if m.contains("beams made") { Ok(()) } else { Err(format!("unclear message: {m}")) };
         }
@@ -506,7 +506,7 @@ fn check(name: &str, scene: &Scene, expect: Expect) -> Result<(), String> {
     }
     // The file the bake would write (in memory): half floats where they fit.
     let grids = [GridRef::Float(&baked.density), GridRef::Vec3(&baked.emission)];
-    let (opts, full) = aurora::outputs::fit_half(aurora::outputs::write_options(scene), &grids);
+    let (opts, full) = aurora::io::bake_folder::fit_half(aurora::io::bake_folder::write_options(scene), &grids);
     if expect == Expect::HalfOverflow && !full.contains(&"emission".to_string()) {
         return Err(format!("the emission beyond half range is not stored as full floats: {full:?}"));
     }

@@ -19,8 +19,8 @@
 //! it against this prediction, and asserts its shape: up at both ends, a
 //! minimum in between, between the photon spacing and the thickness.
 
-use aurora::deposit::Photon;
-use aurora::photons::{kdtree::PhotonMap, kernel::Kernel};
+use aurora::pipeline::deposit::Photon;
+use aurora::pipeline::photons::{kdtree::PhotonMap, kernel::Kernel};
 use glam::DVec3;
 use rand::Rng;
 
@@ -41,7 +41,7 @@ fn phi(y: f64, sd: f64) -> f64 {
 }
 
 fn sheet() -> Vec<Photon> {
-    let mut r = aurora::rng::rng(&[20_140, 6]);
+    let mut r = aurora::util::rng::rng(&[20_140, 6]);
     (0..N)
         .map(|_| {
             let x = (r.random::<f64>() - 0.5) * L;

@@ -1,13 +1,13 @@
-//! The red trail (`animation.trail_samples`, `aurora::trail`): a scene that
+//! The red trail (`animation.trail_samples`, `aurora::pipeline::red_trail`): a scene that
 //! does not move keeps its red; a drifting curtain's 630.0 nm trails its
 //! 557.7 nm by about speed x lifetime; the bake is the same whatever the
 //! thread count. And the per-line grids after pruning keep exactly the
-//! leaves the emission kept (`aurora::prune::prune_like`).
+//! leaves the emission kept (`aurora::pipeline::prune::prune_like`).
 
-use aurora::bake::{self, plan, Bake};
 use aurora::grid::Grid;
-use aurora::progress::NoProgress;
+use aurora::pipeline::bake::{self, plan, Bake};
 use aurora::scene::{Curtain, Scene, VoxelSize};
+use aurora::util::progress::NoProgress;
 use std::collections::BTreeSet;
 
 /// One 40 x 16 km curtain, 400 beams, 1 km voxels, nothing pruned, the
@@ -56,7 +56,7 @@ fn centroid_y(g: &Grid<f32>) -> f64 {
 #[test]
 fn a_still_scene_keeps_its_red_with_the_trail() {
     // Nothing moves: every sample traces the same beams through the same
-    // footprints, and the weights sum to 1 (`aurora::trail`), so each
+    // footprints, and the weights sum to 1 (`aurora::pipeline::red_trail`), so each
     // line's photons per second (its grid summed times the voxel volume:
     // the kernel has unit mass whatever the photons) are the steady
     // state's to the f32 rounding of adding 9 photon sets in place of one
@@ -116,7 +116,7 @@ fn a_drifting_curtain_leaves_its_red_behind() {
     //   1 %, 10 % allowed;
     // - against the physics, v tau_bar: besides that, the discrete mean lag
     //   is within 10 % of tau from 10 s up and 0.54 of it at 1.5 s
-    //   (`aurora::trail` tests), with the red's weighted lifetime 46 s:
+    //   (`aurora::pipeline::red_trail` tests), with the red's weighted lifetime 46 s:
     //   measured 5 % short, 15 % allowed.
     let mut s = still_scene();
     let (d, period) = (100.0, 6000.0);
@@ -135,12 +135,12 @@ fn a_drifting_curtain_leaves_its_red_behind() {
     let atm = plan::atmosphere(&s);
     let omega = std::f64::consts::TAU / period;
     let v = omega * d;
-    let samples = aurora::trail::samples(8);
+    let samples = aurora::pipeline::red_trail::samples(8);
     let (mut e_sum, mut tau_sum, mut lag_sum) = (0.0, 0.0, 0.0);
     let red = line_grid(&off, "6300");
     for (ijk, e) in red.iter_active() {
         let z = red.transform.index_to_world(ijk.as_dvec3()).z;
-        let tau = aurora::lines::line_lifetimes(&atm, z)[1];
+        let tau = aurora::physics::emission::line_table::line_lifetimes(&atm, z)[1];
         let e = e as f64;
         e_sum += e;
         tau_sum += e * tau;
@@ -173,7 +173,7 @@ fn the_trail_is_the_same_whatever_the_thread_count() {
 
 #[test]
 fn pruned_per_line_grids_keep_the_leaves_the_emission_kept() {
-    // The rule (`aurora::prune`): a line grid keeps exactly its own leaves
+    // The rule (`aurora::pipeline::prune`): a line grid keeps exactly its own leaves
     // whose origin the pruned emission kept. With the trail the green lacks
     // leaves the red has, so the line grids' leaf sets differ; each must be
     // its unpruned set intersected with the emission's kept set.

@@ -6,9 +6,9 @@
 mod common;
 
 use aurora::grid::{Grid, VoxelValue};
+use aurora::io::usd::write_usda;
+use aurora::io::vdb::write::{write_vdb, GridRef, WriteOptions};
 use aurora::scene::Compression;
-use aurora::usd::write_usda;
-use aurora::vdb::write::{write_vdb, GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
 use serde_json::{json, Value};
 use std::path::Path;

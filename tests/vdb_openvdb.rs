@@ -7,10 +7,10 @@
 mod common;
 
 use aurora::grid::{Grid, VoxelValue};
+use aurora::io::vdb::codec::round_half_value;
+use aurora::io::vdb::read::{read_vdb, Decoder};
+use aurora::io::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use aurora::scene::Compression;
-use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_vdb, Decoder};
-use aurora::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use glam::{DVec3, IVec3};
 use serde_json::{json, Value};
 use std::collections::HashMap;
@@ -282,9 +282,9 @@ fn mask_cases_grid() -> Grid<f32> {
 
 /// Offset where a grid's transform starts (after compression flags and metadata).
 fn transform_start(bytes: &[u8], grid_pos: u64) -> usize {
-    let mut cur = aurora::vdb::parse::Cursor::new(bytes);
+    let mut cur = aurora::io::vdb::parse::Cursor::new(bytes);
     cur.seek(grid_pos + 4).unwrap();
-    aurora::vdb::parse::read_meta_map(&mut cur).unwrap();
+    aurora::io::vdb::parse::read_meta_map(&mut cur).unwrap();
     cur.pos()
 }
 
@@ -325,8 +325,8 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
             let out = cmd.output().expect("run openvdb_write_bench");
             assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
             let (a, b) = (std::fs::read(&ours).unwrap(), std::fs::read(&theirs).unwrap());
-            let pa = aurora::vdb::parse::parse_file(&a, &|_| false).unwrap();
-            let pb = aurora::vdb::parse::parse_file(&b, &|_| false).unwrap_or_else(|e| panic!("{what}: OpenVDB's file: {e}"));
+            let pa = aurora::io::vdb::parse::parse_file(&a, &|_| false).unwrap();
+            let pb = aurora::io::vdb::parse::parse_file(&b, &|_| false).unwrap_or_else(|e| panic!("{what}: OpenVDB's file: {e}"));
             assert_eq!(pa.grids.len(), pb.grids.len());
             for ga in &pa.grids {
                 let gb = pb.grids.iter().find(|g| g.header.unique_name == ga.header.unique_name).expect("same grids");
@@ -361,9 +361,9 @@ fn openvdb_reads_the_default_bake_with_its_high_column() {
     let mut scene = aurora::scene::Scene::from_toml_str(small_bake_toml!(), "small.toml").unwrap();
     assert!(scene.grid.half_emission && scene.grid.half_density && !scene.grid.cycles_shell);
     scene.grid.high_voxel_factor = 2;
-    let baked = aurora::bake::bake(&scene, &aurora::progress::NoProgress).unwrap();
+    let baked = aurora::pipeline::bake::bake(&scene, &aurora::util::progress::NoProgress).unwrap();
     let out = dir.join("out");
-    aurora::outputs::write_outputs(&scene, &baked, &out).unwrap();
+    aurora::io::bake_folder::write_outputs(&scene, &baked, &out).unwrap();
     let path = out.join("aurora.vdb");
     let ours = read_vdb(&path).unwrap();
     let (d, e) = (ours.float("density").unwrap(), ours.vec3("emission").unwrap());

@@ -7,10 +7,10 @@
 mod common;
 
 use aurora::grid::{Grid, Transform, VoxelValue};
+use aurora::io::vdb::codec::round_half_value;
+use aurora::io::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, Decoder, RawMeta};
+use aurora::io::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
 use aurora::scene::Compression;
-use aurora::vdb::codec::round_half_value;
-use aurora::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, Decoder, RawMeta};
-use aurora::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
 use common::damaged::{body_cuts, cut_body, random_changes, small_file, truncation_lengths, MODES};
 use glam::{DVec3, IVec3};
 use std::time::{Duration, Instant};
@@ -185,7 +185,7 @@ fn write_vdb_is_atomic_and_reports_stats() {
 /// milliseconds; a corrupted file may legitimately declare active tiles that
 /// densify into up to `MAX_TILE_VOXELS` voxels (~0.2 s alone), and the machine
 /// is shared, so only a read over 10 s counts as a hang.
-fn read_timed(bytes: &[u8]) -> Result<aurora::vdb::read::VdbFile, String> {
+fn read_timed(bytes: &[u8]) -> Result<aurora::io::vdb::read::VdbFile, String> {
     let t0 = Instant::now();
     let r = read_vdb_bytes(bytes).map_err(|e| e.to_string());
     assert!(t0.elapsed() < Duration::from_secs(10), "read of {} bytes took {:?}", bytes.len(), t0.elapsed());
@@ -274,7 +274,7 @@ fn parallel_decoding_is_thread_count_independent() {
         assert_same(one.float("density").unwrap(), many.float("density").unwrap(), &what);
         assert_same(one.vec3("emission").unwrap(), many.vec3("emission").unwrap(), &what);
         let origins =
-            |f: &aurora::vdb::read::VdbFile| -> Vec<IVec3> { f.vec3("emission").unwrap().leaves().iter().map(|l| l.origin).collect() };
+            |f: &aurora::io::vdb::read::VdbFile| -> Vec<IVec3> { f.vec3("emission").unwrap().leaves().iter().map(|l| l.origin).collect() };
         assert_eq!(origins(&one), origins(&many), "{what}: leaf order");
         assert_same(&d, one.float("density").unwrap(), &what);
     }

@@ -14,9 +14,9 @@
 
 mod common;
 
+use aurora::app::vdb_for_render::{read_render_medium, read_render_medium_bytes, render_grids, RenderMedium, RenderReadError};
+use aurora::io::vdb::read::{read_vdb, read_vdb_bytes, read_vdb_bytes_for_render, read_vdb_for_render, VdbFile, VdbReadError};
 use aurora::render::medium::Medium;
-use aurora::vdb::read::{read_vdb, read_vdb_bytes, read_vdb_bytes_for_render, read_vdb_for_render, VdbFile, VdbReadError};
-use aurora::vdb_medium::{read_render_medium, read_render_medium_bytes, render_grids, RenderMedium, RenderReadError};
 use common::damaged::{damaged_files, four_grids, grids_of, with_root_tiles, Damaged, Expect};
 use std::path::Path;
 

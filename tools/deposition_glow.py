@@ -11,7 +11,7 @@ normalised L1 distance between profiles (each normalised to sum 1 on 0.5
 km bins from 80 to 400 km). Profiles:
 - `fang`: Fang 2010 (monoenergetic, or integrated over the Maxwellian's
   energy-flux density Gamma(3, E0)), evaluated here in numpy on the column
-  mass of data/nrlmsis21.csv (the same model as src/fang.rs: its Maxwellian
+  mass of data/nrlmsis21.csv (the same model as src/physics/deposition/fang.rs: its Maxwellian
   profiles are `aurora profile`'s to L1 0.003-0.01);
 - `corr`: the same with `--corr S0,A0,EF,P`: in Fang's variable ln y every
   deposit of energy E moved to smaller y (higher) by S0 phi(E) plus an
@@ -60,7 +60,7 @@ P_2010 = np.array([
 def atmosphere():
     """Altitude (km), density and column mass (g cm^-2) of the default
     atmosphere: piecewise exponential between the table's nodes, as
-    src/atmosphere.rs integrates it."""
+    src/physics/atmosphere.rs integrates it."""
     rows = [r for r in open(ROOT / "data" / "nrlmsis21.csv") if not r.startswith("#")]
     rd = list(csv.DictReader(rows))
     h = np.array([float(r["altitude_km"]) for r in rd])

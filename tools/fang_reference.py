@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Writes data/fang_reference.csv: Fang et al. 2008 and 2010 energy
-dissipation computed by `eppaurora` (PyPI), the oracle of src/fang.rs's tests.
+dissipation computed by `eppaurora` (PyPI), the oracle of src/physics/deposition/fang.rs's tests.
 
 Columns: model, energy_kev, column_g_cm2, scale_height_cm, dissipation_per_cm
 (energy dissipated per cm per unit incident energy flux, 1/cm: eppaurora's

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Refits the coefficients of the gather's rational erf (src/photons/fast_math.rs).
+"""Refits the coefficients of the gather's rational erf (src/pipeline/photons/fast_math.rs).
 
 erf(x) ~ x P(x^2) / Q(x^2) on [0, 4], P of degree 6 and Q of degree 5 in x^2,
 Q's constant term 1. The fit is linear least squares on x P(t) - erf(x) Q(t)

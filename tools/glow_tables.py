@@ -8,7 +8,7 @@
   temperature Te, the ion temperature Ti, the electron density and the NO
   density (GLOW's empirical NO, the Marsh et al. 2004 NOEM model; the same
   with and without precipitation) of the GLOW call without precipitation
-  (`glowpython.no_precipitation`). src/chemistry/ambient.rs reads it.
+  (`glowpython.no_precipitation`). src/physics/chemistry/ambient.rs reads it.
 - tests/data/glow_chemistry.csv: GLOW's own auroral runs
   (`glowpython.maxwellian`, E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2 s^-1)
   with their ionization rate, neutral densities, temperatures and the

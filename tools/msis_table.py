@@ -1,13 +1,13 @@
 #!/usr/bin/env python3
 """Writes data/nrlmsis21.csv: the NRLMSIS 2.1 atmosphere that `aurora` uses by
-default (`[atmosphere] model = "nrlmsis21"`, src/atmosphere.rs).
+default (`[atmosphere] model = "nrlmsis21"`, src/physics/atmosphere.rs).
 
 An auroral-zone winter night: 67 N, 20 E, 2020-01-15 00:00 UT,
 F10.7 = F10.7a = 150 sfu, Ap = 15 (all seven Ap slots), 50-700 km every 0.5 km.
 Columns: altitude_km, rho_g_cm3 (total mass density), n2_cm3, o2_cm3, o_cm3
 (number densities), temperature_k, then n4s_cm3 (ground-state atomic
 nitrogen N(4S)) and no_cm3 (nitric oxide, NRLMSIS 2.1's new NO model), which
-the emission chemistry (src/chemistry/) needs. Six significant digits.
+the emission chemistry (src/physics/chemistry/) needs. Six significant digits.
 
 Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
 incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the

@@ -703,7 +703,7 @@ def study_render(tools: Tools, cfg: dict, worker: CyclesWorker, scene_text: str,
 
 def fisheye_mask(width: int, height: int) -> "np.ndarray":
     """Pixels of an equidistant fisheye wholly inside its image circle (all
-    four corners within it: src/camera.rs maps the raster to u, v in [-1, 1]
+    four corners within it: src/geometry/camera.rs maps the raster to u, v in [-1, 1]
     per axis and has no ray beyond r = 1)."""
     import numpy as np
 

@@ -124,7 +124,7 @@ pub struct BakeArgs {
     pub plan: bool,
     /// Frames --plan bakes to calibrate (first, last and evenly between).
     #[arg(long, value_name = "N", default_value_t = 3, requires = "plan",
-          value_parser = clap::value_parser!(u64).range(1..=aurora::farm_plan::MAX_SAMPLES as u64))]
+          value_parser = clap::value_parser!(u64).range(1..=aurora::farm::cost_plan::MAX_SAMPLES as u64))]
     pub plan_samples: u64,
     #[command(flatten)]
     pub common: Common,
@@ -265,7 +265,7 @@ pub struct PreviewArgs {
     pub watch: bool,
     /// Samples per pixel of the refined picture; when [render] spp is larger, a picture at
     /// the scene's spp follows it (when smaller, it caps this).
-    #[arg(long, value_name = "N", default_value_t = aurora::preview::DEFAULT_SPP as u64,
+    #[arg(long, value_name = "N", default_value_t = aurora::app::preview::DEFAULT_SPP as u64,
           value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
     pub spp: u64,
     #[command(flatten)]

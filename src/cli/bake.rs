@@ -1,11 +1,11 @@
 //! `aurora bake`: one bake into a folder ([`bake_one`]), or a frame
 //! sequence ([`bake_frames`]), resumed frame by frame: a frame already
 //! complete for this bake is skipped, one another process is baking is
-//! waited for (`aurora::sequence`, `aurora::outputs::lock_frame`).
+//! waited for (`aurora::farm::sequence_folder`, `aurora::io::bake_folder::lock_frame`).
 //!
 //! What it says on stderr goes through one [`Report`]: bars, summaries and
 //! warning lines for a terminal, or with `--progress json` only JSON objects
-//! (`aurora::progress::JsonProgress`: stage lines, one `frame` line per
+//! (`aurora::util::progress::JsonProgress`: stage lines, one `frame` line per
 //! frame of a sequence, warnings; the error line is `exit::code`'s).
 
 use super::args::{BakeArgs, ProgressFormat};
@@ -14,8 +14,8 @@ use super::exit::InputError;
 use super::frames::frame_selection;
 use super::{load_scene, print_warnings, with_threads};
 use anyhow::Result;
-use aurora::progress::{JsonProgress, Progress};
 use aurora::scene::Scene;
+use aurora::util::progress::{JsonProgress, Progress};
 use std::path::Path;
 
 /// Where the bake's progress and messages go.
@@ -87,9 +87,9 @@ pub fn run(a: BakeArgs) -> Result<()> {
     with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, &report))
 }
 
-/// `--plan`: the estimate for `frames` on stdout (`aurora::farm_plan`).
+/// `--plan`: the estimate for `frames` on stdout (`aurora::farm::cost_plan`).
 fn plan_frames(scene: &Scene, frames: &[i64], samples: usize, format: ProgressFormat, say: &Report) -> Result<()> {
-    let plan = aurora::farm_plan::plan(scene, frames, samples, say.progress())?;
+    let plan = aurora::farm::cost_plan::plan(scene, frames, samples, say.progress())?;
     match format {
         ProgressFormat::Json => println!("{}", plan.json()),
         ProgressFormat::Bars => println!("{}", plan.text()),
@@ -100,29 +100,29 @@ fn plan_frames(scene: &Scene, frames: &[i64], samples: usize, format: ProgressFo
 /// One bake into `out`: aurora.vdb, aurora.usda and bake.json.
 fn bake_one(scene: &Scene, out: &Path, say: &Report) -> Result<()> {
     // The folder is checked and locked before the bake, not after it.
-    let _lock = aurora::outputs::prepare(out, || {
+    let _lock = aurora::io::bake_folder::prepare(out, || {
         say.say(|| format!("aurora: another bake is writing to {}; waiting for it to finish", out.display()))
     })?;
-    let bake = aurora::bake::bake(scene, say.progress())?;
+    let bake = aurora::pipeline::bake::bake(scene, say.progress())?;
     say.warnings(&bake.stats.warnings);
-    let report = aurora::outputs::write_outputs_locked(scene, &bake, out)?;
+    let report = aurora::io::bake_folder::write_outputs_locked(scene, &bake, out)?;
     say.say(|| report.summary());
     Ok(())
 }
 
 /// Bakes this process's share `mine` of the sequence `frames` into `out`
-/// (a folder of one bake: `aurora::sequence`; `rebake` deletes another's).
+/// (a folder of one bake: `aurora::farm::sequence_folder`; `rebake` deletes another's).
 fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, say: &Report) -> Result<()> {
     let progress = say.progress();
-    let identity = aurora::bake_identity::BakeIdentity::of(scene);
-    let fields = aurora::outputs::stage_fields(scene);
-    let mut seq = aurora::sequence::Sequence::open(out, identity, frames, scene.animation.fps, fields, rebake, || {
+    let identity = aurora::pipeline::bake::identity::BakeIdentity::of(scene);
+    let fields = aurora::io::bake_folder::stage_fields(scene);
+    let mut seq = aurora::farm::sequence_folder::Sequence::open(out, identity, frames, scene.animation.fps, fields, rebake, || {
         say.say(|| format!("aurora: another bake is writing to {}; waiting", out.display()))
     })?;
     say.frames(0, mine.len());
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped) = (0usize, 0usize);
-    let mut plan: Option<aurora::bake::plan::BakePlan> = None;
+    let mut plan: Option<aurora::pipeline::bake::plan::BakePlan> = None;
     for &f in mine {
         if seq.frame_complete(f) {
             skipped += 1;
@@ -132,15 +132,16 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
         seq.check_still_ours()?;
         // One writer per frame: a shard that finds another baking it waits,
         // then finds it complete.
-        let _lock = aurora::outputs::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
+        let _lock =
+            aurora::io::bake_folder::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
         if seq.frame_complete(f) {
             skipped += 1;
             say.frames(baked + skipped, mine.len());
             continue;
         }
-        let at = Scene { animation: aurora::animation::at_frame(&scene.animation, f), ..scene.clone() };
+        let at = Scene { animation: aurora::pipeline::motion::at_frame(&scene.animation, f), ..scene.clone() };
         // One plan, carried from frame to frame (only the time changes).
-        let (bake, p) = aurora::bake::bake_reusing(&at, plan.as_ref(), progress)?;
+        let (bake, p) = aurora::pipeline::bake::bake_reusing(&at, plan.as_ref(), progress)?;
         plan = Some(p);
         say.warnings(&bake.stats.warnings);
         let report = seq.write_frame(&at, &bake, f)?;
@@ -155,7 +156,7 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
             mine.len(),
             frames.len(),
             if secs > 0.0 { baked as f64 / secs } else { 0.0 },
-            out.join(aurora::outputs::USDA_NAME).display()
+            out.join(aurora::io::bake_folder::USDA_NAME).display()
         )
     });
     Ok(())

@@ -1,7 +1,7 @@
 //! Progress on stderr: an indicatif bar per stage, behind the library's
 //! [`Progress`] trait (or none with --quiet).
 
-use aurora::progress::{NoProgress, Progress};
+use aurora::util::progress::{NoProgress, Progress};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::sync::Mutex;
 

@@ -1,4 +1,4 @@
-//! `aurora bench`: the speed-against-accuracy studies of `aurora::bench`,
+//! `aurora bench`: the speed-against-accuracy studies of `aurora::app::bench`,
 //! their files written and their summary table printed.
 
 use super::args::BenchArgs;
@@ -16,12 +16,12 @@ pub fn run(a: BenchArgs) -> Result<()> {
             }
         };
         let run = if storage {
-            aurora::bench::run_storage(&scene, &scene_arg, &log)?
+            aurora::app::bench::run_storage(&scene, &scene_arg, &log)?
         } else {
-            aurora::bench::run(&scene, &scene_arg, quick, &log)?
+            aurora::app::bench::run(&scene, &scene_arg, quick, &log)?
         };
-        let written = aurora::bench::report::write(&run, &out)?;
-        print!("{}", aurora::bench::report::summary(&run));
+        let written = aurora::app::bench::report::write(&run, &out)?;
+        print!("{}", aurora::app::bench::report::summary(&run));
         if !quiet {
             eprintln!("wrote {} files to {}", written.len(), out.display());
         }

@@ -35,7 +35,7 @@ pub fn code(result: anyhow::Result<()>, json: bool) -> i32 {
         Err(e) => {
             let status = if is_input(&e) { BAD_INPUT } else { FAILURE };
             if json {
-                aurora::progress::JsonProgress::new(std::io::stderr()).error(&format!("{e:#}"), status);
+                aurora::util::progress::JsonProgress::new(std::io::stderr()).error(&format!("{e:#}"), status);
             } else {
                 eprintln!("aurora: error: {e:#}");
             }
@@ -58,16 +58,16 @@ pub fn is_input(e: &anyhow::Error) -> bool {
     ask!(
         InputError,
         aurora::scene::SceneError,
-        aurora::bake::BakeError,
-        aurora::atomic::AtomicError,
-        aurora::outputs::OutputError,
-        aurora::sequence::SequenceError,
-        aurora::farm_plan::PlanError,
-        aurora::footprint::FootprintError,
+        aurora::pipeline::bake::BakeError,
+        aurora::util::atomic_write::AtomicError,
+        aurora::io::bake_folder::OutputError,
+        aurora::farm::sequence_folder::SequenceError,
+        aurora::farm::cost_plan::PlanError,
+        aurora::pipeline::footprint::FootprintError,
         aurora::render::RenderError,
-        aurora::preview::PreviewError,
-        aurora::bench::sweeps::SweepError,
-        aurora::bench::report::ReportError,
+        aurora::app::preview::PreviewError,
+        aurora::app::bench::sweeps::SweepError,
+        aurora::app::bench::report::ReportError,
     );
     false
 }

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 /// The frames of SPEC (exit 2 on bad syntax or a negative frame) and the
 /// share `--shard` gives this process.
 pub fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec<i64>)> {
-    let frames = aurora::frames::parse_range(spec).map_err(|e| InputError(e.to_string()))?;
+    let frames = aurora::farm::frame_range::parse_range(spec).map_err(|e| InputError(e.to_string()))?;
     if let Some(f) = frames.iter().find(|&&f| f < 0) {
         return Err(InputError(format!(
             "--frames `{spec}`: frame {f} is negative; frame files are named by frame number (aurora.0001.vdb), so frames must be >= 0"
@@ -17,11 +17,11 @@ pub fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec
     }
     let (i, n) = match shard {
         None => (0, 1),
-        Some(t) => {
-            aurora::frames::Shard::parse(t).and_then(|s| s.resolve(|k| std::env::var(k).ok())).map_err(|e| InputError(e.to_string()))?
-        }
+        Some(t) => aurora::farm::frame_range::Shard::parse(t)
+            .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
+            .map_err(|e| InputError(e.to_string()))?,
     };
-    let mine = aurora::frames::select(&frames, i, n);
+    let mine = aurora::farm::frame_range::select(&frames, i, n);
     Ok((frames, mine))
 }
 
@@ -29,5 +29,5 @@ pub fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec
 pub fn frame_name(path: &Path, frame: i64) -> PathBuf {
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "frame".into());
     let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    path.with_file_name(aurora::frames::frame_file_name(&stem, frame, &ext))
+    path.with_file_name(aurora::farm::frame_range::frame_file_name(&stem, frame, &ext))
 }

@@ -7,9 +7,9 @@ use super::exit::InputError;
 use super::render::{image_format, ImageFormat};
 use super::{load_scene, print_warnings, scene_dir, with_threads};
 use anyhow::Result;
-use aurora::preview::{Preview, Update};
+use aurora::app::preview::{Preview, Update};
 use aurora::scene::Scene;
-use aurora::watch::Watcher;
+use aurora::util::file_watch::Watcher;
 use std::cell::{Cell, RefCell};
 use std::path::Path;
 
@@ -55,7 +55,7 @@ impl Session<'_> {
     }
 
     /// One update of the picture from `scene`, its warnings and summary printed.
-    fn update(&self, preview: &mut Preview, scene: &Scene) -> Result<(), aurora::preview::PreviewError> {
+    fn update(&self, preview: &mut Preview, scene: &Scene) -> Result<(), aurora::app::preview::PreviewError> {
         let u = preview.update(scene, &|what, secs| self.on_picture(what, secs))?;
         if let Some(b) = preview.bake() {
             print_warnings(&b.stats.warnings);
@@ -77,7 +77,7 @@ impl Session<'_> {
     }
 
     /// The --watch loop: an update per save that ended and changed the text
-    /// (`aurora::watch`); never returns but on a watch that cannot start.
+    /// (`aurora::util::file_watch`); never returns but on a watch that cannot start.
     fn watch(&self, preview: &mut Preview, scene_arg: &str) -> Result<()> {
         let path = Path::new(scene_arg);
         if !path.is_file() {

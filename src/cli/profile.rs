@@ -19,11 +19,11 @@ pub fn run(a: ProfileArgs) -> Result<()> {
 
 fn profile(scene: &Scene, out: Option<&Path>, quiet: bool) -> Result<()> {
     let bars = Bars::new(quiet);
-    let p = aurora::profile::profile(scene, bars.progress())?;
-    let csv = aurora::profile::to_csv(&p);
+    let p = aurora::pipeline::altitude_profile::profile(scene, bars.progress())?;
+    let csv = aurora::pipeline::altitude_profile::to_csv(&p);
     match out {
         Some(path) => {
-            aurora::atomic::write_atomic(path, csv.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
+            aurora::util::atomic_write::write_atomic(path, csv.as_bytes()).with_context(|| format!("cannot write {}", path.display()))?;
             if !quiet {
                 eprintln!("wrote {}", path.display());
             }

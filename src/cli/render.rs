@@ -4,7 +4,7 @@
 //! renderer's medium, a VDB read into grids where that path does not apply,
 //! or a bake in memory. With `--grid NAME` one float grid alone is the
 //! emission (grey) and the image is written with one channel
-//! ([`prepare_grid`], `aurora::render::film::write_exr_grey`).
+//! ([`prepare_grid`], `aurora::render::image_file::write_exr_grey`).
 
 use super::args::RenderArgs;
 use super::bars::Bars;
@@ -12,9 +12,9 @@ use super::exit::InputError;
 use super::frames::{frame_name, frame_selection};
 use super::{load_scene, print_warnings, scene_dir, with_threads};
 use anyhow::{Context, Result};
-use aurora::progress::Progress;
 use aurora::render::Prepared;
 use aurora::scene::Scene;
+use aurora::util::progress::Progress;
 use std::path::{Path, PathBuf};
 
 /// The image formats `aurora render` writes, chosen by the file name's extension.
@@ -84,16 +84,16 @@ pub fn run(a: RenderArgs) -> Result<()> {
         if image_format("--png", p)? != ImageFormat::Png {
             return Err(InputError(format!("--png {}: the preview is a PNG; give a name ending in .png", p.display())).into());
         }
-        aurora::atomic::check_replaceable(p)?;
+        aurora::util::atomic_write::check_replaceable(p)?;
     }
-    aurora::atomic::check_replaceable(&out)?;
+    aurora::util::atomic_write::check_replaceable(&out)?;
     let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {
             let (frames, _) = frame_selection(&spec, None)?;
             let seq = vdb.expect("clap requires --vdb with --frame");
             for &f in &frames {
-                aurora::atomic::check_replaceable(&frame_name(&out, f))?;
+                aurora::util::atomic_write::check_replaceable(&frame_name(&out, f))?;
             }
             with_threads(common.threads, || render_frames(&job, &seq, &frames, &out, png.as_deref()))
         }
@@ -105,7 +105,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
 /// the frame number before the extension.
 fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<&Path>) -> Result<()> {
     for &f in frames {
-        let (vdb_path, _) = aurora::outputs::frame_paths(seq, f);
+        let (vdb_path, _) = aurora::io::bake_folder::frame_paths(seq, f);
         let exr = frame_name(out, f);
         let pngf = png.map(|p| frame_name(p, f));
         render_one(job, &Files { vdb: Some(&vdb_path), out: &exr, png: pngf.as_deref() })?;
@@ -158,7 +158,7 @@ fn prepare(
     progress: &dyn Progress,
 ) -> Result<(Prepared, f64, f64)> {
     let from_records = match vdb {
-        Some(path) => aurora::vdb_medium::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+        Some(path) => aurora::app::vdb_for_render::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
             .map_err(|e| InputError(e.to_string()))?,
         None => None,
     };
@@ -168,11 +168,11 @@ fn prepare(
     let open = std::time::Instant::now();
     let (density, emission) = match vdb {
         Some(path) => {
-            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
-            aurora::vdb_medium::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            aurora::app::vdb_for_render::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
         }
         None => {
-            let bake = aurora::bake::bake(scene, progress)?;
+            let bake = aurora::pipeline::bake::bake(scene, progress)?;
             print_warnings(&bake.stats.warnings);
             (Some(bake.density), Some(bake.emission))
         }
@@ -198,12 +198,12 @@ fn prepare_grid(
     let open = std::time::Instant::now();
     let (density, floats, source) = match vdb {
         Some(path) => {
-            let file = aurora::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
             let density = file.float("density").cloned();
             (density, file.float_grids, path.display().to_string())
         }
         None => {
-            let bake = aurora::bake::bake(scene, progress)?;
+            let bake = aurora::pipeline::bake::bake(scene, progress)?;
             print_warnings(&bake.stats.warnings);
             (Some(bake.density), bake.lines, "the bake (grid.lines)".to_string())
         }
@@ -216,7 +216,7 @@ fn prepare_grid(
     let emission = aurora::render::grids::grey(g);
     // A line's own grid sees the air at that line's optical depth.
     let mut settings = settings.clone();
-    settings.line = name.strip_prefix("line_").and_then(aurora::lines::line_index);
+    settings.line = name.strip_prefix("line_").and_then(aurora::physics::emission::line_table::line_index);
     let open_seconds = open.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: Some(&emission) };
@@ -229,7 +229,7 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
     let grey_png = |p: &Path| -> Result<()> {
         let largest = image.pixels.iter().map(|p| p[0] as f64).fold(0.0, f64::max);
         let scale = job.grid_max.unwrap_or(if largest > 0.0 { largest } else { 1.0 });
-        aurora::render::film::write_png_grey(p, image, scale).with_context(|| format!("cannot write {}", p.display()))?;
+        aurora::render::image_file::write_png_grey(p, image, scale).with_context(|| format!("cannot write {}", p.display()))?;
         if !job.quiet {
             eprintln!("{}: greyscale, linear, 255 = {scale:.6e} (the grid integrated along the ray)", p.display());
         }
@@ -238,7 +238,7 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
     if png_only {
         return grey_png(path);
     }
-    aurora::render::film::write_exr_grey(path, image).with_context(|| format!("cannot write {}", path.display()))
+    aurora::render::image_file::write_exr_grey(path, image).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes a render's image (and PNG) and prints its statistics.
@@ -252,12 +252,12 @@ fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seco
         }
     } else {
         match job.format {
-            ImageFormat::Exr => aurora::render::film::write_exr(out, image),
-            ImageFormat::Png => aurora::render::film::write_png(out, image, exposure, view),
+            ImageFormat::Exr => aurora::render::image_file::write_exr(out, image),
+            ImageFormat::Png => aurora::render::image_file::write_png(out, image, exposure, view),
         }
         .with_context(|| format!("cannot write {}", out.display()))?;
         if let Some(p) = png {
-            aurora::render::film::write_png(p, image, exposure, view).with_context(|| format!("cannot write {}", p.display()))?;
+            aurora::render::image_file::write_png(p, image, exposure, view).with_context(|| format!("cannot write {}", p.display()))?;
         }
     }
     if !job.quiet {

@@ -35,8 +35,8 @@ fn scene_header(name: &str) -> String {
 /// `aurora footprint`: DIR/footprint-N.png per curtain.
 pub fn footprint(a: FootprintArgs) -> Result<()> {
     let scene = load_scene(&a.scene)?;
-    aurora::atomic::prepare_folder(&a.out)?;
-    for (i, fp) in aurora::bake::plan::footprints(&scene).iter().enumerate() {
+    aurora::util::atomic_write::prepare_folder(&a.out)?;
+    for (i, fp) in aurora::pipeline::bake::plan::footprints(&scene).iter().enumerate() {
         let path = a.out.join(format!("footprint-{i}.png"));
         fp.write_png(&path).with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());
@@ -53,7 +53,7 @@ pub fn terrain(a: TerrainArgs) -> Result<()> {
             InputError(format!("--out {}: the terrain is written as a Wavefront OBJ; give a name ending in .obj", out.display())).into()
         );
     }
-    aurora::atomic::check_replaceable(&out)?;
+    aurora::util::atomic_write::check_replaceable(&out)?;
     if scene.terrain.kind != aurora::scene::TerrainKind::Heightfield {
         return Err(InputError(format!(
             "terrain.kind = {:?}: only a heightfield has a mesh to write (a plane is z = terrain.height)",

@@ -8,7 +8,7 @@
 use super::integrator::{render, render_prepared, Counters, Image, PixelState, TILE};
 use super::prepared::Prepared;
 use super::settings::{RenderError, RenderSettings, Volume};
-use crate::progress::Progress;
+use crate::util::progress::Progress;
 use rayon::prelude::*;
 use std::time::Instant;
 

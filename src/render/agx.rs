@@ -319,7 +319,7 @@ impl Agx {
         let span = LUT_LOG2_MAX - LUT_LOG2_MIN;
         // Non-positive components sit at the LUT's floor (log2 of 0 is -inf).
         let p = e.map(|v| if v > 0.0 { (v.log2() - LUT_LOG2_MIN) / span } else { 0.0 });
-        self.lookup(p).map(|v| super::film::srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
+        self.lookup(p).map(|v| super::image_file::srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
     }
 }
 
@@ -363,7 +363,7 @@ mod tests {
         }
         let d = Agx::get().display([GREY; 3]);
         for v in d {
-            assert!((v - crate::render::film::srgb_oetf(GREY)).abs() < 2e-3, "{d:?}");
+            assert!((v - crate::render::image_file::srgb_oetf(GREY)).abs() < 2e-3, "{d:?}");
         }
         for stops in [-8.0, -3.0, 0.0, 2.0, 5.0] {
             let d = Agx::get().display([GREY * f64::exp2(stops); 3]);

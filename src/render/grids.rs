@@ -7,7 +7,7 @@
 //!
 //! The choice is made over a plain listing of the file's grids ([`Listed`])
 //! and the decoded grids, so the renderer knows nothing of file formats:
-//! `crate::vdb_medium::render_grids` lists a VDB file and calls [`choose`].
+//! `crate::app::vdb_for_render::render_grids` lists a VDB file and calls [`choose`].
 
 use crate::grid::{Grid, Leaf};
 
@@ -59,8 +59,8 @@ pub fn check_types(listing: &[Listed<'_>]) -> Result<(), RenderGridsError> {
         let expected = match g.name {
             "density" if g.kind != GridType::Float => "a float grid (extinction per unit length)",
             "emission" if !matches!(g.kind, GridType::Float | GridType::Vec3) => "a vec3 grid (or a float grid, taken as grey)",
-            "density_high" if g.kind != GridType::Float => "a float grid (the density's high column, crate::column)",
-            "emission_high" if g.kind != GridType::Vec3 => "a vec3 grid (the emission's high column, crate::column)",
+            "density_high" if g.kind != GridType::Float => "a float grid (the density's high column, crate::grid::high_column)",
+            "emission_high" if g.kind != GridType::Vec3 => "a vec3 grid (the emission's high column, crate::grid::high_column)",
             _ => continue,
         };
         return Err(RenderGridsError::WrongType { name: g.name.to_string(), type_name: g.type_name.to_string(), expected });
@@ -76,8 +76,8 @@ pub type ChosenGrids = (Option<Grid<f32>>, Option<Grid<[f32; 3]>>);
 /// file order) and the file's decoded `float_grids` and `vec3_grids` (each
 /// in file order), the first float `density` and the first `emission`
 /// (vec3, else float taken as grey). A `density_high` or `emission_high`
-/// grid (the high column at a resolution of its own, `crate::column`) is
-/// added to its fine grid ([`crate::column::merge`]), as a renderer
+/// grid (the high column at a resolution of its own, `crate::grid::high_column`) is
+/// added to its fine grid ([`crate::grid::high_column::merge`]), as a renderer
 /// sampling both grids sees them.
 pub fn choose(
     listing: &[Listed<'_>],
@@ -124,7 +124,7 @@ fn with_high<T: crate::grid::VoxelValue>(
     name: &str,
 ) -> Result<Option<Grid<T>>, RenderGridsError> {
     match (fine, high) {
-        (Some(f), Some(h)) => crate::column::merge(&f, &h).map(Some).map_err(|e| RenderGridsError::High(e.to_string())),
+        (Some(f), Some(h)) => crate::grid::high_column::merge(&f, &h).map(Some).map_err(|e| RenderGridsError::High(e.to_string())),
         (None, Some(_)) => Err(RenderGridsError::High(format!("grid `{name}_high` has no `{name}` grid to add to"))),
         (f, None) => Ok(f),
     }

@@ -13,7 +13,7 @@ use super::prepared::Prepared;
 use super::sampler::{pixel_position, pixel_rng};
 use super::settings::{RenderError, RenderSettings, Volume};
 use super::shadow::estimate_irradiance;
-use crate::progress::Progress;
+use crate::util::progress::Progress;
 use rand::Rng;
 use rand_pcg::Pcg32;
 use rayon::prelude::*;
@@ -165,7 +165,7 @@ impl Prepared {
                 }
             };
             // The volume's emission lies above the air: its transmittance
-            // towards the ray's direction (`crate::extinction`).
+            // towards the ray's direction (`crate::physics::air_extinction`).
             let l_vol = match &self.air {
                 Some(a) => {
                     let ta = a.towards(ray.dir);
@@ -228,7 +228,7 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
 
 /// [`render`] from an already built [`Prepared`] at its settings (size
 /// from its camera, `settings.render.spp`): a caller that keeps the medium
-/// between renders (`crate::preview`) pays the build once. The same image
+/// between renders (`crate::app::preview`) pays the build once. The same image
 /// as `render` with those settings; `stats.build_seconds` is 0.
 pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<Image, RenderError> {
     if prepared.settings.render.spp == 0 {

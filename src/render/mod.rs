@@ -13,7 +13,7 @@
 //! radiance does not light the terrain**: it is only what camera rays see
 //! behind everything.
 //!
-//! **The air** (`[sky] extinction`, `crate::extinction`): the volume's
+//! **The air** (`[sky] extinction`, `crate::physics::air_extinction`): the volume's
 //! emission lies above the lower atmosphere, so `L` is multiplied per channel
 //! by the air's transmittance towards the ray's direction, the terrain's
 //! light by the transmittance of its straight path to the camera, and the
@@ -22,7 +22,7 @@
 //!
 //! Stages (each a function of plain data):
 //! `settings.rs` (what is asked, [`RenderError`]) -> `prepared.rs` (built
-//! once per scene, camera and medium: [`Prepared`]) with `crate::camera`
+//! once per scene, camera and medium: [`Prepared`]) with `crate::geometry::camera`
 //! (rays), `medium/` (ghosted dual leaves + tree), `terrain.rs`, `sky.rs`
 //! and the emission sampler of `shadow.rs` -> `integrator.rs` (the pixel
 //! loop, tiles; `adaptive.rs` shares the samples by pixel variance), its
@@ -57,12 +57,12 @@
 // Loops over the three colour channels index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-pub use crate::camera;
+pub use crate::geometry::camera;
 pub mod adaptive;
 pub mod agx;
 pub mod dda;
-pub mod film;
 pub mod grids;
+pub mod image_file;
 pub mod integrator;
 pub mod march;
 pub mod medium;
@@ -74,7 +74,7 @@ pub mod shadow;
 pub mod sky;
 pub mod terrain;
 
-pub use crate::camera::{CameraModel, Ray};
+pub use crate::geometry::camera::{CameraModel, Ray};
 pub use adaptive::{render_adaptive, render_adaptive_prepared, ADAPTIVE_FLOOR, ADAPTIVE_MIN_SPP};
 pub use integrator::{render, render_prepared, Image, RenderStats};
 pub use march::{optical_depth_along_ray, radiance_along_ray, RayIntegral};

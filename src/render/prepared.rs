@@ -1,7 +1,7 @@
 //! What is built once per scene, camera and medium before any pixel is
 //! traced ([`Prepared`]): the camera model, the medium (`medium/`), the
 //! terrain, the terrain's emission sampler (`shadow.rs`), the sky and the
-//! air between the volume and the camera (`crate::extinction`), with the
+//! air between the volume and the camera (`crate::physics::air_extinction`), with the
 //! settings they were built for. Every way to make or change one
 //! ([`Prepared::new`], [`Prepared::with_medium`], [`Prepared::reuse`],
 //! [`Prepared::set_volume_scales`], [`Prepared::set_image`]) runs the same
@@ -14,8 +14,8 @@ use super::settings::{Integration, RenderError, RenderSettings, Volume};
 use super::shadow::{EmissionSampler, ShadowScene};
 use super::sky::Sky;
 use super::terrain::TerrainModel;
-use crate::extinction::{Air, Extinction};
 use crate::grid::Grid;
+use crate::physics::air_extinction::{Air, Extinction};
 use glam::DVec3;
 
 /// A scene ready to render: camera, medium, terrain and emission sampler.
@@ -39,7 +39,7 @@ impl Prepared {
     }
 
     /// [`Prepared::new`] with a medium already built (for instance straight
-    /// from a file, `crate::vdb_medium::read_render_medium`), its scales set
+    /// from a file, `crate::app::vdb_for_render::read_render_medium`), its scales set
     /// to the settings'. `emission` is the emission grid for the terrain's
     /// emission sampler if the caller has it; without it the sampler is
     /// built from the medium (the same sampler).
@@ -238,7 +238,7 @@ impl Prepared {
 /// local up are taken from the camera (`Extinction::for_observer`).
 fn observer_air(s: &RenderSettings) -> Option<Extinction> {
     let air = Air::from_sky(&s.sky)?;
-    let earth = crate::earth::Earth::new(s.earth_radius_km);
+    let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
     let at = DVec3::from_array(s.camera.position);
     Some(Extinction::for_observer_at(air, at, earth.altitude(at), earth.local_up(at), s.line))
 }
@@ -297,7 +297,7 @@ mod tests {
 
     /// The rendered image's bits.
     fn bits(p: &Prepared) -> Vec<u32> {
-        let img = crate::render::render_prepared(p, &crate::progress::NoProgress).unwrap();
+        let img = crate::render::render_prepared(p, &crate::util::progress::NoProgress).unwrap();
         img.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect()
     }
 

@@ -6,7 +6,7 @@
 //! stratified at every power of two) are stated on [`pixel_position`] and
 //! in the renderer's module doc.
 
-use crate::rng::splitmix64;
+use crate::util::rng::splitmix64;
 use rand_pcg::Pcg32;
 
 /// The first two dimensions of the Sobol sequence, point `i`, as 32-bit

@@ -38,9 +38,9 @@ pub struct RenderSettings {
     /// `earth.radius_km`: the terrain lies on the sphere of this radius
     /// about `(0, 0, -radius)` (`terrain`); 0 is the flat ground.
     pub earth_radius_km: f64,
-    /// The air between the volume and the camera (`crate::extinction`).
+    /// The air between the volume and the camera (`crate::physics::air_extinction`).
     pub sky: SkyParams,
-    /// The line (index in `crate::spectrum::LINES`) a one-line grid holds
+    /// The line (index in `crate::physics::emission::line_colour::LINES`) a one-line grid holds
     /// (`aurora render --grid line_*`): the air takes that line's optical
     /// depth in every channel; None: the per-channel depths of the lines' mix.
     pub line: Option<usize>,
@@ -86,12 +86,12 @@ impl RenderSettings {
     }
 
     /// Checks, without opening them, that [`Self::input_files`] are regular
-    /// files (`crate::input_file::check`): a missing heightmap or a FIFO
+    /// files (`crate::util::input_file::check`): a missing heightmap or a FIFO
     /// given as the sky is refused before a bake or a medium build, not
     /// after. They are opened, and checked again, when read.
     pub fn check_input_files(&self) -> Result<(), RenderError> {
         for (key, path) in self.input_files() {
-            crate::input_file::check(&path).map_err(|source| RenderError::Input { key, source })?;
+            crate::util::input_file::check(&path).map_err(|source| RenderError::Input { key, source })?;
         }
         Ok(())
     }
@@ -118,9 +118,9 @@ pub enum RenderError {
     Grid { grid: String, message: String },
     /// A grid's leaf could not be read (a file's record would not decode).
     #[error("grid '{grid}': {source}")]
-    Source { grid: String, source: crate::leaf_source::LeafError },
+    Source { grid: String, source: crate::grid::leaf_source::LeafError },
     /// The grids' leaves would need more memory for the medium than this
-    /// process may use ([`crate::memory::available`]); refused before the
+    /// process may use ([`crate::util::memory::available`]); refused before the
     /// values are allocated or read.
     #[error("the volume's {leaves} leaves would need about {needed} for the renderer's medium, but this process may use {available}")]
     Memory { leaves: usize, needed: String, available: String },
@@ -128,9 +128,9 @@ pub enum RenderError {
     #[error("heightmap {}: {message}", path.display())]
     Heightmap { path: PathBuf, message: String },
     /// An input file the scene names (`key`) is not a regular file, or
-    /// cannot be opened (`crate::input_file`).
+    /// cannot be opened (`crate::util::input_file`).
     #[error("{key} {source}")]
-    Input { key: &'static str, source: crate::input_file::InputFileError },
+    Input { key: &'static str, source: crate::util::input_file::InputFileError },
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: EXR: {message}", path.display())]
@@ -139,7 +139,7 @@ pub enum RenderError {
     Png { path: PathBuf, message: String },
     /// The output is not ours to replace, or could not be staged or renamed.
     #[error(transparent)]
-    Output(Box<crate::atomic::AtomicError>),
+    Output(Box<crate::util::atomic_write::AtomicError>),
 }
 
 impl RenderError {
@@ -154,8 +154,8 @@ impl RenderError {
     }
 }
 
-impl From<crate::camera::CameraError> for RenderError {
-    fn from(e: crate::camera::CameraError) -> Self {
+impl From<crate::geometry::camera::CameraError> for RenderError {
+    fn from(e: crate::geometry::camera::CameraError) -> Self {
         RenderError::Settings(e.to_string())
     }
 }

@@ -27,7 +27,7 @@
 //! Background radiance does not light the terrain: it is only what camera
 //! rays see behind everything. With `[sky] extinction` each sample is also
 //! dimmed by the air between the terrain point and the aurora
-//! (`crate::extinction::Extinction::towards_from`: the air-mass law with the
+//! (`crate::physics::air_extinction::Extinction::towards_from`: the air-mass law with the
 //! column above the point).
 //!
 //! The transmittance `T(x, y)` of a shadow ray is itself estimated, by ratio
@@ -52,7 +52,7 @@ use super::medium::Medium;
 use super::terrain::TerrainModel;
 use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM};
-use crate::spectrum::luminance;
+use crate::physics::emission::line_colour::luminance;
 use glam::{DVec3, IVec3};
 use rand::Rng;
 
@@ -86,7 +86,7 @@ impl EmissionSampler {
     /// [`EmissionSampler::new`] from the medium's emission channels instead
     /// of the grid (the render from a file's records has no grid): the
     /// same sampler for a grid whose leaves are in (x, y, z) order (as every
-    /// grid `crate::vdb::read` returns), since the medium's blocks are the
+    /// grid `crate::io::vdb::read` returns), since the medium's blocks are the
     /// grid's leaves in that order with their values as stored, inactive
     /// voxels 0.
     /// `None` when nothing emits or `volume.emission_scale` is 0.
@@ -185,8 +185,8 @@ pub struct ShadowScene<'a> {
     pub terrain: &'a TerrainModel,
     pub sampler: Option<&'a EmissionSampler>,
     pub integration: Integration,
-    /// The air between the terrain and the volume (`crate::extinction`).
-    pub air: Option<&'a crate::extinction::Extinction>,
+    /// The air between the terrain and the volume (`crate::physics::air_extinction`).
+    pub air: Option<&'a crate::physics::air_extinction::Extinction>,
 }
 
 /// Monte Carlo estimate of the irradiance `E(x)` (see the module doc) from

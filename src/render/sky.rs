@@ -40,9 +40,9 @@
 //! depend on the thread count.
 
 use super::{Image, RenderError};
-use crate::camera::CameraModel;
+use crate::geometry::camera::CameraModel;
+use crate::physics::emission::line_colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use crate::scene::Background;
-use crate::spectrum::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use glam::DVec3;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -142,7 +142,7 @@ pub fn blackbody_rgb(t_k: f64) -> [f64; 3] {
 pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64) -> Vec<Star> {
     let n = (STARS_TO_MAG_6 * 10f64.powf(COUNT_SLOPE * (limiting_magnitude - 6.0))).round() as usize;
     let colours: Vec<[f64; 3]> = CLASSES.iter().map(|&(_, t)| blackbody_rgb(t)).collect();
-    let mut rng = crate::rng::rng(&[seed, 0x5354_4152_5300]);
+    let mut rng = crate::util::rng::rng(&[seed, 0x5354_4152_5300]);
     (0..n)
         .map(|_| {
             // Uniform on the sphere: z uniform in [-1, 1], azimuth uniform.
@@ -181,8 +181,8 @@ impl Sky {
             None => None,
             Some(p) => {
                 let path = super::settings::input_path(base_dir, p);
-                let file = crate::input_file::open(&path).map_err(|source| RenderError::Input { key: "background.image", source })?;
-                let img = super::film::read_exr_file(file, &path)?;
+                let file = crate::util::input_file::open(&path).map_err(|source| RenderError::Input { key: "background.image", source })?;
+                let img = super::image_file::read_exr_file(file, &path)?;
                 Some(EnvMap::from_image(&img, &path)?)
             }
         };

@@ -21,7 +21,7 @@
 //!   viewed), height `height + mountain_height * v` with `v` in [0, 1].
 //!
 //! # On a round Earth
-//! With `earth.radius_km = R > 0` (`crate::earth`: the centre at `(0, 0,
+//! With `earth.radius_km = R > 0` (`crate::geometry::earth`: the centre at `(0, 0,
 //! -R)`) the plane is the sphere of radius `R + height`
 //! ([`TerrainModel::Sphere`], an exact ray-sphere intersection), and a
 //! heightfield's sample `(x, y)` of height `z` sits at `z` above the sphere,
@@ -281,7 +281,7 @@ impl Heightfield {
     /// Heights from an 8- or 16-bit greyscale PNG (see the module doc).
     pub fn from_heightmap(path: &Path, t: &Terrain) -> Result<Heightfield, RenderError> {
         let err = |message: String| RenderError::Heightmap { path: path.to_path_buf(), message };
-        let file = crate::input_file::open(path).map_err(|source| RenderError::Input { key: "terrain.heightmap", source })?;
+        let file = crate::util::input_file::open(path).map_err(|source| RenderError::Input { key: "terrain.heightmap", source })?;
         let mut dec = png::Decoder::new(std::io::BufReader::new(file));
         dec.set_transformations(png::Transformations::EXPAND);
         let mut reader = dec.read_info().map_err(|e| err(e.to_string()))?;
@@ -475,7 +475,7 @@ fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
     for o in 0..OCTAVES {
         // Offsets keep the octaves' lattice zeros from lining up at the origin.
         let off = 17.31 * o as f64 + 0.5;
-        sum += amp * crate::rng::noise2(perlin, x * freq + off, y * freq - off);
+        sum += amp * crate::util::rng::noise2(perlin, x * freq + off, y * freq - off);
         norm += amp;
         amp *= 0.5;
         freq *= 2.0;
@@ -494,7 +494,7 @@ fn mountain(perlin: &Perlin, x: f64, y: f64) -> f64 {
 pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderError> {
     let path = path.as_ref();
     let io = |e: std::io::Error| RenderError::Io { path: path.to_path_buf(), source: e };
-    let mut tmp = crate::atomic::TempFile::create(path).map_err(|e| RenderError::Output(Box::new(e)))?;
+    let mut tmp = crate::util::atomic_write::TempFile::create(path).map_err(|e| RenderError::Output(Box::new(e)))?;
     let result = (|| -> std::io::Result<()> {
         let mut w = std::io::BufWriter::new(tmp.file());
         let (nx, ny) = (hf.nx(), hf.ny());

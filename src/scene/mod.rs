@@ -67,7 +67,7 @@ impl Default for Scene {
 // ---------------------------------------------------------------- loading
 
 /// Keys added with a default of 0 that means "off", left out of
-/// [`Scene::hash`] and of the bake identity (`crate::bake_identity`) while
+/// [`Scene::hash`] and of the bake identity (`crate::pipeline::bake::identity`) while
 /// 0: a scene that does not set them keeps the hash it had before they
 /// existed, and its bake is the same.
 pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples"];
@@ -91,13 +91,13 @@ impl Scene {
             }
         }
         // Only a regular file is read (a FIFO or a device is refused, never
-        // waited on: `crate::input_file`).
+        // waited on: `crate::util::input_file`).
         let path = Path::new(path_or_preset);
         if !path.exists() && path.symlink_metadata().is_err() {
             return Err(SceneError::Unknown { name: path_or_preset.to_string(), presets: presets::names().collect() });
         }
-        let text =
-            crate::input_file::read_to_string(path).map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
+        let text = crate::util::input_file::read_to_string(path)
+            .map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
         Self::from_toml_str(&text, path_or_preset)
     }
 

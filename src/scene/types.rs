@@ -37,7 +37,7 @@ pub struct Curtain {
     /// Seed offset so curtains differ.
     pub seed: u64,
     /// The ground track of the curtain's lower border (at 110 km), km: a
-    /// centripetal Catmull-Rom curve through these points (`crate::curve`),
+    /// centripetal Catmull-Rom curve through these points (`crate::pipeline::footprint::curtain_path`),
     /// instead of `center`, `length` and `rotation_deg`.
     pub path: Option<Vec<[f64; 2]>>,
 }
@@ -117,7 +117,7 @@ pub struct FootprintParams {
 /// The most earlier times `animation.trail_samples` may ask for.
 pub const MAX_TRAIL_SAMPLES: u32 = 16;
 
-/// Motion in time (`crate::animation`): closed form in t, so any frame costs
+/// Motion in time (`crate::pipeline::motion`): closed form in t, so any frame costs
 /// one bake. Speeds from the time scales observers report; every motion
 /// parameter at 0 gives identical frames.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -154,7 +154,7 @@ pub struct AnimationParams {
     pub pulsation_patch_km: f64,
     /// Range of patch periods, s (most often 6-10 s; a few s to 20 s).
     pub pulsation_period_s: [f64; 2],
-    /// The red trail (`crate::trail`): how many earlier times of the
+    /// The red trail (`crate::pipeline::red_trail`): how many earlier times of the
     /// motion the O(1D) lines (630.0, 636.4 nm) of a bake at `time_s` sum,
     /// each weighted by the decay of O(1D) at the deposit's altitude;
     /// 0 (the default) is off: every line at `time_s`. At most
@@ -172,7 +172,7 @@ pub struct BeamParams {
     pub count: usize,
     /// Relative RMS noise of the emission grid to aim for (0 = off: use
     /// `count`). A pilot bake measures the scene's noise and sets the beam
-    /// count from it (`crate::bake::pilot`), at most `count`.
+    /// count from it (`crate::pipeline::bake::pilot`), at most `count`.
     pub target_noise: f64,
     /// Altitude where beams start, km.
     pub top_km: f64,
@@ -192,13 +192,13 @@ pub struct BeamParams {
     pub b_inclination_deg: f64,
     /// Magnetic declination: azimuth of B's horizontal part, degrees from +y towards +x.
     pub b_declination_deg: f64,
-    /// How a beam deposits its energy (`crate::beams`): `expected` (the
+    /// How a beam deposits its energy (`crate::pipeline::beams`): `expected` (the
     /// curtain's whole spectrum on every beam, Fang et al. 2010 integrated),
     /// `sampled` (one energy per beam, Fang 2010 monoenergetic) or `csda`
     /// (one energy per beam, straight-line continuous slowing down: the
     /// model before Fang, kept for comparison).
     pub deposition: Deposition,
-    /// How beam starts are placed over the footprint (`crate::starts`).
+    /// How beam starts are placed over the footprint (`crate::pipeline::beams::starts`).
     pub starts: BeamStarts,
 }
 
@@ -211,7 +211,7 @@ pub enum Deposition {
     Csda,
 }
 
-/// The neutral atmosphere model (`crate::atmosphere`).
+/// The neutral atmosphere model (`crate::physics::atmosphere`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum AtmosphereModel {
@@ -234,7 +234,7 @@ impl Default for AtmosphereParams {
     }
 }
 
-/// The Earth under the scene (`crate::earth`).
+/// The Earth under the scene (`crate::geometry::earth`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct EarthParams {
@@ -243,14 +243,14 @@ pub struct EarthParams {
     pub radius_km: f64,
     /// Ground coordinates `[x, y]` km of the geomagnetic (dipole) pole:
     /// when given the field at each beam's start follows the dipole
-    /// (`crate::magnetic`) and `beams.b_inclination_deg` and
+    /// (`crate::physics::geomagnetic_field`) and `beams.b_inclination_deg` and
     /// `b_declination_deg` are unused; none by default.
     pub magnetic_pole: Option<[f64; 2]>,
 }
 
 impl Default for EarthParams {
     fn default() -> Self {
-        Self { radius_km: crate::earth::MEAN_RADIUS_KM, magnetic_pole: None }
+        Self { radius_km: crate::geometry::earth::MEAN_RADIUS_KM, magnetic_pole: None }
     }
 }
 
@@ -278,7 +278,7 @@ pub enum ColourMode {
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum LineModel {
-    /// The ion and excited-state chemistry (`crate::chemistry`), driven by
+    /// The ion and excited-state chemistry (`crate::physics::chemistry`), driven by
     /// the local ionization rate at each deposit (default).
     Chemistry,
     /// The altitude-only parameterisation (`spectrum::EmissionModel`).
@@ -330,7 +330,7 @@ pub struct PhotonParams {
     pub kernel: KernelShape,
 }
 
-/// Photon kernel shape (`crate::photons`).
+/// Photon kernel shape (`crate::pipeline::photons`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum KernelShape {
@@ -354,7 +354,7 @@ pub enum Compression {
 
 /// Voxel size: a number of km, or "auto": one voxel about one pixel of the
 /// scene's camera at the nearest aurora, resolved by the bake
-/// (`crate::bake::voxel::auto_voxel_size`).
+/// (`crate::pipeline::bake::voxel::auto_voxel_size`).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {
@@ -418,7 +418,7 @@ pub const DEFAULT_PRUNE: f64 = 1e-3;
 pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
 
 /// Default `grid.mantissa_bits`: the mantissa bits kept of every stored
-/// `density` and `emission` value (`crate::vdb::mantissa`), relative step
+/// `density` and `emission` value (`crate::io::vdb::mantissa`), relative step
 /// 2^-5, at most 1.6 % per voxel. From the storage study on the default
 /// scene (`docs/storage.md`): with ZIP the frame is 59.0 MB (0.31x of the
 /// 187.5 MB that the 9a7556f build wrote), and its picture (640x360, 16 spp)
@@ -446,7 +446,7 @@ pub struct GridParams {
     /// 11 significant bits, a relative rounding error of at most 2^-11 per
     /// voxel, 10^-5 of the picture on the default scene (`docs/storage.md`).
     /// A grid whose values pass the half range (65504) is stored as full
-    /// floats instead, with a warning (`crate::outputs::fit_half`).
+    /// floats instead, with a warning (`crate::io::bake_folder::fit_half`).
     pub half_emission: bool,
     /// Store `density` (and `density_high`) as half floats in the VDB (as
     /// `half_emission`).
@@ -454,7 +454,7 @@ pub struct GridParams {
     /// Mantissa bits kept of every stored `density` and `emission` value
     /// (and of their high column): each is rounded to the nearest number
     /// with this many bits, at most 2^-(bits+1) relative
-    /// (`crate::vdb::mantissa`); 10 keeps a half float whole, 23 a full
+    /// (`crate::io::vdb::mantissa`); 10 keeps a half float whole, 23 a full
     /// float. The cleared bits cost ZIP almost nothing.
     pub mantissa_bits: u32,
     /// Also store a one-voxel shell of active zero voxels around the aurora
@@ -468,13 +468,13 @@ pub struct GridParams {
     /// Altitude, km, above which the grids are stored at
     /// `high_voxel_factor` times the voxel size, in grids of their own
     /// (`emission_high`, `density_high`) that a renderer adds to `emission`
-    /// and `density` (`crate::column`): the faint soft-electron column.
+    /// and `density` (`crate::grid::high_column`): the faint soft-electron column.
     pub high_above_km: f64,
     /// Voxel size of the high column over `voxel_size` (1 = no high
     /// column: one grid each at the voxel size).
     pub high_voxel_factor: u32,
     pub compression: Compression,
-    /// Error budget of contribution-based pruning (`crate::prune`): the
+    /// Error budget of contribution-based pruning (`crate::pipeline::prune`): the
     /// faintest leaves, as seen from the camera, are dropped while their
     /// share of the light reaching it stays below this fraction
     /// (0 = keep every leaf with any emission).
@@ -524,7 +524,7 @@ pub struct RenderParams {
     pub view_transform: ViewTransform,
 }
 
-/// How a linear image becomes PNG code values (`crate::render::film`).
+/// How a linear image becomes PNG code values (`crate::render::image_file`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum ViewTransform {
@@ -561,7 +561,7 @@ pub struct Background {
     pub star_brightness: f64,
 }
 
-/// The air between the aurora and the observer (`crate::extinction`).
+/// The air between the aurora and the observer (`crate::physics::air_extinction`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct SkyParams {

@@ -4,13 +4,13 @@
 //! one set of limits ([`Camera::problems`]). Each check also records its
 //! range for [`super::schema`]. Validity is a property of the scene alone,
 //! never of the machine: whether a bake fits in memory is decided at bake
-//! time (`crate::budget`).
+//! time (`crate::pipeline::memory_budget`).
 
 use super::*;
 use std::fmt;
 
-/// The line names `grid.lines` takes, in `crate::spectrum::LINES` order
-/// (557.7, 630.0, 636.4, 427.8 nm, the N2 1P bands; `crate::lines` reads
+/// The line names `grid.lines` takes, in `crate::physics::emission::line_colour::LINES` order
+/// (557.7, 630.0, 636.4, 427.8 nm, the N2 1P bands; `crate::physics::emission::line_table` reads
 /// them from here).
 pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
 
@@ -48,7 +48,7 @@ impl Camera {
 
     /// Every camera value outside its range, as (key, value, allowed): the
     /// one set of camera limits, applied by [`Scene::validate`] and by
-    /// `crate::camera::CameraModel::new`.
+    /// `crate::geometry::camera::CameraModel::new`.
     pub fn problems(&self) -> Vec<(&'static str, String, String)> {
         let mut p = Vec::new();
         let (max_fov, inclusive) = self.max_fov_deg();
@@ -622,7 +622,7 @@ mod tests {
         let m = Scene::from_toml_str("[beams]\ncount = 0\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("beams.count = 0") && m.contains("[1, "), "{m}");
         // Validity does not depend on the machine: a tiny voxel is valid here and
-        // refused by the bake's memory budget (crate::budget).
+        // refused by the bake's memory budget (crate::pipeline::memory_budget).
         assert!(Scene::from_toml_str("[grid]\nvoxel_size = 0.0001\n", "s.toml").is_ok());
         let m = Scene::from_toml_str("[footprint]\nresolution = [100000000, 8]\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("s.toml:2: footprint.resolution") && m.contains("[8, 4096]"), "{m}");

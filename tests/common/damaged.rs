@@ -15,9 +15,9 @@
 //! compression mode, full and half float.
 
 use aurora::grid::{Grid, Transform};
+use aurora::io::vdb::parse::{parse_file_with, read_meta_map, Cursor, Decode, LeafSpan, ValueKind};
+use aurora::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
 use aurora::scene::Compression;
-use aurora::vdb::parse::{parse_file_with, read_meta_map, Cursor, Decode, LeafSpan, ValueKind};
-use aurora::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 
@@ -136,8 +136,8 @@ pub fn grids_of(bytes: &[u8]) -> Vec<GridAt> {
         .into_iter()
         .map(|g| {
             let spans = match &g.tree {
-                Some(aurora::vdb::parse::AnyTree::Float(t)) => t.spans.clone(),
-                Some(aurora::vdb::parse::AnyTree::Vec3(t)) => t.spans.clone(),
+                Some(aurora::io::vdb::parse::AnyTree::Float(t)) => t.spans.clone(),
+                Some(aurora::io::vdb::parse::AnyTree::Vec3(t)) => t.spans.clone(),
                 None => Vec::new(),
             };
             GridAt {

@@ -1,5 +1,5 @@
 //! The vdb-rs crate as an independent oracle for our VDB decoder, plugged
-//! into `aurora::vdb::read::read_vdb_bytes_with` (vdb-rs is a dev-dependency:
+//! into `aurora::io::vdb::read::read_vdb_bytes_with` (vdb-rs is a dev-dependency:
 //! the product never builds it).
 //!
 //! vdb-rs reads the plain `float` grids: no half floats, no active tiles
@@ -14,9 +14,9 @@
 //! byte-swapped magic): our parser checks the magic first.
 
 use aurora::grid::{Leaf, Transform, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
-use aurora::vdb::layout::{internal16_child_origin, internal32_child_origin};
-use aurora::vdb::parse::{GridHeader, ValueKind};
-use aurora::vdb::read::{read_vdb_bytes_with, ExternalDecode, ExternalFloatDecoder, FloatLeaves, GridNames, VdbFile, VdbReadError};
+use aurora::io::vdb::layout::{internal16_child_origin, internal32_child_origin};
+use aurora::io::vdb::parse::{GridHeader, ValueKind};
+use aurora::io::vdb::read::{read_vdb_bytes_with, ExternalDecode, ExternalFloatDecoder, FloatLeaves, GridNames, VdbFile, VdbReadError};
 use glam::{DVec3, IVec3};
 use std::cell::Cell;
 use std::panic::{catch_unwind, AssertUnwindSafe};

@@ -35,7 +35,7 @@ integrated over altitude; the curtain's area cancels in every ratio):
   two-stream transport (Banks & Nagy) differs from them by that much, most
   at low energies, where GLOW also reflects more (deposits 0.80-0.92 of the
   incident energy, Fang 0.94-0.99). Below a few keV the deposition's upper
-  side is stretched towards GLOW's (src/fang_glow.rs), its peak kept at
+  side is stretched towards GLOW's (src/physics/deposition/glow_calibration.rs), its peak kept at
   Fang 2008's (tests/python/test_profile.py). The tail is checked
   separately: the share of the ionization above 250 km within 30 % of
   GLOW's for E0 = 0.5-10 keV (measured 0.97-1.00; docs/physics.md, "The
@@ -48,12 +48,12 @@ is the 557.7 nm shape at E0 = 0.5 keV, measured L1 0.192: there GLOW's
 ionization is flat from 141 to 154 km and its green peaks at 156 km, and
 lifting ours lifts the ionization peak away from Fang 2008's (141.75 km),
 which test_profile.py holds ours to within 1.5 km. The low-energy
-correction's constants (src/fang_glow.rs) were chosen to meet both: the
+correction's constants (src/physics/deposition/glow_calibration.rs) were chosen to meet both: the
 shape below 0.2 and that peak at 143.25 km, 1.5 km up, on a plateau of
 our profile flat to 0.1 % from 141.25 km.
 
 The green's agreement below 3 keV comes mostly from the chemistry's
-ambient NO being GLOW's own (src/chemistry/ambient.rs): with NRLMSIS
+ambient NO being GLOW's own (src/physics/chemistry/ambient.rs): with NRLMSIS
 2.1's NO, 2.7-4.4 times lower above 120 km, 557.7 / 427.8 was 0.77-0.81
 of GLOW's at E0 <= 1 keV; the deposition's shape moves it by 1-2 %.
 

@@ -17,13 +17,13 @@ use super::check::{bad_voxel, leaf_peak};
 use super::dual::{cell_masks, feeds_from_nonzero, fill_leaf, push_dual_keys};
 use super::field::{Field, Tree};
 use super::layout::{CellMask, NONE};
+use crate::grid::leaf_source::{LeafSource, LeafValues, Scratch};
 use crate::grid::{LEAF_DIM, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
-use crate::leaf_source::{LeafSource, LeafValues, Scratch};
 use crate::render::RenderError;
 use glam::IVec3;
 use rayon::prelude::*;
 
-/// The share of this process's memory limit ([`crate::memory::available`])
+/// The share of this process's memory limit ([`crate::util::memory::available`])
 /// the medium's values may take; the rest is the mapped file, the image,
 /// the threads' stacks and heaps.
 pub const MEDIUM_MEMORY_FRACTION: f64 = 0.75;
@@ -117,7 +117,7 @@ impl Field {
     pub(super) fn from_sources(
         sources: &[&dyn LeafSource],
         reserved: f64,
-        limit: &crate::memory::MemoryLimit,
+        limit: &crate::util::memory::MemoryLimit,
     ) -> Result<(Field, Vec<SourceReport>), RenderError> {
         assert!(!sources.is_empty() && sources.len() <= 2);
         let transform = sources[0].transform();
@@ -145,7 +145,11 @@ impl Field {
         let per_block = LEAF_NUM_VALUES * channels;
         let needed = reserved + ((origins.len() + 1) * per_block * std::mem::size_of::<f32>()) as f64;
         if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
-            return Err(RenderError::Memory { leaves: origins.len(), needed: crate::memory::gib(needed), available: limit.to_string() });
+            return Err(RenderError::Memory {
+                leaves: origins.len(),
+                needed: crate::util::memory::gib(needed),
+                available: limit.to_string(),
+            });
         }
         // Zeroed by the allocator (fresh pages): blocks not written cost
         // no memory.

@@ -9,8 +9,8 @@
 //! below +inf's (or is -0), and such bits order as the values, so one pass
 //! gives both the verdict and the leaf's largest value.
 
+use crate::grid::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
 use crate::grid::{Grid, VoxelValue, LEAF_MASK_WORDS};
-use crate::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
 use crate::render::RenderError;
 
 /// Whether a stored component is acceptable: finite and >= 0 (-0 included),

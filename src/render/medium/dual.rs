@@ -16,8 +16,8 @@
 //! brute-force oracle in the tests.
 
 use super::layout::{shr, CellMask, Y0_BITS, Z0_BITS, Z7_BITS};
+use crate::grid::leaf_source::LeafValues;
 use crate::grid::{LEAF_LOG2DIM, LEAF_MASK_WORDS};
-use crate::leaf_source::LeafValues;
 use glam::IVec3;
 #[cfg(test)]
 use {

@@ -40,8 +40,8 @@ mod dual;
 pub mod field;
 pub mod layout;
 
+use crate::grid::leaf_source::{GridSource, LeafSource};
 use crate::grid::Grid;
-use crate::leaf_source::{GridSource, LeafSource};
 use check::{check_header, check_scaled_peak};
 use field::Field;
 use glam::DVec3;
@@ -145,7 +145,7 @@ impl Medium {
         }
         // Each field's value storage is checked against the process's
         // memory limit before it is allocated ([`Field::from_sources`]).
-        let limit = crate::memory::available();
+        let limit = crate::util::memory::available();
         let mut reserved = 0.0;
         // Sources sharing a transform share a field.
         let groups: Vec<Vec<usize>> = match srcs {

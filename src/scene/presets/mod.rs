@@ -132,7 +132,7 @@ pub const OVAL_LENGTH_KM: f64 = 2500.0;
 /// fisheye looking at the zenith, north up, with stars. On the round
 /// Earth its ends go down behind the horizon, some 1250 km away.
 pub fn oval() -> Scene {
-    let earth = crate::earth::Earth::new(crate::earth::MEAN_RADIUS_KM);
+    let earth = crate::geometry::earth::Earth::new(crate::geometry::earth::MEAN_RADIUS_KM);
     let pole = [0.0, OVAL_POLE_DISTANCE_KM];
     // The small circle's radius in space, R sin(rho / R): its azimuths from
     // the pole span the arc's length; 33 points, 78 km apart.

@@ -1,0 +1,350 @@
+//! A VDB file into the renderer: the adapter between the file layer
+//! (`vdb`) and the renderer (`render`), which know nothing of each other.
+//!
+//! Two paths, one verdict on a file:
+//! - the grid path: [`render_grids`] lists a file read into grids
+//!   (`vdb::read::read_vdb_for_render`) for the renderer's grid choice
+//!   (`render::grids::choose`);
+//! - the records path: [`read_render_medium`] parses the file once, locating
+//!   each leaf's record (`vdb::parse::Decode::Locate`), and builds the
+//!   renderer's medium straight from the records (`Medium::from_sources`
+//!   over `vdb::records::FileLeaves`, each a `leaf_source::LeafSource`): no
+//!   grid in between. It applies the grid reader's checks (the tile limit
+//!   of every grid, every record of the unused grids decompressed once), so
+//!   both paths accept and refuse the same files (`vdb::read`'s module doc).
+
+use crate::grid::leaf_source::LeafSource;
+use crate::grid::Transform;
+use crate::io::vdb::parse::{self, AnyTree, ParseError, ValueKind};
+use crate::io::vdb::read::{check_tile_voxels, VdbFile, VdbReadError};
+use crate::io::vdb::records::{FileBytes, FileLeaves};
+use crate::render::grids::{check_types, choose, ChosenGrids, GridType, Listed, RenderGridsError};
+use crate::render::medium::Medium;
+use crate::render::RenderError;
+use glam::DVec3;
+use std::path::Path;
+
+/// The grids a renderer needs from a file: the file's grids listed for the
+/// renderer's grid choice ([`crate::render::grids::choose`]: a float
+/// `density` grid, an `emission` grid, vec3 or float counted as grey; either
+/// may be absent, not both).
+pub fn render_grids(file: VdbFile) -> Result<ChosenGrids, RenderGridsError> {
+    let listing: Vec<Listed<'_>> =
+        file.grids.iter().map(|g| Listed { name: &g.name, type_name: &g.type_name, kind: grid_type(g.kind) }).collect();
+    choose(&listing, file.float_grids, file.vec3_grids)
+}
+
+/// The renderer's name for a grid's value type, as listed for
+/// [`crate::render::grids`] (both the grid and the records path).
+fn grid_type(kind: Option<ValueKind>) -> GridType {
+    match kind {
+        Some(ValueKind::Float) => GridType::Float,
+        Some(ValueKind::Vec3) => GridType::Vec3,
+        None => GridType::Other,
+    }
+}
+
+/// Why a VDB file's medium could not be built: the grid choice
+/// ([`crate::render::grids`]) or the renderer's checks on the values.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderReadError {
+    #[error(transparent)]
+    Read(#[from] VdbReadError),
+    #[error("{file}: {source}")]
+    Grids { file: String, source: RenderGridsError },
+    #[error("{file}: {source}")]
+    Render { file: String, source: RenderError },
+}
+
+impl RenderReadError {
+    /// True when the file, or a grid the renderer refuses, is at fault (exit status 2).
+    pub fn is_input(&self) -> bool {
+        match self {
+            RenderReadError::Read(e) => e.is_input(),
+            RenderReadError::Grids { source, .. } => source.is_input(),
+            RenderReadError::Render { source, .. } => source.is_input(),
+        }
+    }
+}
+
+/// The renderer's medium read straight from a VDB file, and the split of
+/// the time it took.
+pub struct RenderMedium {
+    pub medium: Medium,
+    /// Reading the file and validating every record (its leaves located).
+    pub open_seconds: f64,
+    /// Decoding the records into the medium (`Medium::from_sources`).
+    pub build_seconds: f64,
+}
+
+/// Reads a VDB file straight into the renderer's medium (the `render`
+/// command's path): the file is parsed once, validating every record and
+/// locating each leaf's, then [`Medium::from_sources`] decodes the records
+/// in parallel, each into a per-thread buffer, checks them and copies them
+/// into the medium's blocks: no [`crate::grid::Grid`] in between. The grids are the ones
+/// [`render_grids`] would choose and the medium equals `Medium::new` of
+/// those grids (read by [`read_vdb`]), field for field. The other grids'
+/// records are checked, not kept (module docs), so this path refuses
+/// exactly the files the grid path refuses.
+///
+/// `Ok(None)` where this path does not apply and the caller should read
+/// grids instead ([`read_vdb_for_render`], [`render_grids`]): a float
+/// `emission` grid (read as grey), active tiles in a chosen grid, or no
+/// grid to render (the grid path reports it), a high-column grid
+/// (`density_high`, `emission_high`: the grid path adds it to its fine grid).
+pub fn read_render_medium(path: &Path, density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
+    let start = std::time::Instant::now();
+    let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    render_medium_named(bytes.bytes(), &path.display().to_string(), start, density_scale, emission_scale)
+}
+
+/// [`read_render_medium`] of a file held in memory.
+pub fn read_render_medium_bytes(bytes: &[u8], density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
+    render_medium_named(bytes, "<memory>", std::time::Instant::now(), density_scale, emission_scale)
+}
+
+fn render_medium_named(
+    bytes: &[u8],
+    file: &str,
+    start: std::time::Instant,
+    density_scale: f64,
+    emission_scale: f64,
+) -> Result<Option<RenderMedium>, RenderReadError> {
+    let file = file.to_string();
+    let invalid = |source: ParseError| VdbReadError::Invalid { file: file.clone(), source };
+    let parsed = parse::parse_file_with(bytes, &|gh| {
+        if gh.kind.is_some() {
+            parse::Decode::Locate
+        } else {
+            parse::Decode::Skip
+        }
+    })
+    .map_err(invalid)?;
+    let names: Vec<String> = parsed.grids.iter().map(|g| g.header.name()).collect();
+    let listing: Vec<Listed<'_>> = parsed
+        .grids
+        .iter()
+        .zip(&names)
+        .map(|(g, name)| Listed { name, type_name: &g.header.type_name, kind: grid_type(g.header.kind) })
+        .collect();
+    check_types(&listing).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
+    let transform_of = |g: &parse::ParsedGrid| g.header.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
+    let mut density = None;
+    let mut emission = None;
+    let mut float_emission = false;
+    let mut used = [None, None];
+    for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
+        match (&g.tree, name.as_str()) {
+            (Some(AnyTree::Float(t)), "density") if density.is_none() => {
+                used[0] = Some(i);
+                density = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
+            }
+            (Some(AnyTree::Vec3(t)), "emission") if emission.is_none() => {
+                used[1] = Some(i);
+                emission = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
+            }
+            (Some(AnyTree::Float(_)), "emission") => float_emission = true,
+            _ => {}
+        }
+    }
+    let tiles =
+        density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0) || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
+    // The high column (`crate::grid::high_column`) is added to its fine grid in memory:
+    // the grid path does it.
+    let high = names.iter().any(|n| n.ends_with(crate::grid::high_column::HIGH_SUFFIX));
+    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles || high {
+        return Ok(None);
+    }
+    // What the grid reader refuses is refused here too: its tile limit on
+    // every grid, and the records of the grids the medium does not use
+    // checked as decoding them would (`parse::check_located`); the builder
+    // checks the used grids' records as it decodes them.
+    for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
+        let Some(tree) = &g.tree else { continue };
+        check_tile_voxels(tree.tile_voxels(), name, &file)?;
+        if !used.contains(&Some(i)) {
+            tree.check_located(bytes, &g.header.unique_name).map_err(invalid)?;
+        }
+    }
+    let open_seconds = start.elapsed().as_secs_f64();
+    let build = std::time::Instant::now();
+    let medium = Medium::from_sources(
+        density.as_ref().map(|s| s as &dyn LeafSource),
+        emission.as_ref().map(|s| s as &dyn LeafSource),
+        density_scale,
+        emission_scale,
+    )
+    .map_err(|source| RenderReadError::Render { file: file.clone(), source })?;
+    Ok(Some(RenderMedium { medium, open_seconds, build_seconds: build.elapsed().as_secs_f64() }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Grid;
+    use crate::io::vdb::read::read_vdb_bytes;
+    use glam::IVec3;
+
+    /// Density and emission grids with dense, sparse, all-zero (a Cycles
+    /// shell) and single-voxel leaves, negative coordinates, inactive
+    /// voxels holding garbage-free background, on transform `tr` (emission
+    /// on `tr_e`).
+    fn medium_grids(tr: Transform, tr_e: Transform) -> (Grid<f32>, Grid<[f32; 3]>) {
+        let mut d = Grid::new("density", 0.0f32, tr);
+        let mut e = Grid::new("emission", [0.0f32; 3], tr_e);
+        let mut h = 17u32;
+        let mut next = || {
+            h ^= h << 13;
+            h ^= h >> 17;
+            h ^= h << 5;
+            h
+        };
+        for x in -12..20 {
+            for y in -4..9 {
+                for z in 0..11 {
+                    let r = next();
+                    if r % 3 == 0 {
+                        continue;
+                    }
+                    let v = (r % 1000) as f32 * 1e-3;
+                    d.set(IVec3::new(x, y, z), if r % 7 == 0 { 0.0 } else { v });
+                    if r % 5 != 0 {
+                        e.set(IVec3::new(x, y, z), [v, 0.5 * v, if r % 11 == 0 { 0.0 } else { 2.0 * v }]);
+                    }
+                }
+            }
+        }
+        // A shell leaf of active zeros in both, one only in emission, a
+        // lone voxel on a leaf's upper face.
+        for ijk in [IVec3::new(40, 0, 0), IVec3::new(41, 3, 7)] {
+            d.set(ijk, 0.0);
+            e.set(ijk, [0.0; 3]);
+        }
+        e.set(IVec3::new(-40, 8, 0), [0.0; 3]);
+        d.set(IVec3::new(7, 63, -9), 3.5);
+        (d, e)
+    }
+
+    /// The medium built straight from a file's records equals the one built
+    /// from the same file read into grids, field for field (block numbers
+    /// included), for every compression, half emission, shared and
+    /// separate transforms, any scales and the thread count; the scales set
+    /// afterwards equal the scales built in.
+    #[test]
+    fn medium_from_file_equals_medium_from_grids() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
+        use crate::render::medium::Medium;
+        use crate::scene::Compression;
+        let tr = Transform::new(0.5, DVec3::new(1.0, -2.0, 3.0));
+        for tr_e in [tr, Transform::new(0.25, DVec3::ZERO)] {
+            let (d, e) = medium_grids(tr, tr_e);
+            for c in [
+                Compression::None,
+                Compression::Zip,
+                Compression::ActiveMask,
+                Compression::ZipActiveMask,
+                Compression::Blosc,
+                Compression::BloscActiveMask,
+            ] {
+                for half in [false, true] {
+                    let opts = WriteOptions {
+                        compression: c,
+                        half: if half { vec!["emission".into()] } else { Vec::new() },
+                        ..WriteOptions::default()
+                    };
+                    let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
+                    let file = read_vdb_bytes(&bytes).unwrap();
+                    let (gd, ge) = render_grids(file).unwrap();
+                    for (ds, es) in [(1.0, 1.0), (2.5, 0.0), (0.0, 3.0)] {
+                        let want = Medium::new(gd.as_ref(), ge.as_ref(), ds, es).unwrap();
+                        for threads in [1, 2] {
+                            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                            let got = pool.install(|| read_render_medium_bytes(&bytes, ds, es)).unwrap().unwrap().medium;
+                            assert!(got == want, "{c:?} half {half} scales {ds} {es} threads {threads}");
+                        }
+                        let mut rescaled = Medium::new(gd.as_ref(), ge.as_ref(), 1.0, 1.0).unwrap();
+                        rescaled.set_scales(ds, es).unwrap();
+                        assert!(rescaled == want, "set_scales({ds}, {es})");
+                    }
+                    let m = Medium::new(gd.as_ref(), ge.as_ref(), 1.0, 1.0).unwrap();
+                    assert_eq!(m.fields.len(), if tr_e == tr { 1 } else { 2 });
+                }
+            }
+        }
+    }
+
+    /// A render of the medium read straight from the file is byte-identical
+    /// to the render of the grids in memory.
+    #[test]
+    fn render_from_file_equals_render_in_memory() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
+        use crate::render::{render, render_prepared, Prepared, RenderSettings, Volume};
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let (d, e) = medium_grids(tr, tr);
+        let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
+        let mut scene = crate::scene::Scene::default();
+        scene.terrain.kind = crate::scene::TerrainKind::None;
+        scene.render.width = 24;
+        scene.render.height = 16;
+        scene.render.spp = 4;
+        scene.camera.position = [4.0, -30.0, 2.0];
+        scene.camera.look_at = [4.0, 0.0, 2.0];
+        scene.volume.emission_scale = 40.0;
+        let settings = RenderSettings::from_scene(&scene);
+        let volume = Volume { density: Some(&d), emission: Some(&e) };
+        let want = render(&settings, &volume, &crate::util::progress::NoProgress).unwrap();
+        let m = read_render_medium_bytes(&bytes, 1.0, 1.0).unwrap().unwrap().medium;
+        let p = Prepared::with_medium(&settings, m.clone(), None).unwrap();
+        let got = render_prepared(&p, &crate::util::progress::NoProgress).unwrap();
+        let bits = |img: &crate::render::Image| img.pixels.iter().flat_map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
+        assert!(bits(&want).iter().any(|&b| b != 0), "the camera sees the volume");
+        assert_eq!(bits(&got), bits(&want));
+        // With a terrain lit by the volume: the emission sampler built from
+        // the medium equals the one built from the grid.
+        let mut lit = settings.clone();
+        lit.terrain.kind = crate::scene::TerrainKind::Plane;
+        lit.terrain.height = -1.0;
+        let want = render(&lit, &volume, &crate::util::progress::NoProgress).unwrap();
+        let p = Prepared::with_medium(&lit, m, None).unwrap();
+        assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
+        assert_eq!(bits(&render_prepared(&p, &crate::util::progress::NoProgress).unwrap()), bits(&want));
+        assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
+    }
+
+    /// Bad files give typed errors, never a panic: every 7th byte of a
+    /// small file's last two thirds damaged in turn, a truncated file,
+    /// negative voxels (named with their coordinates; the writer refuses
+    /// NaN, `render_read_drops_only_zero_leaves` covers the rest).
+    #[test]
+    fn bad_files_give_errors_on_the_medium_path() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let mut d = Grid::new("density", 0.0f32, tr);
+        let mut e = Grid::new("emission", [0.0f32; 3], tr);
+        for i in 0..40 {
+            d.set(IVec3::new(i, i % 5, 2 * i), 1.0 + i as f32);
+            e.set(IVec3::new(i, 1, 0), [i as f32, 0.0, 1.0]);
+        }
+        let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
+        for cut in [0, 8, bytes.len() / 2, bytes.len() - 1] {
+            assert!(read_render_medium_bytes(&bytes[..cut], 1.0, 1.0).is_err(), "cut at {cut}");
+        }
+        let start = bytes.len() / 3;
+        for at in (start..bytes.len()).step_by(7) {
+            for flip in [0x01u8, 0x80, 0xff] {
+                let mut b = bytes.clone();
+                b[at] ^= flip;
+                // Either an error or a medium (a flipped float bit can be a
+                // valid value): never a panic.
+                let _ = read_render_medium_bytes(&b, 1.0, 1.0);
+            }
+        }
+        for (v, want) in [(-1.0f32, "-1.0"), (-1e-30, "-1e-30")] {
+            let mut bad = d.clone();
+            bad.set(IVec3::new(3, 4, 5), v);
+            let bytes = write_vdb_bytes(&[GridRef::Float(&bad), GridRef::Vec3(&e)], &WriteOptions::default()).unwrap();
+            let err = read_render_medium_bytes(&bytes, 1.0, 1.0).err().expect("refused").to_string();
+            assert!(err.contains("[3, 4, 5]") && err.contains(want) && err.contains("density"), "{err}");
+        }
+    }
+}

@@ -1,0 +1,4 @@
+//! Frames and projections: the round Earth's local frame and the camera.
+
+pub mod camera;
+pub mod earth;

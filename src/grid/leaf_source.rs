@@ -1,0 +1,99 @@
+//! A grid's leaves as a reader sees them, whatever holds them: the
+//! renderer's medium (`crate::render::medium`) is built from this view, so
+//! a grid in memory ([`GridSource`]) and a VDB file's grid decoded leaf by
+//! leaf (`crate::io::vdb::read`) give the same medium.
+//!
+//! Model: a sparse grid of OpenVDB 8^3 leaves (`crate::grid`), listed as
+//! each leaf's origin and active mask (known up front: a file's topology
+//! precedes its values) and its values, produced per leaf on demand, in
+//! any order and from several threads. The values come in one of the two
+//! layouts an OpenVDB leaf record may hold (`io::writeCompressedValues`):
+//! all 512 slots, or the active slots only (mask compression).
+//!
+//! This is the bottom layer: it knows grids, and nothing of the renderer or
+//! the file format.
+
+use crate::grid::{Grid, Transform, VoxelValue, LEAF_MASK_WORDS};
+use glam::IVec3;
+
+/// Why a leaf's values could not be produced (a file's decode error).
+pub type LeafError = Box<dyn std::error::Error + Send + Sync>;
+
+/// Per-thread buffers a [`LeafSource`] may decode a leaf into.
+#[derive(Default)]
+pub struct Scratch {
+    pub values: Vec<f32>,
+    pub bytes: Vec<u8>,
+}
+
+/// One grid's leaves as the medium's builder reads them: origins and
+/// active masks up front (a file's topology lists them before any value),
+/// the values leaf by leaf, possibly decoded on demand and in parallel. A
+/// grid in memory is one ([`GridSource`]); so is a VDB file's grid
+/// (`crate::io::vdb::read`), which lets a render build its medium straight from
+/// the file's records, with no intermediate [`Grid`].
+pub trait LeafSource: Sync {
+    /// The grid's name (for messages).
+    fn name(&self) -> &str;
+    fn transform(&self) -> Transform;
+    /// Components per voxel: 1 (float) or 3 (vec3).
+    fn channels(&self) -> usize;
+    /// The background's components (the first [`channels`](Self::channels)).
+    fn background(&self) -> [f32; 3];
+    fn leaf_count(&self) -> usize;
+    /// Origin of leaf `i` (distinct for distinct `i`).
+    fn origin(&self, i: usize) -> IVec3;
+    /// Active mask of leaf `i`.
+    fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS];
+    /// The values of leaf `i`, components interleaved, borrowed from the
+    /// source or decoded into `scratch`.
+    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError>;
+}
+
+/// A leaf's values as a [`LeafSource`] gives them.
+#[derive(Clone, Copy, Debug)]
+pub enum LeafValues<'s> {
+    /// All 512 slots in index order (`512 * channels` floats; inactive
+    /// slots may hold anything).
+    All(&'s [f32]),
+    /// The active slots only, in index order (`popcount(mask) * channels`
+    /// floats): what an active-mask VDB record stores.
+    Active(&'s [f32]),
+}
+
+/// A grid in memory as a [`LeafSource`].
+pub struct GridSource<'a, T>(pub &'a Grid<T>);
+
+macro_rules! grid_source {
+    ($t:ty, $flat:expr) => {
+        impl LeafSource for GridSource<'_, $t> {
+            fn name(&self) -> &str {
+                &self.0.name
+            }
+            fn transform(&self) -> Transform {
+                self.0.transform
+            }
+            fn channels(&self) -> usize {
+                <$t as VoxelValue>::COMPONENTS
+            }
+            fn background(&self) -> [f32; 3] {
+                self.0.background.components()
+            }
+            fn leaf_count(&self) -> usize {
+                self.0.leaves().len()
+            }
+            fn origin(&self, i: usize) -> IVec3 {
+                self.0.leaves()[i].origin
+            }
+            fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS] {
+                &self.0.leaves()[i].mask
+            }
+            fn values<'s>(&'s self, i: usize, _: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
+                let flat: fn(&[$t]) -> &[f32] = $flat;
+                Ok(LeafValues::All(flat(&self.0.leaves()[i].values[..])))
+            }
+        }
+    };
+}
+grid_source!(f32, |v| v);
+grid_source!([f32; 3], |v| v.as_flattened());

@@ -1,0 +1,519 @@
+//! The neutral atmosphere, 50-700 km: mass density, the number densities of
+//! N2, O2 and O, and the column mass above an altitude. Two tables:
+//!
+//! - **NRLMSIS 2.1** (the default; Emmert et al. 2022, J. Geophys. Res. Space
+//!   Physics 127, e2022JA030896) for an auroral-zone winter night: 67 N, 20 E,
+//!   2020-01-15 00:00 UT, F10.7 = F10.7a = 150, Ap = 15, every 0.5 km from 50
+//!   to 700 km, in `data/nrlmsis21.csv`, made by `tools/msis_table.py` with the
+//!   `pymsis` package (a 30 keV spectrum deposits down to about 65 km).
+//! - **Approximate U.S. Standard Atmosphere 1976**, 80-500 km (NOAA, NASA,
+//!   USAF, "U.S. Standard Atmosphere, 1976", NOAA-S/T 76-1562): computed with
+//!   the open `ussa1976` Python package (v0.3.4, a re-implementation of the
+//!   standard's equations) and rounded to 5 significant digits. The standard
+//!   defines atomic oxygen only from 86 km: at 86 km we use its boundary value
+//!   8.6e10 cm^-3 and at 80 km an exponential extrapolation of the 86-90 km
+//!   slope (flagged below).
+//!
+//! Between table altitudes every quantity is interpolated log-linearly (an
+//! exponential within each segment, with its own scale height), and outside the
+//! table the end segments are extrapolated. The column mass above `h` is the
+//! exact integral of that piecewise-exponential density (per segment
+//! `H_i (rho_i - rho_{i+1})`), so `-dC/dh = rho` holds everywhere.
+//!
+//! Units: altitude km, mass density g cm^-3, number density cm^-3, column
+//! mass g cm^-2 (the unit of the electron range-energy relation in `csda`).
+
+/// Centimetres per kilometre.
+pub const CM_PER_KM: f64 = 1e5;
+
+/// Rows: altitude km, rho g cm^-3, n(N2), n(O2), n(O) cm^-3.
+/// Approximate U.S. Standard Atmosphere 1976 (see the module doc).
+const USSA1976: [[f64; 5]; 43] = [
+    [80.0, 1.8458e-08, 2.9966e+14, 8.0390e+13, 1.74e+10], // O extrapolated (not defined below 86 km)
+    [86.0, 6.9578e-09, 1.1296e+14, 3.0303e+13, 8.60e+10], // O: the standard's 86 km boundary value
+    [90.0, 3.4164e-09, 5.5465e+13, 1.4795e+13, 2.4980e+11],
+    [95.0, 1.3940e-09, 2.2677e+13, 5.8301e+12, 4.5789e+11],
+    [100.0, 5.6123e-10, 9.2096e+12, 2.1507e+12, 4.6070e+11],
+    [105.0, 2.3308e-10, 3.8818e+12, 7.6434e+11, 3.6514e+11],
+    [110.0, 9.7491e-11, 1.6407e+12, 2.6201e+11, 2.4682e+11],
+    [115.0, 4.3149e-11, 7.2520e+11, 9.6438e+10, 1.5303e+11],
+    [120.0, 2.2393e-11, 3.7247e+11, 4.3940e+10, 9.9424e+10],
+    [125.0, 1.3027e-11, 2.1340e+11, 2.3355e+10, 6.8346e+10],
+    [130.0, 8.2387e-12, 1.3260e+11, 1.3743e+10, 4.9582e+10],
+    [135.0, 5.5306e-12, 8.7326e+10, 8.6425e+09, 3.7489e+10],
+    [140.0, 3.8825e-12, 6.0069e+10, 5.7011e+09, 2.9255e+10],
+    [145.0, 2.8221e-12, 4.2737e+10, 3.9017e+09, 2.3397e+10],
+    [150.0, 2.1092e-12, 3.1230e+10, 2.7493e+09, 1.9081e+10],
+    [155.0, 1.6131e-12, 2.3329e+10, 1.9842e+09, 1.5812e+10],
+    [160.0, 1.2568e-12, 1.7735e+10, 1.4597e+09, 1.3272e+10],
+    [165.0, 9.9479e-13, 1.3683e+10, 1.0912e+09, 1.1259e+10],
+    [170.0, 7.9857e-13, 1.0695e+10, 8.2746e+08, 9.6439e+09],
+    [175.0, 6.4845e-13, 8.4477e+09, 6.3467e+08, 8.3225e+09],
+    [180.0, 5.3216e-13, 6.7365e+09, 4.9187e+08, 7.2325e+09],
+    [185.0, 4.4062e-13, 5.4143e+09, 3.8450e+08, 6.3209e+09],
+    [190.0, 3.6782e-13, 4.3828e+09, 3.0291e+08, 5.5531e+09],
+    [195.0, 3.0925e-13, 3.5696e+09, 2.4023e+08, 4.9001e+09],
+    [200.0, 2.6169e-13, 2.9231e+09, 1.9166e+08, 4.3407e+09],
+    [210.0, 1.9061e-13, 1.9875e+09, 1.2385e+08, 3.4409e+09],
+    [220.0, 1.4155e-13, 1.3724e+09, 8.1391e+07, 2.7579e+09],
+    [230.0, 1.0684e-13, 9.5919e+08, 5.4203e+07, 2.2299e+09],
+    [240.0, 8.1775e-14, 6.7721e+08, 3.6498e+07, 1.8161e+09],
+    [250.0, 6.3344e-14, 4.8210e+08, 2.4800e+07, 1.4878e+09],
+    [260.0, 4.9582e-14, 3.4556e+08, 1.6978e+07, 1.2247e+09],
+    [270.0, 3.9165e-14, 2.4911e+08, 1.1697e+07, 1.0123e+09],
+    [280.0, 3.1185e-14, 1.8045e+08, 8.1009e+06, 8.3948e+08],
+    [290.0, 2.5010e-14, 1.3126e+08, 5.6364e+06, 6.9822e+08],
+    [300.0, 2.0186e-14, 9.5831e+07, 3.9376e+06, 5.8219e+08],
+    [325.0, 1.2090e-14, 4.4185e+07, 1.6282e+06, 3.7274e+08],
+    [350.0, 7.4394e-15, 2.0669e+07, 6.8415e+05, 2.4094e+08],
+    [375.0, 4.6736e-15, 9.7744e+06, 2.9099e+05, 1.5686e+08],
+    [400.0, 2.9843e-15, 4.6635e+06, 1.2500e+05, 1.0269e+08],
+    [425.0, 1.9307e-15, 2.2417e+06, 5.4151e+04, 6.7541e+07],
+    [450.0, 1.2631e-15, 1.0850e+06, 2.3642e+04, 4.4607e+07],
+    [475.0, 8.3453e-16, 5.2851e+05, 1.0397e+04, 2.9572e+07],
+    [500.0, 5.5630e-16, 2.5888e+05, 4.6014e+03, 1.9669e+07],
+];
+
+/// The NRLMSIS 2.1 table (see the module doc): a CSV with a `#` comment line,
+/// a header, then altitude_km, rho_g_cm3, n2_cm3, o2_cm3, o_cm3, temperature_k.
+const NRLMSIS21_CSV: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/nrlmsis21.csv"));
+
+/// Number densities of the three species that matter for the aurora, cm^-3.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Composition {
+    pub n2: f64,
+    pub o2: f64,
+    pub o: f64,
+}
+
+impl Composition {
+    /// Total of the three, cm^-3 (Ar, He, H are below 1 % in 80-500 km).
+    pub fn total(&self) -> f64 {
+        self.n2 + self.o2 + self.o
+    }
+}
+
+/// The tabulated atmosphere with per-segment scale heights and columns.
+#[derive(Clone, Debug)]
+pub struct Atmosphere {
+    h: Vec<f64>,
+    /// ln rho, ln n(N2), ln n(O2), ln n(O) at the nodes.
+    ln: Vec<[f64; 4]>,
+    /// Density scale height of segment i (between nodes i and i+1), km.
+    scale: Vec<f64>,
+    /// Column mass above node i, g cm^-2.
+    col: Vec<f64>,
+    /// rho at node i, g cm^-3: `exp(ln[i][0])`, made once (the column mass
+    /// takes it at every call).
+    rho_node: Vec<f64>,
+    /// `1 / dh` when the nodes are evenly spaced (`h[i] = h[0] + i dh`
+    /// exactly, NRLMSIS's 0.5 km), for [`Self::segment`]'s first guess; 0
+    /// otherwise.
+    inv_dh: f64,
+}
+
+impl Default for Atmosphere {
+    fn default() -> Self {
+        Self::nrlmsis21()
+    }
+}
+
+impl Atmosphere {
+    /// The table `[atmosphere] model` names.
+    pub fn of_model(model: crate::scene::AtmosphereModel) -> Self {
+        match model {
+            crate::scene::AtmosphereModel::Nrlmsis21 => Self::nrlmsis21(),
+            crate::scene::AtmosphereModel::Us1976 => Self::us1976(),
+        }
+    }
+
+    /// The approximate U.S. Standard Atmosphere 1976 table of this module.
+    pub fn us1976() -> Self {
+        Self::from_rows(&USSA1976)
+    }
+
+    /// NRLMSIS 2.1 for an auroral-zone winter night (module doc), parsed once.
+    pub fn nrlmsis21() -> Self {
+        static TABLE: std::sync::OnceLock<Atmosphere> = std::sync::OnceLock::new();
+        TABLE.get_or_init(|| Self::from_rows(&parse_csv(NRLMSIS21_CSV))).clone()
+    }
+
+    /// Lowest and highest tabulated altitude, km (outside, the end segments
+    /// are extrapolated).
+    pub fn bottom_km(&self) -> f64 {
+        self.h[0]
+    }
+    pub fn top_km(&self) -> f64 {
+        self.h[self.h.len() - 1]
+    }
+
+    /// A table of rows [altitude km, rho g cm^-3, n(N2), n(O2), n(O) cm^-3],
+    /// ascending altitude, every value positive.
+    fn from_rows(rows: &[[f64; 5]]) -> Self {
+        let n = rows.len();
+        let h: Vec<f64> = rows.iter().map(|r| r[0]).collect();
+        let ln: Vec<[f64; 4]> = rows.iter().map(|r| [r[1].ln(), r[2].ln(), r[3].ln(), r[4].ln()]).collect();
+        let scale: Vec<f64> = (0..n - 1).map(|i| (h[i + 1] - h[i]) / (ln[i][0] - ln[i + 1][0])).collect();
+        let mut col = vec![0.0; n];
+        // Above the last node the last segment's exponential continues to
+        // infinity: integral = rho * H.
+        col[n - 1] = rows[n - 1][1] * scale[n - 2] * CM_PER_KM;
+        for i in (0..n - 1).rev() {
+            // Exact integral of rho_i exp(-(h - h_i)/H_i) over the segment.
+            col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
+        }
+        let rho_node = ln.iter().map(|l| l[0].exp()).collect();
+        let dh = (h[n - 1] - h[0]) / (n - 1) as f64;
+        let even = dh > 0.0 && h.iter().enumerate().all(|(i, &x)| x == h[0] + i as f64 * dh);
+        let inv_dh = if even { 1.0 / dh } else { 0.0 };
+        Self { h, ln, scale, col, rho_node, inv_dh }
+    }
+
+    /// Index of the segment holding `h` (end segments extrapolate).
+    #[inline]
+    fn segment(&self, h: f64) -> usize {
+        let n = self.h.len();
+        if self.inv_dh == 0.0 {
+            let i = self.h.partition_point(|&x| x <= h);
+            return i.saturating_sub(1).min(n - 2);
+        }
+        // Evenly spaced nodes: the node below h by its offset (a float to
+        // integer cast saturates, NaN gives 0), then corrected to the last
+        // node at or below h (0 if none), as the search finds it.
+        let mut i = (((h - self.h[0]) * self.inv_dh) as usize).min(n - 1);
+        while i + 1 < n && self.h[i + 1] <= h {
+            i += 1;
+        }
+        while i > 0 && self.h[i] > h {
+            i -= 1;
+        }
+        i.min(n - 2)
+    }
+
+    /// Log-linear interpolation of column `k` of `ln`.
+    #[inline]
+    fn interp(&self, h: f64, k: usize) -> f64 {
+        self.interp_in(self.segment(h), h, k)
+    }
+
+    /// [`Self::interp`] in segment `i` (`self.segment(h)`).
+    #[inline]
+    fn interp_in(&self, i: usize, h: f64, k: usize) -> f64 {
+        let t = (h - self.h[i]) / (self.h[i + 1] - self.h[i]);
+        (self.ln[i][k] + t * (self.ln[i + 1][k] - self.ln[i][k])).exp()
+    }
+
+    /// Mass density at altitude `h` km, g cm^-3.
+    #[inline]
+    pub fn rho(&self, h: f64) -> f64 {
+        self.interp(h, 0)
+    }
+
+    /// N2, O2 and O number densities at `h` km, cm^-3.
+    pub fn composition(&self, h: f64) -> Composition {
+        Composition { n2: self.interp(h, 1), o2: self.interp(h, 2), o: self.interp(h, 3) }
+    }
+
+    /// Density scale height at `h`, km (constant within a table segment).
+    pub fn scale_height(&self, h: f64) -> f64 {
+        self.scale[self.segment(h)]
+    }
+
+    /// Vertical column mass above altitude `h`, g cm^-2: the exact integral of
+    /// the piecewise-exponential `rho` from `h` to infinity.
+    #[inline]
+    pub fn column_mass(&self, h: f64) -> f64 {
+        let i = self.segment(h);
+        let rho = self.interp_in(i, h, 0);
+        let h_i = self.scale[i];
+        if h >= self.h[self.h.len() - 1] {
+            return rho * h_i * CM_PER_KM;
+        }
+        // col(h) = col_{i+1} + H_i (rho(h) - rho_{i+1}); below the table the
+        // first segment's exponential continues (the same formula).
+        self.col[i + 1] + h_i * (rho - self.rho_node[i + 1]) * CM_PER_KM
+    }
+
+    /// Column mass along a straight path of length `len_km` from altitude
+    /// `h0` to `h1` (plane-parallel atmosphere), g cm^-2:
+    /// `int rho ds = (len / |h1 - h0|) |C(h1) - C(h0)|`; a (nearly) horizontal
+    /// path uses `rho(mid) len` instead, where the difference would cancel.
+    #[inline]
+    pub fn slant_column(&self, h0: f64, h1: f64, len_km: f64) -> f64 {
+        let dh = (h1 - h0).abs();
+        if dh < 1e-6 * len_km.max(1e-300) || dh < 1e-9 {
+            return self.rho(0.5 * (h0 + h1)) * len_km * CM_PER_KM;
+        }
+        (len_km / dh) * (self.column_mass(h0) - self.column_mass(h1)).abs()
+    }
+}
+
+/// Rows of the committed NRLMSIS CSV (five leading columns). The file is
+/// ours and fixed at compile time: a malformed row is a build defect, caught
+/// by the tests.
+fn parse_csv(text: &str) -> Vec<[f64; 5]> {
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("altitude") && !l.trim().is_empty())
+        .map(|l| {
+            let mut it = l.split(',').map(|x| x.trim().parse::<f64>().expect("data/nrlmsis21.csv: a number"));
+            std::array::from_fn(|_| it.next().expect("data/nrlmsis21.csv: 5 columns"))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sweep() -> impl Iterator<Item = f64> {
+        (0..=4200).map(|i| 80.0 + i as f64 * 0.1)
+    }
+
+    #[test]
+    fn segments_are_the_searched_ones() {
+        let a = Atmosphere::nrlmsis21();
+        assert!(a.inv_dh > 0.0, "NRLMSIS's nodes are evenly spaced");
+        let searched = |h: f64| a.h.partition_point(|&x| x <= h).saturating_sub(1).min(a.h.len() - 2);
+        let nodes = a.h.iter().flat_map(|&x| [x, x.next_down(), x.next_up()]);
+        let sweep = (0..=80_000).map(|i| 30.0 + i as f64 * 0.01);
+        let odd = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, -1e300, 1e300, 0.0, -0.0];
+        for h in nodes.chain(sweep).chain(odd) {
+            assert_eq!(a.segment(h), searched(h), "{h}");
+        }
+    }
+
+    #[test]
+    fn column_mass_is_its_formula_bit_for_bit() {
+        // The node densities made once give the bits of exp at each call.
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            for h in (0..=7000).map(|i| 40.0 + i as f64 * 0.1) {
+                let i = a.segment(h);
+                let want = if h >= a.top_km() {
+                    a.rho(h) * a.scale[i] * CM_PER_KM
+                } else {
+                    a.col[i + 1] + a.scale[i] * (a.rho(h) - a.ln[i + 1][0].exp()) * CM_PER_KM
+                };
+                assert_eq!(a.column_mass(h).to_bits(), want.to_bits(), "{h}");
+            }
+        }
+    }
+
+    #[test]
+    fn densities_and_column_decrease_monotonically() {
+        let a = Atmosphere::us1976();
+        let mut prev: Option<(f64, Composition, f64)> = None;
+        for h in sweep() {
+            let (r, c, col) = (a.rho(h), a.composition(h), a.column_mass(h));
+            assert!(r > 0.0 && col > 0.0 && c.n2 > 0.0 && c.o > 0.0);
+            if let Some((r0, c0, col0)) = prev {
+                assert!(r < r0 && c.n2 < c0.n2 && c.o2 < c0.o2 && col < col0, "not decreasing at {h} km");
+            }
+            prev = Some((r, c, col));
+        }
+    }
+
+    #[test]
+    fn interpolation_reproduces_the_table_nodes() {
+        let a = Atmosphere::us1976();
+        for r in &USSA1976 {
+            let c = a.composition(r[0]);
+            // exp(ln x) round trip: a few ulps of relative error.
+            for (got, want) in [(a.rho(r[0]), r[1]), (c.n2, r[2]), (c.o2, r[3]), (c.o, r[4])] {
+                assert!((got / want - 1.0).abs() < 1e-12, "{} km: {got} vs {want}", r[0]);
+            }
+        }
+    }
+
+    #[test]
+    fn column_at_100_km_is_rho_times_a_6_to_7_km_scale_height() {
+        let a = Atmosphere::us1976();
+        let h_eff = a.column_mass(100.0) / (a.rho(100.0) * CM_PER_KM);
+        assert!((6.0..7.0).contains(&h_eff), "effective scale height {h_eff} km");
+    }
+
+    #[test]
+    fn column_matches_a_fine_integration_of_the_standard() {
+        // Oracle: trapezoid integration of the `ussa1976` package's density on
+        // a 50 m grid to 1000 km (the model itself, not this table). The table
+        // has 5-25 km nodes where the scale height changes by up to 40 % per
+        // segment (110-130 km, where temperature climbs fast); log-linear
+        // interpolation measured 1.1 % off at 110 km, < 0.3 % elsewhere: allow 2 %.
+        let a = Atmosphere::us1976();
+        for (h, want) in [(100.0, 3.4023e-4), (110.0, 7.5828e-5), (150.0, 5.0198e-6), (200.0, 9.6884e-7), (300.0, 1.0560e-7)] {
+            let got = a.column_mass(h);
+            assert!((got / want - 1.0).abs() < 0.02, "{h} km: {got:e} vs {want:e}");
+        }
+    }
+
+    #[test]
+    fn column_derivative_is_minus_rho() {
+        let a = Atmosphere::us1976();
+        for h in [82.0, 97.3, 113.0, 161.7, 250.0, 333.0, 480.0] {
+            let d = 1e-4;
+            let deriv = -(a.column_mass(h + d) - a.column_mass(h - d)) / (2.0 * d * CM_PER_KM);
+            // Central difference of an exponential: relative error (d/H)^2/6 < 1e-9,
+            // plus cancellation of ~1e-16 C / (rho d) ~ 1e-7.
+            assert!((deriv / a.rho(h) - 1.0).abs() < 1e-6, "{h}: {deriv:e} vs {:e}", a.rho(h));
+        }
+        // Continuity of the column across nodes.
+        for r in &USSA1976[1..USSA1976.len() - 1] {
+            let (lo, hi) = (a.column_mass(r[0] - 1e-9), a.column_mass(r[0] + 1e-9));
+            assert!((lo / hi - 1.0).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn slant_column_scales_with_path_length() {
+        let a = Atmosphere::us1976();
+        let vertical = a.slant_column(120.0, 110.0, 10.0);
+        let expect = a.column_mass(110.0) - a.column_mass(120.0);
+        assert!((vertical / expect - 1.0).abs() < 1e-12);
+        // 60 degrees from the vertical: path twice as long, same heights.
+        let slant = a.slant_column(120.0, 110.0, 20.0);
+        assert!((slant / (2.0 * expect) - 1.0).abs() < 1e-12);
+        // Horizontal: rho * length.
+        let flat = a.slant_column(110.0, 110.0, 3.0);
+        assert!((flat / (a.rho(110.0) * 3.0 * CM_PER_KM) - 1.0).abs() < 1e-12);
+        // Nearly horizontal agrees with horizontal to first order in dh / H.
+        let near = a.slant_column(110.0, 110.0 + 1e-5, 3.0);
+        assert!((near / flat - 1.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn nrlmsis_table_spans_50_to_700_km_and_decreases() {
+        let a = Atmosphere::nrlmsis21();
+        assert_eq!((a.bottom_km(), a.top_km()), (50.0, 700.0));
+        assert_eq!(parse_csv(NRLMSIS21_CSV).len(), 1301);
+        let mut prev = f64::INFINITY;
+        for i in 0..=6500 {
+            let h = 50.0 + i as f64 * 0.1;
+            let (r, col) = (a.rho(h), a.column_mass(h));
+            assert!(r > 0.0 && col < prev, "{h} km");
+            prev = col;
+        }
+    }
+
+    #[test]
+    fn nrlmsis_column_is_hydrostatic_rho_times_kt_over_mg() {
+        // Hydrostatic equilibrium: column mass = p / g = rho k T / (m g),
+        // with m the mean molecular mass. Oracle from the table's own
+        // temperature column; m = rho / (n_N2 + n_O2 + n_O) ignores Ar and He
+        // (about 1 % of the number density from 50 to 120 km, up to a few %
+        // near 300 km) and g is the point value at h, not the column's mean
+        // (g falls 3 % per 100 km): allow 4 %.
+        let a = Atmosphere::nrlmsis21();
+        let rows: Vec<Vec<f64>> = NRLMSIS21_CSV
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.starts_with("altitude"))
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        const K_B: f64 = 1.380649e-16; // erg/K
+        for h in [60.0, 80.0, 100.0, 110.0, 130.0, 200.0, 300.0] {
+            let r = rows.iter().find(|r| r[0] == h).unwrap();
+            let m = r[1] / (r[2] + r[3] + r[4]);
+            let g = 980.665 * (6371.0 / (6371.0 + h)).powi(2);
+            let want = r[1] * K_B * r[5] / (m * g);
+            let got = a.column_mass(h);
+            assert!((got / want - 1.0).abs() < 0.04, "{h} km: {got:e} vs {want:e}");
+        }
+    }
+
+    #[test]
+    fn n2_half_quenching_density_for_630_lies_near_260_km() {
+        // k [N2] = 1 / tau with k = 3e-11 cm^3/s, tau = 110 s: [N2] = 3.03e8.
+        let a = Atmosphere::us1976();
+        let h = (0..4200).map(|i| 80.0 + i as f64 * 0.1).find(|&h| a.composition(h).n2 < 1.0 / (110.0 * 3e-11)).unwrap();
+        assert!((250.0..275.0).contains(&h), "{h}");
+    }
+
+    // ---- Oracles added for the mutation report
+    // (docs/mutants/REPORT.md).
+
+    #[test]
+    fn scale_height_is_minus_the_inverse_log_slope_of_density() {
+        // H = -1 / (d ln rho / dh): inside a segment ln rho is linear, so a
+        // central difference is exact to rounding (~1e-16 / (d/H) = 1e-10).
+        // Points off both tables' nodes (0.5 km grid, US 1976 nodes).
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            for h in [52.3, 82.2, 97.3, 113.1, 161.7, 250.2, 333.3, 480.1, 690.7] {
+                let d = 1e-4;
+                let slope = (a.rho(h + d).ln() - a.rho(h - d).ln()) / (2.0 * d);
+                let hs = a.scale_height(h);
+                assert!((hs * -slope - 1.0).abs() < 1e-8, "{h} km: H {hs} vs {}", -1.0 / slope);
+                assert!((4.0..120.0).contains(&hs), "{h} km: {hs}");
+            }
+        }
+    }
+
+    #[test]
+    fn column_continues_as_one_exponential_above_the_table_and_below_it() {
+        // Above the top node the last segment's exponential goes on: the
+        // column is rho H there, and -dC/dh = rho holds past both ends.
+        for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
+            let top = a.top_km();
+            for h in [top, top + 50.0] {
+                let want = a.rho(h) * a.scale_height(h) * CM_PER_KM;
+                assert!((a.column_mass(h) / want - 1.0).abs() < 1e-12, "{h} km");
+            }
+            let (lo, hi) = (a.column_mass(top - 1e-9), a.column_mass(top + 1e-9));
+            assert!((lo / hi - 1.0).abs() < 1e-9);
+            for h in [a.bottom_km() - 10.0, top + 20.0] {
+                let d = 1e-4;
+                let deriv = -(a.column_mass(h + d) - a.column_mass(h - d)) / (2.0 * d * CM_PER_KM);
+                assert!((deriv / a.rho(h) - 1.0).abs() < 1e-6, "{h}: {deriv:e} vs {:e}", a.rho(h));
+            }
+        }
+        let a = Atmosphere::us1976();
+        assert_eq!((a.bottom_km(), a.top_km()), (80.0, 500.0));
+    }
+
+    #[test]
+    fn slant_column_is_symmetric_and_continuous_at_the_horizontal_switch() {
+        // The column along a path does not depend on its direction, and the
+        // switch to rho(mid) len for near-horizontal paths joins the general
+        // formula to first order in dh / H (dh = 1e-6 len here: 1e-7 of H).
+        let a = Atmosphere::nrlmsis21();
+        assert_eq!(a.slant_column(110.0, 130.0, 40.0), a.slant_column(130.0, 110.0, 40.0));
+        let len = 3.0;
+        let below = a.slant_column(110.0, 110.0 + 0.99e-6 * len, len);
+        let above = a.slant_column(110.0, 110.0 + 1.01e-6 * len, len);
+        assert!((below / above - 1.0).abs() < 1e-6, "{below:e} {above:e}");
+        // A short path of dh 1e-10 km (below the absolute switch, 1e-9 km):
+        // rho len, not the cancelling difference.
+        let tiny = a.slant_column(110.0, 110.0 + 1e-10, 2e-10);
+        assert!((tiny / (a.rho(110.0) * 2e-10 * CM_PER_KM) - 1.0).abs() < 1e-9, "{tiny:e}");
+    }
+
+    #[test]
+    fn a_grazing_path_keeps_full_precision() {
+        // dh = 1e-8 km over 100 km: the difference of columns would cancel
+        // to ulp(C) / (rho dh) ~ 1e-7 relative; rho(mid) len is exact to
+        // (dh / H)^2 ~ 1e-18 (the density is exponential across dh).
+        let a = Atmosphere::nrlmsis21();
+        let got = a.slant_column(110.0, 110.0 + 1e-8, 100.0);
+        let want = a.rho(110.0 + 5e-9) * 100.0 * CM_PER_KM;
+        assert!((got / want - 1.0).abs() < 1e-12, "{got:e} vs {want:e}");
+    }
+
+    #[test]
+    fn a_steep_one_metre_path_is_not_treated_as_horizontal() {
+        // The switch to rho(mid) len is for nearly horizontal paths,
+        // dh < 1e-6 len. A 1 m path rising 0.99 m inside one table segment
+        // (100.0-100.5 km, H = 5.9 km) must carry the exact column of the
+        // exponential, rho(h0) H (1 - exp(-dh/H)) len / dh. rho(mid) len
+        // misses the curvature by (dh / 2H)^2 / 6 = 1.2e-9 relative; the
+        // general formula's cancellation costs about eps H / dh (a few 1e-12),
+        // so 1e-10 separates the two by an order of magnitude each way.
+        let a = Atmosphere::nrlmsis21();
+        let (h0, len) = (100.1, 1e-3);
+        let h1 = h0 + 0.99e-3;
+        let dh = h1 - h0;
+        let hs = a.scale_height(h0);
+        assert_eq!(hs, a.scale_height(h1), "one segment");
+        let want = a.rho(h0) * hs * -(-dh / hs).exp_m1() * (len / dh) * CM_PER_KM;
+        let got = a.slant_column(h0, h1, len);
+        assert!((got / want - 1.0).abs() < 1e-10, "{got:e} vs {want:e}: {:e}", got / want - 1.0);
+        // Downward the same.
+        assert!((a.slant_column(h1, h0, len) / want - 1.0).abs() < 1e-10);
+    }
+}

@@ -1,0 +1,8 @@
+//! Where a precipitating electron's energy goes with altitude: Fang et al.
+//! (2010)'s parameterisation ([`fang`]), its low-energy shape calibrated to
+//! NCAR GLOW ([`glow_calibration`]), and the continuous-slowing-down
+//! alternative ([`csda`]).
+
+pub mod csda;
+pub mod fang;
+pub mod glow_calibration;

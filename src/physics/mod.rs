@@ -1,0 +1,11 @@
+//! The model, as functions of altitude, energy and ionization rate: the
+//! neutral atmosphere, the geomagnetic field, the electrons' energy
+//! deposition, the chemistry that turns ionization into line emission, the
+//! emission lines themselves, and the air's extinction of their light.
+
+pub mod air_extinction;
+pub mod atmosphere;
+pub mod chemistry;
+pub mod deposition;
+pub mod emission;
+pub mod geomagnetic_field;

@@ -1,0 +1,669 @@
+//! Electron beams: precipitating electrons traced down the geomagnetic field
+//! with random deflections (Baranoski, Rokne, Shirley, Trondsen & Bastos,
+//! "Simulating the aurora borealis", Pacific Graphics 2000), losing energy to
+//! the atmosphere, and leaving a photon at every deflection point.
+//!
+//! This stage starts every beam of every curtain and sums where their power
+//! went ([`trace_range`]). One beam's walk and the deposition models are
+//! [`walk`]'s; the start points are `crate::pipeline::beams::starts`'s, the field
+//! `crate::physics::geomagnetic_field`'s, and the photons and step deposits it returns are the
+//! plain records of `crate::pipeline::deposit`.
+//!
+//! Photons carry physical power (see [`crate::pipeline::deposit::Photon`]), not a
+//! colour-map colour.
+//!
+//! Normalisation: curtain c with peak energy flux `F` (mW m^-2 = erg cm^-2
+//! s^-1) and footprint `f` (peak 1) receives the electron power
+//! `P_c = F * int f dA` over the cells above threshold. Its `N_c` beams (its
+//! `beam_weight` share of `beams.count`) each carry `P_c / N_c`. A beam's
+//! energy E is drawn from the *energy-flux* distribution of a Maxwellian:
+//! the number flux is `phi(E) ~ E exp(-E/E0)` (Gamma(2, E0) in E), so
+//! the energy flux is `E phi(E) ~ Gamma(3, E0)`; since every beam carries
+//! the same power, energies must follow the energy flux, else hard electrons
+//! would be under-weighted by `E / <E>`. A share `soft_fraction` of the energy
+//! flux is carried by a second, soft Maxwellian (E0 = `soft_energy_kev`, some
+//! 0.1 keV): the low-energy electrons of real arc spectra that stop above
+//! 200 km, where O(1D) escapes quenching and the red tops shine. Each beam is
+//! soft with probability `soft_fraction` (equal-power beams: the mixture by
+//! energy flux).
+
+pub mod starts;
+pub mod walk;
+
+use crate::geometry::earth::Earth;
+use crate::physics::atmosphere::Atmosphere;
+use crate::physics::deposition::fang::{MonoDeposition, SpectrumDeposition};
+use crate::physics::emission::line_colour::ColourTable;
+use crate::physics::emission::line_table::LineTable;
+use crate::physics::geomagnetic_field::MagneticField;
+use crate::pipeline::beams::starts::{StartMap, UnitPoints};
+use crate::pipeline::deposit::Photon;
+use crate::pipeline::deposit::StepDeposit;
+use crate::pipeline::footprint::Footprint;
+use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene};
+use crate::util::progress::Progress;
+use crate::util::rng;
+use glam::DVec3;
+use noise::Perlin;
+use rand::Rng;
+use rayon::prelude::*;
+use std::ops::Range;
+use walk::{trace_beam_into, BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
+
+/// keV per joule.
+pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
+
+/// Draws an energy from Gamma(3, e0), the energy-flux distribution of a
+/// Maxwellian of characteristic energy e0: the sum of three exponentials.
+pub fn sample_gamma3(e0: f64, r: &mut impl Rng) -> f64 {
+    // 1 - U lies in (0, 1], so the logarithm is finite.
+    let p = (1.0 - r.random::<f64>()) * (1.0 - r.random::<f64>()) * (1.0 - r.random::<f64>());
+    -e0 * p.ln()
+}
+
+/// Splits `count` beams between curtains in proportion to their weights
+/// (largest remainder, so the total is exactly `count`; ties go to the
+/// earlier curtain).
+pub fn apportion(count: usize, weights: &[f64]) -> Vec<usize> {
+    let total: f64 = weights.iter().map(|w| w.max(0.0)).sum();
+    if total <= 0.0 || weights.is_empty() {
+        return vec![0; weights.len()];
+    }
+    let exact: Vec<f64> = weights.iter().map(|w| count as f64 * w.max(0.0) / total).collect();
+    let mut n: Vec<usize> = exact.iter().map(|x| x.floor() as usize).collect();
+    let mut left = count - n.iter().sum::<usize>();
+    let mut order: Vec<usize> = (0..weights.len()).collect();
+    order.sort_by(|&a, &b| (exact[b] - n[b] as f64).total_cmp(&(exact[a] - n[a] as f64)).then(a.cmp(&b)));
+    for &i in order.iter().cycle() {
+        if left == 0 {
+            break;
+        }
+        if weights[i] > 0.0 {
+            n[i] += 1;
+            left -= 1;
+        }
+    }
+    n
+}
+
+/// A beam stage failure.
+#[derive(Debug, thiserror::Error)]
+pub enum BeamError {
+    #[error("curtain[{curtain}]: no footprint cell is above footprint.threshold = {threshold} after the fluid simulation (largest cell: {peak}), so it cannot emit beams: the band was advected out of its box or thinned below the threshold; lower footprint.threshold, footprint.velocity_amplitude or footprint.steps, or widen the curtain")]
+    EmptyFootprint { curtain: usize, threshold: f64, peak: f32 },
+}
+
+impl BeamError {
+    /// Always the user's input: the scene's parameters (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
+/// Where one curtain's electron power went, W. `electron = deposited +
+/// backscattered + above_top + undeposited` (to rounding).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CurtainPower {
+    /// Energy flux times footprint area above threshold.
+    pub electron_power_w: f64,
+    /// Deposited along the beams (the photons' energy).
+    pub deposited_power_w: f64,
+    /// Backscattered according to the deposition model (Fang: 1 minus the
+    /// fit's total deposition; 0 for CSDA).
+    pub backscattered_power_w: f64,
+    /// Deposited by the model above the beams' start altitude, outside the
+    /// bake (soft electrons).
+    pub above_top_power_w: f64,
+    /// Still carried by beams when they stopped: CSDA beams that left the
+    /// footprint or ran out of steps, Fang beams below the atmosphere's
+    /// bottom or at the safety cap.
+    pub undeposited_power_w: f64,
+}
+
+/// Counts from the beam stage.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct BeamStats {
+    pub beams: usize,
+    pub photons: usize,
+    pub ended_left_footprint: usize,
+    pub ended_energy_spent: usize,
+    pub ended_max_steps: usize,
+    pub ended_bottom: usize,
+    /// Electron power into the atmosphere over all curtains, W.
+    pub electron_power_w: f64,
+    /// Of which deposited along the beams, W (the rest: see [`CurtainPower`]).
+    pub deposited_power_w: f64,
+    pub backscattered_power_w: f64,
+    pub above_top_power_w: f64,
+    pub undeposited_power_w: f64,
+    /// The same per curtain, in scene order.
+    pub curtains: Vec<CurtainPower>,
+}
+
+/// What tracing needs of the scene, as plain data (no `Scene`): the
+/// curtains, the beam parameters, the seed, the footprint threshold, the
+/// animation time (pulsation, ray drift), the colour noise and the kernel
+/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline::bake::plan`
+/// keeps owned copies.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceParams<'a> {
+    pub seed: u64,
+    pub curtains: &'a [Curtain],
+    pub beams: &'a BeamParams,
+    /// `footprint.threshold`.
+    pub threshold: f64,
+    pub animation: &'a AnimationParams,
+    /// `colour.noise_km` and `colour.noise_freq`.
+    pub colour_noise_km: f64,
+    pub colour_noise_freq: f64,
+    /// `photons.kernel`.
+    pub kernel: KernelShape,
+    /// The lines one at a time (physical colour with pulsation or
+    /// `grid.lines`; `None` otherwise): each line follows the pulsation
+    /// through its lifetime, and the lines of `line_outputs` (indices in
+    /// `crate::physics::emission::line_colour::LINES`) leave per-line photon powers.
+    pub lines: Option<&'a LineTable>,
+    pub line_outputs: &'a [usize],
+    /// The red trail's sample this trace makes (`crate::pipeline::red_trail`, with
+    /// `lines`); `None` keeps every line at the animation's time.
+    pub trail: Option<crate::pipeline::red_trail::TrailSample>,
+    /// `[earth]`: the beams walk in its curved frame, their photons mapped
+    /// onto it (`crate::geometry::earth`).
+    pub earth: Earth,
+    /// `earth.magnetic_pole`: the dipole's field at each beam's start
+    /// instead of `beams`' angles.
+    pub magnetic_pole: Option<[f64; 2]>,
+}
+
+impl<'a> TraceParams<'a> {
+    pub fn of(scene: &'a Scene) -> Self {
+        TraceParams {
+            seed: scene.seed,
+            curtains: &scene.curtains,
+            beams: &scene.beams,
+            threshold: scene.footprint.threshold,
+            animation: &scene.animation,
+            colour_noise_km: scene.colour.noise_km,
+            colour_noise_freq: scene.colour.noise_freq,
+            kernel: scene.photons.kernel,
+            lines: None,
+            line_outputs: &[],
+            trail: None,
+            earth: Earth::new(scene.earth.radius_km),
+            magnetic_pole: scene.earth.magnetic_pole,
+        }
+    }
+}
+
+/// Traces every beam of every curtain. Beams run in parallel; each has its
+/// own random stream seeded from (scene seed, curtain seed, beam index), and
+/// photons are concatenated in (curtain, beam) order, so the result does not
+/// depend on the thread count.
+pub fn trace_all(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    progress: &dyn Progress,
+) -> Result<(Vec<Photon>, BeamStats), BeamError> {
+    trace_all_from(scene, footprints, atmosphere, colour, 0, progress)
+}
+
+/// [`trace_all`] with beam `i` of a curtain drawing the random stream of
+/// index `first_beam + i`: beams from disjoint index ranges are independent
+/// samples of the same scene (the pilot of `crate::pipeline::bake::pilot` uses two).
+pub fn trace_all_from(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    first_beam: u64,
+    progress: &dyn Progress,
+) -> Result<(Vec<Photon>, BeamStats), BeamError> {
+    let n = scene.beams.count;
+    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, first_beam, 0..n, false, progress)?;
+    Ok((t.photons, t.stats))
+}
+
+/// The beams' deposits, per curtain in scene order, exactly as [`trace_all`]
+/// makes them (same beams, same random streams): what `aurora profile` bins.
+pub fn trace_deposits(
+    scene: &Scene,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    progress: &dyn Progress,
+) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
+    let n = scene.beams.count;
+    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, 0, 0..n, true, progress)?;
+    Ok((t.deposits, t.stats))
+}
+
+/// What [`trace_range`] returns.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Traced {
+    pub photons: Vec<Photon>,
+    pub stats: BeamStats,
+    /// Per curtain (empty vectors unless recorded).
+    pub deposits: Vec<Vec<StepDeposit>>,
+    /// Per photon, the powers of `TraceParams::line_outputs` in that order
+    /// (`line_outputs.len()` values a photon; empty without outputs).
+    pub line_power: Vec<f32>,
+}
+
+/// How a beam ended and where its power went, kept until the curtain's
+/// beams are tallied.
+struct BeamOut {
+    end: EndReason,
+    /// keV/s: deposited, backscattered, above the top, undeposited.
+    power: [f64; 4],
+}
+
+/// Consecutive beams of a curtain traced on one thread: their photons,
+/// line powers and deposits (if recorded) one beam after the other, and
+/// each beam's [`BeamOut`] in order.
+#[derive(Default)]
+struct ChunkOut {
+    bufs: BeamBuffers,
+    beams: Vec<BeamOut>,
+}
+
+/// Beams per [`ChunkOut`]: fixed, so which beams share a chunk does not
+/// depend on the thread count (the output never does: chunks are
+/// concatenated in order); small enough to balance the threads, large
+/// enough that a chunk's vectors grow a few times rather than each beam's.
+const CHUNK_BEAMS: usize = 64;
+
+/// Traces beams `range` of a bake of `count` beams. The bake's beams are
+/// numbered curtain by curtain (curtain 0's share of `count` by
+/// [`apportion`], then curtain 1's, ...); local beam `i` of curtain `c`
+/// draws the random stream `stream_offset + i` (and, stratified, the R2
+/// point of that index) and carries `1 / n_c` of its curtain's power. So a
+/// beam is the same whatever range it is traced in: tracing `[0, K)` and
+/// `[K, N)` and concatenating gives the photons of `[0, N)` byte for byte.
+/// A range's `electron_power_w` is its beams' share of the curtains' power
+/// (all of it for `0..count`).
+#[allow(clippy::too_many_arguments)]
+pub fn trace_range(
+    params: &TraceParams,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    count: usize,
+    stream_offset: u64,
+    range: Range<usize>,
+    record_deposits: bool,
+    progress: &dyn Progress,
+) -> Result<Traced, BeamError> {
+    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
+    let counts = apportion(count, &weights);
+    let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
+    let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
+    let mut stats = BeamStats::default();
+    let mut all_deposits = vec![Vec::new(); params.curtains.len()];
+    stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
+    let range = range.start.min(count)..range.end.min(count);
+    progress.start("beams", range.len() as u64);
+    let mut curtain_first = 0usize;
+    let mut traced = Vec::new();
+    for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
+        let n = counts[ci];
+        let local = local_beams(&range, curtain_first, n);
+        curtain_first += n;
+        if local.is_empty() {
+            continue;
+        }
+        let (power_w, chunks) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
+        // The range's share of the curtain's power (all of it for a whole bake).
+        stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
+        stats.beams += local.len();
+        traced.push((ci, chunks));
+    }
+    // Every curtain's photons into one allocation of the final size.
+    let chunks = || traced.iter().flat_map(|(_, c)| c);
+    let mut photons = Vec::with_capacity(chunks().map(|c| c.bufs.photons.len()).sum());
+    let mut line_power = Vec::with_capacity(chunks().map(|c| c.bufs.line_power.len()).sum());
+    for (ci, chunks) in traced {
+        tally(&mut stats, ci, chunks, &mut photons, &mut line_power, &mut all_deposits[ci]);
+    }
+    sum_curtains(&mut stats);
+    stats.photons = photons.len();
+    progress.finish();
+    Ok(Traced { photons, stats, deposits: all_deposits, line_power })
+}
+
+/// The beams of `range` (bake indices) that belong to the curtain whose `n`
+/// beams are `[curtain_first, curtain_first + n)` of the bake, as local
+/// indices (empty if none).
+fn local_beams(range: &Range<usize>, curtain_first: usize, n: usize) -> Range<usize> {
+    let lo = range.start.saturating_sub(curtain_first).min(n);
+    let hi = range.end.saturating_sub(curtain_first).min(n);
+    lo..hi.max(lo)
+}
+
+/// The electron power a curtain receives, W: its peak energy flux times its
+/// footprint's integral above `threshold` (module doc).
+fn curtain_power_w(curtain: &Curtain, fp: &Footprint, threshold: f64) -> f64 {
+    // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
+    curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6
+}
+
+/// Adds curtain `ci`'s beams to the stage's counts and power (W), and
+/// appends their photons and deposits in beam order.
+fn tally(
+    stats: &mut BeamStats,
+    ci: usize,
+    chunks: Vec<ChunkOut>,
+    photons: &mut Vec<Photon>,
+    line_power: &mut Vec<f32>,
+    deposits: &mut Vec<StepDeposit>,
+) {
+    for c in chunks {
+        photons.extend_from_slice(&c.bufs.photons);
+        line_power.extend_from_slice(&c.bufs.line_power);
+        deposits.extend_from_slice(&c.bufs.deposits);
+        tally_beams(stats, ci, &c.beams);
+    }
+}
+
+/// Adds beams' ends and power (W) to curtain `ci`'s counts, in order.
+fn tally_beams(stats: &mut BeamStats, ci: usize, beams: &[BeamOut]) {
+    for b in beams {
+        match b.end {
+            EndReason::LeftFootprint => stats.ended_left_footprint += 1,
+            EndReason::EnergySpent => stats.ended_energy_spent += 1,
+            EndReason::MaxSteps => stats.ended_max_steps += 1,
+            EndReason::Bottom => stats.ended_bottom += 1,
+        }
+        let cp = &mut stats.curtains[ci];
+        cp.deposited_power_w += b.power[0] / KEV_PER_J;
+        cp.backscattered_power_w += b.power[1] / KEV_PER_J;
+        cp.above_top_power_w += b.power[2] / KEV_PER_J;
+        cp.undeposited_power_w += b.power[3] / KEV_PER_J;
+    }
+}
+
+/// The stage's totals: the sums over its curtains, in scene order.
+fn sum_curtains(stats: &mut BeamStats) {
+    for cp in &stats.curtains {
+        stats.electron_power_w += cp.electron_power_w;
+        stats.deposited_power_w += cp.deposited_power_w;
+        stats.backscattered_power_w += cp.backscattered_power_w;
+        stats.above_top_power_w += cp.above_top_power_w;
+        stats.undeposited_power_w += cp.undeposited_power_w;
+    }
+}
+
+/// What the curtains of one [`trace_range`] share.
+struct Tracer<'a> {
+    params: &'a TraceParams<'a>,
+    atmosphere: &'a Atmosphere,
+    colour: &'a ColourTable,
+    field: MagneticField,
+    stream_offset: u64,
+    record_deposits: bool,
+    progress: &'a dyn Progress,
+}
+
+impl Tracer<'_> {
+    /// Curtain `ci`'s local beams `local` (of its `n`), in parallel, in index
+    /// order (chunks of [`CHUNK_BEAMS`]), and the curtain's whole electron
+    /// power, W.
+    fn curtain(
+        &self,
+        ci: usize,
+        curtain: &Curtain,
+        fp: &Footprint,
+        n: usize,
+        local: Range<usize>,
+    ) -> Result<(f64, Vec<ChunkOut>), BeamError> {
+        let p = self.params;
+        // Beam i maps the same point of the unit square through every
+        // frame's footprint (crate::pipeline::motion: identity across frames).
+        let map = StartMap::new(fp, p.threshold);
+        if map.is_empty() {
+            let peak = fp.data.iter().cloned().fold(0.0f32, f32::max);
+            return Err(BeamError::EmptyFootprint { curtain: ci, threshold: p.threshold, peak });
+        };
+        let power_w = curtain_power_w(curtain, fp, p.threshold);
+        let starts = CurtainStarts::new(p, curtain, fp, map, power_w * KEV_PER_J / n as f64);
+        let spectrum = || SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+        // The chemistry's colours need the local ionization rate: the
+        // curtain spectrum's ionization per unit flux (whatever the
+        // deposition model: q is the mean over the spectrum's electrons).
+        let ionization = self.colour.needs_q().then(|| spectrum().ionization_profile(self.atmosphere));
+        let expected;
+        let model = match p.beams.deposition {
+            Deposition::Expected => {
+                expected = spectrum();
+                DepositModel::Expected(&expected)
+            }
+            Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
+            Deposition::Csda => DepositModel::Csda,
+        };
+        let ctx = BeamContext {
+            atmosphere: self.atmosphere,
+            model,
+            colour: self.colour,
+            field: self.field,
+            params: p.beams,
+            footprint: fp,
+            threshold: p.threshold,
+            record_path: false,
+            lines: p.lines,
+            line_outputs: p.line_outputs,
+            trail: p.lines.and(p.trail),
+            ionization: ionization.as_ref(),
+            earth: p.earth,
+        };
+        let chunks: Vec<Range<usize>> = local.clone().step_by(CHUNK_BEAMS).map(|a| a..(a + CHUNK_BEAMS).min(local.end)).collect();
+        let traces = chunks
+            .into_par_iter()
+            .map(|c| {
+                let mut out = ChunkOut { beams: Vec::with_capacity(c.len()), ..ChunkOut::default() };
+                for i in c {
+                    self.beam(&ctx, &starts, self.stream_offset + i as u64, &mut out);
+                }
+                out
+            })
+            .collect();
+        Ok((power_w, traces))
+    }
+
+    /// The beam of stream `index`: its start and its walk, on its own random
+    /// stream, appended to `out` (its deposits only while it is summed,
+    /// unless they are recorded).
+    fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64, out: &mut ChunkOut) {
+        let mut r = rng::rng(&[self.params.seed, starts.curtain.seed, rng::tag::BEAM, index]);
+        let start = starts.start(index, &mut r);
+        let bufs = std::mem::take(&mut out.bufs);
+        let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
+        let t = match self.params.magnetic_pole {
+            // The dipole's field at the beam's start: over a beam's path
+            // (some 50 km across the field at I = 78 deg, from 260 to 100 km)
+            // its direction turns by about 50 / R rad = 0.5 degrees.
+            Some(pole) => {
+                let field = MagneticField::dipole(&self.params.earth, pole, [start.position.x, start.position.y]);
+                trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs)
+            }
+            None => trace_beam_into(ctx, &start, &mut r, bufs),
+        };
+        self.progress.inc(1);
+        let mut bufs = BeamBuffers { photons: t.photons, line_power: t.line_power, deposits: t.deposits };
+        let deposited: f64 = bufs.deposits[first_deposit..].iter().map(|d| d.power_kev_s).sum();
+        if !self.record_deposits {
+            bufs.deposits.clear();
+        }
+        if self.params.kernel == KernelShape::Point {
+            // The point estimator: each step's power at its end.
+            bufs.photons[first_photon..].iter_mut().for_each(|p| *p = p.to_point());
+        }
+        out.bufs = bufs;
+        out.beams.push(BeamOut { power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s], end: t.end });
+    }
+}
+
+/// Where one curtain's beams start and what each carries: the start map and
+/// unit-square points (`crate::pipeline::beams::starts`), the noise on the start height (the
+/// rays) and on the colour altitude, and the power per beam, keV/s.
+struct CurtainStarts<'a> {
+    params: &'a TraceParams<'a>,
+    curtain: &'a Curtain,
+    footprint: &'a Footprint,
+    map: StartMap,
+    points: UnitPoints,
+    ray_shift_km: f64,
+    top_noise: Perlin,
+    colour_noise: Perlin,
+    power_kev_s: f64,
+    /// The curtain's peak energy flux, keV cm^-2 s^-1, over the footprint's
+    /// peak density: times the density at a start, the flux there.
+    flux_per_density: f64,
+}
+
+impl<'a> CurtainStarts<'a> {
+    fn new(params: &'a TraceParams<'a>, curtain: &'a Curtain, footprint: &'a Footprint, map: StartMap, power_kev_s: f64) -> Self {
+        let (seed, cs) = (params.seed, curtain.seed);
+        CurtainStarts {
+            params,
+            curtain,
+            footprint,
+            map,
+            points: UnitPoints::new(params.beams.starts, [seed, cs, rng::tag::BEAM_STARTS]),
+            ray_shift_km: crate::pipeline::motion::ray_shift_km(params.animation),
+            top_noise: rng::perlin(&[seed, cs, rng::tag::BEAM_TOP_NOISE]),
+            colour_noise: rng::perlin(&[seed, cs, rng::tag::COLOUR_NOISE]),
+            power_kev_s,
+            flux_per_density: {
+                let peak = footprint.data.iter().cloned().fold(0.0f32, f32::max) as f64;
+                if peak > 0.0 {
+                    curtain.energy_flux * crate::physics::deposition::fang::KEV_PER_ERG / peak
+                } else {
+                    0.0
+                }
+            },
+        }
+    }
+
+    /// The start of the beam of stream `index`, drawn from `r`: its point of
+    /// the unit square (the shifted R2 sequence, fixed by the index whatever
+    /// the count, or two random numbers) mapped through the footprint's
+    /// continuous start map, so the beam moves with its curtain from frame
+    /// to frame; then its energy.
+    fn start(&self, index: u64, r: &mut impl Rng) -> BeamStart {
+        let (p, b) = (self.params, self.params.beams);
+        let (xi1, xi2) = self.points.point(index, r);
+        let (u, v) = self.map.map(xi1, xi2);
+        let (x, y) = self.footprint.to_world(u, v);
+        // High-frequency noise on the start height along the curtain
+        // (the rays), running along it in time.
+        let ur = u - self.ray_shift_km;
+        let z = b.top_km + b.top_noise_km * rng::noise1(&self.top_noise, ur * b.top_noise_freq);
+        let colour_offset_km = p.colour_noise_km * rng::noise1(&self.colour_noise, ur * p.colour_noise_freq);
+        // The deposit follows the flux at once; with the lines at hand each
+        // line follows it through its upper state's lifetime (`wave`).
+        let pulsation = crate::pipeline::motion::pulsation(p.animation, p.seed, x, y);
+        let power_kev_s = self.power_kev_s * pulsation;
+        let flux_kev_cm2_s = self.flux_per_density * self.footprint.cell_value_world(x, y) * pulsation;
+        let wave = p.lines.and_then(|_| crate::pipeline::motion::pulsation_wave(p.animation, p.seed, x, y));
+        // Drawn in every model, so a beam's path is the same in all.
+        let c = self.curtain;
+        let e0 = if r.random::<f64>() < c.soft_fraction { c.soft_energy_kev } else { c.char_energy_kev };
+        BeamStart {
+            position: DVec3::new(x, y, z),
+            energy_kev: sample_gamma3(e0, r),
+            power_kev_s,
+            base_power_kev_s: self.power_kev_s,
+            wave,
+            colour_offset_km,
+            flux_kev_cm2_s,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A small scene: one short curtain, few beams.
+    fn small_scene(count: usize) -> Scene {
+        let mut s = crate::scene::presets::small_test_scene();
+        s.beams.count = count;
+        s
+    }
+
+    #[test]
+    fn stratified_beam_i_is_the_same_whatever_the_count_and_threads() {
+        // Beam i's start, energy and path depend on (seed, curtain, i) only:
+        // its photons are the same in a bake of N and of 2N beams (their
+        // power scales by N / 2N: each beam carries P / N), and the whole
+        // photon list is the same for 1 and 3 threads.
+        let s1 = small_scene(300);
+        let s2 = small_scene(600);
+        let fps = crate::pipeline::bake::plan::footprints(&s1);
+        let atm = Atmosphere::us1976();
+        let colour = crate::pipeline::bake::plan::colour_table(&s1, &atm);
+        let run = |s: &Scene, threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| trace_all(s, &fps, &atm, &colour, &crate::util::progress::NoProgress).unwrap().0)
+        };
+        let (a, b) = (run(&s1, 1), run(&s2, 3));
+        assert_eq!(a, run(&s1, 3));
+        // The first 300 beams of the 600 come first in the list.
+        assert!(b.len() > a.len());
+        for (p, q) in a.iter().zip(&b) {
+            assert_eq!((p.position, p.end), (q.position, q.end));
+            for k in 0..3 {
+                // P/N halves exactly in binary, up to the f32 rounding of
+                // the product.
+                assert!((p.power[k] - 2.0 * q.power[k]).abs() <= 2e-7 * p.power[k].abs(), "{p:?} {q:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn steps_are_segments_and_the_point_kernel_collapses_them() {
+        let mut s = small_scene(50);
+        let fps = crate::pipeline::bake::plan::footprints(&s);
+        let atm = Atmosphere::us1976();
+        let colour = crate::pipeline::bake::plan::colour_table(&s, &atm);
+        let (seg, _) = trace_all(&s, &fps, &atm, &colour, &crate::util::progress::NoProgress).unwrap();
+        assert!(seg.iter().filter(|p| !p.is_point()).count() > seg.len() / 2);
+        // Consecutive steps of a beam chain: one ends where the next starts
+        // (except across beams, and after a step that deposited nothing).
+        let chained = seg.windows(2).filter(|w| w[0].end == w[1].position).count();
+        assert!(chained as f64 > 0.9 * seg.len() as f64, "{chained} of {}", seg.len());
+        s.photons.kernel = KernelShape::Point;
+        let (pts, _) = trace_all(&s, &fps, &atm, &colour, &crate::util::progress::NoProgress).unwrap();
+        assert_eq!(pts.len(), seg.len());
+        for (p, q) in pts.iter().zip(&seg) {
+            assert!(p.is_point() && p.position == q.end && p.power == q.power);
+        }
+    }
+
+    #[test]
+    fn gamma3_has_the_right_mean_and_variance() {
+        // Gamma(3, E0): mean 3 E0, variance 3 E0^2. Sample mean of N = 1e5 has
+        // sigma = sqrt(3) E0 / sqrt(N); allow 5 sigma.
+        let mut r = rng::rng(&[5]);
+        let n = 100_000;
+        let xs: Vec<f64> = (0..n).map(|_| sample_gamma3(2.0, &mut r)).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        assert!((mean - 6.0).abs() < 5.0 * 3f64.sqrt() * 2.0 / (n as f64).sqrt(), "{mean}");
+        // Sample variance: relative sigma sqrt((kurtosis - 1) / N) with
+        // kurtosis 3 + 6/3 = 5 for Gamma(3): 0.0063; 5 sigma = 3.2 %.
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!((var / 12.0 - 1.0).abs() < 0.032, "{var}");
+    }
+
+    #[test]
+    fn apportion_is_exact_and_proportional() {
+        assert_eq!(apportion(10, &[1.0, 1.0, 1.0]), vec![4, 3, 3]);
+        assert_eq!(apportion(7, &[0.0, 2.0, 1.0]).iter().sum::<usize>(), 7);
+        assert_eq!(apportion(7, &[0.0, 2.0, 1.0])[0], 0);
+        assert_eq!(apportion(100, &[3.0, 1.0]), vec![75, 25]);
+    }
+}

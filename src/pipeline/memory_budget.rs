@@ -1,0 +1,474 @@
+//! The bake's memory, known before it is spent.
+//!
+//! [`estimate`] bounds what a bake of a validated scene allocates at its peak,
+//! from the scene alone (before any footprint is simulated or beam traced), and
+//! [`check`] compares it with what this process may use
+//! ([`crate::util::memory::available`]), refusing with the key that drives the
+//! estimate, the memory needed and the memory available. Every term is an
+//! upper bound, so a scene that passes does not run out of memory through the
+//! bake's own allocations; scenes near the limit may be refused that would
+//! have fitted (the error says which key to lower).
+//!
+//! The terms (bytes):
+//! - **photons**: at most `ceil(1 / beams.dt)` photons per beam (one per
+//!   step), plus, for Fang's depositions, one per [`ABOVE_START_SPAN_KM`] of
+//!   the column above the beam's start (what the spectrum leaves above the
+//!   start, laid along the field line up to at most the atmosphere table's
+//!   top, [`crate::pipeline::beams::walk::above_start_column_top`]); `beams.count` beams,
+//!   [`Photon`] each; held three times at the peak (the per-beam vectors
+//!   while they are concatenated, the concatenation, and the kd-tree's copy
+//!   of the positions with indices).
+//! - **candidate leaves**: every photon lists the 8^3-voxel leaves within the
+//!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` of its step
+//!   (at most `length_km * dt` long) before they are deduplicated: at most
+//!   `photons * L` entries of 12 bytes,
+//!   `L = (ceil((2 reach + step) / leaf) + 1)^3`; where every step descends (alpha_D below the field's dip), a
+//!   beam's path to the 50 km bottom is at most `h / sin(dip - alpha_D)`
+//!   long and its entries at most `(path / leaf + 2) * (L^(1/3))^2`; its
+//!   column segments, end to end along the field line above its start,
+//!   at most `(column / sin(dip) / leaf + 2 n) (2 reach / leaf + 2)^2` for
+//!   n segments.
+//! - **grids**: the leaves, at most the smaller of `photons * L` and the
+//!   number of leaves in the scene's world box dilated by the reach (up to
+//!   the beams' highest start), plus those of the columns above the starts,
+//!   each holding an emission leaf (512 x 12 bytes), a density leaf (512 x
+//!   4) and masks, with 30 % for the Cycles shell and the sort. A column is
+//!   the curtain's start area carried up along the field: a sheared prism,
+//!   whose every leaf-thick slab is the start area's box shifted, so it
+//!   holds at most `(dx / leaf + 3) (dy / leaf + 3)` leaves per slab (the
+//!   box dilated by the reach; one more per axis for the shift within a
+//!   slab, which is below a leaf for dips above 45 degrees), not the far
+//!   larger axis-aligned box around the whole slanted column.
+//! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell (a
+//!   path's cells along it from [`crate::pipeline::footprint::cells_along`]).
+//! - **per-line grids** (`grid.lines`, with a physical colour): each line's
+//!   float grid on at most the grids' leaves (512 x 4 bytes and masks a
+//!   leaf), and while they are gathered, three lines at a time, one more
+//!   colour grid of those leaves and a copy of the photons carrying the
+//!   lines' powers, beside the emission grid and the photons
+//!   (`crate::pipeline::bake::plan::line_grids`).
+//! - **the red trail** (`animation.trail_samples = N`, physical colour): N
+//!   more traces of every beam whose photons join the bake's
+//!   (`crate::pipeline::red_trail`): N times the photons and their candidate leaves
+//!   again; the grids do not grow (the earlier times' deposits fall in
+//!   the same world box the bound already covers: the motion is inside it).
+//!
+//! A curtain along a path (`crate::pipeline::footprint::curtain_path`) is bounded by its band, not its
+//! bounding box: the leaves meeting the set of points within rho of a curve
+//! of length L lie within rho + sqrt(2) a of it (a the leaf side), a set of
+//! area at most `2 (rho + sqrt 2 a) L + pi (rho + sqrt 2 a)^2` (the area of
+//! a curve's parallel set), so at most that over a^2 leaves per leaf-thick
+//! slab, rho the half width, the reach and the slab's shift along the field
+//! within a leaf (below a leaf for dips above 45 degrees; each slab is the
+//! band shifted, as for the columns).
+//!
+//! With `voxel_size = "auto"` the voxel is at least half the kernel radius
+//! `photons.radius_km` ([`KernelRadius::auto_voxel_floor_km`], the floor the
+//! bake's automatic size never goes below): the estimate uses that floor,
+//! the most memory "auto" can ask for. The kernel's reach is
+//! [`KernelRadius::max_reach_km`], the gather's.
+
+use crate::physics::atmosphere::Atmosphere;
+use crate::physics::deposition::fang::SpectrumDeposition;
+use crate::pipeline::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM};
+use crate::pipeline::deposit::Photon;
+use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
+use crate::scene::{Curtain, Deposition, KernelRadius, Scene, VoxelSize};
+use crate::util::memory::{gib, MemoryLimit};
+
+/// Bytes per leaf of both grids: emission values, density values, two masks
+/// and bookkeeping.
+const LEAF_BYTES: f64 = 512.0 * 12.0 + 512.0 * 4.0 + 2.0 * 64.0 + 64.0;
+/// Bytes per leaf of one per-line float grid: values, mask, bookkeeping.
+const LINE_LEAF_BYTES: f64 = 512.0 * 4.0 + 64.0 + 64.0;
+/// Bytes per leaf of the colour grid a per-line gather makes.
+const RGB_LEAF_BYTES: f64 = 512.0 * 12.0 + 64.0 + 64.0;
+/// Share of the limit the estimate may use (the rest: the program, the
+/// allocator's slack, the output writer's buffers).
+pub const USABLE_FRACTION: f64 = 0.8;
+
+/// One term of the estimate, and the scene key that drives it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Term {
+    pub what: &'static str,
+    pub bytes: f64,
+    /// The key to change, as the user writes it (e.g. "beams.count").
+    pub key: String,
+    /// Its value, as written.
+    pub value: String,
+}
+
+/// The bake's estimated peak memory, term by term.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Estimate {
+    pub terms: Vec<Term>,
+}
+
+impl Estimate {
+    pub fn total(&self) -> f64 {
+        self.terms.iter().map(|t| t.bytes).sum()
+    }
+    /// The largest term.
+    pub fn dominant(&self) -> &Term {
+        self.terms.iter().max_by(|a, b| a.bytes.total_cmp(&b.bytes)).expect("an estimate has terms")
+    }
+}
+
+/// A bake that would not fit.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{key} = {value} needs about {needed} for its {what} ({total} in all), but this process may use {available}; lower {key}")]
+pub struct TooLarge {
+    pub key: String,
+    pub value: String,
+    pub what: &'static str,
+    pub needed: String,
+    pub total: String,
+    pub available: String,
+}
+
+impl TooLarge {
+    /// Always the user's input: the key named asks for too much memory (exit status 2).
+    pub fn is_input(&self) -> bool {
+        true
+    }
+}
+
+/// The highest altitude a deposit of `curtain` can lie at, km: the beams'
+/// highest start, or above it for Fang's depositions, which lay what the
+/// spectrum leaves above a beam's start along the field line above it up
+/// to [`crate::pipeline::beams::walk::above_start_column_top`]: for `expected`, that altitude for
+/// the curtain's own spectrum (the function the trace calls, so the same
+/// altitude: 412 km for the default curtains); for `sampled`, where each
+/// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS
+/// 2.1), which bounds every energy's.
+pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
+    let start_top = scene.beams.top_km + scene.beams.top_noise_km;
+    let atm = Atmosphere::of_model(scene.atmosphere.model);
+    match scene.beams.deposition {
+        Deposition::Csda => start_top,
+        Deposition::Sampled => start_top.max(atm.top_km()),
+        Deposition::Expected => {
+            let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+            above_start_column_top(&atm, &|m| g.fraction_above(m), g.total(), start_top)
+        }
+    }
+}
+
+/// Altitude span of a curtain's columns above the starts, km: from the
+/// lowest start to [`deposit_top_km`] (0 without them).
+pub fn column_km(scene: &Scene, curtain: &Curtain) -> f64 {
+    (deposit_top_km(scene, curtain) - (scene.beams.top_km - scene.beams.top_noise_km)).max(0.0)
+}
+
+/// Bound on the leaves of the columns above the starts (module
+/// documentation): per curtain, its rotated footprint box dilated by
+/// `reach`, `(dx / leaf + 3) (dy / leaf + 3)` leaves per slab, over
+/// `column_km / leaf + 2` slabs.
+pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
+    scene
+        .curtains
+        .iter()
+        .map(|c| {
+            let h = column_km(scene, c);
+            if h <= 0.0 {
+                return 0.0;
+            }
+            let slabs = h / leaf_km + 2.0;
+            if let Some((length, _)) = path_curve(scene, c) {
+                let rho = 0.5 * c.width + reach + std::f64::consts::SQRT_2 * leaf_km + leaf_km;
+                return band_leaves(length, rho, leaf_km) * slabs;
+            }
+            let (s, co) = c.rotation_deg.to_radians().sin_cos();
+            let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * reach;
+            let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * reach;
+            (dx / leaf_km + 3.0) * (dy / leaf_km + 3.0) * slabs
+        })
+        .sum()
+}
+
+/// A path curtain's curve lifted to the start altitude: its length and
+/// vertices (None for a straight curtain).
+fn path_curve(scene: &Scene, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
+    let p = c.path.as_ref()?;
+    let v = vertices(&Lift::of(&scene.beams, &scene.earth).path(p));
+    Some((polyline_length(&v), v))
+}
+
+/// Leaves of side `leaf` per slab within `rho` of a curve of `length`
+/// (module documentation).
+fn band_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
+    let r = rho + std::f64::consts::SQRT_2 * leaf;
+    (2.0 * r * length + std::f64::consts::PI * r * r) / (leaf * leaf)
+}
+
+/// A conservative world box around every curtain, km: footprint boxes
+/// (rotated), from 50 km (below the lowest altitude the hardest electrons
+/// reach) to the beams' highest start, widened by the drift along an
+/// inclined field. The columns above the starts are bounded apart
+/// ([`column_leaves`]).
+pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
+    let z0 = 50.0;
+    let z1 = scene.beams.top_km + scene.beams.top_noise_km;
+    let tilt = (90.0 - scene.beams.b_inclination_deg).to_radians().tan() * (z1 - z0);
+    let mut lo = [f64::INFINITY, f64::INFINITY, z0];
+    let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
+    for c in &scene.curtains {
+        if let Some((_, v)) = path_curve(scene, c) {
+            let h = 0.5 * c.width;
+            for p in v {
+                lo[0] = lo[0].min(p[0] - h - tilt);
+                lo[1] = lo[1].min(p[1] - h - tilt);
+                hi[0] = hi[0].max(p[0] + h + tilt);
+                hi[1] = hi[1].max(p[1] + h + tilt);
+            }
+            continue;
+        }
+        let (s, co) = c.rotation_deg.to_radians().sin_cos();
+        for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
+            let (u, w) = (a * c.length, b * c.width);
+            let x = c.center[0] + u * co - w * s;
+            let y = c.center[1] + u * s + w * co;
+            lo[0] = lo[0].min(x - tilt);
+            lo[1] = lo[1].min(y - tilt);
+            hi[0] = hi[0].max(x + tilt);
+            hi[1] = hi[1].max(y + tilt);
+        }
+    }
+    (lo, hi)
+}
+
+/// The smallest voxel the bake may use, km.
+fn min_voxel_km(scene: &Scene) -> (f64, String, String) {
+    match scene.grid.voxel_size {
+        VoxelSize::Km(v) => (v, "grid.voxel_size".into(), format!("{v}")),
+        VoxelSize::Auto(_) => {
+            let floor = KernelRadius::of(&scene.photons).auto_voxel_floor_km();
+            (floor, "grid.voxel_size".into(), format!("\"auto\" (at least photons.radius_km / 2 = {floor} km)"))
+        }
+    }
+}
+
+/// The bake's peak memory, bounded from the scene alone.
+pub fn estimate(scene: &Scene) -> Estimate {
+    let b = &scene.beams;
+    let steps = (1.0 / b.dt).ceil();
+    // The tallest curtain's column, for every beam.
+    let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
+    let column_segments = if column > 0.0 { (column / ABOVE_START_SPAN_KM).ceil() + 1.0 } else { 0.0 };
+    let step_photons = b.count as f64 * steps;
+    let photons = b.count as f64 * (steps + column_segments);
+    let photon_bytes = std::mem::size_of::<Photon>() as f64;
+    let (photon_key, photon_value) =
+        if steps > 1000.0 { ("beams.dt".to_string(), format!("{}", b.dt)) } else { ("beams.count".to_string(), format!("{}", b.count)) };
+
+    let (voxel, vkey, vvalue) = min_voxel_km(scene);
+    let leaf_km = 8.0 * voxel;
+    let p = &scene.photons;
+    let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
+    let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
+    let (lo, hi) = world_bounds(scene);
+    let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
+    // With a path, the sum of the curtains' own bounds (a path's band) when smaller than the box.
+    let area_leaves = if scene.curtains.iter().any(|c| c.path.is_some()) {
+        let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
+        let own: f64 = scene
+            .curtains
+            .iter()
+            .map(|c| match path_curve(scene, c) {
+                Some((length, _)) => band_leaves(length, 0.5 * c.width + reach + leaf_km, leaf_km) * slabs,
+                None => {
+                    let (s, co) = c.rotation_deg.to_radians().sin_cos();
+                    let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + leaf_km);
+                    let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * (reach + leaf_km);
+                    ((dx / leaf_km).ceil() + 1.0) * ((dy / leaf_km).ceil() + 1.0) * slabs
+                }
+            })
+            .sum();
+        box_leaves.min(own)
+    } else {
+        box_leaves
+    };
+    let leaves = area_leaves.min(step_photons * per_photon) + column_leaves(scene, leaf_km, reach);
+    // Blame the kernel when its reach, not the voxel or the curtains, makes the grid large.
+    let box_without_reach: f64 = (0..3).map(|i| ((hi[i] - lo[i]) / leaf_km).ceil() + 1.0).product();
+    let (grid_key, grid_value) = if box_leaves > 4.0 * box_without_reach && reach > leaf_km {
+        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    } else {
+        (vkey, vvalue)
+    };
+    // Candidate entries: each photon's segment box (kernel reach around a
+    // step of at most length_km * dt) lists its leaves. Where every step
+    // descends (the deflection alpha_D is smaller than the field's dip),
+    // a beam's path from its top to the 50 km bottom is at most
+    // h / sin(dip - alpha_D) long, so its photons touch at most
+    // (path / leaf + 2) slices of cross^2 leaves, which bounds the list
+    // (photons of one beam are consecutive and deduplicated) far below
+    // photons x leaves per photon.
+    let step = b.length_km * b.dt;
+    let cross = ((2.0 * reach + step) / leaf_km).ceil() + 1.0;
+    let per_photon_seg = cross.powi(3);
+    let descent = (b.b_inclination_deg - b.alpha_d_deg).to_radians();
+    let per_beam = if descent > 0.05 {
+        let path = (b.top_km + b.top_noise_km - 50.0).max(0.0) / descent.sin();
+        (path / leaf_km + 2.0) * cross * cross
+    } else {
+        f64::INFINITY
+    };
+    let step_entries = (step_photons * per_photon_seg).min(b.count as f64 * per_beam).min(step_photons * per_photon_seg.min(box_leaves));
+    // A beam's column segments lie end to end along one field line: their
+    // boxes list at most (length / leaf + 2) slices each of cross_c^2
+    // leaves, cross_c the kernel's width in leaves.
+    let sin_dip = b.b_inclination_deg.to_radians().sin().max(0.05);
+    let cross_c = (2.0 * reach / leaf_km).ceil() + 2.0;
+    let column_entries = b.count as f64 * (column / sin_dip / leaf_km + 2.0 * column_segments) * cross_c * cross_c;
+    let entries = step_entries + column_entries;
+    let candidates = entries * 12.0;
+    let (cand_key, cand_value) = if per_photon > 64.0 {
+        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    } else {
+        (photon_key.clone(), photon_value.clone())
+    };
+
+    let [nx, ny] = scene.footprint.resolution;
+    let cells: f64 = scene
+        .curtains
+        .iter()
+        .map(|c| {
+            let length = path_curve(scene, c).map_or(c.length, |(l, _)| l);
+            crate::pipeline::footprint::cells_along(c, length, &scene.footprint) as f64 * ny as f64
+        })
+        .sum();
+    let footprint = cells * 12.0 * 8.0;
+
+    let physical = scene.colour.mode == crate::scene::ColourMode::Physical;
+    // The red trail: N more traces, their photons and candidates beside the bake's.
+    let trail = if physical { scene.animation.trail_samples as f64 } else { 0.0 };
+    let all_photons = photons * (1.0 + trail);
+    let n_lines = if physical { scene.grid.lines.len() as f64 } else { 0.0 };
+    let mut terms = vec![
+        Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
+        Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
+        Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
+        Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
+    ];
+    if n_lines > 0.0 {
+        let bytes = 1.3 * leaves * (n_lines * LINE_LEAF_BYTES + RGB_LEAF_BYTES) + all_photons * photon_bytes;
+        terms.push(Term { what: "per-line grids", bytes, key: "grid.lines".into(), value: format!("{:?}", scene.grid.lines) });
+    }
+    if trail > 0.0 {
+        terms.push(Term {
+            what: "red trail",
+            bytes: trail * (3.0 * photons * photon_bytes + candidates),
+            key: "animation.trail_samples".into(),
+            value: format!("{trail}"),
+        });
+    }
+    Estimate { terms }
+}
+
+/// Refuses a bake whose estimate exceeds [`USABLE_FRACTION`] of `limit`.
+pub fn check(estimate: &Estimate, limit: &MemoryLimit) -> Result<(), Box<TooLarge>> {
+    let total = estimate.total();
+    if total <= USABLE_FRACTION * limit.bytes {
+        return Ok(());
+    }
+    let d = estimate.dominant();
+    Err(Box::new(TooLarge {
+        key: d.key.clone(),
+        value: d.value.clone(),
+        what: d.what,
+        needed: gib(d.bytes),
+        total: gib(total),
+        available: limit.to_string(),
+    }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn limit(g: f64) -> MemoryLimit {
+        MemoryLimit { bytes: g * (1u64 << 30) as f64, source: "test" }
+    }
+
+    #[test]
+    fn default_scene_fits_in_a_few_gib_and_the_bound_is_above_what_it_uses() {
+        let s = Scene::default();
+        let e = estimate(&s);
+        // Measured: 643 MB peak resident for the default bake with its VDB
+        // write (`/usr/bin/time -v aurora bake`, 2026-11-29, with the
+        // columns above the starts); the bound is above it and below 6 GiB
+        // (4.0 GiB: the box and column bounds count every leaf of the
+        // footprints' bounding boxes, where the curtains fill a band).
+        assert!(e.total() > 0.643e9 && e.total() < 6.0 * (1u64 << 30) as f64, "{}", gib(e.total()));
+        check(&e, &limit(8.0)).unwrap();
+    }
+
+    #[test]
+    fn huge_scenes_are_refused_naming_the_key_that_drives_them() {
+        let mut s = Scene::default();
+        s.beams.count = 100_000_000;
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "beams.count", "{e}");
+
+        let mut s = Scene::default();
+        s.beams.dt = 1e-6;
+        assert_eq!(check(&estimate(&s), &limit(8.0)).unwrap_err().key, "beams.dt");
+
+        let mut s = Scene::default();
+        s.photons.radius_km = 50.0;
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "photons.radius_km", "{e}");
+
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Km(0.005);
+        let e = check(&estimate(&s), &limit(8.0)).unwrap_err();
+        assert_eq!(e.key, "grid.voxel_size", "{e}");
+        assert!(e.to_string().contains("GiB") && e.to_string().contains("test"), "{e}");
+    }
+
+    #[test]
+    fn per_line_grids_and_the_trail_are_counted() {
+        // A scene sized to fit only without its per-line grids: the
+        // estimate without them is 0.8 of a limit that the five lines'
+        // grids (about 5 x 2.2 kB a leaf over the grids' 8.3 kB, plus a
+        // colour grid and a photon copy) push well past.
+        let mut s = Scene::default();
+        let plain = estimate(&s).total();
+        let l = limit(plain / USABLE_FRACTION / (1u64 << 30) as f64 * 1.01);
+        check(&estimate(&s), &l).unwrap();
+        s.grid.lines = crate::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();
+        let e = estimate(&s);
+        let lines = e.terms.iter().find(|t| t.what == "per-line grids").expect("a per-line term");
+        let grids = e.terms.iter().find(|t| t.what == "grids").unwrap();
+        // Five float grids and a colour grid on the same leaves: (5 x 2176 +
+        // 6272) / 8384 = 2.05 of the grids' term, plus the photons' copy.
+        assert!(lines.bytes > 2.05 * grids.bytes, "{} vs {}", lines.bytes, grids.bytes);
+        let err = check(&e, &l).unwrap_err();
+        assert!(err.to_string().contains("GiB"), "{err}");
+        // A colour map makes no per-line grids: nothing counted.
+        s.colour.mode = crate::scene::ColourMode::Colormap;
+        assert_eq!(estimate(&s).total(), plain);
+
+        // The trail: N more photon sets and candidate lists.
+        let mut s = Scene::default();
+        s.animation.trail_samples = 8;
+        let e = estimate(&s);
+        let t = e.terms.iter().find(|t| t.what == "red trail").expect("a trail term");
+        let (ph, ca) = (e.terms[0].bytes, e.terms[1].bytes);
+        assert!((t.bytes - 8.0 * (ph + ca)).abs() <= 1e-9 * t.bytes, "{} vs {}", t.bytes, 8.0 * (ph + ca));
+        assert_eq!(t.key, "animation.trail_samples");
+        assert!(check(&e, &l).is_err());
+    }
+
+    #[test]
+    fn estimate_grows_with_beams_and_shrinks_with_voxel_size() {
+        let mut s = Scene::default();
+        let a = estimate(&s).total();
+        s.beams.count *= 2;
+        assert!(estimate(&s).total() > a);
+        let mut s = Scene::default();
+        s.grid.voxel_size = VoxelSize::Km(2.0);
+        assert!(estimate(&s).total() < a);
+    }
+}

@@ -1,0 +1,230 @@
+//! Image files: the linear OpenEXR result and an 8-bit PNG preview.
+//!
+//! * EXR: 32-bit float RGBA, linear Rec.709 (chromaticities attribute set to
+//!   Rec.709 primaries and D65 white), row 0 at the top, `A = 1 - T` (the
+//!   volume's coverage along the primary ray; RGB already contains what lies
+//!   behind). Lossless compression (the `exr` crate's default, RLE in 64x64
+//!   tiles), tiles stored in increasing order: the crate compresses tiles in
+//!   parallel and, with its default "unspecified" line order, writes them in
+//!   the order they finish, so the same image gave different bytes from run
+//!   to run; with `LineOrder::Increasing` it sorts them first.
+//! * PNG preview of `2^exposure * linear` through the view transform
+//!   (`render.view_transform`): `standard` is `v = clamp(sRGB_OETF(x), 0, 1)`
+//!   per RGB channel, with the sRGB OETF `12.92 x` for `x <= 0.0031308` and
+//!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), Blender's "Standard";
+//!   `agx` (the default) is Blender's AgX view for an sRGB display
+//!   ([`super::agx`]); quantised as `round(255 v)`, no dither; alpha is
+//!   dropped (8-bit RGB).
+//!
+//! * One-channel images of a float grid (`aurora render --grid`): the red
+//!   channel (the grid is rendered as grey) as an EXR of one 32-bit float
+//!   channel `Y` in the grid's units integrated along the ray (rayleigh for
+//!   a per-line grid in R/km), or an 8-bit greyscale PNG, linear:
+//!   `round(255 clamp(v / scale, 0, 1))`, the scale stated by the caller
+//!   and stored in the PNG's `aurora_scale` text chunk.
+//!
+//! All are written to a temporary file in the destination folder and renamed.
+
+use super::{Image, RenderError, RenderStats};
+use crate::scene::ViewTransform;
+use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
+use std::path::Path;
+
+fn output_err(e: crate::util::atomic_write::AtomicError) -> RenderError {
+    RenderError::Output(Box::new(e))
+}
+
+/// Writes a one-layer EXR image to a temporary in `path`'s folder, tiles in
+/// increasing order (module documentation: the same bytes every run), and
+/// renames it to `path`.
+fn write_exr_image<'i, C>(path: &Path, exr_image: &'i mut exr::image::Image<exr::image::Layer<C>>) -> Result<(), RenderError>
+where
+    exr::image::Layer<C>: exr::image::write::layers::WritableLayers<'i>,
+{
+    exr_image.layer_data.encoding.line_order = exr::meta::attribute::LineOrder::Increasing;
+    let exr_image: &'i exr::image::Image<_> = exr_image;
+    let mut tmp = crate::util::atomic_write::TempFile::create(path).map_err(output_err)?;
+    exr_image
+        .write()
+        .to_buffered(std::io::BufWriter::new(tmp.file()))
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    tmp.commit().map_err(output_err)
+}
+
+/// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
+pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    let channels = SpecificChannels::rgba(|Vec2(x, y): Vec2<usize>| {
+        let p = image.pixels[y * w + x];
+        (p[0], p[1], p[2], p[3])
+    });
+    let mut exr_image = exr::image::Image::from_channels((w, h), channels);
+    exr_image.attributes.chromaticities = Some(exr::meta::attribute::Chromaticities {
+        red: Vec2(0.64, 0.33),
+        green: Vec2(0.30, 0.60),
+        blue: Vec2(0.15, 0.06),
+        white: Vec2(0.3127, 0.3290),
+    });
+    write_exr_image(path, &mut exr_image)
+}
+
+/// Writes the red channel of `image` as a one-channel (`Y`) f32 OpenEXR
+/// (module doc).
+pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    let channels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|Vec2(x, y): Vec2<usize>| (image.pixels[y * w + x][0],));
+    let mut exr_image = exr::image::Image::from_channels((w, h), channels);
+    write_exr_image(path, &mut exr_image)
+}
+
+/// Reads the `Y` channel of a one-channel EXR written by [`write_exr_grey`]:
+/// (width, height, values row by row from the top).
+pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>), RenderError> {
+    use exr::prelude::ReadSpecificChannel;
+    let path = path.as_ref();
+    let file = crate::util::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required("Y")
+        .collect_pixels(
+            |res: Vec2<usize>, _| (res.0, vec![0.0f32; res.0 * res.1]),
+            |(w, px): &mut (usize, Vec<f32>), pos: Vec2<usize>, (y,): (f32,)| px[pos.1 * *w + pos.0] = y,
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_unbuffered(file)
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let size = img.layer_data.size;
+    let (_, values) = img.layer_data.channel_data.pixels;
+    Ok((size.0, size.1, values))
+}
+
+/// Writes the red channel of `image` as an 8-bit greyscale PNG, linear with
+/// 255 = `scale` (module doc; `scale` > 0 and finite).
+pub fn write_png_grey(path: impl AsRef<Path>, image: &Image, scale: f64) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(RenderError::Settings(format!("greyscale scale {scale} must be finite and > 0")));
+    }
+    let data: Vec<u8> = image
+        .pixels
+        .iter()
+        .map(|p| {
+            let v = p[0] as f64 / scale;
+            (if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) } * 255.0).round() as u8
+        })
+        .collect();
+    let mut tmp = crate::util::atomic_write::TempFile::create(path).map_err(output_err)?;
+    let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
+    let r = (|| -> Result<(), RenderError> {
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.file()), w as u32, h as u32);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.add_text_chunk("aurora_scale".into(), format!("255 = {scale:e} (linear)")).map_err(|e| png_err(e.to_string()))?;
+        let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
+        writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
+        writer.finish().map_err(|e| png_err(e.to_string()))
+    })();
+    r?;
+    tmp.commit().map_err(output_err)
+}
+
+/// Reads the first RGBA layer of an EXR (alpha 1 if absent). Stats are zero.
+pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
+    let path = path.as_ref();
+    let file = crate::util::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    read_exr_file(file, path)
+}
+
+/// [`read_exr`] of a file already opened (through `crate::util::input_file`);
+/// `path` names it in errors.
+pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderError> {
+    let img = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .rgba_channels(
+            |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
+            |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+                px[pos.1 * *w + pos.0] = [r, g, b, a];
+            },
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_unbuffered(file)
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let size = img.layer_data.size;
+    let (_, pixels) = img.layer_data.channel_data.pixels;
+    Ok(Image { width: size.0, height: size.1, pixels, stats: RenderStats::default() })
+}
+
+/// The sRGB OETF (IEC 61966-2-1) of a linear value.
+pub fn srgb_oetf(x: f64) -> f64 {
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The standard display transform of one linear channel value (module doc).
+pub fn display_u8(linear: f32, exposure: f64) -> u8 {
+    to_u8(srgb_oetf(linear as f64 * exposure.exp2()))
+}
+
+fn to_u8(v: f64) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (v * 255.0).round() as u8
+}
+
+/// One pixel's RGB code values through `view` at `exposure` (module doc).
+pub fn display_rgb(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u8; 3] {
+    match view {
+        ViewTransform::Standard => [0, 1, 2].map(|c| display_u8(p[c], exposure)),
+        ViewTransform::Agx => {
+            let k = exposure.exp2();
+            // A NaN or infinite pixel is black, as in the standard transform.
+            let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
+            super::agx::Agx::get().display(c).map(to_u8)
+        }
+    }
+}
+
+/// Writes an 8-bit sRGB PNG preview through the view transform (module doc).
+pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64, view: ViewTransform) -> Result<(), RenderError> {
+    let path = path.as_ref();
+    let (w, h) = (image.width, image.height);
+    if image.pixels.len() != w * h || w == 0 || h == 0 {
+        return Err(RenderError::Settings(format!("image of {}x{} has {} pixels", w, h, image.pixels.len())));
+    }
+    if !exposure.is_finite() {
+        return Err(RenderError::Settings(format!("exposure {exposure} must be finite")));
+    }
+    let data: Vec<u8> = image.pixels.iter().flat_map(|&p| display_rgb(p, exposure, view)).collect();
+    let mut tmp = crate::util::atomic_write::TempFile::create(path).map_err(output_err)?;
+    let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
+    let r = (|| -> Result<(), RenderError> {
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.file()), w as u32, h as u32);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
+        writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
+        writer.finish().map_err(|e| png_err(e.to_string()))
+    })();
+    r?;
+    tmp.commit().map_err(output_err)
+}
