@@ -1,7 +1,7 @@
 //! `aurora bake`: one bake into a folder ([`bake_one`]), or a frame
 //! sequence ([`bake_frames`]), resumed frame by frame: a frame already
 //! complete for this bake is skipped, one another process is baking is
-//! waited for (`aurora::farm::sequence_folder`, `aurora::io::bake_folder::lock_frame`).
+//! waited for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
 //!
 //! What it says on stderr goes through one [`Report`]: bars, summaries and
 //! warning lines for a terminal, or with `--progress json` only JSON objects
@@ -133,7 +133,7 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
         // One writer per frame: a shard that finds another baking it waits,
         // then finds it complete.
         let _lock =
-            aurora::io::bake_folder::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
+            aurora::farm::frame_files::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
         if seq.frame_complete(f) {
             skipped += 1;
             say.frames(baked + skipped, mine.len());

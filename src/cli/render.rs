@@ -105,7 +105,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
 /// the frame number before the extension.
 fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<&Path>) -> Result<()> {
     for &f in frames {
-        let (vdb_path, _) = aurora::io::bake_folder::frame_paths(seq, f);
+        let (vdb_path, _) = aurora::farm::frame_files::frame_paths(seq, f);
         let exr = frame_name(out, f);
         let pngf = png.map(|p| frame_name(p, f));
         render_one(job, &Files { vdb: Some(&vdb_path), out: &exr, png: pngf.as_deref() })?;

@@ -10,7 +10,7 @@
 //! a farm task would: each at its own time, one [`crate::pipeline::bake::plan::BakePlan`]
 //! carried from one to the next (`bake::bake_reusing`, as `aurora bake
 //! --frames` does), and each frame's files staged and committed by the same
-//! writer the sequence uses (`bake_folder::stage_frame`) into a scratch folder
+//! writer the sequence uses (`crate::farm::frame_files::stage_frame`) into a scratch folder
 //! that is removed afterwards. It then estimates
 //!
 //! ```text
@@ -177,7 +177,7 @@ pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progre
         let t0 = Instant::now();
         let (b, p) = bake::bake_reusing(&at, carried.as_ref(), progress)?;
         carried = Some(p);
-        let staged = bake_folder::stage_frame(&at, &b, &scratch.0, frame, &identity)?;
+        let staged = crate::farm::frame_files::stage_frame(&at, &b, &scratch.0, frame, &identity)?;
         let report = staged.commit()?;
         let wall_s = t0.elapsed().as_secs_f64();
         let (cpu1, _) = usage();
@@ -191,7 +191,7 @@ pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progre
         });
         drop(b);
     }
-    let stage = bake_folder::write_sequence_usda(&scratch.0, frames, scene.animation.fps, &bake_folder::stage_fields(scene))?;
+    let stage = crate::farm::frame_files::write_sequence_usda(&scratch.0, frames, scene.animation.fps, &bake_folder::stage_fields(scene))?;
     let stage_bytes = file_len(&stage)?;
     let (_, peak_rss_bytes) = usage();
     Ok(estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes))

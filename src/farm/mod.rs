@@ -3,5 +3,6 @@
 //! plan behind `--plan` ([`cost_plan`]).
 
 pub mod cost_plan;
+pub mod frame_files;
 pub mod frame_range;
 pub mod sequence_folder;

@@ -44,7 +44,7 @@
 //! nor a frame): a hidden name beside `.aurora.lock`, so `aurora.*.json`
 //! remains the frames' reports.
 
-use crate::io::bake_folder::{self, BakeReport, OutputError, FRAME_STEM, LOCK_STEM};
+use crate::io::bake_folder::{BakeReport, OutputError, FRAME_STEM, LOCK_STEM};
 use crate::pipeline::bake::identity::BakeIdentity;
 use crate::pipeline::bake::Bake;
 use crate::scene::Scene;
@@ -131,7 +131,7 @@ impl Sequence {
         let others = seq.other_frames()?;
         if rebake {
             for (frame, report, _) in &others {
-                let (vdb, _) = bake_folder::frame_paths(dir, *frame);
+                let (vdb, _) = crate::farm::frame_files::frame_paths(dir, *frame);
                 remove_regular(report)?;
                 remove_regular(&vdb)?;
             }
@@ -160,9 +160,9 @@ impl Sequence {
         &self.identity
     }
 
-    /// Frame `frame` is complete for this bake ([`bake_folder::frame_complete`]).
+    /// Frame `frame` is complete for this bake ([`crate::farm::frame_files::frame_complete`]).
     pub fn frame_complete(&self, frame: i64) -> bool {
-        bake_folder::frame_complete(&self.dir, frame, &self.identity)
+        crate::farm::frame_files::frame_complete(&self.dir, frame, &self.identity)
     }
 
     /// Fails if another bake owns the folder now (a `--rebake` took it over):
@@ -179,9 +179,9 @@ impl Sequence {
 
     /// Stages frame `frame` (`scene` at its time) and commits it if the
     /// folder is, or now becomes, this bake's (module docs, "Committing a
-    /// frame"). The caller holds the frame's lock ([`bake_folder::lock_frame`]).
+    /// frame"). The caller holds the frame's lock ([`crate::farm::frame_files::lock_frame`]).
     pub fn write_frame(&mut self, scene: &Scene, bake: &Bake, frame: i64) -> Result<BakeReport, SequenceError> {
-        let staged = bake_folder::stage_frame(scene, bake, &self.dir, frame, &self.identity)?;
+        let staged = crate::farm::frame_files::stage_frame(scene, bake, &self.dir, frame, &self.identity)?;
         let _lock = UnitLock::acquire(&self.dir, LOCK_STEM, || {})?;
         match self.owner() {
             Owner::Bake(id) if id == self.identity => {
@@ -256,7 +256,7 @@ impl Sequence {
     }
 
     fn write_stage(&self) -> Result<(), SequenceError> {
-        bake_folder::write_sequence_usda(&self.dir, &self.frames, self.fps, &self.fields)?;
+        crate::farm::frame_files::write_sequence_usda(&self.dir, &self.frames, self.fps, &self.fields)?;
         Ok(())
     }
 
@@ -274,7 +274,7 @@ impl Sequence {
         Ok(self
             .frames_named("vdb")?
             .into_iter()
-            .map(|f| bake_folder::frame_paths(&self.dir, f))
+            .map(|f| crate::farm::frame_files::frame_paths(&self.dir, f))
             .filter(|(_, report)| std::fs::symlink_metadata(report).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound))
             .map(|(vdb, _)| vdb)
             .collect())
@@ -285,12 +285,12 @@ impl Sequence {
     fn other_frames(&self) -> Result<Vec<(i64, PathBuf, String)>, SequenceError> {
         let mut out = Vec::new();
         for frame in self.frames_named("json")? {
-            let (vdb, report) = bake_folder::frame_paths(&self.dir, frame);
+            let (vdb, report) = crate::farm::frame_files::frame_paths(&self.dir, frame);
             if std::fs::symlink_metadata(&vdb).is_err() {
                 // No VDB: not a frame (an interrupted one is baked again).
                 continue;
             }
-            let why = match bake_folder::frame_identity(&report) {
+            let why = match crate::farm::frame_files::frame_identity(&report) {
                 Ok(id) if id == self.identity => continue,
                 Ok(id) => format!("it was baked from {}", self.identity.difference(&id)),
                 Err(why) => why,

@@ -5,7 +5,7 @@
 //! the memory budget (`crate::pipeline::memory_budget`) both take it from here, so they
 //! cannot disagree on the kernel's reach or on the automatic voxel's floor.
 
-use super::PhotonParams;
+use super::grid::PhotonParams;
 
 /// The kernel radius the scene asks for (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,6 +47,7 @@ impl KernelRadius {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::*;
 
     #[test]
     fn the_range_brackets_the_base_radius() {

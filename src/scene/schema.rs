@@ -3,7 +3,7 @@
 //! missing table or key gives) serialised, and ranges are the checks
 //! [`Scene::validate`] makes, recorded as it validates the default
 //! scene (`Validator::allow`): a range changed there changes here.
-use super::*;
+use super::{beams::*, colour::*, curtain::*, grid::*, root::Scene, validation::SceneError, view::*};
 use serde_json::{json, Map, Value};
 
 /// What a key accepts (recorded by the checks in [`super::validation`]).
@@ -126,6 +126,7 @@ pub fn schema_json() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::{schema, *};
     #[test]
     fn schema_has_every_key_with_default_and_range() {
         let s = schema::schema();

@@ -6,7 +6,7 @@
 //! never of the machine: whether a bake fits in memory is decided at bake
 //! time (`crate::pipeline::memory_budget`).
 
-use super::*;
+use super::{colour::*, curtain::*, grid::*, root::Scene, view::*};
 use std::fmt;
 
 /// The line names `grid.lines` takes, in `crate::physics::emission::line_colour::LINES` order
@@ -137,6 +137,10 @@ pub enum Allowed {
 // ---------------------------------------------------------------- checks
 
 impl Scene {
+    /// Checks every range; `text` (the TOML source) is used to find lines.
+    pub fn validate(&self, file: &str, text: Option<&str>) -> Result<(), SceneError> {
+        self.validate_with(file, text).map(|_| ())
+    }
     /// [`validate`](Self::validate), also returning every check made (the
     /// ranges [`schema`] prints).
     pub(super) fn validate_with(&self, file: &str, text: Option<&str>) -> Result<Vec<(String, Allowed)>, SceneError> {
@@ -235,7 +239,7 @@ impl Scene {
             );
         }
 
-        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::MAX_TRAIL_SAMPLES as f64, true);
+        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::curtain::MAX_TRAIL_SAMPLES as f64, true);
 
         let b = &self.beams;
         let t = Some(("beams", 0));
@@ -319,9 +323,9 @@ impl Scene {
         v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
         v.finite(t, "density_base_km", g.density_base_km);
         v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
-        v.range(t, "mantissa_bits", g.mantissa_bits as f64, 1.0, crate::scene::types::MAX_MANTISSA_BITS as f64, true);
+        v.range(t, "mantissa_bits", g.mantissa_bits as f64, 1.0, crate::scene::grid::MAX_MANTISSA_BITS as f64, true);
         v.range(t, "high_above_km", g.high_above_km, 0.0, 1e4, true);
-        v.range(t, "high_voxel_factor", g.high_voxel_factor as f64, 1.0, crate::scene::types::MAX_HIGH_VOXEL_FACTOR as f64, true);
+        v.range(t, "high_voxel_factor", g.high_voxel_factor as f64, 1.0, crate::scene::grid::MAX_HIGH_VOXEL_FACTOR as f64, true);
         let keys = LINE_KEYS.map(|k| format!("\"{k}\"")).join(", ");
         v.allow(t, "lines", Allowed::Rule(format!("a list of distinct line names from {keys}; needs colour.mode = \"physical\"")));
         for (i, name) in g.lines.iter().enumerate() {
@@ -604,6 +608,7 @@ pub fn find_key_line(text: &str, table: Option<(&str, usize)>, key: &str) -> Opt
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::*;
     #[test]
     fn unknown_key_is_an_error_naming_key_and_line() {
         let e = Scene::from_toml_str("seed = 1\n[beams]\ncount = 5\nbogus = 3\n", "x.toml").unwrap_err();

@@ -122,7 +122,7 @@ mod tests {
 
     #[test]
     fn the_scene_key_ends_at_a_full_float() {
-        assert_eq!(crate::scene::types::MAX_MANTISSA_BITS, FLOAT_MANTISSA_BITS);
+        assert_eq!(crate::scene::grid::MAX_MANTISSA_BITS, FLOAT_MANTISSA_BITS);
     }
 
     #[test]

@@ -29,8 +29,8 @@
 //! per curtain, voxels of 0.4-1 km); the numbers each form takes are in its
 //! function's documentation.
 
-use super::super::*;
-use super::default_scene;
+use super::classic::default_scene;
+use crate::scene::{curtain::*, grid::*, root::Scene, view::*};
 
 /// A perspective camera at `position` looking at `look_at`, z up.
 fn camera(position: [f64; 3], look_at: [f64; 3], fov_deg: f64) -> Camera {

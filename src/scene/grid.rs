@@ -1,0 +1,229 @@
+//! The estimate and its storage: `[photons]` (the kernel and the gather) and
+//! `[grid]` (voxel size, pruning, compression, the high column), each with
+//! its defaults and limits. No checks here (`super::validation`).
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum GatherMethod {
+    /// Gaussian kernel density estimate with a kiddo kd-tree gather.
+    Kdtree,
+    /// Each photon splats its kernel into the voxels it covers.
+    Splat,
+    /// The 2014 report: photons binned in a uniform grid, kernel-weighted
+    /// *average* of colours (no density estimate). For comparison only.
+    Report2014,
+}
+
+/// Volumetric photon mapping: Gaussian kernel density estimation.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct PhotonParams {
+    /// Kernel radius r (the Gaussian's standard deviation), km.
+    pub radius_km: f64,
+    /// The kernel is cut off at this many radii (and renormalised).
+    pub cutoff: f64,
+    /// Relative amplitude of the medium-frequency 2D noise on the radius.
+    pub radius_noise: f64,
+    /// Spatial frequency of that noise, cycles per km.
+    pub radius_noise_freq: f64,
+    pub gather: GatherMethod,
+    /// Kernel shape: each step's power spread along its segment, or at its
+    /// end point (for comparison).
+    pub kernel: KernelShape,
+}
+
+impl Default for PhotonParams {
+    fn default() -> Self {
+        Self {
+            radius_km: 0.5,
+            cutoff: 2.5,
+            radius_noise: 0.3,
+            radius_noise_freq: 0.05,
+            gather: GatherMethod::Splat,
+            kernel: KernelShape::Segment,
+        }
+    }
+}
+
+/// Photon kernel shape (`crate::pipeline::photons`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum KernelShape {
+    /// The Gaussian convolved with each step's segment (photon beams; default).
+    Segment,
+    /// The Gaussian at each step's end point.
+    Point,
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum Compression {
+    None,
+    Zip,
+    ActiveMask,
+    ZipActiveMask,
+    /// Blosc (LZ4, byte shuffle), as OpenVDB and Houdini write by default.
+    Blosc,
+    BloscActiveMask,
+}
+
+/// Voxel size: a number of km, or "auto": one voxel about one pixel of the
+/// scene's camera at the nearest aurora, resolved by the bake
+/// (`crate::pipeline::bake::voxel::auto_voxel_size`).
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
+#[serde(untagged)]
+pub enum VoxelSize {
+    Km(f64),
+    Auto(AutoTag),
+}
+
+/// A number (integer or float) of km, or exactly the string "auto"; anything
+/// else is an error that lists both (serde's untagged enums only say "did not
+/// match any variant").
+impl<'de> Deserialize<'de> for VoxelSize {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = VoxelSize;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a voxel size in km (a number > 0) or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<VoxelSize, E> {
+                Ok(VoxelSize::Km(x as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<VoxelSize, E> {
+                if s == "auto" {
+                    Ok(VoxelSize::Auto(AutoTag::Auto))
+                } else {
+                    Err(E::custom(format!("unknown value \"{s}\": expected a voxel size in km (a number > 0) or \"auto\" (lower case)")))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum AutoTag {
+    Auto,
+}
+
+/// Default `grid.prune`, from the pruning study of `aurora bench` and the
+/// default scene (640x360): at 10^-3 the file is 11 % smaller (9 % fewer
+/// voxels, 28 % fewer leaves) and the image differs from the unpruned one by
+/// 0.28 % per pixel (mean, pixels above 1 % of the peak), below the 0.42 % to
+/// which our renderer and Cycles agree on the same file; at 10^-2 the error
+/// is 2.7 %, visible in the faint fringes.
+pub const DEFAULT_PRUNE: f64 = 1e-3;
+
+/// Default `grid.high_above_km` (used with `grid.high_voxel_factor > 1`),
+/// from the storage study on the default scene (`docs/storage.md`): above
+/// it lies about half of the bake's voxels and a small share of its light.
+/// At 240 km, with half floats and the default pruning, the default frame
+/// is 61.0 MB and its picture (640x360, 16 spp) within 0.43 % of the
+/// full-precision unpruned file's; the dome master from the scene camera's
+/// position 0.63 %.
+pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
+
+/// Default `grid.mantissa_bits`: the mantissa bits kept of every stored
+/// `density` and `emission` value (`crate::io::vdb::mantissa`), relative step
+/// 2^-5, at most 1.6 % per voxel. From the storage study on the default
+/// scene (`docs/storage.md`): with ZIP the frame is 59.0 MB (0.31x of the
+/// 187.5 MB that the 9a7556f build wrote), and its picture (640x360, 16 spp)
+/// within 0.25 % of the full-precision unpruned file's, the dome master
+/// within 0.37 %; 4 bits give 51 MB, 0.29 % and 0.41 %.
+pub const DEFAULT_MANTISSA_BITS: u32 = 5;
+
+/// Largest `grid.mantissa_bits`: a full float's mantissa
+/// (`vdb::mantissa::FLOAT_MANTISSA_BITS`, which a test there checks).
+pub const MAX_MANTISSA_BITS: u32 = 23;
+
+/// Largest `grid.high_voxel_factor`.
+pub const MAX_HIGH_VOXEL_FACTOR: u32 = 4;
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct GridParams {
+    pub voxel_size: VoxelSize,
+    /// Air extinction where the aurora is: density = a * exp(-b (h - base_km)),
+    /// per km (the report's a exp(-b h)).
+    pub density_a: f64,
+    pub density_b: f64,
+    pub density_base_km: f64,
+    /// Store `emission` (and `emission_high`) as half floats in the VDB:
+    /// 11 significant bits, a relative rounding error of at most 2^-11 per
+    /// voxel, 10^-5 of the picture on the default scene (`docs/storage.md`).
+    /// A grid whose values pass the half range (65504) is stored as full
+    /// floats instead, with a warning (`crate::io::bake_folder::fit_half`).
+    pub half_emission: bool,
+    /// Store `density` (and `density_high`) as half floats in the VDB (as
+    /// `half_emission`).
+    pub half_density: bool,
+    /// Mantissa bits kept of every stored `density` and `emission` value
+    /// (and of their high column): each is rounded to the nearest number
+    /// with this many bits, at most 2^-(bits+1) relative
+    /// (`crate::io::vdb::mantissa`); 10 keeps a half float whole, 23 a full
+    /// float. The cleared bits cost ZIP almost nothing.
+    pub mantissa_bits: u32,
+    /// Also store a one-voxel shell of active zero voxels around the aurora
+    /// (the 26-neighbourhood of its voxels): Cycles' biased volume mode
+    /// marches only the active voxels grown across faces, so without it the
+    /// low-index edges lose up to half a voxel of their trilinear ramp
+    /// (`blender/vdb_pad.py`). The field is unchanged. Off by default: the
+    /// aurora's own edges are its faint kernel tails, and the Cycles
+    /// cross-check agrees without it (`docs/storage.md`).
+    pub cycles_shell: bool,
+    /// Altitude, km, above which the grids are stored at
+    /// `high_voxel_factor` times the voxel size, in grids of their own
+    /// (`emission_high`, `density_high`) that a renderer adds to `emission`
+    /// and `density` (`crate::grid::high_column`): the faint soft-electron column.
+    pub high_above_km: f64,
+    /// Voxel size of the high column over `voxel_size` (1 = no high
+    /// column: one grid each at the voxel size).
+    pub high_voxel_factor: u32,
+    pub compression: Compression,
+    /// Error budget of contribution-based pruning (`crate::pipeline::prune`): the
+    /// faintest leaves, as seen from the camera, are dropped while their
+    /// share of the light reaching it stays below this fraction
+    /// (0 = keep every leaf with any emission).
+    pub prune: f64,
+    /// Emission lines written as float grids of their own (`line_5577`,
+    /// ...), in rayleigh per km: names of [`LINE_KEYS`].
+    pub lines: Vec<String>,
+}
+
+impl Default for GridParams {
+    fn default() -> Self {
+        Self {
+            voxel_size: VoxelSize::Km(0.5),
+            density_a: 0.02,
+            density_b: 0.02,
+            density_base_km: 90.0,
+            half_emission: true,
+            half_density: true,
+            mantissa_bits: DEFAULT_MANTISSA_BITS,
+            cycles_shell: false,
+            high_above_km: DEFAULT_HIGH_ABOVE_KM,
+            // One grid per field by default: with the high column apart,
+            // Cycles lights terrain with up to 9 % less of the column's red
+            // light than `aurora render` (docs/storage.md).
+            high_voxel_factor: 1,
+            // Deflate, which every OpenVDB reader has (Blender's Blosc has
+            // LZ4 alone): with rounded mantissas 0.59x the size of Blosc's
+            // LZ4, which finds no repeats in the remaining bits.
+            compression: Compression::ZipActiveMask,
+            prune: DEFAULT_PRUNE,
+            lines: Vec::new(),
+        }
+    }
+}

@@ -1,0 +1,135 @@
+//! The three scenes the rest are built on: the default (three curtains
+//! seen from the ground), the 2014 report's own scene, and an arc of the
+//! auroral oval for a planetarium dome.
+
+use crate::scene::{beams::*, colour::*, curtain::*, grid::*, root::Scene, view::*};
+
+impl Default for Scene {
+    fn default() -> Self {
+        default_scene()
+    }
+}
+
+/// Three sheets one behind the other, seen from the ground to the south.
+pub fn default_scene() -> Scene {
+    let sheet = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, seed: u64| Curtain {
+        center: [cx, cy],
+        rotation_deg: rot,
+        energy_flux: flux,
+        char_energy_kev: e0,
+        seed,
+        ..Curtain::default()
+    };
+    Scene {
+        seed: 2014,
+        curtains: vec![sheet(-20.0, 0.0, 4.0, 6.0, 4.0, 1), sheet(25.0, 45.0, -6.0, 4.0, 2.5, 2), sheet(-5.0, 95.0, 2.0, 3.0, 1.5, 3)],
+        footprint: FootprintParams::default(),
+        beams: BeamParams::default(),
+        colour: ColourParams::default(),
+        photons: PhotonParams::default(),
+        grid: GridParams::default(),
+        camera: Camera::default(),
+        render: RenderParams::default(),
+        volume: VolumeParams::default(),
+        background: Background::default(),
+        terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
+        animation: AnimationParams::default(),
+        atmosphere: AtmosphereParams::default(),
+        earth: EarthParams::default(),
+        sky: SkyParams::default(),
+    }
+}
+
+/// The 2014 report's final scene: 500,000 beams, alpha_D = 25 deg,
+/// delta alpha = 12 deg, beam length 70, dt = 0.004 (at most 250
+/// deflections), photon radius 0.2, air density 0.9 exp(-0.02 h), three
+/// sheets. Report units are taken as km.
+pub fn seed2014() -> Scene {
+    let mut s = default_scene();
+    s.beams.count = 500_000;
+    s.beams.alpha_d_deg = 25.0;
+    s.beams.delta_alpha_deg = 12.0;
+    s.beams.length_km = 70.0;
+    s.beams.dt = 0.004;
+    // With s = L dt xi (mean L dt / 2 = 0.14 km) and at most 250 steps a
+    // beam travels 35 km on average: starting at 140 km it reaches the
+    // green layer (100-120 km), as the report's curtains do.
+    s.beams.top_km = 140.0;
+    // The report's beams end after 1/dt steps wherever they are: its look
+    // needs the straight-line model and its stopping rules.
+    s.beams.deposition = Deposition::Csda;
+    s.photons.radius_km = 0.2;
+    s.grid.voxel_size = VoxelSize::Km(0.2);
+    s.grid.density_a = 0.9;
+    s.grid.density_b = 0.02;
+    s.grid.density_base_km = 90.0;
+    s.colour.mode = ColourMode::Colormap;
+    s.render.width = 640;
+    s.render.height = 438;
+    s.render.spp = 8;
+    s
+}
+
+/// Ground distance from the oval's dipole pole to its arc, km: magnetic
+/// latitude 90 deg - 2200 / 6371 rad = 70.2 deg, the auroral oval's night
+/// side.
+pub const OVAL_POLE_DISTANCE_KM: f64 = 2200.0;
+/// Length of the oval's arc along its circle of magnetic latitude, km.
+pub const OVAL_LENGTH_KM: f64 = 2500.0;
+
+/// An arc of the auroral oval for a planetarium dome: the lower border
+/// (the path, at 110 km) runs 2500 km along the small circle of magnetic
+/// latitude 70.2 deg about a dipole pole 2200 km north
+/// (`earth.magnetic_pole`), its middle overhead; seen by a 180-degree
+/// fisheye looking at the zenith, north up, with stars. On the round
+/// Earth its ends go down behind the horizon, some 1250 km away.
+pub fn oval() -> Scene {
+    let earth = crate::geometry::earth::Earth::new(crate::geometry::earth::MEAN_RADIUS_KM);
+    let pole = [0.0, OVAL_POLE_DISTANCE_KM];
+    // The small circle's radius in space, R sin(rho / R): its azimuths from
+    // the pole span the arc's length; 33 points, 78 km apart.
+    let rho = OVAL_POLE_DISTANCE_KM;
+    let span_deg = (OVAL_LENGTH_KM / (earth.radius_km * (rho / earth.radius_km).sin())).to_degrees();
+    let south = earth.azimuth_deg(pole, [0.0, 0.0]);
+    let n = 33;
+    let path: Vec<[f64; 2]> = (0..n)
+        .map(|k| {
+            let az = south + span_deg * (0.5 - k as f64 / (n - 1) as f64);
+            let [x, y] = earth.destination(pole, az, rho);
+            // Rounded to metres: the TOML stays readable.
+            [(x * 1e3).round() / 1e3, (y * 1e3).round() / 1e3]
+        })
+        .collect();
+    let mut s = Scene {
+        curtains: vec![Curtain {
+            path: Some(path),
+            width: 40.0,
+            energy_flux: 12.0,
+            char_energy_kev: 4.0,
+            bend_km: 8.0,
+            seed: 1,
+            ..Curtain::default()
+        }],
+        ..default_scene()
+    };
+    s.earth.magnetic_pole = Some(pole);
+    s.beams.count = 50_000;
+    s.photons.radius_km = 1.5;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s.camera = Camera {
+        position: [0.0, 0.0, 0.002],
+        look_at: [0.0, 0.0, 1.0],
+        up: [0.0, 1.0, 0.0],
+        projection: Projection::Fisheye,
+        fov_deg: 180.0,
+        ..Camera::default()
+    };
+    s.render.width = 1024;
+    s.render.height = 1024;
+    // A bright arc (12 mW/m^2) straight overhead: 1.5 stops under the
+    // default exposure keeps its core out of the view transform's shoulder.
+    s.render.exposure = 1.5;
+    s.background.stars = true;
+    s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
+    s
+}
