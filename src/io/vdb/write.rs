@@ -1,6 +1,7 @@
 //! Native OpenVDB writer: file format version 224, byte for byte what
 //! OpenVDB 10 to 12 write for fog-volume `float` and `vec3s` grids made of
-//! leaves (the byte layout: `super::layout`).
+//! leaves (the byte layout: `super::layout`; metadata maps: `super::meta`;
+//! the tree's topology: `super::topology`).
 //!
 //! File layout, in byte order (OpenVDB `io/Archive.cc`, `Archive::writeHeader`
 //! then `Archive::write` / `writeGrid`):
@@ -34,12 +35,15 @@
 //! before anything is renamed into place: NaN or infinity, and in half mode
 //! magnitudes above 65504, are refused with the grid name and voxel.
 
-use super::codec::{self, Deflate, Encoder, Storage};
+use super::codec::{Deflate, Encoder, Storage};
 use super::fileid::piece_hash;
 /// The file-ID code, re-exported for the writer's callers.
 pub use super::fileid::{content_uuid, xxh64};
-use super::layout::{self, INTERNAL16, INTERNAL32};
+use super::layout::{self};
 use super::mantissa;
+pub use super::meta::MetaValue;
+use super::meta::{push_dvec3, push_string, write_meta_map};
+use super::topology::{build_tree, write_mask, write_root_topology};
 use crate::grid::{Grid, Leaf, VoxelValue, LEAF_NUM_VALUES};
 use crate::scene::Compression;
 use glam::IVec3;
@@ -60,18 +64,6 @@ impl GridRef<'_> {
             GridRef::Vec3(g) => &g.name,
         }
     }
-}
-
-/// A per-grid metadata value (OpenVDB `TypedMetadata` types).
-#[derive(Clone, Debug, PartialEq)]
-pub enum MetaValue {
-    String(String),
-    Int64(i64),
-    Float(f32),
-    Double(f64),
-    Bool(bool),
-    Vec3i([i32; 3]),
-    Vec3d([f64; 3]),
 }
 
 /// How to write a file.
@@ -369,96 +361,6 @@ fn encode_file(target: &mut dyn Target, grids: &[GridRef], opts: &WriteOptions) 
     Ok(WriteStats { bytes, uuid, grids: stats })
 }
 
-fn push_string(out: &mut Vec<u8>, s: &str) {
-    out.extend_from_slice(&(s.len() as u32).to_le_bytes());
-    out.extend_from_slice(s.as_bytes());
-}
-
-fn push_dvec3(out: &mut Vec<u8>, v: [f64; 3]) {
-    for x in v {
-        out.extend_from_slice(&x.to_le_bytes());
-    }
-}
-
-/// Encodes one metadata entry as (type name, value bytes).
-fn meta_bytes(v: &MetaValue) -> (&'static str, Vec<u8>) {
-    match v {
-        MetaValue::String(s) => ("string", s.as_bytes().to_vec()),
-        MetaValue::Int64(x) => ("int64", x.to_le_bytes().to_vec()),
-        MetaValue::Float(x) => ("float", x.to_le_bytes().to_vec()),
-        MetaValue::Double(x) => ("double", x.to_le_bytes().to_vec()),
-        MetaValue::Bool(b) => ("bool", vec![*b as u8]),
-        MetaValue::Vec3i(v) => ("vec3i", v.iter().flat_map(|x| x.to_le_bytes()).collect()),
-        MetaValue::Vec3d(v) => ("vec3d", v.iter().flat_map(|x| x.to_le_bytes()).collect()),
-    }
-}
-
-/// MetaMap with keys in byte order (OpenVDB's `std::map<Name, ...>`).
-fn write_meta_map(out: &mut Vec<u8>, mut entries: Vec<(String, MetaValue)>) {
-    entries.sort_by(|a, b| a.0.as_bytes().cmp(b.0.as_bytes()));
-    out.extend_from_slice(&(entries.len() as u32).to_le_bytes());
-    for (k, v) in &entries {
-        let (type_name, bytes) = meta_bytes(v);
-        push_string(out, k);
-        push_string(out, type_name);
-        out.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
-        out.extend_from_slice(&bytes);
-    }
-}
-
-/// A grid's leaves regrouped into the 5-4-3 tree, in file order.
-struct Tree<'g, T> {
-    roots: Vec<RootChild>,
-    /// Leaves in depth-first file order.
-    leaves: Vec<&'g Leaf<T>>,
-}
-
-/// A root child: an Internal32 node and its Internal16 children.
-struct RootChild {
-    origin: IVec3,
-    child_mask: Vec<u64>,
-    nodes: Vec<Node16>,
-}
-
-/// An Internal16 node: its child mask and the range of its leaves in `Tree::leaves`.
-struct Node16 {
-    child_mask: Vec<u64>,
-    leaves: std::ops::Range<usize>,
-}
-
-/// Regroups leaves: sort by (root origin x, y, z, Internal32 slot, Internal16
-/// slot), which is exactly the depth-first order of OpenVDB's tree.
-fn build_tree<T: VoxelValue>(grid: &Grid<T>) -> Tree<'_, T> {
-    // (root origin x, y, z, Internal32 slot, Internal16 slot)
-    type Key = (i32, i32, i32, u32, u32);
-    let mut keyed: Vec<(Key, &Leaf<T>)> = grid
-        .leaves()
-        .iter()
-        .map(|l| {
-            let r = layout::root_child_origin(l.origin);
-            ((r.x, r.y, r.z, layout::internal32_offset(l.origin) as u32, layout::internal16_offset(l.origin) as u32), l)
-        })
-        .collect();
-    keyed.sort_unstable_by_key(|(k, _)| *k);
-    let mut roots: Vec<RootChild> = Vec::new();
-    for (i, ((rx, ry, rz, s32, s16), _)) in keyed.iter().enumerate() {
-        let origin = IVec3::new(*rx, *ry, *rz);
-        if roots.last().is_none_or(|r| r.origin != origin) {
-            roots.push(RootChild { origin, child_mask: vec![0; INTERNAL32.mask_words()], nodes: Vec::new() });
-        }
-        let root = roots.last_mut().expect("just pushed");
-        let new16 = !layout::mask_bit(&root.child_mask, *s32 as usize);
-        if new16 {
-            layout::set_mask_bit(&mut root.child_mask, *s32 as usize);
-            root.nodes.push(Node16 { child_mask: vec![0; INTERNAL16.mask_words()], leaves: i..i });
-        }
-        let node = root.nodes.last_mut().expect("just pushed");
-        layout::set_mask_bit(&mut node.child_mask, *s16 as usize);
-        node.leaves.end = i + 1;
-    }
-    Tree { roots, leaves: keyed.into_iter().map(|(_, l)| l).collect() }
-}
-
 /// Streams descriptor and body of one grid; returns (active voxels, leaves).
 /// The descriptor's three offsets are hashed as zeros and patched once the
 /// grid is written (as OpenVDB's `Archive::writeGrid` seeks back for them).
@@ -555,111 +457,11 @@ fn write_transform(out: &mut Vec<u8>, s: f64, t: [f64; 3]) {
 /// Largest finite half float.
 const HALF_MAX: f32 = 65504.0;
 
-/// Root node topology (OpenVDB `RootNode::writeTopology`): background (rounded
-/// to half in half mode, stored full), tile count 0, child count, then each
-/// child's origin and Internal32 topology in ascending (x, y, z) order.
-fn write_root_topology<T: VoxelValue>(out: &mut Vec<u8>, tree: &Tree<T>, bg: T, flags: u32, st: Storage) {
-    out.extend_from_slice(&1i32.to_le_bytes()); // buffer count
-    codec::push_full(out, if st.half { codec::round_half_value(bg) } else { bg });
-    out.extend_from_slice(&0u32.to_le_bytes());
-    out.extend_from_slice(&(tree.roots.len() as u32).to_le_bytes());
-    // Internal nodes hold the background and zeros: stored exactly.
-    let mut enc = Encoder::new(flags, Storage { mantissa_bits: mantissa::FLOAT_MANTISSA_BITS, ..st });
-    let mut cache = InternalCache::default();
-    for root in &tree.roots {
-        for c in root.origin.to_array() {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-        write_internal32_topology(out, root, tree, bg, &mut enc, &mut cache);
-    }
-}
-
-/// Records of internal nodes whose value arrays are all zero bits (child
-/// slots hold 0, tiles the background +0): identical for every node of a
-/// level, so encoded once.
-#[derive(Default)]
-struct InternalCache {
-    level32: Option<Vec<u8>>,
-    level16: Option<Vec<u8>>,
-}
-
-/// An internal node's value record: slot n holds the tile value (here the
-/// background, inactive) or 0 for child slots; the value mask is empty.
-fn write_internal_values<T: VoxelValue>(
-    out: &mut Vec<u8>,
-    level: layout::InternalLevel,
-    child_mask: &[u64],
-    bg: T,
-    enc: &mut Encoder,
-    cached: &mut Option<Vec<u8>>,
-) {
-    let zero_bits = bg.components().iter().all(|x| x.to_bits() == 0);
-    if zero_bits {
-        if let Some(c) = cached {
-            out.extend_from_slice(c);
-            return;
-        }
-    }
-    let values: Vec<T> = (0..level.num_values()).map(|n| if layout::mask_bit(child_mask, n) { T::ZERO } else { bg }).collect();
-    let value_mask = vec![0u64; level.mask_words()];
-    let start = out.len();
-    enc.write_values(out, &values, &value_mask, Some(child_mask), bg);
-    if zero_bits {
-        *cached = Some(out[start..].to_vec());
-    }
-}
-
-/// Internal32 topology (OpenVDB `InternalNode::writeTopology`): child mask,
-/// value mask, value record, then each child's topology in slot order.
-fn write_internal32_topology<T: VoxelValue>(
-    out: &mut Vec<u8>,
-    root: &RootChild,
-    tree: &Tree<T>,
-    bg: T,
-    enc: &mut Encoder,
-    cache: &mut InternalCache,
-) {
-    write_mask(out, &root.child_mask);
-    write_mask(out, &vec![0u64; INTERNAL32.mask_words()]);
-    write_internal_values(out, INTERNAL32, &root.child_mask, bg, enc, &mut cache.level32);
-    for node in &root.nodes {
-        write_internal16_topology(out, node, tree, bg, enc, cache);
-    }
-}
-
-/// Internal16 topology: child mask, value mask, value record, leaf topologies.
-fn write_internal16_topology<T: VoxelValue>(
-    out: &mut Vec<u8>,
-    node: &Node16,
-    tree: &Tree<T>,
-    bg: T,
-    enc: &mut Encoder,
-    cache: &mut InternalCache,
-) {
-    write_mask(out, &node.child_mask);
-    write_mask(out, &vec![0u64; INTERNAL16.mask_words()]);
-    write_internal_values(out, INTERNAL16, &node.child_mask, bg, enc, &mut cache.level16);
-    for leaf in &tree.leaves[node.leaves.clone()] {
-        write_leaf_topology(out, leaf);
-    }
-}
-
-/// Leaf topology (OpenVDB `LeafNode::writeTopology`): the value mask only.
-fn write_leaf_topology<T: VoxelValue>(out: &mut Vec<u8>, leaf: &Leaf<T>) {
-    write_mask(out, &leaf.mask);
-}
-
 /// Leaf buffers (OpenVDB `LeafNode::writeBuffers`): a copy of the value mask,
 /// then the value record.
 fn write_leaf_buffers<T: VoxelValue>(out: &mut Vec<u8>, leaf: &Leaf<T>, bg: T, enc: &mut Encoder) {
     write_mask(out, &leaf.mask);
     enc.write_values(out, &leaf.values[..], &leaf.mask, None, bg);
-}
-
-fn write_mask(out: &mut Vec<u8>, mask: &[u64]) {
-    for w in mask {
-        out.extend_from_slice(&w.to_le_bytes());
-    }
 }
 
 /// Checks a leaf's values (every one is written in some mode): finite, and
