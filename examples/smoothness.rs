@@ -135,7 +135,7 @@ fn main() {
     if let Some(g) = gather {
         new.photons.gather = g;
     }
-    let old = aurora::app::bench::sweeps::old_estimators(&new);
+    let old = aurora::app::bench::harness::old_estimators(&new);
     let scaled = |s: &Scene| Scene { beams: aurora::scene::BeamParams { count: beams * factor, ..s.beams.clone() }, ..s.clone() };
     let threads = rayon::current_num_threads();
     let load0 = std::fs::read_to_string("/proc/loadavg").unwrap_or_default();

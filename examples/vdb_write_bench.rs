@@ -17,7 +17,7 @@
 //! table and CSV lines
 //! (`csv,mode,voxels,threads,aurora_best,aurora_median,openvdb_best,openvdb_median,aurora_bytes,openvdb_bytes`).
 
-use aurora::app::bench::vdb_write::{bench_write, BenchWrite};
+use aurora::app::bench::vdb_write_timing::{bench_write, BenchWrite};
 use aurora::grid::{Grid, Transform};
 use aurora::io::vdb::read::read_vdb;
 use aurora::io::vdb::write::{GridRef, WriteOptions};

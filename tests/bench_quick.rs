@@ -104,7 +104,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let text = std::fs::read_to_string(out.join("bench.csv")).expect("bench.csv");
     let mut lines = text.lines();
     let header = parse_csv_line(lines.next().expect("header"));
-    assert_eq!(header, aurora::app::bench::chart::CSV_HEADER.split(',').collect::<Vec<_>>());
+    assert_eq!(header, aurora::app::bench::measurement::CSV_HEADER.split(',').collect::<Vec<_>>());
     let rows: Vec<Row> = lines
         .map(|l| {
             let f = parse_csv_line(l);
@@ -113,7 +113,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         })
         .collect();
     for r in &rows {
-        let (s, e) = (num(r, "seconds"), num(r, "error"));
+        let (s, e) = (num(r, "cost"), num(r, "error"));
         assert!(s > 0.0 && s.is_finite() && e >= 0.0 && e.is_finite(), "{r:?}");
         assert!(["0", "1"].contains(&r["pareto"].as_str()) && ["0", "1"].contains(&r["scene_setting"].as_str()));
     }
@@ -122,7 +122,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         assert!(sel.len() >= 3, "{st}: {} rows", sel.len());
         // Pareto flags: a flagged point is dominated by no other; an
         // unflagged one is dominated (or repeats an earlier flagged point).
-        let pts: Vec<(f64, f64)> = sel.iter().map(|r| (num(r, "seconds"), num(r, "error"))).collect();
+        let pts: Vec<(f64, f64)> = sel.iter().map(|r| (num(r, "cost"), num(r, "error"))).collect();
         for (i, r) in sel.iter().enumerate() {
             let dominated =
                 pts.iter().enumerate().any(|(j, q)| j != i && q.0 <= pts[i].0 && q.1 <= pts[i].1 && (q.0 < pts[i].0 || q.1 < pts[i].1));
@@ -175,13 +175,13 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     let scene_gather: Vec<f64> = rows
         .iter()
         .filter(|r| r["scene_setting"] == "1" && ["gather radius", "gather method", "voxel size"].contains(&r["study"].as_str()))
-        .map(|r| num(r, "seconds"))
+        .map(|r| num(r, "cost"))
         .collect();
     assert_eq!(scene_gather.len(), 3);
     assert!(scene_gather.iter().all(|&t| t == scene_gather[0]), "{scene_gather:?}");
     // The photon-count study adds the beam trace to the same gather.
     let pc = rows.iter().find(|r| r["study"] == "photon count" && r["scene_setting"] == "1").unwrap();
-    assert!(num(pc, "seconds") > scene_gather[0], "beams + gather > gather");
+    assert!(num(pc, "cost") > scene_gather[0], "beams + gather > gather");
 
     // --- charts
     for st in studies {
@@ -220,7 +220,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         // The fastest setting at least as accurate as the scene's is no
         // slower and no less accurate than it.
         let best = &s["fastest_at_least_as_accurate_as_scene"];
-        assert!(best["seconds"].as_f64().unwrap() <= num(scene_row, "seconds"));
+        assert!(best["cost"].as_f64().unwrap() <= num(scene_row, "cost"));
         assert!(best["error"].as_f64().unwrap() <= num(scene_row, "error"));
     }
 }

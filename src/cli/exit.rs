@@ -66,7 +66,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::pipeline::footprint::FootprintError,
         aurora::render::RenderError,
         aurora::app::preview::PreviewError,
-        aurora::app::bench::sweeps::SweepError,
+        aurora::app::bench::harness::SweepError,
         aurora::app::bench::report::ReportError,
     );
     false

@@ -7,99 +7,9 @@
 //! front drawn over them. A reference measured against itself has error 0,
 //! which a log axis cannot show: it is drawn as a triangle on the bottom edge.
 
+use super::measurement::{pareto_front, CostUnit, Measurement};
 use plotters::prelude::*;
 use std::path::Path;
-
-/// One run of one method at one setting.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Measurement {
-    /// What is being swept, e.g. "photon count".
-    pub study: String,
-    /// The curve it belongs to, e.g. "kd-tree gather".
-    pub method: String,
-    /// The swept parameter's name and value, e.g. ("beams", 20000).
-    pub param_name: String,
-    pub param: f64,
-    /// The stage whose wall time `seconds` is, e.g. "gather" or "render".
-    pub stage: String,
-    /// Wall time, seconds; for the storage studies (`stage` =
-    /// [`super::storage::SIZE_STAGE`]) the file's size in MB.
-    pub seconds: f64,
-    /// Error against the reference (relative RMS unless `metric` says otherwise).
-    pub error: f64,
-    pub metric: String,
-    /// This run uses the given scene's own setting for what is swept.
-    pub scene_setting: bool,
-}
-
-/// Indices of the points on the Pareto front of (time, error), both to be
-/// minimised: no other point is at least as good in both and better in one.
-/// Returned in ascending time.
-pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..points.len()).filter(|&i| points[i].0.is_finite() && points[i].1.is_finite()).collect();
-    idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
-    let mut front = Vec::new();
-    let mut best = f64::INFINITY;
-    for i in idx {
-        if points[i].1 < best {
-            best = points[i].1;
-            front.push(i);
-        }
-    }
-    front
-}
-
-/// The header of [`to_csv`].
-pub const CSV_HEADER: &str = "study,method,param_name,param,stage,seconds,error,metric,scene_setting,pareto";
-
-/// `bench.csv`: one row per measurement, plus a Pareto flag within its study.
-pub fn to_csv(ms: &[Measurement]) -> String {
-    let mut s = format!("{CSV_HEADER}\n");
-    let on_front = front_flags(ms);
-    for (m, p) in ms.iter().zip(on_front) {
-        s += &format!(
-            // Shortest round-trip representations: the CSV holds exactly
-            // the numbers the Pareto flags were computed from.
-            "{},{},{},{},{},{},{:e},{},{},{}\n",
-            csv_field(&m.study),
-            csv_field(&m.method),
-            csv_field(&m.param_name),
-            m.param,
-            csv_field(&m.stage),
-            m.seconds,
-            m.error,
-            csv_field(&m.metric),
-            m.scene_setting as u8,
-            p as u8
-        );
-    }
-    s
-}
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-/// For each measurement, whether it is on its study's Pareto front.
-pub fn front_flags(ms: &[Measurement]) -> Vec<bool> {
-    let mut flags = vec![false; ms.len()];
-    let mut studies: Vec<&str> = ms.iter().map(|m| m.study.as_str()).collect();
-    studies.dedup();
-    studies.sort();
-    studies.dedup();
-    for st in studies {
-        let ids: Vec<usize> = (0..ms.len()).filter(|&i| ms[i].study == st).collect();
-        let pts: Vec<(f64, f64)> = ids.iter().map(|&i| (ms[i].seconds, ms[i].error)).collect();
-        for k in pareto_front(&pts) {
-            flags[ids[k]] = true;
-        }
-    }
-    flags
-}
 
 /// Registers DejaVu Sans (Debian's fonts-dejavu-core) for chart text.
 fn ensure_font() -> Result<(), ChartError> {
@@ -188,16 +98,15 @@ fn draw_on<DB: DrawingBackend>(root: DrawingArea<DB, plotters::coord::Shift>, ms
 where
     DB::ErrorType: 'static,
 {
-    let sel: Vec<&Measurement> =
-        ms.iter().filter(|m| m.study == study && m.seconds > 0.0 && m.error >= 0.0 && m.error.is_finite()).collect();
+    let sel: Vec<&Measurement> = ms.iter().filter(|m| m.study == study && m.cost > 0.0 && m.error >= 0.0 && m.error.is_finite()).collect();
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     if !sel.iter().any(|m| m.error > 0.0) {
         return Err(format!("study '{study}' has no finite positive measurements"));
     }
     let (mut t0, mut t1, mut e0, mut e1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
     for m in &sel {
-        t0 = t0.min(m.seconds);
-        t1 = t1.max(m.seconds);
+        t0 = t0.min(m.cost);
+        t1 = t1.max(m.cost);
         if m.error > 0.0 {
             e0 = e0.min(m.error);
             e1 = e1.max(m.error);
@@ -208,14 +117,14 @@ where
     let (e0, e1) = (e0 / 1.5, e1 * 1.5);
     // Where an error of exactly 0 (a reference against itself) is drawn.
     let floor = e0 * 1.05;
-    let shown = |m: &Measurement| (m.seconds, if m.error > 0.0 { m.error } else { floor });
+    let shown = |m: &Measurement| (m.cost, if m.error > 0.0 { m.error } else { floor });
     let metric = sel[0].metric.clone();
     let stage = sel[0].stage.clone();
-    // The storage studies put the file's size where the others put a time.
-    let (against, x_desc) = if stage == super::storage::SIZE_STAGE {
-        ("size", "file size (MB)".to_string())
-    } else {
-        ("time", format!("wall time of {stage} (s)"))
+    let unit = sel[0].unit;
+    let against = unit.quantity();
+    let x_desc = match unit {
+        CostUnit::Seconds => format!("wall time of {stage} (s)"),
+        CostUnit::Megabytes => format!("{stage} ({})", unit.symbol()),
     };
     let mut chart = ChartBuilder::on(&root)
         .caption(format!("{study}: {against} against error"), ("sans-serif", 24))
@@ -248,7 +157,7 @@ where
         let color = PALETTE[k % PALETTE.len()];
         let mut pts: Vec<&&Measurement> = sel.iter().filter(|m| m.method == *method).collect();
         pts.sort_by(|a, b| a.param.total_cmp(&b.param));
-        let series: Vec<(f64, f64)> = pts.iter().filter(|m| m.error > 0.0).map(|m| (m.seconds, m.error)).collect();
+        let series: Vec<(f64, f64)> = pts.iter().filter(|m| m.error > 0.0).map(|m| (m.cost, m.error)).collect();
         chart
             .draw_series(LineSeries::new(series.clone(), color.stroke_width(2)))
             .map_err(|e| e.to_string())?
@@ -270,7 +179,7 @@ where
             .map_err(|e| e.to_string())?;
     }
     // The Pareto front over all methods of this study.
-    let all: Vec<(f64, f64)> = sel.iter().map(|m| (m.seconds, m.error)).collect();
+    let all: Vec<(f64, f64)> = sel.iter().map(|m| (m.cost, m.error)).collect();
     let front: Vec<(f64, f64)> = pareto_front(&all).into_iter().map(|i| shown(sel[i])).collect();
     chart
         .draw_series(LineSeries::new(front.clone(), BLACK.stroke_width(1)))
@@ -386,31 +295,6 @@ mod tests {
     }
 
     #[test]
-    fn csv_marks_front_per_study() {
-        let m = |study: &str, s: f64, e: f64| Measurement {
-            study: study.into(),
-            method: "m".into(),
-            param_name: "p".into(),
-            param: 1.0,
-            stage: "gather".into(),
-            seconds: s,
-            error: e,
-            metric: "rel".into(),
-            scene_setting: false,
-        };
-        let ms = vec![m("a", 1.0, 1.0), m("a", 2.0, 2.0), m("b", 2.0, 2.0)];
-        assert_eq!(front_flags(&ms), vec![true, false, true]);
-        let csv = to_csv(&ms);
-        assert_eq!(csv.lines().count(), 4);
-        assert_eq!(csv.lines().next().unwrap(), CSV_HEADER);
-        assert!(csv.lines().nth(2).unwrap().ends_with(",0"));
-        // Numbers are written so that they read back exactly.
-        let row: Vec<&str> = csv.lines().nth(1).unwrap().split(',').collect();
-        assert_eq!(row[5].parse::<f64>().unwrap(), 1.0);
-        assert_eq!(row[6].parse::<f64>().unwrap(), 1.0);
-    }
-
-    #[test]
     fn chart_files_are_written() {
         let dir = std::env::temp_dir().join(format!("aurora-chart-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -421,7 +305,8 @@ mod tests {
                 param_name: "n".into(),
                 param: k as f64,
                 stage: "render".into(),
-                seconds: 0.1 * k as f64,
+                cost: 0.1 * k as f64,
+                unit: CostUnit::Seconds,
                 // The last point is a reference: error 0.
                 error: if k == 5 { 0.0 } else { 1.0 / k as f64 },
                 metric: "rel".into(),

@@ -1,38 +1,32 @@
 //! `aurora bench`: speed against accuracy for every method choice.
 //!
-//! [`run`] reduces the scene ([`reduced`]), runs every study ([`sweeps`]):
+//! [`run`] reduces the scene ([`reduced`]), runs every study ([`studies`],
+//! on the [`harness`]):
 //! photon count, gather radius, gather method, voxel size, primary-ray
 //! integration, pruning, storage (bytes against picture error,
-//! [`storage`]), shadow rays and animation flicker
-//! ([`animation`]), each measuring wall time of the affected
+//! `studies::storage`), shadow rays and animation flicker, each measuring wall time of the affected
 //! stage against error relative to a converged reference, and returns a
 //! [`report::BenchRun`]; [`report::write`] leaves `bench.csv`, `bench.json`
 //! and a chart per study (PNG and SVG, [`chart`]) in the output folder.
 //! Speed targets live here and in the committed runs under
 //! `benchmarks/bench/`, never in unit tests.
 
-pub mod animation;
 pub mod chart;
-pub mod integration;
+pub mod harness;
+pub mod measurement;
 pub mod metrics;
-pub mod photons;
-pub mod prune;
-pub mod radius;
 pub mod reduced;
 pub mod report;
-pub mod shadow;
-pub mod storage;
-pub mod sweeps;
-pub mod vdb_write;
-pub mod voxel;
+pub mod studies;
+pub mod vdb_write_timing;
 
 use crate::pipeline::bake::plan::{self, BakePlan};
 use crate::pipeline::bake::BakeError;
 use crate::scene::{Scene, VoxelSize};
 use crate::util::progress::NoProgress;
+use harness::{Bench, Plan, SweepError};
 use report::{BenchRun, Machine};
 use std::time::{Instant, SystemTime};
-use sweeps::{Bench, Plan, SweepError};
 
 /// The storage studies alone on the full `scene` (not reduced): its
 /// camera at its own image size and a 1024 x 1024 dome master, each picture
@@ -51,8 +45,8 @@ pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync))
     plan.retime = false;
     let b = Bench::new(scene.clone(), plan.clone(), log);
     let studies = vec![
-        b.storage_study(storage::View::Scene, [scene.render.width, scene.render.height])?,
-        b.storage_study(storage::View::Dome, plan.dome_image)?,
+        b.storage_study(studies::storage::View::Scene, [scene.render.width, scene.render.height])?,
+        b.storage_study(studies::storage::View::Dome, plan.dome_image)?,
     ];
     let reduction = vec!["none: the storage studies run on the full scene".into()];
     started.finish(scene, scene_name, plan, (scene.to_toml(), reduction), studies, log)
@@ -80,7 +74,7 @@ impl Started {
         scene_name: &str,
         plan: Plan,
         reduced: (String, Vec<String>),
-        studies: Vec<sweeps::Study>,
+        studies: Vec<harness::Study>,
         log: &(dyn Fn(&str) + Sync),
     ) -> Result<BenchRun, SweepError> {
         let throughput = throughput(scene, log)?;
@@ -133,10 +127,10 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
     let grids = b.bake_grids()?;
     studies.push(b.integration_study(&grids)?);
     studies.push(b.prune_study()?);
-    studies.push(b.storage_study(storage::View::Scene, plan.volume_image)?);
-    studies.push(b.storage_study(storage::View::Dome, plan.dome_image)?);
+    studies.push(b.storage_study(studies::storage::View::Scene, plan.volume_image)?);
+    studies.push(b.storage_study(studies::storage::View::Dome, plan.dome_image)?);
     studies.push(b.shadow_study(&grids)?);
-    studies.push(animation::animation_study(&red.scene, &plan, log)?);
+    studies.push(studies::flicker::animation_study(&red.scene, &plan, log)?);
     if plan.retime {
         b.retime(&mut studies)?;
     }

@@ -3,8 +3,9 @@
 //! best settings), one chart per study (`<study>.png` and `.svg`), and the
 //! summary table printed on stdout.
 
-use super::chart::{self, front_flags, Measurement};
-use super::sweeps::{Plan, Study};
+use super::chart;
+use super::harness::{Plan, Study};
+use super::measurement::{front_flags, Measurement};
 use crate::util::atomic_write::write_atomic;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
@@ -104,7 +105,8 @@ fn point(m: &Measurement) -> Value {
     json!({
         "method": m.method,
         m.param_name.clone(): m.param,
-        "seconds": m.seconds,
+        "cost": m.cost,
+        "unit": m.unit.symbol(),
         "error": m.error,
     })
 }
@@ -117,14 +119,15 @@ pub fn study_json(st: &Study) -> Value {
     let flags = front_flags(ms);
     let front: Vec<Value> = ms.iter().zip(&flags).filter(|(_, &f)| f).map(|(m, _)| point(m)).collect();
     let scene = ms.iter().zip(&flags).find(|(m, _)| m.scene_setting);
-    let most_accurate = ms.iter().min_by(|a, b| a.error.total_cmp(&b.error).then(a.seconds.total_cmp(&b.seconds)));
-    let as_good = scene.and_then(|(s, _)| ms.iter().filter(|m| m.error <= s.error).min_by(|a, b| a.seconds.total_cmp(&b.seconds)));
+    let most_accurate = ms.iter().min_by(|a, b| a.error.total_cmp(&b.error).then(a.cost.total_cmp(&b.cost)));
+    let as_good = scene.and_then(|(s, _)| ms.iter().filter(|m| m.error <= s.error).min_by(|a, b| a.cost.total_cmp(&b.cost)));
     json!({
         "study": st.name,
         "timed_stage": st.stage,
         "metric": st.metric,
         "reference": st.reference,
-        "reference_seconds": st.reference_seconds,
+        "reference_cost": st.reference_cost,
+        "unit": st.unit.symbol(),
         "notes": st.notes,
         "pareto_front": front,
         "scene_setting": scene.map(|(m, _)| point(m)),
@@ -205,11 +208,13 @@ pub fn summary(run: &BenchRun) -> String {
     );
     for st in &run.studies {
         let flags = front_flags(&st.measurements);
-        // The storage studies measure a file's size, not a time.
-        let size = st.stage == super::storage::SIZE_STAGE;
-        let (what, unit, col) = if size { ("size", "MB", "MB") } else { ("time", "s", "seconds") };
+        let (what, unit) = (st.unit.quantity(), st.unit.symbol());
+        let col = match st.unit {
+            super::measurement::CostUnit::Seconds => "seconds",
+            super::measurement::CostUnit::Megabytes => unit,
+        };
         let _ = writeln!(s, "\n== {} ({what}: {}; error: {})", st.name, st.stage, st.metric);
-        let _ = writeln!(s, "   reference: {} ({:.2} {unit})", st.reference, st.reference_seconds);
+        let _ = writeln!(s, "   reference: {} ({:.2} {unit})", st.reference, st.reference_cost);
         let _ = writeln!(s, "   {:<44} {:>12} {:>10} {:>11}  front scene", "method", "param", col, "error");
         for (m, f) in st.measurements.iter().zip(&flags) {
             let _ = writeln!(
@@ -217,7 +222,7 @@ pub fn summary(run: &BenchRun) -> String {
                 "   {:<44} {:>12} {:>10.4} {:>11.4e}  {:^5} {:^5}",
                 m.method,
                 format!("{}={}", short(&m.param_name), m.param),
-                m.seconds,
+                m.cost,
                 m.error,
                 if *f { "F" } else { "" },
                 if m.scene_setting { "*" } else { "" }
@@ -281,7 +286,7 @@ pub fn write(run: &BenchRun, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
     let mut written = Vec::new();
     let ms = run.measurements();
     let csv = dir.join("bench.csv");
-    write_atomic(&csv, chart::to_csv(&ms).as_bytes()).map_err(|e| io(&csv)(e.into()))?;
+    write_atomic(&csv, super::measurement::to_csv(&ms).as_bytes()).map_err(|e| io(&csv)(e.into()))?;
     written.push(csv);
     for st in &run.studies {
         let name = slug(&st.name);

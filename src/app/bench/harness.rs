@@ -41,7 +41,7 @@
 //! settings measured during it. Results are deterministic; only the times
 //! vary between runs.
 
-use super::chart::Measurement;
+use super::measurement::{Cost, CostUnit, Measurement};
 use super::reduced::volume_camera;
 use crate::grid::Grid;
 use crate::pipeline::bake::plan::{self, BakePlan};
@@ -169,8 +169,10 @@ pub struct Study {
     pub metric: String,
     /// What the errors are measured against.
     pub reference: String,
-    /// Wall time of the reference's timed stage, seconds.
-    pub reference_seconds: f64,
+    /// The reference's cost: wall time of its timed stage, or its file's size.
+    pub reference_cost: f64,
+    /// The unit of the reference's and the measurements' costs.
+    pub unit: CostUnit,
     /// The parameter whose increase is expected to lower the error, per
     /// method (`+1`: error falls as the parameter grows, `-1`: it rises).
     pub expected_trend: Vec<(String, i32)>,
@@ -339,7 +341,7 @@ impl<'a> Bench<'a> {
             for st in studies.iter_mut() {
                 for m in st.measurements.iter_mut() {
                     if (&m.study, &m.method, m.param.to_bits()) == (&id.0, &id.1, id.2) {
-                        m.seconds = best;
+                        m.cost = best;
                     }
                 }
             }
@@ -424,14 +426,15 @@ impl<'a> Bench<'a> {
         param_name: &str,
         param: f64,
         stage: &str,
-        seconds: f64,
+        cost: Cost,
         error: f64,
         metric: &str,
         scene_setting: bool,
     ) -> Measurement {
-        let unit = if stage == super::storage::SIZE_STAGE { "MB" } else { "s" };
+        let Cost(value, unit) = cost;
         self.say(&format!(
-            "{study}: {method}, {param_name} = {param}: {seconds:.3} {unit} ({stage}), error {error:.4e}{}",
+            "{study}: {method}, {param_name} = {param}: {value:.3} {} ({stage}), error {error:.4e}{}",
+            unit.symbol(),
             if scene_setting { " [scene setting]" } else { "" }
         ));
         Measurement {
@@ -440,7 +443,8 @@ impl<'a> Bench<'a> {
             param_name: param_name.into(),
             param,
             stage: stage.into(),
-            seconds,
+            cost: value,
+            unit,
             error,
             metric: metric.into(),
             scene_setting,

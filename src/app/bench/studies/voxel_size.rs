@@ -1,8 +1,9 @@
 //! The voxel size study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::grid_rel_rms;
-use super::sweeps::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::grid_rel_rms;
 use crate::scene::GatherMethod;
 
 impl<'a> Bench<'a> {
@@ -25,7 +26,7 @@ impl<'a> Bench<'a> {
                 let (g, secs) = self.gather(n, r, vv, method)?;
                 let e = grid_rel_rms(&g, &reference);
                 let here = f == 1.0 && method == self.scene.photons.gather;
-                ms.push(self.measure(name, label, "voxel_km", vv, "gather", secs, e, metric, here));
+                ms.push(self.measure(name, label, "voxel_km", vv, "gather", Cost::seconds(secs), e, metric, here));
                 self.note_last(&ms, gather_key(n, r, vv, method), 0.0);
             }
         }
@@ -34,7 +35,8 @@ impl<'a> Bench<'a> {
             stage: "gather".into(),
             metric: metric.into(),
             reference: format!("the same photons ({n} beams) and method on voxels of {v_ref} km; kernel r = {r} km"),
-            reference_seconds: ref_secs,
+            reference_cost: ref_secs,
+            unit: CostUnit::Seconds,
             expected_trend: trend,
             notes: vec!["Pure discretisation: the photons and kernel are those of the reference, so the error is that of storing the estimate at voxel centres and reading it back trilinearly (as Cycles does), against a finer grid.".into()],
             measurements: ms,

@@ -15,9 +15,9 @@
 //! the still (t = 0): motion is closed form in t, so they cost the same;
 //! the ratios go into the study's notes, with frames per second.
 
-use super::chart::Measurement;
-use super::metrics::grid_rel_rms;
-use super::sweeps::{timed, Plan, Study, SweepError};
+use crate::app::bench::harness::{timed, Plan, Study, SweepError};
+use crate::app::bench::measurement::{CostUnit, Measurement};
+use crate::app::bench::metrics::grid_rel_rms;
 use crate::pipeline::bake;
 use crate::scene::Scene;
 use crate::util::progress::NoProgress;
@@ -67,7 +67,8 @@ pub fn animation_study(scene: &Scene, plan: &Plan, log: &(dyn Fn(&str) + Sync)) 
                 param_name: "beams".into(),
                 param: beams as f64,
                 stage: "bake (one frame)".into(),
-                seconds: secs,
+                cost: secs,
+                unit: CostUnit::Seconds,
                 error: ratio,
                 metric: "frame-to-frame change / motion's own change".into(),
                 scene_setting: beams == n && method == "beam identity",
@@ -95,7 +96,8 @@ pub fn animation_study(scene: &Scene, plan: &Plan, log: &(dyn Fn(&str) + Sync)) 
         stage: "bake (one frame)".into(),
         metric: "frame-to-frame change / motion's own change".into(),
         reference: format!("{n_ref} beams, same streams, frames at t = {T0} s and +1/fps"),
-        reference_seconds: ref_s,
+        reference_cost: ref_s,
+        unit: CostUnit::Seconds,
         expected_trend: vec![("beam identity".into(), 1), ("redrawn each frame".into(), 1)],
         notes,
         measurements: ms,

@@ -1,9 +1,10 @@
 //! The shadow rays study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::image_rel_error_masked;
-use super::reduced::{ground_camera, ground_terrain};
-use super::sweeps::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::image_rel_error_masked;
+use crate::app::bench::reduced::{ground_camera, ground_terrain};
 use crate::pipeline::bake::{self};
 use crate::render::{Integration, Prepared, RenderSettings, Volume};
 
@@ -61,7 +62,7 @@ impl<'a> Bench<'a> {
                 let (e, _) = image_rel_error_masked(&img.pixels, &reference.pixels, &mask, 0.01);
                 // The CLI renders with the scene's spp and one shadow ray per hit.
                 let here = !per_hit && k == scene_spp;
-                ms.push(self.measure(name, label, "samples", k as f64, "render", secs, e, metric, here));
+                ms.push(self.measure(name, label, "samples", k as f64, "render", Cost::seconds(secs), e, metric, here));
             }
         }
         Ok(Study {
@@ -72,7 +73,8 @@ impl<'a> Bench<'a> {
                 "the same estimator with {big} samples per pixel ({w}x{h} px, {terrain_px} terrain pixels; bench ground camera, terrain {:?})",
                 s.terrain.kind
             ),
-            reference_seconds: ref_secs,
+            reference_cost: ref_secs,
+            unit: CostUnit::Seconds,
             expected_trend: methods.iter().map(|(l, _)| (l.to_string(), 1)).collect(),
             notes: vec![
                 "Each curve has its own reference (its estimator with many samples): 'shadow rays per hit' converges to the pixel-centre value, 'pixel samples' to the pixel's box-filtered value. Both errors are Monte Carlo noise, falling as samples^-1/2.".into(),

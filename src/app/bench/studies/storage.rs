@@ -30,10 +30,11 @@
 //! Pruning follows the camera, so each view is its own study: the scene's
 //! camera, and a dome master (a 180-degree fisheye looking up from the
 //! scene's camera position). The x axis of the chart is the file's size in
-//! MB ([`SIZE_STAGE`]); its `seconds` field holds that size.
+//! MB ([`SIZE_STAGE`], in [`CostUnit::Megabytes`]).
 
-use super::metrics::image_rel_error_masked;
-use super::sweeps::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::image_rel_error_masked;
 use crate::geometry::earth::Earth;
 use crate::grid::high_column::{self, Column};
 use crate::grid::Grid;
@@ -175,7 +176,7 @@ impl<'a> Bench<'a> {
             let img = render(w)?;
             let (err, flux) = image_rel_error_masked(&img.pixels, &reference.pixels, &all, 0.01);
             notes.push(format!("{method}, {param_name} = {param}: {} bytes, error {err:.5}, flux {flux:.5}", w.len()));
-            ms.push(self.measure(name, method, param_name, param, SIZE_STAGE, mb(w), err, metric, scene_setting));
+            ms.push(self.measure(name, method, param_name, param, SIZE_STAGE, Cost::megabytes(mb(w)), err, metric, scene_setting));
             Ok(())
         };
         let g = &self.scene.grid;
@@ -239,7 +240,8 @@ impl<'a> Bench<'a> {
                 image[1],
                 if view == View::Dome { "180-degree fisheye up" } else { "the scene's camera" }
             ),
-            reference_seconds: mb(&reference_file),
+            reference_cost: mb(&reference_file),
+            unit: CostUnit::Megabytes,
             expected_trend: vec![],
             notes,
             measurements: ms,

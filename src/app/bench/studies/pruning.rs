@@ -1,8 +1,9 @@
 //! The pruning study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::image_rel_error_masked;
-use super::sweeps::{timed, Bench, Study, SweepError};
+use crate::app::bench::harness::{timed, Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::image_rel_error_masked;
 use crate::grid::Grid;
 use crate::io::vdb::write::GridRef;
 use crate::pipeline::bake::{self};
@@ -58,7 +59,8 @@ impl<'a> Bench<'a> {
         let all = vec![true; full.pixels.len()];
         let (full_bytes, full_s) = write(&full_e, &full_d);
         let scene_budget = self.scene.grid.prune;
-        let mut ms = vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", full_s, 0.0, metric, scene_budget == 0.0)];
+        let mut ms =
+            vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", Cost::seconds(full_s), 0.0, metric, scene_budget == 0.0)];
         let mut notes = vec![format!(
             "Unpruned: {} aurora voxels, {} leaves, {full_bytes} bytes (VDB, scene compression, Cycles shell: {}). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
             base.emission.active_voxel_count(),
@@ -87,7 +89,17 @@ impl<'a> Bench<'a> {
                 st.removed_fraction,
                 nb as f64 / full_bytes.max(1) as f64
             ));
-            ms.push(self.measure(name, "contribution pruning", "budget", b, "vdb write", secs, err, metric, b == scene_budget));
+            ms.push(self.measure(
+                name,
+                "contribution pruning",
+                "budget",
+                b,
+                "vdb write",
+                Cost::seconds(secs),
+                err,
+                metric,
+                b == scene_budget,
+            ));
         }
         notes.push(format!("The scene's grid.prune = {scene_budget}."));
         Ok(Study {
@@ -98,7 +110,8 @@ impl<'a> Bench<'a> {
                 "the unpruned bake's image ({}x{} px, spp 1, exact integration; bench volume camera, no terrain)",
                 full.width, full.height
             ),
-            reference_seconds: full_s,
+            reference_cost: full_s,
+            unit: CostUnit::Seconds,
             expected_trend: vec![("contribution pruning".into(), -1)],
             notes,
             measurements: ms,

@@ -1,8 +1,9 @@
 //! The photon count and gather method study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::{grid_rel_rms, grid_rel_rms_best_scale};
-use super::sweeps::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::{grid_rel_rms, grid_rel_rms_best_scale};
 use crate::scene::GatherMethod;
 
 impl<'a> Bench<'a> {
@@ -27,7 +28,7 @@ impl<'a> Bench<'a> {
             if k == n {
                 err_n = Some(e);
             }
-            ms.push(self.measure(name, &method, "beams", k as f64, "beams+gather", trace_s + gather_s, e, metric, k == n));
+            ms.push(self.measure(name, &method, "beams", k as f64, "beams+gather", Cost::seconds(trace_s + gather_s), e, metric, k == n));
             self.note_last(&ms, gather_key(k, r, v, gm), trace_s);
         }
         // The old estimators over the same beam counts, on the same chart.
@@ -37,7 +38,7 @@ impl<'a> Bench<'a> {
             let k = self.beams_times(f);
             let (g, trace_s, gather_s) = self.old_estimator_grid(k)?;
             let e = grid_rel_rms(&g, &reference);
-            ms.push(self.measure(name, &old_label, "beams", k as f64, "beams+gather", trace_s + gather_s, e, metric, false));
+            ms.push(self.measure(name, &old_label, "beams", k as f64, "beams+gather", Cost::seconds(trace_s + gather_s), e, metric, false));
             old_gathers.push((k, gather_s, e));
         }
         let mut notes = vec![format!(
@@ -54,7 +55,8 @@ impl<'a> Bench<'a> {
             stage: "beams+gather".into(),
             metric: metric.into(),
             reference: format!("kd-tree gather of {m} beams, same radius (r = {r} km, radius noise as in the scene) and voxel ({v} km)"),
-            reference_seconds: ref_secs + self.photons[&m].1,
+            reference_cost: ref_secs + self.photons[&m].1,
+            unit: CostUnit::Seconds,
             expected_trend: vec![(method.clone(), 1), (old_label.clone(), 1)],
             notes,
             measurements: ms,
@@ -79,11 +81,31 @@ impl<'a> Bench<'a> {
                 let k = self.beams_times(f);
                 let (g, secs) = self.gather(k, r, v, method)?;
                 let here = method == scene_gather && k == n;
-                ms.push(self.measure(name, label, "beams", k as f64, "gather", secs, grid_rel_rms(&g, &reference), metric, here));
+                ms.push(self.measure(
+                    name,
+                    label,
+                    "beams",
+                    k as f64,
+                    "gather",
+                    Cost::seconds(secs),
+                    grid_rel_rms(&g, &reference),
+                    metric,
+                    here,
+                ));
                 self.note_last(&ms, gather_key(k, r, v, method), 0.0);
                 if method == GatherMethod::Report2014 {
                     let (e, s) = grid_rel_rms_best_scale(&g, &reference);
-                    scaled.push(self.measure(name, "report2014, best-fit scale", "beams", k as f64, "gather", secs, e, metric, false));
+                    scaled.push(self.measure(
+                        name,
+                        "report2014, best-fit scale",
+                        "beams",
+                        k as f64,
+                        "gather",
+                        Cost::seconds(secs),
+                        e,
+                        metric,
+                        false,
+                    ));
                     self.note_last(&scaled, gather_key(k, r, v, method), 0.0);
                     self.say(&format!("  (report2014 best-fit scale factor {s:.4e})"));
                 }
@@ -101,7 +123,7 @@ impl<'a> Bench<'a> {
                     (s, grid_rel_rms(&g, &reference))
                 }
             };
-            ms.push(self.measure(name, &old_label, "beams", k as f64, "gather", gather_s, e, metric, false));
+            ms.push(self.measure(name, &old_label, "beams", k as f64, "gather", Cost::seconds(gather_s), e, metric, false));
         }
         trend.push((old_label.clone(), 1));
         let gather = Study {
@@ -109,7 +131,8 @@ impl<'a> Bench<'a> {
             stage: "gather".into(),
             metric: metric.into(),
             reference: photon.reference.clone(),
-            reference_seconds: ref_secs,
+            reference_cost: ref_secs,
+            unit: CostUnit::Seconds,
             expected_trend: trend,
             notes: vec![
                 "kd-tree is a balloon estimator (radius at the voxel), splat a sample-point estimator (radius at the photon): with radius noise they differ slightly, without it they are the same sum.".into(),

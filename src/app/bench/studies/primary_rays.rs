@@ -1,8 +1,9 @@
 //! The primary-ray integration study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::image_rel_error_masked;
-use super::sweeps::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::image_rel_error_masked;
 use crate::pipeline::bake::{self};
 use crate::render::{Integration, Volume};
 
@@ -17,7 +18,7 @@ impl<'a> Bench<'a> {
         s.integration = Integration::Exact;
         let (exact, exact_s) = self.render_timed(&s, &vol)?;
         let all = vec![true; exact.pixels.len()];
-        let mut ms = vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", exact_s, 0.0, metric, true)];
+        let mut ms = vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", Cost::seconds(exact_s), 0.0, metric, true)];
         let mut flux = Vec::new();
         for f in self.plan.step_factors.clone() {
             let h = v * f;
@@ -25,7 +26,7 @@ impl<'a> Bench<'a> {
             let (img, secs) = self.render_timed(&s, &vol)?;
             let (e, fl) = image_rel_error_masked(&img.pixels, &exact.pixels, &all, 0.01);
             flux.push(format!("h = {h} km: {fl:.5}"));
-            ms.push(self.measure(name, "fixed step", "step_km", h, "render", secs, e, metric, false));
+            ms.push(self.measure(name, "fixed step", "step_km", h, "render", Cost::seconds(secs), e, metric, false));
         }
         let lit = exact.pixels.iter().filter(|p| p[1] > 0.0).count();
         Ok(Study {
@@ -36,7 +37,8 @@ impl<'a> Bench<'a> {
                 "the exact integrator's image ({}x{} px, spp 1, {} pixels with emission; camera: bench volume camera, no terrain)",
                 exact.width, exact.height, lit
             ),
-            reference_seconds: exact_s,
+            reference_cost: exact_s,
+            unit: CostUnit::Seconds,
             expected_trend: vec![("fixed step".into(), -1)],
             notes: vec![
                 format!("Voxel size {v} km; steps are multiples of it. Exact integration is the reference (error 0, drawn on the bottom edge); its own error against closed forms is below 1e-4 (tests/render_closed_forms.rs, tests/stability_integration.rs)."),

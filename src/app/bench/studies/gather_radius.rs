@@ -1,8 +1,9 @@
 //! The gather radius study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use super::metrics::grid_rel_rms;
-use super::sweeps::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::measurement::{Cost, CostUnit};
+use crate::app::bench::metrics::grid_rel_rms;
 use crate::scene::GatherMethod;
 
 impl<'a> Bench<'a> {
@@ -24,7 +25,7 @@ impl<'a> Bench<'a> {
                 let rr = r * f;
                 let (g, secs) = self.gather(k, rr, v, gm)?;
                 let e = grid_rel_rms(&g, &reference);
-                ms.push(self.measure(name, &method, "radius_km", rr, "gather", secs, e, metric, k == n && f == 1.0));
+                ms.push(self.measure(name, &method, "radius_km", rr, "gather", Cost::seconds(secs), e, metric, k == n && f == 1.0));
                 self.note_last(&ms, gather_key(k, rr, v, gm), 0.0);
             }
         }
@@ -35,7 +36,8 @@ impl<'a> Bench<'a> {
             reference: format!(
                 "kd-tree gather of {m} beams with half the radius (r = {r_ref} km, radius noise as in the scene) on half the voxel size ({v_ref} km): the blur of the reference itself (r/2) is not measured"
             ),
-            reference_seconds: ref_secs,
+            reference_cost: ref_secs,
+            unit: CostUnit::Seconds,
             expected_trend: vec![],
             notes: vec![
                 format!("Voxel size fixed at the scene's ({v} km). Small radii: noise (few photons per kernel) and, below half a voxel, aliasing; large radii: blur across the curtain."),
