@@ -4,7 +4,9 @@
 //! `#fragment` names a heading of the target Markdown file (GitHub's anchor
 //! rule: lower case, punctuation other than `-` and `_` dropped, spaces to
 //! `-`, a repeated heading numbered `-1`, `-2`, ...). Web links are not
-//! followed.
+//! followed. And every path in inline code that starts with `src/` or
+//! `tools/` (`src/pipeline/beams/walk.rs`, `tools/check`) names a file or
+//! folder of the repository: the documents follow the tree when it moves.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -135,6 +137,62 @@ fn every_relative_link_in_the_documents_resolves() {
     }
     assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
     assert!(checked >= 40, "only {checked} links found: is the link parser still reading the documents?");
+}
+
+/// Paths in inline code spans (`` `src/x.rs` ``, `` `tools/check` ``, with
+/// an optional `:line` or `::item` after them) on a line outside fenced
+/// blocks.
+fn code_paths(line: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for (k, span) in line.split('`').enumerate() {
+        if k % 2 == 0 {
+            continue;
+        }
+        let span = span.trim();
+        if !(span.starts_with("src/") || span.starts_with("tools/")) || span.contains(char::is_whitespace) {
+            continue;
+        }
+        let path = span.split([':', '#']).next().unwrap_or(span).trim_end_matches(['.', ',', ')']);
+        if path.contains(['*', '{', '<']) {
+            continue; // a pattern, not a path
+        }
+        out.push(path.to_string());
+    }
+    out
+}
+
+#[test]
+fn every_src_and_tools_path_in_the_documents_exists() {
+    let mut missing = Vec::new();
+    let mut checked = 0;
+    for file in markdown_files() {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let name = file.strip_prefix(root()).unwrap().display().to_string();
+        let mut fenced = false;
+        for (i, line) in text.lines().enumerate() {
+            if line.trim_start().starts_with("```") {
+                fenced = !fenced;
+                continue;
+            }
+            if fenced {
+                continue;
+            }
+            for path in code_paths(line) {
+                checked += 1;
+                if !root().join(&path).exists() {
+                    missing.push(format!("{name}:{}: `{path}`: no such file or folder", i + 1));
+                }
+            }
+        }
+    }
+    assert!(missing.is_empty(), "paths in the documents that do not exist:\n{}", missing.join("\n"));
+    assert!(checked >= 20, "only {checked} src/ and tools/ paths found: is the parser still reading the documents?");
+}
+
+#[test]
+fn code_paths_are_read_from_inline_code() {
+    let got = code_paths("see `src/io/vdb/write.rs:42`, `tools/check` and `src/x/*.rs`, not src/y.rs or `cargo run`");
+    assert_eq!(got, ["src/io/vdb/write.rs", "tools/check"]);
 }
 
 #[test]
