@@ -88,7 +88,7 @@ pub struct Sample {
 
 /// The estimate for a frame range (module docs).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Plan {
+pub struct CostPlan {
     pub frames: usize,
     pub first: i64,
     pub last: i64,
@@ -162,7 +162,7 @@ fn file_len(path: &Path) -> Result<u64, PlanError> {
 
 /// Bakes `samples` frames of `frames` (module docs) and estimates the range.
 /// Nothing is written outside a scratch folder, which is removed.
-pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progress) -> Result<Plan, PlanError> {
+pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progress) -> Result<CostPlan, PlanError> {
     let (&first, &last) = match (frames.first(), frames.last()) {
         (Some(a), Some(b)) => (a, b),
         _ => return Err(PlanError::NoFrames),
@@ -198,7 +198,7 @@ pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progre
 }
 
 /// The module docs' estimate from measured samples.
-pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sample>, stage_bytes: u64, peak_rss_bytes: f64) -> Plan {
+pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sample>, stage_bytes: u64, peak_rss_bytes: f64) -> CostPlan {
     let mean = |v: &mut dyn Iterator<Item = f64>| {
         let (s, k) = v.fold((0.0, 0usize), |(s, k), x| (s + x, k + 1));
         if k == 0 {
@@ -215,7 +215,7 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
     } else {
         (samples.first().map_or(0.0, |s| s.cpu_s), 0.0, samples.first().map_or(0.0, |s| s.wall_s))
     };
-    Plan {
+    CostPlan {
         frames: n,
         first,
         last,
@@ -260,7 +260,7 @@ pub fn human_seconds(s: f64) -> String {
     }
 }
 
-impl Plan {
+impl CostPlan {
     /// What a task pays once, before its frames (the first sample's CPU time
     /// above the later ones': the plan, atmosphere and colour table that the
     /// later frames reuse), in words; a first frame that cost no more than

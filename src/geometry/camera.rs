@@ -51,9 +51,6 @@
 //!
 //! All ray math is f64.
 
-// `!(x > 0.0)` is used on purpose: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 use crate::scene::{Camera, Projection, MAX_IMAGE_SIDE};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};

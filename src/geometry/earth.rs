@@ -1,6 +1,6 @@
 //! The round Earth under a scene: a sphere of radius R (`earth.radius_km`,
-//! 6371 km by default, the mean radius; 0 is the flat ground of earlier
-//! builds), and the closed forms of its geometry.
+//! 6371 km by default, the mean radius; 0 is flat ground, where
+//! altitude is z), and the closed forms of its geometry.
 //!
 //! **Frames.** The scene frame is Cartesian, km, x east, y north, z up *at
 //! the scene's origin*, which lies on the ground; the Earth's centre is at
@@ -64,7 +64,7 @@ pub struct Earth {
 }
 
 impl Earth {
-    /// The flat ground of earlier builds: altitude is z.
+    /// Flat ground: altitude is z, and every map is the identity.
     pub const FLAT: Earth = Earth { radius_km: 0.0 };
 
     pub fn new(radius_km: f64) -> Self {

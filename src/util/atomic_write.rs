@@ -8,7 +8,7 @@
 //!    absent or a regular file. A symlink, a directory, a device node, a FIFO
 //!    or a socket is refused with [`AtomicError::NotRegular`]. (A rename over
 //!    a device node does not write through it but replaces its directory entry:
-//!    as root, `--out /dev/full` used to replace the system's `/dev/full`.)
+//!    as root, `--out /dev/full` would replace the system's `/dev/full`.)
 //! 2. **A file appears whole or not at all.** Bytes go to a temporary name in
 //!    the destination's folder, `.<name>.tmp<pid>-<n>.<host>`, created with
 //!    `O_EXCL` (so nothing planted at that name is written through), and are

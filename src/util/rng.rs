@@ -79,7 +79,7 @@ pub const NOISE1_Y: f64 = 0.371_9;
 /// `x - 256 floor(x / 256)` is exact there (the result is a multiple of
 /// ulp(x) and smaller than |x|), and so is the crate's own `x - floor(x)`, so
 /// the value is the one the crate would give without the overflow; smaller
-/// coordinates pass unchanged (bit for bit today's noise); a non-finite
+/// coordinates pass unchanged (bit for bit the crate's noise); a non-finite
 /// coordinate gives 0.
 #[inline]
 pub fn noise2(p: &Perlin, x: f64, y: f64) -> f64 {

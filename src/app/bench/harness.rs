@@ -57,7 +57,7 @@ use std::time::Instant;
 /// What each study sweeps. Factors multiply the reduced scene's own values
 /// (`N` = its beam count, `r` its kernel radius, `v` its voxel size).
 #[derive(Clone, Debug, serde::Serialize)]
-pub struct Plan {
+pub struct StudyPlan {
     pub quick: bool,
     /// Length the curtain is cut to, km ([`super::reduced::reduce`]).
     pub curtain_km: f64,
@@ -101,10 +101,10 @@ pub struct Plan {
     pub retime: bool,
 }
 
-impl Plan {
+impl StudyPlan {
     /// The full bench: a few minutes on 2 cores.
-    pub fn full() -> Plan {
-        Plan {
+    pub fn full() -> StudyPlan {
+        StudyPlan {
             quick: false,
             curtain_km: 40.0,
             beam_factors: vec![0.125, 0.25, 0.5, 1.0, 2.0, 4.0],
@@ -132,8 +132,8 @@ impl Plan {
 
     /// `--quick`: under a minute on 2 cores (a shorter curtain, fewer points,
     /// cheaper references).
-    pub fn quick() -> Plan {
-        Plan {
+    pub fn quick() -> StudyPlan {
+        StudyPlan {
             quick: true,
             curtain_km: 20.0,
             beam_factors: vec![0.25, 0.5, 1.0, 2.0],
@@ -231,7 +231,7 @@ pub fn timed<T>(min_seconds: f64, max_runs: usize, mut f: impl FnMut() -> T) -> 
 /// field and a cache of traced photons per beam count.
 pub struct Bench<'a> {
     pub scene: Scene,
-    pub plan: Plan,
+    pub plan: StudyPlan,
     /// The reduced scene's bake plan (footprints, atmosphere, colour
     /// table, field, radius field).
     pub(super) bake: BakePlan,
@@ -267,7 +267,7 @@ pub(super) type Timed<T> = (T, f64);
 
 impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
-    pub fn new(scene: Scene, plan: Plan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
+    pub fn new(scene: Scene, plan: StudyPlan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
         let bake = BakePlan::new(&scene, &NoProgress);
         Bench { scene, plan, bake, photons: BTreeMap::new(), gathers: HashMap::new(), gather_timed: Vec::new(), log }
     }

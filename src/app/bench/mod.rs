@@ -24,7 +24,7 @@ use crate::pipeline::bake::plan::{self, BakePlan};
 use crate::pipeline::bake::BakeError;
 use crate::scene::{Scene, VoxelSize};
 use crate::util::progress::NoProgress;
-use harness::{Bench, Plan, SweepError};
+use harness::{Bench, StudyPlan, SweepError};
 use report::{BenchRun, Machine};
 use std::time::{Instant, SystemTime};
 
@@ -34,7 +34,7 @@ use std::time::{Instant, SystemTime};
 /// ([`storage`]), with the throughput of the full scene as in [`run`].
 pub fn run_storage(scene: &Scene, scene_name: &str, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
     let started = Started::now();
-    let mut plan = Plan::full();
+    let mut plan = StudyPlan::full();
     plan.dome_image = [1024, 1024];
     plan.storage_as_rendered = true;
     plan.prune_budgets = vec![1e-3];
@@ -72,7 +72,7 @@ impl Started {
         mut self,
         scene: &Scene,
         scene_name: &str,
-        plan: Plan,
+        plan: StudyPlan,
         reduced: (String, Vec<String>),
         studies: Vec<harness::Study>,
         log: &(dyn Fn(&str) + Sync),
@@ -95,7 +95,7 @@ impl Started {
 
 /// The full scene's frames 1 and 18000 of a ten-minute range at its fps,
 /// baked and written ([`crate::farm::cost_plan::plan`]).
-fn throughput(scene: &Scene, log: &(dyn Fn(&str) + Sync)) -> Result<crate::farm::cost_plan::Plan, SweepError> {
+fn throughput(scene: &Scene, log: &(dyn Fn(&str) + Sync)) -> Result<crate::farm::cost_plan::CostPlan, SweepError> {
     log("throughput: the full scene's frames 1 and 18000 of a ten-minute range at its fps");
     let show: Vec<i64> = (1..=(600.0 * scene.animation.fps).round().max(2.0) as i64).collect();
     crate::farm::cost_plan::plan(scene, &show, 2, &NoProgress).map_err(|e| SweepError::Plan(Box::new(e)))
@@ -105,7 +105,7 @@ fn throughput(scene: &Scene, log: &(dyn Fn(&str) + Sync)) -> Result<crate::farm:
 /// names it in the outputs; `log` receives a line per measurement.
 pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + Sync)) -> Result<BenchRun, SweepError> {
     let started = Started::now();
-    let plan = if quick { Plan::quick() } else { Plan::full() };
+    let plan = if quick { StudyPlan::quick() } else { StudyPlan::full() };
     let auto_voxel = match scene.grid.voxel_size {
         VoxelSize::Km(_) => None,
         VoxelSize::Auto(_) => {

@@ -4,7 +4,7 @@
 //! summary table printed on stdout.
 
 use super::chart;
-use super::harness::{Plan, Study};
+use super::harness::{Study, StudyPlan};
 use super::measurement::{front_flags, Measurement};
 use crate::util::atomic_write::write_atomic;
 use serde_json::{json, Value};
@@ -83,7 +83,7 @@ pub struct BenchRun {
     /// ("YYYY-MM-DD", ISO date-time), UTC, at the start.
     pub date: (String, String),
     pub wall_seconds: f64,
-    pub plan: Plan,
+    pub plan: StudyPlan,
     /// The scene argument, the reduced scene (TOML) and what was changed.
     pub scene_name: String,
     pub reduced_toml: String,
@@ -91,7 +91,7 @@ pub struct BenchRun {
     pub studies: Vec<Study>,
     /// The full scene's throughput as a sequence: two frames of a ten-minute
     /// range at the scene's fps baked and written ([`crate::farm::cost_plan`]).
-    pub throughput: crate::farm::cost_plan::Plan,
+    pub throughput: crate::farm::cost_plan::CostPlan,
 }
 
 impl BenchRun {
@@ -156,7 +156,7 @@ pub fn to_json(run: &BenchRun) -> Value {
 
 /// Frames per hour (one task on this machine's threads, and per CPU-hour)
 /// and bytes per frame of the full scene.
-pub fn throughput_json(p: &crate::farm::cost_plan::Plan) -> Value {
+pub fn throughput_json(p: &crate::farm::cost_plan::CostPlan) -> Value {
     json!({
         "frames_per_hour": frames_per_hour(p.wall_per_frame_s),
         "frames_per_cpu_hour": frames_per_hour(p.cpu_per_frame_s),
@@ -179,7 +179,7 @@ fn frames_per_hour(seconds: f64) -> f64 {
 }
 
 /// The throughput lines of the summary.
-pub fn throughput_summary(p: &crate::farm::cost_plan::Plan) -> String {
+pub fn throughput_summary(p: &crate::farm::cost_plan::CostPlan) -> String {
     format!(
         "\n== throughput of the full scene as a sequence (frames {} and {} of {}-{}, baked and written)\n   {:.0} frames per hour on {} threads ({:.2} s a frame), {:.0} frames per CPU-hour ({:.2} CPU-s a frame; {}), {} a frame, peak {}\n",
         p.samples.first().map_or(0, |s| s.frame),

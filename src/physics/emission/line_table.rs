@@ -11,8 +11,8 @@
 //! - **per-line grids** (`grid.lines`): each line's volume emission rate on
 //!   its own float grid, in rayleigh per km ([`R_PER_KM_SCALE`]).
 //!
-//! Each line's yield comes from ONE function, [`line_yields`] (today's
-//! `line_colour::EmissionModel::yields`), and its lifetime from ONE function,
+//! Each line's yield comes from ONE function, [`line_yields`]
+//! (`line_colour::EmissionModel::yields`), and its lifetime from ONE function,
 //! [`line_lifetimes`] (`crate::physics::emission::lifetime::lifetimes`): a line model that
 //! gives both replaces these two bodies.
 //!

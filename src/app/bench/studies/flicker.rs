@@ -15,7 +15,7 @@
 //! the still (t = 0): motion is closed form in t, so they cost the same;
 //! the ratios go into the study's notes, with frames per second.
 
-use crate::app::bench::harness::{timed, Plan, Study, SweepError};
+use crate::app::bench::harness::{timed, Study, StudyPlan, SweepError};
 use crate::app::bench::measurement::{CostUnit, Measurement};
 use crate::app::bench::metrics::grid_rel_rms;
 use crate::pipeline::bake;
@@ -36,7 +36,7 @@ fn at(scene: &Scene, t: f64, beams: usize, seed: u64) -> Scene {
 }
 
 /// Runs the study on the reduced `scene` (its own animation parameters).
-pub fn animation_study(scene: &Scene, plan: &Plan, log: &(dyn Fn(&str) + Sync)) -> Result<Study, SweepError> {
+pub fn animation_study(scene: &Scene, plan: &StudyPlan, log: &(dyn Fn(&str) + Sync)) -> Result<Study, SweepError> {
     let n = scene.beams.count;
     let dt = 1.0 / scene.animation.fps;
     let t1 = T0 + dt;
