@@ -228,7 +228,7 @@ fn main() {
             "git_commit": commit,
         });
         std::fs::write(dir.join("smoothness.json"), serde_json::to_string_pretty(&json).unwrap() + "\n").expect("write json");
-        let lum = |p: &[f32; 4]| aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
+        let lum = |p: &[f32; 4]| aurora::util::colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
         let peak = i_ref_new.pixels.iter().map(lum).fold(0.0, f64::max).max(1e-30);
         for (name, img) in [("new", &i_new), ("old", &i_old), ("new_ref", &i_ref_new), ("old_ref", &i_ref_old)] {
             write_png(&dir.join(format!("{name}.png")), img, 1.0 / peak);

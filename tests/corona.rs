@@ -224,8 +224,7 @@ fn corona_vanishing_point_is_the_magnetic_zenith() {
         let mut settings = RenderSettings::from_scene(&scene);
         settings.integration = Integration::Exact;
         let img = render(&settings, &Volume { density: Some(&baked.density), emission: Some(&baked.emission) }, &NoProgress).unwrap();
-        let lum: Vec<f64> =
-            img.pixels.iter().map(|p| aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])).collect();
+        let lum: Vec<f64> = img.pixels.iter().map(|p| aurora::util::colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])).collect();
         let cam = CameraModel::new(&scene.camera, side, side).unwrap();
         let (fx, fy) = vanishing_point(&cam, &lum);
         let (zx, zy) = cam.project(cam.position + zenith).unwrap();

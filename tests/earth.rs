@@ -5,12 +5,12 @@
 
 use aurora::geometry::camera::CameraModel;
 use aurora::geometry::earth::Earth;
-use aurora::physics::emission::line_colour::luminance;
 use aurora::physics::geomagnetic_field::{dipole_angles_deg, MagneticField};
 use aurora::pipeline::bake::bake;
 use aurora::pipeline::beams::trace_all;
 use aurora::render::{render, RenderSettings, Volume};
 use aurora::scene::{Camera, Curtain, Projection, Scene, TerrainKind, VoxelSize};
+use aurora::util::colour::luminance;
 use aurora::util::progress::NoProgress;
 use glam::DVec3;
 

@@ -58,7 +58,7 @@ fn render_of(s: &Scene, b: &Bake, aurora_only: bool) -> Image {
 }
 
 fn luminance(p: &[f32; 4]) -> f64 {
-    aurora::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])
+    aurora::util::colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])
 }
 
 /// Sums of R, G and B over rows `rows` of `img`.

@@ -58,8 +58,8 @@
 
 use crate::geometry::camera::CameraModel;
 use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_DIM, LEAF_NUM_VALUES};
-use crate::physics::emission::line_colour::luminance;
 use crate::scene::Projection;
+use crate::util::colour::luminance;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use serde::Serialize;

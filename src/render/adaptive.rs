@@ -5,7 +5,8 @@
 //! [`render_adaptive`]). The image depends only on (seed, pixel), never on
 //! the thread count.
 
-use super::integrator::{render, render_prepared, Counters, Image, PixelState, TILE};
+use super::image::Image;
+use super::integrator::{render, render_prepared, Counters, PixelState, TILE};
 use super::prepared::Prepared;
 use super::settings::{RenderError, RenderSettings, Volume};
 use crate::util::progress::Progress;

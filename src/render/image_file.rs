@@ -4,18 +4,12 @@
 //!   Rec.709 primaries and D65 white), row 0 at the top, `A = 1 - T` (the
 //!   volume's coverage along the primary ray; RGB already contains what lies
 //!   behind). Lossless compression (the `exr` crate's default, RLE in 64x64
-//!   tiles), tiles stored in increasing order: the crate compresses tiles in
-//!   parallel and, with its default "unspecified" line order, writes them in
-//!   the order they finish, so the same image gave different bytes from run
-//!   to run; with `LineOrder::Increasing` it sorts them first.
-//! * PNG preview of `2^exposure * linear` through the view transform
-//!   (`render.view_transform`): `standard` is `v = clamp(sRGB_OETF(x), 0, 1)`
-//!   per RGB channel, with the sRGB OETF `12.92 x` for `x <= 0.0031308` and
-//!   `1.055 x^(1/2.4) - 0.055` above (IEC 61966-2-1), Blender's "Standard";
-//!   `agx` (the default) is Blender's AgX view for an sRGB display
-//!   ([`super::agx`]); quantised as `round(255 v)`, no dither; alpha is
-//!   dropped (8-bit RGB).
-//!
+//!   tiles), tiles stored in increasing order (`LineOrder::Increasing`): the
+//!   crate compresses tiles in parallel, and in its default "unspecified"
+//!   order it would write them as they finish, the same image in different
+//!   bytes from run to run.
+//! * PNG preview: 8-bit sRGB RGB of `2^exposure * linear` through the view
+//!   transform (`view_transform.rs`); alpha is dropped.
 //! * One-channel images of a float grid (`aurora render --grid`): the red
 //!   channel (the grid is rendered as grey) as an EXR of one 32-bit float
 //!   channel `Y` in the grid's units integrated along the ray (rayleigh for
@@ -25,7 +19,9 @@
 //!
 //! All are written to a temporary file in the destination folder and renamed.
 
-use super::{Image, RenderError, RenderStats};
+use super::image::{Image, RenderStats};
+use super::settings::RenderError;
+use super::view_transform::display_rgb;
 use crate::scene::ViewTransform;
 use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
 use std::path::Path;
@@ -169,38 +165,6 @@ pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderEr
     let size = img.layer_data.size;
     let (_, pixels) = img.layer_data.channel_data.pixels;
     Ok(Image { width: size.0, height: size.1, pixels, stats: RenderStats::default() })
-}
-
-/// The sRGB OETF (IEC 61966-2-1) of a linear value.
-pub fn srgb_oetf(x: f64) -> f64 {
-    if x <= 0.003_130_8 {
-        12.92 * x
-    } else {
-        1.055 * x.powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// The standard display transform of one linear channel value (module doc).
-pub fn display_u8(linear: f32, exposure: f64) -> u8 {
-    to_u8(srgb_oetf(linear as f64 * exposure.exp2()))
-}
-
-fn to_u8(v: f64) -> u8 {
-    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-    (v * 255.0).round() as u8
-}
-
-/// One pixel's RGB code values through `view` at `exposure` (module doc).
-pub fn display_rgb(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u8; 3] {
-    match view {
-        ViewTransform::Standard => [0, 1, 2].map(|c| display_u8(p[c], exposure)),
-        ViewTransform::Agx => {
-            let k = exposure.exp2();
-            // A NaN or infinite pixel is black, as in the standard transform.
-            let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
-            super::agx::Agx::get().display(c).map(to_u8)
-        }
-    }
 }
 
 /// Writes an 8-bit sRGB PNG preview through the view transform (module doc).

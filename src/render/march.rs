@@ -5,8 +5,8 @@
 //! (the emission-absorption model; no scattering).
 //!
 //! Two integrators:
-//! * [`Integration::Exact`]: walks the dual cells ([`dda::segments`]) and
-//!   integrates each piece with [`segment::Accum`]: optical depth exactly,
+//! * [`Integration::Exact`]: walks the dual cells ([`segments`]) and
+//!   integrates each piece with [`Accum`]: optical depth exactly,
 //!   emission with Gauss-Legendre of bounded error. When density and emission
 //!   live on different transforms, the two cell sequences are merged so that
 //!   each piece lies inside one dual cell of each grid.
@@ -22,7 +22,7 @@
 use super::dda::{segments, CellFilter, CellSeg, CellWalker, IndexRay, LeafWalker};
 use super::medium::{field::Field, Channel, Medium};
 use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
-use super::Integration;
+use super::settings::Integration;
 use glam::DVec3;
 
 /// The result of integrating along one ray.

@@ -8,12 +8,12 @@
 //! checks, so the pixel loop (`integrator.rs`) never sees a setting out of
 //! range or a medium past the memory check.
 
-use super::camera::CameraModel;
 use super::medium::Medium;
 use super::settings::{Integration, RenderError, RenderSettings, Volume};
 use super::shadow::{EmissionSampler, ShadowScene};
 use super::sky::Sky;
 use super::terrain::TerrainModel;
+use crate::geometry::camera::CameraModel;
 use crate::grid::Grid;
 use crate::physics::air_extinction::{Air, Extinction};
 use glam::DVec3;

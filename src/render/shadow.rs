@@ -1,8 +1,8 @@
 //! Emissive shadow rays: the aurora lighting the terrain.
 //!
-//! The 2014 report (section 2.5) added the volume's emission to shadow rays
-//! (`L = T * Li + Lvi`) by calling the volume integrator on them. Done as an
-//! estimator, the irradiance at a terrain point `x` with normal `n` is
+//! The volume's emission reaches the terrain along shadow rays
+//! (`L = T * Li + Lvi`, the 2014 report, section 2.5). As an estimator, the
+//! irradiance at a terrain point `x` with normal `n` is
 //!
 //! ```text
 //! E(x) = int_V e(y) T(x,y) V(x,y) max(0, n . w) / |y - x|^2 dy,   w = (y - x) / |y - x|
@@ -31,28 +31,27 @@
 //! column above the point).
 //!
 //! The transmittance `T(x, y)` of a shadow ray is itself estimated, by ratio
-//! tracking against the medium's largest sigma_t ([`transmittance_ratio_tracking`]):
-//! an unbiased estimate from sigma_t at a few random points (about
-//! `mu L`: 0.019 per km on the default bake) instead of the exact optical
-//! depth through every dual cell the ray crosses. Shadow rays go in every
-//! direction, so each of those cells was a cache miss: on the default
-//! scene at 320x180, 4 spp, shadow rays took about 35 % of the pixel loop's
-//! CPU time and now about 13 %, for 4 % more variance in the picture
-//! (measured over three seeds; the emission sampling's own dominates).
-//! A ray whose majorant optical depth through the field's box exceeds
+//! tracking against the medium's largest sigma_t
+//! ([`transmittance_ratio_tracking`]; Cramer 1978; Novak, Selle & Jarosz
+//! 2014): an unbiased estimate from sigma_t at a few random points (about the
+//! majorant optical depth `mu L`) instead of the exact optical depth
+//! through every dual cell the ray crosses. Shadow rays go in every
+//! direction, so each of those cells would be a cache miss; the estimate's
+//! variance is small beside the emission sampling's. A ray whose majorant
+//! optical depth through the field's box exceeds
 //! [`RATIO_TRACKING_MAX_DEPTH`] takes the exact walk instead (bounded work
 //! on extreme densities). The fixed-step integrator
-//! (`Integration::FixedStep`, the Cycles-like comparison mode) keeps its own
-//! marched transmittance.
+//! (`Integration::FixedStep`, the Cycles-like comparison mode) keeps its
+//! own marched transmittance.
 
 use super::dda::{IndexRay, LeafWalker};
 use super::march::optical_depth_along_ray;
 use super::medium::field::Field;
 use super::medium::Medium;
+use super::settings::Integration;
 use super::terrain::TerrainModel;
-use super::Integration;
 use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM};
-use crate::physics::emission::line_colour::luminance;
+use crate::util::colour::luminance;
 use glam::{DVec3, IVec3};
 use rand::Rng;
 
@@ -90,7 +89,7 @@ impl EmissionSampler {
     /// grid's leaves in that order with their values as stored, inactive
     /// voxels 0.
     /// `None` when nothing emits or `volume.emission_scale` is 0.
-    pub fn from_medium(medium: &super::Medium) -> Option<EmissionSampler> {
+    pub fn from_medium(medium: &Medium) -> Option<EmissionSampler> {
         let c = medium.emission?;
         let f = &medium.fields[c.field];
         let per_block = crate::grid::LEAF_NUM_VALUES * f.channels;

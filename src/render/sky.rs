@@ -39,10 +39,11 @@
 //! star in a fixed order after the pixel loop, so the image does not
 //! depend on the thread count.
 
-use super::{Image, RenderError};
+use super::image::Image;
+use super::settings::RenderError;
 use crate::geometry::camera::CameraModel;
-use crate::physics::emission::line_colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use crate::scene::Background;
+use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use glam::DVec3;
 use rand::Rng;
 use std::f64::consts::PI;

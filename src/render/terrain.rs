@@ -40,7 +40,7 @@
 //! triangle's geometric normal, turned to face the incoming ray (two-sided,
 //! flat: as Cycles shades an imported mesh with flat shading).
 
-use super::RenderError;
+use super::settings::RenderError;
 use crate::scene::{Terrain, TerrainKind};
 use glam::DVec3;
 use noise::Perlin;

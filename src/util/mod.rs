@@ -1,8 +1,10 @@
-//! The machine and the process, no physics: seeded random numbers, progress
+//! The machine and the process: seeded random numbers, progress
 //! reporting, memory limits, reading input files, atomic writes, watching
-//! files for changes.
+//! files for changes; and the colour science the bake and the renderer
+//! share (`colour.rs`).
 
 pub mod atomic_write;
+pub mod colour;
 pub mod file_watch;
 pub mod input_file;
 pub mod memory;

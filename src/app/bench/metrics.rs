@@ -78,7 +78,7 @@ fn ratio(num: f64, den: f64) -> f64 {
 /// luminance. Returns (mean relative error, ratio of total fluxes a/b).
 pub fn image_rel_error(a: &[[f32; 4]], b: &[[f32; 4]], floor: f64) -> (f64, f64) {
     assert_eq!(a.len(), b.len(), "images differ in size");
-    let lum = |p: &[f32; 4]| crate::physics::emission::line_colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
+    let lum = |p: &[f32; 4]| crate::util::colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64]);
     let peak = b.iter().map(lum).fold(0.0, f64::max);
     let (mut sum, mut n, mut fa, mut fb) = (0.0, 0usize, 0.0, 0.0);
     for (pa, pb) in a.iter().zip(b) {

@@ -1,72 +1,23 @@
-//! Colour of the aurora: CIE 1931 colour matching, the emission lines and
-//! their yields per keV of deposited electron energy as a function of altitude,
-//! and the artist colour map alternative.
+//! The aurora's colours: the emission lines ([`LINES`]), the colour of one
+//! photon of each ([`line_rgb`], [`n2_1p_rgb`]), their yields per keV of
+//! deposited electron energy as a function of altitude ([`EmissionModel`]),
+//! and the colour per keV tabulated for the beams ([`ColourTable`]: the
+//! simple model, the chemistry's table, or an artist colour map).
 //!
-//! Colour space: linear Rec.709 / sRGB primaries, D65 white. A photon "power"
-//! in this crate is an RGB triple in units where one photon per second of
-//! OI 557.7 nm has luminance Y = 1; the emission grid then reads 1 = 1 kR of
-//! 557.7 nm per km of path (see `photons`).
+//! A photon "power" in this crate is a linear Rec.709 triple in units where
+//! one photon per second of OI 557.7 nm has luminance Y = 1; the emission
+//! grid then reads 1 = 1 kR of 557.7 nm per km of path
+//! (`crate::pipeline::photons`). A line's colour is its wavelength through
+//! the CIE 1931 observer, gamut mapped into Rec.709, weighted by the photon
+//! energy (`crate::util::colour`).
 //!
-//! Sources:
-//! - CIE 1931 2-degree colour matching functions through the multi-lobe
-//!   Gaussian fit of Wyman, Sloan & Shirley, "Simple analytic approximations to
-//!   the CIE XYZ color matching functions", JCGT 2(2), 2013 (their eq. 2-4).
-//! - XYZ to linear sRGB: IEC 61966-2-1 (the sRGB standard), D65.
-//! - Yields and quenching: see [`EmissionModel`].
+//! Sources: the yields and quenching rates are cited on [`EmissionModel`];
+//! the N2 1P band heads on [`N2_1P`].
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::table::LineTable;
+use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use std::sync::Arc;
-
-/// Piecewise Gaussian of Wyman, Sloan & Shirley (2013): width `s1` left of the
-/// mean, `s2` right of it.
-#[inline]
-fn lobe(x: f64, mu: f64, s1: f64, s2: f64) -> f64 {
-    let t = (x - mu) / if x < mu { s1 } else { s2 };
-    (-0.5 * t * t).exp()
-}
-
-/// CIE 1931 2-degree colour matching functions (xbar, ybar, zbar) at
-/// `lambda_nm`, multi-lobe fit of Wyman, Sloan & Shirley (2013), eq. 2-4.
-pub fn cie1931_xyz(lambda_nm: f64) -> [f64; 3] {
-    let l = lambda_nm;
-    let x = 1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7) - 0.065 * lobe(l, 501.1, 20.4, 26.2);
-    let y = 0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1);
-    let z = 1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8);
-    [x, y, z]
-}
-
-/// XYZ to linear Rec.709 (sRGB primaries, D65 white), IEC 61966-2-1.
-pub const XYZ_TO_REC709: [[f64; 3]; 3] = [[3.2406, -1.5372, -0.4986], [-0.9689, 1.8758, 0.0415], [0.0557, -0.2040, 1.0570]];
-
-/// Luminance Y of a linear Rec.709 colour (the Y row of the inverse matrix).
-pub const REC709_LUMA: [f64; 3] = [0.2126, 0.7152, 0.0722];
-
-pub fn xyz_to_rec709(xyz: [f64; 3]) -> [f64; 3] {
-    let m = &XYZ_TO_REC709;
-    std::array::from_fn(|i| m[i][0] * xyz[0] + m[i][1] * xyz[1] + m[i][2] * xyz[2])
-}
-
-#[inline]
-pub fn luminance(rgb: [f64; 3]) -> f64 {
-    REC709_LUMA[0] * rgb[0] + REC709_LUMA[1] * rgb[1] + REC709_LUMA[2] * rgb[2]
-}
-
-/// Gamut mapping for colours outside Rec.709 (every monochromatic line is):
-/// desaturate toward the white of equal luminance, `(1 - t) rgb + t (Y, Y, Y)`,
-/// with the smallest `t` in [0, 1] that leaves no component negative. Y is
-/// kept exactly (white has luminance Y and the map is affine), and the hue in
-/// the RGB cube is kept approximately (we move along the line to grey).
-/// A colour with Y <= 0 has no such white and maps to black.
-pub fn gamut_map(rgb: [f64; 3]) -> [f64; 3] {
-    let y = luminance(rgb);
-    if y <= 0.0 {
-        return [0.0; 3];
-    }
-    // Component c reaches 0 at t = -c / (Y - c) (Y > 0 > c).
-    let t = rgb.iter().filter(|&&c| c < 0.0).map(|&c| -c / (y - c)).fold(0.0, f64::max);
-    std::array::from_fn(|i| ((1.0 - t) * rgb[i] + t * y).max(0.0))
-}
 
 /// An emission line.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -158,13 +109,13 @@ impl LineYields {
 ///   dissociative recombination), rising with altitude with the O fraction,
 ///   times the survival against quenching by N2
 ///   `q_D = A_D / (A_D + k_D [N2])`, k_D = 3e-11 cm^3/s and lifetime
-///   1/A_D = 110 s (half-quenched where [N2] = 3e8 cm^-3, near 260 km); the
+///   1/A_D = 110 s (half-quenched where `[N2]` = 3e8 cm^-3, near 260 km); the
 ///   emitted photons split 3:1 between 630.0 and 636.4 nm.
 /// - **N2 1P, 647-688 nm** (the red of the pink lower border of hard
 ///   aurora): `eps_1P = R_1P eps_4278`, proportional to N2 like 427.8 nm.
 ///   N2(B) is excited by electron impact on N2 (directly and by cascade from
 ///   N2(C) and higher states) and radiates in microseconds, so neither O
-///   thinning nor quenching removes it above 60 km (k_N2 [N2] ~ 1e3 /s
+///   thinning nor quenching removes it above 60 km (`k_N2 [N2]` ~ 1e3 /s
 ///   against A ~ 1.5e5 /s at 80 km), while 557.7 nm fades below 100 km with
 ///   O and under O2 quenching: the lower border turns from green to the
 ///   violet of N2+ 1N plus the red of N2 1P, pink, without anyone placing it.
@@ -404,56 +355,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn cmf_fit_matches_cie_table_values() {
-        // CIE 1931 2-degree table values. The multi-lobe fit is an
-        // approximation (largest error here: xbar(440) 0.359 vs 0.348, 1 % of
-        // the peak); allow 2 % of each function's peak (1.06, 1.0, 1.78).
-        let cases = [
-            (555.0, 1, 1.0000),
-            (600.0, 0, 1.0622),
-            (450.0, 2, 1.7721),
-            (630.0, 1, 0.2650),
-            (440.0, 0, 0.3483),
-            (500.0, 1, 0.3230),
-            (650.0, 0, 0.2835),
-        ];
-        let peak = [1.0622, 1.0, 1.7721];
-        for (l, k, want) in cases {
-            let got = cie1931_xyz(l)[k];
-            assert!((got - want).abs() < 0.02 * peak[k], "{l} nm component {k}: {got} vs {want}");
-        }
-    }
-
-    #[test]
-    fn white_maps_to_equal_rgb_and_luma_row_matches_y() {
-        // D65 white point XYZ (0.95047, 1, 1.08883) -> (1, 1, 1) to the
-        // matrix's 4-digit precision.
-        let w = xyz_to_rec709([0.95047, 1.0, 1.08883]);
-        for c in w {
-            assert!((c - 1.0).abs() < 1e-3, "{w:?}");
-        }
-        let xyz = [0.3, 0.5, 0.2];
-        assert!((luminance(xyz_to_rec709(xyz)) - 0.5).abs() < 1e-3);
-    }
-
-    #[test]
-    fn gamut_map_keeps_luminance_and_clears_negatives() {
-        for l in [427.8, 450.0, 500.0, 557.7, 630.0, 700.0] {
-            let raw = xyz_to_rec709(cie1931_xyz(l));
-            let m = gamut_map(raw);
-            assert!(m.iter().all(|&c| c >= 0.0), "{l}: {m:?}");
-            // Affine map toward (Y, Y, Y): Y is kept to rounding.
-            assert!((luminance(m) - luminance(raw)).abs() < 1e-12 * (1.0 + luminance(raw).abs()), "{l}");
-            // Minimal: some component sits at exactly zero when raw was out of gamut.
-            if raw.iter().any(|&c| c < 0.0) {
-                assert!(m.iter().any(|&c| c.abs() < 1e-12), "{l}: {m:?}");
-            }
-        }
-        let inside = [0.2, 0.5, 0.1];
-        assert_eq!(gamut_map(inside), inside);
-    }
-
-    #[test]
     fn one_557_7_photon_has_unit_luminance_and_lines_have_their_hues() {
         assert!((luminance(line_rgb(557.7)) - 1.0).abs() < 1e-12);
         let g = line_rgb(557.7);
@@ -560,66 +461,8 @@ mod tests {
         assert_eq!(t.rgb(1e4), [1.0, 0.0, 0.5]);
     }
 
-    // ---- Oracles added for the mutation report
-    // (docs/mutants/REPORT.md): closed forms, literature numbers and
-    // conservation, not the code's constants read back.
-
-    #[test]
-    fn cmf_fit_follows_the_cie_table_across_the_visible() {
-        // CIE 1931 2-degree table (CIE 15:2004, table T.4), 10 nm steps.
-        // Same 2 %-of-peak tolerance as above (the fit's largest deviation on
-        // these rows is about 1 % of the peak).
-        #[rustfmt::skip]
-        let table = [
-            (400.0, 0.01431, 0.000396, 0.06785), (420.0, 0.13438, 0.0040, 0.64560),
-            (460.0, 0.29080, 0.06000, 1.66920), (470.0, 0.19536, 0.09098, 1.28764),
-            (480.0, 0.09564, 0.13902, 0.81295), (490.0, 0.03201, 0.20802, 0.46518),
-            (510.0, 0.00930, 0.50300, 0.15820), (520.0, 0.06327, 0.71000, 0.07825),
-            (530.0, 0.16550, 0.86200, 0.04216), (540.0, 0.29040, 0.95400, 0.02030),
-            (550.0, 0.43345, 0.99495, 0.00875), (560.0, 0.59450, 0.99500, 0.00390),
-            (570.0, 0.76210, 0.95200, 0.00210), (580.0, 0.91630, 0.87000, 0.00165),
-            (590.0, 1.02630, 0.75700, 0.00110), (610.0, 1.00260, 0.50300, 0.00034),
-            (620.0, 0.85445, 0.38100, 0.00019), (640.0, 0.44790, 0.17500, 0.00002),
-            (660.0, 0.16490, 0.06100, 0.0), (680.0, 0.04677, 0.01700, 0.0),
-            (700.0, 0.01136, 0.00410, 0.0),
-        ];
-        let peak = [1.0622, 1.0, 1.7826];
-        for (l, x, y, z) in table {
-            let got = cie1931_xyz(l);
-            for (k, want) in [x, y, z].into_iter().enumerate() {
-                assert!((got[k] - want).abs() < 0.02 * peak[k], "{l} nm component {k}: {} vs {want}", got[k]);
-            }
-        }
-        // Equal-energy white: the three functions have equal integrals
-        // (CIE 1931 normalisation, 106.86 nm each); the fit keeps them within
-        // 0.1 % (1 nm sums, 360-830 nm): allow 0.5 %.
-        let int = (360..=830).fold([0.0; 3], |a, l| {
-            let c = cie1931_xyz(l as f64);
-            [a[0] + c[0], a[1] + c[1], a[2] + c[2]]
-        });
-        for (k, v) in int.iter().enumerate() {
-            assert!((v / 106.86 - 1.0).abs() < 0.005, "integral {k}: {v}");
-        }
-    }
-
-    #[test]
-    fn gamut_map_moves_along_the_line_to_grey_by_the_smallest_step() {
-        // raw = (-0.1, 0.5, 0.2): Y = 0.35078, t = 0.1 / (Y + 0.1), and the
-        // result minus grey is (1 - t) times raw minus grey.
-        let raw = [-0.1, 0.5, 0.2];
-        let y = 0.2126 * -0.1 + 0.7152 * 0.5 + 0.0722 * 0.2;
-        let t = 0.1 / (y + 0.1);
-        let m = gamut_map(raw);
-        for k in 0..3 {
-            assert!((m[k] - y - (1.0 - t) * (raw[k] - y)).abs() < 1e-15, "{m:?}");
-        }
-        assert!(m[0].abs() < 1e-16);
-        // Two negative components: the more negative one decides.
-        let m = gamut_map([-0.3, 1.0, -0.05]);
-        assert!(m[0].abs() < 1e-15 && m[2] > 0.0, "{m:?}");
-        // Negative luminance: no white to move to, black.
-        assert_eq!(gamut_map([0.2, -0.2, 0.0]), [0.0; 3]);
-    }
+    // ---- Oracles (docs/mutants/REPORT.md): closed forms, literature
+    // numbers and conservation, not the code's constants read back.
 
     #[test]
     fn a_line_photon_weighs_its_energy_times_ybar() {

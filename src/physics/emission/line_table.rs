@@ -171,7 +171,7 @@ impl LineTable {
             return rgb;
         }
         let c = self.rgb_of(&at(h_colour_km), factor);
-        let (y, yc) = (crate::physics::emission::line_colour::luminance(rgb), crate::physics::emission::line_colour::luminance(c));
+        let (y, yc) = (crate::util::colour::luminance(rgb), crate::util::colour::luminance(c));
         if yc > 0.0 {
             c.map(|x| x * y / yc)
         } else {
@@ -199,10 +199,8 @@ impl LineTable {
             return self.rgb_of_each(&own, factor);
         }
         let c = at(h_colour_km);
-        let (y, yc) = (
-            crate::physics::emission::line_colour::luminance(self.rgb_of(&own, |_| 1.0)),
-            crate::physics::emission::line_colour::luminance(self.rgb_of(&c, |_| 1.0)),
-        );
+        let (y, yc) =
+            (crate::util::colour::luminance(self.rgb_of(&own, |_| 1.0)), crate::util::colour::luminance(self.rgb_of(&c, |_| 1.0)));
         if yc > 0.0 {
             self.rgb_of_each(&c, factor).map(|x| x * y / yc)
         } else {

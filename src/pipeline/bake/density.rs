@@ -3,9 +3,9 @@
 
 use crate::geometry::earth::Earth;
 use crate::grid::{Grid, Leaf, Transform};
-use crate::physics::emission::line_colour::luminance;
 use crate::pipeline::photons;
 use crate::scene::GridParams;
+use crate::util::colour::luminance;
 use rayon::prelude::*;
 
 /// `indicator = 1 - exp(-Y / (AURORA_FRACTION * Y_peak))`, about 1 wherever

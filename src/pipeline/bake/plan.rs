@@ -47,7 +47,7 @@ use crate::geometry::camera::{CameraError, CameraModel};
 use crate::geometry::earth::Earth;
 use crate::grid::{Grid, Leaf};
 use crate::physics::atmosphere::Atmosphere;
-use crate::physics::emission::line_colour::{luminance, ColourTable, EmissionModel};
+use crate::physics::emission::line_colour::{ColourTable, EmissionModel};
 use crate::physics::emission::line_table::{grid_name, line_index, LineTable};
 use crate::physics::geomagnetic_field::MagneticField;
 use crate::pipeline::beams::{self, BeamError, BeamStats, TraceParams, Traced};
@@ -59,6 +59,7 @@ use crate::scene::{
     AnimationParams, AtmosphereParams, BeamParams, Camera, ColourMode, ColourParams, Curtain, EarthParams, FootprintParams, GatherMethod,
     GridParams, KernelRadius, LineModel, PhotonParams, Scene,
 };
+use crate::util::colour::luminance;
 use crate::util::progress::Progress;
 use glam::DVec3;
 use rayon::prelude::*;

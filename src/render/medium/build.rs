@@ -19,7 +19,7 @@ use super::field::{Field, Tree};
 use super::layout::{CellMask, NONE};
 use crate::grid::leaf_source::{LeafSource, LeafValues, Scratch};
 use crate::grid::{LEAF_DIM, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
-use crate::render::RenderError;
+use crate::render::settings::RenderError;
 use glam::IVec3;
 use rayon::prelude::*;
 

@@ -11,7 +11,7 @@
 
 use crate::grid::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
 use crate::grid::{Grid, VoxelValue, LEAF_MASK_WORDS};
-use crate::render::RenderError;
+use crate::render::settings::RenderError;
 
 /// Whether a stored component is acceptable: finite and >= 0 (-0 included),
 /// on its bits: below +inf's bits, or -0's.

@@ -15,9 +15,9 @@
 //! around it, and its tent-shaped footprint reaches exactly one voxel past
 //! its centre. The values are stored once per source leaf (a *block*) and
 //! each dual leaf reads its neighbours' blocks in place: copying 9^3
-//! "ghost" values per dual leaf instead would take 567 MB against 314 MB on
-//! the default bake (48.6 k dual leaves over 38.3 k source leaves), and the
-//! copy would dominate the build.
+//! "ghost" values per dual leaf instead would store 729 values per dual
+//! leaf against 512 per source leaf, on more dual leaves than source
+//! leaves, and the copy would dominate the build.
 //!
 //! One concept per file:
 //! - `layout.rs`: the tree's node levels, slot functions and mask bits;
@@ -46,7 +46,7 @@ use check::{check_header, check_scaled_peak};
 use field::Field;
 use glam::DVec3;
 
-use super::RenderError;
+use crate::render::settings::RenderError;
 
 /// Where a quantity lives: which field, which channel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,0 +1,39 @@
+//! Display encoding: how a linear Rec.709 pixel becomes the 8-bit sRGB code
+//! values of a PNG preview, through the view transform
+//! (`render.view_transform`), at `2^exposure` times the linear value.
+//!
+//! * `standard`, Blender's "Standard": per RGB channel
+//!   `v = clamp(sRGB_OETF(x), 0, 1)`, with the sRGB OETF of IEC 61966-2-1
+//!   ([`crate::util::colour::srgb_oetf`]).
+//! * `agx` (the default), Blender's AgX view for an sRGB display
+//!   ([`Agx`]).
+//!
+//! Either is quantised as `round(255 v)`, no dither; a NaN (and with AgX an
+//! infinite) channel is black. Alpha is not encoded.
+
+use super::agx::Agx;
+use crate::scene::ViewTransform;
+use crate::util::colour::srgb_oetf;
+
+/// The standard display transform of one linear channel value (module doc).
+pub fn display_u8(linear: f32, exposure: f64) -> u8 {
+    to_u8(srgb_oetf(linear as f64 * exposure.exp2()))
+}
+
+fn to_u8(v: f64) -> u8 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (v * 255.0).round() as u8
+}
+
+/// One pixel's RGB code values through `view` at `exposure` (module doc).
+pub fn display_rgb(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u8; 3] {
+    match view {
+        ViewTransform::Standard => [0, 1, 2].map(|c| display_u8(p[c], exposure)),
+        ViewTransform::Agx => {
+            let k = exposure.exp2();
+            // A NaN or infinite pixel is black, as in the standard transform.
+            let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
+            Agx::get().display(c).map(to_u8)
+        }
+    }
+}
