@@ -215,8 +215,8 @@ fn paths(code: &str, children: &BTreeSet<String>) -> Vec<Vec<String>> {
     let b = code.as_bytes();
     let mut out = Vec::new();
     let mut i = 0;
-    while i < b.len() {
-        let starts_word = !ident_byte(i.checked_sub(1).map(|j| b[j])) && !(i >= 2 && &b[i - 2..i] == b"::");
+        let after_path = i >= 2 && &b[i - 2..i] == b"::";
+        let starts_word = !ident_byte(i.checked_sub(1).map(|j| b[j])) && !after_path;
         if starts_word && (b[i].is_ascii_alphabetic() || b[i] == b'_') {
             let word: String = code[i..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
             let after = i + word.len();

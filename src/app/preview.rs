@@ -13,7 +13,7 @@
 //!
 //! | the edit touches | rerun |
 //! |---|---|
-//! | `render.exposure` or `render.view_transform` only | nothing traced: the last linear image re-encoded (a tone map of the linear film, `crate::render::image_file::display_rgb`) |
+//! | `render.exposure` or `render.view_transform` only | nothing traced: the last linear image re-encoded (a tone map of the linear film, `crate::render::view_transform::display_rgb`) |
 //! | `[render]` spp, `[background]`, `[terrain]` | the pixels (the medium is kept; the terrain model unless its geometry changed, the sky unless `[background]` did) |
 //! | `[volume]` | the pixels (the medium holds unit values and applies the scales at lookup: `Prepared::set_volume_scales`, no rebuild) |
 //! | `[camera]`, `[render]` width / height | the voxel size (`"auto"` follows the camera): the gather when it changed, pruning when `grid.prune > 0` (then the medium), then the pixels |

@@ -63,7 +63,7 @@ impl Default for RenderParams {
     }
 }
 
-/// How a linear image becomes PNG code values (`crate::render::image_file`).
+/// How a linear image becomes PNG code values (`crate::render::view_transform`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "lowercase")]
 pub enum ViewTransform {
