@@ -215,6 +215,7 @@ fn paths(code: &str, children: &BTreeSet<String>) -> Vec<Vec<String>> {
     let b = code.as_bytes();
     let mut out = Vec::new();
     let mut i = 0;
+    while i < b.len() {
         let after_path = i >= 2 && &b[i - 2..i] == b"::";
         let starts_word = !ident_byte(i.checked_sub(1).map(|j| b[j])) && !after_path;
         if starts_word && (b[i].is_ascii_alphabetic() || b[i] == b'_') {
