@@ -44,12 +44,9 @@
 //! PNG) through `view_transform.rs` (standard or `agx.rs`). `grids.rs`
 //! picks a file's grids.
 
-// `!(x > 0.0)` is used on purpose throughout: it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
 // Loops over the three colour channels index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-pub use crate::geometry::camera;
 pub mod adaptive;
 pub mod agx;
 pub mod dda;

@@ -65,7 +65,7 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
 }
 
 /// The camera ray through film point (fx, fy), written from Cycles'
-/// formulas (independent of `aurora::render::camera`).
+/// formulas (independent of `aurora::geometry::camera`).
 pub fn camera_ray(cam: &Camera, w: usize, h: usize, fx: f64, fy: f64) -> (DVec3, DVec3) {
     let pos = DVec3::from_array(cam.position);
     let fwd = (DVec3::from_array(cam.look_at) - pos).normalize();

@@ -9,8 +9,8 @@
 //! below +inf's (or is -0), and such bits order as the values, so one pass
 //! gives both the verdict and the leaf's largest value.
 
-use crate::grid::leaf_source::{GridSource, LeafSource, LeafValues, Scratch};
-use crate::grid::{Grid, VoxelValue, LEAF_MASK_WORDS};
+use crate::grid::leaf_source::{LeafSource, LeafValues};
+use crate::grid::{VoxelValue, LEAF_MASK_WORDS};
 use crate::render::settings::RenderError;
 
 /// Whether a stored component is acceptable: finite and >= 0 (-0 included),
@@ -70,23 +70,6 @@ pub(super) fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LE
             Ok(f32::from_bits(peak))
         }
     }
-}
-
-/// Rejects grids the renderer cannot sample the way Cycles does.
-pub fn validate_grid<T: VoxelValue>(g: &Grid<T>) -> Result<(), RenderError>
-where
-    for<'a> GridSource<'a, T>: LeafSource,
-{
-    let src = GridSource(g);
-    check_header(&src)?;
-    let mut scratch = Scratch::default();
-    for i in 0..src.leaf_count() {
-        let v = src.values(i, &mut scratch).map_err(|e| RenderError::Grid { grid: g.name.clone(), message: e.to_string() })?;
-        if let Err(n) = leaf_peak(v, src.channels(), src.mask(i)) {
-            return Err(bad_voxel(&src, i, n, v));
-        }
-    }
-    Ok(())
 }
 
 /// The checks on a source that need no values: transform and background.

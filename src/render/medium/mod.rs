@@ -191,12 +191,6 @@ impl Medium {
         Ok(medium)
     }
 
-    /// The emission channel's field and first channel whatever the scale
-    /// (`None` without a non-zero emission voxel).
-    pub fn stored_emission(&self) -> Option<Channel> {
-        self.stored[1].as_ref().map(|s| s.channel)
-    }
-
     /// Sets `volume.density_scale` and `volume.emission_scale` without
     /// rebuilding anything (the fields hold unit values; the scales are
     /// applied at lookup): the medium then equals `Medium::new` with these
