@@ -52,7 +52,7 @@ impl Node {
 
 /// The tabulated chemistry of one atmosphere.
 #[derive(Clone, Debug)]
-pub struct LineTable {
+pub struct ChemistryTable {
     nh: usize,
     nq: usize,
     /// Row-major: `nodes[ih * nq + iq]`.
@@ -66,7 +66,7 @@ pub struct Cell {
     pub w: [f64; 4],
 }
 
-impl LineTable {
+impl ChemistryTable {
     /// Solves the chemistry at every node for `atmosphere`'s N2, O2 and O
     /// and the ambient tables (`ambient`).
     pub fn build(atmosphere: &Atmosphere) -> Self {
@@ -82,7 +82,7 @@ impl LineTable {
                 (0..nq).map(move |iq| Node::of(&solve(10f64.powf(LOG_Q.0 + iq as f64 * D_LOG_Q), &air)))
             })
             .collect();
-        LineTable { nh, nq, nodes }
+        ChemistryTable { nh, nq, nodes }
     }
 
     /// Number of nodes.

@@ -1,4 +1,4 @@
-use super::table::{LineTable, KEV_PER_ION_PAIR};
+use super::table::{ChemistryTable, KEV_PER_ION_PAIR};
 
 // Equalities with the layers above (spectrum's R_1P, fang's 35 eV per ion
 // pair) are tested there: this module imports neither.
@@ -105,7 +105,7 @@ fn photons_per_ion_pair_match_glow_at_the_source_altitude() {
 #[test]
 fn table_interpolates_the_solver_within_one_percent() {
     let atm = Atmosphere::nrlmsis21();
-    let t = LineTable::build(&atm);
+    let t = ChemistryTable::build(&atm);
     assert_eq!(t.len(), 1301 * 37);
     // Off-grid points (h between rows, q between columns), where a line is
     // at least 1e-4 photons per keV (fainter is invisible beside the rest).

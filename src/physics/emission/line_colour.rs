@@ -15,7 +15,7 @@
 //! the N2 1P band heads on [`N2_1P`].
 
 use crate::physics::atmosphere::Atmosphere;
-use crate::physics::chemistry::table::LineTable;
+use crate::physics::chemistry::table::ChemistryTable;
 use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
 use std::sync::Arc;
 
@@ -199,7 +199,7 @@ pub struct ColourTable {
 /// The chemistry's line table and the colour per keV at each of its nodes.
 #[derive(Debug)]
 struct ChemColour {
-    lines: LineTable,
+    lines: ChemistryTable,
     rgb: Vec<[f64; 3]>,
 }
 
@@ -233,7 +233,7 @@ impl ColourTable {
     /// cost), with each node's colour per keV. Its altitude-only lookups
     /// ([`ColourTable::rgb`]) read the simple model's table, built beside it.
     pub fn chemistry(atmosphere: &Atmosphere) -> Self {
-        let lines = LineTable::build(atmosphere);
+        let lines = ChemistryTable::build(atmosphere);
         let rgb = lines.nodes().iter().map(|n| lines_rgb(n.per_kev)).collect();
         let simple = Self::physical(&EmissionModel::new(atmosphere.clone()));
         Self { chem: Some(Arc::new(ChemColour { lines, rgb })), ..simple }
@@ -266,7 +266,7 @@ impl ColourTable {
     /// bilinear lookup, or [`ColourTable::rgb`] (q unused) without it.
     #[inline]
     pub fn rgb_q(&self, h_km: f64, q: f64) -> [f64; 3] {
-        self.rgb_lq(h_km, crate::physics::chemistry::table::LineTable::log_q(q))
+        self.rgb_lq(h_km, crate::physics::chemistry::table::ChemistryTable::log_q(q))
     }
 
     /// [`Self::rgb_q`] at `lq`, the chemistry table's log of `q`.
@@ -321,7 +321,7 @@ impl ColourTable {
     /// `rgb_q(h_colour, q)`.
     #[inline]
     pub fn rgb_with_colour_altitude(&self, h_km: f64, h_colour_km: f64, q: f64) -> [f64; 3] {
-        let lq = crate::physics::chemistry::table::LineTable::log_q(q);
+        let lq = crate::physics::chemistry::table::ChemistryTable::log_q(q);
         let c = self.rgb_lq(h_colour_km, lq);
         let own = self.rgb_lq(h_km, lq);
         let y = luminance(own);

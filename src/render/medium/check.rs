@@ -10,7 +10,7 @@
 //! gives both the verdict and the leaf's largest value.
 
 use crate::grid::leaf_source::{LeafSource, LeafValues};
-use crate::grid::{VoxelValue, LEAF_MASK_WORDS};
+use crate::grid::LEAF_MASK_WORDS;
 use crate::render::settings::RenderError;
 
 /// Whether a stored component is acceptable: finite and >= 0 (-0 included),
