@@ -27,7 +27,7 @@ pub enum EndReason {
     /// The atmosphere absorbed all its energy.
     EnergySpent,
     /// It took the maximum number of steps (1 / dt for CSDA,
-    /// [`FANG_MAX_STEPS`] for the Fang models).
+    /// [`FANG_MAX_STEPS`](super::walk::FANG_MAX_STEPS) for the Fang models).
     MaxSteps,
     /// It went below the atmosphere's table (Fang models).
     Bottom,
@@ -66,7 +66,7 @@ pub struct BeamStart {
 pub struct BeamTrace {
     pub photons: Vec<Photon>,
     /// Per photon, the powers of `BeamContext::line_outputs` in that order,
-    /// photons per second times [`R_PER_KM_SCALE`] (empty without outputs).
+    /// photons per second times [`R_PER_KM_SCALE`](crate::physics::emission::line_table::R_PER_KM_SCALE) (empty without outputs).
     pub line_power: Vec<f32>,
     /// One entry per photon, in step order: the step's altitudes and the
     /// power it deposited.
@@ -75,7 +75,7 @@ pub struct BeamTrace {
     /// `P (1 - D(inf))`), keV/s; 0 for CSDA.
     pub backscatter_kev_s: f64,
     /// Power the model deposits above the top of the beam's deposit (at
-    /// most [`ABOVE_START_TOL`] of its total, above [`above_start_top`]),
+    /// most [`ABOVE_START_TOL`](super::walk::ABOVE_START_TOL) of its total, above [`above_start_top`](super::walk::above_start_top)),
     /// outside the bake, keV/s; 0 for CSDA.
     pub above_top_kev_s: f64,
     /// Power the beam still carried when it stopped, keV/s.
@@ -114,7 +114,7 @@ impl BeamTrace {
 }
 
 /// Vectors a trace appends its photons, line powers and deposits to
-/// ([`trace_beam_into`]): empty for a beam of its own, or those of the
+/// ([`trace_beam_into`](super::walk::trace_beam_into)): empty for a beam of its own, or those of the
 /// beams before it, so many beams fill one allocation instead of each
 /// growing its own.
 #[derive(Clone, Debug, Default)]
@@ -160,6 +160,6 @@ pub struct BeamContext<'a> {
     pub ionization: Option<&'a IonizationProfile>,
     /// The Earth: the walk is in its curved frame (ground coordinates and
     /// altitude, `crate::geometry::earth`), and each photon is mapped to the scene
-    /// frame as it is made ([`deposit`]); the identity when flat.
+    /// frame as it is made ([`deposit`](super::emit::deposit)); the identity when flat.
     pub earth: Earth,
 }
