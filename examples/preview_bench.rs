@@ -1,4 +1,4 @@
-//! Edit-to-picture times of `aurora preview` (src/app/preview.rs) on a scene
+//! Edit-to-picture times of `aurora preview` (src/app/preview/) on a scene
 //! (default: the default preset) at 320x180: the first picture, then
 //! - an exposure edit (`render.exposure`): a tone map of the last linear
 //!   image, nothing traced;

@@ -8,6 +8,8 @@
 //! photons per second" (one photon per second of 557.7 nm has luminance 1;
 //! `crate::physics::emission::line_colour`), deposited power keV/s.
 
+use glam::DVec3;
+
 /// A photon of the photon map: a segment from `position` to `end` (km; a
 /// point photon has `end == position`) and the power emitted along it,
 /// spread uniformly, as linear Rec.709 RGB in "557.7 nm photons per second"
@@ -46,6 +48,18 @@ impl Photon {
     pub fn is_point(&self) -> bool {
         self.position == self.end
     }
+}
+
+/// A photon's position (its segment's start), f64.
+#[inline]
+pub fn pos(p: &Photon) -> DVec3 {
+    DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64)
+}
+
+/// A photon's segment end (its position for a point photon), f64.
+#[inline]
+pub fn end(p: &Photon) -> DVec3 {
+    DVec3::new(p.end[0] as f64, p.end[1] as f64, p.end[2] as f64)
 }
 
 /// One step's deposit: from altitude `z_start` to `z_end` km, `power_kev_s`,

@@ -12,8 +12,9 @@
 //! [`voxel`] the voxel size (the camera's choice for `voxel_size = "auto"`)
 //! and the resolution warnings; [`density`] the density grid and the air
 //! extinction; [`stats`] the numbers written as bake.json; [`pilot`] the
-//! beam count from a target noise. Here: the composition, its result
-//! [`Bake`] and its error [`BakeError`].
+//! beam count from a target noise; [`result`] what a bake returns, [`Bake`]
+//! or [`BakeError`]; [`identity`] what makes two bakes the same. Here: the
+//! composition.
 //!
 //! Grid transform: translation 0, so voxel (i, j, k) is centred at
 //! `voxel_size * (i, j, k)` km ([`voxel::grid_transform`]).
@@ -22,90 +23,29 @@ pub mod density;
 pub mod identity;
 pub mod pilot;
 pub mod plan;
+pub mod result;
 pub mod stats;
 pub mod voxel;
 
-use crate::grid::Grid;
-use crate::pipeline::beams::{BeamError, BeamStats};
-use crate::pipeline::deposit::Photon;
+pub use result::{empty_reason, Bake, BakeError};
+
 use crate::scene::Scene;
 use crate::util::progress::Progress;
 use plan::BakePlan;
-use stats::{BakeStats, NoiseEstimate, StageTimes};
+use stats::{NoiseEstimate, StageTimes};
 use std::time::Instant;
 
-/// The baked volumes and what produced them.
-#[derive(Clone, Debug)]
-pub struct Bake {
-    /// Linear Rec.709 emission, kR per km (Y = 1: 1 kR of 557.7 nm per km).
-    pub emission: Grid<[f32; 3]>,
-    /// Extinction per km, on the emission's active voxels.
-    pub density: Grid<f32>,
-    /// The per-line grids of `grid.lines`, rayleigh per km
-    /// (`crate::physics::emission::line_table`), unpruned; empty by default.
-    pub lines: Vec<Grid<f32>>,
-    pub photons: Vec<Photon>,
-    pub stats: BakeStats,
-}
-
-/// A bake failure.
-#[derive(Debug, thiserror::Error)]
-pub enum BakeError {
-    #[error(transparent)]
-    Beams(#[from] BeamError),
-    /// The emission overflowed single precision (never written: a safety
-    /// net behind the scene's validation ranges).
-    #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
-    NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
-    /// The bake would need more memory than this process may use
-    /// ([`crate::pipeline::memory_budget`]); refused before anything is allocated. Boxed: its
-    /// six strings would otherwise set the size of every
-    /// `Result<_, BakeError>`.
-    #[error(transparent)]
-    Memory(#[from] Box<crate::pipeline::memory_budget::TooLarge>),
-    /// The bake produced no emission at all: an empty VDB is never written
-    /// silently. The message says where the beams' energy went.
-    #[error("the bake deposited no light: {0}")]
-    Empty(String),
-    /// The scene's camera is out of range (never with a validated scene).
-    #[error(transparent)]
-    Camera(#[from] crate::geometry::camera::CameraError),
-}
-
-impl BakeError {
-    /// Always the user's input: every variant comes from the scene's parameters and names the keys to change (exit status 2).
-    pub fn is_input(&self) -> bool {
-        true
-    }
-}
-
-/// Why a bake came out empty, in the user's terms: how its beams ended and
-/// which keys to look at.
-pub fn empty_reason(stats: &BeamStats, beams: &crate::scene::BeamParams) -> String {
-    let mut why = format!(
-        "{} beams made {} photons ({} left their footprint, {} spent their energy, {} took the most steps, 1 / beams.dt = {})",
-        stats.beams,
-        stats.photons,
-        stats.ended_left_footprint,
-        stats.ended_energy_spent,
-        stats.ended_max_steps,
-        (1.0 / beams.dt).round()
-    );
-    if stats.photons == 0 {
-        why += &format!(
-            "; no beam deposited energy before stopping: check beams.length_km = {} (a first step longer than the atmosphere leaves nothing) and beams.top_km = {}",
-            beams.length_km, beams.top_km
-        );
-    } else {
-        why += "; their emission is zero everywhere (curtain energy_flux, or an all-zero colour map)";
-    }
-    why
+/// Refuses a bake that would need more memory than this process may use
+/// ([`crate::pipeline::memory_budget`]), before anything is allocated.
+pub fn check_memory(scene: &Scene) -> Result<(), BakeError> {
+    crate::pipeline::memory_budget::check(&crate::pipeline::memory_budget::estimate(scene), &crate::util::memory::available())?;
+    Ok(())
 }
 
 /// Runs every stage of the bake for a validated scene.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
-    crate::pipeline::memory_budget::check(&crate::pipeline::memory_budget::estimate(scene), &crate::util::memory::available())?;
+    check_memory(scene)?;
     let plan = BakePlan::new(scene, progress);
     bake_plan(&plan, t_all, progress)
 }
@@ -115,7 +55,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 /// colour table); returns the bake and its plan, for the next call.
 pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> Result<(Bake, BakePlan), BakeError> {
     let t_all = Instant::now();
-    crate::pipeline::memory_budget::check(&crate::pipeline::memory_budget::estimate(scene), &crate::util::memory::available())?;
+    check_memory(scene)?;
     let plan = match prev {
         Some(p) => BakePlan::reusing(scene, p, progress),
         None => BakePlan::new(scene, progress),
@@ -328,7 +268,7 @@ mod tests {
         // The photons carry the deposited energy: total luminance > 0 and the
         // stats agree with the per-curtain sums.
         assert!((st.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.electron_power_w);
-        // CSDA keeps its old stopping rules, and reports what they leave.
+        // CSDA stops by its own rules, and reports what they leave.
         let mut c = small_scene();
         c.beams.deposition = crate::scene::Deposition::Csda;
         let st = bake(&c, &NoProgress).unwrap().stats.beam_stats;

@@ -27,8 +27,8 @@
 //! falls as `N^-3/2` (Mitchell 1996, "Consequences of stratified sampling
 //! in graphics"; Pharr, Jakob & Humphreys, PBRT 4th ed., section 8.2), not
 //! the `N^-2` of smooth integrands. Each pilot block has its own
-//! Cranley-Patterson shift (`crate::pipeline::beams::starts`; with one shared shift the
-//! halves are correlated and the split estimate is off by 15 %). The pilot
+//! Cranley-Patterson shift (`crate::pipeline::beams::starts`; one shared shift would
+//! correlate the halves and bias the split estimate). The pilot
 //! fits
 //!
 //! `noise(N)^2 = a / N + b / N^(3/2)`
@@ -43,30 +43,21 @@
 //! `N = m (noise(m) / t)^2`, exact for random starts; a negative `a` (the
 //! pair falls faster than `N^-3/4`) is set to 0, the start law alone.
 //!
-//! Measured for the final estimators (segment kernels, splat gather, merged
-//! runs, expected deposition, stratified starts) on the tests' small scene,
-//! each noise the mean of three independent split estimates: noise(N) =
-//! 0.391, 0.151, 0.103, 0.059, 0.042 at N = 125, 500, 1000, 2000, 4000.
-//! From the pilot's pair (125, 500) the `N^-3/2` law predicts 0.095, 0.061,
-//! 0.040 at 1000, 2000, 4000 (-8 %, +3 %, -5 %). The `N^-2` law it replaces
-//! predicted 0.100, 0.069, 0.048 (-3 %, +16 %, +14 %: it kept too much of
-//! the start share's fall for large N, so a pilot asked for about a third
-//! more beams than needed at 4x its size); the plain `N^-1/2` law from 500
-//! alone, 0.107, 0.076, 0.053 (+4 %, +28 %, +27 %). The new law errs either
-//! way by less than the estimates' own scatter, so the chosen count may be
-//! a few percent short as often as over.
+//! On the tests' small scene the law fitted to the pilot's pair (125, 500
+//! beams) predicts the measured noise at 1000 to 4000 beams within the
+//! estimates' own scatter, so the chosen count is short as often as over.
 //!
 //! This measures noise only: the kernel's bias (blur), which more beams do
 //! not change, is not part of it. The pilot costs about `2.5 m` beams of
 //! tracing and gathering; the count is capped at `beams.count`.
 
 use super::plan::{self, BakePlan};
+use super::result::BakeError;
 use super::stats::NoiseEstimate;
-use super::BakeError;
 use crate::grid::Grid;
 use crate::util::progress::NoProgress;
 
-/// Beams in each half of the pilot: about 6 % of the default scene's
+/// Beams in each half of the pilot: a small share of the default scene's
 /// tracing and gathering, and enough that the noise estimate itself is
 /// within a few percent (the sums run over millions of voxel values).
 pub const PILOT_HALF_BEAMS: usize = 500;

@@ -40,9 +40,9 @@
 //! `photons.radius_km` is read in one place, [`crate::scene::KernelRadius::of`].
 
 use super::density::{density_grid, extinction_warning};
+use super::result::{empty_reason, Bake, BakeError};
 use super::stats::{BakeStats, NoiseEstimate, StageTimes};
 use super::voxel::{grid_transform, resolution_warnings_for, voxel_size_for};
-use super::{empty_reason, Bake, BakeError};
 use crate::geometry::camera::{CameraError, CameraModel};
 use crate::geometry::earth::Earth;
 use crate::grid::{Grid, Leaf};
@@ -52,6 +52,7 @@ use crate::physics::emission::line_table::{grid_name, line_index, LineTable};
 use crate::physics::geomagnetic_field::MagneticField;
 use crate::pipeline::beams::{self, BeamError, BeamStats, TraceParams, Traced};
 use crate::pipeline::deposit::Photon;
+use crate::pipeline::footprint::curtain_path::{bend_warnings, Lift};
 use crate::pipeline::footprint::{self, Footprint};
 use crate::pipeline::photons::{self, radius::RadiusField};
 use crate::pipeline::prune;
@@ -60,7 +61,7 @@ use crate::scene::{
     GridParams, KernelRadius, LineModel, PhotonParams, Scene,
 };
 use crate::util::colour::luminance;
-use crate::util::progress::Progress;
+use crate::util::progress::{NoProgress, Progress};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::ops::Range;
@@ -69,8 +70,8 @@ use std::time::Instant;
 /// One footprint per curtain (in curtain order; simulated in parallel), at
 /// the scene's `animation.time_s`.
 pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    let lift = crate::pipeline::footprint::curtain_path::Lift::of(&scene.beams, &scene.earth);
-    simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, lift, &crate::util::progress::NoProgress)
+    let lift = Lift::of(&scene.beams, &scene.earth);
+    simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, lift, &NoProgress)
 }
 
 /// One footprint per curtain at `animation.time_s`, in parallel; paths
@@ -80,7 +81,7 @@ pub fn simulate_footprints(
     curtains: &[Curtain],
     params: &FootprintParams,
     animation: &AnimationParams,
-    lift: crate::pipeline::footprint::curtain_path::Lift,
+    lift: Lift,
     progress: &dyn Progress,
 ) -> Vec<Footprint> {
     progress.start("footprints", curtains.len() as u64);
@@ -219,7 +220,7 @@ impl BakePlan {
                     &scene.curtains,
                     &scene.footprint,
                     &scene.animation,
-                    crate::pipeline::footprint::curtain_path::Lift::of(&scene.beams, &scene.earth),
+                    Lift::of(&scene.beams, &scene.earth),
                     progress,
                 );
                 (f, t.elapsed().as_secs_f64())
@@ -338,7 +339,7 @@ pub fn trace_bake(plan: &BakePlan, count: usize, progress: &dyn Progress) -> Res
 /// the photons (and per-line powers) concatenated in sample order. The
 /// stats are the plan's time's.
 pub fn trace_trail(plan: &BakePlan, count: usize, n: u32, progress: &dyn Progress) -> Result<Traced, BeamError> {
-    let lift = crate::pipeline::footprint::curtain_path::Lift::of(&plan.beams, &plan.earth);
+    let lift = Lift::of(&plan.beams, &plan.earth);
     let mut out: Option<Traced> = None;
     for sample in crate::pipeline::red_trail::samples(n) {
         let animation = AnimationParams { time_s: plan.animation.time_s - sample.lag_s, ..plan.animation.clone() };
@@ -346,7 +347,7 @@ pub fn trace_trail(plan: &BakePlan, count: usize, n: u32, progress: &dyn Progres
         let footprints = if sample.is_now() {
             &plan.footprints
         } else {
-            earlier = simulate_footprints(plan.seed, &plan.curtains, &plan.footprint, &animation, lift, &crate::util::progress::NoProgress);
+            earlier = simulate_footprints(plan.seed, &plan.curtains, &plan.footprint, &animation, lift, &NoProgress);
             &earlier
         };
         let params = TraceParams { animation: &animation, trail: Some(sample), ..plan.trace_params() };
@@ -377,10 +378,10 @@ pub fn gather_input(plan: &BakePlan, photons: &[Photon]) -> photons::GatherInput
     photons::GatherInput::new(photons, &plan.radius, plan.photons.cutoff, plan.photons.gather)
 }
 
-/// [`gather`] of photons made ready by [`gather_input`] with the same plan:
-/// the same grid.
-pub fn gather_from(plan: &BakePlan, input: &photons::GatherInput, voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
-    photons::gather_prepared(input, grid_transform(voxel_km), &plan.radius, plan.photons.cutoff, plan.photons.gather, progress)
+/// [`gather`] of photons made ready by [`gather_input`], with the plan they
+/// were made with: the same grid.
+pub fn gather_from(input: &photons::GatherInput, voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
+    photons::gather_prepared(input, grid_transform(voxel_km), progress)
 }
 
 /// The transform + radius field + gather set-up, written once: the emission
@@ -429,7 +430,7 @@ pub fn line_grids(plan: &BakePlan, photons: &[Photon], line_power: &[f32], voxel
 }
 
 /// What [`finish`] needs besides the plan and the emission grid.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Gathered {
     pub photons: Vec<Photon>,
     /// The per-line grids ([`line_grids`]; empty without `grid.lines`).
@@ -442,13 +443,33 @@ pub struct Gathered {
     pub noise: Option<NoiseEstimate>,
 }
 
+/// What [`finish`] needs of `photons` (their per-line grids `lines`, their
+/// beams' `beam_stats`) gathered at `voxel` (km, and where that size came
+/// from): the warnings of that voxel size ([`resolution_warnings_for`]) and
+/// of the curtains' paths ([`bend_warnings`]), then `earlier` (the pilot's).
+pub fn gathered(
+    plan: &BakePlan,
+    photons: Vec<Photon>,
+    lines: Vec<Grid<f32>>,
+    beam_stats: BeamStats,
+    voxel: (f64, String),
+    earlier: &[String],
+    noise: Option<NoiseEstimate>,
+) -> Gathered {
+    let (voxel_km, voxel_source) = voxel;
+    let mut warnings = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
+    warnings.extend(bend_warnings(&plan.curtains));
+    warnings.extend(earlier.iter().cloned());
+    Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise }
+}
+
 /// Traces `count` beams, picks the voxel size and gathers: stages 2 and 3.
 /// `times.beams` and `times.gather` are filled in.
 pub fn trace_and_gather(
     plan: &BakePlan,
     count: usize,
     noise: Option<NoiseEstimate>,
-    mut warnings: Vec<String>,
+    warnings: Vec<String>,
     times: &mut StageTimes,
     progress: &dyn Progress,
 ) -> Result<(Grid<[f32; 3]>, Gathered), BakeError> {
@@ -456,14 +477,12 @@ pub fn trace_and_gather(
     let traced = trace_bake(plan, count, progress)?;
     times.beams = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let (voxel_km, voxel_source) = plan.voxel_size(&traced.photons);
-    let mut w = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
-    w.extend(crate::pipeline::footprint::curtain_path::bend_warnings(&plan.curtains));
-    w.append(&mut warnings);
-    let emission = gather(plan, &traced.photons, voxel_km, progress);
-    let lines = line_grids(plan, &traced.photons, &traced.line_power, voxel_km, progress);
+    let voxel = plan.voxel_size(&traced.photons);
+    let emission = gather(plan, &traced.photons, voxel.0, progress);
+    let lines = line_grids(plan, &traced.photons, &traced.line_power, voxel.0, progress);
+    let g = gathered(plan, traced.photons, lines, traced.stats, voxel, &warnings, noise);
     times.gather = t.elapsed().as_secs_f64();
-    Ok((emission, Gathered { photons: traced.photons, lines, beam_stats: traced.stats, voxel_km, voxel_source, warnings: w, noise }))
+    Ok((emission, g))
 }
 
 /// The emission's checks and peaks, the first step of [`finish`]: every

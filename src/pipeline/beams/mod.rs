@@ -4,8 +4,8 @@
 //! the atmosphere, and leaving a photon at every deflection point.
 //!
 //! This stage starts every beam of every curtain and sums where their power
-//! went ([`trace_range`]). One beam's walk and the deposition models are
-//! [`walk`]'s; the start points are `crate::pipeline::beams::starts`'s, the field
+//! went ([`trace_range`]). One beam's data are [`beam`]'s, its walk and the
+//! deposition models [`walk`]'s, a step's photon [`emit`]'s; the start points are `crate::pipeline::beams::starts`'s, the field
 //! `crate::physics::geomagnetic_field`'s, and the photons and step deposits it returns are the
 //! plain records of `crate::pipeline::deposit`.
 //!
@@ -27,6 +27,8 @@
 //! soft with probability `soft_fraction` (equal-power beams: the mixture by
 //! energy flux).
 
+pub mod beam;
+pub mod emit;
 pub mod starts;
 pub mod walk;
 
@@ -43,12 +45,13 @@ use crate::pipeline::footprint::Footprint;
 use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene};
 use crate::util::progress::Progress;
 use crate::util::rng;
+use beam::{BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
 use glam::DVec3;
 use noise::Perlin;
 use rand::Rng;
 use rayon::prelude::*;
 use std::ops::Range;
-use walk::{trace_beam_into, BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
+use walk::trace_beam_into;
 
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;

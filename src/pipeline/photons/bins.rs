@@ -20,8 +20,8 @@
 //! same leaves and bins, tested).
 
 use super::fast_math::{ceil_i, floor_i};
-use super::{end, pos, Photon};
 use crate::grid::LEAF_DIM;
+use crate::pipeline::deposit::{end, pos, Photon};
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 

@@ -19,8 +19,8 @@ use super::leaf::LeafGather;
 use super::merge::{merge_segments, MERGE_CDF, MERGE_LEN_R, MERGE_OFF_R};
 use super::radius::RadiusField;
 use super::splat::SplatScratch;
-use super::{end, pos, Photon};
 use crate::grid::{Grid, Leaf, Transform};
+use crate::pipeline::deposit::{end, pos, Photon};
 use crate::scene::GatherMethod;
 use crate::util::progress::Progress;
 use glam::DVec3;
@@ -37,7 +37,7 @@ pub fn gather_grid(
     method: GatherMethod,
     progress: &dyn Progress,
 ) -> Grid<[f32; 3]> {
-    gather_prepared(&GatherInput::new(photons, radius, cutoff, method), transform, radius, cutoff, method, progress)
+    gather_prepared(&GatherInput::new(photons, radius, cutoff, method), transform, progress)
 }
 
 /// The photons as the gathers take them, made once for several gathers of
@@ -45,14 +45,18 @@ pub fn gather_grid(
 /// straight, evenly lit runs of beam steps merged into one segment each
 /// ([`merge_segments`], all but `report2014`) and, for the splat, each
 /// photon's kernel (r at the point or the segment's midpoint: a Perlin
-/// lookup per photon).
+/// lookup per photon), with the radius field, cutoff and method they were
+/// made for.
 #[derive(Clone, Debug)]
 pub struct GatherInput {
     pub photons: Vec<Photon>,
     splat_kernels: Vec<KernelF32>,
-    /// The segment kernel's masses for the cutoff (a table of some 4 k
-    /// numerical integrals).
+    /// The segment kernel's masses for the cutoff (a table of numerical
+    /// integrals).
     seg: SegmentMass,
+    radius: RadiusField,
+    cutoff: f64,
+    method: GatherMethod,
 }
 
 impl GatherInput {
@@ -77,7 +81,7 @@ impl GatherInput {
         } else {
             Vec::new()
         };
-        Self { photons, splat_kernels, seg: SegmentMass::new(cutoff) }
+        Self { photons, splat_kernels, seg: SegmentMass::new(cutoff), radius: radius.clone(), cutoff, method }
     }
 
     /// Every `k`-th photon (from the first), its power multiplied by `k`:
@@ -87,20 +91,14 @@ impl GatherInput {
         let k = k.max(1);
         let photons = self.photons.iter().step_by(k).map(|p| Photon { power: p.power.map(|c| c * k as f32), ..*p }).collect();
         let splat_kernels = self.splat_kernels.iter().step_by(k).copied().collect();
-        Self { photons, splat_kernels, seg: self.seg.clone() }
+        Self { photons, splat_kernels, seg: self.seg.clone(), radius: self.radius.clone(), ..*self }
     }
 }
 
-/// [`gather_grid`] of photons made ready by [`GatherInput::new`] with the
-/// same radius field, cutoff and method.
-pub fn gather_prepared(
-    input: &GatherInput,
-    transform: Transform,
-    radius: &RadiusField,
-    cutoff: f64,
-    method: GatherMethod,
-    progress: &dyn Progress,
-) -> Grid<[f32; 3]> {
+/// [`gather_grid`] of photons made ready by [`GatherInput::new`], with the
+/// radius field, cutoff and method they were made for.
+pub fn gather_prepared(input: &GatherInput, transform: Transform, progress: &dyn Progress) -> Grid<[f32; 3]> {
+    let (radius, cutoff, method) = (&input.radius, input.cutoff, input.method);
     let mut grid = Grid::new("emission", [0.0f32; 3], transform);
     let photons = &input.photons[..];
     let mass = gaussian_mass_inside(cutoff);
@@ -171,8 +169,8 @@ pub fn gather_prepared(
 mod tests {
     use super::*;
     use crate::pipeline::photons::kernel::estimate_brute_force;
+    use crate::pipeline::photons::leaf::PHOTONS_PER_KM2_S_PER_KR;
     use crate::pipeline::photons::test_fixtures::{beam_path, segment_photons, uniform_box};
-    use crate::pipeline::photons::PHOTONS_PER_KM2_S_PER_KR;
     use crate::util::progress::NoProgress;
     use glam::IVec3;
 

@@ -21,9 +21,9 @@
 
 use super::fast_math::{erf_diff, exp_neg_f32};
 use super::kernel::{photon_kernel, Kernel, KernelF32, MIDPOINT_LAMBDA};
-use super::leaf::{LeafGather, LeafKernels, LeafSums};
-use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
+use super::leaf::{LeafGather, LeafKernels, LeafSums, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::{Leaf, LEAF_DIM, LEAF_NUM_VALUES};
+use crate::pipeline::deposit::{end, pos, Photon};
 use glam::{DVec3, IVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -210,7 +210,7 @@ impl LeafGather<'_> {
 mod tests {
     use super::*;
     use crate::grid::Transform;
-    use crate::pipeline::photons::gather_grid;
+    use crate::pipeline::photons::gather::gather_grid;
     use crate::pipeline::photons::kernel::{estimate_brute_force, gaussian_mass_inside};
     use crate::pipeline::photons::radius::RadiusField;
     use crate::pipeline::photons::test_fixtures::uniform_box;

@@ -57,7 +57,7 @@
 //! [`photon_kernel`] and [`estimate_brute_force`] evaluate these in f64 for
 //! one photon and for a photon list: the estimate the gathers are held to.
 
-use super::{end, pos, Photon};
+use crate::pipeline::deposit::{end, pos, Photon};
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -22,9 +22,13 @@
 use super::fast_math::{ceil_i, exp_neg_f32, floor_i};
 use super::kernel::{KernelF32, SegmentMass};
 use super::radius::RadiusField;
-use super::{pos, Photon};
 use crate::grid::{Leaf, Transform, LEAF_DIM, LEAF_NUM_VALUES};
+use crate::pipeline::deposit::{pos, Photon};
 use glam::{DVec3, IVec3};
+
+/// Photons km^-2 s^-1 in one kR: [`LeafSums::finish`] scales the sums
+/// (photons km^-3 s^-1) by its inverse to the emission grid's kR per km.
+pub const PHOTONS_PER_KM2_S_PER_KR: f64 = 1e19;
 
 /// One gather's fixed inputs, borrowed for the evaluation of its leaves:
 /// the photons, the grid's transform, the kernel radius, cutoff and masses,

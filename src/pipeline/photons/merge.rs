@@ -9,7 +9,7 @@
 //! chunks cut between beams, where no run can continue: the same list as
 //! one pass (tested).
 
-use super::{end, pos, Photon};
+use crate::pipeline::deposit::{end, pos, Photon};
 use glam::DVec3;
 use rayon::prelude::*;
 

@@ -4,7 +4,7 @@
 //! gather.
 //!
 //! Each photon carries its own kernel ([`KernelF32`], made once per photon
-//! by [`super::GatherInput`]: r at the point or the segment's midpoint, a
+//! by [`super::gather::GatherInput`]: r at the point or the segment's midpoint, a
 //! Perlin lookup) and is binned by its own reach `c r_i` ([`super::bins`]);
 //! each leaf then adds its photons' kernels, in photon order, to the voxels
 //! within their reach ([`LeafGather::splat`]). A point photon (or a segment
@@ -33,9 +33,9 @@
 
 use super::fast_math::{erf_diff_lanes, exp_neg_f32};
 use super::kernel::{Kernel, KernelF32, MIDPOINT_LAMBDA};
-use super::leaf::{LeafGather, LeafKernels, LeafSums};
-use super::{end, pos, Photon, PHOTONS_PER_KM2_S_PER_KR};
+use super::leaf::{LeafGather, LeafKernels, LeafSums, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::Leaf;
+use crate::pipeline::deposit::{end, pos, Photon};
 use glam::IVec3;
 
 /// How many photons ahead of the one being added [`LeafGather::splat`]

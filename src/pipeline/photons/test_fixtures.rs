@@ -1,7 +1,7 @@
 //! Photon sets the gathers' tests share: uniform points in a box, loose
 //! segments, and beam-like paths of contiguous steps.
 
-use super::Photon;
+use crate::pipeline::deposit::Photon;
 use crate::util::rng;
 use glam::DVec3;
 use rand::Rng;

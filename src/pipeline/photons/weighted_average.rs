@@ -13,9 +13,9 @@
 //! power P reads P / 1e19 inside, whatever their number: tested).
 
 use super::kernel::Kernel;
-use super::leaf::{LeafGather, LeafSums};
-use super::{pos, PHOTONS_PER_KM2_S_PER_KR};
+use super::leaf::{LeafGather, LeafSums, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::{leaf_offset, Leaf, LEAF_NUM_VALUES};
+use crate::pipeline::deposit::pos;
 use glam::IVec3;
 
 impl LeafGather<'_> {
