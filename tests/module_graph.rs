@@ -355,8 +355,9 @@ fn resolve(rel: &str, segs: &[String], files: &BTreeSet<String>) -> Option<Strin
         let child = if dir.is_empty() { seg.clone() } else { format!("{dir}/{seg}") };
         match module_file(&child, files) {
             Some(f) => found = Some(f),
-            // A folder without its own file (a synthetic tree's) still leads on.
-            None if files.iter().any(|f| f.starts_with(&format!("{child}/"))) => {}
+            // A folder without its own file (a synthetic tree's) stands for
+            // its `mod.rs`.
+            None if files.iter().any(|f| f.starts_with(&format!("{child}/"))) => found = Some(format!("{child}/mod.rs")),
             None => break,
         }
         dir = child;
@@ -632,6 +633,7 @@ fn synthetic() -> Vec<(String, String)> {
         ("pipeline/beams/mod.rs", "use crate::util::rng;\n"),
         ("render/mod.rs", "fn f() { crate::geometry::camera::CameraModel::new(); }\n"),
         ("io/vdb/mod.rs", "use crate::grid::Grid;\n"),
+        ("io/bake_folder.rs", "use crate::io::vdb;\n"),
         ("io/vdb/read.rs", "use crate::pipeline::bake::Bake;\n"),
         ("farm/sequence_folder.rs", "use crate::io::vdb;\n"),
         ("app/vdb_for_render.rs", "use crate::render::medium::Medium;\nuse crate::io::vdb::read;\n"),
