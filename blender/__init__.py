@@ -19,7 +19,7 @@ Scripts use the functions, the operator is a thin wrapper:
 Installs as a Blender 4.2+ extension (blender_manifest.toml) or as a legacy
 add-on (bl_info, for add-on paths); relative imports only, so the package
 works under any name (`bl_ext.<repo>.aurora_importer`, or `blender` when the
-repository root is on sys.path, as tools/cycles_render.py does).
+repository root is on sys.path, as tools/cycles/cycles_render.py does).
 """
 
 bl_info = {

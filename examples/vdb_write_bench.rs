@@ -1,5 +1,5 @@
 //! VDB write benchmark: aurora's writer against OpenVDB's own (libopenvdb via
-//! `tools/openvdb_write_bench.cpp`), same grids, same compression, same
+//! `benchmarks/vdb_write/openvdb_write_bench.cpp`), same grids, same compression, same
 //! half-float setting; reports time ratio and file sizes.
 //!
 //! ```text

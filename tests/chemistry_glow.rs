@@ -1,6 +1,6 @@
 //! The emission chemistry against NCAR GLOW 4.0.4 driven by GLOW's own
 //! ionization rate and densities (the fixture `tests/data/glow_chemistry.csv`
-//! from `tools/glow_tables.py`: E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2
+//! from `tools/reference/glow_tables.py`: E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2
 //! s^-1, Maxwellian, 67 N 20 E 2020-01-15 00 UT, nightglow subtracted).
 
 use aurora::physics::chemistry::{solve, Air, Ambient, AmbientTable};

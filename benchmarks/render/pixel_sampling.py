@@ -6,25 +6,27 @@
 
 The default scene, volume only (terrain none), at --size; the reference is
 `aurora render` of the first binary at 8x8 sub-pixels x 8 spp x 2 seeds,
-box-downsampled (as tools/side_by_side.py). Each binary renders a ladder of
-spp with SEEDS seeds; the error is tools/compare.py's mean relative error,
-averaged over the seeds; the spp to reach each target is interpolated
-log-log between the rungs that bracket it. Prints a table and writes
+box-downsampled (as benchmarks/side_by_side/side_by_side.py). Each binary
+renders a ladder of spp with SEEDS seeds; the error is
+tools/cycles/compare.py's mean relative error, averaged over the seeds; the
+spp to reach each target is interpolated log-log between the rungs that
+bracket it. Prints a table and writes
 pixel_sampling.json in --out. Compare binaries built from commits that
 differ only in how pixel positions are drawn.
 """
 import argparse
 import json
-import math
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-sys.path.insert(0, str(ROOT / "tools"))
-import compare  # noqa: E402
-import numpy as np  # noqa: E402
-from side_by_side import downsample, edit_toml, interpolate, timed_run  # noqa: E402
+# The shared package aurora_tools, and the side-by-side benchmark's runners and metrics.
+sys.path[:0] = [str(ROOT / "tools"), str(ROOT / "benchmarks" / "side_by_side")]
+from aurora_tools import image_compare as compare  # noqa: E402
+from aurora_tools.toml_io import edit_toml  # noqa: E402
+from metrics import downsample, interpolate  # noqa: E402
+from runners import timed_run  # noqa: E402
 
 LADDER = [4, 8, 16, 32, 64, 128]
 SEEDS = (11, 12, 13)

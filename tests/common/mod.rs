@@ -71,11 +71,11 @@ pub fn venv_python() -> PathBuf {
     p
 }
 
-/// Runs `python script args...` and parses its stdout as JSON; any failure
+/// Runs `python tools/probes/SCRIPT args...` and parses its stdout as JSON; any failure
 /// (missing module, non-zero exit, bad JSON) fails the test with the output.
 pub fn run_json(python: &Path, script: &str, args: &[&str]) -> Value {
     let out = Command::new(python)
-        .arg(repo_root().join("tools").join(script))
+        .arg(repo_root().join("tools/probes").join(script))
         .args(args)
         .output()
         .unwrap_or_else(|e| panic!("cannot run {}: {e}; run tools/setup", python.display()));
@@ -157,7 +157,7 @@ pub fn test_emission() -> Grid<[f32; 3]> {
     g
 }
 
-/// OpenVDB's own writer (`tools/openvdb_write_bench.cpp`), compiled into
+/// OpenVDB's own writer (`benchmarks/vdb_write/openvdb_write_bench.cpp`), compiled into
 /// `target/` on first use and whenever the source is newer.
 pub fn openvdb_write_tool() -> PathBuf {
     openvdb_tool::build(&repo_root()).unwrap_or_else(|e| panic!("{e}"))

@@ -3,7 +3,7 @@
     .venv/bin/python tests/python/bench_cycles_noise.py [--out DIR] [--quick]
 
 Renders a synthetic one-voxel-thick curtain (synth.curtain_arrays) through
-tools/cycles_render.py with pixel-centre sampling (scene spp = 1) and
+tools/cycles/cycles_render.py with pixel-centre sampling (scene spp = 1) and
 compares with the brute-force oracle (synth.march) at the same pixel
 centres. For each volume mode, step rate and sample count it prints one CSV
 row: mean relative error over pixels brighter than 1% of the peak (compare.py's
@@ -30,7 +30,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent.parent
 sys.path.insert(0, str(HERE))
-sys.path.insert(0, str(ROOT / "tools"))
+sys.path.insert(0, str(ROOT / "tools" / "cycles"))
 
 import synth  # noqa: E402
 

@@ -15,16 +15,15 @@ view transform's gamut handling shows.
 from __future__ import annotations
 
 import os
-import struct
 import subprocess
 import sys
-import zlib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 import synth
+from aurora_tools.png import read_png
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 
@@ -37,47 +36,9 @@ def aurora_bin() -> Path:
 
 def read_png_rgb8(path: Path) -> np.ndarray:
     """An 8-bit RGB (or RGBA) non-interlaced PNG as (H, W, 3) uint8."""
-    data = Path(path).read_bytes()
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, idat, head = 8, b"", None
-    while pos < len(data):
-        n, kind = struct.unpack(">I4s", data[pos:pos + 8])
-        body = data[pos + 8:pos + 8 + n]
-        if kind == b"IHDR":
-            head = struct.unpack(">IIBBBBB", body)
-        elif kind == b"IDAT":
-            idat += body
-        pos += 12 + n
-    w, h, depth, ctype, _, _, interlace = head
-    assert depth == 8 and ctype in (2, 6) and interlace == 0, head
-    bpp = 3 if ctype == 2 else 4
-    raw = zlib.decompress(idat)
-    out = np.zeros((h, w * bpp), np.uint8)
-    prev = np.zeros(w * bpp, np.int32)
-    stride = w * bpp + 1
-    for y in range(h):
-        f, line = raw[y * stride], np.frombuffer(raw[y * stride + 1:(y + 1) * stride], np.uint8).astype(np.int32)
-        cur = np.zeros_like(line)
-        for x in range(len(line)):
-            a = cur[x - bpp] if x >= bpp else 0
-            b = prev[x]
-            c = prev[x - bpp] if x >= bpp else 0
-            if f == 0:
-                pred = 0
-            elif f == 1:
-                pred = a
-            elif f == 2:
-                pred = b
-            elif f == 3:
-                pred = (a + b) // 2
-            else:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                pred = a if pa <= pb and pa <= pc else (b if pb <= pc else c)
-            cur[x] = (line[x] + pred) & 0xFF
-        out[y] = cur
-        prev = cur
-    return out.reshape(h, w, bpp)[..., :3]
+    px = read_png(path)
+    assert px.dtype == np.uint8 and px.shape[2] in (3, 4), (px.dtype, px.shape)
+    return px[..., :3]
 
 
 def blender_agx_png(bpy, exr: Path, png: Path, exposure: float) -> np.ndarray:
@@ -181,7 +142,7 @@ def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):
 
 
 def test_agx_png_tool_writes_through_a_temporary_and_renames(bpy, compare, tmp_path):
-    """tools/agx_png.py gives Blender's AgX picture of the EXR, replaces an
+    """tools/cycles/agx_png.py gives Blender's AgX picture of the EXR, replaces an
     existing PNG and leaves no temporary file beside it."""
     scene = tmp_path / "t.toml"
     scene.write_text(synth.toml_dumps({
@@ -195,7 +156,7 @@ def test_agx_png_tool_writes_through_a_temporary_and_renames(bpy, compare, tmp_p
     out_dir.mkdir()
     png = out_dir / "t.png"
     png.write_bytes(b"an older picture")
-    tool = ROOT / "tools" / "agx_png.py"
+    tool = ROOT / "tools" / "cycles" / "agx_png.py"
     r = subprocess.run([sys.executable, tool, exr, png, "--exposure", "5"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == ["t.png"]

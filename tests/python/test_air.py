@@ -81,7 +81,7 @@ def _both(compare, name: str, doc: dict, vdb: Path) -> dict:
     scene.write_text(synth.toml_dumps(doc))
     a, b = d / "aurora.exr", d / "cycles.exr"
     run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", a, "--spp", 1])
-    run([sys.executable, ROOT / "tools" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
+    run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
          "--samples", 64, "--step-rate", 0.1])
     m = compare.compare(a, b, d / "diff.png", d / "figures.json")
     print(name, json.dumps(m))

@@ -1,4 +1,4 @@
-"""tools/compare.py on synthetic images whose differences are known exactly."""
+"""tools/cycles/compare.py on synthetic images whose differences are known exactly."""
 
 from __future__ import annotations
 
@@ -85,7 +85,7 @@ def test_cli_writes_json_and_a_readable_png(compare, cycles_render, tmp_path):
                     for i in _chunks(png, b"IDAT"))
     raw = np.frombuffer(zlib.decompress(idat), np.uint8).reshape(h, 1 + 3 * w)
     assert np.all(raw[:, 0] == 0)
-    assert compare._read_png_gray(tmp_path / "d.png").shape == (h, w)
+    assert compare.read_png(tmp_path / "d.png").shape == (h, w, 3)
 
 
 def _chunks(png, tag):

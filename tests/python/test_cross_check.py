@@ -1,8 +1,8 @@
-"""`aurora render` against Cycles (tools/cycles_render.py) on the default bake.
+"""`aurora render` against Cycles (tools/cycles/cycles_render.py) on the default bake.
 
     aurora bake SCENE --out DIR
     aurora render SCENE --vdb DIR/aurora.vdb --out A.exr
-    tools/cycles_render.py SCENE --vdb DIR/aurora.vdb --out B.exr
+    tools/cycles/cycles_render.py SCENE --vdb DIR/aurora.vdb --out B.exr
 
 at 160x90, for two scenes derived from `aurora scene default`:
 - volume only (no terrain): mean relative error over pixels brighter than 1%
@@ -97,7 +97,7 @@ def render_both(binary, scene_doc: dict, name: str, vdb: Path, extra=(), kind=No
     a, b = d / "aurora.exr", d / "cycles.exr"
     run([binary, "render", scene, "--vdb", vdb, "--out", a, "--spp", AURORA_SPP[name],
          "--shadow-samples", AURORA_SHADOW[name], "--png", d / "aurora.png"])
-    run([sys.executable, ROOT / "tools" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
+    run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
          "--samples", CYCLES_SAMPLES[name], "--step-rate", STEP_RATE[name], *extra])
     return scene, a, b
 

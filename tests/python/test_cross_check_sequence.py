@@ -39,7 +39,7 @@ def test_cycles_matches_aurora_render_on_two_frames_of_a_sequence(compare):
         a, b = d / f"aurora.{f:04d}.exr", d / f"cycles.{f:04d}.exr"
         run([binary, "render", scene, "--vdb", shot, "--frame", str(f), "--out", d / "aurora.exr",
              "--spp", AURORA_SPP["volume"], "--shadow-samples", AURORA_SHADOW["volume"], "-q"])
-        run([sys.executable, ROOT / "tools" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
+        run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
              "--samples", CYCLES_SAMPLES["volume"], "--step-rate", STEP_RATE["volume"]])
         m = compare.compare(a, b, d / f"diff.{f:04d}.png", d / f"figures.{f:04d}.json")
         print(f"frame {f}:", json.dumps(m))

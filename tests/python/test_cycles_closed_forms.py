@@ -1,4 +1,4 @@
-"""Cycles through tools/cycles_render.py against closed forms.
+"""Cycles through tools/cycles/cycles_render.py against closed forms.
 
 Each case writes a synthetic VDB (leaf voxels) and a scene TOML, renders it
 twice with different seeds, and checks the pair with conftest.assert_matches

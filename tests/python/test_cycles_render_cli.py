@@ -1,4 +1,4 @@
-"""tools/cycles_render.py as a command: output file, channels, exit codes."""
+"""tools/cycles/cycles_render.py as a command: output file, channels, exit codes."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import numpy as np
 import synth
 
 ROOT = Path(__file__).resolve().parent.parent.parent
-TOOL = ROOT / "tools" / "cycles_render.py"
+TOOL = ROOT / "tools" / "cycles" / "cycles_render.py"
 
 
 def test_cli_writes_rgba_float_exr_with_background_in_rgb(tmp_path):

@@ -1,5 +1,5 @@
 """`aurora profile` against NCAR GLOW, the field's standard open model of
-auroral emission (glowpython 4.0.4, run by tools/glow_run.py in .venv-glow,
+auroral emission (glowpython 4.0.4, run by tools/reference/glow_run.py in .venv-glow,
 which tools/setup makes; GLOW missing is a failure, never a skip).
 
 Cases: single curtains with a Maxwellian of E0 keV and energy flux Q
@@ -8,7 +8,7 @@ erg cm^-2 s^-1, no soft component, on a uniform footprint
 does), on the default atmosphere (NRLMSIS 2.1 at 67 N, 20 E, 2020-01-15
 00:00 UT, F10.7 = 150, Ap = 15: GLOW's run uses the same place, time and
 indices). GLOW's ambient ionosphere glows on its own; its nightglow run is
-subtracted (tools/glow_run.py). E0 = 1, 3, 10 keV at Q = 1 and 10, plus
+subtracted (tools/reference/glow_run.py). E0 = 1, 3, 10 keV at Q = 1 and 10, plus
 0.5 / 1, 2 / 5, 5 / 20 and 7 / 2.
 
 Targets (column totals: aurora's summed over its 0.5 km bins, GLOW's
@@ -74,6 +74,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from test_profile import scene_text as profile_scene
+
 ROOT = Path(__file__).resolve().parent.parent.parent
 
 MAIN = [(1.0, 1.0), (3.0, 1.0), (10.0, 1.0), (1.0, 10.0), (3.0, 10.0), (10.0, 10.0)]
@@ -103,7 +105,7 @@ def run(cmd) -> subprocess.CompletedProcess:
 
 @functools.lru_cache(maxsize=None)
 def glow(e0: float, q: float) -> dict:
-    r = run([glow_python(), ROOT / "tools" / "glow_run.py", "--e0", e0, "--q", q, "--json"])
+    r = run([glow_python(), ROOT / "tools" / "reference" / "glow_run.py", "--e0", e0, "--q", q, "--json"])
     g = json.loads(r.stdout)
     out = {"z": np.array(g["alt_km"])}
     out.update({k: np.array(v) for k, v in g["rates"].items()})
@@ -112,20 +114,8 @@ def glow(e0: float, q: float) -> dict:
 
 
 def scene_text(e0: float, q: float) -> str:
-    return f"""seed = 3
-[[curtain]]
-length = 40.0
-width = 16.0
-bend_km = 0.0
-energy_flux = {q}
-char_energy_kev = {e0}
-soft_fraction = 0.0
-[footprint]
-resolution = [64, 32]
-uniform = true
-[beams]
-count = 600
-"""
+    """One straight curtain of energy flux `q` on a uniform footprint."""
+    return profile_scene(e0, 600, bend_km=0.0, energy_flux=q, footprint="resolution = [64, 32]\nuniform = true")
 
 
 @functools.lru_cache(maxsize=None)
@@ -172,20 +162,22 @@ def test_4278_photons_per_ion_pair(e0, q):
     assert abs(ours / theirs - 1) <= 0.15, f"427.8 per ion pair {ours:.5f} vs GLOW {theirs:.5f} (ratio {ours / theirs:.3f}, allowed 0.85-1.15)"
 
 
+def over_4278(e0: float, q: float, line: str) -> tuple[float, float]:
+    """The column of `line` over 427.8 nm's: ours, and GLOW's."""
+    a, g, _ = both(e0, q)
+    return a[line].sum() / a["n2p_4278"].sum(), g["columns"][line] / g["columns"]["n2p_4278"]
+
+
 @pytest.mark.parametrize("e0,q", CASES, ids=IDS)
 def test_5577_over_4278(e0, q):
-    a, g, _ = both(e0, q)
-    ours = a["oi_5577"].sum() / a["n2p_4278"].sum()
-    theirs = g["columns"]["oi_5577"] / g["columns"]["n2p_4278"]
+    ours, theirs = over_4278(e0, q, "oi_5577")
     print(f"E0 {e0} keV Q {q}: 557.7/427.8 {ours:.3f}, GLOW {theirs:.3f}, ratio {ours / theirs:.3f}")
     assert abs(ours / theirs - 1) <= 0.15, f"557.7/427.8 {ours:.3f} vs GLOW {theirs:.3f} (ratio {ours / theirs:.3f}, allowed +-15%)"
 
 
 @pytest.mark.parametrize("e0,q", CASES, ids=IDS)
 def test_6300_over_4278(e0, q):
-    a, g, _ = both(e0, q)
-    ours = a["oi_6300"].sum() / a["n2p_4278"].sum()
-    theirs = g["columns"]["oi_6300"] / g["columns"]["n2p_4278"]
+    ours, theirs = over_4278(e0, q, "oi_6300")
     tol = 0.25 if e0 <= 2.5 else 0.40
     print(f"E0 {e0} keV Q {q}: 630.0/427.8 {ours:.4f}, GLOW {theirs:.4f}, ratio {ours / theirs:.3f} (allowed +-{tol:.0%})")
     assert abs(ours / theirs - 1) <= tol, f"630.0/427.8 {ours:.4f} vs GLOW {theirs:.4f} (ratio {ours / theirs:.3f}, allowed +-{tol:.0%})"

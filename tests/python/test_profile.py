@@ -48,16 +48,22 @@ def run(cmd):
     return r
 
 
-def scene_text(e0: float, beams: int, extra: str = "") -> str:
+def scene_text(e0: float, beams: int, extra: str = "", *, bend_km: float = 3.0, energy_flux: float | None = None,
+               footprint: str = "resolution = [128, 48]") -> str:
+    """One curtain of Maxwellian electrons of E0 = `e0` keV (no soft
+    component), `beams` beams; `energy_flux` (erg cm^-2 s^-1) when given,
+    `footprint` the [footprint] table's lines, `extra` tables after [beams]
+    (also tests/python/test_glow.py's scene)."""
+    flux = "" if energy_flux is None else f"energy_flux = {energy_flux}\n"
     return f"""seed = 3
 [[curtain]]
 length = 40.0
 width = 16.0
-bend_km = 3.0
-char_energy_kev = {e0}
+bend_km = {bend_km}
+{flux}char_energy_kev = {e0}
 soft_fraction = 0.0
 [footprint]
-resolution = [128, 48]
+{footprint}
 [beams]
 count = {beams}
 {extra}"""

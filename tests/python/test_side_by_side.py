@@ -1,4 +1,4 @@
-"""tools/side_by_side.py --quick: the whole benchmark runs and its output holds together.
+"""benchmarks/side_by_side/side_by_side.py --quick: the whole benchmark runs and its output holds together.
 
 The quick mode bakes a reduced default scene (1,000 beams, 1 km voxels),
 times the VDB writers once, bakes the three gather methods, renders 64x36
@@ -24,7 +24,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent.parent
-TOOL = ROOT / "tools" / "side_by_side.py"
+TOOL = ROOT / "benchmarks" / "side_by_side" / "side_by_side.py"
 
 
 def test_quick_side_by_side_runs_and_is_consistent(tmp_path):

@@ -1,4 +1,4 @@
-"""Terrain lit by an emissive slab, Cycles through tools/cycles_render.py.
+"""Terrain lit by an emissive slab, Cycles through tools/cycles/cycles_render.py.
 
 Closed form: under an infinite non-absorbing slab of thickness H
 and emission e, every direction of the upper hemisphere sees radiance

@@ -1,5 +1,5 @@
 """Render an aurora scene with Blender Cycles (CPU), exactly as `aurora
-render` frames it (tools/cycles_render.py is the command line).
+render` frames it (tools/cycles/cycles_render.py is the command line).
 
 Everything goes through the add-on in ../blender (setup_scene_from_toml):
 same camera, resolution, pixel footprint (spp = 1: pixel centres, else the

@@ -1,5 +1,5 @@
 """Two linear RGBA EXR renders compared: error figures and a picture
-(tools/compare.py is its command line).
+(tools/cycles/compare.py is its command line).
 
 Figures (A and B play symmetric roles; neither is assumed exact):
 - mean_rel_err: mean over "bright" pixels of |A - B|_1 / ((|A|_1 + |B|_1) / 2),
@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import json
 import math
-import struct
-import zlib
 from pathlib import Path
 
 import numpy as np
@@ -32,6 +30,7 @@ import numpy as np
 from . import addon
 from .exr_io import read_rgba
 from .files import write_atomic
+from .png import read_png, write_png
 
 
 
@@ -42,7 +41,7 @@ def read_mask(path) -> np.ndarray:
     p = Path(path)
     if p.suffix.lower() == ".exr":
         return read_rgba(p)[..., 0] > 0
-    return _read_png_gray(p) > 0
+    return read_png(p)[..., 0] > 0
 
 
 # ---------------------------------------------------------------- figures
@@ -244,70 +243,6 @@ def _text(img, x, y, s, color=(230, 230, 230)):
                 if g[row * 5 + col] == "1" and 0 <= y + row < img.shape[0] and 0 <= x + col < img.shape[1]:
                     img[y + row, x + col] = color
         x += 6
-
-
-def write_png(path, rgb8: np.ndarray) -> None:
-    """8-bit RGB PNG (filter 0 rows, zlib), written to a temporary name and renamed."""
-    rgb8 = np.ascontiguousarray(rgb8, np.uint8)
-    h, w = rgb8.shape[:2]
-    raw = b"".join(b"\x00" + rgb8[y].tobytes() for y in range(h))
-
-    def chunk(tag, data):
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    png = (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0))
-           + chunk(b"IDAT", zlib.compress(raw, 6)) + chunk(b"IEND", b""))
-    write_atomic(path, png)
-
-
-def _read_png_gray(path) -> np.ndarray:
-    """First channel of a non-interlaced 8/16-bit PNG (the masks we write or a user paints)."""
-    data = Path(path).read_bytes()
-    if data[:8] != b"\x89PNG\r\n\x1a\n":
-        raise ValueError(f"{path}: not a PNG")
-    pos, idat, hdr = 8, b"", None
-    while pos < len(data):
-        n, tag = struct.unpack(">I4s", data[pos:pos + 8])
-        body = data[pos + 8:pos + 8 + n]
-        if tag == b"IHDR":
-            hdr = struct.unpack(">IIBBBBB", body)
-        elif tag == b"IDAT":
-            idat += body
-        pos += 12 + n
-    w, h, depth, ctype, _, _, interlace = hdr
-    if interlace or depth not in (8, 16) or ctype not in (0, 2, 4, 6):
-        raise ValueError(f"{path}: unsupported PNG (depth {depth}, colour type {ctype}, interlace {interlace})")
-    ch = {0: 1, 2: 3, 4: 2, 6: 4}[ctype]
-    bpp = ch * depth // 8
-    raw = zlib.decompress(idat)
-    stride = w * bpp
-    out = np.zeros((h, stride), np.uint8)
-    prev = np.zeros(stride, np.int32)
-    for y in range(h):
-        f = raw[y * (stride + 1)]
-        line = np.frombuffer(raw, np.uint8, stride, y * (stride + 1) + 1).astype(np.int32)
-        cur = np.zeros(stride, np.int32)
-        for i in range(stride):
-            left = cur[i - bpp] if i >= bpp else 0
-            up = prev[i]
-            ul = prev[i - bpp] if i >= bpp else 0
-            if f == 0:
-                pred = 0
-            elif f == 1:
-                pred = left
-            elif f == 2:
-                pred = up
-            elif f == 3:
-                pred = (left + up) // 2
-            else:
-                p = left + up - ul
-                pa, pb, pc = abs(p - left), abs(p - up), abs(p - ul)
-                pred = left if pa <= pb and pa <= pc else (up if pb <= pc else ul)
-            cur[i] = (line[i] + pred) & 255
-        out[y] = cur
-        prev = cur
-    px = out.reshape(h, w, bpp)
-    return px[..., 0] if depth == 8 else (px[..., 0].astype(np.int32) << 8 | px[..., 1])
 
 
 def compare(a_path, b_path, out_png=None, json_path=None, mask=None, threshold: float = 0.01,

@@ -5,10 +5,10 @@
 # user's `cargo run --release -- bake` does. Runs alternate A B A B ... so
 # that a change of machine load falls on both.
 #
-#   tools/first_bake_bench [--runs N] [--out FILE] [BASE [NEW]]
+#   benchmarks/build/first_bake.sh [--runs N] [--out FILE] [BASE [NEW]]
 #
-# BASE defaults to the tree before the build-time changes (the parent of the
-# commit that added this script), NEW to HEAD. N (default 2) runs of each.
+# BASE defaults to 9a7556f, the tree before the build-time changes, NEW to
+# HEAD. N (default 2) runs of each.
 # Prints wall and CPU (user + sys) seconds of the build and of the bake for
 # every run, the median of each per revision, NEW/BASE ratios, the slowest
 # units of each build (from cargo's timings report), and the sha256 of each
@@ -25,23 +25,14 @@ while [ $# -gt 0 ]; do
     case "$1" in
         --runs) runs=$2; shift 2 ;;
         --out) out=$2; shift 2 ;;
-        -h|--help) sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+        -h|--help) sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
         --*) echo "unknown option $1" >&2; exit 2 ;;
         *) break ;;
     esac
 done
 top=$(git rev-parse --show-toplevel)
 cd "$top"
-if [ $# -ge 1 ]; then
-    base=$1
-else
-    added=$(git log --diff-filter=A --format=%H -- tools/first_bake_bench | tail -n 1)
-    if [ -z "$added" ]; then
-        echo "no history of tools/first_bake_bench here: name BASE" >&2
-        exit 2
-    fi
-    base="$added^"
-fi
+base=${1:-9a7556f}
 new=${2:-HEAD}
 base_rev=$(git rev-parse --verify "$base^{commit}")
 new_rev=$(git rev-parse --verify "$new^{commit}")

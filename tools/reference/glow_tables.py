@@ -17,18 +17,20 @@
   oracle test (tests/chemistry_glow.rs), which drives our chemistry with
   GLOW's q(z) and densities.
 
-Rerun: `python tools/glow_tables.py` with a Python that has glowpython
+Rerun: `python tools/reference/glow_tables.py` with a Python that has glowpython
 4.0.4 and numpy 1.26 (see tools/setup).
 """
 import datetime
 import io
 import sys
+from pathlib import Path
 
 import glowpython
 import numpy as np
 
-from aurora_tools import ROOT
-from aurora_tools.files import write_atomic
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools import ROOT  # noqa: E402
+from aurora_tools.files import write_atomic  # noqa: E402
 
 TIME = datetime.datetime(2020, 1, 15, 0, 0)
 LAT, LON = 67.0, 20.0
@@ -39,7 +41,7 @@ CASES = [(e0, q) for e0 in (1.0, 3.0, 10.0) for q in (1.0, 10.0)]
 
 def header():
     return (f"# NCAR GLOW via glowpython {glowpython.__version__ if hasattr(glowpython, '__version__') else '4.0.4'}: "
-            f"{LAT} N, {LON} E, {TIME.isoformat()} UT, F10.7 = F10.7a = F10.7p = 150, Ap = 15; made by tools/glow_tables.py\n")
+            f"{LAT} N, {LON} E, {TIME.isoformat()} UT, F10.7 = F10.7a = F10.7p = 150, Ap = 15; made by tools/reference/glow_tables.py\n")
 
 
 def main():

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Render an aurora scene with Blender Cycles (CPU), exactly as `aurora render` frames it.
 
-    .venv/bin/python tools/cycles_render.py SCENE.toml --vdb FILE.vdb --out IMAGE.exr \
+    .venv/bin/python tools/cycles/cycles_render.py SCENE.toml --vdb FILE.vdb --out IMAGE.exr \
         [--samples N] [--terrain-obj terrain.obj] [--seed S] [--volume-mode biased|unbiased] [--step-rate R]
 
 What it renders, and the output's channels (RGB = Combined + Environment,
@@ -15,9 +15,10 @@ import argparse
 import sys
 from pathlib import Path
 
-from aurora_tools.addon import load_addon  # noqa: F401 - part of this module's interface
-from aurora_tools.cycles import DEFAULT_SAMPLES, render
-from aurora_tools.exr_io import read_exr_layers, write_rgba_exr  # noqa: F401 - part of this module's interface
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.addon import load_addon  # noqa: E402, F401 - part of this module's interface
+from aurora_tools.cycles import DEFAULT_SAMPLES, render  # noqa: E402
+from aurora_tools.exr_io import read_exr_layers, write_rgba_exr  # noqa: E402, F401 - part of this module's interface
 
 
 def main(argv=None) -> int:

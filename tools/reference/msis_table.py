@@ -11,16 +11,18 @@ the emission chemistry (src/physics/chemistry/) needs. Six significant digits.
 
 Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
 incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the
-`pymsis` package (PyPI). Rerun: `python tools/msis_table.py [OUT.csv]`.
+`pymsis` package (PyPI). Rerun: `python tools/reference/msis_table.py [OUT.csv]`.
 """
 import io
 import sys
+from pathlib import Path
 
 import numpy as np
 import pymsis
 
-from aurora_tools import ROOT
-from aurora_tools.files import write_atomic
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools import ROOT  # noqa: E402
+from aurora_tools.files import write_atomic  # noqa: E402
 
 LAT, LON = 67.0, 20.0
 DATE = np.datetime64("2020-01-15T00:00")
@@ -58,7 +60,7 @@ def main():
     with io.StringIO() as f:
         f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
                 f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
-                f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/msis_table.py\n")
+                f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/reference/msis_table.py\n")
         f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,n4s_cm3,no_cm3\n")
         for r in rows:
             f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")

@@ -16,8 +16,10 @@ half a voxel beyond the outermost voxel centres.
 import json
 import os
 import sys
+from pathlib import Path
 
-from aurora_tools.probe import require
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.probe import require  # noqa: E402
 
 bpy = require("bpy")
 

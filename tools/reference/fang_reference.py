@@ -10,16 +10,18 @@ en_diss with flux = 1 keV cm^-2 s^-1). Models:
 - fang2010_maxw: eppaurora.fang2010_maxw_int, Fang 2010 integrated over a
   Maxwellian, bounds 0.1-1000 keV, 2048 log-spaced energies.
 rho is set to column / H, so eppaurora sees the column mass rho H exactly.
-Rerun: `python tools/fang_reference.py [OUT.csv]`.
+Rerun: `python tools/reference/fang_reference.py [OUT.csv]`.
 """
 import io
 import sys
+from pathlib import Path
 
 import numpy as np
 import eppaurora
 
-from aurora_tools import ROOT
-from aurora_tools.files import write_atomic
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools import ROOT  # noqa: E402
+from aurora_tools.files import write_atomic  # noqa: E402
 
 H_CM = (6.0e5, 2.5e6)
 
@@ -46,7 +48,7 @@ def rows():
 def main():
     path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "fang_reference.csv")
     with io.StringIO() as f:
-        f.write(f"# eppaurora {eppaurora.__version__}; made by tools/fang_reference.py\n")
+        f.write(f"# eppaurora {eppaurora.__version__}; made by tools/reference/fang_reference.py\n")
         f.write("model,energy_kev,column_g_cm2,scale_height_cm,dissipation_per_cm\n")
         for model, e, m, h, x in rows():
             f.write(f"{model},{e:g},{m:.17g},{h:.17g},{x:.17g}\n")

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A linear EXR through Blender's own AgX view for an sRGB display, as an 8-bit PNG.
 
-    .venv/bin/python tools/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS]
+    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS]
 
 Blender's colour management (display sRGB, view AgX, look None, no dither),
 the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
@@ -17,7 +17,8 @@ import os
 import sys
 from pathlib import Path
 
-from aurora_tools.files import replace_atomic
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.files import replace_atomic  # noqa: E402
 
 
 def main(argv=None) -> int:

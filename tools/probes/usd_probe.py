@@ -13,8 +13,10 @@ tokens), fieldDataType, plus the Volume's local transform.
 """
 import json
 import sys
+from pathlib import Path
 
-from aurora_tools.probe import require
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.probe import require  # noqa: E402
 
 Sdf, Usd, UsdGeom, UsdVol = (require(f"pxr.{m}", "pxr (usd-core)") for m in ("Sdf", "Usd", "UsdGeom", "UsdVol"))
 

@@ -18,13 +18,13 @@ km bins from 80 to 400 km). Profiles:
   exponentially distributed amount of mean A0 phi(E), phi = 1 / (1 + (E /
   EF)^P); the kernel is a probability density, so the deposited total is
   unchanged;
-- `glow`: GLOW 4.0.4 (tools/glow_run.py in .venv-glow, nightglow subtracted);
+- `glow`: GLOW 4.0.4 (tools/reference/glow_run.py in .venv-glow, nightglow subtracted);
 - `aurora`: `aurora profile` of the single uniform curtain of
   tests/python/test_glow.py (with --aurora; Maxwellian cases);
 - `fang08`: Fang et al. 2008's Maxwellian fit (eppaurora; Maxwellian cases).
 
 Run in .venv (numpy, eppaurora, pymsis), with GLOW's venv beside it:
-    .venv/bin/python tools/deposition_glow.py [--mono] [--aurora] [--corr 0,0.15,1.5,3] [--e0 0.5 1 2]
+    .venv/bin/python tools/reference/deposition_glow.py [--mono] [--aurora] [--corr 0,0.15,1.5,3] [--e0 0.5 1 2]
 """
 
 from __future__ import annotations
@@ -35,26 +35,20 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
+import eppaurora.electrons
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools import ROOT  # noqa: E402
+
 KEV_PER_ION_PAIR = 0.035
 KEV_PER_ERG = 6.241509074e8
 Z = np.arange(80.25, 400.0, 0.5)  # bin centres, km
 
-P_2010 = np.array([
-    [1.24616e+0, 1.45903e+0, -2.42269e-1, 5.95459e-2],
-    [2.23976e+0, -4.22918e-7, 1.36458e-2, 2.53332e-3],
-    [1.41754e+0, 1.44597e-1, 1.70433e-2, 6.39717e-4],
-    [2.48775e-1, -1.50890e-1, 6.30894e-9, 1.23707e-3],
-    [-4.65119e-1, -1.05081e-1, -8.95701e-2, 1.22450e-2],
-    [3.86019e-1, 1.75430e-3, -7.42960e-4, 4.60881e-4],
-    [-6.45454e-1, 8.49555e-4, -4.28581e-2, -2.99302e-3],
-    [9.48930e-1, 1.97385e-1, -2.50660e-3, -2.06938e-3],
-])
+#: Fang et al. (2010), Table 1: P_ij, i = 1..8 (rows), j = 0..3 (columns), as eppaurora holds it.
+P_2010 = np.array(eppaurora.electrons.POLY_F2010)
 
 
 def atmosphere():
@@ -143,7 +137,7 @@ def maxwellian_q(e0, k=None, z=Z):
 
 def glow(e0, mono, q=1.0):
     py = Path(os.environ.get("AURORA_GLOW_PYTHON", ROOT / ".venv-glow" / "bin" / "python"))
-    cmd = [str(py), str(ROOT / "tools" / "glow_run.py"), "--e0", str(e0), "--q", str(q), "--json"] + (["--mono"] if mono else [])
+    cmd = [str(py), str(ROOT / "tools" / "reference" / "glow_run.py"), "--e0", str(e0), "--q", str(q), "--json"] + (["--mono"] if mono else [])
     g = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
     zg, ion = np.array(g["alt_km"]), np.array(g["rates"]["ionization"])
     return np.interp(Z, zg, ion, left=0.0, right=0.0) / (q * KEV_PER_ERG), g
@@ -151,16 +145,9 @@ def glow(e0, mono, q=1.0):
 
 def aurora(e0, q=1.0):
     sys.path.insert(0, str(ROOT / "tests" / "python"))
-    from test_glow import scene_text  # the GLOW test's own scene
-    exe = os.environ.get("AURORA_BIN", str(ROOT / "target" / "release" / "aurora"))
-    with tempfile.TemporaryDirectory() as d:
-        s, o = Path(d) / "s.toml", Path(d) / "p.csv"
-        s.write_text(scene_text(e0, q))
-        subprocess.run([exe, "profile", str(s), "--out", str(o), "--quiet"], check=True)
-        rows = list(csv.DictReader(open(o)))
-    za = np.array([float(r["altitude_km"]) for r in rows])
-    ion = np.array([float(r["ionization"]) for r in rows])
-    return np.interp(Z, za, ion, left=0.0, right=0.0)
+    from test_glow import aurora as profile  # `aurora profile` of the GLOW test's own scene
+    p = profile(e0, q)
+    return np.interp(Z, p["altitude_km"], p["ionization"], left=0.0, right=0.0)
 
 
 def fang2008(e0):

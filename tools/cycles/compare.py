@@ -1,25 +1,28 @@
 #!/usr/bin/env python3
 """Compare two linear RGBA EXR renders: error figures and a picture.
 
-    .venv/bin/python tools/compare.py A.exr B.exr --out DIFF.png [--json out.json]
+    .venv/bin/python tools/cycles/compare.py A.exr B.exr --out DIFF.png [--json out.json]
         [--mask MASK.exr|MASK.png | --terrain-mask SCENE.toml] [--threshold 0.01] [--range R]
 
 The figures and the picture are described in aurora_tools/image_compare.py,
-which does the work; this is its command line. `import compare` still gives
-every function (read_rgba, metrics, compare, terrain_mask, ...).
+which does the work; this is its command line. `import compare` (with
+tools/cycles/ on sys.path) gives every function (read_rgba, metrics,
+compare, terrain_mask, read_png, ...).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
-from aurora_tools.files import write_atomic  # noqa: F401 - part of this module's interface
-from aurora_tools.exr_io import read_rgba
-from aurora_tools.image_compare import (  # noqa: F401 - part of this module's interface
-    _read_png_gray, compare, diverging, make_picture, metrics, nice_range, read_mask, relative_difference,
-    terrain_mask, write_png,
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.files import write_atomic  # noqa: E402, F401 - part of this module's interface
+from aurora_tools.exr_io import read_rgba  # noqa: E402
+from aurora_tools.image_compare import (  # noqa: E402, F401 - part of this module's interface
+    compare, diverging, make_picture, metrics, nice_range, read_mask, relative_difference, terrain_mask,
 )
+from aurora_tools.png import read_png, write_png  # noqa: E402, F401 - part of this module's interface
 
 
 def main(argv=None) -> int:

@@ -3,7 +3,7 @@
 // (`examples/vdb_write_bench.rs` runs both and compares).
 //
 // Build (Debian's libopenvdb-dev, installed by tools/setup):
-//   g++ -O2 -std=c++17 tools/openvdb_write_bench.cpp -o target/openvdb_write_bench \
+//   g++ -O2 -std=c++17 benchmarks/vdb_write/openvdb_write_bench.cpp -o target/openvdb_write_bench \
 //       -lopenvdb -ltbb -lImath-3_1 -lpthread
 //
 // Usage:

@@ -21,8 +21,10 @@ tools/setup. Used by tests/vdb_openvdb.rs.
 import json
 import math
 import sys
+from pathlib import Path
 
-from aurora_tools.probe import require
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
+from aurora_tools.probe import require  # noqa: E402
 
 vdb = require("pyopenvdb")
 
@@ -90,14 +92,22 @@ def probe(path, samples, dump):
     }
 
 
+def fog_grid(kind, name, voxel_size, offset=(10.0, -20.0, 2.5)):
+    """An empty fog-volume grid of `kind` (vdb.FloatGrid, vdb.Vec3SGrid)
+    named `name`, its linear transform of `voxel_size` moved by `offset`."""
+    grid = kind()
+    grid.name = name
+    grid.gridClass = vdb.GridClass.FOG_VOLUME
+    grid.transform = vdb.createLinearTransform(voxelSize=voxel_size)
+    if offset is not None:
+        grid.transform.translate(offset)
+    return grid
+
+
 def write_reference(path):
     """Grids covering the cases our reader must handle in OpenVDB's own bytes:
     tiles, vec3s, half floats, a plain float grid, an unsupported type."""
-    density = vdb.FloatGrid()
-    density.name = "density"
-    density.gridClass = vdb.GridClass.FOG_VOLUME
-    density.transform = vdb.createLinearTransform(voxelSize=0.25)
-    density.transform.translate((10.0, -20.0, 2.5))
+    density = fog_grid(vdb.FloatGrid, "density", 0.25)
     acc = density.getAccessor()
     n = 0
     for i in range(-40, 40, 3):
@@ -109,32 +119,21 @@ def write_reference(path):
     # stores it as two 8^3 ... tiles at the Internal16 level.
     density.fill((64, 64, 64), (79, 79, 79), 1.5, True)
 
-    emission = vdb.Vec3SGrid()
-    emission.name = "emission"
-    emission.gridClass = vdb.GridClass.FOG_VOLUME
-    emission.transform = vdb.createLinearTransform(voxelSize=0.25)
-    emission.transform.translate((10.0, -20.0, 2.5))
+    emission = fog_grid(vdb.Vec3SGrid, "emission", 0.25)
     acc = emission.getAccessor()
     for i in range(-20, 20, 1):
         for j in range(-3, 3):
             for k in (-4097, 0, 4100):
                 acc.setValueOn((i, j, k), (0.5 * i, 0.25 * j + 0.125, k / 8.0))
 
-    half = vdb.Vec3SGrid()
-    half.name = "emission_half"
-    half.gridClass = vdb.GridClass.FOG_VOLUME
-    half.transform = vdb.createLinearTransform(voxelSize=0.5)
+    half = fog_grid(vdb.Vec3SGrid, "emission_half", 0.5, offset=None)
     half.saveFloatAsHalf = True
     acc = half.getAccessor()
     for i in range(0, 30, 2):
         acc.setValueOn((i, -i, 3 * i), (i / 3.0, 1.0 / (i + 1), -2.0 * i))
 
     # No tiles: the tests' vdb-rs oracle reads this one too (with Blosc).
-    plain = vdb.FloatGrid()
-    plain.name = "density_plain"
-    plain.gridClass = vdb.GridClass.FOG_VOLUME
-    plain.transform = vdb.createLinearTransform(voxelSize=0.25)
-    plain.transform.translate((10.0, -20.0, 2.5))
+    plain = fog_grid(vdb.FloatGrid, "density_plain", 0.25)
     acc = plain.getAccessor()
     for i in range(-300, 300, 7):
         for k in range(-20, 20):

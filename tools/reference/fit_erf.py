@@ -10,7 +10,7 @@ square root of the error (Lawson's iteration) toward equal ripple, the
 minimax fit. Prints the f64 error, the error after Horner's rule in f32, and
 the coefficients rounded to f32.
 
-Usage: tools/fit_erf.py    (needs numpy: tools/setup's environment)
+Usage: tools/reference/fit_erf.py    (needs numpy: tools/setup's environment)
 """
 import math
 

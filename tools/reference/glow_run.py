@@ -24,7 +24,7 @@ dropped (listed in `dropped_km`); a NaN above `NAN_FLOOR_KM`, where a
 Maxwellian of up to 30 keV deposits energy, is an error, not a zero.
 
 Run in .venv-glow (tools/setup makes it):
-    .venv-glow/bin/python tools/glow_run.py --e0 3 --q 1 [--mono] [--csv out.csv] [--json]
+    .venv-glow/bin/python tools/reference/glow_run.py --e0 3 --q 1 [--mono] [--csv out.csv] [--json]
 """
 
 from __future__ import annotations

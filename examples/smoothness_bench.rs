@@ -2,7 +2,7 @@
 //! default bake's picture is from a converged one, and what the new
 //! estimators cost, measured side by side in one run.
 //!
-//! The scene is the default preset with today's settings written out: 8000
+//! The scene is the default preset with the build's settings written out: 8000
 //! beams (no noise target), 0.5 km kernel and voxels, no pruning, rendered
 //! volume only (no terrain, black sky) at 320x180, 16 samples per pixel.
 //! Each estimator ("new": the scene's defaults, whatever `beams.deposition`
@@ -11,14 +11,14 @@
 //! has that key) is baked at 8000 beams and at `factor` times as many (the
 //! reference), and both are rendered. Printed: the mean relative difference
 //! per pixel (luminance, pixels above 1 % of the reference's peak, as
-//! `tools/compare.py`) of each 8000-beam picture against its own estimator's
-//! reference, the new picture against the old reference, and the bake times
+//! `tools/cycles/compare.py`) of each 8000-beam picture against its own
+//! estimator's reference, the new picture against the old reference, and the bake times
 //! (the fastest of `runs` alternating bakes of each, so load from other jobs
 //! hits both alike) and their ratio, in wall time and in CPU time (on a
 //! shared machine the wall time moves with the other jobs' load; the CPU
 //! time is the work done). Targets: 5 % and 1.5x.
 //!
-//! cargo run --release --example smoothness -- [--factor 16] [--runs 3] [--out DIR] [--time-only] [--gather kdtree|splat]
+//! cargo run --release --example smoothness_bench -- [--factor 16] [--runs 3] [--out DIR] [--time-only] [--gather kdtree|splat]
 //!
 //! `--time-only` stops after the bake times (no references, no pictures).
 //! `--gather` overrides the new estimators' gather (default: the scene's).
@@ -37,7 +37,7 @@ use aurora::util::progress::NoProgress;
 use common::cpu_seconds;
 use std::time::Instant;
 
-/// The default scene with today's settings written out.
+/// The default scene with the build's settings written out.
 fn base_scene(beams: usize) -> Scene {
     let mut s = Scene::load("default").expect("default preset");
     s.beams.count = beams;

@@ -2,7 +2,7 @@
 //! `default`) once and prints per-stage wall times and the bake's counts.
 //! Speed is measured here, never in a unit test.
 //!
-//! cargo run --release --example bake_timing -- default seed2014
+//! cargo run --release --example bake_bench -- default seed2014
 fn main() {
     let mut names: Vec<String> = std::env::args().skip(1).collect();
     if names.is_empty() {
