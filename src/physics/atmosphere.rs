@@ -4,7 +4,7 @@
 //! - **NRLMSIS 2.1** (the default; Emmert et al. 2022, J. Geophys. Res. Space
 //!   Physics 127, e2022JA030896) for an auroral-zone winter night: 67 N, 20 E,
 //!   2020-01-15 00:00 UT, F10.7 = F10.7a = 150, Ap = 15, every 0.5 km from 50
-//!   to 700 km, in `data/nrlmsis21.csv`, made by `tools/msis_table.py` with the
+//!   to 700 km, in `data/nrlmsis21.csv`, made by `tools/reference/msis_table.py` with the
 //!   `pymsis` package (a 30 keV spectrum deposits down to about 65 km).
 //! - **Approximate U.S. Standard Atmosphere 1976**, 80-500 km (NOAA, NASA,
 //!   USAF, "U.S. Standard Atmosphere, 1976", NOAA-S/T 76-1562): computed with

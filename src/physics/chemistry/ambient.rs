@@ -6,13 +6,13 @@
 //!
 //! - **Tn, N(4S)**: NRLMSIS 2.1 (Emmert et al. 2022, J. Geophys. Res.
 //!   Space Physics 127, e2022JA030896), columns 6-7 of `data/nrlmsis21.csv`,
-//!   made by `tools/msis_table.py`.
+//!   made by `tools/reference/msis_table.py`.
 //! - **Te, Ti, ambient ne, NO**: NCAR GLOW 4.0.4 (Solomon 2017,
 //!   `glowpython`) called without precipitation at the same place and time:
 //!   the IRI ionosphere above 200 km and GLOW's own night-time chemistry
 //!   below, and GLOW's NO (the empirical NOEM model of Marsh et al. 2004, J.
 //!   Geophys. Res. 109, A07301, driven by the date, Kp and F10.7),
-//!   `data/ionosphere.csv`, made by `tools/glow_tables.py`. At night the
+//!   `data/ionosphere.csv`, made by `tools/reference/glow_tables.py`. At night the
 //!   F-region peak is 1.7e5 cm^-3 at 361 km; below 200 km the ambient
 //!   density is a few 1e3 cm^-3, negligible beside auroral ionization.
 //!

@@ -97,7 +97,7 @@
 //!
 //! Against GLOW driven by its own q(z) and densities this reproduces its
 //! 427.8, 557.7 and 630.0 nm columns (tests/chemistry_glow.rs, the fixture
-//! `tests/data/glow_chemistry.csv` from `tools/glow_tables.py`).
+//! `tests/data/glow_chemistry.csv` from `tools/reference/glow_tables.py`).
 
 pub mod ambient;
 pub mod table;

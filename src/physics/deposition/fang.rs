@@ -484,7 +484,7 @@ mod tests {
         assert!((100.0..120.0).contains(&h), "{h}");
     }
 
-    /// Rows of data/fang_reference.csv (made by tools/fang_reference.py with
+    /// Rows of data/fang_reference.csv (made by tools/reference/fang_reference.py with
     /// eppaurora 0.3.1): model, energy keV, column g cm^-2, H cm, dissipation
     /// per unit energy flux 1/cm.
     fn reference() -> Vec<(String, f64, f64, f64, f64)> {

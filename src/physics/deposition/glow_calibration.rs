@@ -11,7 +11,7 @@
 //! puts electrons below a few keV higher: on the default atmosphere its
 //! monoenergetic profiles peak 15 km above Fang 2010's at 0.3-0.5 keV, 11
 //! km at 1 keV, 6 km at 2 keV, 4 km at 3 keV and 2-3 km at 5-10 keV
-//! (`tools/deposition_glow.py --mono`), and its Maxwellians of E0 <= 1 keV
+//! (`tools/reference/deposition_glow.py --mono`), and its Maxwellians of E0 <= 1 keV
 //! reach 7-17 km higher on their upper side (E0 = 0.5 keV: half maximum at
 //! 210 km against 192; 1 keV: 154 against 144) while their lower side and
 //! peak stay within 2.5 km at 1 keV. The 630.0 nm line, made mostly above
@@ -57,7 +57,7 @@
 //! GLOW (tests/python/test_glow.py's cases, E0 = 0.5-3 keV) subject to the
 //! Maxwellian peaks staying within 1.5 km of Fang et al. (2008)'s at 0.5 and
 //! 1 keV and their L1 against Fang 2008 below 0.15 (the checks of
-//! tests/python/test_profile.py); `tools/deposition_glow.py --corr
+//! tests/python/test_profile.py); `tools/reference/deposition_glow.py --corr
 //! 0,A0,E_f,p` prints the profiles' agreement with GLOW and Fang 2008
 //! (docs/physics.md, "The deposition at low energies"). A hand search over
 //! A0 0.06-0.26, E_f 1-3 keV and p 1.5-3 chose A0 = 0.2, E_f = 1.3 keV, p =

@@ -25,7 +25,7 @@
 //! (1 beyond: erfc(4) = 1.5e-8), P of degree 6 and Q of degree 5 in x^2,
 //! odd like erf. The coefficients are a near-minimax fit on [0, 4]
 //! (weighted linear least squares on 4,000 Chebyshev nodes, reweighted
-//! toward equal ripple; `tools/fit_erf.py` refits them): 1.5e-9 in f64,
+//! toward equal ripple; `tools/reference/fit_erf.py` refits them): 1.5e-9 in f64,
 //! 4e-7 after Horner's rule in f32 (tested against libm). The segment
 //! kernel takes two per voxel and photon, as their difference
 //! ([`erf_diff`]) over one common denominator. Straight-line arithmetic
