@@ -15,7 +15,7 @@ the U.S. Standard Atmosphere 1976 pressure ratio, the ozone column's share
 above the observer (a triangle from 10 to 40 km peaking at 25 km: all of it
 below 10 km) and the aerosol's `tau_550 (lambda / 550)^-angstrom` times
 exp(-altitude / scale height). The per-line sea-level depths and the
-channel weights w_ic come from blender/extinction.json, which tests/extinction.rs
+channel weights w_ic come from blender/extinction.json, which tests/render/extinction.rs
 writes from the library and checks.
 
 In Cycles the volume material multiplies its emission by T_c of the camera

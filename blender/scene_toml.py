@@ -5,7 +5,7 @@ the volume scales, the background, the terrain and the sky's air. This module re
 six tables of the scene TOML into plain dataclasses. `src/scene/` is the
 authority: the defaults and ranges below come from its schema
 (`aurora scene --schema`, committed as scene_schema.json next to this file
-and checked against the binary by tests/schema.rs), not restated here. The bake tables
+and checked against the binary by tests/cli/schema.rs), not restated here. The bake tables
 (`curtain`, `beams`, ...) are ignored here: the baker validates them.
 
 Units are kilometres, z up (Blender units = km in this add-on).

@@ -29,6 +29,8 @@ use std::process::Command;
 #[path = "../tests/common/openvdb_tool.rs"]
 mod openvdb_tool;
 
+use openvdb_tool::mode_name;
+
 struct Args {
     input: Option<PathBuf>,
     repeat: usize,
@@ -36,17 +38,6 @@ struct Args {
     half: Vec<String>,
     modes: Vec<Compression>,
     out_dir: PathBuf,
-}
-
-fn mode_name(c: Compression) -> &'static str {
-    match c {
-        Compression::None => "none",
-        Compression::Zip => "zip",
-        Compression::ActiveMask => "active-mask",
-        Compression::ZipActiveMask => "zip+active-mask",
-        Compression::Blosc => "blosc",
-        Compression::BloscActiveMask => "blosc+active-mask",
-    }
 }
 
 fn parse_args() -> anyhow::Result<Args> {

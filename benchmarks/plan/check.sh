@@ -2,7 +2,7 @@
 # The plan's CPU estimate against a measured bake: `aurora bake SCENE
 # --frames 1-N --plan` (the estimate), then the same range baked for real
 # under /usr/bin/time (user + system CPU seconds), in one run. Prints both
-# and their ratio; the byte estimate is compared too (tests/farm_plan.rs
+# and their ratio; the byte estimate is compared too (tests/cli/plan.rs
 # checks bytes in the test command; CPU time is too noisy for a test).
 # Usage: benchmarks/plan/check.sh [BIN] [SCENE] [N]
 set -euo pipefail

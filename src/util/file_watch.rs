@@ -2,7 +2,7 @@
 //! acts on a file once a save has *ended*, never on what lies on disk in the
 //! middle of one.
 //!
-//! Editors save in one of three ways (`tests/preview_watch.rs` drives each):
+//! Editors save in one of three ways (`tests/cli/watch.rs` drives each):
 //!
 //! 1. **write in place**: open the file with `O_TRUNC`, write, close (nano,
 //!    VS Code, vim with `backupcopy=yes`, a shell's `>`); the text may come

@@ -1,7 +1,7 @@
 //! Damaged VDB files, made from small valid files of our writer: the one
 //! list both readers (the grid reader and the renderer's records path) are
-//! run on (`tests/vdb_verdicts.rs`), and the generators the grid reader's
-//! own corruption tests use (`tests/vdb_roundtrip.rs`).
+//! run on (`tests/vdb/verdicts.rs`), and the generators the grid reader's
+//! own corruption tests use (`tests/vdb/roundtrip.rs`).
 //!
 //! Kinds of damage: truncations (with the descriptor's offsets left alone
 //! or patched to the cut), corrupt ZIP payloads and checksums, corrupt or
@@ -14,22 +14,13 @@
 //! `temperature` and vec3 `velocity` it does not use), in every
 //! compression mode, full and half float.
 
+use super::MODES;
 use aurora::grid::{Grid, Transform};
 use aurora::io::vdb::parse::{parse_file_with, read_meta_map, Cursor, Decode, LeafSpan, ValueKind};
 use aurora::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
 use aurora::scene::Compression;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
-
-/// The six compression modes of the writer.
-pub const MODES: [Compression; 6] = [
-    Compression::None,
-    Compression::Zip,
-    Compression::ActiveMask,
-    Compression::ZipActiveMask,
-    Compression::Blosc,
-    Compression::BloscActiveMask,
-];
 
 /// What a damaged file must do.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

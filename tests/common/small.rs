@@ -1,47 +1,57 @@
-//! The small scene the command-line tests bake (about a second a frame: one
-//! curtain, a coarse footprint, 400 beams, 1 km voxels) and the bake command
-//! they run, clear of the farm's variables.
+//! The small scenes the tests bake: the command-line tests' scene file
+//! (`tests/data/small_bake.toml`, [`small_bake_toml!`]) and the bake
+//! command they run, and the library tests' scenes ([`small_scene`],
+//! [`preview_scene`], and [`coarse`], which shrinks any scene to a bake of
+//! seconds).
 
+use super::child::Aurora;
+use aurora::scene::{Curtain, Scene, VoxelSize};
 use std::path::Path;
-use std::process::Command;
 
-/// The bake keys every small scene of the command-line tests shares, as TOML;
-/// a test appends its own sections with `concat!`.
+/// The bake keys every small scene of the command-line tests shares
+/// (`tests/data/small_bake.toml`), as TOML; a test appends its own tables
+/// with `concat!`.
 #[macro_export]
 macro_rules! small_bake_toml {
     () => {
-        r#"
-seed = 7
-[[curtain]]
-center = [0.0, 0.0]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 400
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-"#
+        include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/small_bake.toml"))
     };
 }
 
-/// The variables `--shard auto` reads (Slurm's job array, a Kubernetes
-/// Indexed Job): removed, so a test runs the same inside a farm job.
-pub const FARM_VARS: [&str; 5] =
-    ["SLURM_ARRAY_TASK_ID", "SLURM_ARRAY_TASK_MIN", "SLURM_ARRAY_TASK_COUNT", "SLURM_ARRAY_TASK_STEP", "JOB_COMPLETION_INDEX"];
+/// `aurora bake SCENE --out OUT`; the caller adds its flags and runs it.
+pub fn bake_command(scene: &Path, out: &Path) -> Aurora {
+    Aurora::new().arg("bake").arg(scene).arg("--out").arg(out)
+}
 
-/// `aurora bake SCENE --out OUT`, without [`FARM_VARS`]; the caller adds
-/// its flags and runs it.
-pub fn bake_command(scene: &Path, out: &Path) -> Command {
-    let mut c = Command::new(super::AURORA_BIN);
-    c.arg("bake").arg(scene).arg("--out").arg(out);
-    for v in FARM_VARS {
-        c.env_remove(v);
-    }
-    c
+/// `s` shrunk to bake in seconds: a `resolution` footprint, `beams`
+/// beams, a 1 km kernel on 1 km voxels.
+pub fn coarse(mut s: Scene, resolution: [usize; 2], beams: usize) -> Scene {
+    s.footprint.resolution = resolution;
+    s.beams.count = beams;
+    s.photons.radius_km = 1.0;
+    s.grid.voxel_size = VoxelSize::Km(1.0);
+    s
+}
+
+/// Two short curtains with unequal beam weights (so the apportioned counts
+/// differ), few beams, coarse voxels: a bake in about a second.
+pub fn small_scene() -> Scene {
+    let s = Scene {
+        curtains: vec![
+            Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() },
+            Curtain { center: [30.0, 20.0], length: 30.0, width: 14.0, beam_weight: 0.5, seed: 7, ..Curtain::default() },
+        ],
+        ..Scene::default()
+    };
+    coarse(s, [128, 48], 301)
+}
+
+/// The scene `aurora preview` tests watch: [`small_scene`]'s first
+/// curtain, 300 beams, 2 samples per pixel.
+pub fn preview_scene() -> Scene {
+    let mut s = small_scene();
+    s.curtains.truncate(1);
+    s.beams.count = 300;
+    s.render.spp = 2;
+    s
 }

@@ -499,7 +499,7 @@ def test_scene_defaults_match_the_baker(addon, tmp_path):
 
 def test_scene_schema_copy_is_the_binarys(addon):
     # The add-on's defaults and ranges come from blender/scene_schema.json;
-    # it must be what `aurora scene --schema` prints (tests/schema.rs checks
+    # it must be what `aurora scene --schema` prints (tests/cli/schema.rs checks
     # the same from Rust), and a [terrain] table without `kind` means no
     # terrain there as in aurora (Terrain::default), unlike a missing table.
     from aurora_importer import scene_toml

@@ -1,6 +1,6 @@
 """The air between the aurora and the camera in the add-on (blender/air.py)
 against the library (blender/extinction.json, written and checked by
-tests/extinction.rs), and `aurora render` against Cycles with `[sky]
+tests/render/extinction.rs), and `aurora render` against Cycles with `[sky]
 extinction` on: a uniform emitting slab 100-110 km up seen low (10 degrees
 elevation, perspective) and as a dome master (a 180-degree fisheye looking
 straight up).

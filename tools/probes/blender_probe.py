@@ -1,7 +1,7 @@
 """What Blender (bpy 5.0.1) sees in a VDB file or a USD stage, as JSON.
 
 Runs under the project venv's Python (.venv/bin/python; see tools/setup).
-Used by tests/vdb_blender.rs.
+Used by tests/vdb/blender.rs.
 
   blender_probe.py FILE...      per file, in a fresh empty scene:
                                 FILE.vdb: load it as a Volume datablock on an object;

@@ -1,7 +1,7 @@
 """What usd-core (pxr) sees in a USD stage, as JSON.
 
 Runs under the project venv's Python (.venv/bin/python; see tools/setup).
-Used by tests/vdb_blender.rs.
+Used by tests/vdb/blender.rs.
 
   usd_probe.py STAGE.usda
 

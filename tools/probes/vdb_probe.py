@@ -2,7 +2,7 @@
 """What OpenVDB itself sees in VDB files, as JSON (the reference for aurora's writer).
 
 Runs under Debian's /usr/bin/python3 with pyopenvdb (OpenVDB 10.0.1); see
-tools/setup. Used by tests/vdb_openvdb.rs.
+tools/setup. Used by tests/vdb/openvdb.rs.
 
   vdb_probe.py [--dump] [--samples SAMPLES.json] FILE...
       For each file: file metadata and, per grid, name, value type, class,

@@ -14,7 +14,7 @@
   with their ionization rate, neutral densities, temperatures and the
   volume emission rates of 427.8, 557.7 and 630.0 nm, the nightglow (the
   run without precipitation) subtracted: the fixture of the chemistry's
-  oracle test (tests/chemistry_glow.rs), which drives our chemistry with
+  oracle test (tests/physics/chemistry.rs), which drives our chemistry with
   GLOW's q(z) and densities.
 
 Rerun: `python tools/reference/glow_tables.py` with a Python that has glowpython

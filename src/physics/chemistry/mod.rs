@@ -96,7 +96,7 @@
 //! the simple model, as many photons as 427.8 nm (`spectrum::R_1P`).
 //!
 //! Against GLOW driven by its own q(z) and densities this reproduces its
-//! 427.8, 557.7 and 630.0 nm columns (tests/chemistry_glow.rs, the fixture
+//! 427.8, 557.7 and 630.0 nm columns (tests/physics/chemistry.rs, the fixture
 //! `tests/data/glow_chemistry.csv` from `tools/reference/glow_tables.py`).
 
 pub mod ambient;

@@ -127,7 +127,7 @@ pub const CORONA: &str = "a corona: rayed bands overhead, seen from beneath, the
 
 /// A corona: rays are field lines, and parallel lines seen in perspective
 /// meet at their vanishing point, the magnetic zenith (the direction -B,
-/// here 12 degrees south of the zenith; `tests/corona.rs` finds it in the
+/// here 12 degrees south of the zenith; `tests/physics/corona.rs` finds it in the
 /// image). Four rayed bands (as [`rayed_band`], 15-30 mW/m^2 of 4-6 keV)
 /// lie across the sky from 60 km south to 60 km north of the observer,
 /// who looks up the field line through a 180-degree fisheye (north at the

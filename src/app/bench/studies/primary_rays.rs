@@ -41,7 +41,7 @@ impl<'a> Bench<'a> {
             unit: CostUnit::Seconds,
             expected_trend: vec![("fixed step".into(), -1)],
             notes: vec![
-                format!("Voxel size {v} km; steps are multiples of it. Exact integration is the reference (error 0, drawn on the bottom edge); its own error against closed forms is below 1e-4 (tests/render_closed_forms.rs, tests/stability_integration.rs)."),
+                format!("Voxel size {v} km; steps are multiples of it. Exact integration is the reference (error 0, drawn on the bottom edge); its own error against closed forms is below 1e-4 (tests/render/closed_forms.rs, tests/stability/integration.rs)."),
                 format!("Total flux ratio fixed/exact: {}", flux.join(", ")),
             ],
             measurements: ms,

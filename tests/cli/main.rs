@@ -1,0 +1,29 @@
+//! The `aurora` command line, driven as a user and a farm drive it: each
+//! module runs the binary and checks the files it writes, the exit status
+//! and the message against what the commands promise.
+//!
+//! - `end_to_end`: a small scene baked, read back and rendered; bytes
+//!   independent of the thread count; bad input refused;
+//! - `frames`, `resume`, `plan`: sequences, shards, reruns and their
+//!   estimate;
+//! - `inputs`, `outputs`: inputs and outputs that are not regular files,
+//!   killed and concurrent bakes;
+//! - `preview`, `watch`: `aurora preview` and its watch under real editors'
+//!   saves;
+//! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
+//! - `schema`: the committed schema and the documents generated from it.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod bench;
+mod end_to_end;
+mod frames;
+mod inputs;
+mod outputs;
+mod plan;
+mod preview;
+mod profile;
+mod resume;
+mod schema;
+mod watch;

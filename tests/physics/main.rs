@@ -1,0 +1,22 @@
+//! The physics of the bake and of what is seen, one test binary: each
+//! module checks a result against a closed form, an independent model or
+//! a measurement: the chemistry against NCAR GLOW (`chemistry`), the power
+//! balance (`energy`), the memory budget (`budget`), the bake's stages
+//! (`pipeline`), curtains along paths (`path`), the round Earth (`earth`),
+//! the lines one at a time and their red trail (`lines`, `trail`), the
+//! corona's vanishing point (`corona`) and the presets' colours
+//! (`presets`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod budget;
+mod chemistry;
+mod corona;
+mod earth;
+mod energy;
+mod lines;
+mod path;
+mod pipeline;
+mod presets;
+mod trail;

@@ -1,0 +1,16 @@
+//! The reference renderer, one test binary: pixels against closed forms
+//! (`closed_forms`), the volume walker and integrators against an
+//! independent brute-force oracle (`integrator`), film, camera and file
+//! conventions (`film`), the lit terrain and its mesh (`terrain`), the
+//! camera against Blender's (`blender`), and the air between the aurora
+//! and the eye (`extinction`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod blender;
+mod closed_forms;
+mod extinction;
+mod film;
+mod integrator;
+mod terrain;
