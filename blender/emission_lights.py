@@ -21,14 +21,14 @@ blocks 90 km away). A Blender point light of power P has intensity
 P / (4 pi) per steradian (measured: 0.07953 for 1/(4 pi) = 0.07958), so
 P = 4 pi I. Block size B (1, 2, 4, ... voxels) is the smallest that keeps the
 number of lights at most `max_lights`.
+
+The grid is read with Blender's own OpenVDB module, `openvdb`.
 """
 
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
@@ -46,31 +46,6 @@ class EmissionClusters:
     intensities: np.ndarray
     block: int
     voxel_volume: float
-
-
-def import_openvdb():
-    """The OpenVDB Python module: Blender's bundled `openvdb`, else `pyopenvdb`."""
-    try:
-        import openvdb  # Blender ships it (also inside the bpy wheel, off sys.path)
-
-        return openvdb
-    except ImportError:
-        pass
-    try:
-        import bpy
-
-        local = Path(bpy.utils.resource_path("LOCAL")) / "python" / "lib"
-        for site in sorted(local.glob("python3*/site-packages")):
-            if str(site) not in sys.path:
-                sys.path.append(str(site))
-        import openvdb
-
-        return openvdb
-    except ImportError:
-        pass
-    import pyopenvdb  # Debian's python3-openvdb
-
-    return pyopenvdb
 
 
 def _aggregate(coords, rgb, moment, weight, factor: int):
@@ -93,8 +68,9 @@ def emission_clusters(vdb_path, emission_scale: float = 1.0, max_lights: int = D
     keeps per-leaf (8^3) sums and first moments, and the non-zero voxels
     themselves while there are few enough that blocks under 8 could fit;
     coarser blocks merge leaves, finer ones merge voxels."""
-    vdb = import_openvdb()
-    grid = vdb.read(str(vdb_path), "emission")
+    import openvdb
+
+    grid = openvdb.read(str(vdb_path), "emission")
     if grid.activeVoxelCount() == 0:
         return EmissionClusters(np.zeros((0, 3)), np.zeros((0, 3)), 1, 0.0)
     (i0, j0, k0), (i1, j1, k1) = grid.evalActiveVoxelBoundingBox()

@@ -192,7 +192,7 @@ def _settings_annotations() -> dict:
 
 AuroraSettings = _group("AuroraSettings", _settings_annotations())
 
-CLASSES = [AuroraCurtain, *TABLE_GROUPS.values(), AuroraSettings]
+classes = (AuroraCurtain, *TABLE_GROUPS.values(), AuroraSettings)
 
 
 # --- values <-> scene document ------------------------------------------------
@@ -318,14 +318,3 @@ def load_document(settings, doc: dict) -> None:
             elif key in SCHEMA["curtain"]:
                 write_key(c, "curtain", key, v)
 
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-    bpy.types.Scene.aurora = PointerProperty(type=AuroraSettings)
-
-
-def unregister():
-    del bpy.types.Scene.aurora
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)

@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, make_dataclass
 from pathlib import Path
 
 
@@ -41,73 +41,44 @@ class SceneFileError(ValueError):
     """A scene file that cannot be read or has a value out of range."""
 
 
-@dataclass(frozen=True)
-class Camera:
-    position: tuple[float, float, float] = _default("camera", "position")
-    look_at: tuple[float, float, float] = _default("camera", "look_at")
-    up: tuple[float, float, float] = _default("camera", "up")
-    projection: str = _default("camera", "projection")
-    #: Vertical field of view, degrees (perspective); the angle across the
-    #: image circle (fisheye, up to 360).
-    fov_deg: float = _default("camera", "fov_deg")
-    #: Vertical extent of the view in km (orthographic).
-    ortho_height: float = _default("camera", "ortho_height")
+def _table_class(name: str, table: str, keys: str, doc: str):
+    """A frozen dataclass of the schema's `keys` of `table`, each defaulting
+    to the schema's default (lists as tuples)."""
+    fields = []
+    for key in keys.split():
+        d = _default(table, key)
+        fields.append((key, str | None if d is None else type(d), field(default=d)))
+    return make_dataclass(name, fields, frozen=True, namespace={"__doc__": doc, "__module__": __name__})
 
 
-@dataclass(frozen=True)
-class Render:
-    width: int = _default("render", "width")
-    height: int = _default("render", "height")
-    spp: int = _default("render", "spp")
-    exposure: float = _default("render", "exposure")
-    #: The PNG view transform of `aurora render` ("agx" or "standard"; the
-    #: EXR it writes and Cycles' EXR are linear either way).
-    view_transform: str = _default("render", "view_transform")
+Camera = _table_class("Camera", "camera", "position look_at up projection fov_deg ortho_height", """`[camera]`.
 
+    fov_deg: the vertical field of view, degrees (perspective); the angle
+    across the image circle (fisheye, up to 360). ortho_height: the vertical
+    extent of the view in km (orthographic).""")
+Render = _table_class("Render", "render", "width height spp exposure view_transform", """`[render]`.
 
-@dataclass(frozen=True)
-class Volume:
-    #: extinction sigma_t = density_scale * density grid (per km).
-    density_scale: float = _default("volume", "density_scale")
-    #: emitted radiance per km = emission_scale * emission grid.
-    emission_scale: float = _default("volume", "emission_scale")
+    view_transform: the PNG view transform of `aurora render` ("agx" or
+    "standard"; the EXR it writes and Cycles' EXR are linear either way).""")
+Volume = _table_class("Volume", "volume", "density_scale emission_scale", """`[volume]`.
 
+    Extinction sigma_t = density_scale * density grid (per km); emitted
+    radiance per km = emission_scale * emission grid.""")
+Background = _table_class("Background", "background", "radiance image stars limiting_magnitude star_brightness",
+                          """`[background]`.
 
-@dataclass(frozen=True)
-class Background:
-    #: Radiance seen by camera rays that escape; lights nothing.
-    radiance: tuple[float, float, float] = _default("background", "radiance")
-    #: Equirectangular linear EXR of sky radiance (relative to the scene file).
-    image: str | None = _default("background", "image")
-    #: Procedural stars (drawn by `aurora render` only).
-    stars: bool = _default("background", "stars")
-    limiting_magnitude: float = _default("background", "limiting_magnitude")
-    star_brightness: float = _default("background", "star_brightness")
+    radiance: seen by camera rays that escape; lights nothing. image: an
+    equirectangular linear EXR of sky radiance (relative to the scene file).
+    The procedural stars are drawn by `aurora render` only.""")
+Sky = _table_class("Sky", "sky", "extinction ozone_du aerosol_optical_depth angstrom aerosol_scale_height_km",
+                   """`[sky]`: the air between the aurora and the camera (air.py), on by default.""")
+Earth = _table_class("Earth", "earth", "radius_km", """`[earth]`.
 
+    radius_km: the sphere the camera stands on, centre (0, 0, -radius_km);
+    0 is flat ground. The air's altitude and local up at the camera follow it.""")
+Terrain = _table_class("Terrain", "terrain", "kind height albedo", """`[terrain]`.
 
-@dataclass(frozen=True)
-class Sky:
-    #: The air between the aurora and the camera (air.py): on by default.
-    extinction: bool = _default("sky", "extinction")
-    ozone_du: float = _default("sky", "ozone_du")
-    aerosol_optical_depth: float = _default("sky", "aerosol_optical_depth")
-    angstrom: float = _default("sky", "angstrom")
-    aerosol_scale_height_km: float = _default("sky", "aerosol_scale_height_km")
-
-
-@dataclass(frozen=True)
-class Earth:
-    #: The sphere the camera stands on, centre (0, 0, -radius_km); 0 is flat
-    #: ground. The air's altitude and local up at the camera follow it.
-    radius_km: float = _default("earth", "radius_km")
-
-
-@dataclass(frozen=True)
-class Terrain:
-    #: A scene file without [terrain] gets aurora's default scene terrain.
-    kind: str = _default("terrain", "kind")
-    height: float = _default("terrain", "height")
-    albedo: tuple[float, float, float] = _default("terrain", "albedo")
+    A scene file without [terrain] gets aurora's default scene terrain.""")
 
 
 @dataclass(frozen=True)
@@ -209,7 +180,6 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         raise SceneFileError(f"{src}: camera.up must not be parallel to the view direction")
 
     r = _table(doc, "render", src)
-    d = Render()
     ren = Render(
         width=int(_checked(src, "render", "width", r)),
         height=int(_checked(src, "render", "height", r)),
@@ -225,7 +195,6 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
             raise SceneFileError(f"{src}: render.{k} must be an integer, got {r[k]!r}")
 
     v = _table(doc, "volume", src)
-    d = Volume()
     vol = Volume(
         density_scale=_checked(src, "volume", "density_scale", v),
         emission_scale=_checked(src, "volume", "emission_scale", v),

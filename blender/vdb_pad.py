@@ -13,7 +13,7 @@ the 26-neighbourhood of the non-zero set active (value 0: the field is
 unchanged) the biased mode matches trilinear interpolation exactly.
 
 `pad_vdb(src, dst)` writes such a copy (all grids, file metadata kept); it
-uses Blender's bundled `openvdb` module (or Debian's `pyopenvdb`).
+uses Blender's own OpenVDB module, `openvdb`.
 `has_cycles_shell(path)` tells whether a file already carries the shell:
 `aurora bake` writes it with `grid.cycles_shell = true` (off by default) and marks
 every grid with the metadata `aurora_cycles_shell = true`, so the add-on
@@ -24,12 +24,11 @@ from __future__ import annotations
 
 import os
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-
-from .emission_lights import import_openvdb
 
 
 @dataclass
@@ -86,8 +85,9 @@ def pad_grid(grid, slab: int = 32) -> int:
 def has_cycles_shell(path) -> bool:
     """True when every grid of the file says `aurora_cycles_shell = true`
     (reads the grids' metadata only, not their voxels)."""
-    vdb = import_openvdb()
-    grids = vdb.readAllGridMetadata(str(path))
+    import openvdb
+
+    grids = openvdb.readAllGridMetadata(str(path))
     if not grids:
         return False
     for g in grids:
@@ -102,11 +102,10 @@ def has_cycles_shell(path) -> bool:
 
 def pad_vdb(src, dst) -> PadReport:
     """Copy `src` to `dst` with every grid padded (see the module doc)."""
-    import time
+    import openvdb
 
     t0 = time.perf_counter()
-    vdb = import_openvdb()
-    grids, meta = vdb.readAll(str(src))
+    grids, meta = openvdb.readAll(str(src))
     report = {}
     for g in grids:
         report[g.name] = pad_grid(g)
@@ -115,7 +114,7 @@ def pad_vdb(src, dst) -> PadReport:
     fd, tmp = tempfile.mkstemp(prefix=f".{dst.name}.", suffix=".tmp.vdb", dir=dst.parent)
     os.close(fd)
     try:
-        vdb.write(tmp, grids=grids, metadata=meta)
+        openvdb.write(tmp, grids=grids, metadata=meta)
         os.replace(tmp, dst)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)

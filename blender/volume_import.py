@@ -226,15 +226,9 @@ def _import_vdb(scene, path: Path, name: str) -> bpy.types.Object:
 def _import_usd(scene, path: Path) -> list[bpy.types.Object]:
     before = set(bpy.data.objects)
     with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
-        result = bpy.ops.wm.usd_import(
-            filepath=str(path),
-            import_volumes=True,
-            import_cameras=False,
-            import_lights=False,
-            import_materials=False,
-            apply_unit_conversion_scale=True,
-            create_world_material=False,
-        )
+        result = bpy.ops.wm.usd_import(filepath=str(path), import_volumes=True, import_cameras=False, import_lights=False,
+                                       import_materials=False, apply_unit_conversion_scale=True,
+                                       create_world_material=False)
     if "FINISHED" not in result:
         raise AuroraImportError(f"{path}: Blender's USD importer failed")
     new = [o for o in bpy.data.objects if o not in before]

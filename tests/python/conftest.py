@@ -3,10 +3,20 @@
 Blender's user folders are redirected to a throw-away directory *before*
 bpy is imported (BLENDER_USER_RESOURCES is read once, at import), so the
 extension-install test never touches the real ~/.config/blender.
+
+The add-on imports Blender's own OpenVDB module, `openvdb`, as it would
+inside Blender; the bpy wheel ships it in a site-packages folder of its own,
+off sys.path. This process gets that folder at the end of sys.path. Child
+processes (tools/cycles_render.py and the like) get, through PYTHONPATH, a
+folder holding a link to that one module: PYTHONPATH comes before the
+venv's site-packages, and the whole folder would put Blender's `pxr` ahead
+of usd-core's. The linked module finds its OpenVDB library once bpy is
+loaded, and whatever loads the add-on loads bpy first.
 """
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import sys
 import tempfile
@@ -23,6 +33,24 @@ os.environ["BLENDER_USER_RESOURCES"] = _USER
 for p in (HERE, ROOT / "tools"):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
+
+
+def blender_site_packages() -> Path:
+    """The bpy wheel's own site-packages (found without importing bpy)."""
+    spec = importlib.util.find_spec("bpy")
+    assert spec is not None and spec.submodule_search_locations, "no bpy module: run tools/setup"
+    found = sorted(Path(spec.submodule_search_locations[0]).glob("*/python/lib/python3*/site-packages"))
+    assert found, f"no site-packages inside {spec.submodule_search_locations[0]}"
+    return found[-1]
+
+
+_BLENDER_SITE = blender_site_packages()
+sys.path.append(str(_BLENDER_SITE))
+_OPENVDB_ONLY = Path(_USER) / "openvdb-module"
+_OPENVDB_ONLY.mkdir()
+for _module in _BLENDER_SITE.glob("openvdb.*"):
+    (_OPENVDB_ONLY / _module.name).symlink_to(_module)
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(_OPENVDB_ONLY), os.environ.get("PYTHONPATH")]))
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -10,9 +10,9 @@ temporary directory (conftest.py).
 from __future__ import annotations
 
 import math
-import os
 import subprocess
 import sys
+import tomllib
 import zipfile
 from pathlib import Path
 
@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import synth
+from scenes import aurora_bin, write_small_scene
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 ADDON = ROOT / "blender"
@@ -119,6 +120,8 @@ def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_pat
     assert z.name == "aurora_importer-0.1.0.zip" and z.is_file()
     names = zipfile.ZipFile(z).namelist()
     assert "blender_manifest.toml" in names and "scene_schema.json" in names and "scene_keys.json" in names
+    assert {"__init__.py", "preferences.py", "operators/__init__.py", "operators/bake.py", "ui/__init__.py",
+            "ui/panels.py"} <= set(names)  # the subpackages too
     assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
     again = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--out", str(tmp_path / "dist2")],
                            capture_output=True, text=True, check=True)
@@ -129,10 +132,11 @@ def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_pat
     try:
         assert module in bpy.context.preferences.addons
         installed = Path(bpy.utils.user_resource("EXTENSIONS")) / "user_default" / "aurora_importer"
-        assert (installed / "blender_manifest.toml").is_file()
+        manifest = tomllib.loads((installed / "blender_manifest.toml").read_text())
+        assert (manifest["id"], manifest["name"]) == ("aurora_importer", "Aurora")
         assert str(installed).startswith(str(blender_user_dir))  # never the real user folder
-        assert hasattr(bpy.ops.import_scene, "aurora")
-        result = bpy.ops.import_scene.aurora(filepath=str(aurora_vdb), density_scale=2.0, emission_scale=3.0)
+        assert hasattr(bpy.ops.aurora, "import_vdb")
+        result = bpy.ops.aurora.import_vdb(filepath=str(aurora_vdb), density_scale=2.0, emission_scale=3.0)
         assert result == {"FINISHED"}
         vols = [o for o in bpy.data.objects if o.type == "VOLUME"]
         assert len(vols) == 1
@@ -140,11 +144,12 @@ def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_pat
         assert np.allclose(np.array(vols[0].matrix_world), np.eye(4))
         assert bpy.context.scene.unit_settings.scale_length == 1000.0  # 1 BU = 1 km
         # A bake from the panel's operator, the binary found through the preferences.
-        binary = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
+        binary = aurora_bin()
         monkeypatch.delenv("AURORA_BIN", raising=False)
         monkeypatch.setenv("PATH", str(tmp_path))  # no aurora on PATH either
-        assert binary.is_file(), f"{binary}: the aurora binary is missing (cargo build --release)"
-        bpy.context.preferences.addons[module].preferences.binary = str(binary)
+        prefs = bpy.context.preferences.addons[module].preferences
+        assert type(prefs).bl_idname == module  # the preferences are keyed by the package
+        prefs.binary = str(binary)
         s = bpy.context.scene.aurora
         s.output_dir = str(tmp_path / "bake")
         s.beams.count, s.footprint.resolution, s.grid.voxel_size = 300, (64, 16), 2.0
@@ -170,15 +175,15 @@ def test_enables_as_legacy_addon(bpy, fresh, tmp_path, aurora_vdb):
     try:
         mod = addon_utils.enable(name, default_set=True, handle_error=None)
         assert mod is not None and name in bpy.context.preferences.addons
-        assert mod.bl_info["blender"] <= (5, 0, 0)
-        assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb)) == {"FINISHED"}
+        assert mod.bl_info["blender"] <= (5, 0, 0) and mod.bl_info["name"] == "Aurora"
+        assert bpy.ops.aurora.import_vdb(filepath=str(aurora_vdb)) == {"FINISHED"}
         assert_aurora_volume([o for o in bpy.data.objects if o.type == "VOLUME"][0], 1.0, 1.0)
         # With a scene file: camera, world and the file's scales come too.
         cam = {"position": [0, -50, 5], "look_at": [10, 0, 103], "up": [0, 0, 1], "projection": "perspective",
                "fov_deg": 30.0}
         toml = synth.write_scene(tmp_path / "op.toml", cam, 64, 36, density_scale=0.25, emission_scale=2.0)
         before = set(bpy.data.objects)
-        assert bpy.ops.import_scene.aurora(filepath=str(aurora_vdb), scene_file=str(toml)) == {"FINISHED"}
+        assert bpy.ops.aurora.import_vdb(filepath=str(aurora_vdb), scene_file=str(toml)) == {"FINISHED"}
         sc = bpy.context.scene
         assert sc.camera is not None and sc.camera.data.angle_y == pytest.approx(math.radians(30.0))
         assert not sc.render.film_transparent  # interactive default: opaque film, background visible
@@ -188,7 +193,7 @@ def test_enables_as_legacy_addon(bpy, fresh, tmp_path, aurora_vdb):
         # Errors are reported (an ERROR report, which bpy.ops turns into a
         # RuntimeError for a script), not a Python traceback from the add-on.
         with pytest.raises(RuntimeError, match="missing.vdb: no such file"):
-            bpy.ops.import_scene.aurora(filepath=str(tmp_path / "missing.vdb"))
+            bpy.ops.aurora.import_vdb(filepath=str(tmp_path / "missing.vdb"))
     finally:
         addon_utils.disable(name, default_set=True)
         bpy.context.preferences.filepaths.script_directories.remove(d)
@@ -435,25 +440,6 @@ def test_blender_minimum_resolution_is_refused(addon, fresh, tmp_path):
         addon.setup_scene_from_toml(synth.write_scene(tmp_path / "t.toml", cam, 64, 2))
 
 
-SHELL_SCENE = """seed = 5
-[[curtain]]
-center = [0.0, 0.0]
-length = 30.0
-width = 10.0
-bend_km = 2.0
-[footprint]
-resolution = [64, 24]
-steps = 3
-[beams]
-count = 150
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-cycles_shell = {shell}
-"""
-
-
 @pytest.mark.parametrize("shell", [True, False])
 def test_bake_writes_the_cycles_shell_the_addon_would_add(addon, tmp_path, shell):
     # `aurora bake` dilates both grids by one voxel of active zeros (the
@@ -461,12 +447,9 @@ def test_bake_writes_the_cycles_shell_the_addon_would_add(addon, tmp_path, shell
     # is. Proof that the bake's shell is the add-on's: padding the baked file
     # switches on no voxel at all. Without the shell, padding adds voxels and
     # the file is not marked.
-    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
-    assert aurora.is_file(), f"{aurora} missing: cargo build --release first"
-    scene = tmp_path / "s.toml"
-    scene.write_text(SHELL_SCENE.format(shell=str(shell).lower()))
+    scene = write_small_scene(tmp_path / "s.toml", grid={"cycles_shell": shell})
     out = tmp_path / "out"
-    r = subprocess.run([str(aurora), "bake", str(scene), "--out", str(out), "-q"], capture_output=True, text=True)
+    r = subprocess.run([str(aurora_bin()), "bake", str(scene), "--out", str(out), "-q"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     vdb = out / "aurora.vdb"
     from aurora_importer.vdb_pad import has_cycles_shell, pad_vdb
@@ -485,10 +468,9 @@ def test_scene_defaults_match_the_baker(addon, tmp_path):
     # `aurora render`: the add-on's defaults are aurora's. `aurora scene FILE`
     # prints the file with every default filled in by aurora itself.
     from aurora_importer.scene_toml import load_scene
-    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
     minimal = tmp_path / "minimal.toml"
     minimal.write_text("seed = 3\n")
-    r = subprocess.run([str(aurora), "scene", str(minimal)], capture_output=True, text=True)
+    r = subprocess.run([str(aurora_bin()), "scene", str(minimal)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     full = tmp_path / "full.toml"
     full.write_text(r.stdout)
@@ -503,10 +485,9 @@ def test_scene_schema_copy_is_the_binarys(addon):
     # the same from Rust), and a [terrain] table without `kind` means no
     # terrain there as in aurora (Terrain::default), unlike a missing table.
     from aurora_importer import scene_toml
-    aurora = Path(os.environ.get("AURORA_BIN", Path(__file__).resolve().parents[2] / "target" / "release" / "aurora"))
-    r = subprocess.run([str(aurora), "scene", "--schema"], capture_output=True, text=True)
+    r = subprocess.run([str(aurora_bin()), "scene", "--schema"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
-    committed = (Path(__file__).resolve().parents[2] / "blender" / "scene_schema.json").read_text()
+    committed = (ADDON / "scene_schema.json").read_text()
     assert r.stdout == committed, "run: aurora scene --schema > blender/scene_schema.json"
     assert scene_toml.Camera().fov_deg == scene_toml.SCHEMA["camera"]["fov_deg"]["default"]
     assert scene_toml.scene_from_dict({"terrain": {"height": 1.0}}).terrain.kind == "none"

@@ -14,7 +14,6 @@ import hashlib
 import importlib
 import json
 import math
-import os
 import subprocess
 import time
 import tomllib
@@ -22,18 +21,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-ROOT = Path(__file__).resolve().parent.parent.parent
+from scenes import aurora_bin
 
 #: A reduced scene: ~1 s per bake on two cores.
 SMALL = {"beams": {"count": 400}, "footprint": {"resolution": (64, 16), "steps": 2},
          "grid": {"voxel_size": 2.0}, "photons": {"radius_km": 1.5}}
-
-
-def aurora_bin() -> Path:
-    p = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
-    assert p.is_file() and os.access(p, os.X_OK), f"{p}: the aurora binary is missing (cargo build --release)"
-    return p
 
 
 @pytest.fixture(scope="module")
@@ -180,7 +172,7 @@ def test_a_preset_loads_into_the_panel_and_writes_back_the_same_bake(sc, panel, 
 
 
 def test_the_preset_menu_lists_the_binarys_presets_and_falls_back_without_it(sc, panel, tmp_path, bpy):
-    pm = sub(panel, "panel")
+    pm = sub(panel, "operators.presets")
     out = subprocess.run([aurora_bin(), "scene", "--list"], capture_output=True, text=True, check=True).stdout
     names = [line.split()[0] for line in out.splitlines()]
     assert pm.list_presets(str(aurora_bin())) == names
@@ -340,11 +332,11 @@ def test_bake_errors_are_reported_and_leave_nothing(sc, panel, bpy, tmp_path, mo
 
 
 def make_job(panel, bpy, sc, frames):
-    return sub(panel, "bake_ops").make_job(bpy.context, frames)
+    return sub(panel, "operators.bake").make_job(bpy.context, frames)
 
 
 def test_a_bake_reports_progress_often_and_a_cancel_leaves_the_previous_bake_untouched(sc, panel, bpy, tmp_path):
-    ops = sub(panel, "bake_ops")
+    ops = sub(panel, "operators.bake")
     s = sc.aurora
     s.output_dir = str(tmp_path / "out")
     set_small(s)
@@ -411,7 +403,7 @@ def test_a_cancelled_sequence_never_mixes_two_scenes_frames(sc, panel, bpy, tmp_
 
 
 def test_status_text_and_latest_progress(panel):
-    ops = sub(panel, "bake_ops")
+    ops = sub(panel, "operators.bake")
     E = sub(panel, "bake_job").Event
     assert ops.status_text(None, (1, 3)) == "Aurora frames 1-3: starting (Esc to cancel)"
     assert ops.status_text(E("gather", 50, 200, 3.25), None) == "Aurora bake: gather 25%, 3.2 s (Esc to cancel)"

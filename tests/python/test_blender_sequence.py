@@ -4,50 +4,30 @@ logic loads frame 3 from frame 1's name; the add-on sets the sequence up
 from a frame file or from the stage; usd-core reads the stage with one time
 sample per frame and field.
 
-The binary is target/release/aurora (AURORA_BIN overrides).
+The scene is the suite's small one (scenes.py), the binary
+target/release/aurora (AURORA_BIN overrides).
 """
 
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+from scenes import aurora_bin, write_small_scene
 
-ROOT = Path(__file__).resolve().parents[2]
-SCENE = """
-seed = 7
-[[curtain]]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 300
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-[animation]
-fps = 30.0
-ray_speed_kms = 20.0
-drift_km = 4.0
-drift_period_s = 1.0
-"""
+#: The small scene's `[animation]` for the sequence: 30 fps, rays along the
+#: curtain and a drift, so that the frames differ.
+ANIMATION = {"fps": 30.0, "ray_speed_kms": 20.0, "drift_km": 4.0, "drift_period_s": 1.0}
 
 
 @pytest.fixture(scope="module")
 def sequence(tmp_path_factory) -> Path:
-    aurora = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
-    assert aurora.is_file(), f"{aurora} missing: cargo build --release first"
     d = tmp_path_factory.mktemp("seq")
-    (d / "scene.toml").write_text(SCENE)
-    subprocess.run([str(aurora), "bake", str(d / "scene.toml"), "--frames", "1-4", "--out", str(d / "out"), "-q"], check=True)
+    write_small_scene(d / "scene.toml", animation=ANIMATION)
+    subprocess.run([str(aurora_bin()), "bake", str(d / "scene.toml"), "--frames", "1-4", "--out", str(d / "out"), "-q"], check=True)
     return d / "out"
 
 

@@ -12,7 +12,8 @@ socket (so it touches no system daemon and two runs do not collide), and
 stops the three by process id in a `finally` block. It needs root (slurmd
 runs jobs as their user and SlurmUser is root here).
 
-The binary is target/release/aurora (AURORA_BIN overrides).
+The scene is the suite's small one (scenes.py), the binary
+target/release/aurora (AURORA_BIN overrides).
 """
 
 from __future__ import annotations
@@ -27,33 +28,11 @@ import time
 from pathlib import Path
 
 import pytest
+from scenes import aurora_bin, write_small_scene
 
 ROOT = Path(__file__).resolve().parents[2]
-SCENE = """
-seed = 7
-[[curtain]]
-center = [0.0, 0.0]
-length = 40.0
-width = 12.0
-bend_km = 3.0
-[footprint]
-resolution = [96, 32]
-steps = 4
-[beams]
-count = 400
-[photons]
-radius_km = 0.8
-[grid]
-voxel_size = 1.0
-[animation]
-ray_speed_kms = 20.0
-"""
-
-
-def aurora_bin() -> Path:
-    p = Path(os.environ.get("AURORA_BIN", ROOT / "target" / "release" / "aurora"))
-    assert p.is_file(), f"{p} missing: cargo build --release first (or set AURORA_BIN)"
-    return p.resolve()
+#: The `[animation]` the frames are baked with: rays running along the curtain at 20 km/s.
+ANIMATION = {"ray_speed_kms": 20.0}
 
 
 def tool(name: str) -> str:
@@ -111,7 +90,7 @@ def test_slurm_array_bakes_frames_equal_to_one_process(tmp_path: Path) -> None:
     munged, slurmctld, slurmd = tool("munged"), tool("slurmctld"), tool("slurmd")
     sbatch, sinfo, scontrol = tool("sbatch"), tool("sinfo"), tool("scontrol")
     scene = tmp_path / "small.toml"
-    scene.write_text(SCENE)
+    write_small_scene(scene, animation=ANIMATION)
     ref = reference(tmp_path, scene, "1-8")
 
     d = tmp_path / "slurm"
@@ -209,7 +188,7 @@ def test_openjd_template_checks_and_runs(tmp_path: Path) -> None:
     template = ROOT / "farm" / "openjd" / "aurora-frames.yaml"
     subprocess.run([openjd, "check", str(template)], check=True)
     scene = tmp_path / "small.toml"
-    scene.write_text(SCENE)
+    write_small_scene(scene, animation=ANIMATION)
     ref = reference(tmp_path, scene, "1-3")
     out = tmp_path / "shots"
     r = subprocess.run(

@@ -24,22 +24,18 @@ from pathlib import Path
 import bpy
 from bpy.props import BoolProperty
 
-from .air import line_depths, weights
-from .bake_job import BakeError, BakeJob, Event, find_binary
-from .camera_export import CameraExportError
-from .curve_path import CurvePathError
-from .scene_write import scene_document, to_toml
-from .volume_import import AuroraImportError, import_aurora
+from ..air import line_depths, weights
+from ..bake_job import BakeError, BakeJob, Event
+from ..camera_export import CameraExportError
+from ..curve_path import CurvePathError
+from ..preferences import aurora_binary
+from ..scene_write import scene_document, to_toml
+from ..volume_import import AuroraImportError, import_aurora
 
 #: Object name of a fresh bake's Volume.
 VOLUME_NAME = "Aurora"
 #: Seconds between the modal operator's looks at the bake.
 TICK_S = 0.1
-
-
-def addon_preferences(context):
-    addon = context.preferences.addons.get(__package__)
-    return addon.preferences if addon is not None else None
 
 
 def output_dir(scene: bpy.types.Scene) -> Path:
@@ -54,8 +50,7 @@ def output_dir(scene: bpy.types.Scene) -> Path:
 def make_job(context, frames: bool) -> BakeJob:
     """The bake the panel describes (raises BakeError with a message for the user)."""
     scene = context.scene
-    prefs = addon_preferences(context)
-    binary = find_binary(getattr(prefs, "binary", "") or None)
+    binary = aurora_binary(context)
     try:
         doc = scene_document(scene, context.evaluated_depsgraph_get())
     except (CameraExportError, CurvePathError, ValueError) as e:
@@ -132,15 +127,7 @@ class AURORA_OT_bake(bpy.types.Operator):
     _timer = None
 
     def execute(self, context):
-        try:
-            job = make_job(context, self.frames)
-            job.run()
-            objects = load_result(context.scene, job)
-        except (BakeError, AuroraImportError, OSError) as e:
-            self.report({"ERROR"}, str(e))
-            return {"CANCELLED"}
-        self.report({"INFO"}, f"Aurora baked into {job.output_dir} ({objects[0].name})")
-        return {"FINISHED"}
+        return self._complete(context, None)
 
     def invoke(self, context, event):
         if bpy.app.background or context.window is None:
@@ -174,8 +161,17 @@ class AURORA_OT_bake(bpy.types.Operator):
         if job.running:
             return {"RUNNING_MODAL"}
         self._end(context)
+        return self._complete(context, job)
+
+    def _complete(self, context, job: BakeJob | None):
+        """Finish `job` (its process has ended), or without one bake now,
+        synchronously; then load the result and report."""
         try:
-            job.finish()
+            if job is None:
+                job = make_job(context, self.frames)
+                job.run()
+            else:
+                job.finish()
             objects = load_result(context.scene, job)
         except (BakeError, AuroraImportError, OSError) as e:
             self.report({"ERROR"}, str(e))
@@ -192,14 +188,4 @@ class AURORA_OT_bake(bpy.types.Operator):
         context.workspace.status_text_set(None)
 
 
-CLASSES = [AURORA_OT_bake]
-
-
-def register():
-    for cls in CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(CLASSES):
-        bpy.utils.unregister_class(cls)
+classes = (AURORA_OT_bake,)

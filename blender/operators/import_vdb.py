@@ -1,5 +1,5 @@
-"""File > Import > Aurora (.vdb / .usda): a thin operator over import_aurora
-and setup_scene_from_toml."""
+"""`bpy.ops.aurora.import_vdb()`, File > Import > Aurora (.vdb / .usda): a thin
+operator over import_aurora and setup_scene_from_toml."""
 
 from __future__ import annotations
 
@@ -7,15 +7,15 @@ import bpy
 from bpy.props import BoolProperty, FloatProperty, FloatVectorProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from .render_settings import CyclesSettings
-from .scene_setup import setup_scene_from_toml
-from .volume_import import AuroraImportError, import_aurora
+from ..render_settings import CyclesSettings
+from ..scene_setup import setup_scene_from_toml
+from ..volume_import import AuroraImportError, import_aurora
 
 
-class IMPORT_OT_aurora(bpy.types.Operator, ImportHelper):
+class AURORA_OT_import_vdb(bpy.types.Operator, ImportHelper):
     """Import an aurora bake as a Volume with the reference emission-absorption material"""
 
-    bl_idname = "import_scene.aurora"
+    bl_idname = "aurora.import_vdb"
     bl_label = "Import Aurora"
     bl_options = {"REGISTER", "UNDO", "PRESET"}
 
@@ -50,15 +50,4 @@ class IMPORT_OT_aurora(bpy.types.Operator, ImportHelper):
         return {"FINISHED"}
 
 
-def menu_func_import(self, context):
-    self.layout.operator(IMPORT_OT_aurora.bl_idname, text="Aurora (.vdb / .usda)")
-
-
-def register():
-    bpy.utils.register_class(IMPORT_OT_aurora)
-    bpy.types.TOPBAR_MT_file_import.append(menu_func_import)
-
-
-def unregister():
-    bpy.types.TOPBAR_MT_file_import.remove(menu_func_import)
-    bpy.utils.unregister_class(IMPORT_OT_aurora)
+classes = (AURORA_OT_import_vdb,)
