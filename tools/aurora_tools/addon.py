@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib.util
 import sys
+from pathlib import Path
 
 from . import ROOT
 
@@ -16,10 +17,28 @@ from . import ROOT
 NAME = "aurora_importer"
 
 
+def blender_openvdb_on_path() -> None:
+    """Lets the add-on's `import openvdb` find Blender's own module outside
+    Blender: the bpy wheel ships it in a site-packages folder of its own,
+    which is appended to sys.path (at the end, so that usd-core's `pxr`
+    stays ahead of Blender's). Inside Blender, or where `openvdb` is
+    already importable, nothing changes."""
+    if importlib.util.find_spec("openvdb") is not None:
+        return
+    spec = importlib.util.find_spec("bpy")
+    if spec is None or not spec.submodule_search_locations:
+        return
+    found = sorted(Path(spec.submodule_search_locations[0]).glob("*/python/lib/python3*/site-packages"))
+    if found and str(found[-1]) not in sys.path:
+        sys.path.append(str(found[-1]))
+
+
 def load_addon(name: str = NAME):
-    """Import ../blender as a package (relative imports inside it work under any name)."""
+    """Import ../blender as a package (relative imports inside it work under
+    any name), with Blender's `openvdb` reachable as inside Blender."""
     if name in sys.modules:
         return sys.modules[name]
+    blender_openvdb_on_path()
     init = ROOT / "blender" / "__init__.py"
     spec = importlib.util.spec_from_file_location(name, init, submodule_search_locations=[str(init.parent)])
     mod = importlib.util.module_from_spec(spec)
