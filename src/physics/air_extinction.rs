@@ -6,91 +6,39 @@
 //! layer reaches an observer at altitude `h_o` through
 //!
 //! ```text
-//! T(lambda, direction) = exp(-tau(lambda, h_o) X(e)),
-//! tau = tau_R + tau_O3 + tau_a,
+//! T(lambda, direction) = exp(-tau(lambda, h_o) X(e)),   tau = tau_R + tau_O3 + tau_a
 //! ```
 //!
 //! `tau` the zenith optical depth of the air above the observer and `X` the
-//! relative air mass at the direction's elevation `e` above the observer's
-//! horizon. Three extinctions add:
+//! relative air mass at the direction's elevation `e` (dimensionless; km and
+//! nm elsewhere):
 //!
-//! - **Rayleigh scattering** by the air, Bodhaine et al. (1999), J. Atmos.
-//!   Oceanic Technol. 16, 1854, their eq. (30), the fit for sea level
-//!   (1013.25 hPa, 45 deg latitude, 360 ppm CO2), `lambda` in micrometres:
-//!   `tau_R0 = 0.0021520 (1.0455996 - 341.29061 l^-2 - 0.90230850 l^2) /
-//!   (1 + 0.0027059889 l^-2 - 85.968563 l^2)`: 0.2725 at 427.8 nm, 0.0942 at
-//!   557.7 nm, 0.0561 at 630.0 nm. The column above an observer is the
-//!   pressure there (hydrostatic balance), so `tau_R(h) = tau_R0 p(h) / p0`,
-//!   `p` from the U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562): its
-//!   seven layers of constant lapse rate in geopotential height
-//!   (`H = r0 z / (r0 + z)`, r0 = 6356.766 km) up to 84.852 km, where
-//!   `p = p_b (T_b / (T_b + L (H - H_b)))^(g0 M / (R* L))` (or
-//!   `p_b exp(-g0 M (H - H_b) / (R* T_b))` where `L = 0`), `g0 M / R* =
-//!   34.1632 K/km`, and isothermal above (the column there is below 4e-6 of
-//!   the ground's).
-//! - **Ozone**, its Chappuis band (400-700 nm): `tau_O3 = sigma(lambda) N`
-//!   with `N` the column (`ozone_du` Dobson units, 1 DU = 2.687e16
-//!   molecules cm^-2) and `sigma` the cross-section of Serdyuchenko et al.
-//!   (2014), Atmos. Meas. Tech. 7, 625 (the 233 K spectrum of the IUP Bremen
-//!   data base, the stratosphere's temperature), as 10 nm bin means: the
-//!   table [`O3_SIGMA_CM2`], taken as each bin's value at its centre and
-//!   interpolated linearly between centres (0.030 at 557.7 nm, 0.028 at
-//!   630.0 nm for 300 DU). Its profile is the triangle peaking at 25 km
-//!   between 10 and 40 km used by Bruneton & Neyret (2008) and Bruneton
-//!   (2017, "A qualitative and quantitative evaluation of 8 clear sky
-//!   models"): the column above an observer below 10 km is all of it.
-//! - **Aerosol**: `tau_a(lambda) = tau_550 (lambda / 550 nm)^-angstrom`
-//!   (Angstrom 1929), its density falling as `exp(-z / H_a)` so that the
-//!   column above the observer is `tau_a exp(-h_o / H_a)`. The defaults
-//!   (`tau_550 = 0.05`, `angstrom = 1.3`) are the clean Arctic winter
-//!   background of Tomasi et al. (2007), J. Geophys. Res. 112, D16205
-//!   (sun-photometer optical depths 0.03-0.07 at 500 nm away from haze
-//!   events, Angstrom exponents 1.2-1.6); `H_a = 1.2 km` is the boundary-
-//!   layer scale height of Bruneton & Neyret (2008).
+//! - **Rayleigh**: Bodhaine et al. (1999), J. Atmos. Oceanic Technol. 16,
+//!   1854, eq. (30) at sea level, times `p(h_o) / p0` of the U.S. Standard
+//!   Atmosphere 1976 (NOAA-S/T 76-1562).
+//! - **Ozone**, the Chappuis band: `tau_O3 = sigma(lambda) N`, `N` the column
+//!   (`ozone_du`, 1 DU = 2.687e16 cm^-2), `sigma` the 233 K cross-section of
+//!   Serdyuchenko et al. (2014), Atmos. Meas. Tech. 7, 625, as 10 nm bin
+//!   means ([`O3_SIGMA_CM2`]), in the 10-40 km layer of Bruneton & Neyret
+//!   (2008) and Bruneton (2017).
+//! - **Aerosol**: `tau_550 (lambda / 550 nm)^-angstrom` (Angstrom 1929),
+//!   density `exp(-z / H_a)`; defaults from Tomasi et al. (2007), J. Geophys.
+//!   Res. 112, D16205, and Bruneton & Neyret (2008).
 //!
-//! **Air mass.** `X(e) = 1 / (sin e + 0.50572 (e + 6.07995 deg)^-1.6364)`
-//! (Kasten & Young 1989, Appl. Opt. 28, 4735, their eq. 3 with the zenith
-//! angle `z = 90 deg - e`), fitted to the ISO standard atmosphere's ray
-//! tracing and so including refraction: it is the definition used here for
-//! every constituent (1.00 at the zenith, 1.99 at 30 deg, 5.59 at 10 deg,
-//! 37.92 at the horizon). Directions below the observer's horizon take
-//! `X(0)`. Ozone's higher layer and the aerosol's lower one would give air
-//! masses of about 17 and 90 at the horizon instead; their optical depths
-//! are a tenth and a fifth of the Rayleigh one, so near the horizon this is
-//! the largest approximation of the model.
+//! **Air mass**: `X(e) = 1 / (sin e + 0.50572 (e + 6.07995 deg)^-1.6364)`
+//! (Kasten & Young 1989, Appl. Opt. 28, 4735, refraction included), for
+//! every constituent; below the horizon `X(0)`. **Paths inside the layer**
+//! ([`Air::tau_path`]): plane-parallel and exact, `tau = d (C(z0) - C(z1)) /
+//! (z1 - z0)` with `C(z)` the zenith depth above `z`, `d (-C'(z0))` when level.
 //!
-//! **Paths inside the layer.** Light from the terrain travels a straight
-//! path of length `d` from altitude `z1` to the observer at `z0`. In a
-//! plane-parallel atmosphere the slant column is the vertical column
-//! between the two altitudes divided by the path's `|sin e|`, which is
-//! `(z1 - z0) / d`: with `C(z)` the zenith optical depth above `z`,
-//! `tau = d (C(z0) - C(z1)) / (z1 - z0)` exactly, and `d (-C'(z0))` when the
-//! path is level ([`Air::tau_path`]).
-//!
-//! **Per channel.** The renderer works in Rec.709 RGB, not in lines, so
-//! each channel's light is taken as a fixed mix of the lines: channel `c`
-//! holds the share `w_ic = n_i rgb_i[c] / sum_k n_k rgb_k[c]` of line `i`,
-//! `rgb_i` the line's colour (`crate::physics::emission::line_table::line_colours`) and `n_i` the
-//! photons of a reference aurora ([`REFERENCE_MIX`]: the 3 keV Maxwellian
-//! column of NCAR GLOW for 427.8, 557.7 and 630.0 nm, 636.4 nm at the
-//! 630.0 / 636.4 branching ratio 3.16 and the N2 1P bands at
-//! `crate::physics::emission::line_colour::R_1P` times 427.8 nm). Each line is dimmed by its own
-//! depth, so the channel's transmittance is the sum of exponentials
-//!
-//! ```text
-//! T_c(X) = sum_i w_ic exp(-tau_i X),
-//! ```
-//!
-//! exact for that mix, which the renderer applies ([`Extinction::towards`]).
-//! Its effective depth `tau_c(X) = -ln T_c(X) / X` starts at the weighted
-//! mean `sum_i w_ic tau_i` ([`Air::channel_depths`]) and falls with `X`
-//! where lines of different depth share a channel: blue holds 427.8 nm
-//! (0.34) and the blue of the gamut-mapped red lines (0.12), so near the
-//! horizon the red lines' share is what is left of it. A single
-//! `exp(-tau_c X)` per channel would make blue 17 % too dark at 10 degrees
-//! (docs/physics.md tabulates both). A per-line grid (`grid.lines`,
-//! `aurora render --grid`) gets its line's own depth in every channel
-//! ([`Extinction::for_line`]).
+//! **Per channel.** Channel `c` holds the share `w_ic` of line `i` of a
+//! reference aurora ([`REFERENCE_MIX`]) times the line's colour, each line
+//! dimmed by its own depth: `T_c(X) = sum_i w_ic exp(-tau_i X)`, exact for
+//! that mix ([`Extinction::towards`]); its effective depth starts at
+//! `sum_i w_ic tau_i` ([`Air::channel_depths`]). A per-line grid gets its
+//! line's own depth ([`Extinction::for_line`]). Light is only taken away:
+//! scattering into the ray is not modelled. Formulas, depths and tables:
+//! docs/physics.md, "The air between the aurora and the eye".
 
 use crate::physics::emission::line_colour::{LINES, N2_1P, N2_1P_BANDS_NM};
 use crate::physics::emission::line_table::{line_colours, N_LINES};

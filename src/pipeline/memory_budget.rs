@@ -1,72 +1,44 @@
 //! The bake's memory, known before it is spent.
 //!
-//! [`estimate`] bounds what a bake of a validated scene allocates at its peak,
-//! from the scene alone (before any footprint is simulated or beam traced), and
-//! [`check`] compares it with what this process may use
-//! ([`crate::util::memory::available`]), refusing with the key that drives the
-//! estimate, the memory needed and the memory available. Every term is an
-//! upper bound, so a scene that passes does not run out of memory through the
-//! bake's own allocations; scenes near the limit may be refused that would
-//! have fitted (the error says which key to lower).
+//! [`estimate`] bounds a validated scene's peak allocation from the scene
+//! alone (before any footprint or beam); [`check`] compares it with what this
+//! process may use ([`crate::util::memory::available`]) and refuses naming
+//! the key that drives it, the memory needed and the memory available. Every
+//! term is an upper bound: a scene that passes does not run out of memory
+//! through the bake's own allocations. Terms in bytes, `leaf` an 8^3-voxel
+//! leaf's side, `reach = cutoff * radius_km * (1 + radius_noise)`:
+//! - **photons**: `beams.count` beams of at most `ceil(1 / beams.dt)` steps,
+//!   plus for Fang's depositions one per [`ABOVE_START_SPAN_KM`] of the column
+//!   above the start ([`crate::pipeline::beams::walk::above_start_column_top`]),
+//!   a [`Photon`] each, held three times (per-beam vectors, their
+//!   concatenation, the kd-tree's copy).
+//! - **candidate leaves**: 12 bytes per leaf within reach of each step (at
+//!   most `length_km * dt`), before deduplication: at most `photons * L`,
+//!   `L = (ceil((2 reach + step) / leaf) + 1)^3`; where every step descends
+//!   (alpha_D below the field's dip) a beam's path to 50 km is at most
+//!   `h / sin(dip - alpha_D)`, its entries `(path / leaf + 2) (L^(1/3))^2`,
+//!   and n column segments above the start at most
+//!   `(column / sin(dip) / leaf + 2 n) (2 reach / leaf + 2)^2`.
+//! - **grids**: min(`photons * L`, the world box's leaves dilated by the
+//!   reach) plus the columns', each an emission leaf (512 x 12), a density
+//!   leaf (512 x 4) and masks, +30 % (Cycles shell, sort). A column (the
+//!   start area carried up the field, a sheared prism) holds at most `(dx / leaf + 3) (dy / leaf + 3)` leaves per
+//!   leaf-thick slab (the box dilated by the reach, one more per axis for the
+//!   shift within a slab, below a leaf for dips above 45 degrees). A curtain
+//!   along a path (`crate::pipeline::footprint::curtain_path`) counts its band:
+//!   leaves within rho (half width, reach, shift) of a curve of length L lie
+//!   within `rho' = rho + sqrt(2) leaf` of it, `(2 rho' L + pi rho'^2) / leaf^2`
+//!   per slab at most (the area of a curve's parallel set).
+//! - **footprints**: 12 f64 per fluid cell ([`crate::pipeline::footprint::cells_along`]).
+//! - **per-line grids** (`grid.lines`, physical colour): 512 x 4 bytes and
+//!   masks per leaf and line, plus, three lines at a time, a colour grid and
+//!   a copy of the photons (`crate::pipeline::bake::plan::line_grids`).
+//! - **red trail** (`animation.trail_samples = N`, physical colour): N times
+//!   the photons and candidate leaves (`crate::pipeline::red_trail`); the
+//!   grids do not grow (the motion stays inside the world box).
 //!
-//! The terms (bytes):
-//! - **photons**: at most `ceil(1 / beams.dt)` photons per beam (one per
-//!   step), plus, for Fang's depositions, one per [`ABOVE_START_SPAN_KM`] of
-//!   the column above the beam's start (what the spectrum leaves above the
-//!   start, laid along the field line up to at most the atmosphere table's
-//!   top, [`crate::pipeline::beams::walk::above_start_column_top`]); `beams.count` beams,
-//!   [`Photon`] each; held three times at the peak (the per-beam vectors
-//!   while they are concatenated, the concatenation, and the kd-tree's copy
-//!   of the positions with indices).
-//! - **candidate leaves**: every photon lists the 8^3-voxel leaves within the
-//!   kernel's reach `cutoff * radius_km * (1 + radius_noise)` of its step
-//!   (at most `length_km * dt` long) before they are deduplicated: at most
-//!   `photons * L` entries of 12 bytes,
-//!   `L = (ceil((2 reach + step) / leaf) + 1)^3`; where every step descends (alpha_D below the field's dip), a
-//!   beam's path to the 50 km bottom is at most `h / sin(dip - alpha_D)`
-//!   long and its entries at most `(path / leaf + 2) * (L^(1/3))^2`; its
-//!   column segments, end to end along the field line above its start,
-//!   at most `(column / sin(dip) / leaf + 2 n) (2 reach / leaf + 2)^2` for
-//!   n segments.
-//! - **grids**: the leaves, at most the smaller of `photons * L` and the
-//!   number of leaves in the scene's world box dilated by the reach (up to
-//!   the beams' highest start), plus those of the columns above the starts,
-//!   each holding an emission leaf (512 x 12 bytes), a density leaf (512 x
-//!   4) and masks, with 30 % for the Cycles shell and the sort. A column is
-//!   the curtain's start area carried up along the field: a sheared prism,
-//!   whose every leaf-thick slab is the start area's box shifted, so it
-//!   holds at most `(dx / leaf + 3) (dy / leaf + 3)` leaves per slab (the
-//!   box dilated by the reach; one more per axis for the shift within a
-//!   slab, which is below a leaf for dips above 45 degrees), not the far
-//!   larger axis-aligned box around the whole slanted column.
-//! - **footprints**: the fluid's arrays per curtain, 12 f64 per cell (a
-//!   path's cells along it from [`crate::pipeline::footprint::cells_along`]).
-//! - **per-line grids** (`grid.lines`, with a physical colour): each line's
-//!   float grid on at most the grids' leaves (512 x 4 bytes and masks a
-//!   leaf), and while they are gathered, three lines at a time, one more
-//!   colour grid of those leaves and a copy of the photons carrying the
-//!   lines' powers, beside the emission grid and the photons
-//!   (`crate::pipeline::bake::plan::line_grids`).
-//! - **the red trail** (`animation.trail_samples = N`, physical colour): N
-//!   more traces of every beam whose photons join the bake's
-//!   (`crate::pipeline::red_trail`): N times the photons and their candidate leaves
-//!   again; the grids do not grow (the earlier times' deposits fall in
-//!   the same world box the bound already covers: the motion is inside it).
-//!
-//! A curtain along a path (`crate::pipeline::footprint::curtain_path`) is bounded by its band, not its
-//! bounding box: the leaves meeting the set of points within rho of a curve
-//! of length L lie within rho + sqrt(2) a of it (a the leaf side), a set of
-//! area at most `2 (rho + sqrt 2 a) L + pi (rho + sqrt 2 a)^2` (the area of
-//! a curve's parallel set), so at most that over a^2 leaves per leaf-thick
-//! slab, rho the half width, the reach and the slab's shift along the field
-//! within a leaf (below a leaf for dips above 45 degrees; each slab is the
-//! band shifted, as for the columns).
-//!
-//! With `voxel_size = "auto"` the voxel is at least half the kernel radius
-//! `photons.radius_km` ([`KernelRadius::auto_voxel_floor_km`], the floor the
-//! bake's automatic size never goes below): the estimate uses that floor,
-//! the most memory "auto" can ask for. The kernel's reach is
-//! [`KernelRadius::max_reach_km`], the gather's.
+//! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]);
+//! the reach is the gather's ([`KernelRadius::max_reach_km`]).
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;

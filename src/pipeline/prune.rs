@@ -1,60 +1,43 @@
 //! Contribution-based pruning: leaves (8^3 blocks) whose light at the scene's
 //! camera is below an error budget are not stored.
 //!
-//! What a voxel adds to an image is its radiance times the solid angle it
-//! covers, spread over the pixels it covers: a voxel of emission `epsilon`
-//! (luminance, kR per km) and volume `V` at distance `d` adds
-//! `epsilon V / d^2` to `sum L_p Omega_p` (the radiance integrated over the
-//! frame). The pixels of a pinhole camera do not all subtend the same solid
-//! angle: `Omega_p = Omega_0 cos^3 theta`, `theta` the angle from the optical
-//! axis, so to the plain sum of pixel values (what the image's flux and a
-//! per-pixel error see) it adds `epsilon V / (d^2 cos^3 theta)`. For an
-//! orthographic camera every pixel has the same area and a voxel adds
-//! `epsilon V` whatever its distance. So a leaf's contribution
-//! ([`leaf_contributions`]) is `sum Y V w` over its active voxels, with
-//! `w = 1 / (d^2 cos^3 theta)` (perspective) or `1` (orthographic). In
-//! general `w = 1 / (d^2 Omega_p / Omega_0)`, the pixel's solid angle
-//! relative to the centre pixel's coming from the camera
+//! A voxel of emission `epsilon` (luminance, kR per km) and volume `V` at
+//! distance `d` adds `epsilon V / d^2` to the radiance integrated over the
+//! frame, `sum L_p Omega_p`. A pinhole camera's pixels do not all subtend the
+//! same solid angle (`Omega_p = Omega_0 cos^3 theta`, `theta` off the optical
+//! axis), so to the plain sum of pixel values (what the image's flux and a
+//! per-pixel error see) it adds `epsilon V / (d^2 cos^3 theta)`. In general
+//! a leaf's contribution ([`leaf_contributions`]) is `sum Y V w` over its
+//! active voxels with `w = 1 / (d^2 Omega_p / Omega_0)`, the pixel's solid
+//! angle relative to the centre pixel's from the camera
 //! ([`crate::geometry::camera::CameraModel::relative_pixel_solid_angle`]):
-//! `sin theta / theta` for the equidistant fisheye (`theta` off axis),
-//! `cos beta` for the equirectangular panorama (`beta` the latitude).
+//! `cos^3 theta` for perspective, `sin theta / theta` for the equidistant
+//! fisheye, `cos beta` (latitude) for the equirectangular panorama; an
+//! orthographic camera has `w = 1` (every pixel the same area, no `d^2`).
 //!
-//! [`prune`] drops leaves in increasing order of contribution for as long as
-//! the dropped total stays within `budget` of the grid's total: the removed
-//! light is at most `budget` of what reaches the camera. Two simplifications,
-//! both chosen to stay on the safe side of that bound:
-//! - extinction is ignored: air in front of a leaf only lowers its real
-//!   contribution (and the total by the same or less);
-//! - off-screen voxels count as if they were on the frame's corner
-//!   (`cos theta` is clamped at the corner's; for a fisheye, the image
-//!   circle's edge): off-screen aurora lights the
-//!   terrain in frame and a lighting artist may re-frame the shot, so a
-//!   block is dropped for being faint, not for being off screen.
+//! [`prune`] drops leaves in increasing order of contribution while the
+//! dropped total stays within `budget` of the grid's total, so the removed
+//! light is at most `budget` of what reaches the camera. Both simplifications
+//! stay on the safe side of that bound: extinction is ignored (air in front
+//! of a leaf only lowers its contribution), and off-screen voxels count as if
+//! on the frame's corner (`cos theta` clamped there; for a fisheye, the image
+//! circle's edge), since off-screen aurora lights the terrain in frame and a
+//! shot may be re-framed: a block is dropped for being faint, not for being
+//! off screen. With all the aurora in frame the bound holds on the image's
+//! flux up to the reconstruction filter: trilinear interpolation also fades
+//! the cells straddling a dropped leaf's faces, so the flux removed may
+//! exceed the budget by a fraction of it. `aurora bench` measures the
+//! per-pixel error. A bake pruned for one camera may miss faint leaves in
+//! another view; `grid.prune = 0` keeps every leaf.
 //!
-//! When all the aurora is in frame the bound is a bound on the image's flux
-//! (background aside) up to the reconstruction filter: measured on the
-//! default scene, budget 10^-3 removed 1.26 x 10^-3 of the image's flux,
-//! most likely because trilinear interpolation also fades the cells that
-//! straddle a dropped leaf's faces (their kept side is brighter). `aurora
-//! bench` measures the per-pixel error.
-//!
-//! A bake pruned for one camera is pruned for that camera: another view
-//! (or a fisheye's wider field) may miss faint leaves. `grid.prune = 0`
-//! keeps every leaf, for every camera.
-//!
-//! The density grid is built afterwards on the kept voxels (it lives on the
-//! emission's active voxels), so both grids lose the same leaves.
-//!
-//! The per-line grids (`grid.lines`) follow the emission, leaf by leaf
-//! ([`prune_like`]): a per-line grid keeps exactly those of its leaves
-//! whose origin the emission kept. The emission is the lines' sum (each
-//! line's photons times its colour), so the picture is what decides: a
-//! line grid holding a leaf the picture lost would give a physicist light
-//! the render does not show (its brightness along a ray would exceed the
-//! picture's), and one losing a leaf the picture kept would drop light the
-//! render shows. A line grid may still lack a leaf the emission has (a
-//! line that is zero there, such as the green in the red trail's earlier
-//! samples): the rule never adds a leaf.
+//! The density grid is built afterwards on the kept voxels, so both grids
+//! lose the same leaves. The per-line grids (`grid.lines`) follow the
+//! emission leaf by leaf ([`prune_like`]): a line grid keeps exactly those of
+//! its leaves whose origin the emission kept, because the emission (the
+//! lines' sum) is what the render shows: a line grid must neither hold light
+//! the picture lost nor drop light it shows. It may still lack a leaf the
+//! emission has (a line that is zero there, such as the green in the red
+//! trail's earlier samples): the rule never adds a leaf.
 
 use crate::geometry::camera::CameraModel;
 use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_DIM, LEAF_NUM_VALUES};

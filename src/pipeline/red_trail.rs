@@ -1,50 +1,31 @@
 //! The red trail: O(1D) (630.0 and 636.4 nm) remembers where the aurora was.
 //!
-//! Model. An upper state of lifetime tau made at rate P(t) has the population
-//! equation `dn/dt = P(t) - n / tau` (`crate::physics::emission::lifetime`), whose solution for a
-//! source that has always been running is the convolution
+//! Model. An upper state of lifetime tau (s) made at rate P(t) obeys
+//! `dn/dt = P(t) - n / tau` (`crate::physics::emission::lifetime`); for a
+//! source that has always run, `n(t) / tau = int_0^inf P(t - s) exp(-s / tau)
+//! / tau ds`: the line's emission at t is its steady-state emission averaged
+//! over the past with the density `exp(-s / tau) / tau` (mean lag tau). A
+//! curtain moving at v leaves its red about `v tau` behind; the green (O(1S),
+//! 0.9 s) and the prompt lines stay with the electrons (GLOW's lifetimes;
+//! Solomon & Abreu 1989, J. Geophys. Res. 94, 6817, for the rates).
 //!
-//! ```text
-//! n(t) / tau = integral_0^inf P(t - s) exp(-s / tau) / tau ds
-//! ```
-//!
-//! so the line's emission at time t is its steady-state emission (yield
-//! times deposit, what a still scene gives) averaged over the past with the
-//! probability density `exp(-s / tau) / tau`. A curtain moving at speed v
-//! leaves its O(1D) emission a distance of about `v tau` behind (the kernel's
-//! mean lag is tau): 40 s at 1 km/s is 40 km at 250 km altitude, where the
-//! 557.7 nm green (O(1S), 0.9 s) and the prompt blue stay with the
-//! electrons (emission-chemistry note of GLOW's lifetimes; Solomon & Abreu
-//! 1989, J. Geophys. Res. 94, 6817, for the rates).
-//!
-//! Discretisation. The motion is closed form in t (`crate::pipeline::motion`), so
-//! the deposits of any earlier time are one more trace of the beams. With
-//! sample lags `0 = s_0 < s_1 < ... < s_N` the past is cut at the midpoints
-//! `a_0 = 0`, `a_k = (s_{k-1} + s_k) / 2`, `a_{N+1} = inf`, and the deposits
-//! of time `t - s_k` stand for the whole interval `[a_k, a_{k+1})`:
+//! Discretisation. The motion is closed form in t (`crate::pipeline::motion`),
+//! so the deposits of an earlier time are one more trace of the beams. Lags
+//! `0 = s_0 < ... < s_N` ([`samples`]: `s_k = L (k / N)^2`, `L = tau_max
+//! sqrt(N + 1)`, `tau_max = 1 / A` = 129 s the unquenched O(1D) lifetime)
+//! cut the past at the midpoints `a_0 = 0`, `a_k = (s_{k-1} + s_k) / 2`,
+//! `a_{N+1} = inf`, and the deposits of `t - s_k` stand for `[a_k, a_{k+1})`:
 //!
 //! ```text
 //! E(t) ~ sum_k w_k(tau) S(t - s_k),   w_k = exp(-a_k / tau) - exp(-a_{k+1} / tau)
 //! ```
 //!
-//! The weights telescope: `sum_k w_k = exp(0) - exp(-inf) = 1` exactly, so a
-//! scene that does not move gets its steady-state red back (to rounding)
-//! whatever tau. The sum is a Riemann-Stieltjes sum of S against the
-//! kernel's distribution, so for a continuous bounded S it converges to the
-//! convolution when the widest interval shrinks to 0 and the last lag grows
-//! without bound. The lags ([`samples`]) are `s_k = L (k / N)^2` with
-//! `L = tau_max sqrt(N + 1)`, `tau_max = 1 / A` = 129 s the unquenched
-//! O(1D) lifetime (the longest at any altitude): dense at small lags, where
-//! the short lifetimes of the low red (1.5 s at 150 km) put their weight;
-//! the widest interval `~2 L / N = 2 tau_max sqrt(N + 1) / N` goes to 0 and
-//! `L` to infinity as N grows, and the default-free choice N = 8 reaches
-//! `3 tau_max` (387 s: the history beyond holds `exp(-3)` of the longest-lived
-//! red, lumped at the last sample).
+//! The weights telescope to exactly 1 (a still scene keeps its red), and the
+//! sum converges to the convolution as N grows.
 //!
-//! A pulsating patch (`crate::pipeline::motion::Wave`) is a sine in time at a fixed
-//! place, so over one interval its part of the convolution has a closed
-//! form rather than a sample: with `theta_k` the patch's phase at `t - s_k`,
-//! `x = omega tau` and `E_a = exp(-a / tau)`,
+//! A pulsating patch (`crate::pipeline::motion::Wave`) is a sine at a fixed
+//! place, so its part of each interval has a closed form: with `theta_k` its
+//! phase at `t - s_k`, `x = omega tau`, `E_a = exp(-a / tau)`,
 //!
 //! ```text
 //! integral_a^b (mean + amp sin(theta_k - omega (s - s_k))) exp(-s / tau) / tau ds
@@ -52,18 +33,11 @@
 //! phi_a = theta_k + omega (s_k - a),  phi_b = theta_k + omega (s_k - b)
 //! ```
 //!
-//! ([`TrailSample::weight`]); over `[0, inf)` it is the sinusoid response of
-//! `crate::physics::emission::lifetime::response`, so a patch that does not move keeps exactly
-//! the fraction `1 / sqrt(1 + (omega tau)^2)` of its modulation with or
-//! without the trail, and a moving one carries its phase with it.
-//!
-//! Cost: the trace at t gives every line (the O(1D) lines with `w_0`), and
-//! each of the N earlier times one more trace of the beams (footprints at
-//! that time, the same beams on the same random streams) whose photons carry
-//! only the O(1D) lines with `w_k`: N + 1 times the beams' tracing and
-//! photons, gathered once. Frame t needs only the closed-form motion at
-//! `t - s_k`, so frames stay independent and byte-identical however a
-//! sequence is split.
+//! ([`TrailSample::weight`]): over `[0, inf)` the sinusoid response of
+//! `crate::physics::emission::lifetime::response`. The trace at t gives every
+//! line (O(1D) with `w_0`), each earlier time only the O(1D) lines with
+//! `w_k`; frames stay independent and byte-identical however a sequence is
+//! split. Convergence, cost and measurements: docs/physics.md, "The red trail".
 
 use crate::physics::emission::lifetime::A_1D;
 use crate::pipeline::motion::Wave;

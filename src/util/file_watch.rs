@@ -3,56 +3,42 @@
 //! middle of one.
 //!
 //! Editors save in one of three ways (`tests/cli/watch.rs` drives each):
-//!
-//! 1. **write in place**: open the file with `O_TRUNC`, write, close (nano,
-//!    VS Code, vim with `backupcopy=yes`, a shell's `>`); the text may come
-//!    in several `write`s with pauses between them, on one descriptor, so
-//!    the file is empty, then half-written, for a while;
-//! 2. **write a new file under the name**: rename the old one away as a
-//!    backup (vim's `file~` with `backupcopy=no`, emacs' `file~`), create
-//!    the name, write, close;
+//! 1. **write in place**: open with `O_TRUNC`, write, close (nano, VS Code,
+//!    vim with `backupcopy=yes`, a shell's `>`), possibly in several `write`s
+//!    with pauses, so the file is empty, then half-written, for a while;
+//! 2. **write a new file under the name** after renaming the old one away as
+//!    a backup (vim's `file~` with `backupcopy=no`, emacs' `file~`);
 //! 3. **write a temporary and rename it onto the name** (JetBrains'
 //!    `file___jb_tmp___`, emacs with `file-precious-flag`, atomic-write
-//!    libraries): the name is never half-written, but may be missing for a
-//!    moment.
+//!    libraries): never half-written, but missing for a moment.
 //!
-//! **File system events (Linux).** The watcher asks inotify (inotify(7),
-//! `man7.org/linux/man-pages/man7/inotify.7.html`) for the events of the
-//! file's *folder* (a watch on the file itself would follow the inode that
-//! 2 and 3 rename away) and keeps those that name the file (and, when the
-//! path is a symbolic link, those naming its target in the target's folder).
-//! A save ends with `IN_CLOSE_WRITE` (a descriptor opened for writing was
-//! closed: 1 and 2) or `IN_MOVED_TO` (a name was renamed onto it: 3);
-//! `IN_MODIFY`, `IN_CREATE`, `IN_DELETE` and `IN_MOVED_FROM` mark a save in
-//! progress. The file is read when the last event naming it is an end, and
-//! the read counts only if no event naming it follows within [`QUIET`]
-//! (20 ms) of it: one that does means another save began meanwhile (the read
-//! may be torn), whose end is awaited instead. Saves that ended while the
-//! caller was busy are one read, of the latest text. A lost event queue
-//! (`IN_Q_OVERFLOW`) is followed by the polling rule below for that one
-//! save; a watch that ends (the folder moved or removed: `IN_IGNORED`,
-//! `IN_MOVE_SELF`, `IN_DELETE_SELF`) turns the watcher to polling.
+//! **Events (Linux).** The watcher asks inotify (inotify(7),
+//! `man7.org/linux/man-pages/man7/inotify.7.html`) for the events of the file's *folder* (a watch on the file would follow the inode that 2
+//! and 3 rename away), keeping those naming the file (or, for a symbolic
+//! link, its target in the target's folder). A save ends with
+//! `IN_CLOSE_WRITE` (1 and 2) or `IN_MOVED_TO` (3); `IN_MODIFY`, `IN_CREATE`,
+//! `IN_DELETE` and `IN_MOVED_FROM` mark one in progress. The file is read
+//! when the last event naming it is an end, and the read counts only if no
+//! event naming it follows within [`QUIET`]: one that does means another save
+//! began (the read may be torn), whose end is awaited instead. Saves that
+//! ended while the caller was busy are one read, of the latest text. After
+//! `IN_Q_OVERFLOW` that one save is found by polling; a watch that ends
+//! (`IN_IGNORED`, `IN_MOVE_SELF`, `IN_DELETE_SELF`) turns to polling.
 //!
-//! **Polling (the fallback).** Where inotify is unavailable (another system,
-//! or `inotify_init1` / `inotify_add_watch` fails, e.g. no watch left) or
-//! when the environment says `AURORA_WATCH=poll` ([`ENV`]; `auto`, the
-//! default, uses events where it can), the file is read every
-//! [`POLL_TICK`] (50 ms) and a save counts once the file's size,
-//! modification time and content hash have stayed the same for [`SETTLE`]
-//! (400 ms). An editor's writes of one save come within milliseconds of one
-//! another; 400 ms is well above the 150 ms pause of a chunked writer, so
-//! a file half-written and still for 150 ms does not count. A writer
-//! pausing longer than that inside one save is seen half-way: only the
-//! events above know where a save ends. The text at the start counts after
-//! the same settle.
+//! **Polling** (no inotify, it fails, or `AURORA_WATCH=poll`, [`ENV`]; `auto`
+//! uses events where it can): the file is read every [`POLL_TICK`] and a save
+//! counts once its size, modification time and content hash have stayed the
+//! same for [`SETTLE`], well above the 150 ms pauses of the tests' chunked
+//! writer; a writer
+//! pausing longer inside one save is seen half-way (only events know where a
+//! save ends). The text at the start counts after the same settle.
 //!
-//! Either way a save is acted on only when its text (the 64-bit FNV-1a hash
-//! of its bytes, [`text_hash`]) differs from the last one acted on: a save
-//! without changes, or a `touch`, does nothing. A missing file (between the
-//! renames of 2 and 3) is no save; a file that cannot be read, is not a
-//! regular file (it is opened with `O_NONBLOCK` and checked with `fstat`
-//! before it is read, so a FIFO put in its place never blocks the watch) or
-//! is not UTF-8 is reported once, until the next save that differs.
+//! Either way a save is acted on only when its text ([`text_hash`], 64-bit
+//! FNV-1a) differs from the last one acted on, so a `touch` does nothing. A
+//! missing file (between the renames of 2 and 3) is no save; one that cannot
+//! be read, is not a regular file (opened with `O_NONBLOCK` and checked with
+//! `fstat` first, so a FIFO never blocks the watch) or is not UTF-8 is
+//! reported once, until the next save that differs.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant, SystemTime};

@@ -8,96 +8,37 @@
 //! The reactions, rates and branching ratios are those of NCAR GLOW's
 //! `gchem` (Solomon, Hays & Abreu 1988, J. Geophys. Res. 93, 9867; Solomon
 //! & Abreu 1989, J. Geophys. Res. 94, 6817; GLOW 0.98/4.0, Solomon 2017),
-//! which compiles them from the laboratory literature; the two
-//! electron-impact yields are fits to GLOW's own transport (below). Every
+//! which compiles them from the laboratory literature, with O2+ + N2 from
+//! Rees (1989, "Physics and chemistry of the upper atmosphere") and N(2D)
+//! from electron-impact dissociation of N2 after Zipf et al. (1980); the two
+//! electron-impact yields on O are fits to GLOW's own transport. Every
 //! balance is local and in steady state: production P (cm^-3 s^-1) over
 //! loss frequency L (s^-1), X = P / L. Units: cm^-3, cm^3 s^-1, s^-1, K.
 //!
-//! **Ionization.** q is shared between N2, O2 and O in proportion to
-//! 1 : 1.09 : 0.63 times their densities (the ratio of their total
-//! ionization cross sections at auroral energies, holds in GLOW from 100 to
-//! 200 km). Of the N2 ionizations 0.16 are dissociative (N+ + N), of the O2
-//! ionizations 0.19 (O+ + O); of the O ionizations 0.6 leave O+ in its 2D or
-//! 2P states, which give their charge to N2 (k = 8e-10) or O2 (7e-10) unless
-//! O (5e-12) or an electron (6.6e-8 (300/Te)^0.5) returns them to O+(4S).
+//! - **Ionization**: q shared between N2, O2 and O as 1 : 1.09 : 0.63 times
+//!   their densities, with the dissociative and excited-ion branches.
+//! - **Ions** N2+, N+, O+, O2+, NO+ (ion-neutral rates at Tn), each closed
+//!   form given ne. Above 200 km O+ lives an hour and transport sets it, so
+//!   it is capped at the ambient electron density (uncapped, 630.0 nm comes
+//!   out about 40 % high against GLOW). ne, the ions' sum plus the ambient
+//!   density where that is larger, is a fixed point started from the
+//!   E-region `sqrt(q / alpha)`, each pass taking the geometric mean of the
+//!   old and new ne: it converges to 1e-6 in under 20 passes (tested).
+//! - **Excited states** N2(A), N(2D), O(1S) (557.7 nm, A = 1.06 s^-1) and
+//!   O(1D) (630.0 + 636.4 nm, A = 0.00585 + 0.00185 s^-1, ratio 3.16):
+//!   their production channels and quenchers, O(1D) impact excitation
+//!   reduced above about 240 km where the secondaries heat the F-region
+//!   electrons instead.
+//! - **N2+ 427.8 nm**: 0.022 photons per N2 ionization, unquenched. **N2 1P**
+//!   (647-688 nm): not in GLOW; as many photons as 427.8 nm (`line_colour::R_1P`).
 //!
-//! **Ions** (Tn for the ion-neutral rates; the night-time ion temperature
-//! is within 10 % of it below 250 km, where the ions matter):
-//! - N2+: made by N2 ionization and O+(2D,2P) + N2; lost to
-//!   O (-> NO+ + N(2D), k3 = 1.4e-10 (300/T)^0.44; -> O+ + N2, 1e-11 (300/T)^0.23),
-//!   O2 (-> O2+, k4 = 5e-11 (300/T)^0.8) and electrons
-//!   (-> 2 N, 2.2e-7 (300/Te)^0.39, one N(2D) per recombination).
-//! - N+: made by dissociative N2 ionization; lost to O2
-//!   (5.5e-10: 0.43 NO+ + O, of which 0.3 O(1D) per reaction; 0.51 O2+ + N;
-//!   0.06 O+ + NO) and O (-> O+, 1e-12).
-//! - O+: made by O ionization (4S and the returned 2D/2P), dissociative O2
-//!   ionization, N2+ + O and N+; lost to N2 (-> NO+, 1.2e-12), O2 (-> O2+,
-//!   1.6e-11 (300/T)^0.52) and NO (-> NO+, 8e-13). Above 200 km its
-//!   lifetime is an hour and transport, not the local balance, sets it: there
-//!   O+ is capped at the ambient electron density (without the cap the
-//!   auroral O+ feeds O2+ as if in steady state and 630.0 nm comes out about
-//!   40 % high against GLOW).
-//! - O2+: made by O2 ionization, O+ + O2, N2+ + O2, N+ + O2 and O+(2D,2P) +
-//!   O2; lost by dissociative recombination (alpha2 = 1.95e-7 (300/Te)^0.7),
-//!   to NO (-> NO+, 4.4e-10), N(4S) (-> NO+ + O, 1.2e-10) and N2 (-> NO+ +
-//!   NO, 5e-16, Rees 1989, "Physics and chemistry of the upper atmosphere",
-//!   table 8.x: slow, but below 85 km [N2] makes it the O2+ sink that keeps
-//!   O2+ recombination, and with it 557.7 nm, off the lower border; GLOW's
-//!   557.7/427.8 there is 0.03-0.11 from 80 to 84 km).
-//! - NO+: made by all of the above; lost by recombination
-//!   (3.5e-7 (300/Te)^0.69, 0.76 N(2D) per recombination).
-//!
-//! Each ion is closed form given ne; ne = N2+ + N+ + O+ + O2+ + NO+ plus
-//! the ambient density where it is larger (above 200 km) is found by a fixed
-//! point from the E-region estimate ne = sqrt(q / alpha): each pass
-//! recomputes the ions and takes the geometric mean of the old and new ne,
-//! which converges to 1e-6 in under 20 passes (tested).
-//!
-//! **N2(A)**: 0.60 per N2 ionization (GLOW's N2(A, B, C) excitation with the
-//! cascade into A); lost to O (3.1e-11, O(1S) with branching 0.19), O2
-//! (4.1e-12), NO (8.9e-11) and by radiation (0.77 s^-1).
-//!
-//! **N(2D)**: made by N2+ + O, N2+ + e, NO+ + e (above), dissociative N2
-//! ionization (0.5 per) and electron-impact dissociation of N2 (0.5 N(2D)
-//! per N2 ionization, Zipf et al. 1980); lost to O2 (6e-12, O(1D) branching
-//! 0.1), O (6.9e-13, 0.1), NO (7e-11, O(1S) branching 0.2), electrons
-//! (5.5e-10 (Te/300)^0.5) and radiation (1.07e-5 s^-1).
-//!
-//! **O(1S), 557.7 nm** (A = 1.06 s^-1 at 557.7, 0.045 at 297.2 nm):
-//! - electron impact on O: 0.153 x_O / (1 + 1.36 x_O) per ion pair, x_O the
-//!   O mole fraction (a fit to GLOW's transport; a mole-fraction law is 1.9
-//!   times too small at x_O = 0.1, where secondaries of a few eV prefer O);
-//! - N2(A) + O (above);
-//! - O2+ + e, branching max(0.03, 0.12 + 0.02 log10(ne/[O] (300/Te)^0.7))
-//!   (the vibrational development of O2+ with density, GLOW's fit);
-//! - N(2D) + NO (0.2) and O2+ + N (0.21);
-//! - quenched by O2 (4e-12 exp(-865/T)) and O (2e-14).
-//!
-//! **O(1D), 630.0 + 636.4 nm** (A = 0.00585 and 0.00185 s^-1: ratio 3.16,
-//! radiative lifetime 130 s):
-//! - electron impact on O: 2.63 x_O / (1 + 1.18 x_O) per ion pair (fit to
-//!   GLOW within 2 % from 95 to 230 km: slow secondaries excite O(1D) in
-//!   competition with N2 vibration), times 1 / (1 + (ne0 / (1.1e-4 [O]))^0.62)
-//!   with ne0 the ambient electron density: above about 240 km the
-//!   secondaries lose their energy to the thermal F-region electrons
-//!   (0.88 at 240 km, 0.43 at 300, 0.14 at 400 km on this ionosphere);
-//! - O2+ + e, 1.2 O(1D) per recombination;
-//! - N(2D) + O2 and N(2D) + O (above); N+ + O2 (0.3 per reaction);
-//! - the cascade O(1S) -> O(1D): every 557.7 nm photon leaves O in 1D;
-//! - electron-impact dissociation of O2 (0.4 O(1D) per O2 ionization, the
-//!   Schumann-Runge continuum share);
-//! - quenched by N2 (2.0e-11 exp(107.8/T)), O2 (2.9e-11 exp(67.5/T)), O
-//!   (3e-12) and electrons (8.1e-10 (Te/300)^0.5).
-//!
-//! **N2+ 427.8 nm**: 0.11 N2+(B) per N2 ionization, 0.20 of which radiate in
-//! the (0,1) band: 0.022 photons per N2 ionization, unquenched.
-//!
-//! **N2 1P** (647-688 nm, Delta v = 3): GLOW does not compute it; kept as in
-//! the simple model, as many photons as 427.8 nm (`spectrum::R_1P`).
-//!
-//! Against GLOW driven by its own q(z) and densities this reproduces its
-//! 427.8, 557.7 and 630.0 nm columns (tests/physics/chemistry.rs, the fixture
-//! `tests/data/glow_chemistry.csv` from `tools/reference/glow_tables.py`).
+//! It knows nothing of transport (beyond the O+ cap) or of time: the
+//! lifetimes it returns are applied by `crate::physics::emission::lifetime`.
+//! Every reaction, rate and branching ratio: docs/physics.md, "The
+//! chemistry's reactions". Against GLOW driven by its own q(z) and densities
+//! it reproduces GLOW's 427.8, 557.7 and 630.0 nm columns
+//! (tests/physics/chemistry.rs; `tests/data/glow_chemistry.csv` from
+//! `tools/reference/glow_tables.py`).
 
 pub mod ambient;
 pub mod table;

@@ -20,49 +20,25 @@
 //! energy flux Q0), eq. 2-7: `y = (m / 4e-6)^(1/1.65) / E0`, the same f with
 //! its own P table, `q = Q0 f(y) / (2 H)`.
 //!
-//! **Cumulative deposition.** In a hydrostatic atmosphere the column mass is
-//! `m = rho H` with H the (pressure) scale height, and `dm = -rho dz`, so
-//! `dz / H = -dm / m`: the energy deposited above column m is
-//! `Q0 D(m)`, `D(m) = int_0^m f(y(m')) dm'/m'`. With `y ~ m^0.7`,
-//! `dm/m = dy / (0.7 y)`, hence for the monoenergetic fit
-//! `D_E(m) = (1/0.7) int_0^{y(m)} f_E(y) dy / y` (and `(1.65/2) int f dy / y`
-//! for 2008). So the deposit between two altitudes depends only on their
-//! column masses, not on the local scale height: any path between them, of
-//! any slant, receives `Q0 (D(m1) - D(m0))`, and the profile in altitude is
-//! Fang's whatever the field's dip.
+//! **Cumulative deposition** (only column masses enter, never the path).
+//! Hydrostatic, `dz / H = -dm / m`, so the energy
+//! deposited above column m is `Q0 D(m)`, `D_E(m) = (1/0.7) int_0^{y(m)}
+//! f_E(y) dy / y` (`(1.65/2) int f dy / y` for 2008): the deposit between two
+//! altitudes depends only on their column masses, whatever the path's slant
+//! or the field's dip. A spectrum is a mixture of Maxwellians by energy flux
+//! (`char_energy_kev` plus the soft component), each Gamma(3, E0) in energy
+//! flux, `w(E) = E^2 exp(-E/E0) / (2 E0^3)`, with `G(m) = int w(E) D_E(m) dE`
+//! ([`SpectrumDeposition`]): Fang 2010 over the spectrum, so the `sampled`
+//! mode (one energy per beam, [`MonoDeposition`]) has exactly the `expected`
+//! mode's mean. `D_E(inf) < 1` is Fang's backscatter, kept as published
+//! ([`MonoDeposition::total`]). Below 0.1 keV the coefficients of 0.1 keV are
+//! used with the true E in y (a range-energy-like scaling `E^(1/0.7)`).
 //!
-//! A spectrum is a mixture of Maxwellians by energy flux (the curtain's
-//! `char_energy_kev` plus the soft component): its energy-flux density is
-//! Gamma(3, E0), `w(E) = E^2 exp(-E/E0) / (2 E0^3)`, and its cumulative
-//! deposition `G(m) = int w(E) D_E(m) dE` ([`SpectrumDeposition`]). This is
-//! Fang 2010 integrated over the spectrum, which agrees with Fang 2008 to
-//! within 1 km in peak altitude and 0.07 in normalised L1 for E0 = 0.5-30 keV
-//! (checked in tests/python/test_profile.py); using 2010 for both modes makes
-//! the `sampled` mode (one energy per beam, [`MonoDeposition`]) have exactly
-//! the `expected` mode's mean.
-//!
-//! **Backscatter.** Fang's fits deposit less than the incident flux: the rest
-//! is backscattered (albedo) or lost to the fit. `D_E(inf)` is 0.84 at
-//! 0.1 keV, 0.94 at 1 keV, 0.98 at 3 keV, 0.99 at 10 keV, 0.98 at 30 keV and
-//! slightly above 1 (1.008) at 100 keV, within the fit's stated 4 % on total
-//! ionization ([`MonoDeposition::total`]); we keep it as published.
-//!
-//! **Low energies.** The table the beams use ([`MonoDeposition::get`])
-//! carries the shape correction of [`crate::physics::deposition::glow_calibration`]: below a few keV the
-//! deposit is smeared towards higher altitudes, as NCAR GLOW's transport
-//! puts it, with the total unchanged; [`MonoDeposition::published`] is Fang
-//! 2010 as published (the comparisons above and the tests against
-//! eppaurora use it). With it the Maxwellian peaks stay within 1 km of Fang
-//! 2008's, the L1 at E0 = 0.5 keV rises to 0.07.
-//!
-//! Below 0.1 keV (the fit's range) the coefficients of 0.1 keV are used with
-//! the true E in y: the profile keeps its 0.1 keV shape and scales in column
-//! as `E^(1/0.7)`, like a range-energy law.
-//!
-//! Coefficient P_10 of the 2010 table: 1.24616 (as in eppaurora, and in
-//! independent MATLAB, Fortran and Python copies we found); another copy has
-//! 1.24516. The difference scales C1 by exp(0.001), 0.1 %, below the fit's
-//! own accuracy, so the choice cannot be told from profiles.
+//! **Low energies.** [`MonoDeposition::get`] carries the shape correction of
+//! [`crate::physics::deposition::glow_calibration`] (deposit below a few keV
+//! moved up, as NCAR GLOW puts it, total unchanged); [`MonoDeposition::published`]
+//! is Fang 2010 as published (the tests against eppaurora use it). Derivation, agreement with Fang 2008, backscatter figures and the P_10
+//! coefficient: docs/physics.md, "Fang's fits in detail".
 
 use crate::physics::atmosphere::Atmosphere;
 

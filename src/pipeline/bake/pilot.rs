@@ -1,55 +1,40 @@
 //! The beam count from a target noise level (`beams.target_noise`).
 //!
 //! The emission grid is a sum over independent, identically distributed
-//! beams, each carrying `1/N` of the curtain's power: its expectation does
-//! not depend on `N` and its variance is `sigma^2 / N` in every voxel. So
-//! the relative RMS noise of the grid,
+//! beams, each carrying `1/N` of the curtain's power, so its expectation does
+//! not depend on `N` and its variance is `sigma^2 / N` in every voxel. The
+//! relative RMS noise of the grid (sums over voxels and the three colour
+//! components, the bench's photon-count metric against a converged reference),
 //!
-//! `noise(N) = sqrt(sum_v Var[e_v]) / sqrt(sum_v E[e_v]^2)`
+//! `noise(N) = sqrt(sum_v Var[e_v]) / sqrt(sum_v E[e_v]^2)`,
 //!
-//! (sums over voxels and the three colour components, the bench's
-//! photon-count metric against a converged reference), falls exactly as
-//! `N^-1/2`, and one measurement at a small `m` gives every other:
+//! falls as `N^-1/2`, and one measurement gives every other:
 //! `N = m (noise(m) / target)^2`.
 //!
 //! [`beams_for_noise`] measures `noise(m)` by splitting a pilot into two
-//! independent halves `a` and `b` of `m` beams each (disjoint random
-//! streams, [`crate::pipeline::beams::trace_all_from`]), gathered on the bake's own
-//! grid: `E[(a - b)^2] = 2 Var`, and `E[((a + b)/2)^2] = E^2 + Var / 2`, so
+//! independent halves `a` and `b` of `m` beams each (disjoint random streams,
+//! [`crate::pipeline::beams::trace_all_from`]) gathered on the bake's own
+//! grid: `E[(a - b)^2] = 2 Var` and `E[((a + b)/2)^2] = E^2 + Var / 2`, so
 //!
 //! `noise(m)^2 = (sum (a - b)^2 / 2) / (sum ((a + b)/2)^2 - sum (a - b)^2 / 4)`.
 //!
-//! **Stratified starts** (`beams.starts = "stratified"`, [`crate::pipeline::beams::starts`])
-//! break the exact law: beams are still independent in their deflections,
-//! but their starts are a low-discrepancy set, whose share of the variance
-//! falls faster than `1/N`: for a 2D integrand with edges (the footprint's
-//! fringe, each beam's sharp-edged deposit) stratified sampling's variance
-//! falls as `N^-3/2` (Mitchell 1996, "Consequences of stratified sampling
-//! in graphics"; Pharr, Jakob & Humphreys, PBRT 4th ed., section 8.2), not
-//! the `N^-2` of smooth integrands. Each pilot block has its own
-//! Cranley-Patterson shift (`crate::pipeline::beams::starts`; one shared shift would
-//! correlate the halves and bias the split estimate). The pilot
-//! fits
+//! **Stratified starts** (`beams.starts = "stratified"`,
+//! [`crate::pipeline::beams::starts`]) fall faster: for an integrand with
+//! edges the starts' variance falls as `N^-3/2` (Mitchell 1996, "Consequences
+//! of stratified sampling in graphics"; Pharr, Jakob & Humphreys, PBRT 4th
+//! ed., section 8.2). Each pilot block has its own Cranley-Patterson shift
+//! (a shared one would correlate the halves). The pilot fits
+//! `noise(N)^2 = a / N + b / N^(3/2)` to `m` and `m / 4` beams per half (the
+//! quarter pair on its own streams): with `v_i = noise(m_i)^2`,
+//! `b = (m_1 v_1 - m_2 v_2) / (m_1^-1/2 - m_2^-1/2)`, `a = m_2 v_2 - b
+//! m_2^-1/2`; N solves `a x^2 + b x^3 = t^2` for `x = N^-1/2` (one positive
+//! root; bisection). A negative `b` is set to 0 (the plain law, exact for
+//! random starts), a negative `a` to 0 (the start law alone).
 //!
-//! `noise(N)^2 = a / N + b / N^(3/2)`
-//!
-//! to two measurements, `m` and `m / 4` beams per half (the quarter pair on
-//! its own disjoint streams): with `v_i = noise(m_i)^2`,
-//! `b = (m_1 v_1 - m_2 v_2) / (m_1^-1/2 - m_2^-1/2)` and
-//! `a = m_2 v_2 - b m_2^-1/2`; then N solves `a x^2 + b x^3 = t^2` for
-//! `x = N^-1/2` and target t (one positive root: the left side grows with
-//! x; bisection). A negative `b` (sampling error, or random starts, where b
-//! = 0 in expectation) is set to 0, which is the plain law
-//! `N = m (noise(m) / t)^2`, exact for random starts; a negative `a` (the
-//! pair falls faster than `N^-3/4`) is set to 0, the start law alone.
-//!
-//! On the tests' small scene the law fitted to the pilot's pair (125, 500
-//! beams) predicts the measured noise at 1000 to 4000 beams within the
-//! estimates' own scatter, so the chosen count is short as often as over.
-//!
-//! This measures noise only: the kernel's bias (blur), which more beams do
-//! not change, is not part of it. The pilot costs about `2.5 m` beams of
-//! tracing and gathering; the count is capped at `beams.count`.
+//! This measures noise only, not the kernel's bias (blur), which more beams
+//! do not change. The pilot costs about `2.5 m` beams of tracing and
+//! gathering; the count is capped at `beams.count`. Derivation and how well
+//! the law predicts: docs/physics.md, "The noise target".
 
 use super::plan::{self, BakePlan};
 use super::result::BakeError;

@@ -1,58 +1,41 @@
 //! The kernels of the density estimate and their masses, in f64 (the
 //! oracle every gather is tested against) and as the f32 constants the
-//! leaf loops read ([`KernelF32`]).
+//! leaf loops read ([`KernelF32`]). Lengths in km; a kernel integrates to 1,
+//! so each photon's kernel integrates to its power.
 //!
-//! **Point kernel.** [`Kernel`]: the 3D Gaussian of standard deviation r
-//! (the kernel radius), `G_r(d) = exp(-d^2 / 2r^2) / ((2 pi)^(3/2) r^3)`,
-//! truncated at the reach `c r` (c the cutoff) and renormalised by its mass
-//! inside, `M(c) = erf(c / sqrt2) - sqrt(2 / pi) c e^{-c^2/2}`
-//! ([`gaussian_mass_inside`]), so it integrates to 1: each photon's kernel
-//! integrates to its power.
+//! **Point kernel** ([`Kernel`], `photons.kernel = "point"`, each step's
+//! power at its end): the 3D Gaussian of standard deviation r (the kernel
+//! radius), `G_r(d) = exp(-d^2 / 2r^2) / ((2 pi)^(3/2) r^3)`, truncated at
+//! the reach `c r` (c the cutoff) and renormalised by its mass inside,
+//! `M(c) = erf(c / sqrt2) - sqrt(2 / pi) c e^{-c^2/2}` ([`gaussian_mass_inside`]).
 //!
-//! **Segment kernel** (`photons.kernel = "segment"`, default). A beam step
-//! deposits its power along the segment from `a` to `b` (length L, unit
-//! direction d), not at one point: the photon is a short photon beam
-//! (Jarosz, Nowrouzezahrai, Sadeghi & Jensen, "A Comprehensive Theory of
-//! Volumetric Radiance Estimation Using Photon Points and Beams", ACM TOG
-//! 30(1), 2011), and its kernel is the Gaussian convolved with the uniform
-//! density `1/L` on the segment. Write `x - a = s d + p` (s along the
-//! segment, p perpendicular to it). The Gaussian factors into `phi_2(p)
-//! phi_1(s - t)` for a centre at `a + t d`, so
+//! **Segment kernel** (`photons.kernel = "segment"`, default): a beam step
+//! deposits its power uniformly along the segment from `a` to `b` (length L,
+//! direction d), a short photon beam (Jarosz, Nowrouzezahrai, Sadeghi &
+//! Jensen, "A Comprehensive Theory of Volumetric Radiance Estimation Using
+//! Photon Points and Beams", ACM TOG 30(1), 2011). With `x - a = s d + p`:
 //!
 //! ```text
-//! K_seg(x) = (1/L) int_0^L G_r(x - a - t d) dt
-//!          = exp(-|p|^2 / 2r^2) / (2 pi r^2)                (across)
-//!            * [erf(s / (sqrt2 r)) - erf((s - L) / (sqrt2 r))] / (2 L)   (along)
+//! K_seg(x) = exp(-|p|^2 / 2r^2) / (2 pi r^2)                         (across)
+//!          * [erf(s / (sqrt2 r)) - erf((s - L) / (sqrt2 r))] / (2 L)   (along)
 //! ```
 //!
-//! (the along factor is `(Phi(s/r) - Phi((s-L)/r)) / L`, Phi the normal
-//! CDF). It is truncated where the distance from x to the segment reaches
-//! `cutoff * r` (a capsule, the ball of the point kernel swept along the
-//! segment) and renormalised by its mass inside, `M_seg(lambda)`, lambda =
-//! L / r. With u = s / r and `g(u) = (Phi(u) - Phi(u - lambda)) / lambda` the
-//! along density, the capsule splits into its cylinder (0 <= u <= lambda,
-//! where the across factor holds `1 - exp(-c^2/2)` of its mass inside radius
-//! c) and two half balls (u < 0 and, by symmetry, u > lambda, where the
-//! across radius is `sqrt(c^2 - u^2)`):
+//! truncated where the distance to the segment reaches `c r` (a capsule)
+//! and renormalised by its mass inside; with lambda = L / r, u = s / r,
+//! `g(u) = (Phi(u) - Phi(u - lambda)) / lambda` (Phi the normal CDF):
 //!
 //! ```text
 //! M_seg(lambda) = (1 - e^{-c^2/2}) A(lambda) + 2 int_{-c}^0 g(u) (1 - e^{-(c^2 - u^2)/2}) du
 //! A(lambda)     = int_0^lambda g = erf(lambda / sqrt2) - (2 / lambda) (phi(0) - phi(lambda))
 //! ```
 //!
-//! (A from `int Phi = u Phi(u) + phi(u)`; the half-ball integral has no
-//! elementary form and is integrated numerically once per bake into a table
-//! over lambda, [`SegmentMass`]). As L -> 0, g -> phi, A -> 0 and M_seg ->
-//! `int_{-c}^c phi(u) (1 - e^{-(c^2-u^2)/2}) du = M(c)`, the point kernel's
-//! mass: a zero-length segment is the point kernel, exactly (the gathers
-//! take the point kernel for L = 0, and the midpoint's below lambda =
-//! [`MIDPOINT_LAMBDA`] = 0.004, where erf's f32 cancellation, 3e-7 / (0.8 lambda) relative, would
-//! cost more than the midpoint kernel's difference, `M_seg(lambda) / M(c) -
-//! 1 ~ 0.06 lambda` for c = 2.5: both below 1e-4 there). Each segment's kernel integrates to its
-//! power, as each point's does. Unlike points at the deflections, the
-//! estimate does not ripple along the beam path at the step length.
-//! `photons.kernel = "point"` puts each step's power at its end (the
-//! deflection point): the point estimator, kept for comparison.
+//! (the cylinder and the two half balls; the half-ball integral is tabulated
+//! over lambda once per bake, [`SegmentMass`]). `M_seg(0) = M(c)`: a
+//! zero-length segment is the point kernel, which the gathers take for L = 0,
+//! and the midpoint's below lambda = [`MIDPOINT_LAMBDA`], where f32 erf
+//! cancellation costs more than the difference. Unlike points, the estimate
+//! does not ripple along the path at the step length. Derivation and error
+//! figures: docs/physics.md, "The segment kernel's mass".
 //!
 //! [`photon_kernel`] and [`estimate_brute_force`] evaluate these in f64 for
 //! one photon and for a photon list: the estimate the gathers are held to.
