@@ -108,11 +108,11 @@ pub fn python(python: &Path, args: &[&str]) -> String {
     stdout
 }
 
-/// Runs `python tools/SCRIPT ARGS...` and parses its stdout as JSON; any
+/// Runs `python tools/probes/SCRIPT ARGS...` and parses its stdout as JSON; any
 /// failure (missing module, non-zero exit, bad JSON) fails the test with
 /// the output.
 pub fn run_json(py: &Path, script: &str, args: &[&str]) -> Value {
-    let path = repo_root().join("tools").join(script);
+    let path = repo_root().join("tools/probes").join(script);
     let mut all = vec![path.to_str().expect("a UTF-8 path")];
     all.extend_from_slice(args);
     let stdout = python(py, &all);
@@ -135,14 +135,14 @@ pub fn vdb_print_ok(file: &Path) -> String {
     text
 }
 
-/// OpenVDB's own writer (`tools/openvdb_write_bench.cpp`), compiled into
+/// OpenVDB's own writer (`benchmarks/vdb_write/openvdb_write_bench.cpp`), compiled into
 /// `target/` on first use and whenever the source is newer.
 pub fn openvdb_write_tool() -> PathBuf {
     openvdb_tool::build(&repo_root()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The mode names of OpenVDB's writer tool (`--help` of
-/// `tools/openvdb_write_bench.cpp`).
+/// `benchmarks/vdb_write/openvdb_write_bench.cpp`).
 pub use openvdb_tool::mode_name;
 
 /// The committed file `rel` (from the repository root) must hold `now`;

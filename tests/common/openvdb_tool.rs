@@ -1,4 +1,4 @@
-//! OpenVDB's own writer (`tools/openvdb_write_bench.cpp`), compiled into
+//! OpenVDB's own writer (`benchmarks/vdb_write/openvdb_write_bench.cpp`), compiled into
 //! `target/` on first use and whenever the source is newer, and the names
 //! it gives the compression modes. Shared by the integration tests
 //! (`tests/common`) and `examples/vdb_write_bench.rs` (which includes this
@@ -11,7 +11,7 @@ use std::process::Command;
 /// The compiled tool's path under `root` (the crate's folder), building it
 /// if missing or stale. Errors say what failed and to run `tools/setup`.
 pub fn build(root: &Path) -> Result<PathBuf, String> {
-    let src = root.join("tools/openvdb_write_bench.cpp");
+    let src = root.join("benchmarks/vdb_write/openvdb_write_bench.cpp");
     let bin = root.join("target/openvdb_write_bench");
     let modified = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified());
     let stale = match (modified(&src), modified(&bin)) {

@@ -7,7 +7,7 @@ extension-install test never touches the real ~/.config/blender.
 The add-on imports Blender's own OpenVDB module, `openvdb`, as it would
 inside Blender; the bpy wheel ships it in a site-packages folder of its own,
 off sys.path. This process gets that folder at the end of sys.path. Child
-processes (tools/cycles_render.py and the like) get, through PYTHONPATH, a
+processes (tools/cycles/cycles_render.py and the like) get, through PYTHONPATH, a
 folder holding a link to that one module: PYTHONPATH comes before the
 venv's site-packages, and the whole folder would put Blender's `pxr` ahead
 of usd-core's. The linked module finds its OpenVDB library once bpy is
