@@ -14,7 +14,7 @@
 //! `temperature` and vec3 `velocity` it does not use), in every
 //! compression mode, full and half float.
 
-use super::MODES;
+use super::modes;
 use aurora::grid::{Grid, Transform};
 use aurora::io::vdb::parse::{parse_file_with, read_meta_map, Cursor, Decode, LeafSpan, ValueKind};
 use aurora::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
@@ -385,7 +385,7 @@ fn value_damages(base: &[u8], g: &GridAt, out: &mut Vec<(String, Vec<u8>, Expect
 /// and compressed: a few ms a read, and nothing the other modes miss).
 pub fn damaged_files() -> Vec<Damaged> {
     let mut out = Vec::new();
-    for comp in MODES {
+    for comp in modes() {
         for half in [false, true] {
             let base = four_grids(comp, half);
             let mut list = vec![("intact".to_string(), base.clone(), Expect::Read, "")];

@@ -167,21 +167,20 @@ pub fn update_or_check_committed(rel: &str, now: &str, regenerate: &str) {
     check_committed(rel, now, regenerate);
 }
 
-/// The six compression modes of the writer.
-pub const MODES: [Compression; 6] = [
-    Compression::None,
-    Compression::Zip,
-    Compression::ActiveMask,
-    Compression::ZipActiveMask,
-    Compression::Blosc,
-    Compression::BloscActiveMask,
-];
+/// The writer's compression modes: every value the scene's
+/// `grid.compression` accepts, in the schema's order
+/// (`aurora::scene::schema`).
+pub fn modes() -> Vec<Compression> {
+    let schema = aurora::scene::schema::schema();
+    let values = schema["grid"]["compression"]["values"].as_array().expect("grid.compression's values in the schema");
+    values.iter().map(|v| serde_json::from_value(v.clone()).unwrap_or_else(|e| panic!("compression {v}: {e}"))).collect()
+}
 
 /// The writer's options in every mode, full and half floats (`density` and
 /// `emission` stored as half in the latter), each with `metadata`: (mode,
 /// half, options).
 pub fn every_mode(metadata: &[(String, MetaValue)]) -> Vec<(Compression, bool, WriteOptions)> {
-    MODES
+    modes()
         .into_iter()
         .flat_map(|compression| {
             [false, true].map(|half| {

@@ -5,7 +5,7 @@
 //! Needs `tools/setup`; a missing tool fails the test.
 
 use crate::common::{
-    every_mode, mode_name, openvdb_write_tool, rounded, run_json, scratch, system_python, test_grids, vdb_print_ok, vdbrs, MODES,
+    every_mode, mode_name, modes, openvdb_write_tool, rounded, run_json, scratch, system_python, test_grids, vdb_print_ok, vdbrs,
 };
 use crate::small_bake_toml;
 use aurora::grid::{Grid, VoxelValue};
@@ -272,7 +272,7 @@ fn tree_bytes_are_identical_to_openvdb_writer() {
     let dir = scratch("vdb", "openvdb_bytes");
     let (d, e) = test_grids();
     let m = mask_cases_grid();
-    for comp in MODES {
+    for comp in modes() {
         for half in [false, true] {
             let what = format!("{comp:?} half={half}");
             let half_names: Vec<String> = if half { vec!["density".into(), "emission".into(), "mask_cases".into()] } else { vec![] };

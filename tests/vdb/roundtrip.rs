@@ -5,7 +5,7 @@
 //! or a successful read, never a panic or a hang.
 
 use crate::common::damaged::{body_cuts, cut_body, random_changes, small_file, truncation_lengths};
-use crate::common::{every_mode, rounded, scratch, test_grids, vdbrs, with_threads, MODES};
+use crate::common::{every_mode, modes, rounded, scratch, test_grids, vdbrs, with_threads};
 use aurora::grid::{Grid, Transform, VoxelValue};
 use aurora::io::vdb::read::{read_native_float_grids, read_vdb, read_vdb_bytes, Decoder, RawMeta};
 use aurora::io::vdb::write::{write_vdb, write_vdb_bytes, GridRef, MetaValue, WriteOptions};
@@ -96,7 +96,7 @@ fn round_trip_special_values_and_background() {
     g.set(IVec3::new(-1, 0, 0), f32::MAX);
     g.set(IVec3::new(0, 0, 0), -f32::MAX);
     g.set(IVec3::new(5, 5, 5), 0.25); // equal to the background but active
-    for comp in MODES {
+    for comp in modes() {
         let bytes = write_vdb_bytes(&[GridRef::Float(&g)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         let f = read_vdb_bytes(&bytes).unwrap();
         assert_same(&g, &f.float_grids[0], &format!("{comp:?}"));
@@ -111,7 +111,7 @@ fn round_trip_special_values_and_background() {
 fn empty_grids_and_empty_files_are_valid() {
     let d = Grid::new("density", 0.0f32, Transform::new(0.5, DVec3::ZERO));
     let e = Grid::new("emission", [0.0f32; 3], Transform::new(0.5, DVec3::ZERO));
-    for comp in MODES {
+    for comp in modes() {
         let opts = WriteOptions { compression: comp, half: vec!["emission".into()], metadata: vec![], ..Default::default() };
         let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &opts).unwrap();
         let f = read_vdb_bytes(&bytes).unwrap();
@@ -236,7 +236,7 @@ fn truncated_grid_bodies_with_consistent_offsets_are_errors() {
 #[test]
 fn parallel_decoding_is_thread_count_independent() {
     let (d, e) = test_grids();
-    for comp in MODES {
+    for comp in modes() {
         let bytes =
             write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e)], &WriteOptions { compression: comp, ..Default::default() }).unwrap();
         let read = |threads: usize| with_threads(threads, || read_vdb_bytes(&bytes).unwrap());
