@@ -10,6 +10,7 @@ mod cli;
 use clap::Parser;
 
 fn main() {
+    cli::out::reopen_closed_descriptors();
     aurora::util::memory::tune_allocator();
     let args = cli::args::Cli::parse();
     let json = args.json_errors();

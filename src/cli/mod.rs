@@ -3,6 +3,10 @@
 //! status. Each command composes the library's stages (bake -> files, files
 //! -> render) and prints what it did on stderr.
 
+// First: its print!/eprintln! shadow std's in every module below.
+#[macro_use]
+pub mod out;
+
 pub mod args;
 mod bake;
 mod bars;

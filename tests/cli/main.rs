@@ -26,4 +26,5 @@ mod preview;
 mod profile;
 mod resume;
 mod schema;
+mod streams;
 mod watch;

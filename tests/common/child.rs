@@ -181,6 +181,28 @@ impl Aurora {
         o
     }
 
+    /// Runs it to completion with the standard streams as given (a pipe
+    /// whose reader has gone, say) and `close` (of 0, 1, 2) closed in the
+    /// child before it starts; its exit is checked as [`Aurora::output`]
+    /// checks it (stderr is not captured: the message names the command).
+    pub fn run_with(self, stdout: Stdio, stderr: Stdio, close: &'static [i32]) -> ExitStatus {
+        use std::os::unix::process::CommandExt;
+        let mut c = self.command();
+        c.stdout(stdout).stderr(stderr);
+        // SAFETY: close(2) is async-signal-safe, as pre_exec requires.
+        unsafe {
+            c.pre_exec(move || {
+                for &fd in close {
+                    libc::close(fd);
+                }
+                Ok(())
+            });
+        }
+        let status = c.status().unwrap_or_else(|e| panic!("cannot run {}: {e}", self.line()));
+        check(&self.line(), status, b"(not captured)");
+        status
+    }
+
     /// Starts it with stderr piped and stdout as given.
     fn start(&self, stdout: Stdio) -> std::process::Child {
         self.command().stdout(stdout).stderr(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {}: {e}", self.line()))

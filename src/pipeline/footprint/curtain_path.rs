@@ -360,7 +360,14 @@ pub fn tight_bends(points: &[[f64; 2]], min_radius_km: f64) -> Vec<TightBend> {
     for i in 1..v.len().saturating_sub(1) {
         let (a, b) = (sub(v[i], v[i - 1]), sub(v[i + 1], v[i]));
         let twice_area = cross(a, b).abs();
-        let r = if twice_area > 0.0 { norm(a) * norm(b) * norm(sub(v[i + 1], v[i - 1])) / (2.0 * twice_area) } else { f64::INFINITY };
+        let r = if twice_area > 0.0 {
+            norm(a) * norm(b) * norm(sub(v[i + 1], v[i - 1])) / (2.0 * twice_area)
+        } else if dot(a, b) < 0.0 {
+            // Collinear and going back: the path turns on itself, radius 0.
+            0.0
+        } else {
+            f64::INFINITY
+        };
         if r < min_radius_km {
             let here = TightBend { at: v[i], along_km: s[i], radius_km: r };
             match out.last_mut() {
@@ -392,6 +399,13 @@ pub fn bend_warnings(curtains: &[crate::scene::Curtain]) -> Vec<String> {
         let half = 0.5 * c.width;
         let bends = tight_bends(points, half);
         for b in bends.iter().take(3) {
+            if b.radius_km == 0.0 {
+                w.push(format!(
+                    "tight bend: curtain[{i}].path turns back on itself at ({:.1}, {:.1}) km, {:.1} km along it: the band folds over itself there; remove the point that goes back or move it aside",
+                    b.at[0], b.at[1], b.along_km
+                ));
+                continue;
+            }
             w.push(format!(
                 "tight bend: curtain[{i}].path bends with a radius of curvature of {:.1} km at ({:.1}, {:.1}) km, {:.1} km along it, below half its width (curtain[{i}].width / 2 = {half} km): the band overlaps itself on the inside of the bend; space the points wider there or narrow the curtain",
                 b.radius_km, b.at[0], b.at[1], b.along_km
@@ -432,6 +446,12 @@ mod tests {
         assert_eq!(tight_bends(&pts, 25.0).len(), 1);
         // A straight path never bends.
         assert!(tight_bends(&[[0.0, 0.0], [50.0, 0.0], [100.0, 0.0]], 1e6).is_empty());
+        // One that goes back along itself turns with radius 0, at the
+        // turning point (50 km out, 50 km along).
+        let back = tight_bends(&[[0.0, 0.0], [50.0, 0.0], [20.0, 0.0]], 1e-3);
+        assert_eq!(back.len(), 1, "{back:?}");
+        assert_eq!(back[0].radius_km, 0.0);
+        assert!((back[0].at[0] - 50.0).abs() < 1e-9 && back[0].at[1] == 0.0 && (back[0].along_km - 50.0).abs() < 1e-9, "{back:?}");
         // A right-angle corner at (100, 0) between two long legs: the
         // tightest place is at the corner.
         let b = tight_bends(&[[0.0, 0.0], [100.0, 0.0], [100.0, 100.0]], 30.0);
@@ -451,6 +471,11 @@ mod tests {
         let place = format!("{:.1} km at ({:.1}, {:.1}) km", tightest.radius_km, tightest.at[0], tightest.at[1]);
         assert!(w[0].starts_with("tight bend: curtain[2].path") && w[0].contains("curtain[2].width / 2 = 25 km"), "{}", w[0]);
         assert!(w[0].contains(&place), "{} lacks {place}", w[0]);
+        // Three collinear points going back: any width folds the band.
+        let back = Curtain { path: Some(vec![[0.0, 0.0], [50.0, 0.0], [20.0, 0.0]]), width: 2.0, ..Curtain::default() };
+        let w = bend_warnings(&[back]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].starts_with("tight bend: curtain[0].path turns back on itself at (50.0, 0.0) km, 50.0 km along it"), "{}", w[0]);
     }
 
     #[test]
