@@ -99,8 +99,10 @@ class BakeJob:
     """`aurora bake SCENE --out STAGING --progress json [--frames a-b]`."""
 
     def __init__(self, binary: str, scene_toml: str, output_dir, frames: tuple[int, int] | None = None,
-                 threads: int | None = None):
+                 threads: int | None = None, sources: dict[int, str] | None = None):
         self.binary = binary
+        # curtain index -> the Blender object its path came from, to name in errors.
+        self.sources = sources or {}
         self.scene_toml = scene_toml
         self.output_dir = Path(output_dir).resolve()
         self.frames = frames
@@ -194,16 +196,25 @@ class BakeJob:
         rc = self.wait()
         if rc != 0:
             shutil.rmtree(self.staging, ignore_errors=True)
-            msg = "; ".join(self.errors) or f"aurora bake exited with status {rc}"
-            # Name the scene file where it would have been kept, not the
-            # staging folder just removed.
-            raise BakeError(msg.replace(str(self.staging), str(self.output_dir)))
+            raise BakeError(self.explain("; ".join(self.errors) or f"aurora bake exited with status {rc}"))
         old = self.output_dir.parent / f".{self.output_dir.name}.old-{os.getpid()}-{id(self):x}"
         if self.output_dir.exists():
             self.output_dir.rename(old)
         self.staging.rename(self.output_dir)
         shutil.rmtree(old, ignore_errors=True)
         return self.output_dir
+
+    def explain(self, msg: str) -> str:
+        """The binary's message in the artist's terms: the scene file it
+        names is the panel's (the staging folder is gone, and the output
+        folder's scene.toml is the previous bake's), and each curtain[i] it
+        names whose path is a curve is followed by that curve's name."""
+        msg = msg.replace(str(self.staging / SCENE_FILE), "the Aurora panel's scene")
+        msg = msg.replace(str(self.staging), str(self.output_dir))
+        named = sorted({int(i) for i in re.findall(r"curtain\[(\d+)\]", msg)} & self.sources.keys())
+        if named:
+            msg += " (" + "; ".join(f"curtain[{i}] is the curve {self.sources[i]!r}" for i in named) + ")"
+        return msg
 
     def run(self, on_event=None) -> Path:
         """start + wait + finish: the synchronous bake (background mode)."""

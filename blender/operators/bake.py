@@ -58,7 +58,8 @@ def make_job(context, frames: bool) -> BakeJob:
     span = (scene.frame_start, scene.frame_end) if frames else None
     if span is not None and span[0] < 1:
         raise BakeError(f"frame range {span[0]}-{span[1]}: bake frames start at 1 (aurora.0001.vdb)")
-    return BakeJob(binary, to_toml(doc), output_dir(scene), span)
+    sources = {i: c.path_object.name for i, c in enumerate(scene.aurora.curtains) if c.path_object is not None}
+    return BakeJob(binary, to_toml(doc), output_dir(scene), span, sources=sources)
 
 
 def status_text(ev: Event | None, frames: tuple[int, int] | None) -> str:

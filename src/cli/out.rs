@@ -39,8 +39,7 @@ pub fn stderr(args: std::fmt::Arguments) {
 pub fn reopen_closed_descriptors() {
     for fd in 0..=2 {
         // SAFETY: fcntl(F_GETFD) only queries the descriptor table.
-        let closed = unsafe { libc::fcntl(fd, libc::F_GETFD) } == -1
-            && std::io::Error::last_os_error().raw_os_error() == Some(libc::EBADF);
+        let closed = unsafe { libc::fcntl(fd, libc::F_GETFD) } == -1 && std::io::Error::last_os_error().raw_os_error() == Some(libc::EBADF);
         if closed {
             // open(2) returns the lowest free descriptor: this one, as the
             // lower ones are open by now.

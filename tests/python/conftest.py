@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -51,6 +52,49 @@ _OPENVDB_ONLY.mkdir()
 for _module in _BLENDER_SITE.glob("openvdb.*"):
     (_OPENVDB_ONLY / _module.name).symlink_to(_module)
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(_OPENVDB_ONLY), os.environ.get("PYTHONPATH")]))
+
+
+class _CheckedPopen(subprocess.Popen):
+    """Every child a test starts (subprocess.run uses Popen too), kept so
+    that a child that panics (exit 101) or dies of a signal the test did
+    not send fails the test, whatever status the test expected."""
+
+    def __init__(self, *args, **kwargs):
+        self.stopped_on_purpose = False
+        super().__init__(*args, **kwargs)
+        _CHILDREN.append(self)
+
+    def send_signal(self, sig):  # terminate() and kill() come through here
+        self.stopped_on_purpose = True
+        super().send_signal(sig)
+
+
+_CHILDREN: list[_CheckedPopen] = []
+subprocess.Popen = _CheckedPopen
+
+
+@pytest.fixture(autouse=True)
+def children_end_on_their_own():
+    """Fails the test if a child it started exited with 101 (a Rust panic)
+    or was killed by a signal it did not send."""
+    first = len(_CHILDREN)
+    yield
+    bad = ended_badly(_CHILDREN[first:])
+    del _CHILDREN[first:]
+    if bad:
+        pytest.fail("; ".join(bad), pytrace=False)
+
+
+def ended_badly(children) -> list[str]:
+    """What went wrong with each of `children` that panicked or died of a
+    signal nobody sent it (one that is still running is not judged)."""
+    bad = []
+    for p in children:
+        rc = p.poll()
+        if rc is not None and not p.stopped_on_purpose and (rc == 101 or rc < 0):
+            what = "panicked (exit 101)" if rc == 101 else f"was killed by signal {-rc}"
+            bad.append(f"{p.args!r} {what}")
+    return bad
 
 
 def pytest_sessionfinish(session, exitstatus):

@@ -328,6 +328,25 @@ def test_bake_errors_are_reported_and_leave_nothing(sc, panel, bpy, tmp_path, mo
     assert (tmp_path / "x" / "thesis.tex").read_text() == "mine"
 
 
+def test_a_refused_bake_names_the_curve_not_the_previous_bakes_scene_file(sc, panel, bpy, tmp_path):
+    s = sc.aurora
+    s.output_dir = str(tmp_path / "bake")
+    set_small(s)
+    assert bpy.ops.aurora.bake() == {"FINISHED"}  # a previous bake, with its scene.toml
+    P = sub(panel, "properties")
+    P.add_curtain(s)
+    c = P.add_curtain(s)
+    # Longer than the 1e4 km a path may be: the binary refuses curtain[1].path.
+    c.path_object = bezier(bpy, sc, [(-6000.0, 0.0), (0.0, 10.0), (6000.0, 0.0)], name="Oval edge")
+    before = digest(Path(s.output_dir))
+    with pytest.raises(RuntimeError) as e:
+        bpy.ops.aurora.bake()
+    msg = str(e.value)
+    assert "curtain[1].path" in msg and "curtain[1] is the curve 'Oval edge'" in msg, msg
+    assert "the Aurora panel's scene" in msg and str(Path(s.output_dir) / "scene.toml") not in msg, msg
+    assert digest(Path(s.output_dir)) == before
+
+
 # --- the modal path: progress and cancel ---------------------------------------------
 
 
