@@ -394,9 +394,7 @@ fn every_repository_path_in_the_help_exists() {
 #[test]
 fn the_help_names_every_preset_and_every_profile_column() {
     let top = aurora_stdout(&["--help"]);
-    let words = |t: &str| -> BTreeSet<String> {
-        t.split(|c: char| !c.is_ascii_alphanumeric() && c != '_').map(String::from).collect()
-    };
+    let words = |t: &str| -> BTreeSet<String> { t.split(|c: char| !c.is_ascii_alphanumeric() && c != '_').map(String::from).collect() };
     let top_words = words(&top);
     let missing: Vec<&str> = aurora::scene::presets::names().filter(|n| !top_words.contains(*n)).collect();
     assert!(missing.is_empty(), "aurora --help does not name the presets {missing:?}");
@@ -411,7 +409,11 @@ fn the_help_names_every_preset_and_every_profile_column() {
 fn the_scene_header_points_to_the_key_tables() {
     let out = aurora_stdout(&["scene", "default"]);
     let header: Vec<&str> = out.lines().take_while(|l| l.starts_with('#')).collect();
-    assert!(header.iter().any(|l| l.contains("docs/scene.md")), "the header of `aurora scene` does not name docs/scene.md:\n{}", header.join("\n"));
+    assert!(
+        header.iter().any(|l| l.contains("docs/scene.md")),
+        "the header of `aurora scene` does not name docs/scene.md:\n{}",
+        header.join("\n")
+    );
     let tables = std::fs::read_to_string(root().join("docs/scene.md")).unwrap();
     assert!(tables.contains("`[[curtain]]`") && tables.contains("| key |"), "docs/scene.md no longer holds the key tables");
 }
@@ -462,10 +464,7 @@ fn png_text_chunks_are_read() {
 fn the_readme_picture_of_the_default_scene_shows_the_pinned_default_bake() {
     let remake = "remake the README's pictures with `tools/readme_pictures` (docs/images/; tools/README.md)";
     let pins = std::fs::read_to_string(root().join("benchmarks/pins/current.txt")).unwrap();
-    let pinned = pins
-        .lines()
-        .find_map(|l| l.strip_suffix("  bake/aurora.vdb"))
-        .expect("benchmarks/pins/current.txt pins bake/aurora.vdb");
+    let pinned = pins.lines().find_map(|l| l.strip_suffix("  bake/aurora.vdb")).expect("benchmarks/pins/current.txt pins bake/aurora.vdb");
     let text = png_text(&std::fs::read(root().join("docs/images/default.png")).unwrap());
     let get = |k: &str| text.iter().find(|(key, _)| key == k).map(|(_, v)| v.as_str());
     let Some(vdbs) = get("aurora_vdb_sha256") else {

@@ -79,8 +79,9 @@ fn the_readme_quick_start_runs_as_written_after_its_install_line() {
     let bin = root.join("bin");
     assert!(bin.join("aurora").is_file(), "cargo install put no aurora in {}", bin.display());
 
-    let path = std::env::join_paths(std::iter::once(bin.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())))
-        .unwrap();
+    let path =
+        std::env::join_paths(std::iter::once(bin.clone()).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())))
+            .unwrap();
     let sh = |line: &str| {
         Command::new("sh").arg("-c").arg(line).current_dir(&work).env("PATH", &path).stdin(std::process::Stdio::null()).output().unwrap()
     };
