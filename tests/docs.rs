@@ -1,6 +1,6 @@
 //! The documents' relative links resolve: every `[text](target)` and
-//! `![alt](target)` outside code in README.md, docs/**/*.md and
-//! blender/README.md names a file or folder of the repository, and a
+//! `![alt](target)` outside code in README.md, docs/**/*.md,
+//! blender/README.md and tools/README.md names a file or folder of the repository, and a
 //! `#fragment` names a heading of the target Markdown file (GitHub's anchor
 //! rule: lower case, punctuation other than `-` and `_` dropped, spaces to
 //! `-`, a repeated heading numbered `-1`, `-2`, ...). Web links are not
@@ -38,7 +38,7 @@ fn markdown_files() -> Vec<PathBuf> {
             }
         }
     }
-    let mut out = vec![root().join("README.md"), root().join("blender/README.md")];
+    let mut out = vec![root().join("README.md"), root().join("blender/README.md"), root().join("tools/README.md")];
     walk(&root().join("docs"), &mut out);
     out
 }
