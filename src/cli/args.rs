@@ -48,7 +48,8 @@ pub enum Command {
     /// [background] and [terrain] sections set up the picture.
     Render(RenderArgs),
     /// Measure speed against accuracy of every method choice (photon count, gather radius and
-    /// method, voxel size, ray integration, shadow rays) on a reduced copy of the scene.
+    /// method, voxel size, ray integration, pruning, storage, shadow rays, animation flicker) on a
+    /// reduced copy of the scene.
     ///
     /// Writes DIR/bench.csv, DIR/bench.json and a PNG and SVG chart per study (time against
     /// error, Pareto front marked), and prints a summary table. A few minutes on 2 cores;
