@@ -7,8 +7,10 @@
 //! The install goes to a scratch root (`--root`) and builds in this run's
 //! own target folder (`CARGO_TARGET_DIR`), offline and from Cargo.lock:
 //! after `cargo build --release` (as tools/check runs it) it compiles
-//! nothing and takes a fraction of a second; the commands then take what
-//! a default bake and render take.
+//! nothing, takes a fraction of a second and leaves the target folder's
+//! `aurora`, which the other tests run, as it was (Cargo.toml asks for the
+//! dev-dependencies' features, so that a test build and a plain build are
+//! one build). The commands then take what a default bake and render take.
 
 use crate::common;
 use std::path::{Path, PathBuf};
