@@ -1,6 +1,8 @@
 //! The command line's arguments: the `clap` definitions of every command
 //! and its flags, checked as far as clap can (ranges, `--size` syntax). Each
-//! command's help is the doc of its [`Command`] variant.
+//! command's help is the doc of its [`Command`] variant; the texts that list
+//! a registry (the presets, the profile's columns) are built from it in
+//! [`super::help`].
 
 use clap::{Parser, Subcommand};
 use std::path::PathBuf;
@@ -10,10 +12,7 @@ use std::path::PathBuf;
     name = "aurora",
     version,
     about = "Bake physically plausible aurora into OpenVDB volumes, and render them.",
-    long_about = "Bake physically plausible aurora into sparse OpenVDB volumes (an `emission` vec3 grid and a \
-`density` float grid) for Blender Cycles, Houdini or a USD pipeline, and render them with a reference raymarcher.\n\n\
-SCENE is a TOML scene file or the name of a built-in preset (default, seed2014, oval); `aurora scene default` prints one to edit. \
-Units are kilometres, z up."
+    long_about = super::help::long_about()
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -49,15 +48,16 @@ pub enum Command {
     /// [background] and [terrain] sections set up the picture.
     Render(RenderArgs),
     /// Measure speed against accuracy of every method choice (photon count, gather radius and
-    /// method, voxel size, ray integration, shadow rays) on a reduced copy of the scene.
+    /// method, voxel size, ray integration, pruning, storage, shadow rays, animation flicker) on a
+    /// reduced copy of the scene.
     ///
     /// Writes DIR/bench.csv, DIR/bench.json and a PNG and SVG chart per study (time against
     /// error, Pareto front marked), and prints a summary table. A few minutes on 2 cores;
     /// under a minute with --quick.
     Bench(BenchArgs),
-    /// Altitude profiles per curtain from the bake's own beam deposits: CSV with columns
-    /// curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300,oi_6364,n2_1p,deposited_kev_s
-    /// (0.5 km bin centres; ion pairs/s, photons/s, keV/s summed over the curtain).
+    /// Altitude profiles per curtain from the bake's own beam deposits, as CSV: ionization, each
+    /// line's photons and the deposited power per 0.5 km bin.
+    #[command(long_about = super::help::profile_long_about())]
     Profile(ProfileArgs),
     /// Print a built-in scene as TOML, to copy and edit; or a scene file with every default filled in.
     Scene(SceneArgs),
@@ -179,7 +179,7 @@ pub struct RenderArgs {
     pub seed: Option<u64>,
     /// Adaptive sampling by pixel variance: spp becomes the average per pixel; half goes
     /// to every pixel, the rest to the pixels with the largest relative spread (spp >= 8;
-    /// README "The reference renderer").
+    /// docs/physics.md#the-reference-renderer).
     #[arg(long)]
     pub adaptive: bool,
     /// Render the float grid NAME alone as a one-channel image: a per-line grid of

@@ -13,6 +13,7 @@ mod bars;
 mod bench;
 pub mod exit;
 mod frames;
+mod help;
 mod preview;
 mod profile;
 mod render;

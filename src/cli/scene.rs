@@ -28,7 +28,8 @@ fn scene_header(name: &str) -> String {
     format!(
         "# aurora scene `{name}`. Units: kilometres, z up (x east, y north).\n\
          # Bake: aurora bake FILE.toml --out DIR    Render: aurora render FILE.toml --out image.exr\n\
-         # Every key is optional; unknown keys are errors. See README.md for each key's meaning.\n\n"
+         # Every key is optional; unknown keys are errors. docs/scene.md gives each key's meaning,\n\
+         # unit, default and range.\n\n"
     )
 }
 

@@ -11,7 +11,8 @@
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
-//! - `schema`: the committed schema and the documents generated from it.
+//! - `schema`: the committed schema and the documents generated from it;
+//! - `quick_start`: the README's quick start, installed and run as written.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -24,6 +25,7 @@ mod outputs;
 mod plan;
 mod preview;
 mod profile;
+mod quick_start;
 mod resume;
 mod schema;
 mod streams;
