@@ -243,6 +243,7 @@ fn apply_one(doc: &mut Table, o: &Override) -> Result<(), String> {
 fn out_of_bounds(spelled: &str, i: usize, n: usize) -> String {
     match n {
         0 => format!("{spelled}[{i}]: {spelled} is empty"),
+        1 => format!("{spelled}[{i}]: {spelled} has 1 entry, {spelled}[0]"),
         _ => format!("{spelled}[{i}]: {spelled} has {n} entries, {spelled}[0] to {spelled}[{}]", n - 1),
     }
 }

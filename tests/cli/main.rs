@@ -11,7 +11,9 @@
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
-//! - `schema`: the committed schema and the documents generated from it.
+//! - `schema`: the committed schema and the documents generated from it;
+//! - `overrides`, `messages`: `--set` and render's flags over a scene, and
+//!   the scene's errors in plain words.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -20,7 +22,9 @@ mod bench;
 mod end_to_end;
 mod frames;
 mod inputs;
+mod messages;
 mod outputs;
+mod overrides;
 mod plan;
 mod preview;
 mod profile;
