@@ -53,10 +53,7 @@ fn the_nearest_key_table_or_preset_is_suggested() {
 #[test]
 fn a_curtain_with_path_and_center_is_told_it_takes_one() {
     let e = refusal("path", "[[curtain]]\ncenter = [0, 0]\npath = [[0, 0], [50, 10]]\n");
-    says(
-        &e,
-        &["s.toml:3: curtain[0].path: a curtain takes either a `center` (with `length` and `rotation_deg`) or a `path`", "not both"],
-    );
+    says(&e, &["s.toml:3: curtain[0].path: a curtain takes either a `center` (with `length` and `rotation_deg`) or a `path`", "not both"]);
     assert!(!e.contains("out of range") && !e.contains("given"), "{e}");
 }
 

@@ -64,7 +64,8 @@ fn bake_records_the_overrides_and_its_identity_follows_the_effective_scene() {
     assert_eq!(j["overrides"], serde_json::json!(["seed=3", "seed=9", "curtain[0].energy_flux=3"]));
     assert_eq!(j["seed"], 9);
     // The same values written into the file: the same scene, hash and identity.
-    let text = std::fs::read_to_string(&scene).unwrap().replace("seed = 7", "seed = 9").replace("bend_km = 3.0", "bend_km = 3.0\nenergy_flux = 3");
+    let text =
+        std::fs::read_to_string(&scene).unwrap().replace("seed = 7", "seed = 9").replace("bend_km = 3.0", "bend_km = 3.0\nenergy_flux = 3");
     let edited = write(&d, "edited.toml", text);
     let plain = d.join("edited");
     ok(&Aurora::new().args(["bake", edited.to_str().unwrap(), "-q", "--out"]).arg(&plain).output());
@@ -123,7 +124,18 @@ fn render_size_exposure_and_spp_are_overrides_and_png_alone_writes_only_the_png(
     // The later of --spp and --set render.spp wins: 20 x 10 x 3 rays.
     assert!(e.contains("600 primary rays"), "{e}");
     // --exposure is render.exposure, --size is render.width and height.
-    render(&["--set", "render.width=20", "--set", "render.height=10", "--set", "render.spp=3", "--set", "render.exposure=-1", "--png", "b.png"]);
+    render(&[
+        "--set",
+        "render.width=20",
+        "--set",
+        "render.height=10",
+        "--set",
+        "render.spp=3",
+        "--set",
+        "render.exposure=-1",
+        "--png",
+        "b.png",
+    ]);
     assert_eq!(std::fs::read(d.join("a.png")).unwrap(), std::fs::read(d.join("b.png")).unwrap());
     // With --out too, both.
     render(&["--spp", "1", "--out", "c.exr", "--png", "c.png"]);
