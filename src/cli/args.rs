@@ -35,7 +35,7 @@ pub struct Common {
 #[derive(clap::Args, Default)]
 pub struct SceneOverrides {
     /// Set a scene key: KEY=VALUE, VALUE in TOML (--set render.width=64, --set 'camera.up=[0, 1, 0]',
-    /// --set colour.mode=chemistry: a bare word is text, --set 'curtain[1].energy_flux=3').
+    /// --set colour.mode=colormap: a bare word is text, --set 'curtain[1].energy_flux=3').
     /// Repeatable. Applied to the scene file's TOML before it is checked, so the file's rules
     /// apply (ranges, unknown keys). Every flag that sets a key (--set, --seed, and render's
     /// --spp, --size and --exposure) applies in command-line order, the later winning. Recorded

@@ -92,3 +92,29 @@ fn parse_error(file: &str, text: &str, e: &toml::de::Error) -> SceneError {
     };
     SceneError::Parse { file: file.to_string(), message }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(text: &str) -> Override {
+        Override::parse(text, "--set").unwrap()
+    }
+
+    /// The file's errors keep their lines; an override's error names the
+    /// override; a preset with overrides is the preset with those values.
+    #[test]
+    fn errors_are_located_at_the_file_or_the_override() {
+        let text = "[render]\nwidth = 8\n[beams]\ncount = 0\n";
+        let m = Scene::from_toml_str_with(text, "f.toml", &[set("render.width=0")]).unwrap_err().to_string();
+        assert!(m.contains("--set render.width=0: render.width = 0 is out of range") && m.contains("f.toml:4: beams.count = 0"), "{m}");
+        // The later override wins, and the record keeps them all in order.
+        let s = Scene::from_toml_str_with(text, "f.toml", &[set("beams.count=0"), set("beams.count=5")]).unwrap();
+        assert_eq!((s.beams.count, s.overrides.clone()), (5, vec!["beams.count=0".to_string(), "beams.count=5".to_string()]));
+        let mut want = presets::by_name("corona").unwrap();
+        want.curtains[0].energy_flux = 2.0;
+        let got = Scene::load_with("corona", &[set("curtain[0].energy_flux=2")]).unwrap();
+        assert_eq!(got.hash(), want.hash());
+        assert_eq!(Scene { overrides: Vec::new(), ..got }, want);
+    }
+}

@@ -47,7 +47,7 @@ impl Override {
 
     /// `KEY=VALUE` as `--set` takes it: VALUE is TOML (`64`, `[0, 1, 0]`,
     /// `"chemistry"`); a VALUE that is not TOML is taken as text
-    /// (`colour.mode=chemistry`). The key's spelling is checked here, the
+    /// (`colour.mode=colormap`). The key's spelling is checked here, the
     /// key's existence and the value when applied.
     pub fn parse(text: &str, flag: &str) -> Result<Override, SceneError> {
         let source = format!("{flag} {text}");
@@ -278,7 +278,7 @@ mod tests {
         assert_eq!(set("render.width=64").value, Value::Integer(64));
         assert_eq!(set("camera.up=[0,1,0]").record(), "camera.up=[0, 1, 0]");
         assert_eq!(set("colour.mode=\"chemistry\"").value, Value::String("chemistry".into()));
-        assert_eq!(set("colour.mode=chemistry").value, Value::String("chemistry".into()));
+        assert_eq!(set("colour.mode=colormap").value, Value::String("colormap".into()));
         for bad in ["render.width", "=3", "render..width=3", "curtain[x].energy_flux=1", "render width=3"] {
             let e = Override::parse(bad, "--set").unwrap_err().to_string();
             assert!(e.starts_with(&format!("--set {bad}: ")), "{e}");

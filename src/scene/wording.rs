@@ -188,6 +188,19 @@ pub fn plain(message: &str, at: At<'_>, source: Option<&str>) -> String {
             return format!("{key}expected {}, found {}{range}", plain_type(expected), plain_found(found));
         }
     }
+    if let Some(rest) = m.strip_prefix("invalid value: ") {
+        if let Some((found, expected)) = rest.rsplit_once(", expected ") {
+            let unsigned = ["usize", "u64", "u32", "u16", "u8"].contains(&expected.trim());
+            let expected = if unsigned { "a whole number, 0 or more".to_string() } else { plain_type(expected) };
+            return format!("{key}expected {expected}, found {}{range}", plain_found(found));
+        }
+    }
+    if m == "duplicate key" {
+        return match at.dotted() {
+            Some(k) => format!("{k} is given twice; give each key once"),
+            None => "this table is given twice; give each table once (merge the two)".into(),
+        };
+    }
     if m == "wanted string or table" {
         let found = source.map(|s| format!(", found {s}")).unwrap_or_default();
         return format!("{key}expected text{found}{range}");
@@ -260,6 +273,12 @@ mod tests {
         assert!(plain("invalid type: string \"x\", expected f64", at, None).contains("expected a number, found the text \"x\""));
         let at = At { index: None, table: Some("camera"), key: Some("up") };
         assert!(plain("invalid type: string \"x\", expected an array of length 3", at, None).contains("expected a list of 3 values"));
+        let seed = At { index: None, table: None, key: Some("seed") };
+        assert_eq!(
+            plain("invalid value: integer `-1`, expected u64", seed, None),
+            "seed: expected a whole number, 0 or more, found the whole number -1"
+        );
+        assert_eq!(plain("duplicate key", at, None), "camera.up is given twice; give each key once");
         for rust in ["usize", "f64", "a string", "a sequence", "a boolean", "struct RenderParams"] {
             let m = plain(&format!("invalid type: map, expected {rust}"), At { index: None, table: None, key: Some("seed") }, None);
             assert!(!m.contains(rust), "{m}");
