@@ -269,7 +269,7 @@ pub struct ProfileArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
     /// Override the scene's seed.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
     pub seed: Option<u64>,
     #[command(flatten)]
     pub overrides: SceneOverrides,
