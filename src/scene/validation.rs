@@ -456,14 +456,14 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
             let t = Some(("curtain", i));
             let both: Vec<&str> = STRAIGHT_KEYS.iter().copied().filter(|k| c.contains_key(*k)).collect();
             if !both.is_empty() {
-                let has = both.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ");
+                let has = both.join(", ");
                 v.push(
                     t,
                     "path",
                     String::new(),
                     format!(
                         "a curtain takes either a `center` (with `length` and `rotation_deg`) or a `path` (the points of its \
-                         ground track), not both; this one has `path` and {has}: remove one or the other"
+                         ground track), not both; this one has path and {has}: remove {has} or the path"
                     ),
                 );
             }
