@@ -133,7 +133,8 @@ fn sequence_folder_without_frame(dir: &Path) -> String {
             frame_ranges(&frames)
         ),
         _ => format!(
-            "--vdb {d}: is a folder with no frames ({stem}NNNN.vdb) in it; give --vdb a .vdb file, or with --frame N a sequence folder"
+            "--vdb {d}: is a directory, not a regular file, and holds no frames ({stem}NNNN.vdb); give --vdb a .vdb file, or with \
+             --frame N a sequence folder"
         ),
     }
 }

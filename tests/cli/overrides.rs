@@ -155,6 +155,6 @@ fn a_sequence_folder_without_frame_is_refused_naming_its_frames() {
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
     let e = refused(&Aurora::new().args(["render", scene.to_str().unwrap(), "--vdb"]).arg(&empty).arg("--png").arg(&png).output());
-    assert!(e.contains("is a folder with no frames (aurora.NNNN.vdb)"), "{e}");
+    assert!(e.contains("is a directory, not a regular file, and holds no frames (aurora.NNNN.vdb)"), "{e}");
     assert!(!png.exists());
 }
