@@ -7,12 +7,10 @@
 
 mod cli;
 
-use clap::Parser;
-
 fn main() {
     cli::out::reopen_closed_descriptors();
     aurora::util::memory::tune_allocator();
-    let args = cli::args::Cli::parse();
+    let args = cli::args::parse();
     let json = args.json_errors();
     let code = cli::exit::code(cli::run(args), json);
     std::process::exit(code);

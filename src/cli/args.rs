@@ -29,6 +29,35 @@ pub struct Common {
     pub quiet: bool,
 }
 
+/// `--set KEY=VALUE`, on every command that takes a scene, and the order
+/// of every override flag ([`parse`] fills it).
+#[derive(clap::Args, Default)]
+pub struct SceneOverrides {
+    /// Set a scene key: KEY=VALUE, VALUE in TOML (--set render.width=64, --set 'camera.up=[0, 1, 0]',
+    /// --set colour.mode=colormap: a bare word is text, --set 'curtain[1].energy_flux=3').
+    /// Repeatable. Applied to the scene file's TOML before it is checked, so the file's rules
+    /// apply (ranges, unknown keys). Every flag that sets a key (--set, --seed, and render's
+    /// --spp, --size and --exposure) applies in command-line order, the later winning. Recorded
+    /// in bake.json (`overrides`).
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+    pub set: Vec<aurora::scene::Override>,
+    /// Every override of the command line, in its order.
+    #[arg(skip)]
+    pub ordered: Vec<aurora::scene::Override>,
+}
+
+impl SceneOverrides {
+    /// The overrides in command-line order (the `--set` flags alone when
+    /// the order was not taken from the command line).
+    pub fn in_order(&self) -> &[aurora::scene::Override] {
+        if self.ordered.is_empty() {
+            &self.set
+        } else {
+            &self.ordered
+        }
+    }
+}
+
 #[derive(Subcommand)]
 pub enum Command {
     /// Bake a scene into DIR/aurora.vdb, DIR/aurora.usda and DIR/bake.json.
@@ -72,8 +101,8 @@ pub enum Command {
     /// pruning, a beams or colour edit retraces the beams but keeps the footprints. A coarse
     /// picture (1/4 size, 1 spp) is written first, then the refined one (--size, --spp), then,
     /// when [render] spp is larger, one at the scene's spp, each atomically; each update prints
-    /// its stage times. The bake uses the scene's own settings. Without --watch: one update, then
-    /// exit.
+    /// its stage times. The bake uses the scene's own settings. Without --watch: the coarse and
+    /// the refined picture (--size, --spp), then exit.
     Preview(PreviewArgs),
     /// Write each curtain's 2D footprint (the fluid simulation, bent along its noise curve) as a PNG.
     Footprint(FootprintArgs),
@@ -127,6 +156,8 @@ pub struct BakeArgs {
           value_parser = clap::value_parser!(u64).range(1..=aurora::farm::cost_plan::MAX_SAMPLES as u64))]
     pub plan_samples: u64,
     #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
     pub common: Common,
 }
 
@@ -160,15 +191,22 @@ pub struct RenderArgs {
     pub frame: Option<String>,
     /// Output image, its format from the extension: .exr (linear Rec.709 RGBA, A = volume
     /// coverage 1 - T) or .png (sRGB preview at [render] exposure). Only a new name or a
-    /// regular file is ever replaced.
-    #[arg(long, default_value = "aurora.exr", value_name = "IMAGE.exr|IMAGE.png")]
-    pub out: PathBuf,
-    /// Also write an sRGB PNG preview (exposure from [render] exposure).
+    /// regular file is ever replaced. Default: aurora.exr, or none when --png is given alone.
+    #[arg(long, value_name = "IMAGE.exr|IMAGE.png")]
+    pub out: Option<PathBuf>,
+    /// Also write an sRGB PNG preview (exposure from [render] exposure); alone (without
+    /// --out), the PNG is the only image written.
     #[arg(long, value_name = "PREVIEW.png")]
     pub png: Option<PathBuf>,
     /// Override [render] spp.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
     pub spp: Option<u64>,
+    /// Override [render] width and height: WIDTHxHEIGHT in pixels.
+    #[arg(long, value_name = "WxH", value_parser = parse_size)]
+    pub size: Option<[usize; 2]>,
+    /// Override [render] exposure, in stops (EV).
+    #[arg(long, value_name = "EV", allow_hyphen_values = true)]
+    pub exposure: Option<f64>,
     /// Emissive shadow-ray samples per terrain hit per pixel sample (default 1):
     /// more makes lit terrain less noisy at less cost than more spp.
     #[arg(long, value_name = "N", default_value_t = 1,
@@ -194,6 +232,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "VALUE", requires = "grid")]
     pub grid_max: Option<f64>,
     #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
     pub common: Common,
 }
 
@@ -214,6 +254,8 @@ pub struct BenchArgs {
     #[arg(long, conflicts_with = "quick")]
     pub storage: bool,
     #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
     pub common: Common,
 }
 
@@ -227,8 +269,10 @@ pub struct ProfileArgs {
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
     /// Override the scene's seed.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
     pub seed: Option<u64>,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
     #[command(flatten)]
     pub common: Common,
 }
@@ -246,6 +290,8 @@ pub struct SceneArgs {
     /// (the Blender add-on reads a copy: blender/scene_schema.json).
     #[arg(long)]
     pub schema: bool,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
 }
 
 // The arguments of `aurora preview` (its help is the doc of [`Command::Preview`]).
@@ -269,6 +315,8 @@ pub struct PreviewArgs {
           value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SPP))]
     pub spp: u64,
     #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
     pub common: Common,
 }
 
@@ -281,6 +329,8 @@ pub struct FootprintArgs {
     /// Output folder: footprint-<N>.png per curtain.
     #[arg(long, default_value = "aurora-out", value_name = "DIR")]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
 }
 
 // The arguments of `aurora terrain` (its help is the doc of [`Command::Terrain`]).
@@ -291,6 +341,8 @@ pub struct TerrainArgs {
     pub scene: String,
     #[arg(long, default_value = "terrain.obj", value_name = "FILE.obj")]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
 }
 
 /// `--size WxH`: two positive integers up to the scene's image limit.
@@ -303,4 +355,68 @@ fn parse_size(text: &str) -> std::result::Result<[usize; 2], String> {
         return Err(bad());
     }
     Ok([w, h])
+}
+
+/// `--set KEY=VALUE` (`aurora::scene::Override::parse`).
+fn parse_set(text: &str) -> std::result::Result<aurora::scene::Override, String> {
+    aurora::scene::Override::parse(text, "--set").map_err(|e| e.to_string())
+}
+
+/// The command line, with every override flag of the command in the order
+/// given ([`SceneOverrides::ordered`]): `--seed N` is `seed=N`, render's
+/// `--spp N`, `--size WxH` and `--exposure EV` set `render.spp`,
+/// `render.width` and `render.height`, `render.exposure`.
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let matches = Cli::command().get_matches();
+    let mut cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit());
+    let Some((name, m)) = matches.subcommand() else { return cli };
+    let mut found: Vec<(usize, aurora::scene::Override)> = Vec::new();
+    let positions = |id: &str| m.indices_of(id).map(|i| i.collect::<Vec<_>>()).unwrap_or_default();
+    if let Ok(Some(sets)) = m.try_get_many::<aurora::scene::Override>("set") {
+        found.extend(positions("set").into_iter().zip(sets.cloned()));
+    }
+    let typed = matches!(name, "bake" | "render" | "profile");
+    let mut add = |id: &str, key: &str, value: toml::Value, shown: String| {
+        if let Some(&at) = positions(id).last() {
+            found.push((at, aurora::scene::Override::new(key, value, &format!("--{id} {shown}"))));
+        }
+    };
+    if typed {
+        if let Ok(Some(&seed)) = m.try_get_one::<u64>("seed") {
+            add("seed", "seed", toml::Value::Integer(seed as i64), seed.to_string());
+        }
+    }
+    if name == "render" {
+        if let Ok(Some(&spp)) = m.try_get_one::<u64>("spp") {
+            add("spp", "render.spp", toml::Value::Integer(spp as i64), spp.to_string());
+        }
+        if let Ok(Some(&ev)) = m.try_get_one::<f64>("exposure") {
+            add("exposure", "render.exposure", toml::Value::Float(ev), ev.to_string());
+        }
+        if let Ok(Some(&[w, h])) = m.try_get_one::<[usize; 2]>("size") {
+            add("size", "render.width", toml::Value::Integer(w as i64), format!("{w}x{h}"));
+            add("size", "render.height", toml::Value::Integer(h as i64), format!("{w}x{h}"));
+        }
+    }
+    found.sort_by_key(|(at, _)| *at);
+    let ordered = found.into_iter().map(|(_, o)| o).collect();
+    cli.command.overrides_mut().ordered = ordered;
+    cli
+}
+
+impl Command {
+    /// The command's scene overrides (every command that takes a scene).
+    fn overrides_mut(&mut self) -> &mut SceneOverrides {
+        match self {
+            Command::Bake(a) => &mut a.overrides,
+            Command::Render(a) => &mut a.overrides,
+            Command::Bench(a) => &mut a.overrides,
+            Command::Profile(a) => &mut a.overrides,
+            Command::Scene(a) => &mut a.overrides,
+            Command::Preview(a) => &mut a.overrides,
+            Command::Footprint(a) => &mut a.overrides,
+            Command::Terrain(a) => &mut a.overrides,
+        }
+    }
 }

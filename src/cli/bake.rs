@@ -63,12 +63,10 @@ impl Report {
 }
 
 pub fn run(a: BakeArgs) -> Result<()> {
-    let BakeArgs { scene, out, seed, frames, shard, sequence, rebake, progress, plan, plan_samples, common } = a;
+    // --seed is one of the overrides, applied in command-line order.
+    let BakeArgs { scene, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
     let report = Report::new(progress, common.quiet);
-    let mut scene = load_scene(&scene)?;
-    if let Some(s) = seed {
-        scene.seed = s;
-    }
+    let scene = load_scene(&scene, &overrides)?;
     let Some(spec) = frames else {
         return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };

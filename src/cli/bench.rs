@@ -6,8 +6,8 @@ use super::{load_scene, with_threads};
 use anyhow::Result;
 
 pub fn run(a: BenchArgs) -> Result<()> {
-    let BenchArgs { scene: scene_arg, out, quick, storage, common } = a;
-    let scene = load_scene(&scene_arg)?;
+    let BenchArgs { scene: scene_arg, out, quick, storage, common, overrides } = a;
+    let scene = load_scene(&scene_arg, &overrides)?;
     let quiet = common.quiet;
     with_threads(common.threads, || {
         let log = |line: &str| {

@@ -38,9 +38,10 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
-/// The scene a command names: a scene file or a preset, validated.
-fn load_scene(arg: &str) -> Result<Scene> {
-    Ok(Scene::load(arg)?)
+/// The scene a command names: a scene file or a preset, its overrides
+/// applied in command-line order, validated.
+fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
+    Ok(Scene::load_with(arg, overrides.in_order())?)
 }
 
 /// The folder relative paths in a scene file (a heightmap) are resolved

@@ -1,8 +1,10 @@
-//! `aurora preview`: one quick picture of a scene, or (--watch) a picture
-//! per save of the scene file until killed. A bad edit is reported as
-//! `aurora bake` words it and the watch goes on with the last good scene.
+//! `aurora preview`: one quick picture of a scene (the coarse and the
+//! refined picture, at the preview's size and spp, never the scene's spp),
+//! or (--watch) a picture per save of the scene file until killed. A bad
+//! edit is reported as `aurora bake` words it and the watch goes on with
+//! the last good scene. The `--set` overrides apply to every save.
 
-use super::args::PreviewArgs;
+use super::args::{PreviewArgs, SceneOverrides};
 use super::exit::InputError;
 use super::render::{image_format, ImageFormat};
 use super::{load_scene, print_warnings, scene_dir, with_threads};
@@ -14,7 +16,7 @@ use std::cell::{Cell, RefCell};
 use std::path::Path;
 
 pub fn run(a: PreviewArgs) -> Result<()> {
-    let PreviewArgs { scene: scene_arg, out, size, watch, spp, common } = a;
+    let PreviewArgs { scene: scene_arg, out, size, watch, spp, common, overrides } = a;
     image_format("--out", &out).and_then(|f| match f {
         ImageFormat::Png => Ok(()),
         ImageFormat::Exr => Err(InputError(format!("--out {}: the preview writes PNG", out.display())).into()),
@@ -23,7 +25,14 @@ pub fn run(a: PreviewArgs) -> Result<()> {
     with_threads(common.threads, || {
         let mut preview = Preview::new(&out, size, Some(dir.to_path_buf()));
         preview.spp = spp as usize;
-        let session = Session { out: &out, quiet: common.quiet, watcher: RefCell::new(None), previewing: Cell::new(None) };
+        let session = Session {
+            out: &out,
+            quiet: common.quiet,
+            overrides: &overrides,
+            once: !watch,
+            watcher: RefCell::new(None),
+            previewing: Cell::new(None),
+        };
         if watch {
             session.watch(&mut preview, &scene_arg)
         } else {
@@ -39,6 +48,9 @@ pub fn run(a: PreviewArgs) -> Result<()> {
 struct Session<'a> {
     out: &'a Path,
     quiet: bool,
+    overrides: &'a SceneOverrides,
+    /// Without --watch: the quick picture is the last (no picture at the scene's spp).
+    once: bool,
     watcher: RefCell<Option<Watcher>>,
     previewing: Cell<Option<u64>>,
 }
@@ -49,6 +61,9 @@ impl Session<'_> {
     fn on_picture(&self, what: &str, secs: f64) -> bool {
         if !self.quiet {
             eprintln!("{what} in {secs:.2} s");
+        }
+        if self.once {
+            return false;
         }
         let mut w = self.watcher.borrow_mut();
         self.previewing.get().zip(w.as_mut()).is_none_or(|(h, w)| !w.changed_since(h))
@@ -70,9 +85,9 @@ impl Session<'_> {
         }
     }
 
-    /// Without --watch: one update, then exit.
+    /// Without --watch: one update (the coarse and the refined picture), then exit.
     fn once(&self, preview: &mut Preview, scene_arg: &str) -> Result<()> {
-        let scene = load_scene(scene_arg)?;
+        let scene = load_scene(scene_arg, self.overrides)?;
         Ok(self.update(preview, &scene)?)
     }
 
@@ -112,7 +127,7 @@ impl Session<'_> {
                 );
                 continue;
             }
-            let result = Scene::from_toml_str(&save.text, scene_arg)
+            let result = Scene::from_toml_str_with(&save.text, scene_arg, self.overrides.in_order())
                 .map_err(anyhow::Error::from)
                 .and_then(|scene| self.update(preview, &scene).map_err(anyhow::Error::from));
             if let Err(e) = result {

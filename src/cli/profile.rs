@@ -9,11 +9,9 @@ use aurora::scene::Scene;
 use std::path::Path;
 
 pub fn run(a: ProfileArgs) -> Result<()> {
-    let ProfileArgs { scene, out, seed, common } = a;
-    let mut scene = load_scene(&scene)?;
-    if let Some(s) = seed {
-        scene.seed = s;
-    }
+    // --seed is one of the overrides, applied in command-line order.
+    let ProfileArgs { scene, out, seed: _, common, overrides } = a;
+    let scene = load_scene(&scene, &overrides)?;
     with_threads(common.threads, || profile(&scene, out.as_deref(), common.quiet))
 }
 

@@ -64,26 +64,33 @@ struct Files<'a> {
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
-    let RenderArgs { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, grid, grid_max, common } = a;
+    // --seed, --spp, --size and --exposure are overrides, applied in command-line order.
+    let RenderArgs { scene: scene_arg, vdb, frame, out, png, shadow_samples, adaptive, grid, grid_max, common, overrides, .. } = a;
     if let Some(m) = grid_max {
         if !(m.is_finite() && m > 0.0) {
             return Err(InputError(format!("--grid-max {m}: must be a finite number > 0")).into());
         }
     }
-    let mut scene = load_scene(&scene_arg)?;
-    if let Some(s) = seed {
-        scene.seed = s;
+    if let (Some(dir), None) = (&vdb, &frame) {
+        if dir.is_dir() {
+            return Err(InputError(sequence_folder_without_frame(dir)).into());
+        }
     }
-    if let Some(n) = spp {
-        scene.render.spp = n as usize;
-    }
+    let scene = load_scene(&scene_arg, &overrides)?;
     let dir = scene_dir(&scene_arg);
     // Refuse a bad output before rendering, not after.
-    let format = image_format("--out", &out)?;
     if let Some(p) = &png {
         if image_format("--png", p)? != ImageFormat::Png {
             return Err(InputError(format!("--png {}: the preview is a PNG; give a name ending in .png", p.display())).into());
         }
+    }
+    // --png alone: the PNG is the one image.
+    let (out, png) = match (out, png) {
+        (None, Some(p)) => (p, None),
+        (out, png) => (out.unwrap_or_else(|| PathBuf::from("aurora.exr")), png),
+    };
+    let format = image_format("--out", &out)?;
+    if let Some(p) = &png {
         aurora::util::atomic_write::check_replaceable(p)?;
     }
     aurora::util::atomic_write::check_replaceable(&out)?;
@@ -99,6 +106,52 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
         None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref() })),
     }
+}
+
+/// The refusal of `--vdb DIR` without `--frame`: DIR is a sequence folder
+/// (or a folder of none), with the frames found there.
+fn sequence_folder_without_frame(dir: &Path) -> String {
+    let stem = format!("{}.", aurora::io::bake_folder::FRAME_STEM);
+    let mut frames: Vec<i64> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok())
+                .filter_map(|e| {
+                    let name = e.file_name().into_string().ok()?;
+                    let digits = name.strip_prefix(&stem)?.strip_suffix(".vdb")?;
+                    digits.bytes().all(|b| b.is_ascii_digit()).then(|| digits.parse().ok())?
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    frames.sort_unstable();
+    let d = dir.display();
+    match (frames.first(), frames.last()) {
+        (Some(first), Some(last)) => format!(
+            "--vdb {d}: is a sequence folder ({} frames, {}); pass --frame N to render one frame (--frame {first}) or a range \
+             (--frame {first}-{last}), or give --vdb a .vdb file",
+            frames.len(),
+            frame_ranges(&frames)
+        ),
+        _ => format!(
+            "--vdb {d}: is a directory, not a regular file, and holds no frames ({stem}NNNN.vdb); give --vdb a .vdb file, or with \
+             --frame N a sequence folder"
+        ),
+    }
+}
+
+/// Sorted frame numbers as ranges: "1-48", "1-10, 12, 20-24".
+fn frame_ranges(frames: &[i64]) -> String {
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < frames.len() {
+        let mut j = i;
+        while j + 1 < frames.len() && frames[j + 1] == frames[j] + 1 {
+            j += 1;
+        }
+        parts.push(if j > i { format!("{}-{}", frames[i], frames[j]) } else { frames[i].to_string() });
+        i = j + 1;
+    }
+    parts.join(", ")
 }
 
 /// Renders each frame of the sequence folder `seq` to `out` and `png` with

@@ -18,7 +18,7 @@ pub fn print(a: SceneArgs) -> Result<()> {
         print!("{}", aurora::scene::schema::schema_json());
         return Ok(());
     }
-    let s = load_scene(&a.name)?;
+    let s = load_scene(&a.name, &a.overrides)?;
     print!("{}", scene_header(&a.name));
     print!("{}", s.to_toml());
     Ok(())
@@ -35,7 +35,7 @@ fn scene_header(name: &str) -> String {
 
 /// `aurora footprint`: DIR/footprint-N.png per curtain.
 pub fn footprint(a: FootprintArgs) -> Result<()> {
-    let scene = load_scene(&a.scene)?;
+    let scene = load_scene(&a.scene, &a.overrides)?;
     aurora::util::atomic_write::prepare_folder(&a.out)?;
     for (i, fp) in aurora::pipeline::bake::plan::footprints(&scene).iter().enumerate() {
         let path = a.out.join(format!("footprint-{i}.png"));
@@ -47,8 +47,8 @@ pub fn footprint(a: FootprintArgs) -> Result<()> {
 
 /// `aurora terrain`: the triangles `aurora render` traces, as a Wavefront OBJ.
 pub fn terrain(a: TerrainArgs) -> Result<()> {
-    let TerrainArgs { scene: scene_arg, out } = a;
-    let scene = load_scene(&scene_arg)?;
+    let TerrainArgs { scene: scene_arg, out, overrides } = a;
+    let scene = load_scene(&scene_arg, &overrides)?;
     if out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() != Some("obj") {
         return Err(
             InputError(format!("--out {}: the terrain is written as a Wavefront OBJ; give a name ending in .obj", out.display())).into()

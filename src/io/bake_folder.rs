@@ -316,6 +316,7 @@ pub(crate) fn unit_report(scene: &Scene, bake: &Bake, identity: &BakeIdentity) -
         "bake_identity": identity.to_json(),
         "scene_hash": format!("{:016x}", scene.hash()),
         "seed": scene.seed,
+        "overrides": scene.overrides,
         "units": "km",
         "threads": rayon::current_num_threads(),
         "stats": bake.stats,

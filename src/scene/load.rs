@@ -1,39 +1,120 @@
-//! Reading a scene: TOML text or a file, or a built-in preset by name.
-//! Parsing is separate from validation (pbrt's `GridMedium::Create`
-//! pattern): serde reads the TOML (unknown keys are errors), then
-//! [`Scene::validate`] checks every range once.
+//! Reading a scene: TOML text or a file, or a built-in preset by name,
+//! then the overrides ([`super::overrides`]) in order. Parsing is separate
+//! from validation (pbrt's `GridMedium::Create` pattern): serde reads the
+//! TOML (unknown keys are errors), the overrides are applied to the
+//! document, then [`Scene::validate`] checks every range once. The
+//! parser's messages are put in plain words ([`super::wording`]).
 
+use super::overrides::{self, Override};
 use super::presets;
 use super::root::Scene;
 use super::validation::{check_shapes, SceneError};
+use super::wording;
 use std::path::Path;
 
 impl Scene {
     /// Parses TOML text (unknown keys are errors), then validates it.
     /// `file` names the source in messages.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Scene, SceneError> {
+        Self::from_toml_str_with(text, file, &[])
+    }
+
+    /// [`from_toml_str`](Self::from_toml_str) with `overrides` applied, in
+    /// order, after the text and before validation.
+    pub fn from_toml_str_with(text: &str, file: &str, overrides: &[Override]) -> Result<Scene, SceneError> {
         check_shapes(text, file)?;
-        let scene: Scene = toml::from_str(text).map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
-        scene.validate(file, Some(text))?;
-        Ok(scene)
+        let scene: Scene = toml::from_str(text).map_err(|e| parse_error(file, text, &e))?;
+        if overrides.is_empty() {
+            scene.validate(file, Some(text))?;
+            return Ok(scene);
+        }
+        let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| parse_error(file, text, &e))?;
+        Self::from_document(doc, file, Some(text), overrides)
     }
 
     /// Reads a scene file, or a preset by name ([`presets::PRESETS`]); a
     /// name that is neither is [`SceneError::Unknown`], naming the presets.
     pub fn load(path_or_preset: &str) -> Result<Scene, SceneError> {
+        Self::load_with(path_or_preset, &[])
+    }
+
+    /// [`load`](Self::load) with `overrides` applied, in order, after the
+    /// file or preset and before validation.
+    pub fn load_with(path_or_preset: &str, overrides: &[Override]) -> Result<Scene, SceneError> {
         if let Some(s) = presets::by_name(path_or_preset) {
             if !Path::new(path_or_preset).exists() {
-                return Ok(s);
+                if overrides.is_empty() {
+                    return Ok(s);
+                }
+                let doc = toml::Table::try_from(&s).expect("a scene serialises to a table");
+                return Self::from_document(doc, path_or_preset, None, overrides);
             }
         }
         // Only a regular file is read (a FIFO or a device is refused, never
         // waited on: `crate::util::input_file`).
         let path = Path::new(path_or_preset);
         if !path.exists() && path.symlink_metadata().is_err() {
-            return Err(SceneError::Unknown { name: path_or_preset.to_string(), presets: presets::names().collect() });
+            let hint = wording::suggestion(path_or_preset, presets::names());
+            return Err(SceneError::Unknown { name: path_or_preset.to_string(), presets: presets::names().collect(), hint });
         }
         let text = crate::util::input_file::read_to_string(path)
             .map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
-        Self::from_toml_str(&text, path_or_preset)
+        Self::from_toml_str_with(&text, path_or_preset, overrides)
+    }
+
+    /// The scene of a TOML document after `overrides`, validated; errors
+    /// are located in `text` (the file's own keys) or at the override.
+    fn from_document(mut doc: toml::Table, file: &str, text: Option<&str>, overrides: &[Override]) -> Result<Scene, SceneError> {
+        overrides::apply(&mut doc, overrides)?;
+        let merged = toml::to_string(&doc).expect("a TOML table serialises");
+        // Each override and the file were checked alone; what is left is
+        // their combination.
+        let given: Vec<&str> = overrides.iter().map(|o| o.source.as_str()).collect();
+        let with = format!("{file} with {}", given.join(", "));
+        check_shapes(&merged, &with).map_err(|e| overrides::relocate(e, overrides))?;
+        let mut scene: Scene = toml::from_str(&merged).map_err(|e| parse_error(&with, &merged, &e))?;
+        scene.validate(file, text).map_err(|e| overrides::relocate(e, overrides))?;
+        scene.overrides = overrides.iter().map(Override::record).collect();
+        Ok(scene)
+    }
+}
+
+/// The TOML reader's error in plain words, keeping its snippet of the
+/// file (the line, a caret under the value).
+fn parse_error(file: &str, text: &str, e: &toml::de::Error) -> SceneError {
+    let (table, index, key, source) = e.span().map_or((None, None, None, None), |s| wording::locate(text, s.start));
+    let at = wording::At { table: table.as_deref(), index, key: key.as_deref() };
+    let plain = wording::plain(e.message(), at, source.as_deref());
+    let full = e.to_string();
+    let message = match full.rfind(e.message()) {
+        Some(i) => format!("{}{plain}{}", &full[..i], &full[i + e.message().len()..]),
+        None => full,
+    };
+    SceneError::Parse { file: file.to_string(), message }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(text: &str) -> Override {
+        Override::parse(text, "--set").unwrap()
+    }
+
+    /// The file's errors keep their lines; an override's error names the
+    /// override; a preset with overrides is the preset with those values.
+    #[test]
+    fn errors_are_located_at_the_file_or_the_override() {
+        let text = "[render]\nwidth = 8\n[beams]\ncount = 0\n";
+        let m = Scene::from_toml_str_with(text, "f.toml", &[set("render.width=0")]).unwrap_err().to_string();
+        assert!(m.contains("--set render.width=0: render.width = 0 is out of range") && m.contains("f.toml:4: beams.count = 0"), "{m}");
+        // The later override wins, and the record keeps them all in order.
+        let s = Scene::from_toml_str_with(text, "f.toml", &[set("beams.count=0"), set("beams.count=5")]).unwrap();
+        assert_eq!((s.beams.count, s.overrides.clone()), (5, vec!["beams.count=0".to_string(), "beams.count=5".to_string()]));
+        let mut want = presets::by_name("corona").unwrap();
+        want.curtains[0].energy_flux = 2.0;
+        let got = Scene::load_with("corona", &[set("curtain[0].energy_flux=2")]).unwrap();
+        assert_eq!(got.hash(), want.hash());
+        assert_eq!(Scene { overrides: Vec::new(), ..got }, want);
     }
 }

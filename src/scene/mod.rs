@@ -15,8 +15,10 @@
 //! `[earth]`), [`colour`], [`grid`] (`[photons]`, `[grid]`) and [`view`]
 //! (`[camera]`, `[render]`, `[volume]`, `[background]`, `[sky]`,
 //! `[terrain]`); [`root`] (the [`Scene`] that holds them), reading
-//! (`load`), [`validation`] (the range checks, their limits and the error
-//! types), [`schema`] (the `--schema` JSON drawn from those checks),
+//! (`load`), [`overrides`] (`--set KEY=VALUE` applied to the document
+//! before validation), [`validation`] (the range checks, their limits and
+//! the error types), [`wording`] (the parser's messages in plain words,
+//! did-you-mean), [`schema`] (the `--schema` JSON drawn from those checks),
 //! [`presets`] (the built-in scenes) and [`kernel`] (the photon kernel's
 //! radius range). Callers outside use the re-exports here
 //! (`crate::scene::Camera`); files inside import from the file that
@@ -28,17 +30,20 @@ pub mod curtain;
 pub mod grid;
 pub mod kernel;
 mod load;
+pub mod overrides;
 pub mod presets;
 pub mod root;
 pub mod schema;
 pub mod validation;
 pub mod view;
+pub mod wording;
 
 pub use beams::*;
 pub use colour::*;
 pub use curtain::*;
 pub use grid::*;
 pub use kernel::KernelRadius;
+pub use overrides::Override;
 pub use root::{fnv1a, Scene, OFF_WHEN_ZERO};
 pub use validation::{
     check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED, MAX_SHADOW_SAMPLES,

@@ -30,6 +30,12 @@ pub struct Scene {
     pub animation: AnimationParams,
     pub atmosphere: AtmosphereParams,
     pub earth: EarthParams,
+    /// The overrides applied to the file, in order, as `KEY=VALUE`
+    /// (`crate::scene::overrides`; recorded in bake.json). Not part of the
+    /// TOML: the values above already hold them, so the hash and the bake
+    /// identity follow the effective scene.
+    #[serde(skip)]
+    pub overrides: Vec<String>,
 }
 
 /// Keys added with a default of 0 that means "off", left out of

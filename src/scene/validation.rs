@@ -71,7 +71,22 @@ impl Camera {
         let up2: f64 = self.up.iter().map(|u| u * u).sum();
         let dir2: f64 = dir.iter().map(|u| u * u).sum();
         if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
-            p.push(("up", format!("{:?}", self.up), "must not be parallel to the view direction".into()));
+            // `up` is the picture's top: across a view along z (straight up
+            // or down) north, [0, 1, 0], is; across any other view, z is.
+            let vertical = dir[2].abs() >= dir[0].abs().max(dir[1].abs());
+            let (along, suggest) = if vertical {
+                (
+                    if dir[2] > 0.0 { "the camera looks straight up" } else { "the camera looks straight down" },
+                    "[0, 1, 0] (north at the top of the picture)",
+                )
+            } else {
+                ("`up` lies along the view", "[0, 0, 1] (the sky at the top of the picture)")
+            };
+            p.push((
+                "up",
+                format!("{:?}", self.up),
+                format!("must not be parallel to the view direction (look_at - position): {along}; set camera.up = {suggest}"),
+            ));
         }
         for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
             if a.iter().any(|x| !x.is_finite()) {
@@ -91,13 +106,18 @@ pub enum SceneError {
     /// `source`, so `{:#}` does not print it twice).
     #[error("{file}: cannot read: {error}")]
     Io { file: String, error: std::io::Error },
-    /// Neither a file nor a preset: the message names every preset.
-    #[error("{name}: no such file, and no preset of that name (presets: {}; `aurora scene --list` says what each shows)", .presets.join(", "))]
-    Unknown { name: String, presets: Vec<&'static str> },
+    /// Neither a file nor a preset: the message names every preset, and
+    /// the nearest (`hint`: "; did you mean `corona`?") when one is near.
+    #[error("{name}: no such file, and no preset of that name{hint} (presets: {}; `aurora scene --list` says what each shows)", .presets.join(", "))]
+    Unknown { name: String, presets: Vec<&'static str>, hint: String },
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
     #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\n"))]
     Invalid(Vec<RangeError>),
+    /// An override (`crate::scene::overrides`) that is not a key of the
+    /// scene or does not fit it; `given` is how the user gave it.
+    #[error("{given}: {message}")]
+    Override { given: String, message: String },
 }
 
 impl SceneError {
@@ -122,6 +142,10 @@ impl fmt::Display for RangeError {
         match self.line {
             Some(l) => write!(f, "{}:{}: ", self.file, l)?,
             None => write!(f, "{}: ", self.file)?,
+        }
+        if self.value.is_empty() {
+            // A rule between keys, not one value's range.
+            return write!(f, "{}: {}", self.key, self.allowed);
         }
         write!(f, "{} = {} is out of range: {}", self.key, self.value, self.allowed)
     }
@@ -432,7 +456,16 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
             let t = Some(("curtain", i));
             let both: Vec<&str> = STRAIGHT_KEYS.iter().copied().filter(|k| c.contains_key(*k)).collect();
             if !both.is_empty() {
-                v.push(t, "path", "given".into(), format!("path replaces {}: give path or them, not both", both.join(", ")));
+                let has = both.join(", ");
+                v.push(
+                    t,
+                    "path",
+                    String::new(),
+                    format!(
+                        "a curtain takes either a `center` (with `length` and `rotation_deg`) or a `path` (the points of its \
+                         ground track), not both; this one has path and {has}: remove {has} or the path"
+                    ),
+                );
             }
             if let toml::Value::Array(rows) = path {
                 for (k, r) in rows.iter().enumerate() {

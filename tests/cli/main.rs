@@ -13,6 +13,8 @@
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
 //! - `schema`: the committed schema and the documents generated from it;
 //! - `quick_start`: the README's quick start, installed and run as written.
+//! - `overrides`, `messages`: `--set` and render's flags over a scene, and
+//!   the scene's errors in plain words.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -21,7 +23,9 @@ mod bench;
 mod end_to_end;
 mod frames;
 mod inputs;
+mod messages;
 mod outputs;
+mod overrides;
 mod plan;
 mod preview;
 mod profile;

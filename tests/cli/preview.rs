@@ -100,3 +100,32 @@ fn without_watch_one_picture_then_exit() {
     refused(&Aurora::new().args(["preview", "--size", "0x10"]).output());
     refused(&Aurora::new().args(["preview", "--spp", "0"]).output());
 }
+
+/// Without --watch the quick picture is the last: the preview's size at
+/// its spp (4), the very PNG `aurora render --spp 4` makes, not the one at
+/// the scene's 64 spp; and --set applies to the preview's scene.
+#[test]
+fn without_watch_the_quick_picture_is_the_last() {
+    let dir = scratch("preview", "quick");
+    let mut scene = preview_scene();
+    (scene.render.width, scene.render.height, scene.render.spp) = (48, 27, 64);
+    let scene_path = dir.join("scene.toml");
+    std::fs::write(&scene_path, scene.to_toml()).unwrap();
+    let (quick, full) = (dir.join("quick.png"), dir.join("full.png"));
+    let e = ok(&Aurora::new()
+        .args(["preview", scene_path.to_str().unwrap(), "--size", "48x27", "--threads", "2", "--set", "render.exposure=1", "--out"])
+        .arg(&quick)
+        .output());
+    let last = e.lines().rfind(|l| l.starts_with("wrote ")).unwrap();
+    assert!(last.contains("(build") && last.contains("4 spp)") && !last.contains("full render"), "{e}");
+    let render = |spp: &str, png: &std::path::Path| {
+        ok(&Aurora::new()
+            .args(["render", scene_path.to_str().unwrap(), "--threads", "2", "--exposure", "1", "--spp", spp, "--png"])
+            .arg(png)
+            .output())
+    };
+    render("4", &full);
+    assert_eq!(std::fs::read(&quick).unwrap(), std::fs::read(&full).unwrap(), "the preview is the render at 4 spp");
+    render("64", &full);
+    assert_ne!(std::fs::read(&quick).unwrap(), std::fs::read(&full).unwrap(), "not the render at the scene's spp");
+}

@@ -212,6 +212,13 @@ fn scene_doc(schema: &Value) -> String {
          `blender/scene_schema.json`). Lengths are kilometres, z up, x east, y north.\n\n",
     );
     out.push_str(
+        "Any key can be set on the command line without editing the file: `--set KEY=VALUE` (every \
+         command that takes a scene; repeatable), the key spelled as the errors spell it (`seed`, \
+         `render.width`, `curtain[1].energy_flux`, `camera.up[2]`), the value in TOML (`64`, \
+         `'[0, 1, 0]'`, `\"agx\"`; a bare word is text). Overrides apply in command-line order after the \
+         file and before these checks, so the same ranges apply (docs/guide.md, \"Overrides\").\n\n",
+    );
+    out.push_str(
         "Ranges: `[a, b]` includes both ends, `(a, b)` neither, `inf` is unbounded. A type \
          `3 numbers` is a TOML array of three numbers.\n\n",
     );

@@ -23,7 +23,8 @@
 //! 3. when the scene's `render.spp` is larger, the picture at the scene's
 //!    spp, the very image `aurora render` makes of `aurora bake` at that
 //!    size and spp (tested). `--watch` skips it when the file changed again
-//!    meanwhile, so a newer edit waits only for picture 2.
+//!    meanwhile, so a newer edit waits only for picture 2; `aurora preview`
+//!    without `--watch` always does (the quick picture is its last).
 //!
 //! The bake runs at the scene's own settings (beam count, voxel size for
 //! the scene's `render` size): the preview size only sets the picture's.

@@ -1,0 +1,83 @@
+//! The scene's errors in plain words: types named as a scene's author
+//! names them ("whole number", "number", "text", "list", "true or false"),
+//! never Rust's; the nearest key, table or preset suggested; and the
+//! messages that used to be garbled or bare: a curtain with both `path`
+//! and `center`, `colour.lines` given line names, a camera looking
+//! straight up with the default `up`. Each is refused with exit 2.
+
+use crate::common::{refused, scratch, write, Aurora};
+
+/// `aurora scene FILE` of `text`: refused, its stderr.
+fn refusal(name: &str, text: &str) -> String {
+    let d = scratch("messages", name);
+    let f = write(&d, "s.toml", text);
+    refused(&Aurora::new().arg("scene").arg(&f).output())
+}
+
+/// Every phrase of `want` is in `e`, and no Rust type name.
+fn says(e: &str, want: &[&str]) {
+    for w in want {
+        assert!(e.contains(w), "no `{w}` in {e}");
+    }
+    for rust in ["usize", "f64", "u64", "a sequence", "a boolean", "wanted string or table", "invalid type", "unknown field"] {
+        assert!(!e.contains(rust), "`{rust}` in {e}");
+    }
+}
+
+#[test]
+fn types_are_named_in_plain_words() {
+    let cases: [(&str, &str, &[&str]); 6] = [
+        ("width", "[render]\nwidth = 1.5\n", &["render.width: expected a whole number, found the number 1.5", "[1, 16384]"]),
+        ("exposure", "[render]\nexposure = \"bright\"\n", &["render.exposure: expected a number, found the text \"bright\""]),
+        ("shell", "[grid]\ncycles_shell = 1\n", &["grid.cycles_shell: expected true or false, found the whole number 1"]),
+        ("lines", "[grid]\nlines = \"5577\"\n", &["grid.lines: expected a list, found the text \"5577\""]),
+        ("view", "[render]\nview_transform = 3\n", &["render.view_transform: expected text, found 3", "\"standard\", \"agx\""]),
+        ("flux", "[[curtain]]\nenergy_flux = [1]\n", &["curtain[0].energy_flux: expected a number, found a list"]),
+    ];
+    for (name, text, want) in cases {
+        says(&refusal(name, text), want);
+    }
+}
+
+#[test]
+fn the_nearest_key_table_or_preset_is_suggested() {
+    says(&refusal("key", "[[curtain]]\nenergy_flx = 3\n"), &["unknown key `energy_flx` in [[curtain]]; did you mean `energy_flux`?"]);
+    says(&refusal("table", "[rendr]\nwidth = 64\n"), &["unknown table or key `rendr`; did you mean `render`?"]);
+    let e = refused(&Aurora::new().args(["scene", "corona2"]).output());
+    assert!(e.contains("corona2: no such file, and no preset of that name; did you mean `corona`?"), "{e}");
+    // Nothing near: no guess, the known names listed.
+    let e = refusal("far", "[render]\nzzzzzzzz = 1\n");
+    assert!(!e.contains("did you mean") && e.contains("known: width, height, spp"), "{e}");
+}
+
+#[test]
+fn a_curtain_with_path_and_center_is_told_it_takes_one() {
+    let e = refusal("path", "[[curtain]]\ncenter = [0, 0]\npath = [[0, 0], [50, 10]]\n");
+    says(&e, &["s.toml:3: curtain[0].path: a curtain takes either a `center` (with `length` and `rotation_deg`) or a `path`", "not both"]);
+    assert!(!e.contains("out of range") && !e.contains("given"), "{e}");
+}
+
+#[test]
+fn line_names_in_colour_lines_point_to_grid_lines() {
+    let e = refusal("colour-lines", "[colour]\nlines = [\"5577\"]\n");
+    says(
+        &e,
+        &[
+            "colour.lines = [\"5577\"] is the line model",
+            "\"chemistry\" (the default) or \"simple\"",
+            "grid.lines, a list of line names (\"5577\", \"6300\", \"6364\", \"4278\", \"n2_1p\")",
+        ],
+    );
+}
+
+#[test]
+fn a_camera_looking_straight_up_is_told_which_up_to_set() {
+    let e = refusal("up", "[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, 100]\n");
+    says(&e, &["camera.up", "the camera looks straight up; set camera.up = [0, 1, 0]"]);
+    // With that `up` the scene is good.
+    let d = scratch("messages", "up-fixed");
+    let f = write(&d, "s.toml", "[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, 100]\nup = [0, 1, 0]\n");
+    crate::common::ok(&Aurora::new().arg("scene").arg(&f).output());
+    let e = refusal("along", "[camera]\nposition = [0, -100, 1]\nlook_at = [0, 0, 1]\nup = [0, 1, 0]\n");
+    says(&e, &["set camera.up = [0, 0, 1]"]);
+}
