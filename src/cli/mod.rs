@@ -12,6 +12,7 @@ mod frames;
 mod preview;
 mod profile;
 mod render;
+mod render_checks;
 mod scene;
 
 use anyhow::{Context, Result};

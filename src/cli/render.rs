@@ -65,6 +65,7 @@ struct Files<'a> {
 
 pub fn run(a: RenderArgs) -> Result<()> {
     let RenderArgs { scene: scene_arg, vdb, frame, out, png, spp, shadow_samples, seed, adaptive, grid, grid_max, common } = a;
+    super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
     if let Some(m) = grid_max {
         if !(m.is_finite() && m > 0.0) {
             return Err(InputError(format!("--grid-max {m}: must be a finite number > 0")).into());
