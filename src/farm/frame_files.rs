@@ -193,6 +193,8 @@ pub fn vdb_header(path: &Path) -> Result<VdbHeader, VdbHeaderError> {
 pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(String, &'static str)]) -> Result<PathBuf, OutputError> {
     crate::util::atomic_write::prepare_folder(out)?;
     let path = out.join(USDA_NAME);
+    // Refused as the user's (exit 2) when the name is not a regular file.
+    crate::util::atomic_write::check_replaceable(&path)?;
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
     usd::write_usda_sequence(&path, frames, &stage_vdb_name, &fields, 1000.0, fps)
         .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;

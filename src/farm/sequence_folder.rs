@@ -384,6 +384,24 @@ fn frame_of_name(name: &str, ext: &str) -> Option<i64> {
 mod tests {
     use super::*;
 
+    /// A claim whose stage cannot be written (a directory in its place,
+    /// put there after the folder was opened) takes the record back: the
+    /// folder holds what it held before, nothing of this bake.
+    #[test]
+    fn a_claim_whose_stage_cannot_be_written_leaves_no_record() {
+        let dir = std::env::temp_dir().join(format!("aurora-claim-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let scene = Scene::default();
+        let fields = crate::io::bake_folder::stage_fields(&scene);
+        let mut seq = Sequence::open(&dir, BakeIdentity::of(&scene), &[1, 2], 24.0, fields, false, || {}).unwrap();
+        std::fs::create_dir(dir.join(USDA_NAME)).unwrap();
+        let e = seq.claim().unwrap_err();
+        assert!(e.to_string().contains("aurora.usda") && e.is_input(), "{e}");
+        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, [USDA_NAME]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     #[test]
     fn frame_reports_are_recognised_by_name() {
         assert_eq!(frame_of_name("aurora.0001.json", "json"), Some(1));
