@@ -1,7 +1,9 @@
 //! `aurora bake`: one bake into a folder ([`bake_one`]), or a frame
 //! sequence ([`bake_frames`]), resumed frame by frame: a frame already
-//! complete for this bake is skipped, one another process is baking is
-//! waited for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
+//! complete for this bake is skipped, one whose VDB is not the file its
+//! report records (size, header UUID: `aurora::farm::frame_files::frame_state`)
+//! is baked again with a warning, one another process is baking is waited
+//! for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
 //!
 //! What it says on stderr goes through one [`Report`]: bars, summaries and
 //! warning lines for a terminal, or with `--progress json` only JSON objects

@@ -12,9 +12,16 @@
 //! under that lock. So at every instant the folder holds frames of the
 //! record's bake only, and the stage is the owner's.
 //!
-//! **Opening** ([`Sequence::open`], under the lock). The folder's frames of
-//! another bake (a complete frame whose report names another identity, or
-//! none, or cannot be read) and the record are examined:
+//! **Opening** ([`Sequence::open`], under the lock). The record, the
+//! stage's name and the folder's frames of another bake (a complete frame
+//! whose report names another identity, or none, or is not a report) are
+//! examined before anything is deleted or baked:
+//! - a record or a report that cannot be read (an I/O error such as too
+//!   many open files; for the record, also a name that is not a regular
+//!   file): an I/O error ([`SequenceError::Record`], [`SequenceError::Read`];
+//!   exit 1), never a verdict on whose the folder is, and nothing is
+//!   deleted, `--rebake` or not; a record read but not one aurora writes:
+//!   [`SequenceError::BadRecord`] (exit 2);
 //! - another bake's frame, or another bake's record: refused
 //!   ([`SequenceError::OtherBake`], [`SequenceError::Claimed`]; exit 2)
 //!   naming the first such frame (or the record) and how to go on: a new
@@ -29,7 +36,8 @@
 //! - no record and no other bake's frame: nothing is written yet. The folder
 //!   is claimed by the first frame committed ([`Sequence::write_frame`]),
 //!   so a bake that fails before its first frame (a refused scene, a full
-//!   disk) leaves nothing that stops the next one.
+//!   disk, a stage that cannot be written: the record is then removed
+//!   again) leaves nothing that stops the next one.
 //!
 //! **Committing a frame** ([`Sequence::write_frame`]). The frame is staged
 //! in full (temporaries), then, under the folder lock, the record is read
