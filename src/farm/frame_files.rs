@@ -205,9 +205,9 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(Stri
 /// `frames`, counted as it is written into a sink that keeps none of them.
 pub fn sequence_usda_bytes(frames: &[i64], fps: f64, fields: &[(String, &'static str)]) -> Result<u64, std::io::Error> {
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
-    let mut sink = ByteCount(0);
+    let mut sink = std::io::BufWriter::with_capacity(usd::STREAM_BUFFER, ByteCount(0));
     usd::write_usda_sequence_into(&mut sink, frames, &stage_vdb_name, &fields, 1000.0, fps)?;
-    Ok(sink.0)
+    Ok(sink.into_inner().map_err(|e| e.into_error())?.0)
 }
 
 /// A frame's VDB name as the stage lists it (relative to the stage).

@@ -132,7 +132,9 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
             Samples::Sequence { frames, name, .. } => {
                 writeln!(w, "        asset filePath.timeSamples = {{")?;
                 for &f in frames {
-                    writeln!(w, "            {f}: @{}@,", asset(&name(f)))?;
+                    let file = name(f);
+                    let dot = if file.starts_with("./") || file.starts_with("../") { "" } else { "./" };
+                    writeln!(w, "            {f}: @{dot}{file}@,")?;
                 }
                 writeln!(w, "        }}")?;
             }
