@@ -1,7 +1,9 @@
 //! `aurora bake`: one bake into a folder ([`bake_one`]), or a frame
 //! sequence ([`bake_frames`]), resumed frame by frame: a frame already
-//! complete for this bake is skipped, one another process is baking is
-//! waited for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
+//! complete for this bake is skipped, one whose VDB is not the file its
+//! report records (size, header UUID: `aurora::farm::frame_files::frame_state`)
+//! is baked again with a warning, one another process is baking is waited
+//! for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
 //!
 //! What it says on stderr goes through one [`Report`]: bars, summaries and
 //! warning lines for a terminal, or with `--progress json` only JSON objects
@@ -11,9 +13,10 @@
 use super::args::{BakeArgs, ProgressFormat};
 use super::bars::Bars;
 use super::exit::InputError;
-use super::frames::frame_selection;
+use super::frames::{frame_selection, selection};
 use super::{load_scene, print_warnings, with_threads};
 use anyhow::Result;
+use aurora::farm::frame_files::FrameState;
 use aurora::scene::Scene;
 use aurora::util::progress::{JsonProgress, Progress};
 use std::path::Path;
@@ -70,7 +73,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
     let Some(spec) = frames else {
         return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };
-    let (mut frames, mine) = frame_selection(&spec, shard.as_deref())?;
+    let super::frames::Selection { mut frames, mine, shard } = selection(&spec, shard.as_deref())?;
     if let Some(seq) = sequence {
         let (all, _) = frame_selection(&seq, None)?;
         if let Some(f) = frames.iter().find(|f| all.binary_search(f).is_err()) {
@@ -80,14 +83,15 @@ pub fn run(a: BakeArgs) -> Result<()> {
     }
     if plan {
         // This process's share: what one farm task of the range costs.
-        return with_threads(common.threads, || plan_frames(&scene, &mine, plan_samples as usize, progress, &report));
+        let task = aurora::farm::cost_plan::Task { sequence: &frames, frames: &mine, shard };
+        return with_threads(common.threads, || plan_frames(&scene, task, plan_samples as usize, progress, &report));
     }
     with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, &report))
 }
 
-/// `--plan`: the estimate for `frames` on stdout (`aurora::farm::cost_plan`).
-fn plan_frames(scene: &Scene, frames: &[i64], samples: usize, format: ProgressFormat, say: &Report) -> Result<()> {
-    let plan = aurora::farm::cost_plan::plan(scene, frames, samples, say.progress())?;
+/// `--plan`: the estimate for `task` on stdout (`aurora::farm::cost_plan`).
+fn plan_frames(scene: &Scene, task: aurora::farm::cost_plan::Task<'_>, samples: usize, format: ProgressFormat, say: &Report) -> Result<()> {
+    let plan = aurora::farm::cost_plan::plan_task(scene, task, samples, say.progress())?;
     match format {
         ProgressFormat::Json => println!("{}", plan.json()),
         ProgressFormat::Bars => println!("{}", plan.text()),
@@ -119,10 +123,10 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
     })?;
     say.frames(0, mine.len());
     let t0 = std::time::Instant::now();
-    let (mut baked, mut skipped) = (0usize, 0usize);
+    let (mut baked, mut skipped, mut mismatched) = (0usize, 0usize, 0usize);
     let mut plan: Option<aurora::pipeline::bake::plan::BakePlan> = None;
     for &f in mine {
-        if seq.frame_complete(f) {
+        if seq.frame_state(f)? == FrameState::Complete {
             skipped += 1;
             say.frames(baked + skipped, mine.len());
             continue;
@@ -132,10 +136,17 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
         // then finds it complete.
         let _lock =
             aurora::farm::frame_files::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
-        if seq.frame_complete(f) {
-            skipped += 1;
-            say.frames(baked + skipped, mine.len());
-            continue;
+        match seq.frame_state(f)? {
+            FrameState::Complete => {
+                skipped += 1;
+                say.frames(baked + skipped, mine.len());
+                continue;
+            }
+            FrameState::Mismatch(why) => {
+                mismatched += 1;
+                say.warnings(&[format!("frame {f}: {why}; baking it again")]);
+            }
+            FrameState::Absent => {}
         }
         let at = Scene { animation: aurora::pipeline::motion::at_frame(&scene.animation, f), ..scene.clone() };
         // One plan, carried from frame to frame (only the time changes).
@@ -146,6 +157,11 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
         baked += 1;
         say.say(|| format!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display()));
         say.frames(baked + skipped, mine.len());
+    }
+    if mismatched > 0 {
+        say.warnings(&[format!(
+            "{mismatched} frames baked again: their VDB was not the file their report records (its size in bytes and header UUID)"
+        )]);
     }
     say.say(|| {
         let secs = t0.elapsed().as_secs_f64();

@@ -8,6 +8,22 @@ use std::path::{Path, PathBuf};
 /// The frames of SPEC (exit 2 on bad syntax or a negative frame) and the
 /// share `--shard` gives this process.
 pub fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec<i64>)> {
+    let s = selection(spec, shard)?;
+    Ok((s.frames, s.mine))
+}
+
+/// A frame range and this process's share of it.
+pub struct Selection {
+    /// Every frame of SPEC, ascending.
+    pub frames: Vec<i64>,
+    /// The frames `--shard` gives this process (all of them without one).
+    pub mine: Vec<i64>,
+    /// The shard, (index, count), when one was given.
+    pub shard: Option<(u64, u64)>,
+}
+
+/// [`frame_selection`], with the shard it resolved.
+pub fn selection(spec: &str, shard: Option<&str>) -> Result<Selection> {
     let frames = aurora::farm::frame_range::parse_range(spec).map_err(|e| InputError(e.to_string()))?;
     if let Some(f) = frames.iter().find(|&&f| f < 0) {
         return Err(InputError(format!(
@@ -15,14 +31,17 @@ pub fn frame_selection(spec: &str, shard: Option<&str>) -> Result<(Vec<i64>, Vec
         ))
         .into());
     }
-    let (i, n) = match shard {
-        None => (0, 1),
-        Some(t) => aurora::farm::frame_range::Shard::parse(t)
-            .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
-            .map_err(|e| InputError(e.to_string()))?,
+    let shard = match shard {
+        None => None,
+        Some(t) => Some(
+            aurora::farm::frame_range::Shard::parse(t)
+                .and_then(|s| s.resolve(|k| std::env::var(k).ok()))
+                .map_err(|e| InputError(e.to_string()))?,
+        ),
     };
+    let (i, n) = shard.unwrap_or((0, 1));
     let mine = aurora::farm::frame_range::select(&frames, i, n);
-    Ok((frames, mine))
+    Ok(Selection { frames, mine, shard })
 }
 
 /// `name.ext` -> `name.NNNN.ext` (the frame before the extension).

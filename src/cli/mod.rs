@@ -17,6 +17,7 @@ mod help;
 mod preview;
 mod profile;
 mod render;
+mod render_checks;
 mod scene;
 
 use anyhow::{Context, Result};

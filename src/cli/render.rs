@@ -90,6 +90,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
         (out, png) => (out.unwrap_or_else(|| PathBuf::from("aurora.exr")), png),
     };
     let format = image_format("--out", &out)?;
+    super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
     if let Some(p) = &png {
         aurora::util::atomic_write::check_replaceable(p)?;
     }

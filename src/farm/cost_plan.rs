@@ -15,7 +15,10 @@
 //!
 //! ```text
 //! bytes per frame   B = mean over samples of (frame VDB + frame report)
-//! total bytes         = N B + the stage (aurora.usda, written once)
+//! total bytes         = N B + U (what one task writes)
+//! stage             U = aurora.usda listing every frame of the sequence,
+//!                       counted exactly by its writer into a sink that
+//!                       keeps nothing; every task writes it whole
 //! CPU per frame     C = mean CPU of the samples after the first
 //! setup per task    S = CPU of the first sample - C (the plan: footprints,
 //!                       atmosphere, colour table; a task pays it once)
@@ -30,6 +33,13 @@
 //! freed before the next; the plan is shared). The memory budget's model
 //! (`crate::pipeline::memory_budget::estimate`) is printed beside it. With one sample, C is
 //! that sample's CPU (setup included) and S is 0: an upper bound.
+//!
+//! The task is one shard's share (`--shard I/N`): its N frames are the
+//! ones it bakes, and the samples are drawn from them, but the stage it
+//! writes lists the whole sequence (each shard rewrites the same stage,
+//! `crate::farm::frame_files::write_sequence_usda`), so for a long range
+//! the stage can outweigh the task's frames. The ownership record (about
+//! 100 bytes, once per folder) is left out.
 //!
 //! What it does not know: how a farm packs tasks (a task's setup is paid
 //! once per task; divide the range by the tasks' frame count to add it per
@@ -58,6 +68,9 @@ pub enum PlanError {
     Scratch { path: PathBuf, message: String },
     #[error("--plan needs at least one frame")]
     NoFrames,
+    /// The task's shard holds no frame of the range.
+    #[error("--shard {index}/{count}: this shard has no frame to plan: the range has {frames} frames, fewer than the {count} shards (shard I takes the frames at positions I, I+N, ...; shards {frames} to {} get none)", count - 1)]
+    EmptyShard { index: u64, count: u64, frames: usize },
 }
 
 impl PlanError {
@@ -67,7 +80,7 @@ impl PlanError {
             PlanError::Bake(e) => e.is_input(),
             PlanError::Output(e) => e.is_input(),
             PlanError::Scratch { .. } => false,
-            PlanError::NoFrames => true,
+            PlanError::NoFrames | PlanError::EmptyShard { .. } => true,
         }
     }
 }
@@ -89,12 +102,18 @@ pub struct Sample {
 /// The estimate for a frame range (module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CostPlan {
+    /// The frames the task bakes.
     pub frames: usize,
+    /// The frames of the whole sequence (its stage lists them all).
+    pub sequence_frames: usize,
+    /// The task's shard, (index, count), when it is one.
+    pub shard: Option<(u64, u64)>,
     pub first: i64,
     pub last: i64,
     pub samples: Vec<Sample>,
     pub bytes_per_frame: f64,
-    /// The sequence stage, aurora.usda, written once.
+    /// The sequence stage, aurora.usda, as the task writes it (every frame
+    /// of the sequence listed).
     pub stage_bytes: u64,
     pub total_bytes: f64,
     pub cpu_per_frame_s: f64,
@@ -156,17 +175,44 @@ fn scratch_folder() -> Result<Scratch, PlanError> {
     Ok(Scratch(path))
 }
 
+/// What one farm task bakes: its frames (`frames`, ascending), the sequence
+/// they belong to (`sequence`, whose stage the task writes) and its shard
+/// (index, count) when it is one.
+#[derive(Clone, Copy, Debug)]
+pub struct Task<'a> {
+    pub sequence: &'a [i64],
+    pub frames: &'a [i64],
+    pub shard: Option<(u64, u64)>,
+}
+
 fn file_len(path: &Path) -> Result<u64, PlanError> {
     std::fs::metadata(path).map(|m| m.len()).map_err(|e| PlanError::Scratch { path: path.to_path_buf(), message: e.to_string() })
 }
 
-/// Bakes `samples` frames of `frames` (module docs) and estimates the range.
-/// Nothing is written outside a scratch folder, which is removed.
+/// Bakes `samples` frames of `frames` (module docs) and estimates the
+/// range, baked by one task. Nothing is written outside a scratch folder,
+/// which is removed.
 pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progress) -> Result<CostPlan, PlanError> {
+    plan_task(scene, Task { sequence: frames, frames, shard: None }, samples, progress)
+}
+
+/// [`plan`] for one task of a sequence: its frames sampled and estimated,
+/// and the stage counted for the whole sequence it writes (module docs).
+/// A shard without frames is refused naming the shard.
+pub fn plan_task(scene: &Scene, task: Task<'_>, samples: usize, progress: &dyn Progress) -> Result<CostPlan, PlanError> {
+    let frames = task.frames;
     let (&first, &last) = match (frames.first(), frames.last()) {
         (Some(a), Some(b)) => (a, b),
-        _ => return Err(PlanError::NoFrames),
+        _ => {
+            return Err(match task.shard {
+                Some((index, count)) => PlanError::EmptyShard { index, count, frames: task.sequence.len() },
+                None => PlanError::NoFrames,
+            })
+        }
     };
+    let fields = bake_folder::stage_fields(scene);
+    let stage_bytes = crate::farm::frame_files::sequence_usda_bytes(task.sequence, scene.animation.fps, &fields)
+        .map_err(|e| OutputError::Write { path: PathBuf::from(bake_folder::USDA_NAME), message: e.to_string() })?;
     let scratch = scratch_folder()?;
     let identity = BakeIdentity::of(scene);
     let mut carried: Option<bake::plan::BakePlan> = None;
@@ -191,10 +237,11 @@ pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progre
         });
         drop(b);
     }
-    let stage = crate::farm::frame_files::write_sequence_usda(&scratch.0, frames, scene.animation.fps, &bake_folder::stage_fields(scene))?;
-    let stage_bytes = file_len(&stage)?;
     let (_, peak_rss_bytes) = usage();
-    Ok(estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes))
+    let mut plan = estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes);
+    plan.sequence_frames = task.sequence.len();
+    plan.shard = task.shard;
+    Ok(plan)
 }
 
 /// The module docs' estimate from measured samples.
@@ -217,6 +264,8 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
     };
     CostPlan {
         frames: n,
+        sequence_frames: n,
+        shard: None,
         first,
         last,
         bytes_per_frame,
@@ -276,8 +325,12 @@ impl CostPlan {
 
     /// The plan as a table for a terminal.
     pub fn text(&self) -> String {
+        let shard = match self.shard {
+            Some((i, n)) => format!(" of shard {i}/{n} (the sequence has {} frames)", self.sequence_frames),
+            None => String::new(),
+        };
         let mut t = format!(
-            "plan for frames {}-{} ({} frames), from {} calibration frames baked on {} threads:\n",
+            "plan for frames {}-{} ({} frames){shard}, from {} calibration frames baked on {} threads:\n",
             self.first,
             self.last,
             self.frames,
@@ -293,9 +346,11 @@ impl CostPlan {
         }
         t += &format!("bytes per frame      {} ({:.0} B)\n", human_bytes(self.bytes_per_frame), self.bytes_per_frame);
         t += &format!(
-            "bytes in total       {} (+ the stage aurora.usda, {})\n",
+            "bytes in total       {} ({} frames' VDBs and reports, and the stage aurora.usda, {}, listing the sequence's {} frames)\n",
             human_bytes(self.total_bytes),
-            human_bytes(self.stage_bytes as f64)
+            self.frames,
+            human_bytes(self.stage_bytes as f64),
+            self.sequence_frames
         );
         t += &format!(
             "peak memory per task {} measured ({} by the memory budget's model)\n",
@@ -317,6 +372,8 @@ impl CostPlan {
     pub fn json(&self) -> serde_json::Value {
         json!({
             "frames": self.frames,
+            "sequence_frames": self.sequence_frames,
+            "shard": self.shard.map(|(i, n)| json!([i, n])),
             "first": self.first,
             "last": self.last,
             "samples": self.samples.iter().map(|s| json!({

@@ -12,9 +12,16 @@
 //! under that lock. So at every instant the folder holds frames of the
 //! record's bake only, and the stage is the owner's.
 //!
-//! **Opening** ([`Sequence::open`], under the lock). The folder's frames of
-//! another bake (a complete frame whose report names another identity, or
-//! none, or cannot be read) and the record are examined:
+//! **Opening** ([`Sequence::open`], under the lock). The record, the
+//! stage's name and the folder's frames of another bake (a complete frame
+//! whose report names another identity, or none, or is not a report) are
+//! examined before anything is deleted or baked:
+//! - a record or a report that cannot be read (an I/O error such as too
+//!   many open files; for the record, also a name that is not a regular
+//!   file): an I/O error ([`SequenceError::Record`], [`SequenceError::Read`];
+//!   exit 1), never a verdict on whose the folder is, and nothing is
+//!   deleted, `--rebake` or not; a record read but not one aurora writes:
+//!   [`SequenceError::BadRecord`] (exit 2);
 //! - another bake's frame, or another bake's record: refused
 //!   ([`SequenceError::OtherBake`], [`SequenceError::Claimed`]; exit 2)
 //!   naming the first such frame (or the record) and how to go on: a new
@@ -29,7 +36,8 @@
 //! - no record and no other bake's frame: nothing is written yet. The folder
 //!   is claimed by the first frame committed ([`Sequence::write_frame`]),
 //!   so a bake that fails before its first frame (a refused scene, a full
-//!   disk) leaves nothing that stops the next one.
+//!   disk, a stage that cannot be written: the record is then removed
+//!   again) leaves nothing that stops the next one.
 //!
 //! **Committing a frame** ([`Sequence::write_frame`]). The frame is staged
 //! in full (temporaries), then, under the folder lock, the record is read
@@ -44,7 +52,8 @@
 //! nor a frame): a hidden name beside `.aurora.lock`, so `aurora.*.json`
 //! remains the frames' reports.
 
-use crate::io::bake_folder::{BakeReport, OutputError, FRAME_STEM, LOCK_STEM};
+use crate::farm::frame_files::{FrameState, ReportError};
+use crate::io::bake_folder::{BakeReport, OutputError, FRAME_STEM, LOCK_STEM, USDA_NAME};
 use crate::pipeline::bake::identity::BakeIdentity;
 use crate::pipeline::bake::Bake;
 use crate::scene::Scene;
@@ -62,10 +71,21 @@ pub enum SequenceError {
     /// The folder holds a frame of another bake.
     #[error("{}: frame {frame} ({}) is not of this bake: {why}; {HOW}", dir.display(), report.display())]
     OtherBake { dir: PathBuf, frame: i64, report: PathBuf, why: String },
-    /// The folder is claimed by another bake (its record), without a frame of it.
-    /// `taken_over`: the record changed while this run baked.
+    /// The folder is claimed by another bake (its record names it), without
+    /// a frame of it. `taken_over`: the record changed while this run baked.
     #[error("{}: the folder belongs to another bake ({}: {why}){}; {HOW}", dir.display(), record.display(), if *taken_over { ", which took it over while this one ran: this run's frame was not written" } else { "" })]
     Claimed { dir: PathBuf, record: PathBuf, why: String, taken_over: bool },
+    /// The record was read and is not one aurora writes (not JSON, or it
+    /// names no bake): whose the folder is cannot be told.
+    #[error("{}: the folder's ownership record {} is not one aurora writes ({why}); remove it if the folder's frames are of this bake, or add --rebake to delete any other bake's frames and bake these", dir.display(), record.display())]
+    BadRecord { dir: PathBuf, record: PathBuf, why: String },
+    /// The record could not be read (the OS's error, or it is not a regular
+    /// file): nothing is known about the folder's owner, nothing is deleted.
+    #[error("cannot read {}, the sequence folder's ownership record: {cause}", record.display())]
+    Record { record: PathBuf, cause: std::io::Error },
+    /// A folder listing or a frame's report could not be read.
+    #[error("cannot read {}: {cause}", path.display())]
+    Read { path: PathBuf, cause: std::io::Error },
     #[error(transparent)]
     Output(#[from] OutputError),
 }
@@ -75,7 +95,8 @@ impl SequenceError {
     /// (exit status 2).
     pub fn is_input(&self) -> bool {
         match self {
-            SequenceError::OtherBake { .. } | SequenceError::Claimed { .. } => true,
+            SequenceError::OtherBake { .. } | SequenceError::Claimed { .. } | SequenceError::BadRecord { .. } => true,
+            SequenceError::Record { .. } | SequenceError::Read { .. } => false,
             SequenceError::Output(o) => o.is_input(),
         }
     }
@@ -92,8 +113,8 @@ impl From<AtomicError> for SequenceError {
 enum Owner {
     Nobody,
     Bake(BakeIdentity),
-    /// A record that cannot be read as one (the reason).
-    Unknown(String),
+    /// A record that was read and is not one (the reason).
+    NotARecord(String),
 }
 
 /// One run's view of a sequence folder (module docs).
@@ -127,7 +148,11 @@ impl Sequence {
         crate::util::atomic_write::prepare_folder(dir)?;
         let mut seq = Sequence { dir: dir.to_path_buf(), identity, frames: frames.to_vec(), fps, fields, claimed: false };
         let _lock = UnitLock::acquire(dir, LOCK_STEM, on_wait)?;
-        let owner = seq.owner();
+        // Everything that could stop this run is read and checked before
+        // anything is deleted or baked: the record (a failed read stops
+        // the run, exit 1), the stage's name, the frames' reports.
+        let owner = seq.owner()?;
+        crate::util::atomic_write::check_replaceable(&dir.join(USDA_NAME))?;
         let others = seq.other_frames()?;
         if rebake {
             for (frame, report, _) in &others {
@@ -160,9 +185,10 @@ impl Sequence {
         &self.identity
     }
 
-    /// Frame `frame` is complete for this bake ([`crate::farm::frame_files::frame_complete`]).
-    pub fn frame_complete(&self, frame: i64) -> bool {
-        crate::farm::frame_files::frame_complete(&self.dir, frame, &self.identity)
+    /// Frame `frame`'s state for this bake ([`crate::farm::frame_files::frame_state`]):
+    /// complete, absent, or a VDB that does not match its report.
+    pub fn frame_state(&self, frame: i64) -> Result<FrameState, SequenceError> {
+        crate::farm::frame_files::frame_state(&self.dir, frame, &self.identity).map_err(report_error)
     }
 
     /// Fails if another bake owns the folder now (a `--rebake` took it over):
@@ -170,7 +196,7 @@ impl Sequence {
     /// lost the folder stops at once; [`Self::write_frame`] checks again
     /// under the lock.
     pub fn check_still_ours(&self) -> Result<(), SequenceError> {
-        match self.owner() {
+        match self.owner()? {
             Owner::Nobody => Ok(()),
             Owner::Bake(id) if id == self.identity => Ok(()),
             other => Err(self.lost(other)?),
@@ -183,7 +209,7 @@ impl Sequence {
     pub fn write_frame(&mut self, scene: &Scene, bake: &Bake, frame: i64) -> Result<BakeReport, SequenceError> {
         let staged = crate::farm::frame_files::stage_frame(scene, bake, &self.dir, frame, &self.identity)?;
         let _lock = UnitLock::acquire(&self.dir, LOCK_STEM, || {})?;
-        match self.owner() {
+        match self.owner()? {
             Owner::Bake(id) if id == self.identity => {
                 if !self.claimed {
                     self.write_stage()?;
@@ -205,20 +231,31 @@ impl Sequence {
         self.dir.join(RECORD_NAME)
     }
 
-    fn owner(&self) -> Owner {
-        let path = self.record_path();
-        match std::fs::symlink_metadata(&path) {
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Owner::Nobody,
-            _ => {}
+    /// Who the record names. Only a record that was read can name a bake or
+    /// be found not to be one; a failure to read it (an I/O error such as
+    /// too many open files, or a name that is not a regular file: only
+    /// those are ours) is an error of its own, never a verdict about the
+    /// folder.
+    fn owner(&self) -> Result<Owner, SequenceError> {
+        let record = self.record_path();
+        let failed = |cause| SequenceError::Record { record: record.clone(), cause };
+        match std::fs::symlink_metadata(&record) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Owner::Nobody),
+            Err(e) => return Err(failed(e)),
+            Ok(m) if !m.is_file() => {
+                let kind = crate::util::input_file::kind_name(m.file_type());
+                return Err(failed(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("is {kind}, not a regular file"))));
+            }
+            Ok(_) => {}
         }
-        let json = crate::util::input_file::read(&path)
-            .map_err(|e| e.reason())
-            .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).map_err(|e| format!("not JSON: {e}")));
-        match json.map(|j| BakeIdentity::from_report(&j)) {
-            Ok(Some(id)) => Owner::Bake(id),
-            Ok(None) => Owner::Unknown("it names no bake identity".into()),
-            Err(why) => Owner::Unknown(why),
-        }
+        let bytes = crate::util::input_file::read(&record).map_err(|e| failed(e.into()))?;
+        Ok(match serde_json::from_slice::<serde_json::Value>(&bytes) {
+            Err(e) => Owner::NotARecord(format!("not JSON: {e}")),
+            Ok(j) => match BakeIdentity::from_report(&j) {
+                Some(id) => Owner::Bake(id),
+                None => Owner::NotARecord("it names no bake identity".into()),
+            },
+        })
     }
 
     /// The refusal when `owner`, another bake, has the folder: taken over
@@ -236,21 +273,29 @@ impl Sequence {
     fn claimed_error(&self, owner: Owner, taken_over: bool) -> SequenceError {
         let why = match owner {
             Owner::Bake(id) => format!("it names {}", self.identity.difference(&id)),
-            Owner::Unknown(why) => why,
+            Owner::NotARecord(why) => return SequenceError::BadRecord { dir: self.dir.clone(), record: self.record_path(), why },
             Owner::Nobody => "it is gone".into(),
         };
         SequenceError::Claimed { dir: self.dir.clone(), record: self.record_path(), why, taken_over }
     }
 
     /// Makes the folder this bake's: the record (unless it names this bake
-    /// already), then the stage. The caller holds the folder's lock.
+    /// already), then the stage. The caller holds the folder's lock. If the
+    /// stage cannot be written, a record this call wrote is removed again
+    /// (the folder is claimed by its first frame, which is not written).
     fn claim(&mut self) -> Result<(), SequenceError> {
-        if self.owner() != Owner::Bake(self.identity.clone()) {
+        let wrote_record = self.owner()? != Owner::Bake(self.identity.clone());
+        if wrote_record {
             let record = serde_json::json!({ "bake_identity": self.identity.to_json() });
             let text = serde_json::to_string_pretty(&record).expect("json serialises") + "\n";
             crate::util::atomic_write::write_atomic(&self.record_path(), text.as_bytes())?;
         }
-        self.write_stage()?;
+        if let Err(e) = self.write_stage() {
+            if wrote_record {
+                let _ = remove_regular(&self.record_path());
+            }
+            return Err(e);
+        }
         self.claimed = true;
         Ok(())
     }
@@ -262,8 +307,14 @@ impl Sequence {
 
     /// The frame numbers of the folder's names `aurora.NNNN.EXT`.
     fn frames_named(&self, ext: &str) -> Result<Vec<i64>, SequenceError> {
-        let entries = std::fs::read_dir(&self.dir).map_err(|source| AtomicError::Io { path: self.dir.clone(), source })?;
-        Ok(entries.flatten().filter_map(|e| frame_of_name(&e.file_name().to_string_lossy(), ext)).collect())
+        let failed = |cause| SequenceError::Read { path: self.dir.clone(), cause };
+        let mut frames = Vec::new();
+        for entry in std::fs::read_dir(&self.dir).map_err(failed)? {
+            if let Some(f) = frame_of_name(&entry.map_err(failed)?.file_name().to_string_lossy(), ext) {
+                frames.push(f);
+            }
+        }
+        Ok(frames)
     }
 
     /// Frame VDBs without a report: frames interrupted between their two
@@ -293,12 +344,25 @@ impl Sequence {
             let why = match crate::farm::frame_files::frame_identity(&report) {
                 Ok(id) if id == self.identity => continue,
                 Ok(id) => format!("it was baked from {}", self.identity.difference(&id)),
-                Err(why) => why,
+                Err(ReportError::NotABake { why, .. }) => why,
+                Err(e) => return Err(report_error(e)),
             };
             out.push((frame, report, why));
         }
         out.sort_by_key(|o| o.0);
         Ok(out)
+    }
+}
+
+/// A report that could not be read is an I/O error (exit 1); one that is
+/// not a report is the folder's content ([`SequenceError::OtherBake`] says
+/// so where it is found).
+fn report_error(e: ReportError) -> SequenceError {
+    match e {
+        ReportError::Unreadable { path, cause } => SequenceError::Read { path, cause },
+        ReportError::NotABake { path, why } => {
+            SequenceError::Read { path, cause: std::io::Error::new(std::io::ErrorKind::InvalidData, why) }
+        }
     }
 }
 
@@ -327,6 +391,24 @@ fn frame_of_name(name: &str, ext: &str) -> Option<i64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A claim whose stage cannot be written (a directory in its place,
+    /// put there after the folder was opened) takes the record back: the
+    /// folder holds what it held before, nothing of this bake.
+    #[test]
+    fn a_claim_whose_stage_cannot_be_written_leaves_no_record() {
+        let dir = std::env::temp_dir().join(format!("aurora-claim-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let scene = Scene::default();
+        let fields = crate::io::bake_folder::stage_fields(&scene);
+        let mut seq = Sequence::open(&dir, BakeIdentity::of(&scene), &[1, 2], 24.0, fields, false, || {}).unwrap();
+        std::fs::create_dir(dir.join(USDA_NAME)).unwrap();
+        let e = seq.claim().unwrap_err();
+        assert!(e.to_string().contains("aurora.usda") && e.is_input(), "{e}");
+        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        assert_eq!(names, [USDA_NAME]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn frame_reports_are_recognised_by_name() {

@@ -6,7 +6,10 @@
 //! A frame sequence (`aurora bake --frames`) gets one stage whose fields'
 //! `filePath` is time-sampled, one sample per frame file
 //! ([`usda_sequence_text`]). One writer makes both: a single bake is a
-//! one-sample sequence without timing.
+//! one-sample sequence without timing. It writes line by line into a
+//! buffered temporary ([`write_usda_sequence`]) or any sink
+//! ([`write_usda_sequence_into`]), so a stage of ten million frames (about
+//! 90 bytes a frame and field) costs its buffer in memory, not its length.
 //!
 //! Schema facts (usd-core's `usdVol/generatedSchema.usda`): `fieldClass` is a
 //! token among `levelSet`, `fogVolume`, `staggered`, `unknown`;
@@ -19,7 +22,7 @@
 //! already maps voxel indices to world coordinates in kilometres, z up, so the
 //! stage declares `metersPerUnit = 1000` and `upAxis = "Z"`.
 
-use std::fmt::Write as _;
+use std::io::Write;
 use std::path::Path;
 
 /// Name of the `Volume` prim (and the stage's default prim).
@@ -57,14 +60,17 @@ fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> 
     Ok(())
 }
 
-/// What the fields' `filePath` holds: the frames' VDB files (frame number,
-/// file name relative to the stage) and, for a sequence, its fps. A single
-/// bake is a one-sample sequence without timing: one file for every time,
-/// `filePath` a plain asset and no time codes on the stage.
-struct Samples<'a> {
-    frames: Vec<(i64, &'a str)>,
-    /// `None`: a single bake (exactly one frame, untimed).
-    fps: Option<f64>,
+/// What the fields' `filePath` holds. A single bake is a one-sample
+/// sequence without timing: one file for every time, `filePath` a plain
+/// asset and no time codes on the stage.
+#[derive(Clone, Copy)]
+enum Samples<'a> {
+    /// A single bake: the VDB's name relative to the stage.
+    Single(&'a str),
+    /// A sequence: its frames, ascending; each frame's VDB name relative to
+    /// the stage, made when its line is written (nothing is kept per
+    /// frame); its fps.
+    Sequence { frames: &'a [i64], name: &'a dyn Fn(i64) -> String, fps: f64 },
 }
 
 /// `./name` unless the name already starts at `.` or `..`, so the path
@@ -77,140 +83,159 @@ fn asset(name: &str) -> String {
     }
 }
 
-/// The one writer of stage text (single bake and sequence). Stage metadata
-/// in the order usd-core's `ExportToString` sorts it.
-fn stage_text(samples: &Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
-    let frames = &samples.frames;
-    let (first, last) = (frames.first().map_or(0, |f| f.0), frames.last().map_or(0, |f| f.0));
-    let mut s = String::new();
-    let _ = writeln!(s, "#usda 1.0");
-    let _ = writeln!(s, "(");
-    let _ = writeln!(s, "    defaultPrim = \"{VOLUME_PRIM}\"");
-    match samples.fps {
-        None => {
-            let _ = writeln!(
-                s,
-                "    doc = \"Aurora volume written by {}; fields in {}\"",
-                crate::io::vdb::write::CREATOR,
-                asset(frames.first().map_or("", |f| f.1))
-            );
+/// The one writer of stage text (single bake and sequence), line by line
+/// into `w`: what it holds at any time is one line, however many frames
+/// the sequence has (callers buffer `w`). Stage metadata in the order
+/// usd-core's `ExportToString` sorts it.
+fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> std::io::Result<()> {
+    writeln!(w, "#usda 1.0")?;
+    writeln!(w, "(")?;
+    writeln!(w, "    defaultPrim = \"{VOLUME_PRIM}\"")?;
+    match samples {
+        Samples::Single(file) => {
+            writeln!(w, "    doc = \"Aurora volume written by {}; fields in {}\"", crate::io::vdb::write::CREATOR, asset(file))?;
         }
-        Some(fps) => {
-            let _ = writeln!(
-                s,
+        Samples::Sequence { frames, fps, .. } => {
+            let (first, last) = (frames.first().map_or(0, |f| *f), frames.last().map_or(0, |f| *f));
+            writeln!(
+                w,
                 "    doc = \"Aurora volume sequence written by {}: frames {first} to {last}, {} files\"",
                 crate::io::vdb::write::CREATOR,
                 frames.len()
-            );
-            let _ = writeln!(s, "    endTimeCode = {last}");
-            let _ = writeln!(s, "    framesPerSecond = {}", fmt_number(fps));
+            )?;
+            writeln!(w, "    endTimeCode = {last}")?;
+            writeln!(w, "    framesPerSecond = {}", fmt_number(fps))?;
         }
     }
-    let _ = writeln!(s, "    metersPerUnit = {}", fmt_number(meters_per_unit));
-    if let Some(fps) = samples.fps {
-        let _ = writeln!(s, "    startTimeCode = {first}");
-        let _ = writeln!(s, "    timeCodesPerSecond = {}", fmt_number(fps));
+    writeln!(w, "    metersPerUnit = {}", fmt_number(meters_per_unit))?;
+    if let Samples::Sequence { frames, fps, .. } = samples {
+        writeln!(w, "    startTimeCode = {}", frames.first().map_or(0, |f| *f))?;
+        writeln!(w, "    timeCodesPerSecond = {}", fmt_number(fps))?;
     }
-    let _ = writeln!(s, "    upAxis = \"Z\"");
-    let _ = writeln!(s, ")");
-    let _ = writeln!(s);
-    let _ = writeln!(s, "def Volume \"{VOLUME_PRIM}\"");
-    let _ = writeln!(s, "{{");
+    writeln!(w, "    upAxis = \"Z\"")?;
+    writeln!(w, ")")?;
+    writeln!(w)?;
+    writeln!(w, "def Volume \"{VOLUME_PRIM}\"")?;
+    writeln!(w, "{{")?;
     for (name, _) in fields {
-        let _ = writeln!(s, "    custom rel field:{name} = </{VOLUME_PRIM}/{name}>");
+        writeln!(w, "    custom rel field:{name} = </{VOLUME_PRIM}/{name}>")?;
     }
     for (name, ty) in fields {
-        let _ = writeln!(s);
-        let _ = writeln!(s, "    def OpenVDBAsset \"{name}\"");
-        let _ = writeln!(s, "    {{");
-        let _ = writeln!(s, "        token fieldClass = \"fogVolume\"");
-        let _ = writeln!(s, "        token fieldDataType = \"{ty}\"");
-        let _ = writeln!(s, "        token fieldName = \"{name}\"");
-        match samples.fps {
-            None => {
-                let _ = writeln!(s, "        asset filePath = @{}@", asset(frames.first().map_or("", |f| f.1)));
-            }
-            Some(_) => {
-                let _ = writeln!(s, "        asset filePath.timeSamples = {{");
-                for (f, file) in frames {
-                    let _ = writeln!(s, "            {f}: @{}@,", asset(file));
+        writeln!(w)?;
+        writeln!(w, "    def OpenVDBAsset \"{name}\"")?;
+        writeln!(w, "    {{")?;
+        writeln!(w, "        token fieldClass = \"fogVolume\"")?;
+        writeln!(w, "        token fieldDataType = \"{ty}\"")?;
+        writeln!(w, "        token fieldName = \"{name}\"")?;
+        match samples {
+            Samples::Single(file) => writeln!(w, "        asset filePath = @{}@", asset(file))?,
+            Samples::Sequence { frames, name, .. } => {
+                writeln!(w, "        asset filePath.timeSamples = {{")?;
+                for &f in frames {
+                    let file = name(f);
+                    let dot = if file.starts_with("./") || file.starts_with("../") { "" } else { "./" };
+                    writeln!(w, "            {f}: @{dot}{file}@,")?;
                 }
-                let _ = writeln!(s, "        }}");
+                writeln!(w, "        }}")?;
             }
         }
-        let _ = writeln!(s, "    }}");
+        writeln!(w, "    }}")?;
     }
-    let _ = writeln!(s, "}}");
-    s
+    writeln!(w, "}}")
 }
 
-/// [`stage_text`] after checking every input: frames non-empty and
-/// ascending (a single bake: exactly one), fps finite and positive, and
-/// each file name, field and unit as [`check`] wants them.
-fn stage_checked(samples: &Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<String, std::io::Error> {
-    let frames = &samples.frames;
-    if frames.is_empty() || frames.windows(2).any(|w| w[1].0 <= w[0].0) || (samples.fps.is_none() && frames.len() != 1) {
-        return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
-    }
-    if let Some(fps) = samples.fps {
-        if !(fps.is_finite() && fps > 0.0) {
-            return Err(invalid(format!("fps {fps} must be positive")));
+/// Checks every input of [`write_stage`] before a byte is written: frames
+/// non-empty and ascending, fps finite and positive, and each file name,
+/// field and unit as [`check`] wants them.
+fn check_samples(samples: Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
+    match samples {
+        Samples::Single(file) => check(file, fields, meters_per_unit),
+        Samples::Sequence { frames, name, fps } => {
+            if frames.is_empty() || frames.windows(2).any(|w| w[1] <= w[0]) {
+                return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
+            }
+            if !(fps.is_finite() && fps > 0.0) {
+                return Err(invalid(format!("fps {fps} must be positive")));
+            }
+            check("x", fields, meters_per_unit)?;
+            frames.iter().try_for_each(|&f| check(&name(f), &[], meters_per_unit))
         }
     }
-    for (_, name) in frames {
-        check(name, fields, meters_per_unit)?;
-    }
-    Ok(stage_text(samples, fields, meters_per_unit))
 }
 
-fn single(vdb_file_name: &str) -> Samples<'_> {
-    Samples { frames: vec![(0, vdb_file_name)], fps: None }
+/// The text of a stage in memory (for small stages and tests: a sequence's
+/// stage is written by [`write_usda_sequence`] or
+/// [`write_usda_sequence_into`] without holding its text).
+fn stage_text(samples: Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
+    let mut bytes = Vec::new();
+    write_stage(&mut bytes, samples, fields, meters_per_unit).expect("writing into memory cannot fail");
+    String::from_utf8(bytes).expect("the stage is UTF-8")
 }
 
-fn sequence(frames: &[(i64, String)], fps: f64) -> Samples<'_> {
-    Samples { frames: frames.iter().map(|(f, n)| (*f, n.as_str())).collect(), fps: Some(fps) }
+/// Writes `samples`' stage to `path` atomically: streamed through a
+/// buffered writer into a temporary beside it, then renamed (a failure
+/// removes the temporary).
+fn write_file(path: &Path, samples: Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
+    check_samples(samples, fields, meters_per_unit)?;
+    let mut tmp = crate::util::atomic_write::TempFile::create(path)?;
+    let mut w = std::io::BufWriter::with_capacity(STREAM_BUFFER, tmp.file());
+    write_stage(&mut w, samples, fields, meters_per_unit)?;
+    w.flush()?;
+    drop(w);
+    tmp.commit().map_err(Into::into)
 }
+
+/// The buffer between the stage writer and its file, bytes: what a stage
+/// costs in memory, whatever its length.
+pub const STREAM_BUFFER: usize = 64 * 1024;
 
 /// The stage text of a single bake. `vdb_file_name` is relative to the
 /// stage's folder; `fields` are (grid name, data type: `"float"` |
 /// `"float3"`). Call [`write_usda`] to have the inputs validated.
 pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
-    stage_text(&single(vdb_file_name), fields, meters_per_unit)
+    stage_text(Samples::Single(vdb_file_name), fields, meters_per_unit)
 }
 
 /// The stage of a frame sequence: the same prims, each field's `filePath`
-/// time-sampled, one sample per frame (`frames`: (frame number, VDB file
-/// name relative to the stage)); `startTimeCode` and `endTimeCode` are the
-/// first and last frame, `timeCodesPerSecond` and `framesPerSecond` the
-/// sequence's fps. USD has no `####` substitution: every frame is listed
-/// (openusd.org, UsdVol OpenVDBAsset). Call [`write_usda_sequence`] to
-/// have the inputs validated.
-pub fn usda_sequence_text(frames: &[(i64, String)], fields: &[(&str, &str)], meters_per_unit: f64, fps: f64) -> String {
-    stage_text(&sequence(frames, fps), fields, meters_per_unit)
+/// time-sampled, one sample per frame (`frames` ascending, `name(frame)`
+/// its VDB file name relative to the stage); `startTimeCode` and
+/// `endTimeCode` are the first and last frame, `timeCodesPerSecond` and
+/// `framesPerSecond` the sequence's fps. USD has no `####` substitution:
+/// every frame is listed (openusd.org, UsdVol OpenVDBAsset). In memory, for
+/// short sequences; [`write_usda_sequence`] streams a sequence of any length.
+pub fn usda_sequence_text(frames: &[i64], name: &dyn Fn(i64) -> String, fields: &[(&str, &str)], meters_per_unit: f64, fps: f64) -> String {
+    stage_text(Samples::Sequence { frames, name, fps }, fields, meters_per_unit)
 }
 
-/// Writes a sequence stage atomically (see [`usda_sequence_text`]); frames
-/// must be non-empty and ascending, fps finite and positive.
-pub fn write_usda_sequence(
-    path: &Path,
-    frames: &[(i64, String)],
+/// Writes a sequence's stage (see [`usda_sequence_text`]) into `w`, line by
+/// line, after checking its inputs (frames non-empty and ascending, fps
+/// finite and positive): nothing is written when they are refused, and no
+/// more than one line is held whatever the number of frames.
+pub fn write_usda_sequence_into(
+    w: &mut dyn Write,
+    frames: &[i64],
+    name: &dyn Fn(i64) -> String,
     fields: &[(&str, &str)],
     meters_per_unit: f64,
     fps: f64,
 ) -> Result<(), std::io::Error> {
-    let text = usda_sequence_checked(frames, fields, meters_per_unit, fps)?;
-    crate::util::atomic_write::write_atomic(path, text.as_bytes()).map_err(Into::into)
+    let samples = Samples::Sequence { frames, name, fps };
+    check_samples(samples, fields, meters_per_unit)?;
+    write_stage(w, samples, fields, meters_per_unit)
 }
 
-/// [`usda_sequence_text`] after checking its inputs as
-/// [`write_usda_sequence`] does.
-pub fn usda_sequence_checked(
-    frames: &[(i64, String)],
+/// Writes a sequence stage to `path` atomically (see [`usda_sequence_text`]):
+/// streamed to a temporary through a [`STREAM_BUFFER`]-byte buffer, then
+/// renamed, so its memory does not grow with the number of frames.
+pub fn write_usda_sequence(
+    path: &Path,
+    frames: &[i64],
+    name: &dyn Fn(i64) -> String,
     fields: &[(&str, &str)],
     meters_per_unit: f64,
     fps: f64,
-) -> Result<String, std::io::Error> {
-    stage_checked(&sequence(frames, fps), fields, meters_per_unit)
+) -> Result<(), std::io::Error> {
+    write_file(path, Samples::Sequence { frames, name, fps }, fields, meters_per_unit)
 }
 
 /// A number as USD writes it: integers without a decimal point.
@@ -225,8 +250,7 @@ fn fmt_number(x: f64) -> String {
 /// Writes the stage of a single bake atomically (temporary file in the same
 /// folder, then rename).
 pub fn write_usda(path: &Path, vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
-    let text = stage_checked(&single(vdb_file_name), fields, meters_per_unit)?;
-    crate::util::atomic_write::write_atomic(path, text.as_bytes()).map_err(Into::into)
+    write_file(path, Samples::Single(vdb_file_name), fields, meters_per_unit)
 }
 
 #[cfg(test)]
@@ -265,17 +289,27 @@ mod tests {
         assert_eq!(fmt_number(0.01), "0.01");
     }
 
+    fn name(f: i64) -> String {
+        format!("aurora.{f:04}.vdb")
+    }
+
     #[test]
     fn sequence_lists_every_frame_as_a_time_sample() {
-        let frames: Vec<(i64, String)> = [1, 2, 3].iter().map(|&f| (f, format!("aurora.{f:04}.vdb"))).collect();
-        let t = usda_sequence_text(&frames, &[("density", "float")], 1000.0, 24.0);
+        let frames = [1, 2, 3];
+        let t = usda_sequence_text(&frames, &name, &[("density", "float")], 1000.0, 24.0);
         assert!(t.contains("    endTimeCode = 3\n    framesPerSecond = 24\n    metersPerUnit = 1000\n    startTimeCode = 1\n    timeCodesPerSecond = 24\n"), "{t}");
         assert!(t.contains("        asset filePath.timeSamples = {\n            1: @./aurora.0001.vdb@,\n            2: @./aurora.0002.vdb@,\n            3: @./aurora.0003.vdb@,\n        }\n"), "{t}");
         let p = std::env::temp_dir().join("aurora-usd-seq-never-written.usda");
-        assert!(write_usda_sequence(&p, &[], &[("density", "float")], 1000.0, 24.0).is_err());
-        assert!(write_usda_sequence(&p, &[(2, "a.vdb".into()), (1, "b.vdb".into())], &[("density", "float")], 1000.0, 24.0).is_err());
-        assert!(write_usda_sequence(&p, &frames, &[("density", "float")], 1000.0, 0.0).is_err());
+        let fields = [("density", "float")];
+        assert!(write_usda_sequence(&p, &[], &name, &fields, 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence(&p, &[2, 1], &name, &fields, 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence(&p, &frames, &name, &fields, 1000.0, 0.0).is_err());
+        assert!(write_usda_sequence(&p, &frames, &|_| "a@b.vdb".into(), &fields, 1000.0, 24.0).is_err());
         assert!(!p.exists());
+        // Refused inputs write nothing into a sink either.
+        let mut sink = Vec::new();
+        assert!(write_usda_sequence_into(&mut sink, &[2, 1], &name, &fields, 1000.0, 24.0).is_err());
+        assert!(sink.is_empty());
     }
 
     #[test]

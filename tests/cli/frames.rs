@@ -189,3 +189,43 @@ fn red_trail_frames_are_identical_alone_and_in_shards() {
     ok(&bake(&plain_scene, &plain, &["--frames", "3"], &[]));
     assert_ne!(read(&plain, 3), read(&range, 3), "the trail changed nothing");
 }
+
+/// `render --frame A-B` checks every frame it needs before the first is
+/// rendered: a frame missing from the folder, or one whose VDB is not a
+/// VDB (a file cut to nothing, another file in its place), exits 2 naming
+/// that frame's file, and no image, preview or temporary is written.
+#[test]
+fn render_frame_with_a_missing_or_damaged_frame_writes_nothing() {
+    let dir = scratch("frames", "render-missing");
+    let scene = write(&dir, "small.toml", format!("{SMALL}[render]\nwidth = 16\nheight = 12\nspp = 1\n"));
+    let seq = dir.join("seq");
+    ok(&bake(&scene, &seq, &["--frames", "1,3"], &[]));
+    let images = dir.join("images");
+    std::fs::create_dir(&images).unwrap();
+    let render = |frames: &str| {
+        Aurora::new()
+            .arg("render")
+            .arg(&scene)
+            .arg("--vdb")
+            .arg(&seq)
+            .args(["--frame", frames, "--out"])
+            .arg(images.join("f.exr"))
+            .arg("--png")
+            .arg(images.join("f.png"))
+            .arg("-q")
+            .output()
+    };
+    let e = refused(&render("1-3"));
+    assert_eq!(file_names(&images), Vec::<String>::new(), "written before the missing frame was found");
+    assert!(e.contains("frame 2") && e.contains("aurora.0002.vdb") && e.contains("does not exist"), "{e}");
+    std::fs::write(seq.join("aurora.0002.vdb"), b"").unwrap();
+    let e = refused(&render("1-3"));
+    assert!(e.contains("aurora.0002.vdb") && e.contains("not a VDB file"), "{e}");
+    std::fs::copy(seq.join("aurora.usda"), seq.join("aurora.0002.vdb")).unwrap();
+    let e = refused(&render("1-3"));
+    assert!(e.contains("aurora.0002.vdb") && e.contains("magic number"), "{e}");
+    assert_eq!(file_names(&images), Vec::<String>::new());
+    // The frames that are there render.
+    ok(&render("3"));
+    assert_eq!(file_names(&images), ["f.0003.exr", "f.0003.png"]);
+}

@@ -209,3 +209,37 @@ fn a_failed_bake_leaves_no_folder_it_created() {
     assert!(before == after, "the previous set changed");
     assert_eq!(names(&kept), vec!["aurora.usda", "aurora.vdb", "bake.json"]);
 }
+
+/// An output whose folder cannot take a file is refused before anything
+/// is baked or rendered (exit 2, the folder named; a failure after the
+/// render would be the writer's, exit 1), and nothing is written: not
+/// the EXR when only the preview's folder is bad. The cases fail for root
+/// too: a folder that does not exist, and a "folder" that is a regular
+/// file.
+#[test]
+fn render_into_a_folder_it_cannot_write_fails_before_rendering_and_writes_nothing() {
+    let d = dir("render-folder");
+    let scene = scene_file(&d, 1);
+    let scene = scene.to_str().unwrap();
+    let file = write(&d, "file.txt", "a regular file");
+    let good = d.join("good.exr");
+    let cases = [
+        (d.join("missing/x.exr"), None, "does not exist"),
+        (file.join("x.exr"), None, "not a folder"),
+        (good.clone(), Some(file.join("x.png")), "not a folder"),
+        (good.clone(), Some(d.join("missing/x.png")), "does not exist"),
+    ];
+    for (out, png, why) in &cases {
+        let mut c = Aurora::new().args(["render", scene, "-q", "--out"]).arg(out);
+        if let Some(p) = png {
+            c = c.arg("--png").arg(p);
+        }
+        let o = c.output();
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{}: {e}", out.display());
+        assert!(e.contains("output folder") && e.contains(why), "{e}");
+        assert!(!good.exists(), "{} written before the preview's folder was refused", good.display());
+    }
+    assert_eq!(names(&d), ["file.txt", "small1.toml"]);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "a regular file");
+}

@@ -66,3 +66,49 @@ fn plan_refuses_bad_arguments() {
         assert!(!dir.join("out").exists());
     }
 }
+
+/// One shard of a long range: the task bakes two frames but writes the
+/// stage of all 40,000, about 2.6 MB, which outweighs them. The plan's
+/// stage bytes, and its total, lie within 10 % of what the task then
+/// writes (the stage is counted by its own writer, so it is exact; the
+/// frames are the same two frames, their reports differing only in
+/// timings).
+#[test]
+fn plan_for_a_shard_counts_the_stage_of_the_whole_range_the_task_writes() {
+    let dir = scratch("plan", "shard");
+    let scene = write(&dir, "scene.toml", SCENE);
+    let shard = ["--frames", "1-40000", "--shard", "0/20000", "--threads", "1"];
+    let o = bake_command(&scene, &dir.join("planned")).args(shard).args(["--plan", "--plan-samples", "2", "--progress", "json"]).output();
+    ok(&o);
+    let plan: serde_json::Value = serde_json::from_slice(&o.stdout).expect("one JSON object on stdout");
+    assert_eq!((plan["frames"].as_u64(), plan["sequence_frames"].as_u64()), (Some(2), Some(40000)), "{plan}");
+    assert_eq!(plan["shard"], serde_json::json!([0, 20000]));
+    let baked = dir.join("baked");
+    ok(&bake_command(&scene, &baked).args(shard).arg("-q").output());
+    let stage = std::fs::metadata(baked.join("aurora.usda")).unwrap().len() as f64;
+    let (planned_stage, planned_total) = (plan["stage_bytes"].as_f64().unwrap(), plan["total_bytes"].as_f64().unwrap());
+    let actual = bytes_of_bake(&baked) as f64;
+    println!("stage: plan {planned_stage:.0} B, bake {stage:.0} B; total: plan {planned_total:.0} B, bake {actual:.0} B");
+    assert!(stage > 2e6, "the stage lists all 40,000 frames: {stage} B");
+    assert!((planned_stage - stage).abs() <= 0.1 * stage, "plan's stage {planned_stage} B, the task wrote {stage} B");
+    assert!((planned_total - actual).abs() <= 0.1 * actual, "plan's total {planned_total} B, the task wrote {actual} B");
+    // The table says whose share it is and what the stage lists.
+    let o = bake_command(&scene, &dir.join("planned")).args(shard).args(["--plan", "--plan-samples", "2", "-q"]).output();
+    ok(&o);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("(2 frames) of shard 0/20000 (the sequence has 40000 frames)"), "{text}");
+    assert!(text.contains("listing the sequence's 40000 frames"), "{text}");
+    assert!(!dir.join("planned").exists());
+}
+
+/// `--plan` for a shard without frames blames the shard: its index and
+/// count and how many frames the range has; exit 2, nothing written.
+#[test]
+fn plan_of_an_empty_shard_names_the_shard_and_the_range() {
+    let dir = scratch("plan", "empty-shard");
+    let scene = write(&dir, "scene.toml", SCENE);
+    let out = dir.join("out");
+    let e = refused(&bake_command(&scene, &out).args(["--frames", "1-3", "--shard", "5/8", "--plan"]).output());
+    assert!(e.contains("--shard 5/8") && e.contains("range has 3 frames") && e.contains("8 shards"), "{e}");
+    assert!(!out.exists());
+}

@@ -63,11 +63,13 @@ fn bake(scene: &Path, out: &Path, extra: &[&str]) -> Output {
     command(scene, out, extra).spawn().wait_within(DEADLINE)
 }
 
-/// Every file of a folder with a hash of its bytes and, but for the stage
-/// (rewritten, same bytes, by every run that owns the folder), its mtime.
+/// Every regular file of a folder with a hash of its bytes and, but for
+/// the stage (rewritten, same bytes, by every run that owns the folder),
+/// its mtime.
 fn snapshot(dir: &Path) -> Vec<(String, u64, Option<SystemTime>)> {
     file_names(dir)
         .into_iter()
+        .filter(|n| std::fs::symlink_metadata(dir.join(n)).is_ok_and(|m| m.is_file()))
         .map(|n| {
             let p = dir.join(&n);
             let m = std::fs::metadata(&p).unwrap().modified().unwrap();
@@ -278,4 +280,144 @@ fn a_rebake_that_takes_a_folder_over_from_a_running_bake_leaves_only_its_own_fra
     }
     same_bake_as(&out, &rb);
     eprintln!("running bake: exit {:?}; rebake: {}", first.status.code(), e.lines().last().unwrap_or(""));
+}
+
+/// Asserts that the run failed on its own account (exit 1, not the
+/// input's); returns its stderr.
+fn failed(o: &Output) -> String {
+    let e = stderr(o);
+    assert_eq!(o.status.code(), Some(1), "expected exit 1 (an I/O error): {e}");
+    e
+}
+
+/// A resume checks each kept frame's VDB against its report (size, header
+/// UUID): a VDB cut in half, two frames' VDBs swapped, and a VDB of the
+/// right size whose UUID is not the report's are baked again, each said
+/// on stderr with the count, and the folder ends byte for byte as a clean
+/// bake of the same frames.
+#[test]
+fn a_truncated_swapped_or_foreign_frame_is_baked_again_and_matches_a_clean_bake() {
+    let (d, a, out) = three_frames("verify");
+    let clean = alone(&a, &d, "clean", "1-3");
+    let vdb = |f: i64| out.join(format!("aurora.{f:04}.vdb"));
+    let bytes1 = std::fs::read(vdb(1)).unwrap();
+    std::fs::write(vdb(1), &bytes1[..bytes1.len() / 2]).unwrap();
+    let (two, three) = (std::fs::read(vdb(2)).unwrap(), std::fs::read(vdb(3)).unwrap());
+    assert_ne!(two, three);
+    std::fs::write(vdb(2), &three).unwrap();
+    std::fs::write(vdb(3), &two).unwrap();
+    let e = ok(&bake(&a, &out, &["--frames", "1-3"]));
+    assert!(e.contains("3 frames baked, 0 already complete"), "{e}");
+    assert!(e.contains(&format!("frame 1: aurora.0001.vdb is {} bytes, its report records {}", bytes1.len() / 2, bytes1.len())), "{e}");
+    for f in 2..=3 {
+        assert!(e.contains(&format!("frame {f}: aurora.{f:04}.vdb ")) && e.contains("baking it again"), "{e}");
+    }
+    assert!(e.contains("3 frames baked again"), "{e}");
+    same_bake_as(&out, &clean);
+
+    // The same size, another UUID (a file of another bake written over
+    // this one's, or a bit flipped in the header): caught by the UUID.
+    let mut b2 = std::fs::read(vdb(2)).unwrap();
+    b2[21] = if b2[21] == b'0' { b'1' } else { b'0' };
+    std::fs::write(vdb(2), &b2).unwrap();
+    let e = ok(&bake(&a, &out, &["--frames", "1-3"]));
+    assert!(e.contains("1 frames baked, 2 already complete") && e.contains("frame 2: aurora.0002.vdb has UUID"), "{e}");
+    assert!(e.contains("1 frames baked again"), "{e}");
+    same_bake_as(&out, &clean);
+    // And a folder that matches its reports is kept as it is.
+    let before = snapshot(&out);
+    let e = ok(&bake(&a, &out, &["--frames", "1-3"]));
+    assert!(e.contains("0 frames baked, 3 already complete") && !e.contains("again"), "{e}");
+    assert_eq!(snapshot(&out), before);
+}
+
+/// `scene` baked into `out` with at most `files` open file descriptors
+/// (`ulimit -n`, which binds root too).
+fn bake_with_open_files(scene: &Path, out: &Path, files: u32, extra: &[&str]) -> Output {
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -n {files} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_aurora"))
+        .arg("bake")
+        .arg(scene)
+        .arg("--out")
+        .arg(out)
+        .args(["--threads", "1"])
+        .args(extra)
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("sh runs");
+    assert!(matches!(o.status.code(), Some(0..=2) | Some(127)), "ulimit -n {files}: {:?}: {}", o.status, stderr(&o));
+    o
+}
+
+/// A failure to read the ownership record because the process has too
+/// many files open (the smallest `ulimit -n` under which the binary
+/// starts at all leaves it no descriptor for the record) is an I/O error,
+/// exit 1, naming the record and the OS's reason; with --rebake of another
+/// scene it deletes nothing (the frames' reports could not be read either:
+/// they are not another bake's).
+#[test]
+fn too_many_open_files_reading_the_record_is_an_io_error_that_deletes_nothing() {
+    let (d, _, out) = three_frames("open-files");
+    let b = write(&d, "b.toml", SMALL.replace("bend_km = 3.0", "bend_km = 3.0\nenergy_flux = 9.0"));
+    let before = snapshot(&out);
+    let mut hit = false;
+    for files in 3..=16 {
+        let o = bake_with_open_files(&b, &out, files, &["--frames", "1-3", "--rebake"]);
+        let e = stderr(&o);
+        assert!(!e.contains("belongs to another bake") && !e.contains("not of this bake"), "ulimit -n {files}: {e}");
+        if o.status.code() == Some(1) && e.contains(".aurora.sequence.json") {
+            assert!(e.contains("Too many open files"), "{e}");
+            assert_eq!(snapshot(&out), before, "ulimit -n {files}: the folder changed");
+            hit = true;
+            break;
+        }
+        // Failed earlier (the loader, the scene file, the lock): it must
+        // have changed nothing either.
+        assert_ne!(o.status.code(), Some(0), "ulimit -n {files}: the bake ran: {e}");
+        assert_eq!(snapshot(&out), before, "ulimit -n {files}: the folder changed: {e}");
+    }
+    assert!(hit, "no ulimit -n from 3 to 16 made the record's read fail");
+}
+
+/// An ownership record that is not a regular file (a directory, a symbolic
+/// link: only a regular file is ours) cannot be read: exit 1, the record's
+/// path and the reason, never "belongs to another bake"; and with --rebake
+/// of another scene nothing is deleted.
+#[test]
+fn an_unreadable_ownership_record_is_an_io_error_and_deletes_nothing() {
+    let (d, a, out) = three_frames("record");
+    let b = write(&d, "b.toml", SMALL.replace("bend_km = 3.0", "bend_km = 3.0\nenergy_flux = 9.0"));
+    let record = out.join(".aurora.sequence.json");
+    let good = std::fs::read(&record).unwrap();
+    std::fs::remove_file(&record).unwrap();
+    std::fs::create_dir(&record).unwrap();
+    let before = snapshot(&out);
+    for (scene, extra) in [(&a, &[][..]), (&b, &["--rebake"][..])] {
+        let mut args = vec!["--frames", "1-3"];
+        args.extend(extra);
+        let e = failed(&bake(scene, &out, &args));
+        assert!(e.contains("cannot read") && e.contains(".aurora.sequence.json") && e.contains("is a directory"), "{e}");
+        assert!(!e.contains("belongs to another bake") && !e.contains("--rebake"), "{e}");
+        assert_eq!(snapshot(&out), before, "{}: the folder changed", scene.display());
+    }
+    std::fs::remove_dir(&record).unwrap();
+    std::os::unix::fs::symlink(".aurora.sequence.json", &record).unwrap();
+    let e = failed(&bake(&b, &out, &["--frames", "1-3", "--rebake"]));
+    assert!(e.contains(".aurora.sequence.json") && e.contains("symbolic link"), "{e}");
+    assert!(!e.contains("belongs to another bake"), "{e}");
+    for f in 1..=3 {
+        assert!(out.join(format!("aurora.{f:04}.vdb")).is_file() && out.join(format!("aurora.{f:04}.json")).is_file(), "frame {f} deleted");
+    }
+    // A record that is read and is not one aurora writes is the folder's
+    // content (exit 2), and says so rather than name another bake.
+    std::fs::remove_file(&record).unwrap();
+    std::fs::write(&record, b"{ not json").unwrap();
+    let e = refused(&bake(&a, &out, &["--frames", "1-3"]));
+    assert!(e.contains("not one aurora writes") && e.contains("not JSON") && !e.contains("belongs to another bake"), "{e}");
+    // Restored, the folder resumes as before.
+    std::fs::write(&record, good).unwrap();
+    let e = ok(&bake(&a, &out, &["--frames", "1-3"]));
+    assert!(e.contains("0 frames baked, 3 already complete"), "{e}");
 }

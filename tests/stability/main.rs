@@ -3,7 +3,8 @@
 //! (`extremes`, and through the command line and the writer, `cli`), and
 //! the two approximations with a known failure mode fail exactly as
 //! derived: the density estimate at extreme gather radii (`gather`) and
-//! fixed-step ray marching in an optically thick medium (`integration`).
+//! fixed-step ray marching in an optically thick medium (`integration`);
+//! a sequence's stage of any length is streamed (`stage`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -12,3 +13,4 @@ mod cli;
 mod extremes;
 mod gather;
 mod integration;
+mod stage;

@@ -1,0 +1,95 @@
+//! `aurora render`'s inputs and outputs, checked before anything is baked,
+//! read or traced, so that bad input exits 2 having written nothing (the
+//! README's promise) and a render is never lost to a folder it cannot
+//! write:
+//!
+//! - every VDB the render reads: `--vdb FILE`, or with `--frame A-B` each
+//!   frame's `aurora.NNNN.vdb` in the sequence folder, is a regular file
+//!   whose header the reader accepts (magic number, file version, grid
+//!   offsets: `aurora::farm::frame_files::vdb_header`); the rest of each
+//!   file is read when its frame is rendered;
+//! - every output (`--out`, `--png`, and with `--frame` each frame's name)
+//!   is a new name or a regular file (`aurora::util::atomic_write`), and its
+//!   folder exists, is a folder and takes a new file (a probe is created
+//!   and removed: a read-only folder, or one on a full or read-only file
+//!   system, is found here rather than after the render).
+
+use super::exit::InputError;
+use super::frames::{frame_name, frame_selection};
+use anyhow::Result;
+use aurora::farm::frame_files::{vdb_header, VdbHeaderError};
+use aurora::util::atomic_write::AtomicError;
+use std::path::{Path, PathBuf};
+
+/// Checks the render's inputs and outputs (module docs): `vdb` is `--vdb`
+/// (the sequence folder with `frame`, `--frame`'s range), `outputs` the
+/// image names given (`--out`, `--png`).
+pub fn inputs_and_outputs(vdb: Option<&Path>, frame: Option<&str>, outputs: &[Option<&Path>]) -> Result<()> {
+    let outputs: Vec<&Path> = outputs.iter().flatten().copied().collect();
+    for out in &outputs {
+        output_folder(out)?;
+    }
+    match (vdb, frame) {
+        (Some(seq), Some(spec)) => {
+            let (frames, _) = frame_selection(spec, None)?;
+            for &f in &frames {
+                let (path, _) = aurora::farm::frame_files::frame_paths(seq, f);
+                vdb_input(&path, &format!("--frame {spec}: frame {f}"))?;
+                for out in &outputs {
+                    aurora::util::atomic_write::check_replaceable(&frame_name(out, f))?;
+                }
+            }
+        }
+        (Some(path), None) => {
+            vdb_input(path, "--vdb")?;
+            for out in &outputs {
+                aurora::util::atomic_write::check_replaceable(out)?;
+            }
+        }
+        (None, _) => {
+            for out in &outputs {
+                aurora::util::atomic_write::check_replaceable(out)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `path` is a VDB file the reader accepts, by its header; `what` names it
+/// in the message.
+fn vdb_input(path: &Path, what: &str) -> Result<()> {
+    match vdb_header(path) {
+        Ok(_) => Ok(()),
+        Err(VdbHeaderError::NotVdb(why)) => Err(InputError(format!("{what}: {}: {why}", path.display())).into()),
+        Err(VdbHeaderError::Unreadable(e)) if e.kind() == std::io::ErrorKind::NotFound => {
+            Err(InputError(format!("{what}: {} does not exist", path.display())).into())
+        }
+        Err(VdbHeaderError::Unreadable(e)) => Err(InputError(format!("{what}: cannot read {}: {e}", path.display())).into()),
+    }
+}
+
+/// The folder `out` is written into exists, is a folder, and takes a new
+/// file (a probe file is created there and removed).
+fn output_folder(out: &Path) -> Result<(), AtomicError> {
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let refuse = |message: String| AtomicError::Folder { path: dir.clone(), message: format!("{message} (for {})", out.display()) };
+    match std::fs::metadata(&dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => return Err(refuse("exists and is not a folder".into())),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Err(refuse("does not exist".into())),
+        Err(e) => return Err(refuse(e.to_string())),
+    }
+    let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.subsec_nanos()).unwrap_or(0);
+    let probe = dir.join(format!(".aurora-write-probe{}-{nanos}", std::process::id()));
+    match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+        Ok(f) => {
+            drop(f);
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(refuse(format!("not writable: {e}"))),
+    }
+}
