@@ -35,7 +35,11 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// The scene a command names: a scene file or a preset, validated.
 fn load_scene(arg: &str) -> Result<Scene> {
-    Ok(Scene::load(arg)?)
+    let scene = Scene::load(arg)?;
+    // A table the scene names that is not compiled in is read now (and kept):
+    // a missing or damaged one is refused before any work (exit status 2).
+    aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
+    Ok(scene)
 }
 
 /// The folder relative paths in a scene file (a heightmap) are resolved
