@@ -11,12 +11,15 @@
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
-//! - `schema`: the committed schema and the documents generated from it.
+//! - `schema`: the committed schema and the documents generated from it;
+//! - `data`: the tables read from the data folder, and the default that
+//!   reads none.
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod bench;
+mod data;
 mod end_to_end;
 mod frames;
 mod inputs;

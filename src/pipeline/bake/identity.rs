@@ -168,6 +168,7 @@ mod tests {
         "us1976",
         "standard",
         "nrlmsis21",
+        "glow",
         "x.png",
     ];
 
