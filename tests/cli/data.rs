@@ -5,13 +5,19 @@
 //! binary holds neither table.
 
 use crate::common::child::AURORA_BIN;
-use crate::common::small::{bake_command, small_scene};
+use crate::common::small::bake_command;
+use crate::small_bake_toml;
 use crate::common::{file_names, ok, refused, repo_root, scratch, write, Aurora};
 
 /// A row of each restrictive table, as it stands in the file (NRLMSIS 2.1
 /// at 50.5 km, GLOW's ionosphere at its second altitude).
 const NRLMSIS_ROW: &str = "50.5,6.22167e-07,1.01069e+16,2.71023e+15,5.13424e+07";
 const GLOW_ROW: &str = "74.784,225.812,225.812,1661.96,2.23783e+08";
+
+/// The small scene with `atmosphere`'s lines as its [atmosphere] table.
+fn scene_text(atmosphere: &str) -> String {
+    format!("{}\n[atmosphere]\n{atmosphere}", small_bake_toml!())
+}
 
 fn holds(haystack: &[u8], needle: &str) -> bool {
     haystack.windows(needle.len()).any(|w| w == needle.as_bytes())
@@ -35,7 +41,7 @@ fn the_default_bakes_with_an_empty_data_folder() {
     let d = scratch("data", "default_empty");
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let scene = write(&d, "s.toml", small_scene().to_toml());
+    let scene = write(&d, "s.toml", scene_text(""));
     let out = d.join("out");
     ok(&bake_command(&scene, &out).env("AURORA_DATA", &empty).arg("--quiet").output());
     assert!(file_names(&out).contains(&"aurora.vdb".to_string()), "{:?}", file_names(&out));
@@ -46,10 +52,8 @@ fn a_missing_table_is_refused_naming_the_file_its_terms_and_where_to_put_it() {
     let d = scratch("data", "missing");
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let mut s = small_scene();
-    s.atmosphere.model = aurora::scene::AtmosphereModel::Nrlmsis21;
     // Through AURORA_DATA: the folder it names.
-    let scene = write(&d, "s.toml", s.to_toml());
+    let scene = write(&d, "s.toml", scene_text("model = \"nrlmsis21\"\n"));
     let out = d.join("out");
     let e = refused(&bake_command(&scene, &out).env("AURORA_DATA", &empty).output());
     for want in ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "AURORA_DATA", "[atmosphere] data", "us1976", &empty.display().to_string()] {
@@ -57,10 +61,7 @@ fn a_missing_table_is_refused_naming_the_file_its_terms_and_where_to_put_it() {
     }
     assert!(!out.exists(), "nothing is written");
     // Through [atmosphere] data, relative to the scene file; GLOW's table too.
-    s.atmosphere.model = aurora::scene::AtmosphereModel::Us1976;
-    s.atmosphere.ionosphere = aurora::scene::Ionosphere::Glow;
-    s.atmosphere.data = Some("tables".into());
-    let scene = write(&d, "g.toml", s.to_toml());
+    let scene = write(&d, "g.toml", scene_text("ionosphere = \"glow\"\ndata = \"tables\"\n"));
     let e = refused(&Aurora::new().arg("scene").arg(&scene).current_dir(repo_root()).output());
     assert!(e.contains("ionosphere.csv") && e.contains("no sale") && e.contains("closed-form"), "{e}");
     assert!(e.contains(&d.join("tables").display().to_string()), "{e}");
@@ -74,11 +75,7 @@ fn the_data_key_finds_the_tables_beside_the_scene_and_they_change_the_bake() {
     for f in ["nrlmsis21.csv", "ionosphere.csv"] {
         std::fs::copy(repo_root().join("data").join(f), tables.join(f)).unwrap();
     }
-    let mut s = small_scene();
-    s.atmosphere.model = aurora::scene::AtmosphereModel::Nrlmsis21;
-    s.atmosphere.ionosphere = aurora::scene::Ionosphere::Glow;
-    s.atmosphere.data = Some("tables".into());
-    let scene = write(&d, "s.toml", s.to_toml());
+    let scene = write(&d, "s.toml", scene_text("model = \"nrlmsis21\"\nionosphere = \"glow\"\ndata = \"tables\"\n"));
     // Found from another working folder, with AURORA_DATA pointing elsewhere.
     let empty = d.join("empty");
     std::fs::create_dir(&empty).unwrap();
@@ -87,7 +84,7 @@ fn the_data_key_finds_the_tables_beside_the_scene_and_they_change_the_bake() {
         std::fs::read(d.join(out).join("aurora.vdb")).unwrap()
     };
     let validated = bake(&scene, "validated");
-    let default = bake(&write(&d, "default.toml", small_scene().to_toml()), "default");
+    let default = bake(&write(&d, "default.toml", scene_text("")), "default");
     assert_ne!(validated, default, "the tables are read and used");
     // A damaged table is refused naming its line.
     std::fs::write(tables.join("ionosphere.csv"), "altitude_km,te_k,ti_k,ne_cm3,no_cm3\n80,200,200,1000,1e8\n90,x,200,1000,1e8\n").unwrap();
