@@ -46,7 +46,7 @@ const SECTIONS: &[(&str, &str, &str)] = &[
     ("curtain", "`[[curtain]]`", "One table per auroral curtain: where its footprint lies and how hard it is driven. A scene without any `[[curtain]]` has the default scene's three; the defaults below are those of one table that omits a key."),
     ("footprint", "`[footprint]`", "The 2D stable-fluids simulation (Stam 1999) that makes each curtain's footprint, bent along a low-frequency noise curve."),
     ("beams", "`[beams]`", "Electron beams traced down the geomagnetic field with random deflections (Baranoski et al. 2000), depositing energy by Fang et al. (2010)."),
-    ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in."),
+    ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in, and the ambient night ionosphere the chemistry needs. The default is compiled in and free to sell with; `nrlmsis21` and `glow` are the data the physics was validated on, whose terms forbid commercial use or sale, read from a data folder ([data.md](data.md))."),
     ("earth", "`[earth]`", "The ground's shape: a sphere (curtain positions and paths are ground distances from the origin, azimuthal equidistant) or a flat plane."),
     ("colour", "`[colour]`", "How deposited energy becomes colour."),
     ("photons", "`[photons]`", "Volumetric photon mapping: a Gaussian-kernel density estimate of the emission."),
