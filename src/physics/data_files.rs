@@ -167,7 +167,8 @@ mod tests {
         let e = read(&NRLMSIS21, &p).unwrap_err();
         assert!(e.is_input());
         let m = e.to_string();
-        for want in ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "no such folder", "[atmosphere] data", "AURORA_DATA", "us1976"] {
+        for want in ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "no such folder", "[atmosphere] data", "AURORA_DATA", "us1976"]
+        {
             assert!(m.contains(want), "{want}: {m}");
         }
         let m = read(&IONOSPHERE, &p).unwrap_err().to_string();

@@ -6,8 +6,8 @@
 
 use crate::common::child::AURORA_BIN;
 use crate::common::small::bake_command;
-use crate::small_bake_toml;
 use crate::common::{file_names, ok, refused, repo_root, scratch, write, Aurora};
+use crate::small_bake_toml;
 
 /// A row of each restrictive table, as it stands in the file (NRLMSIS 2.1
 /// at 50.5 km, GLOW's ionosphere at its second altitude).
@@ -56,7 +56,9 @@ fn a_missing_table_is_refused_naming_the_file_its_terms_and_where_to_put_it() {
     let scene = write(&d, "s.toml", scene_text("model = \"nrlmsis21\"\n"));
     let out = d.join("out");
     let e = refused(&bake_command(&scene, &out).env("AURORA_DATA", &empty).output());
-    for want in ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "AURORA_DATA", "[atmosphere] data", "us1976", &empty.display().to_string()] {
+    for want in
+        ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "AURORA_DATA", "[atmosphere] data", "us1976", &empty.display().to_string()]
+    {
         assert!(e.contains(want), "{want}: {e}");
     }
     assert!(!out.exists(), "nothing is written");

@@ -138,7 +138,8 @@ impl AmbientTable {
     /// cm^-3, NO cm^-3]`, each ascending in altitude with positive values.
     pub fn new(neutral: &[[f64; 3]], ions: &[[f64; 5]]) -> Self {
         let neutral = Profile { h: neutral.iter().map(|r| r[0]).collect(), v: neutral.iter().map(|r| vec![r[1], r[2].ln()]).collect() };
-        let ions = Profile { h: ions.iter().map(|r| r[0]).collect(), v: ions.iter().map(|r| vec![r[1], r[2], r[3].ln(), r[4].ln()]).collect() };
+        let ions =
+            Profile { h: ions.iter().map(|r| r[0]).collect(), v: ions.iter().map(|r| vec![r[1], r[2], r[3].ln(), r[4].ln()]).collect() };
         AmbientTable { neutral, ions }
     }
 
@@ -194,9 +195,17 @@ mod tests {
 
     #[test]
     fn the_table_interpolates_and_holds_outside() {
-        let t = AmbientTable::new(&[[100.0, 200.0, 1e6], [200.0, 1000.0, 1e8]], &[[100.0, 200.0, 200.0, 1e3, 1e8], [200.0, 1000.0, 900.0, 1e5, 1e6]]);
+        let t = AmbientTable::new(
+            &[[100.0, 200.0, 1e6], [200.0, 1000.0, 1e8]],
+            &[[100.0, 200.0, 200.0, 1e3, 1e8], [200.0, 1000.0, 900.0, 1e5, 1e6]],
+        );
         let a = t.at(150.0);
-        assert!((a.tn - 600.0).abs() < 1e-9 && (a.n4s / 1e7 - 1.0).abs() < 1e-12 && (a.ne / 1e4 - 1.0).abs() < 1e-12 && (a.no / 1e7 - 1.0).abs() < 1e-12);
+        assert!(
+            (a.tn - 600.0).abs() < 1e-9
+                && (a.n4s / 1e7 - 1.0).abs() < 1e-12
+                && (a.ne / 1e4 - 1.0).abs() < 1e-12
+                && (a.no / 1e7 - 1.0).abs() < 1e-12
+        );
         assert!((a.ti - 550.0).abs() < 1e-9);
         assert_eq!(t.at(10.0), t.at(100.0));
         assert_eq!(t.at(2000.0), t.at(200.0));
