@@ -89,14 +89,14 @@ impl Atmosphere {
             AtmosphereModel::Us1976 => us1976_rows().to_vec(),
             AtmosphereModel::Nrlmsis21 => {
                 let (path, text) = data_files::read(&data_files::NRLMSIS21, params)?;
-                data_files::file_rows(&path, &text, 7)?
+                data_files::file_rows(&path, &text, 7, Some(1))?
             }
         };
         let ions = match params.ionosphere {
             Ionosphere::ClosedForm => None,
             Ionosphere::Glow => {
                 let (path, text) = data_files::read(&data_files::IONOSPHERE, params)?;
-                Some(data_files::file_rows(&path, &text, 5)?.iter().map(|r| [r[0], r[1], r[2], r[3], r[4]]).collect::<Vec<_>>())
+                Some(data_files::file_rows(&path, &text, 5, None)?.iter().map(|r| [r[0], r[1], r[2], r[3], r[4]]).collect::<Vec<_>>())
             }
         };
         Ok(Self::from_tables(params.model, &rows, ions))

@@ -114,6 +114,32 @@ pub fn read(file: &'static DataFile, params: &AtmosphereParams) -> Result<(PathB
     Ok((path, text))
 }
 
+/// The tables `params` selects that are read from the data folder.
+pub fn selected(params: &AtmosphereParams) -> Vec<&'static DataFile> {
+    let mut out = Vec::new();
+    if params.model == crate::scene::AtmosphereModel::Nrlmsis21 {
+        out.push(&NRLMSIS21);
+    }
+    if params.ionosphere == crate::scene::Ionosphere::Glow {
+        out.push(&IONOSPHERE);
+    }
+    out
+}
+
+/// What the tables `params` reads from the data folder add to a bake's
+/// identity: each one's name and the FNV-1a hash of its bytes (empty for
+/// the compiled-in default; "missing" for a table not there, which the
+/// bake refuses before it starts).
+pub fn identity(params: &AtmosphereParams) -> String {
+    selected(params)
+        .into_iter()
+        .map(|f| match read(f, params) {
+            Ok((_, text)) => format!("|{}:{:016x}", f.name, crate::scene::fnv1a(text.as_bytes())),
+            Err(_) => format!("|{}:missing", f.name),
+        })
+        .collect()
+}
+
 /// The rows of numbers of a table (lines starting with `#` are comments,
 /// the header starts with a letter), each with at least `columns` values.
 /// Errors name the line (1-based) and what is wrong.
@@ -144,9 +170,26 @@ pub fn rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, (usize, String)
     Ok(out)
 }
 
-/// [`rows`] of a file read from `path`, as a [`DataError`].
-pub fn file_rows(path: &Path, text: &str, columns: usize) -> Result<Vec<Vec<f64>>, DataError> {
-    rows(text, columns).map_err(|(line, message)| DataError::Malformed { path: path.to_path_buf(), line, message })
+/// [`rows`] of a file read from `path`, as a [`DataError`], with columns 1
+/// to `columns - 1` (densities and temperatures) positive and, if
+/// `falling` names one, that column falling with altitude (a density the
+/// column mass integrates).
+pub fn file_rows(path: &Path, text: &str, columns: usize, falling: Option<usize>) -> Result<Vec<Vec<f64>>, DataError> {
+    let bad = |line: usize, message: String| DataError::Malformed { path: path.to_path_buf(), line, message };
+    let out = rows(text, columns).map_err(|(line, message)| bad(line, message))?;
+    // Row i's line: the i-th line of numbers.
+    let line_of = |i: usize| text.lines().enumerate().filter(|(_, l)| l.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.')).nth(i).map_or(0, |(n, _)| n + 1);
+    for (i, r) in out.iter().enumerate() {
+        if let Some(k) = (1..columns).find(|&k| r[k] <= 0.0) {
+            return Err(bad(line_of(i), format!("column {} is {}, must be positive", k + 1, r[k])));
+        }
+        if let Some(k) = falling.filter(|_| i > 0) {
+            if r[k] >= out[i - 1][k] {
+                return Err(bad(line_of(i), format!("column {} must fall with altitude", k + 1)));
+            }
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -176,11 +219,33 @@ mod tests {
     }
 
     #[test]
+    fn the_identity_holds_the_bytes_of_the_tables_read() {
+        use crate::scene::{AtmosphereModel, Ionosphere};
+        assert_eq!(identity(&AtmosphereParams::default()), "");
+        let p = AtmosphereParams {
+            model: AtmosphereModel::Nrlmsis21,
+            ionosphere: Ionosphere::Glow,
+            data: Some(BUILD_DATA_DIR.into()),
+            base_dir: None,
+        };
+        let bytes = std::fs::read(format!("{BUILD_DATA_DIR}/nrlmsis21.csv")).unwrap();
+        let id = identity(&p);
+        assert!(id.contains(&format!("|nrlmsis21.csv:{:016x}", crate::scene::fnv1a(&bytes))) && id.contains("|ionosphere.csv:"), "{id}");
+        let gone = AtmosphereParams { data: Some("no such folder".into()), ..p };
+        assert_eq!(identity(&gone), "|nrlmsis21.csv:missing|ionosphere.csv:missing");
+    }
+
+    #[test]
     fn damaged_rows_are_named_by_line() {
         assert_eq!(rows("# c\nh,a\n1,2\n2,x\n", 2).unwrap_err().0, 4);
         assert_eq!(rows("1,2\n1,3\n", 2).unwrap_err().0, 2);
         assert_eq!(rows("1,2\n2\n", 2).unwrap_err().0, 2);
         assert_eq!(rows("1,2\n2,inf\n", 2).unwrap_err().0, 2);
         assert_eq!(rows("# c\n1,2\n2,3\n", 2).unwrap(), vec![vec![1.0, 2.0], vec![2.0, 3.0]]);
+        let p = Path::new("t.csv");
+        let e = file_rows(p, "h,a\n1,2\n2,0\n", 2, None).unwrap_err().to_string();
+        assert!(e.contains("t.csv:3:") && e.contains("positive"), "{e}");
+        let e = file_rows(p, "1,2\n2,3\n", 2, Some(1)).unwrap_err().to_string();
+        assert!(e.contains("t.csv:2:") && e.contains("fall"), "{e}");
     }
 }
