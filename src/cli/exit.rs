@@ -58,6 +58,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
     ask!(
         InputError,
         aurora::scene::SceneError,
+        aurora::physics::data_files::DataError,
         aurora::pipeline::bake::BakeError,
         aurora::util::atomic_write::AtomicError,
         aurora::io::bake_folder::OutputError,

@@ -42,7 +42,11 @@ pub fn run(cli: Cli) -> Result<()> {
 /// The scene a command names: a scene file or a preset, its overrides
 /// applied in command-line order, validated.
 fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
-    Ok(Scene::load_with(arg, overrides.in_order())?)
+    let scene = Scene::load_with(arg, overrides.in_order())?;
+    // A table the scene names that is not compiled in is read now (and kept):
+    // a missing or damaged one is refused before any work (exit status 2).
+    aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
+    Ok(scene)
 }
 
 /// The folder relative paths in a scene file (a heightmap) are resolved

@@ -129,6 +129,13 @@ impl Session<'_> {
             }
             let result = Scene::from_toml_str_with(&save.text, scene_arg, self.overrides.in_order())
                 .map_err(anyhow::Error::from)
+                .and_then(|mut scene| {
+                    // As `Scene::load` and `load_scene`: the data folder is
+                    // relative to the scene file, its tables read now.
+                    scene.atmosphere.base_dir = Some(path.parent().map(Path::to_path_buf).unwrap_or_default());
+                    aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
+                    Ok(scene)
+                })
                 .and_then(|scene| self.update(preview, &scene).map_err(anyhow::Error::from));
             if let Err(e) = result {
                 eprintln!("aurora: error: {e:#}");

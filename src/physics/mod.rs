@@ -6,6 +6,7 @@
 pub mod air_extinction;
 pub mod atmosphere;
 pub mod chemistry;
+pub mod data_files;
 pub mod deposition;
 pub mod emission;
 pub mod geomagnetic_field;

@@ -115,7 +115,7 @@ impl TooLarge {
 /// 2.1), which bounds every energy's.
 pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
     let start_top = scene.beams.top_km + scene.beams.top_noise_km;
-    let atm = Atmosphere::of_model(scene.atmosphere.model);
+    let atm = Atmosphere::of_params(&scene.atmosphere).unwrap_or_else(|e| panic!("{e}"));
     match scene.beams.deposition {
         Deposition::Csda => start_top,
         Deposition::Sampled => start_top.max(atm.top_km()),

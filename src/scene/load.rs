@@ -59,7 +59,10 @@ impl Scene {
         }
         let text = crate::util::input_file::read_to_string(path)
             .map_err(|e| SceneError::Io { file: path_or_preset.to_string(), error: e.into() })?;
-        Self::from_toml_str_with(&text, path_or_preset, overrides)
+        let mut scene = Self::from_toml_str_with(&text, path_or_preset, overrides)?;
+        // `[atmosphere] data` is relative to the scene file's folder.
+        scene.atmosphere.base_dir = Some(path.parent().map(Path::to_path_buf).unwrap_or_default());
+        Ok(scene)
     }
 
     /// The scene of a TOML document after `overrides`, validated; errors

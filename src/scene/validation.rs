@@ -697,7 +697,7 @@ mod tests {
         assert_eq!(s.atmosphere.model, AtmosphereModel::Us1976);
         assert_eq!(s.beams.deposition, Deposition::Sampled);
         let d = Scene::default();
-        assert_eq!((d.atmosphere.model, d.beams.deposition), (AtmosphereModel::Nrlmsis21, Deposition::Expected));
+        assert_eq!((d.atmosphere.model, d.beams.deposition), (AtmosphereModel::Us1976, Deposition::Expected));
         let m = Scene::from_toml_str("[atmosphere]\nmodel = \"msis00\"\n", "m.toml").unwrap_err().to_string();
         assert!(m.contains("m.toml") && m.contains("msis00") && m.contains("nrlmsis21") && m.contains("us1976"), "{m}");
         let m = Scene::from_toml_str("[beams]\ndeposition = \"mean\"\n", "m.toml").unwrap_err().to_string();

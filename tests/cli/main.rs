@@ -15,11 +15,14 @@
 //! - `quick_start`: the README's quick start, installed and run as written.
 //! - `overrides`, `messages`: `--set` and render's flags over a scene, and
 //!   the scene's errors in plain words.
+//! - `data`: the tables read from the data folder, and the default that
+//!   reads none.
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod bench;
+mod data;
 mod end_to_end;
 mod frames;
 mod inputs;

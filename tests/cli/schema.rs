@@ -46,7 +46,7 @@ const SECTIONS: &[(&str, &str, &str)] = &[
     ("curtain", "`[[curtain]]`", "One table per auroral curtain: where its footprint lies and how hard it is driven. A scene without any `[[curtain]]` has the default scene's three; the defaults below are those of one table that omits a key."),
     ("footprint", "`[footprint]`", "The 2D stable-fluids simulation (Stam 1999) that makes each curtain's footprint, bent along a low-frequency noise curve."),
     ("beams", "`[beams]`", "Electron beams traced down the geomagnetic field with random deflections (Baranoski et al. 2000), depositing energy by Fang et al. (2010)."),
-    ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in."),
+    ("atmosphere", "`[atmosphere]`", "The neutral atmosphere the electrons deposit their energy in, and the ambient night ionosphere the chemistry needs. The default is compiled in and free to sell with; `nrlmsis21` and `glow` are the data the physics was validated on, whose terms forbid commercial use or sale, read from a data folder ([data.md](data.md))."),
     ("earth", "`[earth]`", "The ground's shape: a sphere (curtain positions and paths are ground distances from the origin, azimuthal equidistant) or a flat plane."),
     ("colour", "`[colour]`", "How deposited energy becomes colour."),
     ("photons", "`[photons]`", "Volumetric photon mapping: a Gaussian-kernel density estimate of the emission."),
@@ -100,7 +100,9 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("beams", "b_declination_deg", "deg", "azimuth of the field's horizontal part, from +y towards +x"),
     ("beams", "deposition", "", "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
     ("beams", "starts", "", "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
-    ("atmosphere", "model", "", "`nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15: `data/nrlmsis21.csv`, made by `tools/reference/msis_table.py`) or `us1976` (U.S. Standard Atmosphere 1976, 80-500 km)"),
+    ("atmosphere", "model", "", "the neutral atmosphere: `us1976` (U.S. Standard Atmosphere 1976, 50-700 km, public domain, compiled in: `data/us1976.csv` from `tools/reference/ussa1976_table.py`) or `nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15, made by `tools/reference/msis_table.py`; research, academic and non-profit use only, so read from `nrlmsis21.csv` in the data folder, never compiled in; docs/data.md)"),
+    ("atmosphere", "ionosphere", "", "the ambient night ionosphere and NO the chemistry needs: `closed-form` (Te = Ti = Tn, Chapman F and E layers, SNOE's NO peak; compiled in; `src/physics/chemistry/ambient.rs`) or `glow` (NCAR GLOW 4.0.4's IRI ionosphere and NOEM NO at the NRLMSIS table's place and time, the data the chemistry was validated on; GLOW's licence forbids sale, so read from `ionosphere.csv` in the data folder; docs/data.md)"),
+    ("atmosphere", "data", "", "the folder holding `nrlmsis21.csv` and `ionosphere.csv`, relative to the scene file; unset, the `AURORA_DATA` environment variable names it, else the source tree's `data/` of the build. A table asked for and not there is refused naming the file and its terms (exit status 2)"),
     ("earth", "radius_km", "km", "radius of the spherical Earth centred at `(0, 0, -radius_km)`: altitude is the distance from its centre minus the radius everywhere (atmosphere, deposition, colour, density grid, terrain); curtain positions and paths are ground distances from the origin mapped onto it (azimuthal equidistant); the field's angles are relative to the local vertical and north; 0 is a flat ground, altitude = z"),
     ("earth", "magnetic_pole", "km", "ground coordinates `[x, y]` of the geomagnetic dipole's pole: the field at each beam's start is the dipole's (dip `tan I = 2 tan(magnetic latitude)`, horizontal part toward the pole), replacing `beams.b_inclination_deg` and `b_declination_deg`; none by default"),
     ("colour", "mode", "", "`physical` (the emission lines through the CIE 1931 colour matching functions) or `colormap` (the `colormap` table)"),
@@ -178,7 +180,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
 /// one that takes a number or a word.
 fn stated_type(section: &str, key: &str) -> Option<&'static str> {
     Some(match (section, key) {
-        ("background", "image") | ("terrain", "heightmap") => "path",
+        ("background", "image") | ("terrain", "heightmap") | ("atmosphere", "data") => "path",
         ("grid", "voxel_size") => "number or `\"auto\"`",
         ("grid", "lines") => "list of words",
         ("curtain", "path") => "rows of 2 numbers",

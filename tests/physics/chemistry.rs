@@ -3,7 +3,8 @@
 //! from `tools/reference/glow_tables.py`: E0 = 1, 3, 10 keV, Q = 1 and 10 erg cm^-2
 //! s^-1, Maxwellian, 67 N 20 E 2020-01-15 00 UT, nightglow subtracted).
 
-use aurora::physics::chemistry::{solve, Air, Ambient, AmbientTable};
+use aurora::physics::atmosphere::Atmosphere;
+use aurora::physics::chemistry::{solve, Air, Ambient};
 
 struct Row {
     e0: f64,
@@ -52,7 +53,8 @@ fn column(rows: &[&Row], f: impl Fn(&Row) -> f64) -> f64 {
 #[test]
 fn columns_match_glow_driven_by_its_own_ionization() {
     let all = fixture();
-    let amb = AmbientTable::get();
+    let atm = Atmosphere::nrlmsis21();
+    let amb = atm.ambient();
     let mut report = String::new();
     let mut worst = [0.0f64; 3];
     let (mut worst_shape, mut worst_centroid) = (0.0f64, 0.0f64);

@@ -49,6 +49,7 @@ def main():
     path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "fang_reference.csv")
     with io.StringIO() as f:
         f.write(f"# eppaurora {eppaurora.__version__}; made by tools/reference/fang_reference.py\n")
+        f.write('# terms: numbers computed with eppaurora (GPL-2.0) from the published formulas of Fang et al. 2008 and 2010; used by the tests only, not compiled into aurora (NOTICE, docs/data.md)\n')
         f.write("model,energy_kev,column_g_cm2,scale_height_cm,dissipation_per_cm\n")
         for model, e, m, h, x in rows():
             f.write(f"{model},{e:g},{m:.17g},{h:.17g},{x:.17g}\n")

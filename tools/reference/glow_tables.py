@@ -49,6 +49,7 @@ def main():
     z = night.alt_km.values.astype(float)
     with io.StringIO() as f:
         f.write(header().rstrip("\n") + "; ambient ionosphere (IRI above 200 km, GLOW's chemistry below), no precipitation\n")
+        f.write('# terms: NCAR GLOW Open Source Academic Research License (UCAR): research, academic and non-profit use; no sale; derivative works open source (NOTICE, docs/data.md); not compiled into aurora\n')
         f.write("altitude_km,te_k,ti_k,ne_cm3,no_cm3\n")
         for i in range(len(z)):
             # GLOW leaves the lowest levels undefined (NaN): rows start where

@@ -61,6 +61,7 @@ def main():
         f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
                 f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
                 f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/reference/msis_table.py\n")
+        f.write("# terms: NRLMSIS 2.1 (MSIS, NRL-SOF-014-1): research, academic and non-profit use only; commercial use needs the U.S. Naval Research Laboratory's written consent (NOTICE, docs/data.md); not compiled into aurora\n")
         f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,n4s_cm3,no_cm3\n")
         for r in rows:
             f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")

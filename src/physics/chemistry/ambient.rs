@@ -1,49 +1,88 @@
 //! What the emission chemistry needs besides N2, O2 and O: the neutral
-//! temperature, ground-state atomic nitrogen N(4S) and nitric oxide NO, and
-//! the ambient night-time ionosphere (electron and ion temperatures, electron
-//! density), all at the place and time of `data/nrlmsis21.csv` (67 N, 20 E,
-//! 2020-01-15 00:00 UT, F10.7 = F10.7a = 150, Ap = 15).
+//! temperature Tn, ground-state atomic nitrogen N(4S), nitric oxide NO and
+//! the ambient night-time ionosphere (electron and ion temperatures Te, Ti
+//! and electron density ne). Two sources, chosen by `[atmosphere]`
+//! (`crate::physics::atmosphere` assembles them; docs/data.md has the
+//! terms, docs/physics.md the derivations):
 //!
-//! - **Tn, N(4S)**: NRLMSIS 2.1 (Emmert et al. 2022, J. Geophys. Res.
-//!   Space Physics 127, e2022JA030896), columns 6-7 of `data/nrlmsis21.csv`,
-//!   made by `tools/reference/msis_table.py`.
-//! - **Te, Ti, ambient ne, NO**: NCAR GLOW 4.0.4 (Solomon 2017,
-//!   `glowpython`) called without precipitation at the same place and time:
-//!   the IRI ionosphere above 200 km and GLOW's own night-time chemistry
-//!   below, and GLOW's NO (the empirical NOEM model of Marsh et al. 2004, J.
-//!   Geophys. Res. 109, A07301, driven by the date, Kp and F10.7),
-//!   `data/ionosphere.csv`, made by `tools/reference/glow_tables.py`. At night the
-//!   F-region peak is 1.7e5 cm^-3 at 361 km; below 200 km the ambient
-//!   density is a few 1e3 cm^-3, negligible beside auroral ionization.
-//!
-//! **Why GLOW's NO, not NRLMSIS 2.1's.** NO makes 557.7 nm through N(2D) +
-//! NO -> O(1S) (branching 0.2), so above 120 km, where most of the green of
-//! soft aurora is made, the green per ion pair follows it. NOEM's
-//! auroral-zone NO is 2.7-4.4 times NRLMSIS 2.1's from 120 to 400 km (2.4e7
-//! against 8.8e6 cm^-3 at 150 km, 4.5e6 against 1.1e6 at 200 km) and 1.05-1.8
-//! times at 90-110 km. With NRLMSIS 2.1's NO the whole pipeline (`aurora
-//! profile` against GLOW, tests/python/test_glow.py) gave 557.7 / 427.8 at
-//! 0.77-0.81 of GLOW's for E0 <= 1 keV and 0.86-0.88 at 2-3 keV; with GLOW's
-//! NO, 0.91-0.93 from 0.5 to 10 keV. (GLOW's 10 % more O and 5 % less N2
-//! above 110 km than NRLMSIS 2.1 make most of the rest.) Both NO models are
-//! empirical and no NO measurement was made here; GLOW is the oracle the
-//! colours are checked against and already supplies the ambient ionosphere,
-//! so its NO is taken with it. NRLMSIS 2.1's NO stays in
-//! `data/nrlmsis21.csv` (column 8), unused by the chemistry.
-//!
-//! The U.S. Standard Atmosphere 1976 defines none of these: with it the same
-//! profiles are used (the standard's N2, O2 and O, these minor species and
-//! this ionosphere), a documented equivalent rather than a second source.
+//! - **Closed forms** (`ionosphere = "closed-form"`, the default, compiled
+//!   in): Te = Ti = Tn (the night-time assumption below the F peak);
+//!   ne a night-time F layer and E layer, each a Chapman alpha layer
+//!   (Chapman 1931; Rishbeth & Garriott 1969, "Introduction to Ionospheric
+//!   Physics"), [`NE_LAYERS`]; NO held at its peak below [`NO_PEAK_KM`] and
+//!   falling with a [`NO_SCALE_KM`] scale height above (the peak at 106-110
+//!   km and the auroral-zone magnitude SNOE measured, Barth et al. 2003, J.
+//!   Geophys. Res. 108(A1), 1027). With the U.S. Standard Atmosphere, N(4S)
+//!   is in diffusive equilibrium with O above its peak, anchored at the
+//!   night-time density AE-C measured at 400 km (Mauersberger et al. 1976,
+//!   J. Geophys. Res. 81), and cut off below [`N4S_PEAK_KM`] where
+//!   N + NO and N + O2 destroy it ([`closed_form_n4s`]).
+//! - **The validated tables** (`model = "nrlmsis21"` gives Tn and N(4S),
+//!   `ionosphere = "glow"` gives Te, Ti, ne and NO): NRLMSIS 2.1 (Emmert et
+//!   al. 2022) and NCAR GLOW 4.0.4 (Solomon 2017; IRI above 200 km, NO from
+//!   NOEM, Marsh et al. 2004), at 67 N, 20 E, 2020-01-15 00:00 UT,
+//!   F10.7 = 150, Ap = 15, read from the data folder
+//!   (`crate::physics::data_files`). The chemistry was checked against GLOW
+//!   with these (tests/python/test_glow.py); NOEM's NO is 2.7-4.4 times
+//!   NRLMSIS 2.1's from 120 to 400 km, and N(2D) + NO makes 557.7 nm, so
+//!   GLOW's NO is the one taken with it.
 //!
 //! Interpolation: temperatures linearly, densities log-linearly in altitude;
-//! held at the first and last row outside the tables (50-700 km and
-//! 73-962 km; GLOW's NO is constant below 94 km, so holding it below 73 km
-//! continues it).
+//! held at the first and last row outside the tables.
 
-/// The NRLMSIS table: columns 6-7 (T, N(4S)) are read here.
-const NRLMSIS21_CSV: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/nrlmsis21.csv"));
-/// The GLOW ambient ionosphere: altitude, Te, Ti, ne, NO.
-const IONOSPHERE_CSV: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/data/ionosphere.csv"));
+/// NO's peak altitude, km: the middle of SNOE's 106-110 km (Barth et al. 2003).
+pub const NO_PEAK_KM: f64 = 108.0;
+/// NO at its peak, cm^-3: a round auroral-zone value of SNOE's 110 km
+/// densities (Barth et al. 2003), 1e8 to a few 1e8 at 60-70 geomagnetic.
+pub const NO_PEAK_CM3: f64 = 2e8;
+/// NO's scale height above its peak, km: within a factor of 2 of NOEM's fall
+/// from 110 to 250 km at 67 N (docs/data.md), between the neutral gas's
+/// scale heights at 120 and 200 km.
+pub const NO_SCALE_KM: f64 = 20.0;
+/// N(4S) at 400 km, cm^-3: AE-C's afternoon maximum there, 1.5e6
+/// (Mauersberger et al. 1975, Geophys. Res. Lett. 2, 337), over the 5.2
+/// afternoon-to-night ratio it measured at 68 N, 17 h against 02 h local
+/// time (Mauersberger et al. 1976).
+pub const N4S_400_CM3: f64 = 3e5;
+/// Below this altitude, km, N(4S) is cut off by a Gaussian of
+/// [`N4S_CUT_KM`] (its chemical loss, above which diffusion holds).
+pub const N4S_PEAK_KM: f64 = 200.0;
+pub const N4S_CUT_KM: f64 = 35.0;
+/// The night-time Chapman layers of ne: (peak cm^-3, peak km, scale height
+/// km). F layer: NmF2 = 1.5e5 cm^-3 (foF2 = 3.5 MHz) at 350 km, H = 50 km,
+/// a winter night in the auroral zone at moderate solar activity (GLOW's IRI
+/// at the NRLMSIS table's place and time has 1.7e5 at 361 km). E layer: 3e3
+/// cm^-3 at 110 km, H = 10 km, the residual night E layer.
+pub const NE_LAYERS: [(f64, f64, f64); 2] = [(1.5e5, 350.0, 50.0), (3e3, 110.0, 10.0)];
+
+/// The closed-form NO at `h_km`, cm^-3 (module doc).
+pub fn closed_form_no(h_km: f64) -> f64 {
+    NO_PEAK_CM3 * (-(h_km - NO_PEAK_KM).max(0.0) / NO_SCALE_KM).exp()
+}
+
+/// The closed-form night-time ne at `h_km`, cm^-3: the sum of the Chapman
+/// alpha layers `Nm exp((1 - y - e^-y) / 2)`, `y = (h - hm) / H`.
+pub fn closed_form_ne(h_km: f64) -> f64 {
+    NE_LAYERS
+        .iter()
+        .map(|&(nm, hm, sh)| {
+            let y = (h_km - hm) / sh;
+            nm * (0.5 * (1.0 - y - (-y).exp())).exp()
+        })
+        .sum()
+}
+
+/// The closed-form N(4S) at `h_km`, cm^-3, from the atmosphere's O and Tn
+/// there and at 400 km (`o_400`, `t_400`): diffusive equilibrium with O,
+/// `n_N / n_N(400) = (T_400 / T)^(1 - 14/16) (n_O / n_O(400))^(14/16)`
+/// (each species with its own scale height kT / mg at the common T), times
+/// `exp(-((200 - h) / 35)^2)` below 200 km.
+pub fn closed_form_n4s(h_km: f64, o: f64, tn: f64, o_400: f64, t_400: f64) -> f64 {
+    const M: f64 = 14.0 / 16.0;
+    let diffusive = N4S_400_CM3 * (t_400 / tn).powf(1.0 - M) * (o / o_400).powf(M);
+    let below = (N4S_PEAK_KM - h_km).max(0.0) / N4S_CUT_KM;
+    diffusive * (-below * below).exp()
+}
 
 /// The ambient quantities at one altitude.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,16 +99,6 @@ pub struct Ambient {
     pub ti: f64,
     /// Ambient (non-auroral) electron density, cm^-3.
     pub ne: f64,
-}
-
-/// Rows of numbers of a committed CSV (comment lines start with `#`, the
-/// header with a letter). The files are ours and fixed at compile time: a
-/// malformed row is a build defect, caught by the tests.
-fn rows(text: &str) -> Vec<Vec<f64>> {
-    text.lines()
-        .filter(|l| !l.starts_with('#') && !l.starts_with(|c: char| c.is_ascii_alphabetic()) && !l.trim().is_empty())
-        .map(|l| l.split(',').map(|x| x.trim().parse::<f64>().expect("ambient table: a number")).collect())
-        .collect()
 }
 
 /// One tabulated profile: altitudes and, per column, values (log or linear).
@@ -95,7 +124,7 @@ impl Profile {
     }
 }
 
-/// The ambient profiles (module doc), parsed once.
+/// The ambient profiles (module doc).
 #[derive(Clone, Debug)]
 pub struct AmbientTable {
     /// T, ln N(4S).
@@ -105,17 +134,19 @@ pub struct AmbientTable {
 }
 
 impl AmbientTable {
-    /// The committed tables (module doc).
-    pub fn get() -> &'static AmbientTable {
-        static TABLE: std::sync::OnceLock<AmbientTable> = std::sync::OnceLock::new();
-        TABLE.get_or_init(|| {
-            let m = rows(NRLMSIS21_CSV);
-            let neutral = Profile { h: m.iter().map(|r| r[0]).collect(), v: m.iter().map(|r| vec![r[5], r[6].ln()]).collect() };
-            let i = rows(IONOSPHERE_CSV);
-            let ions =
-                Profile { h: i.iter().map(|r| r[0]).collect(), v: i.iter().map(|r| vec![r[1], r[2], r[3].ln(), r[4].ln()]).collect() };
-            AmbientTable { neutral, ions }
-        })
+    /// From rows `[h km, Tn K, N(4S) cm^-3]` and `[h km, Te K, Ti K, ne
+    /// cm^-3, NO cm^-3]`, each ascending in altitude with positive values.
+    pub fn new(neutral: &[[f64; 3]], ions: &[[f64; 5]]) -> Self {
+        let neutral = Profile { h: neutral.iter().map(|r| r[0]).collect(), v: neutral.iter().map(|r| vec![r[1], r[2].ln()]).collect() };
+        let ions =
+            Profile { h: ions.iter().map(|r| r[0]).collect(), v: ions.iter().map(|r| vec![r[1], r[2], r[3].ln(), r[4].ln()]).collect() };
+        AmbientTable { neutral, ions }
+    }
+
+    /// The closed-form ionosphere's rows at altitudes `h` with neutral
+    /// temperatures `tn` (Te = Ti = Tn).
+    pub fn closed_form_ions(h: &[f64], tn: &[f64]) -> Vec<[f64; 5]> {
+        h.iter().zip(tn).map(|(&h, &t)| [h, t, t, closed_form_ne(h), closed_form_no(h)]).collect()
     }
 
     /// The ambient quantities at `h_km`.
@@ -131,24 +162,52 @@ mod tests {
     use super::*;
 
     #[test]
-    fn tables_hold_the_documented_profiles() {
-        let t = AmbientTable::get();
-        // GLOW's NO (NOEM) near its 100-110 km maximum: 2.2e8 / 3.1e8 at
-        // 100 / 110 km in the table; 2.3e7 at 150 km and 4.5e6 at 200 km,
-        // 2-4 times NRLMSIS 2.1's there (module doc).
-        let a = t.at(105.0);
-        assert!((1e8..4e8).contains(&a.no), "{a:?}");
-        assert!((1.8e7..2.8e7).contains(&t.at(150.7).no) && (3.6e6..5.5e6).contains(&t.at(199.7).no), "{:?}", t.at(150.7));
-        // Night-time F-region: ambient ne peaks near 1.7e5 cm^-3 around 360
-        // km; a few 1e3 cm^-3 in the E region.
-        let peak = (200..600).map(|h| (t.at(h as f64).ne, h)).fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
-        assert!((1.4e5..2.0e5).contains(&peak.0) && (330..400).contains(&peak.1), "{peak:?}");
-        assert!(t.at(120.0).ne < 1e4);
-        // Thermosphere: Tn about 1000 K at 300 km (Ap 15, F10.7 150); Te >= Tn.
-        let a = t.at(300.0);
-        assert!((900.0..1100.0).contains(&a.tn) && a.te >= a.tn - 1.0, "{a:?}");
-        // Held outside the tables.
-        assert_eq!(t.at(10.0), t.at(40.0));
-        assert_eq!(t.at(2000.0), t.at(1500.0));
+    fn the_chapman_layers_peak_where_and_as_high_as_stated() {
+        // y = 0 at hm: Nm exactly (the other layer adds its tail).
+        let f = closed_form_ne(350.0);
+        assert!((f / 1.5e5 - 1.0).abs() < 1e-6, "{f}");
+        let peak = (2000..6000).map(|i| i as f64 * 0.1).max_by(|a, b| closed_form_ne(*a).total_cmp(&closed_form_ne(*b))).unwrap();
+        assert!((peak - 350.0).abs() < 0.15, "{peak}");
+        // One scale height below the F peak: exp((1 + 1 - e) / 2) = 0.698.
+        assert!((closed_form_ne(300.0) / 1.5e5 - (0.5 * (2.0 - 1f64.exp())).exp()).abs() < 1e-3);
+        // The night E layer: 3e3 at 110 km, a few 1e2 to 1e3 from 90 to 200 km.
+        assert!((closed_form_ne(110.0) / 3e3 - 1.0).abs() < 1e-6);
+        assert!((100.0..3e3).contains(&closed_form_ne(90.0)) && (100.0..3e3).contains(&closed_form_ne(180.0)));
+    }
+
+    #[test]
+    fn no_holds_its_peak_below_and_falls_a_scale_height_each_20_km_above() {
+        assert_eq!(closed_form_no(80.0), NO_PEAK_CM3);
+        assert_eq!(closed_form_no(NO_PEAK_KM), NO_PEAK_CM3);
+        assert!((closed_form_no(NO_PEAK_KM + 20.0) / NO_PEAK_CM3 - (-1f64).exp()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn n4s_is_anchored_at_400_km_and_follows_o_with_mass_ratio_14_16() {
+        assert!((closed_form_n4s(400.0, 1e8, 1000.0, 1e8, 1000.0) / N4S_400_CM3 - 1.0).abs() < 1e-12);
+        // O ten times denser at the same T: N 10^(7/8) times.
+        let r = closed_form_n4s(300.0, 1e9, 1000.0, 1e8, 1000.0) / N4S_400_CM3;
+        assert!((r / 10f64.powf(0.875) - 1.0).abs() < 1e-12, "{r}");
+        // One cut width below 200 km: e^-1 of the diffusive value.
+        let r = closed_form_n4s(165.0, 1e8, 1000.0, 1e8, 1000.0) / N4S_400_CM3;
+        assert!((r - (-1f64).exp()).abs() < 1e-12, "{r}");
+    }
+
+    #[test]
+    fn the_table_interpolates_and_holds_outside() {
+        let t = AmbientTable::new(
+            &[[100.0, 200.0, 1e6], [200.0, 1000.0, 1e8]],
+            &[[100.0, 200.0, 200.0, 1e3, 1e8], [200.0, 1000.0, 900.0, 1e5, 1e6]],
+        );
+        let a = t.at(150.0);
+        assert!(
+            (a.tn - 600.0).abs() < 1e-9
+                && (a.n4s / 1e7 - 1.0).abs() < 1e-12
+                && (a.ne / 1e4 - 1.0).abs() < 1e-12
+                && (a.no / 1e7 - 1.0).abs() < 1e-12
+        );
+        assert!((a.ti - 550.0).abs() < 1e-9);
+        assert_eq!(t.at(10.0), t.at(100.0));
+        assert_eq!(t.at(2000.0), t.at(200.0));
     }
 }

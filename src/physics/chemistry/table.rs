@@ -18,7 +18,7 @@
 //! 5 f64 + 11 f32 = 84 bytes, 4.0 MB (plus the colour table's 3 f64 per
 //! node in `spectrum`, 1.2 MB).
 
-use super::{solve, Air, AmbientTable, Emission};
+use super::{solve, Air, Emission};
 use crate::physics::atmosphere::Atmosphere;
 
 /// Altitude range and step, km.
@@ -68,12 +68,12 @@ pub struct Cell {
 
 impl ChemistryTable {
     /// Solves the chemistry at every node for `atmosphere`'s N2, O2 and O
-    /// and the ambient tables (`ambient`).
+    /// and its ambient state (`Atmosphere::ambient`).
     pub fn build(atmosphere: &Atmosphere) -> Self {
         use rayon::prelude::*;
         let nh = ((H_KM.1 - H_KM.0) / DH_KM).round() as usize + 1;
         let nq = ((LOG_Q.1 - LOG_Q.0) / D_LOG_Q).round() as usize + 1;
-        let amb = AmbientTable::get();
+        let amb = atmosphere.ambient();
         let nodes = (0..nh)
             .into_par_iter()
             .flat_map_iter(|ih| {

@@ -558,7 +558,8 @@ mod tests {
     #[test]
     fn yields_reach_their_physical_limits_and_conserve_energy() {
         let m = EmissionModel::default();
-        let a = Atmosphere::nrlmsis21();
+        // The default model's own atmosphere (U.S. Standard Atmosphere 1976).
+        let a = Atmosphere::default();
         // Well-mixed 50-80 km: N2 is 78.08 % of the air, 78.85 % of N2+O2
         // (Ar not counted), so 427.8 nm is Rees & Luckey's 0.34 photons/keV
         // to 1 %.

@@ -19,11 +19,12 @@
 //!   manifests made by `build.rs` (the version, 0.1.0 on every commit,
 //!   cannot tell builds apart).
 //!
-//! **Files.** The bake reads no file at run time: the atmosphere table
-//! (`data/nrlmsis21.csv`) and the deposition reference data are compiled in
-//! (`include_str!`), so `build` covers them; the heightmap and the sky image
-//! are read by the renderer only (their keys are render-only below). A file
-//! the bake comes to read must add its bytes' hash here.
+//! **Files.** The compiled-in atmosphere (`data/us1976.csv`, `include_str!`)
+//! is covered by `build`; the tables a scene reads from the data folder
+//! (`nrlmsis21.csv`, `ionosphere.csv`: `crate::physics::data_files`) add
+//! their bytes' hash to `scene`; the heightmap and the sky image are read
+//! by the renderer only (their keys are render-only below). A file the bake
+//! comes to read must add its bytes' hash here.
 //!
 //! The identity is kept in the JSON report only, never in the VDB (whose
 //! bytes are pinned): a frame kept across a render-only edit still carries
@@ -61,7 +62,9 @@ pub struct BakeIdentity {
 impl BakeIdentity {
     /// The identity of baking `scene` (validated) with this build.
     pub fn of(scene: &Scene) -> BakeIdentity {
-        BakeIdentity { scene: format!("{:016x}", fnv1a(bake_keys_json(scene).as_bytes())), build: BUILD.to_string() }
+        // The tables read from the data folder count with their bytes.
+        let keys = bake_keys_json(scene) + &crate::physics::data_files::identity(&scene.atmosphere);
+        BakeIdentity { scene: format!("{:016x}", fnv1a(keys.as_bytes())), build: BUILD.to_string() }
     }
 
     /// The identity a report names (its `bake_identity`), if any.
@@ -168,6 +171,7 @@ mod tests {
         "us1976",
         "standard",
         "nrlmsis21",
+        "glow",
         "x.png",
     ];
 

@@ -120,7 +120,9 @@ pub fn atmosphere(scene: &Scene) -> Atmosphere {
 
 /// The neutral atmosphere of `[atmosphere]`.
 pub fn atmosphere_for(params: &AtmosphereParams) -> Atmosphere {
-    Atmosphere::of_model(params.model)
+    // A table from the data folder was read when the scene was checked
+    // (`Atmosphere::of_params`, kept for the process): this cannot fail then.
+    Atmosphere::of_params(params).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The kernel radius field at base radius `kernel.base_km` (noise from
