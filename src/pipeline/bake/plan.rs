@@ -445,8 +445,9 @@ pub struct Gathered {
 
 /// What [`finish`] needs of `photons` (their per-line grids `lines`, their
 /// beams' `beam_stats`) gathered at `voxel` (km, and where that size came
-/// from): the warnings of that voxel size ([`resolution_warnings_for`]) and
-/// of the curtains' paths ([`bend_warnings`]), then `earlier` (the pilot's).
+/// from): the warnings of that voxel size ([`resolution_warnings_for`]), of
+/// the curtains' paths ([`bend_warnings`]) and of the power the beams did
+/// not deposit ([`beams::loss_warnings`]), then `earlier` (the pilot's).
 pub fn gathered(
     plan: &BakePlan,
     photons: Vec<Photon>,
@@ -459,6 +460,7 @@ pub fn gathered(
     let (voxel_km, voxel_source) = voxel;
     let mut warnings = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
     warnings.extend(bend_warnings(&plan.curtains));
+    warnings.extend(beams::loss_warnings(&beam_stats));
     warnings.extend(earlier.iter().cloned());
     Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise }
 }
