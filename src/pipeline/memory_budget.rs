@@ -174,12 +174,13 @@ fn band_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
 /// A conservative world box around every curtain, km: footprint boxes
 /// (rotated), from 50 km (below the lowest altitude the hardest electrons
 /// reach) to the beams' highest start, widened by the drift along an
-/// inclined field (at the smallest dip, [`dip_deg`]). The columns above the starts are bounded apart
+/// inclined field (at the smallest dip, [`dip_deg`]) and the beams' spread
+/// across it ([`spread_km`]). The columns above the starts are bounded apart
 /// ([`column_leaves`]).
 pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
     let z0 = 50.0;
     let z1 = scene.beams.top_km + scene.beams.top_noise_km;
-    let tilt = (90.0 - dip_deg(scene)).to_radians().tan() * (z1 - z0);
+    let tilt = (90.0 - dip_deg(scene)).to_radians().tan() * (z1 - z0) + spread_km(scene);
     let mut lo = [f64::INFINITY, f64::INFINITY, z0];
     let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
     for c in &scene.curtains {
@@ -276,6 +277,16 @@ pub fn photons_of_steps(scene: &Scene, beams: f64) -> f64 {
     beams * mean + 4.0 * (beams * var).sqrt()
 }
 
+/// How far a beam wanders across the field line, km: its deflections are a
+/// random walk of [`steps_per_beam`] steps, each at most `L dt tan
+/// alpha_D` across with mean square `(L dt tan alpha_D)^2 / 3`; four
+/// standard deviations of its sum.
+pub fn spread_km(scene: &Scene) -> f64 {
+    let b = &scene.beams;
+    let (n, _) = steps_per_beam(scene);
+    4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * b.alpha_d_deg.to_radians().tan()
+}
+
 /// The smallest voxel the bake may use, km.
 fn min_voxel_km(scene: &Scene) -> (f64, String, String) {
     match scene.grid.voxel_size {
@@ -308,26 +319,27 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
     let (lo, hi) = world_bounds(scene);
     let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
-    // With a path, the sum of the curtains' own bounds (a path's band) when smaller than the box.
-    let area_leaves = if scene.curtains.iter().any(|c| c.path.is_some()) {
-        let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
-        let own: f64 = scene
-            .curtains
-            .iter()
-            .map(|c| match path_curve(scene, c) {
-                Some((length, _)) => band_leaves(length, 0.5 * c.width + reach + leaf_km, leaf_km) * slabs,
-                None => {
-                    let (s, co) = c.rotation_deg.to_radians().sin_cos();
-                    let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + leaf_km);
-                    let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * (reach + leaf_km);
-                    ((dx / leaf_km).ceil() + 1.0) * ((dy / leaf_km).ceil() + 1.0) * slabs
-                }
-            })
-            .sum();
-        box_leaves.min(own)
-    } else {
-        box_leaves
-    };
+    // The curtains' own bounds when smaller than the box: per leaf-thick
+    // slab, the start area (a path's band, a straight curtain's rectangle)
+    // dilated by the reach and the beams' spread, widened by the field
+    // line's shift within the slab, leaf cot(I).
+    let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
+    let shift = leaf_km / dip.to_radians().tan();
+    let spread = spread_km(scene);
+    let own: f64 = scene
+        .curtains
+        .iter()
+        .map(|c| match path_curve(scene, c) {
+            Some((length, _)) => band_leaves(length, 0.5 * c.width + reach + spread + leaf_km + shift, leaf_km) * slabs,
+            None => {
+                let (s, co) = c.rotation_deg.to_radians().sin_cos();
+                let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + spread + leaf_km) + shift;
+                let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * (reach + spread + leaf_km) + shift;
+                ((dx / leaf_km).ceil() + 1.0) * ((dy / leaf_km).ceil() + 1.0) * slabs
+            }
+        })
+        .sum();
+    let area_leaves = box_leaves.min(own);
     let leaves = area_leaves.min(step_photons * per_photon) + column_leaves(scene, leaf_km, reach);
     // Blame the kernel when its reach, not the voxel or the curtains, makes the grid large.
     let box_without_reach: f64 = (0..3).map(|i| ((hi[i] - lo[i]) / leaf_km).ceil() + 1.0).product();

@@ -160,6 +160,6 @@ mod tests {
         // A uniform field: the dip against alpha_D.
         let b = BeamParams { alpha_d_deg: 30.0, b_inclination_deg: 30.0, delta_alpha_deg: 3.0, ..BeamParams::default() };
         let m = check_field(&c, &b, &earth(None)).unwrap_err().to_string();
-        assert!(m.contains("dips 30.00 degrees") && m.contains("beams.b_inclination_deg"), "{m}");
+        assert!(m.contains("dips only 30.00 degrees") && m.contains("raise beams.b_inclination_deg"), "{m}");
     }
 }
