@@ -11,7 +11,9 @@
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
-//! - `schema`: the committed schema and the documents generated from it.
+//! - `schema`: the committed schema and the documents generated from it;
+//! - `globe`: scenes anywhere on the globe, the field's dip refused or
+//!   warned about.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -19,6 +21,7 @@ mod common;
 mod bench;
 mod end_to_end;
 mod frames;
+mod globe;
 mod inputs;
 mod outputs;
 mod plan;

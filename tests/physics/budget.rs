@@ -103,3 +103,76 @@ fn the_photon_estimate_follows_the_field_dip() {
         assert!(leaves <= bound, "dip {dip}: {leaves} leaves, bound {bound:.0}");
     }
 }
+
+/// `s` with `key` (a dotted `table.name`) set to `value` as a scene file
+/// writes it, read back through TOML.
+fn with_key(s: &aurora::scene::Scene, key: &str, value: &str) -> aurora::scene::Scene {
+    let mut doc: toml::Table = s.to_toml().parse().unwrap();
+    let (table, name) = key.split_once('.').unwrap();
+    let v: toml::Table = format!("v = {value}").parse().unwrap_or_else(|e| panic!("{key} = {value}: {e}"));
+    doc.get_mut(table).and_then(|t| t.as_table_mut()).unwrap().insert(name.to_string(), v["v"].clone());
+    aurora::scene::Scene::from_toml_str(&toml::to_string(&doc).unwrap(), "suggested.toml").unwrap()
+}
+
+#[test]
+fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
+    // Scenes far over an 8 GiB limit, each for a different reason: every
+    // change the refusal suggests, written into the scene file alone, gives
+    // a scene the budget accepts, and moves its key the way that shrinks
+    // the bake (fewer beams, longer steps, larger voxels, a smaller
+    // kernel, a coarser footprint, fewer lines or trail samples). A
+    // steeper field's longer beams are counted too.
+    use aurora::pipeline::memory_refusal::check;
+    use aurora::scene::{Scene, VoxelSize};
+    let limit = aurora::util::memory::MemoryLimit { bytes: 8.0 * (1u64 << 30) as f64, source: "test" };
+    let mut scenes: Vec<(&str, Scene)> = Vec::new();
+    let mut s = Scene::default();
+    s.beams.count = 20_000_000;
+    scenes.push(("many beams", s));
+    let mut s = Scene::default();
+    s.grid.voxel_size = VoxelSize::Km(0.02);
+    scenes.push(("small voxels", s));
+    let mut s = Scene::default();
+    s.beams.dt = 2e-5;
+    s.beams.count = 40_000;
+    scenes.push(("short steps", s));
+    let mut s = Scene::default();
+    s.photons.radius_km = 30.0;
+    scenes.push(("wide kernel", s));
+    let mut s = Scene::default();
+    s.beams.count = 400_000;
+    s.earth.magnetic_pole = Some(pole_for_dip(12.0, s.earth.radius_km));
+    s.grid.lines = aurora::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();
+    s.animation.trail_samples = 4;
+    scenes.push(("shallow field, lines and trail", s));
+    for (name, s) in scenes {
+        s.validate(name, None).unwrap();
+        let e = check(&s, &limit).expect_err(name);
+        let m = e.to_string();
+        assert!(!e.suggestions.is_empty(), "{name}: {m}");
+        assert!(m.contains("80 %") && m.contains("each of these changes alone brings it under"), "{name}: {m}");
+        eprintln!("{name}: {m}");
+        for sg in &e.suggestions {
+            let t = with_key(&s, &sg.key, &sg.to);
+            let fits = check(&t, &limit);
+            assert!(fits.is_ok(), "{name}: {} = {} does not fit: {}", sg.key, sg.to, fits.unwrap_err());
+            let ok = match sg.key.as_str() {
+                "beams.count" => t.beams.count < s.beams.count,
+                "beams.dt" => t.beams.dt > s.beams.dt,
+                "grid.voxel_size" => voxel_km(&t) > voxel_km(&s),
+                "photons.radius_km" => t.photons.radius_km < s.photons.radius_km,
+                "footprint.resolution" => t.footprint.resolution[0] < s.footprint.resolution[0],
+                "grid.lines" => t.grid.lines.len() < s.grid.lines.len(),
+                "animation.trail_samples" => t.animation.trail_samples < s.animation.trail_samples,
+                k => panic!("{name}: an unexpected key {k}"),
+            };
+            assert!(ok, "{name}: {} goes the wrong way: {} to {}", sg.key, sg.from, sg.to);
+        }
+    }
+}
+
+/// The voxel size the budget takes for `s`: its own, or the automatic
+/// one's floor.
+fn voxel_km(s: &aurora::scene::Scene) -> f64 {
+    s.voxel_size_km().unwrap_or_else(|| KernelRadius::of(&s.photons).auto_voxel_floor_km())
+}
