@@ -32,11 +32,11 @@ pub struct Suggestion {
 /// A bake that would not fit.
 #[derive(Debug, Clone, thiserror::Error)]
 #[error(
-    "the bake needs about {} GiB ({what}: {} GiB from {key} = {value}), more than the {:.0} % of this process's memory a bake may use: {} GiB of {limit} (the other {:.0} % is kept for the program, its threads, the allocator's slack and the files' write buffers); {}",
+    "the bake needs about {} GiB (its {what}: {} GiB, from {key} = {value}), more than the {} GiB it may use: {:.0} % of the {limit} this process may use, the other {:.0} % being kept for the program, its threads, the allocator's slack and the files' write buffers; {}",
     gib_up(*total),
     gib_up(*needed),
-    100.0 * USABLE_FRACTION,
     gib_down(*usable),
+    100.0 * USABLE_FRACTION,
     100.0 * (1.0 - USABLE_FRACTION),
     advice(suggestions)
 )]
