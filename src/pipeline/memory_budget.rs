@@ -57,8 +57,8 @@
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::beams::dip::min_dip_deg;
-use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM, COMPLETE_TOL, FANG_MAX_STEPS};
+use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
 use crate::scene::{Curtain, Deposition, KernelRadius, Scene, VoxelSize};
@@ -280,11 +280,22 @@ pub fn photons_of_steps(scene: &Scene, beams: f64) -> f64 {
 /// How far a beam wanders across the field line, km: its deflections are a
 /// random walk of [`steps_per_beam`] steps, each at most `L dt tan
 /// alpha_D` across with mean square `(L dt tan alpha_D)^2 / 3`; four
-/// standard deviations of its sum.
+/// standard deviations of its sum, and at most `sin(alpha_D)` of its
+/// longest path, `h / sin(I - alpha_D)`.
 pub fn spread_km(scene: &Scene) -> f64 {
     let b = &scene.beams;
     let (n, _) = steps_per_beam(scene);
-    4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * b.alpha_d_deg.to_radians().tan()
+    let walk = 4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * b.alpha_d_deg.to_radians().tan();
+    // However long the steps, a path that descends at least sin(I - alpha_D)
+    // per km from the highest start to 50 km goes at most tan(alpha_D) per
+    // km along the line across it.
+    let descent = (dip_deg(scene) - b.alpha_d_deg).to_radians();
+    if descent > 0.0 {
+        let h = (b.top_km + b.top_noise_km - 50.0).max(0.0);
+        walk.min(h / descent.sin() * b.alpha_d_deg.to_radians().sin())
+    } else {
+        walk
+    }
 }
 
 /// The smallest voxel the bake may use, km.
@@ -419,7 +430,7 @@ pub fn estimate(scene: &Scene) -> Estimate {
     // count by what their peak exceeds the rest.
     let rest: f64 = terms.iter().map(|t| t.bytes).sum();
     let pilot_photons = |beams: f64| photons_of_steps(scene, beams) + beams * column_segments;
-    let deposit_pilot = 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS as f64) * photon_bytes + terms[3].bytes;
+    let deposit_pilot = 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS.min(b.count) as f64) * photon_bytes + terms[3].bytes;
     let noise_pilot = if b.target_noise > 0.0 {
         let m = PILOT_HALF_BEAMS as f64;
         let grid = area_leaves.min(photons_of_steps(scene, m) * per_photon) + column_leaves(scene, leaf_km, reach);

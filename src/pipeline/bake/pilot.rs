@@ -37,7 +37,7 @@
 //! the law predicts: docs/physics.md, "The noise target".
 //!
 //! **The deposition pilot** ([`check_deposition`], before every bake)
-//! traces [`DEPOSIT_PILOT_BEAMS`] beams of each curtain on streams of their
+//! traces [`DEPOSIT_PILOT_BEAMS`] beams (at most `beams.count`) of each curtain on streams of their
 //! own and refuses a curtain whose beams deposit under
 //! [`crate::pipeline::beams::MIN_DEPOSITED_FRACTION`] of the power entering
 //! the atmosphere (a field so shallow that they leave their footprint
@@ -48,9 +48,10 @@ use super::plan::{self, BakePlan};
 use super::result::BakeError;
 use super::stats::NoiseEstimate;
 use crate::grid::Grid;
-use crate::pipeline::beams::{self, dip::curtain_dip, BeamError, TraceParams, DEPOSIT_PILOT_BEAMS, MIN_DEPOSITED_FRACTION, PILOT_HALF_BEAMS};
+use crate::pipeline::beams::{
+    self, dip::curtain_dip, BeamError, TraceParams, DEPOSIT_PILOT_BEAMS, MIN_DEPOSITED_FRACTION, PILOT_HALF_BEAMS,
+};
 use crate::util::progress::NoProgress;
-
 
 /// Beam-stream index where the pilot's second half starts: far beyond any
 /// beam count the scene accepts (10^8), so the halves never share a stream.
@@ -63,13 +64,14 @@ pub const QUARTER_OFFSETS: [u64; 2] = [2 << 40, 3 << 40];
 /// noise pilot's.
 pub const DEPOSIT_PILOT_OFFSET: u64 = 4 << 40;
 
-/// Traces [`DEPOSIT_PILOT_BEAMS`] beams of each curtain that has beams
+/// Traces [`DEPOSIT_PILOT_BEAMS`] beams (at most `beams.count`) of each curtain that has beams
 /// (its own random streams from [`DEPOSIT_PILOT_OFFSET`], so the bake's
 /// beams are untouched) and refuses the first whose deposited fraction is
 /// under [`MIN_DEPOSITED_FRACTION`] ([`BeamError::LowDeposit`]); returns
 /// the fractions, in curtain order (1 for a curtain without beams).
 pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
-    let m = DEPOSIT_PILOT_BEAMS;
+    // Never more than the bake's own beams.
+    let m = DEPOSIT_PILOT_BEAMS.min(plan.beams.count);
     let mut fractions = Vec::with_capacity(plan.curtains.len());
     for (i, c) in plan.curtains.iter().enumerate() {
         if !(c.beam_weight > 0.0) {

@@ -108,13 +108,7 @@ pub fn check_field(curtains: &[Curtain], beams: &BeamParams, earth: &EarthParams
                 ),
                 None => "raise beams.b_inclination_deg or lower beams.alpha_d_deg".to_string(),
             };
-            return Err(BeamError::FieldInCone {
-                curtain: i,
-                dip_deg: d.dip_deg,
-                at: d.at,
-                alpha_d_deg: beams.alpha_d_deg,
-                fix,
-            });
+            return Err(BeamError::FieldInCone { curtain: i, dip_deg: d.dip_deg, at: d.at, alpha_d_deg: beams.alpha_d_deg, fix });
         }
     }
     Ok(())

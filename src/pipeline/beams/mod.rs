@@ -102,7 +102,7 @@ pub enum BeamError {
     /// A pilot of the curtain's beams deposited under
     /// [`MIN_DEPOSITED_FRACTION`] of the power entering the atmosphere
     /// (`crate::pipeline::bake::pilot::check_deposition`).
-    #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power entering the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
+    #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power entering the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
     LowDeposit { curtain: usize, beams: usize, fraction: f64, left: usize, bottom: usize, capped: usize, dip_deg: f64, alpha_d_deg: f64 },
 }
 
