@@ -39,9 +39,10 @@
 //! **The deposition pilot** ([`check_deposition`], before every bake)
 //! traces [`DEPOSIT_PILOT_BEAMS`] beams (at most `beams.count`) of each curtain on streams of their
 //! own and refuses a curtain whose beams deposit under
-//! [`crate::pipeline::beams::MIN_DEPOSITED_FRACTION`] of the power entering
-//! the atmosphere (a field so shallow that they leave their footprint
-//! sideways): the fraction's sampling error at 256 beams is at most
+//! [`crate::pipeline::beams::MIN_DEPOSITED_FRACTION`] of the power they
+//! carry into the atmosphere (a field so shallow that they leave their
+//! footprint sideways; Fang's depositions only, csda's beams stop by its own
+//! rules): the fraction's sampling error at 256 beams is at most
 //! `sqrt(1/4 / 256)` = 3 %.
 
 use super::plan::{self, BakePlan};
@@ -68,13 +69,16 @@ pub const DEPOSIT_PILOT_OFFSET: u64 = 4 << 40;
 /// (its own random streams from [`DEPOSIT_PILOT_OFFSET`], so the bake's
 /// beams are untouched) and refuses the first whose deposited fraction is
 /// under [`MIN_DEPOSITED_FRACTION`] ([`BeamError::LowDeposit`]); returns
-/// the fractions, in curtain order (1 for a curtain without beams).
+/// the fractions, in curtain order (1 for a curtain without beams, and for
+/// every curtain with csda, which is not refused).
 pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
     // Never more than the bake's own beams.
     let m = DEPOSIT_PILOT_BEAMS.min(plan.beams.count);
     let mut fractions = Vec::with_capacity(plan.curtains.len());
     for (i, c) in plan.curtains.iter().enumerate() {
-        if !(c.beam_weight > 0.0) {
+        // csda's beams stop by its own rules (after 1 / dt steps, off the
+        // footprint): its losses are warned about, never refused.
+        if !(c.beam_weight > 0.0) || plan.beams.deposition == crate::scene::Deposition::Csda {
             fractions.push(1.0);
             continue;
         }

@@ -655,6 +655,7 @@ pub fn finish_keeping(
         total_emitted_luminance: luminance(total),
         electron_power_w: beam_stats.electron_power_w,
         deposited_power_w: beam_stats.deposited_power_w,
+        deposited_fraction: beam_stats.deposited_fraction,
         beam_stats,
         times_s: times,
         noise,

@@ -100,14 +100,16 @@ pub enum BeamError {
     #[error("curtain[{curtain}]: the geomagnetic field where its beams start dips only {dip_deg:.2} degrees below the horizon (at [{:.1}, {:.1}] km), within the beams' deflection cone beams.alpha_d_deg = {alpha_d_deg} of the horizontal, so its electrons may go up or sideways instead of down into the atmosphere; the dip must exceed beams.alpha_d_deg: {fix}", at[0], at[1])]
     FieldInCone { curtain: usize, dip_deg: f64, at: [f64; 2], alpha_d_deg: f64, fix: String },
     /// A pilot of the curtain's beams deposited under
-    /// [`MIN_DEPOSITED_FRACTION`] of the power entering the atmosphere
+    /// [`MIN_DEPOSITED_FRACTION`] of the power they carried
     /// (`crate::pipeline::bake::pilot::check_deposition`).
-    #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power entering the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
+    #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power they carried into the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
     LowDeposit { curtain: usize, beams: usize, fraction: f64, left: usize, bottom: usize, capped: usize, dip_deg: f64, alpha_d_deg: f64 },
 }
 
-/// A curtain whose beams deposit less than this share of the power entering
-/// the atmosphere (electron power less the model's backscatter) is refused.
+/// A curtain whose beams deposit less than this share of the power they
+/// carry into the atmosphere is refused (Fang's depositions; csda's beams
+/// stop by its own rules, after `1 / beams.dt` steps or off the footprint,
+/// and are only warned about).
 pub const MIN_DEPOSITED_FRACTION: f64 = 0.5;
 
 /// Beams per curtain of the deposition pilot
@@ -121,8 +123,8 @@ pub const DEPOSIT_PILOT_BEAMS: usize = 256;
 /// over millions of voxel values).
 pub const PILOT_HALF_BEAMS: usize = 500;
 
-/// A bake whose curtains deposit less than this share of that power is
-/// warned about (`aurora: warning: ...`).
+/// A bake whose curtains deposit less than this share of the power their
+/// beams carry is warned about (`aurora: warning: ...`).
 pub const WARN_DEPOSITED_FRACTION: f64 = 0.95;
 
 impl BeamError {
@@ -150,24 +152,24 @@ pub struct CurtainPower {
     /// footprint or ran out of steps, Fang beams below the atmosphere's
     /// bottom or at the safety cap.
     pub undeposited_power_w: f64,
-    /// The share of the power entering the atmosphere (electron power less
-    /// backscatter) the beams deposited in the bake: the rest was still
-    /// carried when they stopped or lay above the column's top. 1 when no
-    /// power enters.
+    /// The share of the power the beams carried into the atmosphere (at the
+    /// frame's pulsation; without it, electron power less backscatter) that
+    /// they deposited in the bake: the rest was still carried when they
+    /// stopped or lay above the column's top. 1 when they carried none.
     pub deposited_fraction: f64,
 }
 
 impl CurtainPower {
     /// [`CurtainPower::deposited_fraction`] from the powers.
     pub fn fraction_deposited(&self) -> f64 {
-        deposited_fraction(self.deposited_power_w, self.electron_power_w - self.backscattered_power_w)
+        deposited_fraction(self.deposited_power_w, self.undeposited_power_w + self.above_top_power_w)
     }
 }
 
-/// `deposited / entering`, 1 when nothing enters.
-fn deposited_fraction(deposited: f64, entering: f64) -> f64 {
-    if entering > 0.0 {
-        deposited / entering
+/// `deposited / (deposited + lost)`, 1 when both are 0.
+fn deposited_fraction(deposited: f64, lost: f64) -> f64 {
+    if deposited + lost > 0.0 {
+        deposited / (deposited + lost)
     } else {
         1.0
     }
@@ -189,8 +191,8 @@ pub struct BeamStats {
     pub backscattered_power_w: f64,
     pub above_top_power_w: f64,
     pub undeposited_power_w: f64,
-    /// The share of the power entering the atmosphere the beams deposited,
-    /// over all curtains ([`CurtainPower::deposited_fraction`]).
+    /// The share of the power the beams carried into the atmosphere that
+    /// they deposited, over all curtains ([`CurtainPower::deposited_fraction`]).
     pub deposited_fraction: f64,
     /// The same per curtain, in scene order.
     pub curtains: Vec<CurtainPower>,
@@ -450,11 +452,11 @@ fn sum_curtains(stats: &mut BeamStats) {
         stats.above_top_power_w += cp.above_top_power_w;
         stats.undeposited_power_w += cp.undeposited_power_w;
     }
-    stats.deposited_fraction = deposited_fraction(stats.deposited_power_w, stats.electron_power_w - stats.backscattered_power_w);
+    stats.deposited_fraction = deposited_fraction(stats.deposited_power_w, stats.undeposited_power_w + stats.above_top_power_w);
 }
 
 /// A warning for each curtain (and the bake) that deposited less than
-/// [`WARN_DEPOSITED_FRACTION`] of the power entering the atmosphere: where
+/// [`WARN_DEPOSITED_FRACTION`] of the power its beams carried: where
 /// the rest went, and the keys that keep the beams over their footprint.
 pub fn loss_warnings(stats: &BeamStats) -> Vec<String> {
     stats
@@ -464,10 +466,10 @@ pub fn loss_warnings(stats: &BeamStats) -> Vec<String> {
         .filter(|(_, c)| c.deposited_fraction < WARN_DEPOSITED_FRACTION)
         .map(|(i, c)| {
             format!(
-                "curtain[{i}]: its beams deposited {:.1} % of the power entering the atmosphere ({:.3e} of {:.3e} W; {:.3e} W still carried when they stopped, {:.3e} W above the column's top), more than {:.0} % lost: bake.json beam_stats.deposited_fraction; a steeper field or a smaller beams.alpha_d_deg or beams.length_km keeps the beams over their footprint",
+                "curtain[{i}]: its beams deposited {:.1} % of the power they carried into the atmosphere ({:.3e} of {:.3e} W; {:.3e} W still carried when they stopped, {:.3e} W above the column's top), more than {:.0} % lost: bake.json beam_stats.deposited_fraction; a steeper field, a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint",
                 100.0 * c.deposited_fraction,
                 c.deposited_power_w,
-                c.electron_power_w - c.backscattered_power_w,
+                c.deposited_power_w + c.undeposited_power_w + c.above_top_power_w,
                 c.undeposited_power_w,
                 c.above_top_power_w,
                 100.0 * (1.0 - WARN_DEPOSITED_FRACTION)
