@@ -6,8 +6,11 @@
 //! This stage starts every beam of every curtain and sums where their power
 //! went ([`trace_range`]). One beam's data are [`beam`]'s, its walk and the
 //! deposition models [`walk`]'s, a step's photon [`emit`]'s; the start points are `crate::pipeline::beams::starts`'s, the field
-//! `crate::physics::geomagnetic_field`'s, and the photons and step deposits it returns are the
-//! plain records of `crate::pipeline::deposit`.
+//! `crate::physics::geomagnetic_field`'s (its dip where each curtain starts, and the
+//! refusal of a field the beams cannot go down, [`dip`]'s), and the photons and step deposits it returns are the
+//! plain records of `crate::pipeline::deposit`. Where the beams' power went
+//! is summed per curtain ([`CurtainPower`], with the share deposited) and a
+//! loss above 5 % is warned about ([`loss_warnings`]).
 //!
 //! Photons carry physical power (see [`crate::pipeline::deposit::Photon`]), not a
 //! colour-map colour.
