@@ -31,14 +31,21 @@
 //! Physics", section 6.2): at magnetic latitude `lambda` (90 degrees less
 //! the central angle to the pole) the dip is `tan I = 2 tan(lambda)`, and the
 //! horizontal part points toward the pole, `D` the pole's azimuth
-//! ([`MagneticField::dipole`]).
+//! ([`MagneticField::dipole`]). Beyond the dipole's equator (more than a
+//! quarter of the globe from the pole, `lambda < 0`) B points up: the
+//! electrons still go down the field line into the atmosphere, along -B,
+//! so there `b` is -B, dipping `|I|` toward the pole's antipode (the other
+//! pole). Where `|I|` is no more than the beams' deflection `alpha_D` a
+//! step may go up or sideways for ever; such a curtain is refused
+//! (`crate::pipeline::beams::dip`).
 
 use crate::geometry::earth::Earth;
 use glam::DVec3;
 
-/// The geomagnetic frame: `b` the unit field direction (pointing down, the
-/// way precipitating electrons move), `u`, `v` completing an orthonormal,
-/// right-handed basis (u x v = b).
+/// The geomagnetic frame: `b` the unit direction of the field line the way
+/// precipitating electrons move (down: B in the northern hemisphere, -B in
+/// the southern), `u`, `v` completing an orthonormal, right-handed basis
+/// (u x v = b).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MagneticField {
     pub b: DVec3,
@@ -61,13 +68,25 @@ impl MagneticField {
         Self { b, u, v }
     }
 
-    /// The dipole's field at ground point `at` for the pole at ground point
-    /// `pole` (module doc): inclination `atan(2 tan(lambda))`, declination
-    /// the pole's azimuth. Within 1e-9 rad of the pole the field is
+    /// The dipole's field line at ground point `at` for the pole at ground
+    /// point `pole` (module doc), the way electrons precipitate: inclination
+    /// `atan(2 tan(lambda))`, declination the pole's azimuth; beyond the
+    /// dipole's equator (negative inclination, B pointing up) -B, dipping
+    /// `|I|` the other way. Within 1e-9 rad of the pole the field is
     /// vertical.
     pub fn dipole(earth: &Earth, pole: [f64; 2], at: [f64; 2]) -> Self {
         let (inc, dec) = dipole_angles_deg(earth, pole, at);
-        Self::new(inc, dec)
+        if inc < 0.0 {
+            Self::new(-inc, dec + 180.0)
+        } else {
+            Self::new(inc, dec)
+        }
+    }
+
+    /// The dip of `b` below the horizon, degrees (in [0, 90] for every field
+    /// [`MagneticField::new`] and [`MagneticField::dipole`] make).
+    pub fn dip_deg(&self) -> f64 {
+        (-self.b.z).clamp(-1.0, 1.0).asin().to_degrees()
     }
 
     /// The point where the field line through `p` crosses altitude `z`
@@ -80,7 +99,8 @@ impl MagneticField {
 }
 
 /// The dipole's inclination and declination, degrees, at ground point `at`
-/// for the pole at `pole` ([`MagneticField::dipole`]).
+/// for the pole at `pole` ([`MagneticField::dipole`]): the inclination of B
+/// itself, negative beyond the dipole's equator where B points up.
 pub fn dipole_angles_deg(earth: &Earth, pole: [f64; 2], at: [f64; 2]) -> (f64, f64) {
     let colat = earth.central_angle(at, pole);
     if colat < 1e-9 {
@@ -128,5 +148,28 @@ mod tests {
         assert!(d < -20.0 && d > -90.0, "{d}");
         // At the pole, vertical.
         assert_eq!(dipole_angles_deg(&e, [0.0, 2000.0], [0.0, 2000.0]), (90.0, 0.0));
+    }
+
+    #[test]
+    fn beyond_the_dipole_equator_electrons_go_down_along_minus_b() {
+        // The pole 14000 km north: magnetic latitude 90 - 14000 / R rad =
+        // -35.9 degrees, B points up at 55.3 degrees; the electrons' line
+        // dips 55.3 degrees toward the south (away from the pole, toward
+        // its antipode).
+        let e = Earth::new(crate::geometry::earth::MEAN_RADIUS_KM);
+        let (i, d) = dipole_angles_deg(&e, [0.0, 14000.0], [0.0, 0.0]);
+        assert!(i < -55.0 && i > -56.0 && d.abs() < 1e-9, "{i} {d}");
+        let f = MagneticField::dipole(&e, [0.0, 14000.0], [0.0, 0.0]);
+        assert!(f.b.z < 0.0 && f.b.y < 0.0 && f.b.x.abs() < 1e-12, "{:?}", f.b);
+        assert!((f.dip_deg() + i).abs() < 1e-9, "{} vs {i}", f.dip_deg());
+        // The mirror by the dipole's symmetry: the pole d north and the pole
+        // pi R - d south (its antipode d north) give the same line.
+        let d = 3000.0;
+        let far = std::f64::consts::PI * e.radius_km - d;
+        for at in [[0.0, 0.0], [40.0, -25.0], [-300.0, 120.0]] {
+            let n = MagneticField::dipole(&e, [0.0, d], at);
+            let s = MagneticField::dipole(&e, [0.0, -far], at);
+            assert!((n.b - s.b).length() < 1e-9, "{at:?}: {:?} vs {:?}", n.b, s.b);
+        }
     }
 }

@@ -17,6 +17,8 @@
 //!   the scene's errors in plain words.
 //! - `data`: the tables read from the data folder, and the default that
 //!   reads none.
+//! - `globe`: scenes anywhere on the globe, the field's dip refused or
+//!   warned about.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -25,6 +27,7 @@ mod bench;
 mod data;
 mod end_to_end;
 mod frames;
+mod globe;
 mod inputs;
 mod messages;
 mod outputs;

@@ -62,3 +62,117 @@ fn a_bake_stays_inside_the_budget_bounds() {
         );
     }
 }
+
+/// The pole's ground distance north of the origin that gives the dipole's
+/// field a dip of `dip_deg` there: magnetic latitude `atan(tan(I) / 2)`,
+/// 90 degrees less the central angle to the pole.
+fn pole_for_dip(dip_deg: f64, radius_km: f64) -> [f64; 2] {
+    let lat = (dip_deg.to_radians().tan() / 2.0).atan();
+    [0.0, (std::f64::consts::FRAC_PI_2 - lat) * radius_km]
+}
+
+#[test]
+fn the_photon_estimate_follows_the_field_dip() {
+    // With a shallower field each beam takes more steps to descend: at a
+    // dip of 12 degrees some 4.5 times the 78 degrees' (sin 78 / sin 12),
+    // where the estimate once counted 1 / beams.dt steps whatever the dip.
+    // The estimate is Wald's bound on the expected steps to descend from
+    // the highest start (top_km + top_noise_km) to where the spectrum's
+    // deposition is complete, plus four standard deviations of the sum,
+    // and the columns above the starts: above the count by the start
+    // noise (at most 12 km of some 180 km descent, 7 %), the last step's
+    // overshoot and the margin, so within 15 % of it at every dip (measured:
+    // 4.9 % at 78 degrees, 6.7 % at 12); and the
+    // grid's leaves stay within its bound.
+    for dip in [78.0, 45.0, 25.0, 12.0] {
+        let mut s = small_scene();
+        s.atmosphere.model = aurora::scene::AtmosphereModel::Us1976;
+        if dip < 78.0 {
+            s.earth.magnetic_pole = Some(pole_for_dip(dip, s.earth.radius_km));
+        }
+        let b = bake::bake(&s, &NoProgress).unwrap();
+        let e = memory_budget::estimate(&s);
+        let term = e.terms.iter().find(|t| t.what == "photons").unwrap();
+        let counted = term.bytes / 3.0 / std::mem::size_of::<Photon>() as f64;
+        let held = b.photons.len() as f64;
+        let grids = e.terms.iter().find(|t| t.what == "grids").unwrap();
+        let leaves = b.emission.leaf_count() as f64;
+        let bound = grids.bytes / 1.3 / (512.0 * 16.0 + 192.0);
+        eprintln!("dip {dip}: {held} photons, estimate {counted:.0} ({:.3}); {leaves} leaves, bound {bound:.0}", counted / held);
+        assert!(counted >= held && counted <= 1.15 * held, "dip {dip}: {held} photons, the estimate counts {counted:.0}");
+        assert!(leaves <= bound, "dip {dip}: {leaves} leaves, bound {bound:.0}");
+    }
+}
+
+/// `s` with `key` (a dotted `table.name`) set to `value` as a scene file
+/// writes it, read back through TOML.
+fn with_key(s: &aurora::scene::Scene, key: &str, value: &str) -> aurora::scene::Scene {
+    let mut doc: toml::Table = s.to_toml().parse().unwrap();
+    let (table, name) = key.split_once('.').unwrap();
+    let v: toml::Table = format!("v = {value}").parse().unwrap_or_else(|e| panic!("{key} = {value}: {e}"));
+    doc.get_mut(table).and_then(|t| t.as_table_mut()).unwrap().insert(name.to_string(), v["v"].clone());
+    aurora::scene::Scene::from_toml_str(&toml::to_string(&doc).unwrap(), "suggested.toml").unwrap()
+}
+
+#[test]
+fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
+    // Scenes far over an 8 GiB limit, each for a different reason: every
+    // change the refusal suggests, written into the scene file alone, gives
+    // a scene the budget accepts, and moves its key the way that shrinks
+    // the bake (fewer beams, longer steps, larger voxels, a smaller
+    // kernel, a coarser footprint, fewer lines or trail samples). A
+    // steeper field's longer beams are counted too.
+    use aurora::pipeline::memory_refusal::check;
+    use aurora::scene::{Scene, VoxelSize};
+    let limit = aurora::util::memory::MemoryLimit { bytes: 8.0 * (1u64 << 30) as f64, source: "test" };
+    let mut scenes: Vec<(&str, Scene)> = Vec::new();
+    let mut s = Scene::default();
+    s.beams.count = 20_000_000;
+    scenes.push(("many beams", s));
+    let mut s = Scene::default();
+    s.grid.voxel_size = VoxelSize::Km(0.02);
+    scenes.push(("small voxels", s));
+    let mut s = Scene::default();
+    s.beams.dt = 2e-5;
+    s.beams.count = 40_000;
+    scenes.push(("short steps", s));
+    let mut s = Scene::default();
+    s.photons.radius_km = 30.0;
+    scenes.push(("wide kernel", s));
+    let mut s = Scene::default();
+    s.beams.count = 400_000;
+    s.earth.magnetic_pole = Some(pole_for_dip(12.0, s.earth.radius_km));
+    s.grid.lines = aurora::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();
+    s.animation.trail_samples = 4;
+    scenes.push(("shallow field, lines and trail", s));
+    for (name, s) in scenes {
+        s.validate(name, None).unwrap();
+        let e = check(&s, &limit).expect_err(name);
+        let m = e.to_string();
+        assert!(!e.suggestions.is_empty(), "{name}: {m}");
+        assert!(m.contains("80 %") && m.contains("each of these changes alone brings it under"), "{name}: {m}");
+        eprintln!("{name}: {m}");
+        for sg in &e.suggestions {
+            let t = with_key(&s, &sg.key, &sg.to);
+            let fits = check(&t, &limit);
+            assert!(fits.is_ok(), "{name}: {} = {} does not fit: {}", sg.key, sg.to, fits.unwrap_err());
+            let ok = match sg.key.as_str() {
+                "beams.count" => t.beams.count < s.beams.count,
+                "beams.dt" => t.beams.dt > s.beams.dt,
+                "grid.voxel_size" => voxel_km(&t) > voxel_km(&s),
+                "photons.radius_km" => t.photons.radius_km < s.photons.radius_km,
+                "footprint.resolution" => t.footprint.resolution[0] < s.footprint.resolution[0],
+                "grid.lines" => t.grid.lines.len() < s.grid.lines.len(),
+                "animation.trail_samples" => t.animation.trail_samples < s.animation.trail_samples,
+                k => panic!("{name}: an unexpected key {k}"),
+            };
+            assert!(ok, "{name}: {} goes the wrong way: {} to {}", sg.key, sg.from, sg.to);
+        }
+    }
+}
+
+/// The voxel size the budget takes for `s`: its own, or the automatic
+/// one's floor.
+fn voxel_km(s: &aurora::scene::Scene) -> f64 {
+    s.voxel_size_km().unwrap_or_else(|| KernelRadius::of(&s.photons).auto_voxel_floor_km())
+}

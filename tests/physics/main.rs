@@ -1,7 +1,8 @@
 //! The physics of the bake and of what is seen, one test binary: each
 //! module checks a result against a closed form, an independent model or
 //! a measurement: the chemistry against NCAR GLOW (`chemistry`), the power
-//! balance (`energy`), the memory budget (`budget`), the bake's stages
+//! balance (`energy`), the memory budget (`budget`), the southern
+//! hemisphere's mirror of the northern (`globe`), the bake's stages
 //! (`pipeline`), curtains along paths (`path`), the round Earth (`earth`),
 //! the lines one at a time and their red trail (`lines`, `trail`), the
 //! corona's vanishing point (`corona`) and the presets' colours
@@ -15,6 +16,7 @@ mod chemistry;
 mod corona;
 mod earth;
 mod energy;
+mod globe;
 mod lines;
 mod path;
 mod pipeline;

@@ -47,11 +47,17 @@ fn deflection_of_90_degrees_is_refused_naming_key_and_range_and_nothing_is_writt
         assert!(e.contains("[0, 90)"), "{e}");
         assert!(!out.exists(), "nothing may be written: {:?}", files_in(&out));
     }
-    // Just below 90 is accepted (and baked: see `extremes`).
+    // Just below 90 is accepted by the scene's checks, and refused by the
+    // bake: a cone of 89.9 degrees about a field dipping 78 reaches past the
+    // horizontal (exit 2, naming the dip and the limit, nothing written).
     let scene = d.join("alpha-89.toml");
     std::fs::write(&scene, scene_text("count = 10\nalpha_d_deg = 89.9\ndelta_alpha_deg = 10.0", "", "", "steps = 2", "")).unwrap();
-    let o = aurora(&["bake", scene.to_str().unwrap(), "--out", d.join("out-89").to_str().unwrap(), "-q"]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out = d.join("out-89");
+    let o = aurora(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "-q"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("dips only 78.00 degrees") && e.contains("beams.alpha_d_deg = 89.9"), "{e}");
+    assert!(files_in(&out).is_empty(), "nothing may be written: {:?}", files_in(&out));
 }
 
 #[test]

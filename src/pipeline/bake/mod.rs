@@ -35,10 +35,13 @@ use plan::BakePlan;
 use stats::{NoiseEstimate, StageTimes};
 use std::time::Instant;
 
-/// Refuses a bake that would need more memory than this process may use
-/// ([`crate::pipeline::memory_budget`]), before anything is allocated.
+/// Refuses a bake whose beams cannot go down (a field within their
+/// deflection cone of the horizontal, [`crate::pipeline::beams::dip`]: its
+/// memory has no bound) or that would need more memory than this process
+/// may use ([`crate::pipeline::memory_budget`]), before anything is allocated.
 pub fn check_memory(scene: &Scene) -> Result<(), BakeError> {
-    crate::pipeline::memory_budget::check(&crate::pipeline::memory_budget::estimate(scene), &crate::util::memory::available())?;
+    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
+    crate::pipeline::memory_refusal::check(scene, &crate::util::memory::available())?;
     Ok(())
 }
 
@@ -75,12 +78,16 @@ pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Re
 
 /// The beam count: `beams.count`, or the pilot's when `beams.target_noise >
 /// 0` (with its estimate, and a warning when `beams.count` capped it);
-/// `times.pilot` is filled in.
+/// first the deposition pilot refuses a curtain whose beams would not
+/// deposit ([`pilot::check_deposition`]). `times.pilot` is filled in.
 pub fn beam_count(
     plan: &BakePlan,
     times: &mut StageTimes,
     progress: &dyn Progress,
 ) -> Result<(usize, Option<NoiseEstimate>, Vec<String>), BakeError> {
+    let t = Instant::now();
+    pilot::check_deposition(plan)?;
+    times.pilot = t.elapsed().as_secs_f64();
     if plan.beams.target_noise <= 0.0 {
         return Ok((plan.beams.count, None, Vec::new()));
     }
@@ -90,7 +97,7 @@ pub fn beam_count(
     let est = pilot::beams_for_noise(plan, plan.beams.target_noise)?;
     progress.inc(1);
     progress.finish();
-    times.pilot = t.elapsed().as_secs_f64();
+    times.pilot += t.elapsed().as_secs_f64();
     if est.capped {
         warnings.push(format!(
             "beams.target_noise = {} needs {:.0} beams (pilot: {:.3} relative RMS noise at {} beams); capped at beams.count = {}, expected noise {:.3}: raise beams.count to reach the target",

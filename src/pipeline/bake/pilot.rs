@@ -35,17 +35,24 @@
 //! do not change. The pilot costs about `2.5 m` beams of tracing and
 //! gathering; the count is capped at `beams.count`. Derivation and how well
 //! the law predicts: docs/physics.md, "The noise target".
+//!
+//! **The deposition pilot** ([`check_deposition`], before every bake)
+//! traces [`DEPOSIT_PILOT_BEAMS`] beams (at most `beams.count`) of each curtain on streams of their
+//! own and refuses a curtain whose beams deposit under
+//! [`crate::pipeline::beams::MIN_DEPOSITED_FRACTION`] of the power they
+//! carry into the atmosphere (a field so shallow that they leave their
+//! footprint sideways; Fang's depositions only, csda's beams stop by its own
+//! rules): the fraction's sampling error at 256 beams is at most
+//! `sqrt(1/4 / 256)` = 3 %.
 
 use super::plan::{self, BakePlan};
 use super::result::BakeError;
 use super::stats::NoiseEstimate;
 use crate::grid::Grid;
+use crate::pipeline::beams::{
+    self, dip::curtain_dip, BeamError, TraceParams, DEPOSIT_PILOT_BEAMS, MIN_DEPOSITED_FRACTION, PILOT_HALF_BEAMS,
+};
 use crate::util::progress::NoProgress;
-
-/// Beams in each half of the pilot: a small share of the default scene's
-/// tracing and gathering, and enough that the noise estimate itself is
-/// within a few percent (the sums run over millions of voxel values).
-pub const PILOT_HALF_BEAMS: usize = 500;
 
 /// Beam-stream index where the pilot's second half starts: far beyond any
 /// beam count the scene accepts (10^8), so the halves never share a stream.
@@ -53,6 +60,54 @@ pub const SECOND_HALF_OFFSET: u64 = 1 << 40;
 
 /// Beam-stream indices of the quarter-size pair: beyond both halves.
 pub const QUARTER_OFFSETS: [u64; 2] = [2 << 40, 3 << 40];
+
+/// Beam-stream index where the deposition pilot's beams start: beyond the
+/// noise pilot's.
+pub const DEPOSIT_PILOT_OFFSET: u64 = 4 << 40;
+
+/// Traces [`DEPOSIT_PILOT_BEAMS`] beams (at most `beams.count`) of each curtain that has beams
+/// (its own random streams from [`DEPOSIT_PILOT_OFFSET`], so the bake's
+/// beams are untouched) and refuses the first whose deposited fraction is
+/// under [`MIN_DEPOSITED_FRACTION`] ([`BeamError::LowDeposit`]); returns
+/// the fractions, in curtain order (1 for a curtain without beams, and for
+/// every curtain with csda, which is not refused).
+pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
+    // Never more than the bake's own beams.
+    let m = DEPOSIT_PILOT_BEAMS.min(plan.beams.count);
+    let mut fractions = Vec::with_capacity(plan.curtains.len());
+    for (i, c) in plan.curtains.iter().enumerate() {
+        // csda's beams stop by its own rules (after 1 / dt steps, off the
+        // footprint): its losses are warned about, never refused.
+        if !(c.beam_weight > 0.0) || plan.beams.deposition == crate::scene::Deposition::Csda {
+            fractions.push(1.0);
+            continue;
+        }
+        let params = TraceParams { curtains: std::slice::from_ref(c), ..plan.trace_params() };
+        let fp = std::slice::from_ref(&plan.footprints[i]);
+        let t = beams::trace_range(&params, fp, &plan.atmosphere, &plan.colour_table, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress)
+            .map_err(|e| match e {
+                BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
+                e => e,
+            })?;
+        let f = t.stats.curtains[0].deposited_fraction;
+        if f < MIN_DEPOSITED_FRACTION {
+            let st = &t.stats;
+            return Err(BeamError::LowDeposit {
+                curtain: i,
+                beams: m,
+                fraction: f,
+                left: st.ended_left_footprint,
+                bottom: st.ended_bottom,
+                capped: st.ended_max_steps,
+                dip_deg: curtain_dip(c, &plan.beams, &plan.earth).dip_deg,
+                alpha_d_deg: plan.beams.alpha_d_deg,
+            }
+            .into());
+        }
+        fractions.push(f);
+    }
+    Ok(fractions)
+}
 
 /// `a` and `b` of `noise(N)^2 = a / N + b / N^(3/2)` from `noise(m1)` and
 /// `noise(m2)` (see the module documentation); b >= 0.

@@ -447,8 +447,9 @@ pub struct Gathered {
 
 /// What [`finish`] needs of `photons` (their per-line grids `lines`, their
 /// beams' `beam_stats`) gathered at `voxel` (km, and where that size came
-/// from): the warnings of that voxel size ([`resolution_warnings_for`]) and
-/// of the curtains' paths ([`bend_warnings`]), then `earlier` (the pilot's).
+/// from): the warnings of that voxel size ([`resolution_warnings_for`]), of
+/// the curtains' paths ([`bend_warnings`]) and of the power the beams did
+/// not deposit ([`beams::loss_warnings`]), then `earlier` (the pilot's).
 pub fn gathered(
     plan: &BakePlan,
     photons: Vec<Photon>,
@@ -461,6 +462,7 @@ pub fn gathered(
     let (voxel_km, voxel_source) = voxel;
     let mut warnings = resolution_warnings_for(plan.kernel, &plan.footprints, plan.footprint.threshold, voxel_km);
     warnings.extend(bend_warnings(&plan.curtains));
+    warnings.extend(beams::loss_warnings(&beam_stats));
     warnings.extend(earlier.iter().cloned());
     Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise }
 }
@@ -655,6 +657,7 @@ pub fn finish_keeping(
         total_emitted_luminance: luminance(total),
         electron_power_w: beam_stats.electron_power_w,
         deposited_power_w: beam_stats.deposited_power_w,
+        deposited_fraction: beam_stats.deposited_fraction,
         beam_stats,
         times_s: times,
         noise,

@@ -31,11 +31,11 @@ pub enum BakeError {
     #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
     /// The bake would need more memory than this process may use
-    /// ([`crate::pipeline::memory_budget`]); refused before anything is allocated. Boxed: its
-    /// six strings would otherwise set the size of every
-    /// `Result<_, BakeError>`.
+    /// ([`crate::pipeline::memory_budget`], [`crate::pipeline::memory_refusal`]); refused before
+    /// anything is allocated. Boxed: its strings and suggestions would
+    /// otherwise set the size of every `Result<_, BakeError>`.
     #[error(transparent)]
-    Memory(#[from] Box<crate::pipeline::memory_budget::TooLarge>),
+    Memory(#[from] Box<crate::pipeline::memory_refusal::TooLarge>),
     /// The bake produced no emission at all: an empty VDB is never written
     /// silently. The message says where the beams' energy went.
     #[error("the bake deposited no light: {0}")]

@@ -55,6 +55,10 @@ pub struct BakeStats {
     /// deposited before stopping.
     pub electron_power_w: f64,
     pub deposited_power_w: f64,
+    /// The deposit over the power the beams carried into the atmosphere
+    /// (electron power less backscatter when nothing pulses); under 0.95 the bake warns
+    /// ([`crate::pipeline::beams::loss_warnings`]; per curtain in `beam_stats`).
+    pub deposited_fraction: f64,
     pub beam_stats: BeamStats,
     pub times_s: StageTimes,
     /// How `beams.target_noise` set the beam count (None when it is 0).

@@ -6,8 +6,11 @@
 //! This stage starts every beam of every curtain and sums where their power
 //! went ([`trace_range`]). One beam's data are [`beam`]'s, its walk and the
 //! deposition models [`walk`]'s, a step's photon [`emit`]'s; the start points are `crate::pipeline::beams::starts`'s, the field
-//! `crate::physics::geomagnetic_field`'s, and the photons and step deposits it returns are the
-//! plain records of `crate::pipeline::deposit`.
+//! `crate::physics::geomagnetic_field`'s (its dip where each curtain starts, and the
+//! refusal of a field the beams cannot go down, [`dip`]'s), and the photons and step deposits it returns are the
+//! plain records of `crate::pipeline::deposit`. Where the beams' power went
+//! is summed per curtain ([`CurtainPower`], with the share deposited) and a
+//! loss above 5 % is warned about ([`loss_warnings`]).
 //!
 //! Photons carry physical power (see [`crate::pipeline::deposit::Photon`]), not a
 //! colour-map colour.
@@ -28,6 +31,7 @@
 //! energy flux).
 
 pub mod beam;
+pub mod dip;
 pub mod emit;
 pub mod starts;
 pub mod walk;
@@ -94,7 +98,37 @@ pub fn apportion(count: usize, weights: &[f64]) -> Vec<usize> {
 pub enum BeamError {
     #[error("curtain[{curtain}]: no footprint cell is above footprint.threshold = {threshold} after the fluid simulation (largest cell: {peak}), so it cannot emit beams: the band was advected out of its box or thinned below the threshold; lower footprint.threshold, footprint.velocity_amplitude or footprint.steps, or widen the curtain")]
     EmptyFootprint { curtain: usize, threshold: f64, peak: f32 },
+    /// The electrons' field line at the curtain's start lies within the
+    /// beams' deflection cone of the horizontal ([`dip::check_field`]).
+    #[error("curtain[{curtain}]: the geomagnetic field where its beams start dips only {dip_deg:.2} degrees below the horizon (at [{:.1}, {:.1}] km), within the beams' deflection cone beams.alpha_d_deg = {alpha_d_deg} of the horizontal, so its electrons may go up or sideways instead of down into the atmosphere; the dip must exceed beams.alpha_d_deg: {fix}", at[0], at[1])]
+    FieldInCone { curtain: usize, dip_deg: f64, at: [f64; 2], alpha_d_deg: f64, fix: String },
+    /// A pilot of the curtain's beams deposited under
+    /// [`MIN_DEPOSITED_FRACTION`] of the power they carried
+    /// (`crate::pipeline::bake::pilot::check_deposition`).
+    #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power they carried into the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
+    LowDeposit { curtain: usize, beams: usize, fraction: f64, left: usize, bottom: usize, capped: usize, dip_deg: f64, alpha_d_deg: f64 },
 }
+
+/// A curtain whose beams deposit less than this share of the power they
+/// carry into the atmosphere is refused (Fang's depositions; csda's beams
+/// stop by its own rules, after `1 / beams.dt` steps or off the footprint,
+/// and are only warned about).
+pub const MIN_DEPOSITED_FRACTION: f64 = 0.5;
+
+/// Beams per curtain of the deposition pilot
+/// (`crate::pipeline::bake::pilot::check_deposition`): the deposited
+/// fraction's sampling error is at most `sqrt(1/4 / 256)` = 3 %.
+pub const DEPOSIT_PILOT_BEAMS: usize = 256;
+
+/// Beams in each half of the noise pilot (`crate::pipeline::bake::pilot`):
+/// a small share of the default scene's tracing and gathering, and enough
+/// that the noise estimate itself is within a few percent (the sums run
+/// over millions of voxel values).
+pub const PILOT_HALF_BEAMS: usize = 500;
+
+/// A bake whose curtains deposit less than this share of the power their
+/// beams carry is warned about (`aurora: warning: ...`).
+pub const WARN_DEPOSITED_FRACTION: f64 = 0.95;
 
 impl BeamError {
     /// Always the user's input: the scene's parameters (exit status 2).
@@ -121,6 +155,27 @@ pub struct CurtainPower {
     /// footprint or ran out of steps, Fang beams below the atmosphere's
     /// bottom or at the safety cap.
     pub undeposited_power_w: f64,
+    /// The share of the power the beams carried into the atmosphere (at the
+    /// frame's pulsation; without it, electron power less backscatter) that
+    /// they deposited in the bake: the rest was still carried when they
+    /// stopped or lay above the column's top. 1 when they carried none.
+    pub deposited_fraction: f64,
+}
+
+impl CurtainPower {
+    /// [`CurtainPower::deposited_fraction`] from the powers.
+    pub fn fraction_deposited(&self) -> f64 {
+        deposited_fraction(self.deposited_power_w, self.undeposited_power_w + self.above_top_power_w)
+    }
+}
+
+/// `deposited / (deposited + lost)`, 1 when both are 0.
+fn deposited_fraction(deposited: f64, lost: f64) -> f64 {
+    if deposited + lost > 0.0 {
+        deposited / (deposited + lost)
+    } else {
+        1.0
+    }
 }
 
 /// Counts from the beam stage.
@@ -139,6 +194,9 @@ pub struct BeamStats {
     pub backscattered_power_w: f64,
     pub above_top_power_w: f64,
     pub undeposited_power_w: f64,
+    /// The share of the power the beams carried into the atmosphere that
+    /// they deposited, over all curtains ([`CurtainPower::deposited_fraction`]).
+    pub deposited_fraction: f64,
     /// The same per curtain, in scene order.
     pub curtains: Vec<CurtainPower>,
 }
@@ -386,15 +444,41 @@ fn tally_beams(stats: &mut BeamStats, ci: usize, beams: &[BeamOut]) {
     }
 }
 
-/// The stage's totals: the sums over its curtains, in scene order.
+/// The stage's totals: the sums over its curtains, in scene order, and
+/// the deposited fractions.
 fn sum_curtains(stats: &mut BeamStats) {
-    for cp in &stats.curtains {
+    for cp in &mut stats.curtains {
+        cp.deposited_fraction = cp.fraction_deposited();
         stats.electron_power_w += cp.electron_power_w;
         stats.deposited_power_w += cp.deposited_power_w;
         stats.backscattered_power_w += cp.backscattered_power_w;
         stats.above_top_power_w += cp.above_top_power_w;
         stats.undeposited_power_w += cp.undeposited_power_w;
     }
+    stats.deposited_fraction = deposited_fraction(stats.deposited_power_w, stats.undeposited_power_w + stats.above_top_power_w);
+}
+
+/// A warning for each curtain (and the bake) that deposited less than
+/// [`WARN_DEPOSITED_FRACTION`] of the power its beams carried: where
+/// the rest went, and the keys that keep the beams over their footprint.
+pub fn loss_warnings(stats: &BeamStats) -> Vec<String> {
+    stats
+        .curtains
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.deposited_fraction < WARN_DEPOSITED_FRACTION)
+        .map(|(i, c)| {
+            format!(
+                "curtain[{i}]: its beams deposited {:.1} % of the power they carried into the atmosphere ({:.3e} of {:.3e} W; {:.3e} W still carried when they stopped, {:.3e} W above the column's top), more than {:.0} % lost: bake.json beam_stats.deposited_fraction; a steeper field, a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint",
+                100.0 * c.deposited_fraction,
+                c.deposited_power_w,
+                c.deposited_power_w + c.undeposited_power_w + c.above_top_power_w,
+                c.undeposited_power_w,
+                c.above_top_power_w,
+                100.0 * (1.0 - WARN_DEPOSITED_FRACTION)
+            )
+        })
+        .collect()
 }
 
 /// What the curtains of one [`trace_range`] share.

@@ -1,0 +1,159 @@
+//! The field's dip where each curtain's beams start, and the curtains whose
+//! electrons cannot go down.
+//!
+//! A step leaves at an angle of at most `alpha_D` (`beams.alpha_d_deg`)
+//! from the field line (Baranoski, Rokne, Shirley, Trondsen & Bastos 2000;
+//! [`super::walk`]). Its vertical part is at most
+//! `-s sin(I - alpha_D) / cos(alpha)` for a line dipping `I` below the
+//! horizon, so every step descends while `I > alpha_D`; where the line lies
+//! within that cone of the horizontal (`I <= alpha_D`) a beam may go up or
+//! sideways for ever. With a dipole pole (`earth.magnetic_pole`,
+//! `crate::physics::geomagnetic_field`) that happens near the dipole's
+//! equator, a quarter of the globe (`pi R / 2`, 10007 km) from the pole.
+//!
+//! [`curtain_dip`] samples a curtain's start area (a straight curtain's
+//! rectangle, or a path's lifted vertices widened by half the width) and
+//! keeps its smallest dip, 0 where the samples straddle the dipole's
+//! equator; [`check_field`] refuses a curtain at or inside the cone.
+
+use super::BeamError;
+use crate::geometry::earth::Earth;
+use crate::physics::geomagnetic_field::dipole_angles_deg;
+use crate::pipeline::footprint::curtain_path::{vertices, Lift};
+use crate::scene::{BeamParams, Curtain, EarthParams};
+
+/// Samples along a straight curtain's length (and across, [`ACROSS`]).
+const ALONG: usize = 17;
+const ACROSS: usize = 3;
+
+/// The smallest dip of the electrons' field line over a curtain's start area.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CurtainDip {
+    /// Degrees below the horizon, in [0, 90]: 0 where the area straddles
+    /// the dipole's equator.
+    pub dip_deg: f64,
+    /// The ground point `[x, y]` km where it is smallest.
+    pub at: [f64; 2],
+}
+
+/// Ground points `[x, y]` km of a curtain's start area: a straight
+/// curtain's rectangle at [`ALONG`] x [`ACROSS`] points (corners, edges,
+/// centre), or a path's vertices lifted to the start altitude, each with
+/// the four points half the width away along the axes.
+pub fn start_samples(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams) -> Vec<[f64; 2]> {
+    if let Some(p) = &curtain.path {
+        let h = 0.5 * curtain.width;
+        return vertices(&Lift::of(beams, earth).path(p))
+            .into_iter()
+            .flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]])
+            .collect();
+    }
+    let (s, c) = curtain.rotation_deg.to_radians().sin_cos();
+    let mut out = Vec::with_capacity(ALONG * ACROSS);
+    for i in 0..ALONG {
+        for j in 0..ACROSS {
+            let u = (i as f64 / (ALONG - 1) as f64 - 0.5) * curtain.length;
+            let w = (j as f64 / (ACROSS - 1) as f64 - 0.5) * curtain.width;
+            out.push([curtain.center[0] + u * c - w * s, curtain.center[1] + u * s + w * c]);
+        }
+    }
+    out
+}
+
+/// The smallest dip over `curtain`'s start area: `beams.b_inclination_deg`
+/// for a uniform field; with a dipole pole the smallest `|I|` of the
+/// samples ([`start_samples`]), 0 if B points down at some and up at others
+/// (the dipole's equator runs through the curtain).
+pub fn curtain_dip(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams) -> CurtainDip {
+    let pole = match earth.magnetic_pole {
+        Some(pole) if earth.radius_km > 0.0 => pole,
+        _ => return CurtainDip { dip_deg: beams.b_inclination_deg, at: curtain.center },
+    };
+    let e = Earth::new(earth.radius_km);
+    let (mut best, mut up, mut down) = (CurtainDip { dip_deg: f64::INFINITY, at: curtain.center }, false, false);
+    for at in start_samples(curtain, beams, earth) {
+        let (inc, _) = dipole_angles_deg(&e, pole, at);
+        up |= inc < 0.0;
+        down |= inc > 0.0;
+        if inc.abs() < best.dip_deg {
+            best = CurtainDip { dip_deg: inc.abs(), at };
+        }
+    }
+    if up && down {
+        best.dip_deg = 0.0;
+    }
+    best
+}
+
+/// The smallest dip over every curtain's start area, degrees (90 without
+/// curtains).
+pub fn min_dip_deg(curtains: &[Curtain], beams: &BeamParams, earth: &EarthParams) -> f64 {
+    curtains.iter().map(|c| curtain_dip(c, beams, earth).dip_deg).fold(90.0, f64::min)
+}
+
+/// Refuses the first curtain whose field line at its start lies within the
+/// beams' deflection cone of the horizontal (`dip <= beams.alpha_d_deg`),
+/// naming it, its dip and the limit ([`BeamError::FieldInCone`]).
+pub fn check_field(curtains: &[Curtain], beams: &BeamParams, earth: &EarthParams) -> Result<(), BeamError> {
+    for (i, c) in curtains.iter().enumerate() {
+        let d = curtain_dip(c, beams, earth);
+        if !(d.dip_deg > beams.alpha_d_deg) {
+            let fix = match earth.magnetic_pole {
+                Some(pole) => format!(
+                    "the dipole pole earth.magnetic_pole = [{}, {}] is {:.0} km away, its equator (dip 0) {:.0} km from it: move the pole nearer the curtain, or lower beams.alpha_d_deg",
+                    pole[0],
+                    pole[1],
+                    Earth::new(earth.radius_km).central_angle(d.at, pole) * earth.radius_km,
+                    std::f64::consts::FRAC_PI_2 * earth.radius_km
+                ),
+                None => "raise beams.b_inclination_deg or lower beams.alpha_d_deg".to_string(),
+            };
+            return Err(BeamError::FieldInCone { curtain: i, dip_deg: d.dip_deg, at: d.at, alpha_d_deg: beams.alpha_d_deg, fix });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::earth::MEAN_RADIUS_KM;
+
+    fn earth(pole: Option<[f64; 2]>) -> EarthParams {
+        EarthParams { radius_km: MEAN_RADIUS_KM, magnetic_pole: pole }
+    }
+
+    #[test]
+    fn the_dip_is_the_smallest_over_the_start_area() {
+        let b = BeamParams::default();
+        let c = Curtain { center: [0.0, 0.0], length: 200.0, width: 0.0, rotation_deg: 90.0, ..Curtain::default() };
+        // A uniform field: its inclination.
+        assert_eq!(curtain_dip(&c, &b, &earth(None)).dip_deg, 78.0);
+        // The pole 3000 km north, the curtain along y: the far end (100 km
+        // farther, magnetic latitude 90 - 3100 / R rad) dips least.
+        let d = curtain_dip(&c, &b, &earth(Some([0.0, 3000.0])));
+        let lat = 90.0 - (3100.0 / MEAN_RADIUS_KM).to_degrees();
+        let want = (2.0 * lat.to_radians().tan()).atan().to_degrees();
+        assert!((d.dip_deg - want).abs() < 1e-6 && (d.at[1] + 100.0).abs() < 1e-9, "{d:?} vs {want}");
+        // Across the dipole's equator: 0.
+        let q = std::f64::consts::FRAC_PI_2 * MEAN_RADIUS_KM;
+        assert_eq!(curtain_dip(&c, &b, &earth(Some([0.0, q + 10.0]))).dip_deg, 0.0);
+    }
+
+    #[test]
+    fn a_field_within_the_deflection_cone_is_refused_naming_the_curtain_and_the_dip() {
+        let b = BeamParams::default();
+        let c = vec![Curtain::default(), Curtain { center: [0.0, 0.0], ..Curtain::default() }];
+        check_field(&c, &b, &earth(Some([0.0, 2000.0]))).unwrap();
+        // At the dipole's equator: refused.
+        let q = std::f64::consts::FRAC_PI_2 * MEAN_RADIUS_KM;
+        let e = check_field(&c, &b, &earth(Some([0.0, q]))).unwrap_err();
+        let m = e.to_string();
+        assert!(m.starts_with("curtain[0]") && m.contains("beams.alpha_d_deg = 5") && m.contains("earth.magnetic_pole"), "{m}");
+        assert!(e.is_input());
+        // A uniform field: the dip against alpha_D.
+        let b = BeamParams { alpha_d_deg: 30.0, b_inclination_deg: 30.0, delta_alpha_deg: 3.0, ..BeamParams::default() };
+        let m = check_field(&c, &b, &earth(None)).unwrap_err().to_string();
+        assert!(m.contains("dips only 30.00 degrees") && m.contains("raise beams.b_inclination_deg"), "{m}");
+    }
+}
