@@ -178,7 +178,13 @@ pub fn file_rows(path: &Path, text: &str, columns: usize, falling: Option<usize>
     let bad = |line: usize, message: String| DataError::Malformed { path: path.to_path_buf(), line, message };
     let out = rows(text, columns).map_err(|(line, message)| bad(line, message))?;
     // Row i's line: the i-th line of numbers.
-    let line_of = |i: usize| text.lines().enumerate().filter(|(_, l)| l.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.')).nth(i).map_or(0, |(n, _)| n + 1);
+    let line_of = |i: usize| {
+        text.lines()
+            .enumerate()
+            .filter(|(_, l)| l.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '.'))
+            .nth(i)
+            .map_or(0, |(n, _)| n + 1)
+    };
     for (i, r) in out.iter().enumerate() {
         if let Some(k) = (1..columns).find(|&k| r[k] <= 0.0) {
             return Err(bad(line_of(i), format!("column {} is {}, must be positive", k + 1, r[k])));
