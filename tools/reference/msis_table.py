@@ -13,7 +13,6 @@ Model: Emmert et al. 2022, "NRLMSIS 2.1: an empirical model of nitric oxide
 incorporated into MSIS", J. Geophys. Res. Space Physics 127; run through the
 `pymsis` package (PyPI). Rerun: `python tools/reference/msis_table.py [OUT.csv]`.
 """
-import io
 import sys
 from pathlib import Path
 
@@ -22,7 +21,7 @@ import pymsis
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
 from aurora_tools import ROOT  # noqa: E402
-from aurora_tools.files import write_atomic  # noqa: E402
+from aurora_tools.files import write_altitude_table  # noqa: E402
 
 LAT, LON = 67.0, 20.0
 DATE = np.datetime64("2020-01-15T00:00")
@@ -57,16 +56,12 @@ def main():
     path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "nrlmsis21.csv")
     rows = table()
     assert np.all(np.isfinite(rows)) and np.all(rows[:, 1:] > 0), "NRLMSIS returned a non-positive value"
-    with io.StringIO() as f:
-        f.write(f"# NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
-                f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
-                f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/reference/msis_table.py\n")
-        f.write("# terms: NRLMSIS 2.1 (MSIS, NRL-SOF-014-1): research, academic and non-profit use only; commercial use needs the U.S. Naval Research Laboratory's written consent (NOTICE, docs/data.md); not compiled into aurora\n")
-        f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,n4s_cm3,no_cm3\n")
-        for r in rows:
-            f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")
-        write_atomic(path, f.getvalue().encode())
-    print(f"wrote {path}: {len(rows)} rows", file=sys.stderr)
+    write_altitude_table(path, [
+        f"NRLMSIS 2.1 via pymsis {pymsis.__version__}: {LAT} N, {LON} E, {DATE} UT, "
+        f"F10.7 = F10.7a = {F107}, Ap = {AP}; "
+        f"O (and N, NO where undefined) at 50 km extrapolated (NRLMSIS leaves them undefined there); made by tools/reference/msis_table.py",
+        "terms: NRLMSIS 2.1 (MSIS, NRL-SOF-014-1): research, academic and non-profit use only; commercial use needs the U.S. Naval Research Laboratory's written consent (NOTICE, docs/data.md); not compiled into aurora",
+    ], "altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,n4s_cm3,no_cm3", rows)
 
 
 if __name__ == "__main__":

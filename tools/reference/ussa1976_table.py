@@ -17,7 +17,6 @@ Ar are defined throughout, H from 150 km (0 below, as the standard leaves it).
 Rerun: `python tools/reference/ussa1976_table.py [OUT.csv]` in a Python with
 `pip install ussa1976`.
 """
-import io
 import sys
 from pathlib import Path
 
@@ -26,7 +25,7 @@ import ussa1976
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # tools/: the shared package aurora_tools
 from aurora_tools import ROOT  # noqa: E402
-from aurora_tools.files import write_atomic  # noqa: E402
+from aurora_tools.files import write_altitude_table  # noqa: E402
 
 ALTITUDES = np.arange(50.0, 700.0 + 0.25, 0.5)
 O_FROM_KM = 86.0
@@ -49,16 +48,12 @@ def main():
     path = sys.argv[1] if len(sys.argv) > 1 else str(ROOT / "data" / "us1976.csv")
     rows = table()
     assert np.all(np.isfinite(rows)) and np.all(rows[:, 1:6] > 0), "a non-positive density or temperature"
-    with io.StringIO() as f:
-        f.write(f"# U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562) via ussa1976 {ussa1976.__version__}; "
-                f"O below {O_FROM_KM:g} km extrapolated (the standard defines it from {O_FROM_KM:g} km), H 0 below 150 km; "
-                "made by tools/reference/ussa1976_table.py\n")
-        f.write("# terms: public domain (a work of the U.S. Government); the ussa1976 package is MIT-licensed\n")
-        f.write("altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,ar_cm3,he_cm3,h_cm3\n")
-        for r in rows:
-            f.write(f"{r[0]:.1f}," + ",".join(f"{x:.6g}" for x in r[1:]) + "\n")
-        write_atomic(path, f.getvalue().encode())
-    print(f"wrote {path}: {len(rows)} rows", file=sys.stderr)
+    write_altitude_table(path, [
+        f"U.S. Standard Atmosphere 1976 (NOAA-S/T 76-1562) via ussa1976 {ussa1976.__version__}; "
+        f"O below {O_FROM_KM:g} km extrapolated (the standard defines it from {O_FROM_KM:g} km), H 0 below 150 km; "
+        "made by tools/reference/ussa1976_table.py",
+        "terms: public domain (a work of the U.S. Government); the ussa1976 package is MIT-licensed",
+    ], "altitude_km,rho_g_cm3,n2_cm3,o2_cm3,o_cm3,temperature_k,ar_cm3,he_cm3,h_cm3", rows)
 
 
 if __name__ == "__main__":
