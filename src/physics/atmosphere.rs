@@ -85,6 +85,10 @@ impl Atmosphere {
     /// state from the ionosphere it names. A table that is not compiled in
     /// is read from the data folder (`crate::physics::data_files`).
     pub fn of_params(params: &AtmosphereParams) -> Result<Self, DataError> {
+        if (params.model, params.ionosphere) == (AtmosphereModel::Us1976, Ionosphere::ClosedForm) {
+            // The default: built once for the process (every stage asks).
+            return Ok(Self::us1976());
+        }
         let rows = match params.model {
             AtmosphereModel::Us1976 => us1976_rows().to_vec(),
             AtmosphereModel::Nrlmsis21 => {
