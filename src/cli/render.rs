@@ -91,18 +91,11 @@ pub fn run(a: RenderArgs) -> Result<()> {
     };
     let format = image_format("--out", &out)?;
     super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
-    if let Some(p) = &png {
-        aurora::util::atomic_write::check_replaceable(p)?;
-    }
-    aurora::util::atomic_write::check_replaceable(&out)?;
     let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {
             let (frames, _) = frame_selection(&spec, None)?;
             let seq = vdb.expect("clap requires --vdb with --frame");
-            for &f in &frames {
-                aurora::util::atomic_write::check_replaceable(&frame_name(&out, f))?;
-            }
             with_threads(common.threads, || render_frames(&job, &seq, &frames, &out, png.as_deref()))
         }
         None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref() })),

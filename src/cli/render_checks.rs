@@ -28,6 +28,7 @@ pub fn inputs_and_outputs(vdb: Option<&Path>, frame: Option<&str>, outputs: &[Op
     let outputs: Vec<&Path> = outputs.iter().flatten().copied().collect();
     for out in &outputs {
         output_folder(out)?;
+        aurora::util::atomic_write::check_replaceable(out)?;
     }
     match (vdb, frame) {
         (Some(seq), Some(spec)) => {
@@ -40,17 +41,8 @@ pub fn inputs_and_outputs(vdb: Option<&Path>, frame: Option<&str>, outputs: &[Op
                 }
             }
         }
-        (Some(path), None) => {
-            vdb_input(path, "--vdb")?;
-            for out in &outputs {
-                aurora::util::atomic_write::check_replaceable(out)?;
-            }
-        }
-        (None, _) => {
-            for out in &outputs {
-                aurora::util::atomic_write::check_replaceable(out)?;
-            }
-        }
+        (Some(path), None) => vdb_input(path, "--vdb")?,
+        (None, _) => {}
     }
     Ok(())
 }
