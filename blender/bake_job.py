@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import json
 import os
+import platform
 import queue
 import re
 import shutil
@@ -43,20 +44,60 @@ class BakeError(RuntimeError):
     """The bake could not run or failed; the message says why."""
 
 
-def find_binary(preference: str | None = None) -> str:
-    """The `aurora` executable: the add-on preference if set, else
+#: Where an extension zip built by tools/build_extension keeps the baker:
+#: bin/<Blender platform>/aurora beside this file.
+BUNDLED_DIR = Path(__file__).resolve().parent / "bin"
+
+
+def blender_platform() -> str | None:
+    """This machine as the extension manifest's `platforms` names it
+    (linux-x64, ...), or None for one we do not ship a baker for."""
+    machine = {"x86_64": "x64", "amd64": "x64", "arm64": "arm64", "aarch64": "arm64"}.get(platform.machine().lower())
+    system = {"linux": "linux", "darwin": "macos", "windows": "windows"}.get(platform.system().lower())
+    return f"{system}-{machine}" if machine and system else None
+
+
+def bundled_binary(bundled_dir: Path = BUNDLED_DIR) -> str | None:
+    """The baker the extension zip brought for this platform, made
+    executable if the installer's unzip dropped its mode bits (Python's
+    zipfile does), or None."""
+    plat = blender_platform()
+    if plat is None:
+        return None
+    exe = bundled_dir / plat / ("aurora.exe" if plat.startswith("windows") else "aurora")
+    if not exe.is_file():
+        return None
+    if not os.access(exe, os.X_OK):
+        try:
+            exe.chmod(exe.stat().st_mode | 0o111)
+        except OSError:
+            return None
+    return str(exe) if os.access(exe, os.X_OK) else None
+
+
+def find_binary(preference: str | None = None, bundled_dir: Path = BUNDLED_DIR) -> str:
+    """The `aurora` executable: the add-on preference if set (the user's
+    explicit choice), else the one the extension zip brought, else
     `$AURORA_BIN`, else `aurora` on PATH."""
-    for where, cand in (("the add-on preferences", preference), ("$AURORA_BIN", os.environ.get("AURORA_BIN"))):
-        if cand:
-            p = Path(cand).expanduser()
-            if p.is_file() and os.access(p, os.X_OK):
-                return str(p)
-            raise BakeError(f"the aurora binary set in {where} ({cand}) is not an executable file")
+    if preference:
+        return _executable(preference, "the add-on preferences")
+    bundled = bundled_binary(bundled_dir)
+    if bundled:
+        return bundled
+    if os.environ.get("AURORA_BIN"):
+        return _executable(os.environ["AURORA_BIN"], "$AURORA_BIN")
     found = shutil.which("aurora")
     if found:
         return found
-    raise BakeError("no aurora binary: set its path in the add-on preferences (Edit > Preferences > Add-ons > Aurora), "
-                    "or $AURORA_BIN, or put `aurora` on PATH")
+    raise BakeError("no aurora binary: install the extension zip that brings it (tools/build_extension), set its path "
+                    "in the add-on preferences (Edit > Preferences > Add-ons > Aurora), or $AURORA_BIN, or put `aurora` on PATH")
+
+
+def _executable(cand: str, where: str) -> str:
+    p = Path(cand).expanduser()
+    if p.is_file() and os.access(p, os.X_OK):
+        return str(p)
+    raise BakeError(f"the aurora binary set in {where} ({cand}) is not an executable file")
 
 
 @dataclass

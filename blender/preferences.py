@@ -19,7 +19,7 @@ class AuroraPreferences(bpy.types.AddonPreferences):
     bl_idname = __package__
 
     binary: StringProperty(name="aurora binary", subtype="FILE_PATH", default="",
-                           description="Path of the `aurora` executable (empty: $AURORA_BIN, else aurora on PATH)")
+                           description="Path of the `aurora` executable (empty: the one the extension brought, else $AURORA_BIN, else aurora on PATH)")
 
     def draw(self, context):
         self.layout.prop(self, "binary")
@@ -34,8 +34,9 @@ def addon_preferences(context=None) -> AuroraPreferences | None:
 
 
 def aurora_binary(context=None) -> str:
-    """The `aurora` executable: the preference if set, else $AURORA_BIN, else
-    `aurora` on PATH (bake_job.find_binary; raises BakeError without one)."""
+    """The `aurora` executable: the preference if set, else the one the
+    extension zip brought, else $AURORA_BIN, else `aurora` on PATH
+    (bake_job.find_binary; raises BakeError without one)."""
     prefs = addon_preferences(context)
     return find_binary(prefs.binary if prefs is not None and prefs.binary else None)
 

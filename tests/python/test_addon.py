@@ -111,21 +111,32 @@ def assert_aurora_volume(obj, density_scale, emission_scale):
 
 def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_path, aurora_vdb, blender_user_dir, monkeypatch):
     """The zip tools/build_extension writes, installed into the throw-away
-    user folder (conftest.py), enabled, importing and baking from the panel's
-    operator with the binary set in the add-on's preferences."""
-    out = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--out", str(tmp_path / "dist")],
-                         capture_output=True, text=True)
+    user folder (conftest.py), enabled, importing, and baking from the
+    panel's operator with the baker the zip brought: no preference, no
+    $AURORA_BIN, no aurora on PATH."""
+    binary = aurora_bin()
+    build = [sys.executable, str(ROOT / "tools" / "build_extension"), "--binary", str(binary)]
+    out = subprocess.run(build + ["--out", str(tmp_path / "dist")], capture_output=True, text=True)
     assert out.returncode == 0, out.stderr
     z = Path(out.stdout.strip())
-    assert z.name == "aurora_importer-0.1.0.zip" and z.is_file()
-    names = zipfile.ZipFile(z).namelist()
+    assert z.name == "aurora_importer-0.1.0-linux_x64.zip" and z.is_file()  # Blender's --split-platforms name
+    zf = zipfile.ZipFile(z)
+    names = zf.namelist()
     assert "blender_manifest.toml" in names and "scene_schema.json" in names and "scene_keys.json" in names
     assert {"__init__.py", "preferences.py", "operators/__init__.py", "operators/bake.py", "ui/__init__.py",
             "ui/panels.py"} <= set(names)  # the subpackages too
     assert not any("__pycache__" in n or n.endswith(".pyc") for n in names)
-    again = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--out", str(tmp_path / "dist2")],
-                           capture_output=True, text=True, check=True)
+    baker = zf.getinfo("bin/linux-x64/aurora")
+    assert zf.read(baker) == binary.read_bytes() and (baker.external_attr >> 16) & 0o111
+    assert tomllib.loads(zf.read("blender_manifest.toml").decode())["platforms"] == ["linux-x64"]
+    again = subprocess.run(build + ["--out", str(tmp_path / "dist2")], capture_output=True, text=True, check=True)
     assert Path(again.stdout.strip()).read_bytes() == z.read_bytes()  # reproducible
+    plain = subprocess.run([sys.executable, str(ROOT / "tools" / "build_extension"), "--no-binary", "--out", str(tmp_path / "dist3")],
+                           capture_output=True, text=True, check=True)
+    plain_zip = zipfile.ZipFile(Path(plain.stdout.strip()))
+    assert Path(plain.stdout.strip()).name == "aurora_importer-0.1.0.zip"
+    assert not any(n.startswith("bin/") for n in plain_zip.namelist())
+    assert "platforms" not in tomllib.loads(plain_zip.read("blender_manifest.toml").decode())
     result = bpy.ops.extensions.package_install_files(filepath=str(z), repo="user_default", enable_on_install=True)
     assert result == {"FINISHED"}
     module = "bl_ext.user_default.aurora_importer"
@@ -143,13 +154,15 @@ def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_pat
         assert_aurora_volume(vols[0], 2.0, 3.0)
         assert np.allclose(np.array(vols[0].matrix_world), np.eye(4))
         assert bpy.context.scene.unit_settings.scale_length == 1000.0  # 1 BU = 1 km
-        # A bake from the panel's operator, the binary found through the preferences.
-        binary = aurora_bin()
+        # A bake from the panel's operator with nothing but the extension:
+        # the baker comes from the installed zip.
         monkeypatch.delenv("AURORA_BIN", raising=False)
         monkeypatch.setenv("PATH", str(tmp_path))  # no aurora on PATH either
         prefs = bpy.context.preferences.addons[module].preferences
         assert type(prefs).bl_idname == module  # the preferences are keyed by the package
-        prefs.binary = str(binary)
+        assert prefs.binary == ""
+        found = sys.modules[module + ".preferences"].aurora_binary(bpy.context)
+        assert Path(found) == installed / "bin" / "linux-x64" / "aurora"
         s = bpy.context.scene.aurora
         s.output_dir = str(tmp_path / "bake")
         s.beams.count, s.footprint.resolution, s.grid.voxel_size = 300, (64, 16), 2.0
@@ -157,6 +170,10 @@ def test_installs_and_enables_as_extension_imports_and_bakes(bpy, fresh, tmp_pat
         baked = [o for o in bpy.data.objects if o.get("aurora_bake_dir") == str(tmp_path / "bake")]
         assert len(baked) == 1 and baked[0].data.grids.load()
         assert (tmp_path / "bake" / "aurora.vdb").is_file() and (tmp_path / "bake" / "scene.toml").is_file()
+        # A path in the preferences is the user's explicit choice and wins
+        # over the bundled baker.
+        prefs.binary = str(binary)
+        assert sys.modules[module + ".preferences"].aurora_binary(bpy.context) == str(binary)
     finally:
         bpy.ops.preferences.addon_disable(module=module)
     assert module not in bpy.context.preferences.addons
