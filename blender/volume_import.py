@@ -1,21 +1,27 @@
 """Import an aurora bake (.vdb, or the .usda that points at it) as a Volume object.
 
-The VDB's own transform places the voxels in km (= Blender units), so a
-.vdb becomes a Volume object at identity. A USD stage is imported with
-Blender's USD importer, which scales root prims by the stage's metersPerUnit
-(aurora writes 1000: km) and turns Y-up stages to Z-up; one Blender unit is
-one km here, so the roots are then scaled by 1/1000. Path lengths are
-measured in the grid's own units (`volume.render.space` OBJECT), the units
-of the bake's per-km density and emission, whatever the object's scale.
+The VDB's own transform places the voxels in km. Units (`units`): "km"
+(the default) makes the scene's unit 1 Blender unit = 1 km and puts the
+Volume at identity; "scene" keeps the scene's unit settings and scales the
+Volume to them (1000 / `unit_settings.scale_length` Blender units per km: a
+shot in metres gets 1000); a number is Blender units per km, the scene
+untouched. A USD stage is imported with Blender's USD importer, which
+scales root prims by the stage's metersPerUnit (aurora writes 1000: km) and
+turns Y-up stages to Z-up; its roots are then scaled from metres to the
+chosen units. Path lengths are measured in the grid's own units
+(`volume.render.space` OBJECT), the units of the bake's per-km density and
+emission, so the picture is the same at any scale.
 
 Sequences (`aurora bake --frames`): importing any `aurora.NNNN.vdb` of a
 folder, or the folder's time-sampled `aurora.usda`, sets the Volume up as
 Blender's own sequence (is_sequence, frame_start, frame_duration,
 frame_offset: Blender loads file number scene frame - frame_start + 1 +
 frame_offset, digits before the extension replaced at the same width), and
-the scene's frame range and fps to the sequence's (fps from the frame's
-`aurora.NNNN.json`, or the stage's timeCodesPerSecond), and the current frame
-to the imported file's (a stage: its first frame).
+with `set_frame_range` (the default) the scene's frame range and fps to the
+sequence's (fps from the frame's `aurora.NNNN.json`, or the stage's
+timeCodesPerSecond), and the current frame to the imported file's (a
+stage: its first frame); without it the shot's range, fps and current frame
+stay, and the Volume still plays its frames at their own numbers.
 
 Render accuracy (docs/guide.md, "How Cycles reads the VDB"): precision FULL (HALF
 is off by up to 0.34%), clipping 0 (the default 0.001 drops faint emission).
@@ -52,9 +58,10 @@ def import_aurora(
     anisotropy: float = 0.0,
     scene: bpy.types.Scene | None = None,
     name: str | None = None,
-    set_units: bool = True,
+    units: str | float = "km",
     pad_dir=None,
     air=None,
+    set_frame_range: bool = True,
 ) -> list[bpy.types.Object]:
     """Import `filepath` (.vdb or .usd[a|c|z]) into `scene` (default: the
     context scene) and give every imported Volume the aurora material.
@@ -68,17 +75,20 @@ def import_aurora(
     `aurora_source` property. Files that already carry the shell (`aurora
     bake` writes it: metadata `aurora_cycles_shell = true` on every grid)
     are read as they are.
+    units: "km", "scene" or Blender units per km (the module doc).
+    set_frame_range: a sequence sets the scene's frame range and fps.
     Returns the Volume objects (one for a .vdb).
     """
     path = Path(filepath).expanduser().resolve()
     if not path.is_file():
         raise AuroraImportError(f"{path}: no such file")
     scene = scene or bpy.context.scene
+    per_km = units_per_km(scene, units)
     suffix = path.suffix.lower()
     if suffix in VDB_SUFFIXES:
-        objects = [_import_vdb(scene, path, name or path.stem)]
+        objects = [_import_vdb(scene, path, name or path.stem, per_km)]
     elif suffix in USD_SUFFIXES:
-        objects = _import_usd(scene, path)
+        objects = _import_usd(scene, path, per_km)
     else:
         raise AuroraImportError(f"{path}: expected .vdb or .usd/.usda/.usdc/.usdz")
     for obj in objects:
@@ -119,13 +129,15 @@ def import_aurora(
         vol.materials.clear()
         vol.materials.append(mat)
         obj["aurora_source"] = str(source)
-    if set_units:
+    if units == "km":
         set_scene_units(scene)
     seq = sequence_of(path)
     if seq is not None:
         first, last, fps = seq
         for obj in objects:
             set_volume_sequence(obj.data, first, last)
+        if not set_frame_range:
+            return objects
         scene.frame_start, scene.frame_end = first, last
         if fps:
             set_scene_fps(scene, fps)
@@ -134,6 +146,20 @@ def import_aurora(
         m = FRAME_RE.match(path.name)
         scene.frame_current = int(m["digits"]) if m and path.suffix.lower() == ".vdb" else first
     return objects
+
+
+def units_per_km(scene: bpy.types.Scene, units: str | float) -> float:
+    """Blender units per km of the volume for `units` (the module doc)."""
+    if units == "km":
+        return 1.0
+    if units == "scene":
+        u = scene.unit_settings
+        if u.system == "NONE" or u.scale_length <= 0:
+            return 1000.0  # unitless: 1 Blender unit reads as 1 m
+        return 1000.0 / u.scale_length
+    if isinstance(units, (int, float)) and not isinstance(units, bool) and 0 < units < float("inf"):
+        return float(units)
+    raise AuroraImportError(f"units = {units!r}: expected \"km\", \"scene\" or Blender units per km, a number > 0")
 
 
 #: `stem.NNNN.vdb`: the digits just before the extension (Blender's rule).
@@ -213,17 +239,17 @@ def _load_grids(vol: bpy.types.Volume, path: Path) -> dict[str, str]:
     return {g.name: g.data_type for g in vol.grids}
 
 
-def _import_vdb(scene, path: Path, name: str) -> bpy.types.Object:
+def _import_vdb(scene, path: Path, name: str, per_km: float) -> bpy.types.Object:
     vol = bpy.data.volumes.new(name)
     vol.filepath = str(path)
     vol.sequence_mode = "CLIP"
     obj = bpy.data.objects.new(name, vol)
     scene.collection.objects.link(obj)
-    obj.matrix_world = Matrix.Identity(4)
+    obj.matrix_world = Matrix.Scale(per_km, 4)
     return obj
 
 
-def _import_usd(scene, path: Path) -> list[bpy.types.Object]:
+def _import_usd(scene, path: Path, per_km: float) -> list[bpy.types.Object]:
     before = set(bpy.data.objects)
     with bpy.context.temp_override(scene=scene, view_layer=scene.view_layers[0]):
         result = bpy.ops.wm.usd_import(filepath=str(path), import_volumes=True, import_cameras=False, import_lights=False,
@@ -232,10 +258,10 @@ def _import_usd(scene, path: Path) -> list[bpy.types.Object]:
     if "FINISHED" not in result:
         raise AuroraImportError(f"{path}: Blender's USD importer failed")
     new = [o for o in bpy.data.objects if o not in before]
-    # The importer scaled the roots to metres; bring them to km.
+    # The importer scaled the roots to metres; bring them to the chosen units.
     for obj in new:
         if obj.parent is None or obj.parent not in new:
-            obj.matrix_world = Matrix.Scale(BU_PER_METRE, 4) @ obj.matrix_world
+            obj.matrix_world = Matrix.Scale(BU_PER_METRE * per_km, 4) @ obj.matrix_world
     volumes = [o for o in new if o.type == "VOLUME"]
     if not volumes:
         raise AuroraImportError(f"{path}: the stage holds no UsdVol.Volume")

@@ -77,6 +77,12 @@ def _table_panel(table: str):
             col.label(text="fps: the scene's frame rate")
         if table == "render":
             col.label(text="width, height: the scene's resolution")
+        if table == "grid":
+            # grid.prune drops the leaves faintest as seen from the active
+            # camera: another camera can lose faint aurora.
+            col.label(text="prune follows the active camera:")
+            col.label(text="for several cameras bake with prune = 0")
+            col.label(text="or once per camera")
 
     return type(f"VIEW3D_PT_aurora_{table}", (bpy.types.Panel,), {
         "bl_space_type": "VIEW_3D", "bl_region_type": "UI", "bl_category": "Aurora",

@@ -229,6 +229,74 @@ def test_import_function_vdb(addon, fresh, aurora_vdb, bpy):
     assert obj["aurora_source"] == str(Path(aurora_vdb).resolve())
 
 
+def _render_mean(bpy, scene, cam_pos, look, scale_clip: float) -> np.ndarray:
+    """Mean linear RGB of a 24x16 Cycles picture from a camera at `cam_pos`
+    looking at `look` (Blender units), fixed seed."""
+    from mathutils import Vector
+
+    data = bpy.data.cameras.new("c")
+    data.clip_start, data.clip_end = 0.01 * scale_clip, 1000.0 * scale_clip
+    cam = bpy.data.objects.new("c", data)
+    scene.collection.objects.link(cam)
+    cam.location = cam_pos
+    cam.rotation_euler = (Vector(look) - Vector(cam_pos)).to_track_quat("-Z", "Y").to_euler()
+    scene.camera = cam
+    scene.render.engine = "CYCLES"
+    scene.cycles.samples, scene.cycles.seed, scene.cycles.device = 16, 5, "CPU"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 24, 16, 100
+    scene.render.filepath = str(Path(bpy.app.tempdir) / "shot.exr")
+    scene.render.image_settings.file_format = "OPEN_EXR"
+    bpy.ops.render.render(write_still=True)
+    img = bpy.data.images.load(scene.render.filepath)
+    px = np.array(img.pixels[:], dtype=np.float64).reshape(-1, 4)[:, :3]
+    bpy.data.images.remove(img)
+    return px.mean(axis=0)
+
+
+def test_import_into_a_shot_in_metres_keeps_the_shot_and_the_picture(addon, fresh, bpy, aurora_vdb):
+    """A shot in metres (1 Blender unit = 1 m) keeps its unit settings, frame
+    range and fps; the Volume comes in 1000 units per km, and Cycles draws
+    the same picture as the km import seen from the same place."""
+    sc = bpy.context.scene
+    sc.unit_settings.system, sc.unit_settings.scale_length, sc.unit_settings.length_unit = "METRIC", 1.0, "METERS"
+    sc.frame_start, sc.frame_end, sc.render.fps = 1001, 1240, 24
+    obj = addon.import_aurora(aurora_vdb, units="scene")[0]
+    assert (sc.unit_settings.scale_length, sc.unit_settings.length_unit) == (1.0, "METERS")
+    assert (sc.frame_start, sc.frame_end, sc.render.fps) == (1001, 1240, 24)
+    assert np.allclose(np.array(obj.matrix_world), np.diag([1000.0, 1000.0, 1000.0, 1.0]))
+    assert obj.data.render.space == "OBJECT"  # path lengths in the grid's km
+    look_km, cam_km = (13.0, 0.0, 102.5), (13.0, -30.0, 102.5)
+    metres = _render_mean(bpy, sc, tuple(1000.0 * c for c in cam_km), tuple(1000.0 * c for c in look_km), 1000.0)
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    addon.import_aurora(aurora_vdb)
+    assert sc.unit_settings.scale_length == 1000.0
+    km = _render_mean(bpy, sc, cam_km, look_km, 1.0)
+    assert km.max() > 0.0
+    # Same seed and the same geometry up to a scale: equal but for float
+    # rounding in the ray setup, far below Cycles' 16-sample noise.
+    assert metres == pytest.approx(km, rel=0.02)
+    # Any scale, by number; a bad one is refused.
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    obj = addon.import_aurora(aurora_vdb, units=100.0)[0]
+    assert np.allclose(np.array(obj.matrix_world), np.diag([100.0, 100.0, 100.0, 1.0]))
+    assert bpy.context.scene.unit_settings.scale_length == 1.0  # untouched
+    with pytest.raises(addon.AuroraImportError, match="units = -1"):
+        addon.import_aurora(aurora_vdb, units=-1.0)
+    # The operator's options say what they change.
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    addon.register()
+    try:
+        assert bpy.ops.aurora.import_vdb(filepath=str(aurora_vdb), units="CUSTOM", units_per_km=10.0) == {"FINISHED"}
+        vol = [o for o in bpy.data.objects if o.type == "VOLUME"][0]
+        assert np.allclose(np.array(vol.matrix_world), np.diag([10.0, 10.0, 10.0, 1.0]))
+        assert bpy.context.scene.unit_settings.scale_length == 1.0
+        units = bpy.ops.aurora.import_vdb.get_rna_type().properties["units"]
+        assert units.default == "KM" and units.enum_items["KM"].name == "Set Scene to km"
+    finally:
+        addon.unregister()
+
+
 def test_import_with_scattering_keeps_extinction(addon, fresh, aurora_vdb):
     obj = addon.import_aurora(aurora_vdb, 1.5, 1.0, scattering_albedo=0.6)[0]
     pv = principled(obj.data.materials[0])

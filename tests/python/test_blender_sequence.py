@@ -85,6 +85,24 @@ def test_addon_sets_up_the_sequence_from_a_frame_file(addon, fresh, bpy, sequenc
     assert evaluated_file(bpy, obj, 6) == "aurora.0006.vdb"
 
 
+def test_a_sequence_imported_into_a_shot_keeps_its_range_when_asked(addon, fresh, bpy, sequence):
+    """set_frame_range=False: the shot's range, fps and current frame stay;
+    the Volume still loads file F at scene frame F."""
+    scene = bpy.context.scene
+    scene.frame_start, scene.frame_end, scene.frame_current, scene.render.fps = 1, 240, 17, 25
+    obj = addon.import_aurora(sequence / "aurora.0002.vdb", set_frame_range=False)[0]
+    assert (scene.frame_start, scene.frame_end, scene.frame_current, scene.render.fps) == (1, 240, 17, 25)
+    assert (obj.data.is_sequence, obj.data.frame_start, obj.data.frame_duration) == (True, 1, 4)
+    assert evaluated_file(bpy, obj, 3) == "aurora.0003.vdb"
+    # The operator's default sets the range, visibly (its option's name).
+    addon.register()
+    try:
+        op = bpy.ops.aurora.import_vdb.get_rna_type().properties["set_frame_range"]
+        assert op.default is True and op.name == "Set Frame Range and fps"
+    finally:
+        addon.unregister()
+
+
 def test_stage_has_a_time_sample_per_frame_and_imports_as_a_sequence(addon, fresh, bpy, sequence):
     usda = sequence / "aurora.usda"
     check = (
