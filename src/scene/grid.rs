@@ -155,8 +155,15 @@ pub const MAX_HIGH_VOXEL_FACTOR: u32 = 4;
 #[serde(deny_unknown_fields, default)]
 pub struct GridParams {
     pub voxel_size: VoxelSize,
-    /// Air extinction where the aurora is: density = a * exp(-b (h - base_km)),
-    /// per km (the report's a exp(-b h)).
+    /// Artistic air extinction where the aurora is: density =
+    /// a * exp(-b (h - base_km)), per km (the report's "air density"
+    /// a exp(-b h)). 0, the default, is the physical air: in the visible the
+    /// thermosphere is optically thin (Rayleigh scattering at 557.7 nm,
+    /// about 4.3e-27 cm^2 a molecule (Bodhaine et al. 1999), on the
+    /// 1.2e13 cm^-3 of 100 km, is 5e-9 per km; the column above 90 km has
+    /// an optical depth near 2e-7), so the volume holds no extinction and
+    /// the `density` grid is written empty. The air below the aurora is
+    /// `[sky] extinction`'s.
     pub density_a: f64,
     pub density_b: f64,
     pub density_base_km: f64,
@@ -206,7 +213,7 @@ impl Default for GridParams {
     fn default() -> Self {
         Self {
             voxel_size: VoxelSize::Km(0.5),
-            density_a: 0.02,
+            density_a: 0.0,
             density_b: 0.02,
             density_base_km: 90.0,
             half_emission: true,

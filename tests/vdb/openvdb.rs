@@ -324,6 +324,19 @@ fn openvdb_reads_the_default_bake_with_its_high_column() {
     let mut scene = aurora::scene::Scene::from_toml_str(small_bake_toml!(), "small.toml").unwrap();
     assert!(scene.grid.half_emission && scene.grid.half_density && !scene.grid.cycles_shell);
     scene.grid.high_voxel_factor = 2;
+    // The default air is optically thin: its density grids are empty, and
+    // OpenVDB reads them as grids with no voxel.
+    let thin = aurora::pipeline::bake::bake(&scene, &aurora::util::progress::NoProgress).unwrap();
+    aurora::io::bake_folder::write_outputs(&scene, &thin, &dir.join("thin")).unwrap();
+    let report = run_json(&system_python(), "vdb_probe.py", &[dir.join("thin").join("aurora.vdb").to_str().unwrap()]);
+    let r = &report.as_array().expect("one entry per file")[0];
+    assert!(r.get("error").is_none(), "OpenVDB failed: {}", r["error"]);
+    for g in r["grids"].as_array().unwrap() {
+        let empty = g["name"].as_str().unwrap().starts_with("density");
+        assert_eq!(g["active_voxels"].as_u64() == Some(0), empty, "{g}");
+    }
+    // The artistic air: every grid holds values OpenVDB must read.
+    scene.grid.density_a = 0.02;
     let baked = aurora::pipeline::bake::bake(&scene, &aurora::util::progress::NoProgress).unwrap();
     let out = dir.join("out");
     aurora::io::bake_folder::write_outputs(&scene, &baked, &out).unwrap();

@@ -95,7 +95,7 @@ mod tests {
         assert_eq!(edit(&|s| s.volume.emission_scale *= 2.0), Stage::Render);
         assert_eq!(edit(&|s| s.render.width += 2), Stage::Camera);
         assert_eq!(edit(&|s| s.camera.fov_deg += 1.0), Stage::Camera);
-        assert_eq!(edit(&|s| s.grid.density_a *= 2.0), Stage::Finish);
+        assert_eq!(edit(&|s| s.grid.density_a = 0.02), Stage::Finish);
         assert_eq!(edit(&|s| s.grid.voxel_size = crate::scene::VoxelSize::Km(0.7)), Stage::Gather);
         assert_eq!(edit(&|s| s.photons.radius_km *= 1.1), Stage::Gather);
         assert_eq!(edit(&|s| s.photons.kernel = crate::scene::KernelShape::Point), Stage::Trace);

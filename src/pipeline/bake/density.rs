@@ -26,9 +26,14 @@ pub const MAX_EXTINCTION_PER_KM: f64 = 1e6;
 /// density, per km; [`extinction`], clamped at [`MAX_EXTINCTION_PER_KM`]) times an aurora indicator in [0, 1] that saturates
 /// smoothly in the emission's luminance relative to [`AURORA_FRACTION`] of the
 /// peak. No fog box: only where the aurora is. `h` is the voxel's altitude
-/// above `earth` (`crate::geometry::earth`: z when flat).
+/// above `earth` (`crate::geometry::earth`: z when flat). With
+/// `density_a` 0 (the physical, optically thin air) the grid has no
+/// leaves: nothing to store, nothing for a renderer to integrate.
 pub fn density_grid(emission: &Grid<[f32; 3]>, params: &GridParams, peak_luminance: f64, earth: &Earth) -> Grid<f32> {
     let tr = emission.transform;
+    if params.density_a <= 0.0 {
+        return Grid::from_leaves("density", 0.0f32, tr, Vec::new());
+    }
     let scale = AURORA_FRACTION * peak_luminance;
     let inv_scale = if scale > 0.0 { (1.0 / scale) as f32 } else { 0.0 };
     let leaves: Vec<Leaf<f32>> = emission.leaves().par_iter().map(|l| density_leaf(l, params, inv_scale, earth, tr)).collect();
@@ -117,7 +122,7 @@ mod tests {
         use rand::Rng;
         let mut r = crate::util::rng::rng(&[77]);
         let tr = Transform::new(0.5, DVec3::new(0.25, -0.5, 0.0));
-        let params = GridParams::default();
+        let params = GridParams { density_a: 0.02, ..GridParams::default() };
         let mut g = Grid::new("emission", [0.0f32; 3], tr);
         for _ in 0..20_000 {
             let ijk = IVec3::new(r.random_range(-900..900), r.random_range(-400..400), r.random_range(150..600));

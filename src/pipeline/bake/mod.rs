@@ -160,7 +160,14 @@ mod tests {
 
     #[test]
     fn density_lives_on_the_emission_voxels_and_stats_are_consistent() {
+        // The default, physical air: optically thin, an empty density grid.
         let b = bake(&small_scene(), &NoProgress).unwrap();
+        assert_eq!(b.density.leaf_count(), 0);
+        assert!(b.emission.leaf_count() > 0);
+        // The artistic air: density on every emission voxel.
+        let mut s = small_scene();
+        s.grid.density_a = 0.02;
+        let b = bake(&s, &NoProgress).unwrap();
         assert_eq!(b.density.active_voxel_count(), b.emission.active_voxel_count());
         for (ijk, d) in b.density.iter_active() {
             assert!(b.emission.is_active(ijk));
@@ -229,6 +236,7 @@ mod tests {
     fn steep_air_density_is_clamped_and_warned_never_infinite() {
         // exp(-10 (h - 10^6)) overflows f64 for any altitude of the grid.
         let mut s = small_scene();
+        s.grid.density_a = 0.02;
         s.grid.density_b = 10.0;
         s.grid.density_base_km = 1e6;
         let b = bake(&s, &NoProgress).unwrap();
@@ -241,8 +249,9 @@ mod tests {
         let b = bake(&s, &NoProgress).unwrap();
         assert!(b.density.iter_active().all(|(_, d)| d == 0.0));
         assert!(b.stats.warnings.is_empty(), "{:?}", b.stats.warnings);
-        // The default profile is far below the clamp: no warning, the formula.
-        let p = GridParams::default();
+        assert_eq!(extinction(&s.grid, 100.0), 0.0);
+        // The artistic profile is far below the clamp: no warning, the formula.
+        let p = GridParams { density_a: 0.02, ..GridParams::default() };
         assert_eq!(extinction(&p, 100.0), p.density_a * (-p.density_b * (100.0 - p.density_base_km)).exp());
         assert!(extinction_warning(&p, 60.0).is_none());
     }
