@@ -186,7 +186,9 @@ pub struct RenderArgs {
     pub vdb: Option<PathBuf>,
     /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,
     /// or a range (1-48) for an image sequence. The frame number goes before the extension
-    /// of --out and --png (aurora.0003.exr).
+    /// of --out and --png (aurora.0003.exr), or in place of a run of # in their names,
+    /// zero-padded to its length (--png 'show_#####.png': show_00001.png, as a fulldome
+    /// show's frames are named; 16-bit with --set render.png_bits=16).
     #[arg(long, value_name = "SPEC", requires = "vdb", allow_hyphen_values = true)]
     pub frame: Option<String>,
     /// Output image, its format from the extension: .exr (linear Rec.709 RGBA, A = volume

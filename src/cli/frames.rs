@@ -44,9 +44,52 @@ pub fn selection(spec: &str, shard: Option<&str>) -> Result<Selection> {
     Ok(Selection { frames, mine, shard })
 }
 
-/// `name.ext` -> `name.NNNN.ext` (the frame before the extension).
+/// `name.ext` -> `name.NNNN.ext` (the frame before the extension); a file
+/// name holding a run of `#` gets the frame there instead, zero-padded to
+/// the run's length: `show_#####.png` -> `show_00001.png`, the names a
+/// fulldome show file's frames take (checked first by [`frame_pattern`]).
 pub fn frame_name(path: &Path, frame: i64) -> PathBuf {
+    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    if let Some((start, len)) = hash_run(&name) {
+        return path.with_file_name(format!("{}{frame:0len$}{}", &name[..start], &name[start + len..]));
+    }
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "frame".into());
     let ext = path.extension().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     path.with_file_name(aurora::farm::frame_range::frame_file_name(&stem, frame, &ext))
+}
+
+/// The byte offset and length of the run of `#` in a file name, if any.
+fn hash_run(name: &str) -> Option<(usize, usize)> {
+    let start = name.find('#')?;
+    let len = name[start..].bytes().take_while(|&b| b == b'#').count();
+    Some((start, len))
+}
+
+/// Checks an output name against the frames it will be written for: a name
+/// with a `#` run numbers frames, so it needs `--frame` (`frames` None
+/// without), one run only, and enough `#` for the largest frame (a wider
+/// number would break the sequence's sort order and its reader's pattern).
+/// `flag` names the option in the message.
+pub fn frame_pattern(flag: &str, path: &Path, frames: Option<&[i64]>) -> Result<(), InputError> {
+    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let Some((start, len)) = hash_run(&name) else { return Ok(()) };
+    if name[start + len..].contains('#') {
+        return Err(InputError(format!(
+            "{flag} {}: more than one run of # in the name; one run (show_#####.png) takes the frame number",
+            path.display()
+        )));
+    }
+    let Some(frames) = frames else {
+        return Err(InputError(format!("{flag} {}: a run of # takes a frame number; give --frame with a sequence folder", path.display())));
+    };
+    if let Some(&widest) = frames.iter().max() {
+        let digits = widest.to_string().len();
+        if digits > len {
+            return Err(InputError(format!(
+                "{flag} {}: frame {widest} has {digits} digits but the name has {len} #; give at least {digits}",
+                path.display()
+            )));
+        }
+    }
+    Ok(())
 }

@@ -12,6 +12,7 @@ use super::exit::InputError;
 use super::frames::{frame_name, frame_selection};
 use super::{load_scene, print_warnings, scene_dir, with_threads};
 use anyhow::{Context, Result};
+use aurora::render::image_file::PngBits;
 use aurora::render::Prepared;
 use aurora::scene::Scene;
 use aurora::util::progress::Progress;
@@ -292,6 +293,7 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
     let Files { vdb, out, png } = *files;
     let (exposure, view) = (job.scene.render.exposure, job.scene.render.view_transform);
+    let bits = if job.scene.render.png_bits == 16 { PngBits::Sixteen } else { PngBits::Eight };
     if job.grid.is_some() {
         write_grey(job, out, job.format == ImageFormat::Png, image)?;
         if let Some(p) = png {
@@ -300,11 +302,12 @@ fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seco
     } else {
         match job.format {
             ImageFormat::Exr => aurora::render::image_file::write_exr(out, image),
-            ImageFormat::Png => aurora::render::image_file::write_png(out, image, exposure, view),
+            ImageFormat::Png => aurora::render::image_file::write_png_bits(out, image, exposure, view, bits),
         }
         .with_context(|| format!("cannot write {}", out.display()))?;
         if let Some(p) = png {
-            aurora::render::image_file::write_png(p, image, exposure, view).with_context(|| format!("cannot write {}", p.display()))?;
+            aurora::render::image_file::write_png_bits(p, image, exposure, view, bits)
+                .with_context(|| format!("cannot write {}", p.display()))?;
         }
     }
     if !job.quiet {

@@ -15,7 +15,7 @@
 //!   system, is found here rather than after the render).
 
 use super::exit::InputError;
-use super::frames::{frame_name, frame_selection};
+use super::frames::{frame_name, frame_pattern, frame_selection};
 use anyhow::Result;
 use aurora::farm::frame_files::{vdb_header, VdbHeaderError};
 use aurora::util::atomic_write::AtomicError;
@@ -26,13 +26,20 @@ use std::path::{Path, PathBuf};
 /// image names given (`--out`, `--png`).
 pub fn inputs_and_outputs(vdb: Option<&Path>, frame: Option<&str>, outputs: &[Option<&Path>]) -> Result<()> {
     let outputs: Vec<&Path> = outputs.iter().flatten().copied().collect();
+    let frames = match (vdb, frame) {
+        (Some(_), Some(spec)) => Some(frame_selection(spec, None)?.0),
+        _ => None,
+    };
     for out in &outputs {
+        frame_pattern("output", out, frames.as_deref())?;
         output_folder(out)?;
-        aurora::util::atomic_write::check_replaceable(out)?;
+        if frames.is_none() {
+            aurora::util::atomic_write::check_replaceable(out)?;
+        }
     }
     match (vdb, frame) {
         (Some(seq), Some(spec)) => {
-            let (frames, _) = frame_selection(spec, None)?;
+            let frames = frames.unwrap_or_default();
             for &f in &frames {
                 let (path, _) = aurora::farm::frame_files::frame_paths(seq, f);
                 vdb_input(&path, &format!("--frame {spec}: frame {f}"))?;

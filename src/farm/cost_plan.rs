@@ -126,7 +126,15 @@ pub struct CostPlan {
     pub budget_bytes: f64,
     /// Worker threads the samples ran on (wall time depends on it; CPU time does not).
     pub threads: usize,
+    /// The sequence's frame rate (`animation.fps`).
+    pub fps: f64,
+    /// The camera is a fisheye: the frames are dome masters.
+    pub dome: bool,
 }
+
+/// Frame rates the fulldome show file format takes (IMERSA / fulldome.org
+/// Dome Master Show File Format: 30 or 60 frames per second).
+pub const FULLDOME_FPS: [f64; 2] = [30.0, 60.0];
 
 /// Up to `n` frames of `frames` spread evenly by index, first and last
 /// included, in order and distinct.
@@ -279,6 +287,8 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
         budget_bytes: crate::pipeline::memory_budget::estimate(scene).total(),
         threads: rayon::current_num_threads(),
         samples,
+        fps: scene.animation.fps,
+        dome: scene.camera.projection == crate::scene::Projection::Fisheye,
     }
 }
 
@@ -365,7 +375,22 @@ impl CostPlan {
             self.threads,
             if self.wall_per_frame_s > 0.0 { 3600.0 / self.wall_per_frame_s } else { 0.0 }
         );
+        t += &format!("\nshow length          {} at {} fps", human_seconds(self.sequence_frames as f64 / self.fps), self.fps);
+        if let Some(note) = self.delivery_note() {
+            t += &format!("\n{note}");
+        }
         t
+    }
+
+    /// For dome masters at a rate the fulldome show file format does not
+    /// take, what to set.
+    pub fn delivery_note(&self) -> Option<String> {
+        (self.dome && !FULLDOME_FPS.contains(&self.fps)).then(|| {
+            format!(
+                "note: dome masters are delivered at 30 or 60 fps (the fulldome Dome Master Show File Format); this scene has {} (set animation.fps)",
+                self.fps
+            )
+        })
     }
 
     /// The plan as one JSON object.
@@ -390,6 +415,9 @@ impl CostPlan {
             "peak_rss_bytes": self.peak_rss_bytes,
             "budget_bytes": self.budget_bytes,
             "threads": self.threads,
+            "fps": self.fps,
+            "show_seconds": self.sequence_frames as f64 / self.fps,
+            "delivery_note": self.delivery_note(),
         })
     }
 }

@@ -21,7 +21,7 @@
 
 use super::image::{Image, RenderStats};
 use super::settings::RenderError;
-use super::view_transform::display_rgb;
+use super::view_transform::{display_rgb, display_rgb16};
 use crate::scene::ViewTransform;
 use exr::prelude::{read, ReadChannels, ReadLayers, SpecificChannels, Vec2, WritableImage};
 use std::path::Path;
@@ -169,6 +169,20 @@ pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderEr
 
 /// Writes an 8-bit sRGB PNG preview through the view transform (module doc).
 pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64, view: ViewTransform) -> Result<(), RenderError> {
+    write_png_bits(path, image, exposure, view, PngBits::Eight)
+}
+
+/// Bits per channel of a PNG: 8 for previews, 16 for delivery (a dome
+/// master's frames, which 8 bits band in the faint gradients of the sky).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PngBits {
+    Eight,
+    Sixteen,
+}
+
+/// Writes an sRGB PNG of `bits` per channel through the view transform
+/// (module doc); 16-bit samples big-endian, as PNG stores them.
+pub fn write_png_bits(path: impl AsRef<Path>, image: &Image, exposure: f64, view: ViewTransform, bits: PngBits) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -177,13 +191,19 @@ pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f64, view: Vie
     if !exposure.is_finite() {
         return Err(RenderError::Settings(format!("exposure {exposure} must be finite")));
     }
-    let data: Vec<u8> = image.pixels.iter().flat_map(|&p| display_rgb(p, exposure, view)).collect();
+    let data: Vec<u8> = match bits {
+        PngBits::Eight => image.pixels.iter().flat_map(|&p| display_rgb(p, exposure, view)).collect(),
+        PngBits::Sixteen => image.pixels.iter().flat_map(|&p| display_rgb16(p, exposure, view)).flat_map(u16::to_be_bytes).collect(),
+    };
     let mut tmp = crate::util::atomic_write::TempFile::create(path).map_err(output_err)?;
     let png_err = |m: String| RenderError::Png { path: path.to_path_buf(), message: m };
     let r = (|| -> Result<(), RenderError> {
         let mut enc = png::Encoder::new(std::io::BufWriter::new(tmp.file()), w as u32, h as u32);
         enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
+        enc.set_depth(match bits {
+            PngBits::Eight => png::BitDepth::Eight,
+            PngBits::Sixteen => png::BitDepth::Sixteen,
+        });
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
         writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;

@@ -1,5 +1,5 @@
-//! Display encoding: how a linear Rec.709 pixel becomes the 8-bit sRGB code
-//! values of a PNG preview, through the view transform
+//! Display encoding: how a linear Rec.709 pixel becomes the 8- or 16-bit
+//! sRGB code values of a PNG, through the view transform
 //! (`render.view_transform`), at `2^exposure` times the linear value.
 //!
 //! * `standard`, Blender's "Standard": per RGB channel
@@ -8,7 +8,8 @@
 //! * `agx` (the default), Blender's AgX view for an sRGB display
 //!   ([`Agx`]).
 //!
-//! Either is quantised as `round(255 v)`, no dither; a NaN (and with AgX an
+//! Either is quantised as `round(255 v)` (`round(65535 v)` for a 16-bit
+//! PNG, a dome master's delivery depth), no dither; a NaN (and with AgX an
 //! infinite) channel is black. Alpha is not encoded.
 
 use super::agx::Agx;
@@ -27,13 +28,27 @@ fn to_u8(v: f64) -> u8 {
 
 /// One pixel's RGB code values through `view` at `exposure` (module doc).
 pub fn display_rgb(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u8; 3] {
+    display_unit(p, exposure, view).map(to_u8)
+}
+
+/// One pixel's 16-bit RGB code values through `view` at `exposure`.
+pub fn display_rgb16(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u16; 3] {
+    display_unit(p, exposure, view).map(|v| {
+        let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+        (v * 65535.0).round() as u16
+    })
+}
+
+/// One pixel's display values in [0, 1] before quantising (NaN possible
+/// with the standard transform; the quantisers make it black).
+fn display_unit(p: [f32; 4], exposure: f64, view: ViewTransform) -> [f64; 3] {
+    let k = exposure.exp2();
     match view {
-        ViewTransform::Standard => [0, 1, 2].map(|c| display_u8(p[c], exposure)),
+        ViewTransform::Standard => [0, 1, 2].map(|c| srgb_oetf(p[c] as f64 * k)),
         ViewTransform::Agx => {
-            let k = exposure.exp2();
             // A NaN or infinite pixel is black, as in the standard transform.
             let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
-            Agx::get().display(c).map(to_u8)
+            Agx::get().display(c)
         }
     }
 }

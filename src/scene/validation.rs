@@ -378,6 +378,10 @@ impl Scene {
         v.range(t, "height", r.height as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
         v.range(t, "spp", r.spp as f64, 1.0, MAX_SPP as f64, true);
         v.range(t, "exposure", r.exposure, -50.0, 50.0, true);
+        v.allow(t, "png_bits", Allowed::Rule("8 or 16".into()));
+        if !matches!(r.png_bits, 8 | 16) {
+            v.push(t, "png_bits", r.png_bits.to_string(), "must be 8 or 16".into());
+        }
         let vol = &self.volume;
         let t = Some(("volume", 0));
         v.range(t, "density_scale", vol.density_scale, 0.0, 1e9, true);

@@ -55,11 +55,14 @@ pub struct RenderParams {
     pub exposure: f64,
     /// The PNG preview's view transform (the EXR stays linear).
     pub view_transform: ViewTransform,
+    /// Bits per channel of the PNG: 8, or 16 for delivery (a dome master's
+    /// frames: the fulldome show file format takes 8-16 bit PNG or TIFF).
+    pub png_bits: u32,
 }
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx }
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx, png_bits: 8 }
     }
 }
 

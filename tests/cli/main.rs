@@ -25,6 +25,7 @@ mod common;
 
 mod bench;
 mod data;
+mod dome;
 mod end_to_end;
 mod frames;
 mod globe;

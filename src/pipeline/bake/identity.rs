@@ -41,6 +41,7 @@ pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.spp", "samples per pixel of the reference renderer; the bake traces no pixel"),
     ("render.exposure", "the PNG preview's exposure, a tone map of the rendered image"),
     ("render.view_transform", "the PNG preview's view transform, a tone map of the rendered image"),
+    ("render.png_bits", "the PNG's bits per channel, an encoding of the rendered image"),
     ("volume", "density_scale and emission_scale are applied by the renderer at lookup; the files hold the unscaled grids"),
     ("background", "radiance, image and stars are seen by camera rays only; the bake never reads the image"),
     ("sky", "the air between the volume and the camera is applied by the renderer; the files hold the emission above it"),
