@@ -117,7 +117,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("photons", "gather", "", "`splat` (each photon adds its kernel to the voxels it covers), `kdtree` (each voxel gathers from a kd-tree: the same field) or `report2014` (the 2014 report's kernel-weighted average of colours, not a density estimate, for comparison)"),
     ("photons", "kernel", "", "`segment` (each beam step's power spread along the step: the Gaussian convolved with the segment) or `point` (at the step's end, for comparison)"),
     ("grid", "voxel_size", "km", "voxel edge, or `\"auto\"`: one voxel projects to about one pixel at the nearest aurora (never below half the kernel radius, never above twice its smallest value); `bake.json` says what it picked"),
-    ("grid", "density_a", "1/km", "extinction where the aurora is: `density = a exp(-b (h - base))`"),
+    ("grid", "density_a", "1/km", "artistic extinction where the aurora is: `density = a exp(-b (h - base))`; 0 (the default) is the physical, optically thin air: an empty `density` grid"),
     ("grid", "density_b", "1/km", "fall-off of that extinction with altitude"),
     ("grid", "density_base_km", "km", "base altitude of that extinction"),
     ("grid", "half_emission", "", "store `emission` (and `emission_high`) as half floats: 2^-11 relative rounding per voxel; a grid whose values pass 65504 is stored as full floats, with a warning"),
