@@ -85,7 +85,7 @@ count = {beams}
 
 def read_profile(path: Path) -> dict[str, np.ndarray]:
     with open(path) as f:
-        rows = list(csv.DictReader(f))
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert rows, f"{path}: empty"
     return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
