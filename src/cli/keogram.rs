@@ -39,7 +39,8 @@ pub fn run(a: KeogramArgs) -> Result<()> {
     let largest = k.values.iter().fold(0.0f64, |m, &v| m.max(v as f64));
     let scale = if largest > 0.0 { largest } else { 1.0 };
     write_atomic(&csv, k.to_csv(&meta.units).as_bytes()).with_context(|| format!("cannot write {}", csv.display()))?;
-    aurora::render::image_file::write_png_grey(&png, &image, scale, Some(&meta)).with_context(|| format!("cannot write {}", png.display()))?;
+    aurora::render::image_file::write_png_grey(&png, &image, scale, Some(&meta))
+        .with_context(|| format!("cannot write {}", png.display()))?;
     aurora::render::image_file::write_exr_grey(&out, &image, Some(&meta)).with_context(|| format!("cannot write {}", out.display()))?;
     if !common.quiet {
         eprintln!(

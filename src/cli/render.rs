@@ -303,7 +303,8 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
     let grey_png = |p: &Path| -> Result<()> {
         let largest = image.pixels.iter().map(|p| p[0] as f64).fold(0.0, f64::max);
         let scale = job.grid_max.unwrap_or(if largest > 0.0 { largest } else { 1.0 });
-        aurora::render::image_file::write_png_grey(p, image, scale, Some(&meta)).with_context(|| format!("cannot write {}", p.display()))?;
+        aurora::render::image_file::write_png_grey(p, image, scale, Some(&meta))
+            .with_context(|| format!("cannot write {}", p.display()))?;
         if !job.quiet {
             let unit = if meta.units.starts_with("R ") { " R" } else { "" };
             eprintln!("{}: greyscale, linear, 255 = {scale:.6e}{unit} (the grid integrated along the ray)", p.display());

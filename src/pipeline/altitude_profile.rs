@@ -271,8 +271,10 @@ n2p_4278_r_per_erg,oi_5577_r_per_erg,oi_6300_r_per_erg,oi_6364_r_per_erg,n2_1p_r
 /// the area comment, [`COLUMNS_HEADER`], one row per curtain.
 pub fn columns_to_csv(p: &Profile) -> String {
     let mut s = area_comment(p);
-    s.push_str("# *_r: column brightness in rayleigh (1 R = 1e6 photons cm^-2 s^-1 in the column); *_r_per_erg: \
-per erg cm^-2 s^-1 of energy_flux_erg_cm2_s, the curtain's electron power over its footprint area\n");
+    s.push_str(
+        "# *_r: column brightness in rayleigh (1 R = 1e6 photons cm^-2 s^-1 in the column); *_r_per_erg: \
+per erg cm^-2 s^-1 of energy_flux_erg_cm2_s, the curtain's electron power over its footprint area\n",
+    );
     s.push_str(COLUMNS_HEADER);
     s.push('\n');
     for (ci, c) in columns(p).iter().enumerate() {
