@@ -254,6 +254,16 @@ mod tests {
         let rows = meridian(&s);
         assert!((rows[0].dir - DVec3::X).length() < 1e-12);
         assert!(rows.iter().all(|r| r.dir.y.abs() < 1e-12));
+        // On the round Earth away from the origin the rows turn with the
+        // local vertical: the middle row is the camera's zenith, the ends
+        // lie on its horizon.
+        s.earth.radius_km = crate::geometry::earth::MEAN_RADIUS_KM;
+        s.camera.position = [300.0, -500.0, 1.0];
+        let up = Earth::new(s.earth.radius_km).local_up(DVec3::from_array(s.camera.position));
+        let rows = meridian(&s);
+        assert!((rows[180].dir - up).length() < 1e-9);
+        assert!(rows[0].dir.dot(up).abs() < 1e-9 && rows[360].dir.dot(up).abs() < 1e-9);
+        assert!((rows[0].dir + rows[360].dir).length() < 1e-9);
     }
 
     #[test]
