@@ -400,7 +400,7 @@ fn the_help_names_every_preset_and_every_profile_column() {
     assert!(missing.is_empty(), "aurora --help does not name the presets {missing:?}");
     let profile_words = words(&aurora_stdout(&["profile", "--help"]));
     let columns: Vec<&str> = aurora::pipeline::altitude_profile::HEADER.split(',').collect();
-    assert_eq!(columns.len(), 18, "{columns:?}");
+    assert_eq!(columns.len(), 23, "{columns:?}");
     let missing: Vec<&&str> = columns.iter().filter(|c| !profile_words.contains(**c)).collect();
     assert!(missing.is_empty(), "aurora profile --help does not name the CSV's columns {missing:?}");
 }

@@ -1,7 +1,9 @@
 //! Above the stages, the files and the renderer: the adapter from a VDB file
 //! to the renderer's medium ([`vdb_for_render`]), the live preview
-//! ([`preview`]), and the speed-against-accuracy bench ([`bench`]).
+//! ([`preview`]), the speed-against-accuracy bench ([`bench`]), and
+//! keograms of a baked sequence along the magnetic meridian ([`keogram`]).
 
 pub mod bench;
+pub mod keogram;
 pub mod preview;
 pub mod vdb_for_render;

@@ -88,6 +88,10 @@ pub enum Command {
     /// line's photons and the deposited power per 0.5 km bin.
     #[command(long_about = super::help::profile_long_about())]
     Profile(ProfileArgs),
+    /// A keogram of a baked sequence: one float grid (a line's, in rayleigh) along the magnetic
+    /// meridian through the camera, one column per frame.
+    #[command(long_about = super::help::keogram_long_about())]
+    Keogram(KeogramArgs),
     /// Print a built-in scene as TOML, to copy and edit; or a scene file with every default filled in.
     Scene(SceneArgs),
     /// Render a quick preview PNG of a scene; with --watch, re-render on every save.
@@ -279,6 +283,29 @@ pub struct ProfileArgs {
     pub common: Common,
 }
 
+// The arguments of `aurora keogram` (its help is the doc of [`Command::Keogram`]).
+#[derive(clap::Args)]
+pub struct KeogramArgs {
+    /// Scene file or preset name (the sequence's: its camera, [sky] and [animation]).
+    pub scene: String,
+    /// The sequence folder of `aurora bake --frames` (aurora.NNNN.vdb).
+    #[arg(long, value_name = "DIR")]
+    pub vdb: PathBuf,
+    /// Frames, in Open Job Description range syntax: 1-100, 1,3,7-20:2.
+    #[arg(long, value_name = "SPEC", allow_hyphen_values = true)]
+    pub frame: String,
+    /// The float grid traced: line_5577, line_6300, ... (grid.lines) or any float emission grid.
+    #[arg(long, value_name = "NAME", default_value = "line_5577")]
+    pub grid: String,
+    /// Output OpenEXR; the PNG and CSV take its name with .png and .csv.
+    #[arg(long, value_name = "K.exr")]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
+    pub common: Common,
+}
+
 // The arguments of `aurora scene` (its help is the doc of [`Command::Scene`]).
 #[derive(clap::Args)]
 pub struct SceneArgs {
@@ -415,6 +442,7 @@ impl Command {
             Command::Render(a) => &mut a.overrides,
             Command::Bench(a) => &mut a.overrides,
             Command::Profile(a) => &mut a.overrides,
+            Command::Keogram(a) => &mut a.overrides,
             Command::Scene(a) => &mut a.overrides,
             Command::Preview(a) => &mut a.overrides,
             Command::Footprint(a) => &mut a.overrides,

@@ -67,6 +67,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::pipeline::footprint::FootprintError,
         aurora::render::RenderError,
         aurora::app::preview::PreviewError,
+        aurora::app::keogram::KeogramError,
         aurora::app::bench::harness::SweepError,
         aurora::app::bench::report::ReportError,
     );

@@ -14,6 +14,7 @@ mod bench;
 pub mod exit;
 mod frames;
 mod help;
+mod keogram;
 mod preview;
 mod profile;
 mod render;
@@ -32,6 +33,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => render::run(a),
         Command::Bench(a) => bench::run(a),
         Command::Profile(a) => profile::run(a),
+        Command::Keogram(a) => keogram::run(a),
         Command::Scene(a) => scene::print(a),
         Command::Preview(a) => preview::run(a),
         Command::Footprint(a) => scene::footprint(a),

@@ -271,22 +271,51 @@ fn prepare_grid(
     Ok((Prepared::new(&settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
 }
 
+/// What a `--grid NAME` image holds: a `line_*` grid (rayleigh per km)
+/// integrated along the ray is the line's column brightness in rayleigh,
+/// `4 pi I / 1e6` with I the radiance in photons cm^-2 s^-1 sr^-1; any other
+/// grid its units times km. The air's extinction is in it when
+/// `[sky] extinction` is on.
+pub fn grey_metadata(scene: &Scene, name: &str) -> aurora::render::image_file::GreyMetadata {
+    let mut units = if name.starts_with("line_") {
+        format!(
+            "R (rayleigh): the {name} grid (R/km) integrated along each ray, the line's column brightness 4 pi I / 1e6, \
+I in photons cm^-2 s^-1 sr^-1"
+        )
+    } else {
+        format!("the {name} grid's units times km: the grid integrated along each ray")
+    };
+    if scene.volume.emission_scale != 1.0 {
+        units.push_str(&format!(", times volume.emission_scale = {}", scene.volume.emission_scale));
+    }
+    let air = if scene.sky.extinction {
+        "applied: sky.extinction = true, the line's own optical depth along each ray (the brightness seen below the air)"
+    } else {
+        "not applied: sky.extinction = false (the brightness above the air)"
+    };
+    aurora::render::image_file::GreyMetadata { units, air: air.to_string() }
+}
+
 /// Writes a one-channel `--grid` image (EXR `Y`, or greyscale PNG at
-/// `--grid-max` or the image's largest value), its scale printed.
+/// `--grid-max` or the image's largest value), its scale printed, its
+/// units and air in the file ([`grey_metadata`]).
 fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Image) -> Result<()> {
+    let meta = grey_metadata(&job.scene, job.grid.as_deref().unwrap_or_default());
     let grey_png = |p: &Path| -> Result<()> {
         let largest = image.pixels.iter().map(|p| p[0] as f64).fold(0.0, f64::max);
         let scale = job.grid_max.unwrap_or(if largest > 0.0 { largest } else { 1.0 });
-        aurora::render::image_file::write_png_grey(p, image, scale).with_context(|| format!("cannot write {}", p.display()))?;
+        aurora::render::image_file::write_png_grey(p, image, scale, Some(&meta))
+            .with_context(|| format!("cannot write {}", p.display()))?;
         if !job.quiet {
-            eprintln!("{}: greyscale, linear, 255 = {scale:.6e} (the grid integrated along the ray)", p.display());
+            let unit = if meta.units.starts_with("R ") { " R" } else { "" };
+            eprintln!("{}: greyscale, linear, 255 = {scale:.6e}{unit} (the grid integrated along the ray)", p.display());
         }
         Ok(())
     };
     if png_only {
         return grey_png(path);
     }
-    aurora::render::image_file::write_exr_grey(path, image).with_context(|| format!("cannot write {}", path.display()))
+    aurora::render::image_file::write_exr_grey(path, image, Some(&meta)).with_context(|| format!("cannot write {}", path.display()))
 }
 
 /// Writes a render's image (and PNG) and prints its statistics.

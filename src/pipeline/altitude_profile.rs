@@ -23,6 +23,21 @@
 //! recombination, N(2D), the O(1S) cascade and the rest (N+ + O2, O2
 //! dissociation) ([`crate::physics::chemistry::Channels`]); each line's channels sum
 //! to its column. Zero with the simple model.
+//!
+//! Last come the lines' volume emission rates, `*_ver_cm3_s` (photons
+//! cm^-3 s^-1): each bin's photons/s over the curtain's footprint area `A`
+//! times the bin's height, the footprint average. `A` is the area of the
+//! footprint cells above `footprint.threshold` (the cells beams start
+//! from: the box `length x width` for `footprint.uniform`), written in the
+//! CSV's first line (a `#` comment). [`columns`] integrates them over
+//! altitude: each curtain's column brightness per line in rayleigh, 1 R =
+//! 1e6 photons cm^-2 s^-1 in the column (Hunten, Roach & Chamberlain 1956,
+//! J. Atmos. Terr. Phys. 8, 345), `4 pi I = 1e-6 sum VER dz`, and in R per
+//! erg cm^-2 s^-1 of the curtain's mean energy flux over `A` (its electron
+//! power over `A`; the ratio does not depend on `A`). The published 557.7
+//! nm yield is about 1-1.4 kR per erg cm^-2 s^-1 for E0 of a few keV (Rees
+//! & Luckey 1974, J. Geophys. Res. 79, 5181; GLOW at E0 = 3 keV: 1268 R,
+//! `crate::physics::air_extinction::REFERENCE_MIX`).
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::CHANNEL_NAMES;
@@ -35,6 +50,16 @@ use crate::pipeline::deposit::StepDeposit;
 use crate::scene::Scene;
 use crate::util::progress::Progress;
 
+/// The lines with a volume emission rate and a column, in the profile's
+/// order (its columns 3 to 7): CSV name prefixes.
+pub const LINE_NAMES: [&str; 5] = ["n2p_4278", "oi_5577", "oi_6300", "oi_6364", "n2_1p"];
+
+/// Photons cm^-2 s^-1 of column per rayleigh.
+pub const PHOTONS_PER_RAYLEIGH: f64 = 1e6;
+
+/// Square centimetres per square kilometre.
+const CM2_PER_KM2: f64 = 1e10;
+
 /// Bin width, km.
 pub const BIN_KM: f64 = 0.5;
 
@@ -43,7 +68,8 @@ pub const BIN_KM: f64 = 0.5;
 /// channels, [`CHANNEL_NAMES`] prefixed `oi_5577_` (g_) and `oi_6300_` (r_)).
 pub const HEADER: &str = "curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300,oi_6364,n2_1p,deposited_kev_s,\
 oi_5577_impact,oi_5577_n2a,oi_5577_recombination,oi_5577_n2d,\
-oi_6300_impact,oi_6300_recombination,oi_6300_n2d,oi_6300_cascade,oi_6300_other";
+oi_6300_impact,oi_6300_recombination,oi_6300_n2d,oi_6300_cascade,oi_6300_other,\
+n2p_4278_ver_cm3_s,oi_5577_ver_cm3_s,oi_6300_ver_cm3_s,oi_6364_ver_cm3_s,n2_1p_ver_cm3_s";
 
 /// Values per bin: the seven of [`CurtainProfile::bins`] and the channels.
 pub const COLUMNS: usize = 7 + CHANNEL_NAMES.len();
@@ -52,6 +78,11 @@ pub const COLUMNS: usize = 7 + CHANNEL_NAMES.len();
 #[derive(Clone, Debug, PartialEq)]
 pub struct CurtainProfile {
     pub z0: f64,
+    /// The footprint's area above threshold, km^2 (module doc); 0 before
+    /// [`profile`] sets it.
+    pub area_km2: f64,
+    /// The curtain's electron power into the atmosphere, W.
+    pub electron_power_w: f64,
     /// Per bin: ion pairs/s, then photons/s of n2p_4278, oi_5577, oi_6300,
     /// oi_6364, n2_1p, then deposited keV/s, then the chemistry's channels
     /// (photons/s, module doc).
@@ -63,6 +94,72 @@ impl CurtainProfile {
     pub fn centre(&self, i: usize) -> f64 {
         self.z0 + (i as f64 + 0.5) * BIN_KM
     }
+
+    /// Bin `i`'s volume emission rate of each of [`LINE_NAMES`], photons
+    /// cm^-3 s^-1: its photons/s over the area times the bin's height (0
+    /// without an area).
+    pub fn ver_cm3_s(&self, i: usize) -> [f64; 5] {
+        let volume_cm3 = self.area_km2 * CM2_PER_KM2 * BIN_KM * 1e5;
+        let b = &self.bins[i];
+        std::array::from_fn(|k| if volume_cm3 > 0.0 { b[1 + k] / volume_cm3 } else { 0.0 })
+    }
+
+    /// The mean energy flux over the area, erg cm^-2 s^-1 (0 without one).
+    pub fn energy_flux_erg_cm2_s(&self) -> f64 {
+        if self.area_km2 > 0.0 {
+            self.electron_power_w * 1e7 / (self.area_km2 * CM2_PER_KM2)
+        } else {
+            0.0
+        }
+    }
+}
+
+/// One curtain's columns: the lines' brightness seen along the vertical
+/// through the footprint average.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CurtainColumn {
+    pub area_km2: f64,
+    pub energy_flux_erg_cm2_s: f64,
+    /// Rayleigh, per [`LINE_NAMES`].
+    pub rayleigh: [f64; 5],
+    /// Rayleigh per erg cm^-2 s^-1 of energy flux, per [`LINE_NAMES`].
+    pub rayleigh_per_erg: [f64; 5],
+}
+
+/// The curtain's column brightness per line: the volume emission rates
+/// integrated over altitude (module doc).
+pub fn column(c: &CurtainProfile) -> CurtainColumn {
+    let dz_cm = BIN_KM * 1e5;
+    let mut rayleigh = [0.0; 5];
+    for i in 0..c.bins.len() {
+        let v = c.ver_cm3_s(i);
+        for k in 0..5 {
+            rayleigh[k] += v[k] * dz_cm / PHOTONS_PER_RAYLEIGH;
+        }
+    }
+    let flux = c.energy_flux_erg_cm2_s();
+    let rayleigh_per_erg = rayleigh.map(|r| if flux > 0.0 { r / flux } else { 0.0 });
+    CurtainColumn { area_km2: c.area_km2, energy_flux_erg_cm2_s: flux, rayleigh, rayleigh_per_erg }
+}
+
+/// Every curtain's [`column`], in scene order.
+pub fn columns(p: &Profile) -> Vec<CurtainColumn> {
+    p.curtains.iter().map(column).collect()
+}
+
+/// The area of a footprint's cells above `threshold`, km^2.
+pub fn footprint_area_km2(f: &crate::pipeline::footprint::Footprint, threshold: f64) -> f64 {
+    f.data.iter().filter(|&&d| d as f64 > threshold).count() as f64 * f.cell_area_km2()
+}
+
+/// The first line of both CSVs: how the area and the units are taken.
+fn area_comment(p: &Profile) -> String {
+    let areas: Vec<String> = p.curtains.iter().map(|c| format!("{:.6e}", c.area_km2)).collect();
+    format!(
+        "# footprint area per curtain, km^2: {} (the footprint cells above footprint.threshold, each its length x width \
+over the cell counts); *_ver_cm3_s: photons cm^-3 s^-1, the bin's photons/s over that area times {BIN_KM} km\n",
+        areas.join(" ")
+    )
 }
 
 /// Profiles of every curtain, and the beam stage's power accounting.
@@ -117,7 +214,7 @@ pub fn bin_deposits(deposits: &[StepDeposit], model: &EmissionModel, table: &Col
             a = b;
         }
     }
-    CurtainProfile { z0, bins }
+    CurtainProfile { z0, area_km2: 0.0, electron_power_w: 0.0, bins }
 }
 
 /// Traces the scene's beams exactly as the bake does and bins their
@@ -133,23 +230,59 @@ pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BakeEr
     // goes along the field line above it (`beams`), higher than `top_km`.
     let highest = deposits.iter().flatten().map(|d| d.z_start.max(d.z_end)).fold(f64::NEG_INFINITY, f64::max);
     let z1 = ((scene.beams.top_km + scene.beams.top_noise_km).max(highest) + 1.0).ceil();
-    let curtains = deposits.iter().map(|d| bin_deposits(d, &model, &plan.colour_table, z0, z1)).collect();
+    let threshold = scene.footprint.threshold;
+    let curtains = deposits
+        .iter()
+        .enumerate()
+        .map(|(c, d)| CurtainProfile {
+            area_km2: footprint_area_km2(&plan.footprints[c], threshold),
+            electron_power_w: beam_stats.curtains.get(c).map_or(0.0, |p| p.electron_power_w),
+            ..bin_deposits(d, &model, &plan.colour_table, z0, z1)
+        })
+        .collect();
     Ok(Profile { curtains, beam_stats })
 }
 
-/// The profile as CSV ([`HEADER`], then one row per curtain and bin).
+/// The profile as CSV (a `#` line naming the footprint areas, [`HEADER`],
+/// then one row per curtain and bin).
 pub fn to_csv(p: &Profile) -> String {
     let mut s = String::with_capacity(64 * p.curtains.iter().map(|c| c.bins.len()).sum::<usize>() + 128);
+    s.push_str(&area_comment(p));
     s.push_str(HEADER);
     s.push('\n');
     for (ci, c) in p.curtains.iter().enumerate() {
         for (i, b) in c.bins.iter().enumerate() {
             s.push_str(&format!("{ci},{:.2}", c.centre(i)));
-            for x in b {
+            for x in b.iter().chain(c.ver_cm3_s(i).iter()) {
                 s.push_str(&format!(",{x:.6e}"));
             }
             s.push('\n');
         }
+    }
+    s
+}
+
+/// Header of [`columns_to_csv`].
+pub const COLUMNS_HEADER: &str = "curtain,footprint_area_km2,energy_flux_erg_cm2_s,\
+n2p_4278_r,oi_5577_r,oi_6300_r,oi_6364_r,n2_1p_r,\
+n2p_4278_r_per_erg,oi_5577_r_per_erg,oi_6300_r_per_erg,oi_6364_r_per_erg,n2_1p_r_per_erg";
+
+/// Each curtain's [`column`] as CSV (`aurora profile`'s `FILE.columns.csv`):
+/// the area comment, [`COLUMNS_HEADER`], one row per curtain.
+pub fn columns_to_csv(p: &Profile) -> String {
+    let mut s = area_comment(p);
+    s.push_str(
+        "# *_r: column brightness in rayleigh (1 R = 1e6 photons cm^-2 s^-1 in the column); *_r_per_erg: \
+per erg cm^-2 s^-1 of energy_flux_erg_cm2_s, the curtain's electron power over its footprint area\n",
+    );
+    s.push_str(COLUMNS_HEADER);
+    s.push('\n');
+    for (ci, c) in columns(p).iter().enumerate() {
+        s.push_str(&format!("{ci},{:.6e},{:.6e}", c.area_km2, c.energy_flux_erg_cm2_s));
+        for x in c.rayleigh.iter().chain(c.rayleigh_per_erg.iter()) {
+            s.push_str(&format!(",{x:.6e}"));
+        }
+        s.push('\n');
     }
     s
 }
@@ -190,16 +323,36 @@ mod tests {
     fn csv_has_the_promised_header_and_one_row_per_curtain_and_bin() {
         let p = Profile {
             curtains: vec![
-                CurtainProfile { z0: 50.0, bins: vec![[1.0; COLUMNS]; 3] },
-                CurtainProfile { z0: 50.0, bins: vec![[0.0; COLUMNS]; 3] },
+                CurtainProfile { z0: 50.0, area_km2: 2.0, electron_power_w: 1.0, bins: vec![[1.0; COLUMNS]; 3] },
+                CurtainProfile { z0: 50.0, area_km2: 2.0, electron_power_w: 1.0, bins: vec![[0.0; COLUMNS]; 3] },
             ],
             beam_stats: BeamStats::default(),
         };
         let csv = to_csv(&p);
-        let lines: Vec<&str> = csv.lines().collect();
+        let lines: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
+        assert!(csv.starts_with("# footprint area per curtain, km^2: 2.000000e0 2.000000e0 "), "{csv}");
         assert!(lines[0].starts_with("curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300"));
         assert_eq!(lines.len(), 7);
         assert!(lines[1].starts_with("0,50.25,") && lines[4].starts_with("1,50.25,"));
         assert_eq!(lines[1].split(',').count(), HEADER.split(',').count());
+        assert_eq!(COLUMNS + 5, HEADER.split(',').count() - 2);
+    }
+
+    #[test]
+    fn volume_emission_rates_integrate_to_the_column_in_rayleigh() {
+        // 2 km^2 and 1e16 photons/s of 557.7 nm in each of 3 bins: per bin
+        // 1e16 / (2e10 cm^2 * 5e4 cm) = 1e1 photons cm^-3 s^-1; the column
+        // 3 * 1e1 * 5e4 / 1e6 = 1.5 R; 1 W over 2 km^2 is 5e-4 erg cm^-2 s^-1.
+        let mut bins = vec![[0.0; COLUMNS]; 3];
+        for b in &mut bins {
+            b[2] = 1e16;
+        }
+        let c = CurtainProfile { z0: 50.0, area_km2: 2.0, electron_power_w: 1.0, bins };
+        assert!((c.ver_cm3_s(1)[1] - 10.0).abs() < 1e-12);
+        let col = column(&c);
+        assert!((col.rayleigh[1] - 1.5).abs() < 1e-12, "{col:?}");
+        assert!((col.energy_flux_erg_cm2_s - 5e-4).abs() < 1e-16);
+        assert!((col.rayleigh_per_erg[1] - 3000.0).abs() < 1e-9);
+        assert_eq!(col.rayleigh[0], 0.0);
     }
 }

@@ -15,7 +15,13 @@
 //!   channel `Y` in the grid's units integrated along the ray (rayleigh for
 //!   a per-line grid in R/km), or an 8-bit greyscale PNG, linear:
 //!   `round(255 clamp(v / scale, 0, 1))`, the scale stated by the caller
-//!   and stored in the PNG's `aurora_scale` text chunk.
+//!   and stored in the PNG's `aurora_scale` text chunk. Both carry what
+//!   the values are ([`GreyMetadata`]): the units (`aurora_units`) and
+//!   whether the air's extinction is in them (`aurora_air`), as EXR header
+//!   attributes of type string (`aurora_units` among the image's, `aurora_air`
+//!   among the layer's: the crate keeps each set in a hash map, so one
+//!   attribute in each keeps the header's bytes in one order) and as PNG
+//!   `tEXt` chunks.
 //!
 //! All are written to a temporary file in the destination folder and renamed.
 
@@ -68,9 +74,19 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
     write_exr_image(path, &mut exr_image)
 }
 
+/// What a one-channel image's values are (module doc): written into its
+/// EXR header and PNG text chunks.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct GreyMetadata {
+    /// `aurora_units`: the values' units and how they were made.
+    pub units: String,
+    /// `aurora_air`: whether the air's extinction is applied.
+    pub air: String,
+}
+
 /// Writes the red channel of `image` as a one-channel (`Y`) f32 OpenEXR
-/// (module doc).
-pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+/// (module doc), with `meta` in its header when given.
+pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image, meta: Option<&GreyMetadata>) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -78,7 +94,31 @@ pub fn write_exr_grey(path: impl AsRef<Path>, image: &Image) -> Result<(), Rende
     }
     let channels = SpecificChannels::build().with_channel("Y").with_pixel_fn(|Vec2(x, y): Vec2<usize>| (image.pixels[y * w + x][0],));
     let mut exr_image = exr::image::Image::from_channels((w, h), channels);
+    if let Some(m) = meta {
+        use exr::meta::attribute::{AttributeValue, Text};
+        exr_image.attributes.other.insert(Text::from("aurora_units"), AttributeValue::Text(Text::from(m.units.as_str())));
+        exr_image.layer_data.attributes.other.insert(Text::from("aurora_air"), AttributeValue::Text(Text::from(m.air.as_str())));
+    }
     write_exr_image(path, &mut exr_image)
+}
+
+/// The string attributes of an EXR's first header (the image's and the
+/// first layer's), sorted by name.
+pub fn read_exr_text_attributes(path: impl AsRef<Path>) -> Result<Vec<(String, String)>, RenderError> {
+    let path = path.as_ref();
+    let file = crate::util::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), false)
+        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
+    let mut out = Vec::new();
+    if let Some(h) = meta.headers.first() {
+        for (k, v) in h.shared_attributes.other.iter().chain(h.own_attributes.other.iter()) {
+            if let exr::meta::attribute::AttributeValue::Text(t) = v {
+                out.push((k.to_string(), t.to_string()));
+            }
+        }
+    }
+    out.sort();
+    Ok(out)
 }
 
 /// Reads the `Y` channel of a one-channel EXR written by [`write_exr_grey`]:
@@ -106,8 +146,9 @@ pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>),
 }
 
 /// Writes the red channel of `image` as an 8-bit greyscale PNG, linear with
-/// 255 = `scale` (module doc; `scale` > 0 and finite).
-pub fn write_png_grey(path: impl AsRef<Path>, image: &Image, scale: f64) -> Result<(), RenderError> {
+/// 255 = `scale` (module doc; `scale` > 0 and finite), with `meta` in text
+/// chunks when given.
+pub fn write_png_grey(path: impl AsRef<Path>, image: &Image, scale: f64, meta: Option<&GreyMetadata>) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -131,6 +172,10 @@ pub fn write_png_grey(path: impl AsRef<Path>, image: &Image, scale: f64) -> Resu
         enc.set_color(png::ColorType::Grayscale);
         enc.set_depth(png::BitDepth::Eight);
         enc.add_text_chunk("aurora_scale".into(), format!("255 = {scale:e} (linear)")).map_err(|e| png_err(e.to_string()))?;
+        if let Some(m) = meta {
+            enc.add_text_chunk("aurora_units".into(), m.units.clone()).map_err(|e| png_err(e.to_string()))?;
+            enc.add_text_chunk("aurora_air".into(), m.air.clone()).map_err(|e| png_err(e.to_string()))?;
+        }
         let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
         writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
         writer.finish().map_err(|e| png_err(e.to_string()))

@@ -11,6 +11,7 @@
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
+//! - `keogram`: `aurora keogram` of a baked sequence, a drifting arc tracked;
 //! - `schema`: the committed schema and the documents generated from it;
 //! - `quick_start`: the README's quick start, installed and run as written.
 //! - `overrides`, `messages`: `--set` and render's flags over a scene, and
@@ -30,6 +31,7 @@ mod end_to_end;
 mod frames;
 mod globe;
 mod inputs;
+mod keogram;
 mod messages;
 mod outputs;
 mod overrides;

@@ -130,7 +130,7 @@ def aurora(e0: float, q: float) -> dict:
         scene.write_text(scene_text(e0, q))
         run([aurora_bin(), "profile", scene, "--out", out, "--quiet"])
         with open(out) as f:
-            rows = list(csv.DictReader(f))
+            rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert rows, "empty profile"
     p = {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
     assert set(p["curtain"]) == {0.0}

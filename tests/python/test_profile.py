@@ -85,7 +85,7 @@ count = {beams}
 
 def read_profile(path: Path) -> dict[str, np.ndarray]:
     with open(path) as f:
-        rows = list(csv.DictReader(f))
+        rows = list(csv.DictReader(line for line in f if not line.startswith("#")))
     assert rows, f"{path}: empty"
     return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
 
@@ -122,7 +122,7 @@ def test_ionization_profile_matches_fang_2008(work, e0):
     out = work / f"maxw{e0}.csv"
     run([aurora_bin(), "profile", scene, "--out", out, "--quiet"])
     p = read_profile(out)
-    header = open(out).readline().strip()
+    header = next(line for line in open(out) if not line.startswith("#")).strip()
     assert header.startswith("curtain,altitude_km,ionization,n2p_4278,oi_5577,oi_6300"), header
     assert set(p["curtain"]) == {0.0}
     z, ion = p["altitude_km"], p["ionization"]

@@ -2,8 +2,9 @@
 //! (`closed_forms`), the volume walker and integrators against an
 //! independent brute-force oracle (`integrator`), film, camera and file
 //! conventions (`film`), the lit terrain and its mesh (`terrain`), the
-//! camera against Blender's (`blender`), and the air between the aurora
-//! and the eye (`extinction`).
+//! camera against Blender's (`blender`), the air between the aurora
+//! and the eye (`extinction`), and narrow-band images in rayleigh at the
+//! zenith (`zenith`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -14,3 +15,4 @@ mod extinction;
 mod film;
 mod integrator;
 mod terrain;
+mod zenith;

@@ -47,7 +47,7 @@ def measure(binary: Path, e0: float, atmosphere: str) -> dict:
         s, out = Path(d) / "s.toml", Path(d) / "p.csv"
         s.write_text(scene(e0, atmosphere))
         subprocess.run([str(binary), "profile", str(s), "--out", str(out), "--quiet"], check=True)
-        rows = list(csv.DictReader(open(out)))
+        rows = list(csv.DictReader(line for line in open(out) if not line.startswith("#")))
     col = {k: [float(r[k]) for r in rows] for k in rows[0]}
     z, ion = col["altitude_km"], col["ionization"]
     green, red = sum(col["oi_5577"]), sum(col["oi_6300"])
