@@ -20,7 +20,7 @@ use crate::io::vdb::read::{check_tile_voxels, VdbFile, VdbReadError};
 use crate::io::vdb::records::{FileBytes, FileLeaves};
 use crate::render::grids::{check_types, choose, ChosenGrids, GridType, Listed, RenderGridsError};
 use crate::render::medium::Medium;
-use crate::render::RenderError;
+use crate::render::{Prepared, RenderError, RenderSettings, Volume};
 use glam::DVec3;
 use std::path::Path;
 
@@ -75,6 +75,28 @@ pub struct RenderMedium {
     pub open_seconds: f64,
     /// Decoding the records into the medium (`Medium::from_sources`).
     pub build_seconds: f64,
+}
+
+/// The renderer prepared from a VDB file, as `aurora render --vdb` does:
+/// the records path ([`read_render_medium`]) where it applies, else the
+/// grid path; with the seconds spent opening the file and building the
+/// medium.
+pub fn prepare_from_vdb(settings: &RenderSettings, path: &Path) -> Result<(Prepared, f64, f64), RenderReadError> {
+    let file = path.display().to_string();
+    let render_err = |source: RenderError| RenderReadError::Render { file: file.clone(), source };
+    let (ds, es) = (settings.volume.density_scale, settings.volume.emission_scale);
+    if let Some(read) = read_render_medium(path, ds, es)? {
+        let prepared = Prepared::with_medium(settings, read.medium, None).map_err(render_err)?;
+        return Ok((prepared, read.open_seconds, read.build_seconds));
+    }
+    let open = std::time::Instant::now();
+    let vdb = crate::io::vdb::read::read_vdb_for_render(path)?;
+    let (density, emission) = render_grids(vdb).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
+    let open_seconds = open.elapsed().as_secs_f64();
+    let build = std::time::Instant::now();
+    let volume = Volume { density: density.as_ref(), emission: emission.as_ref() };
+    let prepared = Prepared::new(settings, &volume).map_err(render_err)?;
+    Ok((prepared, open_seconds, build.elapsed().as_secs_f64()))
 }
 
 /// Reads a VDB file straight into the renderer's medium (the `render`

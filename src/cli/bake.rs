@@ -67,9 +67,9 @@ impl Report {
 
 pub fn run(a: BakeArgs) -> Result<()> {
     // --seed is one of the overrides, applied in command-line order.
-    let BakeArgs { scene, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
+    let BakeArgs { scene: scene_arg, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
     let report = Report::new(progress, common.quiet);
-    let scene = load_scene(&scene, &overrides)?;
+    let scene = load_scene(&scene_arg, &overrides)?;
     let Some(spec) = frames else {
         return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };
@@ -84,14 +84,32 @@ pub fn run(a: BakeArgs) -> Result<()> {
     if plan {
         // This process's share: what one farm task of the range costs.
         let task = aurora::farm::cost_plan::Task { sequence: &frames, frames: &mine, shard };
-        return with_threads(common.threads, || plan_frames(&scene, task, plan_samples as usize, progress, &report));
+        // The render's settings, as `aurora render` makes them; its input
+        // files (a heightmap, a sky image) are checked before any bake.
+        let mut settings = aurora::render::RenderSettings::from_scene(&scene);
+        settings.base_dir = Some(super::scene_dir(&scene_arg));
+        settings.check_input_files()?;
+        return with_threads(common.threads, || plan_frames(&scene, task, &settings, plan_samples as usize, progress, &report));
     }
     with_threads(common.threads, || bake_frames(&scene, &out, &frames, &mine, rebake, &report))
 }
 
 /// `--plan`: the estimate for `task` on stdout (`aurora::farm::cost_plan`).
-fn plan_frames(scene: &Scene, task: aurora::farm::cost_plan::Task<'_>, samples: usize, format: ProgressFormat, say: &Report) -> Result<()> {
-    let plan = aurora::farm::cost_plan::plan_task(scene, task, samples, say.progress())?;
+fn plan_frames(
+    scene: &Scene,
+    task: aurora::farm::cost_plan::Task<'_>,
+    settings: &aurora::render::RenderSettings,
+    samples: usize,
+    format: ProgressFormat,
+    say: &Report,
+) -> Result<()> {
+    // The render of the first calibration frame, at the frame's time.
+    let probe = |at: &Scene, vdb: &Path, frame: i64| {
+        let mut s = aurora::render::RenderSettings::from_scene(at);
+        s.base_dir = settings.base_dir.clone();
+        aurora::app::render_cost::calibrate(at, &s, vdb, frame)
+    };
+    let plan = aurora::farm::cost_plan::plan_task(scene, task, samples, Some(&probe), say.progress())?;
     match format {
         ProgressFormat::Json => println!("{}", plan.json()),
         ProgressFormat::Bars => println!("{}", plan.text()),

@@ -205,26 +205,19 @@ fn prepare(
     vdb: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<(Prepared, f64, f64)> {
-    let from_records = match vdb {
-        Some(path) => aurora::app::vdb_for_render::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
-            .map_err(|e| InputError(e.to_string()))?,
-        None => None,
-    };
-    if let Some(read) = from_records {
-        return Ok((Prepared::with_medium(settings, read.medium, None)?, read.open_seconds, read.build_seconds));
+    if let Some(path) = vdb {
+        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path).map_err(|e| {
+            if e.is_input() {
+                InputError(e.to_string()).into()
+            } else {
+                anyhow::Error::new(e)
+            }
+        });
     }
     let open = std::time::Instant::now();
-    let (density, emission) = match vdb {
-        Some(path) => {
-            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
-            aurora::app::vdb_for_render::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
-        }
-        None => {
-            let bake = aurora::pipeline::bake::bake(scene, progress)?;
-            print_warnings(&bake.stats.warnings);
-            (Some(bake.density), Some(bake.emission))
-        }
-    };
+    let bake = aurora::pipeline::bake::bake(scene, progress)?;
+    print_warnings(&bake.stats.warnings);
+    let (density, emission) = (Some(bake.density), Some(bake.emission));
     let open_seconds = open.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };

@@ -41,6 +41,18 @@
 //! the stage can outweigh the task's frames. The ownership record (about
 //! 100 bytes, once per folder) is left out.
 //!
+//! The render. A show's cost is mostly its render, so with a render probe
+//! (the command line gives one: `crate::app::render_cost`) the plan also
+//! renders its first calibration frame from the VDB it wrote, as a farm's
+//! `aurora render --vdb` would, at a reduced size, and scales:
+//!
+//! ```text
+//! render CPU per frame  R = F + k W H spp
+//! F = CPU to open the VDB and build the medium (paid per frame)
+//! k = CPU per pixel sample, measured at the reduced size (the same
+//!     picture scaled, so the same mix of sky and aurora per pixel)
+//! ```
+//!
 //! What it does not know: how a farm packs tasks (a task's setup is paid
 //! once per task; divide the range by the tasks' frame count to add it per
 //! task), and file-system overheads beyond the files' bytes.
@@ -68,6 +80,9 @@ pub enum PlanError {
     Scratch { path: PathBuf, message: String },
     #[error("--plan needs at least one frame")]
     NoFrames,
+    /// The render probe failed on a frame the plan baked.
+    #[error("the plan's render of frame {frame}: {message}")]
+    Render { frame: i64, message: String },
     /// The task's shard holds no frame of the range.
     #[error("--shard {index}/{count}: this shard has no frame to plan: the range has {frames} frames, fewer than the {count} shards (shard I takes the frames at positions I, I+N, ...; shards {frames} to {} get none)", count - 1)]
     EmptyShard { index: u64, count: u64, frames: usize },
@@ -79,11 +94,40 @@ impl PlanError {
         match self {
             PlanError::Bake(e) => e.is_input(),
             PlanError::Output(e) => e.is_input(),
-            PlanError::Scratch { .. } => false,
+            PlanError::Scratch { .. } | PlanError::Render { .. } => false,
             PlanError::NoFrames | PlanError::EmptyShard { .. } => true,
         }
     }
 }
+
+/// The render's cost, calibrated on one frame (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderCost {
+    /// The frame it was calibrated on.
+    pub frame: i64,
+    /// The image the plan is for: the scene's size and samples per pixel.
+    pub width: usize,
+    pub height: usize,
+    pub spp: usize,
+    /// The reduced image it was measured on.
+    pub calibrated_width: usize,
+    pub calibrated_height: usize,
+    /// CPU seconds to open the VDB and build the medium: F.
+    pub fixed_cpu_s: f64,
+    /// CPU seconds per pixel sample: k.
+    pub cpu_per_sample_s: f64,
+}
+
+impl RenderCost {
+    /// CPU seconds to render one frame at the plan's size: F + k W H spp.
+    pub fn cpu_per_frame_s(&self) -> f64 {
+        self.fixed_cpu_s + self.cpu_per_sample_s * (self.width * self.height * self.spp) as f64
+    }
+}
+
+/// What renders a baked frame to measure the render's cost: given the
+/// scene at the frame's time and the frame's VDB.
+pub type RenderProbe<'a> = &'a dyn Fn(&Scene, &Path, i64) -> Result<RenderCost, String>;
 
 /// One calibration frame, measured.
 #[derive(Clone, Debug, PartialEq)]
@@ -130,6 +174,8 @@ pub struct CostPlan {
     pub fps: f64,
     /// The camera is a fisheye: the frames are dome masters.
     pub dome: bool,
+    /// The render's cost, when the plan was given a render probe.
+    pub render: Option<RenderCost>,
 }
 
 /// Frame rates the fulldome show file format takes (IMERSA / fulldome.org
@@ -201,13 +247,19 @@ fn file_len(path: &Path) -> Result<u64, PlanError> {
 /// range, baked by one task. Nothing is written outside a scratch folder,
 /// which is removed.
 pub fn plan(scene: &Scene, frames: &[i64], samples: usize, progress: &dyn Progress) -> Result<CostPlan, PlanError> {
-    plan_task(scene, Task { sequence: frames, frames, shard: None }, samples, progress)
+    plan_task(scene, Task { sequence: frames, frames, shard: None }, samples, None, progress)
 }
 
 /// [`plan`] for one task of a sequence: its frames sampled and estimated,
 /// and the stage counted for the whole sequence it writes (module docs).
 /// A shard without frames is refused naming the shard.
-pub fn plan_task(scene: &Scene, task: Task<'_>, samples: usize, progress: &dyn Progress) -> Result<CostPlan, PlanError> {
+pub fn plan_task(
+    scene: &Scene,
+    task: Task<'_>,
+    samples: usize,
+    render: Option<RenderProbe<'_>>,
+    progress: &dyn Progress,
+) -> Result<CostPlan, PlanError> {
     let frames = task.frames;
     let (&first, &last) = match (frames.first(), frames.last()) {
         (Some(a), Some(b)) => (a, b),
@@ -225,6 +277,7 @@ pub fn plan_task(scene: &Scene, task: Task<'_>, samples: usize, progress: &dyn P
     let identity = BakeIdentity::of(scene);
     let mut carried: Option<bake::plan::BakePlan> = None;
     let mut measured = Vec::new();
+    let mut first_frame: Option<(Scene, PathBuf, i64)> = None;
     for frame in sample_frames(frames, samples) {
         let at = Scene { animation: crate::pipeline::motion::at_frame(&scene.animation, frame), ..scene.clone() };
         let (cpu0, _) = usage();
@@ -244,9 +297,17 @@ pub fn plan_task(scene: &Scene, task: Task<'_>, samples: usize, progress: &dyn P
             wall_s,
         });
         drop(b);
+        if first_frame.is_none() {
+            first_frame = Some((at, report.vdb.clone(), frame));
+        }
     }
+    // The bake's peak, taken before the render probe (a farm renders in
+    // tasks of its own).
     let (_, peak_rss_bytes) = usage();
     let mut plan = estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes);
+    if let (Some(probe), Some((at, vdb, frame))) = (render, first_frame) {
+        plan.render = Some(probe(&at, &vdb, frame).map_err(|message| PlanError::Render { frame, message })?);
+    }
     plan.sequence_frames = task.sequence.len();
     plan.shard = task.shard;
     Ok(plan)
@@ -289,6 +350,7 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
         samples,
         fps: scene.animation.fps,
         dome: scene.camera.projection == crate::scene::Projection::Fisheye,
+        render: None,
     }
 }
 
@@ -375,6 +437,23 @@ impl CostPlan {
             self.threads,
             if self.wall_per_frame_s > 0.0 { 3600.0 / self.wall_per_frame_s } else { 0.0 }
         );
+        if let Some(r) = &self.render {
+            let total = r.cpu_per_frame_s() * self.frames as f64;
+            t += &format!(
+                "\nrender CPU per frame {} at {}x{}, {} spp ({} to open the VDB and build, {:.3} us a pixel sample; measured on frame {} at {}x{})",
+                human_seconds(r.cpu_per_frame_s()),
+                r.width,
+                r.height,
+                r.spp,
+                human_seconds(r.fixed_cpu_s),
+                r.cpu_per_sample_s * 1e6,
+                r.frame,
+                r.calibrated_width,
+                r.calibrated_height
+            );
+            t += &format!("\nrender CPU in total  {} ({:.1} CPU-hours)", human_seconds(total), total / 3600.0);
+            t += &format!("\nbake and render      {:.1} CPU-hours", (total + self.total_cpu_s) / 3600.0);
+        }
         t += &format!("\nshow length          {} at {} fps", human_seconds(self.sequence_frames as f64 / self.fps), self.fps);
         if let Some(note) = self.delivery_note() {
             t += &format!("\n{note}");
@@ -416,6 +495,12 @@ impl CostPlan {
             "budget_bytes": self.budget_bytes,
             "threads": self.threads,
             "fps": self.fps,
+            "render": self.render.as_ref().map(|r| json!({
+                "frame": r.frame, "width": r.width, "height": r.height, "spp": r.spp,
+                "calibrated_width": r.calibrated_width, "calibrated_height": r.calibrated_height,
+                "fixed_cpu_s": r.fixed_cpu_s, "cpu_per_sample_s": r.cpu_per_sample_s,
+                "cpu_per_frame_s": r.cpu_per_frame_s(), "total_cpu_s": r.cpu_per_frame_s() * self.frames as f64,
+            })),
             "show_seconds": self.sequence_frames as f64 / self.fps,
             "delivery_note": self.delivery_note(),
         })
