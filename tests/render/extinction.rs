@@ -16,6 +16,7 @@ use aurora::physics::air_extinction::{
 };
 use aurora::render::{render, Volume};
 use aurora::scene::{Scene, SkyParams};
+use aurora::util::observer::Observer;
 use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use std::f64::consts::PI;
@@ -125,7 +126,7 @@ fn ozone_chappuis_band() {
 #[test]
 fn slant_path_depth_is_the_integral_along_the_path() {
     let air = default_air();
-    let d = air.channel_depths()[2];
+    let d = air.channel_depths(Observer::default())[2];
     for (z0, z1, len) in [(0.0, 3.0, 40.0), (1.0, 0.0, 25.0), (0.3, 0.3, 60.0), (2.0, 15.0, 30.0), (0.0, 30.0, 80.0)] {
         let n = 2000;
         let f = |s: f64| air.coefficient(&d, z0 + (z1 - z0) * s / len);
@@ -145,7 +146,7 @@ fn slant_path_depth_is_the_integral_along_the_path() {
 /// reference mix and each line's depths: `sum_i w_ic exp(-tau_i X)`.
 fn channel_t(c: usize, x: f64) -> f64 {
     let air = default_air();
-    let colours = aurora::physics::emission::line_table::line_colours();
+    let colours = aurora::physics::emission::line_table::line_colours(Observer::default());
     let (mut num, mut den) = (0.0, 0.0);
     for i in 0..aurora::physics::emission::line_table::N_LINES {
         let w = REFERENCE_MIX[i] * colours[i][c];
@@ -163,7 +164,7 @@ fn channel_t(c: usize, x: f64) -> f64 {
 #[test]
 fn channel_and_line_depths() {
     let air = default_air();
-    let first = air.channel_depths().map(|d| d.rayleigh + d.ozone + d.aerosol);
+    let first = air.channel_depths(Observer::default()).map(|d| d.rayleigh + d.ozone + d.aerosol);
     let want = [0.1580, 0.1707, 0.2716];
     for c in 0..3 {
         assert!((first[c] - want[c]).abs() < 5e-4, "channel {c}: {first:?}");
@@ -289,9 +290,10 @@ fn extinction_off_ignores_the_other_sky_keys() {
 /// `blender/extinction.json`: what the add-on needs to apply the same air
 /// in Cycles (blender/air.py): per line its sea-level Rayleigh depth, its
 /// ozone depth per Dobson unit and the wavelengths its aerosol depth is
-/// averaged over; each channel's weights over the lines; and, as the
-/// add-on's test oracle, the transmittance per channel at a few
-/// elevations for the default sky at two observer altitudes. Regenerated
+/// averaged over; each channel's weights over the lines for each observer
+/// (`[colour] observer`: "camera", "eye"); and, as the add-on's test
+/// oracle, the transmittance per channel at a few elevations for the
+/// default sky at two observer altitudes, for each observer. Regenerated
 /// with `AURORA_UPDATE_DOCS=1 cargo test --release --test render air_extinction::`.
 #[test]
 fn committed_addon_table_matches_the_library() {
@@ -307,16 +309,21 @@ fn committed_addon_table_matches_the_library() {
         })
         .collect();
     let mut checks = Vec::new();
-    for z in [0.0, 1.0] {
-        let ext = Extinction::for_observer(air, DVec3::new(0.0, 0.0, z), None);
-        for e in [90.0f64, 30.0, 10.0, 2.0] {
-            let dir = DVec3::new(e.to_radians().cos(), 0.0, e.to_radians().sin());
-            checks.push(json!({"observer_km": z, "elevation_deg": e, "transmittance": ext.towards(dir)}));
+    for o in Observer::ALL {
+        for z in [0.0, 1.0] {
+            let at = DVec3::new(0.0, 0.0, z);
+            let ext = Extinction::for_observer_at(air, at, z, DVec3::Z, None, o);
+            for e in [90.0f64, 30.0, 10.0, 2.0] {
+                let dir = DVec3::new(e.to_radians().cos(), 0.0, e.to_radians().sin());
+                checks.push(json!({"observer": o.name(), "observer_km": z, "elevation_deg": e, "transmittance": ext.towards(dir)}));
+            }
         }
     }
+    let weights: serde_json::Map<String, Value> =
+        Observer::ALL.iter().map(|o| (o.name().to_string(), json!(aurora::physics::air_extinction::channel_weights(*o)))).collect();
     let doc = json!({
         "reference_mix": REFERENCE_MIX,
-        "weights": aurora::physics::air_extinction::channel_weights(),
+        "weights": weights,
         "lines": lines,
         "checks": checks,
     });
