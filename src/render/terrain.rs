@@ -36,9 +36,21 @@
 //!
 //! Rays are traced with a 2D DDA over the cells the ray's ground projection
 //! crosses (cells culled by their height range) and an f64 Moller-Trumbore
-//! test of the two triangles of each cell. The shading normal is the
-//! triangle's geometric normal, turned to face the incoming ray (two-sided,
-//! flat: as Cycles shades an imported mesh with flat shading).
+//! test of the two triangles of each cell. The shading normal is smooth, as
+//! Blender shades the mesh with `use_smooth` (blender/terrain.py): each
+//! sample's vertex normal is the normals of the triangles round it
+//! weighted by their corner angles there (Blender's vertex normals), and a
+//! hit's normal is its triangle's three vertex normals interpolated with
+//! the hit's barycentric coordinates and normalised (Cycles' smooth
+//! normal), flipped when the ray meets the triangle's back.
+//!
+//! # Snow
+//! The default albedo (`terrain.albedo`, `crate::scene::Terrain`) is
+//! fresh snow's in the visible, 0.85: pure snow reflects 0.96-0.99 of
+//! visible light and parts per million of soot take 5-15 % off (Warren &
+//! Wiscombe 1980, "A model for the spectral albedo of snow II", J. Atmos.
+//! Sci. 37, 2734): the auroral zone's winter ground, lit green by the
+//! aurora as photographs show it.
 
 use super::settings::RenderError;
 use crate::scene::{Terrain, TerrainKind};
@@ -207,6 +219,8 @@ pub struct Heightfield {
     pub z: Vec<f64>,
     pub zmin: f64,
     pub zmax: f64,
+    /// Vertex normals, as `z` ([`vertex_normals`]: Blender's for a smooth mesh).
+    pub normals: Vec<DVec3>,
 }
 
 /// Cells of the procedural heightfield along an axis of length `len`.
@@ -256,7 +270,9 @@ impl Heightfield {
         }
         let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
         let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Ok(Heightfield { xs, ys, z, zmin, zmax })
+        let mut hf = Heightfield { xs, ys, z, zmin, zmax, normals: Vec::new() };
+        hf.normals = vertex_normals(&hf);
+        Ok(hf)
     }
 
     /// The heightfield laid on the sphere of radius `r` km about `(0, 0, -r)`
@@ -360,6 +376,23 @@ impl Heightfield {
         self.ys.len()
     }
 
+    /// The shading normal at barycentric `(u, v)` of the triangle with
+    /// sample `corners`: the vertex normals interpolated and normalised, as
+    /// Cycles shades a smooth mesh, turned to the side the ray came from by
+    /// the geometric normal (`facing`, already facing the ray): a ray on a
+    /// face's back gets the flipped normal, as Cycles' backfacing flip.
+    fn smooth_normal(&self, corners: &[(usize, usize); 3], u: f64, v: f64, facing: DVec3, tri: &[DVec3; 3]) -> DVec3 {
+        let nx = self.xs.len();
+        let vn = corners.map(|(i, j)| self.normals[j * nx + i]);
+        let n = ((1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2]).try_normalize().unwrap_or(facing);
+        let front = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        if front.dot(facing) >= 0.0 {
+            n
+        } else {
+            -n
+        }
+    }
+
     /// The surface's height over `(x, y)`: the triangle of the cell that
     /// holds it (module doc: split along the (i, j)-(i+1, j+1) diagonal),
     /// linear on it; None outside the extent.
@@ -444,10 +477,10 @@ impl Heightfield {
             let margin = 1e-9 * (1.0 + za.abs().max(zb.abs()));
             if za.min(zb) <= cmax + margin && za.max(zb) >= cmin - margin {
                 let mut best: Option<SurfaceHit> = None;
-                for tri in self.cell_triangles(i, j) {
-                    if let Some(h) = intersect_triangle(o, d, &tri, t_min, t_max) {
+                for (tri, corners) in self.cell_triangles(i, j).iter().zip(cell_corners(i, j)) {
+                    if let Some((h, u, v)) = intersect_triangle_uv(o, d, tri, t_min, t_max) {
                         if best.is_none_or(|b| h.t < b.t) {
-                            best = Some(h);
+                            best = Some(SurfaceHit { n: self.smooth_normal(&corners, u, v, h.n, tri), ..h });
                         }
                     }
                 }
@@ -490,10 +523,45 @@ impl Heightfield {
     }
 }
 
+/// The samples (i, j) at the corners of cell (i, j)'s two triangles, in
+/// [`Heightfield::cell_triangles`]' order.
+fn cell_corners(i: usize, j: usize) -> [[(usize, usize); 3]; 2] {
+    [[(i, j), (i + 1, j), (i + 1, j + 1)], [(i, j), (i + 1, j + 1), (i, j + 1)]]
+}
+
+/// Blender's vertex normals of a triangle mesh: at each vertex the face
+/// normals of the triangles round it weighted by their corner angles there,
+/// normalised (Blender's `mesh_normals`, as for a mesh shaded smooth).
+fn vertex_normals(hf: &Heightfield) -> Vec<DVec3> {
+    let (nx, ny) = (hf.xs.len(), hf.ys.len());
+    let mut acc = vec![DVec3::ZERO; nx * ny];
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            for corners in cell_corners(i, j) {
+                let p = corners.map(|(a, b)| hf.vertex(a, b));
+                let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+                for k in 0..3 {
+                    let (a, b) = ((p[(k + 1) % 3] - p[k]).normalize_or_zero(), (p[(k + 2) % 3] - p[k]).normalize_or_zero());
+                    let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+                    let (ci, cj) = corners[k];
+                    acc[cj * nx + ci] += n * angle;
+                }
+            }
+        }
+    }
+    acc.into_iter().map(|n| n.try_normalize().unwrap_or(DVec3::Z)).collect()
+}
+
 /// Moller & Trumbore (1997) ray-triangle test in f64; edges are inclusive
 /// (with a 1e-12 barycentric tolerance) so the shared diagonal and cell
 /// borders leave no cracks.
 pub fn intersect_triangle(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+    intersect_triangle_uv(o, d, tri, t_min, t_max).map(|(h, _, _)| h)
+}
+
+/// [`intersect_triangle`] with the hit's barycentric coordinates `(u, v)`
+/// of `tri[1]` and `tri[2]`.
+pub fn intersect_triangle_uv(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<(SurfaceHit, f64, f64)> {
     const EPS: f64 = 1e-12;
     let e1 = tri[1] - tri[0];
     let e2 = tri[2] - tri[0];
@@ -521,7 +589,7 @@ pub fn intersect_triangle(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_ma
     if n.dot(d) > 0.0 {
         n = -n;
     }
-    Some(SurfaceHit { t, p: o + d * t, n })
+    Some((SurfaceHit { t, p: o + d * t, n }, u, v))
 }
 
 /// Procedural mountain profile in [0, 1] at `(x, y)` in feature units.
