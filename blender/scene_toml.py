@@ -244,7 +244,12 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     # aurora checks it; here a number >= 0 is enough.
     earth = Earth(_number(f"{src}: earth.radius_km", e.get("radius_km", Earth().radius_km), 0.0, math.inf))
 
-    observer = _table(doc, "colour", src).get("observer", _default("colour", "observer"))
+    # [colour] shapes the bake; only its observer matters here (the rest of
+    # the table is aurora's to check).
+    colour = doc.get("colour", {})
+    if not isinstance(colour, dict):
+        raise SceneFileError(f"{src}: [colour] must be a table")
+    observer = colour.get("observer", _default("colour", "observer"))
     observers = SCHEMA["colour"]["observer"]["values"]
     if observer not in observers:
         raise SceneFileError(f"{src}: colour.observer = {observer!r} must be one of {', '.join(observers)}")
