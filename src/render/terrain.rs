@@ -658,7 +658,8 @@ mod tests {
         // straight down from above the peaks (the mesh's own test).
         let t = Terrain { kind: TerrainKind::Heightfield, extent: [-20.0, -15.0, 25.0, 30.0], ..Terrain::default() };
         let h = Heightfield::from_terrain(&t, None).unwrap();
-        for (x, y) in [(-10.0, 4.0), (3.3, -7.1), (h.xs[3], h.ys[5]), (0.5 * (h.xs[4] + h.xs[5]), 0.5 * (h.ys[4] + h.ys[5])), (24.9, 29.9)] {
+        for (x, y) in [(-10.0, 4.0), (3.3, -7.1), (h.xs[3], h.ys[5]), (0.5 * (h.xs[4] + h.xs[5]), 0.5 * (h.ys[4] + h.ys[5])), (24.9, 29.9)]
+        {
             let z = h.height_at(x, y).unwrap();
             let hit = h.intersect(DVec3::new(x, y, h.zmax + 1.0), DVec3::NEG_Z, 0.0, f64::INFINITY).unwrap();
             // Both are f64 arithmetic on the same f32 vertices: rounding only.
@@ -669,7 +670,8 @@ mod tests {
         let c = model.clearance(DVec3::new(-10.0, 4.0, -1.0)).unwrap();
         assert!(c.is_below() && c.point_km == -1.0);
         // On a round Earth the plane is the sphere: altitudes above it.
-        let sphere = TerrainModel::on_earth(&Terrain { kind: TerrainKind::Plane, height: 0.3, ..Terrain::default() }, None, 6371.0).unwrap();
+        let sphere =
+            TerrainModel::on_earth(&Terrain { kind: TerrainKind::Plane, height: 0.3, ..Terrain::default() }, None, 6371.0).unwrap();
         let c = sphere.clearance(DVec3::new(100.0, 0.0, 0.5)).unwrap();
         assert!((c.ground_km - 0.3).abs() < 1e-9 && (c.point_km - ((6371.5f64.powi(2) + 1e4).sqrt() - 6371.0)).abs() < 1e-9, "{c:?}");
         assert_eq!(TerrainModel::None.clearance(DVec3::ZERO), None);

@@ -52,7 +52,10 @@ impl Default for ColourParams {
             mode: ColourMode::Physical,
             lines: LineModel::Chemistry,
             observer: Observer::Camera,
-            noise_km: 8.0, noise_freq: 0.02, colormap: report_colormap() }
+            noise_km: 8.0,
+            noise_freq: 0.02,
+            colormap: report_colormap(),
+        }
     }
 }
 

@@ -79,7 +79,10 @@ fn a_camera_inside_the_terrain_is_refused_by_render_and_preview_and_bake_warns()
     // The default scene's mountains rise to 1.58 km over (-10, 40) km.
     let inside = "camera.position=[-10, 40, 0.5]";
     let want = |e: &str| {
-        assert!(e.contains("camera.position = [-10, 40, 0.5]") && e.contains("0.5000 km") && e.contains("below the terrain's 1.5828 km"), "{e}");
+        assert!(
+            e.contains("camera.position = [-10, 40, 0.5]") && e.contains("0.5000 km") && e.contains("below the terrain's 1.5828 km"),
+            "{e}"
+        );
     };
     let png = dir.join("r.png");
     let e = refused(&Aurora::new().args(["render", "--set", inside, "--png"]).arg(&png).output());

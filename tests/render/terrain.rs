@@ -500,7 +500,7 @@ for n in me.vertex_normals:
     let nv: usize = lines.next().unwrap()[2..].parse().unwrap();
     assert_eq!(nv, hf.normals.len());
     let mut worst = 0.0f64;
-    for (k, want) in hf.normals.iter().enumerate() {
+    for want in &hf.normals {
         let c: Vec<f64> = lines.next().unwrap().split(' ').map(|x| x.parse().unwrap()).collect();
         worst = worst.max((DVec3::new(c[0], c[1], c[2]) - *want).length());
     }

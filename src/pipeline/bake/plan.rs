@@ -176,7 +176,8 @@ pub struct BakePlan {
 /// on (`animation.trail_samples`) or `grid.lines` asks for per-line grids;
 /// `None` otherwise.
 pub fn line_table_for(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams, atmosphere: &Atmosphere) -> Option<LineTable> {
-    needs_line_table(colour, animation, grid).then(|| LineTable::new(&EmissionModel::new(atmosphere.clone()).with_observer(colour.observer)))
+    needs_line_table(colour, animation, grid)
+        .then(|| LineTable::new(&EmissionModel::new(atmosphere.clone()).with_observer(colour.observer)))
 }
 
 /// Whether [`line_table_for`] builds a table.
