@@ -155,7 +155,7 @@ const KEYS: &[(&str, &str, &str, &str)] = &[
     ("sky", "aerosol_scale_height_km", "km", "scale height of the aerosol's density (the column above the observer falls as exp(-altitude / it))"),
     ("terrain", "kind", "", "`none`, `plane` (z = `height`) or `heightfield`"),
     ("terrain", "height", "km", "base height of the plane or heightfield"),
-    ("terrain", "albedo", "", "Lambertian albedo, linear Rec.709"),
+    ("terrain", "albedo", "", "Lambertian albedo, linear Rec.709; the default 0.85 is fresh snow in the visible (Warren & Wiscombe 1980)"),
     ("terrain", "mountain_height", "km", "heightfield: peak height of the procedural fBm mountains above `height`"),
     ("terrain", "mountain_scale", "km", "heightfield: horizontal feature size of the mountains"),
     ("terrain", "heightmap", "", "heightfield: a 16- or 8-bit greyscale PNG instead of the procedural mountains (relative to the scene file)"),
