@@ -87,13 +87,15 @@ def line_depths(sky, observer_km: float) -> list[float]:
     return out
 
 
-def weights() -> list[list[float]]:
-    """Each channel's weights over the lines (rows: R, G, B)."""
-    return TABLE["weights"]
+def weights(observer: str = "camera") -> list[list[float]]:
+    """Each channel's weights over the lines (rows: R, G, B) for the scene's
+    `[colour] observer` ("camera" or "eye"): the lines' colours, and so
+    their shares of each channel, are that observer's."""
+    return TABLE["weights"][observer]
 
 
-def transmittance(sky, observer_km: float, e_deg: float) -> tuple[float, float, float]:
+def transmittance(sky, observer_km: float, e_deg: float, observer: str = "camera") -> tuple[float, float, float]:
     """T_c towards elevation e (degrees) for emission above the layer."""
     x = air_mass(e_deg)
     t = [math.exp(-tau * x) for tau in line_depths(sky, observer_km)]
-    return tuple(sum(w * ti for w, ti in zip(row, t)) for row in weights())
+    return tuple(sum(w * ti for w, ti in zip(row, t)) for row in weights(observer))

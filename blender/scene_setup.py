@@ -42,7 +42,8 @@ class AuroraScene:
 
 def camera_air(spec: SceneSpec):
     """The air as the camera sees it (air.py), or None with `sky.extinction`
-    off: each line's zenith depth above the camera, the channel weights and
+    off: each line's zenith depth above the camera, the channel weights of
+    the scene's observer (`[colour] observer`, the colours the bake wrote) and
     the camera's local up. On a round Earth (`earth.radius_km` > 0, centre
     (0, 0, -R)) the camera's altitude is its distance from the centre minus
     R and its up the radial direction; on flat ground its z and +z, as in
@@ -56,7 +57,7 @@ def camera_air(spec: SceneSpec):
         altitude, up = d - r, (x / d, y / d, (z + r) / d)
     else:
         altitude, up = z, (0.0, 0.0, 1.0)
-    return line_depths(spec.sky, altitude), weights(), up
+    return line_depths(spec.sky, altitude), weights(spec.observer), up
 
 
 def setup_scene_from_toml(

@@ -94,6 +94,9 @@ class SceneSpec:
     earth: Earth = field(default_factory=Earth)
     #: The file it came from (None for a scene built in code).
     path: Path | None = None
+    #: `[colour] observer`: whose colours the bake wrote ("camera" or "eye");
+    #: the air's channel weights follow it (air.py).
+    observer: str = _default("colour", "observer")
 
 
 _TABLES = {
@@ -241,7 +244,17 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     # aurora checks it; here a number >= 0 is enough.
     earth = Earth(_number(f"{src}: earth.radius_km", e.get("radius_km", Earth().radius_km), 0.0, math.inf))
 
-    return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path)
+    # [colour] shapes the bake; only its observer matters here (the rest of
+    # the table is aurora's to check).
+    colour = doc.get("colour", {})
+    if not isinstance(colour, dict):
+        raise SceneFileError(f"{src}: [colour] must be a table")
+    observer = colour.get("observer", _default("colour", "observer"))
+    observers = SCHEMA["colour"]["observer"]["values"]
+    if observer not in observers:
+        raise SceneFileError(f"{src}: colour.observer = {observer!r} must be one of {', '.join(observers)}")
+
+    return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path, observer)
 
 
 def load_scene(path: str | Path) -> SceneSpec:

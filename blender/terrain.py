@@ -20,7 +20,9 @@
   altitude.
 - "heightfield": the OBJ written by `aurora terrain SCENE --out terrain.obj`
   (km, z up) is imported with forward +Y, up +Z so no axis is swapped, and
-  shaded flat: `aurora render` shades each triangle with its geometric normal.
+  shaded smooth: Blender's vertex normals (face normals weighted by corner
+  angle) interpolated over each triangle, which `aurora render` computes
+  the same way (src/render/terrain.rs).
 Both get the Lambertian terrain material (material.terrain_material).
 """
 
@@ -135,8 +137,10 @@ def heightfield_terrain(scene, obj_path, albedo, volume_alpha: bool = True,
         with bpy.context.temp_override(object=obj, active_object=obj, selected_objects=[obj],
                                        selected_editable_objects=[obj]):
             bpy.ops.mesh.customdata_custom_splitnormals_clear()
+    # Smooth shading: Blender's angle-weighted vertex normals, interpolated
+    # (the normals `aurora render` computes; the OBJ says `s off`).
     for p in mesh.polygons:
-        p.use_smooth = False
+        p.use_smooth = True
     mesh.materials.clear()
     mesh.materials.append(terrain_material(name + "Material", albedo, volume_alpha))
     for p in mesh.polygons:

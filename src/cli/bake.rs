@@ -69,7 +69,11 @@ pub fn run(a: BakeArgs) -> Result<()> {
     // --seed is one of the overrides, applied in command-line order.
     let BakeArgs { scene: scene_arg, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
     let report = Report::new(progress, common.quiet);
+    let dir = super::scene_dir(&scene_arg);
     let scene = load_scene(&scene_arg, &overrides)?;
+    // The bake never reads the terrain: a camera inside it is only warned of
+    // (`render` and `preview` refuse it).
+    report.warnings(&super::render_checks::camera_below_terrain(&scene, &dir).into_iter().collect::<Vec<_>>());
     let Some(spec) = frames else {
         return with_threads(common.threads, || bake_one(&scene, &out, &report));
     };
@@ -87,7 +91,7 @@ pub fn run(a: BakeArgs) -> Result<()> {
         // The render's settings, as `aurora render` makes them; its input
         // files (a heightmap, a sky image) are checked before any bake.
         let mut settings = aurora::render::RenderSettings::from_scene(&scene);
-        settings.base_dir = Some(super::scene_dir(&scene_arg));
+        settings.base_dir = Some(dir.clone());
         settings.check_input_files()?;
         return with_threads(common.threads, || plan_frames(&scene, task, &settings, plan_samples as usize, progress, &report));
     }

@@ -88,6 +88,7 @@ impl Session<'_> {
     /// Without --watch: one update (the coarse and the refined picture), then exit.
     fn once(&self, preview: &mut Preview, scene_arg: &str) -> Result<()> {
         let scene = load_scene(scene_arg, self.overrides)?;
+        super::render_checks::camera_above_terrain(&scene, &scene_dir(scene_arg))?;
         Ok(self.update(preview, &scene)?)
     }
 
@@ -134,6 +135,7 @@ impl Session<'_> {
                     // relative to the scene file, its tables read now.
                     scene.atmosphere.base_dir = Some(path.parent().map(Path::to_path_buf).unwrap_or_default());
                     aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
+                    super::render_checks::camera_above_terrain(&scene, &scene_dir(scene_arg))?;
                     Ok(scene)
                 })
                 .and_then(|scene| self.update(preview, &scene).map_err(anyhow::Error::from));

@@ -92,6 +92,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     };
     let format = image_format("--out", &out)?;
     super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
+    super::render_checks::camera_above_terrain(&scene, &dir)?;
     let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {

@@ -12,12 +12,18 @@
 //!   is a new name or a regular file (`aurora::util::atomic_write`), and its
 //!   folder exists, is a folder and takes a new file (a probe is created
 //!   and removed: a read-only folder, or one on a full or read-only file
-//!   system, is found here rather than after the render).
+//!   system, is found here rather than after the render);
+//! - the camera is above the terrain ([`camera_above_terrain`]): a camera
+//!   inside the ground would give a black picture, so `render` and
+//!   `preview` refuse it naming both heights; `bake` never reads the
+//!   terrain and only warns ([`camera_below_terrain`]).
 
 use super::exit::InputError;
 use super::frames::{frame_name, frame_pattern, frame_selection};
 use anyhow::Result;
 use aurora::farm::frame_files::{vdb_header, VdbHeaderError};
+use aurora::render::terrain::TerrainModel;
+use aurora::scene::Scene;
 use aurora::util::atomic_write::AtomicError;
 use std::path::{Path, PathBuf};
 
@@ -90,5 +96,31 @@ fn output_folder(out: &Path) -> Result<(), AtomicError> {
             Ok(())
         }
         Err(e) => Err(refuse(format!("not writable: {e}"))),
+    }
+}
+
+/// The refusal's words when the scene's camera is below its terrain (the
+/// terrain built as the renderer builds it, relative paths against `dir`);
+/// None when it is above, or there is no ground under it. A terrain that
+/// cannot be built is left to the renderer's own error.
+pub fn camera_below_terrain(scene: &Scene, dir: &Path) -> Option<String> {
+    let terrain = TerrainModel::on_earth(&scene.terrain, Some(dir), scene.earth.radius_km).ok()?;
+    let p = scene.camera.position;
+    let c = terrain.clearance(glam::DVec3::from_array(p)).filter(|c| c.is_below())?;
+    let kind = toml::Value::try_from(scene.terrain.kind).map(|v| v.to_string()).unwrap_or_default();
+    let what = if scene.earth.radius_km > 0.0 { "altitude" } else { "height" };
+    Some(format!(
+        "camera.position = [{}, {}, {}]: the camera is at {what} {:.4} km, below the terrain's {:.4} km there \
+         (terrain.kind = {kind}): the picture would be the inside of the ground. Raise the camera above \
+         {:.4} km, move it, or set terrain.kind = \"none\"",
+        p[0], p[1], p[2], c.point_km, c.ground_km, c.ground_km
+    ))
+}
+
+/// Refuses (exit status 2) a camera below the terrain ([`camera_below_terrain`]).
+pub fn camera_above_terrain(scene: &Scene, dir: &Path) -> Result<()> {
+    match camera_below_terrain(scene, dir) {
+        Some(m) => Err(InputError(m).into()),
+        None => Ok(()),
     }
 }

@@ -32,15 +32,17 @@
 //! (z1 - z0)` with `C(z)` the zenith depth above `z`, `d (-C'(z0))` when level.
 //!
 //! **Per channel.** Channel `c` holds the share `w_ic` of line `i` of a
-//! reference aurora ([`REFERENCE_MIX`]) times the line's colour, each line
-//! dimmed by its own depth: `T_c(X) = sum_i w_ic exp(-tau_i X)`, exact for
-//! that mix ([`Extinction::towards`]); its effective depth starts at
-//! `sum_i w_ic tau_i` ([`Air::channel_depths`]). A per-line grid gets its
+//! reference aurora ([`REFERENCE_MIX`]) times the line's colour for the
+//! scene's observer (`[colour] observer`: the camera's 557.7 nm has no red,
+//! the eye's does, so the weights differ per observer; [`channel_weights`]),
+//! each line dimmed by its own depth: `T_c(X) = sum_i w_ic exp(-tau_i X)`,
+//! exact for that mix ([`Extinction::towards`]); its effective depth starts
+//! at `sum_i w_ic tau_i` ([`Air::channel_depths`]). A per-line grid gets its
 //! line's own depth ([`Extinction::for_line`]). Light is only taken away:
 //! scattering into the ray is not modelled. Formulas, depths and tables:
 //! docs/physics.md, "The air between the aurora and the eye".
 
-use crate::physics::emission::line_colour::{LINES, N2_1P, N2_1P_BANDS_NM};
+use crate::physics::emission::line_colour::{Observer, LINES, N2_1P, N2_1P_BANDS_NM};
 use crate::physics::emission::line_table::{line_colours, N_LINES};
 use crate::scene::SkyParams;
 use glam::DVec3;
@@ -224,10 +226,10 @@ impl Air {
         }
     }
 
-    /// First-order sea-level zenith depths per Rec.709 channel,
-    /// `tau_c = sum_i w_ic tau_i` (module doc).
-    pub fn channel_depths(&self) -> [Depths; 3] {
-        channel_weights().map(|w| (0..N_LINES).fold(Depths::default(), |acc, i| acc.scaled_add(self.line_depths(i), w[i])))
+    /// First-order sea-level zenith depths per Rec.709 channel seen by
+    /// `observer`, `tau_c = sum_i w_ic tau_i` (module doc).
+    pub fn channel_depths(&self, observer: Observer) -> [Depths; 3] {
+        channel_weights(observer).map(|w| (0..N_LINES).fold(Depths::default(), |acc, i| acc.scaled_add(self.line_depths(i), w[i])))
     }
 
     /// Zenith optical depth `C(z)` of `d` above altitude `z_km`.
@@ -298,9 +300,10 @@ pub struct Extinction {
     pub tau_zenith: [f64; N_LINES],
 }
 
-/// Each channel's weights over the lines for the reference mix.
-pub fn channel_weights() -> [[f64; N_LINES]; 3] {
-    let colours = line_colours();
+/// Each channel's weights over the lines for the reference mix seen by
+/// `observer`.
+pub fn channel_weights(observer: Observer) -> [[f64; N_LINES]; 3] {
+    let colours = line_colours(observer);
     std::array::from_fn(|c| {
         let w: [f64; N_LINES] = std::array::from_fn(|i| REFERENCE_MIX[i] * colours[i][c].max(0.0));
         let total: f64 = w.iter().sum();
@@ -310,21 +313,22 @@ pub fn channel_weights() -> [[f64; N_LINES]; 3] {
 
 impl Extinction {
     /// The observer at `position` (km, z up): altitude `z` and up `+z` on the
-    /// flat ground. The one place the observer's frame is computed. `line`:
-    /// a one-line grid's line (its depth in every channel), else the
-    /// reference mix.
+    /// flat ground, with the default observer's colours. The one place the
+    /// observer's frame is computed. `line`: a one-line grid's line (its
+    /// depth in every channel), else the reference mix.
     pub fn for_observer(air: Air, position: DVec3, line: Option<usize>) -> Extinction {
-        Self::for_observer_at(air, position, position.z, DVec3::Z, line)
+        Self::for_observer_at(air, position, position.z, DVec3::Z, line, Observer::default())
     }
 
     /// [`Self::for_observer`] for an observer at `position` whose altitude
     /// and local up (a unit vector) are given: on a round Earth, the
     /// distance from its centre minus its radius and the radial direction
-    /// (`crate::geometry::earth`); on flat ground, `position.z` and +z.
-    pub fn for_observer_at(air: Air, position: DVec3, altitude_km: f64, up: DVec3, line: Option<usize>) -> Extinction {
+    /// (`crate::geometry::earth`); on flat ground, `position.z` and +z. The
+    /// channels' weights are `observer`'s.
+    pub fn for_observer_at(air: Air, position: DVec3, altitude_km: f64, up: DVec3, line: Option<usize>, observer: Observer) -> Extinction {
         let weights = match line {
             Some(i) => [std::array::from_fn(|k| if k == i { 1.0 } else { 0.0 }); 3],
-            None => channel_weights(),
+            None => channel_weights(observer),
         };
         let lines: [Depths; N_LINES] = std::array::from_fn(|i| air.line_depths(i));
         let tau_zenith = lines.map(|d| air.column_above(&d, altitude_km));

@@ -240,7 +240,7 @@ fn observer_air(s: &RenderSettings) -> Option<Extinction> {
     let air = Air::from_sky(&s.sky)?;
     let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
     let at = DVec3::from_array(s.camera.position);
-    Some(Extinction::for_observer_at(air, at, earth.altitude(at), earth.local_up(at), s.line))
+    Some(Extinction::for_observer_at(air, at, earth.altitude(at), earth.local_up(at), s.line, s.observer))
 }
 
 /// The terrain's emission sampler: none without a terrain or emission;

@@ -44,6 +44,9 @@ pub struct RenderSettings {
     /// (`aurora render --grid line_*`): the air takes that line's optical
     /// depth in every channel; None: the per-channel depths of the lines' mix.
     pub line: Option<usize>,
+    /// Whose colours the emission holds (`[colour] observer`): the air
+    /// weighs its channels for that observer.
+    pub observer: crate::util::observer::Observer,
     /// Seed of every random stream (with the pixel index).
     pub seed: u64,
     pub integration: Integration,
@@ -68,6 +71,7 @@ impl RenderSettings {
             earth_radius_km: scene.earth.radius_km,
             sky: scene.sky.clone(),
             line: None,
+            observer: scene.colour.observer,
             seed: scene.seed,
             integration: Integration::Exact,
             shadow_samples: 1,

@@ -36,9 +36,21 @@
 //!
 //! Rays are traced with a 2D DDA over the cells the ray's ground projection
 //! crosses (cells culled by their height range) and an f64 Moller-Trumbore
-//! test of the two triangles of each cell. The shading normal is the
-//! triangle's geometric normal, turned to face the incoming ray (two-sided,
-//! flat: as Cycles shades an imported mesh with flat shading).
+//! test of the two triangles of each cell. The shading normal is smooth, as
+//! Blender shades the mesh with `use_smooth` (blender/terrain.py): each
+//! sample's vertex normal is the normals of the triangles round it
+//! weighted by their corner angles there (Blender's vertex normals), and a
+//! hit's normal is its triangle's three vertex normals interpolated with
+//! the hit's barycentric coordinates and normalised (Cycles' smooth
+//! normal), flipped when the ray meets the triangle's back.
+//!
+//! # Snow
+//! The default albedo (`terrain.albedo`, `crate::scene::Terrain`) is
+//! fresh snow's in the visible, 0.85: pure snow reflects 0.96-0.99 of
+//! visible light and parts per million of soot take 5-15 % off (Warren &
+//! Wiscombe 1980, "A model for the spectral albedo of snow II", J. Atmos.
+//! Sci. 37, 2734): the auroral zone's winter ground, lit green by the
+//! aurora as photographs show it.
 
 use super::settings::RenderError;
 use crate::scene::{Terrain, TerrainKind};
@@ -136,6 +148,39 @@ impl TerrainModel {
     pub fn is_none(&self) -> bool {
         matches!(self, TerrainModel::None)
     }
+
+    /// How high the point `p` (km) and the ground under it are, in the same
+    /// measure ([`Clearance`]): on the plane and a heightfield, `z` and the
+    /// surface's `z` over `(p.x, p.y)`; on the sphere, the altitudes above
+    /// the Earth's surface. None without ground under `p` (no terrain, or
+    /// outside a heightfield's extent). A camera whose point is below its
+    /// ground sees the inside of the terrain: a black picture.
+    pub fn clearance(&self, p: DVec3) -> Option<Clearance> {
+        match self {
+            TerrainModel::None => None,
+            TerrainModel::Plane { height } => Some(Clearance { point_km: p.z, ground_km: *height }),
+            TerrainModel::Heightfield(h) => h.height_at(p.x, p.y).map(|g| Clearance { point_km: p.z, ground_km: g }),
+            TerrainModel::Sphere { centre, radius } => {
+                // The Earth's radius: the centre sits at (0, 0, -R).
+                let r_earth = -centre.z;
+                Some(Clearance { point_km: (p - *centre).length() - r_earth, ground_km: radius - r_earth })
+            }
+        }
+    }
+}
+
+/// A point's height and the ground's under it, km ([`TerrainModel::clearance`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Clearance {
+    pub point_km: f64,
+    pub ground_km: f64,
+}
+
+impl Clearance {
+    /// Whether the point lies below the ground.
+    pub fn is_below(&self) -> bool {
+        self.point_km < self.ground_km
+    }
 }
 
 /// The nearest hit of `o + t d` with the sphere, `t` in `(t_min, t_max)`: the
@@ -174,6 +219,8 @@ pub struct Heightfield {
     pub z: Vec<f64>,
     pub zmin: f64,
     pub zmax: f64,
+    /// Vertex normals, as `z` ([`vertex_normals`]: Blender's for a smooth mesh).
+    pub normals: Vec<DVec3>,
 }
 
 /// Cells of the procedural heightfield along an axis of length `len`.
@@ -223,7 +270,9 @@ impl Heightfield {
         }
         let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
         let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        Ok(Heightfield { xs, ys, z, zmin, zmax })
+        let mut hf = Heightfield { xs, ys, z, zmin, zmax, normals: Vec::new() };
+        hf.normals = vertex_normals(&hf);
+        Ok(hf)
     }
 
     /// The heightfield laid on the sphere of radius `r` km about `(0, 0, -r)`
@@ -327,6 +376,45 @@ impl Heightfield {
         self.ys.len()
     }
 
+    /// The shading normal at barycentric `(u, v)` of the triangle with
+    /// sample `corners`: the vertex normals interpolated and normalised, as
+    /// Cycles shades a smooth mesh, turned to the side the ray came from by
+    /// the geometric normal (`facing`, already facing the ray): a ray on a
+    /// face's back gets the flipped normal, as Cycles' backfacing flip.
+    fn smooth_normal(&self, corners: &[(usize, usize); 3], u: f64, v: f64, facing: DVec3, tri: &[DVec3; 3]) -> DVec3 {
+        let nx = self.xs.len();
+        let vn = corners.map(|(i, j)| self.normals[j * nx + i]);
+        let n = ((1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2]).try_normalize().unwrap_or(facing);
+        let front = (tri[1] - tri[0]).cross(tri[2] - tri[0]);
+        if front.dot(facing) >= 0.0 {
+            n
+        } else {
+            -n
+        }
+    }
+
+    /// The surface's height over `(x, y)`: the triangle of the cell that
+    /// holds it (module doc: split along the (i, j)-(i+1, j+1) diagonal),
+    /// linear on it; None outside the extent.
+    pub fn height_at(&self, x: f64, y: f64) -> Option<f64> {
+        let (nx, ny) = (self.nx(), self.ny());
+        if !(x >= self.xs[0] && x <= self.xs[nx - 1] && y >= self.ys[0] && y <= self.ys[ny - 1]) {
+            return None;
+        }
+        let cell = |v: &[f64], x: f64| v.partition_point(|s| *s <= x).saturating_sub(1).min(v.len() - 2);
+        let (i, j) = (cell(&self.xs, x), cell(&self.ys, y));
+        let u = (x - self.xs[i]) / (self.xs[i + 1] - self.xs[i]);
+        let v = (y - self.ys[j]) / (self.ys[j + 1] - self.ys[j]);
+        let z = |a: usize, b: usize| self.z[(j + b) * nx + i + a];
+        Some(if u >= v {
+            // (p00, p10, p11)
+            z(0, 0) + u * (z(1, 0) - z(0, 0)) + v * (z(1, 1) - z(1, 0))
+        } else {
+            // (p00, p11, p01)
+            z(0, 0) + u * (z(1, 1) - z(0, 1)) + v * (z(0, 1) - z(0, 0))
+        })
+    }
+
     /// Sample (i, j) as a point.
     #[inline]
     pub fn vertex(&self, i: usize, j: usize) -> DVec3 {
@@ -389,10 +477,10 @@ impl Heightfield {
             let margin = 1e-9 * (1.0 + za.abs().max(zb.abs()));
             if za.min(zb) <= cmax + margin && za.max(zb) >= cmin - margin {
                 let mut best: Option<SurfaceHit> = None;
-                for tri in self.cell_triangles(i, j) {
-                    if let Some(h) = intersect_triangle(o, d, &tri, t_min, t_max) {
+                for (tri, corners) in self.cell_triangles(i, j).iter().zip(cell_corners(i, j)) {
+                    if let Some((h, u, v)) = intersect_triangle_uv(o, d, tri, t_min, t_max) {
                         if best.is_none_or(|b| h.t < b.t) {
-                            best = Some(h);
+                            best = Some(SurfaceHit { n: self.smooth_normal(&corners, u, v, h.n, tri), ..h });
                         }
                     }
                 }
@@ -435,10 +523,45 @@ impl Heightfield {
     }
 }
 
+/// The samples (i, j) at the corners of cell (i, j)'s two triangles, in
+/// [`Heightfield::cell_triangles`]' order.
+fn cell_corners(i: usize, j: usize) -> [[(usize, usize); 3]; 2] {
+    [[(i, j), (i + 1, j), (i + 1, j + 1)], [(i, j), (i + 1, j + 1), (i, j + 1)]]
+}
+
+/// Blender's vertex normals of a triangle mesh: at each vertex the face
+/// normals of the triangles round it weighted by their corner angles there,
+/// normalised (Blender's `mesh_normals`, as for a mesh shaded smooth).
+fn vertex_normals(hf: &Heightfield) -> Vec<DVec3> {
+    let (nx, ny) = (hf.xs.len(), hf.ys.len());
+    let mut acc = vec![DVec3::ZERO; nx * ny];
+    for j in 0..ny - 1 {
+        for i in 0..nx - 1 {
+            for corners in cell_corners(i, j) {
+                let p = corners.map(|(a, b)| hf.vertex(a, b));
+                let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+                for k in 0..3 {
+                    let (a, b) = ((p[(k + 1) % 3] - p[k]).normalize_or_zero(), (p[(k + 2) % 3] - p[k]).normalize_or_zero());
+                    let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+                    let (ci, cj) = corners[k];
+                    acc[cj * nx + ci] += n * angle;
+                }
+            }
+        }
+    }
+    acc.into_iter().map(|n| n.try_normalize().unwrap_or(DVec3::Z)).collect()
+}
+
 /// Moller & Trumbore (1997) ray-triangle test in f64; edges are inclusive
 /// (with a 1e-12 barycentric tolerance) so the shared diagonal and cell
 /// borders leave no cracks.
 pub fn intersect_triangle(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<SurfaceHit> {
+    intersect_triangle_uv(o, d, tri, t_min, t_max).map(|(h, _, _)| h)
+}
+
+/// [`intersect_triangle`] with the hit's barycentric coordinates `(u, v)`
+/// of `tri[1]` and `tri[2]`.
+pub fn intersect_triangle_uv(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_max: f64) -> Option<(SurfaceHit, f64, f64)> {
     const EPS: f64 = 1e-12;
     let e1 = tri[1] - tri[0];
     let e2 = tri[2] - tri[0];
@@ -466,7 +589,7 @@ pub fn intersect_triangle(o: DVec3, d: DVec3, tri: &[DVec3; 3], t_min: f64, t_ma
     if n.dot(d) > 0.0 {
         n = -n;
     }
-    Some(SurfaceHit { t, p: o + d * t, n })
+    Some((SurfaceHit { t, p: o + d * t, n }, u, v))
 }
 
 /// Procedural mountain profile in [0, 1] at `(x, y)` in feature units.
@@ -527,6 +650,32 @@ pub fn write_obj(path: impl AsRef<Path>, hf: &Heightfield) -> Result<(), RenderE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_height_under_a_point_is_where_a_vertical_ray_meets_the_mesh() {
+        // Procedural mountains; at points inside cells (both triangles), on
+        // the diagonal and on samples, the height is the hit of a ray
+        // straight down from above the peaks (the mesh's own test).
+        let t = Terrain { kind: TerrainKind::Heightfield, extent: [-20.0, -15.0, 25.0, 30.0], ..Terrain::default() };
+        let h = Heightfield::from_terrain(&t, None).unwrap();
+        for (x, y) in [(-10.0, 4.0), (3.3, -7.1), (h.xs[3], h.ys[5]), (0.5 * (h.xs[4] + h.xs[5]), 0.5 * (h.ys[4] + h.ys[5])), (24.9, 29.9)]
+        {
+            let z = h.height_at(x, y).unwrap();
+            let hit = h.intersect(DVec3::new(x, y, h.zmax + 1.0), DVec3::NEG_Z, 0.0, f64::INFINITY).unwrap();
+            // Both are f64 arithmetic on the same f32 vertices: rounding only.
+            assert!((hit.p.z - z).abs() < 1e-9, "({x}, {y}): {z} vs {}", hit.p.z);
+        }
+        assert_eq!(h.height_at(-20.1, 0.0), None);
+        let model = TerrainModel::Heightfield(h);
+        let c = model.clearance(DVec3::new(-10.0, 4.0, -1.0)).unwrap();
+        assert!(c.is_below() && c.point_km == -1.0);
+        // On a round Earth the plane is the sphere: altitudes above it.
+        let sphere =
+            TerrainModel::on_earth(&Terrain { kind: TerrainKind::Plane, height: 0.3, ..Terrain::default() }, None, 6371.0).unwrap();
+        let c = sphere.clearance(DVec3::new(100.0, 0.0, 0.5)).unwrap();
+        assert!((c.ground_km - 0.3).abs() < 1e-9 && (c.point_km - ((6371.5f64.powi(2) + 1e4).sqrt() - 6371.0)).abs() < 1e-9, "{c:?}");
+        assert_eq!(TerrainModel::None.clearance(DVec3::ZERO), None);
+    }
 
     #[test]
     fn sphere_hits_are_the_closed_form_ones() {

@@ -3,6 +3,9 @@
 
 use serde::{Deserialize, Serialize};
 
+/// Whose colours (`observer`): "camera" (default) or "eye" (CIE 1931).
+pub use crate::util::observer::Observer;
+
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum ColourMode {
@@ -29,6 +32,11 @@ pub struct ColourParams {
     pub mode: ColourMode,
     /// Line model of the physical colours: "chemistry" or "simple".
     pub lines: LineModel,
+    /// Whose colours the lines get: "camera" (a digital camera at daylight
+    /// white balance, as photographs record aurora) or "eye" (the CIE 1931
+    /// observer). The bake writes that observer's RGB; the renderer's air
+    /// weighs its channels for it (`crate::util::observer`).
+    pub observer: Observer,
     /// Amplitude of the low-frequency 1D noise on the altitude used for colour, km.
     pub noise_km: f64,
     /// Spatial frequency of that noise, cycles per km (along the curtain).
@@ -40,7 +48,14 @@ pub struct ColourParams {
 
 impl Default for ColourParams {
     fn default() -> Self {
-        Self { mode: ColourMode::Physical, lines: LineModel::Chemistry, noise_km: 8.0, noise_freq: 0.02, colormap: report_colormap() }
+        Self {
+            mode: ColourMode::Physical,
+            lines: LineModel::Chemistry,
+            observer: Observer::Camera,
+            noise_km: 8.0,
+            noise_freq: 0.02,
+            colormap: report_colormap(),
+        }
     }
 }
 

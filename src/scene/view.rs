@@ -152,7 +152,9 @@ pub struct Terrain {
     pub kind: TerrainKind,
     /// Base height of the plane or heightfield, km.
     pub height: f64,
-    /// Lambertian albedo, linear Rec.709.
+    /// Lambertian albedo, linear Rec.709. The default, 0.85, is fresh
+    /// snow's in the visible (Warren & Wiscombe 1980, J. Atmos. Sci. 37,
+    /// 2734: 0.96-0.99 for pure snow, 5-15 % less with traces of soot).
     pub albedo: [f64; 3],
     /// Heightfield: peak height of the procedural mountains above `height`, km.
     pub mountain_height: f64,
@@ -172,7 +174,7 @@ impl Default for Terrain {
         Self {
             kind: TerrainKind::None,
             height: 0.0,
-            albedo: [0.3, 0.3, 0.3],
+            albedo: [0.85, 0.85, 0.85],
             mountain_height: 3.0,
             mountain_scale: 10.0,
             heightmap: None,

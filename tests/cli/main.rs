@@ -33,6 +33,7 @@ mod globe;
 mod inputs;
 mod keogram;
 mod messages;
+mod observer;
 mod outputs;
 mod overrides;
 mod plan;

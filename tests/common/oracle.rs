@@ -58,6 +58,7 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         earth_radius_km: 0.0,
         sky: SkyParams { extinction: false, ..SkyParams::default() },
         line: None,
+        observer: aurora::util::observer::Observer::default(),
         seed: 7,
         integration: Integration::Exact,
         shadow_samples: 1,

@@ -50,7 +50,7 @@ def test_port_reproduces_the_library():
     checks = air.TABLE["checks"]
     assert len(checks) >= 8
     for c in checks:
-        got = air.transmittance(_Sky, c["observer_km"], c["elevation_deg"])
+        got = air.transmittance(_Sky, c["observer_km"], c["elevation_deg"], c["observer"])
         for g, w in zip(got, c["transmittance"]):
             assert abs(g / w - 1.0) < 1e-12, (c, got)
     # The schema's defaults are the sky used for the checks.

@@ -16,6 +16,7 @@ use aurora::physics::air_extinction::{
 };
 use aurora::render::{render, Volume};
 use aurora::scene::{Scene, SkyParams};
+use aurora::util::observer::Observer;
 use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use std::f64::consts::PI;
@@ -125,7 +126,7 @@ fn ozone_chappuis_band() {
 #[test]
 fn slant_path_depth_is_the_integral_along_the_path() {
     let air = default_air();
-    let d = air.channel_depths()[2];
+    let d = air.channel_depths(Observer::default())[2];
     for (z0, z1, len) in [(0.0, 3.0, 40.0), (1.0, 0.0, 25.0), (0.3, 0.3, 60.0), (2.0, 15.0, 30.0), (0.0, 30.0, 80.0)] {
         let n = 2000;
         let f = |s: f64| air.coefficient(&d, z0 + (z1 - z0) * s / len);
@@ -143,9 +144,9 @@ fn slant_path_depth_is_the_integral_along_the_path() {
 /// The spectral transmittance of channel `c` at air mass `x` for an
 /// observer at sea level, assembled here from the lines' colours, the
 /// reference mix and each line's depths: `sum_i w_ic exp(-tau_i X)`.
-fn channel_t(c: usize, x: f64) -> f64 {
+fn channel_t(c: usize, x: f64, observer: Observer) -> f64 {
     let air = default_air();
-    let colours = aurora::physics::emission::line_table::line_colours();
+    let colours = aurora::physics::emission::line_table::line_colours(observer);
     let (mut num, mut den) = (0.0, 0.0);
     for i in 0..aurora::physics::emission::line_table::N_LINES {
         let w = REFERENCE_MIX[i] * colours[i][c];
@@ -157,27 +158,34 @@ fn channel_t(c: usize, x: f64) -> f64 {
 }
 
 /// The documented per-channel depths (docs/physics.md): first order
-/// (`x -> 0`) 0.158 / 0.171 / 0.272, and the effective depths
+/// (`x -> 0`) 0.158 / 0.171 / 0.272 for the eye, 0.124 / 0.171 / 0.338
+/// for the camera (its 557.7 nm has no red or blue, so red is the red
+/// lines' and blue 427.8 nm's), and the eye's effective depths
 /// `-ln T_c / X` at 30 and 10 degrees; a line's own depth for its grid;
 /// an observer 1 km up.
 #[test]
 fn channel_and_line_depths() {
     let air = default_air();
-    let first = air.channel_depths().map(|d| d.rayleigh + d.ozone + d.aerosol);
-    let want = [0.1580, 0.1707, 0.2716];
-    for c in 0..3 {
-        assert!((first[c] - want[c]).abs() < 5e-4, "channel {c}: {first:?}");
+    for (o, want) in [(Observer::Eye, [0.1580, 0.1707, 0.2716]), (Observer::Camera, [0.1242, 0.1707, 0.3385])] {
+        let first = air.channel_depths(o).map(|d| d.rayleigh + d.ozone + d.aerosol);
+        for c in 0..3 {
+            assert!((first[c] - want[c]).abs() < 5e-4, "{o:?} channel {c}: {first:?}");
+        }
+        let ext = Extinction::for_observer_at(air, DVec3::ZERO, 0.0, DVec3::Z, None, o);
+        for c in 0..3 {
+            assert!((ext.effective_tau(c, 1e-9) - first[c]).abs() < 1e-6);
+            for x in [1.0, 2.0, 5.6] {
+                assert!((ext.effective_tau(c, x) - (-channel_t(c, x, o).ln() / x)).abs() < 1e-12);
+            }
+        }
     }
-    let ext = Extinction::for_observer(air, DVec3::ZERO, None);
-    for c in 0..3 {
-        assert!((ext.effective_tau(c, 1e-9) - first[c]).abs() < 1e-6);
-    }
+    let ext = Extinction::for_observer_at(air, DVec3::ZERO, 0.0, DVec3::Z, None, Observer::Eye);
     for (e, want) in [(30.0, [0.1571, 0.1707, 0.2600]), (10.0, [0.1555, 0.1707, 0.2375])] {
         let x = air_mass(e);
         for c in 0..3 {
             let t = ext.effective_tau(c, x);
             assert!((t - want[c]).abs() < 5e-4, "{e} deg channel {c}: {t}");
-            assert!((t - (-channel_t(c, x).ln() / x)).abs() < 1e-12);
+            assert!((t - (-channel_t(c, x, Observer::Eye).ln() / x)).abs() < 1e-12);
         }
     }
     // Green is 557.7 nm alone: its depth at every air mass.
@@ -247,7 +255,7 @@ fn a_curtain_dims_as_exp_minus_tau_x() {
         let (pc, pn) = (off.pixel(2, 2), on.pixel(2, 2));
         for c in 0..3 {
             assert!(pc[c] > 0.0, "the slab is in view");
-            let tau_c = -channel_t(c, x).ln() / x;
+            let tau_c = -channel_t(c, x, s.observer).ln() / x;
             let want = (-tau_c * x).exp();
             let got = pn[c] as f64 / pc[c] as f64;
             assert!((got / want - 1.0).abs() < 0.01, "{elev} deg, channel {c}: {got} vs {want}");
@@ -289,9 +297,10 @@ fn extinction_off_ignores_the_other_sky_keys() {
 /// `blender/extinction.json`: what the add-on needs to apply the same air
 /// in Cycles (blender/air.py): per line its sea-level Rayleigh depth, its
 /// ozone depth per Dobson unit and the wavelengths its aerosol depth is
-/// averaged over; each channel's weights over the lines; and, as the
-/// add-on's test oracle, the transmittance per channel at a few
-/// elevations for the default sky at two observer altitudes. Regenerated
+/// averaged over; each channel's weights over the lines for each observer
+/// (`[colour] observer`: "camera", "eye"); and, as the add-on's test
+/// oracle, the transmittance per channel at a few elevations for the
+/// default sky at two observer altitudes, for each observer. Regenerated
 /// with `AURORA_UPDATE_DOCS=1 cargo test --release --test render air_extinction::`.
 #[test]
 fn committed_addon_table_matches_the_library() {
@@ -307,16 +316,21 @@ fn committed_addon_table_matches_the_library() {
         })
         .collect();
     let mut checks = Vec::new();
-    for z in [0.0, 1.0] {
-        let ext = Extinction::for_observer(air, DVec3::new(0.0, 0.0, z), None);
-        for e in [90.0f64, 30.0, 10.0, 2.0] {
-            let dir = DVec3::new(e.to_radians().cos(), 0.0, e.to_radians().sin());
-            checks.push(json!({"observer_km": z, "elevation_deg": e, "transmittance": ext.towards(dir)}));
+    for o in Observer::ALL {
+        for z in [0.0, 1.0] {
+            let at = DVec3::new(0.0, 0.0, z);
+            let ext = Extinction::for_observer_at(air, at, z, DVec3::Z, None, o);
+            for e in [90.0f64, 30.0, 10.0, 2.0] {
+                let dir = DVec3::new(e.to_radians().cos(), 0.0, e.to_radians().sin());
+                checks.push(json!({"observer": o.name(), "observer_km": z, "elevation_deg": e, "transmittance": ext.towards(dir)}));
+            }
         }
     }
+    let weights: serde_json::Map<String, Value> =
+        Observer::ALL.iter().map(|o| (o.name().to_string(), json!(aurora::physics::air_extinction::channel_weights(*o)))).collect();
     let doc = json!({
         "reference_mix": REFERENCE_MIX,
-        "weights": aurora::physics::air_extinction::channel_weights(),
+        "weights": weights,
         "lines": lines,
         "checks": checks,
     });

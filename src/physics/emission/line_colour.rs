@@ -8,15 +8,19 @@
 //! one photon per second of OI 557.7 nm has luminance Y = 1; the emission
 //! grid then reads 1 = 1 kR of 557.7 nm per km of path
 //! (`crate::pipeline::photons`). A line's colour is its wavelength through
-//! the CIE 1931 observer, gamut mapped into Rec.709, weighted by the photon
-//! energy (`crate::util::colour`).
+//! the scene's observer (`[colour] observer`, [`Observer`]: a camera at
+//! daylight white balance by default, or the CIE 1931 eye), gamut mapped
+//! into Rec.709, weighted by the photon energy (`crate::util::colour`,
+//! `crate::util::observer`). The functions take any wavelength the observer
+//! covers (380-780 nm for the camera), so every line and band has a colour.
 //!
 //! Sources: the yields and quenching rates are cited on [`EmissionModel`];
 //! the N2 1P band heads on [`N2_1P`].
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::table::ChemistryTable;
-use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
+use crate::util::colour::luminance;
+pub use crate::util::observer::Observer;
 use std::sync::Arc;
 
 /// An emission line.
@@ -40,31 +44,53 @@ pub const N2_1P_BANDS_NM: [f64; 6] = [646.9, 654.5, 662.4, 670.5, 678.9, 687.5];
 /// The lines of the physical colour model, in [`LineYields`] order.
 pub const LINES: [Line; 5] = [OI_5577, OI_6300, OI_6364, N2P_4278, N2_1P];
 
-/// Linear Rec.709 colour of one photon per second of a line, gamut mapped,
-/// in units where one 557.7 nm photon has Y = 1. Photon counts become
-/// radiometric weights through the photon energy ratio `557.7 / lambda`
-/// (the CMFs weigh radiant power, not photon number).
-pub fn line_rgb(lambda_nm: f64) -> [f64; 3] {
-    let y_ref = luminance(gamut_map(xyz_to_rec709(cie1931_xyz(OI_5577.lambda_nm))));
-    let c = gamut_map(xyz_to_rec709(cie1931_xyz(lambda_nm)));
-    let w = OI_5577.lambda_nm / lambda_nm / y_ref;
+/// Linear Rec.709 colour of one photon per second at `lambda_nm` seen by
+/// `observer`, brought into Rec.709 as that observer does it
+/// ([`Observer::in_gamut`]), in units where one 557.7 nm photon has Y = 1
+/// for that observer. Photon counts become radiometric weights through the
+/// photon energy ratio `557.7 / lambda` (the observers weigh radiant power,
+/// not photon number).
+pub fn line_rgb(lambda_nm: f64, observer: Observer) -> [f64; 3] {
+    let c = observer.in_gamut(observer.rgb(lambda_nm));
+    let w = OI_5577.lambda_nm / lambda_nm / y_ref(observer);
     c.map(|x| x * w)
 }
 
-/// Linear Rec.709 colour of one photon per second of the N2 1P visible
-/// bands: the mean, over [`N2_1P_BANDS_NM`] with equal photon weights, of
-/// each band's CIE colour weighted by its photon energy (`557.7 / lambda`),
-/// gamut mapped once (the mixture is what the eye sees), in the units of
-/// [`line_rgb`].
-pub fn n2_1p_rgb() -> [f64; 3] {
-    let y_ref = luminance(gamut_map(xyz_to_rec709(cie1931_xyz(OI_5577.lambda_nm))));
-    let n = N2_1P_BANDS_NM.len() as f64;
-    let xyz = N2_1P_BANDS_NM.iter().fold([0.0; 3], |acc, &l| {
-        let c = cie1931_xyz(l);
+/// Luminance of one 557.7 nm photon's gamut-mapped colour for `observer`:
+/// the unit of photon power.
+fn y_ref(observer: Observer) -> f64 {
+    luminance(observer.in_gamut(observer.rgb(OI_5577.lambda_nm)))
+}
+
+/// Linear Rec.709 colour of one photon per second spread with equal photon
+/// weights over the wavelengths `bands_nm` (a band system), seen by
+/// `observer`: the mean of each wavelength's colour weighted by its photon
+/// energy (`557.7 / lambda`), brought into the gamut once (the mixture is
+/// what is seen), in the units of [`line_rgb`].
+pub fn bands_rgb(bands_nm: &[f64], observer: Observer) -> [f64; 3] {
+    let n = bands_nm.len() as f64;
+    let rgb = bands_nm.iter().fold([0.0; 3], |acc, &l| {
+        let c = observer.rgb(l);
         let w = OI_5577.lambda_nm / l / n;
         [acc[0] + w * c[0], acc[1] + w * c[1], acc[2] + w * c[2]]
     });
-    gamut_map(xyz_to_rec709(xyz)).map(|x| x / y_ref)
+    observer.in_gamut(rgb).map(|x| x / y_ref(observer))
+}
+
+/// Linear Rec.709 colour of one photon per second of the N2 1P visible
+/// bands seen by `observer`: [`bands_rgb`] over [`N2_1P_BANDS_NM`].
+pub fn n2_1p_rgb(observer: Observer) -> [f64; 3] {
+    bands_rgb(&N2_1P_BANDS_NM, observer)
+}
+
+/// The colour of one photon per second of `line` seen by `observer`: the
+/// band mixture for the N2 1P bands, the line's wavelength otherwise.
+pub fn colour_of(line: &Line, observer: Observer) -> [f64; 3] {
+    if *line == N2_1P {
+        n2_1p_rgb(observer)
+    } else {
+        line_rgb(line.lambda_nm, observer)
+    }
 }
 
 /// Photons emitted per keV of electron energy deposited, per line.
@@ -127,6 +153,8 @@ impl LineYields {
 #[derive(Clone, Debug, Default)]
 pub struct EmissionModel {
     pub atmosphere: Atmosphere,
+    /// Whose colours [`EmissionModel::rgb_per_kev`] gives.
+    pub observer: Observer,
 }
 
 /// 427.8 nm photons per keV at the reference N2 fraction (Rees & Luckey 1974).
@@ -157,8 +185,14 @@ pub const A_D: f64 = 1.0 / 110.0;
 pub const K_D_N2: f64 = 3e-11;
 
 impl EmissionModel {
+    /// The model on `atmosphere`, coloured for the default observer.
     pub fn new(atmosphere: Atmosphere) -> Self {
-        Self { atmosphere }
+        Self { atmosphere, observer: Observer::default() }
+    }
+
+    /// The model coloured for `observer`.
+    pub fn with_observer(self, observer: Observer) -> Self {
+        Self { observer, ..self }
     }
 
     /// Photons per keV deposited at altitude `h_km`, per line.
@@ -181,7 +215,7 @@ impl EmissionModel {
 
     /// Linear Rec.709 colour emitted per keV deposited at `h_km`.
     pub fn rgb_per_kev(&self, h_km: f64) -> [f64; 3] {
-        lines_rgb(self.yields(h_km).as_array())
+        lines_rgb(self.yields(h_km).as_array(), self.observer)
     }
 }
 
@@ -203,11 +237,12 @@ struct ChemColour {
     rgb: Vec<[f64; 3]>,
 }
 
-/// Linear Rec.709 colour of `y` photons of each line of [`LINES`].
-pub fn lines_rgb(y: [f64; 5]) -> [f64; 3] {
+/// Linear Rec.709 colour of `y` photons of each line of [`LINES`] seen by
+/// `observer`.
+pub fn lines_rgb(y: [f64; 5], observer: Observer) -> [f64; 3] {
     let mut rgb = [0.0; 3];
     for (line, n) in LINES.iter().zip(y) {
-        let c = if *line == N2_1P { n2_1p_rgb() } else { line_rgb(line.lambda_nm) };
+        let c = colour_of(line, observer);
         for k in 0..3 {
             rgb[k] += n * c[k];
         }
@@ -230,12 +265,13 @@ impl ColourTable {
 
     /// The chemistry (`crate::physics::chemistry`) on `atmosphere`, over altitude and
     /// ionization rate ([`crate::physics::chemistry::table`]: its grid, error and
-    /// cost), with each node's colour per keV. Its altitude-only lookups
-    /// ([`ColourTable::rgb`]) read the simple model's table, built beside it.
-    pub fn chemistry(atmosphere: &Atmosphere) -> Self {
+    /// cost), with each node's colour per keV seen by `observer`. Its
+    /// altitude-only lookups ([`ColourTable::rgb`]) read the simple model's
+    /// table, built beside it.
+    pub fn chemistry(atmosphere: &Atmosphere, observer: Observer) -> Self {
         let lines = ChemistryTable::build(atmosphere);
-        let rgb = lines.nodes().iter().map(|n| lines_rgb(n.per_kev)).collect();
-        let simple = Self::physical(&EmissionModel::new(atmosphere.clone()));
+        let rgb = lines.nodes().iter().map(|n| lines_rgb(n.per_kev, observer)).collect();
+        let simple = Self::physical(&EmissionModel::new(atmosphere.clone()).with_observer(observer));
         Self { chem: Some(Arc::new(ChemColour { lines, rgb })), ..simple }
     }
 
@@ -354,15 +390,37 @@ pub fn colormap_rgb(rows: &[[f64; 4]], h_km: f64) -> [f64; 3] {
 mod tests {
     use super::*;
 
+    use crate::util::colour::{cie1931_xyz, gamut_map, xyz_to_rec709};
+
+    const EYE: Observer = Observer::Eye;
+
     #[test]
     fn one_557_7_photon_has_unit_luminance_and_lines_have_their_hues() {
-        assert!((luminance(line_rgb(557.7)) - 1.0).abs() < 1e-12);
-        let g = line_rgb(557.7);
-        assert!(g[1] > g[0] && g[1] > g[2], "green {g:?}");
-        let r = line_rgb(630.0);
-        assert!(r[0] > 5.0 * r[1] && r[0] > 5.0 * r[2], "red {r:?}");
-        let b = line_rgb(427.8);
-        assert!(b[2] > b[0] && b[2] > b[1], "violet {b:?}");
+        for o in Observer::ALL {
+            assert!((luminance(line_rgb(557.7, o)) - 1.0).abs() < 1e-12);
+            let g = line_rgb(557.7, o);
+            assert!(g[1] > g[0] && g[1] > g[2], "{o:?} green {g:?}");
+            let r = line_rgb(630.0, o);
+            assert!(r[0] > 5.0 * r[1] && r[0] > 5.0 * r[2], "{o:?} red {r:?}");
+            let b = line_rgb(427.8, o);
+            assert!(b[2] > b[0] && b[2] > b[1], "{o:?} violet {b:?}");
+        }
+        // The camera's green line has almost no red (a saturated green); the
+        // eye's gamut-mapped one keeps 0.37 of its green in red (yellowish).
+        let (cam, eye) = (line_rgb(557.7, Observer::Camera), line_rgb(557.7, EYE));
+        assert!(cam[0] < 0.05 * cam[1] && eye[0] > 0.3 * eye[1], "camera {cam:?} eye {eye:?}");
+    }
+
+    #[test]
+    fn every_wavelength_of_the_visible_has_a_colour_for_every_observer() {
+        // Any line or band the line model adds is covered: finite, >= 0.
+        for o in Observer::ALL {
+            for l in 380..=780 {
+                let c = line_rgb(l as f64 + 0.3, o);
+                assert!(c.iter().all(|x| x.is_finite() && *x >= 0.0), "{o:?} {l}: {c:?}");
+            }
+        }
+        assert_eq!(bands_rgb(&[557.7], EYE), line_rgb(557.7, EYE));
     }
 
     #[test]
@@ -397,11 +455,12 @@ mod tests {
 
     #[test]
     fn n2_1p_is_red_and_makes_the_lower_border_of_hard_aurora_pink() {
-        let c = n2_1p_rgb();
+        let c = n2_1p_rgb(EYE);
         assert!(c[0] > 5.0 * c[1] && c[0] > 5.0 * c[2], "1P colour {c:?}");
         // Its mean wavelength lies inside its bands.
         assert!((N2_1P_BANDS_NM.iter().sum::<f64>() / 6.0 - N2_1P.lambda_nm).abs() < 0.1);
-        let m = EmissionModel::default();
+        // The eye's colours (the ratios below are the CIE observer's).
+        let m = EmissionModel::default().with_observer(EYE);
         // 1P follows N2 like 427.8 nm at every altitude.
         for h in [80.0, 100.0, 150.0, 250.0] {
             let y = m.yields(h);
@@ -474,7 +533,7 @@ mod tests {
         let y = |l: f64| luminance(xyz_to_rec709(cie1931_xyz(l)));
         for l in [427.8, 557.7, 630.0, 636.4, 666.8] {
             let want = 557.7 / l * y(l) / y(557.7);
-            assert!((luminance(line_rgb(l)) / want - 1.0).abs() < 1e-12, "{l}");
+            assert!((luminance(line_rgb(l, EYE)) / want - 1.0).abs() < 1e-12, "{l}");
         }
         // The N2 1P colour is the gamut-mapped mixture of its bands, equal
         // photon counts, each weighted by its photon energy.
@@ -486,7 +545,7 @@ mod tests {
             }
         }
         let want = gamut_map(xyz_to_rec709(xyz)).map(|c| c / y(557.7));
-        let got = n2_1p_rgb();
+        let got = n2_1p_rgb(EYE);
         for k in 0..3 {
             assert!((got[k] - want[k]).abs() < 1e-12 * want[0], "{got:?} vs {want:?}");
         }
@@ -497,13 +556,13 @@ mod tests {
     fn chemistry_shares_the_simple_models_1p_ratio_and_its_table_has_its_colours() {
         assert_eq!(crate::physics::chemistry::R_1P, R_1P);
         let atm = Atmosphere::nrlmsis21();
-        let t = ColourTable::chemistry(&atm);
+        let t = ColourTable::chemistry(&atm, Observer::default());
         assert!(t.needs_q() && !ColourTable::physical(&EmissionModel::default()).needs_q());
         // rgb_q is the colour of line_yields (bilinear on both: the same
         // weights), green at 110 km, red at 250 km.
         for (h, q) in [(110.3, 2e3), (251.1, 1.5)] {
             let y = t.line_yields(h, q).unwrap().as_array();
-            let (a, b) = (t.rgb_q(h, q), lines_rgb(y));
+            let (a, b) = (t.rgb_q(h, q), lines_rgb(y, Observer::default()));
             for k in 0..3 {
                 assert!((a[k] - b[k]).abs() <= 1e-9 * (b[k].abs() + 1e-9), "{h}: {a:?} {b:?}");
             }
@@ -598,7 +657,8 @@ mod tests {
         // Light adds: rgb = sum over lines of yield times one photon's colour
         // (the 1P bands through their mixture colour).
         let m = EmissionModel::default();
-        let colours = [line_rgb(557.7), line_rgb(630.0), line_rgb(636.4), line_rgb(427.8), n2_1p_rgb()];
+        let o = m.observer;
+        let colours = [line_rgb(557.7, o), line_rgb(630.0, o), line_rgb(636.4, o), line_rgb(427.8, o), n2_1p_rgb(o)];
         for h in [70.0, 95.0, 110.0, 180.0, 300.0] {
             let y = m.yields(h).as_array();
             let got = m.rgb_per_kev(h);

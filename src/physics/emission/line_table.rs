@@ -24,7 +24,7 @@
 //! ray's integral of the grid in km is the line's brightness in rayleigh.
 
 use crate::physics::atmosphere::Atmosphere;
-use crate::physics::emission::line_colour::{line_rgb, n2_1p_rgb, EmissionModel, LINES, N2_1P, TABLE_H};
+use crate::physics::emission::line_colour::{colour_of, EmissionModel, Observer, LINES, TABLE_H};
 
 /// Number of lines ([`LINES`]).
 pub const N_LINES: usize = LINES.len();
@@ -65,10 +65,10 @@ pub fn line_lifetimes(atm: &Atmosphere, h_km: f64) -> [f64; N_LINES] {
 /// the ones the red trail sums over earlier times (`crate::pipeline::red_trail`).
 pub const O1D_LINES: [bool; N_LINES] = [false, true, true, false, false];
 
-/// The linear Rec.709 colour of one photon per second of each line
-/// (`crate::physics::emission::line_colour`'s units).
-pub fn line_colours() -> [[f64; 3]; N_LINES] {
-    std::array::from_fn(|i| if LINES[i] == N2_1P { n2_1p_rgb() } else { line_rgb(LINES[i].lambda_nm) })
+/// The linear Rec.709 colour of one photon per second of each line seen by
+/// `observer` (`crate::physics::emission::line_colour`'s units).
+pub fn line_colours(observer: Observer) -> [[f64; 3]; N_LINES] {
+    std::array::from_fn(|i| colour_of(&LINES[i], observer))
 }
 
 /// Per-line yields and lifetimes every 0.05 km over [`TABLE_H`] (as the
@@ -99,7 +99,7 @@ impl LineTable {
         let h = |i: usize| TABLE_H.0 + i as f64 * dh;
         let yields = (0..n).map(|i| line_yields(model, h(i))).collect();
         let tau = (0..n).map(|i| line_lifetimes(&model.atmosphere, h(i))).collect();
-        Self { h0: TABLE_H.0, dh, yields, tau, colours: line_colours() }
+        Self { h0: TABLE_H.0, dh, yields, tau, colours: line_colours(model.observer) }
     }
 
     /// Yields and lifetimes at `h_km`.

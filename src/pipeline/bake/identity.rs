@@ -174,6 +174,7 @@ mod tests {
         "nrlmsis21",
         "glow",
         "x.png",
+        "eye",
     ];
 
     /// The scenes that differ from `base` in the leaf at `path` alone.

@@ -106,8 +106,8 @@ pub fn colour_table(scene: &Scene, atmosphere: &Atmosphere) -> ColourTable {
 pub fn colour_table_for(colour: &ColourParams, atmosphere: &Atmosphere) -> ColourTable {
     match colour.mode {
         ColourMode::Physical => match colour.lines {
-            LineModel::Chemistry => ColourTable::chemistry(atmosphere),
-            LineModel::Simple => ColourTable::physical(&EmissionModel::new(atmosphere.clone())),
+            LineModel::Chemistry => ColourTable::chemistry(atmosphere, colour.observer),
+            LineModel::Simple => ColourTable::physical(&EmissionModel::new(atmosphere.clone()).with_observer(colour.observer)),
         },
         ColourMode::Colormap => ColourTable::colormap(&colour.colormap),
     }
@@ -176,7 +176,8 @@ pub struct BakePlan {
 /// on (`animation.trail_samples`) or `grid.lines` asks for per-line grids;
 /// `None` otherwise.
 pub fn line_table_for(colour: &ColourParams, animation: &AnimationParams, grid: &GridParams, atmosphere: &Atmosphere) -> Option<LineTable> {
-    needs_line_table(colour, animation, grid).then(|| LineTable::new(&EmissionModel::new(atmosphere.clone())))
+    needs_line_table(colour, animation, grid)
+        .then(|| LineTable::new(&EmissionModel::new(atmosphere.clone()).with_observer(colour.observer)))
 }
 
 /// Whether [`line_table_for`] builds a table.
