@@ -49,6 +49,7 @@
 
 pub mod adaptive;
 pub mod agx;
+pub mod airglow;
 pub mod dda;
 pub mod grids;
 pub mod image;
@@ -62,6 +63,7 @@ pub mod segment;
 pub mod settings;
 pub mod shadow;
 pub mod sky;
+pub mod sky_map;
 pub mod terrain;
 pub mod view_transform;
 

@@ -3,12 +3,14 @@
 //! independent brute-force oracle (`integrator`), film, camera and file
 //! conventions (`film`), the lit terrain and its mesh (`terrain`), the
 //! camera against Blender's (`blender`), and the air between the aurora
-//! and the eye (`extinction`).
+//! and the eye (`extinction`), the airglow and the stars behind the volume
+//! (`airglow`).
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod blender;
+mod airglow;
 mod closed_forms;
 mod extinction;
 mod film;
