@@ -10,7 +10,8 @@
 //! read: one sample at each pixel centre, no volume, no terrain (the other
 //! renderer has its own), and without `background.radiance` and
 //! `background.image`, which the other renderer adds itself. Stars keep
-//! their flux over the map's pixels, a Gaussian of one map pixel.
+//! their flux over the map's pixels, a Gaussian of one map pixel; an
+//! orthographic scene camera's map has none, as its render has none.
 
 use super::image::Image;
 use super::integrator::render_prepared;
@@ -29,12 +30,16 @@ pub fn sky_map(settings: &RenderSettings, width: usize, progress: &dyn Progress)
         return Err(RenderError::Settings(format!("sky map width {width}: must be an even number in [8, {MAX_SKY_WIDTH}]")));
     }
     let mut s = settings.clone();
+    // An orthographic view shows no stars (`sky.rs`).
+    s.background.stars &= s.camera.projection != Projection::Orthographic;
     let p = s.camera.position;
     s.camera = Camera {
         position: p,
         look_at: [p[0] + 1.0, p[1], p[2]],
         up: [0.0, 0.0, 1.0],
         projection: Projection::Equirectangular,
+        // Not used by the panorama; any value its checks accept.
+        fov_deg: 90.0,
         ..s.camera
     };
     s.render.width = width;
