@@ -13,7 +13,7 @@ use anyhow::Result;
 pub fn run(a: SkyArgs) -> Result<()> {
     let SkyArgs { scene: scene_arg, out, width, overrides, common } = a;
     let max = aurora::render::sky_map::MAX_SKY_WIDTH;
-    if !(8..=max).contains(&width) || width % 2 != 0 {
+    if !(8..=max).contains(&width) || !width.is_multiple_of(2) {
         return Err(InputError(format!("--width {width}: must be an even number in [8, {max}]")).into());
     }
     if image_format("--out", &out)? != ImageFormat::Exr {

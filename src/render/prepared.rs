@@ -111,7 +111,8 @@ impl Prepared {
             CameraModel::new(&s.camera, s.render.width, s.render.height)?
         };
         let air = observer_air(s);
-        let same_glow = o.airglow == s.airglow && o.sky == s.sky && o.camera.position == s.camera.position && o.earth_radius_km == s.earth_radius_km;
+        let same_glow =
+            o.airglow == s.airglow && o.sky == s.sky && o.camera.position == s.camera.position && o.earth_radius_km == s.earth_radius_km;
         let airglow = if same_glow { old.airglow } else { observer_airglow(s) };
         let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: s.clone() };
         if !grids_changed && o.volume != s.volume {

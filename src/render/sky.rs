@@ -329,7 +329,12 @@ mod tests {
             }
             assert!((flux / 1.5 - 1.0).abs() < 1e-4, "{p:?} {w}x{h}: {flux}");
             let (fx, fy) = m.project(m.position + sky.stars[0].dir).unwrap();
-            assert!((cx / flux - fx).abs() < 0.05 && (cy / flux - fy).abs() < 0.05, "{p:?} {w}x{h}: ({}, {}) vs ({fx}, {fy})", cx / flux, cy / flux);
+            assert!(
+                (cx / flux - fx).abs() < 0.05 && (cy / flux - fy).abs() < 0.05,
+                "{p:?} {w}x{h}: ({}, {}) vs ({fx}, {fy})",
+                cx / flux,
+                cy / flux
+            );
         }
     }
 

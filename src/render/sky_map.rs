@@ -26,7 +26,7 @@ pub const MAX_SKY_WIDTH: usize = 16384;
 /// The equirectangular sky map of `settings` (module doc), `width` x
 /// `width / 2` pixels, RGBA with alpha 0.
 pub fn sky_map(settings: &RenderSettings, width: usize, progress: &dyn Progress) -> Result<Image, RenderError> {
-    if !(8..=MAX_SKY_WIDTH).contains(&width) || width % 2 != 0 {
+    if !(8..=MAX_SKY_WIDTH).contains(&width) || !width.is_multiple_of(2) {
         return Err(RenderError::Settings(format!("sky map width {width}: must be an even number in [8, {MAX_SKY_WIDTH}]")));
     }
     let mut s = settings.clone();

@@ -25,7 +25,13 @@ const R_EARTH: f64 = 6371.0;
 fn only(k: usize) -> AirglowParams {
     let d = AirglowParams::default();
     let keep = |i: usize, v: f64| if i == k { v } else { 0.0 };
-    AirglowParams { green_r: keep(0, d.green_r), red_r: keep(1, d.red_r), sodium_r: keep(2, d.sodium_r), hydroxyl_r: keep(3, d.hydroxyl_r), ..d }
+    AirglowParams {
+        green_r: keep(0, d.green_r),
+        red_r: keep(1, d.red_r),
+        sodium_r: keep(2, d.sodium_r),
+        hydroxyl_r: keep(3, d.hydroxyl_r),
+        ..d
+    }
 }
 
 /// One pixel at the centre of a 1 x 1 perspective image looking along
@@ -83,7 +89,12 @@ fn a_layer_through_its_shell_gives_van_rhijns_factor_with_the_thick_layer_correc
             let px = pixel(glow_settings(only(k)), [0.0; 3], dir);
             for c in 0..3 {
                 let want = zenith[c] as f64 * f;
-                assert!((px[c] as f64 - want).abs() <= 1e-4 * want.abs().max(1e-6), "{} z {z_deg} channel {c}: {} vs {want}", layer.name, px[c]);
+                assert!(
+                    (px[c] as f64 - want).abs() <= 1e-4 * want.abs().max(1e-6),
+                    "{} z {z_deg} channel {c}: {} vs {want}",
+                    layer.name,
+                    px[c]
+                );
             }
         }
     }

@@ -9,8 +9,8 @@
 #[path = "../common/mod.rs"]
 mod common;
 
-mod blender;
 mod airglow;
+mod blender;
 mod closed_forms;
 mod extinction;
 mod film;
