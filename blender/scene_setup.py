@@ -4,8 +4,9 @@
 `aurora render path --vdb ...`: camera, resolution and pixel footprint,
 volume material with the file's density/emission scales and the sky's air
 (air.py: the emission dimmed towards each camera ray), background seen only
-by camera rays, terrain (plane or heightfield OBJ), and the Cycles settings of
-render_settings.py. The pixel footprint follows the scene's `render.spp`
+by camera rays, the airglow and the stars as the world's background (the
+map `aurora sky` writes, see sky_map), terrain (plane or heightfield OBJ),
+and the Cycles settings of render_settings.py. The pixel footprint follows the scene's `render.spp`
 (1: pixel centres; more: the pixel square); the number of Cycles samples is
 separate (Cycles needs many more than the reference raymarcher).
 """
@@ -13,6 +14,10 @@ separate (Cycles needs many more than the reference raymarcher).
 from __future__ import annotations
 
 import math
+import shutil
+import subprocess
+import tempfile
+import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -22,7 +27,7 @@ from .air import line_depths, weights
 from .camera import build_camera
 from .emission_lights import build_emission_lights, emission_clusters
 from .render_settings import CyclesSettings, configure_cycles, set_scene_units
-from .scene_toml import SceneSpec, load_scene
+from .scene_toml import SCHEMA, SceneSpec, load_scene
 from .terrain import heightfield_terrain, plane_terrain
 from .volume_import import import_aurora
 from .world import background_world
@@ -60,6 +65,45 @@ def camera_air(spec: SceneSpec):
     return line_depths(spec.sky, altitude), weights(spec.observer), up
 
 
+def sky_wanted(path, spec: SceneSpec) -> bool:
+    """Whether `aurora render` draws a sky of its own for this scene: the
+    airglow (`[airglow] on`) or the stars (`background.stars`)."""
+    with open(path, "rb") as f:
+        glow = tomllib.load(f).get("airglow", {})
+    on = glow.get("on", SCHEMA["airglow"]["on"]["default"])
+    return bool(on) or bool(spec.background.stars)
+
+
+def sky_map_width(spec: SceneSpec) -> int:
+    """The sky map's width: one map pixel per camera pixel at the image
+    centre (the stars, a Gaussian of one pixel in both renderers, then have
+    about the same size), even, in [512, 16384]."""
+    c, w, h = spec.camera, spec.render.width, spec.render.height
+    if c.projection == "perspective":
+        angle = 2.0 * math.tan(math.radians(c.fov_deg) / 2.0) / h
+    elif c.projection == "fisheye":
+        angle = math.radians(c.fov_deg) / max(w, h)
+    elif c.projection == "equirectangular":
+        angle = 2.0 * math.pi / w
+    else:
+        return 2048
+    return min(16384, max(512, 2 * round(math.pi / angle)))
+
+
+def sky_map(path, out, spec: SceneSpec, binary: str | None = None) -> Path:
+    """Runs `aurora sky` on the scene file `path`, writing `out` (an
+    equirectangular linear EXR of the airglow and stars seen from the
+    camera, src/render/sky_map.rs); binary: the aurora binary (default:
+    $AURORA_BIN or `aurora` on PATH, as the bake finds it)."""
+    from .bake_job import find_binary
+
+    cmd = [binary or find_binary(), "sky", str(path), "--out", str(out), "--width", str(sky_map_width(spec)), "--quiet"]
+    r = subprocess.run(cmd, stdin=subprocess.DEVNULL, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise ValueError(f"{path}: `aurora sky` failed ({r.returncode}): {r.stderr.strip()}")
+    return Path(out)
+
+
 def setup_scene_from_toml(
     path,
     vdb=None,
@@ -71,6 +115,7 @@ def setup_scene_from_toml(
     terrain: bool = True,
     volume_alpha: bool = True,
     pad_dir=None,
+    sky_exr=None,
 ) -> AuroraScene:
     """Set up `scene` (default: the context scene) from the scene file `path`.
 
@@ -80,6 +125,9 @@ def setup_scene_from_toml(
     volume_alpha: terrain pixels get alpha = 1 - T_volume (else 1).
     pad_dir: where to write the Cycles-padded copy of the VDB (see
     volume_import.import_aurora); None renders the file as it is.
+    sky_exr: the airglow and stars map (`aurora sky`) for the world; None
+    makes it with the aurora binary when the scene has airglow or stars
+    (sky_map; packed into the .blend); False: none.
     """
     spec = load_scene(path)
     scene = scene or bpy.context.scene
@@ -92,7 +140,23 @@ def setup_scene_from_toml(
         image = spec.background.image
         if image is not None and spec.path is not None and not Path(image).is_absolute():
             image = spec.path.parent / image
-        wld = background_world("AuroraBackground", spec.background.radiance, image)
+        sky = sky_exr
+        made = None
+        if sky is None and sky_wanted(path, spec):
+            from .bake_job import BakeError, find_binary
+
+            try:
+                binary = find_binary()
+            except BakeError as e:
+                print(f"aurora: {e}; the world has no airglow or stars")
+            else:
+                made = Path(tempfile.mkdtemp(prefix="aurora-sky-"))
+                sky = sky_map(path, made / "sky.exr", spec, binary)
+        try:
+            wld = background_world("AuroraBackground", spec.background.radiance, image, sky or None)
+        finally:
+            if made is not None:
+                shutil.rmtree(made, ignore_errors=True)
         scene.world = wld
     ter = None
     if terrain and spec.terrain.kind == "plane":

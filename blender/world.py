@@ -9,8 +9,11 @@ only way it contributes is through camera rays that miss everything.
 `background.image` (an equirectangular linear EXR) is an Environment
 Texture with its default mapping, added to the constant radiance: Cycles
 maps a direction to the image exactly as `aurora render` does
-(src/render/sky.rs: centre towards +x, top row the zenith). The procedural
-stars (`background.stars`) are drawn by `aurora render` only.
+(src/render/sky.rs: centre towards +x, top row the zenith). The airglow
+(`[airglow]`) and the procedural stars (`background.stars`) come the same
+way, as a second Environment Texture: the map `aurora sky` writes
+(src/render/sky_map.rs), the sky `aurora render` draws from the camera's
+position, already dimmed by the air.
 """
 
 from __future__ import annotations
@@ -18,8 +21,10 @@ from __future__ import annotations
 import bpy
 
 
-def background_world(name: str, radiance, image=None) -> bpy.types.World:
-    """radiance: constant RGB; image: path of an equirectangular sky EXR or None."""
+def background_world(name: str, radiance, image=None, sky=None) -> bpy.types.World:
+    """radiance: constant RGB; image: path of an equirectangular sky EXR or
+    None; sky: path of the airglow and stars map from `aurora sky` or None.
+    Every one given is added to the others."""
     r, g, b = (float(x) for x in radiance)
     world = bpy.data.worlds.new(name)
     tree = world.node_tree
@@ -36,24 +41,29 @@ def background_world(name: str, radiance, image=None) -> bpy.types.World:
     out.location = (450, 0)
     # Fac = Is Camera Ray: 0 -> first input (unconnected = no light), 1 -> background.
     tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
-    if image is None:
-        tree.links.new(bg.outputs["Background"], mix.inputs[2])
-    else:
+    shader = bg.outputs["Background"]
+    for k, (key, img) in enumerate((("aurora_background_image", image), ("aurora_sky_map", sky))):
+        if img is None:
+            continue
+        y = -250 * (k + 1)
         env = tree.nodes.new("ShaderNodeTexEnvironment")
-        env.location = (-500, -250)
-        env.image = bpy.data.images.load(str(image), check_existing=True)
+        env.location = (-500, y)
+        env.image = bpy.data.images.load(str(img), check_existing=True)
         env.image.colorspace_settings.name = "Non-Color"  # linear radiance, no transform
         env.interpolation = "Linear"
-        sky = tree.nodes.new("ShaderNodeBackground")
-        sky.location = (-250, -250)
-        sky.inputs["Strength"].default_value = 1.0
-        tree.links.new(env.outputs["Color"], sky.inputs["Color"])
+        if key == "aurora_sky_map":
+            env.image.pack()  # the .blend keeps it; the file may be a temporary
+        emit = tree.nodes.new("ShaderNodeBackground")
+        emit.location = (-250, y)
+        emit.inputs["Strength"].default_value = 1.0
+        tree.links.new(env.outputs["Color"], emit.inputs["Color"])
         add = tree.nodes.new("ShaderNodeAddShader")
-        add.location = (0, -100)
-        tree.links.new(bg.outputs["Background"], add.inputs[0])
-        tree.links.new(sky.outputs["Background"], add.inputs[1])
-        tree.links.new(add.outputs["Shader"], mix.inputs[2])
-        world["aurora_background_image"] = str(image)
+        add.location = (0, y + 150)
+        tree.links.new(shader, add.inputs[0])
+        tree.links.new(emit.outputs["Background"], add.inputs[1])
+        shader = add.outputs["Shader"]
+        world[key] = str(img)
+    tree.links.new(shader, mix.inputs[2])
     tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
     world.cycles.sampling_method = "NONE"
     world["aurora_background_radiance"] = [r, g, b]

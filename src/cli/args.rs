@@ -112,6 +112,11 @@ pub enum Command {
     Footprint(FootprintArgs),
     /// Write the scene's terrain as an OBJ mesh (km, z up), exactly the triangles `aurora render` traces.
     Terrain(TerrainArgs),
+    /// Write the sky `aurora render` draws behind the volume (the airglow and the stars, seen from
+    /// the camera's position through the air) as an equirectangular linear OpenEXR, mapped as
+    /// Blender's Environment Texture reads it: the Blender add-on makes it the world's background.
+    /// [background] radiance and image are left out (the add-on adds them itself).
+    Sky(SkyArgs),
 }
 
 // The arguments of `aurora bake` (its help is the doc of [`Command::Bake`]).
@@ -259,6 +264,24 @@ pub struct BenchArgs {
     /// not reduced: its own camera and image size, and a 1024 x 1024 dome master.
     #[arg(long, conflicts_with = "quick")]
     pub storage: bool,
+    #[command(flatten)]
+    pub overrides: SceneOverrides,
+    #[command(flatten)]
+    pub common: Common,
+}
+
+// The arguments of `aurora sky` (its help is the doc of [`Command::Sky`]).
+#[derive(clap::Args)]
+pub struct SkyArgs {
+    /// Scene file or preset name.
+    #[arg(default_value = "default")]
+    pub scene: String,
+    /// Output image (.exr; only a new name or a regular file is ever replaced).
+    #[arg(long, value_name = "SKY.exr", default_value = "sky.exr")]
+    pub out: PathBuf,
+    /// Width of the map, pixels (even); its height is half of it.
+    #[arg(long, value_name = "N", default_value_t = 2048)]
+    pub width: usize,
     #[command(flatten)]
     pub overrides: SceneOverrides,
     #[command(flatten)]
@@ -447,6 +470,7 @@ impl Command {
             Command::Preview(a) => &mut a.overrides,
             Command::Footprint(a) => &mut a.overrides,
             Command::Terrain(a) => &mut a.overrides,
+            Command::Sky(a) => &mut a.overrides,
         }
     }
 }

@@ -20,6 +20,7 @@ mod profile;
 mod render;
 mod render_checks;
 mod scene;
+mod sky;
 
 use anyhow::{Context, Result};
 use args::{Cli, Command};
@@ -38,6 +39,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Preview(a) => preview::run(a),
         Command::Footprint(a) => scene::footprint(a),
         Command::Terrain(a) => scene::terrain(a),
+        Command::Sky(a) => sky::run(a),
     }
 }
 

@@ -171,10 +171,11 @@ fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
     settings.base_dir = Some(job.dir.clone());
     settings.shadow_samples = job.shadow_samples;
     if job.grid.is_some() {
-        // A filter image holds the grid's light alone: no sky, no stars.
+        // A filter image holds the grid's light alone: no sky, no stars, no airglow.
         settings.background.radiance = [0.0; 3];
         settings.background.image = None;
         settings.background.stars = false;
+        settings.airglow.on = false;
     }
     // A heightmap or sky image that is missing or not a regular file is
     // refused before the bake or the medium build, not after.

@@ -1,9 +1,11 @@
 //! The model, as functions of altitude, energy and ionization rate: the
 //! neutral atmosphere, the geomagnetic field, the electrons' energy
 //! deposition, the chemistry that turns ionization into line emission, the
-//! emission lines themselves, and the air's extinction of their light.
+//! emission lines themselves, the air's extinction of their light, and the
+//! airglow (the night sky's own light, drawn by the renderer only).
 
 pub mod air_extinction;
+pub mod airglow;
 pub mod atmosphere;
 pub mod chemistry;
 pub mod data_files;

@@ -102,7 +102,8 @@ impl Prepared {
                 }
                 None => {
                     let s = self.sky.radiance(ray.dir);
-                    [0, 1, 2].map(|c| background[c] + s[c])
+                    let g = self.airglow.as_ref().map_or([0.0; 3], |a| a.radiance(ray.dir));
+                    [0, 1, 2].map(|c| background[c] + s[c] + g[c])
                 }
             };
             // The volume's emission lies above the air: its transmittance

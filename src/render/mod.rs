@@ -6,7 +6,8 @@
 //! with `sigma_t = density_scale * density` and `e = emission_scale * emission`
 //! sampled as Cycles samples the same VDB: voxel (i,j,k) centred at index point
 //! (i,j,k), trilinear, inactive voxels 0 (docs/guide.md, "How Cycles reads the VDB").
-//! `L_behind` is the background radiance, or, where the ray hits the terrain,
+//! `L_behind` is the background radiance plus the sky (`sky.rs`: image and
+//! stars) and the airglow (`airglow.rs`, dimmed by the air), or, where the ray hits the terrain,
 //! `albedo / pi * E` with `E` the irradiance the volume's emission delivers
 //! through the volume's transmittance, estimated with emissive shadow rays
 //! (`shadow.rs`; the 2014 report's `L = T * Li + Lvi`). **Background
@@ -34,7 +35,7 @@
 //! Files, in the order of the stages: `settings.rs` (what is asked,
 //! [`RenderError`]) -> `prepared.rs` ([`Prepared`], built once per scene,
 //! camera and medium: `crate::geometry::camera`'s rays, `medium/` (dual
-//! leaves and their tree), `terrain.rs`, `sky.rs`, the emission sampler of
+//! leaves and their tree), `terrain.rs`, `sky.rs`, `airglow.rs`, the emission sampler of
 //! `shadow.rs`) -> `integrator.rs` (the pixel loop, tiles; `adaptive.rs`
 //! shares the samples by pixel variance; positions from `sampler.rs`) ->
 //! per ray `dda.rs` (hierarchical DDA: occupied leaves, then dual cells) ->
@@ -42,13 +43,15 @@
 //! `march.rs` (one walker for primary and shadow rays) -> `shadow.rs`
 //! (terrain irradiance) -> `image.rs` ([`Image`]) -> `image_file.rs` (EXR,
 //! PNG) through `view_transform.rs` (standard or `agx.rs`). `grids.rs`
-//! picks a file's grids.
+//! picks a file's grids; `sky_map.rs` renders the sky alone as a map for
+//! Blender's world.
 
 // Loops over the three colour channels index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
 pub mod adaptive;
 pub mod agx;
+pub mod airglow;
 pub mod dda;
 pub mod grids;
 pub mod image;
@@ -62,6 +65,7 @@ pub mod segment;
 pub mod settings;
 pub mod shadow;
 pub mod sky;
+pub mod sky_map;
 pub mod terrain;
 pub mod view_transform;
 

@@ -8,6 +8,7 @@
 //! checks, so the pixel loop (`integrator.rs`) never sees a setting out of
 //! range or a medium past the memory check.
 
+use super::airglow::Airglow;
 use super::medium::Medium;
 use super::settings::{Integration, RenderError, RenderSettings, Volume};
 use super::shadow::{EmissionSampler, ShadowScene};
@@ -27,6 +28,8 @@ pub struct Prepared {
     pub(super) sky: Sky,
     /// The air's transmittance (`[sky] extinction`), None without it.
     pub(super) air: Option<Extinction>,
+    /// The airglow's radiance per direction (`[airglow]`), None when off.
+    pub(super) airglow: Option<Airglow>,
     pub(super) settings: RenderSettings,
 }
 
@@ -108,7 +111,10 @@ impl Prepared {
             CameraModel::new(&s.camera, s.render.width, s.render.height)?
         };
         let air = observer_air(s);
-        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, settings: s.clone() };
+        let same_glow =
+            o.airglow == s.airglow && o.sky == s.sky && o.camera.position == s.camera.position && o.earth_radius_km == s.earth_radius_km;
+        let airglow = if same_glow { old.airglow } else { observer_airglow(s) };
+        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: s.clone() };
         if !grids_changed && o.volume != s.volume {
             // The kept medium and sampler still carry the old scales.
             prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
@@ -215,7 +221,8 @@ impl Prepared {
         let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
         let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         let air = observer_air(settings);
-        Ok(Prepared { camera, medium, terrain, sampler, sky, air, settings: settings.clone() })
+        let airglow = observer_airglow(settings);
+        Ok(Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: settings.clone() })
     }
 
     pub(super) fn shadow_scene(&self) -> ShadowScene<'_> {
@@ -241,6 +248,11 @@ fn observer_air(s: &RenderSettings) -> Option<Extinction> {
     let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
     let at = DVec3::from_array(s.camera.position);
     Some(Extinction::for_observer_at(air, at, earth.altitude(at), earth.local_up(at), s.line, s.observer))
+}
+
+/// The airglow as the camera sees it (`super::airglow`), None when off.
+fn observer_airglow(s: &RenderSettings) -> Option<Airglow> {
+    Airglow::new(&s.airglow, &s.sky, DVec3::from_array(s.camera.position), s.earth_radius_km, s.observer)
 }
 
 /// The terrain's emission sampler: none without a terrain or emission;

@@ -3,7 +3,7 @@
 //! rays per terrain hit), and why a render can fail ([`RenderError`]).
 
 use crate::grid::Grid;
-use crate::scene::{Background, Camera, RenderParams, Scene, SkyParams, Terrain, VolumeParams};
+use crate::scene::{AirglowParams, Background, Camera, RenderParams, Scene, SkyParams, Terrain, VolumeParams};
 use std::path::{Path, PathBuf};
 
 /// The grids to render. A VDB without a density grid has no extinction; one
@@ -40,6 +40,8 @@ pub struct RenderSettings {
     pub earth_radius_km: f64,
     /// The air between the volume and the camera (`crate::physics::air_extinction`).
     pub sky: SkyParams,
+    /// The airglow behind the volume (`super::airglow`).
+    pub airglow: AirglowParams,
     /// The line (index in `crate::physics::emission::line_colour::LINES`) a one-line grid holds
     /// (`aurora render --grid line_*`): the air takes that line's optical
     /// depth in every channel; None: the per-channel depths of the lines' mix.
@@ -59,7 +61,7 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
-    /// The scene's camera, render, volume, background, sky and terrain, its seed,
+    /// The scene's camera, render, volume, background, sky, airglow and terrain, its seed,
     /// exact integration and one shadow ray per terrain hit and sample.
     pub fn from_scene(scene: &Scene) -> RenderSettings {
         RenderSettings {
@@ -70,6 +72,7 @@ impl RenderSettings {
             terrain: scene.terrain.clone(),
             earth_radius_km: scene.earth.radius_km,
             sky: scene.sky.clone(),
+            airglow: scene.airglow.clone(),
             line: None,
             observer: scene.colour.observer,
             seed: scene.seed,

@@ -30,14 +30,20 @@
 //! naked-eye stars by spectral class (B 12 %, A 22 %, F 17 %, G 15 %,
 //! K 30 %, M 4 %; Bright Star Catalogue counts, rounded).
 //!
-//! Stars are points: each adds its flux to the one pixel whose area holds
-//! its projection, as radiance `E T / Omega_p` (`Omega_p` the pixel's solid
-//! angle, from the camera; `T` the volume's transmittance towards the star
-//! times the air's per channel with `[sky] extinction`, 0 behind terrain), so they stay one pixel wide and keep their flux at
-//! any resolution. An orthographic camera sees no stars (its pixels have no
-//! solid angle). Same seed, same stars; the pixel sums are done star by
-//! star in a fixed order after the pixel loop, so the image does not
-//! depend on the thread count.
+//! Stars are drawn a few pixels wide and keep their flux: star `s` seen at
+//! film point `f` gives pixel `q` (of the 7 x 7 around it) the radiance
+//! `E T w_q / Omega_q`, `w_q = exp(-|c_q - f|^2 / (2 sigma^2)) / sum`, a
+//! Gaussian of [`STAR_SIGMA_PX`] = 1 pixel at the pixel centres `c_q`
+//! normalised over the 49 pixels, `Omega_q` the solid angle of pixel `q`
+//! (from the camera, at its centre), `T` the volume's transmittance towards
+//! the star times the air's per channel with `[sky] extinction` (0 behind
+//! terrain). So `sum_q L_q Omega_q = E T` at any resolution and
+//! projection; the part of a footprint off the image (or outside a
+//! fisheye's circle) is lost, and an equirectangular image wraps around in
+//! azimuth. An orthographic camera sees no stars (its pixels have no solid
+//! angle). Same seed, same stars; the pixel sums are done star by star in
+//! a fixed order after the pixel loop, so the image does not depend on the
+//! thread count.
 
 use super::image::Image;
 use super::settings::RenderError;
@@ -55,6 +61,10 @@ pub const STARS_TO_MAG_6: f64 = 4800.0;
 pub const COUNT_SLOPE: f64 = 0.45;
 /// Irradiance of a magnitude-0 star, kR sr (see the module documentation).
 pub const MAG0_KR_SR: f64 = 0.0111;
+/// Standard deviation of a star's footprint, pixels.
+pub const STAR_SIGMA_PX: f64 = 1.0;
+/// Half-width of the footprint, pixels (3 sigma).
+const STAR_RADIUS_PX: i64 = 3;
 /// The brightest star drawn (Sirius, V = -1.46).
 pub const BRIGHTEST_MAG: f64 = -1.5;
 
@@ -196,17 +206,44 @@ impl Sky {
         self.image.as_ref().map_or([0.0; 3], |m| m.radiance(dir))
     }
 
-    /// Adds every star to the pixel that sees it: `E T / Omega_p`, `T` per
-    /// channel from `transmittance(dir)` (None when terrain hides the star).
+    /// Adds every star's footprint (module doc): `E T w_q / Omega_q` to
+    /// each pixel `q` around it, `T` per channel from `transmittance(dir)`
+    /// (None when terrain hides the star).
     pub fn add_stars(&self, img: &mut [[f32; 4]], camera: &CameraModel, transmittance: impl Fn(DVec3) -> Option<[f64; 3]>) {
+        if camera.pixel_solid_angle(DVec3::Z).is_none() {
+            return;
+        }
+        let (w, h) = (camera.width as i64, camera.height as i64);
+        let wraps = camera.projection == crate::scene::Projection::Equirectangular;
+        let k = STAR_RADIUS_PX;
         for s in &self.stars {
-            let Some(omega) = camera.pixel_solid_angle(s.dir) else { return };
             let Some((fx, fy)) = camera.project(camera.position + s.dir) else { continue };
-            let (px, py) = ((fx as usize).min(camera.width - 1), (fy as usize).min(camera.height - 1));
             let Some(t) = transmittance(s.dir) else { continue };
-            let p = &mut img[py * camera.width + px];
-            for k in 0..3 {
-                p[k] += (s.irradiance[k] * t[k] / omega) as f32;
+            let (cx, cy) = (fx.floor() as i64, fy.floor() as i64);
+            let weight = |x: i64, y: i64| {
+                let (dx, dy) = (x as f64 + 0.5 - fx, y as f64 + 0.5 - fy);
+                (-(dx * dx + dy * dy) / (2.0 * STAR_SIGMA_PX * STAR_SIGMA_PX)).exp()
+            };
+            let mut sum = 0.0;
+            for y in cy - k..=cy + k {
+                for x in cx - k..=cx + k {
+                    sum += weight(x, y);
+                }
+            }
+            for y in (cy - k..=cy + k).filter(|y| (0..h).contains(y)) {
+                for x in cx - k..=cx + k {
+                    let xi = if wraps { x.rem_euclid(w) } else { x };
+                    if !(0..w).contains(&xi) {
+                        continue;
+                    }
+                    let Some(ray) = camera.ray_at(xi as f64 + 0.5, y as f64 + 0.5) else { continue };
+                    let Some(omega) = camera.pixel_solid_angle(ray.dir) else { continue };
+                    let f = weight(x, y) / sum / omega;
+                    let p = &mut img[y as usize * camera.width + xi as usize];
+                    for c in 0..3 {
+                        p[c] += (s.irradiance[c] * t[c] * f) as f32;
+                    }
+                }
             }
         }
     }
@@ -251,10 +288,13 @@ mod tests {
         }
     }
 
-    /// A star's flux, summed over the image, is E T whatever the resolution
-    /// and projection, and it lands on one pixel.
+    /// A star's flux, summed over the image (radiance times each pixel's
+    /// solid angle), is E T whatever the resolution and projection, within
+    /// 1e-4 (f32 pixels); it is spread over the pixels around it, centred on
+    /// its projection: at least 9 pixels hold 1 % of its peak, and the
+    /// flux-weighted centre is within 0.05 pixel of the projected point.
     #[test]
-    fn a_star_keeps_its_flux_at_any_resolution() {
+    fn a_star_keeps_its_flux_over_a_few_pixels() {
         let sky = Sky {
             image: None,
             stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0] }],
@@ -276,16 +316,25 @@ mod tests {
             let m = CameraModel::new(&cam, w, h).unwrap();
             let mut img = vec![[0.0f32; 4]; w * h];
             sky.add_stars(&mut img, &m, |_| Some([0.5; 3]));
-            let lit: Vec<usize> = (0..w * h).filter(|&i| img[i][0] > 0.0).collect();
-            assert_eq!(lit.len(), 1, "{p:?} {w}x{h}");
-            // Flux = radiance x the pixel's solid angle (numerically, from
-            // the corner rays' spherical quadrilateral as in camera.rs).
-            let i = lit[0];
-            let (px, py) = ((i % w) as f64, (i / w) as f64);
-            let omega = m.pixel_solid_angle(m.ray(px + 0.5, py + 0.5).dir).unwrap();
-            let flux = img[i][2] as f64 * omega;
-            // The pixel's solid angle varies by < 1 % across one pixel here.
-            assert!((flux / 1.5 - 1.0).abs() < 0.01, "{p:?} {w}x{h}: {flux}");
+            let omega = |i: usize| m.pixel_solid_angle(m.ray((i % w) as f64 + 0.5, (i / w) as f64 + 0.5).dir).unwrap();
+            let peak = img.iter().map(|q| q[2]).fold(0.0f32, f32::max);
+            let lit = (0..w * h).filter(|&i| img[i][2] > 0.01 * peak).count();
+            assert!(lit >= 9, "{p:?} {w}x{h}: {lit} pixels");
+            let (mut flux, mut cx, mut cy) = (0.0, 0.0, 0.0);
+            for i in 0..w * h {
+                let f = img[i][2] as f64 * omega(i);
+                flux += f;
+                cx += f * ((i % w) as f64 + 0.5);
+                cy += f * ((i / w) as f64 + 0.5);
+            }
+            assert!((flux / 1.5 - 1.0).abs() < 1e-4, "{p:?} {w}x{h}: {flux}");
+            let (fx, fy) = m.project(m.position + sky.stars[0].dir).unwrap();
+            assert!(
+                (cx / flux - fx).abs() < 0.05 && (cy / flux - fy).abs() < 0.05,
+                "{p:?} {w}x{h}: ({}, {}) vs ({fx}, {fy})",
+                cx / flux,
+                cy / flux
+            );
         }
     }
 

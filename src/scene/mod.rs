@@ -14,7 +14,7 @@
 //! `[footprint]`, `[animation]`), [`beams`] (`[beams]`, `[atmosphere]`,
 //! `[earth]`), [`colour`], [`grid`] (`[photons]`, `[grid]`) and [`view`]
 //! (`[camera]`, `[render]`, `[volume]`, `[background]`, `[sky]`,
-//! `[terrain]`); [`root`] (the [`Scene`] that holds them), reading
+//! `[terrain]`), [`airglow`] (`[airglow]`); [`root`] (the [`Scene`] that holds them), reading
 //! (`load`), [`overrides`] (`--set KEY=VALUE` applied to the document
 //! before validation), [`validation`] (the range checks, their limits and
 //! the error types), [`wording`] (the parser's messages in plain words,
@@ -24,6 +24,7 @@
 //! (`crate::scene::Camera`); files inside import from the file that
 //! defines an item.
 
+pub mod airglow;
 pub mod beams;
 pub mod colour;
 pub mod curtain;
@@ -38,6 +39,7 @@ pub mod validation;
 pub mod view;
 pub mod wording;
 
+pub use airglow::AirglowParams;
 pub use beams::*;
 pub use colour::*;
 pub use curtain::*;

@@ -1,6 +1,7 @@
 //! The scene file's root table, [`Scene`]: one field per TOML table, its
 //! canonical TOML and the hash that identifies a bake's inputs.
 
+use super::airglow::AirglowParams;
 use super::beams::{AtmosphereParams, BeamParams, EarthParams};
 use super::colour::ColourParams;
 use super::curtain::{AnimationParams, Curtain, FootprintParams};
@@ -26,6 +27,7 @@ pub struct Scene {
     pub volume: VolumeParams,
     pub background: Background,
     pub sky: SkyParams,
+    pub airglow: AirglowParams,
     pub terrain: Terrain,
     pub animation: AnimationParams,
     pub atmosphere: AtmosphereParams,

@@ -58,7 +58,7 @@ pub fn schema() -> Value {
     let in_table: Value = json!({
         "footprint": FootprintParams::default(), "beams": BeamParams::default(), "colour": ColourParams::default(),
         "photons": PhotonParams::default(), "grid": GridParams::default(), "camera": Camera::default(),
-        "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(), "sky": SkyParams::default(),
+        "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(), "sky": SkyParams::default(), "airglow": super::airglow::AirglowParams::default(),
         "terrain": Terrain::default(), "atmosphere": AtmosphereParams::default(), "animation": AnimationParams::default(),
         "earth": EarthParams::default(),
     });

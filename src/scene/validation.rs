@@ -405,6 +405,10 @@ impl Scene {
         v.range(t, "aerosol_optical_depth", sky.aerosol_optical_depth, 0.0, 5.0, true);
         v.range(t, "angstrom", sky.angstrom, -1.0, 4.0, true);
         v.range(t, "aerosol_scale_height_km", sky.aerosol_scale_height_km, 0.1, 20.0, true);
+        let t = Some(("airglow", 0));
+        for (key, x, lo, hi) in self.airglow.ranges() {
+            v.range(t, key, x, lo, hi, true);
+        }
         let ter = &self.terrain;
         let t = Some(("terrain", 0));
         v.finite(t, "height", ter.height);

@@ -111,7 +111,7 @@ pub struct Background {
 
 impl Default for Background {
     fn default() -> Self {
-        Self { radiance: [0.0, 0.0, 0.0], image: None, stars: false, limiting_magnitude: 6.0, star_brightness: 1.0 }
+        Self { radiance: [0.0, 0.0, 0.0], image: None, stars: true, limiting_magnitude: 6.0, star_brightness: 1.0 }
     }
 }
 

@@ -20,6 +20,7 @@
 //!   reads none.
 //! - `globe`: scenes anywhere on the globe, the field's dip refused or
 //!   warned about.
+//! - `sky`: `aurora sky`'s airglow and stars map, and its refusals.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -42,5 +43,6 @@ mod profile;
 mod quick_start;
 mod resume;
 mod schema;
+mod sky;
 mod streams;
 mod watch;

@@ -7,7 +7,7 @@
 
 use aurora::grid::{Grid, Transform};
 use aurora::render::{Integration, RenderSettings};
-use aurora::scene::{Background, Camera, Projection, RenderParams, SkyParams, Terrain, TerrainKind, VolumeParams};
+use aurora::scene::{AirglowParams, Background, Camera, Projection, RenderParams, SkyParams, Terrain, TerrainKind, VolumeParams};
 use glam::{DVec3, IVec3};
 
 /// A float grid with every voxel of the inclusive index box `[lo, hi]` set.
@@ -46,17 +46,19 @@ pub fn persp(position: [f64; 3], look_at: [f64; 3], up: [f64; 3], fov_deg: f64) 
     Camera { position, look_at, up, projection: Projection::Perspective, fov_deg, ortho_height: 1.0 }
 }
 
-/// Settings with unit scales, no terrain, black background, no air
+/// Settings with unit scales, no terrain, black background (no stars, no
+/// airglow), no air
 /// (`sky.extinction = false`: the volume's closed forms), exact integration.
 pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> RenderSettings {
     RenderSettings {
         camera,
         render: RenderParams { width, height, spp, exposure: 0.0, ..Default::default() },
         volume: VolumeParams { density_scale: 1.0, emission_scale: 1.0 },
-        background: Background { radiance: [0.0; 3], ..Background::default() },
+        background: Background { radiance: [0.0; 3], stars: false, ..Background::default() },
         terrain: Terrain { kind: TerrainKind::None, ..Terrain::default() },
         earth_radius_km: 0.0,
         sky: SkyParams { extinction: false, ..SkyParams::default() },
+        airglow: AirglowParams { on: false, ..AirglowParams::default() },
         line: None,
         observer: aurora::util::observer::Observer::default(),
         seed: 7,

@@ -223,6 +223,9 @@ fn corona_vanishing_point_is_the_magnetic_zenith() {
         scene.render.spp = 1;
         let mut settings = RenderSettings::from_scene(&scene);
         settings.integration = Integration::Exact;
+        // The curtains' light alone: no stars, no airglow.
+        settings.background.stars = false;
+        settings.airglow.on = false;
         let img = render(&settings, &Volume { density: Some(&baked.density), emission: Some(&baked.emission) }, &NoProgress).unwrap();
         let lum: Vec<f64> = img.pixels.iter().map(|p| aurora::util::colour::luminance([p[0] as f64, p[1] as f64, p[2] as f64])).collect();
         let cam = CameraModel::new(&scene.camera, side, side).unwrap();

@@ -50,6 +50,7 @@ fn arc_scene(radius_km: f64) -> Scene {
     s.terrain.kind = TerrainKind::None;
     s.background.radiance = [0.0; 3];
     s.background.stars = false;
+    s.airglow.on = false;
     s
 }
 

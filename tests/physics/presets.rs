@@ -37,7 +37,7 @@ fn reduced(name: &str) -> Scene {
     s
 }
 
-/// Bakes `s` and renders it; with `aurora_only`, without terrain and stars,
+/// Bakes `s` and renders it; with `aurora_only`, without terrain, stars and airglow,
 /// so that every pixel's light is the aurora's.
 fn bake_and_render(s: &Scene, aurora_only: bool) -> (Image, Vec<String>) {
     let b = bake(s, &NoProgress).unwrap_or_else(|e| panic!("bake: {e}"));
@@ -49,6 +49,7 @@ fn render_of(s: &Scene, b: &Bake, aurora_only: bool) -> Image {
     if aurora_only {
         s.terrain.kind = TerrainKind::None;
         s.background.stars = false;
+        s.airglow.on = false;
     }
     render(&RenderSettings::from_scene(&s), &Volume { density: Some(&b.density), emission: Some(&b.emission) }, &NoProgress)
         .unwrap_or_else(|e| panic!("render: {e}"))

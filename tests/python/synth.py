@@ -115,15 +115,16 @@ def _is_table_array(v) -> bool:
 def write_scene(path, camera: dict, width: int, height: int, spp: int = 16, density_scale=1.0,
                 emission_scale=1.0, background=(0.0, 0.0, 0.0), terrain: dict | None = None,
                 extinction: bool = False) -> Path:
-    """A scene file for the closed forms: no air unless `extinction` (the
-    volume's own emission-absorption model alone)."""
+    """A scene file for the closed forms: no air unless `extinction`, no
+    stars, no airglow (the volume's own emission-absorption model alone)."""
     doc = {
         "camera": camera,
         "render": {"width": width, "height": height, "spp": spp, "exposure": 0.0},
         "volume": {"density_scale": float(density_scale), "emission_scale": float(emission_scale)},
-        "background": {"radiance": [float(x) for x in background]},
+        "background": {"radiance": [float(x) for x in background], "stars": False},
         "terrain": terrain or {"kind": "none"},
         "sky": {"extinction": bool(extinction)},
+        "airglow": {"on": False},
     }
     Path(path).write_text(toml_dumps(doc))
     return Path(path)

@@ -70,8 +70,10 @@ def _slab(path: Path) -> Path:
 
 
 def _scene(camera: dict, width: int, height: int) -> dict:
+    # The slab alone: no stars, no airglow (tests/python/test_airglow_sky.py).
     return {"camera": camera, "render": {"width": width, "height": height, "spp": 1},
-            "terrain": {"kind": "none"}, "sky": {"extinction": True}}
+            "terrain": {"kind": "none"}, "sky": {"extinction": True}, "background": {"stars": False},
+            "airglow": {"on": False}}
 
 
 def _both(compare, name: str, doc: dict, vdb: Path) -> dict:

@@ -3,12 +3,14 @@
 //! independent brute-force oracle (`integrator`), film, camera and file
 //! conventions (`film`), the lit terrain and its mesh (`terrain`), the
 //! camera against Blender's (`blender`), the air between the aurora
-//! and the eye (`extinction`), and narrow-band images in rayleigh at the
-//! zenith (`zenith`).
+//! and the eye (`extinction`), narrow-band images in rayleigh at the
+//! zenith (`zenith`), and the airglow and the stars behind the volume
+//! (`airglow`).
 
 #[path = "../common/mod.rs"]
 mod common;
 
+mod airglow;
 mod blender;
 mod closed_forms;
 mod extinction;

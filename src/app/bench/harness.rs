@@ -484,6 +484,8 @@ impl<'a> Bench<'a> {
         s.render.spp = 1;
         s.terrain.kind = TerrainKind::None;
         s.background.radiance = [0.0; 3];
+        s.background.stars = false;
+        s.airglow.on = false;
         s
     }
 }

@@ -65,7 +65,14 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     let mut render = old.render.clone();
     render.exposure = new.render.exposure;
     render.view_transform = new.render.view_transform;
-    at(render != new.render || old.volume != new.volume || old.background != new.background || old.terrain != new.terrain, Stage::Render);
+    at(
+        render != new.render
+            || old.volume != new.volume
+            || old.background != new.background
+            || old.airglow != new.airglow
+            || old.terrain != new.terrain,
+        Stage::Render,
+    );
     at(old.render.exposure != new.render.exposure || old.render.view_transform != new.render.view_transform, Stage::Exposure);
     s
 }

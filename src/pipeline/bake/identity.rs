@@ -44,6 +44,7 @@ pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.png_bits", "the PNG's bits per channel, an encoding of the rendered image"),
     ("volume", "density_scale and emission_scale are applied by the renderer at lookup; the files hold the unscaled grids"),
     ("background", "radiance, image and stars are seen by camera rays only; the bake never reads the image"),
+    ("airglow", "the night sky's own light is drawn by the renderer behind the volume; the bake never reads it"),
     ("sky", "the air between the volume and the camera is applied by the renderer; the files hold the emission above it"),
     ("terrain", "the ground is traced by the renderer only; the bake neither reads the heightmap nor shades or occludes with it"),
 ];

@@ -37,6 +37,7 @@ pub fn default_scene() -> Scene {
         atmosphere: AtmosphereParams::default(),
         earth: EarthParams::default(),
         sky: SkyParams::default(),
+        airglow: crate::scene::airglow::AirglowParams::default(),
         overrides: Vec::new(),
     }
 }

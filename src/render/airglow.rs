@@ -1,0 +1,131 @@
+//! The airglow as the camera sees it (`[airglow]`, the model and its
+//! sources in `crate::physics::airglow`): behind the volume, seen by camera
+//! rays only (like the background, through the volume's transmittance),
+//! lighting nothing, hidden by the terrain and by the solid Earth.
+//!
+//! **Radiance.** Each line of each layer adds
+//! `L = line_rgb(lambda) I F(z) T_air(lambda, e) / 1000`: `I` its zenith
+//! column in R, `F` the layer's slant factor through its shell at the
+//! ray's zenith angle `z` from the camera (`slant_factor`, round Earth of
+//! `[earth] radius_km`, or the mean radius 6371 km on flat ground, where a
+//! plane layer's `1 / cos z` would be infinite at the horizon), `T_air =
+//! exp(-tau(lambda) X(e))` the air between the camera and the layer
+//! (`crate::physics::air_extinction`: the zenith depth above the camera
+//! times Kasten & Young's air mass at elevation `e`; 1 with `[sky]
+//! extinction = false`), and `line_rgb` the line's colour per photon
+//! (`crate::physics::emission::line_colour`). The division by 1000 puts
+//! it in the volume's radiance unit: 1 = a column of 1 kR of 557.7 nm,
+//! 1 kR sr = 10^9 / (4 pi) photons cm^-2 s^-1 (`sky.rs`); so 1 R at the
+//! zenith is 10^6 / (4 pi) photons cm^-2 s^-1 sr^-1 and reads 0.001 in
+//! luminance for 557.7 nm.
+//!
+//! **Per ray.** The shells are concentric about the Earth's centre and the
+//! camera sits at one point, so `L` depends only on the ray's elevation
+//! above the camera's horizon: it is computed once per render at every
+//! [`STEP_DEG`] of elevation (3601 directions, each layer by quadrature)
+//! and read linearly between; the step is 1/20 of a degree, finer than the
+//! pixels of any camera wider than 32 degrees at 640 pixels.
+
+use crate::util::observer::Observer;
+use crate::geometry::earth::{Earth, MEAN_RADIUS_KM};
+use crate::physics::air_extinction::{air_mass, Air};
+use crate::physics::airglow::{key_r, slant_factor, LAYERS};
+use crate::physics::emission::line_colour::line_rgb;
+use crate::scene::{AirglowParams, SkyParams};
+use glam::DVec3;
+
+/// Elevation step of the table, degrees.
+pub const STEP_DEG: f64 = 0.05;
+/// The volume's radiance unit per rayleigh of column (module doc).
+pub const KR_PER_R: f64 = 1e-3;
+
+/// The airglow's radiance per direction, for one camera position.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Airglow {
+    /// The camera's local up.
+    pub up: DVec3,
+    /// Radiance at elevation `-90 + i STEP_DEG` degrees.
+    table: Vec<[f64; 3]>,
+}
+
+/// One line as the camera sees it: colour times zenith column (kR), the
+/// zenith optical depth of the air above the camera, the layer.
+struct SeenLine {
+    rgb_kr: [f64; 3],
+    tau: f64,
+    layer: usize,
+}
+
+impl Airglow {
+    /// The airglow of `p` seen from `position` (scene frame, km), or None
+    /// when `[airglow] on = false` or every layer is 0; each line in
+    /// `observer`'s colour, as the volume's.
+    pub fn new(p: &AirglowParams, sky: &SkyParams, position: DVec3, earth_radius_km: f64, observer: Observer) -> Option<Airglow> {
+        let earth = Earth::new(earth_radius_km);
+        let (altitude, up) = (earth.altitude(position), earth.local_up(position));
+        let shells_km = if earth.is_flat() { MEAN_RADIUS_KM } else { earth_radius_km };
+        let air = Air::from_sky(sky);
+        let mut lines = Vec::new();
+        for (k, layer) in LAYERS.iter().enumerate() {
+            for &(lambda, w) in layer.lines {
+                let r = if p.on { w * key_r(p, layer) } else { 0.0 };
+                if r > 0.0 {
+                    let tau = air.map_or(0.0, |a| a.column_above(&a.depths(lambda), altitude));
+                    lines.push(SeenLine { rgb_kr: line_rgb(lambda, observer).map(|c| c * r * KR_PER_R), tau, layer: k });
+                }
+            }
+        }
+        if lines.is_empty() {
+            return None;
+        }
+        let n = (180.0 / STEP_DEG).round() as usize + 1;
+        let table = (0..n)
+            .map(|i| {
+                let e = -90.0 + i as f64 * STEP_DEG;
+                let mu = e.to_radians().sin();
+                let x = air_mass(e);
+                let f: Vec<f64> = LAYERS.iter().map(|l| slant_factor(l, shells_km, altitude, mu)).collect();
+                let mut rgb = [0.0; 3];
+                for l in &lines {
+                    let t = f[l.layer] * (-l.tau * x).exp();
+                    for c in 0..3 {
+                        rgb[c] += l.rgb_kr[c] * t;
+                    }
+                }
+                rgb
+            })
+            .collect();
+        Some(Airglow { up, table })
+    }
+
+    /// Radiance along `dir` (unit), linear between the table's elevations.
+    pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
+        let e = self.up.dot(dir).clamp(-1.0, 1.0).asin().to_degrees();
+        let x = ((e + 90.0) / STEP_DEG).clamp(0.0, (self.table.len() - 1) as f64);
+        let i = (x.floor() as usize).min(self.table.len() - 2);
+        let f = x - i as f64;
+        let (a, b) = (self.table[i], self.table[i + 1]);
+        [0, 1, 2].map(|c| a[c] + f * (b[c] - a[c]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without air, looking up from the ground, the green layer alone reads
+    /// its key in kR times its colour; looking down, nothing.
+    #[test]
+    fn zenith_reads_the_key_and_the_ground_hides_it() {
+        let p = AirglowParams { red_r: 0.0, sodium_r: 0.0, hydroxyl_r: 0.0, ..AirglowParams::default() };
+        let sky = SkyParams { extinction: false, ..SkyParams::default() };
+        let a = Airglow::new(&p, &sky, DVec3::ZERO, 6371.0, Observer::Camera).unwrap();
+        let l = a.radiance(DVec3::Z);
+        let want = line_rgb(557.7, Observer::Camera).map(|c| c * 0.25);
+        for c in 0..3 {
+            assert!((l[c] - want[c]).abs() <= 1e-6 * want[1], "{l:?} {want:?}");
+        }
+        assert_eq!(a.radiance(-DVec3::Z), [0.0; 3]);
+        assert!(Airglow::new(&AirglowParams { on: false, ..p }, &sky, DVec3::ZERO, 6371.0, Observer::Camera).is_none());
+    }
+}

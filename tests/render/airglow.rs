@@ -1,0 +1,218 @@
+//! The airglow behind the volume (`aurora::physics::airglow`,
+//! `aurora::render::airglow`, `[airglow]`): the slant column through a
+//! spherical shell against van Rhijn's factor and its thick-layer
+//! correction, the zenith's radiance per line against the keys, the
+//! terrain hiding it, the sky map's layout, and the stars and airglow
+//! independent of the thread count.
+
+// Channel loops index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
+use crate::common::oracle::{persp, settings};
+use aurora::physics::airglow::{slant_factor, thick_layer_factor, van_rhijn, LAYERS};
+use aurora::physics::emission::line_colour::line_rgb;
+use aurora::render::airglow::Airglow;
+use aurora::render::sky::EnvMap;
+use aurora::render::{render, RenderSettings, Volume};
+use aurora::scene::{AirglowParams, SkyParams, TerrainKind};
+use aurora::util::progress::NoProgress;
+use glam::DVec3;
+use std::f64::consts::PI;
+
+const R_EARTH: f64 = 6371.0;
+
+/// Only layer `k` of `LAYERS`, at its default brightness.
+fn only(k: usize) -> AirglowParams {
+    let d = AirglowParams::default();
+    let keep = |i: usize, v: f64| if i == k { v } else { 0.0 };
+    AirglowParams {
+        green_r: keep(0, d.green_r),
+        red_r: keep(1, d.red_r),
+        sodium_r: keep(2, d.sodium_r),
+        hydroxyl_r: keep(3, d.hydroxyl_r),
+        ..d
+    }
+}
+
+/// One pixel at the centre of a 1 x 1 perspective image looking along
+/// `dir` from `at`, round Earth, no air, no volume.
+fn pixel(mut s: RenderSettings, at: [f64; 3], dir: DVec3) -> [f32; 4] {
+    let up = if dir.z.abs() > 0.9 { [0.0, 1.0, 0.0] } else { [0.0, 0.0, 1.0] };
+    let look = DVec3::from_array(at) + dir;
+    s.camera = persp(at, look.to_array(), up, 10.0);
+    let img = render(&s, &Volume::default(), &NoProgress).unwrap();
+    img.pixels[0]
+}
+
+fn glow_settings(p: AirglowParams) -> RenderSettings {
+    let mut s = settings(persp([0.0; 3], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0], 10.0), 1, 1, 1);
+    s.airglow = p;
+    s.earth_radius_km = R_EARTH;
+    s
+}
+
+/// Seen from the ground at zenith angle z, a Gaussian layer's column over
+/// its zenith column (the slant factor, by quadrature through the shell)
+/// is van Rhijn's thin-layer factor `V = 1 / sqrt(1 - (R sin z / (R +
+/// h))^2)` plus the thick-layer correction `sigma^2 / 2 f''(r_h)`,
+/// `f(r) = r / sqrt(r^2 - p^2)`, `p = R sin z`; the next term of the
+/// expansion, `sigma^4 / 8 f''''`, bounds what is left (2x it, plus 1e-6
+/// for the quadrature). For the green layer (sigma 4 km) the correction is
+/// 2e-4 of V at 80 degrees; for the red (sigma 30 km) 2.7e-3, ten times
+/// the tolerance, so the test tells the thick value from the thin one.
+/// V itself is 1.9 at 60 degrees and 3.1-4.1 at 80 (the note's values).
+/// The renderer, without air, gives the same factor times the zenith's
+/// radiance (its elevation table: within 1e-4).
+#[test]
+fn a_layer_through_its_shell_gives_van_rhijns_factor_with_the_thick_layer_correction() {
+    let mut seen_thick = false;
+    for (k, layer) in LAYERS.iter().enumerate().take(2) {
+        let zenith = pixel(glow_settings(only(k)), [0.0; 3], DVec3::Z);
+        for z_deg in [60.0f64, 80.0] {
+            let z = z_deg.to_radians();
+            let f = slant_factor(layer, R_EARTH, 0.0, z.cos());
+            let v = van_rhijn(R_EARTH, 0.0, layer.peak_km, z);
+            let (thick, next) = thick_layer_factor(layer, R_EARTH, 0.0, z);
+            let tol = 2.0 * next.abs() + 1e-6 * thick;
+            assert!((f - thick).abs() <= tol, "{} z {z_deg}: quadrature {f}, thick {thick} (next term {next})", layer.name);
+            assert!((f - v).abs() <= (thick - v).abs() + tol, "{} z {z_deg}: {f} vs van Rhijn {v}", layer.name);
+            if z_deg == 60.0 {
+                assert!((v - 1.9).abs() < 0.1, "{v}");
+            } else {
+                assert!((3.0..4.2).contains(&v), "{v}");
+            }
+            if (thick - v).abs() > 10.0 * tol {
+                seen_thick = true;
+            }
+            // Through the renderer: the elevation 90 - z, looking north.
+            let dir = DVec3::new(0.0, z.sin(), z.cos());
+            let px = pixel(glow_settings(only(k)), [0.0; 3], dir);
+            for c in 0..3 {
+                let want = zenith[c] as f64 * f;
+                assert!(
+                    (px[c] as f64 - want).abs() <= 1e-4 * want.abs().max(1e-6),
+                    "{} z {z_deg} channel {c}: {} vs {want}",
+                    layer.name,
+                    px[c]
+                );
+            }
+        }
+    }
+    assert!(seen_thick, "the red layer's correction is larger than the tolerance");
+}
+
+/// At the zenith, without air, each line's radiance is its key: a column
+/// of I rayleigh is I 10^6 / (4 pi) photons cm^-2 s^-1 sr^-1, and the
+/// volume's unit of radiance is 10^9 / (4 pi) of them (1 kR) times the
+/// line's colour per photon (`line_rgb`, luminance 1 for 557.7 nm); within
+/// 1 % (the Gaussian's mass below the ground is 1e-9; the f32 pixel 1e-7).
+#[test]
+fn the_zeniths_radiance_of_each_line_is_its_key() {
+    let photons_per_r = 1e6 / (4.0 * PI);
+    let unit = 1e9 / (4.0 * PI);
+    for (k, layer) in LAYERS.iter().enumerate() {
+        let p = only(k);
+        let key = aurora::physics::airglow::key_r(&p, layer);
+        assert!(key > 0.0);
+        let mut want = [0.0; 3];
+        for &(lambda, w) in layer.lines {
+            let rgb = line_rgb(lambda, aurora::util::observer::Observer::default());
+            for c in 0..3 {
+                want[c] += rgb[c] * w * key * photons_per_r / unit;
+            }
+        }
+        let got = pixel(glow_settings(p), [0.0; 3], DVec3::Z);
+        for c in 0..3 {
+            assert!((got[c] as f64 - want[c]).abs() <= 0.01 * want[c].abs().max(1e-9), "{} channel {c}: {got:?} vs {want:?}", layer.name);
+        }
+        if k == 0 {
+            // 250 R of 557.7 nm: luminance 0.25.
+            assert!((aurora::util::colour::luminance([got[0] as f64, got[1] as f64, got[2] as f64]) - 0.25).abs() < 0.0025);
+        }
+    }
+    // The air dims the zenith by exp(-tau) of each line above the camera.
+    let mut s = glow_settings(only(0));
+    s.sky = SkyParams::default();
+    let air = aurora::physics::air_extinction::Air::from_sky(&s.sky).unwrap();
+    let t = (-air.column_above(&air.depths(557.7), 0.0)).exp();
+    let dimmed = pixel(s, [0.0; 3], DVec3::Z);
+    let clear = pixel(glow_settings(only(0)), [0.0; 3], DVec3::Z);
+    assert!((dimmed[1] as f64 / clear[1] as f64 - t).abs() < 1e-4, "{} vs {t}", dimmed[1] / clear[1]);
+    assert!(t < 0.95);
+}
+
+/// A ray half a degree below the horizon from 1 km passes 0.76 km above
+/// the ground and crosses every layer twice (bright); the terrain, a
+/// sphere 0.9 km up, stops it first: the pixel is the terrain, lit by
+/// nothing here, 0. The Earth stops rays below its own horizon.
+#[test]
+fn the_terrain_and_the_earth_hide_the_airglow() {
+    let e = (-0.5f64).to_radians();
+    let dir = DVec3::new(0.0, e.cos(), e.sin());
+    let s = glow_settings(AirglowParams::default());
+    let open = pixel(s.clone(), [0.0, 0.0, 1.0], dir);
+    assert!(open[1] > 1.0, "{open:?}");
+    let mut t = s.clone();
+    t.terrain.kind = TerrainKind::Plane;
+    t.terrain.height = 0.9;
+    assert_eq!(pixel(t, [0.0, 0.0, 1.0], dir)[..3], [0.0; 3]);
+    let down = (-5.0f64).to_radians();
+    assert_eq!(pixel(s, [0.0, 0.0, 1.0], DVec3::new(0.0, down.cos(), down.sin()))[..3], [0.0; 3]);
+}
+
+/// `aurora sky`'s map (`sky_map`) holds at pixel (i, j) the airglow of the
+/// direction Blender's Environment Texture reads there (`EnvMap::uv`):
+/// within 1e-5 of the airglow's own radiance at pixel centres, which the
+/// map then gives back through `EnvMap::radiance`.
+#[test]
+fn the_sky_map_is_laid_out_as_blenders_world_reads_it() {
+    let mut s = glow_settings(AirglowParams::default());
+    s.sky = SkyParams::default();
+    s.background.stars = false;
+    s.camera.position = [3.0, -40.0, 1.0];
+    let (w, h) = (64, 32);
+    let map = aurora::render::sky_map::sky_map(&s, w, &NoProgress).unwrap();
+    assert_eq!((map.width, map.height), (w, h));
+    let glow = Airglow::new(&s.airglow, &s.sky, DVec3::from_array(s.camera.position), s.earth_radius_km, s.observer).unwrap();
+    let env = EnvMap { width: w, height: h, pixels: map.pixels.iter().map(|p| [p[0], p[1], p[2]]).collect() };
+    let mut bright = 0;
+    for j in 0..h {
+        for i in 0..w {
+            let (u, v) = ((i as f64 + 0.5) / w as f64, 1.0 - (j as f64 + 0.5) / h as f64);
+            let (az, el) = ((0.5 - u) * 2.0 * PI, (v - 0.5) * PI);
+            let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+            let want = glow.radiance(d);
+            let got = map.pixels[j * w + i];
+            let back = env.radiance(d);
+            for c in 0..3 {
+                assert!((got[c] as f64 - want[c]).abs() <= 1e-5 * want[c].abs().max(1e-3), "({i}, {j}) channel {c}: {got:?} vs {want:?}");
+                assert!((back[c] - got[c] as f64).abs() <= 1e-5 * want[c].abs().max(1e-3));
+            }
+            bright += (want[1] > 0.1) as usize;
+        }
+    }
+    assert!(bright > w * h / 4, "{bright} bright pixels");
+}
+
+/// The stars and the airglow are the same, byte for byte, on 1 and 3
+/// threads.
+#[test]
+fn stars_and_airglow_do_not_depend_on_the_thread_count() {
+    let mut s = glow_settings(AirglowParams::default());
+    s.sky = SkyParams::default();
+    s.background.stars = true;
+    s.camera = persp([0.0, 0.0, 1.0], [0.0, 100.0, 30.0], [0.0, 0.0, 1.0], 90.0);
+    s.render.width = 96;
+    s.render.height = 64;
+    let run = |s: &RenderSettings, n: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
+        pool.install(|| render(s, &Volume::default(), &NoProgress).unwrap().pixels)
+    };
+    let (a, b) = (run(&s, 1), run(&s, 3));
+    assert!(a.iter().zip(&b).all(|(p, q)| p.iter().zip(q).all(|(x, y)| x.to_bits() == y.to_bits())));
+    // Stars are there: pixels brighter than without them, a few per star.
+    s.background.stars = false;
+    let none = run(&s, 2);
+    let lit = a.iter().zip(&none).filter(|(p, q)| p[1] > q[1]).count();
+    assert!(lit >= 100, "{lit} pixels hold starlight");
+}
