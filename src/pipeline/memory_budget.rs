@@ -17,8 +17,9 @@
 //!   from its highest start to where its deposition is complete are at most
 //!   `(H + L dt (sin I + tan alpha_D cos I)) / (L dt sin(I) / 2)`, and the
 //!   bake's sum is within four standard deviations of `count` times that),
-//!   plus for Fang's depositions one per [`ABOVE_START_SPAN_KM`] of the
-//!   column above the start ([`crate::pipeline::beams::walk::above_start_column_top`]),
+//!   plus for Fang's depositions the spans of the column above the start
+//!   ([`crate::pipeline::beams::walk::above_start_column_top`], at most
+//!   [`crate::pipeline::beams::walk::max_above_start_spans`]),
 //!   a [`Photon`] each, held three times (per-beam vectors, their
 //!   concatenation, the kd-tree's copy).
 //! - **candidate leaves**: 12 bytes per leaf within reach of each step (at
@@ -57,7 +58,7 @@
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::beams::dip::min_dip_deg;
-use crate::pipeline::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM, COMPLETE_TOL, FANG_MAX_STEPS};
+use crate::pipeline::beams::walk::{above_start_column_top, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
 use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
@@ -316,7 +317,7 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let dip = dip_deg(scene);
     // The tallest curtain's column, for every beam.
     let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
-    let column_segments = if column > 0.0 { (column / ABOVE_START_SPAN_KM).ceil() + 1.0 } else { 0.0 };
+    let column_segments = if column > 0.0 { max_above_start_spans(column) as f64 } else { 0.0 };
     let step_photons = photons_of_steps(scene, b.count as f64);
     let photons = step_photons + b.count as f64 * column_segments;
     let photon_bytes = std::mem::size_of::<Photon>() as f64;

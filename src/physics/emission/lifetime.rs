@@ -51,10 +51,9 @@
 
 use crate::physics::atmosphere::{Atmosphere, Composition};
 
-/// O(1D) radiative rate, 630.0 + 636.4 nm, 1/s.
-pub const A_1D: f64 = 0.00585 + 0.00185;
-/// O(1S) radiative rate, 557.7 + 297.2 nm, 1/s.
-pub const A_1S: f64 = 1.06 + 0.045;
+/// O(1D) radiative rate, 630.0 + 636.4 nm, and O(1S)'s, 557.7 + 297.2
+/// nm, 1/s (`crate::physics::chemistry::einstein`).
+pub use crate::physics::chemistry::einstein::{A_1D, A_1S};
 
 /// Boltzmann constant, J/K.
 const K_B: f64 = 1.380_649e-23;
