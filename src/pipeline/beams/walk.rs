@@ -172,7 +172,14 @@ fn trace_fang(
 /// or 0 where no column lies above the start (the share above it, under
 /// [`ABOVE_START_TOL`], then goes into the first step). `above_top_kev_s`
 /// is zero.
-fn deposit_above_start(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, frac: &impl Fn(f64) -> f64, total: f64, done: f64) -> f64 {
+fn deposit_above_start(
+    ctx: &BeamContext,
+    start: &BeamStart,
+    out: &mut BeamTrace,
+    frac: &impl Fn(f64) -> f64,
+    total: f64,
+    done: f64,
+) -> f64 {
     let pw = start.power_kev_s;
     let p = start.position;
     out.above_top_kev_s = 0.0;

@@ -357,7 +357,10 @@ fn the_deposit_above_the_start_follows_fang_without_a_lump() {
     // its 10 km top span laid in that span) put 5 keV's share in a lump
     // and nothing above 276 km.
     let (atm, colour) = nrlmsis21();
-    let s = Setup { p: BeamParams { b_inclination_deg: 90.0, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, ..params() }, ..Setup::flat((atm, colour)) };
+    let s = Setup {
+        p: BeamParams { b_inclination_deg: 90.0, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, ..params() },
+        ..Setup::flat((atm, colour))
+    };
     let atm = &s.atm;
     let mut checked = 0;
     for e0 in [0.1, 0.3, 1.0, 3.0, 5.0, 10.0, 30.0] {
