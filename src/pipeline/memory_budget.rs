@@ -109,7 +109,7 @@ impl Estimate {
 /// spectrum leaves above a beam's start along the field line above it up
 /// to [`crate::pipeline::beams::walk::above_start_column_top`]: for `expected`, that altitude for
 /// the curtain's own spectrum (the function the trace calls, so the same
-/// altitude: 412 km for the default curtains); for `sampled`, where each
+/// altitude); for `sampled`, where each
 /// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS
 /// 2.1), which bounds every energy's.
 pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {

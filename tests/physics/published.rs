@@ -1,8 +1,7 @@
 //! The lines against published measurements and models beyond GLOW, each
 //! test citing its source and its tolerance: the O(1D) doublet's ratio,
-//! the red's altitude and topside, the green's peak below the blue, the
-//! N2 1P bands' enhancement in hard aurora and the 427.8 nm brightness
-//! per unit energy flux. docs/physics.md, "The lines against published
+//! the red's altitude and the 427.8 nm brightness per ion pair and per
+//! unit energy flux. docs/physics.md, "The lines against published
 //! values", tables the comparisons.
 
 use aurora::pipeline::altitude_profile::{profile, CurtainProfile};
@@ -29,37 +28,20 @@ fn run(e0: f64) -> (CurtainProfile, f64) {
     (p.curtains.into_iter().next().unwrap(), erg_s)
 }
 
-/// Profile columns: ion pairs, 427.8, 557.7, 630.0, 636.4, N2 1P.
+/// Profile columns: ion pairs (0), 427.8 (1), 630.0 (3), 636.4 nm (4).
 const ION: usize = 0;
 const BLUE: usize = 1;
-const GREEN: usize = 2;
 const RED: usize = 3;
 const RED2: usize = 4;
-const N2_1P: usize = 5;
 
 /// The column of `col`, photons/s.
 fn column(p: &CurtainProfile, col: usize) -> f64 {
     p.bins.iter().map(|b| b[col]).sum()
 }
 
-/// The peak altitude of `col`, km: the bin of the largest value refined by
-/// the parabola through it and its neighbours.
-fn peak(p: &CurtainProfile, col: usize) -> f64 {
-    let i = (1..p.bins.len() - 1).max_by(|&a, &b| p.bins[a][col].total_cmp(&p.bins[b][col])).unwrap();
-    let (a, b, c) = (p.bins[i - 1][col], p.bins[i][col], p.bins[i + 1][col]);
-    let d = a - 2.0 * b + c;
-    let off = if d < 0.0 { 0.5 * (a - c) / d } else { 0.0 };
-    p.centre(i) + off * aurora::pipeline::altitude_profile::BIN_KM
-}
-
 /// The column-weighted mean altitude of `col`, km.
 fn centroid(p: &CurtainProfile, col: usize) -> f64 {
     p.bins.iter().enumerate().map(|(i, b)| b[col] * p.centre(i)).sum::<f64>() / column(p, col)
-}
-
-/// The share of `col`'s column above `z` km.
-fn share_above(p: &CurtainProfile, col: usize, z: f64) -> f64 {
-    p.bins.iter().enumerate().filter(|(i, _)| p.centre(*i) > z).map(|(_, b)| b[col]).sum::<f64>() / column(p, col)
 }
 
 #[test]
