@@ -351,7 +351,7 @@ fn the_deposit_above_the_start_follows_fang_without_a_lump() {
     // over the spectrum, G(m(z_lo)) - G(m(z_hi)): within 10 % in every bin
     // holding at least 1e-3 of the share above the start (a span's deposit
     // is spread evenly, within exp(+-0.075) of the profile at its ends;
-    // the top span, which also holds the last 1e-4 of the total, is left
+    // the top span, which also holds the last 0.2 % of the total, is left
     // out), and the share above each bin's top within 5 %
     // where it is at least 1e-3 of it and 10 times that last share. The old column (everything above
     // its 10 km top span laid in that span) put 5 keV's share in a lump
