@@ -86,7 +86,13 @@ pub const O3_LAYER_KM: (f64, f64, f64) = (10.0, 25.0, 40.0);
 /// Photons of each line of [`LINES`] in the reference aurora of the
 /// per-channel depths (557.7, 630.0, 636.4, 427.8 nm, N2 1P; module doc):
 /// GLOW's column at E0 = 3 keV, R per erg cm^-2 s^-1.
-pub const REFERENCE_MIX: [f64; N_LINES] = [1268.0, 88.5, 88.5 / 3.16, 265.0, 265.0 * crate::physics::emission::line_colour::R_1P];
+pub const REFERENCE_MIX: [f64; N_LINES] = [
+    1268.0,
+    88.5,
+    88.5 / crate::physics::chemistry::einstein::O1D_PHOTON_RATIO,
+    265.0,
+    265.0 * crate::physics::emission::line_colour::R_1P,
+];
 
 /// Rayleigh optical depth at sea level, Bodhaine et al. (1999) eq. (30).
 pub fn rayleigh_tau_sea_level(lambda_nm: f64) -> f64 {

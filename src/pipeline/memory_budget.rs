@@ -17,8 +17,9 @@
 //!   from its highest start to where its deposition is complete are at most
 //!   `(H + L dt (sin I + tan alpha_D cos I)) / (L dt sin(I) / 2)`, and the
 //!   bake's sum is within four standard deviations of `count` times that),
-//!   plus for Fang's depositions one per [`ABOVE_START_SPAN_KM`] of the
-//!   column above the start ([`crate::pipeline::beams::walk::above_start_column_top`]),
+//!   plus for Fang's depositions the spans of the column above the start
+//!   ([`crate::pipeline::beams::walk::above_start_column_top`],
+//!   [`column_spans`]),
 //!   a [`Photon`] each, held three times (per-beam vectors, their
 //!   concatenation, the kd-tree's copy).
 //! - **candidate leaves**: 12 bytes per leaf within reach of each step (at
@@ -57,7 +58,7 @@
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::beams::dip::min_dip_deg;
-use crate::pipeline::beams::walk::{above_start_column_top, ABOVE_START_SPAN_KM, COMPLETE_TOL, FANG_MAX_STEPS};
+use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
 use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
@@ -108,7 +109,7 @@ impl Estimate {
 /// spectrum leaves above a beam's start along the field line above it up
 /// to [`crate::pipeline::beams::walk::above_start_column_top`]: for `expected`, that altitude for
 /// the curtain's own spectrum (the function the trace calls, so the same
-/// altitude: 412 km for the default curtains); for `sampled`, where each
+/// altitude); for `sampled`, where each
 /// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS
 /// 2.1), which bounds every energy's.
 pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
@@ -120,6 +121,34 @@ pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
         Deposition::Expected => {
             let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
             above_start_column_top(&atm, &|m| g.fraction_above(m), g.total(), start_top)
+        }
+    }
+}
+
+/// Bound on the spans of a beam's column above its start (one photon
+/// each): for `expected`, the spans the trace lays above the curtain's
+/// lowest start ([`above_start_spans`], the function the trace calls; a
+/// higher start's column is a part of it, plus 2 for where their
+/// boundaries fall differently); for `sampled`, [`max_above_start_spans`]
+/// of the whole column; none for `csda`.
+pub fn column_spans(scene: &Scene, curtain: &Curtain) -> f64 {
+    let column = column_km(scene, curtain);
+    if column <= 0.0 {
+        return 0.0;
+    }
+    match scene.beams.deposition {
+        Deposition::Csda => 0.0,
+        Deposition::Sampled => max_above_start_spans(column) as f64,
+        Deposition::Expected => {
+            let atm = Atmosphere::of_params(&scene.atmosphere).unwrap_or_else(|e| panic!("{e}"));
+            let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+            let lowest = scene.beams.top_km - scene.beams.top_noise_km;
+            let n = above_start_spans(&atm, &|m| g.fraction_above(m), g.total(), lowest).len();
+            if n < 2 {
+                0.0
+            } else {
+                (n - 1 + 2) as f64
+            }
         }
     }
 }
@@ -316,7 +345,7 @@ pub fn estimate(scene: &Scene) -> Estimate {
     let dip = dip_deg(scene);
     // The tallest curtain's column, for every beam.
     let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
-    let column_segments = if column > 0.0 { (column / ABOVE_START_SPAN_KM).ceil() + 1.0 } else { 0.0 };
+    let column_segments = scene.curtains.iter().map(|c| column_spans(scene, c)).fold(0.0, f64::max);
     let step_photons = photons_of_steps(scene, b.count as f64);
     let photons = step_photons + b.count as f64 * column_segments;
     let photon_bytes = std::mem::size_of::<Photon>() as f64;

@@ -21,4 +21,5 @@ mod lines;
 mod path;
 mod pipeline;
 mod presets;
+mod published;
 mod trail;

@@ -25,7 +25,8 @@
 //!   E-region `sqrt(q / alpha)`, each pass taking the geometric mean of the
 //!   old and new ne: it converges to 1e-6 in under 20 passes (tested).
 //! - **Excited states** N2(A), N(2D), O(1S) (557.7 nm, A = 1.06 s^-1) and
-//!   O(1D) (630.0 + 636.4 nm, A = 0.00585 + 0.00185 s^-1, ratio 3.16):
+//!   O(1D) (630.0 + 636.4 nm, Storey & Zeippen 2000's coefficients in
+//!   [`einstein`], photon ratio 2.997, radiative lifetime 133.2 s):
 //!   their production channels and quenchers, O(1D) impact excitation
 //!   reduced above about 240 km where the secondaries heat the F-region
 //!   electrons instead.
@@ -41,6 +42,7 @@
 //! `tools/reference/glow_tables.py`).
 
 pub mod ambient;
+pub mod einstein;
 pub mod table;
 
 use crate::physics::atmosphere::Composition;
@@ -111,11 +113,7 @@ pub struct Emission {
     pub ions: [f64; 5],
 }
 
-/// Einstein coefficients, s^-1.
-pub const A_5577: f64 = 1.06;
-pub const A_2972: f64 = 0.045;
-pub const A_6300: f64 = 0.00585;
-pub const A_6364: f64 = 0.00185;
+pub use einstein::{A_2972, A_5577, A_6300, A_6364};
 /// 427.8 nm photons per N2 ionization.
 pub const Y_4278: f64 = 0.022;
 /// N2 1P (Delta v = 3) photons per 427.8 nm photon: `spectrum::R_1P`, the

@@ -13,7 +13,8 @@
 //! so tau is its effective lifetime. The rates are the ones the NCAR GLOW
 //! model uses (its `gchem.f90`, compiled from Solomon & Abreu 1989, J.
 //! Geophys. Res. 94, 6817, and Solomon 2017):
-//! - **O(1D)** (630.0 + 636.4 nm): A = 0.00585 + 0.00185 s^-1; quenched by
+//! - **O(1D)** (630.0 + 636.4 nm): A = 5.63e-3 + 1.879e-3 s^-1 (Storey &
+//!   Zeippen 2000, `crate::physics::chemistry::einstein`); quenched by
 //!   N2 at 2.0e-11 exp(107.8 / T), O2 at 2.9e-11 exp(67.5 / T) and O at
 //!   3e-12 cm^3/s. Some 1.5 s at 150 km, 10 s at 200 km, 80-110 s at 300 km.
 //! - **O(1S)** (557.7 nm): A = 1.06 s^-1 at 557.7 nm plus 0.045 s^-1 at
@@ -51,10 +52,9 @@
 
 use crate::physics::atmosphere::{Atmosphere, Composition};
 
-/// O(1D) radiative rate, 630.0 + 636.4 nm, 1/s.
-pub const A_1D: f64 = 0.00585 + 0.00185;
-/// O(1S) radiative rate, 557.7 + 297.2 nm, 1/s.
-pub const A_1S: f64 = 1.06 + 0.045;
+/// O(1D) radiative rate, 630.0 + 636.4 nm, and O(1S)'s, 557.7 + 297.2
+/// nm, 1/s (`crate::physics::chemistry::einstein`).
+pub use crate::physics::chemistry::einstein::{A_1D, A_1S};
 
 /// Boltzmann constant, J/K.
 const K_B: f64 = 1.380_649e-23;

@@ -24,8 +24,9 @@
 //! field-line foot leaves the footprint's box enlarged by its own size on
 //! every side (runaway steps only: the footprint says where electrons enter
 //! at the top, not where a field line ends). What the spectrum deposits
-//! above the start is laid along the field line above it
-//! ([`above_start_column_top`]). A CSDA beam stops when its foot leaves the
+//! above the start is laid along the field line above it, in spans that
+//! follow the deposition's shape up to where at most [`ABOVE_START_TOL`]
+//! of it lies higher ([`above_start_spans`]). A CSDA beam stops when its foot leaves the
 //! footprint, after `1/dt` steps, or when its energy is spent. What a beam
 //! did not deposit is reported ([`super::CurtainPower`]).
 //!
@@ -108,7 +109,7 @@ fn trace_fang(
     let mut p = start.position;
     let mut done = frac(ctx.atmosphere.column_mass(p.z));
     let mut out = BeamTrace::begin(p, pw * (1.0 - total), ctx.record_path, bufs);
-    deposit_above_start(ctx, start, &mut out, &frac, total, done);
+    done = deposit_above_start(ctx, start, &mut out, &frac, total, done);
     let bottom = ctx.atmosphere.bottom_km();
     let z0 = start.position.z;
     let (half_l, half_w) = (0.5 * ctx.footprint.length, 0.5 * ctx.footprint.width);
@@ -161,57 +162,140 @@ fn trace_fang(
 }
 
 /// What the spectrum deposits above the start altitude (soft electrons,
-/// high up), `done` the fraction above the start's column: along the field
-/// line above the start, in spans of [`ABOVE_START_SPAN_KM`] altitude, up
-/// to `z_up`, the higher of [`above_start_top`] (where at most
-/// [`ABOVE_START_TOL`] of the total lies higher) and one span above the
-/// start (capped at the atmosphere's top). What lies above `z_up` is laid
-/// in the top span: the tail above 250 km, which lights the red tops, keeps
-/// its whole column, at the price of its top [`ABOVE_START_TOL`] sitting a
-/// few scale heights low, where the grid already reaches. `above_top_kev_s` is zero, except for a beam starting
-/// at the atmosphere's top, with no field line above it in the table.
-fn deposit_above_start(ctx: &BeamContext, start: &BeamStart, out: &mut BeamTrace, frac: &impl Fn(f64) -> f64, total: f64, done: f64) {
+/// high up), `done` the fraction above the start's column, laid along the
+/// field line above the start following the deposition's own shape (Fang
+/// 2010 over the spectrum): the spans of [`above_start_spans`] up to the
+/// altitude where at most [`ABOVE_START_TOL`] of the total lies higher
+/// ([`above_start_column_top`]; that last share goes into the top span).
+/// Each span holds the difference of the fraction above its ends, spread
+/// evenly along it. Returns the fraction the walk below starts from: `done`,
+/// or 0 where no column lies above the start (the share above it, under
+/// [`ABOVE_START_TOL`], then goes into the first step). `above_top_kev_s`
+/// is zero.
+fn deposit_above_start(
+    ctx: &BeamContext,
+    start: &BeamStart,
+    out: &mut BeamTrace,
+    frac: &impl Fn(f64) -> f64,
+    total: f64,
+    done: f64,
+) -> f64 {
     let pw = start.power_kev_s;
     let p = start.position;
-    let z_up = above_start_column_top(ctx.atmosphere, frac, total, p.z);
     out.above_top_kev_s = 0.0;
-    if z_up > p.z && done > 0.0 {
-        let n = ((z_up - p.z) / ABOVE_START_SPAN_KM).ceil().max(1.0) as usize;
-        let along = |z: f64| p + ctx.field.b * ((z - p.z) / ctx.field.b.z);
-        // The top span starts from nothing deposited above it: it takes
-        // everything above its bottom.
-        let mut f_hi = 0.0;
-        for k in (0..n).rev() {
-            let (z_lo, z_hi) = (p.z + (z_up - p.z) * k as f64 / n as f64, p.z + (z_up - p.z) * (k + 1) as f64 / n as f64);
-            let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
-            if f_lo > f_hi {
-                emit(ctx, start, out, along(z_hi), along(z_lo), pw * (f_lo - f_hi), start.base_power_kev_s * (f_lo - f_hi));
-            }
-            f_hi = f_hi.max(f_lo);
-        }
-    } else {
-        out.above_top_kev_s = pw * done;
+    let spans = above_start_spans(ctx.atmosphere, frac, total, p.z);
+    if spans.len() < 2 || done <= 0.0 {
+        return 0.0;
     }
+    let along = |z: f64| column_point(ctx, p, z);
+    // Top down: the top span starts from nothing deposited above it.
+    let mut f_hi = 0.0;
+    for k in (0..spans.len() - 1).rev() {
+        let (z_lo, z_hi) = (spans[k], spans[k + 1]);
+        let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
+        if f_lo > f_hi {
+            emit(ctx, start, out, along(z_hi), along(z_lo), pw * (f_lo - f_hi), start.base_power_kev_s * (f_lo - f_hi));
+        }
+        f_hi = f_hi.max(f_lo);
+    }
+    done
+}
+
+/// The point at altitude `z` of the field line through `p`, in the walk's
+/// frame. On a round Earth (`crate::geometry::earth`) a ground distance at
+/// altitude h spans `(R + h) / R` times as much: a line of the field's
+/// constant inclination covers `cot(I) R ln((R + z) / (R + z0))` of ground
+/// between altitudes z0 and z (the straight line of the flat frame, the
+/// limit R -> inf, is 0.6 degree off at 600 km where the column of a soft
+/// spectrum reaches).
+fn column_point(ctx: &BeamContext, p: DVec3, z: f64) -> DVec3 {
+    let b = ctx.field.b;
+    let dz = z - p.z;
+    let r = ctx.earth.radius_km;
+    let ground = if r > 0.0 { r * ((r + z) / (r + p.z)).ln() } else { dz };
+    DVec3::new(p.x + b.x * ground / b.z, p.y + b.y * ground / b.z, z)
 }
 
 /// The top of the column above a beam starting at `z_start` km:
-/// [`above_start_top`], and at least one [`ABOVE_START_SPAN_KM`] above the
-/// start (a hard spectrum's share above the start, under
-/// [`ABOVE_START_TOL`], gets one span), within the atmosphere's table.
+/// [`above_start_top`] within the atmosphere's table, or `z_start` where
+/// that lies below the start (no column).
 pub fn above_start_column_top(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f64, z_start: f64) -> f64 {
-    above_start_top(atm, frac, total).max((z_start + ABOVE_START_SPAN_KM).min(atm.top_km()))
+    above_start_top(atm, frac, total).min(atm.top_km()).max(z_start)
+}
+
+/// The span boundaries, km, ascending from `z_start` to
+/// [`above_start_column_top`] (empty without a column): each span ends
+/// where the fraction deposited above, F, and the deposit per km, q =
+/// -dF/dz, have changed by at most the factor `exp(`[`ABOVE_START_DLN`]`)`
+/// from its bottom (the local e-folding lengths `F / q` and
+/// `q / |dq/dz|` times the step, by differences over
+/// [`ABOVE_START_DZ_KM`] either side), from [`ABOVE_START_MIN_SPAN_KM`] to
+/// [`ABOVE_START_SPAN_KM`] long: a span's deposit spread evenly is within
+/// about `exp(+-DLN / 2)` of the profile at its ends. At most
+/// [`max_above_start_spans`] spans.
+pub fn above_start_spans(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f64, z_start: f64) -> Vec<f64> {
+    let top = above_start_column_top(atm, frac, total, z_start);
+    if top <= z_start {
+        return Vec::new();
+    }
+    let f = |z: f64| frac(atm.column_mass(z));
+    let mut z = z_start;
+    let mut out = vec![z];
+    let max = max_above_start_spans(top - z_start);
+    while z < top && out.len() < max {
+        let d = ABOVE_START_DZ_KM;
+        let (lo, mid, hi) = (f(z - d), f(z), f(z + d));
+        let (q1, q2) = ((lo - mid) / d, (mid - hi) / d);
+        let q = 0.5 * (q1 + q2);
+        // Where the fraction above falls by e, and where the deposit per
+        // km changes by e (near a soft spectrum's peak the first is long).
+        let l_f = if q > 0.0 { mid / q } else { f64::INFINITY };
+        let l_q = if q1 > 0.0 && q2 > 0.0 && q1 != q2 { d / (q1 / q2).ln().abs() } else { f64::INFINITY };
+        let step = (ABOVE_START_DLN * l_f.min(l_q)).clamp(ABOVE_START_MIN_SPAN_KM, ABOVE_START_SPAN_KM);
+        z = (z + step).min(top);
+        out.push(z);
+    }
+    if z < top {
+        *out.last_mut().expect("a start") = top;
+    }
+    out
+}
+
+/// Bound on the spans of a column `column_km` high ([`above_start_spans`]
+/// cuts the list there, its last span reaching the top): twice the spans
+/// that lower the fraction above by `exp(DLN)` each from the whole deposit
+/// to [`ABOVE_START_TOL`] of it (the deposit's own e-folding may set the
+/// step instead) plus one per [`ABOVE_START_SPAN_KM`] of column. Used by
+/// the memory budget.
+pub fn max_above_start_spans(column_km: f64) -> usize {
+    2 * ((1.0 / ABOVE_START_TOL).ln() / ABOVE_START_DLN).ceil() as usize + (column_km.max(0.0) / ABOVE_START_SPAN_KM).ceil() as usize + 2
 }
 
 /// A Fang beam lays what its spectrum leaves above its start along the
-/// field line above it, spread up to the altitude where at most this share
-/// of the spectrum's total deposition lies higher ([`above_start_top`]);
-/// that share goes into the top span.
+/// field line above it, up to the altitude where at most this share of the
+/// spectrum's total deposition lies higher ([`above_start_top`]); that
+/// share goes into the top span. 0.2 %: 1e-4 would carry a soft
+/// spectrum's column to the atmosphere's 700 km top, and along a shallow
+/// field (dip 12-25 degrees) its grid alone outgrows an 8 GiB machine.
 pub const ABOVE_START_TOL: f64 = 2e-3;
 
-/// Altitude span of each segment of that deposit, km: the deposition
-/// above 250 km falls by e in some 40 km, so a 10 km span's power is
-/// spread evenly along it to within about 12 % at its ends.
+/// Most a span of that deposit lowers the fraction deposited above it, in
+/// ln: 0.15, so a span's deposit spread evenly is within about 8 % of the
+/// profile at its ends.
+pub const ABOVE_START_DLN: f64 = 0.15;
+
+/// Longest and shortest spans of that deposit, km: 10 km where the
+/// fraction above barely changes (just above the peak of a soft spectrum),
+/// 0.25 km at least (a slope so steep belongs to the first span over a
+/// hard spectrum's last trace).
 pub const ABOVE_START_SPAN_KM: f64 = 10.0;
+pub const ABOVE_START_MIN_SPAN_KM: f64 = 0.25;
+
+/// The altitude step of the differences in [`above_start_spans`], km:
+/// the spectrum's table is linear between nodes 0.02 apart in ln m, 0.8
+/// km at a 40 km scale height, so differences over 1 km either side see
+/// its slope, not its nodes.
+pub const ABOVE_START_DZ_KM: f64 = 1.0;
 
 /// The altitude above which at most [`ABOVE_START_TOL`] of `total` is
 /// deposited by `frac` (the fraction deposited above a column mass), by
