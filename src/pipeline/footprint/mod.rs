@@ -450,8 +450,43 @@ fn place(
 mod tests {
     use super::*;
 
+    /// The 2014 fluid on a small grid, no end fade.
     fn small_params() -> FootprintParams {
-        FootprintParams { resolution: [128, 48], steps: 6, pressure_iterations: 30, ..FootprintParams::default() }
+        FootprintParams {
+            model: FootprintModel::Fluid2014,
+            resolution: [128, 48],
+            steps: 6,
+            pressure_iterations: 30,
+            end_fade_km: 0.0,
+            ..FootprintParams::default()
+        }
+    }
+
+    #[test]
+    fn sheet_footprint_is_normalised_deterministic_continuous_and_fades_at_its_ends() {
+        let c = Curtain { length: 80.0, width: 20.0, ..Curtain::default() };
+        let p = FootprintParams { resolution: [256, 64], sheet_steps: 8, end_fade_km: 10.0, ..FootprintParams::default() };
+        let a = simulate(&c, &p, 3);
+        assert_eq!(a, simulate(&c, &p, 3));
+        let peak = a.data.iter().cloned().fold(0.0f32, f32::max);
+        assert!((peak - 1.0).abs() < 1e-6 && a.data.iter().all(|d| (0.0..=1.0).contains(d)));
+        assert_ne!(simulate(&Curtain { seed: 4, ..c.clone() }, &p, 3).data, a.data);
+        // The end fade: the first and last columns are all but dark (the
+        // smooth step at half a cell of 10 km), the middle is not.
+        let column = |i: usize| (0..a.ny).map(|j| a.cell(i, j)).fold(0.0f32, f32::max);
+        assert!(column(0) < 1e-3 && column(a.nx - 1) < 1e-3, "{} {}", column(0), column(a.nx - 1));
+        assert!((a.nx / 4..3 * a.nx / 4).map(column).fold(0.0f32, f32::max) > 0.5);
+        assert_eq!(end_fade(5.0, 80.0, 10.0), 0.5);
+        assert_eq!(end_fade(40.0, 80.0, 10.0), 1.0);
+        // Motion: a tenth of a frame's step changes it by well under half
+        // a frame's change (L1 per cell).
+        let anim = AnimationParams::default();
+        let l1 = |x: &Footprint, y: &Footprint| x.data.iter().zip(&y.data).map(|(u, v)| (u - v).abs() as f64).sum::<f64>();
+        let f0 = simulate_at(&c, &p, &anim, 3, 50.0, [0.0; 2]);
+        let (f1, f10) =
+            (simulate_at(&c, &p, &anim, 3, 50.0 + 1.0 / 24.0, [0.0; 2]), simulate_at(&c, &p, &anim, 3, 50.0 + 1.0 / 240.0, [0.0; 2]));
+        let (near, tenth) = (l1(&f0, &f1), l1(&f0, &f10));
+        assert!(near > 0.0 && tenth < 0.3 * near, "1/240 s {tenth}, 1/24 s {near}");
     }
 
     #[test]

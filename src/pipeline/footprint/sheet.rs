@@ -37,7 +37,7 @@
 //! `sheet_thickness_km`, each marker's charge spread over its segment
 //! (a stretched sheet dims; a fold seen edge-on stacks it, bright and
 //! thin), times a brightness along the sheet: rays at gamma-like spacing
-//! (mean `ray_spacing_km`, CV about 0.7) of brightness log-uniform in
+//! (mean `ray_spacing_km`, CV about 0.85) of brightness log-uniform in
 //! [1, `ray_contrast`] over a floor, plus a diffuse glow (`glow`, a
 //! Gaussian blur of 3 km).
 //!
@@ -220,9 +220,10 @@ pub fn ray_brightness(n: usize, period: f64, params: &FootprintParams, seeds: [u
     while a < period {
         let b = params.ray_contrast.powf(r.random::<f64>());
         rays.push((a, b));
-        // Gaps 0.3 mean + an exponential of 0.7 mean: CV 0.7, no pile-ups.
+        // Gaps 0.15 mean + an exponential of 0.85 mean: CV 0.85 (rays
+        // bunch and part), none closer than 0.15 mean.
         let e = -(1.0 - r.random::<f64>()).ln();
-        a += mean * (0.3 + 0.7 * e);
+        a += mean * (0.15 + 0.85 * e);
     }
     let w = params.ray_width_km.max(1e-6);
     let h = period / n as f64;
