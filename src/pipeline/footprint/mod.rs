@@ -25,7 +25,7 @@
 //! and normal (`crate::pipeline::footprint::curtain_path::PathFrame`), the path lifted from its altitude
 //! to the beams' start altitude along the field ([`crate::pipeline::footprint::curtain_path::lift_km`]).
 //! Along a long path the cells stay at most twice as long as they are wide
-//! (the sheet's, at most as long as wide, straight or not: [`cells_along`],
+//! (the sheet's about as long as wide, straight or not: [`cells_along`],
 //! up to [`MAX_PATH_CELLS`]), and the fluid's patterns
 //! along u (its waves, the bend's wavelength) keep their size in cells: they
 //! are set per `resolution[0]` cells, so a path of one resolution's worth of
@@ -54,7 +54,7 @@ pub fn cells_along(curtain: &Curtain, length: f64, params: &FootprintParams) -> 
     let [nx, ny] = params.resolution;
     let dv = curtain.width / ny as f64;
     match params.model {
-        FootprintModel::Sheet => nx.max(((length / dv).ceil() as usize).min(MAX_PATH_CELLS)),
+        FootprintModel::Sheet => nx.max(((length / dv).round() as usize).min(MAX_PATH_CELLS)),
         FootprintModel::Fluid2014 if curtain.path.is_none() => nx,
         FootprintModel::Fluid2014 => nx.max(((length / (2.0 * dv)).ceil() as usize).min(MAX_PATH_CELLS)),
     }
