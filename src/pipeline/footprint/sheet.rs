@@ -249,6 +249,7 @@ pub fn ray_brightness(n: usize, period: f64, params: &FootprintParams, seeds: [u
 /// (index `j * nx + i`, u from -length/2, v from -width/2), unnormalised:
 /// each marker's charge (brightness times spacing) spread evenly over the
 /// segment to the next, a Gaussian line of FWHM `thickness_km` across.
+#[allow(clippy::too_many_arguments)]
 pub fn rasterise(x: &[f64], y: &[f64], brightness: &[f64], period: f64, nx: usize, ny: usize, width: f64, thickness_km: f64) -> Vec<f64> {
     let n = x.len();
     let (du, dv) = (period / nx as f64, width / ny as f64);

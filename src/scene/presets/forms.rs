@@ -142,7 +142,7 @@ pub const CORONA: &str = "a corona: rayed sheets filling the sky, seen from bene
 pub fn corona() -> Scene {
     let band = |k: u64| {
         let y = -180.0 + 60.0 * k as f64;
-        let wobble = if k % 2 == 0 { 8.0 } else { -8.0 };
+        let wobble = if k.is_multiple_of(2) { 8.0 } else { -8.0 };
         Curtain {
             path: Some(vec![[-210.0, y - wobble], [-70.0, y + wobble], [70.0, y - 0.5 * wobble], [210.0, y + wobble]]),
             width: 30.0,
