@@ -363,8 +363,8 @@ mod tests {
         let y = vec![0.0; n];
         let (u, v) = Kernel::new(100.0, n, 1.0).velocities(&x, &y);
         assert!(u.iter().chain(&v).all(|a| a.abs() < 1e-12), "{u:?} {v:?}");
-        // A lifted marker is pulled along the sheet (u < 0 above a sheet
-        // whose lower side moves at -γ/2... sign of a positive circulation).
+        // A marker lifted above a sheet of positive circulation moves in -x,
+        // slower than the far field's γ/2 (the blob smooths the jump).
         let mut y2 = y.clone();
         y2[10] = 0.5;
         let (u2, _) = Kernel::new(100.0, n, 1.0).velocities(&x, &y2);
