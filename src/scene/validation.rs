@@ -234,6 +234,17 @@ impl Scene {
         v.range(t, "density_waves", f.density_waves, 0.0, 1e3, true);
         v.range(t, "bend_wavelength", f.bend_wavelength, 0.0, 1e3, false);
         v.range(t, "threshold", f.threshold, 0.0, 1.0, false);
+        v.range(t, "end_fade_km", f.end_fade_km, 0.0, 1e4, true);
+        v.range(t, "sheet_spacing_km", f.sheet_spacing_km, 0.01, 10.0, true);
+        v.range(t, "sheet_smoothing_km", f.sheet_smoothing_km, 0.01, 100.0, true);
+        v.range(t, "sheet_amplitude", f.sheet_amplitude, 0.0, 1.0, true);
+        v.range(t, "sheet_rollup_km", f.sheet_rollup_km, 0.0, 1e3, true);
+        v.range(t, "sheet_steps", f.sheet_steps as f64, 1.0, 10_000.0, true);
+        v.range(t, "sheet_thickness_km", f.sheet_thickness_km, 0.01, 100.0, true);
+        v.range(t, "ray_spacing_km", f.ray_spacing_km, 0.1, 1e4, true);
+        v.range(t, "ray_width_km", f.ray_width_km, 0.01, 100.0, true);
+        v.range(t, "ray_contrast", f.ray_contrast, 1.0, 1e3, true);
+        v.range(t, "glow", f.glow, 0.0, 100.0, true);
 
         let a = &self.animation;
         let t = Some(("animation", 0));

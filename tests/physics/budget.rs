@@ -140,6 +140,10 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
     s.photons.radius_km = 30.0;
     scenes.push(("wide kernel", s));
     let mut s = Scene::default();
+    // 160 km curtains: one change alone must be able to bring it under.
+    for c in &mut s.curtains {
+        c.length = 160.0;
+    }
     s.beams.count = 400_000;
     s.earth.magnetic_pole = Some(pole_for_dip(12.0, s.earth.radius_km));
     s.grid.lines = aurora::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();

@@ -3,7 +3,8 @@
 //! a measurement: the chemistry against NCAR GLOW (`chemistry`), the power
 //! balance (`energy`), the memory budget (`budget`), the southern
 //! hemisphere's mirror of the northern (`globe`), the bake's stages
-//! (`pipeline`), curtains along paths (`path`), the round Earth (`earth`),
+//! (`pipeline`), the footprint's structure and the vortex sheet's growth
+//! (`footprint`), curtains along paths (`path`), the round Earth (`earth`),
 //! the lines one at a time and their red trail (`lines`, `trail`), the
 //! corona's vanishing point (`corona`) and the presets' colours
 //! (`presets`).
@@ -16,6 +17,7 @@ mod chemistry;
 mod corona;
 mod earth;
 mod energy;
+mod footprint;
 mod globe;
 mod lines;
 mod path;

@@ -154,6 +154,7 @@ mod tests {
     /// Every value a string leaf of the scene may take (enum names), and a
     /// path for an absent one.
     const STRINGS: &[&str] = &[
+        "fluid2014",
         "sampled",
         "csda",
         "random",

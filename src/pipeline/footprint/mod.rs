@@ -1,9 +1,12 @@
 //! The footprint of a curtain: a 2D density map on the ground plane saying
 //! where (and how strongly) electrons precipitate.
 //!
-//! As in the 2014 report (section 2.1, after Lawlor & Genetti 2011), a straight
-//! band is folded by a short 2D fluid simulation, then bent along a
-//! low-frequency noise curve:
+//! Two models (`footprint.model`): `"sheet"` (the default, [`sheet`]), a
+//! vortex sheet rolled up by the Kelvin-Helmholtz instability and drawn with
+//! rays along it; and `"fluid2014"`, as in the 2014 report (section 2.1, after
+//! Lawlor & Genetti 2011), a straight band folded by a short 2D fluid
+//! simulation. Either is then bent along a low-frequency noise curve and
+//! faded to 0 over `end_fade_km` at each end ([`end_fade`]). The fluid:
 //!
 //! 1. Stable fluids ([`fluid`]: Stam, "Stable Fluids", SIGGRAPH 1999) on a
 //!    MAC grid in the curtain's own frame (u along the curtain, v across;
@@ -22,19 +25,21 @@
 //! and normal (`crate::pipeline::footprint::curtain_path::PathFrame`), the path lifted from its altitude
 //! to the beams' start altitude along the field ([`crate::pipeline::footprint::curtain_path::lift_km`]).
 //! Along a long path the cells stay at most twice as long as they are wide
-//! ([`cells_along`], up to [`MAX_PATH_CELLS`]), and the fluid's patterns
+//! (the sheet's about as long as wide, straight or not: [`cells_along`],
+//! up to [`MAX_PATH_CELLS`]), and the fluid's patterns
 //! along u (its waves, the bend's wavelength) keep their size in cells: they
 //! are set per `resolution[0]` cells, so a path of one resolution's worth of
 //! cells is simulated exactly as the straight curtain of its length.
 
 pub mod curtain_path;
 pub mod fluid;
+pub mod sheet;
 
 use fluid::bilinear;
 pub use fluid::Fluid;
 
 use crate::pipeline::footprint::curtain_path::PathFrame;
-use crate::scene::{AnimationParams, Curtain, FootprintParams};
+use crate::scene::{AnimationParams, Curtain, FootprintModel, FootprintParams};
 use crate::util::rng;
 use std::path::Path;
 use std::sync::Arc;
@@ -47,11 +52,12 @@ pub const MAX_PATH_CELLS: usize = 16_384;
 /// across, up to [`MAX_PATH_CELLS`].
 pub fn cells_along(curtain: &Curtain, length: f64, params: &FootprintParams) -> usize {
     let [nx, ny] = params.resolution;
-    if curtain.path.is_none() {
-        return nx;
-    }
     let dv = curtain.width / ny as f64;
-    nx.max(((length / (2.0 * dv)).ceil() as usize).min(MAX_PATH_CELLS))
+    match params.model {
+        FootprintModel::Sheet => nx.max(((length / dv).round() as usize).min(MAX_PATH_CELLS)),
+        FootprintModel::Fluid2014 if curtain.path.is_none() => nx,
+        FootprintModel::Fluid2014 => nx.max(((length / (2.0 * dv)).ceil() as usize).min(MAX_PATH_CELLS)),
+    }
 }
 
 /// A footprint placed along a path: its frame and the drift across it, km.
@@ -283,12 +289,67 @@ pub fn simulate_at(
     let length = frame.as_ref().map_or(curtain.length, |f| f.length);
     let nx = cells_along(curtain, length, params);
     let ny = params.resolution[1];
-    let tau = std::f64::consts::TAU;
     if params.uniform {
         return place(curtain, anim, t, frame, length, nx, ny, vec![1.0; nx * ny]);
     }
     // Patterns along u are set per resolution[0] cells (module documentation).
     let along = nx as f64 / params.resolution[0] as f64;
+    let sim = match params.model {
+        FootprintModel::Fluid2014 => fluid2014(curtain, params, anim, seed, t, [nx, ny], along, length),
+        FootprintModel::Sheet => sheet::density(length, curtain.width, nx, ny, params, anim, [seed, curtain.seed], t),
+    };
+
+    // Remap along the noise curve: out(u, v) = sim(u, v - bend(u)), the
+    // curve travelling and changing shape in time.
+    let noise = rng::perlin(&[seed, curtain.seed, rng::tag::FOOTPRINT_BEND]);
+    let dv_km = curtain.width / ny as f64;
+    let wavelength = params.bend_wavelength * length / along;
+    let mut data = vec![0.0f32; nx * ny];
+    for i in 0..nx {
+        let u_km = (i as f64 + 0.5) / nx as f64 * length - anim.bend_speed_kms * t;
+        let n = if anim.bend_change_hz > 0.0 && t != 0.0 {
+            rng::noise2(&noise, u_km / wavelength, rng::NOISE1_Y + anim.bend_change_hz * t)
+        } else {
+            rng::noise1(&noise, u_km / wavelength)
+        };
+        let bend_cells = curtain.bend_km * n / dv_km;
+        for j in 0..ny {
+            let y = j as f64 + 0.5 - bend_cells;
+            let v = if y < 0.5 || y > ny as f64 - 0.5 { 0.0 } else { bilinear(&sim, nx, ny, 0.5, 0.5, i as f64 + 0.5, y) };
+            data[j * nx + i] = v as f32;
+        }
+    }
+    if params.end_fade_km > 0.0 {
+        for i in 0..nx {
+            let w = end_fade((i as f64 + 0.5) / nx as f64 * length, length, params.end_fade_km) as f32;
+            for j in 0..ny {
+                data[j * nx + i] *= w;
+            }
+        }
+    }
+    let peak = data.iter().cloned().fold(0.0f32, f32::max);
+    if peak > 0.0 {
+        for d in &mut data {
+            *d /= peak;
+        }
+    }
+    place(curtain, anim, t, frame, length, nx, ny, data)
+}
+
+/// The 2014 report's footprint before the bend: the band folded by the
+/// stable fluid (module documentation), on the nx x ny cells.
+#[allow(clippy::too_many_arguments)]
+fn fluid2014(
+    curtain: &Curtain,
+    params: &FootprintParams,
+    anim: &AnimationParams,
+    seed: u64,
+    t: f64,
+    [nx, ny]: [usize; 2],
+    along: f64,
+    length: f64,
+) -> Vec<f64> {
+    let tau = std::f64::consts::TAU;
     let mut fluid = Fluid::new(nx, ny);
     let mut r = rng::rng(&[seed, curtain.seed, rng::tag::FOOTPRINT_VELOCITY]);
     use rand::Rng;
@@ -344,33 +405,18 @@ pub fn simulate_at(
         fluid.step(params.dt, params.pressure_iterations);
     }
 
-    // Remap along the noise curve: out(u, v) = sim(u, v - bend(u)), the
-    // curve travelling and changing shape in time.
-    let noise = rng::perlin(&[seed, curtain.seed, rng::tag::FOOTPRINT_BEND]);
-    let dv_km = curtain.width / ny as f64;
-    let wavelength = params.bend_wavelength * length / along;
-    let mut data = vec![0.0f32; nx * ny];
-    for i in 0..nx {
-        let u_km = (i as f64 + 0.5) / nx as f64 * length - anim.bend_speed_kms * t;
-        let n = if anim.bend_change_hz > 0.0 && t != 0.0 {
-            rng::noise2(&noise, u_km / wavelength, rng::NOISE1_Y + anim.bend_change_hz * t)
-        } else {
-            rng::noise1(&noise, u_km / wavelength)
-        };
-        let bend_cells = curtain.bend_km * n / dv_km;
-        for j in 0..ny {
-            let y = j as f64 + 0.5 - bend_cells;
-            let v = if y < 0.5 || y > ny as f64 - 0.5 { 0.0 } else { bilinear(&fluid.density, nx, ny, 0.5, 0.5, i as f64 + 0.5, y) };
-            data[j * nx + i] = v as f32;
-        }
+    fluid.density
+}
+
+/// The weight of the end fade at `u_km` from the start of a footprint of
+/// `length` km: a smooth step (3s^2 - 2s^3) from 0 at either end to 1 at
+/// `fade_km` inside (the fades meet in the middle of a short curtain).
+pub fn end_fade(u_km: f64, length: f64, fade_km: f64) -> f64 {
+    if fade_km <= 0.0 {
+        return 1.0;
     }
-    let peak = data.iter().cloned().fold(0.0f32, f32::max);
-    if peak > 0.0 {
-        for d in &mut data {
-            *d /= peak;
-        }
-    }
-    place(curtain, anim, t, frame, length, nx, ny, data)
+    let s = (u_km.min(length - u_km) / fade_km).clamp(0.0, 1.0);
+    s * s * (3.0 - 2.0 * s)
 }
 
 /// The footprint placed at time `t`: along its path, or about `center`,
@@ -404,8 +450,43 @@ fn place(
 mod tests {
     use super::*;
 
+    /// The 2014 fluid on a small grid, no end fade.
     fn small_params() -> FootprintParams {
-        FootprintParams { resolution: [128, 48], steps: 6, pressure_iterations: 30, ..FootprintParams::default() }
+        FootprintParams {
+            model: FootprintModel::Fluid2014,
+            resolution: [128, 48],
+            steps: 6,
+            pressure_iterations: 30,
+            end_fade_km: 0.0,
+            ..FootprintParams::default()
+        }
+    }
+
+    #[test]
+    fn sheet_footprint_is_normalised_deterministic_continuous_and_fades_at_its_ends() {
+        let c = Curtain { length: 80.0, width: 20.0, ..Curtain::default() };
+        let p = FootprintParams { resolution: [256, 64], sheet_steps: 8, end_fade_km: 10.0, ..FootprintParams::default() };
+        let a = simulate(&c, &p, 3);
+        assert_eq!(a, simulate(&c, &p, 3));
+        let peak = a.data.iter().cloned().fold(0.0f32, f32::max);
+        assert!((peak - 1.0).abs() < 1e-6 && a.data.iter().all(|d| (0.0..=1.0).contains(d)));
+        assert_ne!(simulate(&Curtain { seed: 4, ..c.clone() }, &p, 3).data, a.data);
+        // The end fade: the first and last columns are all but dark (the
+        // smooth step at half a cell of 10 km), the middle is not.
+        let column = |i: usize| (0..a.ny).map(|j| a.cell(i, j)).fold(0.0f32, f32::max);
+        assert!(column(0) < 1e-3 && column(a.nx - 1) < 1e-3, "{} {}", column(0), column(a.nx - 1));
+        assert!((a.nx / 4..3 * a.nx / 4).map(column).fold(0.0f32, f32::max) > 0.5);
+        assert_eq!(end_fade(5.0, 80.0, 10.0), 0.5);
+        assert_eq!(end_fade(40.0, 80.0, 10.0), 1.0);
+        // Motion: a tenth of a frame's step changes it by well under half
+        // a frame's change (L1 per cell).
+        let anim = AnimationParams::default();
+        let l1 = |x: &Footprint, y: &Footprint| x.data.iter().zip(&y.data).map(|(u, v)| (u - v).abs() as f64).sum::<f64>();
+        let f0 = simulate_at(&c, &p, &anim, 3, 50.0, [0.0; 2]);
+        let (f1, f10) =
+            (simulate_at(&c, &p, &anim, 3, 50.0 + 1.0 / 24.0, [0.0; 2]), simulate_at(&c, &p, &anim, 3, 50.0 + 1.0 / 240.0, [0.0; 2]));
+        let (near, tenth) = (l1(&f0, &f1), l1(&f0, &f10));
+        assert!(near > 0.0 && tenth < 0.3 * near, "1/240 s {tenth}, 1/24 s {near}");
     }
 
     #[test]

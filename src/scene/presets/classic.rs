@@ -10,10 +10,15 @@ impl Default for Scene {
     }
 }
 
-/// Three sheets one behind the other, seen from the ground to the south.
+/// Three sheets one behind the other, seen from the ground to the south:
+/// 300, 380 and 460 km long at 65, 100 and 140 km from the camera (whose
+/// view is about 107 degrees wide), so each runs out past the sides of the
+/// frame at its lower border, fading over `footprint.end_fade_km` at its
+/// ends (about the frame's edges) instead of ending in straight sides.
 pub fn default_scene() -> Scene {
     let sheet = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, seed: u64| Curtain {
         center: [cx, cy],
+        length: [300.0, 380.0, 460.0][seed as usize - 1],
         rotation_deg: rot,
         energy_flux: flux,
         char_energy_kev: e0,
@@ -22,7 +27,7 @@ pub fn default_scene() -> Scene {
     };
     Scene {
         seed: 2014,
-        curtains: vec![sheet(-20.0, 0.0, 4.0, 6.0, 4.0, 1), sheet(25.0, 45.0, -6.0, 4.0, 2.5, 2), sheet(-5.0, 95.0, 2.0, 3.0, 1.5, 3)],
+        curtains: vec![sheet(-20.0, -25.0, 4.0, 6.0, 4.0, 1), sheet(25.0, 10.0, -6.0, 4.0, 2.5, 2), sheet(-5.0, 50.0, 2.0, 3.0, 1.5, 3)],
         footprint: FootprintParams::default(),
         beams: BeamParams::default(),
         colour: ColourParams::default(),
@@ -48,6 +53,14 @@ pub fn default_scene() -> Scene {
 /// sheets. Report units are taken as km.
 pub fn seed2014() -> Scene {
     let mut s = default_scene();
+    // The report's footprint: its fluid, three 160 km sheets with
+    // straight ends where the default's stood before they spanned the sky.
+    for (c, y) in s.curtains.iter_mut().zip([0.0, 45.0, 95.0]) {
+        c.length = 160.0;
+        c.center[1] = y;
+    }
+    s.footprint.model = FootprintModel::Fluid2014;
+    s.footprint.end_fade_km = 0.0;
     s.beams.count = 500_000;
     s.beams.alpha_d_deg = 25.0;
     s.beams.delta_alpha_deg = 12.0;

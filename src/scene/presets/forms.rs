@@ -9,7 +9,7 @@
 //! |---|---|---|---|---|
 //! | `quiet_arc` | 3 | 3 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
 //! | `rayed_band` | 5 | 15 | folded band, start heights broken into rays | the ground, 150 km south |
-//! | `corona` | 4-6 | 15-30 | four rayed bands overhead | the ground beneath, looking up the field |
+//! | `corona` | 4-6 | 15-30 | seven rayed sheets filling the sky | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 2 | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
 //! | `type_a_red` | 0.15 | 10 | a band high up, soft spectrum | the ground, 240 km south |
 //! | `type_b_pink` | 25 | 30 | a folded band, hard spectrum | the ground, 220 km south |
@@ -25,7 +25,7 @@
 //! Scandinavia), so the magnetic zenith lies 12 degrees south of the zenith.
 //!
 //! Every preset bakes in under a minute at its own size on two cores
-//! (beam counts of 12,000-16,000, footprints of at most 512 x 128 cells
+//! (beam counts of 10,000-20,000, footprints of at most 128 cells across
 //! per curtain, voxels of 0.4-1 km); the numbers each form takes are in its
 //! function's documentation.
 
@@ -71,6 +71,10 @@ pub fn quiet_arc() -> Scene {
     };
     let mut s = base(1, vec![arc]);
     s.footprint.resolution = [512, 64];
+    // A sheet barely rolled up, rays hardly brighter than the rest.
+    s.footprint.sheet_rollup_km = 6.0;
+    s.footprint.sheet_amplitude = 0.02;
+    s.footprint.ray_contrast = 2.0;
     s.footprint.band_fraction = 0.12;
     s.footprint.velocity_amplitude = 0.3;
     s.footprint.velocity_waves = 2.0;
@@ -123,38 +127,46 @@ pub fn rayed_band() -> Scene {
     s
 }
 
-pub const CORONA: &str = "a corona: rayed bands overhead, seen from beneath, the rays converging on the magnetic zenith";
+pub const CORONA: &str = "a corona: rayed sheets filling the sky, seen from beneath, the rays converging on the magnetic zenith";
 
 /// A corona: rays are field lines, and parallel lines seen in perspective
 /// meet at their vanishing point, the magnetic zenith (the direction -B,
 /// here 12 degrees south of the zenith; `tests/physics/corona.rs` finds it in the
-/// image). Four rayed bands (as [`rayed_band`], 15-30 mW/m^2 of 4-6 keV)
-/// lie across the sky from 60 km south to 60 km north of the observer,
-/// who looks up the field line through a 180-degree fisheye (north at the
-/// top of the image): the rays fan out from one point, as at the height of
-/// a substorm's breakup.
+/// image). Seven rayed sheets (as [`rayed_band`], 15-30 mW/m^2 of 4-6 keV),
+/// 420 km long and 60 km apart, lie across the sky from 180 km south to
+/// 180 km north of the observer: their lower borders (110 km) reach down
+/// to about 30 degrees elevation all round, the ends fading outside. The
+/// observer looks up the field line through a 180-degree fisheye (north at
+/// the top of the image): the rays fan out from one point over the whole
+/// dome, as at the height of a substorm's breakup.
 pub fn corona() -> Scene {
-    let band = |y: f64, flux: f64, e0: f64, seed: u64| Curtain {
-        path: Some(vec![[-160.0, y - 8.0], [-50.0, y + 6.0], [50.0, y - 4.0], [160.0, y + 8.0]]),
-        width: 30.0,
-        energy_flux: flux,
-        char_energy_kev: e0,
-        bend_km: 5.0,
-        seed,
-        ..Curtain::default()
+    let band = |k: u64| {
+        let y = -180.0 + 60.0 * k as f64;
+        let wobble = if k.is_multiple_of(2) { 8.0 } else { -8.0 };
+        Curtain {
+            path: Some(vec![[-210.0, y - wobble], [-70.0, y + wobble], [70.0, y - 0.5 * wobble], [210.0, y + wobble]]),
+            width: 30.0,
+            energy_flux: [15.0, 20.0, 30.0, 25.0, 30.0, 20.0, 15.0][k as usize],
+            char_energy_kev: [4.0, 5.0, 6.0, 5.0, 6.0, 5.0, 4.0][k as usize],
+            bend_km: 5.0,
+            seed: k + 1,
+            ..Curtain::default()
+        }
     };
-    let mut s = base(3, vec![band(-60.0, 15.0, 4.0, 1), band(-20.0, 30.0, 6.0, 2), band(20.0, 25.0, 5.0, 3), band(60.0, 15.0, 4.0, 4)]);
+    let mut s = base(3, (0..7).map(band).collect());
     s.footprint.resolution = [512, 96];
     s.footprint.velocity_amplitude = 3.0;
     s.footprint.velocity_waves = 8.0;
     s.footprint.density_waves = 14.0;
-    s.beams.count = 16_000;
+    s.beams.count = 20_000;
     s.beams.top_noise_km = 40.0;
     s.beams.top_noise_freq = 0.6;
     s.beams.alpha_d_deg = 2.0;
     s.beams.delta_alpha_deg = 1.0;
-    s.photons.radius_km = 0.5;
-    s.grid.voxel_size = VoxelSize::Km(0.5);
+    // Spread over 420 x 360 km of sky: 0.8 km voxels, about a pixel of the
+    // 512-pixel fisheye at 30 degrees elevation (1.3 km there, 0.6 km overhead).
+    s.photons.radius_km = 0.8;
+    s.grid.voxel_size = VoxelSize::Km(0.8);
     // Up the field line: -B = (0, -cos I, sin I) at declination 0.
     let dip = s.beams.b_inclination_deg.to_radians();
     s.camera = Camera {
@@ -198,6 +210,8 @@ pub fn pulsating_patches() -> Scene {
     };
     let mut s = base(4, vec![diffuse]);
     s.footprint.resolution = [256, 128];
+    // Diffuse: the report's fluid band, not a thin sheet.
+    s.footprint.model = FootprintModel::Fluid2014;
     s.footprint.band_fraction = 0.6;
     s.footprint.velocity_amplitude = 0.5;
     s.footprint.velocity_waves = 3.0;
@@ -238,6 +252,8 @@ pub fn type_a_red() -> Scene {
         ..Curtain::default()
     };
     let mut s = base(5, vec![band]);
+    // A broad soft band: the report's fluid, not a thin sheet.
+    s.footprint.model = FootprintModel::Fluid2014;
     s.footprint.band_fraction = 0.15;
     s.footprint.velocity_amplitude = 1.5;
     s.beams.count = 10_000;
