@@ -38,11 +38,11 @@ pub struct Scene {
     pub overrides: Vec<String>,
 }
 
-/// Keys added with a default of 0 that means "off", left out of
+/// Keys added with a default of 0 (or false) that means "off", left out of
 /// [`Scene::hash`] and of the bake identity (`crate::pipeline::bake::identity`) while
-/// 0: a scene that does not set them keeps the hash it had before they
+/// off: a scene that does not set them keeps the hash it had before they
 /// existed, and its bake is the same.
-pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples"];
+pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples", "grid.velocity", "render.shutter_s"];
 
 impl Scene {
     /// The scene as TOML, as `aurora scene default` prints it.
@@ -58,12 +58,14 @@ impl Scene {
         let mut text = self.to_toml();
         for key in OFF_WHEN_ZERO {
             let (table, name) = key.split_once('.').expect("a dotted key");
-            let line = format!("{name} = 0\n");
-            if let Some(start) = text.find(&format!("[{table}]\n")) {
-                let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
-                if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
-                    if text[..i].ends_with('\n') {
-                        text.replace_range(i..i + line.len(), "");
+            for off in ["0", "0.0", "false"] {
+                let line = format!("{name} = {off}\n");
+                if let Some(start) = text.find(&format!("[{table}]\n")) {
+                    let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
+                    if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
+                        if text[..i].ends_with('\n') {
+                            text.replace_range(i..i + line.len(), "");
+                        }
                     }
                 }
             }

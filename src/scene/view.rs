@@ -55,11 +55,16 @@ pub struct RenderParams {
     pub exposure: f64,
     /// The PNG preview's view transform (the EXR stays linear).
     pub view_transform: ViewTransform,
+    /// Shutter time, s, of the reference renderer's motion blur: each
+    /// camera sample reads the fields at `p - v(p) tau`, tau uniform over
+    /// [-shutter_s / 2, shutter_s / 2], as Cycles does with a velocity grid
+    /// (the bake's `v`: `grid.velocity = true`). 0: no blur.
+    pub shutter_s: f64,
 }
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx }
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx, shutter_s: 0.0 }
     }
 }
 
