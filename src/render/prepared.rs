@@ -28,9 +28,18 @@ pub struct Prepared {
     /// The air's transmittance (`[sky] extinction`), None without it.
     pub(super) air: Option<Extinction>,
     pub(super) settings: RenderSettings,
+    /// The velocity grid of the motion blur (`render.shutter_s`), if given.
+    pub(super) velocity: Option<super::medium::velocity::Velocity>,
 }
 
 impl Prepared {
+    /// The velocity grid `v` the motion blur of `render.shutter_s` advects
+    /// the lookups along (`medium::velocity`).
+    pub fn with_velocity(mut self, v: Grid<[f32; 3]>) -> Result<Prepared, RenderError> {
+        self.velocity = Some(super::medium::velocity::Velocity::new(v)?);
+        Ok(self)
+    }
+
     /// Validates the settings and builds everything the pixel loop reads.
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
         let camera = Self::check(settings)?;
@@ -108,7 +117,8 @@ impl Prepared {
             CameraModel::new(&s.camera, s.render.width, s.render.height)?
         };
         let air = observer_air(s);
-        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, settings: s.clone() };
+        let velocity = if grids_changed { None } else { old.velocity };
+        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, settings: s.clone(), velocity };
         if !grids_changed && o.volume != s.volume {
             // The kept medium and sampler still carry the old scales.
             prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
@@ -215,7 +225,7 @@ impl Prepared {
         let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
         let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         let air = observer_air(settings);
-        Ok(Prepared { camera, medium, terrain, sampler, sky, air, settings: settings.clone() })
+        Ok(Prepared { camera, medium, terrain, sampler, sky, air, settings: settings.clone(), velocity: None })
     }
 
     pub(super) fn shadow_scene(&self) -> ShadowScene<'_> {
