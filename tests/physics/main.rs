@@ -22,3 +22,4 @@ mod path;
 mod pipeline;
 mod presets;
 mod trail;
+mod velocity;
