@@ -13,4 +13,5 @@ mod closed_forms;
 mod extinction;
 mod film;
 mod integrator;
+mod motion_blur;
 mod terrain;
