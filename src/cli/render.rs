@@ -207,8 +207,10 @@ fn prepare(
     // The motion blur reads the velocity grid `v` beside the medium: from grids.
     let blur = scene.render.shutter_s > 0.0;
     let from_records = match vdb {
-        Some(path) if !blur => aurora::app::vdb_for_render::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
-            .map_err(|e| InputError(e.to_string()))?,
+        Some(path) if !blur => {
+            aurora::app::vdb_for_render::read_render_medium(path, scene.volume.density_scale, scene.volume.emission_scale)
+                .map_err(|e| InputError(e.to_string()))?
+        }
         _ => None,
     };
     let no_velocity = |source: String| {

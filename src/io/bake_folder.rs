@@ -181,13 +181,14 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
 /// ZIP (a valid zlib stream, three to four times faster to write than
 /// OpenVDB's zlib at level 6).
 pub fn write_options(scene: &Scene) -> WriteOptions {
-    let v = crate::pipeline::bake::velocity::GRID_NAME;
-    let half = [(scene.grid.half_density, "density"), (scene.grid.half_emission, "emission"), (scene.grid.half_emission, v)]
+    // The velocity grid `v`, when written, is stored as the emission is.
+    let v = scene.grid.velocity.then_some(crate::pipeline::bake::velocity::GRID_NAME);
+    let half = [(scene.grid.half_density, Some("density")), (scene.grid.half_emission, Some("emission")), (scene.grid.half_emission, v)]
         .into_iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, name)| name.to_string())
+        .filter_map(|(on, name)| name.filter(|_| on))
+        .map(|name| name.to_string())
         .collect();
-    let mantissa_bits = ["density", "emission", v].map(|g| (g.to_string(), scene.grid.mantissa_bits)).to_vec();
+    let mantissa_bits = ["density", "emission"].into_iter().chain(v).map(|g| (g.to_string(), scene.grid.mantissa_bits)).collect();
     WriteOptions { compression: scene.grid.compression, half, mantissa_bits, deflate: Deflate::Fast, metadata: vdb_metadata(scene) }
 }
 

@@ -10,9 +10,9 @@
 
 use super::image::{Image, RenderStats};
 use super::march::{optical_depth_along_ray, radiance_advected, radiance_along_ray};
-use super::settings::Integration;
 use super::prepared::Prepared;
 use super::sampler::{pixel_position, pixel_rng};
+use super::settings::Integration;
 use super::settings::{RenderError, RenderSettings, Volume};
 use super::shadow::estimate_irradiance;
 use crate::util::progress::Progress;

@@ -218,6 +218,7 @@ fn walk_exact(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, with_emiss
 /// from the ray's entry into the volume's bounds grown by the farthest a
 /// lookup can move (`max_speed |tau|`); the sample at `p` reads sigma_t and
 /// the emission at `p - v(p) tau`. At tau = 0 the fixed-step march.
+#[allow(clippy::too_many_arguments)]
 pub fn radiance_advected(
     medium: &Medium,
     velocity: &Velocity,

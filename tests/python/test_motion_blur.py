@@ -20,7 +20,10 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 SHUTTER_S = 0.6
-SAMPLES = 64
+#: The frame's time: the shutter's earliest sub-frame stays at t >= 0 (the
+#: scene's range); the drift's speed there is cos(2 pi / 30) = 0.98 of its peak.
+T0 = 1.0
+SAMPLES = 16
 
 
 def aurora_bin() -> Path:
@@ -61,6 +64,9 @@ width = 64
 height = 36
 spp = 1
 
+[terrain]
+kind = "none"
+
 [animation]
 time_s = {time_s!r}
 fold_speed_kms = 0.0
@@ -83,7 +89,8 @@ def bake(tmp: Path, tag: str, time_s: float, velocity: bool) -> tuple[Path, Path
 
 
 def cycles(cycles_render, compare, scene: Path, vdb: Path, out: Path, shutter_s: float | None = None) -> np.ndarray:
-    cycles_render.render(scene, vdb, out, SAMPLES, quiet=True, shutter_s=shutter_s)
+    info = cycles_render.render(scene, vdb, out, SAMPLES, quiet=True, shutter_s=shutter_s)
+    print(f"{out.name}: {info['render_s']:.1f} s")
     return compare.read_rgba(out)[..., :3].sum(axis=-1).astype(np.float64)
 
 
@@ -104,13 +111,13 @@ def test_the_add_on_sets_the_velocity_grid(tmp_path, addon, fresh):
 
 
 def test_cycles_blur_from_v_matches_the_sub_frame_average(tmp_path, cycles_render, compare):
-    scene, vdb = bake(tmp_path, "v", 0.0, True)
+    scene, vdb = bake(tmp_path, "v", T0, True)
     blurred = cycles(cycles_render, compare, scene, vdb, tmp_path / "blurred.exr", SHUTTER_S)
     sharp = cycles(cycles_render, compare, scene, vdb, tmp_path / "sharp.exr")
     k = 8
     reference = 0.0
     for i in range(k):
-        t = ((i + 0.5) / k - 0.5) * SHUTTER_S
+        t = T0 + ((i + 0.5) / k - 0.5) * SHUTTER_S
         s, v = bake(tmp_path, f"t{i}", t, False)
         reference = reference + cycles(cycles_render, compare, s, v, tmp_path / f"t{i}.exr") / k
     e_blur, e_sharp = rel_l1(blurred, reference), rel_l1(sharp, reference)

@@ -594,11 +594,7 @@ impl Tracer<'_> {
         }
         let photons = (bufs.photons.len() - first_photon) as u32;
         out.bufs = bufs;
-        out.beams.push(BeamOut {
-            power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s],
-            end: t.end,
-            photons,
-        });
+        out.beams.push(BeamOut { power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s], end: t.end, photons });
     }
 }
 
