@@ -121,5 +121,8 @@ def test_cycles_blur_from_v_matches_the_sub_frame_average(tmp_path, cycles_rende
         s, v = bake(tmp_path, f"t{i}", t, False)
         reference = reference + cycles(cycles_render, compare, s, v, tmp_path / f"t{i}.exr") / k
     e_blur, e_sharp = rel_l1(blurred, reference), rel_l1(sharp, reference)
+    # The floor: 8 shutter times against Cycles' continuous shutter, each
+    # sub-frame bake regridding the shifted pattern, and Cycles' noise at
+    # 16 samples; measured 0.28 % against 1.42 % for the sharp frame.
     print(f"Cycles: blurred {e_blur:.4f}, sharp {e_sharp:.4f}")
-    assert e_blur < 0.4 * e_sharp, (e_blur, e_sharp)
+    assert e_blur < 0.01 and e_blur < 0.4 * e_sharp, (e_blur, e_sharp)
