@@ -110,11 +110,23 @@ mod tests {
         // The hash of a scene with `animation.trail_samples = 0` is the hash
         // of its TOML without that line: what it was before the key existed,
         // so a bake that leaves the key off keeps its files.
+        // The same for `grid.velocity = false` and `render.shutter_s = 0.0`.
         let s = Scene::default();
-        assert!(s.to_toml().contains("\ntrail_samples = 0\n"));
-        assert_eq!(s.hash(), fnv1a(s.to_toml().replacen("\ntrail_samples = 0\n", "\n", 1).as_bytes()));
+        let lines = ["\ntrail_samples = 0\n", "\nvelocity = false\n", "\nshutter_s = 0.0\n"];
+        let mut before = s.to_toml();
+        for l in lines {
+            assert!(before.contains(l), "{l}");
+            before = before.replacen(l, "\n", 1);
+        }
+        assert_eq!(s.hash(), fnv1a(before.as_bytes()));
         let mut t = s.clone();
         t.animation.trail_samples = 4;
+        assert_ne!(t.hash(), s.hash());
+        let mut t = s.clone();
+        t.grid.velocity = true;
+        assert_ne!(t.hash(), s.hash());
+        let mut t = s.clone();
+        t.render.shutter_s = 0.5;
         assert_ne!(t.hash(), s.hash());
         // Read back, the TOML without the line is the same scene.
         let back = Scene::from_toml_str(&s.to_toml().replace("\ntrail_samples = 0\n", "\n"), "t.toml").unwrap();
