@@ -42,6 +42,8 @@ from .vdb_pad import has_cycles_shell, pad_vdb
 
 VDB_SUFFIXES = {".vdb"}
 USD_SUFFIXES = {".usd", ".usda", ".usdc", ".usdz"}
+# The bake's velocity grid (`grid.velocity`), km/s: Blender's and Houdini's name.
+VELOCITY_GRID = "v"
 #: Blender units per metre (1 BU = 1 km).
 BU_PER_METRE = 1.0e-3
 
@@ -111,6 +113,7 @@ def import_aurora(
         if not (has_density or has_emission):
             raise AuroraImportError(f"{path}: no `density` or `emission` grid (found: {sorted(grids) or 'none'})")
         has_high = _high_column(path, grids, has_density, has_emission)
+        set_velocity_grid(vol, grids)
         vol.render.precision = "FULL"
         vol.render.clipping = 0.0
         vol.render.space = "OBJECT"
@@ -214,6 +217,20 @@ def set_scene_fps(scene: bpy.types.Scene, fps: float) -> None:
     whole = max(1, round(fps))
     scene.render.fps = whole
     scene.render.fps_base = whole / fps
+
+
+def set_velocity_grid(vol: bpy.types.Volume, grids: dict[str, str]) -> bool:
+    """Motion blur from the bake's velocity grid `v` (`grid.velocity = true`),
+    when the file holds it: km/s in the VDB's own units (1 unit = 1 km), which
+    are the Volume's object space whatever the import's units (the object's
+    scale maps km to the scene), so Blender reads it per second at scale 1.
+    True when set."""
+    if grids.get(VELOCITY_GRID) != "VECTOR_FLOAT":
+        return False
+    vol.velocity_grid = VELOCITY_GRID
+    vol.velocity_unit = "SECOND"
+    vol.velocity_scale = 1.0
+    return True
 
 
 def _high_column(path, grids: dict[str, str], has_density: bool, has_emission: bool) -> bool:

@@ -207,7 +207,9 @@ fn prepare(
     vdb: Option<&Path>,
     progress: &dyn Progress,
 ) -> Result<(Prepared, f64, f64)> {
-    if let Some(path) = vdb {
+    // The motion blur reads the velocity grid `v` beside the medium: from grids.
+    let blur = scene.render.shutter_s > 0.0;
+    if let (Some(path), false) = (vdb, blur) {
         return aurora::app::vdb_for_render::prepare_from_vdb(settings, path).map_err(|e| {
             if e.is_input() {
                 InputError(e.to_string()).into()
@@ -216,14 +218,41 @@ fn prepare(
             }
         });
     }
+    let no_velocity = |source: String| {
+        InputError(format!(
+            "render.shutter_s = {} blurs along the velocity grid `v`, which {source} does not hold: bake it with grid.velocity = true (or set render.shutter_s = 0)",
+            scene.render.shutter_s
+        ))
+    };
+    let mut velocity = None;
     let open = std::time::Instant::now();
-    let bake = aurora::pipeline::bake::bake(scene, progress)?;
-    print_warnings(&bake.stats.warnings);
-    let (density, emission) = (Some(bake.density), Some(bake.emission));
+    let (density, emission) = match vdb {
+        Some(path) => {
+            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            if blur {
+                let v = file.vec3_grids.iter().find(|g| g.name == aurora::pipeline::bake::velocity::GRID_NAME).cloned();
+                velocity = Some(v.ok_or_else(|| no_velocity(path.display().to_string()))?);
+            }
+            aurora::app::vdb_for_render::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+        }
+        None => {
+            if blur && !scene.grid.velocity {
+                return Err(no_velocity("the bake".to_string()).into());
+            }
+            let bake = aurora::pipeline::bake::bake(scene, progress)?;
+            print_warnings(&bake.stats.warnings);
+            velocity = bake.velocity;
+            (Some(bake.density), Some(bake.emission))
+        }
+    };
     let open_seconds = open.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
-    Ok((Prepared::new(settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
+    let mut prepared = Prepared::new(settings, &volume)?;
+    if let Some(v) = velocity {
+        prepared = prepared.with_velocity(v)?;
+    }
+    Ok((prepared, open_seconds, build.elapsed().as_secs_f64()))
 }
 
 /// The renderer prepared for `--grid NAME`: the float grid `name` as a

@@ -165,6 +165,13 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
         let units = "line_NAME grids: volume emission rate in rayleigh per km (10 photons cm^-3 s^-1), no colour noise, not pruned";
         m.push(("aurora_line_units".into(), MetaValue::String(units.into())));
     }
+    if scene.grid.velocity {
+        // Only with the velocity grid, so the default file is unchanged.
+        let units = "v: the emission pattern's velocity in km/s (1 unit = 1 km), a central difference over t +- dt";
+        m.push(("aurora_velocity_units".into(), MetaValue::String(units.into())));
+        m.push(("aurora_velocity_fps".into(), MetaValue::Double(scene.animation.fps)));
+        m.push(("aurora_velocity_dt_s".into(), MetaValue::Double(crate::pipeline::bake::velocity::dt_s(&scene.animation))));
+    }
     m
 }
 
@@ -174,12 +181,14 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
 /// ZIP (a valid zlib stream, three to four times faster to write than
 /// OpenVDB's zlib at level 6).
 pub fn write_options(scene: &Scene) -> WriteOptions {
-    let half = [(scene.grid.half_density, "density"), (scene.grid.half_emission, "emission")]
+    // The velocity grid `v`, when written, is stored as the emission is.
+    let v = scene.grid.velocity.then_some(crate::pipeline::bake::velocity::GRID_NAME);
+    let half = [(scene.grid.half_density, Some("density")), (scene.grid.half_emission, Some("emission")), (scene.grid.half_emission, v)]
         .into_iter()
-        .filter(|(on, _)| *on)
-        .map(|(_, name)| name.to_string())
+        .filter_map(|(on, name)| name.filter(|_| on))
+        .map(|name| name.to_string())
         .collect();
-    let mantissa_bits = ["density", "emission"].map(|g| (g.to_string(), scene.grid.mantissa_bits)).to_vec();
+    let mantissa_bits = ["density", "emission"].into_iter().chain(v).map(|g| (g.to_string(), scene.grid.mantissa_bits)).collect();
     WriteOptions { compression: scene.grid.compression, half, mantissa_bits, deflate: Deflate::Fast, metadata: vdb_metadata(scene) }
 }
 
@@ -226,6 +235,9 @@ pub fn stage_fields(scene: &Scene) -> Vec<(String, &'static str)> {
         f.push((format!("emission{}", crate::grid::high_column::HIGH_SUFFIX), "float3"));
     }
     f.extend(scene.grid.lines.iter().map(|k| (crate::physics::emission::line_table::grid_name(k), "float")));
+    if scene.grid.velocity {
+        f.push((crate::pipeline::bake::velocity::GRID_NAME.to_string(), "float3"));
+    }
     f
 }
 
@@ -311,7 +323,7 @@ pub(crate) struct UnitFiles {
 /// caller). `identity` is the bake's ([`BakeIdentity`]; a frame's is its
 /// sequence's, the same for every frame).
 pub(crate) fn unit_report(scene: &Scene, bake: &Bake, identity: &BakeIdentity) -> serde_json::Value {
-    json!({
+    let mut report = json!({
         "aurora_version": env!("CARGO_PKG_VERSION"),
         "bake_identity": identity.to_json(),
         "scene_hash": format!("{:016x}", scene.hash()),
@@ -320,7 +332,18 @@ pub(crate) fn unit_report(scene: &Scene, bake: &Bake, identity: &BakeIdentity) -
         "units": "km",
         "threads": rayon::current_num_threads(),
         "stats": bake.stats,
-    })
+    });
+    if bake.velocity.is_some() {
+        // Only with the velocity grid, so the default report is unchanged.
+        report["velocity"] = json!({
+            "grid": crate::pipeline::bake::velocity::GRID_NAME,
+            "units": "km/s",
+            "fps": scene.animation.fps,
+            "dt_s": crate::pipeline::bake::velocity::dt_s(&scene.animation),
+            "method": "central difference of the closed-form motion over t +- dt, luminance-weighted per voxel",
+        });
+    }
+    report
 }
 
 /// An output unit written in full to temporaries, not yet visible: its
@@ -361,6 +384,8 @@ pub(crate) fn stage_unit(
         None => vec![GridRef::Float(&bake.density), GridRef::Vec3(&bake.emission)],
     };
     grids.extend(bake.lines.iter().map(GridRef::Float));
+    // The velocity on the emission's voxels, whole (not split at a high column).
+    grids.extend(bake.velocity.iter().map(GridRef::Vec3));
     let (options, full_float) = fit_half(options, &grids);
     let stats = write_vdb_into(&mut vdb_tmp, &grids, &options)
         .map_err(|e| OutputError::Write { path: vdb_path.clone(), message: e.to_string() })?;

@@ -26,12 +26,12 @@
 //! and read linearly between; the step is 1/20 of a degree, finer than the
 //! pixels of any camera wider than 32 degrees at 640 pixels.
 
-use crate::util::observer::Observer;
 use crate::geometry::earth::{Earth, MEAN_RADIUS_KM};
 use crate::physics::air_extinction::{air_mass, Air};
 use crate::physics::airglow::{key_r, slant_factor, LAYERS};
 use crate::physics::emission::line_colour::line_rgb;
 use crate::scene::{AirglowParams, SkyParams};
+use crate::util::observer::Observer;
 use glam::DVec3;
 
 /// Elevation step of the table, degrees.

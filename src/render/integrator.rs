@@ -9,9 +9,10 @@
 //! only on (seed, pixel index), never on the thread count or the order.
 
 use super::image::{Image, RenderStats};
-use super::march::{optical_depth_along_ray, radiance_along_ray};
+use super::march::{optical_depth_along_ray, radiance_advected, radiance_along_ray};
 use super::prepared::Prepared;
 use super::sampler::{pixel_position, pixel_rng};
+use super::settings::Integration;
 use super::settings::{RenderError, RenderSettings, Volume};
 use super::shadow::estimate_irradiance;
 use crate::util::progress::Progress;
@@ -42,6 +43,12 @@ impl Prepared {
         let mut st = self.pixel_start(px, py);
         self.trace_samples(px, py, &mut st, spp, n);
         st.sum.map(|v| (v / spp as f64) as f32)
+    }
+
+    /// The motion blur's march step: half the finest voxel (the advected
+    /// lookups leave the dual cells, so the exact walk does not apply).
+    fn blur_step(&self) -> f64 {
+        0.5 * self.medium.fields.iter().map(|f| f.transform.voxel_size).fold(f64::INFINITY, f64::min)
     }
 
     /// A pixel's random stream and sample shift, nothing traced yet.
@@ -78,7 +85,20 @@ impl Prepared {
             };
             let hit = self.terrain.intersect(ray.origin, ray.dir, 0.0, f64::INFINITY);
             let t_end = hit.map_or(f64::INFINITY, |h| h.t);
-            let vol = radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset);
+            let vol = match (&self.velocity, s.render.shutter_s > 0.0) {
+                (Some(v), true) => {
+                    // The sample's shutter time: a golden-ratio sequence over the
+                    // pixel's samples from its own shift, uniform on the shutter.
+                    let u = (0.5 + st.shift[0] + st.shift[1] + i as f64 * GOLDEN).fract();
+                    let tau = (u - 0.5) * s.render.shutter_s;
+                    let h = match s.integration {
+                        Integration::FixedStep(h) => h,
+                        Integration::Exact => self.blur_step(),
+                    };
+                    radiance_advected(&self.medium, v, ray.origin, ray.dir, t_end, h, offset, tau)
+                }
+                _ => radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset),
+            };
             let t = vol.transmittance();
             n.primary += 1;
             n.work += vol.work;
@@ -126,6 +146,10 @@ impl Prepared {
         }
     }
 }
+
+/// The golden ratio's fractional part: the shutter times of a pixel's
+/// samples, `frac(c + i GOLDEN)`, fill the shutter evenly for any count.
+const GOLDEN: f64 = 0.618_033_988_749_894_9;
 
 /// One pixel's samples so far: its random stream, the sum of its samples
 /// and the statistics of its antithetic pairs' means (R + G + B).
@@ -175,6 +199,12 @@ pub fn render(settings: &RenderSettings, volume: &Volume<'_>, progress: &dyn Pro
 pub fn render_prepared(prepared: &Prepared, progress: &dyn Progress) -> Result<Image, RenderError> {
     if prepared.settings.render.spp == 0 {
         return Err(RenderError::Settings("render.spp must be at least 1".into()));
+    }
+    let shutter = prepared.settings.render.shutter_s;
+    if shutter > 0.0 && prepared.velocity.is_none() {
+        return Err(RenderError::Settings(format!(
+            "render.shutter_s = {shutter} blurs along the velocity grid `v`, which the volume does not hold: bake it with grid.velocity = true, or set render.shutter_s = 0"
+        )));
     }
     let build_seconds = 0.0;
     let (w, h) = (prepared.camera.width, prepared.camera.height);

@@ -31,9 +31,18 @@ pub struct Prepared {
     /// The airglow's radiance per direction (`[airglow]`), None when off.
     pub(super) airglow: Option<Airglow>,
     pub(super) settings: RenderSettings,
+    /// The velocity grid of the motion blur (`render.shutter_s`), if given.
+    pub(super) velocity: Option<super::medium::velocity::Velocity>,
 }
 
 impl Prepared {
+    /// The velocity grid `v` the motion blur of `render.shutter_s` advects
+    /// the lookups along (`medium::velocity`).
+    pub fn with_velocity(mut self, v: Grid<[f32; 3]>) -> Result<Prepared, RenderError> {
+        self.velocity = Some(super::medium::velocity::Velocity::new(v)?);
+        Ok(self)
+    }
+
     /// Validates the settings and builds everything the pixel loop reads.
     pub fn new(settings: &RenderSettings, volume: &Volume<'_>) -> Result<Prepared, RenderError> {
         let camera = Self::check(settings)?;
@@ -114,7 +123,8 @@ impl Prepared {
         let same_glow =
             o.airglow == s.airglow && o.sky == s.sky && o.camera.position == s.camera.position && o.earth_radius_km == s.earth_radius_km;
         let airglow = if same_glow { old.airglow } else { observer_airglow(s) };
-        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: s.clone() };
+        let velocity = if grids_changed { None } else { old.velocity };
+        let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: s.clone(), velocity };
         if !grids_changed && o.volume != s.volume {
             // The kept medium and sampler still carry the old scales.
             prepared.set_volume_scales(s.volume.density_scale, s.volume.emission_scale)?;
@@ -222,7 +232,7 @@ impl Prepared {
         let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
         let air = observer_air(settings);
         let airglow = observer_airglow(settings);
-        Ok(Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: settings.clone() })
+        Ok(Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: settings.clone(), velocity: None })
     }
 
     pub(super) fn shadow_scene(&self) -> ShadowScene<'_> {

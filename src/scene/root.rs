@@ -40,11 +40,11 @@ pub struct Scene {
     pub overrides: Vec<String>,
 }
 
-/// Keys added with a default of 0 that means "off", left out of
+/// Keys added with a default of 0 (or false) that means "off", left out of
 /// [`Scene::hash`] and of the bake identity (`crate::pipeline::bake::identity`) while
-/// 0: a scene that does not set them keeps the hash it had before they
+/// off: a scene that does not set them keeps the hash it had before they
 /// existed, and its bake is the same.
-pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples"];
+pub const OFF_WHEN_ZERO: &[&str] = &["animation.trail_samples", "grid.velocity", "render.shutter_s"];
 
 impl Scene {
     /// The scene as TOML, as `aurora scene default` prints it.
@@ -60,12 +60,14 @@ impl Scene {
         let mut text = self.to_toml();
         for key in OFF_WHEN_ZERO {
             let (table, name) = key.split_once('.').expect("a dotted key");
-            let line = format!("{name} = 0\n");
-            if let Some(start) = text.find(&format!("[{table}]\n")) {
-                let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
-                if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
-                    if text[..i].ends_with('\n') {
-                        text.replace_range(i..i + line.len(), "");
+            for off in ["0", "0.0", "false"] {
+                let line = format!("{name} = {off}\n");
+                if let Some(start) = text.find(&format!("[{table}]\n")) {
+                    let end = text[start + 1..].find("\n[").map_or(text.len(), |e| start + 1 + e);
+                    if let Some(i) = text[start..end].find(&line).map(|i| start + i) {
+                        if text[..i].ends_with('\n') {
+                            text.replace_range(i..i + line.len(), "");
+                        }
                     }
                 }
             }
@@ -110,11 +112,23 @@ mod tests {
         // The hash of a scene with `animation.trail_samples = 0` is the hash
         // of its TOML without that line: what it was before the key existed,
         // so a bake that leaves the key off keeps its files.
+        // The same for `grid.velocity = false` and `render.shutter_s = 0.0`.
         let s = Scene::default();
-        assert!(s.to_toml().contains("\ntrail_samples = 0\n"));
-        assert_eq!(s.hash(), fnv1a(s.to_toml().replacen("\ntrail_samples = 0\n", "\n", 1).as_bytes()));
+        let lines = ["\ntrail_samples = 0\n", "\nvelocity = false\n", "\nshutter_s = 0.0\n"];
+        let mut before = s.to_toml();
+        for l in lines {
+            assert!(before.contains(l), "{l}");
+            before = before.replacen(l, "\n", 1);
+        }
+        assert_eq!(s.hash(), fnv1a(before.as_bytes()));
         let mut t = s.clone();
         t.animation.trail_samples = 4;
+        assert_ne!(t.hash(), s.hash());
+        let mut t = s.clone();
+        t.grid.velocity = true;
+        assert_ne!(t.hash(), s.hash());
+        let mut t = s.clone();
+        t.render.shutter_s = 0.5;
         assert_ne!(t.hash(), s.hash());
         // Read back, the TOML without the line is the same scene.
         let back = Scene::from_toml_str(&s.to_toml().replace("\ntrail_samples = 0\n", "\n"), "t.toml").unwrap();

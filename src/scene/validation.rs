@@ -17,6 +17,10 @@ pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
 /// Largest seed: TOML integers are signed 64-bit, so a scene (and the
 /// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
 pub const MAX_SEED: u64 = i64::MAX as u64;
+/// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
+/// far beyond a frame (the aurora's fastest rays cross 250 km in it).
+pub const MAX_SHUTTER_S: f64 = 10.0;
+
 /// Largest `render.spp` (also the `--spp` flag's).
 pub const MAX_SPP: u64 = 65_536;
 /// Largest `--shadow-samples` per terrain hit per pixel sample.
@@ -393,6 +397,7 @@ impl Scene {
         if !matches!(r.png_bits, 8 | 16) {
             v.push(t, "png_bits", r.png_bits.to_string(), "must be 8 or 16".into());
         }
+        v.range(t, "shutter_s", r.shutter_s, 0.0, MAX_SHUTTER_S, true);
         let vol = &self.volume;
         let t = Some(("volume", 0));
         v.range(t, "density_scale", vol.density_scale, 0.0, 1e9, true);

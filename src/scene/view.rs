@@ -58,11 +58,16 @@ pub struct RenderParams {
     /// Bits per channel of the PNG: 8, or 16 for delivery (a dome master's
     /// frames: the fulldome show file format takes 8-16 bit PNG or TIFF).
     pub png_bits: u32,
+    /// Shutter time, s, of the reference renderer's motion blur: each
+    /// camera sample reads the fields at `p - v(p) tau`, tau uniform over
+    /// [-shutter_s / 2, shutter_s / 2], as Cycles does with a velocity grid
+    /// (the bake's `v`: `grid.velocity = true`). 0: no blur.
+    pub shutter_s: f64,
 }
 
 impl Default for RenderParams {
     fn default() -> Self {
-        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx, png_bits: 8 }
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx, png_bits: 8, shutter_s: 0.0 }
     }
 }
 

@@ -25,3 +25,4 @@ mod pipeline;
 mod presets;
 mod published;
 mod trail;
+mod velocity;

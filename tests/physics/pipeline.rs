@@ -75,6 +75,7 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
         voxel_source: source,
         warnings: Vec::new(),
         noise: None,
+        velocity: None,
     };
     let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);

@@ -16,5 +16,6 @@ mod closed_forms;
 mod extinction;
 mod film;
 mod integrator;
+mod motion_blur;
 mod terrain;
 mod zenith;

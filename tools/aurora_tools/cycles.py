@@ -41,7 +41,8 @@ DEFAULT_SAMPLES = 128
 
 
 def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=None, seed: int = 0,
-           quiet: bool = False, pad: bool = True, adaptive_threshold: float | None = None, **overrides) -> dict:
+           quiet: bool = False, pad: bool = True, adaptive_threshold: float | None = None,
+           shutter_s: float | None = None, **overrides) -> dict:
     """Render and write `out`; returns timings and settings (for reports):
     setup_s (scene set-up, padding included), render_s and render_cpu_s (wall
     and process CPU time of bpy.ops.render.render: Cycles' sync, the VDB load,
@@ -53,7 +54,10 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
     adaptive_threshold: None keeps the add-on's setting (adaptive sampling
     off); a number turns Cycles' adaptive sampling on with that noise
     threshold (Blender's default is 0.01) and automatic minimum samples;
-    `samples` is then the maximum per pixel."""
+    `samples` is then the maximum per pixel.
+    shutter_s: None or 0 keeps motion blur off; seconds of shutter centred
+    on the frame turn it on (Cycles advects the volume along its velocity
+    grid, set by the add-on when the VDB holds `v`)."""
     import bpy
 
     addon = load_addon()
@@ -65,6 +69,10 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         built = addon.setup_scene_from_toml(scene_toml, vdb=vdb, terrain_obj=terrain_obj, settings=settings,
                                             pad_dir=tmp if pad else None)
         scene = bpy.context.scene
+        if shutter_s:
+            scene.render.use_motion_blur = True
+            scene.render.motion_blur_position = "CENTER"
+            scene.render.motion_blur_shutter = shutter_s * scene.render.fps / scene.render.fps_base
         if adaptive_threshold is not None:
             scene.cycles.use_adaptive_sampling = True
             scene.cycles.adaptive_threshold = adaptive_threshold
@@ -99,6 +107,7 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         "aurora_terrain_lighting": s.terrain_lighting if built.terrain is not None else "no terrain",
         "aurora_emission_lights": len(built.lights),
         "aurora_vdb_padded": "yes" if pad else "no",
+        "aurora_motion_blur_s": shutter_s or 0.0,
         "aurora_adaptive_sampling": (f"on, threshold {adaptive_threshold}" if scene.cycles.use_adaptive_sampling
                                      else "off"),
     }

@@ -40,6 +40,7 @@ use serde::{Deserialize, Serialize};
 pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.spp", "samples per pixel of the reference renderer; the bake traces no pixel"),
     ("render.exposure", "the PNG preview's exposure, a tone map of the rendered image"),
+    ("render.shutter_s", "the reference renderer's motion blur, read from the velocity grid at lookup"),
     ("render.view_transform", "the PNG preview's view transform, a tone map of the rendered image"),
     ("render.png_bits", "the PNG's bits per channel, an encoding of the rendered image"),
     ("volume", "density_scale and emission_scale are applied by the renderer at lookup; the files hold the unscaled grids"),
@@ -98,7 +99,7 @@ pub fn bake_keys_json(scene: &Scene) -> String {
         remove_key(&mut v, key);
     }
     for key in crate::scene::OFF_WHEN_ZERO {
-        if lookup(&v, key).is_some_and(|x| x.as_u64() == Some(0)) {
+        if lookup(&v, key).is_some_and(|x| x.as_u64() == Some(0) || x.as_f64() == Some(0.0) || x.as_bool() == Some(false)) {
             remove_key(&mut v, key);
         }
     }

@@ -25,6 +25,7 @@ pub mod pilot;
 pub mod plan;
 pub mod result;
 pub mod stats;
+pub mod velocity;
 pub mod voxel;
 
 pub use result::{empty_reason, Bake, BakeError};

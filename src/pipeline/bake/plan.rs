@@ -297,6 +297,19 @@ impl BakePlan {
         }
     }
 
+    /// What the velocity grid reads of the plan (`super::velocity`).
+    pub fn motion(&self) -> super::velocity::Motion<'_> {
+        super::velocity::Motion {
+            seed: self.seed,
+            curtains: &self.curtains,
+            footprint: &self.footprint,
+            animation: &self.animation,
+            beams: &self.beams,
+            earth: &self.earth,
+            now: &self.footprints,
+        }
+    }
+
     /// The scene's camera model.
     pub fn camera_model(&self) -> Result<CameraModel, CameraError> {
         CameraModel::new(&self.camera, self.width, self.height)
@@ -360,6 +373,7 @@ pub fn trace_trail(plan: &BakePlan, count: usize, n: u32, progress: &dyn Progres
             Some(o) => {
                 o.photons.extend(t.photons);
                 o.line_power.extend(t.line_power);
+                o.beam_photons.extend(t.beam_photons);
             }
         }
     }
@@ -444,6 +458,9 @@ pub struct Gathered {
     /// Warnings so far (resolution, pilot).
     pub warnings: Vec<String>,
     pub noise: Option<NoiseEstimate>,
+    /// With `grid.velocity`, the luminance-weighted velocity gathered like
+    /// the emission ([`super::velocity::weighted_photons`]).
+    pub velocity: Option<Grid<[f32; 3]>>,
 }
 
 /// What [`finish`] needs of `photons` (their per-line grids `lines`, their
@@ -465,7 +482,7 @@ pub fn gathered(
     warnings.extend(bend_warnings(&plan.curtains));
     warnings.extend(beams::loss_warnings(&beam_stats));
     warnings.extend(earlier.iter().cloned());
-    Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise }
+    Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise, velocity: None }
 }
 
 /// Traces `count` beams, picks the voxel size and gathers: stages 2 and 3.
@@ -485,7 +502,12 @@ pub fn trace_and_gather(
     let voxel = plan.voxel_size(&traced.photons);
     let emission = gather(plan, &traced.photons, voxel.0, progress);
     let lines = line_grids(plan, &traced.photons, &traced.line_power, voxel.0, progress);
-    let g = gathered(plan, traced.photons, lines, traced.stats, voxel, &warnings, noise);
+    let velocity = plan.grid.velocity.then(|| {
+        let v = super::velocity::beam_velocities(&plan.motion(), count);
+        gather(plan, &super::velocity::weighted_photons(&traced, &v), voxel.0, progress)
+    });
+    let mut g = gathered(plan, traced.photons, lines, traced.stats, voxel, &warnings, noise);
+    g.velocity = velocity;
     times.gather = t.elapsed().as_secs_f64();
     Ok((emission, g))
 }
@@ -575,7 +597,7 @@ pub fn finish_keeping(
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<(Bake, DroppedLeaves), BakeError> {
-    let Gathered { photons, mut lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise } = g;
+    let Gathered { photons, mut lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise, velocity } = g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
     }
@@ -615,12 +637,17 @@ pub fn finish_keeping(
     progress.finish();
     warnings.extend(half_warnings(&plan.grid, peak, &density));
     let (aurora_voxels, aurora_leaves) = (emission.active_voxel_count(), emission.leaf_count());
+    // On the kept voxels, before the shell (whose zeros are at rest).
+    let mut velocity = velocity.map(|num| super::velocity::velocity_grid(&emission, &num));
     let shell_voxels = if plan.grid.cycles_shell {
         // Both grids live on the same voxels: the density takes the
         // emission's dilation rather than computing it again.
         let n = emission.dilate_active();
         let m = density.activate_like(&emission);
         debug_assert_eq!(n, m, "both grids live on the same voxels");
+        if let Some(v) = velocity.as_mut() {
+            v.activate_like(&emission);
+        }
         n
     } else {
         0
@@ -665,5 +692,5 @@ pub fn finish_keeping(
         prune: prune_stats,
         warnings,
     };
-    Ok((Bake { emission, density, lines, photons, stats }, dropped))
+    Ok((Bake { emission, density, lines, velocity, photons, stats }, dropped))
 }

@@ -17,6 +17,9 @@ pub struct Bake {
     /// The per-line grids of `grid.lines`, rayleigh per km
     /// (`crate::physics::emission::line_table`), unpruned; empty by default.
     pub lines: Vec<Grid<f32>>,
+    /// With `grid.velocity`, the emission pattern's velocity `v`, km/s, on
+    /// the emission's active voxels (`super::velocity`).
+    pub velocity: Option<Grid<[f32; 3]>>,
     pub photons: Vec<Photon>,
     pub stats: BakeStats,
 }

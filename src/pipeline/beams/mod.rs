@@ -310,12 +310,17 @@ pub struct Traced {
     /// Per photon, the powers of `TraceParams::line_outputs` in that order
     /// (`line_outputs.len()` values a photon; empty without outputs).
     pub line_power: Vec<f32>,
+    /// Photons of each traced beam, in beam order: beam k's photons follow
+    /// the first k's (`crate::pipeline::bake::velocity` gives each its beam's velocity).
+    pub beam_photons: Vec<u32>,
 }
 
 /// How a beam ended and where its power went, kept until the curtain's
 /// beams are tallied.
 struct BeamOut {
     end: EndReason,
+    /// Photons the beam left.
+    photons: u32,
     /// keV/s: deposited, backscattered, above the top, undeposited.
     power: [f64; 4],
 }
@@ -384,13 +389,15 @@ pub fn trace_range(
     let chunks = || traced.iter().flat_map(|(_, c)| c);
     let mut photons = Vec::with_capacity(chunks().map(|c| c.bufs.photons.len()).sum());
     let mut line_power = Vec::with_capacity(chunks().map(|c| c.bufs.line_power.len()).sum());
+    let mut beam_photons = Vec::with_capacity(chunks().map(|c| c.beams.len()).sum());
     for (ci, chunks) in traced {
+        beam_photons.extend(chunks.iter().flat_map(|c| c.beams.iter().map(|b| b.photons)));
         tally(&mut stats, ci, chunks, &mut photons, &mut line_power, &mut all_deposits[ci]);
     }
     sum_curtains(&mut stats);
     stats.photons = photons.len();
     progress.finish();
-    Ok(Traced { photons, stats, deposits: all_deposits, line_power })
+    Ok(Traced { photons, stats, deposits: all_deposits, line_power, beam_photons })
 }
 
 /// The beams of `range` (bake indices) that belong to the curtain whose `n`
@@ -585,8 +592,9 @@ impl Tracer<'_> {
             // The point estimator: each step's power at its end.
             bufs.photons[first_photon..].iter_mut().for_each(|p| *p = p.to_point());
         }
+        let photons = (bufs.photons.len() - first_photon) as u32;
         out.bufs = bufs;
-        out.beams.push(BeamOut { power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s], end: t.end });
+        out.beams.push(BeamOut { power: [deposited, t.backscatter_kev_s, t.above_top_kev_s, t.undeposited_kev_s], end: t.end, photons });
     }
 }
 

@@ -29,6 +29,7 @@
 //!   a scaled peak that cannot overflow the film);
 //! - `build.rs`: the one parallel pass from [`LeafSource`]s to a field,
 //!   with its memory check;
+//! - `velocity.rs`: the velocity grid the motion blur advects lookups along;
 //! - here: the [`Medium`], which channel of which field holds sigma_t and
 //!   emission, and the volume scales applied at lookup.
 //!
@@ -39,6 +40,7 @@ pub mod check;
 mod dual;
 pub mod field;
 pub mod layout;
+pub mod velocity;
 
 use crate::grid::leaf_source::{GridSource, LeafSource};
 use crate::grid::Grid;
