@@ -489,12 +489,14 @@ mod tests {
     fn default_scene_fits_in_a_few_gib_and_the_bound_is_above_what_it_uses() {
         let s = Scene::default();
         let e = estimate(&s);
-        // Measured: 643 MB peak resident for the default bake with its VDB
-        // write (`/usr/bin/time -v aurora bake`, 2026-11-29, with the
-        // columns above the starts); the bound is above it and below 6 GiB
-        // (4.0 GiB: the box and column bounds count every leaf of the
-        // footprints' bounding boxes, where the curtains fill a band).
-        assert!(e.total() > 0.643e9 && e.total() < 6.0 * GIB, "{} GiB", e.total() / GIB);
+        // Measured: 727 MB peak resident for the default bake with its VDB
+        // write (`/usr/bin/time -v aurora bake`, 2026-12-05, the vortex
+        // sheet's 300-460 km curtains); the bound is above it and below
+        // 8 GiB (7.1 GiB: the box and column bounds count every leaf of the
+        // footprints' bounding boxes, where the curtains fill a thin sheet,
+        // so the bound grows with the curtains' length far faster than the
+        // bake does).
+        assert!(e.total() > 0.727e9 && e.total() < 8.0 * GIB, "{} GiB", e.total() / GIB);
     }
 
     #[test]

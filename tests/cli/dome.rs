@@ -26,6 +26,9 @@ fov_deg = 180.0
 width = 24
 height = 24
 spp = 1
+
+[terrain]
+kind = "none"
 "#
 );
 

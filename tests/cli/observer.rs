@@ -45,8 +45,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 fn curtain_hue(observer: &str) -> (f64, f64, usize) {
     let dir = scratch("observer", observer);
     let png = dir.join("arc.png");
-    // No stars (white points) and no air density in the volume: the curtain alone.
-    let sets = ["background.stars=false", "grid.density_a=0", "beams.count=4000"];
+    // No stars (white points), no airglow (the sky's own lines) and no air
+    // density in the volume: the curtain alone.
+    let sets = ["background.stars=false", "airglow.on=false", "grid.density_a=0", "beams.count=4000"];
     let mut cmd = Aurora::new().args(["render", "quiet_arc", "--size", "240x135", "--spp", "2", "--threads", "2", "-q", "--png"]).arg(&png);
     for s in sets.iter().map(|s| s.to_string()).chain([format!("colour.observer={observer}")]) {
         cmd = cmd.args(["--set", &s]);

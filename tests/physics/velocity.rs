@@ -119,8 +119,12 @@ fn a_drifting_curtain_moves_at_the_derivative_of_its_drift() {
 fn running_rays_move_along_the_curtain_at_their_speed() {
     // Only the rays run: the start-height and colour noise is read at
     // u - ray_speed t, so the pattern moves along the curtain (x) at
-    // ray_speed_kms = 10 km/s, and nothing moves across it.
+    // ray_speed_kms = 10 km/s, and nothing moves across it. The 2014
+    // footprint's rays are that noise alone; the sheet's rays run along its
+    // rolled-up markers, so their speed in the world is ray_speed times the
+    // sheet's local stretch (its start map carries them, `bake::velocity`).
     let mut s = straight_scene();
+    s.footprint.model = aurora::scene::FootprintModel::Fluid2014;
     s.animation.ray_speed_kms = 10.0;
     let b = bake::bake(&s, &NoProgress).unwrap();
     let m = weighted_velocity(&b);

@@ -151,7 +151,13 @@ fn under_resolved_kernels_and_curtains_are_warned_on_stderr() {
     // (0.7 km), on 1 km voxels.
     let (o, _) = run(
         "curtain",
-        scene_text("count = 20", "radius_km = 1.0", "voxel_size = 1.0", "steps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02", ""),
+        scene_text(
+            "count = 20",
+            "radius_km = 1.0",
+            "voxel_size = 1.0",
+            "model = \"fluid2014\"\nsteps = 0\nvelocity_amplitude = 0.0\nband_fraction = 0.02",
+            "",
+        ),
     );
     let e = stderr(&o);
     assert!(o.status.success(), "{e}");

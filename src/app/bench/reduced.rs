@@ -148,8 +148,11 @@ mod tests {
         assert!((wl(&s) - wl(&r.scene)).abs() < 1e-9);
         let bend = |sc: &Scene| sc.curtains[0].length * sc.footprint.bend_wavelength;
         assert!((bend(&s) - bend(&r.scene)).abs() < 1e-9);
-        // Cell size along the curtain.
-        let cell = |sc: &Scene| sc.curtains[0].length / sc.footprint.resolution[0] as f64;
+        // Cell size along the curtain (the cells the footprint model lays).
+        let cell = |sc: &Scene| {
+            let c = &sc.curtains[0];
+            c.length / crate::pipeline::footprint::cells_along(c, c.length, &sc.footprint) as f64
+        };
         assert!((cell(&s) - cell(&r.scene)).abs() < 1e-9);
         r.scene.validate("reduced", None).unwrap();
         // A curtain already shorter is kept whole.

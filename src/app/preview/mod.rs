@@ -503,7 +503,7 @@ mod tests {
             ("albedo", Stage::Render, &|s| s.terrain.albedo = [0.5, 0.4, 0.3]),
             ("background", Stage::Render, &|s| s.background.radiance = [1e-3, 2e-3, 3e-3]),
             ("spp", Stage::Render, &|s| s.render.spp = 6),
-            ("stars", Stage::Render, &|s| s.background.stars = true),
+            ("stars", Stage::Render, &|s| s.background.stars = !s.background.stars),
             ("mountains", Stage::Render, &|s| s.terrain.mountain_height += 1.0),
             ("no terrain", Stage::Render, &|s| s.terrain.kind = crate::scene::TerrainKind::None),
             // A medium built without terrain has no emission sampler: the

@@ -89,7 +89,14 @@ pub fn beam_velocities(m: &Motion, count: usize) -> Vec<[f32; 3]> {
         let fps = [&before[ci], &m.now[ci], &after[ci]];
         let maps = fps.map(|f| StartMap::new(f, m.footprint.threshold));
         let points = UnitPoints::new(m.beams.starts, [m.seed, curtain.seed, rng::tag::BEAM_STARTS]);
-        let ray = m.animation.ray_speed_kms;
+        // The sheet's rays are in its footprint (their brightness runs
+        // along it: `footprint::sheet`), so the start map's motion carries
+        // them; the 2014 fluid's rays are the start-height and colour noise,
+        // added here.
+        let ray = match m.footprint.model {
+            crate::scene::FootprintModel::Sheet => 0.0,
+            crate::scene::FootprintModel::Fluid2014 => m.animation.ray_speed_kms,
+        };
         let beams: Vec<[f32; 3]> = (0..n)
             .into_par_iter()
             .map(|i| {
