@@ -209,11 +209,13 @@ pub fn fit_half(mut options: WriteOptions, grids: &[GridRef<'_>]) -> (WriteOptio
 }
 
 /// `options` for a file that also holds the high column: `NAME_high` is
-/// stored as `NAME` is (half floats, mantissa bits).
+/// stored as `NAME` is (half floats, mantissa bits), for the grids the
+/// column splits (`density`, `emission`; the velocity `v` stays whole).
 pub fn with_high_column(mut options: WriteOptions) -> WriteOptions {
     let high = |n: &str| format!("{n}{}", crate::grid::high_column::HIGH_SUFFIX);
-    let half: Vec<String> = options.half.iter().map(|n| high(n)).collect();
-    let bits: Vec<(String, u32)> = options.mantissa_bits.iter().map(|(n, b)| (high(n), *b)).collect();
+    let split = |n: &str| n == "density" || n == "emission";
+    let half: Vec<String> = options.half.iter().filter(|n| split(n)).map(|n| high(n)).collect();
+    let bits: Vec<(String, u32)> = options.mantissa_bits.iter().filter(|(n, _)| split(n)).map(|(n, b)| (high(n), *b)).collect();
     options.half.extend(half);
     options.mantissa_bits.extend(bits);
     options

@@ -145,3 +145,20 @@ fn the_velocity_grid_is_the_same_whatever_the_threads_and_off_by_default() {
     assert!(off.velocity.is_none());
     assert_eq!(off.emission, a.emission, "the velocity changes nothing else");
 }
+
+/// With the high column (`grid.high_voxel_factor = 2`) the velocity grid
+/// is written whole beside the split `density` and `emission`, as half
+/// floats like the emission, and reads back.
+#[test]
+fn the_velocity_grid_is_written_whole_beside_the_high_column() {
+    let mut s = straight_scene();
+    s.grid.high_voxel_factor = 2;
+    s.grid.high_above_km = 120.0;
+    let b = bake::bake(&s, &NoProgress).unwrap();
+    let out = crate::common::scratch("velocity", "high").join("out");
+    aurora::io::bake_folder::write_outputs(&s, &b, &out).unwrap();
+    let file = aurora::io::vdb::read::read_vdb(&out.join("aurora.vdb")).unwrap();
+    let names: Vec<&str> = file.grids.iter().map(|g| g.name.as_str()).collect();
+    assert!(names.contains(&"v") && names.contains(&"emission_high") && !names.contains(&"v_high"), "{names:?}");
+    assert!(file.vec3("v").unwrap().active_voxel_count() > 0);
+}
