@@ -242,12 +242,7 @@ pub fn radiance_advected(
         let q = p - velocity.at(p) * tau;
         let sigma = medium.sigma_t_at(q);
         let e = medium.emission_at(q);
-        let t = (-acc.tau).exp();
-        // Cycles' volume_emission_integrate, as in the fixed-step march.
-        let w = if sigma > 0.0 { (1.0 - (-sigma * dt).exp()) / sigma } else { dt };
-        for c in 0..3 {
-            acc.l[c] += t * e[c] * w;
-        }
+        emit_step(&mut acc, sigma, e, dt);
         acc.tau += sigma * dt;
         n += 1;
         if acc.tau > TAU_CUTOFF {
@@ -338,13 +333,7 @@ fn walk_fixed(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, h: f64, of
             let dt = hi - lo;
             let sigma = medium.sigma_t_at(p);
             if with_emission {
-                let e = medium.emission_at(p);
-                let t = (-acc.tau).exp();
-                // Cycles' volume_emission_integrate: E (1 - exp(-sigma dt)) / sigma, -> E dt as sigma -> 0.
-                let w = if sigma > 0.0 { (1.0 - (-sigma * dt).exp()) / sigma } else { dt };
-                for c in 0..3 {
-                    acc.l[c] += t * e[c] * w;
-                }
+                emit_step(acc, sigma, medium.emission_at(p), dt);
             }
             acc.tau += sigma * dt;
             n += 1;
@@ -354,4 +343,17 @@ fn walk_fixed(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, h: f64, of
         }
     }
     n
+}
+
+/// The light a step of length `dt` through constant `sigma` and emission
+/// `e` adds behind the depth so far (Cycles' volume_emission_integrate:
+/// T E (1 - exp(-sigma dt)) / sigma, -> T E dt as sigma -> 0); the caller
+/// then adds sigma dt to the depth. One place for the fixed-step and the
+/// advected march.
+fn emit_step(acc: &mut Accum, sigma: f64, e: [f64; 3], dt: f64) {
+    let t = (-acc.tau).exp();
+    let w = if sigma > 0.0 { (1.0 - (-sigma * dt).exp()) / sigma } else { dt };
+    for c in 0..3 {
+        acc.l[c] += t * e[c] * w;
+    }
 }
