@@ -56,10 +56,13 @@ Camera = _table_class("Camera", "camera", "position look_at up projection fov_de
     fov_deg: the vertical field of view, degrees (perspective); the angle
     across the image circle (fisheye, up to 360). ortho_height: the vertical
     extent of the view in km (orthographic).""")
-Render = _table_class("Render", "render", "width height spp exposure view_transform", """`[render]`.
+Render = _table_class("Render", "render", "width height spp exposure view_transform shutter_s png_bits", """`[render]`.
 
     view_transform: the PNG view transform of `aurora render` ("agx" or
-    "standard"; the EXR it writes and Cycles' EXR are linear either way).""")
+    "standard"; the EXR it writes and Cycles' EXR are linear either way).
+    shutter_s: seconds of shutter centred on the frame (0: sharp); Cycles
+    blurs along the VDB's velocity grid. png_bits: 8 or 16, for the PNGs
+    `aurora render` writes.""")
 Volume = _table_class("Volume", "volume", "density_scale emission_scale", """`[volume]`.
 
     Extinction sigma_t = density_scale * density grid (per km); emitted
@@ -189,7 +192,11 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         spp=int(_checked(src, "render", "spp", r)),
         exposure=_checked(src, "render", "exposure", r),
         view_transform=r.get("view_transform", Render().view_transform),
+        shutter_s=_checked(src, "render", "shutter_s", r),
+        png_bits=r.get("png_bits", Render().png_bits),
     )
+    if isinstance(ren.png_bits, bool) or ren.png_bits not in (8, 16):
+        raise SceneFileError(f"{src}: render.png_bits = {ren.png_bits!r} must be 8 or 16")
     views = SCHEMA["render"]["view_transform"]["values"]
     if ren.view_transform not in views:
         raise SceneFileError(f"{src}: render.view_transform = {ren.view_transform!r} must be one of {', '.join(views)}")

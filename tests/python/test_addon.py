@@ -495,7 +495,14 @@ def test_setup_scene_orthographic_point_sampled_heightfield(addon, fresh, bpy, t
     assert sc.cycles.pixel_filter_type == "GAUSSIAN" and sc.cycles.filter_width == pytest.approx(0.01)
     verts = sorted(tuple(round(x, 6) for x in built.terrain.matrix_world @ v.co) for v in built.terrain.data.vertices)
     assert verts == [(0, 0, 0), (0, 10, 0), (10, 0, 3), (10, 10, 3)]  # z stayed up
-    assert all(not p.use_smooth for p in built.terrain.data.polygons)  # flat: geometric normals
+    # Smooth, with Blender's own vertex normals (the OBJ's are dropped), as
+    # `aurora render` shades: on this plane each is the plane's normal.
+    mesh = built.terrain.data
+    assert all(p.use_smooth for p in mesh.polygons)
+    assert not getattr(mesh, "has_custom_normals", False)
+    n = (-3.0 / 109.0 ** 0.5, 0.0, 10.0 / 109.0 ** 0.5)  # the plane z = 0.3 x
+    for v in mesh.vertices:
+        assert tuple(v.normal) == pytest.approx(n, abs=1e-5)
 
 
 def test_scene_file_errors(addon, tmp_path):

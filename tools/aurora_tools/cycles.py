@@ -55,8 +55,8 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
     off); a number turns Cycles' adaptive sampling on with that noise
     threshold (Blender's default is 0.01) and automatic minimum samples;
     `samples` is then the maximum per pixel.
-    shutter_s: None or 0 keeps motion blur off; seconds of shutter centred
-    on the frame turn it on (Cycles advects the volume along its velocity
+    shutter_s: None takes the scene's `render.shutter_s`; 0 keeps motion blur
+    off; seconds of shutter centred on the frame turn it on (Cycles advects the volume along its velocity
     grid, set by the add-on when the VDB holds `v`)."""
     import bpy
 
@@ -69,6 +69,8 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
         built = addon.setup_scene_from_toml(scene_toml, vdb=vdb, terrain_obj=terrain_obj, settings=settings,
                                             pad_dir=tmp if pad else None)
         scene = bpy.context.scene
+        if shutter_s is None:
+            shutter_s = built.spec.render.shutter_s
         if shutter_s:
             scene.render.use_motion_blur = True
             scene.render.motion_blur_position = "CENTER"
