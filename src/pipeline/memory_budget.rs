@@ -57,12 +57,16 @@
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
+use crate::pipeline::bake::plan::BakePlan;
 use crate::pipeline::beams::dip::min_dip_deg;
 use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
 use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
-use crate::scene::{Curtain, Deposition, KernelRadius, Scene, VoxelSize};
+use crate::pipeline::memory_leaves::{band_leaves, start_columns, Band};
+use crate::pipeline::photons::kernel::KernelF32;
+use crate::scene::{Curtain, Deposition, GatherMethod, KernelRadius, Scene, VoxelSize};
+use crate::util::progress::NoProgress;
 
 /// Bytes per leaf of both grids: emission values, density values, two masks
 /// and bookkeeping.
@@ -71,6 +75,13 @@ const LEAF_BYTES: f64 = 512.0 * 12.0 + 512.0 * 4.0 + 2.0 * 64.0 + 64.0;
 const LINE_LEAF_BYTES: f64 = 512.0 * 4.0 + 64.0 + 64.0;
 /// Bytes per leaf of the colour grid a per-line gather makes.
 const RGB_LEAF_BYTES: f64 = 512.0 * 12.0 + 64.0 + 64.0;
+/// The program before any scene: code, the atmosphere's and colour
+/// tables, the thread pool's stacks (measured: some 40 MB resident for a
+/// bake of a few beams).
+pub const PROGRAM_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+/// The allocator's share beside the grids' leaves: the leaf vectors'
+/// doubling and the sums' hash table.
+const GRID_SLACK: f64 = 1.1;
 /// Share of the limit the estimate may use: the rest is kept for what does
 /// not scale with the scene (the program's code and stacks, the thread
 /// pool, the allocator's slack and fragmentation, the files' write
@@ -175,7 +186,7 @@ pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
             let slabs = h / leaf_km + 2.0;
             if let Some((length, _)) = path_curve(scene, c) {
                 let rho = 0.5 * c.width + reach + std::f64::consts::SQRT_2 * leaf_km + leaf_km;
-                return band_leaves(length, rho, leaf_km) * slabs;
+                return band_area_leaves(length, rho, leaf_km) * slabs;
             }
             let (s, co) = c.rotation_deg.to_radians().sin_cos();
             let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * reach;
@@ -195,7 +206,7 @@ fn path_curve(scene: &Scene, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
 
 /// Leaves of side `leaf` per slab within `rho` of a curve of `length`
 /// (module documentation).
-fn band_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
+fn band_area_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
     let r = rho + std::f64::consts::SQRT_2 * leaf;
     (2.0 * r * length + std::f64::consts::PI * r * r) / (leaf * leaf)
 }
@@ -338,31 +349,79 @@ fn min_voxel_km(scene: &Scene) -> (f64, String, String) {
     }
 }
 
-/// The bake's peak memory, bounded from the scene alone.
+/// The bake's peak memory, bounded from the plan it would run
+/// ([`estimate_plan`] of a fresh [`BakePlan`]: its footprints are simulated).
 pub fn estimate(scene: &Scene) -> Estimate {
-    let b = &scene.beams;
-    let (steps, _) = steps_per_beam(scene);
-    let dip = dip_deg(scene);
-    // The tallest curtain's column, for every beam.
-    let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
-    let column_segments = scene.curtains.iter().map(|c| column_spans(scene, c)).fold(0.0, f64::max);
-    let step_photons = photons_of_steps(scene, b.count as f64);
-    let photons = step_photons + b.count as f64 * column_segments;
-    let photon_bytes = std::mem::size_of::<Photon>() as f64;
-    let (photon_key, photon_value) =
-        if steps > 1000.0 { ("beams.dt".to_string(), format!("{}", b.dt)) } else { ("beams.count".to_string(), format!("{}", b.count)) };
+    estimate_plan(scene, &BakePlan::new(scene, &NoProgress))
+}
 
-    let (voxel, vkey, vvalue) = min_voxel_km(scene);
-    let leaf_km = 8.0 * voxel;
-    let p = &scene.photons;
-    let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
-    let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
+/// Whether a bake of `scene` with `plan` traces and gathers in chunks
+/// (`crate::pipeline::bake::chunked`): more beams than a chunk, and a
+/// summing gather.
+pub fn is_chunked(scene: &Scene, plan: &BakePlan) -> bool {
+    scene.beams.count > plan.beam_chunk.max(1) && scene.photons.gather != GatherMethod::Report2014
+}
+
+/// The bands of [`crate::pipeline::memory_leaves`] for `plan`'s curtains
+/// and footprints at voxel `voxel_km` and kernel reach `reach` km.
+pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
+    let b = &scene.beams;
+    let atm = &plan.atmosphere;
+    let leaf = 8.0 * voxel_km;
+    let dip = dip_deg(scene).to_radians();
+    let spread = spread_km(scene);
+    let step = b.length_km * b.dt;
+    let lowest_start = b.top_km - b.top_noise_km;
+    // The walk's spread after descending d km: 4 standard deviations of
+    // d / mu steps' deflections ([`spread_km`]), mu = L dt sin(I) / 2 the
+    // mean descent of a step; at most the whole beam's.
+    let mu = 0.5 * step * dip.sin();
+    let per_sqrt_km = 4.0 * step * b.alpha_d_deg.to_radians().tan() / (3.0 * mu).sqrt();
+    // CSDA: 1 / dt steps of L dt xi, xi uniform on [0, 1]: a path of at
+    // most L dt (n / 2 + 4 sqrt(n / 12)), four standard deviations.
+    let n = (1.0 / b.dt).ceil();
+    let csda_path = step * (0.5 * n + 4.0 * (n / 12.0).sqrt());
+    let shell = if scene.grid.cycles_shell { voxel_km } else { 0.0 };
+    scene
+        .curtains
+        .iter()
+        .zip(&plan.footprints)
+        .map(|(c, fp)| {
+            let (columns, slack) = start_columns(fp, scene.footprint.threshold, 0.5 * leaf);
+            let top = deposit_top_km(scene, c).max(b.top_km + b.top_noise_km);
+            let bottom = match b.deposition {
+                Deposition::Csda => lowest_start - csda_path,
+                _ => stop_km(scene, c, atm) - step,
+            }
+            .max(atm.bottom_km() - step);
+            let rho = reach + shell + slack + b.top_noise_km / dip.tan() + 0.25 * leaf;
+            Band {
+                columns,
+                start_km: b.top_km,
+                top_km: top,
+                bottom_km: bottom,
+                rho_km: rho,
+                spread_per_sqrt_km: per_sqrt_km,
+                spread_max_km: spread,
+            }
+        })
+        .collect()
+}
+
+/// Largest leaf count [`crate::pipeline::memory_leaves::band_leaves`] is
+/// asked to count (a set of them takes some 40 bytes each); above it the
+/// box and band bound ([`box_leaves`]) stands, and such a bake (over 16
+/// GiB of grids) is refused anyway on most machines.
+const COUNTED_LEAVES_MAX: f64 = 2.0e6;
+
+/// Bound on the leaves from the world box and the curtains' bands alone
+/// (no footprint), at voxel `voxel_km`, kernel reach `reach`: the
+/// smaller of the box's and the curtains' own bounds (module
+/// documentation), plus the columns above the starts.
+pub fn box_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
+    let dip = dip_deg(scene);
     let (lo, hi) = world_bounds(scene);
     let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
-    // The curtains' own bounds when smaller than the box: per leaf-thick
-    // slab, the start area (a path's band, a straight curtain's rectangle)
-    // dilated by the reach and the beams' spread, widened by the field
-    // line's shift within the slab, leaf cot(I).
     let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
     let shift = leaf_km / dip.to_radians().tan();
     let spread = spread_km(scene);
@@ -370,7 +429,7 @@ pub fn estimate(scene: &Scene) -> Estimate {
         .curtains
         .iter()
         .map(|c| match path_curve(scene, c) {
-            Some((length, _)) => band_leaves(length, 0.5 * c.width + reach + spread + leaf_km + shift, leaf_km) * slabs,
+            Some((length, _)) => band_area_leaves(length, 0.5 * c.width + reach + spread + leaf_km + shift, leaf_km) * slabs,
             None => {
                 let (s, co) = c.rotation_deg.to_radians().sin_cos();
                 let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + spread + leaf_km) + shift;
@@ -379,15 +438,54 @@ pub fn estimate(scene: &Scene) -> Estimate {
             }
         })
         .sum();
-    let area_leaves = box_leaves.min(own);
-    let leaves = area_leaves.min(step_photons * per_photon) + column_leaves(scene, leaf_km, reach);
-    // Blame the kernel when its reach, not the voxel or the curtains, makes the grid large.
-    let box_without_reach: f64 = (0..3).map(|i| ((hi[i] - lo[i]) / leaf_km).ceil() + 1.0).product();
-    let (grid_key, grid_value) = if box_leaves > 4.0 * box_without_reach && reach > leaf_km {
-        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    box_leaves.min(own) + column_leaves(scene, leaf_km, reach)
+}
+
+/// The leaves the bake's grids can hold at voxel `voxel_km`: the bands
+/// counted from the plan ([`crate::pipeline::memory_leaves`]) when
+/// [`box_leaves`] allows it, else that bound.
+pub fn grid_leaves(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> f64 {
+    let bound = box_leaves(scene, 8.0 * voxel_km, reach + voxel_km);
+    if bound > COUNTED_LEAVES_MAX {
+        return bound;
+    }
+    band_leaves(plan, &bands(scene, plan, voxel_km, reach), voxel_km).map_or(bound, |n| (n as f64).min(bound))
+}
+
+/// The bake's peak memory, term by term, from `plan` (built from `scene`):
+/// its footprints' cells, its chunk of beams, the leaves its bands touch.
+pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
+    let b = &scene.beams;
+    let (steps, _) = steps_per_beam(scene);
+    let dip = dip_deg(scene);
+    let chunked = is_chunked(scene, plan);
+    // A chunked bake holds one chunk's photons at a time, of one trail
+    // sample; a whole one every beam's, of every sample.
+    let held_beams = if chunked { plan.beam_chunk.max(1) } else { b.count } as f64;
+    // The tallest curtain's column, for every beam.
+    let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
+    let column_segments = scene.curtains.iter().map(|c| column_spans(scene, c)).fold(0.0, f64::max);
+    let step_photons = photons_of_steps(scene, held_beams);
+    let photons = step_photons + held_beams * column_segments;
+    let photon_bytes = std::mem::size_of::<Photon>() as f64;
+    let kernel_bytes = std::mem::size_of::<KernelF32>() as f64;
+    let (photon_key, photon_value) = if chunked || steps > 1000.0 {
+        ("beams.dt".to_string(), format!("{}", b.dt))
     } else {
-        (vkey, vvalue)
+        ("beams.count".to_string(), format!("{}", b.count))
     };
+
+    let (voxel, vkey, vvalue) = min_voxel_km(scene);
+    let leaf_km = 8.0 * voxel;
+    let p = &scene.photons;
+    let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
+    let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
+    let leaves = grid_leaves(scene, plan, voxel, reach);
+    // The emission's leaves, and the density's on the same voxels unless
+    // the air is physical (`grid.density_a = 0`: no density grid).
+    let leaf_bytes = if scene.grid.density_a > 0.0 { LEAF_BYTES } else { RGB_LEAF_BYTES };
+    let (grid_key, grid_value) =
+        if reach > 2.0 * leaf_km { ("photons.radius_km".to_string(), format!("{}", p.radius_km)) } else { (vkey, vvalue) };
     // Candidate entries: each photon's segment box (kernel reach around a
     // step of at most length_km * dt) lists its leaves. Where every step
     // descends (the deflection alpha_D is smaller than the field's dip),
@@ -406,64 +504,76 @@ pub fn estimate(scene: &Scene) -> Estimate {
     } else {
         f64::INFINITY
     };
-    let step_entries = (step_photons * per_photon_seg).min(b.count as f64 * per_beam).min(step_photons * per_photon_seg.min(box_leaves));
+    let step_entries = (step_photons * per_photon_seg).min(held_beams * per_beam).min(step_photons * per_photon_seg.min(leaves));
     // A beam's column segments lie end to end along one field line: their
     // boxes list at most (length / leaf + 2) slices each of cross_c^2
     // leaves, cross_c the kernel's width in leaves.
     let sin_dip = dip.to_radians().sin().max(0.05);
     let cross_c = (2.0 * reach / leaf_km).ceil() + 2.0;
-    let column_entries = b.count as f64 * (column / sin_dip / leaf_km + 2.0 * column_segments) * cross_c * cross_c;
-    let entries = step_entries + column_entries;
-    let candidates = entries * 12.0;
+    let column_entries = held_beams * (column / sin_dip / leaf_km + 2.0 * column_segments) * cross_c * cross_c;
+    let candidates = (step_entries + column_entries) * 12.0;
     let (cand_key, cand_value) = if per_photon > 64.0 {
         ("photons.radius_km".to_string(), format!("{}", p.radius_km))
     } else {
         (photon_key.clone(), photon_value.clone())
     };
 
-    let [nx, ny] = scene.footprint.resolution;
-    let cells: f64 = scene
-        .curtains
-        .iter()
-        .map(|c| {
-            let length = path_curve(scene, c).map_or(c.length, |(l, _)| l);
-            crate::pipeline::footprint::cells_along(c, length, &scene.footprint) as f64 * ny as f64
-        })
-        .sum();
+    // The footprints' simulation: 12 f64 per cell of the plan's footprints.
+    let cells: f64 = plan.footprints.iter().map(|f| (f.nx * f.ny) as f64).sum();
     let footprint = cells * 12.0 * 8.0;
+    let [nx, ny] = scene.footprint.resolution;
 
     let physical = scene.colour.mode == crate::scene::ColourMode::Physical;
-    // The red trail: N more traces, their photons and candidates beside the bake's.
     let trail = if physical { scene.animation.trail_samples as f64 } else { 0.0 };
-    let all_photons = photons * (1.0 + trail);
+    // Photons held beside the bake's own: every trail sample's when whole.
+    let all_photons = photons * if chunked { 1.0 } else { 1.0 + trail };
     let n_lines = if physical { scene.grid.lines.len() as f64 } else { 0.0 };
     let mut terms = vec![
-        Term { what: "photons", bytes: 3.0 * photons * photon_bytes, key: photon_key, value: photon_value },
+        Term { what: "program", bytes: PROGRAM_BYTES, key: "beams.count".into(), value: format!("{}", b.count) },
+        Term { what: "photons", bytes: photons * (3.0 * photon_bytes + kernel_bytes), key: photon_key, value: photon_value },
         Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
-        Term { what: "grids", bytes: 1.3 * leaves * LEAF_BYTES, key: grid_key, value: grid_value },
+        Term { what: "grids", bytes: GRID_SLACK * leaves * leaf_bytes, key: grid_key, value: grid_value },
         Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
     ];
     if n_lines > 0.0 {
-        let bytes = 1.3 * leaves * (n_lines * LINE_LEAF_BYTES + RGB_LEAF_BYTES) + all_photons * (photon_bytes + 4.0 * n_lines);
+        // Each line's grid, the sums of each three lines (a colour grid
+        // each), the lines' photon copy and each photon's line powers.
+        let groups = (n_lines / 3.0).ceil();
+        let bytes =
+            GRID_SLACK * leaves * (n_lines * LINE_LEAF_BYTES + groups * RGB_LEAF_BYTES) + all_photons * (photon_bytes + 4.0 * n_lines);
         terms.push(Term { what: "per-line grids", bytes, key: "grid.lines".into(), value: format!("{:?}", scene.grid.lines) });
     }
+    if scene.grid.velocity {
+        // The numerator's sums and the velocity grid, the weighted photons'
+        // copy and each beam's velocity.
+        let bytes = GRID_SLACK * leaves * 2.0 * RGB_LEAF_BYTES + photons * (photon_bytes + kernel_bytes) + 12.0 * b.count as f64;
+        terms.push(Term { what: "velocity", bytes, key: "grid.velocity".into(), value: "true".into() });
+    }
     if trail > 0.0 {
+        // Whole: N more photon sets and candidate lists. In chunks: one
+        // earlier sample's footprints at a time (f32 per cell).
+        let bytes = if chunked { 4.0 * cells } else { trail * (3.0 * photons * photon_bytes + candidates) };
+        terms.push(Term { what: "red trail", bytes, key: "animation.trail_samples".into(), value: format!("{trail}") });
+    }
+    if chunked && matches!(scene.grid.voxel_size, VoxelSize::Auto(_)) && plan.camera_model().is_ok_and(|c| c.pixel_angle().is_some()) {
+        // Every photon's distance from the camera (8 bytes), of every sample.
+        let every = photons_of_steps(scene, b.count as f64) + b.count as f64 * column_segments;
         terms.push(Term {
-            what: "red trail",
-            bytes: trail * (3.0 * photons * photon_bytes + candidates),
-            key: "animation.trail_samples".into(),
-            value: format!("{trail}"),
+            what: "photon distances",
+            bytes: 8.0 * every * (1.0 + trail),
+            key: "beams.count".into(),
+            value: format!("{}", b.count),
         });
     }
     // The pilots run before the bake traces and free what they hold: they
     // count by what their peak exceeds the rest.
     let rest: f64 = terms.iter().map(|t| t.bytes).sum();
     let pilot_photons = |beams: f64| photons_of_steps(scene, beams) + beams * column_segments;
-    let deposit_pilot = 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS.min(b.count) as f64) * photon_bytes + terms[3].bytes;
+    let deposit_pilot = PROGRAM_BYTES + 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS.min(b.count) as f64) * photon_bytes + footprint;
     let noise_pilot = if b.target_noise > 0.0 {
         let m = PILOT_HALF_BEAMS as f64;
-        let grid = area_leaves.min(photons_of_steps(scene, m) * per_photon) + column_leaves(scene, leaf_km, reach);
-        2.0 * 1.3 * grid * RGB_LEAF_BYTES + 6.0 * pilot_photons(m) * photon_bytes + terms[3].bytes
+        let grid = leaves.min(photons_of_steps(scene, m) * per_photon);
+        PROGRAM_BYTES + 2.0 * GRID_SLACK * grid * RGB_LEAF_BYTES + 6.0 * pilot_photons(m) * photon_bytes + footprint
     } else {
         0.0
     };

@@ -13,9 +13,11 @@
 //! The message rounds the need up and the usable share down, so a bake it
 //! refuses never reads as one that fits.
 
-use crate::pipeline::memory_budget::{estimate, Estimate, USABLE_FRACTION};
+use crate::pipeline::bake::plan::BakePlan;
+use crate::pipeline::memory_budget::{estimate_plan, Estimate, USABLE_FRACTION};
 use crate::scene::{Scene, VoxelSize};
 use crate::util::memory::MemoryLimit;
+use crate::util::progress::NoProgress;
 
 /// One change that alone brings the estimate under the usable share.
 #[derive(Clone, Debug, PartialEq)]
@@ -84,7 +86,14 @@ fn advice(suggestions: &[Suggestion]) -> String {
 /// Refuses `scene` when its estimate exceeds [`USABLE_FRACTION`] of
 /// `limit`, with the [`suggestions`] that fit; returns the estimate.
 pub fn check(scene: &Scene, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
-    let e = estimate(scene);
+    check_plan(scene, &BakePlan::new(scene, &NoProgress), limit)
+}
+
+/// [`check`] with the plan the bake will run (built from `scene`): the
+/// estimate is that plan's ([`estimate_plan`]), and each suggestion's the
+/// plan reusing its footprints where the key leaves them.
+pub fn check_plan(scene: &Scene, plan: &BakePlan, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
+    let e = estimate_plan(scene, plan);
     let usable = USABLE_FRACTION * limit.bytes;
     let total = e.total();
     if total <= usable {
@@ -99,7 +108,7 @@ pub fn check(scene: &Scene, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarg
         total,
         usable,
         limit: limit.clone(),
-        suggestions: suggestions(scene, usable),
+        suggestions: suggestions_plan(scene, plan, usable),
     }))
 }
 
@@ -199,21 +208,27 @@ pub const CANDIDATES: &[Candidate] = &[
 /// outward to two significant digits when that still fits. A key no value
 /// of which fits is left out.
 pub fn suggestions(scene: &Scene, usable: f64) -> Vec<Suggestion> {
-    CANDIDATES.iter().filter_map(|c| suggest(scene, c, usable)).collect()
+    suggestions_plan(scene, &BakePlan::new(scene, &NoProgress), usable)
 }
 
-/// The estimate of `scene` with `c` set to `x`, if that scene is valid.
-fn fits(scene: &Scene, c: &Candidate, x: f64, usable: f64) -> Option<f64> {
+/// [`suggestions`] from the plan of `scene`.
+pub fn suggestions_plan(scene: &Scene, plan: &BakePlan, usable: f64) -> Vec<Suggestion> {
+    CANDIDATES.iter().filter_map(|c| suggest(scene, plan, c, usable)).collect()
+}
+
+/// The estimate of `scene` with `c` set to `x`, if that scene is valid
+/// (its plan reusing `plan`'s footprints and tables where it can).
+fn fits(scene: &Scene, plan: &BakePlan, c: &Candidate, x: f64, usable: f64) -> Option<f64> {
     let mut s = scene.clone();
     (c.set)(&mut s, x);
     if s.validate("suggestion", None).is_err() {
         return None;
     }
-    let bytes = estimate(&s).total();
+    let bytes = estimate_plan(&s, &BakePlan::reusing(&s, plan, &NoProgress)).total();
     (bytes <= usable).then_some(bytes)
 }
 
-fn suggest(scene: &Scene, c: &Candidate, usable: f64) -> Option<Suggestion> {
+fn suggest(scene: &Scene, plan: &BakePlan, c: &Candidate, usable: f64) -> Option<Suggestion> {
     let x0 = (c.value)(scene)?;
     let (up, limit, integer) = match c.toward {
         Toward::Up(m) => (true, m, false),
@@ -235,7 +250,7 @@ fn suggest(scene: &Scene, c: &Candidate, usable: f64) -> Option<Suggestion> {
     let mut x = x0;
     while !past(x) {
         x = step(x);
-        if fits(scene, c, x, usable).is_some() {
+        if fits(scene, plan, c, x, usable).is_some() {
             good = Some(x);
             break;
         }
@@ -248,7 +263,7 @@ fn suggest(scene: &Scene, c: &Candidate, usable: f64) -> Option<Suggestion> {
         if (integer && (good - bad).abs() <= 1.0) || mid == bad || mid == good {
             break;
         }
-        if fits(scene, c, mid, usable).is_some() {
+        if fits(scene, plan, c, mid, usable).is_some() {
             good = mid;
         } else {
             bad = mid;
@@ -266,9 +281,9 @@ fn suggest(scene: &Scene, c: &Candidate, usable: f64) -> Option<Suggestion> {
     };
     let nice = round(good);
     let x = if !past(nice) || nice == limit { nice } else { good };
-    let (x, bytes) = match fits(scene, c, x, usable) {
+    let (x, bytes) = match fits(scene, plan, c, x, usable) {
         Some(b) => (x, b),
-        None => (good, fits(scene, c, good, usable)?),
+        None => (good, fits(scene, plan, c, good, usable)?),
     };
     let mut changed = scene.clone();
     (c.set)(&mut changed, x);
@@ -312,7 +327,7 @@ mod tests {
         // share: the need is printed above the usable share, and the share
         // and what it is for are said.
         let s = Scene::default();
-        let total = estimate(&s).total();
+        let total = crate::pipeline::memory_budget::estimate(&s).total();
         let l = MemoryLimit { bytes: total / USABLE_FRACTION * (1.0 - 1e-9), source: "test" };
         let e = check(&s, &l).unwrap_err();
         let m = e.to_string();

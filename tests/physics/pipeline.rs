@@ -76,6 +76,7 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
         warnings: Vec::new(),
         noise: None,
         velocity: None,
+        photon_totals: None,
     };
     let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);

@@ -9,6 +9,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod chunks;
 mod cli;
 mod extremes;
 mod gather;

@@ -4,7 +4,8 @@
 //! ([`crate::pipeline::memory_budget`]), a [`BakePlan`] (footprints, atmosphere, colour
 //! table, field, kernel radius field), the beam count ([`beam_count`]: from
 //! `beams.count`, or from the [`pilot`] when `beams.target_noise > 0`), then
-//! trace, gather and finish ([`plan`]). [`bake_plan`] does the same from a
+//! trace and gather a chunk of beams at a time ([`chunked`], so the memory
+//! does not grow with the beams) and finish ([`plan`]). [`bake_plan`] does the same from a
 //! plan already built (frame sequences reuse one, [`bake_reusing`]).
 //!
 //! The rooms: [`plan`] the plan and its stages as functions of it and of
@@ -19,6 +20,7 @@
 //! Grid transform: translation 0, so voxel (i, j, k) is centred at
 //! `voxel_size * (i, j, k)` km ([`voxel::grid_transform`]).
 
+pub mod chunked;
 pub mod density;
 pub mod identity;
 pub mod pilot;
@@ -46,11 +48,20 @@ pub fn check_memory(scene: &Scene) -> Result<(), BakeError> {
     Ok(())
 }
 
-/// Runs every stage of the bake for a validated scene.
+/// [`check_memory`] on the plan the bake runs (built from `scene`): its
+/// estimate is that plan's ([`crate::pipeline::memory_budget::estimate_plan`]).
+pub fn check_plan_memory(scene: &Scene, plan: &BakePlan) -> Result<(), BakeError> {
+    crate::pipeline::memory_refusal::check_plan(scene, plan, &crate::util::memory::available())?;
+    Ok(())
+}
+
+/// Runs every stage of the bake for a validated scene: the field's check,
+/// the plan (the footprints), the memory check on that plan, the rest.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let t_all = Instant::now();
-    check_memory(scene)?;
+    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
     let plan = BakePlan::new(scene, progress);
+    check_plan_memory(scene, &plan)?;
     bake_plan(&plan, t_all, progress)
 }
 
@@ -59,11 +70,12 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 /// colour table); returns the bake and its plan, for the next call.
 pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> Result<(Bake, BakePlan), BakeError> {
     let t_all = Instant::now();
-    check_memory(scene)?;
+    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
     let plan = match prev {
         Some(p) => BakePlan::reusing(scene, p, progress),
         None => BakePlan::new(scene, progress),
     };
+    check_plan_memory(scene, &plan)?;
     Ok((bake_plan(&plan, t_all, progress)?, plan))
 }
 
@@ -73,7 +85,7 @@ pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progr
 pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
     let (count, noise, warnings) = beam_count(plan, &mut times, progress)?;
-    let (emission, gathered) = plan::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
+    let (emission, gathered) = chunked::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
     plan::finish(plan, emission, gathered, times, t_all, progress)
 }
 

@@ -169,7 +169,16 @@ pub struct BakePlan {
     pub line_table: Option<LineTable>,
     /// `grid.lines` as indices in `crate::physics::emission::line_colour::LINES`.
     pub line_outputs: Vec<usize>,
+    /// Beams traced and gathered at a time ([`BEAM_CHUNK`]; `super::chunked`).
+    /// The output does not depend on it; a test sets it smaller.
+    pub beam_chunk: usize,
 }
+
+/// Beams a bake traces and gathers at a time (`super::chunked`): a constant,
+/// so the bake's working set is the same whatever the memory limit or the
+/// thread count. 8192 beams of the 2014 report's 250 steps are 2 M photons,
+/// 74 MB a copy.
+pub const BEAM_CHUNK: usize = 8192;
 
 /// The per-line table a scene needs: with `colour.mode = "physical"`, when
 /// something pulses (each line then follows its lifetime), the red trail is
@@ -275,6 +284,7 @@ impl BakePlan {
             radius,
             line_table,
             line_outputs: line_outputs(&scene.grid),
+            beam_chunk: BEAM_CHUNK,
         }
     }
 
@@ -428,22 +438,30 @@ pub fn line_grids(plan: &BakePlan, photons: &[Photon], line_power: &[f32], voxel
     let mut grids = Vec::with_capacity(n);
     for first in (0..n).step_by(3) {
         let take = (n - first).min(3);
-        let lined: Vec<Photon> = photons
-            .par_iter()
-            .enumerate()
-            .map(|(j, p)| {
-                let row = &line_power[j * n + first..j * n + first + take];
-                let mut power = [0.0f32; 3];
-                power[..take].copy_from_slice(row);
-                Photon { power, ..*p }
-            })
-            .collect();
+        let lined = lined_photons(photons, line_power, n, first);
         let g = gather(plan, &lined, voxel_km, progress);
         for k in 0..take {
             grids.push(g.component(k, grid_name(&plan.grid.lines[first + k])));
         }
     }
     grids
+}
+
+/// The photons carrying lines `first..first + 3` (at most; of the `n` a
+/// photon's `line_power` holds) as their colours: one gather of
+/// [`line_grids`].
+pub fn lined_photons(photons: &[Photon], line_power: &[f32], n: usize, first: usize) -> Vec<Photon> {
+    let take = (n - first).min(3);
+    photons
+        .par_iter()
+        .enumerate()
+        .map(|(j, p)| {
+            let row = &line_power[j * n + first..j * n + first + take];
+            let mut power = [0.0f32; 3];
+            power[..take].copy_from_slice(row);
+            Photon { power, ..*p }
+        })
+        .collect()
 }
 
 /// What [`finish`] needs besides the plan and the emission grid.
@@ -461,6 +479,9 @@ pub struct Gathered {
     /// With `grid.velocity`, the luminance-weighted velocity gathered like
     /// the emission ([`super::velocity::weighted_photons`]).
     pub velocity: Option<Grid<[f32; 3]>>,
+    /// The photons' count and summed power (f64, in photon order) when
+    /// `photons` does not hold them (a bake traced in chunks keeps none).
+    pub photon_totals: Option<(usize, [f64; 3])>,
 }
 
 /// What [`finish`] needs of `photons` (their per-line grids `lines`, their
@@ -482,7 +503,7 @@ pub fn gathered(
     warnings.extend(bend_warnings(&plan.curtains));
     warnings.extend(beams::loss_warnings(&beam_stats));
     warnings.extend(earlier.iter().cloned());
-    Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise, velocity: None }
+    Gathered { photons, lines, beam_stats, voxel_km, voxel_source, warnings, noise, velocity: None, photon_totals: None }
 }
 
 /// Traces `count` beams, picks the voxel size and gathers: stages 2 and 3.
@@ -567,6 +588,16 @@ fn half_warnings(grid: &crate::scene::GridParams, peak: [f32; 3], density: &Grid
     w
 }
 
+/// `total` plus the photons' powers, summed in photon order in f64.
+pub fn sum_power(photons: &[Photon], mut total: [f64; 3]) -> [f64; 3] {
+    for p in photons {
+        for (t, &c) in total.iter_mut().zip(&p.power) {
+            *t += c as f64;
+        }
+    }
+    total
+}
+
 /// Stage 4: checks the emission, prunes it, builds the density grid and the
 /// Cycles shell, and the stats. `times.prune`, `times.density` are filled
 /// in; `times.total` is the time since `t_all`.
@@ -597,7 +628,8 @@ pub fn finish_keeping(
     t_all: Instant,
     progress: &dyn Progress,
 ) -> Result<(Bake, DroppedLeaves), BakeError> {
-    let Gathered { photons, mut lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise, velocity } = g;
+    let Gathered { photons, mut lines, beam_stats, voxel_km: vs, voxel_source: vs_source, mut warnings, noise, velocity, photon_totals } =
+        g;
     if emission.leaf_count() == 0 {
         return Err(BakeError::Empty(empty_reason(&beam_stats, &plan.beams)));
     }
@@ -655,12 +687,7 @@ pub fn finish_keeping(
     times.density = scan_s + t.elapsed().as_secs_f64();
     times.total = t_all.elapsed().as_secs_f64();
 
-    let mut total = [0.0f64; 3];
-    for p in &photons {
-        for (t, &c) in total.iter_mut().zip(&p.power) {
-            *t += c as f64;
-        }
-    }
+    let (photon_count, total) = photon_totals.unwrap_or_else(|| (photons.len(), sum_power(&photons, [0.0; 3])));
     let bbox = emission.index_bbox();
     let stats = BakeStats {
         units: "km",
@@ -670,7 +697,7 @@ pub fn finish_keeping(
         voxel_size_source: vs_source,
         gather: plan.photons.gather,
         beams: beam_stats.beams,
-        photons: photons.len(),
+        photons: photon_count,
         active_voxels: aurora_voxels,
         leaves: aurora_leaves,
         shell_voxels,

@@ -51,6 +51,30 @@ pub fn auto_voxel_size(scene: &Scene, photons: &[Photon]) -> (f64, String) {
 
 /// [`auto_voxel_size`] from plain data.
 pub fn auto_voxel_size_for(kernel: KernelRadius, camera: Option<&CameraModel>, photons: &[Photon]) -> (f64, String) {
+    let d = match camera {
+        Some(cam) if needs_distances(VoxelSize::Auto(crate::scene::AutoTag::Auto), Some(cam)) => camera_distances(cam.position, photons),
+        _ => Vec::new(),
+    };
+    auto_voxel_size_of(kernel, camera, d)
+}
+
+/// Whether the voxel size of `size` seen by `camera` reads the photons'
+/// distances ([`camera_distances`]): `"auto"` with a perspective, fisheye
+/// or equirectangular camera.
+pub fn needs_distances(size: VoxelSize, camera: Option<&CameraModel>) -> bool {
+    matches!(size, VoxelSize::Auto(_)) && camera.is_some_and(|c| c.pixel_angle().is_some())
+}
+
+/// Each photon's distance from `eye`, km (in any order: the voxel size
+/// takes a percentile of them).
+pub fn camera_distances(eye: DVec3, photons: &[Photon]) -> Vec<f64> {
+    photons.iter().map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length()).collect()
+}
+
+/// [`auto_voxel_size_for`] from every photon's distance from the camera
+/// (`d`, [`camera_distances`]; read only when [`needs_distances`]), so a
+/// bake traced in chunks keeps the distances and not the photons.
+pub fn auto_voxel_size_of(kernel: KernelRadius, camera: Option<&CameraModel>, mut d: Vec<f64>) -> (f64, String) {
     let floor = kernel.auto_voxel_floor_km();
     // A validated scene always has a camera; should it not, the kernel
     // radius is a size that neither aliases nor wastes.
@@ -60,11 +84,6 @@ pub fn auto_voxel_size_for(kernel: KernelRadius, camera: Option<&CameraModel>, p
     let (raw, why) = match cam.pixel_angle() {
         None => (cam.pixel_footprint(0.0), "ortho_height / height".to_string()),
         Some(_) => {
-            let eye = cam.position;
-            let mut d: Vec<f64> = photons
-                .iter()
-                .map(|p| (DVec3::new(p.position[0] as f64, p.position[1] as f64, p.position[2] as f64) - eye).length())
-                .collect();
             if d.is_empty() {
                 return (kernel.base_km, "no photons: kernel radius".into());
             }

@@ -33,6 +33,7 @@
 pub mod beam;
 pub mod dip;
 pub mod emit;
+pub mod running;
 pub mod starts;
 pub mod walk;
 

@@ -50,13 +50,13 @@ pub fn gather_grid(
 #[derive(Clone, Debug)]
 pub struct GatherInput {
     pub photons: Vec<Photon>,
-    splat_kernels: Vec<KernelF32>,
+    pub(super) splat_kernels: Vec<KernelF32>,
     /// The segment kernel's masses for the cutoff (a table of numerical
     /// integrals).
-    seg: SegmentMass,
-    radius: RadiusField,
-    cutoff: f64,
-    method: GatherMethod,
+    pub(super) seg: SegmentMass,
+    pub(super) radius: RadiusField,
+    pub(super) cutoff: f64,
+    pub(super) method: GatherMethod,
 }
 
 impl GatherInput {

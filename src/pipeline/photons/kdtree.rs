@@ -84,6 +84,15 @@ impl LeafGather<'_> {
     /// given photons (ascending indices; a superset of those in reach).
     /// Kernel radius at each voxel: r(x_v).
     pub fn balloon(&self, origin: IVec3, candidates: impl Iterator<Item = usize>) -> Option<Leaf<[f32; 3]>> {
+        let mut acc = LeafSums::new_boxed();
+        self.balloon_into(origin, candidates, &mut acc);
+        acc.finish(origin, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
+    }
+
+    /// [`Self::balloon`]'s sums without the leaf, added to what `acc`
+    /// already holds in candidate order (a chunked gather carries a leaf's
+    /// sums from one chunk of photons to the next).
+    pub(super) fn balloon_into(&self, origin: IVec3, candidates: impl Iterator<Item = usize>, acc: &mut LeafSums) {
         let mut k = LeafKernels::new_boxed();
         let mut each = vec![KernelF32::default(); LEAF_NUM_VALUES];
         // The smallest r over the leaf, km.
@@ -96,25 +105,23 @@ impl LeafGather<'_> {
             r_min = r_min.min(kernel.r);
         }
         let reach = self.cutoff * self.radius.max();
-        let mut acc = LeafSums::new_boxed();
         for i in candidates {
             let p = &self.photons[i];
             let (a, b) = (pos(p), end(p));
             if p.is_point() {
-                self.accumulate(origin, p, reach, &k, &mut acc);
+                self.accumulate(origin, p, reach, &k, acc);
             } else if a.distance(b) < MIDPOINT_LAMBDA * r_min {
                 // Shorter than MIDPOINT_LAMBDA r at every voxel: the
                 // (vectorised) point path at the midpoint.
                 let mid = Photon::point((0.5 * (a + b)).as_vec3().to_array(), p.power);
-                self.accumulate(origin, &mid, reach, &k, &mut acc);
+                self.accumulate(origin, &mid, reach, &k, acc);
             } else {
                 // The scalar loop, voxel by voxel (a branch-free 8-wide
                 // version is slower: it evaluates the voxels of each z-row
                 // that the scalar loop's z range skips).
-                self.accumulate_segment(origin, p, reach, &each, &mut acc);
+                self.accumulate_segment(origin, p, reach, &each, acc);
             }
         }
-        acc.finish(origin, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
 
     /// Adds segment photon `p`'s kernel to the voxels of the leaf at

@@ -34,7 +34,10 @@
 //! ([`gather_grid`], [`GatherInput`], [`gather_prepared`]) are `gather`'s.
 //! The kd-tree and the splat agree with the f64 estimate of [`kernel`]
 //! (tests). Every per-voxel sum runs over photons in ascending index order,
-//! so the grids are identical whatever the thread count.
+//! so the grids are identical whatever the thread count. [`sums`] gathers
+//! the photons a chunk at a time, carrying each leaf's sums from chunk to
+//! chunk: the same terms in the same order, so the same grid as one gather
+//! of all the photons, bit for bit.
 
 pub mod bins;
 pub mod fast_math;
@@ -45,8 +48,10 @@ pub mod leaf;
 pub mod merge;
 pub mod radius;
 pub mod splat;
+pub mod sums;
 #[cfg(test)]
 mod test_fixtures;
 pub mod weighted_average;
 
 pub use gather::{gather_grid, gather_prepared, GatherInput};
+pub use sums::GatherSums;

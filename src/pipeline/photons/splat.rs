@@ -70,6 +70,14 @@ impl SplatScratch {
     }
 }
 
+impl SplatScratch {
+    /// The per-voxel kernel constants alone (a chunked gather brings its
+    /// own sums).
+    pub(super) fn kernels(&mut self) -> &mut LeafKernels {
+        &mut self.k
+    }
+}
+
 impl Default for SplatScratch {
     fn default() -> Self {
         Self::new()
@@ -153,16 +161,28 @@ impl LeafGather<'_> {
     /// per thread): the sums are cleared after each leaf, and the per-voxel
     /// kernel rows are written before they are read.
     pub fn splat(&self, origin: IVec3, photons: &[u32], scratch: &mut SplatScratch) -> Option<Leaf<[f32; 3]>> {
+        let SplatScratch { acc, k } = scratch;
+        self.splat_into(origin, photons, k, acc);
+        acc.finish(origin, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
+    }
+
+    /// [`Self::splat`]'s sums without the leaf: the kernels of the bin
+    /// `photons` (ascending indices) added to `acc` in that order, on
+    /// whatever `acc` already holds (a chunked gather carries a leaf's sums
+    /// from one chunk of photons to the next, so the sums are the same
+    /// terms in the same order as one gather of all the photons). `k` is
+    /// scratch.
+    pub(super) fn splat_into(&self, origin: IVec3, photons: &[u32], k: &mut LeafKernels, acc: &mut LeafSums) {
         #[cfg(target_arch = "x86_64")]
         if std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above), the one
             // requirement of `splat_avx2`.
-            return unsafe { self.splat_avx2(origin, photons, scratch) };
+            return unsafe { self.splat_avx2(origin, photons, k, acc) };
         }
-        self.splat_body(origin, photons, scratch)
+        self.splat_body(origin, photons, k, acc)
     }
 
-    /// [`Self::splat`] compiled for AVX2: the 8-wide z-rows of the segment
+    /// [`Self::splat_into`] compiled for AVX2: the 8-wide z-rows of the segment
     /// path in one pass. IEEE arithmetic is the same at any vector width
     /// and Rust fuses no multiply-add, so the values are the same bits as
     /// without AVX2.
@@ -173,14 +193,13 @@ impl LeafGather<'_> {
     /// the body is compiled with AVX2 instructions, which fault elsewhere.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn splat_avx2(&self, origin: IVec3, photons: &[u32], scratch: &mut SplatScratch) -> Option<Leaf<[f32; 3]>> {
-        self.splat_body(origin, photons, scratch)
+    unsafe fn splat_avx2(&self, origin: IVec3, photons: &[u32], k: &mut LeafKernels, acc: &mut LeafSums) {
+        self.splat_body(origin, photons, k, acc)
     }
 
-    /// The leaf loop of [`Self::splat`], inlined into both of its builds.
+    /// The leaf loop of [`Self::splat_into`], inlined into both of its builds.
     #[inline(always)]
-    fn splat_body(&self, origin: IVec3, photons: &[u32], scratch: &mut SplatScratch) -> Option<Leaf<[f32; 3]>> {
-        let SplatScratch { acc, k } = scratch;
+    fn splat_body(&self, origin: IVec3, photons: &[u32], k: &mut LeafKernels, acc: &mut LeafSums) {
         for (j, &i) in photons.iter().enumerate() {
             // The bin's photons are scattered over the photon array: ask
             // for the one a few ahead (and its kernel) to be in cache by
@@ -210,7 +229,6 @@ impl LeafGather<'_> {
             }
             self.accumulate(origin, p, kernel.reach(), k, acc);
         }
-        acc.finish(origin, 1.0 / PHOTONS_PER_KM2_S_PER_KR)
     }
 
     /// The splat's segment path: photon `p`'s segment kernel, with its one

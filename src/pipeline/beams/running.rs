@@ -1,0 +1,67 @@
+//! Tracing a bake's beams a range at a time with the stats of one trace of
+//! them all: [`trace_range_running`] traces beams `range` as
+//! [`super::trace_range`] does and adds their ends and powers to running
+//! tallies, curtain by curtain in beam order; once the ranges have covered
+//! `0..count` in order, [`finish_running`] totals them. The sums are then
+//! the same f64 terms in the same order as one trace's, so the stats are
+//! its own, bit for bit (a range's own stats, summed, would round
+//! differently).
+
+use super::{apportion, local_beams, sum_curtains, tally, BeamError, BeamStats, CurtainPower, TraceParams, Traced, Tracer};
+use crate::physics::atmosphere::Atmosphere;
+use crate::physics::emission::line_colour::ColourTable;
+use crate::physics::geomagnetic_field::MagneticField;
+use crate::pipeline::footprint::Footprint;
+use crate::util::progress::Progress;
+use std::ops::Range;
+
+/// Beams `range` of a bake of `count` beams, as [`super::trace_range`]
+/// traces them (no deposits recorded), their tallies added to `running`;
+/// the returned [`Traced`] has default stats.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_range_running(
+    params: &TraceParams,
+    footprints: &[Footprint],
+    atmosphere: &Atmosphere,
+    colour: &ColourTable,
+    count: usize,
+    stream_offset: u64,
+    range: Range<usize>,
+    running: &mut BeamStats,
+    progress: &dyn Progress,
+) -> Result<Traced, BeamError> {
+    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
+    let counts = apportion(count, &weights);
+    let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
+    let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits: false, progress };
+    if running.curtains.len() != params.curtains.len() {
+        running.curtains = vec![CurtainPower::default(); params.curtains.len()];
+    }
+    let range = range.start.min(count)..range.end.min(count);
+    let mut curtain_first = 0usize;
+    let mut photons = Vec::new();
+    let mut line_power = Vec::new();
+    let mut beam_photons = Vec::new();
+    let mut deposits = Vec::new();
+    for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
+        let n = counts[ci];
+        let local = local_beams(&range, curtain_first, n);
+        curtain_first += n;
+        if local.is_empty() {
+            continue;
+        }
+        let (power_w, chunks) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
+        // The curtain's whole power, as a trace of all its beams records it.
+        running.curtains[ci].electron_power_w = power_w;
+        running.beams += local.len();
+        beam_photons.extend(chunks.iter().flat_map(|c| c.beams.iter().map(|b| b.photons)));
+        tally(running, ci, chunks, &mut photons, &mut line_power, &mut deposits);
+    }
+    running.photons += photons.len();
+    Ok(Traced { photons, stats: BeamStats::default(), deposits: Vec::new(), line_power, beam_photons })
+}
+
+/// The totals of tallies [`trace_range_running`] has filled over `0..count`.
+pub fn finish_running(running: &mut BeamStats) {
+    sum_curtains(running);
+}

@@ -1,0 +1,237 @@
+//! The leaves a bake's grids can hold, counted from the plan the bake runs
+//! (its footprints, field, kernel and voxel size): the memory budget's
+//! grid term ([`crate::pipeline::memory_budget`]).
+//!
+//! Model: a beam starts in a footprint cell above `footprint.threshold`,
+//! at most `beams.top_noise_km` off `beams.top_km`, and walks down (and,
+//! with Fang's depositions, lays its column up) the straight field line
+//! through its start (the uniform field, or the dipole's at the start:
+//! `crate::pipeline::beams`), never farther across it than the walk's
+//! spread ([`crate::pipeline::memory_budget::spread_km`]); its photons'
+//! kernels reach `cutoff * r_max` and the Cycles shell one voxel more. So
+//! every voxel the grids hold lies within
+//! `rho = reach + voxel + spread + cell half-diagonal + collapse + top_noise cot(I) + step / 2`
+//! of a point of a start column's field line, sampled every half leaf
+//! along it, from the deposits' top to their bottom (Fang: where the
+//! deposition is complete, less a step; CSDA: the path's length, `L (1 +
+//! dt)`, below the lowest start). Start cells are collapsed onto a grid of
+//! half a leaf (`collapse` its half-diagonal). The count is the union of
+//! the leaves each sampled ball touches (a leaf touches when its voxel
+//! centres' box lies within `rho`), points mapped to the scene frame by
+//! the Earth's map (`crate::geometry::earth`; its horizontal scale at
+//! altitude h is `1 + h / R`, which widens `rho`).
+//!
+//! Unlike a bounding box, the union follows a curtain's band however it
+//! bends, so it is within the spread and the kernel of the leaves a bake
+//! holds.
+
+use crate::geometry::earth::Earth;
+use crate::physics::geomagnetic_field::MagneticField;
+use crate::pipeline::bake::plan::BakePlan;
+use crate::pipeline::footprint::Footprint;
+use glam::{DVec3, IVec3};
+use rayon::prelude::*;
+use std::collections::HashSet;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// One curtain's field lines: where they start and how far each sampled
+/// ball reaches, km.
+#[derive(Clone, Debug)]
+pub struct Band {
+    /// Start columns (curved-frame ground points) at `top_km`.
+    pub columns: Vec<[f64; 2]>,
+    /// The nominal start altitude the lines pass through, km.
+    pub start_km: f64,
+    /// The highest and lowest altitude sampled, km.
+    pub top_km: f64,
+    pub bottom_km: f64,
+    /// The ball's radius about each sampled point at and above the start,
+    /// km, before the Earth's scale; below it the walk's spread is added,
+    /// `spread_per_sqrt_km * sqrt(start_km - h)` (its random walk's
+    /// standard deviations grow as the root of the steps taken) up to
+    /// `spread_max_km`.
+    pub rho_km: f64,
+    pub spread_per_sqrt_km: f64,
+    pub spread_max_km: f64,
+}
+
+impl Band {
+    /// The ball's radius at altitude `h`, km.
+    pub fn rho_at(&self, h: f64) -> f64 {
+        let depth = (self.start_km - h).max(0.0);
+        self.rho_km + (self.spread_per_sqrt_km * depth.sqrt()).min(self.spread_max_km)
+    }
+}
+
+/// The start columns of `fp`: cells above `threshold` collapsed onto a
+/// grid of `g` km (the cell centres' grid points' centres), and the largest
+/// distance from a start to its column's point: the cell's and the grid's
+/// half-diagonals.
+pub fn start_columns(fp: &Footprint, threshold: f64, g: f64) -> (Vec<[f64; 2]>, f64) {
+    let (du, dv) = fp.cell_size();
+    let mut set = HashSet::new();
+    for j in 0..fp.ny {
+        for i in 0..fp.nx {
+            let d = fp.cell(i, j) as f64;
+            if d <= 0.0 || d < threshold {
+                continue;
+            }
+            let (u, v) = ((i as f64 + 0.5) * du - 0.5 * fp.length, (j as f64 + 0.5) * dv - 0.5 * fp.width);
+            let (x, y) = fp.to_world(u, v);
+            set.insert(((x / g).floor() as i64, (y / g).floor() as i64));
+        }
+    }
+    let mut cols: Vec<(i64, i64)> = set.into_iter().collect();
+    cols.sort_unstable();
+    let pts = cols.into_iter().map(|(a, b)| [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]).collect();
+    (pts, 0.5 * du.hypot(dv) + std::f64::consts::FRAC_1_SQRT_2 * g)
+}
+
+/// Largest number of leaves the bit set of [`band_leaves`] spans (its box
+/// in leaves, 32 MB of bits); a larger box is not counted (None).
+pub const MAX_BOX_LEAVES: usize = 1 << 28;
+
+/// The leaves (8^3 voxels of `voxel_km`) within the bands' balls (module
+/// documentation), counted once; None when their box spans more than
+/// [`MAX_BOX_LEAVES`].
+pub fn band_leaves(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> Option<usize> {
+    let earth = Earth::new(plan.earth.radius_km);
+    let leaf = 8.0 * voxel_km;
+    let field_at = |at: [f64; 2]| match plan.earth.magnetic_pole {
+        Some(pole) if plan.earth.radius_km > 0.0 => MagneticField::dipole(&earth, pole, at),
+        _ => plan.field,
+    };
+    // Each column's samples, half a leaf apart along its line: scene
+    // point and ball radius.
+    let samples = |b: &Band, at: [f64; 2], each: &mut dyn FnMut(DVec3, f64)| {
+        let field = field_at(at);
+        let s = DVec3::new(at[0], at[1], b.start_km);
+        let dh = 0.5 * leaf * (-field.b.z).max(1e-3);
+        let n = ((b.top_km - b.bottom_km) / dh).ceil().max(0.0) as usize;
+        for i in 0..=n {
+            let h = (b.top_km - i as f64 * dh).max(b.bottom_km);
+            let scale = if earth.is_flat() { 1.0 } else { 1.0 + h.max(0.0) / plan.earth.radius_km };
+            each(earth.to_scene(field.foot(s, h)), b.rho_at(h) * scale);
+        }
+    };
+    let work: Vec<(usize, [f64; 2])> = bands.iter().enumerate().flat_map(|(k, b)| b.columns.iter().map(move |c| (k, *c))).collect();
+    if work.is_empty() {
+        return Some(0);
+    }
+    // The box of every ball, in leaves.
+    let (lo, hi) = work
+        .par_iter()
+        .map(|&(k, at)| {
+            let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+            samples(&bands[k], at, &mut |p, r| {
+                lo = lo.min(p - DVec3::splat(r));
+                hi = hi.max(p + DVec3::splat(r));
+            });
+            (lo, hi)
+        })
+        .reduce(|| (DVec3::INFINITY, DVec3::NEG_INFINITY), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    let l0 = (lo / voxel_km).floor().as_ivec3().div_euclid(IVec3::splat(8)) - IVec3::ONE;
+    let l1 = (hi / voxel_km).ceil().as_ivec3().div_euclid(IVec3::splat(8)) + IVec3::ONE;
+    let dims = (l1 - l0 + IVec3::ONE).as_dvec3();
+    if dims.x * dims.y * dims.z > MAX_BOX_LEAVES as f64 {
+        return None;
+    }
+    let bits = LeafBits::new(l0, l1);
+    work.par_iter().for_each(|&(k, at)| samples(&bands[k], at, &mut |p, r| bits.insert_ball(p, r, voxel_km)));
+    Some(bits.count())
+}
+
+/// One bit per leaf of a box of leaves, set from any thread.
+struct LeafBits {
+    lo: IVec3,
+    dims: IVec3,
+    words: Vec<AtomicU64>,
+}
+
+impl LeafBits {
+    fn new(lo: IVec3, hi: IVec3) -> Self {
+        let dims = hi - lo + IVec3::ONE;
+        let n = dims.x as usize * dims.y as usize * dims.z as usize;
+        Self { lo, dims, words: (0..n.div_ceil(64)).map(|_| AtomicU64::new(0)).collect() }
+    }
+
+    fn count(&self) -> usize {
+        self.words.iter().map(|w| w.load(Ordering::Relaxed).count_ones() as usize).sum()
+    }
+
+    /// Sets the leaves whose voxel centres' box lies within `rho` of `p`:
+    /// per leaf column within `rho` across, the leaves within the rest of
+    /// `rho` up and down.
+    fn insert_ball(&self, p: DVec3, rho: f64, vs: f64) {
+        let lo = ((p - DVec3::splat(rho)) / vs).ceil().as_ivec3();
+        let hi = ((p + DVec3::splat(rho)) / vs).floor().as_ivec3();
+        if lo.cmpgt(hi).any() {
+            return;
+        }
+        let (l0, l1) = (lo.div_euclid(IVec3::splat(8)), hi.div_euclid(IVec3::splat(8)));
+        let gap = |p: f64, k: i32| {
+            let (a, b) = ((8 * k) as f64 * vs, (8 * k + 7) as f64 * vs);
+            if p < a {
+                a - p
+            } else if p > b {
+                p - b
+            } else {
+                0.0
+            }
+        };
+        for x in l0.x..=l1.x {
+            let gx = gap(p.x, x);
+            for y in l0.y..=l1.y {
+                let gy = gap(p.y, y);
+                let rest = rho * rho - gx * gx - gy * gy;
+                if rest < 0.0 {
+                    continue;
+                }
+                let dz = rest.sqrt();
+                let (z0, z1) = (((p.z - dz) / vs).ceil() as i32, ((p.z + dz) / vs).floor() as i32);
+                if z0 > z1 {
+                    continue;
+                }
+                for z in z0.div_euclid(8)..=z1.div_euclid(8) {
+                    self.set(IVec3::new(x, y, z));
+                }
+            }
+        }
+    }
+
+    fn set(&self, k: IVec3) {
+        let d = k - self.lo;
+        if d.cmplt(IVec3::ZERO).any() || d.cmpge(self.dims).any() {
+            return;
+        }
+        let i = (d.x as usize * self.dims.y as usize + d.y as usize) * self.dims.z as usize + d.z as usize;
+        self.words[i / 64].fetch_or(1 << (i % 64), Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_ball_touches_the_leaves_its_voxels_lie_in() {
+        // A ball of 1 km about the origin on 0.5 km voxels: the voxel
+        // centres within 1 km are indices -2..=2 per axis, in leaves -1 and 0.
+        let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
+        bits.insert_ball(DVec3::ZERO, 1.0, 0.5);
+        assert_eq!(bits.count(), 8);
+        // Just inside a leaf's middle: one leaf.
+        let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
+        bits.insert_ball(DVec3::splat(1.75), 0.3, 0.5);
+        assert_eq!(bits.count(), 1);
+        // A leaf whose voxel box is 0.3 km away diagonally in x and y
+        // (0.42 km) is outside a ball of 0.4 km and inside one of 0.45 km.
+        let p = DVec3::new(-0.3, -0.3, 1.75);
+        let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
+        bits.insert_ball(p, 0.4, 0.5);
+        assert_eq!(bits.count(), 3);
+        let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
+        bits.insert_ball(p, 0.45, 0.5);
+        assert_eq!(bits.count(), 4);
+    }
+}
