@@ -1,59 +1,49 @@
 //! The bake's memory, known before it is spent.
 //!
-//! [`estimate`] bounds a validated scene's peak allocation from the scene
-//! alone (before any footprint or beam); `crate::pipeline::memory_refusal`
-//! compares it with the share [`USABLE_FRACTION`] of what this process may
-//! use and refuses with the changes that would fit. Every term is an upper bound: a scene that
-//! passes does not run out of memory through the bake's own allocations.
-//! Terms in bytes, `leaf` an 8^3-voxel leaf's side,
-//! `reach = cutoff * radius_km * (1 + radius_noise)`, `I` the smallest dip
-//! of the electrons' field line where a curtain's beams start
-//! ([`crate::pipeline::beams::dip`]; a dip within the deflection cone,
-//! `I <= alpha_D`, has no bound and is refused before this):
-//! - **photons**: `beams.count` beams of [`steps_per_beam`] steps (csda:
-//!   `ceil(1 / beams.dt)`; Fang's depositions: a step of mean length
-//!   `L dt / 2` descends `L dt sin(I) / 2` on average whatever its
-//!   deflection, so by Wald's identity a beam's expected steps to descend
-//!   from its highest start to where its deposition is complete are at most
-//!   `(H + L dt (sin I + tan alpha_D cos I)) / (L dt sin(I) / 2)`, and the
-//!   bake's sum is within four standard deviations of `count` times that),
-//!   plus for Fang's depositions the spans of the column above the start
-//!   ([`crate::pipeline::beams::walk::above_start_column_top`],
-//!   [`column_spans`]),
-//!   a [`Photon`] each, held three times (per-beam vectors, their
-//!   concatenation, the kd-tree's copy).
-//! - **candidate leaves**: 12 bytes per leaf within reach of each step (at
-//!   most `length_km * dt`), before deduplication: at most `photons * L`,
-//!   `L = (ceil((2 reach + step) / leaf) + 1)^3`; where every step descends
-//!   (`alpha_D < I`) a beam's path to 50 km is at most
-//!   `h / sin(I - alpha_D)`, its entries `(path / leaf + 2) (L^(1/3))^2`,
-//!   and n column segments above the start at most
-//!   `(column / sin(I) / leaf + 2 n) (2 reach / leaf + 2)^2`.
-//! - **grids**: min(`photons * L`, the world box's leaves dilated by the
-//!   reach) plus the columns', each an emission leaf (512 x 12), a density
-//!   leaf (512 x 4) and masks, +30 % (Cycles shell, sort). The world box is
-//!   widened by the drift along the field, `cot(I)` per km of descent. A column (the
-//!   start area carried up the field, a sheared prism) holds at most `(dx / leaf + 3) (dy / leaf + 3)` leaves per
-//!   leaf-thick slab (the box dilated by the reach, one more per axis for the
-//!   shift within a slab, below a leaf for dips above 45 degrees). A curtain
-//!   along a path (`crate::pipeline::footprint::curtain_path`) counts its band:
-//!   leaves within rho (half width, reach, shift) of a curve of length L lie
-//!   within `rho' = rho + sqrt(2) leaf` of it, `(2 rho' L + pi rho'^2) / leaf^2`
-//!   per slab at most (the area of a curve's parallel set).
-//! - **footprints**: 12 f64 per fluid cell ([`crate::pipeline::footprint::cells_along`]).
-//! - **per-line grids** (`grid.lines`, physical colour): 512 x 4 bytes and
-//!   masks per leaf and line, plus, three lines at a time, a colour grid and
-//!   a copy of the photons (`crate::pipeline::bake::plan::line_grids`), and
-//!   each photon's line powers (4 bytes a line).
-//! - **red trail** (`animation.trail_samples = N`, physical colour): N times
-//!   the photons and candidate leaves (`crate::pipeline::red_trail`); the
-//!   grids do not grow (the motion stays inside the world box).
-//! - **pilots** (freed before the bake traces): the deposition pilot's
-//!   photons and, with `beams.target_noise`, the noise pilot's two emission
-//!   grids and photons at once; counted by what they exceed the rest.
+//! [`estimate_plan`] bounds a bake's peak allocation from the plan it runs
+//! ([`BakePlan`]: its footprints, field, kernel and chunk of beams), so the
+//! estimate and the bake read the same footprints and constants and cannot
+//! drift apart; [`estimate`] builds that plan from a scene.
+//! `crate::pipeline::memory_refusal` compares it with the share
+//! [`USABLE_FRACTION`] of what this process may use and refuses with the
+//! changes that would fit. Terms in bytes (each an upper bound; measured
+//! against the peak resident set by `benchmarks/memory/budget.sh`,
+//! docs/benchmarks.md), `leaf` an 8^3-voxel leaf's side, `reach = cutoff *
+//! r_max`, `I` the smallest dip of the field where a curtain's beams
+//! start ([`crate::pipeline::beams::dip`]; `I <= alpha_D` is refused
+//! before this):
+//! - **program**: [`PROGRAM_BYTES`], what a bake of a few beams holds.
+//! - **photons**: the beams held at once, one chunk of the plan's
+//!   `beam_chunk` (`crate::pipeline::bake::chunked`; all of them, every
+//!   red-trail sample's, for a bake of one chunk or `report2014`), of
+//!   [`steps_per_beam`] steps (csda: `ceil(1 / beams.dt)`; Fang's: by
+//!   Wald's identity at most `(H + L dt (sin I + tan alpha_D cos I)) /
+//!   (L dt sin(I) / 2)` expected, plus four standard deviations of the sum)
+//!   plus the column above each start ([`column_spans`]): a [`Photon`]
+//!   three times (traced, merged, binned) and the splat's kernel each.
+//! - **candidate leaves**: 12 bytes per leaf within reach of each held
+//!   step, bounded per beam by its path's slices of leaves.
+//! - **grids**: the leaves the bands of [`crate::pipeline::memory_leaves`]
+//!   reach (the plan's start cells carried along their field lines,
+//!   dilated by the reach, the walk's spread, the start noise), each an
+//!   emission leaf (512 x 12 bytes and masks) and, unless the air is
+//!   physical (`grid.density_a = 0`), a density leaf (512 x 4), plus
+//!   [`GRID_SLACK`]. Above [`COUNTED_LEAVES_MAX`] leaves the world box's
+//!   and curtain bands' closed-form bound ([`box_leaves`]) stands.
+//! - **footprints**: 12 f64 per cell of the plan's footprints (their
+//!   simulation's working set).
+//! - **per-line grids**: per leaf a float grid per line and the sums of
+//!   each three lines; a copy of the held photons and their line powers.
+//! - **velocity**: the numerator's sums and the grid, a weighted copy of
+//!   the held photons, 12 bytes per beam.
+//! - **red trail**: in chunks, an earlier sample's footprints; whole, N
+//!   more photon sets and candidate lists.
+//! - **photon distances**: `voxel_size = "auto"` in chunks keeps every
+//!   photon's distance from the camera, 8 bytes each, every sample's.
+//! - **pilots**: freed before the bake traces; counted by what they
+//!   exceed the rest.
 //!
-//! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]);
-//! the reach is the gather's ([`KernelRadius::max_reach_km`]).
+//! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]).
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
@@ -81,7 +71,7 @@ const RGB_LEAF_BYTES: f64 = 512.0 * 12.0 + 64.0 + 64.0;
 pub const PROGRAM_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
 /// The allocator's share beside the grids' leaves: the leaf vectors'
 /// doubling and the sums' hash table.
-const GRID_SLACK: f64 = 1.1;
+pub const GRID_SLACK: f64 = 1.1;
 /// Share of the limit the estimate may use: the rest is kept for what does
 /// not scale with the scene (the program's code and stacks, the thread
 /// pool, the allocator's slack and fragmentation, the files' write
@@ -412,7 +402,7 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
 /// asked to count (a set of them takes some 40 bytes each); above it the
 /// box and band bound ([`box_leaves`]) stands, and such a bake (over 16
 /// GiB of grids) is refused anyway on most machines.
-const COUNTED_LEAVES_MAX: f64 = 2.0e6;
+pub const COUNTED_LEAVES_MAX: f64 = 2.0e6;
 
 /// Bound on the leaves from the world box and the curtains' bands alone
 /// (no footprint), at voxel `voxel_km`, kernel reach `reach`: the
@@ -552,7 +542,7 @@ pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
     if trail > 0.0 {
         // Whole: N more photon sets and candidate lists. In chunks: one
         // earlier sample's footprints at a time (f32 per cell).
-        let bytes = if chunked { 4.0 * cells } else { trail * (3.0 * photons * photon_bytes + candidates) };
+        let bytes = if chunked { 4.0 * cells } else { trail * (photons * (3.0 * photon_bytes + kernel_bytes) + candidates) };
         terms.push(Term { what: "red trail", bytes, key: "animation.trail_samples".into(), value: format!("{trail}") });
     }
     if chunked && matches!(scene.grid.voxel_size, VoxelSize::Auto(_)) && plan.camera_model().is_ok_and(|c| c.pixel_angle().is_some()) {
@@ -595,56 +585,68 @@ mod tests {
 
     const GIB: f64 = (1u64 << 30) as f64;
 
+    fn term<'a>(e: &'a Estimate, what: &str) -> &'a Term {
+        e.terms.iter().find(|t| t.what == what).unwrap_or_else(|| panic!("no {what} term: {:?}", e.terms))
+    }
+
     #[test]
-    fn default_scene_fits_in_a_few_gib_and_the_bound_is_above_what_it_uses() {
+    fn default_scene_bound_is_above_what_it_uses_and_near_it() {
         let s = Scene::default();
         let e = estimate(&s);
-        // Measured: 727 MB peak resident for the default bake with its VDB
-        // write (`/usr/bin/time -v aurora bake`, 2026-12-05, the vortex
-        // sheet's 300-460 km curtains); the bound is above it and below
-        // 8 GiB (7.1 GiB: the box and column bounds count every leaf of the
-        // footprints' bounding boxes, where the curtains fill a thin sheet,
-        // so the bound grows with the curtains' length far faster than the
-        // bake does).
-        assert!(e.total() > 0.727e9 && e.total() < 8.0 * GIB, "{} GiB", e.total() / GIB);
+        // Measured: 0.66 GiB peak resident for the default bake with its
+        // VDB write (`benchmarks/memory/budget.sh`, 2026-12-05); the bound
+        // is above it and below 2 GiB (the bounding boxes' bound gave 7.1
+        // GiB: it counted every leaf of boxes the thin curtains cross).
+        assert!(e.total() > 0.66 * GIB && e.total() < 2.0 * GIB, "{} GiB", e.total() / GIB);
     }
 
     #[test]
     fn per_line_grids_and_the_trail_are_counted() {
-        // The five lines' grids (about 5 x 2.2 kB a leaf over the grids'
-        // 8.3 kB, plus a colour grid, a photon copy and the line powers).
         let mut s = Scene::default();
         let plain = estimate(&s).total();
         s.grid.lines = crate::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();
         let e = estimate(&s);
-        let lines = e.terms.iter().find(|t| t.what == "per-line grids").expect("a per-line term");
-        let grids = e.terms.iter().find(|t| t.what == "grids").unwrap();
-        // Five float grids and a colour grid on the same leaves: (5 x 2176 +
-        // 6272) / 8384 = 2.05 of the grids' term, plus the photons' copy.
-        assert!(lines.bytes > 2.05 * grids.bytes, "{} vs {}", lines.bytes, grids.bytes);
+        let lines = term(&e, "per-line grids");
+        let grids = term(&e, "grids");
+        // Five float grids and two colour sums on the grids' leaves (the
+        // default's physical air has no density grid): (5 x 2176 + 2 x
+        // 6272) / 6272 = 3.73 of the grids' term, plus the photons' copy.
+        assert!(lines.bytes > 3.73 * grids.bytes, "{} vs {}", lines.bytes, grids.bytes);
         assert!(e.total() > 1.01 * plain);
         // A colour map makes no per-line grids: nothing counted.
         s.colour.mode = crate::scene::ColourMode::Colormap;
         assert_eq!(estimate(&s).total(), plain);
 
-        // The trail: N more photon sets and candidate lists.
+        // The trail of a bake of one chunk: N more photon sets and
+        // candidate lists.
         let mut s = Scene::default();
         s.animation.trail_samples = 8;
         let e = estimate(&s);
-        let t = e.terms.iter().find(|t| t.what == "red trail").expect("a trail term");
-        let (ph, ca) = (e.terms[0].bytes, e.terms[1].bytes);
+        let t = term(&e, "red trail");
+        let (ph, ca) = (term(&e, "photons").bytes, term(&e, "candidate leaves").bytes);
         assert!((t.bytes - 8.0 * (ph + ca)).abs() <= 1e-9 * t.bytes, "{} vs {}", t.bytes, 8.0 * (ph + ca));
         assert_eq!(t.key, "animation.trail_samples");
     }
 
     #[test]
-    fn estimate_grows_with_beams_and_shrinks_with_voxel_size() {
-        let mut s = Scene::default();
-        let a = estimate(&s).total();
-        s.beams.count *= 2;
-        assert!(estimate(&s).total() > a);
-        let mut s = Scene::default();
-        s.grid.voxel_size = VoxelSize::Km(2.0);
-        assert!(estimate(&s).total() < a);
+    fn estimate_shrinks_with_voxel_size_and_a_chunked_bake_does_not_grow_with_beams() {
+        let s = Scene::default();
+        let plan = BakePlan::new(&s, &NoProgress);
+        let a = estimate_plan(&s, &plan).total();
+        let mut t = s.clone();
+        t.grid.voxel_size = VoxelSize::Km(2.0);
+        assert!(estimate_plan(&t, &BakePlan::reusing(&t, &plan, &NoProgress)).total() < a);
+        // Beyond one chunk the photons and candidates are a chunk's, and
+        // the rest does not depend on the beams: 4 and 40 chunks, the same.
+        let at = |count: usize| {
+            let mut t = s.clone();
+            t.beams.count = count;
+            estimate_plan(&t, &plan)
+        };
+        let (four, forty) = (at(4 * plan.beam_chunk), at(40 * plan.beam_chunk));
+        assert_eq!(four.total(), forty.total());
+        assert_eq!(term(&four, "photons").key, "beams.dt");
+        // Within a chunk, more beams, more photons.
+        assert!(at(plan.beam_chunk).total() > at(plan.beam_chunk / 2).total());
     }
 }

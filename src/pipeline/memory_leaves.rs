@@ -224,9 +224,10 @@ mod tests {
         let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
         bits.insert_ball(DVec3::splat(1.75), 0.3, 0.5);
         assert_eq!(bits.count(), 1);
-        // A leaf whose voxel box is 0.3 km away diagonally in x and y
-        // (0.42 km) is outside a ball of 0.4 km and inside one of 0.45 km.
-        let p = DVec3::new(-0.3, -0.3, 1.75);
+        // At a voxel centre's height, a leaf whose voxel box is 0.3 km
+        // away in x and y (0.42 km) is outside a ball of 0.4 km and inside
+        // one of 0.45 km; those 0.2 km away in one axis are inside both.
+        let p = DVec3::new(-0.3, -0.3, 2.0);
         let bits = LeafBits::new(IVec3::splat(-3), IVec3::splat(3));
         bits.insert_ball(p, 0.4, 0.5);
         assert_eq!(bits.count(), 3);

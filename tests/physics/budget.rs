@@ -91,13 +91,16 @@ fn the_photon_estimate_follows_the_field_dip() {
             s.earth.magnetic_pole = Some(pole_for_dip(dip, s.earth.radius_km));
         }
         let b = bake::bake(&s, &NoProgress).unwrap();
-        let e = memory_budget::estimate(&s);
+        let plan = aurora::pipeline::bake::plan::BakePlan::new(&s, &NoProgress);
+        let e = memory_budget::estimate_plan(&s, &plan);
         let term = e.terms.iter().find(|t| t.what == "photons").unwrap();
-        let counted = term.bytes / 3.0 / std::mem::size_of::<Photon>() as f64;
+        let per_photon =
+            3.0 * std::mem::size_of::<Photon>() as f64 + std::mem::size_of::<aurora::pipeline::photons::kernel::KernelF32>() as f64;
+        let counted = term.bytes / per_photon;
         let held = b.photons.len() as f64;
-        let grids = e.terms.iter().find(|t| t.what == "grids").unwrap();
         let leaves = b.emission.leaf_count() as f64;
-        let bound = grids.bytes / 1.3 / (512.0 * 16.0 + 192.0);
+        let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
+        let bound = memory_budget::grid_leaves(&s, &plan, b.stats.voxel_size_km, reach);
         eprintln!("dip {dip}: {held} photons, estimate {counted:.0} ({:.3}); {leaves} leaves, bound {bound:.0}", counted / held);
         assert!(counted >= held && counted <= 1.15 * held, "dip {dip}: {held} photons, the estimate counts {counted:.0}");
         assert!(leaves <= bound, "dip {dip}: {leaves} leaves, bound {bound:.0}");
@@ -126,8 +129,11 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
     use aurora::scene::{Scene, VoxelSize};
     let limit = aurora::util::memory::MemoryLimit { bytes: 8.0 * (1u64 << 30) as f64, source: "test" };
     let mut scenes: Vec<(&str, Scene)> = Vec::new();
+    // A bake in chunks holds one chunk's photons whatever the count, but
+    // with the automatic voxel size every photon's distance from the camera.
     let mut s = Scene::default();
     s.beams.count = 20_000_000;
+    s.grid.voxel_size = VoxelSize::Auto(aurora::scene::AutoTag::Auto);
     scenes.push(("many beams", s));
     let mut s = Scene::default();
     s.grid.voxel_size = VoxelSize::Km(0.02);
@@ -179,4 +185,62 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
 /// one's floor.
 fn voxel_km(s: &aurora::scene::Scene) -> f64 {
     s.voxel_size_km().unwrap_or_else(|| KernelRadius::of(&s.photons).auto_voxel_floor_km())
+}
+
+#[test]
+fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
+    // The bands (the plan's start cells along their field lines, dilated
+    // by the reach, spread and start noise) hold every leaf the bake makes,
+    // and on the small scene's 1 km voxels not many more: the walk's
+    // four-standard-deviation spread and the start noise widen a band some
+    // 5 km each side of curtains 14-16 km wide (measured 2.0-2.6x; the
+    // bounding boxes' bound was over 5x).
+    for deposition in [Deposition::Expected, Deposition::Csda] {
+        let mut s = small_scene();
+        s.beams.deposition = deposition;
+        let b = bake::bake(&s, &NoProgress).unwrap();
+        let plan = aurora::pipeline::bake::plan::BakePlan::new(&s, &NoProgress);
+        let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
+        let bound = memory_budget::grid_leaves(&s, &plan, b.stats.voxel_size_km, reach);
+        let leaves = b.emission.leaf_count() as f64;
+        let old = memory_budget::box_leaves(&s, 8.0 * b.stats.voxel_size_km, reach + b.stats.voxel_size_km);
+        eprintln!("{deposition:?}: {leaves} leaves, bands {bound}, boxes {old}");
+        assert!(leaves <= bound && bound <= 3.5 * leaves, "{deposition:?}: {leaves} leaves, bound {bound}");
+    }
+}
+
+#[test]
+fn a_bake_in_chunks_counts_one_chunk_of_photons_and_what_stays_per_beam() {
+    use aurora::pipeline::bake::plan::BakePlan;
+    let s = small_scene();
+    let mut plan = BakePlan::new(&s, &NoProgress);
+    plan.beam_chunk = 50;
+    let term = |s: &aurora::scene::Scene, what: &str| {
+        memory_budget::estimate_plan(s, &plan).terms.iter().find(|t| t.what == what).map(|t| t.bytes)
+    };
+    // 301 beams in chunks of 50: the photons and candidates of 50 beams,
+    // the same for ten times the beams.
+    let mut whole50 = s.clone();
+    whole50.beams.count = 50;
+    let mut more = s.clone();
+    more.beams.count = 3010;
+    for what in ["photons", "candidate leaves"] {
+        assert_eq!(term(&s, what), term(&whole50, what), "{what}");
+        assert_eq!(term(&more, what), term(&s, what), "{what}");
+    }
+    assert!(memory_budget::is_chunked(&s, &plan) && !memory_budget::is_chunked(&whole50, &plan));
+    // What grows with the beams in chunks: the automatic voxel size's
+    // distances (8 bytes a photon) and the velocity's 12 bytes a beam.
+    let mut auto = more.clone();
+    auto.grid.voxel_size = aurora::scene::VoxelSize::Auto(aurora::scene::AutoTag::Auto);
+    let d = term(&auto, "photon distances").expect("a distances term");
+    let steps = memory_budget::photons_of_steps(&auto, 3010.0);
+    assert!(d >= 8.0 * steps, "{d} for {steps} step photons");
+    assert_eq!(term(&more, "photon distances"), None);
+    let mut v = more.clone();
+    v.grid.velocity = true;
+    let mut v2 = v.clone();
+    v2.beams.count = 2 * 3010;
+    let grow = term(&v2, "velocity").unwrap() - term(&v, "velocity").unwrap();
+    assert!((grow - 12.0 * 3010.0).abs() < 1e-6, "{grow}");
 }
