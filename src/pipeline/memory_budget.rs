@@ -474,8 +474,16 @@ pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
     // The emission's leaves, and the density's on the same voxels unless
     // the air is physical (`grid.density_a = 0`: no density grid).
     let leaf_bytes = if scene.grid.density_a > 0.0 { LEAF_BYTES } else { RGB_LEAF_BYTES };
-    let (grid_key, grid_value) =
-        if reach > 2.0 * leaf_km { ("photons.radius_km".to_string(), format!("{}", p.radius_km)) } else { (vkey, vvalue) };
+    // Blame the kernel when its reach, not the voxel or the curtains, makes
+    // the grid large: the world box's leaves with the reach over four times
+    // those without.
+    let (lo, hi) = world_bounds(scene);
+    let boxed = |pad: f64| -> f64 { (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * pad) / leaf_km).ceil() + 1.0).product() };
+    let (grid_key, grid_value) = if boxed(reach) > 4.0 * boxed(0.0) && reach > leaf_km {
+        ("photons.radius_km".to_string(), format!("{}", p.radius_km))
+    } else {
+        (vkey, vvalue)
+    };
     // Candidate entries: each photon's segment box (kernel reach around a
     // step of at most length_km * dt) lists its leaves. Where every step
     // descends (the deflection alpha_D is smaller than the field's dip),

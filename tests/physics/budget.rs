@@ -193,8 +193,9 @@ fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
     // by the reach, spread and start noise) hold every leaf the bake makes,
     // and on the small scene's 1 km voxels not many more: the walk's
     // four-standard-deviation spread and the start noise widen a band some
-    // 5 km each side of curtains 14-16 km wide (measured 2.0-2.6x; the
-    // bounding boxes' bound was over 5x).
+    // 5 km each side of curtains 14-16 km wide (measured 3.6x with Fang's
+    // depositions, 5.6x with CSDA's shorter beams), under half the
+    // bounding boxes' bound the budget used before (8.7x and 14.9x).
     for deposition in [Deposition::Expected, Deposition::Csda] {
         let mut s = small_scene();
         s.beams.deposition = deposition;
@@ -205,7 +206,8 @@ fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
         let leaves = b.emission.leaf_count() as f64;
         let old = memory_budget::box_leaves(&s, 8.0 * b.stats.voxel_size_km, reach + b.stats.voxel_size_km);
         eprintln!("{deposition:?}: {leaves} leaves, bands {bound}, boxes {old}");
-        assert!(leaves <= bound && bound <= 3.5 * leaves, "{deposition:?}: {leaves} leaves, bound {bound}");
+        assert!(leaves <= bound && bound <= 6.0 * leaves, "{deposition:?}: {leaves} leaves, bound {bound}");
+        assert!(bound <= 0.5 * old, "{deposition:?}: bands {bound}, boxes {old}");
     }
 }
 
