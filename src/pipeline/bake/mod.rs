@@ -44,14 +44,14 @@ use std::time::Instant;
 /// may use ([`crate::pipeline::memory_budget`]), before anything is allocated.
 pub fn check_memory(scene: &Scene) -> Result<(), BakeError> {
     crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
-    crate::pipeline::memory_refusal::check(scene, &crate::util::memory::available())?;
+    crate::pipeline::memory_refusal::check(scene, &crate::util::memory::available()).map_err(|e| BakeError::Memory(e))?;
     Ok(())
 }
 
 /// [`check_memory`] on the plan the bake runs (built from `scene`): its
 /// estimate is that plan's ([`crate::pipeline::memory_budget::estimate_plan`]).
 pub fn check_plan_memory(scene: &Scene, plan: &BakePlan) -> Result<(), BakeError> {
-    crate::pipeline::memory_refusal::check_plan(scene, plan, &crate::util::memory::available())?;
+    crate::pipeline::memory_refusal::check_plan(scene, plan, &crate::util::memory::available()).map_err(|e| BakeError::Memory(e))?;
     Ok(())
 }
 

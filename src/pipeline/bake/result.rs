@@ -36,9 +36,11 @@ pub enum BakeError {
     /// The bake would need more memory than this process may use
     /// ([`crate::pipeline::memory_budget`], [`crate::pipeline::memory_refusal`]); refused before
     /// anything is allocated. Boxed: its strings and suggestions would
-    /// otherwise set the size of every `Result<_, BakeError>`.
+    /// otherwise set the size of every `Result<_, BakeError>`; as an error
+    /// (a `crate::pipeline::memory_refusal::TooLarge`), since the refusal
+    /// reads the bake's plan, which returns this type.
     #[error(transparent)]
-    Memory(#[from] Box<crate::pipeline::memory_refusal::TooLarge>),
+    Memory(Box<dyn std::error::Error + Send + Sync>),
     /// The bake produced no emission at all: an empty VDB is never written
     /// silently. The message says where the beams' energy went.
     #[error("the bake deposited no light: {0}")]
