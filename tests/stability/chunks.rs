@@ -17,7 +17,9 @@ fn vdb_bytes(s: &Scene, b: &bake::Bake) -> Vec<u8> {
     // The velocity is compared as a grid: the small scene's overflows the
     // half floats the file would store it in.
     grids.extend(b.lines.iter().map(GridRef::Float));
-    write_vdb_bytes(&grids, &aurora::io::bake_folder::write_options(s)).unwrap()
+    let mut without_v = s.clone();
+    without_v.grid.velocity = false;
+    write_vdb_bytes(&grids, &aurora::io::bake_folder::write_options(&without_v)).unwrap()
 }
 
 /// Bakes `s` with `chunk` beams a chunk.
