@@ -43,7 +43,8 @@
 //! `march.rs` (one walker for primary and shadow rays) -> `shadow.rs`
 //! (terrain irradiance) -> `image.rs` ([`Image`]) -> `image_file.rs` (EXR,
 //! PNG) through `view_transform.rs` (standard or `agx.rs`). `grids.rs`
-//! picks a file's grids; `sky_map.rs` renders the sky alone as a map for
+//! picks a file's grids, `recolour.rs` rebuilds the emission from the line
+//! grids for another observer; `sky_map.rs` renders the sky alone as a map for
 //! Blender's world.
 
 // Loops over the three colour channels index several arrays at once.
@@ -60,6 +61,7 @@ pub mod integrator;
 pub mod march;
 pub mod medium;
 pub mod prepared;
+pub mod recolour;
 pub mod sampler;
 pub mod segment;
 pub mod settings;
