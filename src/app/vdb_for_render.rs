@@ -170,13 +170,13 @@ pub fn prepare_from_vdb(settings: &RenderSettings, path: &Path, colour: &ColourP
     let file = path.display().to_string();
     let render_err = |source: RenderError| RenderReadError::Render { file: file.clone(), source };
     let (ds, es) = (settings.volume.density_scale, settings.volume.emission_scale);
-    let open = std::time::Instant::now();
     if emission_source_of(path, colour)? == EmissionSource::AsBaked {
         if let Some(read) = read_render_medium(path, ds, es)? {
             let prepared = Prepared::with_medium(settings, read.medium, None).map_err(render_err)?;
             return Ok((prepared, read.open_seconds, read.build_seconds));
         }
     }
+    let open = std::time::Instant::now();
     let vdb = crate::io::vdb::read::read_vdb_for_render(path)?;
     let (density, emission) = render_grids_as(vdb, colour).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
     let open_seconds = open.elapsed().as_secs_f64();
@@ -418,6 +418,48 @@ mod tests {
         assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
         assert_eq!(bits(&render_prepared(&p, &crate::util::progress::NoProgress).unwrap()), bits(&want));
         assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
+    }
+
+    /// The listing (`parse::list_grids`) names, types and metadata every
+    /// grid as the whole parse does; the recorded observer is the key's,
+    /// the default for a bake of ours without it, none for a file from
+    /// elsewhere, and an unknown one is refused by name.
+    #[test]
+    fn the_listing_gives_the_grids_and_the_observer_they_record() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, MetaValue, WriteOptions};
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let (d, e) = medium_grids(tr, tr);
+        let mut line = Grid::new("line_5577", 0.0f32, tr);
+        line.set(IVec3::new(1, 2, 3), 4.0);
+        let file = |meta: Vec<(&str, MetaValue)>| {
+            let metadata = meta.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+            let opts = WriteOptions { metadata, ..WriteOptions::default() };
+            write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e), GridRef::Float(&line)], &opts).unwrap()
+        };
+        let hash = ("aurora_scene_hash", MetaValue::String("0123".into()));
+        let observer = |bytes: &[u8]| {
+            let listed = parse::list_grids(bytes).unwrap();
+            let whole = parse::parse_file(bytes, &|_| false).unwrap();
+            assert_eq!(listed.len(), whole.grids.len());
+            for (l, w) in listed.iter().zip(&whole.grids) {
+                assert_eq!(
+                    (l.name(), l.kind, &l.metadata, l.end_pos),
+                    (w.header.name(), w.header.kind, &w.header.metadata, w.header.end_pos)
+                );
+            }
+            baked_observer(listed.iter().map(|h| h.metadata.as_slice()))
+        };
+        let eye = file(vec![hash.clone(), (crate::io::bake_folder::OBSERVER_KEY, MetaValue::String("eye".into()))]);
+        assert_eq!(observer(&eye).unwrap(), Some(Observer::Eye));
+        assert_eq!(observer(&file(vec![hash.clone()])).unwrap(), Some(Observer::Camera));
+        assert_eq!(observer(&file(Vec::new())).unwrap(), None);
+        let owl = file(vec![hash, (crate::io::bake_folder::OBSERVER_KEY, MetaValue::String("owl".into()))]);
+        let m = observer(&owl).unwrap_err().to_string();
+        assert!(m.contains("aurora_observer = \"owl\"") && m.contains("\"camera\", \"eye\""), "{m}");
+        // A damaged listing is an error, never a panic.
+        for cut in [0, 8, 40, eye.len() / 3] {
+            assert!(parse::list_grids(&eye[..cut]).is_err(), "cut at {cut}");
+        }
     }
 
     /// Bad files give typed errors, never a panic: every 7th byte of a
