@@ -23,10 +23,10 @@
 //!   `n_A = 2 P_A / (L_A + sqrt(L_A^2 + 4 k_p P_A))`; at auroral n_A (1e3 to
 //!   1e5 cm^-3) it is under 1e-5 of the loss, kept so the balance is whole.
 //!
-//! At 110-120 km O takes 70-75 % of N2(A) (NRLMSIS 2.1), so the transfer
+//! At 110-120 km O takes 64-72 % of N2(A) (NRLMSIS 2.1), so the transfer
 //! makes O(1S) nearly in proportion to the N2 ionization there, not to
-//! N2 ionization x [O]: the N2(A) channel of 557.7 nm peaks 1.5 km below
-//! 427.8 nm at E0 = 1 keV and 12 km below at 0.5 keV (docs/physics.md,
+//! N2 ionization x [O]: the N2(A) channel of 557.7 nm peaks 1.6 km below
+//! 427.8 nm at E0 = 1 keV and 12.5 km below at 0.5 keV (docs/physics.md,
 //! "Green above blue?").
 //!
 //! **N2(B) and the 1P bands.** N2(B) is made by electron impact on N2,
