@@ -77,9 +77,10 @@ fn blue_per_ion_pair_is_glows_and_its_excess_per_erg_is_the_deposit() {
     // 213 R. Per ion pair ours is GLOW's (0.0151 / 0.0166 / 0.0171 photons
     // at 1 / 3 / 10 keV from GLOW's columns): within 5 %, the spread of
     // GLOW's own yield over Q. The excess per erg is in the ion pairs:
-    // Fang 2010 deposits 0.94-0.99 of the incident energy, GLOW 0.84-0.92,
-    // so ours makes 1.10-1.15 times GLOW's 1.53 / 1.59 / 1.59e10 ion pairs
-    // per erg (at 35 eV each, the most an erg can make is 1.78e10).
+    // ours deposit 0.975-0.99 of the incident energy, GLOW 0.77-0.83 (1 minus
+    // its upward energy flux at the top) at 31-33 eV per ion pair, so ours
+    // makes 1.10-1.15 times GLOW's 1.53 / 1.59 / 1.59e10 ion pairs per erg
+    // (at 35 eV each, the most an erg can make is 1.78e10).
     for (e0, glow_blue_per_ion, glow_ions_per_erg) in [(1.0, 0.01512, 1.528e10), (3.0, 0.01664, 1.589e10), (10.0, 0.01712, 1.585e10)] {
         let (p, erg) = run(e0);
         let ions = column(&p, ION);
