@@ -35,7 +35,7 @@
 //! radiates in 5-8 us (A_B = 1.5e5 s^-1 taken for the v = 3-8 levels of the
 //! visible Delta v = 3 bands; Gilmore, Laher & Espy 1992, J. Phys. Chem.
 //! Ref. Data 21, 1005) and is quenched by N2 (1e-11 cm^3 s^-1) and O2
-//! (3e-10; both from Kossyi et al. 1992): 15 % at 80 km, 2 % at 90 km. That
+//! (3e-10; both from Kossyi et al. 1992): 10 % at 80 km, 2 % at 90 km. That
 //! prompt part is the 1P of every altitude, normalised to [`R_1P`] photons of
 //! the Delta v = 3 sequence per 427.8 nm photon where nothing quenches
 //! (Vallance Jones 1974, "Aurora", ch. 4; Gattinger & Vallance Jones
