@@ -132,7 +132,7 @@ pub fn oval() -> Scene {
         curtains: vec![Curtain {
             path: Some(path),
             width: 40.0,
-            energy_flux: 12.0,
+            energy_flux: 24.0,
             char_energy_kev: 4.0,
             bend_km: 8.0,
             seed: 1,
@@ -154,9 +154,9 @@ pub fn oval() -> Scene {
     };
     s.render.width = 1024;
     s.render.height = 1024;
-    // A bright arc (12 mW/m^2) straight overhead: 1.5 stops under the
-    // default exposure keeps its core out of the view transform's shoulder.
-    s.render.exposure = 1.5;
+    // A bright arc (24 mW/m^2, IBC III) straight overhead, its core out of
+    // the view transform's shoulder at -2 stops.
+    s.render.exposure = -2.0;
     s.background.stars = true;
     s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s
