@@ -7,7 +7,7 @@
 //!
 //! | preset | E0 (keV) | energy flux (mW/m^2) | footprint | seen from |
 //! |---|---|---|---|---|
-//! | `quiet_arc` | 3 | 10 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
+//! | `quiet_arc` | 3 | 20 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
 //! | `rayed_band` | 5 | 40 | folded band, start heights broken into rays | the ground, 150 km south |
 //! | `corona` | 4-6 | 15-30 | seven rayed sheets filling the sky | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 2 | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
@@ -60,15 +60,17 @@ pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 k
 /// curvature, east-west), thin (a band of 0.12 x 24 km = 3 km, within
 /// Borovsky 1993's 0.1-10 km), structureless (folds and the start-height
 /// noise all but off: `velocity_amplitude` 0.3, `top_noise_km` 1) and of
-/// moderate brightness (10 mW/m^2 of E0 = 3 keV electrons: IBC II, some
-/// 10 kR of 557.7 nm in the vertical column, the lower
+/// a brightness photographers seek (20 mW/m^2 of E0 = 3 keV electrons:
+/// IBC III, some 25 kR of 557.7 nm in the vertical column; seen face-on
+/// from 300 km a thinner or weaker arc hardly stands above the airglow
+/// low over the horizon), the lower
 /// border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
 /// drift. Seen from 300 km south, its lower border 20 degrees up.
 pub fn quiet_arc() -> Scene {
     let arc = Curtain {
         path: Some(vec![[-500.0, 0.0], [-250.0, 60.0], [0.0, 80.0], [250.0, 60.0], [500.0, 0.0]]),
         width: 24.0,
-        energy_flux: 10.0,
+        energy_flux: 20.0,
         char_energy_kev: 3.0,
         soft_fraction: 0.02,
         bend_km: 2.0,
@@ -90,7 +92,7 @@ pub fn quiet_arc() -> Scene {
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -300.0, 0.5], [0.0, 80.0, 75.0], 45.0);
-    s.render.exposure = -1.0;
+    s.render.exposure = -2.5;
     s.animation.fold_speed_kms = 0.5;
     s.animation.drift_km = 2.0;
     s.animation.ray_speed_kms = 1.0;
