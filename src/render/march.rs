@@ -7,7 +7,8 @@
 //! Two integrators:
 //! * [`Integration::Exact`]: a primary ray through a medium without
 //!   extinction takes the emission-only path (`emission_only.rs`, the
-//!   plain line integral, exact per cell; [`primary_path`]); otherwise it walks the dual cells ([`segments`]) and
+//!   plain line integral, exact per cell; [`primary_path`]); otherwise it
+//!   walks the dual cells ([`segments`]) and
 //!   integrates each piece with [`Accum`]: optical depth exactly,
 //!   emission with Gauss-Legendre of bounded error. When density and emission
 //!   live on different transforms, the two cell sequences are merged so that
