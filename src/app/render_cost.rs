@@ -40,7 +40,7 @@ pub fn calibrate(scene: &Scene, settings: &RenderSettings, vdb: &Path, frame: i6
     let (width, height, spp) = (scene.render.width, scene.render.height, scene.render.spp);
     let (cw, ch) = calibration_size(width, height, spp, CALIBRATION_SAMPLES);
     let (cpu0, _) = usage();
-    let (mut prepared, _, _) = crate::app::vdb_for_render::prepare_from_vdb(settings, vdb).map_err(|e| e.to_string())?;
+    let (mut prepared, _, _) = crate::app::vdb_for_render::prepare_from_vdb(settings, vdb, &scene.colour).map_err(|e| e.to_string())?;
     let (cpu1, _) = usage();
     prepared.set_image(cw, ch, spp).map_err(|e| e.to_string())?;
     let image = render_prepared(&prepared, &NoProgress).map_err(|e| e.to_string())?;

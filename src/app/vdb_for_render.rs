@@ -12,15 +12,27 @@
 //!   grid in between. It applies the grid reader's checks (the tile limit
 //!   of every grid, every record of the unused grids decompressed once), so
 //!   both paths accept and refuse the same files (`vdb::read`'s module doc).
+//!
+//! Re-colouring: a render whose `[colour] observer` is not the one the file
+//! records (`aurora_observer`, [`baked_observer`]) takes the emission from
+//! the file's line grids ([`render_grids_as`],
+//! `render::recolour::emission_from_lines`) on the grid path, or is refused
+//! when a line grid is missing; the file's listing alone decides
+//! ([`emission_source_of`]), so the check costs no decoding.
 
 use crate::grid::leaf_source::LeafSource;
 use crate::grid::Transform;
+use crate::io::vdb::parse::RawMeta;
 use crate::io::vdb::parse::{self, AnyTree, ParseError, ValueKind};
 use crate::io::vdb::read::{check_tile_voxels, VdbFile, VdbReadError};
 use crate::io::vdb::records::{FileBytes, FileLeaves};
+use crate::physics::emission::line_table::{grid_name, LINE_KEYS};
 use crate::render::grids::{check_types, choose, ChosenGrids, GridType, Listed, RenderGridsError};
 use crate::render::medium::Medium;
+use crate::render::recolour::{emission_from_lines, emission_source, observer_named, EmissionSource, RecolourError};
 use crate::render::{Prepared, RenderError, RenderSettings, Volume};
+use crate::scene::ColourParams;
+use crate::util::observer::Observer;
 use glam::DVec3;
 use std::path::Path;
 
@@ -32,6 +44,77 @@ pub fn render_grids(file: VdbFile) -> Result<ChosenGrids, RenderGridsError> {
     let listing: Vec<Listed<'_>> =
         file.grids.iter().map(|g| Listed { name: &g.name, type_name: &g.type_name, kind: grid_type(g.kind) }).collect();
     choose(&listing, file.float_grids, file.vec3_grids)
+}
+
+/// [`render_grids`] for a render of `colour`: the emission as baked, or
+/// rebuilt from the line grids for `colour.observer` where the file was
+/// baked for another ([`emission_source_of`]'s verdict, on the file read).
+pub fn render_grids_as(file: VdbFile, colour: &ColourParams) -> Result<ChosenGrids, RenderGridsError> {
+    let listing = file.grids.iter().map(|g| (g.name.as_str(), g.kind, g.metadata.as_slice()));
+    if source_of(listing, colour)? == EmissionSource::AsBaked {
+        return render_grids(file);
+    }
+    let found = LINE_KEYS.map(|k| file.float(&grid_name(k)));
+    let missing: Vec<String> = LINE_KEYS.iter().zip(&found).filter(|(_, g)| g.is_none()).map(|(k, _)| grid_name(k)).collect();
+    let lines = match found {
+        [Some(a), Some(b), Some(c), Some(d), Some(e)] => [a, b, c, d, e],
+        _ => {
+            let baked = baked_observer(file.grids.iter().map(|g| g.metadata.as_slice()))?.unwrap_or_default();
+            return Err(RecolourError::MissingLines { asked: colour.observer, baked, missing }.into());
+        }
+    };
+    let emission = emission_from_lines(lines, colour.observer)?;
+    let (density, _) = render_grids(file)?;
+    Ok((density, Some(emission)))
+}
+
+/// The observer a file's `emission` was coloured for, from its grids'
+/// metadata: `aurora_observer` (`crate::io::bake_folder::OBSERVER_KEY`)
+/// where a grid has it; the default observer for a bake of ours without it
+/// (its grids carry `aurora_scene_hash`; the key is written only for
+/// another observer); None for a file from elsewhere, whose colours are
+/// taken as the scene's.
+pub fn baked_observer<'a>(metadata: impl IntoIterator<Item = &'a [(String, RawMeta)]>) -> Result<Option<Observer>, RecolourError> {
+    let key = crate::io::bake_folder::OBSERVER_KEY;
+    let mut ours = false;
+    for m in metadata {
+        for (k, v) in m {
+            if k == key {
+                return match v {
+                    RawMeta::String(s) => observer_named(key, s).map(Some),
+                    other => Err(RecolourError::UnknownObserver { key: key.to_string(), value: format!("{other:?}") }),
+                };
+            }
+            ours |= k == "aurora_scene_hash";
+        }
+    }
+    Ok(ours.then(Observer::default))
+}
+
+/// [`emission_source`] of a file's grids, each its name, value type and
+/// metadata.
+fn source_of<'a>(
+    grids: impl Iterator<Item = (&'a str, Option<ValueKind>, &'a [(String, RawMeta)])>,
+    colour: &ColourParams,
+) -> Result<EmissionSource, RecolourError> {
+    let grids: Vec<_> = grids.collect();
+    let baked = baked_observer(grids.iter().map(|g| g.2))?;
+    let floats: Vec<&str> = grids.iter().filter(|g| g.1 == Some(ValueKind::Float)).map(|g| g.0).collect();
+    emission_source(colour, baked, &floats)
+}
+
+/// Where a render of `colour` takes the emission of the VDB file at `path`
+/// from (`crate::render::recolour::emission_source`): decided from the
+/// file's listing (`vdb::parse::list_grids`: names, types, metadata), no
+/// grid decoded. A missing line grid for another observer than the bake's
+/// is refused (an input error naming the grids).
+pub fn emission_source_of(path: &Path, colour: &ColourParams) -> Result<EmissionSource, RenderReadError> {
+    let file = path.display().to_string();
+    let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    let headers = parse::list_grids(bytes.bytes()).map_err(|source| VdbReadError::Invalid { file: file.clone(), source })?;
+    let names: Vec<String> = headers.iter().map(|h| h.name()).collect();
+    let listing = headers.iter().zip(&names).map(|(h, n)| (n.as_str(), h.kind, h.metadata.as_slice()));
+    source_of(listing, colour).map_err(|e| RenderReadError::Grids { file, source: e.into() })
 }
 
 /// The renderer's name for a grid's value type, as listed for
@@ -77,21 +160,25 @@ pub struct RenderMedium {
     pub build_seconds: f64,
 }
 
-/// The renderer prepared from a VDB file, as `aurora render --vdb` does:
-/// the records path ([`read_render_medium`]) where it applies, else the
-/// grid path; with the seconds spent opening the file and building the
-/// medium.
-pub fn prepare_from_vdb(settings: &RenderSettings, path: &Path) -> Result<(Prepared, f64, f64), RenderReadError> {
+/// The renderer prepared from a VDB file for a scene of `colour`, as
+/// `aurora render --vdb` does: the records path ([`read_render_medium`])
+/// where it applies and the emission is taken as baked, else the grid path
+/// (re-coloured from the line grids for another observer than the bake's:
+/// [`render_grids_as`]); with the seconds spent opening the file and
+/// building the medium.
+pub fn prepare_from_vdb(settings: &RenderSettings, path: &Path, colour: &ColourParams) -> Result<(Prepared, f64, f64), RenderReadError> {
     let file = path.display().to_string();
     let render_err = |source: RenderError| RenderReadError::Render { file: file.clone(), source };
     let (ds, es) = (settings.volume.density_scale, settings.volume.emission_scale);
-    if let Some(read) = read_render_medium(path, ds, es)? {
-        let prepared = Prepared::with_medium(settings, read.medium, None).map_err(render_err)?;
-        return Ok((prepared, read.open_seconds, read.build_seconds));
+    if emission_source_of(path, colour)? == EmissionSource::AsBaked {
+        if let Some(read) = read_render_medium(path, ds, es)? {
+            let prepared = Prepared::with_medium(settings, read.medium, None).map_err(render_err)?;
+            return Ok((prepared, read.open_seconds, read.build_seconds));
+        }
     }
     let open = std::time::Instant::now();
     let vdb = crate::io::vdb::read::read_vdb_for_render(path)?;
-    let (density, emission) = render_grids(vdb).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
+    let (density, emission) = render_grids_as(vdb, colour).map_err(|source| RenderReadError::Grids { file: file.clone(), source })?;
     let open_seconds = open.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let volume = Volume { density: density.as_ref(), emission: emission.as_ref() };
@@ -331,6 +418,48 @@ mod tests {
         assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
         assert_eq!(bits(&render_prepared(&p, &crate::util::progress::NoProgress).unwrap()), bits(&want));
         assert!(want.stats.shadow_samples > 0, "shadow rays were traced");
+    }
+
+    /// The listing (`parse::list_grids`) names, types and metadata every
+    /// grid as the whole parse does; the recorded observer is the key's,
+    /// the default for a bake of ours without it, none for a file from
+    /// elsewhere, and an unknown one is refused by name.
+    #[test]
+    fn the_listing_gives_the_grids_and_the_observer_they_record() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, MetaValue, WriteOptions};
+        let tr = Transform::new(0.5, DVec3::ZERO);
+        let (d, e) = medium_grids(tr, tr);
+        let mut line = Grid::new("line_5577", 0.0f32, tr);
+        line.set(IVec3::new(1, 2, 3), 4.0);
+        let file = |meta: Vec<(&str, MetaValue)>| {
+            let metadata = meta.into_iter().map(|(k, v)| (k.to_string(), v)).collect();
+            let opts = WriteOptions { metadata, ..WriteOptions::default() };
+            write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e), GridRef::Float(&line)], &opts).unwrap()
+        };
+        let hash = ("aurora_scene_hash", MetaValue::String("0123".into()));
+        let observer = |bytes: &[u8]| {
+            let listed = parse::list_grids(bytes).unwrap();
+            let whole = parse::parse_file(bytes, &|_| false).unwrap();
+            assert_eq!(listed.len(), whole.grids.len());
+            for (l, w) in listed.iter().zip(&whole.grids) {
+                assert_eq!(
+                    (l.name(), l.kind, &l.metadata, l.end_pos),
+                    (w.header.name(), w.header.kind, &w.header.metadata, w.header.end_pos)
+                );
+            }
+            baked_observer(listed.iter().map(|h| h.metadata.as_slice()))
+        };
+        let eye = file(vec![hash.clone(), (crate::io::bake_folder::OBSERVER_KEY, MetaValue::String("eye".into()))]);
+        assert_eq!(observer(&eye).unwrap(), Some(Observer::Eye));
+        assert_eq!(observer(&file(vec![hash.clone()])).unwrap(), Some(Observer::Camera));
+        assert_eq!(observer(&file(Vec::new())).unwrap(), None);
+        let owl = file(vec![hash, (crate::io::bake_folder::OBSERVER_KEY, MetaValue::String("owl".into()))]);
+        let m = observer(&owl).unwrap_err().to_string();
+        assert!(m.contains("aurora_observer = \"owl\"") && m.contains("\"camera\", \"eye\""), "{m}");
+        // A damaged listing is an error, never a panic.
+        for cut in [0, 8, 40, eye.len() / 3] {
+            assert!(parse::list_grids(&eye[..cut]).is_err(), "cut at {cut}");
+        }
     }
 
     /// Bad files give typed errors, never a panic: every 7th byte of a

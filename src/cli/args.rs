@@ -190,7 +190,9 @@ pub struct RenderArgs {
     /// Scene file or preset name.
     #[arg(default_value = "default")]
     pub scene: String,
-    /// Render this VDB instead of baking the scene (with --frame: the sequence folder).
+    /// Render this VDB instead of baking the scene (with --frame: the sequence folder). A
+    /// colour.observer other than the one it was baked for re-colours it from its line grids
+    /// (baked with every line in grid.lines; refused without them: docs/colour.md).
     #[arg(long, value_name = "FILE.vdb")]
     pub vdb: Option<PathBuf>,
     /// Render frames of a sequence folder (--vdb DIR holding aurora.NNNN.vdb): one frame N,

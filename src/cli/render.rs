@@ -93,6 +93,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let format = image_format("--out", &out)?;
     super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
     super::render_checks::camera_above_terrain(&scene, &dir)?;
+    if grid.is_none() {
+        super::render_checks::observer_inputs(vdb.as_deref(), frame.as_deref(), &scene.colour)?;
+    }
     let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {
@@ -210,7 +213,7 @@ fn prepare(
     // The motion blur reads the velocity grid `v` beside the medium: from grids.
     let blur = scene.render.shutter_s > 0.0;
     if let (Some(path), false) = (vdb, blur) {
-        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path).map_err(|e| {
+        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path, &scene.colour).map_err(|e| {
             if e.is_input() {
                 InputError(e.to_string()).into()
             } else {
@@ -233,7 +236,7 @@ fn prepare(
                 let v = file.vec3_grids.iter().find(|g| g.name == aurora::pipeline::bake::velocity::GRID_NAME).cloned();
                 velocity = Some(v.ok_or_else(|| no_velocity(path.display().to_string()))?);
             }
-            aurora::app::vdb_for_render::render_grids(file).map_err(|e| InputError(format!("{}: {e}", path.display())))?
+            aurora::app::vdb_for_render::render_grids_as(file, &scene.colour).map_err(|e| InputError(format!("{}: {e}", path.display())))?
         }
         None => {
             if blur && !scene.grid.velocity {

@@ -13,6 +13,8 @@
 //!   folder exists, is a folder and takes a new file (a probe is created
 //!   and removed: a read-only folder, or one on a full or read-only file
 //!   system, is found here rather than after the render);
+//! - every VDB can be shown through the scene's observer ([`observer_inputs`]):
+//!   baked for it, or holding the line grids to re-colour it;
 //! - the camera is above the terrain ([`camera_above_terrain`]): a camera
 //!   inside the ground would give a black picture, so `render` and
 //!   `preview` refuse it naming both heights; `bake` never reads the
@@ -56,6 +58,31 @@ pub fn inputs_and_outputs(vdb: Option<&Path>, frame: Option<&str>, outputs: &[Op
         }
         (Some(path), None) => vdb_input(path, "--vdb")?,
         (None, _) => {}
+    }
+    Ok(())
+}
+
+/// Every VDB the render reads (`vdb`, with `frame` each frame's) can be
+/// shown through `colour.observer`: baked for it, or holding every line's
+/// grid to re-colour it (`aurora::app::vdb_for_render::emission_source_of`,
+/// from each file's listing); else refused naming the missing grids. Run
+/// after [`inputs_and_outputs`], which has checked the files exist.
+pub fn observer_inputs(vdb: Option<&Path>, frame: Option<&str>, colour: &aurora::scene::ColourParams) -> Result<()> {
+    let paths: Vec<PathBuf> = match (vdb, frame) {
+        (Some(seq), Some(spec)) => {
+            frame_selection(spec, None)?.0.iter().map(|&f| aurora::farm::frame_files::frame_paths(seq, f).0).collect()
+        }
+        (Some(path), None) => vec![path.to_path_buf()],
+        (None, _) => Vec::new(),
+    };
+    for path in &paths {
+        aurora::app::vdb_for_render::emission_source_of(path, colour).map_err(|e| -> anyhow::Error {
+            if e.is_input() {
+                InputError(e.to_string()).into()
+            } else {
+                e.into()
+            }
+        })?;
     }
     Ok(())
 }

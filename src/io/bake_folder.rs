@@ -149,6 +149,10 @@ impl BakeReport {
     }
 }
 
+/// The grid metadata naming the observer whose colours `emission` holds
+/// (`[colour] observer`), written when it is not the default (the camera).
+pub const OBSERVER_KEY: &str = "aurora_observer";
+
 /// Grid metadata that identifies the bake inside the VDB.
 pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
     let mut m = vec![
@@ -160,6 +164,11 @@ pub fn vdb_metadata(scene: &Scene) -> Vec<(String, MetaValue)> {
         // The add-on skips its own padding when this is true (blender/volume_import.py).
         ("aurora_cycles_shell".into(), MetaValue::Bool(scene.grid.cycles_shell)),
     ];
+    if scene.colour.observer != crate::util::observer::Observer::default() {
+        // Only for another observer than the default, so the default file is
+        // unchanged: a bake of ours without the key holds the default's colours.
+        m.push((OBSERVER_KEY.into(), MetaValue::String(scene.colour.observer.name().into())));
+    }
     if !scene.grid.lines.is_empty() {
         // Only with per-line grids, so the default file is unchanged.
         let units = "line_NAME grids: volume emission rate in rayleigh per km (10 photons cm^-3 s^-1), no colour noise, not pruned";

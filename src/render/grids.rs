@@ -42,6 +42,10 @@ pub enum RenderGridsError {
     /// added to its fine grid, or one without its fine grid.
     #[error("{0}")]
     High(String),
+    /// The emission cannot be re-coloured for the observer asked
+    /// ([`super::recolour`]).
+    #[error(transparent)]
+    Recolour(#[from] super::recolour::RecolourError),
 }
 
 impl RenderGridsError {

@@ -5,7 +5,10 @@
 //! (the emission-absorption model; no scattering).
 //!
 //! Two integrators:
-//! * [`Integration::Exact`]: walks the dual cells ([`segments`]) and
+//! * [`Integration::Exact`]: a primary ray through a medium without
+//!   extinction takes the emission-only path (`emission_only.rs`, the
+//!   plain line integral, exact per cell; [`primary_path`]); otherwise it
+//!   walks the dual cells ([`segments`]) and
 //!   integrates each piece with [`Accum`]: optical depth exactly,
 //!   emission with Gauss-Legendre of bounded error. When density and emission
 //!   live on different transforms, the two cell sequences are merged so that
@@ -20,6 +23,7 @@
 //!   dual leaf are skipped: the field is 0 there, so this changes nothing.
 
 use super::dda::{segments, CellFilter, CellSeg, CellWalker, IndexRay, LeafWalker};
+use super::emission_only::emission_integral;
 use super::medium::velocity::Velocity;
 use super::medium::{field::Field, Channel, Medium};
 use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
@@ -52,6 +56,38 @@ pub fn radiance_along_ray(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64
     integrate(medium, origin, dir, t_max, integration, offset, true)
 }
 
+/// Which walk a primary ray takes with [`Integration::Exact`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrimaryPath {
+    /// No extinction anywhere (no density grid, an empty one, or
+    /// `volume.density_scale = 0`): the emission's plain line integral
+    /// (`emission_only.rs`), with the transmittance 1.
+    EmissionOnly,
+    /// The emission-absorption walk (optical depth and `int T e`).
+    General,
+}
+
+/// The walk [`radiance_along_ray`] takes through `medium` with
+/// [`Integration::Exact`]: the emission-only one exactly when the medium
+/// has no extinction (the terrain does not matter: a primary ray stops at
+/// it, and the terrain's light is estimated by shadow rays apart).
+pub fn primary_path(medium: &Medium) -> PrimaryPath {
+    if medium.sigma_t.is_none() {
+        PrimaryPath::EmissionOnly
+    } else {
+        PrimaryPath::General
+    }
+}
+
+/// [`radiance_along_ray`] with [`Integration::Exact`] through the general
+/// walk whatever the medium holds: the reference the emission-only path is
+/// checked against.
+pub fn radiance_general(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64) -> RayIntegral {
+    let mut acc = Accum::default();
+    let work = if t_max > 0.0 { walk_exact(medium, origin, dir, t_max, true, &mut acc) } else { 0 };
+    RayIntegral { l: acc.l, tau: acc.tau, work: work.max(acc.parts) }
+}
+
 /// Optical depth along `origin + s dir`, `s` in `[0, t_max]` (shadow rays).
 pub fn optical_depth_along_ray(
     medium: &Medium,
@@ -74,6 +110,11 @@ fn integrate(
     with_emission: bool,
 ) -> RayIntegral {
     debug_assert!((dir.length() - 1.0).abs() < 1e-9, "direction must be unit length");
+    if with_emission && integration == Integration::Exact && primary_path(medium) == PrimaryPath::EmissionOnly {
+        let Some(c) = medium.emission else { return RayIntegral::default() };
+        let (l, work) = emission_integral(&medium.fields[c.field], c.channel, origin, dir, t_max);
+        return RayIntegral { l, tau: 0.0, work };
+    }
     let mut acc = Accum::default();
     let mut work = 0;
     if t_max > 0.0 {

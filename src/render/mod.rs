@@ -39,11 +39,13 @@
 //! `shadow.rs`) -> `integrator.rs` (the pixel loop, tiles; `adaptive.rs`
 //! shares the samples by pixel variance; positions from `sampler.rs`) ->
 //! per ray `dda.rs` (hierarchical DDA: occupied leaves, then dual cells) ->
-//! `segment.rs` (exact optical depth, Gauss-Legendre emission per cell) ->
+//! `segment.rs` (exact optical depth, Gauss-Legendre emission per cell), or
+//! without extinction `emission_only.rs` (the plain line integral) ->
 //! `march.rs` (one walker for primary and shadow rays) -> `shadow.rs`
 //! (terrain irradiance) -> `image.rs` ([`Image`]) -> `image_file.rs` (EXR,
 //! PNG) through `view_transform.rs` (standard or `agx.rs`). `grids.rs`
-//! picks a file's grids; `sky_map.rs` renders the sky alone as a map for
+//! picks a file's grids, `recolour.rs` rebuilds the emission from the line
+//! grids for another observer; `sky_map.rs` renders the sky alone as a map for
 //! Blender's world.
 
 // Loops over the three colour channels index several arrays at once.
@@ -53,6 +55,7 @@ pub mod adaptive;
 pub mod agx;
 pub mod airglow;
 pub mod dda;
+pub mod emission_only;
 pub mod grids;
 pub mod image;
 pub mod image_file;
@@ -60,6 +63,7 @@ pub mod integrator;
 pub mod march;
 pub mod medium;
 pub mod prepared;
+pub mod recolour;
 pub mod sampler;
 pub mod segment;
 pub mod settings;
@@ -73,7 +77,7 @@ pub use crate::geometry::camera::{CameraModel, Ray};
 pub use adaptive::{render_adaptive, render_adaptive_prepared, ADAPTIVE_FLOOR, ADAPTIVE_MIN_SPP};
 pub use image::{Image, RenderStats};
 pub use integrator::{render, render_prepared};
-pub use march::{optical_depth_along_ray, radiance_along_ray, RayIntegral};
+pub use march::{optical_depth_along_ray, primary_path, radiance_along_ray, radiance_general, PrimaryPath, RayIntegral};
 pub use medium::Medium;
 pub use prepared::Prepared;
 pub use sampler::{pixel_position, pixel_rng, sobol2};

@@ -21,6 +21,8 @@
 //! - `globe`: scenes anywhere on the globe, the field's dip refused or
 //!   warned about.
 //! - `sky`: `aurora sky`'s airglow and stars map, and its refusals.
+//! - `recolour`: a bake re-coloured at render time for another observer
+//!   from its line grids, and refused without them.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -41,6 +43,7 @@ mod plan;
 mod preview;
 mod profile;
 mod quick_start;
+mod recolour;
 mod resume;
 mod schema;
 mod sky;

@@ -191,7 +191,11 @@ def test_panoramic_cameras_match_cycles(compare):
             assert outside.sum() > 0.15 * w * h
             assert np.all(A[outside] == 0.0) and np.all(np.abs(B[outside][..., :3]) < 1e-6)
             assert np.abs(A[inside][..., 3] - B[inside][..., 3]).max() <= 0.01, (name, m)
-            assert A[inside][..., 3].max() > 0.01, "the curtains are in the dome"
+            # The default's air is optically thin (alpha ~0 everywhere), so
+            # the curtains show by their light: the brightest pixel of the
+            # dome stands well above the airglow's median there.
+            lum = A[inside][..., :3].max(axis=-1)
+            assert lum.max() > 5.0 * np.median(lum), ("the curtains are in the dome", lum.max(), np.median(lum))
         else:
             assert m["max_alpha_diff"] <= 0.01, (name, m)
 

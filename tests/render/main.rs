@@ -1,5 +1,6 @@
 //! The reference renderer, one test binary: pixels against closed forms
-//! (`closed_forms`), the volume walker and integrators against an
+//! (`closed_forms`), the emission-only path against the general walk
+//! (`emission_only`), the volume walker and integrators against an
 //! independent brute-force oracle (`integrator`), film, camera and file
 //! conventions (`film`), the lit terrain and its mesh (`terrain`), the
 //! camera against Blender's (`blender`), the air between the aurora
@@ -13,6 +14,7 @@ mod common;
 mod airglow;
 mod blender;
 mod closed_forms;
+mod emission_only;
 mod extinction;
 mod film;
 mod integrator;

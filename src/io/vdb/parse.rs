@@ -317,7 +317,9 @@ fn read_header(cur: &mut Cursor) -> Result<Header, ParseError> {
     Ok(Header { file_version, library_major, library_minor, uuid, metadata })
 }
 
-fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> Decode) -> Result<ParsedGrid, ParseError> {
+/// A grid's descriptor, then at its offset its compression flags and
+/// metadata: the cursor is left after the metadata (at the transform).
+fn read_grid_header(cur: &mut Cursor) -> Result<GridHeader, ParseError> {
     let desc_at = cur.pos();
     let unique_name_raw = cur.string_bytes()?.to_vec();
     let unique_name = String::from_utf8_lossy(&unique_name_raw).into_owned();
@@ -351,7 +353,7 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
     }
     let metadata = read_meta_map(cur)?;
     let half = metadata.iter().any(|(k, v)| k == layout::META_HALF && *v == RawMeta::Bool(true));
-    let mut gh = GridHeader {
+    Ok(GridHeader {
         unique_name,
         unique_name_raw,
         type_name,
@@ -365,7 +367,34 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
         half,
         map_name: String::new(),
         transform: None,
-    };
+    })
+}
+
+/// Every grid's header: its descriptor, compression flags and metadata,
+/// without its transform, topology or values (nothing is decoded or
+/// validated past the metadata): a cheap listing of what a file's grids
+/// say of themselves, for a reader deciding how to read it.
+pub fn list_grids(bytes: &[u8]) -> Result<Vec<GridHeader>, ParseError> {
+    let mut cur = Cursor::new(bytes);
+    read_header(&mut cur)?;
+    let at = cur.pos();
+    let grid_count = cur.i32()?;
+    if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
+        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
+    }
+    let mut grids = Vec::with_capacity(grid_count as usize);
+    for _ in 0..grid_count {
+        let gh = read_grid_header(&mut cur)?;
+        cur.seek(gh.end_pos)?;
+        grids.push(gh);
+    }
+    Ok(grids)
+}
+
+fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> Decode) -> Result<ParsedGrid, ParseError> {
+    let desc_at = cur.pos();
+    let mut gh = read_grid_header(cur)?;
+    let kind = gh.kind;
     let tree = match kind {
         None => None,
         Some(kind) => {
@@ -378,7 +407,7 @@ fn read_grid(cur: &mut Cursor, header: &Header, decode: &dyn Fn(&GridHeader) -> 
             let (map_name, transform) = read_transform(cur, &gh.unique_name)?;
             gh.map_name = map_name;
             gh.transform = Some(transform);
-            let fmt = RecordFormat { flags: compression, half };
+            let fmt = RecordFormat { flags: gh.compression, half: gh.half };
             let dec = decode(&gh);
             let named = |e| in_grid(e, &gh.unique_name);
             let tree = match kind {

@@ -31,7 +31,10 @@
 //!   reduced above about 240 km where the secondaries heat the F-region
 //!   electrons instead.
 //! - **N2+ 427.8 nm**: 0.022 photons per N2 ionization, unquenched. **N2 1P**
-//!   (647-688 nm): not in GLOW; as many photons as 427.8 nm (`line_colour::R_1P`).
+//!   (647-688 nm): not in GLOW; N2(B) from direct impact and cascade,
+//!   quenched by N2 and O2, plus the collisional cascade from W below about
+//!   100 km ([`n2_triplet`]): [`R_1P`] photons per 427.8 nm photon high up,
+//!   about 1.5 times that below 100 km (type-B aurora).
 //!
 //! It knows nothing of transport (beyond the O+ cap) or of time: the
 //! lifetimes it returns are applied by `crate::physics::emission::lifetime`.
@@ -43,6 +46,7 @@
 
 pub mod ambient;
 pub mod einstein;
+pub mod n2_triplet;
 pub mod table;
 
 use crate::physics::atmosphere::Composition;
@@ -116,9 +120,10 @@ pub struct Emission {
 pub use einstein::{A_2972, A_5577, A_6300, A_6364};
 /// 427.8 nm photons per N2 ionization.
 pub const Y_4278: f64 = 0.022;
-/// N2 1P (Delta v = 3) photons per 427.8 nm photon: `spectrum::R_1P`, the
-/// simple model's round reading of auroral spectra (equal by test).
-pub const R_1P: f64 = 1.0;
+/// N2 1P (Delta v = 3) photons per 427.8 nm photon high up, the simple
+/// model's `line_colour::R_1P` (equal by test); [`n2_triplet`] adds the
+/// quenching and the collisional cascade.
+pub use n2_triplet::R_1P;
 /// Fixed-point passes on ne.
 pub const NE_PASSES: usize = 24;
 
@@ -182,8 +187,7 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     }
     let [n2p, n_p, _op, o2p, nop] = ions;
     // N2(A).
-    let k_a_o = 3.1e-11;
-    let n2a = 0.60 * q_n2 / (k_a_o * o + 4.1e-12 * o2 + 8.9e-11 * no + 0.77);
+    let n2a = n2_triplet::n2_a(q_n2, o2, o, no);
     // N(2D).
     let p_n2d = k3 * n2p * o + a_n2p * n2p * ne + 0.76 * a_nop * nop * ne + 0.5 * p_np + 0.5 * q_n2;
     let (k5, k6, k31) = (6e-12, 6.9e-13, 7e-11);
@@ -191,7 +195,7 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     // O(1S).
     let b1s = (0.12 + 0.02 * (ne / o * te3.powf(0.7)).log10()).max(0.03);
     let g_impact = q * 0.153 * x_o / (1.0 + 1.36 * x_o);
-    let g_n2a = 0.19 * k_a_o * n2a * o;
+    let g_n2a = n2a.o1s_rate;
     let g_recomb = b1s * a_o2p * o2p * ne;
     let g_n2d = 0.2 * k31 * n2d * no + 0.21 * k37 * o2p * n4s;
     let l_1s = A_5577 + A_2972 + 4e-12 * (-865.0 / t).exp() * o2 + 2e-14 * o;
@@ -213,6 +217,7 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     let f_6364 = A_6364 / l_1d;
     let p_1d = r_impact + r_recomb + r_n2d + r_cascade + r_other;
     let blue = Y_4278 * q_n2 / q;
+    let first_positive = n2_triplet::n2_1p_per_n2_ion(Y_4278, n2, o2) * q_n2 / q;
     let channels = Channels {
         g_impact: f_5577 * g_impact / q,
         g_n2a: f_5577 * g_n2a / q,
@@ -225,7 +230,7 @@ pub fn solve(q: f64, air: &Air) -> Emission {
         r_other: f_6300 * r_other / q,
     };
     Emission {
-        per_ion_pair: [f_5577 * p_1s / q, f_6300 * p_1d / q, f_6364 * p_1d / q, blue, R_1P * blue],
+        per_ion_pair: [f_5577 * p_1s / q, f_6300 * p_1d / q, f_6364 * p_1d / q, blue, first_positive],
         channels,
         tau_1d: 1.0 / l_1d,
         tau_1s: 1.0 / l_1s,

@@ -15,6 +15,11 @@ impl Default for Scene {
 /// view is about 107 degrees wide), so each runs out past the sides of the
 /// frame at its lower border, fading over `footprint.end_fade_km` at its
 /// ends (about the frame's edges) instead of ending in straight sides.
+/// An active display: the brightest rays carry 48, 32 and 24 erg cm^-2
+/// s^-1 (IBC III; the sheets' mean along their length is about 0.4 of
+/// that), so seen face-on through a sheet a few hundred metres thick they
+/// stand 5-10x above the airglow at the horizon, as in photographs, at an
+/// exposure of -3 stops.
 pub fn default_scene() -> Scene {
     let sheet = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, seed: u64| Curtain {
         center: [cx, cy],
@@ -27,14 +32,18 @@ pub fn default_scene() -> Scene {
     };
     Scene {
         seed: 2014,
-        curtains: vec![sheet(-20.0, -25.0, 4.0, 6.0, 4.0, 1), sheet(25.0, 10.0, -6.0, 4.0, 2.5, 2), sheet(-5.0, 50.0, 2.0, 3.0, 1.5, 3)],
+        curtains: vec![
+            sheet(-20.0, -25.0, 4.0, 48.0, 4.0, 1),
+            sheet(25.0, 10.0, -6.0, 32.0, 2.5, 2),
+            sheet(-5.0, 50.0, 2.0, 24.0, 1.5, 3),
+        ],
         footprint: FootprintParams::default(),
         beams: BeamParams::default(),
         colour: ColourParams::default(),
         photons: PhotonParams::default(),
         grid: GridParams::default(),
         camera: Camera::default(),
-        render: RenderParams::default(),
+        render: RenderParams { exposure: -3.0, ..RenderParams::default() },
         volume: VolumeParams::default(),
         background: Background::default(),
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
@@ -55,9 +64,12 @@ pub fn seed2014() -> Scene {
     let mut s = default_scene();
     // The report's footprint: its fluid, three 160 km sheets with
     // straight ends where the default's stood before they spanned the sky.
-    for (c, y) in s.curtains.iter_mut().zip([0.0, 45.0, 95.0]) {
+    // Its fluxes, 6, 4 and 3 erg cm^-2 s^-1, under its dense air at an
+    // exposure of +3 stops.
+    for ((c, y), flux) in s.curtains.iter_mut().zip([0.0, 45.0, 95.0]).zip([6.0, 4.0, 3.0]) {
         c.length = 160.0;
         c.center[1] = y;
+        c.energy_flux = flux;
     }
     s.footprint.model = FootprintModel::Fluid2014;
     s.footprint.end_fade_km = 0.0;
@@ -82,6 +94,7 @@ pub fn seed2014() -> Scene {
     s.render.width = 640;
     s.render.height = 438;
     s.render.spp = 8;
+    s.render.exposure = 3.0;
     s
 }
 
@@ -119,7 +132,7 @@ pub fn oval() -> Scene {
         curtains: vec![Curtain {
             path: Some(path),
             width: 40.0,
-            energy_flux: 12.0,
+            energy_flux: 24.0,
             char_energy_kev: 4.0,
             bend_km: 8.0,
             seed: 1,
@@ -141,9 +154,9 @@ pub fn oval() -> Scene {
     };
     s.render.width = 1024;
     s.render.height = 1024;
-    // A bright arc (12 mW/m^2) straight overhead: 1.5 stops under the
-    // default exposure keeps its core out of the view transform's shoulder.
-    s.render.exposure = 1.5;
+    // A bright arc (24 mW/m^2, IBC III) straight overhead, its core out of
+    // the view transform's shoulder at -2 stops.
+    s.render.exposure = -2.0;
     s.background.stars = true;
     s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s

@@ -7,18 +7,22 @@
 //!
 //! | preset | E0 (keV) | energy flux (mW/m^2) | footprint | seen from |
 //! |---|---|---|---|---|
-//! | `quiet_arc` | 3 | 3 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
-//! | `rayed_band` | 5 | 15 | folded band, start heights broken into rays | the ground, 150 km south |
+//! | `quiet_arc` | 3 | 20 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
+//! | `rayed_band` | 5 | 40 | folded band, start heights broken into rays | the ground, 150 km south |
 //! | `corona` | 4-6 | 15-30 | seven rayed sheets filling the sky | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 2 | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
 //! | `type_a_red` | 0.15 | 10 | a band high up, soft spectrum | the ground, 240 km south |
-//! | `type_b_pink` | 25 | 30 | a folded band, hard spectrum | the ground, 220 km south |
-//! | `surge` | 6 | 25 | an arc curling into a spiral at its western end | 700 km up, to the south |
+//! | `type_b_pink` | 25 | 80 | a folded band, hard spectrum | the ground, 220 km south |
+//! | `surge` | 6 | 50 | an arc curling into a spiral at its western end | 700 km up, to the south |
 //!
 //! Energies and fluxes: a few eV to 1 keV lights the red above 200 km, about
 //! 1 keV the yellow-green, above 10 keV electrons reach below 100 km
 //! (Physics Today 61(7):68, 2008); 1 mW/m^2 of 3 keV electrons gives about
-//! 1 kR of 557.7 nm (weak aurora), bright displays tens of kR. Arcs are
+//! 1 kR of 557.7 nm (weak aurora), bright displays tens of kR. The fluxes
+//! are those of the displays people photograph (IBC II-IV): seen face-on,
+//! a sheet a few km thick at a few mW/m^2 is no brighter than the airglow
+//! at the horizon (`[airglow]`), and each preset's exposure puts its
+//! brightest curtain just under the view transform's shoulder. Arcs are
 //! 100 m to 10 km thick and can be over 1000 km long (Borovsky 1993,
 //! J. Geophys. Res. 98(A4), 6101: the compilation of measured arc
 //! thicknesses). The field's dip is the default 78 degrees (northern
@@ -55,15 +59,18 @@ pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 k
 /// a substorm: long (here a 1000 km path with a 1600 km radius of
 /// curvature, east-west), thin (a band of 0.12 x 24 km = 3 km, within
 /// Borovsky 1993's 0.1-10 km), structureless (folds and the start-height
-/// noise all but off: `velocity_amplitude` 0.3, `top_noise_km` 1) and weak
-/// (3 mW/m^2 of E0 = 3 keV electrons: a few kR of 557.7 nm, the lower
+/// noise all but off: `velocity_amplitude` 0.3, `top_noise_km` 1) and of
+/// a brightness photographers seek (20 mW/m^2 of E0 = 3 keV electrons:
+/// IBC III, some 25 kR of 557.7 nm in the vertical column; seen face-on
+/// from 300 km a thinner or weaker arc hardly stands above the airglow
+/// low over the horizon), the lower
 /// border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
 /// drift. Seen from 300 km south, its lower border 20 degrees up.
 pub fn quiet_arc() -> Scene {
     let arc = Curtain {
         path: Some(vec![[-500.0, 0.0], [-250.0, 60.0], [0.0, 80.0], [250.0, 60.0], [500.0, 0.0]]),
         width: 24.0,
-        energy_flux: 3.0,
+        energy_flux: 20.0,
         char_energy_kev: 3.0,
         soft_fraction: 0.02,
         bend_km: 2.0,
@@ -85,7 +92,7 @@ pub fn quiet_arc() -> Scene {
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -300.0, 0.5], [0.0, 80.0, 75.0], 45.0);
-    s.render.exposure = 0.5;
+    s.render.exposure = -2.5;
     s.animation.fold_speed_kms = 0.5;
     s.animation.drift_km = 2.0;
     s.animation.ray_speed_kms = 1.0;
@@ -99,13 +106,13 @@ pub const RAYED_BAND: &str = "a rayed band: a folded active band broken into fie
 /// over about 1.4 km along the band (`top_noise_km` 30 at 0.7 / km), the
 /// beams are hardly deflected (alpha_D 2 degrees), so each ray stays a
 /// thin streak along the field; the band folds (`velocity_amplitude` 3,
-/// 8 waves) and is bright (15 mW/m^2 of E0 = 5 keV: tens of kR). Rays run
+/// 8 waves) and is bright (40 mW/m^2 of E0 = 5 keV: tens of kR). Rays run
 /// along the band at 15 km/s (observed up to about 25 km/s).
 pub fn rayed_band() -> Scene {
     let band = Curtain {
         path: Some(vec![[-180.0, 20.0], [-60.0, 50.0], [60.0, 35.0], [180.0, 60.0]]),
         width: 40.0,
-        energy_flux: 15.0,
+        energy_flux: 40.0,
         char_energy_kev: 5.0,
         bend_km: 6.0,
         ..Curtain::default()
@@ -122,7 +129,7 @@ pub fn rayed_band() -> Scene {
     s.photons.radius_km = 0.4;
     s.grid.voxel_size = VoxelSize::Km(0.4);
     s.camera = camera([0.0, -150.0, 0.5], [0.0, 40.0, 100.0], 60.0);
-    s.render.exposure = 1.0;
+    s.render.exposure = -2.3;
     s.animation.ray_speed_kms = 15.0;
     s
 }
@@ -179,7 +186,7 @@ pub fn corona() -> Scene {
     };
     s.render.width = 512;
     s.render.height = 512;
-    s.render.exposure = 0.0;
+    s.render.exposure = -2.0;
     s.terrain.kind = TerrainKind::None;
     s.animation.ray_speed_kms = 15.0;
     s
@@ -221,7 +228,7 @@ pub fn pulsating_patches() -> Scene {
     s.photons.radius_km = 1.5;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.camera = Camera { up: [0.0, 1.0, 0.0], ..camera([0.0, 20.0, 0.5], [0.0, 30.0, 100.0], 100.0) };
-    s.render.exposure = 0.5;
+    s.render.exposure = -2.0;
     s.animation.pulsation = 0.9;
     s.animation.pulsation_patch_km = 40.0;
     s.animation.pulsation_period_s = [4.0, 12.0];
@@ -263,7 +270,7 @@ pub fn type_a_red() -> Scene {
     s.photons.radius_km = 1.0;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.camera = camera([0.0, -150.0, 0.5], [0.0, 90.0, 180.0], 70.0);
-    s.render.exposure = 0.0;
+    s.render.exposure = -3.0;
     s
 }
 
@@ -273,14 +280,14 @@ pub const TYPE_B_PINK: &str = "a hard type-B aurora: E0 25 keV electrons reach 8
 /// O(1S) is quenched by O2 before it emits 557.7 nm and what is left is
 /// the N2 first positive bands (red) and the N2+ first negative (violet):
 /// a pink or magenta lower border under the green, in bright active
-/// displays. Here: 30 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV), a
+/// displays. Here: 80 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV), a
 /// folded band seen nearly edge-on from 220 km south, so the lower border
 /// shows as a line under the green.
 pub fn type_b_pink() -> Scene {
     let band = Curtain {
         path: Some(vec![[-150.0, 40.0], [-50.0, 60.0], [50.0, 50.0], [150.0, 70.0]]),
         width: 40.0,
-        energy_flux: 30.0,
+        energy_flux: 80.0,
         char_energy_kev: 25.0,
         soft_fraction: 0.03,
         bend_km: 6.0,
@@ -295,7 +302,7 @@ pub fn type_b_pink() -> Scene {
     s.photons.radius_km = 0.4;
     s.grid.voxel_size = VoxelSize::Km(0.4);
     s.camera = camera([0.0, -160.0, 0.5], [0.0, 60.0, 95.0], 60.0);
-    s.render.exposure = 1.5;
+    s.render.exposure = -2.2;
     s
 }
 
@@ -307,7 +314,7 @@ pub const SURGE: &str = "a westward travelling surge: a bright arc curling into 
 /// the surge is the western edge of the substorm's bulge). Here: one arc
 /// from 400 km east to a hook 190 km west that curls poleward and back
 /// east (radius of curvature about 40 km, above the width's half, 15 km),
-/// 25 mW/m^2 of E0 = 6 keV (the inverted-V electrons of a substorm arc),
+/// 50 mW/m^2 of E0 = 6 keV (the inverted-V electrons of a substorm arc),
 /// folds running westward along it at 2 km/s; seen as an imager in orbit
 /// sees it, from 700 km up and 700 km south.
 pub fn surge() -> Scene {
@@ -323,7 +330,7 @@ pub fn surge() -> Scene {
             [-50.0, 130.0],
         ]),
         width: 30.0,
-        energy_flux: 25.0,
+        energy_flux: 50.0,
         char_energy_kev: 6.0,
         bend_km: 4.0,
         ..Curtain::default()
@@ -337,7 +344,7 @@ pub fn surge() -> Scene {
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.8);
     s.camera = camera([0.0, -700.0, 750.0], [30.0, 80.0, 130.0], 40.0);
-    s.render.exposure = 1.0;
+    s.render.exposure = -1.0;
     s.background.stars = false;
     s.terrain.albedo = [0.15, 0.15, 0.15];
     s.animation.fold_speed_kms = 2.0;
