@@ -5,7 +5,7 @@ references, and the constants the studies share."""
 #: looking up, a dome master) at SIZE pixels, baked for that camera from
 #: the preset with `scene_edits`; the reference is aurora at `ref_spp` per
 #: seed at the image's own pixels, both renderers without the preset's stars
-#: (aurora render draws them, Cycles does not). Errors are over the pixels
+#: and airglow (the sky's agreement is test_cross_check's). Errors are over the pixels
 #: wholly inside the image circle (outside it aurora's alpha is 0 and
 #: Cycles' 1).
 DOME = {"preset": "oval", "size": (1024, 1024), "ref_spp": 32, "scene_edits": {}}

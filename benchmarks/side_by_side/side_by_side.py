@@ -49,7 +49,7 @@ table into DIR/side_by_side.txt and stdout (default DIR: target/side-by-side/):
    --render-only skips the VDB writer, gather and seed2014 studies.
    --cases dome (not in the default cases) adds a dome master: the `oval`
    preset's own camera (180-degree equidistant fisheye looking up) at
-   1024x1024 (DOME), baked for it, without the stars Cycles does not draw;
+   1024x1024 (DOME), baked for it, without its stars and airglow;
    reference aurora render at 32 spp x 2 seeds at the image's own pixels;
    errors (RGB, and alpha) over the pixels
    wholly inside the image circle, since outside it aurora's alpha is 0 (no

@@ -83,9 +83,7 @@ pub fn primary_path(medium: &Medium) -> PrimaryPath {
 /// walk whatever the medium holds: the reference the emission-only path is
 /// checked against.
 pub fn radiance_general(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64) -> RayIntegral {
-    let mut acc = Accum::default();
-    let work = if t_max > 0.0 { walk_exact(medium, origin, dir, t_max, true, &mut acc) } else { 0 };
-    RayIntegral { l: acc.l, tau: acc.tau, work: work.max(acc.parts) }
+    walk(medium, origin, dir, t_max, Integration::Exact, 0.0, true)
 }
 
 /// Optical depth along `origin + s dir`, `s` in `[0, t_max]` (shadow rays).
@@ -115,6 +113,12 @@ fn integrate(
         let (l, work) = emission_integral(&medium.fields[c.field], c.channel, origin, dir, t_max);
         return RayIntegral { l, tau: 0.0, work };
     }
+    walk(medium, origin, dir, t_max, integration, offset, with_emission)
+}
+
+/// The emission-absorption walk of `integration` (optical depth and, with
+/// `with_emission`, `int T e`), whatever the medium holds.
+fn walk(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, integration: Integration, offset: f64, with_emission: bool) -> RayIntegral {
     let mut acc = Accum::default();
     let mut work = 0;
     if t_max > 0.0 {

@@ -59,7 +59,10 @@ pub enum RecolourError {
     )]
     MissingLines { asked: Observer, baked: Observer, missing: Vec<String> },
     /// The file's metadata names an observer this renderer does not know.
-    #[error("metadata {key} = \"{value}\" names no observer this renderer knows (allowed: \"camera\", \"eye\")")]
+    #[error(
+        "metadata {key} = \"{value}\" names no observer this renderer knows (allowed: {allowed})",
+        allowed = Observer::ALL.map(|o| format!("\"{}\"", o.name())).join(", ")
+    )]
     UnknownObserver { key: String, value: String },
     /// Line grids that do not share one transform cannot be added voxel by voxel.
     #[error("line grids `{first}` and `{other}` have different transforms: they cannot be added into one emission grid")]

@@ -263,17 +263,24 @@ pub enum Decode {
     Locate,
 }
 
+/// The number of grids after the file header, refused where that many
+/// descriptors (each at least 3 string lengths and 3 offsets, 36 bytes)
+/// cannot fit in what is left.
+fn read_grid_count(cur: &mut Cursor) -> Result<usize, ParseError> {
+    let at = cur.pos();
+    let grid_count = cur.i32()?;
+    if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
+        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
+    }
+    Ok(grid_count as usize)
+}
+
 /// [`parse_file`] with a per-grid [`Decode`] choice.
 pub fn parse_file_with(bytes: &[u8], decode: &dyn Fn(&GridHeader) -> Decode) -> Result<ParsedFile, ParseError> {
     let mut cur = Cursor::new(bytes);
     let header = read_header(&mut cur)?;
-    let at = cur.pos();
-    let grid_count = cur.i32()?;
-    // A descriptor takes at least 3 string lengths and 3 offsets (36 bytes).
-    if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
-        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
-    }
-    let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count as usize);
+    let grid_count = read_grid_count(&mut cur)?;
+    let mut grids: Vec<ParsedGrid> = Vec::with_capacity(grid_count);
     for _ in 0..grid_count {
         let g = read_grid(&mut cur, &header, decode)?;
         if grids.iter().any(|o| o.header.unique_name_raw == g.header.unique_name_raw) {
@@ -377,12 +384,8 @@ fn read_grid_header(cur: &mut Cursor) -> Result<GridHeader, ParseError> {
 pub fn list_grids(bytes: &[u8]) -> Result<Vec<GridHeader>, ParseError> {
     let mut cur = Cursor::new(bytes);
     read_header(&mut cur)?;
-    let at = cur.pos();
-    let grid_count = cur.i32()?;
-    if grid_count < 0 || grid_count as usize > cur.remaining() / 36 {
-        return Err(cur.err_at(at, format!("grid count {grid_count} cannot fit in the {} bytes left", cur.remaining())));
-    }
-    let mut grids = Vec::with_capacity(grid_count as usize);
+    let grid_count = read_grid_count(&mut cur)?;
+    let mut grids = Vec::with_capacity(grid_count);
     for _ in 0..grid_count {
         let gh = read_grid_header(&mut cur)?;
         cur.seek(gh.end_pos)?;
