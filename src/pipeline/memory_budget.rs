@@ -384,7 +384,8 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
                 _ => stop_km(scene, c, atm) - step,
             }
             .max(atm.bottom_km() - step);
-            let rho = reach + shell + slack + b.top_noise_km / dip.tan() + 0.25 * leaf;
+            // The samples' spacing adds its half (memory_leaves).
+            let rho = reach + shell + slack + b.top_noise_km / dip.tan();
             Band {
                 columns,
                 start_km: b.top_km,
@@ -431,20 +432,76 @@ pub fn box_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
     box_leaves.min(own) + column_leaves(scene, leaf_km, reach)
 }
 
+/// How the grid term finds its leaves.
+#[derive(Clone, Copy, Debug)]
+pub enum LeafCount<'a> {
+    /// The plan's bands, counted ([`crate::pipeline::memory_leaves`]),
+    /// where [`box_leaves`] allows it: the bake's check.
+    Bands,
+    /// As [`LeafCount::Bands`], each distinct set of bands counted once.
+    Memo(&'a LeafMemo),
+    /// [`box_leaves`] alone, in closed form: never below [`LeafCount::Bands`]
+    /// and cheap, for a search that asks many times.
+    Bound,
+}
+
+/// Band counts already made, by their bands, voxel, Earth and field: a
+/// search that changes keys the bands do not read (beams.count, the lines,
+/// ...) counts them once.
+#[derive(Debug, Default)]
+pub struct LeafMemo(std::cell::RefCell<std::collections::HashMap<u64, Option<usize>>>);
+
+/// A hash of everything [`band_leaves`] reads.
+fn bands_key(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> u64 {
+    use std::hash::{Hash, Hasher};
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    format!("{:?} {:?}", plan.earth, plan.field).hash(&mut h);
+    voxel_km.to_bits().hash(&mut h);
+    for b in bands {
+        for c in &b.columns {
+            c.map(f64::to_bits).hash(&mut h);
+        }
+        [b.start_km, b.top_km, b.bottom_km, b.rho_km, b.spread_per_sqrt_km, b.spread_max_km].map(f64::to_bits).hash(&mut h);
+    }
+    h.finish()
+}
+
 /// The leaves the bake's grids can hold at voxel `voxel_km`: the bands
 /// counted from the plan ([`crate::pipeline::memory_leaves`]) when
 /// [`box_leaves`] allows it, else that bound.
 pub fn grid_leaves(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> f64 {
+    grid_leaves_by(scene, plan, voxel_km, reach, LeafCount::Bands)
+}
+
+fn grid_leaves_by(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64, count: LeafCount) -> f64 {
     let bound = box_leaves(scene, 8.0 * voxel_km, reach + voxel_km);
-    if bound > COUNTED_LEAVES_MAX {
+    if bound > COUNTED_LEAVES_MAX || matches!(count, LeafCount::Bound) {
         return bound;
     }
-    band_leaves(plan, &bands(scene, plan, voxel_km, reach), voxel_km).map_or(bound, |n| (n as f64).min(bound))
+    let bands = bands(scene, plan, voxel_km, reach);
+    let n = match count {
+        LeafCount::Memo(m) => {
+            let key = bands_key(plan, &bands, voxel_km);
+            let known = m.0.borrow().get(&key).copied();
+            known.unwrap_or_else(|| {
+                let n = band_leaves(plan, &bands, voxel_km);
+                m.0.borrow_mut().insert(key, n);
+                n
+            })
+        }
+        _ => band_leaves(plan, &bands, voxel_km),
+    };
+    n.map_or(bound, |n| (n as f64).min(bound))
 }
 
 /// The bake's peak memory, term by term, from `plan` (built from `scene`):
 /// its footprints' cells, its chunk of beams, the leaves its bands touch.
 pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
+    estimate_plan_by(scene, plan, LeafCount::Bands)
+}
+
+/// [`estimate_plan`] with the grid's leaves found by `count`.
+pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Estimate {
     let b = &scene.beams;
     let (steps, _) = steps_per_beam(scene);
     let dip = dip_deg(scene);
@@ -470,7 +527,7 @@ pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
     let p = &scene.photons;
     let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
     let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
-    let leaves = grid_leaves(scene, plan, voxel, reach);
+    let leaves = grid_leaves_by(scene, plan, voxel, reach, count);
     // The emission's leaves, and the density's on the same voxels unless
     // the air is physical (`grid.density_a = 0`: no density grid).
     let leaf_bytes = if scene.grid.density_a > 0.0 { LEAF_BYTES } else { RGB_LEAF_BYTES };

@@ -10,9 +10,10 @@
 //! spread ([`crate::pipeline::memory_budget::spread_km`]); its photons'
 //! kernels reach `cutoff * r_max` and the Cycles shell one voxel more. So
 //! every voxel the grids hold lies within
-//! `rho = reach + voxel + spread + cell half-diagonal + collapse + top_noise cot(I) + step / 2`
-//! of a point of a start column's field line, sampled every half leaf
-//! along it, from the deposits' top to their bottom (Fang: where the
+//! `rho = reach + voxel + spread + cell half-diagonal + collapse + top_noise cot(I) + spacing / 2`
+//! of a point of a start column's field line, sampled every `spacing`
+//! along it (half a leaf, or an eighth of the widest ball where that is
+//! more: wide kernels' balls overlap mostly, and cost their area each), from the deposits' top to their bottom (Fang: where the
 //! deposition is complete, less a step; CSDA: the path's length, `L (1 +
 //! dt)`, below the lowest start). Start cells are collapsed onto a grid of
 //! half a leaf (`collapse` its half-diagonal). The count is the union of
@@ -45,8 +46,8 @@ pub struct Band {
     /// The highest and lowest altitude sampled, km.
     pub top_km: f64,
     pub bottom_km: f64,
-    /// The ball's radius about each sampled point at and above the start,
-    /// km, before the Earth's scale; below it the walk's spread is added,
+    /// The ball's radius about each point of the line at and above the
+    /// start, km, before the Earth's scale and the samples' half spacing; below it the walk's spread is added,
     /// `spread_per_sqrt_km * sqrt(start_km - h)` (its random walk's
     /// standard deviations grow as the root of the steps taken) up to
     /// `spread_max_km`.
@@ -106,12 +107,13 @@ pub fn band_leaves(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> Option<usi
     let samples = |b: &Band, at: [f64; 2], each: &mut dyn FnMut(DVec3, f64)| {
         let field = field_at(at);
         let s = DVec3::new(at[0], at[1], b.start_km);
-        let dh = 0.5 * leaf * (-field.b.z).max(1e-3);
+        let spacing = (0.5 * leaf).max((b.rho_km + b.spread_max_km) / 8.0);
+        let dh = spacing * (-field.b.z).max(1e-3);
         let n = ((b.top_km - b.bottom_km) / dh).ceil().max(0.0) as usize;
         for i in 0..=n {
             let h = (b.top_km - i as f64 * dh).max(b.bottom_km);
             let scale = if earth.is_flat() { 1.0 } else { 1.0 + h.max(0.0) / plan.earth.radius_km };
-            each(earth.to_scene(field.foot(s, h)), b.rho_at(h) * scale);
+            each(earth.to_scene(field.foot(s, h)), (b.rho_at(h) + 0.5 * spacing) * scale);
         }
     };
     let work: Vec<(usize, [f64; 2])> = bands.iter().enumerate().flat_map(|(k, b)| b.columns.iter().map(move |c| (k, *c))).collect();

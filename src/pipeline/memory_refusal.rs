@@ -12,12 +12,19 @@
 //! one key changed, fits; a key no valid value of which fits is left out.
 //! The message rounds the need up and the usable share down, so a bake it
 //! refuses never reads as one that fits.
+//!
+//! The search asks for many estimates: it walks and bisects on the grid
+//! term's closed-form bound ([`LeafCount::Bound`], never below the count),
+//! then narrows the last step on the counted bands, which the bake's own
+//! check uses, each distinct set counted once ([`LeafCount::Memo`]); a
+//! changed footprint is simulated once per value and kept for the search.
 
 use crate::pipeline::bake::plan::BakePlan;
-use crate::pipeline::memory_budget::{estimate_plan, Estimate, USABLE_FRACTION};
+use crate::pipeline::memory_budget::{estimate_plan_by, Estimate, LeafCount, LeafMemo, USABLE_FRACTION};
 use crate::scene::{Scene, VoxelSize};
 use crate::util::memory::MemoryLimit;
 use crate::util::progress::NoProgress;
+use std::cell::RefCell;
 
 /// One change that alone brings the estimate under the usable share.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,10 +97,11 @@ pub fn check(scene: &Scene, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarg
 }
 
 /// [`check`] with the plan the bake will run (built from `scene`): the
-/// estimate is that plan's ([`estimate_plan`]), and each suggestion's the
+/// estimate is that plan's ([`crate::pipeline::memory_budget::estimate_plan`]), and each suggestion's the
 /// plan reusing its footprints where the key leaves them.
 pub fn check_plan(scene: &Scene, plan: &BakePlan, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
-    let e = estimate_plan(scene, plan);
+    let memo = LeafMemo::default();
+    let e = estimate_plan_by(scene, plan, LeafCount::Memo(&memo));
     let usable = USABLE_FRACTION * limit.bytes;
     let total = e.total();
     if total <= usable {
@@ -108,7 +116,7 @@ pub fn check_plan(scene: &Scene, plan: &BakePlan, limit: &MemoryLimit) -> Result
         total,
         usable,
         limit: limit.clone(),
-        suggestions: suggestions_plan(scene, plan, usable),
+        suggestions: suggestions_with(scene, plan, usable, memo),
     }))
 }
 
@@ -204,90 +212,140 @@ pub const CANDIDATES: &[Candidate] = &[
 /// For each of [`CANDIDATES`], the value nearest the scene's at which the
 /// estimate with that key alone changed is at most `usable` bytes and the
 /// scene still valid: values a factor 1.25 apart outward until one fits,
-/// then 16 halvings between it and the last that did not, then rounded
-/// outward to two significant digits when that still fits. A key no value
-/// of which fits is left out.
+/// then 16 halvings between it and the last that did not (on the closed-form
+/// leaf bound), then 5 more on the counted bands between the scene's value
+/// and it, then rounded outward to two significant digits when that still
+/// fits. A key no value of which fits is left out.
 pub fn suggestions(scene: &Scene, usable: f64) -> Vec<Suggestion> {
     suggestions_plan(scene, &BakePlan::new(scene, &NoProgress), usable)
 }
 
 /// [`suggestions`] from the plan of `scene`.
 pub fn suggestions_plan(scene: &Scene, plan: &BakePlan, usable: f64) -> Vec<Suggestion> {
-    CANDIDATES.iter().filter_map(|c| suggest(scene, plan, c, usable)).collect()
+    suggestions_with(scene, plan, usable, LeafMemo::default())
 }
 
-/// The estimate of `scene` with `c` set to `x`, if that scene is valid
-/// (its plan reusing `plan`'s footprints and tables where it can).
-fn fits(scene: &Scene, plan: &BakePlan, c: &Candidate, x: f64, usable: f64) -> Option<f64> {
-    let mut s = scene.clone();
-    (c.set)(&mut s, x);
-    if s.validate("suggestion", None).is_err() {
-        return None;
-    }
-    let bytes = estimate_plan(&s, &BakePlan::reusing(&s, plan, &NoProgress)).total();
-    (bytes <= usable).then_some(bytes)
+fn suggestions_with(scene: &Scene, plan: &BakePlan, usable: f64, memo: LeafMemo) -> Vec<Suggestion> {
+    let search = Search { scene, plan, usable, plans: RefCell::new(Vec::new()), memo };
+    CANDIDATES.iter().filter_map(|c| search.suggest(c)).collect()
 }
 
-fn suggest(scene: &Scene, plan: &BakePlan, c: &Candidate, usable: f64) -> Option<Suggestion> {
-    let x0 = (c.value)(scene)?;
-    let (up, limit, integer) = match c.toward {
-        Toward::Up(m) => (true, m, false),
-        Toward::Down(m) => (false, m, false),
-        Toward::DownInt(m) => (false, m, true),
-    };
-    let past = |x: f64| if up { x >= limit } else { x <= limit };
-    let step = |x: f64| {
-        let y = if up { x * 1.25 } else { x / 1.25 };
-        let y = if integer { y.floor().min(x - 1.0) } else { y };
-        if up {
-            y.min(limit)
-        } else {
-            y.max(limit)
-        }
-    };
-    // Outward until one fits.
-    let (mut bad, mut good) = (x0, None);
-    let mut x = x0;
-    while !past(x) {
-        x = step(x);
-        if fits(scene, plan, c, x, usable).is_some() {
-            good = Some(x);
-            break;
-        }
-        bad = x;
+/// One refusal's search: the scene, its plan, the plans of the changed
+/// footprints met so far.
+struct Search<'a> {
+    scene: &'a Scene,
+    plan: &'a BakePlan,
+    usable: f64,
+    plans: RefCell<Vec<BakePlan>>,
+    /// The bands counted so far.
+    memo: LeafMemo,
+}
+
+impl Search<'_> {
+    /// The scene with `c` set to `x`, if valid.
+    fn changed(&self, c: &Candidate, x: f64) -> Option<Scene> {
+        let mut s = self.scene.clone();
+        (c.set)(&mut s, x);
+        s.validate("suggestion", None).is_ok().then_some(s)
     }
-    let mut good = good?;
-    // Between the last that did not fit and the first that did.
-    for _ in 0..16 {
-        let mid = if integer { ((bad + good) / 2.0).floor() } else { 0.5 * (bad + good) };
-        if (integer && (good - bad).abs() <= 1.0) || mid == bad || mid == good {
-            break;
+
+    /// The estimate of `s` by `count`, its plan reusing the scene's or an
+    /// earlier changed one's footprints where they are `s`'s.
+    fn bytes(&self, s: &Scene, count: LeafCount) -> f64 {
+        if self.plan.has_footprints_of(s) {
+            return estimate_plan_by(s, &BakePlan::reusing(s, self.plan, &NoProgress), count).total();
         }
-        if fits(scene, plan, c, mid, usable).is_some() {
-            good = mid;
-        } else {
-            bad = mid;
-        }
+        let mut plans = self.plans.borrow_mut();
+        let k = match plans.iter().position(|p| p.has_footprints_of(s)) {
+            Some(k) => k,
+            None => {
+                plans.push(BakePlan::reusing(s, self.plan, &NoProgress));
+                plans.len() - 1
+            }
+        };
+        estimate_plan_by(s, &BakePlan::reusing(s, &plans[k], &NoProgress), count).total()
     }
-    // Two significant digits, outward, if that still fits.
-    let round = |x: f64| {
-        if x <= 0.0 {
-            return x;
+
+    /// The estimate with `c` set to `x`, if that scene is valid and fits.
+    fn fits(&self, c: &Candidate, x: f64, count: LeafCount) -> Option<f64> {
+        let s = self.changed(c, x)?;
+        let bytes = self.bytes(&s, count);
+        (bytes <= self.usable).then_some(bytes)
+    }
+
+    fn suggest(&self, c: &Candidate) -> Option<Suggestion> {
+        let x0 = (c.value)(self.scene)?;
+        let (up, limit, integer) = match c.toward {
+            Toward::Up(m) => (true, m, false),
+            Toward::Down(m) => (false, m, false),
+            Toward::DownInt(m) => (false, m, true),
+        };
+        let past = |x: f64| if up { x >= limit } else { x <= limit };
+        let step = |x: f64| {
+            let y = if up { x * 1.25 } else { x / 1.25 };
+            let y = if integer { y.floor().min(x - 1.0) } else { y };
+            if up {
+                y.min(limit)
+            } else {
+                y.max(limit)
+            }
+        };
+        // Outward on the bound until one fits; the farthest on the count
+        // when none does.
+        let (mut bad, mut good) = (x0, None);
+        let mut x = x0;
+        while !past(x) {
+            x = step(x);
+            if self.fits(c, x, LeafCount::Bound).is_some() {
+                good = Some(x);
+                break;
+            }
+            bad = x;
         }
-        let p = 10f64.powf(x.log10().floor() - 1.0);
-        let r = if up { (x / p).ceil() * p } else { (x / p).floor() * p };
-        // Clear the binary noise of the product.
-        format!("{r:.12e}").parse::<f64>().unwrap_or(r)
-    };
-    let nice = round(good);
-    let x = if !past(nice) || nice == limit { nice } else { good };
-    let (x, bytes) = match fits(scene, plan, c, x, usable) {
-        Some(b) => (x, b),
-        None => (good, fits(scene, plan, c, good, usable)?),
-    };
-    let mut changed = scene.clone();
-    (c.set)(&mut changed, x);
-    Some(Suggestion { key: c.key.to_string(), from: (c.written)(scene), to: (c.written)(&changed), bytes })
+        let mut good = match good {
+            Some(g) => g,
+            None => {
+                self.fits(c, x, LeafCount::Memo(&self.memo))?;
+                x
+            }
+        };
+        let bisect = |bad: &mut f64, good: &mut f64, halvings: usize, count: LeafCount<'_>| {
+            for _ in 0..halvings {
+                let mid = if integer { ((*bad + *good) / 2.0).floor() } else { 0.5 * (*bad + *good) };
+                if (integer && (*good - *bad).abs() <= 1.0) || mid == *bad || mid == *good {
+                    break;
+                }
+                if self.fits(c, mid, count).is_some() {
+                    *good = mid;
+                } else {
+                    *bad = mid;
+                }
+            }
+        };
+        bisect(&mut bad, &mut good, 16, LeafCount::Bound);
+        // The count lies at or under the bound: the change that fits on the
+        // count lies between the scene's value and the bound's.
+        let mut bad = x0;
+        bisect(&mut bad, &mut good, 5, LeafCount::Memo(&self.memo));
+        // Two significant digits, outward, if that still fits.
+        let round = |x: f64| {
+            if x <= 0.0 {
+                return x;
+            }
+            let p = 10f64.powf(x.log10().floor() - 1.0);
+            let r = if up { (x / p).ceil() * p } else { (x / p).floor() * p };
+            // Clear the binary noise of the product.
+            format!("{r:.12e}").parse::<f64>().unwrap_or(r)
+        };
+        let nice = round(good);
+        let x = if !past(nice) || nice == limit { nice } else { good };
+        let (x, bytes) = match self.fits(c, x, LeafCount::Memo(&self.memo)) {
+            Some(b) => (x, b),
+            None => (good, self.fits(c, good, LeafCount::Memo(&self.memo))?),
+        };
+        let changed = self.changed(c, x)?;
+        Some(Suggestion { key: c.key.to_string(), from: (c.written)(self.scene), to: (c.written)(&changed), bytes })
+    }
 }
 
 #[cfg(test)]

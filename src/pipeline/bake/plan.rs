@@ -215,15 +215,19 @@ impl BakePlan {
         Self::build(scene, Some(prev), progress)
     }
 
+    /// Whether this plan's footprints are `scene`'s: the same seed,
+    /// curtains, `[footprint]`, `[animation]` and Earth.
+    pub fn has_footprints_of(&self, scene: &Scene) -> bool {
+        self.seed == scene.seed
+            && self.curtains == scene.curtains
+            && self.footprint == scene.footprint
+            && self.animation == scene.animation
+            && self.earth == scene.earth
+    }
+
     fn build(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> BakePlan {
         let t = Instant::now();
-        let same_fp = prev.filter(|p| {
-            p.seed == scene.seed
-                && p.curtains == scene.curtains
-                && p.footprint == scene.footprint
-                && p.animation == scene.animation
-                && p.earth == scene.earth
-        });
+        let same_fp = prev.filter(|p| p.has_footprints_of(scene));
         let (footprints, footprint_seconds) = match same_fp {
             Some(p) => (p.footprints.clone(), 0.0),
             None => {
