@@ -19,19 +19,21 @@
 //!   [`steps_per_beam`] steps (csda: `ceil(1 / beams.dt)`; Fang's: by
 //!   Wald's identity at most `(H + L dt (sin I + tan alpha_D cos I)) /
 //!   (L dt sin(I) / 2)` expected, plus four standard deviations of the sum)
-//!   plus the column above each start ([`column_spans`]): a [`Photon`]
-//!   three times (traced, merged, binned) and the splat's kernel each.
+//!   plus the column above each start ([`column_spans`]): for the splat a
+//!   [`Photon`] twice (traced, merged), its kernel and its leaf range
+//!   each; for the other gathers a photon three times and a kernel.
 //! - **candidate leaves**: 12 bytes per leaf within reach of each held
 //!   step, bounded per beam by its path's slices of leaves.
 //! - **grids**: the leaves the bands of [`crate::pipeline::memory_leaves`]
-//!   reach (the plan's start cells carried along their field lines,
-//!   dilated by the reach, the walk's spread, the start noise), each an
+//!   reach (the plan's beams' own starts, or its start cells, carried
+//!   along their field lines, dilated by the reach and the walk's spread), each an
 //!   emission leaf (512 x 12 bytes and masks) and, unless the air is
 //!   physical (`grid.density_a = 0`), a density leaf (512 x 4), plus
 //!   [`GRID_SLACK`]. Above [`COUNTED_LEAVES_MAX`] leaves the world box's
 //!   and curtain bands' closed-form bound ([`box_leaves`]) stands.
-//! - **footprints**: 12 f64 per cell of the plan's footprints (their
-//!   simulation's working set).
+//! - **footprints**: an f32 per cell of the plan's footprints, which it
+//!   keeps; with a red trail, whose samples' footprints are simulated
+//!   during the bake, their simulation's 12 f64 per cell.
 //! - **per-line grids**: per leaf a float grid per line and the sums of
 //!   each three lines; a copy of the held photons and their line powers.
 //! - **velocity**: the numerator's sums and the grid, a weighted copy of
@@ -40,8 +42,8 @@
 //!   more photon sets and candidate lists.
 //! - **photon distances**: `voxel_size = "auto"` in chunks keeps every
 //!   photon's distance from the camera, 8 bytes each, every sample's.
-//! - **pilots**: freed before the bake traces; counted by what they
-//!   exceed the rest.
+//! - **pilots** and the **footprint simulation** (12 f64 per cell): freed
+//!   before the bake traces; counted by what the larger exceeds the rest.
 //!
 //! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]).
 
@@ -50,7 +52,7 @@ use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::bake::plan::BakePlan;
 use crate::pipeline::beams::dip::min_dip_deg;
 use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
-use crate::pipeline::beams::{DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
+use crate::pipeline::beams::{start_positions, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
 use crate::pipeline::memory_leaves::{band_leaves, start_columns, Band};
@@ -300,6 +302,18 @@ pub fn steps_per_beam(scene: &Scene) -> (f64, f64) {
     (mean, h * sigma2 / mu.powi(3))
 }
 
+/// Bytes a held photon costs the gather `method` at its peak (module
+/// documentation): for the splat a [`Photon`] traced and merged, its
+/// kernel and its leaf range; for the others three photons and a kernel.
+pub fn bytes_per_held_photon(method: GatherMethod) -> f64 {
+    let (photon, kernel) = (std::mem::size_of::<Photon>() as f64, std::mem::size_of::<KernelF32>() as f64);
+    if method == GatherMethod::Splat {
+        2.0 * photon + kernel + std::mem::size_of::<(glam::IVec3, glam::IVec3)>() as f64
+    } else {
+        3.0 * photon + kernel
+    }
+}
+
 /// The step photons of `beams` beams: `beams` times the expected steps plus
 /// four standard deviations of their sum ([`steps_per_beam`]).
 pub fn photons_of_steps(scene: &Scene, beams: f64) -> f64 {
@@ -352,8 +366,25 @@ pub fn is_chunked(scene: &Scene, plan: &BakePlan) -> bool {
     scene.beams.count > plan.beam_chunk.max(1) && scene.photons.gather != GatherMethod::Report2014
 }
 
+/// Most beams whose starts the bands draw one by one
+/// ([`crate::pipeline::beams::start_positions`]); above it, and for a bake
+/// whose beams are not the scene's count from its own footprints (a
+/// noise target's, a red trail's), every footprint cell above the
+/// threshold is a start.
+pub const DRAWN_STARTS_MAX: usize = 4_000_000;
+
+/// Whether the bands take the beams' own starts (module documentation).
+pub fn draws_starts(scene: &Scene) -> bool {
+    let trail = scene.colour.mode == crate::scene::ColourMode::Physical && scene.animation.trail_samples > 0;
+    scene.beams.count <= DRAWN_STARTS_MAX && scene.beams.target_noise <= 0.0 && !trail
+}
+
 /// The bands of [`crate::pipeline::memory_leaves`] for `plan`'s curtains
-/// and footprints at voxel `voxel_km` and kernel reach `reach` km.
+/// and footprints at voxel `voxel_km` and kernel reach `reach` km: each
+/// line through a beam's own start ([`draws_starts`]: the points the trace
+/// draws, carried along their field lines to `beams.top_km` and merged on
+/// a grid of a voxel), else through every footprint cell above the
+/// threshold and any start height the noise allows.
 pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
     let b = &scene.beams;
     let atm = &plan.atmosphere;
@@ -372,12 +403,48 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
     let n = (1.0 / b.dt).ceil();
     let csda_path = step * (0.5 * n + 4.0 * (n / 12.0).sqrt());
     let shell = if scene.grid.cycles_shell { voxel_km } else { 0.0 };
+    let drawn = draws_starts(scene).then(|| start_positions(&plan.trace_params(), &plan.footprints, b.count));
+    // A start carried to top_km moves by at most top_noise cot(I) (and the
+    // merge by half a voxel's diagonal); the dipole's direction at the
+    // merged point differs from the start's by at most some 2 d / R rad
+    // (its inclination turns by 1-2 times the arc), over lines of at most
+    // (top - bottom) / sin(I).
+    let earth = crate::geometry::earth::Earth::new(plan.earth.radius_km);
+    let field_at = |at: [f64; 2]| match plan.earth.magnetic_pole {
+        Some(pole) if plan.earth.radius_km > 0.0 => crate::physics::geomagnetic_field::MagneticField::dipole(&earth, pole, at),
+        _ => plan.field,
+    };
     scene
         .curtains
         .iter()
         .zip(&plan.footprints)
-        .map(|(c, fp)| {
-            let (columns, slack) = start_columns(fp, scene.footprint.threshold, 0.5 * leaf);
+        .enumerate()
+        .map(|(k, (c, fp))| {
+            let (columns, slack) = match &drawn {
+                Some(starts) => {
+                    let merge = std::f64::consts::FRAC_1_SQRT_2 * voxel_km;
+                    let carried: Vec<[f64; 2]> = starts[k]
+                        .iter()
+                        .map(|p| {
+                            let q = field_at([p.x, p.y]).foot(*p, b.top_km);
+                            [q.x, q.y]
+                        })
+                        .collect();
+                    let turn = match plan.earth.magnetic_pole {
+                        Some(_) if plan.earth.radius_km > 0.0 => {
+                            let d = b.top_noise_km / dip.tan() + merge;
+                            let length = (deposit_top_km(scene, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
+                            2.0 * d / plan.earth.radius_km * length
+                        }
+                        _ => 0.0,
+                    };
+                    (merged_columns(&carried, voxel_km), merge + turn)
+                }
+                None => {
+                    let (columns, slack) = start_columns(fp, scene.footprint.threshold, 0.5 * leaf);
+                    (columns, slack + b.top_noise_km / dip.tan())
+                }
+            };
             let top = deposit_top_km(scene, c).max(b.top_km + b.top_noise_km);
             let bottom = match b.deposition {
                 Deposition::Csda => lowest_start - csda_path,
@@ -385,7 +452,7 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
             }
             .max(atm.bottom_km() - step);
             // The samples' spacing adds its half (memory_leaves).
-            let rho = reach + shell + slack + b.top_noise_km / dip.tan();
+            let rho = reach + shell + slack;
             Band {
                 columns,
                 start_km: b.top_km,
@@ -397,6 +464,14 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
             }
         })
         .collect()
+}
+
+/// Points merged onto a grid of `g` km: each occupied cell's centre, sorted.
+fn merged_columns(points: &[[f64; 2]], g: f64) -> Vec<[f64; 2]> {
+    let mut cells: Vec<(i64, i64)> = points.iter().map(|p| ((p[0] / g).floor() as i64, (p[1] / g).floor() as i64)).collect();
+    cells.sort_unstable();
+    cells.dedup();
+    cells.into_iter().map(|(a, b)| [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]).collect()
 }
 
 /// Largest leaf count [`crate::pipeline::memory_leaves::band_leaves`] is
@@ -573,19 +648,29 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
         (photon_key.clone(), photon_value.clone())
     };
 
-    // The footprints' simulation: 12 f64 per cell of the plan's footprints.
+    // The footprints: the plan keeps an f32 per cell; their simulation
+    // works on 12 f64 per cell. It runs before the bake traces, so it
+    // counts by what it exceeds the rest, like the pilots; a red trail
+    // simulates its samples' footprints during the bake, beside the rest.
     let cells: f64 = plan.footprints.iter().map(|f| (f.nx * f.ny) as f64).sum();
-    let footprint = cells * 12.0 * 8.0;
+    let simulation = cells * 12.0 * 8.0;
+    let kept = 4.0 * cells;
     let [nx, ny] = scene.footprint.resolution;
 
+    // Per held photon: the splat holds the traced one, the merged one (at
+    // most one per traced), its kernel and its leaf range (the trace's
+    // chunks and their concatenation, two photons, come and go before);
+    // the other gathers a third copy (the kd-tree's, the report's bins).
+    let held_per_photon = bytes_per_held_photon(p.gather);
     let physical = scene.colour.mode == crate::scene::ColourMode::Physical;
     let trail = if physical { scene.animation.trail_samples as f64 } else { 0.0 };
+    let footprint = if trail > 0.0 { simulation } else { kept };
     // Photons held beside the bake's own: every trail sample's when whole.
     let all_photons = photons * if chunked { 1.0 } else { 1.0 + trail };
     let n_lines = if physical { scene.grid.lines.len() as f64 } else { 0.0 };
     let mut terms = vec![
         Term { what: "program", bytes: PROGRAM_BYTES, key: "beams.count".into(), value: format!("{}", b.count) },
-        Term { what: "photons", bytes: photons * (3.0 * photon_bytes + kernel_bytes), key: photon_key, value: photon_value },
+        Term { what: "photons", bytes: photons * held_per_photon, key: photon_key, value: photon_value },
         Term { what: "candidate leaves", bytes: candidates, key: cand_key, value: cand_value },
         Term { what: "grids", bytes: GRID_SLACK * leaves * leaf_bytes, key: grid_key, value: grid_value },
         Term { what: "footprints", bytes: footprint, key: "footprint.resolution".into(), value: format!("[{nx}, {ny}]") },
@@ -607,7 +692,7 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
     if trail > 0.0 {
         // Whole: N more photon sets and candidate lists. In chunks: one
         // earlier sample's footprints at a time (f32 per cell).
-        let bytes = if chunked { 4.0 * cells } else { trail * (photons * (3.0 * photon_bytes + kernel_bytes) + candidates) };
+        let bytes = if chunked { 4.0 * cells } else { trail * (photons * held_per_photon + candidates) };
         terms.push(Term { what: "red trail", bytes, key: "animation.trail_samples".into(), value: format!("{trail}") });
     }
     if chunked && matches!(scene.grid.voxel_size, VoxelSize::Auto(_)) && plan.camera_model().is_ok_and(|c| c.pixel_angle().is_some()) {
@@ -620,8 +705,8 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
             value: format!("{}", b.count),
         });
     }
-    // The pilots run before the bake traces and free what they hold: they
-    // count by what their peak exceeds the rest.
+    // The footprints' simulation and the pilots run before the bake traces
+    // and free what they hold: they count by what their peak exceeds the rest.
     let rest: f64 = terms.iter().map(|t| t.bytes).sum();
     let pilot_photons = |beams: f64| photons_of_steps(scene, beams) + beams * column_segments;
     let deposit_pilot = PROGRAM_BYTES + 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS.min(b.count) as f64) * photon_bytes + footprint;
@@ -632,8 +717,16 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
     } else {
         0.0
     };
+    let simulating = PROGRAM_BYTES + simulation;
     let pilots = deposit_pilot.max(noise_pilot) - rest;
-    if pilots > 0.0 {
+    if simulating - rest > pilots.max(0.0) {
+        terms.push(Term {
+            what: "footprint simulation",
+            bytes: simulating - rest,
+            key: "footprint.resolution".into(),
+            value: format!("[{nx}, {ny}]"),
+        });
+    } else if pilots > 0.0 {
         let (key, value) = if noise_pilot > deposit_pilot {
             ("beams.target_noise".to_string(), format!("{}", b.target_noise))
         } else {
@@ -701,16 +794,23 @@ mod tests {
         let mut t = s.clone();
         t.grid.voxel_size = VoxelSize::Km(2.0);
         assert!(estimate_plan(&t, &BakePlan::reusing(&t, &plan, &NoProgress)).total() < a);
-        // Beyond one chunk the photons and candidates are a chunk's, and
-        // the rest does not depend on the beams: 4 and 40 chunks, the same.
+        // Beyond one chunk the photons and candidates are a chunk's: 4 and
+        // 40 chunks, the same.
         let at = |count: usize| {
             let mut t = s.clone();
             t.beams.count = count;
             estimate_plan(&t, &plan)
         };
         let (four, forty) = (at(4 * plan.beam_chunk), at(40 * plan.beam_chunk));
-        assert_eq!(four.total(), forty.total());
+        for what in ["photons", "candidate leaves"] {
+            assert_eq!(term(&four, what).bytes, term(&forty, what).bytes, "{what}");
+        }
         assert_eq!(term(&four, "photons").key, "beams.dt");
+        // The grids follow the starts the beams cover, up to every cell's
+        // (the bound where the starts are not drawn).
+        let every = at(DRAWN_STARTS_MAX + 1);
+        let grids = |e: &Estimate| term(e, "grids").bytes;
+        assert!(grids(&four) <= grids(&forty) && grids(&forty) <= grids(&every), "{} {} {}", grids(&four), grids(&forty), grids(&every));
         // Within a chunk, more beams, more photons.
         assert!(at(plan.beam_chunk).total() > at(plan.beam_chunk / 2).total());
     }

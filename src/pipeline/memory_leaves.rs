@@ -2,21 +2,29 @@
 //! (its footprints, field, kernel and voxel size): the memory budget's
 //! grid term ([`crate::pipeline::memory_budget`]).
 //!
-//! Model: a beam starts in a footprint cell above `footprint.threshold`,
-//! at most `beams.top_noise_km` off `beams.top_km`, and walks down (and,
-//! with Fang's depositions, lays its column up) the straight field line
-//! through its start (the uniform field, or the dipole's at the start:
-//! `crate::pipeline::beams`), never farther across it than the walk's
-//! spread ([`crate::pipeline::memory_budget::spread_km`]); its photons'
-//! kernels reach `cutoff * r_max` and the Cycles shell one voxel more. So
-//! every voxel the grids hold lies within
-//! `rho = reach + voxel + spread + cell half-diagonal + collapse + top_noise cot(I) + spacing / 2`
-//! of a point of a start column's field line, sampled every `spacing`
+//! Model: a beam starts where the bake draws it
+//! ([`crate::pipeline::beams::start_positions`]: the same points, so the
+//! plan's own beams), or, where the budget does not draw them
+//! ([`crate::pipeline::memory_budget::draws_starts`]), anywhere in a
+//! footprint cell above `footprint.threshold` at most `beams.top_noise_km`
+//! off `beams.top_km`. It walks down (and, with Fang's depositions, lays
+//! its column up) the straight field line through its start (the uniform
+//! field, or the dipole's at the start: `crate::pipeline::beams`), never
+//! farther across it than the walk's spread
+//! ([`crate::pipeline::memory_budget::spread_km`]); its photons' kernels
+//! reach `cutoff * r_max` and the Cycles shell one voxel more. Each start
+//! is carried along its line to `beams.top_km` and merged onto a grid
+//! (a voxel for drawn starts, half a leaf for cells). So every voxel the
+//! grids hold lies within
+//! `rho = reach + voxel + spread + merge + spacing / 2` (drawn starts: plus
+//! the dipole's turn between a start and its merged point; cells: plus the
+//! cell's half-diagonal and `top_noise cot(I)`)
+//! of a point of a column's field line, sampled every `spacing`
 //! along it (half a leaf, or an eighth of the widest ball where that is
-//! more: wide kernels' balls overlap mostly, and cost their area each), from the deposits' top to their bottom (Fang: where the
+//! more: wide kernels' balls overlap mostly, and cost their area each), from
+//! the deposits' top to their bottom (Fang: where the
 //! deposition is complete, less a step; CSDA: the path's length, `L (1 +
-//! dt)`, below the lowest start). Start cells are collapsed onto a grid of
-//! half a leaf (`collapse` its half-diagonal). The count is the union of
+//! dt)`, below the lowest start). The count is the union of
 //! the leaves each sampled ball touches (a leaf touches when its voxel
 //! centres' box lies within `rho`), points mapped to the scene frame by
 //! the Earth's map (`crate::geometry::earth`; its horizontal scale at

@@ -401,6 +401,41 @@ pub fn trace_range(
     Ok(Traced { photons, stats, deposits: all_deposits, line_power, beam_photons })
 }
 
+/// Where the beams of a bake of `count` beams start, per curtain: the
+/// points [`trace_range`] draws on stream 0 (beam `i` of a curtain on
+/// stream `i`), km, in the frame of the footprint (curved, before the
+/// Earth's map). A curtain whose footprint has no cell above the threshold
+/// has none (the trace refuses it).
+pub fn start_positions(params: &TraceParams, footprints: &[Footprint], count: usize) -> Vec<Vec<DVec3>> {
+    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
+    let counts = apportion(count, &weights);
+    params
+        .curtains
+        .iter()
+        .zip(footprints)
+        .zip(counts)
+        .map(|((curtain, fp), n)| {
+            let map = StartMap::new(fp, params.threshold);
+            if map.is_empty() {
+                return Vec::new();
+            }
+            let starts = CurtainStarts::new(params, curtain, fp, map, 0.0);
+            (0..n as u64)
+                .into_par_iter()
+                .map(|i| {
+                    let mut r = beam_rng(params, curtain, i);
+                    starts.start(i, &mut r).position
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The random stream of a curtain's beam `index`: its start, energy and walk.
+fn beam_rng(params: &TraceParams, curtain: &Curtain, index: u64) -> impl Rng {
+    rng::rng(&[params.seed, curtain.seed, rng::tag::BEAM, index])
+}
+
 /// The beams of `range` (bake indices) that belong to the curtain whose `n`
 /// beams are `[curtain_first, curtain_first + n)` of the bake, as local
 /// indices (empty if none).
@@ -569,7 +604,7 @@ impl Tracer<'_> {
     /// stream, appended to `out` (its deposits only while it is summed,
     /// unless they are recorded).
     fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64, out: &mut ChunkOut) {
-        let mut r = rng::rng(&[self.params.seed, starts.curtain.seed, rng::tag::BEAM, index]);
+        let mut r = beam_rng(self.params, starts.curtain, index);
         let start = starts.start(index, &mut r);
         let bufs = std::mem::take(&mut out.bufs);
         let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
@@ -718,6 +753,34 @@ mod tests {
                 assert!((p.power[k] - 2.0 * q.power[k]).abs() <= 2e-7 * p.power[k].abs(), "{p:?} {q:?}");
             }
         }
+    }
+
+    #[test]
+    fn the_drawn_starts_are_where_the_traced_beams_begin() {
+        // CSDA beams (no column above the start) on a flat ground (scene
+        // frame = footprint frame): each beam's first photon begins at its
+        // drawn start, to the photons' f32 precision.
+        let mut s = small_scene(300);
+        s.beams.deposition = Deposition::Csda;
+        s.earth.radius_km = 0.0;
+        let fps = crate::pipeline::bake::plan::footprints(&s);
+        let atm = Atmosphere::us1976();
+        let colour = crate::pipeline::bake::plan::colour_table(&s, &atm);
+        let params = TraceParams::of(&s);
+        let t = trace_range(&params, &fps, &atm, &colour, 300, 0, 0..300, false, &crate::util::progress::NoProgress).unwrap();
+        let starts: Vec<DVec3> = start_positions(&params, &fps, 300).concat();
+        assert_eq!(starts.len(), t.beam_photons.len());
+        let mut first = 0usize;
+        let mut checked = 0;
+        for (start, &n) in starts.iter().zip(&t.beam_photons) {
+            if n > 0 {
+                let p = crate::pipeline::deposit::pos(&t.photons[first]);
+                assert!((p - *start).length() < 1e-3 * start.length().max(1.0) * 1e-2, "{p} against {start}");
+                checked += 1;
+            }
+            first += n as usize;
+        }
+        assert!(checked > 250, "{checked} beams with photons");
     }
 
     #[test]
