@@ -362,8 +362,6 @@ pub fn trace_range(
     record_deposits: bool,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
-    let counts = apportion(count, &weights);
     let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
     let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
     let mut stats = BeamStats::default();
@@ -371,16 +369,10 @@ pub fn trace_range(
     stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
     let range = range.start.min(count)..range.end.min(count);
     progress.start("beams", range.len() as u64);
-    let mut curtain_first = 0usize;
     let mut traced = Vec::new();
-    for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
-        let n = counts[ci];
-        let local = local_beams(&range, curtain_first, n);
-        curtain_first += n;
-        if local.is_empty() {
-            continue;
-        }
-        let (power_w, chunks) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
+    for (ci, n, local) in curtain_ranges(params, count, &range) {
+        let Some(fp) = footprints.get(ci) else { continue };
+        let (power_w, chunks) = tracer.curtain(ci, &params.curtains[ci], fp, n, local.clone())?;
         // The range's share of the curtain's power (all of it for a whole bake).
         stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
         stats.beams += local.len();
@@ -434,6 +426,23 @@ pub fn start_positions(params: &TraceParams, footprints: &[Footprint], count: us
 /// The random stream of a curtain's beam `index`: its start, energy and walk.
 fn beam_rng(params: &TraceParams, curtain: &Curtain, index: u64) -> impl Rng {
     rng::rng(&[params.seed, curtain.seed, rng::tag::BEAM, index])
+}
+
+/// The curtains with beams in `range` (bake indices, within `count`): each
+/// one's index, its share of the `count` beams and its beams of the range
+/// as local indices.
+pub(super) fn curtain_ranges(params: &TraceParams, count: usize, range: &Range<usize>) -> Vec<(usize, usize, Range<usize>)> {
+    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
+    let mut first = 0usize;
+    let mut out = Vec::new();
+    for (ci, n) in apportion(count, &weights).into_iter().enumerate() {
+        let local = local_beams(range, first, n);
+        first += n;
+        if !local.is_empty() {
+            out.push((ci, n, local));
+        }
+    }
+    out
 }
 
 /// The beams of `range` (bake indices) that belong to the curtain whose `n`

@@ -7,7 +7,7 @@
 //! its own, bit for bit (a range's own stats, summed, would round
 //! differently).
 
-use super::{apportion, local_beams, sum_curtains, tally, BeamError, BeamStats, CurtainPower, TraceParams, Traced, Tracer};
+use super::{curtain_ranges, sum_curtains, tally, BeamError, BeamStats, CurtainPower, TraceParams, Traced, Tracer};
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::emission::line_colour::ColourTable;
 use crate::physics::geomagnetic_field::MagneticField;
@@ -30,27 +30,19 @@ pub fn trace_range_running(
     running: &mut BeamStats,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
-    let counts = apportion(count, &weights);
     let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
     let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits: false, progress };
     if running.curtains.len() != params.curtains.len() {
         running.curtains = vec![CurtainPower::default(); params.curtains.len()];
     }
     let range = range.start.min(count)..range.end.min(count);
-    let mut curtain_first = 0usize;
     let mut photons = Vec::new();
     let mut line_power = Vec::new();
     let mut beam_photons = Vec::new();
     let mut deposits = Vec::new();
-    for (ci, (curtain, fp)) in params.curtains.iter().zip(footprints).enumerate() {
-        let n = counts[ci];
-        let local = local_beams(&range, curtain_first, n);
-        curtain_first += n;
-        if local.is_empty() {
-            continue;
-        }
-        let (power_w, chunks) = tracer.curtain(ci, curtain, fp, n, local.clone())?;
+    for (ci, n, local) in curtain_ranges(params, count, &range) {
+        let Some(fp) = footprints.get(ci) else { continue };
+        let (power_w, chunks) = tracer.curtain(ci, &params.curtains[ci], fp, n, local.clone())?;
         // The curtain's whole power, as a trace of all its beams records it.
         running.curtains[ci].electron_power_w = power_w;
         running.beams += local.len();
