@@ -274,12 +274,15 @@ impl Prepared {
 
 impl Prepared {
     /// The star field's points (`sky.rs`), seen through the volume's
-    /// transmittance and the air's, hidden by the terrain.
+    /// transmittance and the air's, hidden by the terrain and by the solid
+    /// Earth (a ray that goes below the ground: below the horizontal on a
+    /// flat ground, below the horizon's dip on a round one), as the airglow is.
     fn add_stars(&self, pixels: &mut [[f32; 4]]) {
         let s = &self.settings;
         let o = self.camera.position;
+        let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
         self.sky.add_stars(pixels, &self.camera, |dir| {
-            if self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
+            if earth.lowest_altitude(o, dir) < 0.0 || self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
                 return None;
             }
             let t = optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance();

@@ -37,7 +37,7 @@
 //! normalised over the 49 pixels, `Omega_q` the solid angle of pixel `q`
 //! (from the camera, at its centre), `T` the volume's transmittance towards
 //! the star times the air's per channel with `[sky] extinction` (0 behind
-//! terrain). So `sum_q L_q Omega_q = E T` at any resolution and
+//! terrain or below the ground). So `sum_q L_q Omega_q = E T` at any resolution and
 //! projection; the part of a footprint off the image (or outside a
 //! fisheye's circle) is lost, and an equirectangular image wraps around in
 //! azimuth. An orthographic camera sees no stars (its pixels have no solid

@@ -2,8 +2,8 @@
 //! `aurora::render::airglow`, `[airglow]`): the slant column through a
 //! spherical shell against van Rhijn's factor and its thick-layer
 //! correction, the zenith's radiance per line against the keys, the
-//! terrain hiding it, the sky map's layout, and the stars and airglow
-//! independent of the thread count.
+//! terrain hiding it, the sky map's layout, the stars and airglow
+//! independent of the thread count, and no star below the ground.
 
 // Channel loops index several arrays at once.
 #![allow(clippy::needless_range_loop)]
@@ -215,4 +215,29 @@ fn stars_and_airglow_do_not_depend_on_the_thread_count() {
     let none = run(&s, 2);
     let lit = a.iter().zip(&none).filter(|(p, q)| p[1] > q[1]).count();
     assert!(lit >= 100, "{lit} pixels hold starlight");
+}
+
+/// No star below the ground: from 1 km up, a camera looking 20 degrees
+/// below the horizontal (the horizon dips 1 degree) sees none, on a round
+/// Earth and on a flat ground; one looking 20 degrees above it sees some.
+#[test]
+fn no_star_shines_from_below_the_ground() {
+    for radius in [R_EARTH, 0.0] {
+        let lit = |elevation_deg: f64| {
+            let mut s = glow_settings(AirglowParams { on: false, ..AirglowParams::default() });
+            s.earth_radius_km = radius;
+            s.sky = SkyParams { extinction: false, ..SkyParams::default() };
+            s.background.stars = true;
+            s.background.limiting_magnitude = 8.0;
+            s.terrain.kind = TerrainKind::None;
+            let e = elevation_deg.to_radians();
+            let at = [0.0, 0.0, 1.0];
+            s.camera = persp(at, [0.0, 100.0 * e.cos(), 1.0 + 100.0 * e.sin()], [0.0, 0.0, 1.0], 30.0);
+            s.render.width = 64;
+            s.render.height = 64;
+            render(&s, &Volume::default(), &NoProgress).unwrap().pixels.iter().filter(|p| p[1] > 0.0).count()
+        };
+        assert_eq!(lit(-20.0), 0, "radius {radius}");
+        assert!(lit(20.0) > 10, "radius {radius}: {} pixels", lit(20.0));
+    }
 }
