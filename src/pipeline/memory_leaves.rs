@@ -11,7 +11,7 @@
 //! its column up) the straight field line through its start (the uniform
 //! field, or the dipole's at the start: `crate::pipeline::beams`), never
 //! farther across it than the walk's spread
-//! ([`crate::pipeline::memory_budget::spread_km`]); its photons' kernels
+//! ([`crate::pipeline::memory_reach::spread_km`]); its photons' kernels
 //! reach `cutoff * r_max` and the Cycles shell one voxel more. Each start
 //! is carried along its line to `beams.top_km` and merged onto a grid
 //! (a voxel for drawn starts, half a leaf for cells). So every voxel the

@@ -11,6 +11,7 @@ pub mod deposit;
 pub mod footprint;
 pub mod memory_budget;
 pub mod memory_leaves;
+pub mod memory_reach;
 pub mod memory_refusal;
 pub mod motion;
 pub mod photons;

@@ -7,7 +7,7 @@
 use crate::common::small::small_scene;
 use aurora::pipeline::bake;
 use aurora::pipeline::deposit::Photon;
-use aurora::pipeline::memory_budget;
+use aurora::pipeline::{memory_budget, memory_reach};
 use aurora::scene::{Deposition, KernelRadius};
 use aurora::util::progress::NoProgress;
 
@@ -21,9 +21,9 @@ fn a_bake_stays_inside_the_budget_bounds() {
         let t = g.transform;
         let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
         let slack = reach + t.voxel_size;
-        let (lo, hi) = memory_budget::world_bounds(&s);
+        let (lo, hi) = memory_reach::world_bounds(&s);
         let start_top = s.beams.top_km + s.beams.top_noise_km;
-        let top = s.curtains.iter().map(|c| memory_budget::deposit_top_km(&s, c)).fold(0.0, f64::max);
+        let top = s.curtains.iter().map(|c| memory_reach::deposit_top_km(&s, c)).fold(0.0, f64::max);
         let mut above = std::collections::BTreeSet::new();
         let mut highest = f64::NEG_INFINITY;
         for (ijk, _) in g.iter_active() {
@@ -42,7 +42,7 @@ fn a_bake_stays_inside_the_budget_bounds() {
             }
         }
         let leaf_km = 8.0 * t.voxel_size;
-        let bound = memory_budget::column_leaves(&s, leaf_km, reach);
+        let bound = memory_reach::column_leaves(&s, leaf_km, reach);
         assert!(above.len() as f64 <= bound, "{deposition:?}: {} leaves above the starts, bound {bound}", above.len());
         if deposition == Deposition::Csda {
             assert!(above.is_empty(), "csda deposits nothing above the starts: highest voxel {highest:.1} km");
@@ -235,7 +235,7 @@ fn a_bake_in_chunks_counts_one_chunk_of_photons_and_what_stays_per_beam() {
     let mut auto = more.clone();
     auto.grid.voxel_size = aurora::scene::VoxelSize::Auto(aurora::scene::AutoTag::Auto);
     let d = term(&auto, "photon distances").expect("a distances term");
-    let steps = memory_budget::photons_of_steps(&auto, 3010.0);
+    let steps = memory_reach::photons_of_steps(&auto, 3010.0);
     assert!(d >= 8.0 * steps, "{d} for {steps} step photons");
     assert_eq!(term(&more, "photon distances"), None);
     let mut v = more.clone();
