@@ -100,12 +100,37 @@ pub fn start_columns(fp: &Footprint, threshold: f64, g: f64) -> (Vec<[f64; 2]>, 
 /// in leaves, 32 MB of bits); a larger box is not counted (None).
 pub const MAX_BOX_LEAVES: usize = 1 << 28;
 
+/// Most leaf columns the balls of [`band_leaves`] may visit (some seconds
+/// on one core); a count that would take more is not made (None).
+pub const MAX_BALL_COLUMNS: f64 = 4.0e8;
+
+/// The leaf columns the balls of `bands` visit, from each band's columns,
+/// its samples along a vertical line (the fewest: a slanted line has more)
+/// and its widest ball: the work of [`band_leaves`], known before it.
+fn ball_columns(bands: &[Band], leaf: f64) -> f64 {
+    bands
+        .iter()
+        .map(|b| {
+            let widest = b.rho_km + b.spread_max_km;
+            let spacing = (0.5 * leaf).max(widest / 8.0);
+            let samples = ((b.top_km - b.bottom_km) / spacing).ceil().max(0.0) + 1.0;
+            let across = 2.0 * (widest + 0.5 * spacing) / leaf + 1.0;
+            b.columns.len() as f64 * samples * across * across
+        })
+        .sum()
+}
+
 /// The leaves (8^3 voxels of `voxel_km`) within the bands' balls (module
 /// documentation), counted once; None when their box spans more than
-/// [`MAX_BOX_LEAVES`].
+/// [`MAX_BOX_LEAVES`] or the balls would visit more than
+/// [`MAX_BALL_COLUMNS`] leaf columns (the caller's closed-form bound
+/// stands).
 pub fn band_leaves(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> Option<usize> {
     let earth = Earth::new(plan.earth.radius_km);
     let leaf = 8.0 * voxel_km;
+    if ball_columns(bands, leaf) > MAX_BALL_COLUMNS {
+        return None;
+    }
     let field_at = |at: [f64; 2]| match plan.earth.magnetic_pole {
         Some(pole) if plan.earth.radius_km > 0.0 => MagneticField::dipole(&earth, pole, at),
         _ => plan.field,
