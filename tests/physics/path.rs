@@ -131,9 +131,9 @@ fn a_3000_km_path_fits_the_memory_budget() {
     s.validate("t", None).unwrap();
     let e = aurora::pipeline::memory_budget::estimate(&s);
     // Default width 40 km, 128 cells across: 0.3125 km, and the sheet's
-    // cells as long as wide, so about 9600 cells along.
+    // cells as long as wide, so about 9600 cells along, an f32 each kept.
     let fp = e.terms.iter().find(|t| t.what == "footprints").unwrap();
-    assert!(fp.bytes > 9000.0 * 128.0 * 96.0 && fp.bytes < 10_000.0 * 128.0 * 96.0, "{}", fp.bytes);
+    assert!(fp.bytes > 9000.0 * 128.0 * 4.0 && fp.bytes < 10_000.0 * 128.0 * 4.0, "{}", fp.bytes);
     // The band bound at 1 km voxels, far below the 2000 x 2000 km box's leaves.
     assert!(e.total() < 8.0 * (1u64 << 30) as f64, "{}: {:?}", aurora::util::memory::gib(e.total()), e.terms);
     let f = &aurora::pipeline::bake::plan::footprints(&s)[0];
