@@ -125,8 +125,9 @@ fn for_each_chunk(
         (n, Some(_)) if n > 0 => red_trail::samples(n).into_iter().map(Some).collect(),
         _ => vec![None],
     };
-    let chunks = count.div_ceil(chunk);
-    progress.start("beams and gather", (chunks * samples.len()) as u64);
+    // The bar counts beams traced, as a whole bake's does; each chunk's
+    // gather runs between its beams and the next chunk's.
+    progress.start("beams", (count * samples.len()) as u64);
     let mut trace_s = 0.0;
     for (k, sample) in samples.into_iter().enumerate() {
         let animation = match sample {
@@ -148,20 +149,10 @@ fn for_each_chunk(
             let beams = first..(first + chunk).min(count);
             let running = if k == 0 { &mut *stats } else { &mut other };
             let t = Instant::now();
-            let traced = trace_range_running(
-                &params,
-                footprints,
-                &plan.atmosphere,
-                &plan.colour_table,
-                count,
-                0,
-                beams.clone(),
-                running,
-                &NoProgress,
-            )?;
+            let traced =
+                trace_range_running(&params, footprints, &plan.atmosphere, &plan.colour_table, count, 0, beams.clone(), running, progress)?;
             trace_s += t.elapsed().as_secs_f64();
             each(traced, beams);
-            progress.inc(1);
         }
     }
     progress.finish();
