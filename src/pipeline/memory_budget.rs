@@ -186,10 +186,7 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
     // (its inclination turns by 1-2 times the arc), over lines of at most
     // (top - bottom) / sin(I).
     let earth = crate::geometry::earth::Earth::new(plan.earth.radius_km);
-    let field_at = |at: [f64; 2]| match plan.earth.magnetic_pole {
-        Some(pole) if plan.earth.radius_km > 0.0 => crate::physics::geomagnetic_field::MagneticField::dipole(&earth, pole, at),
-        _ => plan.field,
-    };
+    let field_at = |at: [f64; 2]| crate::pipeline::memory_leaves::field_at(plan, &earth, at);
     scene
         .curtains
         .iter()

@@ -100,6 +100,15 @@ pub fn start_columns(fp: &Footprint, threshold: f64, g: f64) -> (Vec<[f64; 2]>, 
 /// in leaves, 32 MB of bits); a larger box is not counted (None).
 pub const MAX_BOX_LEAVES: usize = 1 << 28;
 
+/// The field a beam starting at ground point `at` follows: the dipole's
+/// there (`earth` the plan's), or the plan's uniform field.
+pub fn field_at(plan: &BakePlan, earth: &Earth, at: [f64; 2]) -> MagneticField {
+    match plan.earth.magnetic_pole {
+        Some(pole) if plan.earth.radius_km > 0.0 => MagneticField::dipole(earth, pole, at),
+        _ => plan.field,
+    }
+}
+
 /// Most leaf columns the balls of [`band_leaves`] may visit (some seconds
 /// on one core); a count that would take more is not made (None).
 pub const MAX_BALL_COLUMNS: f64 = 4.0e8;
@@ -131,10 +140,7 @@ pub fn band_leaves(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> Option<usi
     if ball_columns(bands, leaf) > MAX_BALL_COLUMNS {
         return None;
     }
-    let field_at = |at: [f64; 2]| match plan.earth.magnetic_pole {
-        Some(pole) if plan.earth.radius_km > 0.0 => MagneticField::dipole(&earth, pole, at),
-        _ => plan.field,
-    };
+    let field_at = |at: [f64; 2]| field_at(plan, &earth, at);
     // Each column's samples, half a leaf apart along its line: scene
     // point and ball radius.
     let samples = |b: &Band, at: [f64; 2], each: &mut dyn FnMut(DVec3, f64)| {
