@@ -7,7 +7,7 @@
 //! beams, gather and write, and both change slowly as curtains fold and
 //! drift. The plan bakes `samples` frames spread evenly over the range
 //! (first, last and evenly between, by index: [`sample_frames`]) exactly as
-//! a farm task would: each at its own time, one [`crate::pipeline::bake::plan::BakePlan`]
+//! a farm task would: each at its own time, one [`crate::pipeline::plan::BakePlan`]
 //! carried from one to the next (`bake::bake_reusing`, as `aurora bake
 //! --frames` does), and each frame's files staged and committed by the same
 //! writer the sequence uses (`crate::farm::frame_files::stage_frame`) into a scratch folder
@@ -60,8 +60,10 @@
 use crate::io::bake_folder::{self, OutputError};
 use crate::pipeline::bake::identity::BakeIdentity;
 use crate::pipeline::bake::{self, BakeError};
+use crate::pipeline::memory::budget::{self, LeafCount};
+use crate::pipeline::plan::BakePlan;
 use crate::scene::Scene;
-use crate::util::progress::Progress;
+use crate::util::progress::{NoProgress, Progress};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -275,7 +277,7 @@ pub fn plan_task(
         .map_err(|e| OutputError::Write { path: PathBuf::from(bake_folder::USDA_NAME), message: e.to_string() })?;
     let scratch = scratch_folder()?;
     let identity = BakeIdentity::of(scene);
-    let mut carried: Option<bake::plan::BakePlan> = None;
+    let mut carried: Option<crate::pipeline::plan::BakePlan> = None;
     let mut measured = Vec::new();
     let mut first_frame: Option<(Scene, PathBuf, i64)> = None;
     for frame in sample_frames(frames, samples) {
@@ -345,7 +347,7 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
         total_cpu_s: setup_cpu_s + cpu_per_frame_s * n as f64,
         wall_per_frame_s,
         peak_rss_bytes,
-        budget_bytes: crate::pipeline::memory_budget::estimate(scene).total(),
+        budget_bytes: budget::estimate(&BakePlan::new(scene, &NoProgress), LeafCount::Bands).total(),
         threads: rayon::current_num_threads(),
         samples,
         fps: scene.animation.fps,

@@ -43,7 +43,7 @@ use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::CHANNEL_NAMES;
 use crate::physics::deposition::fang::KEV_PER_ION_PAIR;
 use crate::physics::emission::line_colour::{ColourTable, EmissionModel};
-use crate::pipeline::bake::plan::BakePlan;
+use crate::pipeline::plan::BakePlan;
 use crate::pipeline::bake::BakeError;
 use crate::pipeline::beams::{self, BeamStats};
 use crate::pipeline::deposit::StepDeposit;

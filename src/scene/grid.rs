@@ -72,7 +72,7 @@ pub enum Compression {
 
 /// Voxel size: a number of km, or "auto": one voxel about one pixel of the
 /// scene's camera at the nearest aurora, resolved by the bake
-/// (`crate::pipeline::bake::voxel::auto_voxel_size`).
+/// (`crate::pipeline::voxel::auto_voxel_size`).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {

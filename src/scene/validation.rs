@@ -4,7 +4,7 @@
 //! one set of limits ([`Camera::problems`]). Each check also records its
 //! range for [`super::schema`]. Validity is a property of the scene alone,
 //! never of the machine: whether a bake fits in memory is decided at bake
-//! time (`crate::pipeline::memory_budget`).
+//! time (`crate::pipeline::memory::budget`).
 
 use super::{colour::*, curtain::*, grid::*, root::Scene, view::*};
 use std::fmt;
@@ -684,7 +684,7 @@ mod tests {
         let m = Scene::from_toml_str("[beams]\ncount = 0\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("beams.count = 0") && m.contains("[1, "), "{m}");
         // Validity does not depend on the machine: a tiny voxel is valid here and
-        // refused by the bake's memory budget (crate::pipeline::memory_budget).
+        // refused by the bake's memory budget (crate::pipeline::memory::budget).
         assert!(Scene::from_toml_str("[grid]\nvoxel_size = 0.0001\n", "s.toml").is_ok());
         let m = Scene::from_toml_str("[footprint]\nresolution = [100000000, 8]\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("s.toml:2: footprint.resolution") && m.contains("[8, 4096]"), "{m}");

@@ -3,7 +3,6 @@
 //! -B), as they go along B in the north.
 
 use crate::common::small::small_scene;
-use aurora::pipeline::bake::plan;
 use aurora::pipeline::beams::trace_deposits;
 use aurora::pipeline::deposit::StepDeposit;
 use aurora::scene::Scene;
@@ -46,9 +45,9 @@ fn a_southern_curtain_deposits_downward_as_its_northern_mirror() {
         s.earth.magnetic_pole = Some(pole);
         // The pole is one a scene file accepts.
         Scene { earth: s.earth.clone(), ..Scene::default() }.validate("globe", None).unwrap();
-        let fps = plan::footprints(&s);
-        let atm = plan::atmosphere(&s);
-        let colour = plan::colour_table(&s, &atm);
+        let fps = aurora::pipeline::plan::footprints(&s);
+        let atm = aurora::pipeline::plan::atmosphere(&s);
+        let colour = aurora::pipeline::plan::colour_table(&s, &atm);
         trace_deposits(&s, &fps, &atm, &colour, &NoProgress).unwrap()
     };
     let r = aurora::geometry::earth::MEAN_RADIUS_KM;

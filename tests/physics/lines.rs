@@ -8,7 +8,7 @@ use crate::common::small::coarse;
 use crate::common::{aurora, ok, refused, scratch, stderr, with_threads, write};
 use aurora::grid::Grid;
 use aurora::physics::emission::line_table::{line_lifetimes, LINE_KEYS};
-use aurora::pipeline::bake::{self, plan, Bake};
+use aurora::pipeline::bake::{self, Bake};
 use aurora::scene::{AnimationParams, Curtain, Scene, TerrainKind};
 use aurora::util::progress::NoProgress;
 
@@ -122,7 +122,7 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
     s.grid.lines = vec!["6300".into(), "5577".into(), "4278".into()];
     // Only the patch changes in time.
     hold_still(&mut s.animation);
-    let atm = plan::atmosphere(&s);
+    let atm = aurora::pipeline::plan::atmosphere(&s);
     let omega = std::f64::consts::TAU / period;
     // Frame k + 1 of a sequence at n frames a period: t = k P / n.
     let anim = AnimationParams { fps: n as f64 / period, ..s.animation.clone() };

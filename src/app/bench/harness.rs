@@ -44,7 +44,9 @@
 use super::measurement::{Cost, CostUnit, Measurement};
 use super::reduced::volume_camera;
 use crate::grid::Grid;
-use crate::pipeline::bake::plan::{self, BakePlan};
+use crate::pipeline::photons::gather_grid;
+use crate::pipeline::plan::BakePlan;
+use crate::pipeline::voxel::grid_transform;
 use crate::pipeline::bake::{self, BakeError};
 use crate::pipeline::deposit::Photon;
 use crate::render::{self, Image, RenderError, RenderSettings, Volume};
@@ -301,7 +303,7 @@ impl<'a> Bench<'a> {
             return Ok(());
         }
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, secs) = timed(min, runs, || plan::trace(&self.bake, n, 0, 0..n, &NoProgress));
+        let (res, secs) = timed(min, runs, || crate::pipeline::bake::trace::trace(&self.bake, n, 0, 0..n, &NoProgress));
         let ph = res.map_err(BakeError::from)?.photons;
         self.photons.insert(n, (ph, secs));
         Ok(())
@@ -377,11 +379,12 @@ impl<'a> Bench<'a> {
     /// `v` and `method` (radius noise as in the scene), and the gather time.
     pub(super) fn gather_uncached(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
         let b = &self.bake;
-        let radius = plan::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
-        let cutoff = b.photons.cutoff;
+        let p = &b.scene.photons;
+        let radius = crate::pipeline::plan::radius_field(KernelRadius::with_base(r, p), p, b.field.b, b.scene.beams.top_km, b.scene.seed);
+        let cutoff = p.cutoff;
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (photons, _) = self.photons_of(n)?;
-        Ok(timed(min, runs, || plan::gather_with(photons, v, &radius, cutoff, method, &NoProgress)))
+        Ok(timed(min, runs, || gather_grid(photons, grid_transform(v), &radius, cutoff, method, &NoProgress)))
     }
 
     pub(super) fn say(&self, s: &str) {
@@ -396,11 +399,11 @@ impl<'a> Bench<'a> {
         // Same curtains and footprint: the plan reuses the footprints.
         let old = BakePlan::reusing(&s, &self.bake, &NoProgress);
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, trace_s) = timed(min, runs, || plan::trace(&old, n, 0, 0..n, &NoProgress));
+        let (res, trace_s) = timed(min, runs, || crate::pipeline::bake::trace::trace(&old, n, 0, 0..n, &NoProgress));
         let photons = res.map_err(BakeError::from)?.photons;
-        let (v, cutoff) = (self.voxel(), self.bake.photons.cutoff);
+        let (v, cutoff) = (self.voxel(), self.bake.scene.photons.cutoff);
         let (g, gather_s) =
-            timed(min, runs, || plan::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress));
+            timed(min, runs, || gather_grid(&photons, grid_transform(v), &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress));
         Ok((g, trace_s, gather_s))
     }
 

@@ -116,17 +116,6 @@ pub enum BeamError {
 /// and are only warned about).
 pub const MIN_DEPOSITED_FRACTION: f64 = 0.5;
 
-/// Beams per curtain of the deposition pilot
-/// (`crate::pipeline::bake::pilot::check_deposition`): the deposited
-/// fraction's sampling error is at most `sqrt(1/4 / 256)` = 3 %.
-pub const DEPOSIT_PILOT_BEAMS: usize = 256;
-
-/// Beams in each half of the noise pilot (`crate::pipeline::bake::pilot`):
-/// a small share of the default scene's tracing and gathering, and enough
-/// that the noise estimate itself is within a few percent (the sums run
-/// over millions of voxel values).
-pub const PILOT_HALF_BEAMS: usize = 500;
-
 /// A bake whose curtains deposit less than this share of the power their
 /// beams carry is warned about (`aurora: warning: ...`).
 pub const WARN_DEPOSITED_FRACTION: f64 = 0.95;
@@ -205,7 +194,7 @@ pub struct BeamStats {
 /// What tracing needs of the scene, as plain data (no `Scene`): the
 /// curtains, the beam parameters, the seed, the footprint threshold, the
 /// animation time (pulsation, ray drift), the colour noise and the kernel
-/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline::bake::plan`
+/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline::plan`
 /// keeps owned copies.
 #[derive(Clone, Copy, Debug)]
 pub struct TraceParams<'a> {
@@ -391,6 +380,20 @@ pub fn trace_range(
     stats.photons = photons.len();
     progress.finish();
     Ok(Traced { photons, stats, deposits: all_deposits, line_power, beam_photons })
+}
+
+/// The field a beam starting at ground point `at` (km, in the curved
+/// frame) follows: with a dipole pole (`[earth] magnetic_pole`, which
+/// needs a round Earth) the dipole's field there, held along the beam (over
+/// a beam's path, some 50 km across the field at I = 78 deg from 260 to
+/// 100 km, its direction turns by about 50 / R rad = 0.5 degrees);
+/// otherwise the uniform field `uniform`. The trace and the memory budget
+/// (through `crate::pipeline::plan::BakePlan::field_at`) both ask here.
+pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, uniform: MagneticField, at: [f64; 2]) -> MagneticField {
+    match pole {
+        Some(pole) => MagneticField::dipole(earth, pole, at),
+        None => uniform,
+    }
 }
 
 /// Where the beams of a bake of `count` beams start, per curtain: the
@@ -617,16 +620,8 @@ impl Tracer<'_> {
         let start = starts.start(index, &mut r);
         let bufs = std::mem::take(&mut out.bufs);
         let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
-        let t = match self.params.magnetic_pole {
-            // The dipole's field at the beam's start: over a beam's path
-            // (some 50 km across the field at I = 78 deg, from 260 to 100 km)
-            // its direction turns by about 50 / R rad = 0.5 degrees.
-            Some(pole) => {
-                let field = MagneticField::dipole(&self.params.earth, pole, [start.position.x, start.position.y]);
-                trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs)
-            }
-            None => trace_beam_into(ctx, &start, &mut r, bufs),
-        };
+        let field = beam_field(&self.params.earth, self.params.magnetic_pole, ctx.field, [start.position.x, start.position.y]);
+        let t = trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs);
         self.progress.inc(1);
         let mut bufs = BeamBuffers { photons: t.photons, line_power: t.line_power, deposits: t.deposits };
         let deposited: f64 = bufs.deposits[first_deposit..].iter().map(|d| d.power_kev_s).sum();
