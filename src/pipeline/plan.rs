@@ -45,8 +45,8 @@ use crate::pipeline::footprint::curtain_path::Lift;
 use crate::pipeline::footprint::{self, Footprint};
 use crate::pipeline::photons::radius::RadiusField;
 use crate::scene::{
-    AnimationParams, AtmosphereParams, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams, KernelRadius, LineModel,
-    PhotonParams, Scene,
+    AnimationParams, AtmosphereParams, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams, KernelRadius,
+    LineModel, PhotonParams, Scene,
 };
 use crate::util::progress::{NoProgress, Progress};
 use glam::DVec3;

@@ -4,8 +4,8 @@
 
 use crate::common::small::small_scene;
 use aurora::pipeline::bake;
-use aurora::pipeline::plan::BakePlan;
 use aurora::pipeline::bake::stats::StageTimes;
+use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{BeamStarts, Deposition};
 use aurora::util::progress::NoProgress;
 use std::time::Instant;

@@ -44,11 +44,11 @@
 use super::measurement::{Cost, CostUnit, Measurement};
 use super::reduced::volume_camera;
 use crate::grid::Grid;
+use crate::pipeline::bake::{self, BakeError};
+use crate::pipeline::deposit::Photon;
 use crate::pipeline::photons::gather_grid;
 use crate::pipeline::plan::BakePlan;
 use crate::pipeline::voxel::grid_transform;
-use crate::pipeline::bake::{self, BakeError};
-use crate::pipeline::deposit::Photon;
 use crate::render::{self, Image, RenderError, RenderSettings, Volume};
 use crate::scene::{GatherMethod, KernelRadius, Scene, TerrainKind, VoxelSize};
 use crate::util::progress::NoProgress;

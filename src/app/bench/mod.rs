@@ -20,8 +20,8 @@ pub mod report;
 pub mod studies;
 pub mod vdb_write_timing;
 
-use crate::pipeline::plan::BakePlan;
 use crate::pipeline::bake::BakeError;
+use crate::pipeline::plan::BakePlan;
 use crate::scene::{Scene, VoxelSize};
 use crate::util::progress::NoProgress;
 use harness::{Bench, StudyPlan, SweepError};

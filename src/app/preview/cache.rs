@@ -10,11 +10,11 @@
 use super::edit::Stage;
 use crate::grid::Leaf;
 use crate::pipeline::bake::gather::Gathered;
-use crate::pipeline::plan::BakePlan;
 use crate::pipeline::bake::stats::{NoiseEstimate, StageTimes};
 use crate::pipeline::bake::{self, Bake, BakeError};
 use crate::pipeline::beams::BeamStats;
 use crate::pipeline::photons::GatherInput;
+use crate::pipeline::plan::BakePlan;
 use crate::scene::Scene;
 use crate::util::progress::NoProgress;
 use std::time::Instant;
@@ -118,7 +118,15 @@ impl Cache {
         s.gather += t.elapsed().as_secs_f64();
         (times.beams, times.gather) = (s.trace, s.gather);
         let beam_stats = traced.stats.clone();
-        let g = crate::pipeline::bake::gather::gathered(&plan, traced.photons, Vec::new(), traced.stats, voxel.clone(), &count.2, count.1.clone());
+        let g = crate::pipeline::bake::gather::gathered(
+            &plan,
+            traced.photons,
+            Vec::new(),
+            traced.stats,
+            voxel.clone(),
+            &count.2,
+            count.1.clone(),
+        );
         let t = Instant::now();
         let (bake, dropped) = crate::pipeline::bake::finish::finish_keeping(&plan, emission, g, times, t0, nothing)?;
         s.finish = t.elapsed().as_secs_f64();

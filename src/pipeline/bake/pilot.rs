@@ -45,13 +45,11 @@
 //! rules): the fraction's sampling error at 256 beams is at most
 //! `sqrt(1/4 / 256)` = 3 %.
 
-use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use super::result::BakeError;
 use super::stats::NoiseEstimate;
 use crate::grid::Grid;
-use crate::pipeline::beams::{
-    self, dip::curtain_dip, BeamError, TraceParams, MIN_DEPOSITED_FRACTION,
-};
+use crate::pipeline::beams::{self, dip::curtain_dip, BeamError, TraceParams, MIN_DEPOSITED_FRACTION};
+use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::util::progress::NoProgress;
 
 /// Beam-stream index where the pilot's second half starts: far beyond any

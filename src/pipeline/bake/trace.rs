@@ -32,7 +32,17 @@ use std::time::Instant;
 /// on random stream `stream_offset + i`, with the stats of that range
 /// ([`crate::pipeline::beams::trace_range`]).
 pub fn trace(plan: &BakePlan, count: usize, stream_offset: u64, beams: Range<usize>, progress: &dyn Progress) -> Result<Traced, BeamError> {
-    beams::trace_range(&plan.trace_params(), &plan.footprints, &plan.atmosphere, &plan.colour_table, count, stream_offset, beams, false, progress)
+    beams::trace_range(
+        &plan.trace_params(),
+        &plan.footprints,
+        &plan.atmosphere,
+        &plan.colour_table,
+        count,
+        stream_offset,
+        beams,
+        false,
+        progress,
+    )
 }
 
 /// The red trail's samples the bake traces: every sample with the trail

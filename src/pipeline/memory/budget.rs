@@ -47,15 +47,15 @@
 //!
 //! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]).
 
-use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
-use crate::pipeline::beams::start_positions;
-use crate::pipeline::deposit::Photon;
 use super::leaves::{band_leaves, start_columns, Band};
 use super::reach::{
     band_area_leaves, column_km, column_leaves, column_spans, deposit_top_km, dip_deg, path_curve, photons_of_steps, spread_km,
     steps_per_beam, stop_km, world_bounds,
 };
+use crate::pipeline::beams::start_positions;
+use crate::pipeline::deposit::Photon;
 use crate::pipeline::photons::kernel::KernelF32;
+use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::scene::{Deposition, GatherMethod, KernelRadius, VoxelSize};
 
 /// Bytes per leaf of both grids: emission values, density values, two masks
@@ -248,7 +248,8 @@ pub fn box_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
     let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
     let shift = leaf_km / dip.to_radians().tan();
     let spread = spread_km(plan);
-    let own: f64 = plan.scene
+    let own: f64 = plan
+        .scene
         .curtains
         .iter()
         .map(|c| match path_curve(plan, c) {

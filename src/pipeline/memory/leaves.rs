@@ -34,8 +34,8 @@
 //! bends, so it is within the spread and the kernel of the leaves a bake
 //! holds.
 
-use crate::pipeline::plan::BakePlan;
 use crate::pipeline::footprint::Footprint;
+use crate::pipeline::plan::BakePlan;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashSet;
