@@ -295,6 +295,9 @@ impl BakePlan {
             trail: None,
             earth: self.earth(),
             magnetic_pole: s.earth.magnetic_pole,
+            footprints: &self.footprints,
+            atmosphere: &self.atmosphere,
+            colour: &self.colour_table,
         }
     }
 

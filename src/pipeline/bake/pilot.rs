@@ -80,9 +80,9 @@ pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
             fractions.push(1.0);
             continue;
         }
-        let params = TraceParams { curtains: std::slice::from_ref(c), ..plan.trace_params() };
-        let fp = std::slice::from_ref(&plan.footprints[i]);
-        let t = beams::trace_range(&params, fp, &plan.atmosphere, &plan.colour_table, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress)
+        let footprints = std::slice::from_ref(&plan.footprints[i]);
+        let params = TraceParams { curtains: std::slice::from_ref(c), footprints, ..plan.trace_params() };
+        let t = beams::trace_range(&params, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress)
             .map_err(|e| match e {
                 BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
                 e => e,

@@ -32,17 +32,7 @@ use std::time::Instant;
 /// on random stream `stream_offset + i`, with the stats of that range
 /// ([`crate::pipeline::beams::trace_range`]).
 pub fn trace(plan: &BakePlan, count: usize, stream_offset: u64, beams: Range<usize>, progress: &dyn Progress) -> Result<Traced, BeamError> {
-    beams::trace_range(
-        &plan.trace_params(),
-        &plan.footprints,
-        &plan.atmosphere,
-        &plan.colour_table,
-        count,
-        stream_offset,
-        beams,
-        false,
-        progress,
-    )
+    beams::trace_range(&plan.trace_params(), count, stream_offset, beams, false, progress)
 }
 
 /// The red trail's samples the bake traces: every sample with the trail
@@ -87,14 +77,14 @@ pub fn for_each_chunk(
             earlier = simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &animation, lift, &NoProgress);
             &earlier
         };
-        let params = TraceParams { animation: &animation, trail: sample, ..plan.trace_params() };
+        let params = TraceParams { animation: &animation, trail: sample, footprints, ..plan.trace_params() };
         // The stats are the plan's time's, the first sample's.
         let mut other = BeamStats::default();
         for beams in &chunks {
             let running = if k == 0 { &mut *stats } else { &mut other };
             let t = Instant::now();
             let traced =
-                trace_range_running(&params, footprints, &plan.atmosphere, &plan.colour_table, count, 0, beams.clone(), running, progress)?;
+                trace_range_running(&params, count, 0, beams.clone(), running, progress)?;
             trace_s += t.elapsed().as_secs_f64();
             each(traced, beams.clone());
         }

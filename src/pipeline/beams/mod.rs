@@ -224,10 +224,17 @@ pub struct TraceParams<'a> {
     /// `earth.magnetic_pole`: the dipole's field at each beam's start
     /// instead of `beams`' angles.
     pub magnetic_pole: Option<[f64; 2]>,
+    /// One footprint per curtain, at the trace's time: where beams start.
+    pub footprints: &'a [Footprint],
+    /// The neutral atmosphere the beams deposit in, and the colour table
+    /// their photons take.
+    pub atmosphere: &'a Atmosphere,
+    pub colour: &'a ColourTable,
 }
 
 impl<'a> TraceParams<'a> {
-    pub fn of(scene: &'a Scene) -> Self {
+    /// The scene's parameters, with its footprints, atmosphere and colour table.
+    pub fn of(scene: &'a Scene, footprints: &'a [Footprint], atmosphere: &'a Atmosphere, colour: &'a ColourTable) -> Self {
         TraceParams {
             seed: scene.seed,
             curtains: &scene.curtains,
@@ -242,6 +249,9 @@ impl<'a> TraceParams<'a> {
             trail: None,
             earth: Earth::new(scene.earth.radius_km),
             magnetic_pole: scene.earth.magnetic_pole,
+            footprints,
+            atmosphere,
+            colour,
         }
     }
 }
@@ -272,7 +282,7 @@ pub fn trace_all_from(
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, first_beam, 0..n, false, progress)?;
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, first_beam, 0..n, false, progress)?;
     Ok((t.photons, t.stats))
 }
 
@@ -286,7 +296,7 @@ pub fn trace_deposits(
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, 0, 0..n, true, progress)?;
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, 0, 0..n, true, progress)?;
     Ok((t.deposits, t.stats))
 }
 
@@ -339,20 +349,15 @@ const CHUNK_BEAMS: usize = 64;
 /// `[K, N)` and concatenating gives the photons of `[0, N)` byte for byte.
 /// A range's `electron_power_w` is its beams' share of the curtains' power
 /// (all of it for `0..count`).
-#[allow(clippy::too_many_arguments)]
 pub fn trace_range(
     params: &TraceParams,
-    footprints: &[Footprint],
-    atmosphere: &Atmosphere,
-    colour: &ColourTable,
     count: usize,
     stream_offset: u64,
     range: Range<usize>,
     record_deposits: bool,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
-    let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
+    let tracer = Tracer::new(params, stream_offset, record_deposits, progress);
     let mut stats = BeamStats::default();
     let mut all_deposits = vec![Vec::new(); params.curtains.len()];
     stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
@@ -360,7 +365,7 @@ pub fn trace_range(
     progress.start("beams", range.len() as u64);
     let mut traced = Vec::new();
     for (ci, n, local) in curtain_ranges(params, count, &range) {
-        let Some(fp) = footprints.get(ci) else { continue };
+        let Some(fp) = params.footprints.get(ci) else { continue };
         let (power_w, chunks) = tracer.curtain(ci, &params.curtains[ci], fp, n, local.clone())?;
         // The range's share of the curtain's power (all of it for a whole bake).
         stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
@@ -401,13 +406,13 @@ pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, uniform: MagneticField,
 /// stream `i`), km, in the frame of the footprint (curved, before the
 /// Earth's map). A curtain whose footprint has no cell above the threshold
 /// has none (the trace refuses it).
-pub fn start_positions(params: &TraceParams, footprints: &[Footprint], count: usize) -> Vec<Vec<DVec3>> {
+pub fn start_positions(params: &TraceParams, count: usize) -> Vec<Vec<DVec3>> {
     let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
     let counts = apportion(count, &weights);
     params
         .curtains
         .iter()
-        .zip(footprints)
+        .zip(params.footprints)
         .zip(counts)
         .map(|((curtain, fp), n)| {
             let map = StartMap::new(fp, params.threshold);
@@ -547,7 +552,15 @@ struct Tracer<'a> {
     progress: &'a dyn Progress,
 }
 
-impl Tracer<'_> {
+impl<'a> Tracer<'a> {
+    /// A tracer of `params`' beams on streams from `stream_offset`, in the
+    /// uniform field of `beams`' angles (a beam's own: [`beam_field`]).
+    pub(super) fn new(params: &'a TraceParams<'a>, stream_offset: u64, record_deposits: bool, progress: &'a dyn Progress) -> Self {
+        let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
+        let (atmosphere, colour) = (params.atmosphere, params.colour);
+        Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress }
+    }
+
     /// Curtain `ci`'s local beams `local` (of its `n`), in parallel, in index
     /// order (chunks of [`CHUNK_BEAMS`]), and the curtain's whole electron
     /// power, W.

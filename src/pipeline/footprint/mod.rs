@@ -446,21 +446,26 @@ fn place(
     Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width, path: None }
 }
 
+/// The 2014 fluid on a small grid, no end fade: a broad folded band of
+/// hundreds of cells, for the tests of the footprint and of the starts
+/// drawn on it.
+#[cfg(test)]
+pub(crate) fn small_params() -> FootprintParams {
+    FootprintParams {
+        model: FootprintModel::Fluid2014,
+        resolution: [128, 48],
+        steps: 6,
+        pressure_iterations: 30,
+        end_fade_km: 0.0,
+        ..FootprintParams::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The 2014 fluid on a small grid, no end fade.
-    fn small_params() -> FootprintParams {
-        FootprintParams {
-            model: FootprintModel::Fluid2014,
-            resolution: [128, 48],
-            steps: 6,
-            pressure_iterations: 30,
-            end_fade_km: 0.0,
-            ..FootprintParams::default()
-        }
-    }
+    use super::small_params;
 
     #[test]
     fn sheet_footprint_is_normalised_deterministic_continuous_and_fades_at_its_ends() {

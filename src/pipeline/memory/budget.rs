@@ -165,7 +165,7 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
     let n = (1.0 / b.dt).ceil();
     let csda_path = step * (0.5 * n + 4.0 * (n / 12.0).sqrt());
     let shell = if plan.scene.grid.cycles_shell { voxel_km } else { 0.0 };
-    let drawn = draws_starts(plan).then(|| start_positions(&plan.trace_params(), &plan.footprints, b.count));
+    let drawn = draws_starts(plan).then(|| start_positions(&plan.trace_params(), b.count));
     // A start carried to top_km moves by at most top_noise cot(I) (and the
     // merge by half a voxel's diagonal); the dipole's direction at the
     // merged point differs from the start's by at most some 2 d / R rad
