@@ -82,11 +82,10 @@ pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
         }
         let footprints = std::slice::from_ref(&plan.footprints[i]);
         let params = TraceParams { curtains: std::slice::from_ref(c), footprints, ..plan.trace_params() };
-        let t = beams::trace_range(&params, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress)
-            .map_err(|e| match e {
-                BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
-                e => e,
-            })?;
+        let t = beams::trace_range(&params, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress).map_err(|e| match e {
+            BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
+            e => e,
+        })?;
         let f = t.stats.curtains[0].deposited_fraction;
         if f < MIN_DEPOSITED_FRACTION {
             let st = &t.stats;

@@ -83,8 +83,7 @@ pub fn for_each_chunk(
         for beams in &chunks {
             let running = if k == 0 { &mut *stats } else { &mut other };
             let t = Instant::now();
-            let traced =
-                trace_range_running(&params, count, 0, beams.clone(), running, progress)?;
+            let traced = trace_range_running(&params, count, 0, beams.clone(), running, progress)?;
             trace_s += t.elapsed().as_secs_f64();
             each(traced, beams.clone());
         }
