@@ -54,7 +54,7 @@ fn a_southern_curtain_deposits_downward_as_its_northern_mirror() {
     let (north, ns) = run([0.0, 3000.0]);
     let (south, ss) = run([0.0, -(std::f64::consts::PI * r - 3000.0)]);
     for (name, st, deps) in [("north", &ns, &north), ("south", &ss, &south)] {
-        assert!(st.deposited_fraction >= 0.95, "{name}: {st:?}");
+        assert!(st.power.deposited_fraction >= 0.95, "{name}: {st:?}");
         for c in &st.curtains {
             assert!(c.deposited_fraction >= 0.95, "{name}: {c:?}");
         }

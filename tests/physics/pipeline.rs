@@ -28,8 +28,8 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             for w in cuts.windows(2) {
                 let part = aurora::pipeline::bake::trace::trace(&plan, n, 0, w[0]..w[1], &NoProgress).unwrap();
                 beams += part.stats.beams;
-                electron += part.stats.electron_power_w;
-                deposited += part.stats.deposited_power_w;
+                electron += part.stats.power.electron_power_w;
+                deposited += part.stats.power.deposited_power_w;
                 photons.extend(part.photons);
             }
             assert_eq!(photons.len(), whole.photons.len(), "{starts:?} {cuts:?}");
@@ -43,8 +43,8 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             assert!(bytes(&photons) == bytes(&whole.photons), "{starts:?} {cuts:?}: photons differ");
             assert_eq!(beams, n);
             // The power sums only differ by the order of f64 additions.
-            assert!((electron / whole.stats.electron_power_w - 1.0).abs() < 1e-12, "{electron}");
-            assert!((deposited / whole.stats.deposited_power_w - 1.0).abs() < 1e-12, "{deposited}");
+            assert!((electron / whole.stats.power.electron_power_w - 1.0).abs() < 1e-12, "{electron}");
+            assert!((deposited / whole.stats.power.deposited_power_w - 1.0).abs() < 1e-12, "{deposited}");
         }
         // An empty range traces nothing.
         assert!(aurora::pipeline::bake::trace::trace(&plan, n, 0, 5..5, &NoProgress).unwrap().photons.is_empty());

@@ -292,10 +292,10 @@ mod tests {
             // Soft electrons above 260 km: a few percent at most.
             assert!(c.above_top_power_w < 0.05 * c.electron_power_w, "{c:?}");
         }
-        assert!((b.stats.deposited_power_w - st.deposited_power_w).abs() < 1e-9 * st.deposited_power_w);
+        assert!((b.stats.deposited_power_w - st.power.deposited_power_w).abs() < 1e-9 * st.power.deposited_power_w);
         // The photons carry the deposited energy: total luminance > 0 and the
         // stats agree with the per-curtain sums.
-        assert!((st.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.electron_power_w);
+        assert!((st.power.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.power.electron_power_w);
         // CSDA stops by its own rules, and reports what they leave.
         let mut c = small_scene();
         c.beams.deposition = crate::scene::Deposition::Csda;

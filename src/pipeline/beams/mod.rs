@@ -177,16 +177,10 @@ pub struct BeamStats {
     pub ended_energy_spent: usize,
     pub ended_max_steps: usize,
     pub ended_bottom: usize,
-    /// Electron power into the atmosphere over all curtains, W.
-    pub electron_power_w: f64,
-    /// Of which deposited along the beams, W (the rest: see [`CurtainPower`]).
-    pub deposited_power_w: f64,
-    pub backscattered_power_w: f64,
-    pub above_top_power_w: f64,
-    pub undeposited_power_w: f64,
-    /// The share of the power the beams carried into the atmosphere that
-    /// they deposited, over all curtains ([`CurtainPower::deposited_fraction`]).
-    pub deposited_fraction: f64,
+    /// Where the electron power of all curtains went, W: their sums, and
+    /// the share deposited over all of them (written flat in bake.json).
+    #[serde(flatten)]
+    pub power: CurtainPower,
     /// The same per curtain, in scene order.
     pub curtains: Vec<CurtainPower>,
 }
@@ -509,13 +503,14 @@ fn tally_beams(stats: &mut BeamStats, ci: usize, beams: &[BeamOut]) {
 fn sum_curtains(stats: &mut BeamStats) {
     for cp in &mut stats.curtains {
         cp.deposited_fraction = cp.fraction_deposited();
-        stats.electron_power_w += cp.electron_power_w;
-        stats.deposited_power_w += cp.deposited_power_w;
-        stats.backscattered_power_w += cp.backscattered_power_w;
-        stats.above_top_power_w += cp.above_top_power_w;
-        stats.undeposited_power_w += cp.undeposited_power_w;
+        let all = &mut stats.power;
+        all.electron_power_w += cp.electron_power_w;
+        all.deposited_power_w += cp.deposited_power_w;
+        all.backscattered_power_w += cp.backscattered_power_w;
+        all.above_top_power_w += cp.above_top_power_w;
+        all.undeposited_power_w += cp.undeposited_power_w;
     }
-    stats.deposited_fraction = deposited_fraction(stats.deposited_power_w, stats.undeposited_power_w + stats.above_top_power_w);
+    stats.power.deposited_fraction = stats.power.fraction_deposited();
 }
 
 /// A warning for each curtain (and the bake) that deposited less than
