@@ -271,9 +271,7 @@ mod tests {
     /// succeeds, the stage is whole, no temporary is left.
     #[test]
     fn concurrent_stage_writers_never_fail_or_leave_temporaries() {
-        let dir = std::env::temp_dir().join(format!("aurora-shared-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::util::scratch::folder("shared", "stage");
         let frames: Vec<i64> = (1..=500).collect();
         std::thread::scope(|s| {
             for _ in 0..8 {
@@ -286,8 +284,7 @@ mod tests {
         });
         let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
         assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, [USDA_NAME]);
+        assert_eq!(crate::util::scratch::file_names(&dir), [USDA_NAME]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -397,16 +397,14 @@ mod tests {
     /// folder holds what it held before, nothing of this bake.
     #[test]
     fn a_claim_whose_stage_cannot_be_written_leaves_no_record() {
-        let dir = std::env::temp_dir().join(format!("aurora-claim-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = crate::util::scratch::folder("claim", "stage");
         let scene = Scene::default();
         let fields = crate::io::bake_folder::stage_fields(&scene);
         let mut seq = Sequence::open(&dir, BakeIdentity::of(&scene), &[1, 2], 24.0, fields, false, || {}).unwrap();
         std::fs::create_dir(dir.join(USDA_NAME)).unwrap();
         let e = seq.claim().unwrap_err();
         assert!(e.to_string().contains("aurora.usda") && e.is_input(), "{e}");
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, [USDA_NAME]);
+        assert_eq!(crate::util::scratch::file_names(&dir), [USDA_NAME]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -154,25 +154,12 @@ pub fn read_to_string(path: &Path) -> Result<String, InputFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::util::scratch::{folder, mkfifo};
     use std::time::{Duration, Instant};
-
-    fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("aurora-input-file-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn mkfifo(p: &Path) {
-        use std::os::unix::ffi::OsStrExt;
-        let c = std::ffi::CString::new(p.as_os_str().as_bytes()).unwrap();
-        // SAFETY: a NUL-terminated path; the result is checked.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0, "mkfifo {}", p.display());
-    }
 
     #[test]
     fn a_regular_file_and_a_link_to_one_read_as_usual() {
-        let d = scratch("regular");
+        let d = folder("input-file", "regular");
         let p = d.join("a.txt");
         std::fs::write(&p, "hello").unwrap();
         assert_eq!(read_to_string(&p).unwrap(), "hello");
@@ -191,7 +178,7 @@ mod tests {
     /// the race's guard) without blocking on a FIFO that has no writer.
     #[test]
     fn fifos_devices_directories_and_sockets_are_refused_by_both_checks_without_blocking() {
-        let d = scratch("special");
+        let d = folder("input-file", "special");
         let fifo = d.join("fifo");
         mkfifo(&fifo);
         let sock = d.join("sock");
