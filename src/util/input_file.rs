@@ -75,23 +75,16 @@ impl From<InputFileError> for std::io::Error {
 /// [`crate::util::atomic_write`] say it: "regular", "a FIFO", "a directory", ...
 pub fn kind_name(t: FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
-    if t.is_file() {
-        "regular"
-    } else if t.is_symlink() {
-        "a symbolic link"
-    } else if t.is_dir() {
-        "a directory"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    }
+    let kinds = [
+        (FileType::is_file as fn(&FileType) -> bool, "regular"),
+        (FileType::is_symlink, "a symbolic link"),
+        (FileType::is_dir, "a directory"),
+        (FileType::is_char_device, "a character device"),
+        (FileType::is_block_device, "a block device"),
+        (FileType::is_fifo, "a FIFO"),
+        (FileType::is_socket, "a socket"),
+    ];
+    kinds.iter().find(|(is, _)| is(&t)).map_or("not a regular file", |(_, name)| name)
 }
 
 /// Checks, without opening it, that `path` is a regular file (a symbolic
