@@ -135,7 +135,6 @@ impl Sequence {
     /// of the bake `identity` (module docs, "Opening"), whose frames hold
     /// the grids `fields` (VDB name, USD type: `bake_folder::stage_fields`; listed in the stage).
     /// `on_wait` is called once if another process holds the folder's lock.
-    #[allow(clippy::too_many_arguments)]
     pub fn open(
         dir: &Path,
         identity: BakeIdentity,
