@@ -196,7 +196,7 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(Stri
     // Refused as the user's (exit 2) when the name is not a regular file.
     crate::util::atomic_write::check_replaceable(&path)?;
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
-    usd::write_usda_sequence(&path, frames, &stage_vdb_name, &fields, 1000.0, fps)
+    usd::write_usda_sequence(&path, usd::Sequence { frames, name: &stage_vdb_name, fps }, &fields, 1000.0)
         .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
     Ok(path)
 }
@@ -206,7 +206,7 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(Stri
 pub fn sequence_usda_bytes(frames: &[i64], fps: f64, fields: &[(String, &'static str)]) -> Result<u64, std::io::Error> {
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
     let mut sink = std::io::BufWriter::with_capacity(usd::STREAM_BUFFER, ByteCount(0));
-    usd::write_usda_sequence_into(&mut sink, frames, &stage_vdb_name, &fields, 1000.0, fps)?;
+    usd::write_usda_sequence_into(&mut sink, usd::Sequence { frames, name: &stage_vdb_name, fps }, &fields, 1000.0)?;
     Ok(sink.into_inner().map_err(|e| e.into_error())?.0)
 }
 
