@@ -218,7 +218,7 @@ fn render_grid_is_the_line_grid_integrated_along_each_ray() {
     for y in 0..h {
         for x in 0..w {
             let (o, d) = oracle::camera_ray(&s.camera, w, h, x as f64 + 0.5, y as f64 + 0.5);
-            let (tau, l) = oracle::oracle(Some(density), Some(&line), 1.0, 1.0, o, d, f64::INFINITY, 4);
+            let (tau, l) = oracle::oracle(Some(density), Some(&line), 1.0, 1.0, oracle::RaySpan { o, d, t_max: f64::INFINITY }, 4);
             let got = px[y * w + x] as f64;
             assert!(oracle::rel(got, l[0], 1e-3 * peak) < 1e-3, "pixel ({x}, {y}): {got} R vs brute force {} R", l[0]);
             if l[0] > 0.02 * peak {

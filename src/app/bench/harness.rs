@@ -267,6 +267,18 @@ pub fn old_estimators(scene: &Scene) -> Scene {
 /// A result and the wall time it took, seconds.
 pub(super) type Timed<T> = (T, f64);
 
+/// The curve a [`Measurement`] belongs to: its study (e.g. "photon
+/// count"), its method (the curve's label), the swept parameter's name,
+/// the stage whose cost is measured and the error's metric.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Series<'a> {
+    pub(super) study: &'a str,
+    pub(super) method: &'a str,
+    pub(super) param_name: &'a str,
+    pub(super) stage: &'a str,
+    pub(super) metric: &'a str,
+}
+
 impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
     pub fn new(scene: Scene, plan: StudyPlan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
@@ -421,19 +433,11 @@ impl<'a> Bench<'a> {
         Ok((g, m, secs))
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn measure(
-        &self,
-        study: &str,
-        method: &str,
-        param_name: &str,
-        param: f64,
-        stage: &str,
-        cost: Cost,
-        error: f64,
-        metric: &str,
-        scene_setting: bool,
-    ) -> Measurement {
+    /// One point of `series`: the setting `param` costs `cost` with the
+    /// error `error` (`scene_setting`: the scene's own setting), said and
+    /// returned as a [`Measurement`].
+    pub(super) fn measure(&self, series: &Series<'_>, param: f64, cost: Cost, error: f64, scene_setting: bool) -> Measurement {
+        let Series { study, method, param_name, stage, metric } = *series;
         let Cost(value, unit) = cost;
         self.say(&format!(
             "{study}: {method}, {param_name} = {param}: {value:.3} {} ({stage}), error {error:.4e}{}",
