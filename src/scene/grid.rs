@@ -1,62 +1,8 @@
-//! The estimate and its storage: `[photons]` (the kernel and the gather) and
-//! `[grid]` (voxel size, pruning, compression, the high column), each with
-//! its defaults and limits. No checks here (`super::validation`).
+//! `[grid]`: the stored grids (voxel size, pruning, compression, the high
+//! column), with the defaults and limits.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum GatherMethod {
-    /// Gaussian kernel density estimate with a kiddo kd-tree gather.
-    Kdtree,
-    /// Each photon splats its kernel into the voxels it covers.
-    Splat,
-    /// The 2014 report: photons binned in a uniform grid, kernel-weighted
-    /// *average* of colours (no density estimate). For comparison only.
-    Report2014,
-}
-
-/// Volumetric photon mapping: Gaussian kernel density estimation.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct PhotonParams {
-    /// Kernel radius r (the Gaussian's standard deviation), km.
-    pub radius_km: f64,
-    /// The kernel is cut off at this many radii (and renormalised).
-    pub cutoff: f64,
-    /// Relative amplitude of the medium-frequency 2D noise on the radius.
-    pub radius_noise: f64,
-    /// Spatial frequency of that noise, cycles per km.
-    pub radius_noise_freq: f64,
-    pub gather: GatherMethod,
-    /// Kernel shape: each step's power spread along its segment, or at its
-    /// end point (for comparison).
-    pub kernel: KernelShape,
-}
-
-impl Default for PhotonParams {
-    fn default() -> Self {
-        Self {
-            radius_km: 0.5,
-            cutoff: 2.5,
-            radius_noise: 0.3,
-            radius_noise_freq: 0.05,
-            gather: GatherMethod::Splat,
-            kernel: KernelShape::Segment,
-        }
-    }
-}
-
-/// Photon kernel shape (`crate::pipeline::photons`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum KernelShape {
-    /// The Gaussian convolved with each step's segment (photon beams; default).
-    Segment,
-    /// The Gaussian at each step's end point.
-    Point,
-}
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]

@@ -2,11 +2,21 @@
 //! canonical TOML and the hash that identifies a bake's inputs.
 
 use super::airglow::AirglowParams;
-use super::beams::{AtmosphereParams, BeamParams, EarthParams};
+use super::animation::AnimationParams;
+use super::atmosphere::AtmosphereParams;
+use super::background::Background;
+use super::beams::BeamParams;
+use super::camera::Camera;
 use super::colour::ColourParams;
-use super::curtain::{AnimationParams, Curtain, FootprintParams};
-use super::grid::{GridParams, PhotonParams, VoxelSize};
-use super::view::{Background, Camera, RenderParams, SkyParams, Terrain, VolumeParams};
+use super::curtain::Curtain;
+use super::earth::EarthParams;
+use super::footprint::FootprintParams;
+use super::grid::{GridParams, VoxelSize};
+use super::photons::PhotonParams;
+use super::render::RenderParams;
+use super::sky::SkyParams;
+use super::terrain::Terrain;
+use super::volume::VolumeParams;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -97,7 +107,7 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::view::Projection;
+    use crate::scene::camera::Projection;
     #[test]
     fn render_only_scene_takes_defaults_elsewhere() {
         let text = "[camera]\nposition = [0, -5, 0]\nlook_at = [0, 0, 0]\nprojection = \"orthographic\"\northo_height = 4.0\n[render]\nwidth = 8\nheight = 4\nspp = 1\n";

@@ -3,7 +3,10 @@
 //! missing table or key gives) serialised, and ranges are the checks
 //! [`Scene::validate`] makes, recorded as it validates the default
 //! scene (`Validator::allow`): a range changed there changes here.
-use super::{beams::*, colour::*, curtain::*, grid::*, root::Scene, validation::SceneError, view::*};
+use super::{
+    animation::*, atmosphere::*, background::*, beams::*, camera::*, colour::*, curtain::*, earth::*, footprint::*, grid::*, photons::*,
+    render::*, root::Scene, sky::*, terrain::*, validation::SceneError, volume::*,
+};
 use serde_json::{json, Map, Value};
 
 /// What a key accepts (recorded by the checks in [`super::validation`]).

@@ -6,7 +6,7 @@
 //! never of the machine: whether a bake fits in memory is decided at bake
 //! time (`crate::pipeline::memory_budget`).
 
-use super::{colour::*, curtain::*, grid::*, root::Scene, view::*};
+use super::{colour::*, curtain::*, grid::*, root::Scene};
 use std::fmt;
 
 /// The line names `grid.lines` takes, in `crate::physics::emission::line_colour::LINES` order
@@ -39,67 +39,6 @@ pub const MAX_PRUNE: f64 = 0.5;
 /// Largest `render.width` and `render.height` (the one image-size limit:
 /// the scene, the camera and the renderer all check this).
 pub const MAX_IMAGE_SIDE: usize = 16384;
-
-impl Camera {
-    /// The largest `fov_deg` of this projection: 360 for the fisheye (the
-    /// whole sphere), below 180 for a pinhole (degrees, exclusive).
-    pub fn max_fov_deg(&self) -> (f64, bool) {
-        match self.projection {
-            Projection::Fisheye => (360.0, true),
-            _ => (180.0, false),
-        }
-    }
-
-    /// Every camera value outside its range, as (key, value, allowed): the
-    /// one set of camera limits, applied by [`Scene::validate`] and by
-    /// `crate::geometry::camera::CameraModel::new`.
-    pub fn problems(&self) -> Vec<(&'static str, String, String)> {
-        let mut p = Vec::new();
-        let (max_fov, inclusive) = self.max_fov_deg();
-        if !(self.fov_deg > 0.0 && (self.fov_deg < max_fov || (inclusive && self.fov_deg == max_fov))) {
-            let close = if inclusive { "]" } else { ")" };
-            p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
-        }
-        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
-            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
-        }
-        let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
-        if dir.iter().all(|d| *d == 0.0) {
-            p.push(("look_at", format!("{:?}", self.look_at), "must differ from camera.position".into()));
-        }
-        let cross = [
-            dir[1] * self.up[2] - dir[2] * self.up[1],
-            dir[2] * self.up[0] - dir[0] * self.up[2],
-            dir[0] * self.up[1] - dir[1] * self.up[0],
-        ];
-        let up2: f64 = self.up.iter().map(|u| u * u).sum();
-        let dir2: f64 = dir.iter().map(|u| u * u).sum();
-        if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
-            // `up` is the picture's top: across a view along z (straight up
-            // or down) north, [0, 1, 0], is; across any other view, z is.
-            let vertical = dir[2].abs() >= dir[0].abs().max(dir[1].abs());
-            let (along, suggest) = if vertical {
-                (
-                    if dir[2] > 0.0 { "the camera looks straight up" } else { "the camera looks straight down" },
-                    "[0, 1, 0] (north at the top of the picture)",
-                )
-            } else {
-                ("`up` lies along the view", "[0, 0, 1] (the sky at the top of the picture)")
-            };
-            p.push((
-                "up",
-                format!("{:?}", self.up),
-                format!("must not be parallel to the view direction (look_at - position): {along}; set camera.up = {suggest}"),
-            ));
-        }
-        for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
-            if a.iter().any(|x| !x.is_finite()) {
-                p.push((k, format!("{a:?}"), "must be finite".into()));
-            }
-        }
-        p
-    }
-}
 
 // ---------------------------------------------------------------- errors
 
@@ -278,7 +217,7 @@ impl Scene {
             );
         }
 
-        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::curtain::MAX_TRAIL_SAMPLES as f64, true);
+        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::animation::MAX_TRAIL_SAMPLES as f64, true);
 
         let b = &self.beams;
         let t = Some(("beams", 0));
@@ -618,7 +557,7 @@ impl Validator<'_> {
     }
 }
 
-fn fmt_num(x: f64) -> String {
+pub(super) fn fmt_num(x: f64) -> String {
     if x == x.trunc() && x.abs() < 1e15 {
         format!("{}", x as i64)
     } else {
