@@ -1,6 +1,7 @@
 //! `[animation]`: closed-form motion in time and the red trail, with its
 //! defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 /// The most earlier times `animation.trail_samples` may ask for.
@@ -72,3 +73,21 @@ impl Default for AnimationParams {
         }
     }
 }
+
+/// Every key of `[animation]`: name, unit, allowed range and description (`super::keys`).
+pub const ANIMATION_KEYS: &[KeySpec] = &[
+    KeySpec::new("fps", "1/s", Range::Num(Num::open_min(0.0, 1000.0)), "frames per second of a sequence (USD `timeCodesPerSecond`, Blender's scene fps); dome masters are delivered at 30 or 60 (the fulldome Dome Master Show File Format; `--plan` notes another rate)"),
+    KeySpec::new("time_s", "s", Range::Num(Num::closed(0.0, 1e7)), "time of the bake; frame N of `--frames` is baked at `time_s + (N - 1) / fps`"),
+    KeySpec::new("fold_speed_kms", "km/s", Range::Num(Num::closed(-100.0, 100.0)), "phase speed of the folds along the curtain (spirals drift about 4 km/s, surges about 2 km/s); the footprint's three vortex modes travel at 1, -0.5 and 1.6 times it"),
+    KeySpec::new("fold_breathing", "", Range::Num(Num::open_max(0.0, 1.0)), "relative swing of the fold-driving velocity (folds deepen and relax)"),
+    KeySpec::new("fold_breathing_period_s", "s", Range::Num(Num::open_min(0.0, 1e6)), "period of that swing"),
+    KeySpec::new("bend_speed_kms", "km/s", Range::Num(Num::closed(-100.0, 100.0)), "speed at which the bend curve travels along the curtain"),
+    KeySpec::new("bend_change_hz", "1/s", Range::Num(Num::closed(0.0, 100.0)), "rate at which the bend curve changes shape"),
+    KeySpec::new("drift_km", "km", Range::Num(Num::closed(0.0, 1e3)), "amplitude of the curtain's drift across its axis, `drift_km sin(2 pi t / drift_period_s)`: bounded, so it never leaves the view"),
+    KeySpec::new("drift_period_s", "s", Range::Num(Num::open_min(0.0, 1e6)), "period of the drift"),
+    KeySpec::new("ray_speed_kms", "km/s", Range::Num(Num::closed(-100.0, 100.0)), "speed of the rays (the start-height and colour noise) along the curtain (up to about 25 km/s observed)"),
+    KeySpec::new("pulsation", "", Range::Num(Num::closed(0.0, 1.0)), "depth of pulsating patches (0 = off): each patch's electron flux swings between `1 - pulsation` and 1 times its value"),
+    KeySpec::new("pulsation_patch_km", "km", Range::Num(Num::open_min(0.0, 1e4)), "size of a pulsating patch"),
+    KeySpec::new("pulsation_period_s", "s", Range::Span { min: 0.0, max: 1e4 }, "range each patch's period is drawn from (observed: a few s to 20 s, mostly 6-10 s)"),
+    KeySpec::new("trail_samples", "", Range::Int { min: 0, max: MAX_TRAIL_SAMPLES as i64 }, "the red trail: earlier times of the motion the O(1D) lines (630.0, 636.4 nm) sum, weighted by O(1D)'s decay at each deposit's altitude, so moving curtains leave red behind (0 = off; each sample traces the beams once more)"),
+];

@@ -1,6 +1,7 @@
 //! `[atmosphere]`: the neutral atmosphere and the ambient ionosphere the
 //! electrons fall through, with the defaults.
 
+use super::keys::{KeySpec, Range};
 use serde::{Deserialize, Serialize};
 
 /// The neutral atmosphere model (`crate::physics::atmosphere`).
@@ -51,3 +52,10 @@ impl Default for AtmosphereParams {
         Self { model: AtmosphereModel::Us1976, ionosphere: Ionosphere::ClosedForm, data: None, base_dir: None }
     }
 }
+
+/// Every key of `[atmosphere]`: name, unit, allowed range and description (`super::keys`).
+pub const ATMOSPHERE_KEYS: &[KeySpec] = &[
+    KeySpec::new("model", "", Range::Word(&["us1976", "nrlmsis21"]), "the neutral atmosphere: `us1976` (U.S. Standard Atmosphere 1976, 50-700 km, public domain, compiled in: `data/us1976.csv` from `tools/reference/ussa1976_table.py`) or `nrlmsis21` (NRLMSIS 2.1 at 67 N 20 E, 2020-01-15 00 UT, F10.7 150, Ap 15, made by `tools/reference/msis_table.py`; research, academic and non-profit use only, so read from `nrlmsis21.csv` in the data folder, never compiled in; docs/data.md)"),
+    KeySpec::new("ionosphere", "", Range::Word(&["closed-form", "glow"]), "the ambient night ionosphere and NO the chemistry needs: `closed-form` (Te = Ti = Tn, Chapman F and E layers, SNOE's NO peak; compiled in; `src/physics/chemistry/ambient.rs`) or `glow` (NCAR GLOW 4.0.4's IRI ionosphere and NOEM NO at the NRLMSIS table's place and time, the data the chemistry was validated on; GLOW's licence forbids sale, so read from `ionosphere.csv` in the data folder; docs/data.md)"),
+    KeySpec::new("data", "", Range::Any, "the folder holding `nrlmsis21.csv` and `ionosphere.csv`, relative to the scene file; unset, the `AURORA_DATA` environment variable names it, else the source tree's `data/` of the build. A table asked for and not there is refused naming the file and its terms (exit status 2)"),
+];

@@ -1,6 +1,7 @@
 //! `[beams]`: how many electron beams, how they deposit their energy and
 //! where they start, with the defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 /// Electron beams traced down the geomagnetic field (Baranoski et al. 2000).
@@ -81,3 +82,20 @@ pub enum BeamStarts {
     /// Independent random points (for comparison).
     Random,
 }
+
+/// Every key of `[beams]`: name, unit, allowed range and description (`super::keys`).
+pub const BEAMS_KEYS: &[KeySpec] = &[
+    KeySpec::new("count", "", Range::Int { min: 1, max: 100_000_000 }, "beams over all curtains; with `target_noise`, the most it may use"),
+    KeySpec::new("target_noise", "", Range::Num(Num::closed(0.0, 1.0)), "relative RMS noise of the emission grid to aim for (0 = off: use `count`): a pilot of 2 x 500 and 2 x 125 beams measures the scene's noise and sets the beam count from the law `noise^2 = a/N + b/N^1.5` fitted to them, at most `count`; `bake.json` `stats.noise` says what it measured and chose"),
+    KeySpec::new("top_km", "km", Range::Num(Num::closed(80.0, 1000.0)), "altitude where beams start"),
+    KeySpec::new("top_noise_km", "km", Range::Num(Num::closed(0.0, 100.0)), "amplitude of the high-frequency 1D noise on the start height"),
+    KeySpec::new("top_noise_freq", "1/km", Range::Num(Num::closed(0.0, 1e3)), "spatial frequency of that noise along the curtain"),
+    KeySpec::new("alpha_d_deg", "deg", Range::Num(Num::open_max(0.0, 90.0)), "upper bound alpha_D of the deflection angle; a curtain whose field dips no more than alpha_D below the horizon where its beams start is refused (its electrons could go up or sideways)").note("degrees: at 90 a beam no longer moves along B"),
+    KeySpec::new("delta_alpha_deg", "deg", Range::Rule("in [0, beams.alpha_d_deg]"), "width of the deflection range: alpha is uniform in [alpha_D - delta, alpha_D]"),
+    KeySpec::new("length_km", "km", Range::Num(Num::POSITIVE), "beam length L: a step is s = L dt u along B (u uniform)"),
+    KeySpec::new("dt", "", Range::Num(Num::closed(1e-6, 1.0)), "step parameter: at most 1/dt deflections per beam (`csda` only: Fang beams go on until their deposition is complete)"),
+    KeySpec::new("b_inclination_deg", "deg", Range::Num(Num::closed(10.0, 90.0)), "the geomagnetic field's dip below the horizon (90 = vertical)"),
+    KeySpec::new("b_declination_deg", "deg", Range::Num(Num::FINITE), "azimuth of the field's horizontal part, from +y towards +x"),
+    KeySpec::new("deposition", "", Range::Word(&["expected", "sampled", "csda"]), "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
+    KeySpec::new("starts", "", Range::Word(&["stratified", "random"]), "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
+];

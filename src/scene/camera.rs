@@ -1,6 +1,7 @@
 //! `[camera]`: the camera of the reference render and of the Blender scene,
 //! with its defaults and its one set of limits ([`Camera::problems`]).
 
+use super::keys::{KeySpec, Num, Range};
 use super::validation::fmt_num;
 use serde::{Deserialize, Serialize};
 
@@ -64,8 +65,10 @@ impl Camera {
             let close = if inclusive { "]" } else { ")" };
             p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
         }
-        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
-            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
+        if let Some((value, allowed)) =
+            CAMERA_KEYS.iter().find(|k| k.name == "ortho_height").and_then(|k| k.number_problem(self.ortho_height))
+        {
+            p.push(("ortho_height", value, allowed));
         }
         let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
         if dir.iter().all(|d| *d == 0.0) {
@@ -104,3 +107,13 @@ impl Camera {
         p
     }
 }
+
+/// Every key of `[camera]`: name, unit, allowed range and description (`super::keys`).
+pub const CAMERA_KEYS: &[KeySpec] = &[
+    KeySpec::new("position", "km", Range::Rule("finite"), "camera position"),
+    KeySpec::new("look_at", "km", Range::Rule("finite, differs from camera.position"), "the point the camera looks at"),
+    KeySpec::new("up", "", Range::Rule("finite, not parallel to look_at - position"), "up direction"),
+    KeySpec::new("projection", "", Range::Word(&["perspective", "orthographic", "fisheye", "equirectangular"]), "`perspective`, `orthographic`, `fisheye` (equidistant, as Cycles' `FISHEYE_EQUIDISTANT`) or `equirectangular` (360 x 180 degrees, as Cycles' `EQUIRECTANGULAR`)"),
+    KeySpec::new("fov_deg", "deg", Range::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\""), "vertical field of view (perspective); for `fisheye` the angle across the image circle (180 = a planetarium dome master); unused by `equirectangular`"),
+    KeySpec::new("ortho_height", "km", Range::Num(Num::POSITIVE), "height of the view (orthographic)"),
+];

@@ -1,6 +1,8 @@
 //! `[[curtain]]`: where one curtain's footprint lies and how hard it is
 //! driven, with the defaults a missing key takes.
 
+use super::keys::{KeySpec, Num, Range};
+use super::validation::PATH_RULE;
 use serde::{Deserialize, Serialize};
 
 /// Serialised through [`CurtainToml`], which leaves out `center`, `length`
@@ -97,3 +99,19 @@ impl From<Curtain> for CurtainToml {
         }
     }
 }
+
+/// Every key of `[curtain]`: name, unit, allowed range and description (`super::keys`).
+pub const CURTAIN_KEYS: &[KeySpec] = &[
+    KeySpec::new("center", "km", Range::Each { min: -1e4, max: 1e4, what: "each coordinate", suffix: " km" }, "centre of the footprint on the ground plane, `[x, y]`"),
+    KeySpec::new("path", "km", Range::Rule(PATH_RULE), "the curtain along a smooth curve (centripetal Catmull-Rom) through these `[x, y]` points: the ground track of its lower border (110 km), lifted up the field to the beams' start; replaces `center`, `length` and `rotation_deg` (giving both is an error)"),
+    KeySpec::new("length", "km", Range::Num(Num::open_min(0.0, 1e4)), "length of the footprint box along the curtain's axis"),
+    KeySpec::new("width", "km", Range::Num(Num::open_min(0.0, 1e4)), "width of the footprint box across the axis (room for folds and bends)"),
+    KeySpec::new("rotation_deg", "deg", Range::Num(Num::FINITE), "direction of the curtain's axis, counter-clockwise from +x"),
+    KeySpec::new("energy_flux", "mW/m^2", Range::Num(Num::open_min(0.0, 1e4)), "peak precipitating electron energy flux (1 mW/m^2 = 1 erg cm^-2 s^-1)"),
+    KeySpec::new("char_energy_kev", "keV", Range::Num(Num::closed(0.05, 100.0)), "characteristic energy E0 of the Maxwellian electron spectrum: harder electrons reach lower"),
+    KeySpec::new("soft_fraction", "", Range::Num(Num::closed(0.0, 1.0)), "share of the energy flux in a soft Maxwellian component (the electrons that light the red tops above 200 km)"),
+    KeySpec::new("soft_energy_kev", "keV", Range::Num(Num::closed(0.01, 100.0)), "characteristic energy of the soft component"),
+    KeySpec::new("beam_weight", "", Range::Num(Num::open_min(0.0, 1e9)), "share of the scene's beams given to this curtain (a relative weight)"),
+    KeySpec::new("bend_km", "km", Range::Num(Num::closed(0.0, 1e4)), "amplitude of the noise curve that bends the band (keep it below `width / 2`)"),
+    KeySpec::new("seed", "", Range::Any, "seed offset, so that curtains differ"),
+];

@@ -1,6 +1,7 @@
 //! `[footprint]`: the vortex sheet or the 2014 report's fluid that shapes
 //! each curtain's footprint, with its defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 /// How a footprint is made (`crate::pipeline::footprint`).
@@ -107,3 +108,30 @@ impl Default for FootprintParams {
         }
     }
 }
+
+/// Every key of `[footprint]`: name, unit, allowed range and description (`super::keys`).
+pub const FOOTPRINT_KEYS: &[KeySpec] = &[
+    KeySpec::new("model", "", Range::Word(&["sheet", "fluid2014"]), "`sheet`: a vortex sheet rolled up by the Kelvin-Helmholtz instability, with rays along it; `fluid2014`: the 2014 report's band folded by a stable fluid (the `steps` to `density_waves` keys)"),
+    KeySpec::new("resolution", "cells", Range::Each { min: 8.0, max: 4096.0, what: "each side", suffix: "" }, "grid across the curtain and least cells along it (the sheet's cells are at most as long as wide)"),
+    KeySpec::new("steps", "", Range::Int { min: 0, max: 10_000 }, "fluid2014: simulation steps"),
+    KeySpec::new("dt", "cells", Range::Num(Num::open_min(0.0, 1e6)), "fluid2014: time step (semi-Lagrangian advection: stable for any `dt`)"),
+    KeySpec::new("pressure_iterations", "", Range::Int { min: 0, max: 10_000 }, "fluid2014: iterations of the pressure projection"),
+    KeySpec::new("band_fraction", "", Range::Num(Num::open_min(0.0, 1.0)), "fluid2014: initial band thickness, as a fraction of the footprint width"),
+    KeySpec::new("velocity_waves", "", Range::Num(Num::closed(0.0, 1e3)), "fluid2014: sine periods of the initial velocity along the band"),
+    KeySpec::new("velocity_amplitude", "cells per unit time", Range::Num(Num::closed(0.0, 1e6)), "fluid2014: amplitude of the initial velocity"),
+    KeySpec::new("density_waves", "", Range::Num(Num::closed(0.0, 1e3)), "fluid2014: sine periods of the initial density modulation along the band"),
+    KeySpec::new("bend_wavelength", "curtain lengths", Range::Num(Num::open_min(0.0, 1e3)), "wavelength of the noise curve that bends the band"),
+    KeySpec::new("threshold", "", Range::Num(Num::open_min(0.0, 1.0)), "footprint density (of a peak of 1) below which no beam starts"),
+    KeySpec::new("end_fade_km", "km", Range::Num(Num::closed(0.0, 1e4)), "length over which the footprint fades to 0 at each end of the curtain (0: straight ends)"),
+    KeySpec::new("sheet_spacing_km", "km", Range::Num(Num::closed(0.01, 10.0)), "sheet: spacing of its vortex markers at the start"),
+    KeySpec::new("sheet_smoothing_km", "km", Range::Num(Num::closed(0.01, 100.0)), "sheet: smoothing length of the vortex-blob kernel (no curls below it)"),
+    KeySpec::new("sheet_amplitude", "", Range::Num(Num::closed(0.0, 1.0)), "sheet: amplitude of the initial displacement spectrum (its slope at 200 km wavelengths and more)"),
+    KeySpec::new("sheet_rollup_km", "km", Range::Num(Num::closed(0.0, 1e3)), "sheet: how far it rolls up (the shear across it times the time)"),
+    KeySpec::new("sheet_steps", "", Range::Int { min: 1, max: 10_000 }, "sheet: Runge-Kutta steps of the roll-up"),
+    KeySpec::new("sheet_thickness_km", "km", Range::Num(Num::closed(0.01, 100.0)), "sheet: full width at half maximum across it"),
+    KeySpec::new("ray_spacing_km", "km", Range::Num(Num::closed(0.1, 1e4)), "sheet: mean spacing of the rays along it (irregular)"),
+    KeySpec::new("ray_width_km", "km", Range::Num(Num::closed(0.01, 100.0)), "sheet: width of a ray along it (Gaussian sigma)"),
+    KeySpec::new("ray_contrast", "", Range::Num(Num::closed(1.0, 1e3)), "sheet: brightest ray over the faintest (log-uniform between)"),
+    KeySpec::new("glow", "", Range::Num(Num::closed(0.0, 100.0)), "sheet: diffuse glow between the rays, a 3 km blur of the sheet, of its peak"),
+    KeySpec::new("uniform", "", Range::Any, "for validation only: density 1 over the whole footprint box (no fluid, no band, no bend), so every beam carries the curtain's `energy_flux`; `tests/python/test_glow.py` compares such a curtain with NCAR GLOW"),
+];

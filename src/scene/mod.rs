@@ -36,6 +36,7 @@ pub mod earth;
 pub mod footprint;
 pub mod grid;
 pub mod kernel;
+pub mod keys;
 mod load;
 pub mod overrides;
 pub mod photons;

@@ -1,5 +1,6 @@
 //! `[photons]`: the photon kernel and the gather, with the defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -54,3 +55,13 @@ pub enum KernelShape {
     /// The Gaussian at each step's end point.
     Point,
 }
+
+/// Every key of `[photons]`: name, unit, allowed range and description (`super::keys`).
+pub const PHOTONS_KEYS: &[KeySpec] = &[
+    KeySpec::new("radius_km", "km", Range::Num(Num::POSITIVE), "kernel radius r, the Gaussian's standard deviation"),
+    KeySpec::new("cutoff", "r", Range::Num(Num::closed(1.0, 6.0)), "the kernel is cut off at `cutoff` x r and renormalised"),
+    KeySpec::new("radius_noise", "", Range::Num(Num::closed(0.0, 0.9)), "relative amplitude of the medium-frequency 2D noise on the radius"),
+    KeySpec::new("radius_noise_freq", "1/km", Range::Num(Num::closed(0.0, 1e3)), "spatial frequency of that noise"),
+    KeySpec::new("gather", "", Range::Word(&["kdtree", "splat", "report2014"]), "`splat` (each photon adds its kernel to the voxels it covers), `kdtree` (each voxel gathers from a kd-tree: the same field) or `report2014` (the 2014 report's kernel-weighted average of colours, not a density estimate, for comparison)"),
+    KeySpec::new("kernel", "", Range::Word(&["segment", "point"]), "`segment` (each beam step's power spread along the step: the Gaussian convolved with the segment) or `point` (at the step's end, for comparison)"),
+];

@@ -1,5 +1,7 @@
 //! `[render]`: the reference renderer's image, with its defaults.
 
+use super::keys::{KeySpec, Num, Range};
+use super::validation::{MAX_IMAGE_SIDE, MAX_SHUTTER_S, MAX_SPP};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -39,3 +41,14 @@ pub enum ViewTransform {
     #[default]
     Agx,
 }
+
+/// Every key of `[render]`: name, unit, allowed range and description (`super::keys`).
+pub const RENDER_KEYS: &[KeySpec] = &[
+    KeySpec::new("width", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image width"),
+    KeySpec::new("height", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image height (row 0 is the top)"),
+    KeySpec::new("spp", "", Range::Int { min: 1, max: MAX_SPP as i64 }, "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
+    KeySpec::new("exposure", "stops", Range::Num(Num::closed(-50.0, 50.0)), "PNG only: the view transform of 2^exposure x the linear image"),
+    KeySpec::new("png_bits", "bits", Range::Of(&[8, 16]), "PNG only: bits per channel, 8 or 16 (16 for delivery: dome masters, whose faint sky gradients band at 8)"),
+    KeySpec::new("view_transform", "", Range::Word(&["standard", "agx"]), "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction) or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),
+    KeySpec::new("shutter_s", "s", Range::Num(Num::closed(0.0, MAX_SHUTTER_S)), "motion blur of `aurora render`: each camera sample reads the fields at `p - v(p) tau`, tau uniform over the shutter centred on the frame, as Cycles does; needs the bake's `v` (`grid.velocity = true`); 0 is sharp"),
+];

@@ -12,6 +12,7 @@ use super::curtain::Curtain;
 use super::earth::EarthParams;
 use super::footprint::FootprintParams;
 use super::grid::{GridParams, VoxelSize};
+use super::keys::{KeySpec, Range};
 use super::photons::PhotonParams;
 use super::render::RenderParams;
 use super::sky::SkyParams;
@@ -103,6 +104,10 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     }
     h
 }
+
+/// Every key of the top level: name, unit, allowed range and description (`super::keys`).
+pub const ROOT_KEYS: &[KeySpec] =
+    &[KeySpec::new("seed", "", Range::Any, "master seed: every random stream is derived from it and an index")];
 
 #[cfg(test)]
 mod tests {

@@ -1,5 +1,6 @@
 //! `[terrain]`: the ground the aurora lights, with the defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
@@ -47,3 +48,35 @@ impl Default for Terrain {
         }
     }
 }
+
+/// Every key of `[terrain]`: name, unit, allowed range and description (`super::keys`).
+pub const TERRAIN_KEYS: &[KeySpec] = &[
+    KeySpec::new("kind", "", Range::Word(&["none", "plane", "heightfield"]), "`none`, `plane` (z = `height`) or `heightfield`"),
+    KeySpec::new("height", "km", Range::Num(Num::FINITE), "base height of the plane or heightfield"),
+    KeySpec::new(
+        "albedo",
+        "",
+        Range::Each { min: 0.0, max: 1.0, what: "components", suffix: "" },
+        "Lambertian albedo, linear Rec.709; the default 0.85 is fresh snow in the visible (Warren & Wiscombe 1980)",
+    ),
+    KeySpec::new(
+        "mountain_height",
+        "km",
+        Range::Num(Num::closed(0.0, 100.0)),
+        "heightfield: peak height of the procedural fBm mountains above `height`",
+    ),
+    KeySpec::new("mountain_scale", "km", Range::Num(Num::POSITIVE), "heightfield: horizontal feature size of the mountains"),
+    KeySpec::new(
+        "heightmap",
+        "",
+        Range::Any,
+        "heightfield: a 16- or 8-bit greyscale PNG instead of the procedural mountains (relative to the scene file)",
+    ),
+    KeySpec::new(
+        "extent",
+        "km",
+        Range::Rule("[x0, y0, x1, y1] with x1 > x0 and y1 > y0"),
+        "heightfield: the ground covered, `[x0, y0, x1, y1]`",
+    ),
+    KeySpec::new("seed", "", Range::Any, "heightfield: seed of the procedural mountains"),
+];

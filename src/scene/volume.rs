@@ -1,5 +1,6 @@
 //! `[volume]`: the volume material's scales, with the defaults.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -16,3 +17,14 @@ impl Default for VolumeParams {
         Self { density_scale: 1.0, emission_scale: 1.0 }
     }
 }
+
+/// Every key of `[volume]`: name, unit, allowed range and description (`super::keys`).
+pub const VOLUME_KEYS: &[KeySpec] = &[
+    KeySpec::new("density_scale", "", Range::Num(Num::closed(0.0, 1e9)), "extinction = `density_scale` x the `density` grid"),
+    KeySpec::new(
+        "emission_scale",
+        "",
+        Range::Num(Num::closed(0.0, 1e9)),
+        "emitted radiance per km = `emission_scale` x the `emission` grid",
+    ),
+];
