@@ -1,8 +1,8 @@
 //! `[camera]`: the camera of the reference render and of the Blender scene,
 //! with its defaults and its one set of limits ([`Camera::problems`]).
 
+use super::keys::fmt_num;
 use super::keys::{KeySpec, Num, Range};
-use super::validation::fmt_num;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]

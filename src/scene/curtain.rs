@@ -2,7 +2,6 @@
 //! driven, with the defaults a missing key takes.
 
 use super::keys::{KeySpec, Num, Range};
-use super::validation::PATH_RULE;
 use serde::{Deserialize, Serialize};
 
 /// Serialised through [`CurtainToml`], which leaves out `center`, `length`
@@ -99,6 +98,10 @@ impl From<Curtain> for CurtainToml {
         }
     }
 }
+
+/// What `curtain.path` accepts.
+pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
+     total length at most 1e4 km; replaces center, length and rotation_deg";
 
 /// Every key of `[curtain]`: name, unit, allowed range and description (`super::keys`).
 pub const CURTAIN_KEYS: &[KeySpec] = &[

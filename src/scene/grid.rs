@@ -2,7 +2,6 @@
 //! column), with the defaults and limits.
 
 use super::keys::{KeySpec, Num, Range};
-use super::validation::MAX_PRUNE;
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
@@ -91,6 +90,10 @@ pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
 /// within 0.25 % of the full-precision unpruned file's, the dome master
 /// within 0.37 %; 4 bits give 51 MB, 0.29 % and 0.41 %.
 pub const DEFAULT_MANTISSA_BITS: u32 = 5;
+
+/// Largest `grid.prune`: half the light may go, no more (beyond that the
+/// "error budget" is no longer a small error).
+pub const MAX_PRUNE: f64 = 0.5;
 
 /// Largest `grid.mantissa_bits`: a full float's mantissa
 /// (`vdb::mantissa::FLOAT_MANTISSA_BITS`, which a test there checks).

@@ -15,11 +15,13 @@
 //! [`atmosphere`], [`earth`], [`colour`], [`photons`], [`grid`],
 //! [`camera`], [`render`], [`volume`], [`background`], [`sky`],
 //! [`airglow`] and [`terrain`]; [`root`] (the [`Scene`] that holds them),
-//! reading (`load`), [`overrides`] (`--set KEY=VALUE` applied to the
-//! document before validation), [`validation`] (the range checks, their
-//! limits and the error types), [`wording`] (the parser's messages in
+//! [`keys`] (what a key is: name, unit, range, description) and [`tables`]
+//! (every table with its keys, the one list the checks, the schema and the
+//! docs walk), reading (`load`), [`overrides`] (`--set KEY=VALUE` applied
+//! to the document before validation), [`validation`] (the range checks
+//! from the tables, the rules between keys and the error types), [`wording`] (the parser's messages in
 //! plain words, did-you-mean), [`schema`] (the `--schema` JSON drawn from
-//! those checks), [`presets`] (the built-in scenes) and [`kernel`] (the
+//! the tables), [`presets`] (the built-in scenes) and [`kernel`] (the
 //! photon kernel's radius range). Callers outside use the re-exports here
 //! (`crate::scene::Camera`); files inside import from the file that
 //! defines an item.
@@ -45,6 +47,7 @@ pub mod render;
 pub mod root;
 pub mod schema;
 pub mod sky;
+pub mod tables;
 pub mod terrain;
 pub mod validation;
 pub mod volume;
@@ -68,8 +71,5 @@ pub use render::*;
 pub use root::{fnv1a, Scene, OFF_WHEN_ZERO};
 pub use sky::*;
 pub use terrain::*;
-pub use validation::{
-    check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED, MAX_SHADOW_SAMPLES,
-    MAX_SPP, MAX_THREADS,
-};
+pub use validation::{check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_SEED, MAX_SHADOW_SAMPLES, MAX_THREADS};
 pub use volume::*;

@@ -1,7 +1,6 @@
 //! `[render]`: the reference renderer's image, with its defaults.
 
 use super::keys::{KeySpec, Num, Range};
-use super::validation::{MAX_IMAGE_SIDE, MAX_SHUTTER_S, MAX_SPP};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -41,6 +40,17 @@ pub enum ViewTransform {
     #[default]
     Agx,
 }
+
+/// Largest `render.width` and `render.height` (the one image-size limit:
+/// the scene, the camera and the renderer all check this).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+/// Largest `render.spp` (also the `--spp` flag's).
+pub const MAX_SPP: u64 = 65_536;
+
+/// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
+/// far beyond a frame (the aurora's fastest rays cross 250 km in it).
+pub const MAX_SHUTTER_S: f64 = 10.0;
 
 /// Every key of `[render]`: name, unit, allowed range and description (`super::keys`).
 pub const RENDER_KEYS: &[KeySpec] = &[

@@ -3,7 +3,7 @@
 //! missing table or key gives) serialised, and ranges are the keys' tables
 //! ([`super::keys`]) that [`Scene::validate`] checks: a range changed there
 //! changes here.
-use super::keys::TABLES;
+use super::tables::TABLES;
 use super::{
     animation::*, atmosphere::*, background::*, beams::*, camera::*, colour::*, curtain::*, earth::*, footprint::*, grid::*, photons::*,
     render::*, root::Scene, sky::*, terrain::*, validation::SceneError, volume::*,
@@ -90,7 +90,7 @@ pub fn schema_json() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{schema, *};
+    use crate::scene::schema;
     #[test]
     fn schema_has_every_key_with_default_and_range() {
         let s = schema::schema();

@@ -6,7 +6,8 @@
 //! never of the machine: whether a bake fits in memory is decided at bake
 //! time (`crate::pipeline::memory_budget`).
 
-use super::keys::{KeySpec, TABLES};
+use super::keys::KeySpec;
+use super::tables::TABLES;
 use super::{colour::*, curtain::*, root::Scene};
 use std::fmt;
 
@@ -18,12 +19,6 @@ pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
 /// Largest seed: TOML integers are signed 64-bit, so a scene (and the
 /// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
 pub const MAX_SEED: u64 = i64::MAX as u64;
-/// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
-/// far beyond a frame (the aurora's fastest rays cross 250 km in it).
-pub const MAX_SHUTTER_S: f64 = 10.0;
-
-/// Largest `render.spp` (also the `--spp` flag's).
-pub const MAX_SPP: u64 = 65_536;
 /// Largest `--shadow-samples` per terrain hit per pixel sample.
 pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 /// Largest colour-map component (linear RGB per unit deposited power, about
@@ -32,14 +27,6 @@ pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 pub const MAX_COLORMAP_VALUE: f64 = 1e6;
 /// Largest `--threads`.
 pub const MAX_THREADS: u64 = 1_024;
-
-/// Largest `grid.prune`: half the light may go, no more (beyond that the
-/// "error budget" is no longer a small error).
-pub const MAX_PRUNE: f64 = 0.5;
-
-/// Largest `render.width` and `render.height` (the one image-size limit:
-/// the scene, the camera and the renderer all check this).
-pub const MAX_IMAGE_SIDE: usize = 16384;
 
 // ---------------------------------------------------------------- errors
 
@@ -222,10 +209,6 @@ impl Scene {
     }
 }
 
-/// What `curtain.path` accepts.
-pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
-     total length at most 1e4 km; replaces center, length and rotation_deg";
-
 /// Keys a `path` replaces.
 const STRAIGHT_KEYS: [&str; 3] = ["center", "length", "rotation_deg"];
 
@@ -367,14 +350,6 @@ impl Validator<'_> {
         if length > 1e4 {
             self.push(t, "path", format!("{length:.1} km long"), "must be at most 1e4 km long".into());
         }
-    }
-}
-
-pub(super) fn fmt_num(x: f64) -> String {
-    if x == x.trunc() && x.abs() < 1e15 {
-        format!("{}", x as i64)
-    } else {
-        format!("{x}")
     }
 }
 

@@ -5,9 +5,9 @@
 //! nearest known name by edit distance (Levenshtein 1966, with adjacent
 //! transpositions counted once as in Damerau 1964): "did you mean
 //! `energy_flux`?". Pure functions of the message, the key and its table
-//! ([`super::keys`]), so each rewording is tested alone.
+//! ([`super::tables`]), so each rewording is tested alone.
 
-use super::keys;
+use super::tables;
 use super::validation::LINE_KEYS;
 
 /// The edit distance between `a` and `b`: insertions, deletions,
@@ -107,7 +107,7 @@ fn ticked(list: &str) -> Vec<&str> {
 /// "must be in [1, 16384]", "must be one of ..." or "allowed: " and a
 /// rule. None when no table has the key or it takes any value.
 pub fn allowed(table: Option<&str>, key: &str) -> Option<String> {
-    let k = keys::spec(table.unwrap_or(""), key)?;
+    let k = tables::spec(table.unwrap_or(""), key)?;
     k.range.says(k.unit)
 }
 

@@ -3,7 +3,7 @@
 //! add-on reads a committed copy (blender/scene_schema.json) and people read
 //! docs/scene.md, a table per section rendered here from the same JSON plus
 //! each key's unit and description, from the scene's tables of keys
-//! (`aurora::scene::keys::TABLES`, which the schema's ranges and the
+//! (`aurora::scene::tables::TABLES`, which the schema's ranges and the
 //! checks come from too). Both tests fail when their
 //! file differs from what the binary prints:
 //! - `aurora scene --schema > blender/scene_schema.json` regenerates the copy;
@@ -14,7 +14,7 @@
 //! description: a new key is documented the day it lands.
 
 use crate::common::{aurora, check_committed, ok, update_or_check_committed};
-use aurora::scene::keys::TABLES;
+use aurora::scene::tables::TABLES;
 use serde_json::{Map, Value};
 use std::fmt::Write as _;
 
