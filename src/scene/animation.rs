@@ -1,5 +1,6 @@
 //! `[animation]`: closed-form motion in time and the red trail, with its
 //! defaults.
+//! [`ANIMATION_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

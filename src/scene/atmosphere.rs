@@ -1,5 +1,6 @@
 //! `[atmosphere]`: the neutral atmosphere and the ambient ionosphere the
 //! electrons fall through, with the defaults.
+//! [`ATMOSPHERE_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Range};
 use serde::{Deserialize, Serialize};

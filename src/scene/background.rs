@@ -1,5 +1,6 @@
 //! `[background]`: what is seen behind the volume (constant radiance, an
 //! image, the stars), with the defaults.
+//! [`BACKGROUND_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

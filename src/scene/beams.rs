@@ -1,5 +1,6 @@
 //! `[beams]`: how many electron beams, how they deposit their energy and
 //! where they start, with the defaults.
+//! [`BEAMS_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,6 @@
 //! `[camera]`: the camera of the reference render and of the Blender scene,
 //! with its defaults and its one set of limits ([`Camera::problems`]).
+//! [`CAMERA_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::fmt_num;
 use super::keys::{KeySpec, Num, Range};
@@ -56,7 +57,7 @@ impl Camera {
     }
 
     /// Every camera value outside its range, as (key, value, allowed): the
-    /// one set of camera limits, applied by [`Scene::validate`] and by
+    /// one set of camera limits, applied by [`Scene::validate`](super::root::Scene::validate) and by
     /// `crate::geometry::camera::CameraModel::new`.
     pub fn problems(&self) -> Vec<(&'static str, String, String)> {
         let mut p = Vec::new();

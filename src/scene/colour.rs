@@ -1,5 +1,6 @@
 //! The emission's colour: `[colour]` (the line model and the colour mode)
-//! with its defaults. No checks here (`super::validation`).
+//! with its defaults.
+//! [`COLOUR_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

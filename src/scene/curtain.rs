@@ -1,5 +1,6 @@
 //! `[[curtain]]`: where one curtain's footprint lies and how hard it is
 //! driven, with the defaults a missing key takes.
+//! [`CURTAIN_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

@@ -1,5 +1,6 @@
 //! `[earth]`: the ground's shape (a sphere or a flat plane) and the
 //! geomagnetic pole, with the defaults.
+//! [`EARTH_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Range};
 use serde::{Deserialize, Serialize};

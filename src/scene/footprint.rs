@@ -1,5 +1,6 @@
 //! `[footprint]`: the vortex sheet or the 2014 report's fluid that shapes
 //! each curtain's footprint, with its defaults.
+//! [`FOOTPRINT_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

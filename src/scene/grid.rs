@@ -1,5 +1,6 @@
 //! `[grid]`: the stored grids (voxel size, pruning, compression, the high
 //! column), with the defaults and limits.
+//! [`GRID_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
@@ -160,7 +161,7 @@ pub struct GridParams {
     /// (0 = keep every leaf with any emission).
     pub prune: f64,
     /// Emission lines written as float grids of their own (`line_5577`,
-    /// ...), in rayleigh per km: names of [`LINE_KEYS`].
+    /// ...), in rayleigh per km: names of [`LINE_KEYS`](super::validation::LINE_KEYS).
     pub lines: Vec<String>,
     /// Also store the emission pattern's velocity, a vec3 grid `v` in km/s
     /// on the emission's active voxels, for motion blur (Cycles'

@@ -1,4 +1,5 @@
 //! `[photons]`: the photon kernel and the gather, with the defaults.
+//! [`PHOTONS_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

@@ -1,4 +1,5 @@
 //! `[render]`: the reference renderer's image, with its defaults.
+//! [`RENDER_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

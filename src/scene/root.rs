@@ -1,5 +1,6 @@
 //! The scene file's root table, [`Scene`]: one field per TOML table, its
 //! canonical TOML and the hash that identifies a bake's inputs.
+//! [`ROOT_KEYS`]: each key's unit, allowed range and description.
 
 use super::airglow::AirglowParams;
 use super::animation::AnimationParams;

@@ -1,4 +1,5 @@
 //! `[sky]`: the air between the aurora and the observer, with the defaults.
+//! [`SKY_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

@@ -1,4 +1,5 @@
 //! `[terrain]`: the ground the aurora lights, with the defaults.
+//! [`TERRAIN_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

@@ -1,4 +1,5 @@
 //! `[volume]`: the volume material's scales, with the defaults.
+//! [`VOLUME_KEYS`]: each key's unit, allowed range and description.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
