@@ -5,7 +5,7 @@
 //! the memory budget (`crate::pipeline::memory::budget`) both take it from here, so they
 //! cannot disagree on the kernel's reach or on the automatic voxel's floor.
 
-use super::grid::PhotonParams;
+use super::photons::PhotonParams;
 
 /// The kernel radius the scene asks for (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
