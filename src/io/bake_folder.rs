@@ -208,7 +208,7 @@ pub fn write_options(scene: &Scene) -> WriteOptions {
 
 /// `options` without the half-float requests for grids whose values do
 /// not fit a half (|x| > 65504): those are stored as full floats (the bake
-/// warns, `crate::pipeline::bake::plan`), so a half-float default never refuses a
+/// warns, `crate::pipeline::bake::finish`), so a half-float default never refuses a
 /// valid scene. Returns the names dropped.
 pub fn fit_half(mut options: WriteOptions, grids: &[GridRef<'_>]) -> (WriteOptions, Vec<String>) {
     let max = half::f16::MAX.to_f32();
