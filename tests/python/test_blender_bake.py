@@ -314,11 +314,15 @@ def test_bake_errors_are_reported_and_leave_nothing(sc, panel, bpy, tmp_path, mo
     with pytest.raises(RuntimeError, match="no aurora binary"):
         bpy.ops.aurora.bake()
     monkeypatch.setenv("AURORA_BIN", str(aurora_bin()))
-    s.footprint.resolution = (4, 4)  # below the schema's minimum of 8: the binary names the key
-    with pytest.raises(RuntimeError, match="footprint.resolution"):
+    s.footprint.resolution = (4, 4)  # below the schema's minimum of 8: the property holds it there
+    assert tuple(s.footprint.resolution) == (8, 8)
+    # A rule between keys the properties cannot hold alone: the binary names the key.
+    s.beams.delta_alpha_deg = s.beams.alpha_d_deg + 1.0
+    with pytest.raises(RuntimeError, match="delta_alpha_deg"):
         bpy.ops.aurora.bake()
     assert list(tmp_path.iterdir()) == []  # no output folder, no staging left
     # A folder of other work is never replaced.
+    s.beams.delta_alpha_deg = 3.0
     s.footprint.resolution = (64, 16)
     set_small(s)
     (tmp_path / "x").mkdir()
