@@ -10,6 +10,7 @@ pub mod beams;
 pub mod deposit;
 pub mod footprint;
 pub mod memory_budget;
+pub mod memory_expected;
 pub mod memory_leaves;
 pub mod memory_reach;
 pub mod memory_refusal;
