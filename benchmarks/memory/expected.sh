@@ -15,15 +15,17 @@ cd "$(dirname "$0")/../.."
 BIN=${1:-./target/release/aurora}
 EXP=${EXPECTED_BIN:-./target/release/examples/memory_expected}
 RUNS=${RUNS:-3}
+# Runs at 1 thread (the thread count's effect; fewer to save time).
+RUNS1=${RUNS1:-$RUNS}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 echo "# aurora expected peak against the bound and the measured peak, $(date -u +%Y-%m-%dT%H:%MZ)"
 echo "# build $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src || echo '+changes'), $(nproc) cores, $(lscpu | sed -n 's/^Model name: *//p')"
-echo "# load before: $(cut -d' ' -f1-3 /proc/loadavg); measured: the largest max-RSS of $RUNS runs of aurora bake -q --threads N"
+echo "# load before: $(cut -d' ' -f1-3 /proc/loadavg); measured: the largest max-RSS of $RUNS runs of aurora bake -q --threads 2 ($RUNS1 at 1 thread)"
 printf '%-9s %7s %9s %9s %12s %12s %11s %9s %s\n' scene threads bound_GiB exp_GiB measured_GiB exp/measured bound/meas est_s scene_args
 peak() {
-  local toml=$1 threads=$2 best=0 p
-  for _ in $(seq "$RUNS"); do
+  local toml=$1 threads=$2 runs=$3 best=0 p
+  for _ in $(seq "$runs"); do
     /usr/bin/time -v -o "$T/time" "$BIN" bake -q --threads "$threads" --out "$T/out" "$toml" >/dev/null 2>"$T/err" || {
       echo "the bake of $toml failed" >&2
       cat "$T/err" >&2
@@ -46,7 +48,7 @@ run() {
     out=$("$EXP" "$T/$name.toml" "$threads")
     t1=$(date +%s.%N)
     read -r bound exp <<<"$out"
-    measured=$(peak "$T/$name.toml" "$threads")
+    measured=$(peak "$T/$name.toml" "$threads" "$([ "$threads" = 1 ] && echo "$RUNS1" || echo "$RUNS")")
     awk -v n="$name" -v th="$threads" -v b="$bound" -v e="$exp" -v m="$measured" -v s="$(echo "$t1 - $t0" | bc)" -v a="$*" \
       'BEGIN {printf "%-9s %7d %9.3f %9.3f %12.3f %12.2f %11.2f %9.1f %s\n", n, th, b / 2^30, e / 2^30, m / 2^30, e / m, b / m, s, a}'
   done
