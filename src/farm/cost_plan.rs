@@ -31,7 +31,10 @@
 //! time is printed beside it for this machine. The peak resident set is what
 //! one task baking frames one after the other needs (each frame's grids are
 //! freed before the next; the plan is shared). The memory budget's model
-//! (`crate::pipeline::memory_budget::estimate`) is printed beside it. With one sample, C is
+//! (`crate::pipeline::memory_budget::estimate`, the upper bound a bake is
+//! refused by) is printed beside it, and the expected peak of one bake on
+//! the plan's threads, from a traced sample of the last sample frame's
+//! beams (`crate::pipeline::memory_expected`). With one sample, C is
 //! that sample's CPU (setup included) and S is 0: an upper bound.
 //!
 //! The task is one shard's share (`--shard I/N`): its N frames are the
