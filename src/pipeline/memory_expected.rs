@@ -218,7 +218,7 @@ fn trace_sample(plan: &BakePlan, count: usize) -> Result<Sample, BeamError> {
         .par_windows(2)
         .map(|w| {
             let mut v = Vec::new();
-            for p in &photons[w[0]..w[1].min(photons.len())] {
+            for p in photons.get(w[0]..w[1]).unwrap_or(&[]) {
                 photon_leaves(p, h, reach(p), &mut v);
             }
             v.sort_unstable_by_key(|o| (o.x, o.y, o.z));
