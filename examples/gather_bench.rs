@@ -12,7 +12,7 @@
 
 mod common;
 
-use aurora::pipeline::bake::plan::{self, BakePlan};
+use aurora::pipeline::plan::BakePlan;
 use aurora::scene::Scene;
 use aurora::util::progress::NoProgress;
 use common::{cpu_seconds as cpu, loadavg};
@@ -48,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         let plan = BakePlan::new(&scene, &NoProgress);
         let mut times = aurora::pipeline::bake::stats::StageTimes::default();
         let count = aurora::pipeline::bake::beam_count(&plan, &mut times, &NoProgress)?;
-        let traced = timed("trace", || plan::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
+        let traced = timed("trace", || aurora::pipeline::bake::trace::trace(&plan, count.0, 0, 0..count.0, &NoProgress))?;
         let voxel = plan.voxel_size(&traced.photons);
         println!("# {} beams, {} photons, voxel {} km", count.0, traced.photons.len(), voxel.0);
         {
@@ -58,7 +58,7 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
             let merged = timed("merge", || {
                 merge::merge_segments(&traced.photons, |p| r.radius(p), merge::MERGE_LEN_R, merge::MERGE_OFF_R, merge::MERGE_CDF)
             });
-            let reach = plan.photons.cutoff * r.max();
+            let reach = plan.scene.photons.cutoff * r.max();
             let leaves = timed("leaves", || bins::candidate_leaves(&merged, voxel.0, reach));
             let bins = timed("bins", || bins::bin_photons(&merged, &leaves, voxel.0, reach));
             println!("# {} merged photons, {} candidate leaves, {} (leaf, photon) pairs", merged.len(), leaves.len(), bins.photons.len());
@@ -66,19 +66,19 @@ fn main() -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         for rep in 0..reps {
             println!("rep {rep} (load {})", loadavg());
             let (t0, c0) = (Instant::now(), cpu());
-            let mut emission = timed("gather", || plan::gather(&plan, &traced.photons, voxel.0, &NoProgress));
+            let mut emission = timed("gather", || aurora::pipeline::bake::gather::gather(&plan, &traced.photons, voxel.0, &NoProgress));
             let t1 = Instant::now();
-            let (_, peak_y) = timed("scan", || plan::scan_emission(&emission, plan.kernel.base_km))?;
-            if plan.grid.prune > 0.0 {
+            let (_, peak_y) = timed("scan", || aurora::pipeline::bake::finish::scan_emission(&emission, plan.kernel.base_km))?;
+            if plan.scene.grid.prune > 0.0 {
                 let camera = plan.camera_model()?;
-                timed("prune", || aurora::pipeline::prune::prune(&mut emission, &camera, plan.grid.prune));
+                timed("prune", || aurora::pipeline::prune::prune(&mut emission, &camera, plan.scene.grid.prune));
             }
             let mut density = timed("density", || {
                 aurora::pipeline::bake::density::density_grid(
                     &emission,
-                    &plan.grid,
+                    &plan.scene.grid,
                     peak_y,
-                    &aurora::geometry::earth::Earth::new(plan.earth.radius_km),
+                    &aurora::geometry::earth::Earth::new(plan.scene.earth.radius_km),
                 )
             });
             let (n, _) = timed("shell", || {

@@ -1,5 +1,5 @@
 //! Prints the bake's expected peak memory for a scene file and thread
-//! count (`aurora::pipeline::memory_expected::expected_peak`, from a traced
+//! count (`aurora::pipeline::memory::expected::expected_peak`, from a traced
 //! sample of its beams) beside the memory budget's bound: the terms of the
 //! peaking phase on stderr, then `bound expected` in bytes on stdout.
 //! `benchmarks/memory/expected.sh` sets both against the bake's measured
@@ -7,7 +7,8 @@
 //!
 //!     cargo run --release --example memory_expected -- SCENE.toml [THREADS]
 
-use aurora::pipeline::bake::{self, plan::BakePlan, stats::StageTimes};
+use aurora::pipeline::bake::{self, stats::StageTimes};
+use aurora::pipeline::plan::BakePlan;
 use aurora::util::progress::NoProgress;
 
 fn main() {
@@ -19,10 +20,10 @@ fn main() {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("a thread pool");
     pool.install(|| {
         let plan = BakePlan::new(&scene, &NoProgress);
-        let bound = aurora::pipeline::memory_budget::estimate_plan(&scene, &plan).total();
+        let bound = aurora::pipeline::memory::budget::estimate(&plan, aurora::pipeline::memory::budget::LeafCount::Bands).total();
         let (count, _, _) = bake::beam_count(&plan, &mut StageTimes::default(), &NoProgress).unwrap_or_else(|e| panic!("{e}"));
         let t = std::time::Instant::now();
-        let e = aurora::pipeline::memory_expected::expected_peak(&plan, count, threads).unwrap_or_else(|e| panic!("{e}"));
+        let e = aurora::pipeline::memory::expected::expected_peak(&plan, count, threads).unwrap_or_else(|e| panic!("{e}"));
         eprintln!(
             "expected peak {:.3} GiB ({} phase, {} threads, {:.0} leaves, {:.3e} photons, {} of {count} beams traced in {:.2} s{})",
             e.bytes / (1u64 << 30) as f64,

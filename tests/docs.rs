@@ -43,17 +43,48 @@ fn markdown_files() -> Vec<PathBuf> {
     out
 }
 
+/// A Markdown document: its path, its name from the repository's root, its
+/// text.
+struct Document {
+    path: PathBuf,
+    name: String,
+    text: String,
+}
+
+/// The documents of [`markdown_files`], read.
+fn documents() -> Vec<Document> {
+    markdown_files()
+        .into_iter()
+        .map(|path| {
+            let text = std::fs::read_to_string(&path).unwrap();
+            let name = path.strip_prefix(root()).unwrap().display().to_string();
+            Document { path, name, text }
+        })
+        .collect()
+}
+
+/// The lines of `text` with their numbers (from 1), those of fenced code
+/// blocks and the fences themselves blanked.
+fn unfenced(text: &str) -> Vec<(usize, &str)> {
+    let mut fenced = false;
+    text.lines()
+        .enumerate()
+        .map(|(i, line)| {
+            let fence = line.trim_start().starts_with("```");
+            if fence {
+                fenced = !fenced;
+            }
+            (i + 1, if fence || fenced { "" } else { line })
+        })
+        .collect()
+}
+
 /// The text outside fenced code blocks and inline code spans, line by line
 /// (line numbers kept).
 fn prose(text: &str) -> Vec<(usize, String)> {
     let mut out = Vec::new();
-    let mut fenced = false;
-    for (i, line) in text.lines().enumerate() {
-        if line.trim_start().starts_with("```") {
-            fenced = !fenced;
-            continue;
-        }
-        if fenced || line.starts_with("    ") && !line.trim_start().starts_with(['-', '|', '*']) {
+    for (number, line) in unfenced(text) {
+        if line.starts_with("    ") && !line.trim_start().starts_with(['-', '|', '*']) {
             continue;
         }
         let mut kept = String::new();
@@ -65,7 +96,7 @@ fn prose(text: &str) -> Vec<(usize, String)> {
                 kept.push(c);
             }
         }
-        out.push((i + 1, kept));
+        out.push((number, kept));
     }
     out
 }
@@ -96,13 +127,8 @@ fn slug(title: &str) -> String {
 /// GitHub's anchors of a Markdown file's headings.
 fn anchors(text: &str) -> BTreeSet<String> {
     let mut seen = BTreeSet::new();
-    let mut fenced = false;
-    for line in text.lines() {
-        if line.trim_start().starts_with("```") {
-            fenced = !fenced;
-            continue;
-        }
-        if fenced || !line.starts_with('#') {
+    for (_, line) in unfenced(text) {
+        if !line.starts_with('#') {
             continue;
         }
         let slug = slug(line.trim_start_matches('#').trim());
@@ -121,10 +147,8 @@ fn anchors(text: &str) -> BTreeSet<String> {
 fn every_relative_link_in_the_documents_resolves() {
     let mut broken = Vec::new();
     let mut checked = 0;
-    for file in markdown_files() {
-        let text = std::fs::read_to_string(&file).unwrap();
+    for Document { path: file, name, text } in documents() {
         let dir = file.parent().unwrap();
-        let name = file.strip_prefix(root()).unwrap().display().to_string();
         for (line, kept) in prose(&text) {
             for target in links(&kept) {
                 if target.contains("://") || target.starts_with("mailto:") {
@@ -180,22 +204,12 @@ fn code_paths(line: &str) -> Vec<String> {
 fn every_src_and_tools_path_in_the_documents_exists() {
     let mut missing = Vec::new();
     let mut checked = 0;
-    for file in markdown_files() {
-        let text = std::fs::read_to_string(&file).unwrap();
-        let name = file.strip_prefix(root()).unwrap().display().to_string();
-        let mut fenced = false;
-        for (i, line) in text.lines().enumerate() {
-            if line.trim_start().starts_with("```") {
-                fenced = !fenced;
-                continue;
-            }
-            if fenced {
-                continue;
-            }
+    for Document { name, text, .. } in documents() {
+        for (number, line) in unfenced(&text) {
             for path in code_paths(line) {
                 checked += 1;
                 if !root().join(&path).exists() {
-                    missing.push(format!("{name}:{}: `{path}`: no such file or folder", i + 1));
+                    missing.push(format!("{name}:{number}: `{path}`: no such file or folder"));
                 }
             }
         }
@@ -303,24 +317,8 @@ fn every_section_reference_in_the_documents_resolves() {
     let roots = root_entries();
     let mut broken = Vec::new();
     let mut checked = 0;
-    for file in markdown_files() {
-        let text = std::fs::read_to_string(&file).unwrap();
-        let name = file.strip_prefix(root()).unwrap().display().to_string();
-        let mut fenced = false;
-        let outside: Vec<&str> = text
-            .lines()
-            .map(|l| {
-                if l.trim_start().starts_with("```") {
-                    fenced = !fenced;
-                    return "";
-                }
-                if fenced {
-                    ""
-                } else {
-                    l
-                }
-            })
-            .collect();
+    for Document { name, text, .. } in documents() {
+        let outside: Vec<&str> = unfenced(&text).into_iter().map(|(_, line)| line).collect();
         // Source paths in the documents are checked above (inline code);
         // here the references to a document or a section of one.
         for r in file_refs(&outside.join("\n"), &roots) {

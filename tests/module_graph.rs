@@ -717,3 +717,76 @@ fn the_checker_reports_a_circle_planted_between_files() {
     let files = planted("util/rng.rs", "use crate::scene::Scene;\n");
     assert!(!file_circles(&files).is_empty());
 }
+
+/// The bake (`pipeline/bake/`) composes the stages below it in
+/// `pipeline/`; nothing below calls back up into it. Every edge from a file
+/// of `pipeline/` outside `pipeline/bake/` into `pipeline/bake/`.
+fn bake_upcalls(files: &[(String, String)]) -> Vec<(String, String)> {
+    file_edges(files)
+        .into_iter()
+        .filter(|(from, to)| from.starts_with("pipeline/") && !from.starts_with("pipeline/bake/") && to.starts_with("pipeline/bake/"))
+        .collect()
+}
+
+#[test]
+fn nothing_in_the_pipeline_below_the_bake_calls_up_into_it() {
+    let up = bake_upcalls(&tree());
+    assert!(up.is_empty(), "files below the bake import it (docs/ARCHITECTURE.md): {up:#?}");
+    // The checker sees one planted: the memory budget reaching for the
+    // bake's trace.
+    let planted = planted("pipeline/memory/budget.rs", "use crate::pipeline::bake::trace::for_each_chunk;\n");
+    let found = bake_upcalls(&planted);
+    assert!(
+        found.iter().any(|(from, to)| from == "pipeline/memory/budget.rs" && to.starts_with("pipeline/bake/")),
+        "a planted upward call is not found: {found:?}"
+    );
+}
+
+/// Where each piece of the bake's boundary lives (docs/ARCHITECTURE.md):
+/// a file, and a definition that appears there and nowhere else in `src/`.
+const BAKE_HOMES: &[(&str, &str)] = &[
+    ("pipeline/plan.rs", "pub struct BakePlan "),
+    ("pipeline/plan.rs", "pub const BEAM_CHUNK"),
+    ("pipeline/plan.rs", "pub fn chunks("),
+    ("pipeline/plan.rs", "pub const DEPOSIT_PILOT_BEAMS"),
+    ("pipeline/beams/mod.rs", "pub fn beam_field("),
+    ("pipeline/bake/trace.rs", "pub fn for_each_chunk("),
+    ("pipeline/bake/gather.rs", "pub fn trace_and_gather("),
+    ("pipeline/bake/finish.rs", "pub fn finish(\n    plan: &BakePlan"),
+    ("pipeline/memory/budget.rs", "pub fn estimate(plan: &BakePlan"),
+    ("pipeline/memory/leaves.rs", "pub fn band_leaves("),
+    ("pipeline/memory/reach.rs", "pub fn world_bounds(plan: &BakePlan"),
+    ("pipeline/memory/refusal.rs", "pub fn check(plan: &BakePlan"),
+];
+
+/// Every breach of [`BAKE_HOMES`] in `files`: a home that is missing or
+/// lacks its definition, or a definition found in another file.
+fn scattered(files: &[(String, String)]) -> Vec<String> {
+    let mut bad = Vec::new();
+    for (home, def) in BAKE_HOMES {
+        let holders: Vec<&String> = files.iter().filter(|(_, t)| code_only(t).contains(def)).map(|(r, _)| r).collect();
+        if holders.len() != 1 || holders[0] != home {
+            bad.push(format!("`{def}` should be in {home} alone, found in {holders:?}"));
+        }
+    }
+    // The memory module is one folder, not siblings by name prefix.
+    bad.extend(
+        files
+            .iter()
+            .filter(|(r, _)| r.starts_with("pipeline/memory_"))
+            .map(|(r, _)| format!("{r}: the memory module lives in pipeline/memory/")),
+    );
+    bad
+}
+
+#[test]
+fn the_plan_trace_gather_finish_and_memory_each_live_in_one_named_place() {
+    let bad = scattered(&tree());
+    assert!(bad.is_empty(), "the bake's boundary scattered:\n{}", bad.join("\n"));
+    // The checker sees a second home and a sibling planted.
+    let mut files = tree();
+    files.push(("pipeline/bake/chunked.rs".to_string(), "pub fn trace_and_gather() {}\n".to_string()));
+    files.push(("pipeline/memory_reach.rs".to_string(), String::new()));
+    let bad = scattered(&files);
+    assert_eq!(bad.len(), 2, "{bad:#?}");
+}

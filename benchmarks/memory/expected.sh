@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The expected peak against the bake's measured peak: for each scene, the
 # refusal's bound and the expected peak `aurora bake --plan` prints
-# (`examples/memory_expected.rs`: `aurora::pipeline::memory_expected`, from a
-# traced sample of the beams, and `aurora::pipeline::memory_budget`), and
+# (`examples/memory_expected.rs`: `aurora::pipeline::memory::expected`, from a
+# traced sample of the beams, and `aurora::pipeline::memory::budget`), and
 # the largest peak resident set ("Maximum resident set size" of
 # /usr/bin/time -v) of RUNS runs of `aurora bake -q` at 2 threads and at 1.
 # Prints bound, expected, measured and their ratios: expected / measured is

@@ -146,7 +146,7 @@ fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: 
     say.frames(0, mine.len());
     let t0 = std::time::Instant::now();
     let (mut baked, mut skipped, mut mismatched) = (0usize, 0usize, 0usize);
-    let mut plan: Option<aurora::pipeline::bake::plan::BakePlan> = None;
+    let mut plan: Option<aurora::pipeline::plan::BakePlan> = None;
     for &f in mine {
         if seq.frame_state(f)? == FrameState::Complete {
             skipped += 1;

@@ -60,6 +60,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::scene::SceneError,
         aurora::physics::data_files::DataError,
         aurora::pipeline::bake::BakeError,
+        aurora::pipeline::beams::BeamError,
         aurora::util::atomic_write::AtomicError,
         aurora::io::bake_folder::OutputError,
         aurora::farm::sequence_folder::SequenceError,

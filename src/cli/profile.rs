@@ -47,7 +47,7 @@ fn profile(scene: &Scene, out: Option<&Path>, quiet: bool) -> Result<()> {
         None => print!("{csv}"),
     }
     if !quiet {
-        let s = &p.beam_stats;
+        let s = &p.beam_stats.power;
         eprintln!(
             "electron power {:.4e} W: deposited {:.4e}, backscattered {:.4e}, above the beams' top {:.4e}, undeposited {:.4e}",
             s.electron_power_w, s.deposited_power_w, s.backscattered_power_w, s.above_top_power_w, s.undeposited_power_w

@@ -37,7 +37,7 @@ fn scene_header(name: &str) -> String {
 pub fn footprint(a: FootprintArgs) -> Result<()> {
     let scene = load_scene(&a.scene, &a.overrides)?;
     aurora::util::atomic_write::prepare_folder(&a.out)?;
-    for (i, fp) in aurora::pipeline::bake::plan::footprints(&scene).iter().enumerate() {
+    for (i, fp) in aurora::pipeline::plan::footprints(&scene).iter().enumerate() {
         let path = a.out.join(format!("footprint-{i}.png"));
         fp.write_png(&path).with_context(|| format!("cannot write {}", path.display()))?;
         eprintln!("wrote {}", path.display());

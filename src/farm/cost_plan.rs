@@ -7,7 +7,7 @@
 //! beams, gather and write, and both change slowly as curtains fold and
 //! drift. The plan bakes `samples` frames spread evenly over the range
 //! (first, last and evenly between, by index: [`sample_frames`]) exactly as
-//! a farm task would: each at its own time, one [`crate::pipeline::bake::plan::BakePlan`]
+//! a farm task would: each at its own time, one [`crate::pipeline::plan::BakePlan`]
 //! carried from one to the next (`bake::bake_reusing`, as `aurora bake
 //! --frames` does), and each frame's files staged and committed by the same
 //! writer the sequence uses (`crate::farm::frame_files::stage_frame`) into a scratch folder
@@ -31,10 +31,10 @@
 //! time is printed beside it for this machine. The peak resident set is what
 //! one task baking frames one after the other needs (each frame's grids are
 //! freed before the next; the plan is shared). The memory budget's model
-//! (`crate::pipeline::memory_budget::estimate`, the upper bound a bake is
+//! (`crate::pipeline::memory::budget::estimate`, the upper bound a bake is
 //! refused by) is printed beside it, and the expected peak of one bake on
 //! the plan's threads, from a traced sample of the last sample frame's
-//! beams (`crate::pipeline::memory_expected`). With one sample, C is
+//! beams (`crate::pipeline::memory::expected`). With one sample, C is
 //! that sample's CPU (setup included) and S is 0: an upper bound.
 //!
 //! The task is one shard's share (`--shard I/N`): its N frames are the
@@ -63,8 +63,10 @@
 use crate::io::bake_folder::{self, OutputError};
 use crate::pipeline::bake::identity::BakeIdentity;
 use crate::pipeline::bake::{self, BakeError};
+use crate::pipeline::memory::budget::{self, LeafCount};
+use crate::pipeline::plan::BakePlan;
 use crate::scene::Scene;
-use crate::util::progress::Progress;
+use crate::util::progress::{NoProgress, Progress};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -173,7 +175,7 @@ pub struct CostPlan {
     pub budget_bytes: f64,
     /// The expected peak of one bake on `threads` threads, bytes, from a
     /// traced sample of the last calibration frame's beams
-    /// (`crate::pipeline::memory_expected`); the budget's is the upper
+    /// (`crate::pipeline::memory::expected`); the budget's is the upper
     /// bound the bake is refused by.
     pub expected_peak_bytes: Option<f64>,
     /// Worker threads the samples ran on (wall time depends on it; CPU time does not).
@@ -283,7 +285,7 @@ pub fn plan_task(
         .map_err(|e| OutputError::Write { path: PathBuf::from(bake_folder::USDA_NAME), message: e.to_string() })?;
     let scratch = scratch_folder()?;
     let identity = BakeIdentity::of(scene);
-    let mut carried: Option<bake::plan::BakePlan> = None;
+    let mut carried: Option<BakePlan> = None;
     let mut beams = 0;
     let mut measured = Vec::new();
     let mut first_frame: Option<(Scene, PathBuf, i64)> = None;
@@ -316,7 +318,7 @@ pub fn plan_task(
     let (_, peak_rss_bytes) = usage();
     let mut plan = estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes);
     if let Some(p) = &carried {
-        let expected = crate::pipeline::memory_expected::expected_peak(p, beams, plan.threads).map_err(BakeError::from)?;
+        let expected = crate::pipeline::memory::expected::expected_peak(p, beams, plan.threads).map_err(BakeError::from)?;
         plan.expected_peak_bytes = Some(expected.bytes);
     }
     if let (Some(probe), Some((at, vdb, frame))) = (render, first_frame) {
@@ -359,7 +361,7 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
         total_cpu_s: setup_cpu_s + cpu_per_frame_s * n as f64,
         wall_per_frame_s,
         peak_rss_bytes,
-        budget_bytes: crate::pipeline::memory_budget::estimate(scene).total(),
+        budget_bytes: budget::estimate(&BakePlan::new(scene, &NoProgress), LeafCount::Bands).total(),
         expected_peak_bytes: None,
         threads: rayon::current_num_threads(),
         samples,

@@ -196,7 +196,7 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(Stri
     // Refused as the user's (exit 2) when the name is not a regular file.
     crate::util::atomic_write::check_replaceable(&path)?;
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
-    usd::write_usda_sequence(&path, frames, &stage_vdb_name, &fields, 1000.0, fps)
+    usd::write_usda_sequence(&path, usd::Sequence { frames, name: &stage_vdb_name, fps }, &fields, 1000.0)
         .map_err(|e| OutputError::Write { path: path.clone(), message: e.to_string() })?;
     Ok(path)
 }
@@ -206,7 +206,7 @@ pub fn write_sequence_usda(out: &Path, frames: &[i64], fps: f64, fields: &[(Stri
 pub fn sequence_usda_bytes(frames: &[i64], fps: f64, fields: &[(String, &'static str)]) -> Result<u64, std::io::Error> {
     let fields: Vec<(&str, &str)> = fields.iter().map(|(n, t)| (n.as_str(), *t)).collect();
     let mut sink = std::io::BufWriter::with_capacity(usd::STREAM_BUFFER, ByteCount(0));
-    usd::write_usda_sequence_into(&mut sink, frames, &stage_vdb_name, &fields, 1000.0, fps)?;
+    usd::write_usda_sequence_into(&mut sink, usd::Sequence { frames, name: &stage_vdb_name, fps }, &fields, 1000.0)?;
     Ok(sink.into_inner().map_err(|e| e.into_error())?.0)
 }
 
@@ -271,9 +271,7 @@ mod tests {
     /// succeeds, the stage is whole, no temporary is left.
     #[test]
     fn concurrent_stage_writers_never_fail_or_leave_temporaries() {
-        let dir = std::env::temp_dir().join(format!("aurora-shared-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::util::scratch::folder("shared", "stage");
         let frames: Vec<i64> = (1..=500).collect();
         std::thread::scope(|s| {
             for _ in 0..8 {
@@ -286,8 +284,7 @@ mod tests {
         });
         let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
         assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, [USDA_NAME]);
+        assert_eq!(crate::util::scratch::file_names(&dir), [USDA_NAME]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

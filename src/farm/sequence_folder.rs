@@ -135,7 +135,6 @@ impl Sequence {
     /// of the bake `identity` (module docs, "Opening"), whose frames hold
     /// the grids `fields` (VDB name, USD type: `bake_folder::stage_fields`; listed in the stage).
     /// `on_wait` is called once if another process holds the folder's lock.
-    #[allow(clippy::too_many_arguments)]
     pub fn open(
         dir: &Path,
         identity: BakeIdentity,
@@ -397,16 +396,14 @@ mod tests {
     /// folder holds what it held before, nothing of this bake.
     #[test]
     fn a_claim_whose_stage_cannot_be_written_leaves_no_record() {
-        let dir = std::env::temp_dir().join(format!("aurora-claim-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
+        let dir = crate::util::scratch::folder("claim", "stage");
         let scene = Scene::default();
         let fields = crate::io::bake_folder::stage_fields(&scene);
         let mut seq = Sequence::open(&dir, BakeIdentity::of(&scene), &[1, 2], 24.0, fields, false, || {}).unwrap();
         std::fs::create_dir(dir.join(USDA_NAME)).unwrap();
         let e = seq.claim().unwrap_err();
         assert!(e.to_string().contains("aurora.usda") && e.is_input(), "{e}");
-        let names: Vec<String> = std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-        assert_eq!(names, [USDA_NAME]);
+        assert_eq!(crate::util::scratch::file_names(&dir), [USDA_NAME]);
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

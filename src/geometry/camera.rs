@@ -1,7 +1,7 @@
 //! The camera: projection, ray generation and the size of a pixel in the
 //! world, defined so that the Blender add-on builds the same camera. The one
 //! owner of camera maths: the renderer, pruning (`crate::pipeline::prune`) and the
-//! automatic voxel size (`crate::pipeline::bake::voxel::auto_voxel_size`) all ask it. The
+//! automatic voxel size (`crate::pipeline::voxel::auto_voxel_size`) all ask it. The
 //! limits it checks are the scene's ([`crate::scene::Camera::problems`],
 //! [`crate::scene::MAX_IMAGE_SIDE`]), so a scene that validates always has a
 //! camera.

@@ -112,41 +112,46 @@ impl BakeReport {
             j["stats"]["shell_voxels"],
             j["stats"]["voxel_size_km"],
             j["total_seconds"].as_f64().unwrap_or(0.0),
-        ) + &self.noise_line()
-            + &self.prune_line()
+        ) + &self.stats_line("noise", noise_line)
+            + &self.stats_line("prune", prune_line)
     }
 
-    fn noise_line(&self) -> String {
-        let n = &self.json["stats"]["noise"];
-        if n.is_null() {
-            return String::new();
+    /// The summary's line on `stats.<key>` as `line` words it; none when
+    /// the bake has no such record.
+    fn stats_line(&self, key: &str, line: fn(&serde_json::Value) -> String) -> String {
+        let record = &self.json["stats"][key];
+        if record.is_null() {
+            String::new()
+        } else {
+            line(record)
         }
-        format!(
-            "\nbeams.target_noise = {}: pilot of 2 x {} beams measured {:.3} relative RMS noise; {} beams used{}, expected noise {:.3}",
-            n["target"],
-            n["pilot_beams"],
-            n["pilot_noise"].as_f64().unwrap_or(0.0),
-            n["beams"],
-            if n["capped"].as_bool() == Some(true) { " (capped at beams.count)" } else { "" },
-            n["expected_noise"].as_f64().unwrap_or(0.0)
-        )
     }
+}
 
-    fn prune_line(&self) -> String {
-        let p = &self.json["stats"]["prune"];
-        if p.is_null() {
-            return String::new();
-        }
-        format!(
-            "\npruned (grid.prune = {}): {} of {} leaves, {} of {} voxels, {:.3e} of the image's light (estimated, extinction ignored)",
-            p["budget"],
-            p["leaves_removed"],
-            p["leaves_before"],
-            p["voxels_removed"],
-            p["voxels_before"],
-            p["removed_fraction"].as_f64().unwrap_or(0.0)
-        )
-    }
+/// The summary's line on the noise target's pilot (`stats.noise`).
+fn noise_line(n: &serde_json::Value) -> String {
+    format!(
+        "\nbeams.target_noise = {}: pilot of 2 x {} beams measured {:.3} relative RMS noise; {} beams used{}, expected noise {:.3}",
+        n["target"],
+        n["pilot_beams"],
+        n["pilot_noise"].as_f64().unwrap_or(0.0),
+        n["beams"],
+        if n["capped"].as_bool() == Some(true) { " (capped at beams.count)" } else { "" },
+        n["expected_noise"].as_f64().unwrap_or(0.0)
+    )
+}
+
+/// The summary's line on what the pruning removed (`stats.prune`).
+fn prune_line(p: &serde_json::Value) -> String {
+    format!(
+        "\npruned (grid.prune = {}): {} of {} leaves, {} of {} voxels, {:.3e} of the image's light (estimated, extinction ignored)",
+        p["budget"],
+        p["leaves_removed"],
+        p["leaves_before"],
+        p["voxels_removed"],
+        p["voxels_before"],
+        p["removed_fraction"].as_f64().unwrap_or(0.0)
+    )
 }
 
 /// The grid metadata naming the observer whose colours `emission` holds
@@ -203,7 +208,7 @@ pub fn write_options(scene: &Scene) -> WriteOptions {
 
 /// `options` without the half-float requests for grids whose values do
 /// not fit a half (|x| > 65504): those are stored as full floats (the bake
-/// warns, `crate::pipeline::bake::plan`), so a half-float default never refuses a
+/// warns, `crate::pipeline::bake::finish`), so a half-float default never refuses a
 /// valid scene. Returns the names dropped.
 pub fn fit_half(mut options: WriteOptions, grids: &[GridRef<'_>]) -> (WriteOptions, Vec<String>) {
     let max = half::f16::MAX.to_f32();

@@ -67,10 +67,18 @@ fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> 
 enum Samples<'a> {
     /// A single bake: the VDB's name relative to the stage.
     Single(&'a str),
-    /// A sequence: its frames, ascending; each frame's VDB name relative to
-    /// the stage, made when its line is written (nothing is kept per
-    /// frame); its fps.
-    Sequence { frames: &'a [i64], name: &'a dyn Fn(i64) -> String, fps: f64 },
+    /// A sequence.
+    Sequence(Sequence<'a>),
+}
+
+/// A frame sequence's time samples: its frames, ascending; each frame's VDB
+/// file name relative to the stage, made when its line is written (nothing
+/// is kept per frame); its fps.
+#[derive(Clone, Copy)]
+pub struct Sequence<'a> {
+    pub frames: &'a [i64],
+    pub name: &'a dyn Fn(i64) -> String,
+    pub fps: f64,
 }
 
 /// `./name` unless the name already starts at `.` or `..`, so the path
@@ -95,7 +103,7 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
         Samples::Single(file) => {
             writeln!(w, "    doc = \"Aurora volume written by {}; fields in {}\"", crate::io::vdb::write::CREATOR, asset(file))?;
         }
-        Samples::Sequence { frames, fps, .. } => {
+        Samples::Sequence(Sequence { frames, fps, .. }) => {
             let (first, last) = (frames.first().map_or(0, |f| *f), frames.last().map_or(0, |f| *f));
             writeln!(
                 w,
@@ -108,7 +116,7 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
         }
     }
     writeln!(w, "    metersPerUnit = {}", fmt_number(meters_per_unit))?;
-    if let Samples::Sequence { frames, fps, .. } = samples {
+    if let Samples::Sequence(Sequence { frames, fps, .. }) = samples {
         writeln!(w, "    startTimeCode = {}", frames.first().map_or(0, |f| *f))?;
         writeln!(w, "    timeCodesPerSecond = {}", fmt_number(fps))?;
     }
@@ -129,7 +137,7 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
         writeln!(w, "        token fieldName = \"{name}\"")?;
         match samples {
             Samples::Single(file) => writeln!(w, "        asset filePath = @{}@", asset(file))?,
-            Samples::Sequence { frames, name, .. } => {
+            Samples::Sequence(Sequence { frames, name, .. }) => {
                 writeln!(w, "        asset filePath.timeSamples = {{")?;
                 for &f in frames {
                     let file = name(f);
@@ -150,7 +158,7 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
 fn check_samples(samples: Samples<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
     match samples {
         Samples::Single(file) => check(file, fields, meters_per_unit),
-        Samples::Sequence { frames, name, fps } => {
+        Samples::Sequence(Sequence { frames, name, fps }) => {
             if frames.is_empty() || frames.windows(2).any(|w| w[1] <= w[0]) {
                 return Err(invalid("a sequence needs at least one frame, in ascending order".into()));
             }
@@ -197,14 +205,14 @@ pub fn usda_text(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: 
 }
 
 /// The stage of a frame sequence: the same prims, each field's `filePath`
-/// time-sampled, one sample per frame (`frames` ascending, `name(frame)`
-/// its VDB file name relative to the stage); `startTimeCode` and
-/// `endTimeCode` are the first and last frame, `timeCodesPerSecond` and
+/// time-sampled, one sample per frame of `seq` (its `frames` ascending,
+/// `name(frame)` its VDB file name relative to the stage); `startTimeCode`
+/// and `endTimeCode` are the first and last frame, `timeCodesPerSecond` and
 /// `framesPerSecond` the sequence's fps. USD has no `####` substitution:
 /// every frame is listed (openusd.org, UsdVol OpenVDBAsset). In memory, for
 /// short sequences; [`write_usda_sequence`] streams a sequence of any length.
-pub fn usda_sequence_text(frames: &[i64], name: &dyn Fn(i64) -> String, fields: &[(&str, &str)], meters_per_unit: f64, fps: f64) -> String {
-    stage_text(Samples::Sequence { frames, name, fps }, fields, meters_per_unit)
+pub fn usda_sequence_text(seq: Sequence<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> String {
+    stage_text(Samples::Sequence(seq), fields, meters_per_unit)
 }
 
 /// Writes a sequence's stage (see [`usda_sequence_text`]) into `w`, line by
@@ -213,13 +221,11 @@ pub fn usda_sequence_text(frames: &[i64], name: &dyn Fn(i64) -> String, fields: 
 /// more than one line is held whatever the number of frames.
 pub fn write_usda_sequence_into(
     w: &mut dyn Write,
-    frames: &[i64],
-    name: &dyn Fn(i64) -> String,
+    seq: Sequence<'_>,
     fields: &[(&str, &str)],
     meters_per_unit: f64,
-    fps: f64,
 ) -> Result<(), std::io::Error> {
-    let samples = Samples::Sequence { frames, name, fps };
+    let samples = Samples::Sequence(seq);
     check_samples(samples, fields, meters_per_unit)?;
     write_stage(w, samples, fields, meters_per_unit)
 }
@@ -227,15 +233,8 @@ pub fn write_usda_sequence_into(
 /// Writes a sequence stage to `path` atomically (see [`usda_sequence_text`]):
 /// streamed to a temporary through a [`STREAM_BUFFER`]-byte buffer, then
 /// renamed, so its memory does not grow with the number of frames.
-pub fn write_usda_sequence(
-    path: &Path,
-    frames: &[i64],
-    name: &dyn Fn(i64) -> String,
-    fields: &[(&str, &str)],
-    meters_per_unit: f64,
-    fps: f64,
-) -> Result<(), std::io::Error> {
-    write_file(path, Samples::Sequence { frames, name, fps }, fields, meters_per_unit)
+pub fn write_usda_sequence(path: &Path, seq: Sequence<'_>, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
+    write_file(path, Samples::Sequence(seq), fields, meters_per_unit)
 }
 
 /// A number as USD writes it: integers without a decimal point.
@@ -293,22 +292,26 @@ mod tests {
         format!("aurora.{f:04}.vdb")
     }
 
+    fn seq<'a>(frames: &'a [i64], name: &'a dyn Fn(i64) -> String, fps: f64) -> Sequence<'a> {
+        Sequence { frames, name, fps }
+    }
+
     #[test]
     fn sequence_lists_every_frame_as_a_time_sample() {
         let frames = [1, 2, 3];
-        let t = usda_sequence_text(&frames, &name, &[("density", "float")], 1000.0, 24.0);
+        let t = usda_sequence_text(seq(&frames, &name, 24.0), &[("density", "float")], 1000.0);
         assert!(t.contains("    endTimeCode = 3\n    framesPerSecond = 24\n    metersPerUnit = 1000\n    startTimeCode = 1\n    timeCodesPerSecond = 24\n"), "{t}");
         assert!(t.contains("        asset filePath.timeSamples = {\n            1: @./aurora.0001.vdb@,\n            2: @./aurora.0002.vdb@,\n            3: @./aurora.0003.vdb@,\n        }\n"), "{t}");
         let p = std::env::temp_dir().join("aurora-usd-seq-never-written.usda");
         let fields = [("density", "float")];
-        assert!(write_usda_sequence(&p, &[], &name, &fields, 1000.0, 24.0).is_err());
-        assert!(write_usda_sequence(&p, &[2, 1], &name, &fields, 1000.0, 24.0).is_err());
-        assert!(write_usda_sequence(&p, &frames, &name, &fields, 1000.0, 0.0).is_err());
-        assert!(write_usda_sequence(&p, &frames, &|_| "a@b.vdb".into(), &fields, 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence(&p, seq(&[], &name, 24.0), &fields, 1000.0).is_err());
+        assert!(write_usda_sequence(&p, seq(&[2, 1], &name, 24.0), &fields, 1000.0).is_err());
+        assert!(write_usda_sequence(&p, seq(&frames, &name, 0.0), &fields, 1000.0).is_err());
+        assert!(write_usda_sequence(&p, seq(&frames, &|_| "a@b.vdb".into(), 24.0), &fields, 1000.0).is_err());
         assert!(!p.exists());
         // Refused inputs write nothing into a sink either.
         let mut sink = Vec::new();
-        assert!(write_usda_sequence_into(&mut sink, &[2, 1], &name, &fields, 1000.0, 24.0).is_err());
+        assert!(write_usda_sequence_into(&mut sink, seq(&[2, 1], &name, 24.0), &fields, 1000.0).is_err());
         assert!(sink.is_empty());
     }
 

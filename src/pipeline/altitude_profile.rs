@@ -43,9 +43,9 @@ use crate::physics::atmosphere::Atmosphere;
 use crate::physics::chemistry::CHANNEL_NAMES;
 use crate::physics::deposition::fang::KEV_PER_ION_PAIR;
 use crate::physics::emission::line_colour::{ColourTable, EmissionModel};
-use crate::pipeline::bake::plan::BakePlan;
-use crate::pipeline::bake::BakeError;
-use crate::pipeline::beams::{self, BeamStats};
+use crate::pipeline::plan::BakePlan;
+
+use crate::pipeline::beams::{self, BeamError, BeamStats};
 use crate::pipeline::deposit::StepDeposit;
 use crate::scene::Scene;
 use crate::util::progress::Progress;
@@ -219,7 +219,7 @@ pub fn bin_deposits(deposits: &[StepDeposit], model: &EmissionModel, table: &Col
 
 /// Traces the scene's beams exactly as the bake does and bins their
 /// deposits per curtain, from the atmosphere's bottom to the highest deposit.
-pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BakeError> {
+pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BeamError> {
     // The bake's own plan: its footprints, atmosphere and colour table.
     let plan = BakePlan::new(scene, progress);
     let atmosphere: &Atmosphere = &plan.atmosphere;

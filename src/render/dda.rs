@@ -143,6 +143,15 @@ impl Dda {
         Some((IVec3::from_array(self.cell), self.t, t1))
     }
 
+    /// The current cell and its span, as [`Dda::current`], the walk then
+    /// stepped past it.
+    #[inline]
+    fn take(&mut self, ray: &IndexRay) -> Option<(IVec3, f64, f64)> {
+        let cell = self.current()?;
+        self.advance(ray);
+        Some(cell)
+    }
+
     /// Steps to the next cell along the axis whose boundary comes first.
     #[inline]
     fn advance(&mut self, ray: &IndexRay) {
@@ -245,8 +254,7 @@ impl Iterator for LeafWalker<'_> {
         let f = self.field;
         loop {
             if let Some((dda, bi)) = &mut self.blk {
-                if let Some((c, t0, t1)) = dda.current() {
-                    dda.advance(&self.ray);
+                if let Some((c, t0, t1)) = dda.take(&self.ray) {
                     self.steps += 1;
                     let li = f.blocks[*bi as usize][slot(c, BLOCK_LOG2)];
                     if li != NONE && t1 > t0 {
@@ -257,8 +265,7 @@ impl Iterator for LeafWalker<'_> {
                 self.blk = None;
             }
             if let Some((dda, si)) = &mut self.sup {
-                if let Some((c, t0, t1)) = dda.current() {
-                    dda.advance(&self.ray);
+                if let Some((c, t0, t1)) = dda.take(&self.ray) {
                     self.steps += 1;
                     let bi = f.supers[*si as usize][slot(c, SUPER_LOG2)];
                     if bi != NONE && t1 > t0 {
@@ -277,8 +284,7 @@ impl Iterator for LeafWalker<'_> {
                     (c, t0, t1, si)
                 }
                 RootWalk::Dda(root) => {
-                    let (c, t0, t1) = root.current()?;
-                    root.advance(&self.ray);
+                    let (c, t0, t1) = root.take(&self.ray)?;
                     let clipped = f.root.get(&c).and_then(|&si| {
                         let (lo, hi) = f.super_bounds[si as usize];
                         self.ray.clip(lo, hi, t0, t1).map(|(p, q)| (c, p, q, si))
@@ -359,8 +365,7 @@ impl<'a> CellWalker<'a> {
     #[inline]
     fn find(&mut self) -> Option<CellSeg> {
         loop {
-            let (c, t0, t1) = self.dda.current()?;
-            self.dda.advance(&self.ray);
+            let (c, t0, t1) = self.dda.take(&self.ray)?;
             let l = c - self.origin;
             if t1 > t0 && mask_has(self.mask, cell_bit(l.x, l.y, l.z)) {
                 let at = self.field.corner_indices(self.leaf, l.x as usize, l.y as usize, l.z as usize);

@@ -90,35 +90,26 @@ pub fn choose(
 ) -> Result<ChosenGrids, RenderGridsError> {
     check_types(listing)?;
     let names: Vec<&str> = listing.iter().map(|g| g.name).collect();
-    let mut density = None;
-    let mut density_high = None;
-    let mut float_emission = None;
-    for g in float_grids {
-        match g.name.as_str() {
-            "density" if density.is_none() => density = Some(g),
-            "density_high" if density_high.is_none() => density_high = Some(g),
-            "emission" if float_emission.is_none() => float_emission = Some(g),
-            _ => {}
-        }
-    }
-    let mut emission = None;
-    let mut emission_high = None;
-    for g in vec3_grids {
-        match g.name.as_str() {
-            "emission" if emission.is_none() => emission = Some(g),
-            "emission_high" if emission_high.is_none() => emission_high = Some(g),
-            _ => {}
-        }
-    }
-    if emission.is_none() {
-        emission = float_emission.as_ref().map(grey);
-    }
+    let [density, density_high, float_emission] = first_named(float_grids, ["density", "density_high", "emission"]);
+    let [emission, emission_high] = first_named(vec3_grids, ["emission", "emission_high"]);
+    let emission = emission.or_else(|| float_emission.as_ref().map(grey));
     let density = with_high(density, density_high, "density")?;
     let emission = with_high(emission, emission_high, "emission")?;
     if density.is_none() && emission.is_none() {
         return Err(RenderGridsError::NoAuroraGrids(if names.is_empty() { "none".into() } else { names.join(", ") }));
     }
     Ok((density, emission))
+}
+
+/// The first of `grids` (in file order) named each of `names`.
+fn first_named<T, const N: usize>(grids: Vec<Grid<T>>, names: [&str; N]) -> [Option<Grid<T>>; N] {
+    let mut found = [(); N].map(|_| None);
+    for g in grids {
+        if let Some(k) = names.iter().position(|n| *n == g.name) {
+            found[k].get_or_insert(g);
+        }
+    }
+    found
 }
 
 /// `fine` plus its high column, when the file has one.

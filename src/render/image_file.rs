@@ -127,22 +127,28 @@ pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>),
     use exr::prelude::ReadSpecificChannel;
     let path = path.as_ref();
     let file = crate::util::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .specific_channels()
-        .required("Y")
-        .collect_pixels(
-            |res: Vec2<usize>, _| (res.0, vec![0.0f32; res.0 * res.1]),
-            |(w, px): &mut (usize, Vec<f32>), pos: Vec2<usize>, (y,): (f32,)| px[pos.1 * *w + pos.0] = y,
-        )
+    let channels = read().no_deep_data().largest_resolution_level().specific_channels().required("Y").collect_pixels(
+        |res: Vec2<usize>, _| (res.0, vec![0.0f32; res.0 * res.1]),
+        |(w, px): &mut (usize, Vec<f32>), pos: Vec2<usize>, (y,): (f32,)| px[pos.1 * *w + pos.0] = y,
+    );
+    let layer = first_valid_layer(channels, file, path)?;
+    let (_, values) = layer.channel_data.pixels;
+    Ok((layer.size.0, layer.size.1, values))
+}
+
+/// The first valid layer of the EXR `file` (named `path` in errors) as
+/// `channels` reads it, with all its attributes.
+fn first_valid_layer<C, Channels>(channels: C, file: std::fs::File, path: &Path) -> Result<exr::image::Layer<Channels>, RenderError>
+where
+    C: for<'s> ReadChannels<'s>,
+    exr::image::read::layers::ReadFirstValidLayer<C>: for<'s> ReadLayers<'s, Layers = exr::image::Layer<Channels>>,
+{
+    let img = channels
         .first_valid_layer()
         .all_attributes()
         .from_unbuffered(file)
         .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
-    let size = img.layer_data.size;
-    let (_, values) = img.layer_data.channel_data.pixels;
-    Ok((size.0, size.1, values))
+    Ok(img.layer_data)
 }
 
 /// Writes the red channel of `image` as an 8-bit greyscale PNG, linear with
@@ -194,22 +200,15 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
 /// [`read_exr`] of a file already opened (through `crate::util::input_file`);
 /// `path` names it in errors.
 pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderError> {
-    let img = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .rgba_channels(
-            |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
-            |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
-                px[pos.1 * *w + pos.0] = [r, g, b, a];
-            },
-        )
-        .first_valid_layer()
-        .all_attributes()
-        .from_unbuffered(file)
-        .map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.to_string() })?;
-    let size = img.layer_data.size;
-    let (_, pixels) = img.layer_data.channel_data.pixels;
-    Ok(Image { width: size.0, height: size.1, pixels, stats: RenderStats::default() })
+    let channels = read().no_deep_data().largest_resolution_level().rgba_channels(
+        |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
+        |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
+            px[pos.1 * *w + pos.0] = [r, g, b, a];
+        },
+    );
+    let layer = first_valid_layer(channels, file, path)?;
+    let (_, pixels) = layer.channel_data.pixels;
+    Ok(Image { width: layer.size.0, height: layer.size.1, pixels, stats: RenderStats::default() })
 }
 
 /// Writes an 8-bit sRGB PNG preview through the view transform (module doc).

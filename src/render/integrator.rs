@@ -9,7 +9,7 @@
 //! only on (seed, pixel index), never on the thread count or the order.
 
 use super::image::{Image, RenderStats};
-use super::march::{optical_depth_along_ray, radiance_advected, radiance_along_ray};
+use super::march::{optical_depth_along_ray, radiance_advected, radiance_along_ray, RaySpan};
 use super::prepared::Prepared;
 use super::sampler::{pixel_position, pixel_rng};
 use super::settings::Integration;
@@ -95,7 +95,7 @@ impl Prepared {
                         Integration::FixedStep(h) => h,
                         Integration::Exact => self.blur_step(),
                     };
-                    radiance_advected(&self.medium, v, ray.origin, ray.dir, t_end, h, offset, tau)
+                    radiance_advected(&self.medium, v, RaySpan { origin: ray.origin, dir: ray.dir, t_max: t_end }, h, offset, tau)
                 }
                 _ => radiance_along_ray(&self.medium, ray.origin, ray.dir, t_end, s.integration, offset),
             };

@@ -53,7 +53,16 @@ impl RayIntegral {
 /// world length); `t_max` may be infinite. `offset` in [0,1) is the sample
 /// position inside each fixed step (ignored by the exact integrator).
 pub fn radiance_along_ray(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, integration: Integration, offset: f64) -> RayIntegral {
-    integrate(medium, origin, dir, t_max, integration, offset, true)
+    integrate(medium, RaySpan { origin, dir, t_max }, integration, offset, true)
+}
+
+/// The part `s` in `[0, t_max]` of the ray `origin + s dir` (`dir` of unit
+/// length, `t_max` possibly infinite) that a march integrates over.
+#[derive(Clone, Copy, Debug)]
+pub struct RaySpan {
+    pub origin: DVec3,
+    pub dir: DVec3,
+    pub t_max: f64,
 }
 
 /// Which walk a primary ray takes with [`Integration::Exact`].
@@ -83,7 +92,7 @@ pub fn primary_path(medium: &Medium) -> PrimaryPath {
 /// walk whatever the medium holds: the reference the emission-only path is
 /// checked against.
 pub fn radiance_general(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64) -> RayIntegral {
-    walk(medium, origin, dir, t_max, Integration::Exact, 0.0, true)
+    walk(medium, RaySpan { origin, dir, t_max }, Integration::Exact, 0.0, true)
 }
 
 /// Optical depth along `origin + s dir`, `s` in `[0, t_max]` (shadow rays).
@@ -95,36 +104,29 @@ pub fn optical_depth_along_ray(
     integration: Integration,
     offset: f64,
 ) -> RayIntegral {
-    integrate(medium, origin, dir, t_max, integration, offset, false)
+    integrate(medium, RaySpan { origin, dir, t_max }, integration, offset, false)
 }
 
-fn integrate(
-    medium: &Medium,
-    origin: DVec3,
-    dir: DVec3,
-    t_max: f64,
-    integration: Integration,
-    offset: f64,
-    with_emission: bool,
-) -> RayIntegral {
+fn integrate(medium: &Medium, seg: RaySpan, integration: Integration, offset: f64, with_emission: bool) -> RayIntegral {
+    let RaySpan { origin, dir, t_max } = seg;
     debug_assert!((dir.length() - 1.0).abs() < 1e-9, "direction must be unit length");
     if with_emission && integration == Integration::Exact && primary_path(medium) == PrimaryPath::EmissionOnly {
         let Some(c) = medium.emission else { return RayIntegral::default() };
         let (l, work) = emission_integral(&medium.fields[c.field], c.channel, origin, dir, t_max);
         return RayIntegral { l, tau: 0.0, work };
     }
-    walk(medium, origin, dir, t_max, integration, offset, with_emission)
+    walk(medium, seg, integration, offset, with_emission)
 }
 
 /// The emission-absorption walk of `integration` (optical depth and, with
 /// `with_emission`, `int T e`), whatever the medium holds.
-fn walk(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, integration: Integration, offset: f64, with_emission: bool) -> RayIntegral {
+fn walk(medium: &Medium, seg: RaySpan, integration: Integration, offset: f64, with_emission: bool) -> RayIntegral {
     let mut acc = Accum::default();
     let mut work = 0;
-    if t_max > 0.0 {
+    if seg.t_max > 0.0 {
         match integration {
-            Integration::Exact => work = walk_exact(medium, origin, dir, t_max, with_emission, &mut acc),
-            Integration::FixedStep(h) => work = walk_fixed(medium, origin, dir, t_max, h, offset, with_emission, &mut acc),
+            Integration::Exact => work = walk_exact(medium, seg, with_emission, &mut acc),
+            Integration::FixedStep(h) => work = walk_fixed(medium, seg, h, offset, with_emission, &mut acc),
         }
     }
     RayIntegral { l: acc.l, tau: acc.tau, work: work.max(acc.parts) }
@@ -177,7 +179,8 @@ fn channel_in(c: Option<Channel>, field: usize) -> Option<usize> {
     c.filter(|c| c.field == field).map(|c| c.channel)
 }
 
-fn walk_exact(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, with_emission: bool, acc: &mut Accum) -> u64 {
+fn walk_exact(medium: &Medium, seg: RaySpan, with_emission: bool, acc: &mut Accum) -> u64 {
+    let RaySpan { origin, dir, t_max } = seg;
     let sigma = medium.sigma_t;
     let emission = if with_emission { medium.emission } else { None };
     let mut n = 0u64;
@@ -263,17 +266,8 @@ fn walk_exact(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, with_emiss
 /// from the ray's entry into the volume's bounds grown by the farthest a
 /// lookup can move (`max_speed |tau|`); the sample at `p` reads sigma_t and
 /// the emission at `p - v(p) tau`. At tau = 0 the fixed-step march.
-#[allow(clippy::too_many_arguments)]
-pub fn radiance_advected(
-    medium: &Medium,
-    velocity: &Velocity,
-    origin: DVec3,
-    dir: DVec3,
-    t_max: f64,
-    h: f64,
-    offset: f64,
-    tau: f64,
-) -> RayIntegral {
+pub fn radiance_advected(medium: &Medium, velocity: &Velocity, seg: RaySpan, h: f64, offset: f64, tau: f64) -> RayIntegral {
+    let RaySpan { origin, dir, t_max } = seg;
     let mut acc = Accum::default();
     let Some((lo, hi)) = medium.world_bounds() else { return RayIntegral::default() };
     let grow = DVec3::splat(velocity.max_speed() * tau.abs() + h);
@@ -317,8 +311,8 @@ fn clip_box(origin: DVec3, dir: DVec3, lo: DVec3, hi: DVec3, t_max: f64) -> Opti
     (t0 < t1 && t0.is_finite() && t1.is_finite()).then_some((t0, t1))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn walk_fixed(medium: &Medium, origin: DVec3, dir: DVec3, t_max: f64, h: f64, offset: f64, with_emission: bool, acc: &mut Accum) -> u64 {
+fn walk_fixed(medium: &Medium, seg: RaySpan, h: f64, offset: f64, with_emission: bool, acc: &mut Accum) -> u64 {
+    let RaySpan { origin, dir, t_max } = seg;
     let mut fields: Vec<usize> = Vec::with_capacity(2);
     for c in [medium.sigma_t, if with_emission { medium.emission } else { None }].into_iter().flatten() {
         if !fields.contains(&c.field) {

@@ -493,33 +493,24 @@ impl Heightfield {
             }
             t = t_end;
             if tx <= ty {
-                if d.x > 0.0 {
-                    i += 1;
-                    if i >= nx - 1 {
-                        return None;
-                    }
-                } else {
-                    if i == 0 {
-                        return None;
-                    }
-                    i -= 1;
-                }
+                i = step_cell(i, nx - 1, d.x)?;
                 tx = next(&self.xs, i, o.x, d.x);
             } else {
-                if d.y > 0.0 {
-                    j += 1;
-                    if j >= ny - 1 {
-                        return None;
-                    }
-                } else {
-                    if j == 0 {
-                        return None;
-                    }
-                    j -= 1;
-                }
+                j = step_cell(j, ny - 1, d.y)?;
                 ty = next(&self.ys, j, o.y, d.y);
             }
         }
+    }
+}
+
+/// The cell after cell `k` (of `cells` along one axis) for a ray whose
+/// direction along that axis is `d`: the next one up for `d > 0`, else the
+/// next one down; `None` past either end.
+fn step_cell(k: usize, cells: usize, d: f64) -> Option<usize> {
+    if d > 0.0 {
+        Some(k + 1).filter(|&next| next < cells)
+    } else {
+        k.checked_sub(1)
     }
 }
 

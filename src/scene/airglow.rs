@@ -1,8 +1,9 @@
 //! `[airglow]`: the night sky's own light, seen behind the volume by the
 //! reference renderer (`crate::physics::airglow` holds the model and its
-//! sources). Render-only: no stage of the bake reads it. No checks here
-//! beyond [`AirglowParams::ranges`], which `super::validation` applies.
+//! sources). Render-only: no stage of the bake reads it. Its keys'
+//! ranges are [`AIRGLOW_KEYS`].
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -35,15 +36,22 @@ impl Default for AirglowParams {
 /// a stable auroral red arc); beyond it the "airglow" is aurora.
 pub const MAX_ZENITH_R: f64 = 1e4;
 
-impl AirglowParams {
-    /// Each numeric key with its allowed range `[lo, hi]` (inclusive).
-    pub fn ranges(&self) -> [(&'static str, f64, f64, f64); 5] {
-        [
-            ("scale", self.scale, 0.0, 100.0),
-            ("green_r", self.green_r, 0.0, MAX_ZENITH_R),
-            ("red_r", self.red_r, 0.0, MAX_ZENITH_R),
-            ("sodium_r", self.sodium_r, 0.0, MAX_ZENITH_R),
-            ("hydroxyl_r", self.hydroxyl_r, 0.0, MAX_ZENITH_R),
-        ]
-    }
-}
+/// Every key of `[airglow]`: name, unit, allowed range and description (`super::keys`).
+pub const AIRGLOW_KEYS: &[KeySpec] = &[
+    KeySpec::new("on", "", Range::Any, "draw the airglow behind the volume (`false`: a black sky, as before it existed)"),
+    KeySpec::new("scale", "", Range::Num(Num::closed(0.0, 100.0)), "scale on every layer's zenith brightness"),
+    KeySpec::new("green_r", "R", Range::Num(Num::closed(0.0, MAX_ZENITH_R)), "zenith brightness of the OI 557.7 nm layer (97 km)"),
+    KeySpec::new(
+        "red_r",
+        "R",
+        Range::Num(Num::closed(0.0, MAX_ZENITH_R)),
+        "zenith brightness of the OI 630.0 nm layer (250 km); OI 636.4 nm comes with it at 1 / 2.997",
+    ),
+    KeySpec::new("sodium_r", "R", Range::Num(Num::closed(0.0, MAX_ZENITH_R)), "zenith brightness of the sodium D lines (589 nm, 92 km)"),
+    KeySpec::new(
+        "hydroxyl_r",
+        "R",
+        Range::Num(Num::closed(0.0, MAX_ZENITH_R)),
+        "zenith brightness of the OH Meinel bands of the visible red (6-1, 7-2, 8-3 at 650-727 nm, 87 km), together",
+    ),
+];

@@ -1,7 +1,8 @@
-//! The electrons and the world they fall through: `[beams]` (how many, how
-//! they deposit, where they start), `[atmosphere]` and `[earth]`, each with
-//! its defaults. No checks here (`super::validation`).
+//! `[beams]`: how many electron beams, how they deposit their energy and
+//! where they start, with the defaults.
+//! [`BEAMS_KEYS`]: each key's unit, allowed range and description.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 /// Electron beams traced down the geomagnetic field (Baranoski et al. 2000).
@@ -72,75 +73,6 @@ pub enum Deposition {
     Csda,
 }
 
-/// The neutral atmosphere model (`crate::physics::atmosphere`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub enum AtmosphereModel {
-    /// U.S. Standard Atmosphere 1976, 50-700 km: public domain, compiled in.
-    Us1976,
-    /// NRLMSIS 2.1, 67 N, 20 E, 2020-01-15 00:00 UT, F10.7 = 150, Ap = 15:
-    /// research, academic and non-profit use only, read from `nrlmsis21.csv`
-    /// in the data folder (docs/data.md).
-    Nrlmsis21,
-}
-
-/// The ambient night-time ionosphere and NO the chemistry needs
-/// (`crate::physics::chemistry::ambient`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum Ionosphere {
-    /// Closed forms: Te = Ti = Tn, a Chapman night-time F layer, a
-    /// published NO peak; compiled in.
-    ClosedForm,
-    /// NCAR GLOW 4.0.4's (IRI above 200 km, NOEM's NO): no sale, read from
-    /// `ionosphere.csv` in the data folder (docs/data.md).
-    Glow,
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct AtmosphereParams {
-    /// `us1976` (default) or `nrlmsis21`.
-    pub model: AtmosphereModel,
-    /// `closed-form` (default) or `glow`.
-    pub ionosphere: Ionosphere,
-    /// The folder holding the tables that are not compiled in
-    /// (`nrlmsis21.csv`, `ionosphere.csv`), relative to the scene file's
-    /// folder; unset, the `AURORA_DATA` environment variable names it, else
-    /// the source tree's `data/` of the build.
-    pub data: Option<String>,
-    /// The folder `data` is relative to: the scene file's, set when the
-    /// scene is read from a file (not part of the scene's TOML).
-    #[serde(skip)]
-    pub base_dir: Option<std::path::PathBuf>,
-}
-
-impl Default for AtmosphereParams {
-    fn default() -> Self {
-        Self { model: AtmosphereModel::Us1976, ionosphere: Ionosphere::ClosedForm, data: None, base_dir: None }
-    }
-}
-
-/// The Earth under the scene (`crate::geometry::earth`).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct EarthParams {
-    /// Radius of the spherical Earth, km (6371, the mean radius); 0 is a
-    /// flat ground where altitude is z.
-    pub radius_km: f64,
-    /// Ground coordinates `[x, y]` km of the geomagnetic (dipole) pole:
-    /// when given the field at each beam's start follows the dipole
-    /// (`crate::physics::geomagnetic_field`) and `beams.b_inclination_deg` and
-    /// `b_declination_deg` are unused; none by default.
-    pub magnetic_pole: Option<[f64; 2]>,
-}
-
-impl Default for EarthParams {
-    fn default() -> Self {
-        Self { radius_km: crate::geometry::earth::MEAN_RADIUS_KM, magnetic_pole: None }
-    }
-}
-
 /// Placement of beam starts over the footprint, in proportion to its flux.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -151,3 +83,20 @@ pub enum BeamStarts {
     /// Independent random points (for comparison).
     Random,
 }
+
+/// Every key of `[beams]`: name, unit, allowed range and description (`super::keys`).
+pub const BEAMS_KEYS: &[KeySpec] = &[
+    KeySpec::new("count", "", Range::Int { min: 1, max: 100_000_000 }, "beams over all curtains; with `target_noise`, the most it may use"),
+    KeySpec::new("target_noise", "", Range::Num(Num::closed(0.0, 1.0)), "relative RMS noise of the emission grid to aim for (0 = off: use `count`): a pilot of 2 x 500 and 2 x 125 beams measures the scene's noise and sets the beam count from the law `noise^2 = a/N + b/N^1.5` fitted to them, at most `count`; `bake.json` `stats.noise` says what it measured and chose"),
+    KeySpec::new("top_km", "km", Range::Num(Num::closed(80.0, 1000.0)), "altitude where beams start"),
+    KeySpec::new("top_noise_km", "km", Range::Num(Num::closed(0.0, 100.0)), "amplitude of the high-frequency 1D noise on the start height"),
+    KeySpec::new("top_noise_freq", "1/km", Range::Num(Num::closed(0.0, 1e3)), "spatial frequency of that noise along the curtain"),
+    KeySpec::new("alpha_d_deg", "deg", Range::Num(Num::open_max(0.0, 90.0)), "upper bound alpha_D of the deflection angle; a curtain whose field dips no more than alpha_D below the horizon where its beams start is refused (its electrons could go up or sideways)").note("degrees: at 90 a beam no longer moves along B"),
+    KeySpec::new("delta_alpha_deg", "deg", Range::Rule("in [0, beams.alpha_d_deg]"), "width of the deflection range: alpha is uniform in [alpha_D - delta, alpha_D]"),
+    KeySpec::new("length_km", "km", Range::Num(Num::POSITIVE), "beam length L: a step is s = L dt u along B (u uniform)"),
+    KeySpec::new("dt", "", Range::Num(Num::closed(1e-6, 1.0)), "step parameter: at most 1/dt deflections per beam (`csda` only: Fang beams go on until their deposition is complete)"),
+    KeySpec::new("b_inclination_deg", "deg", Range::Num(Num::closed(10.0, 90.0)), "the geomagnetic field's dip below the horizon (90 = vertical)"),
+    KeySpec::new("b_declination_deg", "deg", Range::Num(Num::FINITE), "azimuth of the field's horizontal part, from +y towards +x"),
+    KeySpec::new("deposition", "", Range::Word(&["expected", "sampled", "csda"]), "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
+    KeySpec::new("starts", "", Range::Word(&["stratified", "random"]), "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
+];

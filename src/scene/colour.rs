@@ -1,6 +1,8 @@
 //! The emission's colour: `[colour]` (the line model and the colour mode)
-//! with its defaults. No checks here (`super::validation`).
+//! with its defaults.
+//! [`COLOUR_KEYS`]: each key's unit, allowed range and description.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
 /// Whose colours (`observer`): "camera" (default) or "eye" (CIE 1931).
@@ -71,3 +73,13 @@ pub fn report_colormap() -> Vec<[f64; 4]> {
         [300.0, 0.5, 0.05, 0.4],
     ]
 }
+
+/// Every key of `[colour]`: name, unit, allowed range and description (`super::keys`).
+pub const COLOUR_KEYS: &[KeySpec] = &[
+    KeySpec::new("mode", "", Range::Word(&["physical", "colormap"]), "`physical` (the emission lines through the observer's colour response, `observer`) or `colormap` (the `colormap` table)"),
+    KeySpec::new("observer", "", Range::Word(&["camera", "eye"]), "whose colours the lines get: `camera` (a digital camera, the Nikon D5100 measured by Darrodi et al. 2015, at daylight white balance with a ColorChecker-fitted matrix: 557.7 nm a saturated green, as photographs show it) or `eye` (the CIE 1931 observer: 557.7 nm yellow-green); the bake writes its RGB and the air's channels are weighed for it (docs/colour.md)"),
+    KeySpec::new("lines", "", Range::Word(&["chemistry", "simple"]), "the line model of `mode = \"physical\"`: `chemistry` (steady-state ion and excited-state chemistry driven by the local ionization rate, after NCAR GLOW's; docs/physics.md) or `simple` (yields in proportion to mole fractions, one quencher per state: the older rule of thumb)"),
+    KeySpec::new("noise_km", "km", Range::Num(Num::closed(0.0, 200.0)), "amplitude of the low-frequency noise on the altitude used for colour (not intensity)"),
+    KeySpec::new("noise_freq", "1/km", Range::Num(Num::closed(0.0, 1e3)), "spatial frequency of that noise along the curtain"),
+    KeySpec::new("colormap", "km, linear Rec.709", Range::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")"), "rows `[altitude_km, r, g, b]` (colour per unit deposited power), altitudes ascending, used when `mode = \"colormap\"`; the default is the 2014 report's look"),
+];

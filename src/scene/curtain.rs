@@ -1,12 +1,10 @@
-//! The curtains and their motion: `[[curtain]]` (where a footprint lies and
-//! how hard it is driven), `[footprint]` (the fluid that shapes it) and
-//! `[animation]` (closed-form motion and the red trail), each with the
-//! defaults a missing table or key takes. No checks here
-//! (`super::validation`).
+//! `[[curtain]]`: where one curtain's footprint lies and how hard it is
+//! driven, with the defaults a missing key takes.
+//! [`CURTAIN_KEYS`]: each key's unit, allowed range and description.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 
-/// One auroral curtain: where its footprint lies and how hard it is driven.
 /// Serialised through [`CurtainToml`], which leaves out `center`, `length`
 /// and `rotation_deg` when `path` places the curtain.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -102,177 +100,22 @@ impl From<Curtain> for CurtainToml {
     }
 }
 
-/// How a footprint is made (`crate::pipeline::footprint`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub enum FootprintModel {
-    /// A vortex sheet rolled up by the Kelvin-Helmholtz instability
-    /// (`crate::pipeline::footprint::sheet`), drawn with rays along it.
-    Sheet,
-    /// The 2014 report's sine-modulated band folded by a short stable-fluids
-    /// run (Stam 1999): the `band_fraction`, `velocity_*`, `density_waves`,
-    /// `steps`, `dt` and `pressure_iterations` keys.
-    Fluid2014,
-}
+/// What `curtain.path` accepts.
+pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
+     total length at most 1e4 km; replaces center, length and rotation_deg";
 
-/// The footprint of each curtain: the vortex sheet (default) or the 2014
-/// report's 2D stable-fluids simulation (Stam 1999).
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct FootprintParams {
-    /// "sheet" (a rolled-up vortex sheet) or "fluid2014" (the report's fluid).
-    pub model: FootprintModel,
-    /// Grid cells along and across the curtain.
-    pub resolution: [usize; 2],
-    /// Number of simulation steps.
-    pub steps: usize,
-    /// Time step in cell units (semi-Lagrangian advection is stable for any).
-    pub dt: f64,
-    /// Gauss-Seidel / Jacobi iterations of the pressure projection.
-    pub pressure_iterations: usize,
-    /// Initial band thickness as a fraction of the footprint width.
-    pub band_fraction: f64,
-    /// Number of sine periods of the initial velocity along the band.
-    pub velocity_waves: f64,
-    /// Initial velocity amplitude, cells per unit time.
-    pub velocity_amplitude: f64,
-    /// Number of sine periods of the initial density modulation along the band.
-    pub density_waves: f64,
-    /// Wavelength of the noise curve that bends the band, in curtain lengths.
-    pub bend_wavelength: f64,
-    /// Footprint densities below this (of a peak of 1) emit no beams.
-    pub threshold: f64,
-    /// Length over which the footprint fades to 0 at each end of the
-    /// curtain (a smooth step), km; 0 keeps straight ends.
-    pub end_fade_km: f64,
-    /// Sheet: spacing of the vortex markers along it at the start, km.
-    pub sheet_spacing_km: f64,
-    /// Sheet: smoothing length of the vortex-blob kernel, km (the scale
-    /// below which the sheet does not curl).
-    pub sheet_smoothing_km: f64,
-    /// Sheet: amplitude of the initial displacement spectrum (its slope at
-    /// wavelengths of 200 km and more, dimensionless).
-    pub sheet_amplitude: f64,
-    /// Sheet: how far it rolls up: the velocity jump across it times the
-    /// time integrated, km.
-    pub sheet_rollup_km: f64,
-    /// Sheet: Runge-Kutta steps of the roll-up.
-    pub sheet_steps: usize,
-    /// Sheet: full width at half maximum of the sheet across itself, km.
-    pub sheet_thickness_km: f64,
-    /// Sheet: mean spacing of the rays along it, km.
-    pub ray_spacing_km: f64,
-    /// Sheet: width (Gaussian sigma) of a ray along it, km.
-    pub ray_width_km: f64,
-    /// Sheet: brightest ray over the faintest (brightness log-uniform in
-    /// [1, ray_contrast]).
-    pub ray_contrast: f64,
-    /// Sheet: diffuse glow between the rays, a 3 km blur of the sheet with
-    /// this peak (of the sheet's 1).
-    pub glow: f64,
-    /// For validation: a footprint of density 1 over the whole box (no
-    /// fluid, no band, no bend), so every beam carries the curtain's
-    /// `energy_flux` and line yields that depend on the local flux can be
-    /// compared with a one-dimensional model (NCAR GLOW) at a known flux.
-    pub uniform: bool,
-}
-
-impl Default for FootprintParams {
-    fn default() -> Self {
-        Self {
-            model: FootprintModel::Sheet,
-            resolution: [512, 128],
-            steps: 12,
-            dt: 1.0,
-            pressure_iterations: 40,
-            band_fraction: 0.08,
-            velocity_waves: 6.0,
-            velocity_amplitude: 2.5,
-            density_waves: 9.0,
-            bend_wavelength: 0.6,
-            threshold: 0.03,
-            end_fade_km: 25.0,
-            sheet_spacing_km: 0.4,
-            sheet_smoothing_km: 0.8,
-            sheet_amplitude: 0.05,
-            sheet_rollup_km: 30.0,
-            sheet_steps: 20,
-            sheet_thickness_km: 0.5,
-            ray_spacing_km: 3.0,
-            ray_width_km: 0.4,
-            ray_contrast: 10.0,
-            glow: 0.2,
-            uniform: false,
-        }
-    }
-}
-
-/// The most earlier times `animation.trail_samples` may ask for.
-pub const MAX_TRAIL_SAMPLES: u32 = 16;
-
-/// Motion in time (`crate::pipeline::motion`): closed form in t, so any frame costs
-/// one bake. Speeds from the time scales observers report; every motion
-/// parameter at 0 gives identical frames.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct AnimationParams {
-    /// Frames per second of a sequence (`aurora bake --frames`).
-    pub fps: f64,
-    /// Time of the bake, s; frame N of a sequence is baked at
-    /// `time_s + (N - 1) / fps`.
-    pub time_s: f64,
-    /// Phase speed of the folds (the footprint's vortex row) along the
-    /// curtain, km/s (spirals drift about 4 km/s, surges about 2 km/s).
-    pub fold_speed_kms: f64,
-    /// Relative swing of the fold-driving velocity (folds deepen and relax), in [0, 1).
-    pub fold_breathing: f64,
-    /// Period of that swing, s.
-    pub fold_breathing_period_s: f64,
-    /// Speed at which the bend curve travels along the curtain, km/s.
-    pub bend_speed_kms: f64,
-    /// Rate at which the bend curve changes shape, 1/s (its noise moves one
-    /// lattice cell in 1 / rate seconds).
-    pub bend_change_hz: f64,
-    /// Amplitude of the curtain's drift across its axis, km (bounded: a
-    /// sine of period `drift_period_s`, so curtains never leave the view).
-    pub drift_km: f64,
-    pub drift_period_s: f64,
-    /// Speed of the rays (the start-height and colour noise) along the
-    /// curtain, km/s (up to about 25 km/s).
-    pub ray_speed_kms: f64,
-    /// Depth of pulsating patches, in [0, 1] (0 = off): each patch's
-    /// electron flux swings between (1 - pulsation) and 1 times its value.
-    pub pulsation: f64,
-    /// Size of a pulsating patch, km.
-    pub pulsation_patch_km: f64,
-    /// Range of patch periods, s (most often 6-10 s; a few s to 20 s).
-    pub pulsation_period_s: [f64; 2],
-    /// The red trail (`crate::pipeline::red_trail`): how many earlier times of the
-    /// motion the O(1D) lines (630.0, 636.4 nm) of a bake at `time_s` sum,
-    /// each weighted by the decay of O(1D) at the deposit's altitude;
-    /// 0 (the default) is off: every line at `time_s`. At most
-    /// [`MAX_TRAIL_SAMPLES`]; each costs one more trace of the beams (the
-    /// red only).
-    pub trail_samples: u32,
-}
-
-impl Default for AnimationParams {
-    fn default() -> Self {
-        Self {
-            fps: 24.0,
-            time_s: 0.0,
-            fold_speed_kms: 3.0,
-            fold_breathing: 0.3,
-            fold_breathing_period_s: 40.0,
-            bend_speed_kms: 1.0,
-            bend_change_hz: 1.0 / 60.0,
-            drift_km: 8.0,
-            drift_period_s: 300.0,
-            ray_speed_kms: 10.0,
-            pulsation: 0.0,
-            pulsation_patch_km: 25.0,
-            pulsation_period_s: [6.0, 10.0],
-            trail_samples: 0,
-        }
-    }
-}
+/// Every key of `[curtain]`: name, unit, allowed range and description (`super::keys`).
+pub const CURTAIN_KEYS: &[KeySpec] = &[
+    KeySpec::new("center", "km", Range::Each { min: -1e4, max: 1e4, what: "each coordinate", suffix: " km" }, "centre of the footprint on the ground plane, `[x, y]`"),
+    KeySpec::new("path", "km", Range::Rule(PATH_RULE), "the curtain along a smooth curve (centripetal Catmull-Rom) through these `[x, y]` points: the ground track of its lower border (110 km), lifted up the field to the beams' start; replaces `center`, `length` and `rotation_deg` (giving both is an error)"),
+    KeySpec::new("length", "km", Range::Num(Num::open_min(0.0, 1e4)), "length of the footprint box along the curtain's axis"),
+    KeySpec::new("width", "km", Range::Num(Num::open_min(0.0, 1e4)), "width of the footprint box across the axis (room for folds and bends)"),
+    KeySpec::new("rotation_deg", "deg", Range::Num(Num::FINITE), "direction of the curtain's axis, counter-clockwise from +x"),
+    KeySpec::new("energy_flux", "mW/m^2", Range::Num(Num::open_min(0.0, 1e4)), "peak precipitating electron energy flux (1 mW/m^2 = 1 erg cm^-2 s^-1)"),
+    KeySpec::new("char_energy_kev", "keV", Range::Num(Num::closed(0.05, 100.0)), "characteristic energy E0 of the Maxwellian electron spectrum: harder electrons reach lower"),
+    KeySpec::new("soft_fraction", "", Range::Num(Num::closed(0.0, 1.0)), "share of the energy flux in a soft Maxwellian component (the electrons that light the red tops above 200 km)"),
+    KeySpec::new("soft_energy_kev", "keV", Range::Num(Num::closed(0.01, 100.0)), "characteristic energy of the soft component"),
+    KeySpec::new("beam_weight", "", Range::Num(Num::open_min(0.0, 1e9)), "share of the scene's beams given to this curtain (a relative weight)"),
+    KeySpec::new("bend_km", "km", Range::Num(Num::closed(0.0, 1e4)), "amplitude of the noise curve that bends the band (keep it below `width / 2`)"),
+    KeySpec::new("seed", "", Range::Any, "seed offset, so that curtains differ"),
+];

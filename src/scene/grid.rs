@@ -1,62 +1,10 @@
-//! The estimate and its storage: `[photons]` (the kernel and the gather) and
-//! `[grid]` (voxel size, pruning, compression, the high column), each with
-//! its defaults and limits. No checks here (`super::validation`).
+//! `[grid]`: the stored grids (voxel size, pruning, compression, the high
+//! column), with the defaults and limits.
+//! [`GRID_KEYS`]: each key's unit, allowed range and description.
 
+use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
 use std::fmt;
-
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum GatherMethod {
-    /// Gaussian kernel density estimate with a kiddo kd-tree gather.
-    Kdtree,
-    /// Each photon splats its kernel into the voxels it covers.
-    Splat,
-    /// The 2014 report: photons binned in a uniform grid, kernel-weighted
-    /// *average* of colours (no density estimate). For comparison only.
-    Report2014,
-}
-
-/// Volumetric photon mapping: Gaussian kernel density estimation.
-#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct PhotonParams {
-    /// Kernel radius r (the Gaussian's standard deviation), km.
-    pub radius_km: f64,
-    /// The kernel is cut off at this many radii (and renormalised).
-    pub cutoff: f64,
-    /// Relative amplitude of the medium-frequency 2D noise on the radius.
-    pub radius_noise: f64,
-    /// Spatial frequency of that noise, cycles per km.
-    pub radius_noise_freq: f64,
-    pub gather: GatherMethod,
-    /// Kernel shape: each step's power spread along its segment, or at its
-    /// end point (for comparison).
-    pub kernel: KernelShape,
-}
-
-impl Default for PhotonParams {
-    fn default() -> Self {
-        Self {
-            radius_km: 0.5,
-            cutoff: 2.5,
-            radius_noise: 0.3,
-            radius_noise_freq: 0.05,
-            gather: GatherMethod::Splat,
-            kernel: KernelShape::Segment,
-        }
-    }
-}
-
-/// Photon kernel shape (`crate::pipeline::photons`).
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "kebab-case")]
-pub enum KernelShape {
-    /// The Gaussian convolved with each step's segment (photon beams; default).
-    Segment,
-    /// The Gaussian at each step's end point.
-    Point,
-}
 
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
@@ -72,7 +20,7 @@ pub enum Compression {
 
 /// Voxel size: a number of km, or "auto": one voxel about one pixel of the
 /// scene's camera at the nearest aurora, resolved by the bake
-/// (`crate::pipeline::bake::voxel::auto_voxel_size`).
+/// (`crate::pipeline::voxel::auto_voxel_size`).
 #[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum VoxelSize {
@@ -144,9 +92,17 @@ pub const DEFAULT_HIGH_ABOVE_KM: f64 = 240.0;
 /// within 0.37 %; 4 bits give 51 MB, 0.29 % and 0.41 %.
 pub const DEFAULT_MANTISSA_BITS: u32 = 5;
 
+/// Largest `grid.prune`: half the light may go, no more (beyond that the
+/// "error budget" is no longer a small error).
+pub const MAX_PRUNE: f64 = 0.5;
+
 /// Largest `grid.mantissa_bits`: a full float's mantissa
 /// (`vdb::mantissa::FLOAT_MANTISSA_BITS`, which a test there checks).
 pub const MAX_MANTISSA_BITS: u32 = 23;
+
+/// What `grid.lines` takes: the names of [`super::validation::LINE_KEYS`].
+pub const LINES_RULE: &str =
+    "a list of distinct line names from \"5577\", \"6300\", \"6364\", \"4278\", \"n2_1p\"; needs colour.mode = \"physical\"";
 
 /// Largest `grid.high_voxel_factor`.
 pub const MAX_HIGH_VOXEL_FACTOR: u32 = 4;
@@ -205,7 +161,7 @@ pub struct GridParams {
     /// (0 = keep every leaf with any emission).
     pub prune: f64,
     /// Emission lines written as float grids of their own (`line_5577`,
-    /// ...), in rayleigh per km: names of [`LINE_KEYS`].
+    /// ...), in rayleigh per km: names of [`LINE_KEYS`](super::validation::LINE_KEYS).
     pub lines: Vec<String>,
     /// Also store the emission pattern's velocity, a vec3 grid `v` in km/s
     /// on the emission's active voxels, for motion blur (Cycles'
@@ -240,3 +196,21 @@ impl Default for GridParams {
         }
     }
 }
+
+/// Every key of `[grid]`: name, unit, allowed range and description (`super::keys`).
+pub const GRID_KEYS: &[KeySpec] = &[
+    KeySpec::new("voxel_size", "km", Range::NumOrWord(Num::POSITIVE, &["auto"]), "voxel edge, or `\"auto\"`: one voxel projects to about one pixel at the nearest aurora (never below half the kernel radius, never above twice its smallest value); `bake.json` says what it picked"),
+    KeySpec::new("density_a", "1/km", Range::Num(Num::closed(0.0, 1e6)), "artistic extinction where the aurora is: `density = a exp(-b (h - base))`; 0 (the default) is the physical, optically thin air: an empty `density` grid"),
+    KeySpec::new("density_b", "1/km", Range::Num(Num::closed(0.0, 10.0)), "fall-off of that extinction with altitude"),
+    KeySpec::new("density_base_km", "km", Range::Num(Num::FINITE), "base altitude of that extinction"),
+    KeySpec::new("half_emission", "", Range::Any, "store `emission` (and `emission_high`) as half floats: 2^-11 relative rounding per voxel; a grid whose values pass 65504 is stored as full floats, with a warning"),
+    KeySpec::new("half_density", "", Range::Any, "store `density` (and `density_high`) as half floats (as `half_emission`)"),
+    KeySpec::new("mantissa_bits", "bits", Range::Int { min: 1, max: MAX_MANTISSA_BITS as i64 }, "mantissa bits kept of every stored `density` and `emission` value: each is rounded to the nearest number with this many (at most 2^-(bits+1) relative; unbiased), so that ZIP compresses the cleared bits away; 10 keeps a half float whole, 23 a full float; the grids' metadata `aurora_mantissa_bits` says what was kept"),
+    KeySpec::new("cycles_shell", "", Range::Any, "a one-voxel shell of active zeros around the aurora (and its high column), so that Cycles' biased volume mode renders its edges exactly (the field is unchanged); off by default: the aurora's edges are its faint kernel tails, and the Cycles cross-check agrees without it"),
+    KeySpec::new("high_above_km", "km", Range::Num(Num::closed(0.0, 1e4)), "altitude above which the faint soft-electron column is stored at `high_voxel_factor` times the voxel size, in grids of its own (`emission_high`, `density_high`) that a renderer adds to `emission` and `density` (blended over two coarse voxels: no seam); `aurora render` and the add-on add them"),
+    KeySpec::new("high_voxel_factor", "", Range::Int { min: 1, max: MAX_HIGH_VOXEL_FACTOR as i64 }, "voxel size of the high column over `voxel_size`; 1 stores one grid per field at the voxel size"),
+    KeySpec::new("compression", "", Range::Word(&["none", "zip", "active-mask", "zip-active-mask", "blosc", "blosc-active-mask"]), "VDB value compression; `zip-active-mask` (deflate, which every OpenVDB reader has; written with libdeflate) stores the rounded mantissas in 0.59x of `blosc-active-mask`'s bytes (OpenVDB's and Houdini's default: LZ4 with byte shuffle, faster to write, but it finds no repeats in photon noise)"),
+    KeySpec::new("prune", "", Range::Num(Num::closed(0.0, MAX_PRUNE)), "error budget of contribution-based pruning: the 8^3 blocks faintest in the camera's image are dropped while their share of the image's light stays within it (0 = keep all); `bake.json` `stats.prune` reports what went"),
+    KeySpec::new("lines", "", Range::Rule(LINES_RULE), "emission lines written as float grids of their own in the same `.vdb`, `line_NAME`, in rayleigh per km (a ray's integral is the line's brightness in R; 1 R/km = 10 photons cm^-3 s^-1): `5577`, `6300` (630.0 nm alone), `6364`, `4278`, `n2_1p`; empty by default; colour noise applies to `emission` only; every three lines cost one more gather"),
+    KeySpec::new("velocity", "", Range::Any, "also store `v`, the emission pattern's velocity in km/s on the emission's voxels (a vec3 grid; half floats with `half_emission`), for motion blur in Cycles (the add-on sets the Volume's velocity grid) and `render.shutter_s`; off by default: it adds about half to a frame's bytes (52 % on the default scene)"),
+];

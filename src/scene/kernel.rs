@@ -1,11 +1,11 @@
 //! The photon kernel's radius as the scene sets it: `photons.radius_km`,
 //! its relative noise amplitude, and the smallest and largest radius they
 //! give. The one place that reads `photons.radius_km`: the bake's plan
-//! (`crate::pipeline::bake::plan`, the radius field and the automatic voxel size) and
-//! the memory budget (`crate::pipeline::memory_budget`) both take it from here, so they
+//! (`crate::pipeline::plan`, the radius field and the automatic voxel size) and
+//! the memory budget (`crate::pipeline::memory::budget`) both take it from here, so they
 //! cannot disagree on the kernel's reach or on the automatic voxel's floor.
 
-use super::grid::PhotonParams;
+use super::photons::PhotonParams;
 
 /// The kernel radius the scene asks for (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -10,45 +10,66 @@
 //! checks every range once and names the file, line, key, value and the
 //! allowed range. Stages downstream trust a validated scene.
 //!
-//! The tables, each struct beside its defaults: [`curtain`] (`[[curtain]]`,
-//! `[footprint]`, `[animation]`), [`beams`] (`[beams]`, `[atmosphere]`,
-//! `[earth]`), [`colour`], [`grid`] (`[photons]`, `[grid]`) and [`view`]
-//! (`[camera]`, `[render]`, `[volume]`, `[background]`, `[sky]`,
-//! `[terrain]`), [`airglow`] (`[airglow]`); [`root`] (the [`Scene`] that holds them), reading
-//! (`load`), [`overrides`] (`--set KEY=VALUE` applied to the document
-//! before validation), [`validation`] (the range checks, their limits and
-//! the error types), [`wording`] (the parser's messages in plain words,
-//! did-you-mean), [`schema`] (the `--schema` JSON drawn from those checks),
-//! [`presets`] (the built-in scenes) and [`kernel`] (the photon kernel's
-//! radius range). Callers outside use the re-exports here
+//! One file per table, named for it, each struct beside its defaults:
+//! [`curtain`] (`[[curtain]]`), [`footprint`], [`animation`], [`beams`],
+//! [`atmosphere`], [`earth`], [`colour`], [`photons`], [`grid`],
+//! [`camera`], [`render`], [`volume`], [`background`], [`sky`],
+//! [`airglow`] and [`terrain`]; [`root`] (the [`Scene`] that holds them),
+//! [`keys`] (what a key is: name, unit, range, description) and [`tables`]
+//! (every table with its keys, the one list the checks, the schema and the
+//! docs walk), reading (`load`), [`overrides`] (`--set KEY=VALUE` applied
+//! to the document before validation), [`validation`] (the range checks
+//! from the tables, the rules between keys and the error types), [`wording`] (the parser's messages in
+//! plain words, did-you-mean), [`schema`] (the `--schema` JSON drawn from
+//! the tables), [`presets`] (the built-in scenes) and [`kernel`] (the
+//! photon kernel's radius range). Callers outside use the re-exports here
 //! (`crate::scene::Camera`); files inside import from the file that
 //! defines an item.
 
 pub mod airglow;
+pub mod animation;
+pub mod atmosphere;
+pub mod background;
 pub mod beams;
+pub mod camera;
 pub mod colour;
 pub mod curtain;
+pub mod earth;
+pub mod footprint;
 pub mod grid;
 pub mod kernel;
+pub mod keys;
 mod load;
 pub mod overrides;
+pub mod photons;
 pub mod presets;
+pub mod render;
 pub mod root;
 pub mod schema;
+pub mod sky;
+pub mod tables;
+pub mod terrain;
 pub mod validation;
-pub mod view;
+pub mod volume;
 pub mod wording;
 
 pub use airglow::AirglowParams;
+pub use animation::*;
+pub use atmosphere::*;
+pub use background::*;
 pub use beams::*;
+pub use camera::*;
 pub use colour::*;
 pub use curtain::*;
+pub use earth::*;
+pub use footprint::*;
 pub use grid::*;
 pub use kernel::KernelRadius;
 pub use overrides::Override;
+pub use photons::*;
+pub use render::*;
 pub use root::{fnv1a, Scene, OFF_WHEN_ZERO};
-pub use validation::{
-    check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_IMAGE_SIDE, MAX_PRUNE, MAX_SEED, MAX_SHADOW_SAMPLES,
-    MAX_SPP, MAX_THREADS,
-};
-pub use view::*;
+pub use sky::*;
+pub use terrain::*;
+pub use validation::{check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_SEED, MAX_SHADOW_SAMPLES, MAX_THREADS};
+pub use volume::*;

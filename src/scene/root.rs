@@ -1,12 +1,24 @@
 //! The scene file's root table, [`Scene`]: one field per TOML table, its
 //! canonical TOML and the hash that identifies a bake's inputs.
+//! [`ROOT_KEYS`]: each key's unit, allowed range and description.
 
 use super::airglow::AirglowParams;
-use super::beams::{AtmosphereParams, BeamParams, EarthParams};
+use super::animation::AnimationParams;
+use super::atmosphere::AtmosphereParams;
+use super::background::Background;
+use super::beams::BeamParams;
+use super::camera::Camera;
 use super::colour::ColourParams;
-use super::curtain::{AnimationParams, Curtain, FootprintParams};
-use super::grid::{GridParams, PhotonParams, VoxelSize};
-use super::view::{Background, Camera, RenderParams, SkyParams, Terrain, VolumeParams};
+use super::curtain::Curtain;
+use super::earth::EarthParams;
+use super::footprint::FootprintParams;
+use super::grid::{GridParams, VoxelSize};
+use super::keys::{KeySpec, Range};
+use super::photons::PhotonParams;
+use super::render::RenderParams;
+use super::sky::SkyParams;
+use super::terrain::Terrain;
+use super::volume::VolumeParams;
 use serde::{Deserialize, Serialize};
 
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -94,10 +106,14 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
+/// Every key of the top level: name, unit, allowed range and description (`super::keys`).
+pub const ROOT_KEYS: &[KeySpec] =
+    &[KeySpec::new("seed", "", Range::Any, "master seed: every random stream is derived from it and an index")];
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::view::Projection;
+    use crate::scene::camera::Projection;
     #[test]
     fn render_only_scene_takes_defaults_elsewhere() {
         let text = "[camera]\nposition = [0, -5, 0]\nlook_at = [0, 0, 0]\nprojection = \"orthographic\"\northo_height = 4.0\n[render]\nwidth = 8\nheight = 4\nspp = 1\n";

@@ -1,27 +1,20 @@
 //! `aurora scene --schema`: every scene key, its default and its allowed
 //! range, as JSON. One source: defaults are `Scene::default()` (what a
-//! missing table or key gives) serialised, and ranges are the checks
-//! [`Scene::validate`] makes, recorded as it validates the default
-//! scene (`Validator::allow`): a range changed there changes here.
-use super::{beams::*, colour::*, curtain::*, grid::*, root::Scene, validation::SceneError, view::*};
+//! missing table or key gives) serialised, and ranges are the keys' tables
+//! ([`super::keys`]) that [`Scene::validate`] checks: a range changed there
+//! changes here.
+use super::tables::TABLES;
+use super::{
+    animation::*, atmosphere::*, background::*, beams::*, camera::*, colour::*, curtain::*, earth::*, footprint::*, grid::*, photons::*,
+    render::*, root::Scene, sky::*, terrain::*, validation::SceneError, volume::*,
+};
 use serde_json::{json, Map, Value};
 
-/// What a key accepts (recorded by the checks in [`super::validation`]).
-pub use super::validation::Allowed;
-
-fn num(x: f64) -> Value {
-    if x.is_finite() {
-        json!(x)
-    } else {
-        json!(if x > 0.0 { "inf" } else { "-inf" })
-    }
-}
-
-/// Allowed values of the enum-valued keys: every key whose default is a
-/// string is given a value no enum has, and the parser's own message
-/// ("expected one of `a`, `b`") lists the variants. No list to keep in
-/// step by hand: a variant added to an enum appears here (a test checks
-/// each value parses).
+/// The words the parser takes for each enum-valued key: every key whose
+/// default is a string is given a value no enum has, and the parser's own
+/// message ("expected one of `a`, `b`") lists the variants. The keys'
+/// `Range::Word` lists are checked against it (`super::keys`), so a variant
+/// added to an enum and not to its key fails a test.
 pub fn enum_values() -> Vec<(String, Value)> {
     let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
     let mut out = Vec::new();
@@ -47,14 +40,14 @@ pub fn enum_values() -> Vec<(String, Value)> {
 }
 
 /// The schema: `{table: {key: {"default": .., "min"/"max"/.. or "rule"
-/// or "values"}}}`; `curtain` describes one `[[curtain]]` entry
-/// (defaults of `Curtain::default()`), top-level keys sit under `""`.
-/// Where a key inside a table that is present defaults differently from
-/// a missing table (`terrain.kind`), `default_in_table` says so.
+/// or "values"}}}`, one entry per key of [`TABLES`] (its range from
+/// [`super::keys::Range::schema_into`]); `curtain` describes one
+/// `[[curtain]]` entry (defaults of `Curtain::default()`), top-level keys
+/// sit under `""`. Where a key inside a table that is present defaults
+/// differently from a missing table (`terrain.kind`), `default_in_table`
+/// says so.
 pub fn schema() -> Value {
-    let scene = Scene::default();
-    let checks = scene.validate_with("default", None).expect("the default scene validates");
-    let defaults = serde_json::to_value(&scene).expect("a scene serialises");
+    let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
     let in_table: Value = json!({
         "footprint": FootprintParams::default(), "beams": BeamParams::default(), "colour": ColourParams::default(),
         "photons": PhotonParams::default(), "grid": GridParams::default(), "camera": Camera::default(),
@@ -62,57 +55,28 @@ pub fn schema() -> Value {
         "terrain": Terrain::default(), "atmosphere": AtmosphereParams::default(), "animation": AnimationParams::default(),
         "earth": EarthParams::default(),
     });
-    let enums = enum_values();
+    let curtain = serde_json::to_value(Curtain::default()).expect("serialises");
     let mut out = Map::new();
-    let Value::Object(top) = defaults else { unreachable!() };
-    for (table, value) in top {
-        let (name, fields) = match (table.as_str(), value) {
-            ("curtain", _) => ("curtain".to_string(), serde_json::to_value(Curtain::default()).expect("serialises")),
-            (_, v @ Value::Object(_)) => (table.clone(), v),
-            (_, v) => {
-                let mut m = Map::new();
-                m.insert(table.clone(), v);
-                (String::new(), Value::Object(m))
-            }
+    for table in TABLES {
+        let fields = match table.name {
+            "" => &defaults,
+            "curtain" => &curtain,
+            name => &defaults[name],
         };
-        let Value::Object(fields) = fields else { continue };
-        let entry = out.entry(name.clone()).or_insert_with(|| Value::Object(Map::new()));
-        for (key, default) in fields {
-            let full = if name.is_empty() { key.clone() } else { format!("{name}.{key}") };
+        let mut keys = Map::new();
+        for spec in table.keys {
+            let default = fields.get(spec.name).cloned().unwrap_or(Value::Null);
             let mut k = Map::new();
-            k.insert("default".into(), default.clone());
-            if let Some(d) = in_table.get(&name).and_then(|t| t.get(&key)) {
+            if let Some(d) = in_table.get(table.name).and_then(|t| t.get(spec.name)) {
                 if *d != default {
                     k.insert("default_in_table".into(), d.clone());
                 }
             }
-            match checks.iter().find(|(c, _)| *c == full).map(|(_, a)| a) {
-                Some(Allowed::Range { min, max, min_inclusive, max_inclusive }) => {
-                    k.insert("min".into(), num(*min));
-                    k.insert("max".into(), num(*max));
-                    k.insert("min_inclusive".into(), json!(min_inclusive));
-                    k.insert("max_inclusive".into(), json!(max_inclusive));
-                }
-                Some(Allowed::Rule(r)) => {
-                    k.insert("rule".into(), json!(r));
-                }
-                None => {}
-            }
-            if let Some((_, v)) = enums.iter().find(|(e, _)| *e == full) {
-                k.insert("values".into(), v.clone());
-            }
-            entry.as_object_mut().expect("object").insert(key, Value::Object(k));
+            k.insert("default".into(), default);
+            spec.range.schema_into(spec.unit, &mut k);
+            keys.insert(spec.name.into(), Value::Object(k));
         }
-    }
-    // `path` has no default (None is not written): listed with its rule.
-    if let Some(Value::Object(c)) = out.get_mut("curtain") {
-        let rule = checks.iter().find(|(k, _)| k == "curtain.path").map(|(_, a)| a.clone());
-        let mut k = Map::new();
-        k.insert("default".into(), Value::Null);
-        if let Some(Allowed::Rule(r)) = rule {
-            k.insert("rule".into(), json!(r));
-        }
-        c.insert("path".into(), Value::Object(k));
+        out.insert(table.name.into(), Value::Object(keys));
     }
     Value::Object(out)
 }
@@ -126,7 +90,7 @@ pub fn schema_json() -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{schema, *};
+    use crate::scene::schema;
     #[test]
     fn schema_has_every_key_with_default_and_range() {
         let s = schema::schema();

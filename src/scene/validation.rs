@@ -1,12 +1,14 @@
-//! Validation of a parsed scene: every range checked once, each error naming
+//! Validation of a parsed scene: every key's range checked from its table of
+//! keys ([`super::keys`]), then the rules between keys, each error naming
 //! the file, line, key, value and allowed range ([`RangeError`]); the range
-//! limits (`MAX_*`); the shape check that runs before serde; the camera's
-//! one set of limits ([`Camera::problems`]). Each check also records its
-//! range for [`super::schema`]. Validity is a property of the scene alone,
+//! limits (`MAX_*`); the shape check that runs before serde. The camera's
+//! one set of limits is `Camera::problems` (`super::camera`). Validity is a property of the scene alone,
 //! never of the machine: whether a bake fits in memory is decided at bake
-//! time (`crate::pipeline::memory_budget`).
+//! time (`crate::pipeline::memory::budget`).
 
-use super::{colour::*, curtain::*, grid::*, root::Scene, view::*};
+use super::keys::KeySpec;
+use super::tables::TABLES;
+use super::{colour::*, curtain::*, root::Scene};
 use std::fmt;
 
 /// The line names `grid.lines` takes, in `crate::physics::emission::line_colour::LINES` order
@@ -17,12 +19,6 @@ pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
 /// Largest seed: TOML integers are signed 64-bit, so a scene (and the
 /// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
 pub const MAX_SEED: u64 = i64::MAX as u64;
-/// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
-/// far beyond a frame (the aurora's fastest rays cross 250 km in it).
-pub const MAX_SHUTTER_S: f64 = 10.0;
-
-/// Largest `render.spp` (also the `--spp` flag's).
-pub const MAX_SPP: u64 = 65_536;
 /// Largest `--shadow-samples` per terrain hit per pixel sample.
 pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 /// Largest colour-map component (linear RGB per unit deposited power, about
@@ -31,75 +27,6 @@ pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 pub const MAX_COLORMAP_VALUE: f64 = 1e6;
 /// Largest `--threads`.
 pub const MAX_THREADS: u64 = 1_024;
-
-/// Largest `grid.prune`: half the light may go, no more (beyond that the
-/// "error budget" is no longer a small error).
-pub const MAX_PRUNE: f64 = 0.5;
-
-/// Largest `render.width` and `render.height` (the one image-size limit:
-/// the scene, the camera and the renderer all check this).
-pub const MAX_IMAGE_SIDE: usize = 16384;
-
-impl Camera {
-    /// The largest `fov_deg` of this projection: 360 for the fisheye (the
-    /// whole sphere), below 180 for a pinhole (degrees, exclusive).
-    pub fn max_fov_deg(&self) -> (f64, bool) {
-        match self.projection {
-            Projection::Fisheye => (360.0, true),
-            _ => (180.0, false),
-        }
-    }
-
-    /// Every camera value outside its range, as (key, value, allowed): the
-    /// one set of camera limits, applied by [`Scene::validate`] and by
-    /// `crate::geometry::camera::CameraModel::new`.
-    pub fn problems(&self) -> Vec<(&'static str, String, String)> {
-        let mut p = Vec::new();
-        let (max_fov, inclusive) = self.max_fov_deg();
-        if !(self.fov_deg > 0.0 && (self.fov_deg < max_fov || (inclusive && self.fov_deg == max_fov))) {
-            let close = if inclusive { "]" } else { ")" };
-            p.push(("fov_deg", fmt_num(self.fov_deg), format!("must be in (0, {}{close}", fmt_num(max_fov))));
-        }
-        if !(self.ortho_height.is_finite() && self.ortho_height > 0.0) {
-            p.push(("ortho_height", fmt_num(self.ortho_height), "must be a finite number > 0".into()));
-        }
-        let dir = [self.look_at[0] - self.position[0], self.look_at[1] - self.position[1], self.look_at[2] - self.position[2]];
-        if dir.iter().all(|d| *d == 0.0) {
-            p.push(("look_at", format!("{:?}", self.look_at), "must differ from camera.position".into()));
-        }
-        let cross = [
-            dir[1] * self.up[2] - dir[2] * self.up[1],
-            dir[2] * self.up[0] - dir[0] * self.up[2],
-            dir[0] * self.up[1] - dir[1] * self.up[0],
-        ];
-        let up2: f64 = self.up.iter().map(|u| u * u).sum();
-        let dir2: f64 = dir.iter().map(|u| u * u).sum();
-        if !(cross.iter().map(|c| c * c).sum::<f64>() > 1e-18 * up2 * dir2) {
-            // `up` is the picture's top: across a view along z (straight up
-            // or down) north, [0, 1, 0], is; across any other view, z is.
-            let vertical = dir[2].abs() >= dir[0].abs().max(dir[1].abs());
-            let (along, suggest) = if vertical {
-                (
-                    if dir[2] > 0.0 { "the camera looks straight up" } else { "the camera looks straight down" },
-                    "[0, 1, 0] (north at the top of the picture)",
-                )
-            } else {
-                ("`up` lies along the view", "[0, 0, 1] (the sky at the top of the picture)")
-            };
-            p.push((
-                "up",
-                format!("{:?}", self.up),
-                format!("must not be parallel to the view direction (look_at - position): {along}; set camera.up = {suggest}"),
-            ));
-        }
-        for (k, a) in [("position", self.position), ("look_at", self.look_at), ("up", self.up)] {
-            if a.iter().any(|x| !x.is_finite()) {
-                p.push((k, format!("{a:?}"), "must be finite".into()));
-            }
-        }
-        p
-    }
-}
 
 // ---------------------------------------------------------------- errors
 
@@ -155,49 +82,47 @@ impl fmt::Display for RangeError {
     }
 }
 
-/// What a key accepts.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Allowed {
-    Range { min: f64, max: f64, min_inclusive: bool, max_inclusive: bool },
-    Rule(String),
-}
-
 // ---------------------------------------------------------------- checks
 
 impl Scene {
-    /// Checks every range; `text` (the TOML source) is used to find lines.
+    /// Checks every key's range (from its table of keys, [`super::keys`]),
+    /// then the rules between keys; `text` (the TOML source) is used to
+    /// find lines.
     pub fn validate(&self, file: &str, text: Option<&str>) -> Result<(), SceneError> {
-        self.validate_with(file, text).map(|_| ())
+        let mut v = Validator { file, text, errors: Vec::new() };
+        let doc = toml::Table::try_from(self).expect("a scene serialises to a table");
+        for table in TABLES {
+            match (table.name, doc.get(table.name)) {
+                ("", _) => v.table(None, table.keys, &doc),
+                // The camera's limits are its own (`Camera::problems`, below).
+                ("camera", _) => {}
+                ("curtain", Some(toml::Value::Array(curtains))) => {
+                    for (i, c) in curtains.iter().enumerate() {
+                        if let toml::Value::Table(c) = c {
+                            v.table(Some(("curtain", i)), table.keys, c);
+                        }
+                    }
+                }
+                (name, Some(toml::Value::Table(t))) => v.table(Some((name, 0)), table.keys, t),
+                _ => {}
+            }
+        }
+        self.check_rules(&mut v);
+        if v.errors.is_empty() {
+            Ok(())
+        } else {
+            Err(SceneError::Invalid(v.errors))
+        }
     }
-    /// [`validate`](Self::validate), also returning every check made (the
-    /// ranges [`schema`] prints).
-    pub(super) fn validate_with(&self, file: &str, text: Option<&str>) -> Result<Vec<(String, Allowed)>, SceneError> {
-        let mut v = Validator { file, text, errors: Vec::new(), checks: Vec::new() };
+
+    /// The rules a key's range alone does not say: between keys, or over a
+    /// whole list; each names its key.
+    fn check_rules(&self, v: &mut Validator<'_>) {
         if self.curtains.is_empty() {
             v.push(None, "curtain", "[]".into(), "at least one [[curtain]] table is required".into());
         }
         for (i, c) in self.curtains.iter().enumerate() {
             let t = Some(("curtain", i));
-            // At most 10^4 km: beyond that the flat ground is meaningless and
-            // a single beam's photon power (f32) can overflow.
-            v.range(t, "length", c.length, 0.0, 1e4, false);
-            v.range(t, "width", c.width, 0.0, 1e4, false);
-            v.range(t, "energy_flux", c.energy_flux, 0.0, 1e4, false);
-            v.range(t, "char_energy_kev", c.char_energy_kev, 0.05, 100.0, true);
-            v.range(t, "soft_fraction", c.soft_fraction, 0.0, 1.0, true);
-            v.range(t, "soft_energy_kev", c.soft_energy_kev, 0.01, 100.0, true);
-            v.range(t, "beam_weight", c.beam_weight, 0.0, 1e9, false);
-            v.range(t, "bend_km", c.bend_km, 0.0, 1e4, true);
-            v.finite(t, "rotation_deg", c.rotation_deg);
-            // Within 10^4 km of the origin, like the curtain's size: the flat
-            // ground means nothing beyond, and photon positions are f32 (at
-            // 10^20 km their spacing would exceed the aurora).
-            if c.center.iter().any(|x| !(x.is_finite() && x.abs() <= 1e4)) {
-                v.push(t, "center", format!("{:?}", c.center), "each coordinate must be in [-1e4, 1e4] km".into());
-            }
-            v.allow(t, "center", Allowed::Rule("each coordinate in [-1e4, 1e4] km".into()));
-            v.allow(t, "bend_km", Allowed::Rule("in [0, 1e4], less than width / 2".into()));
-            v.allow(t, "path", Allowed::Rule(PATH_RULE.into()));
             if let Some(p) = &c.path {
                 v.path(t, p);
             }
@@ -210,120 +135,34 @@ impl Scene {
                 );
             }
         }
-        if self.curtains.is_empty() {
-            // Record the per-curtain ranges from a default curtain.
-            let one = Scene { curtains: vec![Curtain::default()], ..self.clone() };
-            if let Ok(c) = one.validate_with(file, None) {
-                for (k, a) in c.into_iter().filter(|(k, _)| k.starts_with("curtain.")) {
-                    v.checks.push((k, a));
-                }
-            }
-        }
         if self.curtains.iter().all(|c| c.beam_weight <= 0.0) && !self.curtains.is_empty() {
             v.push(Some(("curtain", 0)), "beam_weight", "0".into(), "at least one curtain needs beam_weight > 0".into());
         }
-        let f = &self.footprint;
-        let t = Some(("footprint", 0));
-        v.allow(t, "resolution", Allowed::Rule("each side in [8, 4096]".into()));
-        // Each side: a 10^8 x 8 footprint would pass a check of the smaller one.
-        if f.resolution.iter().any(|&n| !(8..=4096).contains(&n)) {
-            v.push(t, "resolution", format!("{:?}", f.resolution), "each side must be in [8, 4096]".into());
-        }
-        v.range(t, "steps", f.steps as f64, 0.0, 10_000.0, true);
-        v.range(t, "dt", f.dt, 0.0, 1e6, false);
-        v.range(t, "pressure_iterations", f.pressure_iterations as f64, 0.0, 10_000.0, true);
-        v.range(t, "band_fraction", f.band_fraction, 0.0, 1.0, false);
-        v.range(t, "velocity_waves", f.velocity_waves, 0.0, 1e3, true);
-        v.range(t, "velocity_amplitude", f.velocity_amplitude, 0.0, 1e6, true);
-        v.range(t, "density_waves", f.density_waves, 0.0, 1e3, true);
-        v.range(t, "bend_wavelength", f.bend_wavelength, 0.0, 1e3, false);
-        v.range(t, "threshold", f.threshold, 0.0, 1.0, false);
-        v.range(t, "end_fade_km", f.end_fade_km, 0.0, 1e4, true);
-        v.range(t, "sheet_spacing_km", f.sheet_spacing_km, 0.01, 10.0, true);
-        v.range(t, "sheet_smoothing_km", f.sheet_smoothing_km, 0.01, 100.0, true);
-        v.range(t, "sheet_amplitude", f.sheet_amplitude, 0.0, 1.0, true);
-        v.range(t, "sheet_rollup_km", f.sheet_rollup_km, 0.0, 1e3, true);
-        v.range(t, "sheet_steps", f.sheet_steps as f64, 1.0, 10_000.0, true);
-        v.range(t, "sheet_thickness_km", f.sheet_thickness_km, 0.01, 100.0, true);
-        v.range(t, "ray_spacing_km", f.ray_spacing_km, 0.1, 1e4, true);
-        v.range(t, "ray_width_km", f.ray_width_km, 0.01, 100.0, true);
-        v.range(t, "ray_contrast", f.ray_contrast, 1.0, 1e3, true);
-        v.range(t, "glow", f.glow, 0.0, 100.0, true);
 
-        let a = &self.animation;
-        let t = Some(("animation", 0));
-        v.range(t, "fps", a.fps, 0.0, 1000.0, false);
-        v.range(t, "time_s", a.time_s, 0.0, 1e7, true);
-        v.range(t, "fold_speed_kms", a.fold_speed_kms, -100.0, 100.0, true);
-        v.allow(t, "fold_breathing", Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: false });
-        v.allow(t, "pulsation_period_s", Allowed::Rule("[min, max] with 0 < min <= max <= 10000".into()));
-        if !(0.0..1.0).contains(&a.fold_breathing) {
-            v.push(t, "fold_breathing", fmt_num(a.fold_breathing), "must be in [0, 1)".into());
-        }
-        v.range(t, "fold_breathing_period_s", a.fold_breathing_period_s, 0.0, 1e6, false);
-        v.range(t, "bend_speed_kms", a.bend_speed_kms, -100.0, 100.0, true);
-        v.range(t, "bend_change_hz", a.bend_change_hz, 0.0, 100.0, true);
-        v.range(t, "drift_km", a.drift_km, 0.0, 1e3, true);
-        v.range(t, "drift_period_s", a.drift_period_s, 0.0, 1e6, false);
-        v.range(t, "ray_speed_kms", a.ray_speed_kms, -100.0, 100.0, true);
-        v.range(t, "pulsation", a.pulsation, 0.0, 1.0, true);
-        v.range(t, "pulsation_patch_km", a.pulsation_patch_km, 0.0, 1e4, false);
-        let [p0, p1] = a.pulsation_period_s;
-        if !(p0.is_finite() && p1.is_finite() && p0 > 0.0 && p1 >= p0 && p1 <= 1e4) {
+        let b = &self.beams;
+        if !(b.delta_alpha_deg >= 0.0 && b.delta_alpha_deg <= b.alpha_d_deg) {
             v.push(
-                t,
-                "pulsation_period_s",
-                format!("[{}, {}]", fmt_num(p0), fmt_num(p1)),
-                "must be [min, max] with 0 < min <= max <= 10000".into(),
+                Some(("beams", 0)),
+                "delta_alpha_deg",
+                b.delta_alpha_deg.to_string(),
+                format!("must be in [0, alpha_d_deg = {}]", b.alpha_d_deg),
             );
         }
 
-        v.range(t, "trail_samples", a.trail_samples as f64, 0.0, crate::scene::curtain::MAX_TRAIL_SAMPLES as f64, true);
-
-        let b = &self.beams;
-        let t = Some(("beams", 0));
-        v.range(t, "count", b.count as f64, 1.0, 1e8, true);
-        v.range(t, "target_noise", b.target_noise, 0.0, 1.0, true);
-        v.range(t, "top_km", b.top_km, 80.0, 1000.0, true);
-        v.range(t, "top_noise_km", b.top_noise_km, 0.0, 100.0, true);
-        v.range(t, "top_noise_freq", b.top_noise_freq, 0.0, 1e3, true);
-        v.allow(t, "alpha_d_deg", Allowed::Range { min: 0.0, max: 90.0, min_inclusive: true, max_inclusive: false });
-        v.allow(t, "delta_alpha_deg", Allowed::Rule("in [0, beams.alpha_d_deg]".into()));
-        if !(b.alpha_d_deg >= 0.0 && b.alpha_d_deg < 90.0) {
-            v.push(t, "alpha_d_deg", b.alpha_d_deg.to_string(), "must be in [0, 90) degrees: at 90 a beam no longer moves along B".into());
-        }
-        if !(b.delta_alpha_deg >= 0.0 && b.delta_alpha_deg <= b.alpha_d_deg) {
-            v.push(t, "delta_alpha_deg", b.delta_alpha_deg.to_string(), format!("must be in [0, alpha_d_deg = {}]", b.alpha_d_deg));
-        }
-        v.finite_pos(t, "length_km", b.length_km);
-        v.range(t, "dt", b.dt, 1e-6, 1.0, true);
-        v.range(t, "b_inclination_deg", b.b_inclination_deg, 10.0, 90.0, true);
-        v.finite(t, "b_declination_deg", b.b_declination_deg);
-
         let e = &self.earth;
-        let t = Some(("earth", 0));
-        v.allow(t, "radius_km", Allowed::Rule("0 (a flat ground) or in [1000, 100000] km".into()));
-        if !(e.radius_km == 0.0 || (1000.0..=1e5).contains(&e.radius_km)) {
-            v.push(t, "radius_km", fmt_num(e.radius_km), "must be 0 (a flat ground) or in [1000, 100000] km".into());
-        }
-        v.allow(t, "magnetic_pole", Allowed::Rule("[x, y] km, each in [-2e4, 2e4]; needs radius_km > 0".into()));
         if let Some(pole) = e.magnetic_pole {
-            if pole.iter().any(|x| !(x.is_finite() && x.abs() <= 2e4)) {
-                v.push(t, "magnetic_pole", format!("{pole:?}"), "each coordinate must be in [-2e4, 2e4] km".into());
-            } else if e.radius_km == 0.0 {
-                v.push(t, "magnetic_pole", format!("{pole:?}"), "a dipole pole needs a round Earth: set earth.radius_km > 0".into());
+            if e.radius_km == 0.0 && !v.names("earth.magnetic_pole") {
+                v.push(
+                    Some(("earth", 0)),
+                    "magnetic_pole",
+                    format!("{pole:?}"),
+                    "a dipole pole needs a round Earth: set earth.radius_km > 0".into(),
+                );
             }
         }
 
         let c = &self.colour;
         let t = Some(("colour", 0));
-        v.range(t, "noise_km", c.noise_km, 0.0, 200.0, true);
-        v.range(t, "noise_freq", c.noise_freq, 0.0, 1e3, true);
-        v.allow(
-            t,
-            "colormap",
-            Allowed::Rule("rows of [altitude_km, r, g, b], at least 2, altitudes ascending, colours >= 0 (mode = \"colormap\")".into()),
-        );
         if c.mode == ColourMode::Colormap {
             if c.colormap.len() < 2 {
                 v.push(t, "colormap", format!("{} rows", c.colormap.len()), "needs at least 2 rows of [altitude_km, r, g, b]".into());
@@ -345,28 +184,9 @@ impl Scene {
             }
         }
 
-        let p = &self.photons;
-        let t = Some(("photons", 0));
-        v.finite_pos(t, "radius_km", p.radius_km);
-        v.range(t, "cutoff", p.cutoff, 1.0, 6.0, true);
-        v.range(t, "radius_noise", p.radius_noise, 0.0, 0.9, true);
-        v.range(t, "radius_noise_freq", p.radius_noise_freq, 0.0, 1e3, true);
-
         let g = &self.grid;
         let t = Some(("grid", 0));
-        v.allow(t, "voxel_size", Allowed::Rule("a number of km > 0, or \"auto\"".into()));
-        if let VoxelSize::Km(s) = g.voxel_size {
-            v.finite_pos(t, "voxel_size", s);
-        }
-        v.range(t, "density_a", g.density_a, 0.0, 1e6, true);
-        v.range(t, "density_b", g.density_b, 0.0, 10.0, true);
-        v.finite(t, "density_base_km", g.density_base_km);
-        v.range(t, "prune", g.prune, 0.0, MAX_PRUNE, true);
-        v.range(t, "mantissa_bits", g.mantissa_bits as f64, 1.0, crate::scene::grid::MAX_MANTISSA_BITS as f64, true);
-        v.range(t, "high_above_km", g.high_above_km, 0.0, 1e4, true);
-        v.range(t, "high_voxel_factor", g.high_voxel_factor as f64, 1.0, crate::scene::grid::MAX_HIGH_VOXEL_FACTOR as f64, true);
         let keys = LINE_KEYS.map(|k| format!("\"{k}\"")).join(", ");
-        v.allow(t, "lines", Allowed::Rule(format!("a list of distinct line names from {keys}; needs colour.mode = \"physical\"")));
         for (i, name) in g.lines.iter().enumerate() {
             if !LINE_KEYS.contains(&name.as_str()) {
                 v.push(t, "lines", format!("\"{name}\""), format!("must be one of {keys}"));
@@ -378,78 +198,16 @@ impl Scene {
             v.push(t, "lines", format!("{:?}", g.lines), "needs colour.mode = \"physical\" (a colour map has no lines)".into());
         }
 
-        let t = Some(("camera", 0));
-        v.allow(t, "fov_deg", Allowed::Rule("in (0, 180); in (0, 360] for projection = \"fisheye\"".into()));
-        v.allow(t, "ortho_height", Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
-        v.allow(t, "look_at", Allowed::Rule("finite, differs from camera.position".into()));
-        v.allow(t, "up", Allowed::Rule("finite, not parallel to look_at - position".into()));
-        v.allow(t, "position", Allowed::Rule("finite".into()));
         for (key, value, allowed) in self.camera.problems() {
-            v.push(t, key, value, allowed);
-        }
-        let r = &self.render;
-        let t = Some(("render", 0));
-        v.range(t, "width", r.width as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
-        v.range(t, "height", r.height as f64, 1.0, MAX_IMAGE_SIDE as f64, true);
-        v.range(t, "spp", r.spp as f64, 1.0, MAX_SPP as f64, true);
-        v.range(t, "exposure", r.exposure, -50.0, 50.0, true);
-        v.allow(t, "png_bits", Allowed::Rule("8 or 16".into()));
-        if !matches!(r.png_bits, 8 | 16) {
-            v.push(t, "png_bits", r.png_bits.to_string(), "must be 8 or 16".into());
-        }
-        v.range(t, "shutter_s", r.shutter_s, 0.0, MAX_SHUTTER_S, true);
-        let vol = &self.volume;
-        let t = Some(("volume", 0));
-        v.range(t, "density_scale", vol.density_scale, 0.0, 1e9, true);
-        v.range(t, "emission_scale", vol.emission_scale, 0.0, 1e9, true);
-        let t = Some(("background", 0));
-        // Bounded so that pixels (f32) stay finite.
-        v.allow(t, "radiance", Allowed::Range { min: 0.0, max: 1e9, min_inclusive: true, max_inclusive: true });
-        if self.background.radiance.iter().any(|x| !(0.0..=1e9).contains(x)) {
-            v.push(t, "radiance", format!("{:?}", self.background.radiance), "components must be in [0, 1e9]".into());
-        }
-        // Beyond m = 8 the 0.45 slope of the star counts no longer holds
-        // (and the count passes 38,000).
-        v.range(t, "limiting_magnitude", self.background.limiting_magnitude, -1.5, 8.0, true);
-        v.range(t, "star_brightness", self.background.star_brightness, 0.0, 1e6, true);
-        let sky = &self.sky;
-        let t = Some(("sky", 0));
-        // Ozone columns observed: about 100 (the deepest Antarctic hole) to
-        // 600 DU; aerosol depths from clean polar air to heavy haze; Angstrom
-        // exponents from coarse dust (about 0) to fine smoke (about 2.5).
-        v.range(t, "ozone_du", sky.ozone_du, 0.0, 1000.0, true);
-        v.range(t, "aerosol_optical_depth", sky.aerosol_optical_depth, 0.0, 5.0, true);
-        v.range(t, "angstrom", sky.angstrom, -1.0, 4.0, true);
-        v.range(t, "aerosol_scale_height_km", sky.aerosol_scale_height_km, 0.1, 20.0, true);
-        let t = Some(("airglow", 0));
-        for (key, x, lo, hi) in self.airglow.ranges() {
-            v.range(t, key, x, lo, hi, true);
-        }
-        let ter = &self.terrain;
-        let t = Some(("terrain", 0));
-        v.finite(t, "height", ter.height);
-        v.allow(t, "albedo", Allowed::Range { min: 0.0, max: 1.0, min_inclusive: true, max_inclusive: true });
-        v.allow(t, "extent", Allowed::Rule("[x0, y0, x1, y1] with x1 > x0 and y1 > y0".into()));
-        if ter.albedo.iter().any(|x| !(0.0..=1.0).contains(x)) {
-            v.push(t, "albedo", format!("{:?}", ter.albedo), "components must be in [0, 1]".into());
-        }
-        v.range(t, "mountain_height", ter.mountain_height, 0.0, 100.0, true);
-        v.finite_pos(t, "mountain_scale", ter.mountain_scale);
-        if !(ter.extent[2] > ter.extent[0] && ter.extent[3] > ter.extent[1]) {
-            v.push(t, "extent", format!("{:?}", ter.extent), "must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0".into());
+            v.push(Some(("camera", 0)), key, value, allowed);
         }
 
-        if v.errors.is_empty() {
-            Ok(v.checks)
-        } else {
-            Err(SceneError::Invalid(v.errors))
+        let ter = &self.terrain;
+        if !(ter.extent[2] > ter.extent[0] && ter.extent[3] > ter.extent[1]) {
+            v.push(Some(("terrain", 0)), "extent", format!("{:?}", ter.extent), "must be [x0, y0, x1, y1] with x1 > x0 and y1 > y0".into());
         }
     }
 }
-
-/// What `curtain.path` accepts.
-pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
-     total length at most 1e4 km; replaces center, length and rotation_deg";
 
 /// Keys a `path` replaces.
 const STRAIGHT_KEYS: [&str; 3] = ["center", "length", "rotation_deg"];
@@ -471,7 +229,7 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
     };
     let reference = Scene { curtains: vec![Curtain::default()], ..Scene::default() };
     let reference = toml::Table::try_from(&reference).expect("a scene serialises to a table");
-    let mut v = Validator { file, text: Some(text), errors: Vec::new(), checks: Vec::new() };
+    let mut v = Validator { file, text: Some(text), errors: Vec::new() };
     shapes_table(&user, &reference, None, &mut v);
     if let Some(toml::Value::Array(curtains)) = user.get("curtain") {
         for (i, c) in curtains.iter().enumerate() {
@@ -544,8 +302,6 @@ struct Validator<'a> {
     file: &'a str,
     text: Option<&'a str>,
     errors: Vec<RangeError>,
-    /// Every check made, as (key, allowed range), for [`schema`].
-    checks: Vec<(String, Allowed)>,
 }
 
 impl Validator<'_> {
@@ -558,32 +314,17 @@ impl Validator<'_> {
         };
         self.errors.push(RangeError { file: self.file.to_string(), line, key, value, allowed });
     }
-    fn key(t: Option<(&str, usize)>, key: &str) -> String {
-        match t {
-            Some((t, _)) => format!("{t}.{key}"),
-            None => key.to_string(),
+    /// Every key of one table outside its range ([`KeySpec::problem`]).
+    fn table(&mut self, t: Option<(&str, usize)>, keys: &[KeySpec], values: &toml::Table) {
+        for k in keys {
+            if let Some((value, allowed)) = values.get(k.name).and_then(|x| k.problem(x)) {
+                self.push(t, k.name, value, allowed);
+            }
         }
     }
-    /// Records an allowed range or rule for the schema (no check).
-    fn allow(&mut self, t: Option<(&str, usize)>, key: &str, a: Allowed) {
-        let k = Self::key(t, key);
-        if !self.checks.iter().any(|(c, _)| *c == k) {
-            self.checks.push((k, a));
-        }
-    }
-    fn range(&mut self, t: Option<(&str, usize)>, key: &str, x: f64, lo: f64, hi: f64, lo_inclusive: bool) {
-        self.allow(t, key, Allowed::Range { min: lo, max: hi, min_inclusive: lo_inclusive, max_inclusive: true });
-        let ok = x.is_finite() && (if lo_inclusive { x >= lo } else { x > lo }) && x <= hi;
-        if !ok {
-            let open = if lo_inclusive { "[" } else { "(" };
-            self.push(t, key, fmt_num(x), format!("must be in {open}{}, {}]", fmt_num(lo), fmt_num(hi)));
-        }
-    }
-    fn finite_pos(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
-        self.allow(t, key, Allowed::Range { min: 0.0, max: f64::INFINITY, min_inclusive: false, max_inclusive: false });
-        if !(x.is_finite() && x > 0.0) {
-            self.push(t, key, fmt_num(x), "must be a finite number > 0".into());
-        }
+    /// Whether an error already names `key` (as `table.key`).
+    fn names(&self, key: &str) -> bool {
+        self.errors.iter().any(|e| e.key == key)
     }
     /// The checks of a curtain's `path` ([`PATH_RULE`]).
     fn path(&mut self, t: Option<(&str, usize)>, p: &[[f64; 2]]) {
@@ -609,20 +350,6 @@ impl Validator<'_> {
         if length > 1e4 {
             self.push(t, "path", format!("{length:.1} km long"), "must be at most 1e4 km long".into());
         }
-    }
-    fn finite(&mut self, t: Option<(&str, usize)>, key: &str, x: f64) {
-        self.allow(t, key, Allowed::Rule("finite".into()));
-        if !x.is_finite() {
-            self.push(t, key, fmt_num(x), "must be finite".into());
-        }
-    }
-}
-
-fn fmt_num(x: f64) -> String {
-    if x == x.trunc() && x.abs() < 1e15 {
-        format!("{}", x as i64)
-    } else {
-        format!("{x}")
     }
 }
 
@@ -684,7 +411,7 @@ mod tests {
         let m = Scene::from_toml_str("[beams]\ncount = 0\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("beams.count = 0") && m.contains("[1, "), "{m}");
         // Validity does not depend on the machine: a tiny voxel is valid here and
-        // refused by the bake's memory budget (crate::pipeline::memory_budget).
+        // refused by the bake's memory budget (crate::pipeline::memory::budget).
         assert!(Scene::from_toml_str("[grid]\nvoxel_size = 0.0001\n", "s.toml").is_ok());
         let m = Scene::from_toml_str("[footprint]\nresolution = [100000000, 8]\n", "s.toml").unwrap_err().to_string();
         assert!(m.contains("s.toml:2: footprint.resolution") && m.contains("[8, 4096]"), "{m}");

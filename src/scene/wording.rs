@@ -4,10 +4,10 @@
 //! 1.5 (allowed: 1 to 16384)". Unknown keys, tables and presets get the
 //! nearest known name by edit distance (Levenshtein 1966, with adjacent
 //! transpositions counted once as in Damerau 1964): "did you mean
-//! `energy_flux`?". Pure functions of the message, the key and the schema
-//! ([`super::schema`]), so each rewording is tested alone.
+//! `energy_flux`?". Pure functions of the message, the key and its table
+//! ([`super::tables`]), so each rewording is tested alone.
 
-use super::schema;
+use super::tables;
 use super::validation::LINE_KEYS;
 
 /// The edit distance between `a` and `b`: insertions, deletions,
@@ -102,25 +102,13 @@ fn ticked(list: &str) -> Vec<&str> {
     list.split('`').skip(1).step_by(2).collect()
 }
 
-/// What the schema allows for `table.key` (`key` alone at the top level;
-/// `curtain` for every `[[curtain]]`), in words: "must be in [1, 16384]",
-/// "must be one of ..." or "allowed: " and a rule. None when the schema
-/// does not know the key.
+/// What the key's table ([`super::keys`]) allows for `table.key` (`key`
+/// alone at the top level; `curtain` for every `[[curtain]]`), in words:
+/// "must be in [1, 16384]", "must be one of ..." or "allowed: " and a
+/// rule. None when no table has the key or it takes any value.
 pub fn allowed(table: Option<&str>, key: &str) -> Option<String> {
-    let s = schema::schema();
-    let k = s.get(table.unwrap_or(""))?.get(key)?;
-    if let Some(v) = k.get("values").and_then(|v| v.as_array()) {
-        let names: Vec<String> = v.iter().filter_map(|x| x.as_str()).map(|x| format!("\"{x}\"")).collect();
-        return Some(format!("must be one of {}", names.join(", ")));
-    }
-    if let Some(r) = k.get("rule").and_then(|r| r.as_str()) {
-        return Some(format!("allowed: {r}"));
-    }
-    let (min, max) = (k.get("min")?, k.get("max")?);
-    let open = if k["min_inclusive"] == true { "[" } else { "(" };
-    let close = if k["max_inclusive"] == true { "]" } else { ")" };
-    let text = |v: &serde_json::Value| v.as_str().map(str::to_string).unwrap_or_else(|| v.to_string().trim_end_matches(".0").to_string());
-    Some(format!("must be in {open}{}, {}{close}", text(min), text(max)))
+    let k = tables::spec(table.unwrap_or(""), key)?;
+    k.range.says(k.unit)
 }
 
 /// The key a message is about: its table (None at the top level) and name.

@@ -383,22 +383,11 @@ impl Unit {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn tmpdir(tag: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("aurora-atomic-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn mkfifo(p: &Path) {
-        let st = std::process::Command::new("mkfifo").arg(p).status().expect("mkfifo runs");
-        assert!(st.success());
-    }
+    use crate::util::scratch::{folder, mkfifo};
 
     #[test]
     fn writes_new_and_replaces_regular() {
-        let d = tmpdir("regular");
+        let d = folder("atomic", "regular");
         let p = d.join("a.txt");
         write_atomic(&p, b"one").unwrap();
         write_atomic(&p, b"two").unwrap();
@@ -409,7 +398,7 @@ mod tests {
 
     #[test]
     fn refuses_symlink_fifo_directory() {
-        let d = tmpdir("refuse");
+        let d = folder("atomic", "refuse");
         let target = d.join("target.txt");
         std::fs::write(&target, b"keep").unwrap();
         let link = d.join("link.txt");
@@ -435,7 +424,7 @@ mod tests {
 
     #[test]
     fn dropped_temp_is_removed_and_stale_temps_swept_only_when_unlocked() {
-        let d = tmpdir("sweep");
+        let d = folder("atomic", "sweep");
         let p = d.join("out.vdb");
         {
             let mut t = TempFile::create(&p).unwrap();
@@ -460,7 +449,7 @@ mod tests {
 
     #[test]
     fn unit_commits_manifest_last_and_refusal_changes_nothing() {
-        let d = tmpdir("unit");
+        let d = folder("atomic", "unit");
         let (a, m) = (d.join("a.bin"), d.join("manifest.json"));
         std::fs::write(&a, b"old a").unwrap();
         std::fs::write(&m, b"old manifest").unwrap();
@@ -491,7 +480,7 @@ mod tests {
 
     #[test]
     fn unit_lock_is_exclusive() {
-        let d = tmpdir("lock");
+        let d = folder("atomic", "lock");
         let l1 = UnitLock::acquire(&d, "aurora", || panic!("must not wait")).unwrap();
         let f = OpenOptions::new().read(true).open(d.join(".aurora.lock")).unwrap();
         assert!(f.try_lock().is_err(), "the unit lock is held");
@@ -511,7 +500,7 @@ mod tests {
 
     #[test]
     fn prepare_folder_refuses_a_file() {
-        let d = tmpdir("folder");
+        let d = folder("atomic", "folder");
         let f = d.join("file");
         std::fs::write(&f, b"").unwrap();
         assert!(matches!(prepare_folder(&f), Err(AtomicError::Folder { .. })));

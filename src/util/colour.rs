@@ -21,6 +21,8 @@
 //! - [`srgb_oetf`]: the sRGB display encoding, `12.92 x` for
 //!   `x <= 0.0031308` and `1.055 x^(1/2.4) - 0.055` above
 //!   (IEC 61966-2-1).
+//! - [`hsv_hue_saturation`]: a colour's HSV hue and saturation, by which
+//!   the tests tell a green from a yellow-green.
 
 /// A 3 x 3 matrix, rows first.
 pub type M3 = [[f64; 3]; 3];
@@ -117,6 +119,25 @@ pub fn srgb_oetf(x: f64) -> f64 {
     } else {
         1.055 * x.powf(1.0 / 2.4) - 0.055
     }
+}
+
+/// The HSV (hexcone) hue in degrees, in `[0, 360)`, and the saturation of
+/// an RGB colour with non-negative components; a grey has hue and
+/// saturation 0.
+pub fn hsv_hue_saturation(c: [f64; 3]) -> (f64, f64) {
+    let [r, g, b] = c;
+    let (mx, mn) = (r.max(g).max(b), r.min(g).min(b));
+    if mx == mn {
+        return (0.0, 0.0);
+    }
+    let h = if mx == r {
+        60.0 * ((g - b) / (mx - mn))
+    } else if mx == g {
+        60.0 * ((b - r) / (mx - mn) + 2.0)
+    } else {
+        60.0 * ((r - g) / (mx - mn) + 4.0)
+    };
+    (h.rem_euclid(360.0), (mx - mn) / mx)
 }
 
 #[cfg(test)]

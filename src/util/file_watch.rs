@@ -511,15 +511,9 @@ mod events {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::util::scratch::{folder, mkfifo};
     use std::io::Write;
     use std::sync::mpsc;
-
-    fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("aurora-watch-test-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
 
     /// A watcher on its own thread, handing on its saves (the test waits on
     /// them with a deadline, so a watcher that never wakes fails instead of
@@ -557,7 +551,7 @@ mod tests {
     /// (nothing), a temporary renamed onto the name, a rename away then a
     /// new file, an empty save; with events and by polling.
     fn saves_are_whole(mode: Mode, name: &str) {
-        let d = scratch(name);
+        let d = folder("watch-test", name);
         let p = d.join("scene.toml");
         let texts: Vec<String> = (0..5).map(|i| format!("seed = {i}\n# {}\n", "x".repeat(40 + i))).collect();
         std::fs::write(&p, &texts[0]).unwrap();
@@ -596,15 +590,13 @@ mod tests {
     /// next regular save is handed on.
     #[test]
     fn a_fifo_in_its_place_is_refused_without_blocking() {
-        let d = scratch("fifo");
+        let d = folder("watch-test", "fifo");
         let p = d.join("scene.toml");
         std::fs::write(&p, "seed = 1\n").unwrap();
         let (rx, _) = spawn(&p, Mode::Auto);
         assert_eq!(next(&rx).unwrap().text, "seed = 1\n");
         let fifo = d.join("fifo");
-        let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
-        // SAFETY: a NUL-terminated path.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0);
+        mkfifo(&fifo);
         std::fs::rename(&fifo, &p).unwrap();
         let e = next(&rx).unwrap_err();
         assert!(e.contains("a FIFO"), "{e}");

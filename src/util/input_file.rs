@@ -75,23 +75,16 @@ impl From<InputFileError> for std::io::Error {
 /// [`crate::util::atomic_write`] say it: "regular", "a FIFO", "a directory", ...
 pub fn kind_name(t: FileType) -> &'static str {
     use std::os::unix::fs::FileTypeExt;
-    if t.is_file() {
-        "regular"
-    } else if t.is_symlink() {
-        "a symbolic link"
-    } else if t.is_dir() {
-        "a directory"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_fifo() {
-        "a FIFO"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    }
+    let kinds = [
+        (FileType::is_file as fn(&FileType) -> bool, "regular"),
+        (FileType::is_symlink, "a symbolic link"),
+        (FileType::is_dir, "a directory"),
+        (FileType::is_char_device, "a character device"),
+        (FileType::is_block_device, "a block device"),
+        (FileType::is_fifo, "a FIFO"),
+        (FileType::is_socket, "a socket"),
+    ];
+    kinds.iter().find(|(is, _)| is(&t)).map_or("not a regular file", |(_, name)| name)
 }
 
 /// Checks, without opening it, that `path` is a regular file (a symbolic
@@ -154,25 +147,12 @@ pub fn read_to_string(path: &Path) -> Result<String, InputFileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::util::scratch::{folder, mkfifo};
     use std::time::{Duration, Instant};
-
-    fn scratch(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("aurora-input-file-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn mkfifo(p: &Path) {
-        use std::os::unix::ffi::OsStrExt;
-        let c = std::ffi::CString::new(p.as_os_str().as_bytes()).unwrap();
-        // SAFETY: a NUL-terminated path; the result is checked.
-        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o644) }, 0, "mkfifo {}", p.display());
-    }
 
     #[test]
     fn a_regular_file_and_a_link_to_one_read_as_usual() {
-        let d = scratch("regular");
+        let d = folder("input-file", "regular");
         let p = d.join("a.txt");
         std::fs::write(&p, "hello").unwrap();
         assert_eq!(read_to_string(&p).unwrap(), "hello");
@@ -191,7 +171,7 @@ mod tests {
     /// the race's guard) without blocking on a FIFO that has no writer.
     #[test]
     fn fifos_devices_directories_and_sockets_are_refused_by_both_checks_without_blocking() {
-        let d = scratch("special");
+        let d = folder("input-file", "special");
         let fifo = d.join("fifo");
         mkfifo(&fifo);
         let sock = d.join("sock");

@@ -1,6 +1,6 @@
 //! How much memory this process may use: the smallest of the limits that can
 //! stop it. A machine-level fact read at run time, so it lives at the bottom
-//! layer and is consulted by the bake's memory budget ([`crate::pipeline::memory_budget`]),
+//! layer and is consulted by the bake's memory budget ([`crate::pipeline::memory::budget`]),
 //! never by scene validation (a scene is valid or not whatever machine reads
 //! it).
 //!

@@ -12,3 +12,5 @@ pub mod memory;
 pub mod observer;
 pub mod progress;
 pub mod rng;
+#[cfg(test)]
+pub mod scratch;

@@ -120,16 +120,7 @@ mod tests {
 
     /// Hue in degrees of a linear RGB colour (HSV hexcone).
     fn hue(c: [f64; 3]) -> f64 {
-        let (r, g, b) = (c[0], c[1], c[2]);
-        let (mx, mn) = (r.max(g).max(b), r.min(g).min(b));
-        let h = if mx == r {
-            60.0 * ((g - b) / (mx - mn))
-        } else if mx == g {
-            60.0 * ((b - r) / (mx - mn) + 2.0)
-        } else {
-            60.0 * ((r - g) / (mx - mn) + 4.0)
-        };
-        h.rem_euclid(360.0)
+        crate::util::colour::hsv_hue_saturation(c).0
     }
 
     #[test]

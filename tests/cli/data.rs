@@ -8,6 +8,7 @@ use crate::common::child::AURORA_BIN;
 use crate::common::small::bake_command;
 use crate::common::{file_names, ok, refused, repo_root, scratch, write, Aurora};
 use crate::small_bake_toml;
+use std::path::PathBuf;
 
 /// A row of each restrictive table, as it stands in the file (NRLMSIS 2.1
 /// at 50.5 km, GLOW's ionosphere at its second altitude).
@@ -17,6 +18,20 @@ const GLOW_ROW: &str = "74.784,225.812,225.812,1661.96,2.23783e+08";
 /// The small scene with `atmosphere`'s lines as its [atmosphere] table.
 fn scene_text(atmosphere: &str) -> String {
     format!("{}\n[atmosphere]\n{atmosphere}", small_bake_toml!())
+}
+
+/// In a fresh folder `name`: an empty data folder `empty`, and the bake of
+/// the small scene with `atmosphere` as its [atmosphere] table into `out`
+/// with `AURORA_DATA` naming the empty folder (the caller runs it); returns
+/// (folder, empty data folder, output, bake).
+fn bake_with_empty_data(name: &str, atmosphere: &str) -> (PathBuf, PathBuf, PathBuf, Aurora) {
+    let d = scratch("data", name);
+    let empty = d.join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let scene = write(&d, "s.toml", scene_text(atmosphere));
+    let out = d.join("out");
+    let bake = bake_command(&scene, &out).env("AURORA_DATA", &empty);
+    (d, empty, out, bake)
 }
 
 fn holds(haystack: &[u8], needle: &str) -> bool {
@@ -38,24 +53,16 @@ fn the_binary_holds_no_restrictive_table_and_holds_the_standard_atmosphere() {
 
 #[test]
 fn the_default_bakes_with_an_empty_data_folder() {
-    let d = scratch("data", "default_empty");
-    let empty = d.join("empty");
-    std::fs::create_dir(&empty).unwrap();
-    let scene = write(&d, "s.toml", scene_text(""));
-    let out = d.join("out");
-    ok(&bake_command(&scene, &out).env("AURORA_DATA", &empty).arg("--quiet").output());
+    let (_, _, out, bake) = bake_with_empty_data("default_empty", "");
+    ok(&bake.arg("--quiet").output());
     assert!(file_names(&out).contains(&"aurora.vdb".to_string()), "{:?}", file_names(&out));
 }
 
 #[test]
 fn a_missing_table_is_refused_naming_the_file_its_terms_and_where_to_put_it() {
-    let d = scratch("data", "missing");
-    let empty = d.join("empty");
-    std::fs::create_dir(&empty).unwrap();
     // Through AURORA_DATA: the folder it names.
-    let scene = write(&d, "s.toml", scene_text("model = \"nrlmsis21\"\n"));
-    let out = d.join("out");
-    let e = refused(&bake_command(&scene, &out).env("AURORA_DATA", &empty).output());
+    let (d, empty, out, bake) = bake_with_empty_data("missing", "model = \"nrlmsis21\"\n");
+    let e = refused(&bake.output());
     for want in
         ["nrlmsis21.csv", "model = \"nrlmsis21\"", "non-profit", "AURORA_DATA", "[atmosphere] data", "us1976", &empty.display().to_string()]
     {

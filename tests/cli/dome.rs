@@ -5,31 +5,17 @@
 //! frames cannot fill is refused before anything is rendered; `--plan` of a
 //! fisheye scene notes a frame rate the format does not take.
 
-use crate::common::small::bake_command;
+use crate::common::small::baked_frames;
 use crate::common::{file_names, ok, refused, scratch, write, Aurora};
-use crate::small_bake_toml;
+use crate::{dome_master_toml, small_bake_toml};
 
 const DOME: &str = concat!(
     small_bake_toml!(),
     r#"[animation]
 fps = 30.0
 ray_speed_kms = 20.0
-
-[camera]
-position = [0.0, 0.0, 0.5]
-look_at = [0.0, 0.0, 100.0]
-up = [0.0, 1.0, 0.0]
-projection = "fisheye"
-fov_deg = 180.0
-
-[render]
-width = 24
-height = 24
-spp = 1
-
-[terrain]
-kind = "none"
-"#
+"#,
+    dome_master_toml!("0.5", "24")
 );
 
 /// PNG's IHDR: width, height, bit depth, colour type.
@@ -42,10 +28,7 @@ fn png_header(bytes: &[u8]) -> (u32, u32, u8, u8) {
 
 #[test]
 fn render_frames_are_named_as_the_producer_asks_and_16_bit() {
-    let dir = scratch("dome", "names");
-    let scene = write(&dir, "dome.toml", DOME);
-    let seq = dir.join("seq");
-    ok(&bake_command(&scene, &seq).args(["--frames", "1-2", "-q"]).output());
+    let (dir, scene, seq) = baked_frames("dome", "names", DOME, "1-2");
     let shots = dir.join("shots");
     std::fs::create_dir(&shots).unwrap();
     let render =
@@ -68,10 +51,7 @@ fn render_frames_are_named_as_the_producer_asks_and_16_bit() {
 
 #[test]
 fn a_name_the_frames_cannot_fill_is_refused_before_rendering() {
-    let dir = scratch("dome", "refused");
-    let scene = write(&dir, "dome.toml", DOME);
-    let seq = dir.join("seq");
-    ok(&bake_command(&scene, &seq).args(["--frames", "9-10", "-q"]).output());
+    let (dir, scene, seq) = baked_frames("dome", "refused", DOME, "9-10");
     let shots = dir.join("shots");
     std::fs::create_dir(&shots).unwrap();
     let render = |frames: Option<&str>, name: &str, extra: &[&str]| {

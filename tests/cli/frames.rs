@@ -5,10 +5,10 @@
 //! every frame of the range whichever shard wrote it; bad ranges and shards
 //! exit 2 naming the offending text.
 
-use crate::common::small::bake_command;
+use crate::common::small::{bake_command, baked_frames};
 use crate::common::{file_names, ok, refused, scratch, write, Aurora};
 use crate::small_bake_toml;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Output;
 
 /// A small scene (about a second a frame) whose motion is fast enough that
@@ -34,6 +34,12 @@ pulsation = 0.0
 
 fn bake(scene: &Path, out: &Path, extra: &[&str], env: &[(&str, &str)]) -> Output {
     bake_command(scene, out).arg("-q").args(extra).envs(env.iter().copied()).output()
+}
+
+/// [`SMALL`] with a 16 x 12 render, its frames `frames` baked into a fresh
+/// folder `name`: (folder, scene, sequence folder).
+fn baked_for_render(name: &str, frames: &str) -> (PathBuf, PathBuf, PathBuf) {
+    baked_frames("frames", name, &format!("{SMALL}[render]\nwidth = 16\nheight = 12\nspp = 1\n"), frames)
 }
 
 fn read(dir: &Path, frame: i64) -> Vec<u8> {
@@ -154,10 +160,7 @@ fn bad_ranges_and_shards_exit_2_naming_the_text() {
 
 #[test]
 fn render_frame_renders_one_frame_or_a_range_of_a_sequence_folder() {
-    let dir = scratch("frames", "render");
-    let scene = write(&dir, "small.toml", format!("{SMALL}[render]\nwidth = 16\nheight = 12\nspp = 1\n"));
-    let out = dir.join("out");
-    ok(&bake(&scene, &out, &["--frames", "1-2"], &[]));
+    let (dir, scene, out) = baked_for_render("render", "1-2");
     let img = dir.join("f.exr");
     let render = |frames: &str| Aurora::new().arg("render").arg(&scene).arg("--vdb").arg(&out).args(["--frame", frames, "--out"]).arg(&img);
     ok(&render("1-2").arg("--png").arg(dir.join("f.png")).arg("-q").output());
@@ -196,10 +199,7 @@ fn red_trail_frames_are_identical_alone_and_in_shards() {
 /// that frame's file, and no image, preview or temporary is written.
 #[test]
 fn render_frame_with_a_missing_or_damaged_frame_writes_nothing() {
-    let dir = scratch("frames", "render-missing");
-    let scene = write(&dir, "small.toml", format!("{SMALL}[render]\nwidth = 16\nheight = 12\nspp = 1\n"));
-    let seq = dir.join("seq");
-    ok(&bake(&scene, &seq, &["--frames", "1,3"], &[]));
+    let (dir, scene, seq) = baked_for_render("render-missing", "1,3");
     let images = dir.join("images");
     std::fs::create_dir(&images).unwrap();
     let render = |frames: &str| {

@@ -10,6 +10,7 @@ use crate::common::small::bake_command;
 use crate::common::{file_names, scratch, write};
 use crate::small_bake_toml;
 use serde_json::Value;
+use std::path::Path;
 use std::time::Duration;
 
 /// The small scene with its dipole pole `north_km` north of the origin.
@@ -20,6 +21,16 @@ fn scene_with_pole(north_km: f64) -> String {
 /// Address-space cap for a bake that must be refused before it allocates:
 /// 4 GiB, under which the unbounded bake of a horizontal field aborted.
 const CAP_KIB: u64 = 4 << 20;
+
+/// The message of the bake of `scene` into `out` under [`CAP_KIB`], which
+/// must be refused with nothing written (not even the lock).
+fn refused_writing_nothing(scene: &Path, out: &Path) -> String {
+    let o = bake_command(scene, out).capped(CAP_KIB).spawn().wait_within(Duration::from_secs(300));
+    let e = refused(&o);
+    let left = if out.exists() { file_names(out) } else { Vec::new() };
+    assert!(left.is_empty(), "{}: nothing may be written, found {left:?}", scene.display());
+    e
+}
 
 #[test]
 fn a_field_at_the_dipole_equator_is_refused_and_nothing_is_written() {
@@ -32,12 +43,9 @@ fn a_field_at_the_dipole_equator_is_refused_and_nothing_is_written() {
     for (name, north) in [("equator", 10007.5), ("near", 9800.0)] {
         let scene = write(&d, &format!("{name}.toml"), scene_with_pole(north));
         let out = d.join(format!("out-{name}"));
-        let o = bake_command(&scene, &out).capped(CAP_KIB).spawn().wait_within(Duration::from_secs(300));
-        let e = refused(&o);
+        let e = refused_writing_nothing(&scene, &out);
         assert!(e.contains("curtain[0]") && e.contains("dips only") && e.contains("beams.alpha_d_deg = 5"), "{e}");
         assert!(e.contains("earth.magnetic_pole"), "{e}");
-        let left = if out.exists() { file_names(&out) } else { Vec::new() };
-        assert!(left.is_empty(), "{name}: nothing may be written, found {left:?}");
     }
 }
 
@@ -49,12 +57,8 @@ fn beams_that_would_leave_their_footprint_are_refused_by_the_pilot() {
     // fraction, the dip and the limit.
     let d = scratch("globe", "pilot");
     let scene = write(&d, "shallow.toml", scene_with_pole(9700.0));
-    let out = d.join("out");
-    let o = bake_command(&scene, &out).capped(CAP_KIB).spawn().wait_within(Duration::from_secs(300));
-    let e = refused(&o);
+    let e = refused_writing_nothing(&scene, &d.join("out"));
     assert!(e.contains("curtain[0]: a pilot of 256") && e.contains("under the 50 %") && e.contains("dips 5."), "{e}");
-    let left = if out.exists() { file_names(&out) } else { Vec::new() };
-    assert!(left.is_empty(), "nothing may be written, found {left:?}");
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! status 2 before anything is written.
 
 use crate::common::{aurora, file_names, ok, refused, scratch, write};
+use crate::green_line_grid_toml;
 use std::path::{Path, PathBuf};
 
 /// An arc 80 km long and 4 km wide along x (magnetic east-west: the
@@ -10,7 +11,8 @@ use std::path::{Path, PathBuf};
 /// electrons on a vertical field over flat ground, drifting north by
 /// `30 sin(2 pi t / 80 s)` km; frames 10 s apart; its 557.7 nm on a grid of
 /// its own; a camera on the ground 60 km south of the arc's rest position.
-const SCENE: &str = r#"seed = 3
+const SCENE: &str = concat!(
+    r#"seed = 3
 [[curtain]]
 center = [0.0, 0.0]
 length = 80.0
@@ -26,15 +28,9 @@ uniform = true
 count = 4000
 b_inclination_deg = 90.0
 b_declination_deg = 0.0
-[earth]
-radius_km = 0.0
-[grid]
-voxel_size = 1.0
-density_a = 0.0
-lines = ["5577"]
-[photons]
-radius_km = 1.0
-[animation]
+"#,
+    green_line_grid_toml!(),
+    r#"[animation]
 fps = 0.1
 drift_km = 30.0
 drift_period_s = 80.0
@@ -46,7 +42,8 @@ width = 64
 height = 36
 [terrain]
 kind = "none"
-"#;
+"#
+);
 
 /// The scene and its frames 1-3 baked into `dir/seq` (once per test that
 /// needs them: each test has its own folder).

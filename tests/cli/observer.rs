@@ -20,19 +20,7 @@ fn png_pixels(path: &std::path::Path) -> Vec<[u8; 3]> {
 
 /// HSV hue (degrees) and saturation of an encoded pixel.
 fn hue_saturation(p: [u8; 3]) -> (f64, f64) {
-    let [r, g, b] = p.map(|c| c as f64 / 255.0);
-    let (mx, mn) = (r.max(g).max(b), r.min(g).min(b));
-    if mx == mn {
-        return (0.0, 0.0);
-    }
-    let h = if mx == r {
-        60.0 * ((g - b) / (mx - mn))
-    } else if mx == g {
-        60.0 * ((b - r) / (mx - mn) + 2.0)
-    } else {
-        60.0 * ((r - g) / (mx - mn) + 4.0)
-    };
-    (h.rem_euclid(360.0), (mx - mn) / mx)
+    aurora::util::colour::hsv_hue_saturation(p.map(|c| c as f64 / 255.0))
 }
 
 fn median(mut v: Vec<f64>) -> f64 {

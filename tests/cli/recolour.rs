@@ -51,6 +51,17 @@ fn bake(scene: &Path, dir: &Path, name: &str, sets: &[&str]) -> PathBuf {
     out.join("aurora.vdb")
 }
 
+/// In a fresh folder `name`: the scene (`scene.toml`) and its bakes with
+/// every line's grid for the camera (`camera`) and for the eye (`eye`);
+/// returns (folder, scene, the camera's VDB, the eye's VDB).
+fn bakes_for_both_observers(name: &str) -> (PathBuf, PathBuf, PathBuf, PathBuf) {
+    let dir = scratch("recolour", name);
+    let scene = write(&dir, "scene.toml", SCENE);
+    let camera = bake(&scene, &dir, "camera", &[LINES]);
+    let eye = bake(&scene, &dir, "eye", &[LINES, "colour.observer=eye"]);
+    (dir, scene, camera, eye)
+}
+
 /// `aurora render SCENE --vdb VDB --out OUT` with the overrides `sets`.
 fn render(scene: &Path, vdb: &Path, out: &Path, sets: &[&str]) -> std::process::Output {
     let mut cmd = Aurora::new().arg("render").arg(scene).arg("--vdb").arg(vdb).args(["-q", "--threads", "2", "--out"]).arg(out);
@@ -102,10 +113,7 @@ fn a_bake_recoloured_for_the_other_observer_renders_as_a_bake_for_it() {
     // re-colouring adds nothing measurable to that floor. 1.5 % is twice
     // the floor; the old renderer, which kept the baked colours, is 37 %
     // off.
-    let dir = scratch("recolour", "agree");
-    let scene = write(&dir, "scene.toml", SCENE);
-    let camera = bake(&scene, &dir, "camera", &[LINES]);
-    let eye = bake(&scene, &dir, "eye", &[LINES, "colour.observer=eye"]);
+    let (dir, scene, camera, eye) = bakes_for_both_observers("agree");
     for (from, to, name, baked_for) in [(&camera, &eye, "eye", "camera"), (&eye, &camera, "camera", "eye")] {
         let set = format!("colour.observer={name}");
         let recoloured = dir.join(format!("{name}-from-{baked_for}.exr"));
@@ -121,10 +129,7 @@ fn a_bake_recoloured_for_the_other_observer_renders_as_a_bake_for_it() {
 
 #[test]
 fn the_bakes_own_observer_changes_nothing_and_the_file_records_it() {
-    let dir = scratch("recolour", "same");
-    let scene = write(&dir, "scene.toml", SCENE);
-    let camera = bake(&scene, &dir, "camera", &[LINES]);
-    let eye = bake(&scene, &dir, "eye", &[LINES, "colour.observer=eye"]);
+    let (dir, scene, camera, eye) = bakes_for_both_observers("same");
     // Only another observer than the default is written (the default
     // file's bytes are unchanged).
     assert_eq!(recorded_observer(&camera), None);

@@ -2,7 +2,7 @@
 //! (camera formula, ray-box clipping, brute-force integration through
 //! `Grid::sample_world`), and the grid builders and render settings the
 //! tests feed both.
-#![allow(dead_code, clippy::excessive_precision, clippy::too_many_arguments, clippy::needless_range_loop)]
+#![allow(dead_code, clippy::excessive_precision, clippy::needless_range_loop)]
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use aurora::grid::{Grid, Transform};
@@ -189,21 +189,29 @@ pub fn support<T: aurora::grid::VoxelValue>(g: &Grid<T>) -> Option<(DVec3, DVec3
     Some((g.transform.index_to_world(lo.as_dvec3() - DVec3::ONE), g.transform.index_to_world(hi.as_dvec3() + DVec3::ONE)))
 }
 
-/// Brute-force `(tau, L)` along `o + t d`, t in `[0, t_max]`: breakpoints at
-/// every index-plane crossing of both grids (so sigma_t and e are cubic
-/// between them), sigma_t integrated with 3-point Gauss (exact for cubics),
-/// `int T e` with `parts` x 8-point Gauss per interval, sampling with
-/// `Grid::sample_world`.
+/// The part `t` in `[0, t_max]` of the ray `o + t d` that [`oracle`]
+/// integrates over.
+#[derive(Clone, Copy, Debug)]
+pub struct RaySpan {
+    pub o: DVec3,
+    pub d: DVec3,
+    pub t_max: f64,
+}
+
+/// Brute-force `(tau, L)` along `seg`: breakpoints at every index-plane
+/// crossing of both grids (so sigma_t and e are cubic between them),
+/// sigma_t (`ds` times the density) integrated with 3-point Gauss (exact
+/// for cubics), `int T e` (`es` times the emission) with `parts` x 8-point
+/// Gauss per interval, sampling with `Grid::sample_world`.
 pub fn oracle(
     density: Option<&Grid<f32>>,
     emission: Option<&Grid<[f32; 3]>>,
     ds: f64,
     es: f64,
-    o: DVec3,
-    d: DVec3,
-    t_max: f64,
+    seg: RaySpan,
     parts: usize,
 ) -> (f64, [f64; 3]) {
+    let RaySpan { o, d, t_max } = seg;
     let mut lo = DVec3::INFINITY;
     let mut hi = DVec3::NEG_INFINITY;
     for b in [density.and_then(support), emission.and_then(support)].into_iter().flatten() {

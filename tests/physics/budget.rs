@@ -1,4 +1,4 @@
-//! The memory budget (`aurora::pipeline::memory_budget`) bounds what a real bake makes: the
+//! The memory budget (`aurora::pipeline::memory::budget`) bounds what a real bake makes: the
 //! leaves below the beams' highest start lie in its world box, the leaves
 //! above (the columns over the starts, which reach far above `beams.top_km`
 //! with Fang's depositions) are no more than its column bound, and its
@@ -7,7 +7,9 @@
 use crate::common::small::small_scene;
 use aurora::pipeline::bake;
 use aurora::pipeline::deposit::Photon;
-use aurora::pipeline::{memory_budget, memory_reach};
+use aurora::pipeline::memory::budget::{self, LeafCount};
+use aurora::pipeline::memory::reach;
+use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{Deposition, KernelRadius};
 use aurora::util::progress::NoProgress;
 
@@ -17,13 +19,14 @@ fn a_bake_stays_inside_the_budget_bounds() {
         let mut s = small_scene();
         s.beams.deposition = deposition;
         let b = bake::bake(&s, &NoProgress).unwrap();
+        let plan = BakePlan::new(&s, &NoProgress);
         let g = &b.emission;
         let t = g.transform;
         let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
         let slack = reach + t.voxel_size;
-        let (lo, hi) = memory_reach::world_bounds(&s);
+        let (lo, hi) = reach::world_bounds(&plan);
         let start_top = s.beams.top_km + s.beams.top_noise_km;
-        let top = s.curtains.iter().map(|c| memory_reach::deposit_top_km(&s, c)).fold(0.0, f64::max);
+        let top = s.curtains.iter().map(|c| reach::deposit_top_km(&plan, c)).fold(0.0, f64::max);
         let mut above = std::collections::BTreeSet::new();
         let mut highest = f64::NEG_INFINITY;
         for (ijk, _) in g.iter_active() {
@@ -42,7 +45,7 @@ fn a_bake_stays_inside_the_budget_bounds() {
             }
         }
         let leaf_km = 8.0 * t.voxel_size;
-        let bound = memory_reach::column_leaves(&s, leaf_km, reach);
+        let bound = reach::column_leaves(&plan, leaf_km, reach);
         assert!(above.len() as f64 <= bound, "{deposition:?}: {} leaves above the starts, bound {bound}", above.len());
         if deposition == Deposition::Csda {
             assert!(above.is_empty(), "csda deposits nothing above the starts: highest voxel {highest:.1} km");
@@ -51,7 +54,7 @@ fn a_bake_stays_inside_the_budget_bounds() {
             assert!(highest > start_top + 50.0, "{deposition:?}: highest voxel {highest:.1} km, starts at most {start_top} km");
             assert!(!above.is_empty());
         }
-        let e = memory_budget::estimate(&s);
+        let e = budget::estimate(&plan, LeafCount::Bands);
         let term = e.terms.iter().find(|t| t.what == "photons").unwrap();
         let held = 3.0 * (b.photons.len() * std::mem::size_of::<Photon>()) as f64;
         assert!(
@@ -91,15 +94,15 @@ fn the_photon_estimate_follows_the_field_dip() {
             s.earth.magnetic_pole = Some(pole_for_dip(dip, s.earth.radius_km));
         }
         let b = bake::bake(&s, &NoProgress).unwrap();
-        let plan = aurora::pipeline::bake::plan::BakePlan::new(&s, &NoProgress);
-        let e = memory_budget::estimate_plan(&s, &plan);
+        let plan = BakePlan::new(&s, &NoProgress);
+        let e = budget::estimate(&plan, LeafCount::Bands);
         let term = e.terms.iter().find(|t| t.what == "photons").unwrap();
-        let per_photon = memory_budget::bytes_per_held_photon(s.photons.gather);
+        let per_photon = budget::bytes_per_held_photon(s.photons.gather);
         let counted = term.bytes / per_photon;
         let held = b.photons.len() as f64;
         let leaves = b.emission.leaf_count() as f64;
         let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
-        let bound = memory_budget::grid_leaves(&s, &plan, b.stats.voxel_size_km, reach);
+        let bound = budget::grid_leaves(&plan, b.stats.voxel_size_km, reach, LeafCount::Bands);
         eprintln!("dip {dip}: {held} photons, estimate {counted:.0} ({:.3}); {leaves} leaves, bound {bound:.0}", counted / held);
         assert!(counted >= held && counted <= 1.15 * held, "dip {dip}: {held} photons, the estimate counts {counted:.0}");
         assert!(leaves <= bound, "dip {dip}: {leaves} leaves, bound {bound:.0}");
@@ -124,7 +127,7 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
     // the bake (fewer beams, longer steps, larger voxels, a smaller
     // kernel, a coarser footprint, fewer lines or trail samples). A
     // steeper field's longer beams are counted too.
-    use aurora::pipeline::memory_refusal::check;
+    use aurora::pipeline::memory::refusal::check;
     use aurora::scene::{Scene, VoxelSize};
     let limit = aurora::util::memory::MemoryLimit { bytes: 8.0 * (1u64 << 30) as f64, source: "test" };
     let mut scenes: Vec<(&str, Scene)> = Vec::new();
@@ -156,14 +159,14 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
     scenes.push(("shallow field, lines and trail", s));
     for (name, s) in scenes {
         s.validate(name, None).unwrap();
-        let e = check(&s, &limit).expect_err(name);
+        let e = check(&BakePlan::new(&s, &NoProgress), &limit).expect_err(name);
         let m = e.to_string();
         assert!(!e.suggestions.is_empty(), "{name}: {m}");
         assert!(m.contains("80 %") && m.contains("each of these changes alone brings it under"), "{name}: {m}");
         eprintln!("{name}: {m}");
         for sg in &e.suggestions {
             let t = with_key(&s, &sg.key, &sg.to);
-            let fits = check(&t, &limit);
+            let fits = check(&BakePlan::new(&t, &NoProgress), &limit);
             assert!(fits.is_ok(), "{name}: {} = {} does not fit: {}", sg.key, sg.to, fits.unwrap_err());
             let ok = match sg.key.as_str() {
                 "beams.count" => t.beams.count < s.beams.count,
@@ -199,11 +202,11 @@ fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
         let mut s = small_scene();
         s.beams.deposition = deposition;
         let b = bake::bake(&s, &NoProgress).unwrap();
-        let plan = aurora::pipeline::bake::plan::BakePlan::new(&s, &NoProgress);
+        let plan = BakePlan::new(&s, &NoProgress);
         let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
-        let bound = memory_budget::grid_leaves(&s, &plan, b.stats.voxel_size_km, reach);
+        let bound = budget::grid_leaves(&plan, b.stats.voxel_size_km, reach, LeafCount::Bands);
         let leaves = b.emission.leaf_count() as f64;
-        let old = memory_budget::box_leaves(&s, 8.0 * b.stats.voxel_size_km, reach + b.stats.voxel_size_km);
+        let old = budget::box_leaves(&plan, 8.0 * b.stats.voxel_size_km, reach + b.stats.voxel_size_km);
         eprintln!("{deposition:?}: {leaves} leaves, bands {bound}, boxes {old}");
         assert!(leaves <= bound && bound <= 4.5 * leaves, "{deposition:?}: {leaves} leaves, bound {bound}");
         assert!(bound <= 0.33 * old, "{deposition:?}: bands {bound}, boxes {old}");
@@ -212,12 +215,16 @@ fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
 
 #[test]
 fn a_bake_in_chunks_counts_one_chunk_of_photons_and_what_stays_per_beam() {
-    use aurora::pipeline::bake::plan::BakePlan;
     let s = small_scene();
-    let mut plan = BakePlan::new(&s, &NoProgress);
-    plan.beam_chunk = 50;
+    let plan = BakePlan::new(&s, &NoProgress);
+    // The plan of a scene like `s`, traced and gathered 50 beams at a time.
+    let chunked = |t: &aurora::scene::Scene| {
+        let mut p = BakePlan::reusing(t, &plan, &NoProgress);
+        p.beam_chunk = 50;
+        p
+    };
     let term = |s: &aurora::scene::Scene, what: &str| {
-        memory_budget::estimate_plan(s, &plan).terms.iter().find(|t| t.what == what).map(|t| t.bytes)
+        budget::estimate(&chunked(s), LeafCount::Bands).terms.iter().find(|t| t.what == what).map(|t| t.bytes)
     };
     // 301 beams in chunks of 50: the photons and candidates of 50 beams,
     // the same for ten times the beams.
@@ -229,13 +236,13 @@ fn a_bake_in_chunks_counts_one_chunk_of_photons_and_what_stays_per_beam() {
         assert_eq!(term(&s, what), term(&whole50, what), "{what}");
         assert_eq!(term(&more, what), term(&s, what), "{what}");
     }
-    assert!(memory_budget::is_chunked(&s, &plan) && !memory_budget::is_chunked(&whole50, &plan));
+    assert!(chunked(&s).is_chunked(s.beams.count) && !chunked(&whole50).is_chunked(whole50.beams.count));
     // What grows with the beams in chunks: the automatic voxel size's
     // distances (8 bytes a photon) and the velocity's 12 bytes a beam.
     let mut auto = more.clone();
     auto.grid.voxel_size = aurora::scene::VoxelSize::Auto(aurora::scene::AutoTag::Auto);
     let d = term(&auto, "photon distances").expect("a distances term");
-    let steps = memory_reach::photons_of_steps(&auto, 3010.0);
+    let steps = reach::photons_of_steps(&chunked(&auto), 3010.0);
     assert!(d >= 8.0 * steps, "{d} for {steps} step photons");
     assert_eq!(term(&more, "photon distances"), None);
     let mut v = more.clone();

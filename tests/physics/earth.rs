@@ -156,9 +156,9 @@ fn a_long_curtains_beams_stay_along_the_local_field_at_both_ends() {
         s.beams.delta_alpha_deg = 0.0;
         s.earth.magnetic_pole = pole;
         s.validate("t", None).unwrap();
-        let fps = aurora::pipeline::bake::plan::footprints(&s);
-        let atm = aurora::pipeline::bake::plan::atmosphere(&s);
-        let colour = aurora::pipeline::bake::plan::colour_table(&s, &atm);
+        let fps = aurora::pipeline::plan::footprints(&s);
+        let atm = aurora::pipeline::plan::atmosphere(&s);
+        let colour = aurora::pipeline::plan::colour_table(&s, &atm);
         let (photons, _) = trace_all(&s, &fps, &atm, &colour, &NoProgress).unwrap();
         let (mut worst, mut n, mut global) = (0.0f64, 0, 0.0f64);
         let b0 = MagneticField::new(s.beams.b_inclination_deg, s.beams.b_declination_deg).b;

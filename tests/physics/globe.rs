@@ -3,7 +3,6 @@
 //! -B), as they go along B in the north.
 
 use crate::common::small::small_scene;
-use aurora::pipeline::bake::plan;
 use aurora::pipeline::beams::trace_deposits;
 use aurora::pipeline::deposit::StepDeposit;
 use aurora::scene::Scene;
@@ -46,16 +45,16 @@ fn a_southern_curtain_deposits_downward_as_its_northern_mirror() {
         s.earth.magnetic_pole = Some(pole);
         // The pole is one a scene file accepts.
         Scene { earth: s.earth.clone(), ..Scene::default() }.validate("globe", None).unwrap();
-        let fps = plan::footprints(&s);
-        let atm = plan::atmosphere(&s);
-        let colour = plan::colour_table(&s, &atm);
+        let fps = aurora::pipeline::plan::footprints(&s);
+        let atm = aurora::pipeline::plan::atmosphere(&s);
+        let colour = aurora::pipeline::plan::colour_table(&s, &atm);
         trace_deposits(&s, &fps, &atm, &colour, &NoProgress).unwrap()
     };
     let r = aurora::geometry::earth::MEAN_RADIUS_KM;
     let (north, ns) = run([0.0, 3000.0]);
     let (south, ss) = run([0.0, -(std::f64::consts::PI * r - 3000.0)]);
     for (name, st, deps) in [("north", &ns, &north), ("south", &ss, &south)] {
-        assert!(st.deposited_fraction >= 0.95, "{name}: {st:?}");
+        assert!(st.power.deposited_fraction >= 0.95, "{name}: {st:?}");
         for c in &st.curtains {
             assert!(c.deposited_fraction >= 0.95, "{name}: {c:?}");
         }

@@ -8,7 +8,7 @@ use crate::common::small::coarse;
 use crate::common::{aurora, ok, refused, scratch, stderr, with_threads, write};
 use aurora::grid::Grid;
 use aurora::physics::emission::line_table::{line_lifetimes, LINE_KEYS};
-use aurora::pipeline::bake::{self, plan, Bake};
+use aurora::pipeline::bake::{self, Bake};
 use aurora::scene::{AnimationParams, Curtain, Scene, TerrainKind};
 use aurora::util::progress::NoProgress;
 
@@ -122,7 +122,7 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
     s.grid.lines = vec!["6300".into(), "5577".into(), "4278".into()];
     // Only the patch changes in time.
     hold_still(&mut s.animation);
-    let atm = plan::atmosphere(&s);
+    let atm = aurora::pipeline::plan::atmosphere(&s);
     let omega = std::f64::consts::TAU / period;
     // Frame k + 1 of a sequence at n frames a period: t = k P / n.
     let anim = AnimationParams { fps: n as f64 / period, ..s.animation.clone() };
@@ -218,7 +218,7 @@ fn render_grid_is_the_line_grid_integrated_along_each_ray() {
     for y in 0..h {
         for x in 0..w {
             let (o, d) = oracle::camera_ray(&s.camera, w, h, x as f64 + 0.5, y as f64 + 0.5);
-            let (tau, l) = oracle::oracle(Some(density), Some(&line), 1.0, 1.0, o, d, f64::INFINITY, 4);
+            let (tau, l) = oracle::oracle(Some(density), Some(&line), 1.0, 1.0, oracle::RaySpan { o, d, t_max: f64::INFINITY }, 4);
             let got = px[y * w + x] as f64;
             assert!(oracle::rel(got, l[0], 1e-3 * peak) < 1e-3, "pixel ({x}, {y}): {got} R vs brute force {} R", l[0]);
             if l[0] > 0.02 * peak {

@@ -75,7 +75,7 @@ fn a_straight_two_point_path_is_the_straight_curtain() {
         Curtain { center: [lift[0], 10.0 + lift[1]], length: 80.0, width: 20.0, rotation_deg: 20.0, bend_km: 3.0, ..Curtain::default() };
     let along = Curtain { path: Some(vec![a, b]), ..straight.clone() };
     let (s1, s2) = (scene_with(straight), scene_with(along));
-    let (f1, f2) = (aurora::pipeline::bake::plan::footprints(&s1), aurora::pipeline::bake::plan::footprints(&s2));
+    let (f1, f2) = (aurora::pipeline::plan::footprints(&s1), aurora::pipeline::plan::footprints(&s2));
     assert_eq!((f1[0].nx, f1[0].ny), (f2[0].nx, f2[0].ny));
     assert!((f1[0].length - f2[0].length).abs() < 1e-9);
     let worst = f1[0].data.iter().zip(&f2[0].data).map(|(x, y)| (x - y).abs()).fold(0.0f32, f32::max);
@@ -129,14 +129,15 @@ fn a_3000_km_path_fits_the_memory_budget() {
     s.beams.count = 20_000;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s.validate("t", None).unwrap();
-    let e = aurora::pipeline::memory_budget::estimate(&s);
+    let plan = aurora::pipeline::plan::BakePlan::new(&s, &aurora::util::progress::NoProgress);
+    let e = aurora::pipeline::memory::budget::estimate(&plan, aurora::pipeline::memory::budget::LeafCount::Bands);
     // Default width 40 km, 128 cells across: 0.3125 km, and the sheet's
     // cells as long as wide, so about 9600 cells along, an f32 each kept.
     let fp = e.terms.iter().find(|t| t.what == "footprints").unwrap();
     assert!(fp.bytes > 9000.0 * 128.0 * 4.0 && fp.bytes < 10_000.0 * 128.0 * 4.0, "{}", fp.bytes);
     // The band bound at 1 km voxels, far below the 2000 x 2000 km box's leaves.
     assert!(e.total() < 8.0 * (1u64 << 30) as f64, "{}: {:?}", aurora::util::memory::gib(e.total()), e.terms);
-    let f = &aurora::pipeline::bake::plan::footprints(&s)[0];
+    let f = &aurora::pipeline::plan::footprints(&s)[0];
     assert!((f.length - 3000.0).abs() < 5.0 && f.nx >= 9000, "{} km, {} cells", f.length, f.nx);
     assert!(f.data.iter().any(|&d| d > 0.5));
 }

@@ -1,11 +1,11 @@
-//! The bake pipeline (`aurora::pipeline::bake::plan`): a beam is the same beam whatever
+//! The bake pipeline (`aurora::pipeline::plan`, `aurora::pipeline::bake`): a beam is the same beam whatever
 //! the chunking, and a bake composed from the plan's stages is `aurora
 //! bake`'s.
 
 use crate::common::small::small_scene;
 use aurora::pipeline::bake;
-use aurora::pipeline::bake::plan::{self, BakePlan};
 use aurora::pipeline::bake::stats::StageTimes;
+use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{BeamStarts, Deposition};
 use aurora::util::progress::NoProgress;
 use std::time::Instant;
@@ -18,7 +18,7 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
         s.beams.deposition = deposition;
         let plan = BakePlan::new(&s, &NoProgress);
         let n = s.beams.count;
-        let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
+        let whole = aurora::pipeline::bake::trace::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
         assert!(whole.photons.len() > 1000, "{}", whole.photons.len());
         // Cuts inside the first curtain, at the curtain boundary (201 of
         // 301 beams go to the first, weight 1 : 0.5), inside the second.
@@ -26,10 +26,10 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             let mut photons = Vec::new();
             let (mut beams, mut electron, mut deposited) = (0, 0.0, 0.0);
             for w in cuts.windows(2) {
-                let part = plan::trace(&plan, n, 0, w[0]..w[1], &NoProgress).unwrap();
+                let part = aurora::pipeline::bake::trace::trace(&plan, n, 0, w[0]..w[1], &NoProgress).unwrap();
                 beams += part.stats.beams;
-                electron += part.stats.electron_power_w;
-                deposited += part.stats.deposited_power_w;
+                electron += part.stats.power.electron_power_w;
+                deposited += part.stats.power.deposited_power_w;
                 photons.extend(part.photons);
             }
             assert_eq!(photons.len(), whole.photons.len(), "{starts:?} {cuts:?}");
@@ -43,11 +43,11 @@ fn chunked_tracing_equals_one_call_byte_for_byte() {
             assert!(bytes(&photons) == bytes(&whole.photons), "{starts:?} {cuts:?}: photons differ");
             assert_eq!(beams, n);
             // The power sums only differ by the order of f64 additions.
-            assert!((electron / whole.stats.electron_power_w - 1.0).abs() < 1e-12, "{electron}");
-            assert!((deposited / whole.stats.deposited_power_w - 1.0).abs() < 1e-12, "{deposited}");
+            assert!((electron / whole.stats.power.electron_power_w - 1.0).abs() < 1e-12, "{electron}");
+            assert!((deposited / whole.stats.power.deposited_power_w - 1.0).abs() < 1e-12, "{deposited}");
         }
         // An empty range traces nothing.
-        assert!(plan::trace(&plan, n, 0, 5..5, &NoProgress).unwrap().photons.is_empty());
+        assert!(aurora::pipeline::bake::trace::trace(&plan, n, 0, 5..5, &NoProgress).unwrap().photons.is_empty());
     }
 }
 
@@ -58,16 +58,16 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
     // The stages by hand: plan, trace in two chunks, voxel size, gather,
     // finish.
     let plan = BakePlan::new(&s, &NoProgress);
-    let n = plan.beams.count;
-    let mut photons = plan::trace(&plan, n, 0, 0..150, &NoProgress).unwrap().photons;
-    let rest = plan::trace(&plan, n, 0, 150..n, &NoProgress).unwrap();
+    let n = plan.scene.beams.count;
+    let mut photons = aurora::pipeline::bake::trace::trace(&plan, n, 0, 0..150, &NoProgress).unwrap().photons;
+    let rest = aurora::pipeline::bake::trace::trace(&plan, n, 0, 150..n, &NoProgress).unwrap();
     photons.extend(rest.photons);
     let (v, source) = plan.voxel_size(&photons);
     assert_eq!((v, source.as_str()), (want.stats.voxel_size_km, want.stats.voxel_size_source.as_str()));
-    let emission = plan::gather(&plan, &photons, v, &NoProgress);
-    let whole = plan::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
+    let emission = aurora::pipeline::bake::gather::gather(&plan, &photons, v, &NoProgress);
+    let whole = aurora::pipeline::bake::trace::trace(&plan, n, 0, 0..n, &NoProgress).unwrap();
     assert_eq!(photons, whole.photons);
-    let g = plan::Gathered {
+    let g = aurora::pipeline::bake::gather::Gathered {
         photons,
         lines: Vec::new(),
         beam_stats: whole.stats,
@@ -78,7 +78,7 @@ fn a_bake_through_the_plan_equals_aurora_bake() {
         velocity: None,
         photon_totals: None,
     };
-    let got = plan::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
+    let got = aurora::pipeline::bake::finish::finish(&plan, emission, g, StageTimes::default(), Instant::now(), &NoProgress).unwrap();
     assert_eq!(got.emission, want.emission);
     assert_eq!(got.density, want.density);
     assert_eq!(got.photons, want.photons);

@@ -24,7 +24,7 @@ fn scene(e0: f64) -> Scene {
 /// The curtain's profile and the electron power into the atmosphere, erg/s.
 fn run(e0: f64) -> (CurtainProfile, f64) {
     let p = profile(&scene(e0), &NoProgress).unwrap();
-    let erg_s = p.beam_stats.electron_power_w * 1e7;
+    let erg_s = p.beam_stats.power.electron_power_w * 1e7;
     (p.curtains.into_iter().next().unwrap(), erg_s)
 }
 

@@ -6,7 +6,7 @@
 
 use super::lines::{bake_with_one_and, hold_still, line_grid, patch_scene};
 use aurora::grid::Grid;
-use aurora::pipeline::bake::{self, plan};
+use aurora::pipeline::bake;
 use aurora::scene::{AnimationParams, Scene};
 use aurora::util::progress::NoProgress;
 use std::collections::BTreeSet;
@@ -119,7 +119,7 @@ fn a_drifting_curtain_leaves_its_red_behind() {
     let green_shift = centroid_y(line_grid(&on, "5577")) - centroid_y(line_grid(&off, "5577"));
     assert!(green_shift.abs() < 0.05, "the green stays at t: {green_shift} km");
 
-    let atm = plan::atmosphere(&s);
+    let atm = aurora::pipeline::plan::atmosphere(&s);
     let omega = std::f64::consts::TAU / period;
     let v = omega * d;
     let samples = aurora::pipeline::red_trail::samples(8);

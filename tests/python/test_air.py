@@ -18,13 +18,12 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
 import synth
-from test_cross_check import aurora_bin, run
+from test_cross_check import render_at_one_sample
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 OUT = ROOT / "target" / "cross-check" / "air"
@@ -78,13 +77,7 @@ def _scene(camera: dict, width: int, height: int) -> dict:
 
 def _both(compare, name: str, doc: dict, vdb: Path) -> dict:
     d = OUT / name
-    d.mkdir(parents=True, exist_ok=True)
-    scene = d / "scene.toml"
-    scene.write_text(synth.toml_dumps(doc))
-    a, b = d / "aurora.exr", d / "cycles.exr"
-    run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", a, "--spp", 1])
-    run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
-         "--samples", 64, "--step-rate", 0.1])
+    a, b = render_at_one_sample(d, doc, vdb, ["--samples", 64, "--step-rate", 0.1])
     m = compare.compare(a, b, d / "diff.png", d / "figures.json")
     print(name, json.dumps(m))
     return m

@@ -19,13 +19,12 @@ airglow switched off, the sky is black in both.
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
 import synth
-from test_cross_check import aurora_bin, run
+from test_cross_check import render_at_one_sample
 
 ROOT = Path(__file__).resolve().parent.parent.parent
 OUT = ROOT / "target" / "cross-check" / "airglow"
@@ -44,15 +43,7 @@ def _scene(airglow: bool) -> dict:
 
 
 def _renders(name: str, doc: dict, vdb: Path):
-    d = OUT / name
-    d.mkdir(parents=True, exist_ok=True)
-    scene = d / "scene.toml"
-    scene.write_text(synth.toml_dumps(doc))
-    a, b = d / "aurora.exr", d / "cycles.exr"
-    run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", a, "--spp", 1])
-    run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b,
-         "--samples", 4])
-    return a, b
+    return render_at_one_sample(OUT / name, doc, vdb, ["--samples", 4])
 
 
 def _elevation_deg() -> np.ndarray:

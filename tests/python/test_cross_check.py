@@ -108,6 +108,19 @@ def render_both(binary, scene_doc: dict, name: str, vdb: Path, extra=(), kind=No
     return scene, a, b
 
 
+def render_at_one_sample(out_dir: Path, doc: dict, vdb: Path, cycles_args) -> tuple[Path, Path]:
+    """`doc` written to out_dir/scene.toml and rendered from `vdb` by
+    `aurora render` at 1 sample a pixel (out_dir/aurora.exr) and by Cycles
+    with `cycles_args` (out_dir/cycles.exr)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    scene = out_dir / "scene.toml"
+    scene.write_text(synth.toml_dumps(doc))
+    a, b = out_dir / "aurora.exr", out_dir / "cycles.exr"
+    run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", a, "--spp", 1])
+    run([sys.executable, ROOT / "tools" / "cycles" / "cycles_render.py", scene, "--vdb", vdb, "--out", b, *cycles_args])
+    return a, b
+
+
 def test_aurora_render_matches_cycles_on_the_default_bake(compare):
     binary = aurora_bin()
     OUT.mkdir(parents=True, exist_ok=True)

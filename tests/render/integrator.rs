@@ -83,7 +83,7 @@ fn compare(density: Option<&Grid<f32>>, emission: Option<&Grid<[f32; 3]>>, ds: f
             _ => unreachable!(),
         };
         let got = radiance_along_ray(&medium, o, d, t_max, Integration::Exact, 0.5);
-        let (tau, l) = oracle(density, emission, ds, es, o, d, t_max, 16);
+        let (tau, l) = oracle(density, emission, ds, es, RaySpan { o, d, t_max }, 16);
         if tau > TAU_CUTOFF {
             // The renderer stops once tau passes TAU_CUTOFF (T < 4e-18): what
             // is left of L is below exp(-40) times the rest of the emission.
@@ -211,7 +211,7 @@ fn fixed_step_error_grows_with_step_size_while_exact_stays_exact() {
         let dir = random_dir(&mut rng);
         let through = DVec3::splat(4.8) + DVec3::new(rng.random(), rng.random(), rng.random()) * 1.6 - 0.8;
         let o = through - dir * 20.0;
-        let (tau, l) = oracle(Some(&d), Some(&e), 1.0, 1.0, o, dir, f64::INFINITY, 32);
+        let (tau, l) = oracle(Some(&d), Some(&e), 1.0, 1.0, RaySpan { o, d: dir, t_max: f64::INFINITY }, 32);
         if tau > 5.0 {
             thick += 1;
         }

@@ -421,19 +421,31 @@ fn obj_export_is_the_traced_mesh() {
     }
 }
 
-#[test]
-fn blender_imports_exactly_the_same_mesh() {
-    // The add-on imports the OBJ with forward_axis='Y', up_axis='Z'; Blender
-    // must end up with our vertices bit for bit (f32) and our triangles.
+/// [`mountains`], and what Blender prints running `script` after it
+/// imported them as the add-on does (written as the OBJ `name`, imported
+/// with forward_axis='Y', up_axis='Z'; the script sees the object as `ob`
+/// and its mesh as `me`).
+fn mountains_through_blender(name: &str, script: &str) -> (Heightfield, String) {
     let hf = mountains();
-    let path = tmp("blender.obj");
+    let path = tmp(name);
     write_obj(&path, &hf).unwrap();
-    let script = r#"
-import bpy, sys, struct
+    let script = format!(
+        "import bpy, sys, struct
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.wm.obj_import(filepath=sys.argv[-1], forward_axis='Y', up_axis='Z')
 ob = [o for o in bpy.data.objects if o.type == 'MESH'][0]
 me = ob.data
+{script}"
+    );
+    let text = python(&venv_python(), &["-c", &script, "--", path.to_str().unwrap()]);
+    (hf, text)
+}
+
+#[test]
+fn blender_imports_exactly_the_same_mesh() {
+    // The add-on imports the OBJ with forward_axis='Y', up_axis='Z'; Blender
+    // must end up with our vertices bit for bit (f32) and our triangles.
+    let script = r#"
 assert tuple(ob.matrix_world.row[0]) == (1.0, 0.0, 0.0, 0.0) and tuple(ob.matrix_world.row[2]) == (0.0, 0.0, 1.0, 0.0), ob.matrix_world
 out = sys.stdout
 out.write("V %d\n" % len(me.vertices))
@@ -443,7 +455,7 @@ out.write("F %d\n" % len(me.polygons))
 for p in me.polygons:
     out.write(" ".join(str(i) for i in p.vertices) + "\n")
 "#;
-    let text = python(&venv_python(), &["-c", script, "--", path.to_str().unwrap()]);
+    let (hf, text) = mountains_through_blender("blender.obj", script);
     let mut lines = text.lines().skip_while(|l| !l.starts_with("V "));
     let nv: usize = lines.next().unwrap()[2..].parse().unwrap();
     assert_eq!(nv, hf.nx() * hf.ny());
@@ -480,14 +492,7 @@ fn smooth_normals_are_blenders_vertex_normals() {
     // about 1e-4 of a small angle): measured 4.5e-5 at worst, so 1e-4;
     // area-weighted or equal-weighted normals differ from Blender's by
     // 0.3-0.4 on this mesh.
-    let hf = mountains();
-    let path = tmp("normals.obj");
-    write_obj(&path, &hf).unwrap();
     let script = r#"
-import bpy, sys
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.wm.obj_import(filepath=sys.argv[-1], forward_axis='Y', up_axis='Z')
-me = [o for o in bpy.data.objects if o.type == 'MESH'][0].data
 for p in me.polygons:
     p.use_smooth = True
 me.update()
@@ -495,7 +500,7 @@ sys.stdout.write("N %d\n" % len(me.vertices))
 for n in me.vertex_normals:
     sys.stdout.write("%r %r %r\n" % tuple(n.vector))
 "#;
-    let text = python(&venv_python(), &["-c", script, "--", path.to_str().unwrap()]);
+    let (hf, text) = mountains_through_blender("normals.obj", script);
     let mut lines = text.lines().skip_while(|l| !l.starts_with("N "));
     let nv: usize = lines.next().unwrap()[2..].parse().unwrap();
     assert_eq!(nv, hf.normals.len());

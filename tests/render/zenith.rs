@@ -6,6 +6,7 @@
 //! in the EXR header and the PNG's text chunks.
 
 use crate::common::{aurora, ok, scratch, write};
+use crate::{dome_master_toml, green_line_grid_toml};
 use aurora::geometry::camera::CameraModel;
 use aurora::physics::air_extinction::{Air, Extinction};
 use aurora::scene::{Scene, SkyParams};
@@ -16,7 +17,8 @@ use std::path::Path;
 /// vertical field and flat ground, its 557.7 nm on a grid of its own, no
 /// air density in the volume; a 180 degree fisheye on the ground at its
 /// centre looking up; the air off.
-const SCENE: &str = r#"seed = 5
+const SCENE: &str = concat!(
+    r#"seed = 5
 [[curtain]]
 length = 80.0
 width = 80.0
@@ -30,29 +32,13 @@ uniform = true
 [beams]
 count = 20000
 b_inclination_deg = 90.0
-[earth]
-radius_km = 0.0
-[grid]
-voxel_size = 1.0
-density_a = 0.0
-lines = ["5577"]
-[photons]
-radius_km = 1.0
-[camera]
-position = [0.0, 0.0, 0.1]
-look_at = [0.0, 0.0, 100.0]
-up = [0.0, 1.0, 0.0]
-projection = "fisheye"
-fov_deg = 180.0
-[render]
-width = 96
-height = 96
-spp = 1
-[terrain]
-kind = "none"
-[sky]
+"#,
+    green_line_grid_toml!(),
+    dome_master_toml!("0.1", "96"),
+    r#"[sky]
 extinction = false
-"#;
+"#
+);
 
 /// The pixels within `cone_deg` of the zenith: (value, cosine of the
 /// zenith angle), from the scene's own camera.

@@ -6,7 +6,8 @@
 //! pass traces the chunks twice), and for both summing gathers.
 
 use crate::common::small::small_scene;
-use aurora::pipeline::bake::{self, plan::BakePlan};
+use aurora::pipeline::bake;
+use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{AutoTag, ColourMode, GatherMethod, Scene, VoxelSize};
 use aurora::util::progress::NoProgress;
 use std::time::Instant;

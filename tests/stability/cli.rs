@@ -185,16 +185,16 @@ fn band_thickness_is_the_band_area_over_the_length() {
         }
     }
     // Cells at 0.5 in three rows: 3 * 0.25 km. The threshold is strict.
-    assert!((aurora::pipeline::bake::voxel::band_thickness_km(&fp, 0.03) - 0.75).abs() < 1e-12);
-    assert_eq!(aurora::pipeline::bake::voxel::band_thickness_km(&fp, 0.5), 0.0);
+    assert!((aurora::pipeline::voxel::band_thickness_km(&fp, 0.03) - 0.75).abs() < 1e-12);
+    assert_eq!(aurora::pipeline::voxel::band_thickness_km(&fp, 0.5), 0.0);
     let mut s = aurora::scene::Scene::default();
     s.photons.radius_noise = 0.0;
     s.photons.radius_km = 0.5;
-    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[fp.clone()], 0.7);
+    let w = aurora::pipeline::voxel::resolution_warnings(&s, &[fp.clone()], 0.7);
     assert!(w.is_empty(), "{w:?}");
-    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[fp.clone(), fp], 0.8);
+    let w = aurora::pipeline::voxel::resolution_warnings(&s, &[fp.clone(), fp], 0.8);
     assert_eq!(w.len(), 2, "one per thin curtain: {w:?}");
-    let w = aurora::pipeline::bake::voxel::resolution_warnings(&s, &[], 1.01);
+    let w = aurora::pipeline::voxel::resolution_warnings(&s, &[], 1.01);
     assert_eq!(w.len(), 1, "r = 0.5 < 1.01 / 2: {w:?}");
 }
 

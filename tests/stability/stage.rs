@@ -6,7 +6,7 @@
 //! through a buffered temporary holds them.
 
 use crate::common::scratch;
-use aurora::io::usd::{usda_sequence_text, write_usda_sequence, write_usda_sequence_into};
+use aurora::io::usd::{usda_sequence_text, write_usda_sequence, write_usda_sequence_into, Sequence};
 use std::io::Write;
 
 /// A sink that keeps no bytes: it counts them and remembers the largest
@@ -44,7 +44,7 @@ const FIELDS: [(&str, &str); 2] = [("density", "float"), ("emission", "float3")]
 fn a_long_stage_reaches_its_sink_a_line_at_a_time() {
     let frames: Vec<i64> = (0..2_000_000).collect();
     let mut sink = Counting::default();
-    write_usda_sequence_into(&mut sink, &frames, &name, &FIELDS, 1000.0, 24.0).unwrap();
+    write_usda_sequence_into(&mut sink, Sequence { frames: &frames, name: &name, fps: 24.0 }, &FIELDS, 1000.0).unwrap();
     println!("{} bytes in {} writes, the largest {} bytes", sink.bytes, sink.writes, sink.largest);
     assert!(sink.bytes > 2 * 2_000_000 * 30, "every frame listed once per field: {} bytes", sink.bytes);
     assert!(sink.largest < 200, "a write of {} bytes: the stage was not streamed", sink.largest);
@@ -57,14 +57,15 @@ fn a_long_stage_reaches_its_sink_a_line_at_a_time() {
 #[test]
 fn a_streamed_stage_is_the_same_text_in_a_sink_and_in_its_file() {
     let frames: Vec<i64> = (0..50_000).map(|k| 3 * k + 7).collect();
-    let text = usda_sequence_text(&frames, &name, &FIELDS, 1000.0, 30.0);
+    let seq = Sequence { frames: &frames, name: &name, fps: 30.0 };
+    let text = usda_sequence_text(seq, &FIELDS, 1000.0);
     let mut bytes = Vec::new();
-    write_usda_sequence_into(&mut bytes, &frames, &name, &FIELDS, 1000.0, 30.0).unwrap();
+    write_usda_sequence_into(&mut bytes, seq, &FIELDS, 1000.0).unwrap();
     assert!(bytes == text.as_bytes());
     assert!(text.contains("            7: @./aurora.0007.vdb@,\n") && text.contains("150004: @./aurora.150004.vdb@,\n"));
     let dir = scratch("stage", "file");
     let path = dir.join("aurora.usda");
-    write_usda_sequence(&path, &frames, &name, &FIELDS, 1000.0, 30.0).unwrap();
+    write_usda_sequence(&path, seq, &FIELDS, 1000.0).unwrap();
     assert!(std::fs::read(&path).unwrap() == bytes);
     assert_eq!(crate::common::file_names(&dir), ["aurora.usda"]);
 }

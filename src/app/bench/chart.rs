@@ -255,13 +255,9 @@ mod tests {
     /// Oracle: a point is on the front iff no other point dominates it.
     #[test]
     fn pareto_front_matches_brute_force() {
-        let mut state = 12345u64;
-        let mut rnd = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % 1000) as f64 / 10.0
-        };
+        use rand::Rng;
+        let mut r = crate::util::rng::rng(&[12345]);
+        let mut rnd = || r.random_range(0..1000u32) as f64 / 10.0;
         for _ in 0..50 {
             let pts: Vec<(f64, f64)> = (0..30).map(|_| (rnd(), rnd())).collect();
             let mut fast = pareto_front(&pts);

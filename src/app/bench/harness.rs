@@ -44,9 +44,11 @@
 use super::measurement::{Cost, CostUnit, Measurement};
 use super::reduced::volume_camera;
 use crate::grid::Grid;
-use crate::pipeline::bake::plan::{self, BakePlan};
 use crate::pipeline::bake::{self, BakeError};
 use crate::pipeline::deposit::Photon;
+use crate::pipeline::photons::gather_grid;
+use crate::pipeline::plan::BakePlan;
+use crate::pipeline::voxel::grid_transform;
 use crate::render::{self, Image, RenderError, RenderSettings, Volume};
 use crate::scene::{GatherMethod, KernelRadius, Scene, TerrainKind, VoxelSize};
 use crate::util::progress::NoProgress;
@@ -265,6 +267,18 @@ pub fn old_estimators(scene: &Scene) -> Scene {
 /// A result and the wall time it took, seconds.
 pub(super) type Timed<T> = (T, f64);
 
+/// The curve a [`Measurement`] belongs to: its study (e.g. "photon
+/// count"), its method (the curve's label), the swept parameter's name,
+/// the stage whose cost is measured and the error's metric.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Series<'a> {
+    pub(super) study: &'a str,
+    pub(super) method: &'a str,
+    pub(super) param_name: &'a str,
+    pub(super) stage: &'a str,
+    pub(super) metric: &'a str,
+}
+
 impl<'a> Bench<'a> {
     /// `scene` is the reduced scene.
     pub fn new(scene: Scene, plan: StudyPlan, log: &'a (dyn Fn(&str) + Sync)) -> Bench<'a> {
@@ -301,7 +315,7 @@ impl<'a> Bench<'a> {
             return Ok(());
         }
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, secs) = timed(min, runs, || plan::trace(&self.bake, n, 0, 0..n, &NoProgress));
+        let (res, secs) = timed(min, runs, || crate::pipeline::bake::trace::trace(&self.bake, n, 0, 0..n, &NoProgress));
         let ph = res.map_err(BakeError::from)?.photons;
         self.photons.insert(n, (ph, secs));
         Ok(())
@@ -377,11 +391,12 @@ impl<'a> Bench<'a> {
     /// `v` and `method` (radius noise as in the scene), and the gather time.
     pub(super) fn gather_uncached(&mut self, n: usize, r: f64, v: f64, method: GatherMethod) -> Result<(Grid<[f32; 3]>, f64), SweepError> {
         let b = &self.bake;
-        let radius = plan::radius_field(KernelRadius::with_base(r, &b.photons), &b.photons, b.field.b, b.beams.top_km, b.seed);
-        let cutoff = b.photons.cutoff;
+        let p = &b.scene.photons;
+        let radius = crate::pipeline::plan::radius_field(KernelRadius::with_base(r, p), p, b.field.b, b.scene.beams.top_km, b.scene.seed);
+        let cutoff = p.cutoff;
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
         let (photons, _) = self.photons_of(n)?;
-        Ok(timed(min, runs, || plan::gather_with(photons, v, &radius, cutoff, method, &NoProgress)))
+        Ok(timed(min, runs, || gather_grid(photons, grid_transform(v), &radius, cutoff, method, &NoProgress)))
     }
 
     pub(super) fn say(&self, s: &str) {
@@ -396,11 +411,11 @@ impl<'a> Bench<'a> {
         // Same curtains and footprint: the plan reuses the footprints.
         let old = BakePlan::reusing(&s, &self.bake, &NoProgress);
         let (min, runs) = (self.plan.min_timing_seconds, self.plan.max_timing_runs);
-        let (res, trace_s) = timed(min, runs, || plan::trace(&old, n, 0, 0..n, &NoProgress));
+        let (res, trace_s) = timed(min, runs, || crate::pipeline::bake::trace::trace(&old, n, 0, 0..n, &NoProgress));
         let photons = res.map_err(BakeError::from)?.photons;
-        let (v, cutoff) = (self.voxel(), self.bake.photons.cutoff);
+        let (v, cutoff) = (self.voxel(), self.bake.scene.photons.cutoff);
         let (g, gather_s) =
-            timed(min, runs, || plan::gather_with(&photons, v, &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress));
+            timed(min, runs, || gather_grid(&photons, grid_transform(v), &self.bake.radius, cutoff, GatherMethod::Kdtree, &NoProgress));
         Ok((g, trace_s, gather_s))
     }
 
@@ -418,19 +433,11 @@ impl<'a> Bench<'a> {
         Ok((g, m, secs))
     }
 
-    #[allow(clippy::too_many_arguments)]
-    pub(super) fn measure(
-        &self,
-        study: &str,
-        method: &str,
-        param_name: &str,
-        param: f64,
-        stage: &str,
-        cost: Cost,
-        error: f64,
-        metric: &str,
-        scene_setting: bool,
-    ) -> Measurement {
+    /// One point of `series`: the setting `param` costs `cost` with the
+    /// error `error` (`scene_setting`: the scene's own setting), said and
+    /// returned as a [`Measurement`].
+    pub(super) fn measure(&self, series: &Series<'_>, param: f64, cost: Cost, error: f64, scene_setting: bool) -> Measurement {
+        let Series { study, method, param_name, stage, metric } = *series;
         let Cost(value, unit) = cost;
         self.say(&format!(
             "{study}: {method}, {param_name} = {param}: {value:.3} {} ({stage}), error {error:.4e}{}",

@@ -20,8 +20,8 @@ pub mod report;
 pub mod studies;
 pub mod vdb_write_timing;
 
-use crate::pipeline::bake::plan::{self, BakePlan};
 use crate::pipeline::bake::BakeError;
+use crate::pipeline::plan::BakePlan;
 use crate::scene::{Scene, VoxelSize};
 use crate::util::progress::NoProgress;
 use harness::{Bench, StudyPlan, SweepError};
@@ -111,8 +111,8 @@ pub fn run(scene: &Scene, scene_name: &str, quick: bool, log: &(dyn Fn(&str) + S
         VoxelSize::Auto(_) => {
             // "auto" depends on the full scene's photons: trace them once.
             let plan = BakePlan::new(scene, &NoProgress);
-            let n = plan.beams.count;
-            let photons = plan::trace(&plan, n, 0, 0..n, &NoProgress).map_err(BakeError::from)?.photons;
+            let n = plan.scene.beams.count;
+            let photons = crate::pipeline::bake::trace::trace(&plan, n, 0, 0..n, &NoProgress).map_err(BakeError::from)?.photons;
             Some(plan.voxel_size(&photons))
         }
     };

@@ -9,11 +9,12 @@
 
 use super::edit::Stage;
 use crate::grid::Leaf;
-use crate::pipeline::bake::plan::{self, BakePlan, Gathered};
+use crate::pipeline::bake::gather::Gathered;
 use crate::pipeline::bake::stats::{NoiseEstimate, StageTimes};
 use crate::pipeline::bake::{self, Bake, BakeError};
 use crate::pipeline::beams::BeamStats;
 use crate::pipeline::photons::GatherInput;
+use crate::pipeline::plan::BakePlan;
 use crate::scene::Scene;
 use crate::util::progress::NoProgress;
 use std::time::Instant;
@@ -66,14 +67,17 @@ pub(super) struct Cache {
     pub coarse: Option<Bake>,
 }
 
-/// The preview's copy of the scene's plan: without the Cycles shell. The
-/// shell is one voxel of active zeros around both grids for Cycles' sake
-/// (`crate::pipeline::bake::plan::finish`); the reference renderer samples inactive
-/// voxels as 0 too, so it changes no pixel (tested:
-/// `the_refined_picture_is_the_render_of_the_bake`) and only costs the
-/// dilation and a larger medium.
+/// The preview's copy of the scene's plan: without the Cycles shell, and
+/// one chunk of every beam. The shell is one voxel of active zeros around
+/// both grids for Cycles' sake (`crate::pipeline::bake::finish`); the
+/// reference renderer samples inactive voxels as 0 too, so it changes no
+/// pixel (tested: `the_refined_picture_is_the_render_of_the_bake`) and
+/// only costs the dilation and a larger medium. The preview keeps every
+/// photon to gather again after an edit, so it traces as the bake traces
+/// a bake of one chunk, and its memory check counts every photon.
 pub(super) fn preview_plan(mut plan: BakePlan) -> BakePlan {
-    plan.grid.cycles_shell = false;
+    plan.scene.grid.cycles_shell = false;
+    plan.beam_chunk = usize::MAX;
     plan
 }
 
@@ -90,33 +94,41 @@ impl Cache {
         show: &mut ShowCoarse<E>,
     ) -> Result<Cache, E> {
         let nothing = &NoProgress;
-        bake::check_memory(scene)?;
         let t = Instant::now();
         let plan = preview_plan(match prev {
             Some(c) => BakePlan::reusing(scene, &c.plan, nothing),
             None => BakePlan::new(scene, nothing),
         });
         s.footprints = t.elapsed().as_secs_f64();
+        bake::check_memory(&plan)?;
         let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
         let count = bake::beam_count(&plan, &mut times, nothing)?;
         s.pilot = times.pilot;
         let t = Instant::now();
-        let traced = plan::trace_bake(&plan, count.0, nothing).map_err(BakeError::from)?;
+        let traced = crate::pipeline::bake::trace::trace_bake(&plan, count.0, nothing).map_err(BakeError::from)?;
         s.trace = t.elapsed().as_secs_f64();
         let voxel = plan.voxel_size(&traced.photons);
         let t = Instant::now();
-        let input = plan::gather_input(&plan, &traced.photons);
+        let input = crate::pipeline::bake::gather::gather_input(&plan, &traced.photons);
         s.gather = t.elapsed().as_secs_f64();
         let coarse = coarse_grids(&plan, &input, voxel.0, show)?;
         let t = Instant::now();
-        let emission = plan::gather_from(&input, voxel.0, nothing);
+        let emission = crate::pipeline::bake::gather::gather_from(&input, voxel.0, nothing);
         drop(input);
         s.gather += t.elapsed().as_secs_f64();
         (times.beams, times.gather) = (s.trace, s.gather);
         let beam_stats = traced.stats.clone();
-        let g = plan::gathered(&plan, traced.photons, Vec::new(), traced.stats, voxel.clone(), &count.2, count.1.clone());
+        let g = crate::pipeline::bake::gather::gathered(
+            &plan,
+            traced.photons,
+            Vec::new(),
+            traced.stats,
+            voxel.clone(),
+            &count.2,
+            count.1.clone(),
+        );
         let t = Instant::now();
-        let (bake, dropped) = plan::finish_keeping(&plan, emission, g, times, t0, nothing)?;
+        let (bake, dropped) = crate::pipeline::bake::finish::finish_keeping(&plan, emission, g, times, t0, nothing)?;
         s.finish = t.elapsed().as_secs_f64();
         Ok(Cache { scene: scene.clone(), plan, count, beam_stats, dropped, voxel, bake, coarse: Some(coarse) })
     }
@@ -143,7 +155,7 @@ impl Cache {
             // "auto" voxel size follows the camera.
             let v = plan.voxel_size(&self.bake.photons);
             regather = v.0 != self.voxel.0;
-            if !regather && plan.grid.prune <= 0.0 {
+            if !regather && plan.scene.grid.prune <= 0.0 {
                 (self.plan, self.voxel) = (plan, v);
                 return Ok(false);
             }
@@ -155,11 +167,11 @@ impl Cache {
         let (gathered, voxel, coarse) = if regather {
             let voxel = plan.voxel_size(&self.bake.photons);
             let t = Instant::now();
-            let input = plan::gather_input(&plan, &self.bake.photons);
+            let input = crate::pipeline::bake::gather::gather_input(&plan, &self.bake.photons);
             s.gather = t.elapsed().as_secs_f64();
             let coarse = coarse_grids(&plan, &input, voxel.0, show)?;
             let t = Instant::now();
-            let gathered = plan::gather_from(&input, voxel.0, nothing);
+            let gathered = crate::pipeline::bake::gather::gather_from(&input, voxel.0, nothing);
             s.gather += t.elapsed().as_secs_f64();
             (gathered, voxel, Some(coarse))
         } else {
@@ -171,7 +183,7 @@ impl Cache {
             (gathered, self.voxel.clone(), None)
         };
         let t = Instant::now();
-        let g = plan::gathered(
+        let g = crate::pipeline::bake::gather::gathered(
             &plan,
             self.bake.photons.clone(),
             Vec::new(),
@@ -180,7 +192,7 @@ impl Cache {
             &self.count.2,
             self.count.1.clone(),
         );
-        (self.bake, self.dropped) = plan::finish_keeping(&plan, gathered, g, StageTimes::default(), t0, nothing)?;
+        (self.bake, self.dropped) = crate::pipeline::bake::finish::finish_keeping(&plan, gathered, g, StageTimes::default(), t0, nothing)?;
         s.finish = t.elapsed().as_secs_f64();
         (self.plan, self.voxel, self.coarse) = (plan, voxel, coarse);
         Ok(true)
@@ -197,10 +209,10 @@ fn coarse_grids<E: From<BakeError>>(plan: &BakePlan, input: &GatherInput, voxel_
     let t = Instant::now();
     let nothing = &NoProgress;
     let v = COARSE_VOXEL_FACTOR * voxel_km;
-    let emission = plan::gather_from(&input.every(COARSE_PHOTON_STRIDE), v, nothing);
+    let emission = crate::pipeline::bake::gather::gather_from(&input.every(COARSE_PHOTON_STRIDE), v, nothing);
     // Only the grids are used: no photons for the power sums, no warnings.
     let g = Gathered { voxel_km: v, voxel_source: "coarse preview".into(), ..Gathered::default() };
-    let b = plan::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
+    let b = crate::pipeline::bake::finish::finish(plan, emission, g, StageTimes::default(), t, nothing)?;
     show(&b, t)?;
     Ok(b)
 }

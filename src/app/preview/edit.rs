@@ -16,7 +16,7 @@
 //! Colour edits retrace: a photon carries its RGB power, not the altitude
 //! and deposited power it was coloured from, so a recolour needs the beams;
 //! the footprints (the fluid simulation) are kept
-//! ([`crate::pipeline::bake::plan::BakePlan::reusing`]).
+//! ([`crate::pipeline::plan::BakePlan::reusing`]).
 
 use crate::pipeline::footprint::curtain_path::Lift;
 use crate::scene::Scene;

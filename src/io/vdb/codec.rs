@@ -234,19 +234,20 @@ impl Encoder {
             // HalfWriter::write returns before writing anything, even a ZIP size.
             return;
         }
+        let stored = Stored { values, mask: value_mask, all, count };
         if self.blosc {
             self.raw.clear();
-            gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep, &mut self.halves);
+            gather(&mut self.raw, stored, self.half, self.keep, &mut self.halves);
             blosc_to_stream(&self.raw, out);
             return;
         }
         match self.zlib.as_mut() {
             Some(z) => {
                 self.raw.clear();
-                gather(&mut self.raw, values, value_mask, all, count, self.half, self.keep, &mut self.halves);
+                gather(&mut self.raw, stored, self.half, self.keep, &mut self.halves);
                 zip_to_stream(z, &mut self.zbuf, &self.raw, out);
             }
-            None => gather(out, values, value_mask, all, count, self.half, self.keep, &mut self.halves),
+            None => gather(out, stored, self.half, self.keep, &mut self.halves),
         }
     }
 }
@@ -259,49 +260,50 @@ struct HalfScratch {
     bits: Vec<u16>,
 }
 
-/// Appends the `count` values to store (all of them, or the active ones in
-/// index order) as little-endian `f32` or binary16 components, each rounded
-/// to `keep` mantissa bits.
-#[allow(clippy::too_many_arguments)]
-fn gather<T: VoxelValue>(
-    dst: &mut Vec<u8>,
-    values: &[T],
-    mask: &[u64],
+/// The `count` values a record stores out of `values`: all of them
+/// (`all`), or the active ones of `mask` in index order.
+#[derive(Clone, Copy)]
+struct Stored<'v, T> {
+    values: &'v [T],
+    mask: &'v [u64],
     all: bool,
     count: usize,
-    half: bool,
-    keep: u32,
-    scratch: &mut HalfScratch,
-) {
-    if half {
-        gather_half(dst, values, mask, all, count, keep, scratch)
-    } else {
-        gather_float(dst, values, mask, all, count, keep)
-    }
 }
 
-/// Calls `f` on the `count` values to store, in index order.
-#[inline(always)]
-fn for_each_stored<T: VoxelValue>(values: &[T], mask: &[u64], all: bool, count: usize, mut f: impl FnMut(&T)) {
-    if all {
-        values.iter().take(count).for_each(f);
-    } else {
-        for (w, &word) in mask.iter().enumerate() {
-            let mut bits = word;
-            while bits != 0 {
-                f(&values[w * 64 + bits.trailing_zeros() as usize]);
-                bits &= bits - 1;
+impl<T: VoxelValue> Stored<'_, T> {
+    /// Calls `f` on the values to store, in index order.
+    #[inline(always)]
+    fn for_each(&self, mut f: impl FnMut(&T)) {
+        if self.all {
+            self.values.iter().take(self.count).for_each(f);
+        } else {
+            for (w, &word) in self.mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    f(&self.values[w * 64 + bits.trailing_zeros() as usize]);
+                    bits &= bits - 1;
+                }
             }
         }
     }
 }
 
-fn gather_float<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, keep: u32) {
+/// Appends the values to store as little-endian `f32` or binary16
+/// components, each rounded to `keep` mantissa bits.
+fn gather<T: VoxelValue>(dst: &mut Vec<u8>, stored: Stored<'_, T>, half: bool, keep: u32, scratch: &mut HalfScratch) {
+    if half {
+        gather_half(dst, stored, keep, scratch)
+    } else {
+        gather_float(dst, stored, keep)
+    }
+}
+
+fn gather_float<T: VoxelValue>(dst: &mut Vec<u8>, stored: Stored<'_, T>, keep: u32) {
     let stride = T::COMPONENTS * 4;
     let start = dst.len();
-    dst.resize(start + count * stride, 0);
+    dst.resize(start + stored.count * stride, 0);
     let mut slots = dst[start..].chunks_exact_mut(stride);
-    for_each_stored(values, mask, all, count, |v| {
+    stored.for_each(|v| {
         if let Some(slot) = slots.next() {
             let c = v.components();
             for k in 0..T::COMPONENTS {
@@ -316,10 +318,10 @@ fn gather_float<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], al
 /// instructions where it has them, four values at a time; the rounding is
 /// IEEE round-to-nearest-even either way, so the bits are those of
 /// `f16::from_f32` per value), then rounded to `keep` mantissa bits.
-fn gather_half<T: VoxelValue>(dst: &mut Vec<u8>, values: &[T], mask: &[u64], all: bool, count: usize, keep: u32, s: &mut HalfScratch) {
+fn gather_half<T: VoxelValue>(dst: &mut Vec<u8>, stored: Stored<'_, T>, keep: u32, s: &mut HalfScratch) {
     use half::slice::{HalfBitsSliceExt, HalfFloatSliceExt};
     s.floats.clear();
-    for_each_stored(values, mask, all, count, |v| s.floats.extend_from_slice(&v.components()[..T::COMPONENTS]));
+    stored.for_each(|v| s.floats.extend_from_slice(&v.components()[..T::COMPONENTS]));
     let n = s.floats.len();
     s.bits.clear();
     s.bits.resize(n, 0);
@@ -623,13 +625,9 @@ mod tests {
     /// float, every mask shape, and every kept width.
     #[test]
     fn half_gather_matches_per_value_conversion() {
-        let mut s = 0x2545_f491u32;
-        let mut next = || {
-            s ^= s << 13;
-            s ^= s >> 17;
-            s ^= s << 5;
-            s
-        };
+        use rand::RngCore;
+        let mut r = crate::util::rng::rng(&[0x2545_f491]);
+        let mut next = || r.next_u32();
         let specials = [0.0f32, -0.0, 1.0, -2.5, 65504.0, -65504.0, 65519.0, 6.1e-5, 5.96e-8, 2.98e-8, 1.0e-7, 2049.0, 2051.0, 1.0009766];
         let mut floats: Vec<f32> = specials.to_vec();
         while floats.len() < 3 * 512 {
@@ -650,11 +648,11 @@ mod tests {
                     xs.flat_map(|x| mantissa::round_half_bits(f16::from_f32(x).to_bits(), keep).to_le_bytes()).collect()
                 };
                 let mut got = Vec::new();
-                gather(&mut got, &vecs, &mask, all, count, true, keep, &mut HalfScratch::default());
+                gather(&mut got, Stored { values: &vecs, mask: &mask, all, count }, true, keep, &mut HalfScratch::default());
                 let stored = layout::mask_ones(&mask).flat_map(|n| vecs[n]);
                 assert_eq!(got, want(&mut stored.into_iter()), "vec3 keep {keep} all {all}");
                 let mut got = Vec::new();
-                gather(&mut got, &floats[..512], &mask, all, count, true, keep, &mut HalfScratch::default());
+                gather(&mut got, Stored { values: &floats[..512], mask: &mask, all, count }, true, keep, &mut HalfScratch::default());
                 assert_eq!(got, want(&mut layout::mask_ones(&mask).map(|n| floats[n])), "float keep {keep} all {all}");
             }
         }

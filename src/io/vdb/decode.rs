@@ -36,35 +36,45 @@ pub fn read_values<T: VoxelValue>(
 ) -> Result<Option<Vec<T>>, ParseError> {
     let mut scratch = Vec::new();
     if !decode {
-        read_values_into::<T>(cur, fmt, n, value_mask, background, None, &mut scratch, true)?;
+        read_values_into::<T>(cur, fmt, n, value_mask, background, Destination::Skip { check_streams: true }, &mut scratch)?;
         return Ok(None);
     }
     let mut out = vec![background; n];
-    read_values_into(cur, fmt, n, value_mask, background, Some(&mut out), &mut scratch, true)?;
+    read_values_into(cur, fmt, n, value_mask, background, Destination::Slots(&mut out), &mut scratch)?;
     Ok(Some(out))
 }
 
-/// [`read_values`] writing straight into `out` (all `n` slots), with no
+/// Where [`read_values_into`] puts a record's values.
+pub enum Destination<'o, T> {
+    /// Into these slots, all `n` of them.
+    Slots(&'o mut [T]),
+    /// Nowhere: the record is only validated and skipped. Its ZIP or Blosc
+    /// stream is decompressed (and dropped) only if `check_streams`, which
+    /// gives the verdict decoding would give (the caller that decodes the
+    /// record later may skip it: decoding checks it). Without it a
+    /// stream's length must fit in the file and a Blosc header must be
+    /// valid and hold the expected size, but a damaged ZIP or LZ4 payload
+    /// passes.
+    Skip { check_streams: bool },
+}
+
+/// [`read_values`] writing straight into `dest` ([`Destination`]), with no
 /// allocation beyond `scratch` (reused for decompression): stored values
 /// are converted from the file's bytes, or from the decompressed bytes, in
-/// place. With `out = None` the record is only validated and skipped; its
-/// ZIP or Blosc stream is then decompressed into `scratch` (and dropped)
-/// only if `check_streams`, which gives the verdict decoding would give
-/// (the caller that decodes the record later may skip it: decoding checks
-/// it). Without it a stream's length must fit in the file and a Blosc
-/// header must be valid and hold the expected size, but a damaged ZIP or
-/// LZ4 payload passes.
-#[allow(clippy::too_many_arguments)]
+/// place.
 pub fn read_values_into<T: VoxelValue>(
     cur: &mut Cursor,
     fmt: RecordFormat,
     n: usize,
     value_mask: &[u64],
     background: T,
-    out: Option<&mut [T]>,
+    dest: Destination<'_, T>,
     scratch: &mut Vec<u8>,
-    check_streams: bool,
 ) -> Result<(), ParseError> {
+    let (out, check_streams) = match dest {
+        Destination::Slots(out) => (Some(out), true),
+        Destination::Skip { check_streams } => (None, check_streams),
+    };
     let m = cur.u8()?;
     if m > meta::NO_MASK_AND_ALL_VALS {
         return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));

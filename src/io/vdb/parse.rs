@@ -30,7 +30,7 @@
 //! bytes left before it is used.
 
 pub use super::cursor::{Cursor, ParseError};
-use super::decode::{self, RecordFormat};
+use super::decode::{self, Destination, RecordFormat};
 use super::layout::{self, INTERNAL16, INTERNAL32};
 use crate::grid::{Leaf, Transform, VoxelValue, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
@@ -647,7 +647,7 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
             // A located record is decoded (and its stream checked) later, by
             // the caller or by [`check_located`].
             let check_streams = !decode && how != Decode::Locate;
-            decode::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, None, &mut scratch, check_streams)?;
+            decode::read_values_into::<T>(cur, fmt, LEAF_NUM_VALUES, mask, background, Destination::Skip { check_streams }, &mut scratch)?;
             if decode {
                 spans.push((layout::internal16_child_origin(node.origin, n16), mask, start));
             } else if how == Decode::Locate {
@@ -666,7 +666,15 @@ fn read_tree<T: VoxelValue>(cur: &mut Cursor, gh: &GridHeader, fmt: RecordFormat
                 c.seek(start as u64)?;
                 let mut leaf = Leaf::new(origin, background);
                 leaf.mask = *mask;
-                decode::read_values_into(&mut c, fmt, LEAF_NUM_VALUES, mask, background, Some(&mut leaf.values[..]), scratch, true)?;
+                decode::read_values_into(
+                    &mut c,
+                    fmt,
+                    LEAF_NUM_VALUES,
+                    mask,
+                    background,
+                    Destination::Slots(&mut leaf.values[..]),
+                    scratch,
+                )?;
                 if how == Decode::NonZero && !has_nonzero_active(&leaf) {
                     return Ok(None);
                 }
@@ -697,7 +705,15 @@ pub fn check_located<T: VoxelValue>(data: &[u8], tree: &Tree<T>, name: &str) -> 
         .map_init(Vec::new, |scratch, span| {
             let mut c = Cursor::new(data);
             c.seek(span.start as u64)?;
-            decode::read_values_into::<T>(&mut c, tree.format, LEAF_NUM_VALUES, &span.mask, tree.background, None, scratch, true)
+            decode::read_values_into::<T>(
+                &mut c,
+                tree.format,
+                LEAF_NUM_VALUES,
+                &span.mask,
+                tree.background,
+                Destination::Skip { check_streams: true },
+                scratch,
+            )
         })
         .find_first(|r| r.is_err());
     match first_err {

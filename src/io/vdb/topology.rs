@@ -66,6 +66,9 @@ pub(super) fn build_tree<T: VoxelValue>(grid: &Grid<T>) -> Tree<'_, T> {
 /// Root node topology (OpenVDB `RootNode::writeTopology`): background (rounded
 /// to half in half mode, stored full), tile count 0, child count, then each
 /// child's origin and Internal32 topology in ascending (x, y, z) order.
+/// An internal node's topology (OpenVDB `InternalNode::writeTopology`) is
+/// its node record ([`write_internal_node`]), then each child's topology in
+/// slot order: an Internal32's Internal16 nodes, an Internal16's leaves.
 pub(super) fn write_root_topology<T: VoxelValue>(out: &mut Vec<u8>, tree: &Tree<T>, bg: T, flags: u32, st: Storage) {
     out.extend_from_slice(&1i32.to_le_bytes()); // buffer count
     codec::push_full(out, if st.half { codec::round_half_value(bg) } else { bg });
@@ -78,7 +81,13 @@ pub(super) fn write_root_topology<T: VoxelValue>(out: &mut Vec<u8>, tree: &Tree<
         for c in root.origin.to_array() {
             out.extend_from_slice(&c.to_le_bytes());
         }
-        write_internal32_topology(out, root, tree, bg, &mut enc, &mut cache);
+        write_internal_node(out, INTERNAL32, &root.child_mask, bg, &mut enc, &mut cache.level32);
+        for node in &root.nodes {
+            write_internal_node(out, INTERNAL16, &node.child_mask, bg, &mut enc, &mut cache.level16);
+            for leaf in &tree.leaves[node.leaves.clone()] {
+                write_leaf_topology(out, leaf);
+            }
+        }
     }
 }
 
@@ -91,9 +100,10 @@ pub(super) struct InternalCache {
     pub(super) level16: Option<Vec<u8>>,
 }
 
-/// An internal node's value record: slot n holds the tile value (here the
-/// background, inactive) or 0 for child slots; the value mask is empty.
-pub(super) fn write_internal_values<T: VoxelValue>(
+/// An internal node's record: its child mask, its value mask (empty), and
+/// its value record, whose slot n holds the tile value (here the
+/// background, inactive) or 0 for child slots.
+pub(super) fn write_internal_node<T: VoxelValue>(
     out: &mut Vec<u8>,
     level: layout::InternalLevel,
     child_mask: &[u64],
@@ -101,6 +111,9 @@ pub(super) fn write_internal_values<T: VoxelValue>(
     enc: &mut Encoder,
     cached: &mut Option<Vec<u8>>,
 ) {
+    let value_mask = vec![0u64; level.mask_words()];
+    write_mask(out, child_mask);
+    write_mask(out, &value_mask);
     let zero_bits = bg.components().iter().all(|x| x.to_bits() == 0);
     if zero_bits {
         if let Some(c) = cached {
@@ -109,46 +122,10 @@ pub(super) fn write_internal_values<T: VoxelValue>(
         }
     }
     let values: Vec<T> = (0..level.num_values()).map(|n| if layout::mask_bit(child_mask, n) { T::ZERO } else { bg }).collect();
-    let value_mask = vec![0u64; level.mask_words()];
     let start = out.len();
     enc.write_values(out, &values, &value_mask, Some(child_mask), bg);
     if zero_bits {
         *cached = Some(out[start..].to_vec());
-    }
-}
-
-/// Internal32 topology (OpenVDB `InternalNode::writeTopology`): child mask,
-/// value mask, value record, then each child's topology in slot order.
-pub(super) fn write_internal32_topology<T: VoxelValue>(
-    out: &mut Vec<u8>,
-    root: &RootChild,
-    tree: &Tree<T>,
-    bg: T,
-    enc: &mut Encoder,
-    cache: &mut InternalCache,
-) {
-    write_mask(out, &root.child_mask);
-    write_mask(out, &vec![0u64; INTERNAL32.mask_words()]);
-    write_internal_values(out, INTERNAL32, &root.child_mask, bg, enc, &mut cache.level32);
-    for node in &root.nodes {
-        write_internal16_topology(out, node, tree, bg, enc, cache);
-    }
-}
-
-/// Internal16 topology: child mask, value mask, value record, leaf topologies.
-pub(super) fn write_internal16_topology<T: VoxelValue>(
-    out: &mut Vec<u8>,
-    node: &Node16,
-    tree: &Tree<T>,
-    bg: T,
-    enc: &mut Encoder,
-    cache: &mut InternalCache,
-) {
-    write_mask(out, &node.child_mask);
-    write_mask(out, &vec![0u64; INTERNAL16.mask_words()]);
-    write_internal_values(out, INTERNAL16, &node.child_mask, bg, enc, &mut cache.level16);
-    for leaf in &tree.leaves[node.leaves.clone()] {
-        write_leaf_topology(out, leaf);
     }
 }
 

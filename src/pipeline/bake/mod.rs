@@ -1,68 +1,63 @@
 //! The bake: scene -> footprints -> beams -> photons -> grids.
 //!
-//! [`bake`] composes the stages for a scene: the memory check
-//! ([`crate::pipeline::memory_budget`]), a [`BakePlan`] (footprints, atmosphere, colour
-//! table, field, kernel radius field), the beam count ([`beam_count`]: from
-//! `beams.count`, or from the [`pilot`] when `beams.target_noise > 0`), then
-//! trace and gather a chunk of beams at a time ([`chunked`], so the memory
-//! does not grow with the beams) and finish ([`plan`]). [`bake_plan`] does the same from a
-//! plan already built (frame sequences reuse one, [`bake_reusing`]).
+//! [`bake`] composes the stages for a scene: the field's check, a
+//! [`BakePlan`] (`crate::pipeline::plan`: footprints, atmosphere, colour
+//! table, field, kernel radius field, chunks), the memory check on that
+//! plan before any beam is traced (`crate::pipeline::memory`), the beam
+//! count ([`beam_count`]: from `beams.count`, or from the [`pilot`] when
+//! `beams.target_noise > 0`), then [`trace`] and [`gather`] a chunk of
+//! beams at a time (so the memory does not grow with the beams) and
+//! [`finish`]. [`bake_plan`] does the same from a plan already built
+//! (frame sequences reuse one, [`bake_reusing`]).
 //!
-//! The rooms: [`plan`] the plan and its stages as functions of it and of
-//! plain data (`aurora preview` and the bench call them one by one);
-//! [`voxel`] the voxel size (the camera's choice for `voxel_size = "auto"`)
-//! and the resolution warnings; [`density`] the density grid and the air
-//! extinction; [`stats`] the numbers written as bake.json; [`pilot`] the
-//! beam count from a target noise; [`result`] what a bake returns, [`Bake`]
+//! The rooms: [`trace`] the beams a chunk at a time; [`gather`] the grids
+//! from their photons (the one trace-and-gather); [`finish`] the checks,
+//! pruning, density, velocity, shell and stats; [`density`] the density
+//! grid and the air extinction; [`velocity`] the velocity grid; [`stats`]
+//! the numbers written as bake.json; [`pilot`] the beam count from a target
+//! noise and the deposition check; [`result`] what a bake returns, [`Bake`]
 //! or [`BakeError`]; [`identity`] what makes two bakes the same. Here: the
-//! composition.
+//! composition. `aurora preview` and the bench call the stages one by one.
 //!
 //! Grid transform: translation 0, so voxel (i, j, k) is centred at
-//! `voxel_size * (i, j, k)` km ([`voxel::grid_transform`]).
+//! `voxel_size * (i, j, k)` km (`crate::pipeline::voxel::grid_transform`).
 
-pub mod chunked;
 pub mod density;
+pub mod finish;
+pub mod gather;
 pub mod identity;
 pub mod pilot;
-pub mod plan;
 pub mod result;
 pub mod stats;
+pub mod trace;
 pub mod velocity;
-pub mod voxel;
 
 pub use result::{empty_reason, Bake, BakeError};
 
+use crate::pipeline::memory;
+use crate::pipeline::plan::BakePlan;
 use crate::scene::Scene;
 use crate::util::progress::Progress;
-use plan::BakePlan;
 use stats::{NoiseEstimate, StageTimes};
 use std::time::Instant;
 
 /// Refuses a bake whose beams cannot go down (a field within their
 /// deflection cone of the horizontal, [`crate::pipeline::beams::dip`]: its
-/// memory has no bound) or that would need more memory than this process
-/// may use ([`crate::pipeline::memory_budget`]), before anything is allocated.
-pub fn check_memory(scene: &Scene) -> Result<(), BakeError> {
-    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
-    crate::pipeline::memory_refusal::check(scene, &crate::util::memory::available()).map_err(|e| BakeError::Memory(e))?;
-    Ok(())
-}
-
-/// [`check_memory`] on the plan the bake runs (built from `scene`): its
-/// estimate is that plan's ([`crate::pipeline::memory_budget::estimate_plan`]).
-pub fn check_plan_memory(scene: &Scene, plan: &BakePlan) -> Result<(), BakeError> {
-    crate::pipeline::memory_refusal::check_plan(scene, plan, &crate::util::memory::available()).map_err(|e| BakeError::Memory(e))?;
+/// memory has no bound) or whose plan would need more memory than this
+/// process may use (`crate::pipeline::memory::refusal`). Runs after the
+/// plan is built (its footprints cost some MB) and before any beam is
+/// traced.
+pub fn check_memory(plan: &BakePlan) -> Result<(), BakeError> {
+    let s = &plan.scene;
+    crate::pipeline::beams::dip::check_field(&s.curtains, &s.beams, &s.earth)?;
+    memory::refusal::check(plan, &crate::util::memory::available())?;
     Ok(())
 }
 
 /// Runs every stage of the bake for a validated scene: the field's check,
 /// the plan (the footprints), the memory check on that plan, the rest.
 pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
-    let t_all = Instant::now();
-    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
-    let plan = BakePlan::new(scene, progress);
-    check_plan_memory(scene, &plan)?;
-    bake_plan(&plan, t_all, progress)
+    bake_reusing(scene, None, progress).map(|(b, _)| b)
 }
 
 /// [`bake`] reusing what it can of a previous plan ([`BakePlan::reusing`]:
@@ -75,7 +70,7 @@ pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progr
         Some(p) => BakePlan::reusing(scene, p, progress),
         None => BakePlan::new(scene, progress),
     };
-    check_plan_memory(scene, &plan)?;
+    check_memory(&plan)?;
     Ok((bake_plan(&plan, t_all, progress)?, plan))
 }
 
@@ -85,8 +80,8 @@ pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progr
 pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Result<Bake, BakeError> {
     let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
     let (count, noise, warnings) = beam_count(plan, &mut times, progress)?;
-    let (emission, gathered) = chunked::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
-    plan::finish(plan, emission, gathered, times, t_all, progress)
+    let (emission, gathered) = gather::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
+    finish::finish(plan, emission, gathered, times, t_all, progress)
 }
 
 /// The beam count: `beams.count`, or the pilot's when `beams.target_noise >
@@ -101,13 +96,14 @@ pub fn beam_count(
     let t = Instant::now();
     pilot::check_deposition(plan)?;
     times.pilot = t.elapsed().as_secs_f64();
-    if plan.beams.target_noise <= 0.0 {
-        return Ok((plan.beams.count, None, Vec::new()));
+    let target = plan.scene.beams.target_noise;
+    if target <= 0.0 {
+        return Ok((plan.scene.beams.count, None, Vec::new()));
     }
     let mut warnings = Vec::new();
     let t = Instant::now();
     progress.start("pilot (beams.target_noise)", 1);
-    let est = pilot::beams_for_noise(plan, plan.beams.target_noise)?;
+    let est = pilot::beams_for_noise(plan, target)?;
     progress.inc(1);
     progress.finish();
     times.pilot += t.elapsed().as_secs_f64();
@@ -296,10 +292,10 @@ mod tests {
             // Soft electrons above 260 km: a few percent at most.
             assert!(c.above_top_power_w < 0.05 * c.electron_power_w, "{c:?}");
         }
-        assert!((b.stats.deposited_power_w - st.deposited_power_w).abs() < 1e-9 * st.deposited_power_w);
+        assert!((b.stats.deposited_power_w - st.power.deposited_power_w).abs() < 1e-9 * st.power.deposited_power_w);
         // The photons carry the deposited energy: total luminance > 0 and the
         // stats agree with the per-curtain sums.
-        assert!((st.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.electron_power_w);
+        assert!((st.power.electron_power_w - st.curtains[0].electron_power_w).abs() < 1e-9 * st.power.electron_power_w);
         // CSDA stops by its own rules, and reports what they leave.
         let mut c = small_scene();
         c.beams.deposition = crate::scene::Deposition::Csda;

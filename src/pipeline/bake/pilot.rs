@@ -45,13 +45,11 @@
 //! rules): the fraction's sampling error at 256 beams is at most
 //! `sqrt(1/4 / 256)` = 3 %.
 
-use super::plan::{self, BakePlan};
 use super::result::BakeError;
 use super::stats::NoiseEstimate;
 use crate::grid::Grid;
-use crate::pipeline::beams::{
-    self, dip::curtain_dip, BeamError, TraceParams, DEPOSIT_PILOT_BEAMS, MIN_DEPOSITED_FRACTION, PILOT_HALF_BEAMS,
-};
+use crate::pipeline::beams::{self, dip::curtain_dip, BeamError, TraceParams, MIN_DEPOSITED_FRACTION};
+use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::util::progress::NoProgress;
 
 /// Beam-stream index where the pilot's second half starts: far beyond any
@@ -73,22 +71,21 @@ pub const DEPOSIT_PILOT_OFFSET: u64 = 4 << 40;
 /// every curtain with csda, which is not refused).
 pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
     // Never more than the bake's own beams.
-    let m = DEPOSIT_PILOT_BEAMS.min(plan.beams.count);
-    let mut fractions = Vec::with_capacity(plan.curtains.len());
-    for (i, c) in plan.curtains.iter().enumerate() {
+    let m = DEPOSIT_PILOT_BEAMS.min(plan.scene.beams.count);
+    let mut fractions = Vec::with_capacity(plan.scene.curtains.len());
+    for (i, c) in plan.scene.curtains.iter().enumerate() {
         // csda's beams stop by its own rules (after 1 / dt steps, off the
         // footprint): its losses are warned about, never refused.
-        if !(c.beam_weight > 0.0) || plan.beams.deposition == crate::scene::Deposition::Csda {
+        if !(c.beam_weight > 0.0) || plan.scene.beams.deposition == crate::scene::Deposition::Csda {
             fractions.push(1.0);
             continue;
         }
-        let params = TraceParams { curtains: std::slice::from_ref(c), ..plan.trace_params() };
-        let fp = std::slice::from_ref(&plan.footprints[i]);
-        let t = beams::trace_range(&params, fp, &plan.atmosphere, &plan.colour_table, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress)
-            .map_err(|e| match e {
-                BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
-                e => e,
-            })?;
+        let footprints = std::slice::from_ref(&plan.footprints[i]);
+        let params = TraceParams { curtains: std::slice::from_ref(c), footprints, ..plan.trace_params() };
+        let t = beams::trace_range(&params, m, DEPOSIT_PILOT_OFFSET, 0..m, false, &NoProgress).map_err(|e| match e {
+            BeamError::EmptyFootprint { threshold, peak, .. } => BeamError::EmptyFootprint { curtain: i, threshold, peak },
+            e => e,
+        })?;
         let f = t.stats.curtains[0].deposited_fraction;
         if f < MIN_DEPOSITED_FRACTION {
             let st = &t.stats;
@@ -99,8 +96,8 @@ pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
                 left: st.ended_left_footprint,
                 bottom: st.ended_bottom,
                 capped: st.ended_max_steps,
-                dip_deg: curtain_dip(c, &plan.beams, &plan.earth).dip_deg,
-                alpha_d_deg: plan.beams.alpha_d_deg,
+                dip_deg: curtain_dip(c, &plan.scene.beams, &plan.scene.earth).dip_deg,
+                alpha_d_deg: plan.scene.beams.alpha_d_deg,
             }
             .into());
         }
@@ -189,25 +186,25 @@ pub fn split_noise(a: &Grid<[f32; 3]>, b: &Grid<[f32; 3]>) -> f64 {
 /// Measures the plan's noise with a pilot of `2 m` beams
 /// ([`PILOT_HALF_BEAMS`]) and picks the beam count for `target` relative
 /// RMS noise, at most the plan's `beams.count`. Traces and gathers through
-/// the plan ([`plan::trace`], [`plan::gather`]); the count is an
+/// the plan ([`crate::pipeline::bake::trace::trace`], [`crate::pipeline::bake::gather::gather`]); the count is an
 /// argument, the scene is never copied.
 pub fn beams_for_noise(plan: &BakePlan, target: f64) -> Result<NoiseEstimate, BakeError> {
     let t = std::time::Instant::now();
     let m = PILOT_HALF_BEAMS;
-    let pa = plan::trace(plan, m, 0, 0..m, &NoProgress)?.photons;
-    let pb = plan::trace(plan, m, SECOND_HALF_OFFSET, 0..m, &NoProgress)?.photons;
+    let pa = crate::pipeline::bake::trace::trace(plan, m, 0, 0..m, &NoProgress)?.photons;
+    let pb = crate::pipeline::bake::trace::trace(plan, m, SECOND_HALF_OFFSET, 0..m, &NoProgress)?.photons;
     // The bake's own grid ("auto" resolved on the pilot's photons, which
     // sample the same distribution as the bake's).
     let (vs, _) = plan.voxel_size(&pa);
-    let grid = |photons: &[crate::pipeline::deposit::Photon]| plan::gather(plan, photons, vs, &NoProgress);
+    let grid = |photons: &[crate::pipeline::deposit::Photon]| crate::pipeline::bake::gather::gather(plan, photons, vs, &NoProgress);
     let pilot_noise = split_noise(&grid(&pa), &grid(&pb)).sqrt();
     let q = m / 4;
-    let qa = plan::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;
-    let qb = plan::trace(plan, q, QUARTER_OFFSETS[1], 0..q, &NoProgress)?.photons;
+    let qa = crate::pipeline::bake::trace::trace(plan, q, QUARTER_OFFSETS[0], 0..q, &NoProgress)?.photons;
+    let qb = crate::pipeline::bake::trace::trace(plan, q, QUARTER_OFFSETS[1], 0..q, &NoProgress)?.photons;
     let quarter_noise = split_noise(&grid(&qa), &grid(&qb)).sqrt();
     let (law_a, law_b) = fit_law(q as f64, quarter_noise, m as f64, pilot_noise);
     let beams_needed = beams_for_law(law_a, law_b, target);
-    let cap = plan.beams.count;
+    let cap = plan.scene.beams.count;
     let capped = !(beams_needed <= cap as f64);
     let beams = if capped { cap } else { (beams_needed.ceil() as usize).max(1) };
     Ok(NoiseEstimate {
@@ -272,8 +269,8 @@ mod tests {
     /// `noise(m)` of the plan measured by the split estimator.
     fn split_noise_at(plan: &BakePlan, m: usize) -> f64 {
         let grid = |first: u64| {
-            let ph = plan::trace(plan, m, first, 0..m, &NoProgress).unwrap().photons;
-            plan::gather(plan, &ph, 1.0, &NoProgress)
+            let ph = crate::pipeline::bake::trace::trace(plan, m, first, 0..m, &NoProgress).unwrap().photons;
+            crate::pipeline::bake::gather::gather(plan, &ph, 1.0, &NoProgress)
         };
         split_noise(&grid(0), &grid(SECOND_HALF_OFFSET)).sqrt()
     }
@@ -346,8 +343,8 @@ mod tests {
         assert!(!est.capped && est.beams > 4 * PILOT_HALF_BEAMS, "{est:?}");
         let n = est.beams;
         let grid = |first: u64| {
-            let ph = plan::trace(&plan, n, first, 0..n, &NoProgress).unwrap().photons;
-            plan::gather(&plan, &ph, 1.0, &NoProgress)
+            let ph = crate::pipeline::bake::trace::trace(&plan, n, first, 0..n, &NoProgress).unwrap().photons;
+            crate::pipeline::bake::gather::gather(&plan, &ph, 1.0, &NoProgress)
         };
         let measured = split_noise(&grid(1 << 20), &grid(3 << 40)).sqrt();
         eprintln!("target {target}: measured {measured}, {est:?}");

@@ -6,6 +6,7 @@ use super::stats::BakeStats;
 use crate::grid::Grid;
 use crate::pipeline::beams::{BeamError, BeamStats};
 use crate::pipeline::deposit::Photon;
+use crate::pipeline::memory::refusal::TooLarge;
 
 /// The baked volumes and what produced them.
 #[derive(Clone, Debug)]
@@ -34,13 +35,11 @@ pub enum BakeError {
     #[error("the emission at voxel ({}, {}, {}) is {value}, beyond single precision: the power per photon (curtain energy_flux and area over beams.count) is too high for photons.radius_km = {radius_km}; use more beams or a larger radius", ijk[0], ijk[1], ijk[2])]
     NonFinite { ijk: [i32; 3], value: String, radius_km: f64 },
     /// The bake would need more memory than this process may use
-    /// ([`crate::pipeline::memory_budget`], [`crate::pipeline::memory_refusal`]); refused before
-    /// anything is allocated. Boxed: its strings and suggestions would
-    /// otherwise set the size of every `Result<_, BakeError>`; as an error
-    /// (a `crate::pipeline::memory_refusal::TooLarge`), since the refusal
-    /// reads the bake's plan, which returns this type.
+    /// (`crate::pipeline::memory`): refused after the plan is built and
+    /// before any beam is traced. Boxed: its strings and suggestions would
+    /// otherwise set the size of every `Result<_, BakeError>`.
     #[error(transparent)]
-    Memory(Box<dyn std::error::Error + Send + Sync>),
+    Memory(#[from] Box<TooLarge>),
     /// The bake produced no emission at all: an empty VDB is never written
     /// silently. The message says where the beams' energy went.
     #[error("the bake deposited no light: {0}")]

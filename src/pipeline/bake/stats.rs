@@ -65,7 +65,7 @@ pub struct BakeStats {
     pub noise: Option<NoiseEstimate>,
     /// What `grid.prune` removed (None when it is 0).
     pub prune: Option<PruneStats>,
-    /// Under-resolution warnings ([`super::voxel::resolution_warnings`]); empty when the
+    /// Under-resolution warnings ([`crate::pipeline::voxel::resolution_warnings`]); empty when the
     /// grid resolves the kernel and every curtain.
     pub warnings: Vec<String>,
 }

@@ -37,6 +37,7 @@ use crate::pipeline::beams::{apportion, Traced};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::Lift;
 use crate::pipeline::footprint::{self, Footprint};
+use crate::pipeline::plan::BakePlan;
 use crate::scene::{AnimationParams, BeamParams, Curtain, EarthParams, FootprintParams};
 use crate::util::colour::luminance;
 use crate::util::rng;
@@ -66,6 +67,22 @@ pub struct Motion<'a> {
     pub earth: &'a EarthParams,
     /// One footprint per curtain at `animation.time_s`.
     pub now: &'a [Footprint],
+}
+
+impl<'a> Motion<'a> {
+    /// What the velocity grid reads of a plan.
+    pub fn of(plan: &'a BakePlan) -> Self {
+        let s = &plan.scene;
+        Motion {
+            seed: s.seed,
+            curtains: &s.curtains,
+            footprint: &s.footprint,
+            animation: &s.animation,
+            beams: &s.beams,
+            earth: &s.earth,
+            now: &plan.footprints,
+        }
+    }
 }
 
 /// The velocity of each of the `count` beams of a bake, km/s, in bake order

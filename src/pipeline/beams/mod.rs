@@ -116,17 +116,6 @@ pub enum BeamError {
 /// and are only warned about).
 pub const MIN_DEPOSITED_FRACTION: f64 = 0.5;
 
-/// Beams per curtain of the deposition pilot
-/// (`crate::pipeline::bake::pilot::check_deposition`): the deposited
-/// fraction's sampling error is at most `sqrt(1/4 / 256)` = 3 %.
-pub const DEPOSIT_PILOT_BEAMS: usize = 256;
-
-/// Beams in each half of the noise pilot (`crate::pipeline::bake::pilot`):
-/// a small share of the default scene's tracing and gathering, and enough
-/// that the noise estimate itself is within a few percent (the sums run
-/// over millions of voxel values).
-pub const PILOT_HALF_BEAMS: usize = 500;
-
 /// A bake whose curtains deposit less than this share of the power their
 /// beams carry is warned about (`aurora: warning: ...`).
 pub const WARN_DEPOSITED_FRACTION: f64 = 0.95;
@@ -188,16 +177,10 @@ pub struct BeamStats {
     pub ended_energy_spent: usize,
     pub ended_max_steps: usize,
     pub ended_bottom: usize,
-    /// Electron power into the atmosphere over all curtains, W.
-    pub electron_power_w: f64,
-    /// Of which deposited along the beams, W (the rest: see [`CurtainPower`]).
-    pub deposited_power_w: f64,
-    pub backscattered_power_w: f64,
-    pub above_top_power_w: f64,
-    pub undeposited_power_w: f64,
-    /// The share of the power the beams carried into the atmosphere that
-    /// they deposited, over all curtains ([`CurtainPower::deposited_fraction`]).
-    pub deposited_fraction: f64,
+    /// Where the electron power of all curtains went, W: their sums, and
+    /// the share deposited over all of them (written flat in bake.json).
+    #[serde(flatten)]
+    pub power: CurtainPower,
     /// The same per curtain, in scene order.
     pub curtains: Vec<CurtainPower>,
 }
@@ -205,7 +188,7 @@ pub struct BeamStats {
 /// What tracing needs of the scene, as plain data (no `Scene`): the
 /// curtains, the beam parameters, the seed, the footprint threshold, the
 /// animation time (pulsation, ray drift), the colour noise and the kernel
-/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline::bake::plan`
+/// shape. [`TraceParams::of`] reads them from a scene; `crate::pipeline::plan`
 /// keeps owned copies.
 #[derive(Clone, Copy, Debug)]
 pub struct TraceParams<'a> {
@@ -235,10 +218,17 @@ pub struct TraceParams<'a> {
     /// `earth.magnetic_pole`: the dipole's field at each beam's start
     /// instead of `beams`' angles.
     pub magnetic_pole: Option<[f64; 2]>,
+    /// One footprint per curtain, at the trace's time: where beams start.
+    pub footprints: &'a [Footprint],
+    /// The neutral atmosphere the beams deposit in, and the colour table
+    /// their photons take.
+    pub atmosphere: &'a Atmosphere,
+    pub colour: &'a ColourTable,
 }
 
 impl<'a> TraceParams<'a> {
-    pub fn of(scene: &'a Scene) -> Self {
+    /// The scene's parameters, with its footprints, atmosphere and colour table.
+    pub fn of(scene: &'a Scene, footprints: &'a [Footprint], atmosphere: &'a Atmosphere, colour: &'a ColourTable) -> Self {
         TraceParams {
             seed: scene.seed,
             curtains: &scene.curtains,
@@ -253,6 +243,9 @@ impl<'a> TraceParams<'a> {
             trail: None,
             earth: Earth::new(scene.earth.radius_km),
             magnetic_pole: scene.earth.magnetic_pole,
+            footprints,
+            atmosphere,
+            colour,
         }
     }
 }
@@ -283,7 +276,7 @@ pub fn trace_all_from(
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, first_beam, 0..n, false, progress)?;
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, first_beam, 0..n, false, progress)?;
     Ok((t.photons, t.stats))
 }
 
@@ -297,7 +290,7 @@ pub fn trace_deposits(
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene), footprints, atmosphere, colour, n, 0, 0..n, true, progress)?;
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, 0, 0..n, true, progress)?;
     Ok((t.deposits, t.stats))
 }
 
@@ -350,20 +343,15 @@ const CHUNK_BEAMS: usize = 64;
 /// `[K, N)` and concatenating gives the photons of `[0, N)` byte for byte.
 /// A range's `electron_power_w` is its beams' share of the curtains' power
 /// (all of it for `0..count`).
-#[allow(clippy::too_many_arguments)]
 pub fn trace_range(
     params: &TraceParams,
-    footprints: &[Footprint],
-    atmosphere: &Atmosphere,
-    colour: &ColourTable,
     count: usize,
     stream_offset: u64,
     range: Range<usize>,
     record_deposits: bool,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
-    let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress };
+    let tracer = Tracer::new(params, stream_offset, record_deposits, progress);
     let mut stats = BeamStats::default();
     let mut all_deposits = vec![Vec::new(); params.curtains.len()];
     stats.curtains = vec![CurtainPower::default(); params.curtains.len()];
@@ -371,7 +359,7 @@ pub fn trace_range(
     progress.start("beams", range.len() as u64);
     let mut traced = Vec::new();
     for (ci, n, local) in curtain_ranges(params, count, &range) {
-        let Some(fp) = footprints.get(ci) else { continue };
+        let Some(fp) = params.footprints.get(ci) else { continue };
         let (power_w, chunks) = tracer.curtain(ci, &params.curtains[ci], fp, n, local.clone())?;
         // The range's share of the curtain's power (all of it for a whole bake).
         stats.curtains[ci].electron_power_w = if local.len() == n { power_w } else { power_w * local.len() as f64 / n as f64 };
@@ -393,18 +381,32 @@ pub fn trace_range(
     Ok(Traced { photons, stats, deposits: all_deposits, line_power, beam_photons })
 }
 
+/// The field a beam starting at ground point `at` (km, in the curved
+/// frame) follows: with a dipole pole (`[earth] magnetic_pole`, which
+/// needs a round Earth) the dipole's field there, held along the beam (over
+/// a beam's path, some 50 km across the field at I = 78 deg from 260 to
+/// 100 km, its direction turns by about 50 / R rad = 0.5 degrees);
+/// otherwise the uniform field `uniform`. The trace and the memory budget
+/// (through `crate::pipeline::plan::BakePlan::field_at`) both ask here.
+pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, uniform: MagneticField, at: [f64; 2]) -> MagneticField {
+    match pole {
+        Some(pole) => MagneticField::dipole(earth, pole, at),
+        None => uniform,
+    }
+}
+
 /// Where the beams of a bake of `count` beams start, per curtain: the
 /// points [`trace_range`] draws on stream 0 (beam `i` of a curtain on
 /// stream `i`), km, in the frame of the footprint (curved, before the
 /// Earth's map). A curtain whose footprint has no cell above the threshold
 /// has none (the trace refuses it).
-pub fn start_positions(params: &TraceParams, footprints: &[Footprint], count: usize) -> Vec<Vec<DVec3>> {
+pub fn start_positions(params: &TraceParams, count: usize) -> Vec<Vec<DVec3>> {
     let weights: Vec<f64> = params.curtains.iter().map(|c| c.beam_weight).collect();
     let counts = apportion(count, &weights);
     params
         .curtains
         .iter()
-        .zip(footprints)
+        .zip(params.footprints)
         .zip(counts)
         .map(|((curtain, fp), n)| {
             let map = StartMap::new(fp, params.threshold);
@@ -501,13 +503,14 @@ fn tally_beams(stats: &mut BeamStats, ci: usize, beams: &[BeamOut]) {
 fn sum_curtains(stats: &mut BeamStats) {
     for cp in &mut stats.curtains {
         cp.deposited_fraction = cp.fraction_deposited();
-        stats.electron_power_w += cp.electron_power_w;
-        stats.deposited_power_w += cp.deposited_power_w;
-        stats.backscattered_power_w += cp.backscattered_power_w;
-        stats.above_top_power_w += cp.above_top_power_w;
-        stats.undeposited_power_w += cp.undeposited_power_w;
+        let all = &mut stats.power;
+        all.electron_power_w += cp.electron_power_w;
+        all.deposited_power_w += cp.deposited_power_w;
+        all.backscattered_power_w += cp.backscattered_power_w;
+        all.above_top_power_w += cp.above_top_power_w;
+        all.undeposited_power_w += cp.undeposited_power_w;
     }
-    stats.deposited_fraction = deposited_fraction(stats.deposited_power_w, stats.undeposited_power_w + stats.above_top_power_w);
+    stats.power.deposited_fraction = stats.power.fraction_deposited();
 }
 
 /// A warning for each curtain (and the bake) that deposited less than
@@ -544,7 +547,15 @@ struct Tracer<'a> {
     progress: &'a dyn Progress,
 }
 
-impl Tracer<'_> {
+impl<'a> Tracer<'a> {
+    /// A tracer of `params`' beams on streams from `stream_offset`, in the
+    /// uniform field of `beams`' angles (a beam's own: [`beam_field`]).
+    pub(super) fn new(params: &'a TraceParams<'a>, stream_offset: u64, record_deposits: bool, progress: &'a dyn Progress) -> Self {
+        let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
+        let (atmosphere, colour) = (params.atmosphere, params.colour);
+        Tracer { params, atmosphere, colour, field, stream_offset, record_deposits, progress }
+    }
+
     /// Curtain `ci`'s local beams `local` (of its `n`), in parallel, in index
     /// order (chunks of [`CHUNK_BEAMS`]), and the curtain's whole electron
     /// power, W.
@@ -617,16 +628,8 @@ impl Tracer<'_> {
         let start = starts.start(index, &mut r);
         let bufs = std::mem::take(&mut out.bufs);
         let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
-        let t = match self.params.magnetic_pole {
-            // The dipole's field at the beam's start: over a beam's path
-            // (some 50 km across the field at I = 78 deg, from 260 to 100 km)
-            // its direction turns by about 50 / R rad = 0.5 degrees.
-            Some(pole) => {
-                let field = MagneticField::dipole(&self.params.earth, pole, [start.position.x, start.position.y]);
-                trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs)
-            }
-            None => trace_beam_into(ctx, &start, &mut r, bufs),
-        };
+        let field = beam_field(&self.params.earth, self.params.magnetic_pole, ctx.field, [start.position.x, start.position.y]);
+        let t = trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs);
         self.progress.inc(1);
         let mut bufs = BeamBuffers { photons: t.photons, line_power: t.line_power, deposits: t.deposits };
         let deposited: f64 = bufs.deposits[first_deposit..].iter().map(|d| d.power_kev_s).sum();

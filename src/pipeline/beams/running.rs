@@ -8,30 +8,21 @@
 //! differently).
 
 use super::{curtain_ranges, sum_curtains, tally, BeamError, BeamStats, CurtainPower, TraceParams, Traced, Tracer};
-use crate::physics::atmosphere::Atmosphere;
-use crate::physics::emission::line_colour::ColourTable;
-use crate::physics::geomagnetic_field::MagneticField;
-use crate::pipeline::footprint::Footprint;
 use crate::util::progress::Progress;
 use std::ops::Range;
 
 /// Beams `range` of a bake of `count` beams, as [`super::trace_range`]
 /// traces them (no deposits recorded), their tallies added to `running`;
 /// the returned [`Traced`] has default stats.
-#[allow(clippy::too_many_arguments)]
 pub fn trace_range_running(
     params: &TraceParams,
-    footprints: &[Footprint],
-    atmosphere: &Atmosphere,
-    colour: &ColourTable,
     count: usize,
     stream_offset: u64,
     range: Range<usize>,
     running: &mut BeamStats,
     progress: &dyn Progress,
 ) -> Result<Traced, BeamError> {
-    let field = MagneticField::new(params.beams.b_inclination_deg, params.beams.b_declination_deg);
-    let tracer = Tracer { params, atmosphere, colour, field, stream_offset, record_deposits: false, progress };
+    let tracer = Tracer::new(params, stream_offset, false, progress);
     if running.curtains.len() != params.curtains.len() {
         running.curtains = vec![CurtainPower::default(); params.curtains.len()];
     }
@@ -41,7 +32,7 @@ pub fn trace_range_running(
     let mut beam_photons = Vec::new();
     let mut deposits = Vec::new();
     for (ci, n, local) in curtain_ranges(params, count, &range) {
-        let Some(fp) = footprints.get(ci) else { continue };
+        let Some(fp) = params.footprints.get(ci) else { continue };
         let (power_w, chunks) = tracer.curtain(ci, &params.curtains[ci], fp, n, local.clone())?;
         // The curtain's whole power, as a trace of all its beams records it.
         running.curtains[ci].electron_power_w = power_w;

@@ -231,21 +231,13 @@ impl FootprintCdf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Curtain, FootprintModel, FootprintParams};
+    use crate::scene::{Curtain, FootprintParams};
 
     /// The 2014 fluid's broad folded band: hundreds of cells above the
     /// tests' thresholds, which the sampling statistics need.
     fn footprint() -> Footprint {
         let c = Curtain::default();
-        let fpp = FootprintParams {
-            model: FootprintModel::Fluid2014,
-            resolution: [128, 48],
-            steps: 6,
-            pressure_iterations: 30,
-            end_fade_km: 0.0,
-            ..FootprintParams::default()
-        };
-        crate::pipeline::footprint::simulate(&c, &fpp, 9)
+        crate::pipeline::footprint::simulate(&c, &crate::pipeline::footprint::small_params(), 9)
     }
 
     /// Chi-square of cell counts against the flux shares over the cells

@@ -15,9 +15,9 @@ fn stratified_beam_i_is_the_same_whatever_the_count_and_threads() {
     // photon list is the same for 1 and 3 threads.
     let s1 = small_scene(300);
     let s2 = small_scene(600);
-    let fps = crate::pipeline::bake::plan::footprints(&s1);
+    let fps = crate::pipeline::plan::footprints(&s1);
     let atm = Atmosphere::us1976();
-    let colour = crate::pipeline::bake::plan::colour_table(&s1, &atm);
+    let colour = crate::pipeline::plan::colour_table(&s1, &atm);
     let run = |s: &Scene, threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -47,12 +47,12 @@ fn the_drawn_starts_are_where_the_traced_beams_begin() {
     let mut s = small_scene(300);
     s.beams.deposition = Deposition::Csda;
     s.earth.radius_km = 0.0;
-    let fps = crate::pipeline::bake::plan::footprints(&s);
+    let fps = crate::pipeline::plan::footprints(&s);
     let atm = Atmosphere::us1976();
-    let colour = crate::pipeline::bake::plan::colour_table(&s, &atm);
-    let params = TraceParams::of(&s);
-    let t = trace_range(&params, &fps, &atm, &colour, 300, 0, 0..300, false, &crate::util::progress::NoProgress).unwrap();
-    let starts: Vec<DVec3> = start_positions(&params, &fps, 300).concat();
+    let colour = crate::pipeline::plan::colour_table(&s, &atm);
+    let params = TraceParams::of(&s, &fps, &atm, &colour);
+    let t = trace_range(&params, 300, 0, 0..300, false, &crate::util::progress::NoProgress).unwrap();
+    let starts: Vec<DVec3> = start_positions(&params, 300).concat();
     assert_eq!(starts.len(), t.beam_photons.len());
     let mut first = 0usize;
     let mut checked = 0;
@@ -70,9 +70,9 @@ fn the_drawn_starts_are_where_the_traced_beams_begin() {
 #[test]
 fn steps_are_segments_and_the_point_kernel_collapses_them() {
     let mut s = small_scene(50);
-    let fps = crate::pipeline::bake::plan::footprints(&s);
+    let fps = crate::pipeline::plan::footprints(&s);
     let atm = Atmosphere::us1976();
-    let colour = crate::pipeline::bake::plan::colour_table(&s, &atm);
+    let colour = crate::pipeline::plan::colour_table(&s, &atm);
     let (seg, _) = trace_all(&s, &fps, &atm, &colour, &crate::util::progress::NoProgress).unwrap();
     assert!(seg.iter().filter(|p| !p.is_point()).count() > seg.len() / 2);
     // Consecutive steps of a beam chain: one ends where the next starts

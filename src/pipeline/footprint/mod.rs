@@ -31,10 +31,12 @@
 //! are set per `resolution[0]` cells, so a path of one resolution's worth of
 //! cells is simulated exactly as the straight curtain of its length.
 
+pub mod cells;
 pub mod curtain_path;
 pub mod fluid;
 pub mod sheet;
 
+pub use cells::Cells;
 use fluid::bilinear;
 pub use fluid::Fluid;
 
@@ -289,14 +291,15 @@ pub fn simulate_at(
     let length = frame.as_ref().map_or(curtain.length, |f| f.length);
     let nx = cells_along(curtain, length, params);
     let ny = params.resolution[1];
+    let cells = Cells { nx, ny, length, width: curtain.width };
     if params.uniform {
-        return place(curtain, anim, t, frame, length, nx, ny, vec![1.0; nx * ny]);
+        return place(curtain, anim, t, frame, cells, vec![1.0; nx * ny]);
     }
     // Patterns along u are set per resolution[0] cells (module documentation).
     let along = nx as f64 / params.resolution[0] as f64;
     let sim = match params.model {
-        FootprintModel::Fluid2014 => fluid2014(curtain, params, anim, seed, t, [nx, ny], along, length),
-        FootprintModel::Sheet => sheet::density(length, curtain.width, nx, ny, params, anim, [seed, curtain.seed], t),
+        FootprintModel::Fluid2014 => fluid2014(curtain, params, anim, seed, t, cells, along),
+        FootprintModel::Sheet => sheet::density(cells, params, anim, [seed, curtain.seed], t),
     };
 
     // Remap along the noise curve: out(u, v) = sim(u, v - bend(u)), the
@@ -333,22 +336,13 @@ pub fn simulate_at(
             *d /= peak;
         }
     }
-    place(curtain, anim, t, frame, length, nx, ny, data)
+    place(curtain, anim, t, frame, cells, data)
 }
 
 /// The 2014 report's footprint before the bend: the band folded by the
 /// stable fluid (module documentation), on the nx x ny cells.
-#[allow(clippy::too_many_arguments)]
-fn fluid2014(
-    curtain: &Curtain,
-    params: &FootprintParams,
-    anim: &AnimationParams,
-    seed: u64,
-    t: f64,
-    [nx, ny]: [usize; 2],
-    along: f64,
-    length: f64,
-) -> Vec<f64> {
+fn fluid2014(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams, seed: u64, t: f64, cells: Cells, along: f64) -> Vec<f64> {
+    let Cells { nx, ny, length, .. } = cells;
     let tau = std::f64::consts::TAU;
     let mut fluid = Fluid::new(nx, ny);
     let mut r = rng::rng(&[seed, curtain.seed, rng::tag::FOOTPRINT_VELOCITY]);
@@ -421,17 +415,8 @@ pub fn end_fade(u_km: f64, length: f64, fade_km: f64) -> f64 {
 
 /// The footprint placed at time `t`: along its path, or about `center`,
 /// moved across its axis (the curtain frame's +v) by the bounded drift.
-#[allow(clippy::too_many_arguments)]
-fn place(
-    curtain: &Curtain,
-    anim: &AnimationParams,
-    t: f64,
-    frame: Option<PathFrame>,
-    length: f64,
-    nx: usize,
-    ny: usize,
-    data: Vec<f32>,
-) -> Footprint {
+fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFrame>, cells: Cells, data: Vec<f32>) -> Footprint {
+    let Cells { nx, ny, length, .. } = cells;
     let tau = std::f64::consts::TAU;
     let rot = curtain.rotation_deg.to_radians();
     let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
@@ -446,21 +431,26 @@ fn place(
     Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width, path: None }
 }
 
+/// The 2014 fluid on a small grid, no end fade: a broad folded band of
+/// hundreds of cells, for the tests of the footprint and of the starts
+/// drawn on it.
+#[cfg(test)]
+pub(crate) fn small_params() -> FootprintParams {
+    FootprintParams {
+        model: FootprintModel::Fluid2014,
+        resolution: [128, 48],
+        steps: 6,
+        pressure_iterations: 30,
+        end_fade_km: 0.0,
+        ..FootprintParams::default()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The 2014 fluid on a small grid, no end fade.
-    fn small_params() -> FootprintParams {
-        FootprintParams {
-            model: FootprintModel::Fluid2014,
-            resolution: [128, 48],
-            steps: 6,
-            pressure_iterations: 30,
-            end_fade_km: 0.0,
-            ..FootprintParams::default()
-        }
-    }
+    use super::small_params;
 
     #[test]
     fn sheet_footprint_is_normalised_deterministic_continuous_and_fades_at_its_ends() {

@@ -46,6 +46,7 @@
 //! breathes by `fold_breathing`, and the rays travel along the sheet at
 //! `ray_speed_kms`; the integration time is the same at every t.
 
+use super::cells::Cells;
 use crate::scene::{AnimationParams, FootprintParams};
 use crate::util::rng;
 use rand::Rng;
@@ -249,8 +250,8 @@ pub fn ray_brightness(n: usize, period: f64, params: &FootprintParams, seeds: [u
 /// (index `j * nx + i`, u from -length/2, v from -width/2), unnormalised:
 /// each marker's charge (brightness times spacing) spread evenly over the
 /// segment to the next, a Gaussian line of FWHM `thickness_km` across.
-#[allow(clippy::too_many_arguments)]
-pub fn rasterise(x: &[f64], y: &[f64], brightness: &[f64], period: f64, nx: usize, ny: usize, width: f64, thickness_km: f64) -> Vec<f64> {
+pub fn rasterise(x: &[f64], y: &[f64], brightness: &[f64], cells: Cells, thickness_km: f64) -> Vec<f64> {
+    let Cells { nx, ny, length: period, width } = cells;
     let n = x.len();
     let (du, dv) = (period / nx as f64, width / ny as f64);
     let sigma = thickness_km / 2.3548;
@@ -318,20 +319,11 @@ fn blur(data: &[f64], nx: usize, ny: usize, du: f64, dv: f64, sigma_km: f64) -> 
 
 /// The sheet footprint at time `t` on an nx x ny grid over a box of
 /// `length` x `width` km (before the bend), peak 1.
-#[allow(clippy::too_many_arguments)]
-pub fn density(
-    length: f64,
-    width: f64,
-    nx: usize,
-    ny: usize,
-    params: &FootprintParams,
-    anim: &AnimationParams,
-    seeds: [u64; 2],
-    t: f64,
-) -> Vec<f64> {
+pub fn density(cells: Cells, params: &FootprintParams, anim: &AnimationParams, seeds: [u64; 2], t: f64) -> Vec<f64> {
+    let Cells { nx, ny, length, width } = cells;
     let (x, y) = roll_up(length, params, anim, seeds, t);
     let b = ray_brightness(x.len(), length, params, seeds, anim.ray_speed_kms * t);
-    let sharp = rasterise(&x, &y, &b, length, nx, ny, width, params.sheet_thickness_km);
+    let sharp = rasterise(&x, &y, &b, cells, params.sheet_thickness_km);
     let peak = |d: &[f64]| d.iter().cloned().fold(0.0f64, f64::max);
     let ps = peak(&sharp);
     if ps <= 0.0 {

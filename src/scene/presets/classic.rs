@@ -2,7 +2,10 @@
 //! seen from the ground), the 2014 report's own scene, and an arc of the
 //! auroral oval for a planetarium dome.
 
-use crate::scene::{beams::*, colour::*, curtain::*, grid::*, root::Scene, view::*};
+use crate::scene::{
+    animation::*, atmosphere::*, background::*, beams::*, camera::*, colour::*, curtain::*, earth::*, footprint::*, grid::*, photons::*,
+    render::*, root::Scene, sky::*, terrain::*, volume::*,
+};
 
 impl Default for Scene {
     fn default() -> Self {

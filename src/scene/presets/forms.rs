@@ -34,7 +34,7 @@
 //! function's documentation.
 
 use super::classic::default_scene;
-use crate::scene::{curtain::*, grid::*, root::Scene, view::*};
+use crate::scene::{background::*, camera::*, curtain::*, footprint::*, grid::*, root::Scene, terrain::*};
 
 /// A perspective camera at `position` looking at `look_at`, z up.
 fn camera(position: [f64; 3], look_at: [f64; 3], fov_deg: f64) -> Camera {

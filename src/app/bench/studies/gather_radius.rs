@@ -1,7 +1,7 @@
 //! The gather radius study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::grid_rel_rms;
 use crate::scene::GatherMethod;
@@ -25,7 +25,13 @@ impl<'a> Bench<'a> {
                 let rr = r * f;
                 let (g, secs) = self.gather(k, rr, v, gm)?;
                 let e = grid_rel_rms(&g, &reference);
-                ms.push(self.measure(name, &method, "radius_km", rr, "gather", Cost::seconds(secs), e, metric, k == n && f == 1.0));
+                ms.push(self.measure(
+                    &Series { study: name, method: &method, param_name: "radius_km", stage: "gather", metric },
+                    rr,
+                    Cost::seconds(secs),
+                    e,
+                    k == n && f == 1.0,
+                ));
                 self.note_last(&ms, gather_key(k, rr, v, gm), 0.0);
             }
         }

@@ -1,7 +1,7 @@
 //! The photon count and gather method study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::{grid_rel_rms, grid_rel_rms_best_scale};
 use crate::scene::GatherMethod;
@@ -28,7 +28,13 @@ impl<'a> Bench<'a> {
             if k == n {
                 err_n = Some(e);
             }
-            ms.push(self.measure(name, &method, "beams", k as f64, "beams+gather", Cost::seconds(trace_s + gather_s), e, metric, k == n));
+            ms.push(self.measure(
+                &Series { study: name, method: &method, param_name: "beams", stage: "beams+gather", metric },
+                k as f64,
+                Cost::seconds(trace_s + gather_s),
+                e,
+                k == n,
+            ));
             self.note_last(&ms, gather_key(k, r, v, gm), trace_s);
         }
         // The old estimators over the same beam counts, on the same chart.
@@ -38,7 +44,13 @@ impl<'a> Bench<'a> {
             let k = self.beams_times(f);
             let (g, trace_s, gather_s) = self.old_estimator_grid(k)?;
             let e = grid_rel_rms(&g, &reference);
-            ms.push(self.measure(name, &old_label, "beams", k as f64, "beams+gather", Cost::seconds(trace_s + gather_s), e, metric, false));
+            ms.push(self.measure(
+                &Series { study: name, method: &old_label, param_name: "beams", stage: "beams+gather", metric },
+                k as f64,
+                Cost::seconds(trace_s + gather_s),
+                e,
+                false,
+            ));
             old_gathers.push((k, gather_s, e));
         }
         let mut notes = vec![format!(
@@ -82,28 +94,20 @@ impl<'a> Bench<'a> {
                 let (g, secs) = self.gather(k, r, v, method)?;
                 let here = method == scene_gather && k == n;
                 ms.push(self.measure(
-                    name,
-                    label,
-                    "beams",
+                    &Series { study: name, method: label, param_name: "beams", stage: "gather", metric },
                     k as f64,
-                    "gather",
                     Cost::seconds(secs),
                     grid_rel_rms(&g, &reference),
-                    metric,
                     here,
                 ));
                 self.note_last(&ms, gather_key(k, r, v, method), 0.0);
                 if method == GatherMethod::Report2014 {
                     let (e, s) = grid_rel_rms_best_scale(&g, &reference);
                     scaled.push(self.measure(
-                        name,
-                        "report2014, best-fit scale",
-                        "beams",
+                        &Series { study: name, method: "report2014, best-fit scale", param_name: "beams", stage: "gather", metric },
                         k as f64,
-                        "gather",
                         Cost::seconds(secs),
                         e,
-                        metric,
                         false,
                     ));
                     self.note_last(&scaled, gather_key(k, r, v, method), 0.0);
@@ -123,7 +127,13 @@ impl<'a> Bench<'a> {
                     (s, grid_rel_rms(&g, &reference))
                 }
             };
-            ms.push(self.measure(name, &old_label, "beams", k as f64, "gather", Cost::seconds(gather_s), e, metric, false));
+            ms.push(self.measure(
+                &Series { study: name, method: &old_label, param_name: "beams", stage: "gather", metric },
+                k as f64,
+                Cost::seconds(gather_s),
+                e,
+                false,
+            ));
         }
         trend.push((old_label.clone(), 1));
         let gather = Study {

@@ -1,7 +1,7 @@
 //! The primary-ray integration study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::image_rel_error_masked;
 use crate::pipeline::bake::{self};
@@ -18,7 +18,13 @@ impl<'a> Bench<'a> {
         s.integration = Integration::Exact;
         let (exact, exact_s) = self.render_timed(&s, &vol)?;
         let all = vec![true; exact.pixels.len()];
-        let mut ms = vec![self.measure(name, "exact (per dual cell)", "step_km", 0.0, "render", Cost::seconds(exact_s), 0.0, metric, true)];
+        let mut ms = vec![self.measure(
+            &Series { study: name, method: "exact (per dual cell)", param_name: "step_km", stage: "render", metric },
+            0.0,
+            Cost::seconds(exact_s),
+            0.0,
+            true,
+        )];
         let mut flux = Vec::new();
         for f in self.plan.step_factors.clone() {
             let h = v * f;
@@ -26,7 +32,13 @@ impl<'a> Bench<'a> {
             let (img, secs) = self.render_timed(&s, &vol)?;
             let (e, fl) = image_rel_error_masked(&img.pixels, &exact.pixels, &all, 0.01);
             flux.push(format!("h = {h} km: {fl:.5}"));
-            ms.push(self.measure(name, "fixed step", "step_km", h, "render", Cost::seconds(secs), e, metric, false));
+            ms.push(self.measure(
+                &Series { study: name, method: "fixed step", param_name: "step_km", stage: "render", metric },
+                h,
+                Cost::seconds(secs),
+                e,
+                false,
+            ));
         }
         let lit = exact.pixels.iter().filter(|p| p[1] > 0.0).count();
         Ok(Study {

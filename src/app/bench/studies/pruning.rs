@@ -1,7 +1,7 @@
 //! The pruning study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{timed, Bench, Study, SweepError};
+use crate::app::bench::harness::{timed, Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::image_rel_error_masked;
 use crate::grid::Grid;
@@ -59,8 +59,13 @@ impl<'a> Bench<'a> {
         let all = vec![true; full.pixels.len()];
         let (full_bytes, full_s) = write(&full_e, &full_d);
         let scene_budget = self.scene.grid.prune;
-        let mut ms =
-            vec![self.measure(name, "unpruned", "budget", 0.0, "vdb write", Cost::seconds(full_s), 0.0, metric, scene_budget == 0.0)];
+        let mut ms = vec![self.measure(
+            &Series { study: name, method: "unpruned", param_name: "budget", stage: "vdb write", metric },
+            0.0,
+            Cost::seconds(full_s),
+            0.0,
+            scene_budget == 0.0,
+        )];
         let mut notes = vec![format!(
             "Unpruned: {} aurora voxels, {} leaves, {full_bytes} bytes (VDB, scene compression, Cycles shell: {}). Removed light is estimated without extinction; per budget: leaves and voxels removed, estimated share removed, image flux ratio, file size:",
             base.emission.active_voxel_count(),
@@ -90,14 +95,10 @@ impl<'a> Bench<'a> {
                 nb as f64 / full_bytes.max(1) as f64
             ));
             ms.push(self.measure(
-                name,
-                "contribution pruning",
-                "budget",
+                &Series { study: name, method: "contribution pruning", param_name: "budget", stage: "vdb write", metric },
                 b,
-                "vdb write",
                 Cost::seconds(secs),
                 err,
-                metric,
                 b == scene_budget,
             ));
         }

@@ -1,7 +1,7 @@
 //! The shadow rays study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::image_rel_error_masked;
 use crate::app::bench::reduced::{ground_camera, ground_terrain};
@@ -62,7 +62,13 @@ impl<'a> Bench<'a> {
                 let (e, _) = image_rel_error_masked(&img.pixels, &reference.pixels, &mask, 0.01);
                 // The CLI renders with the scene's spp and one shadow ray per hit.
                 let here = !per_hit && k == scene_spp;
-                ms.push(self.measure(name, label, "samples", k as f64, "render", Cost::seconds(secs), e, metric, here));
+                ms.push(self.measure(
+                    &Series { study: name, method: label, param_name: "samples", stage: "render", metric },
+                    k as f64,
+                    Cost::seconds(secs),
+                    e,
+                    here,
+                ));
             }
         }
         Ok(Study {

@@ -32,7 +32,7 @@
 //! scene's camera position). The x axis of the chart is the file's size in
 //! MB ([`SIZE_STAGE`], in [`CostUnit::Megabytes`]).
 
-use crate::app::bench::harness::{Bench, Study, SweepError};
+use crate::app::bench::harness::{Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::image_rel_error_masked;
 use crate::geometry::earth::Earth;
@@ -176,7 +176,13 @@ impl<'a> Bench<'a> {
             let img = render(w)?;
             let (err, flux) = image_rel_error_masked(&img.pixels, &reference.pixels, &all, 0.01);
             notes.push(format!("{method}, {param_name} = {param}: {} bytes, error {err:.5}, flux {flux:.5}", w.len()));
-            ms.push(self.measure(name, method, param_name, param, SIZE_STAGE, Cost::megabytes(mb(w)), err, metric, scene_setting));
+            ms.push(self.measure(
+                &Series { study: name, method, param_name, stage: SIZE_STAGE, metric },
+                param,
+                Cost::megabytes(mb(w)),
+                err,
+                scene_setting,
+            ));
             Ok(())
         };
         let g = &self.scene.grid;

@@ -1,7 +1,7 @@
 //! The voxel size study of `aurora bench` (see [`super::sweeps`] for the
 //! harness, the table of studies and how times are taken).
 
-use crate::app::bench::harness::{gather_key, Bench, Study, SweepError};
+use crate::app::bench::harness::{gather_key, Bench, Series, Study, SweepError};
 use crate::app::bench::measurement::{Cost, CostUnit};
 use crate::app::bench::metrics::grid_rel_rms;
 use crate::scene::GatherMethod;
@@ -26,7 +26,13 @@ impl<'a> Bench<'a> {
                 let (g, secs) = self.gather(n, r, vv, method)?;
                 let e = grid_rel_rms(&g, &reference);
                 let here = f == 1.0 && method == self.scene.photons.gather;
-                ms.push(self.measure(name, label, "voxel_km", vv, "gather", Cost::seconds(secs), e, metric, here));
+                ms.push(self.measure(
+                    &Series { study: name, method: label, param_name: "voxel_km", stage: "gather", metric },
+                    vv,
+                    Cost::seconds(secs),
+                    e,
+                    here,
+                ));
                 self.note_last(&ms, gather_key(n, r, vv, method), 0.0);
             }
         }

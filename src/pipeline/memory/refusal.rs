@@ -1,7 +1,7 @@
 //! A bake that would not fit, refused with the changes that would.
 //!
-//! [`check`] compares the bake's estimate
-//! ([`crate::pipeline::memory_budget::estimate`]) with the share
+//! [`check`] compares the bake's estimate from its plan
+//! ([`super::budget::estimate`]) with the share
 //! [`USABLE_FRACTION`] of what this process may use
 //! ([`crate::util::memory::available`]), the rest being kept for what does
 //! not scale with the scene. Over it, the bake is refused ([`TooLarge`])
@@ -19,8 +19,8 @@
 //! check uses, each distinct set counted once ([`LeafCount::Memo`]); a
 //! changed footprint is simulated once per value and kept for the search.
 
-use crate::pipeline::bake::plan::BakePlan;
-use crate::pipeline::memory_budget::{estimate_plan_by, Estimate, LeafCount, LeafMemo, USABLE_FRACTION};
+use super::budget::{estimate, Estimate, LeafCount, LeafMemo, USABLE_FRACTION};
+use crate::pipeline::plan::BakePlan;
 use crate::scene::{Scene, VoxelSize};
 use crate::util::memory::MemoryLimit;
 use crate::util::progress::NoProgress;
@@ -90,18 +90,13 @@ fn advice(suggestions: &[Suggestion]) -> String {
     format!("each of these changes alone brings it under: {}", each.join("; "))
 }
 
-/// Refuses `scene` when its estimate exceeds [`USABLE_FRACTION`] of
-/// `limit`, with the [`suggestions`] that fit; returns the estimate.
-pub fn check(scene: &Scene, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
-    check_plan(scene, &BakePlan::new(scene, &NoProgress), limit)
-}
-
-/// [`check`] with the plan the bake will run (built from `scene`): the
-/// estimate is that plan's ([`crate::pipeline::memory_budget::estimate_plan`]), and each suggestion's the
-/// plan reusing its footprints where the key leaves them.
-pub fn check_plan(scene: &Scene, plan: &BakePlan, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
+/// Refuses the bake of `plan` when its estimate exceeds
+/// [`USABLE_FRACTION`] of `limit`, with the suggestions that fit (each
+/// the estimate of the plan reusing its footprints where the key leaves
+/// them); returns the estimate.
+pub fn check(plan: &BakePlan, limit: &MemoryLimit) -> Result<Estimate, Box<TooLarge>> {
     let memo = LeafMemo::default();
-    let e = estimate_plan_by(scene, plan, LeafCount::Memo(&memo));
+    let e = estimate(plan, LeafCount::Memo(&memo));
     let usable = USABLE_FRACTION * limit.bytes;
     let total = e.total();
     if total <= usable {
@@ -116,7 +111,7 @@ pub fn check_plan(scene: &Scene, plan: &BakePlan, limit: &MemoryLimit) -> Result
         total,
         usable,
         limit: limit.clone(),
-        suggestions: suggestions_with(scene, plan, usable, memo),
+        suggestions: suggestions(plan, usable, memo),
     }))
 }
 
@@ -209,24 +204,15 @@ pub const CANDIDATES: &[Candidate] = &[
     },
 ];
 
-/// For each of [`CANDIDATES`], the value nearest the scene's at which the
+/// For each of [`CANDIDATES`], the value nearest the plan's scene's at which the
 /// estimate with that key alone changed is at most `usable` bytes and the
 /// scene still valid: values a factor 1.25 apart outward until one fits,
 /// then 16 halvings between it and the last that did not (on the closed-form
 /// leaf bound), then 5 more on the counted bands between the scene's value
 /// and it, then rounded outward to two significant digits when that still
 /// fits. A key no value of which fits is left out.
-pub fn suggestions(scene: &Scene, usable: f64) -> Vec<Suggestion> {
-    suggestions_plan(scene, &BakePlan::new(scene, &NoProgress), usable)
-}
-
-/// [`suggestions`] from the plan of `scene`.
-pub fn suggestions_plan(scene: &Scene, plan: &BakePlan, usable: f64) -> Vec<Suggestion> {
-    suggestions_with(scene, plan, usable, LeafMemo::default())
-}
-
-fn suggestions_with(scene: &Scene, plan: &BakePlan, usable: f64, memo: LeafMemo) -> Vec<Suggestion> {
-    let search = Search { scene, plan, usable, plans: RefCell::new(Vec::new()), memo };
+pub fn suggestions(plan: &BakePlan, usable: f64, memo: LeafMemo) -> Vec<Suggestion> {
+    let search = Search { scene: &plan.scene, plan, usable, plans: RefCell::new(Vec::new()), memo };
     CANDIDATES.iter().filter_map(|c| search.suggest(c)).collect()
 }
 
@@ -253,7 +239,7 @@ impl Search<'_> {
     /// earlier changed one's footprints where they are `s`'s.
     fn bytes(&self, s: &Scene, count: LeafCount) -> f64 {
         if self.plan.has_footprints_of(s) {
-            return estimate_plan_by(s, &BakePlan::reusing(s, self.plan, &NoProgress), count).total();
+            return estimate(&BakePlan::reusing(s, self.plan, &NoProgress), count).total();
         }
         let mut plans = self.plans.borrow_mut();
         let k = match plans.iter().position(|p| p.has_footprints_of(s)) {
@@ -263,7 +249,7 @@ impl Search<'_> {
                 plans.len() - 1
             }
         };
-        estimate_plan_by(s, &BakePlan::reusing(s, &plans[k], &NoProgress), count).total()
+        estimate(&BakePlan::reusing(s, &plans[k], &NoProgress), count).total()
     }
 
     /// The estimate with `c` set to `x`, if that scene is valid and fits.
@@ -352,6 +338,10 @@ impl Search<'_> {
 mod tests {
     use super::*;
 
+    fn plan_of(s: &Scene) -> BakePlan {
+        BakePlan::new(s, &NoProgress)
+    }
+
     fn limit(g: f64) -> MemoryLimit {
         MemoryLimit { bytes: g * (1u64 << 30) as f64, source: "test" }
     }
@@ -363,21 +353,21 @@ mod tests {
         let mut s = Scene::default();
         s.beams.count = 100_000_000;
         s.grid.voxel_size = VoxelSize::Auto(crate::scene::AutoTag::Auto);
-        let e = check(&s, &limit(8.0)).unwrap_err();
+        let e = check(&plan_of(&s), &limit(8.0)).unwrap_err();
         assert_eq!(e.key, "beams.count", "{e}");
 
         let mut s = Scene::default();
         s.beams.dt = 1e-6;
-        assert_eq!(check(&s, &limit(8.0)).unwrap_err().key, "beams.dt");
+        assert_eq!(check(&plan_of(&s), &limit(8.0)).unwrap_err().key, "beams.dt");
 
         let mut s = Scene::default();
         s.photons.radius_km = 50.0;
-        let e = check(&s, &limit(8.0)).unwrap_err();
+        let e = check(&plan_of(&s), &limit(8.0)).unwrap_err();
         assert_eq!(e.key, "photons.radius_km", "{e}");
 
         let mut s = Scene::default();
         s.grid.voxel_size = VoxelSize::Km(0.005);
-        let e = check(&s, &limit(8.0)).unwrap_err();
+        let e = check(&plan_of(&s), &limit(8.0)).unwrap_err();
         assert_eq!(e.key, "grid.voxel_size", "{e}");
         assert!(e.to_string().contains("GiB") && e.to_string().contains("test"), "{e}");
     }
@@ -388,15 +378,15 @@ mod tests {
         // share: the need is printed above the usable share, and the share
         // and what it is for are said.
         let s = Scene::default();
-        let total = crate::pipeline::memory_budget::estimate(&s).total();
+        let total = super::super::budget::estimate(&plan_of(&s), LeafCount::Bands).total();
         let l = MemoryLimit { bytes: total / USABLE_FRACTION * (1.0 - 1e-9), source: "test" };
-        let e = check(&s, &l).unwrap_err();
+        let e = check(&plan_of(&s), &l).unwrap_err();
         let m = e.to_string();
         let need: f64 = gib_up(e.total).parse().unwrap();
         let usable: f64 = gib_down(e.usable).parse().unwrap();
         assert!(need > usable, "{m}");
         assert!(m.contains("80 %") && m.contains("kept for the program"), "{m}");
         // Exactly at the usable share: accepted.
-        check(&s, &MemoryLimit { bytes: total / USABLE_FRACTION * (1.0 + 1e-12), source: "test" }).unwrap();
+        check(&plan_of(&s), &MemoryLimit { bytes: total / USABLE_FRACTION * (1.0 + 1e-12), source: "test" }).unwrap();
     }
 }

@@ -1,17 +1,18 @@
-//! How far a bake's beams and deposits reach, from the scene alone: the
+//! How far a bake's beams and deposits reach, from its plan's scene and
+//! atmosphere (`crate::pipeline::plan`): the
 //! highest deposit and the columns above the starts, the lowest stop, the
 //! steps a beam takes and how far its walk spreads across the field, and
 //! the world box around the curtains. The memory budget bounds its terms
-//! from these (`crate::pipeline::memory_budget`, its module documentation
+//! from these (`super::budget`, its module documentation
 //! gives the models: Wald's identity for the steps, the random walk's
 //! four standard deviations for the spread).
 
-use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::beams::dip::min_dip_deg;
 use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
-use crate::scene::{Curtain, Deposition, Scene};
+use crate::pipeline::plan::BakePlan;
+use crate::scene::{Curtain, Deposition};
 
 /// The highest altitude a deposit of `curtain` can lie at, km: the beams'
 /// highest start, or above it for Fang's depositions, which lay what the
@@ -21,15 +22,15 @@ use crate::scene::{Curtain, Deposition, Scene};
 /// altitude); for `sampled`, where each
 /// beam's energy is drawn, the atmosphere table's top (700 km for NRLMSIS
 /// 2.1), which bounds every energy's.
-pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
-    let start_top = scene.beams.top_km + scene.beams.top_noise_km;
-    let atm = Atmosphere::of_params(&scene.atmosphere).unwrap_or_else(|e| panic!("{e}"));
-    match scene.beams.deposition {
+pub fn deposit_top_km(plan: &BakePlan, curtain: &Curtain) -> f64 {
+    let start_top = plan.scene.beams.top_km + plan.scene.beams.top_noise_km;
+    let atm = &plan.atmosphere;
+    match plan.scene.beams.deposition {
         Deposition::Csda => start_top,
         Deposition::Sampled => start_top.max(atm.top_km()),
         Deposition::Expected => {
             let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
-            above_start_column_top(&atm, &|m| g.fraction_above(m), g.total(), start_top)
+            above_start_column_top(atm, &|m| g.fraction_above(m), g.total(), start_top)
         }
     }
 }
@@ -40,19 +41,19 @@ pub fn deposit_top_km(scene: &Scene, curtain: &Curtain) -> f64 {
 /// higher start's column is a part of it, plus 2 for where their
 /// boundaries fall differently); for `sampled`, [`max_above_start_spans`]
 /// of the whole column; none for `csda`.
-pub fn column_spans(scene: &Scene, curtain: &Curtain) -> f64 {
-    let column = column_km(scene, curtain);
+pub fn column_spans(plan: &BakePlan, curtain: &Curtain) -> f64 {
+    let column = column_km(plan, curtain);
     if column <= 0.0 {
         return 0.0;
     }
-    match scene.beams.deposition {
+    match plan.scene.beams.deposition {
         Deposition::Csda => 0.0,
         Deposition::Sampled => max_above_start_spans(column) as f64,
         Deposition::Expected => {
-            let atm = Atmosphere::of_params(&scene.atmosphere).unwrap_or_else(|e| panic!("{e}"));
+            let atm = &plan.atmosphere;
             let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
-            let lowest = scene.beams.top_km - scene.beams.top_noise_km;
-            let n = above_start_spans(&atm, &|m| g.fraction_above(m), g.total(), lowest).len();
+            let lowest = plan.scene.beams.top_km - plan.scene.beams.top_noise_km;
+            let n = above_start_spans(atm, &|m| g.fraction_above(m), g.total(), lowest).len();
             if n < 2 {
                 0.0
             } else {
@@ -64,25 +65,25 @@ pub fn column_spans(scene: &Scene, curtain: &Curtain) -> f64 {
 
 /// Altitude span of a curtain's columns above the starts, km: from the
 /// lowest start to [`deposit_top_km`] (0 without them).
-pub fn column_km(scene: &Scene, curtain: &Curtain) -> f64 {
-    (deposit_top_km(scene, curtain) - (scene.beams.top_km - scene.beams.top_noise_km)).max(0.0)
+pub fn column_km(plan: &BakePlan, curtain: &Curtain) -> f64 {
+    (deposit_top_km(plan, curtain) - (plan.scene.beams.top_km - plan.scene.beams.top_noise_km)).max(0.0)
 }
 
 /// Bound on the leaves of the columns above the starts (module
 /// documentation): per curtain, its rotated footprint box dilated by
 /// `reach`, `(dx / leaf + 3) (dy / leaf + 3)` leaves per slab, over
 /// `column_km / leaf + 2` slabs.
-pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
-    scene
+pub fn column_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
+    plan.scene
         .curtains
         .iter()
         .map(|c| {
-            let h = column_km(scene, c);
+            let h = column_km(plan, c);
             if h <= 0.0 {
                 return 0.0;
             }
             let slabs = h / leaf_km + 2.0;
-            if let Some((length, _)) = path_curve(scene, c) {
+            if let Some((length, _)) = path_curve(plan, c) {
                 let rho = 0.5 * c.width + reach + std::f64::consts::SQRT_2 * leaf_km + leaf_km;
                 return band_area_leaves(length, rho, leaf_km) * slabs;
             }
@@ -96,9 +97,9 @@ pub fn column_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
 
 /// A path curtain's curve lifted to the start altitude: its length and
 /// vertices (None for a straight curtain).
-pub fn path_curve(scene: &Scene, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
+pub fn path_curve(plan: &BakePlan, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
     let p = c.path.as_ref()?;
-    let v = vertices(&Lift::of(&scene.beams, &scene.earth).path(p));
+    let v = vertices(&Lift::of(&plan.scene.beams, &plan.scene.earth).path(p));
     Some((polyline_length(&v), v))
 }
 
@@ -115,14 +116,14 @@ pub fn band_area_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
 /// inclined field (at the smallest dip, [`dip_deg`]) and the beams' spread
 /// across it ([`spread_km`]). The columns above the starts are bounded apart
 /// ([`column_leaves`]).
-pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
+pub fn world_bounds(plan: &BakePlan) -> ([f64; 3], [f64; 3]) {
     let z0 = 50.0;
-    let z1 = scene.beams.top_km + scene.beams.top_noise_km;
-    let tilt = (90.0 - dip_deg(scene)).to_radians().tan() * (z1 - z0) + spread_km(scene);
+    let z1 = plan.scene.beams.top_km + plan.scene.beams.top_noise_km;
+    let tilt = (90.0 - dip_deg(plan)).to_radians().tan() * (z1 - z0) + spread_km(plan);
     let mut lo = [f64::INFINITY, f64::INFINITY, z0];
     let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
-    for c in &scene.curtains {
-        if let Some((_, v)) = path_curve(scene, c) {
+    for c in &plan.scene.curtains {
+        if let Some((_, v)) = path_curve(plan, c) {
             let h = 0.5 * c.width;
             for p in v {
                 lo[0] = lo[0].min(p[0] - h - tilt);
@@ -149,8 +150,8 @@ pub fn world_bounds(scene: &Scene) -> ([f64; 3], [f64; 3]) {
 /// The smallest dip of the electrons' field line where any curtain's beams
 /// start, degrees ([`crate::pipeline::beams::dip::min_dip_deg`]), at least
 /// 1e-3 so the bounds stay finite for a scene the bake refuses.
-pub fn dip_deg(scene: &Scene) -> f64 {
-    min_dip_deg(&scene.curtains, &scene.beams, &scene.earth).max(1e-3)
+pub fn dip_deg(plan: &BakePlan) -> f64 {
+    min_dip_deg(&plan.scene.curtains, &plan.scene.beams, &plan.scene.earth).max(1e-3)
 }
 
 /// The altitude where a Fang beam of `curtain` has deposited all but
@@ -158,13 +159,14 @@ pub fn dip_deg(scene: &Scene) -> f64 {
 /// curtain's spectrum's (by bisection on the atmosphere's table, 50
 /// halvings); for `sampled`, where each beam's energy is drawn, the
 /// table's bottom, which bounds every energy's.
-pub fn stop_km(scene: &Scene, curtain: &Curtain, atm: &Atmosphere) -> f64 {
-    if scene.beams.deposition != Deposition::Expected {
+pub fn stop_km(plan: &BakePlan, curtain: &Curtain) -> f64 {
+    let atm = &plan.atmosphere;
+    if plan.scene.beams.deposition != Deposition::Expected {
         return atm.bottom_km();
     }
     let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
     let done = |z: f64| g.fraction_above(atm.column_mass(z)) >= (1.0 - COMPLETE_TOL) * g.total();
-    let (mut lo, mut hi) = (atm.bottom_km(), scene.beams.top_km + scene.beams.top_noise_km);
+    let (mut lo, mut hi) = (atm.bottom_km(), plan.scene.beams.top_km + plan.scene.beams.top_noise_km);
     if !done(lo) {
         return lo;
     }
@@ -186,19 +188,18 @@ pub fn stop_km(scene: &Scene, curtain: &Curtain, atm: &Atmosphere) -> f64 {
 /// variance `H sigma^2 / mu^3`, `sigma^2 <= (L dt)^2 (sin^2 I / 12 +
 /// tan^2 alpha_D cos^2 I / 6)` the variance of a step's descent; at most
 /// [`FANG_MAX_STEPS`].
-pub fn steps_per_beam(scene: &Scene) -> (f64, f64) {
-    let b = &scene.beams;
+pub fn steps_per_beam(plan: &BakePlan) -> (f64, f64) {
+    let b = &plan.scene.beams;
     if b.deposition == Deposition::Csda {
         return ((1.0 / b.dt).ceil(), 0.0);
     }
-    let dip = dip_deg(scene);
+    let dip = dip_deg(plan);
     let cap = FANG_MAX_STEPS as f64;
     if dip <= b.alpha_d_deg {
         return (cap, 0.0);
     }
-    let atm = Atmosphere::of_params(&scene.atmosphere).unwrap_or_else(|e| panic!("{e}"));
     let top = b.top_km + b.top_noise_km;
-    let h = scene.curtains.iter().map(|c| (top - stop_km(scene, c, &atm)).max(0.0)).fold(0.0, f64::max);
+    let h = plan.scene.curtains.iter().map(|c| (top - stop_km(plan, c)).max(0.0)).fold(0.0, f64::max);
     let (si, ci) = dip.to_radians().sin_cos();
     let ta = b.alpha_d_deg.to_radians().tan();
     let a = b.length_km * b.dt;
@@ -210,8 +211,8 @@ pub fn steps_per_beam(scene: &Scene) -> (f64, f64) {
 
 /// The step photons of `beams` beams: `beams` times the expected steps plus
 /// four standard deviations of their sum ([`steps_per_beam`]).
-pub fn photons_of_steps(scene: &Scene, beams: f64) -> f64 {
-    let (mean, var) = steps_per_beam(scene);
+pub fn photons_of_steps(plan: &BakePlan, beams: f64) -> f64 {
+    let (mean, var) = steps_per_beam(plan);
     beams * mean + 4.0 * (beams * var).sqrt()
 }
 
@@ -220,14 +221,14 @@ pub fn photons_of_steps(scene: &Scene, beams: f64) -> f64 {
 /// alpha_D` across with mean square `(L dt tan alpha_D)^2 / 3`; four
 /// standard deviations of its sum, and at most `sin(alpha_D)` of its
 /// longest path, `h / sin(I - alpha_D)`.
-pub fn spread_km(scene: &Scene) -> f64 {
-    let b = &scene.beams;
-    let (n, _) = steps_per_beam(scene);
+pub fn spread_km(plan: &BakePlan) -> f64 {
+    let b = &plan.scene.beams;
+    let (n, _) = steps_per_beam(plan);
     let walk = 4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * b.alpha_d_deg.to_radians().tan();
     // However long the steps, a path that descends at least sin(I - alpha_D)
     // per km from the highest start to 50 km goes at most tan(alpha_D) per
     // km along the line across it.
-    let descent = (dip_deg(scene) - b.alpha_d_deg).to_radians();
+    let descent = (dip_deg(plan) - b.alpha_d_deg).to_radians();
     if descent > 0.0 {
         let h = (b.top_km + b.top_noise_km - 50.0).max(0.0);
         walk.min(h / descent.sin() * b.alpha_d_deg.to_radians().sin())

@@ -1,17 +1,17 @@
 //! The leaves a bake's grids can hold, counted from the plan the bake runs
 //! (its footprints, field, kernel and voxel size): the memory budget's
-//! grid term ([`crate::pipeline::memory_budget`]).
+//! grid term ([`super::budget`]).
 //!
 //! Model: a beam starts where the bake draws it
 //! ([`crate::pipeline::beams::start_positions`]: the same points, so the
 //! plan's own beams), or, where the budget does not draw them
-//! ([`crate::pipeline::memory_budget::draws_starts`]), anywhere in a
+//! ([`super::budget::draws_starts`]), anywhere in a
 //! footprint cell above `footprint.threshold` at most `beams.top_noise_km`
 //! off `beams.top_km`. It walks down (and, with Fang's depositions, lays
-//! its column up) the straight field line through its start (the uniform
-//! field, or the dipole's at the start: `crate::pipeline::beams`), never
+//! its column up) the straight field line through its start (the plan's
+//! [`BakePlan::field_at`], as the trace follows it), never
 //! farther across it than the walk's spread
-//! ([`crate::pipeline::memory_reach::spread_km`]); its photons' kernels
+//! ([`super::reach::spread_km`]); its photons' kernels
 //! reach `cutoff * r_max` and the Cycles shell one voxel more. Each start
 //! is carried along its line to `beams.top_km` and merged onto a grid
 //! (a voxel for drawn starts, half a leaf for cells). So every voxel the
@@ -34,10 +34,8 @@
 //! bends, so it is within the spread and the kernel of the leaves a bake
 //! holds.
 
-use crate::geometry::earth::Earth;
-use crate::physics::geomagnetic_field::MagneticField;
-use crate::pipeline::bake::plan::BakePlan;
 use crate::pipeline::footprint::Footprint;
+use crate::pipeline::plan::BakePlan;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -100,15 +98,6 @@ pub fn start_columns(fp: &Footprint, threshold: f64, g: f64) -> (Vec<[f64; 2]>, 
 /// in leaves, 32 MB of bits); a larger box is not counted (None).
 pub const MAX_BOX_LEAVES: usize = 1 << 28;
 
-/// The field a beam starting at ground point `at` follows: the dipole's
-/// there (`earth` the plan's), or the plan's uniform field.
-pub fn field_at(plan: &BakePlan, earth: &Earth, at: [f64; 2]) -> MagneticField {
-    match plan.earth.magnetic_pole {
-        Some(pole) if plan.earth.radius_km > 0.0 => MagneticField::dipole(earth, pole, at),
-        _ => plan.field,
-    }
-}
-
 /// Most leaf columns the balls of [`band_leaves`] may visit (some seconds
 /// on one core); a count that would take more is not made (None).
 pub const MAX_BALL_COLUMNS: f64 = 4.0e8;
@@ -135,23 +124,22 @@ fn ball_columns(bands: &[Band], leaf: f64) -> f64 {
 /// [`MAX_BALL_COLUMNS`] leaf columns (the caller's closed-form bound
 /// stands).
 pub fn band_leaves(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> Option<usize> {
-    let earth = Earth::new(plan.earth.radius_km);
+    let earth = plan.earth();
     let leaf = 8.0 * voxel_km;
     if ball_columns(bands, leaf) > MAX_BALL_COLUMNS {
         return None;
     }
-    let field_at = |at: [f64; 2]| field_at(plan, &earth, at);
     // Each column's samples, half a leaf apart along its line: scene
     // point and ball radius.
     let samples = |b: &Band, at: [f64; 2], each: &mut dyn FnMut(DVec3, f64)| {
-        let field = field_at(at);
+        let field = plan.field_at(at);
         let s = DVec3::new(at[0], at[1], b.start_km);
         let spacing = (0.5 * leaf).max((b.rho_km + b.spread_max_km) / 8.0);
         let dh = spacing * (-field.b.z).max(1e-3);
         let n = ((b.top_km - b.bottom_km) / dh).ceil().max(0.0) as usize;
         for i in 0..=n {
             let h = (b.top_km - i as f64 * dh).max(b.bottom_km);
-            let scale = if earth.is_flat() { 1.0 } else { 1.0 + h.max(0.0) / plan.earth.radius_km };
+            let scale = if earth.is_flat() { 1.0 } else { 1.0 + h.max(0.0) / plan.scene.earth.radius_km };
             each(earth.to_scene(field.foot(s, h)), (b.rho_at(h) + 0.5 * spacing) * scale);
         }
     };

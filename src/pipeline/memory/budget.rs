@@ -1,10 +1,10 @@
 //! The bake's memory, known before it is spent.
 //!
-//! [`estimate_plan`] bounds a bake's peak allocation from the plan it runs
+//! [`estimate`] bounds a bake's peak allocation from the plan it runs
 //! ([`BakePlan`]: its footprints, field, kernel and chunk of beams), so the
 //! estimate and the bake read the same footprints and constants and cannot
-//! drift apart; [`estimate`] builds that plan from a scene.
-//! `crate::pipeline::memory_refusal` compares it with the share
+//! drift apart.
+//! `super::refusal` compares it with the share
 //! [`USABLE_FRACTION`] of what this process may use and refuses with the
 //! changes that would fit. Terms in bytes (each an upper bound; measured
 //! against the peak resident set by `benchmarks/memory/budget.sh`,
@@ -14,7 +14,7 @@
 //! before this):
 //! - **program**: [`PROGRAM_BYTES`], what a bake of a few beams holds.
 //! - **photons**: the beams held at once, one chunk of the plan's
-//!   `beam_chunk` (`crate::pipeline::bake::chunked`; all of them, every
+//!   `beam_chunk` (`crate::pipeline::plan::BakePlan::chunks`; all of them, every
 //!   red-trail sample's, for a bake of one chunk or `report2014`), of
 //!   [`steps_per_beam`] steps (csda: `ceil(1 / beams.dt)`; Fang's: by
 //!   Wald's identity at most `(H + L dt (sin I + tan alpha_D cos I)) /
@@ -24,7 +24,7 @@
 //!   each; for the other gathers a photon three times and a kernel.
 //! - **candidate leaves**: 12 bytes per leaf within reach of each held
 //!   step, bounded per beam by its path's slices of leaves.
-//! - **grids**: the leaves the bands of [`crate::pipeline::memory_leaves`]
+//! - **grids**: the leaves the bands of [`super::leaves`]
 //!   reach (the plan's beams' own starts, or its start cells, carried
 //!   along their field lines, dilated by the reach and the walk's spread), each an
 //!   emission leaf (512 x 12 bytes and masks) and, unless the air is
@@ -47,17 +47,16 @@
 //!
 //! `voxel_size = "auto"` is taken at its floor ([`KernelRadius::auto_voxel_floor_km`]).
 
-use crate::pipeline::bake::plan::BakePlan;
-use crate::pipeline::beams::{start_positions, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
-use crate::pipeline::deposit::Photon;
-use crate::pipeline::memory_leaves::{band_leaves, start_columns, Band};
-use crate::pipeline::memory_reach::{
+use super::leaves::{band_leaves, start_columns, Band};
+use super::reach::{
     band_area_leaves, column_km, column_leaves, column_spans, deposit_top_km, dip_deg, path_curve, photons_of_steps, spread_km,
     steps_per_beam, stop_km, world_bounds,
 };
+use crate::pipeline::beams::start_positions;
+use crate::pipeline::deposit::Photon;
 use crate::pipeline::photons::kernel::KernelF32;
-use crate::scene::{Deposition, GatherMethod, KernelRadius, Scene, VoxelSize};
-use crate::util::progress::NoProgress;
+use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
+use crate::scene::{Deposition, GatherMethod, KernelRadius, VoxelSize};
 
 /// Bytes per leaf of both grids: emission values, density values, two masks
 /// and bookkeeping.
@@ -119,27 +118,14 @@ pub fn bytes_per_held_photon(method: GatherMethod) -> f64 {
 }
 
 /// The smallest voxel the bake may use, km.
-fn min_voxel_km(scene: &Scene) -> (f64, String, String) {
-    match scene.grid.voxel_size {
+fn min_voxel_km(plan: &BakePlan) -> (f64, String, String) {
+    match plan.scene.grid.voxel_size {
         VoxelSize::Km(v) => (v, "grid.voxel_size".into(), format!("{v}")),
         VoxelSize::Auto(_) => {
-            let floor = KernelRadius::of(&scene.photons).auto_voxel_floor_km();
+            let floor = KernelRadius::of(&plan.scene.photons).auto_voxel_floor_km();
             (floor, "grid.voxel_size".into(), format!("\"auto\" (at least photons.radius_km / 2 = {floor} km)"))
         }
     }
-}
-
-/// The bake's peak memory, bounded from the plan it would run
-/// ([`estimate_plan`] of a fresh [`BakePlan`]: its footprints are simulated).
-pub fn estimate(scene: &Scene) -> Estimate {
-    estimate_plan(scene, &BakePlan::new(scene, &NoProgress))
-}
-
-/// Whether a bake of `scene` with `plan` traces and gathers in chunks
-/// (`crate::pipeline::bake::chunked`): more beams than a chunk, and a
-/// summing gather.
-pub fn is_chunked(scene: &Scene, plan: &BakePlan) -> bool {
-    scene.beams.count > plan.beam_chunk.max(1) && scene.photons.gather != GatherMethod::Report2014
 }
 
 /// Most beams whose starts the bands draw one by one
@@ -150,23 +136,23 @@ pub fn is_chunked(scene: &Scene, plan: &BakePlan) -> bool {
 pub const DRAWN_STARTS_MAX: usize = 4_000_000;
 
 /// Whether the bands take the beams' own starts (module documentation).
-pub fn draws_starts(scene: &Scene) -> bool {
-    let trail = scene.colour.mode == crate::scene::ColourMode::Physical && scene.animation.trail_samples > 0;
-    scene.beams.count <= DRAWN_STARTS_MAX && scene.beams.target_noise <= 0.0 && !trail
+pub fn draws_starts(plan: &BakePlan) -> bool {
+    let trail = plan.scene.colour.mode == crate::scene::ColourMode::Physical && plan.scene.animation.trail_samples > 0;
+    plan.scene.beams.count <= DRAWN_STARTS_MAX && plan.scene.beams.target_noise <= 0.0 && !trail
 }
 
-/// The bands of [`crate::pipeline::memory_leaves`] for `plan`'s curtains
+/// The bands of [`super::leaves`] for `plan`'s curtains
 /// and footprints at voxel `voxel_km` and kernel reach `reach` km: each
 /// line through a beam's own start ([`draws_starts`]: the points the trace
 /// draws, carried along their field lines to `beams.top_km` and merged on
 /// a grid of a voxel), else through every footprint cell above the
 /// threshold and any start height the noise allows.
-pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
-    let b = &scene.beams;
+pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
+    let b = &plan.scene.beams;
     let atm = &plan.atmosphere;
     let leaf = 8.0 * voxel_km;
-    let dip = dip_deg(scene).to_radians();
-    let spread = spread_km(scene);
+    let dip = dip_deg(plan).to_radians();
+    let spread = spread_km(plan);
     let step = b.length_km * b.dt;
     let lowest_start = b.top_km - b.top_noise_km;
     // The walk's spread after descending d km: 4 standard deviations of
@@ -178,16 +164,14 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
     // most L dt (n / 2 + 4 sqrt(n / 12)), four standard deviations.
     let n = (1.0 / b.dt).ceil();
     let csda_path = step * (0.5 * n + 4.0 * (n / 12.0).sqrt());
-    let shell = if scene.grid.cycles_shell { voxel_km } else { 0.0 };
-    let drawn = draws_starts(scene).then(|| start_positions(&plan.trace_params(), &plan.footprints, b.count));
+    let shell = if plan.scene.grid.cycles_shell { voxel_km } else { 0.0 };
+    let drawn = draws_starts(plan).then(|| start_positions(&plan.trace_params(), b.count));
     // A start carried to top_km moves by at most top_noise cot(I) (and the
     // merge by half a voxel's diagonal); the dipole's direction at the
     // merged point differs from the start's by at most some 2 d / R rad
     // (its inclination turns by 1-2 times the arc), over lines of at most
     // (top - bottom) / sin(I).
-    let earth = crate::geometry::earth::Earth::new(plan.earth.radius_km);
-    let field_at = |at: [f64; 2]| crate::pipeline::memory_leaves::field_at(plan, &earth, at);
-    scene
+    plan.scene
         .curtains
         .iter()
         .zip(&plan.footprints)
@@ -199,32 +183,32 @@ pub fn bands(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<B
                     let carried: Vec<[f64; 2]> = starts[k]
                         .iter()
                         .map(|p| {
-                            let q = field_at([p.x, p.y]).foot(*p, b.top_km);
+                            let q = plan.field_at([p.x, p.y]).foot(*p, b.top_km);
                             [q.x, q.y]
                         })
                         .collect();
-                    let turn = match plan.earth.magnetic_pole {
-                        Some(_) if plan.earth.radius_km > 0.0 => {
+                    let turn = match plan.scene.earth.magnetic_pole {
+                        Some(_) if plan.scene.earth.radius_km > 0.0 => {
                             let d = b.top_noise_km / dip.tan() + merge;
-                            let length = (deposit_top_km(scene, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
-                            2.0 * d / plan.earth.radius_km * length
+                            let length = (deposit_top_km(plan, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
+                            2.0 * d / plan.scene.earth.radius_km * length
                         }
                         _ => 0.0,
                     };
                     (merged_columns(&carried, voxel_km), merge + turn)
                 }
                 None => {
-                    let (columns, slack) = start_columns(fp, scene.footprint.threshold, 0.5 * leaf);
+                    let (columns, slack) = start_columns(fp, plan.scene.footprint.threshold, 0.5 * leaf);
                     (columns, slack + b.top_noise_km / dip.tan())
                 }
             };
-            let top = deposit_top_km(scene, c).max(b.top_km + b.top_noise_km);
+            let top = deposit_top_km(plan, c).max(b.top_km + b.top_noise_km);
             let bottom = match b.deposition {
                 Deposition::Csda => lowest_start - csda_path,
-                _ => stop_km(scene, c, atm) - step,
+                _ => stop_km(plan, c) - step,
             }
             .max(atm.bottom_km() - step);
-            // The samples' spacing adds its half (memory_leaves).
+            // The samples' spacing adds its half (`super::leaves`).
             let rho = reach + shell + slack;
             Band {
                 columns,
@@ -247,7 +231,7 @@ fn merged_columns(points: &[[f64; 2]], g: f64) -> Vec<[f64; 2]> {
     cells.into_iter().map(|(a, b)| [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]).collect()
 }
 
-/// Largest leaf count [`crate::pipeline::memory_leaves::band_leaves`] is
+/// Largest leaf count [`super::leaves::band_leaves`] is
 /// asked to count (a set of them takes some 40 bytes each); above it the
 /// box and band bound ([`box_leaves`]) stands, and such a bake (over 16
 /// GiB of grids) is refused anyway on most machines.
@@ -257,17 +241,18 @@ pub const COUNTED_LEAVES_MAX: f64 = 2.0e6;
 /// (no footprint), at voxel `voxel_km`, kernel reach `reach`: the
 /// smaller of the box's and the curtains' own bounds (module
 /// documentation), plus the columns above the starts.
-pub fn box_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
-    let dip = dip_deg(scene);
-    let (lo, hi) = world_bounds(scene);
+pub fn box_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
+    let dip = dip_deg(plan);
+    let (lo, hi) = world_bounds(plan);
     let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
     let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
     let shift = leaf_km / dip.to_radians().tan();
-    let spread = spread_km(scene);
-    let own: f64 = scene
+    let spread = spread_km(plan);
+    let own: f64 = plan
+        .scene
         .curtains
         .iter()
-        .map(|c| match path_curve(scene, c) {
+        .map(|c| match path_curve(plan, c) {
             Some((length, _)) => band_area_leaves(length, 0.5 * c.width + reach + spread + leaf_km + shift, leaf_km) * slabs,
             None => {
                 let (s, co) = c.rotation_deg.to_radians().sin_cos();
@@ -277,13 +262,13 @@ pub fn box_leaves(scene: &Scene, leaf_km: f64, reach: f64) -> f64 {
             }
         })
         .sum();
-    box_leaves.min(own) + column_leaves(scene, leaf_km, reach)
+    box_leaves.min(own) + column_leaves(plan, leaf_km, reach)
 }
 
 /// How the grid term finds its leaves.
 #[derive(Clone, Copy, Debug)]
 pub enum LeafCount<'a> {
-    /// The plan's bands, counted ([`crate::pipeline::memory_leaves`]),
+    /// The plan's bands, counted ([`super::leaves`]),
     /// where [`box_leaves`] allows it: the bake's check.
     Bands,
     /// As [`LeafCount::Bands`], each distinct set of bands counted once.
@@ -303,7 +288,7 @@ pub struct LeafMemo(std::cell::RefCell<std::collections::HashMap<u64, Option<usi
 fn bands_key(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> u64 {
     use std::hash::{Hash, Hasher};
     let mut h = std::collections::hash_map::DefaultHasher::new();
-    format!("{:?} {:?}", plan.earth, plan.field).hash(&mut h);
+    format!("{:?} {:?}", plan.scene.earth, plan.field).hash(&mut h);
     voxel_km.to_bits().hash(&mut h);
     for b in bands {
         for c in &b.columns {
@@ -314,19 +299,15 @@ fn bands_key(plan: &BakePlan, bands: &[Band], voxel_km: f64) -> u64 {
     h.finish()
 }
 
-/// The leaves the bake's grids can hold at voxel `voxel_km`: the bands
-/// counted from the plan ([`crate::pipeline::memory_leaves`]) when
+/// The leaves the bake's grids can hold at voxel `voxel_km`, found by
+/// `count`: the bands counted from the plan ([`super::leaves`]) when
 /// [`box_leaves`] allows it, else that bound.
-pub fn grid_leaves(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64) -> f64 {
-    grid_leaves_by(scene, plan, voxel_km, reach, LeafCount::Bands)
-}
-
-fn grid_leaves_by(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64, count: LeafCount) -> f64 {
-    let bound = box_leaves(scene, 8.0 * voxel_km, reach + voxel_km);
+pub fn grid_leaves(plan: &BakePlan, voxel_km: f64, reach: f64, count: LeafCount) -> f64 {
+    let bound = box_leaves(plan, 8.0 * voxel_km, reach + voxel_km);
     if bound > COUNTED_LEAVES_MAX || matches!(count, LeafCount::Bound) {
         return bound;
     }
-    let bands = bands(scene, plan, voxel_km, reach);
+    let bands = bands(plan, voxel_km, reach);
     let n = match count {
         LeafCount::Memo(m) => {
             let key = bands_key(plan, &bands, voxel_km);
@@ -342,25 +323,21 @@ fn grid_leaves_by(scene: &Scene, plan: &BakePlan, voxel_km: f64, reach: f64, cou
     n.map_or(bound, |n| (n as f64).min(bound))
 }
 
-/// The bake's peak memory, term by term, from `plan` (built from `scene`):
-/// its footprints' cells, its chunk of beams, the leaves its bands touch.
-pub fn estimate_plan(scene: &Scene, plan: &BakePlan) -> Estimate {
-    estimate_plan_by(scene, plan, LeafCount::Bands)
-}
-
-/// [`estimate_plan`] with the grid's leaves found by `count`.
-pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Estimate {
-    let b = &scene.beams;
-    let (steps, _) = steps_per_beam(scene);
-    let dip = dip_deg(scene);
-    let chunked = is_chunked(scene, plan);
+/// The bake's peak memory, term by term, from `plan`: its footprints'
+/// cells, its chunk of beams, the leaves its bands touch, found by `count`
+/// (the bake's check: [`LeafCount::Bands`]).
+pub fn estimate(plan: &BakePlan, count: LeafCount) -> Estimate {
+    let b = &plan.scene.beams;
+    let (steps, _) = steps_per_beam(plan);
+    let dip = dip_deg(plan);
+    let chunked = plan.is_chunked(b.count);
     // A chunked bake holds one chunk's photons at a time, of one trail
     // sample; a whole one every beam's, of every sample.
     let held_beams = if chunked { plan.beam_chunk.max(1) } else { b.count } as f64;
     // The tallest curtain's column, for every beam.
-    let column = scene.curtains.iter().map(|c| column_km(scene, c)).fold(0.0, f64::max);
-    let column_segments = scene.curtains.iter().map(|c| column_spans(scene, c)).fold(0.0, f64::max);
-    let step_photons = photons_of_steps(scene, held_beams);
+    let column = plan.scene.curtains.iter().map(|c| column_km(plan, c)).fold(0.0, f64::max);
+    let column_segments = plan.scene.curtains.iter().map(|c| column_spans(plan, c)).fold(0.0, f64::max);
+    let step_photons = photons_of_steps(plan, held_beams);
     let photons = step_photons + held_beams * column_segments;
     let photon_bytes = std::mem::size_of::<Photon>() as f64;
     let kernel_bytes = std::mem::size_of::<KernelF32>() as f64;
@@ -370,19 +347,19 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
         ("beams.count".to_string(), format!("{}", b.count))
     };
 
-    let (voxel, vkey, vvalue) = min_voxel_km(scene);
+    let (voxel, vkey, vvalue) = min_voxel_km(plan);
     let leaf_km = 8.0 * voxel;
-    let p = &scene.photons;
+    let p = &plan.scene.photons;
     let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
     let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
-    let leaves = grid_leaves_by(scene, plan, voxel, reach, count);
+    let leaves = grid_leaves(plan, voxel, reach, count);
     // The emission's leaves, and the density's on the same voxels unless
     // the air is physical (`grid.density_a = 0`: no density grid).
-    let leaf_bytes = if scene.grid.density_a > 0.0 { LEAF_BYTES } else { RGB_LEAF_BYTES };
+    let leaf_bytes = if plan.scene.grid.density_a > 0.0 { LEAF_BYTES } else { RGB_LEAF_BYTES };
     // Blame the kernel when its reach, not the voxel or the curtains, makes
     // the grid large: the world box's leaves with the reach over four times
     // those without.
-    let (lo, hi) = world_bounds(scene);
+    let (lo, hi) = world_bounds(plan);
     let boxed = |pad: f64| -> f64 { (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * pad) / leaf_km).ceil() + 1.0).product() };
     let (grid_key, grid_value) = if boxed(reach) > 4.0 * boxed(0.0) && reach > leaf_km {
         ("photons.radius_km".to_string(), format!("{}", p.radius_km))
@@ -428,19 +405,19 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
     let cells: f64 = plan.footprints.iter().map(|f| (f.nx * f.ny) as f64).sum();
     let simulation = cells * 12.0 * 8.0;
     let kept = 4.0 * cells;
-    let [nx, ny] = scene.footprint.resolution;
+    let [nx, ny] = plan.scene.footprint.resolution;
 
     // Per held photon: the splat holds the traced one, the merged one (at
     // most one per traced), its kernel and its leaf range (the trace's
     // chunks and their concatenation, two photons, come and go before);
     // the other gathers a third copy (the kd-tree's, the report's bins).
     let held_per_photon = bytes_per_held_photon(p.gather);
-    let physical = scene.colour.mode == crate::scene::ColourMode::Physical;
-    let trail = if physical { scene.animation.trail_samples as f64 } else { 0.0 };
+    let physical = plan.scene.colour.mode == crate::scene::ColourMode::Physical;
+    let trail = if physical { plan.scene.animation.trail_samples as f64 } else { 0.0 };
     let footprint = if trail > 0.0 { simulation } else { kept };
     // Photons held beside the bake's own: every trail sample's when whole.
     let all_photons = photons * if chunked { 1.0 } else { 1.0 + trail };
-    let n_lines = if physical { scene.grid.lines.len() as f64 } else { 0.0 };
+    let n_lines = if physical { plan.scene.grid.lines.len() as f64 } else { 0.0 };
     let mut terms = vec![
         Term { what: "program", bytes: PROGRAM_BYTES, key: "beams.count".into(), value: format!("{}", b.count) },
         Term { what: "photons", bytes: photons * held_per_photon, key: photon_key, value: photon_value },
@@ -454,9 +431,9 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
         let groups = (n_lines / 3.0).ceil();
         let bytes =
             GRID_SLACK * leaves * (n_lines * LINE_LEAF_BYTES + groups * RGB_LEAF_BYTES) + all_photons * (photon_bytes + 4.0 * n_lines);
-        terms.push(Term { what: "per-line grids", bytes, key: "grid.lines".into(), value: format!("{:?}", scene.grid.lines) });
+        terms.push(Term { what: "per-line grids", bytes, key: "grid.lines".into(), value: format!("{:?}", plan.scene.grid.lines) });
     }
-    if scene.grid.velocity {
+    if plan.scene.grid.velocity {
         // The numerator's sums and the velocity grid, the weighted photons'
         // copy and each beam's velocity.
         let bytes = GRID_SLACK * leaves * 2.0 * RGB_LEAF_BYTES + photons * (photon_bytes + kernel_bytes) + 12.0 * b.count as f64;
@@ -468,9 +445,9 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
         let bytes = if chunked { 4.0 * cells } else { trail * (photons * held_per_photon + candidates) };
         terms.push(Term { what: "red trail", bytes, key: "animation.trail_samples".into(), value: format!("{trail}") });
     }
-    if chunked && matches!(scene.grid.voxel_size, VoxelSize::Auto(_)) && plan.camera_model().is_ok_and(|c| c.pixel_angle().is_some()) {
+    if chunked && matches!(plan.scene.grid.voxel_size, VoxelSize::Auto(_)) && plan.camera_model().is_ok_and(|c| c.pixel_angle().is_some()) {
         // Every photon's distance from the camera (8 bytes), of every sample.
-        let every = photons_of_steps(scene, b.count as f64) + b.count as f64 * column_segments;
+        let every = photons_of_steps(plan, b.count as f64) + b.count as f64 * column_segments;
         terms.push(Term {
             what: "photon distances",
             bytes: 8.0 * every * (1.0 + trail),
@@ -481,11 +458,11 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
     // The footprints' simulation and the pilots run before the bake traces
     // and free what they hold: they count by what their peak exceeds the rest.
     let rest: f64 = terms.iter().map(|t| t.bytes).sum();
-    let pilot_photons = |beams: f64| photons_of_steps(scene, beams) + beams * column_segments;
+    let pilot_photons = |beams: f64| photons_of_steps(plan, beams) + beams * column_segments;
     let deposit_pilot = PROGRAM_BYTES + 2.0 * pilot_photons(DEPOSIT_PILOT_BEAMS.min(b.count) as f64) * photon_bytes + footprint;
     let noise_pilot = if b.target_noise > 0.0 {
         let m = PILOT_HALF_BEAMS as f64;
-        let grid = leaves.min(photons_of_steps(scene, m) * per_photon);
+        let grid = leaves.min(photons_of_steps(plan, m) * per_photon);
         PROGRAM_BYTES + 2.0 * GRID_SLACK * grid * RGB_LEAF_BYTES + 6.0 * pilot_photons(m) * photon_bytes + footprint
     } else {
         0.0
@@ -513,6 +490,13 @@ pub fn estimate_plan_by(scene: &Scene, plan: &BakePlan, count: LeafCount) -> Est
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Scene;
+    use crate::util::progress::NoProgress;
+
+    /// The bake's check's estimate of a scene, from its plan.
+    fn est(s: &Scene) -> Estimate {
+        estimate(&BakePlan::new(s, &NoProgress), LeafCount::Bands)
+    }
 
     const GIB: f64 = (1u64 << 30) as f64;
 
@@ -523,7 +507,7 @@ mod tests {
     #[test]
     fn default_scene_bound_is_above_what_it_uses_and_near_it() {
         let s = Scene::default();
-        let e = estimate(&s);
+        let e = est(&s);
         // Measured: 0.66 GiB peak resident for the default bake with its
         // VDB write (`benchmarks/memory/budget.sh`, 2026-12-05); the bound
         // is above it and below 2 GiB (the bounding boxes' bound gave 7.1
@@ -534,9 +518,9 @@ mod tests {
     #[test]
     fn per_line_grids_and_the_trail_are_counted() {
         let mut s = Scene::default();
-        let plain = estimate(&s).total();
+        let plain = est(&s).total();
         s.grid.lines = crate::physics::emission::line_table::LINE_KEYS.iter().map(|k| k.to_string()).collect();
-        let e = estimate(&s);
+        let e = est(&s);
         let lines = term(&e, "per-line grids");
         let grids = term(&e, "grids");
         // Five float grids and two colour sums on the grids' leaves (the
@@ -546,13 +530,13 @@ mod tests {
         assert!(e.total() > 1.01 * plain);
         // A colour map makes no per-line grids: nothing counted.
         s.colour.mode = crate::scene::ColourMode::Colormap;
-        assert_eq!(estimate(&s).total(), plain);
+        assert_eq!(est(&s).total(), plain);
 
         // The trail of a bake of one chunk: N more photon sets and
         // candidate lists.
         let mut s = Scene::default();
         s.animation.trail_samples = 8;
-        let e = estimate(&s);
+        let e = est(&s);
         let t = term(&e, "red trail");
         let (ph, ca) = (term(&e, "photons").bytes, term(&e, "candidate leaves").bytes);
         assert!((t.bytes - 8.0 * (ph + ca)).abs() <= 1e-9 * t.bytes, "{} vs {}", t.bytes, 8.0 * (ph + ca));
@@ -563,16 +547,16 @@ mod tests {
     fn estimate_shrinks_with_voxel_size_and_a_chunked_bake_does_not_grow_with_beams() {
         let s = Scene::default();
         let plan = BakePlan::new(&s, &NoProgress);
-        let a = estimate_plan(&s, &plan).total();
+        let a = estimate(&plan, LeafCount::Bands).total();
         let mut t = s.clone();
         t.grid.voxel_size = VoxelSize::Km(2.0);
-        assert!(estimate_plan(&t, &BakePlan::reusing(&t, &plan, &NoProgress)).total() < a);
+        assert!(estimate(&BakePlan::reusing(&t, &plan, &NoProgress), LeafCount::Bands).total() < a);
         // Beyond one chunk the photons and candidates are a chunk's: 4 and
         // 40 chunks, the same.
         let at = |count: usize| {
             let mut t = s.clone();
             t.beams.count = count;
-            estimate_plan(&t, &plan)
+            estimate(&BakePlan::reusing(&t, &plan, &NoProgress), LeafCount::Bands)
         };
         let (four, forty) = (at(4 * plan.beam_chunk), at(40 * plan.beam_chunk));
         for what in ["photons", "candidate leaves"] {

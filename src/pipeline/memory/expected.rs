@@ -1,6 +1,6 @@
 //! The bake's expected peak memory, from a traced sample of its beams:
 //! what `aurora bake --plan` prints beside the refusal's upper bound
-//! (`crate::pipeline::memory_budget`, which stays the bound the bake is
+//! (`super::budget`, which stays the bound the bake is
 //! refused by), so a farm asks for what a task will use.
 //!
 //! **The sample.** [`SAMPLE_BEAMS`] of the bake's `count` beams (all when
@@ -49,12 +49,12 @@
 //! `benchmarks/memory/expected.sh` (docs/benchmarks.md).
 
 use crate::grid::{leaf_origin, LEAF_DIM, LEAF_NUM_VALUES};
-use crate::pipeline::bake::plan::{gather_input, BakePlan};
 use crate::pipeline::beams::{self, BeamError};
 use crate::pipeline::deposit::{end, pos, Photon};
 use crate::pipeline::photons::kernel::KernelF32;
 use crate::pipeline::photons::merge::{merge_segments, MERGE_CDF, MERGE_LEN_R, MERGE_OFF_R};
-use crate::pipeline::photons::GatherSums;
+use crate::pipeline::photons::{GatherInput, GatherSums};
+use crate::pipeline::plan::BakePlan;
 use crate::scene::GatherMethod;
 use crate::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
@@ -198,14 +198,14 @@ fn trace_sample(plan: &BakePlan, count: usize) -> Result<Sample, BeamError> {
     let ranges = sample_ranges(count);
     let run_len = ranges.iter().map(|r| r.len()).max().unwrap_or(0);
     for r in ranges {
-        let t = beams::trace_range(&params, &plan.footprints, &plan.atmosphere, &plan.colour_table, count, 0, r, false, &NoProgress)?;
+        let t = beams::trace_range(&params, count, 0, r, false, &NoProgress)?;
         photons.extend(t.photons);
         place.extend((0..t.beam_photons.len()).map(|k| k as u32));
         per_beam.extend(t.beam_photons);
     }
     let (h, _) = plan.voxel_size(&photons);
-    let cutoff = plan.photons.cutoff;
-    let splat = plan.photons.gather == GatherMethod::Splat;
+    let cutoff = plan.scene.photons.cutoff;
+    let splat = plan.scene.photons.gather == GatherMethod::Splat;
     let r_max = plan.radius.max();
     let reach = |p: &Photon| cutoff * if splat { plan.radius.radius(0.5 * (pos(p) + end(p))) } else { r_max };
     // Each beam's leaves, once per beam.
@@ -243,11 +243,11 @@ fn trace_sample(plan: &BakePlan, count: usize) -> Result<Sample, BeamError> {
         photon_leaves(p, h, reach(p), &mut scratch);
         pairs += scratch.len();
     }
-    let gathered = if photons.is_empty() || plan.photons.gather == GatherMethod::Report2014 {
+    let gathered = if photons.is_empty() || plan.scene.photons.gather == GatherMethod::Report2014 {
         first.len()
     } else {
-        let mut sums = GatherSums::new(crate::pipeline::bake::voxel::grid_transform(h));
-        sums.add(&gather_input(plan, &photons), &NoProgress);
+        let mut sums = GatherSums::new(crate::pipeline::voxel::grid_transform(h));
+        sums.add(&GatherInput::new(&photons, &plan.radius, cutoff, plan.scene.photons.gather), &NoProgress);
         sums.leaf_count()
     };
     Ok(Sample {
@@ -280,8 +280,8 @@ pub fn expected_peak(plan: &BakePlan, count: usize, threads: usize) -> Result<Ex
     let photon = std::mem::size_of::<Photon>() as f64;
     let n_lines = if plan.line_table.is_some() { plan.line_outputs.len() } else { 0 };
     let groups = n_lines.div_ceil(3);
-    let splat = plan.photons.gather == GatherMethod::Splat;
-    let chunked = count > plan.beam_chunk.max(1) && plan.photons.gather != GatherMethod::Report2014;
+    let splat = plan.scene.photons.gather == GatherMethod::Splat;
+    let chunked = plan.is_chunked(count);
     // Photons held: all of them, or one chunk's.
     let held = if chunked { photons * plan.beam_chunk as f64 / count.max(1) as f64 } else { photons };
     let held_merged = merged * held / photons.max(1.0);
@@ -294,8 +294,8 @@ pub fn expected_peak(plan: &BakePlan, count: usize, threads: usize) -> Result<Ex
     let rgb = leaves * (LEAF_HEAP_BYTES + LEAF_ENTRY_BYTES);
     let float = leaves * (FLOAT_LEAF_HEAP_BYTES + LEAF_ENTRY_BYTES);
     let program = PROGRAM_BYTES + THREAD_BYTES * threads as f64;
-    let velocity = plan.grid.velocity;
-    let density = if plan.grid.density_a > 0.0 { float } else { 0.0 };
+    let velocity = plan.scene.grid.velocity;
+    let density = if plan.scene.grid.density_a > 0.0 { float } else { 0.0 };
 
     let mut phases: Vec<(&'static str, Vec<ExpectedTerm>)> = Vec::new();
     let term = |what, bytes| ExpectedTerm { what, bytes };
@@ -365,8 +365,8 @@ pub fn expected_peak(plan: &BakePlan, count: usize, threads: usize) -> Result<Ex
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pipeline::bake::{bake_plan, plan::BakePlan};
-    use crate::pipeline::memory_budget::estimate_plan;
+    use crate::pipeline::bake::bake_plan;
+    use crate::pipeline::memory::budget::{estimate, LeafCount};
     use crate::util::progress::NoProgress;
 
     fn pool(threads: usize) -> rayon::ThreadPool {
@@ -401,7 +401,7 @@ mod tests {
             + std::mem::size_of::<Photon>() as f64 * b.photons.len() as f64;
         assert!(e.bytes >= grids + PROGRAM_BYTES, "expected {} B, the bake's grids and photons {grids} B", e.bytes);
         // The refusal's bound is an upper bound of the same peak.
-        let bound = estimate_plan(&scene, &plan).total();
+        let bound = estimate(&plan, LeafCount::Bands).total();
         assert!(e.bytes <= bound, "expected {} B above the bound {bound} B", e.bytes);
     }
 
@@ -438,7 +438,7 @@ mod tests {
         // In chunks, a chunk's photons are held instead of all of them.
         plan.beam_chunk = 64;
         let chunked = expected_peak(&plan, 300, 1).unwrap();
-        plan.beam_chunk = crate::pipeline::bake::plan::BEAM_CHUNK;
+        plan.beam_chunk = crate::pipeline::plan::BEAM_CHUNK;
         let whole = expected_peak(&plan, 300, 1).unwrap();
         assert!(chunked.bytes < whole.bytes, "{chunked:?} {whole:?}");
     }

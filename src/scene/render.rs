@@ -1,0 +1,65 @@
+//! `[render]`: the reference renderer's image, with its defaults.
+//! [`RENDER_KEYS`]: each key's unit, allowed range and description.
+
+use super::keys::{KeySpec, Num, Range};
+use serde::{Deserialize, Serialize};
+
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderParams {
+    pub width: usize,
+    pub height: usize,
+    /// Samples per pixel for the stochastic parts (pixel jitter, shadow rays).
+    pub spp: usize,
+    /// Exposure of the PNG preview, in stops.
+    pub exposure: f64,
+    /// The PNG preview's view transform (the EXR stays linear).
+    pub view_transform: ViewTransform,
+    /// Bits per channel of the PNG: 8, or 16 for delivery (a dome master's
+    /// frames: the fulldome show file format takes 8-16 bit PNG or TIFF).
+    pub png_bits: u32,
+    /// Shutter time, s, of the reference renderer's motion blur: each
+    /// camera sample reads the fields at `p - v(p) tau`, tau uniform over
+    /// [-shutter_s / 2, shutter_s / 2], as Cycles does with a velocity grid
+    /// (the bake's `v`: `grid.velocity = true`). 0: no blur.
+    pub shutter_s: f64,
+}
+
+impl Default for RenderParams {
+    fn default() -> Self {
+        Self { width: 640, height: 360, spp: 16, exposure: 3.0, view_transform: ViewTransform::Agx, png_bits: 8, shutter_s: 0.0 }
+    }
+}
+
+/// How a linear image becomes PNG code values (`crate::render::view_transform`).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum ViewTransform {
+    /// The sRGB OETF of the linear value, clipped (Blender's "Standard").
+    Standard,
+    /// AgX, Blender's default view (`crate::render::agx`).
+    #[default]
+    Agx,
+}
+
+/// Largest `render.width` and `render.height` (the one image-size limit:
+/// the scene, the camera and the renderer all check this).
+pub const MAX_IMAGE_SIDE: usize = 16384;
+
+/// Largest `render.spp` (also the `--spp` flag's).
+pub const MAX_SPP: u64 = 65_536;
+
+/// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
+/// far beyond a frame (the aurora's fastest rays cross 250 km in it).
+pub const MAX_SHUTTER_S: f64 = 10.0;
+
+/// Every key of `[render]`: name, unit, allowed range and description (`super::keys`).
+pub const RENDER_KEYS: &[KeySpec] = &[
+    KeySpec::new("width", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image width"),
+    KeySpec::new("height", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image height (row 0 is the top)"),
+    KeySpec::new("spp", "", Range::Int { min: 1, max: MAX_SPP as i64 }, "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
+    KeySpec::new("exposure", "stops", Range::Num(Num::closed(-50.0, 50.0)), "PNG only: the view transform of 2^exposure x the linear image"),
+    KeySpec::new("png_bits", "bits", Range::Of(&[8, 16]), "PNG only: bits per channel, 8 or 16 (16 for delivery: dome masters, whose faint sky gradients band at 8)"),
+    KeySpec::new("view_transform", "", Range::Word(&["standard", "agx"]), "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction) or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),
+    KeySpec::new("shutter_s", "s", Range::Num(Num::closed(0.0, MAX_SHUTTER_S)), "motion blur of `aurora render`: each camera sample reads the fields at `p - v(p) tau`, tau uniform over the shutter centred on the frame, as Cycles does; needs the bake's `v` (`grid.velocity = true`); 0 is sharp"),
+];
