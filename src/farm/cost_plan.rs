@@ -31,7 +31,10 @@
 //! time is printed beside it for this machine. The peak resident set is what
 //! one task baking frames one after the other needs (each frame's grids are
 //! freed before the next; the plan is shared). The memory budget's model
-//! (`crate::pipeline::memory::budget::estimate`) is printed beside it. With one sample, C is
+//! (`crate::pipeline::memory::budget::estimate`, the upper bound a bake is
+//! refused by) is printed beside it, and the expected peak of one bake on
+//! the plan's threads, from a traced sample of the last sample frame's
+//! beams (`crate::pipeline::memory::expected`). With one sample, C is
 //! that sample's CPU (setup included) and S is 0: an upper bound.
 //!
 //! The task is one shard's share (`--shard I/N`): its N frames are the
@@ -170,6 +173,11 @@ pub struct CostPlan {
     pub peak_rss_bytes: f64,
     /// The memory budget's model of one bake, bytes.
     pub budget_bytes: f64,
+    /// The expected peak of one bake on `threads` threads, bytes, from a
+    /// traced sample of the last calibration frame's beams
+    /// (`crate::pipeline::memory::expected`); the budget's is the upper
+    /// bound the bake is refused by.
+    pub expected_peak_bytes: Option<f64>,
     /// Worker threads the samples ran on (wall time depends on it; CPU time does not).
     pub threads: usize,
     /// The sequence's frame rate (`animation.fps`).
@@ -277,7 +285,8 @@ pub fn plan_task(
         .map_err(|e| OutputError::Write { path: PathBuf::from(bake_folder::USDA_NAME), message: e.to_string() })?;
     let scratch = scratch_folder()?;
     let identity = BakeIdentity::of(scene);
-    let mut carried: Option<crate::pipeline::plan::BakePlan> = None;
+    let mut carried: Option<BakePlan> = None;
+    let mut beams = 0;
     let mut measured = Vec::new();
     let mut first_frame: Option<(Scene, PathBuf, i64)> = None;
     for frame in sample_frames(frames, samples) {
@@ -286,6 +295,7 @@ pub fn plan_task(
         let t0 = Instant::now();
         let (b, p) = bake::bake_reusing(&at, carried.as_ref(), progress)?;
         carried = Some(p);
+        beams = b.stats.beams;
         let staged = crate::farm::frame_files::stage_frame(&at, &b, &scratch.0, frame, &identity)?;
         let report = staged.commit()?;
         let wall_s = t0.elapsed().as_secs_f64();
@@ -307,6 +317,10 @@ pub fn plan_task(
     // tasks of its own).
     let (_, peak_rss_bytes) = usage();
     let mut plan = estimate(scene, frames.len(), first, last, measured, stage_bytes, peak_rss_bytes);
+    if let Some(p) = &carried {
+        let expected = crate::pipeline::memory::expected::expected_peak(p, beams, plan.threads).map_err(BakeError::from)?;
+        plan.expected_peak_bytes = Some(expected.bytes);
+    }
     if let (Some(probe), Some((at, vdb, frame))) = (render, first_frame) {
         plan.render = Some(probe(&at, &vdb, frame).map_err(|message| PlanError::Render { frame, message })?);
     }
@@ -348,6 +362,7 @@ pub fn estimate(scene: &Scene, n: usize, first: i64, last: i64, samples: Vec<Sam
         wall_per_frame_s,
         peak_rss_bytes,
         budget_bytes: budget::estimate(&BakePlan::new(scene, &NoProgress), LeafCount::Bands).total(),
+        expected_peak_bytes: None,
         threads: rayon::current_num_threads(),
         samples,
         fps: scene.animation.fps,
@@ -431,6 +446,14 @@ impl CostPlan {
             crate::util::memory::gib(self.peak_rss_bytes),
             crate::util::memory::gib(self.budget_bytes)
         );
+        if let Some(e) = self.expected_peak_bytes {
+            t += &format!(
+                "memory per bake      bound {} (the refusal's), expected peak {} at {} threads\n",
+                crate::util::memory::gib(self.budget_bytes),
+                crate::util::memory::gib(e),
+                self.threads
+            );
+        }
         t += &format!("CPU per frame        {} ({})\n", human_seconds(self.cpu_per_frame_s), self.setup_words());
         t += &format!("CPU in total         {} ({:.0} CPU-hours)\n", human_seconds(self.total_cpu_s), self.total_cpu_s / 3600.0);
         t += &format!(
@@ -495,6 +518,7 @@ impl CostPlan {
             "wall_per_frame_s": self.wall_per_frame_s,
             "peak_rss_bytes": self.peak_rss_bytes,
             "budget_bytes": self.budget_bytes,
+            "expected_peak_bytes": self.expected_peak_bytes,
             "threads": self.threads,
             "fps": self.fps,
             "render": self.render.as_ref().map(|r| json!({

@@ -45,6 +45,9 @@ fn plan_bytes_are_within_a_quarter_of_the_bake() {
     let cpu = plan["cpu_per_frame_s"].as_f64().unwrap();
     assert!(cpu > 0.0 && plan["total_cpu_s"].as_f64().unwrap() >= 24.0 * cpu, "{plan}");
     assert!(plan["peak_rss_bytes"].as_f64().unwrap() > 1e6, "{plan}");
+    // The expected peak (from a traced sample) lies under the refusal's bound.
+    let (expected, bound) = (plan["expected_peak_bytes"].as_f64().unwrap(), plan["budget_bytes"].as_f64().unwrap());
+    assert!(expected > 1e6 && expected <= bound, "{plan}");
 
     let baked = dir.join("baked");
     ok(&bake_command(&scene, &baked).args(["--frames", "1-24", "-q"]).output());
@@ -98,6 +101,7 @@ fn plan_for_a_shard_counts_the_stage_of_the_whole_range_the_task_writes() {
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("(2 frames) of shard 0/20000 (the sequence has 40000 frames)"), "{text}");
     assert!(text.contains("listing the sequence's 40000 frames"), "{text}");
+    assert!(text.contains("(the refusal's), expected peak ") && text.contains(" at 1 threads"), "{text}");
     assert!(!dir.join("planned").exists());
 }
 

@@ -1,4 +1,4 @@
-//! The bake pipeline (`aurora::pipeline::bake::plan`): a beam is the same beam whatever
+//! The bake pipeline (`aurora::pipeline::plan`, `aurora::pipeline::bake`): a beam is the same beam whatever
 //! the chunking, and a bake composed from the plan's stages is `aurora
 //! bake`'s.
 

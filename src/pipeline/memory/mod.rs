@@ -16,6 +16,7 @@
 //! (`crate::pipeline::bake::check_memory`). Nothing here calls the bake.
 
 pub mod budget;
+pub mod expected;
 pub mod leaves;
 pub mod reach;
 pub mod refusal;
