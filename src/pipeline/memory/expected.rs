@@ -23,7 +23,7 @@
 //!
 //! **The peak**, bytes, the largest of its phases, `P` the photons (`P_c`
 //! those of one chunk of `beam_chunk` beams), `M` the merged ones:
-//! - program: [`PROGRAM_BYTES`] plus [`THREAD_BYTES`] a thread;
+//! - program: [`RESIDENT_PROGRAM_BYTES`] plus [`THREAD_BYTES`] a thread;
 //! - leaves: `L (`[`LEAF_HEAP_BYTES`]` + `[`LEAF_ENTRY_BYTES`]`)`, the
 //!   `[f32; 3]` values: what dominates;
 //! - a bake of one chunk (`count <= beam_chunk`, or `report2014`), at its
@@ -68,7 +68,7 @@ pub const SAMPLE_BEAMS: usize = 1024;
 pub const SAMPLE_RUNS: usize = 32;
 /// A process that bakes a few beams (code, tables, footprints, thread
 /// pool): measured 47 MB resident for the default scene with 20 beams.
-pub const PROGRAM_BYTES: f64 = 47.0e6;
+pub const RESIDENT_PROGRAM_BYTES: f64 = 47.0e6;
 /// A leaf's `[f32; 3]` values on the heap, with the allocator's header.
 pub const LEAF_HEAP_BYTES: f64 = (12 * LEAF_NUM_VALUES + 16) as f64;
 /// A leaf's float values on the heap, with the allocator's header.
@@ -293,7 +293,7 @@ pub fn expected_peak(plan: &BakePlan, count: usize, threads: usize) -> Result<Ex
     let input = held_merged * (photon + kernel + 24.0) + 4.0 * held_pairs;
     let rgb = leaves * (LEAF_HEAP_BYTES + LEAF_ENTRY_BYTES);
     let float = leaves * (FLOAT_LEAF_HEAP_BYTES + LEAF_ENTRY_BYTES);
-    let program = PROGRAM_BYTES + THREAD_BYTES * threads as f64;
+    let program = RESIDENT_PROGRAM_BYTES + THREAD_BYTES * threads as f64;
     let velocity = plan.scene.grid.velocity;
     let density = if plan.scene.grid.density_a > 0.0 { float } else { 0.0 };
 
@@ -399,7 +399,7 @@ mod tests {
         let grids = 12.0 * LEAF_NUM_VALUES as f64 * b.emission.leaf_count() as f64
             + 4.0 * LEAF_NUM_VALUES as f64 * b.density.leaf_count() as f64
             + std::mem::size_of::<Photon>() as f64 * b.photons.len() as f64;
-        assert!(e.bytes >= grids + PROGRAM_BYTES, "expected {} B, the bake's grids and photons {grids} B", e.bytes);
+        assert!(e.bytes >= grids + RESIDENT_PROGRAM_BYTES, "expected {} B, the bake's grids and photons {grids} B", e.bytes);
         // The refusal's bound is an upper bound of the same peak.
         let bound = estimate(&plan, LeafCount::Bands).total();
         assert!(e.bytes <= bound, "expected {} B above the bound {bound} B", e.bytes);
