@@ -44,6 +44,7 @@ use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::Lift;
 use crate::pipeline::footprint::{self, Footprint};
 use crate::pipeline::photons::radius::RadiusField;
+use crate::pipeline::photons::GatherInput;
 use crate::scene::{
     AnimationParams, AtmosphereParams, ColourMode, ColourParams, Curtain, FootprintParams, GatherMethod, GridParams, KernelRadius,
     LineModel, PhotonParams, Scene,
@@ -318,6 +319,15 @@ impl BakePlan {
     /// The scene's camera model.
     pub fn camera_model(&self) -> Result<CameraModel, CameraError> {
         CameraModel::new(&self.scene.camera, self.scene.render.width, self.scene.render.height)
+    }
+
+    /// `photons` made ready for a gather with the plan's radius field,
+    /// cutoff and gather method (merged runs, splat kernels): the bake's
+    /// gathers, the preview's and the expected peak's sample all take them
+    /// from here.
+    pub fn gather_input(&self, photons: &[Photon]) -> GatherInput {
+        let p = &self.scene.photons;
+        GatherInput::new(photons, &self.radius, p.cutoff, p.gather)
     }
 
     /// The voxel size in km and where it came from ([`voxel_size_for`]).

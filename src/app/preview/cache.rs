@@ -109,7 +109,7 @@ impl Cache {
         s.trace = t.elapsed().as_secs_f64();
         let voxel = plan.voxel_size(&traced.photons);
         let t = Instant::now();
-        let input = crate::pipeline::bake::gather::gather_input(&plan, &traced.photons);
+        let input = plan.gather_input(&traced.photons);
         s.gather = t.elapsed().as_secs_f64();
         let coarse = coarse_grids(&plan, &input, voxel.0, show)?;
         let t = Instant::now();
@@ -167,7 +167,7 @@ impl Cache {
         let (gathered, voxel, coarse) = if regather {
             let voxel = plan.voxel_size(&self.bake.photons);
             let t = Instant::now();
-            let input = crate::pipeline::bake::gather::gather_input(&plan, &self.bake.photons);
+            let input = plan.gather_input(&self.bake.photons);
             s.gather = t.elapsed().as_secs_f64();
             let coarse = coarse_grids(&plan, &input, voxel.0, show)?;
             let t = Instant::now();

@@ -48,18 +48,10 @@ use std::time::Instant;
 /// The emission grid of `photons` at voxel size `voxel_km`, with the plan's
 /// radius field, cutoff and gather method.
 pub fn gather(plan: &BakePlan, photons: &[Photon], voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
-    gather_from(&gather_input(plan, photons), voxel_km, progress)
+    gather_from(&plan.gather_input(photons), voxel_km, progress)
 }
 
-/// The photons made ready for [`gather_from`] with the plan's radius field,
-/// cutoff and gather method (merged runs, splat kernels): once for several
-/// gathers of the same photons.
-pub fn gather_input(plan: &BakePlan, photons: &[Photon]) -> GatherInput {
-    let p = &plan.scene.photons;
-    GatherInput::new(photons, &plan.radius, p.cutoff, p.gather)
-}
-
-/// [`gather`] of photons made ready by [`gather_input`], with the plan they
+/// [`gather`] of photons made ready by [`BakePlan::gather_input`], with the plan they
 /// were made with: the same grid.
 pub fn gather_from(input: &GatherInput, voxel_km: f64, progress: &dyn Progress) -> Grid<[f32; 3]> {
     photons::gather_prepared(input, grid_transform(voxel_km), progress)
@@ -198,13 +190,13 @@ impl<'a> Running<'a> {
         let plan = self.plan;
         self.photons += traced.photons.len();
         self.power = sum_power(&traced.photons, self.power);
-        self.emission.add(&gather_input(plan, &traced.photons), progress);
+        self.emission.add(&plan.gather_input(&traced.photons), progress);
         for (g, sums) in self.lines.iter_mut().enumerate() {
             let lined = lined_photons(&traced.photons, &traced.line_power, self.n_lines, 3 * g);
-            sums.add(&gather_input(plan, &lined), progress);
+            sums.add(&plan.gather_input(&lined), progress);
         }
         if let Some((v, sums)) = self.velocity.as_mut() {
-            sums.add(&gather_input(plan, &weighted_photons(traced, &v[beams])), progress);
+            sums.add(&plan.gather_input(&weighted_photons(traced, &v[beams])), progress);
         }
     }
 

@@ -53,7 +53,7 @@ use crate::pipeline::beams::{self, BeamError};
 use crate::pipeline::deposit::{end, pos, Photon};
 use crate::pipeline::photons::kernel::KernelF32;
 use crate::pipeline::photons::merge::{merge_segments, MERGE_CDF, MERGE_LEN_R, MERGE_OFF_R};
-use crate::pipeline::photons::{GatherInput, GatherSums};
+use crate::pipeline::photons::GatherSums;
 use crate::pipeline::plan::BakePlan;
 use crate::scene::GatherMethod;
 use crate::util::progress::NoProgress;
@@ -247,7 +247,7 @@ fn trace_sample(plan: &BakePlan, count: usize) -> Result<Sample, BeamError> {
         first.len()
     } else {
         let mut sums = GatherSums::new(crate::pipeline::voxel::grid_transform(h));
-        sums.add(&GatherInput::new(&photons, &plan.radius, cutoff, plan.scene.photons.gather), &NoProgress);
+        sums.add(&plan.gather_input(&photons), &NoProgress);
         sums.leaf_count()
     };
     Ok(Sample {
