@@ -7,6 +7,7 @@
 pub mod altitude_profile;
 pub mod bake;
 pub mod beams;
+pub mod columns;
 pub mod deposit;
 pub mod footprint;
 pub mod memory;

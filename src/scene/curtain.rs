@@ -34,6 +34,19 @@ pub struct Curtain {
     pub bend_km: f64,
     /// Seed offset so curtains differ.
     pub seed: u64,
+    /// The shape of the arc's electron spectrum (`crate::physics::deposition::spectrum`):
+    /// `char_energy_kev` is a Maxwellian's E0, a monoenergetic beam's
+    /// energy, or the accelerated spectrum's source temperature.
+    pub spectrum: SpectrumShape,
+    /// The field-aligned potential drop the accelerated spectrum's source
+    /// falls through, kV (Evans 1974).
+    pub potential_kv: f64,
+    /// Peak energy flux of the filaments inside the arc, mW/m^2 (0: none;
+    /// the vortex sheet only).
+    pub filament_energy_flux: f64,
+    /// The filaments' electrons: the arc's spectrum accelerated through
+    /// this much more potential drop, kV.
+    pub filament_potential_kv: f64,
     /// The ground track of the curtain's lower border (at 110 km), km: a
     /// centripetal Catmull-Rom curve through these points (`crate::pipeline::footprint::curtain_path`),
     /// instead of `center`, `length` and `rotation_deg`.
@@ -54,6 +67,10 @@ impl Default for Curtain {
             beam_weight: 1.0,
             bend_km: 12.0,
             seed: 0,
+            spectrum: SpectrumShape::Maxwellian,
+            potential_kv: 0.0,
+            filament_energy_flux: 0.0,
+            filament_potential_kv: 0.0,
             path: None,
         }
     }
@@ -76,6 +93,10 @@ pub struct CurtainToml {
     beam_weight: f64,
     bend_km: f64,
     seed: u64,
+    spectrum: SpectrumShape,
+    potential_kv: f64,
+    filament_energy_flux: f64,
+    filament_potential_kv: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     path: Option<Vec<[f64; 2]>>,
 }
@@ -95,9 +116,26 @@ impl From<Curtain> for CurtainToml {
             beam_weight: c.beam_weight,
             bend_km: c.bend_km,
             seed: c.seed,
+            spectrum: c.spectrum,
+            potential_kv: c.potential_kv,
+            filament_energy_flux: c.filament_energy_flux,
+            filament_potential_kv: c.filament_potential_kv,
             path: c.path,
         }
     }
+}
+
+/// The shape of a curtain's electron spectrum ([`Curtain::spectrum`]).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum SpectrumShape {
+    /// Number flux ~ E exp(-E / E0), E0 = `char_energy_kev`.
+    Maxwellian,
+    /// Every electron at `char_energy_kev`.
+    Monoenergetic,
+    /// A source Maxwellian of temperature `char_energy_kev` accelerated
+    /// through `potential_kv` (Evans 1974).
+    Accelerated,
 }
 
 /// What `curtain.path` accepts.
@@ -118,4 +156,8 @@ pub const CURTAIN_KEYS: &[KeySpec] = &[
     KeySpec::new("beam_weight", "", Range::Num(Num::open_min(0.0, 1e9)), "share of the scene's beams given to this curtain (a relative weight)"),
     KeySpec::new("bend_km", "km", Range::Num(Num::closed(0.0, 1e4)), "amplitude of the noise curve that bends the band (keep it below `width / 2`)"),
     KeySpec::new("seed", "", Range::Any, "seed offset, so that curtains differ"),
+    KeySpec::new("spectrum", "", Range::Word(&["maxwellian", "monoenergetic", "accelerated"]), "the arc's electron spectrum: `maxwellian` (E0 = `char_energy_kev`: soft, diffuse lower borders), `monoenergetic` (every electron at `char_energy_kev`: the sharpest lower border) or `accelerated` (a source Maxwellian of temperature `char_energy_kev` accelerated through `potential_kv`, Evans 1974: the inverted-V's peaked spectrum)"),
+    KeySpec::new("potential_kv", "kV", Range::Num(Num::closed(0.0, 100.0)), "`accelerated`: the field-aligned potential drop the source falls through"),
+    KeySpec::new("filament_energy_flux", "mW/m^2", Range::Num(Num::closed(0.0, 1e4)), "peak energy flux of the filaments inside the arc (0: none): `footprint.filament_count` lines of width `footprint.filament_width_km` along the vortex sheet, of harder electrons (`filament_potential_kv`); `energy_flux` is then the arc's body"),
+    KeySpec::new("filament_potential_kv", "kV", Range::Num(Num::closed(0.0, 100.0)), "the filaments' electrons: the arc's spectrum accelerated through this much more drop (Evans 1974)"),
 ];

@@ -61,8 +61,14 @@ pub struct FootprintParams {
     pub sheet_rollup_km: f64,
     /// Sheet: Runge-Kutta steps of the roll-up.
     pub sheet_steps: usize,
-    /// Sheet: full width at half maximum of the sheet across itself, km.
+    /// Sheet: full width at half maximum of the sheet across itself, km:
+    /// the arc's body.
     pub sheet_thickness_km: f64,
+    /// Sheet: full width at half maximum of a filament inside the arc, km
+    /// (`curtain.filament_energy_flux`).
+    pub filament_width_km: f64,
+    /// Sheet: filaments inside each arc, parallel to its centre line.
+    pub filament_count: usize,
     /// Sheet: mean spacing of the rays along it, km.
     pub ray_spacing_km: f64,
     /// Sheet: width (Gaussian sigma) of a ray along it, km.
@@ -100,11 +106,13 @@ impl Default for FootprintParams {
             sheet_amplitude: 0.05,
             sheet_rollup_km: 30.0,
             sheet_steps: 20,
-            sheet_thickness_km: 0.5,
+            sheet_thickness_km: 8.0,
+            filament_width_km: 0.1,
+            filament_count: 3,
             ray_spacing_km: 3.0,
             ray_width_km: 0.4,
             ray_contrast: 10.0,
-            glow: 0.2,
+            glow: 0.0,
             uniform: false,
         }
     }
@@ -130,6 +138,8 @@ pub const FOOTPRINT_KEYS: &[KeySpec] = &[
     KeySpec::new("sheet_rollup_km", "km", Range::Num(Num::closed(0.0, 1e3)), "sheet: how far it rolls up (the shear across it times the time)"),
     KeySpec::new("sheet_steps", "", Range::Int { min: 1, max: 10_000 }, "sheet: Runge-Kutta steps of the roll-up"),
     KeySpec::new("sheet_thickness_km", "km", Range::Num(Num::closed(0.01, 100.0)), "sheet: full width at half maximum across it"),
+    KeySpec::new("filament_width_km", "km", Range::Num(Num::closed(0.01, 10.0)), "sheet: full width at half maximum of a filament inside the arc (observed 0.05-0.2 km; `curtain.filament_energy_flux`)"),
+    KeySpec::new("filament_count", "", Range::Int { min: 1, max: 16 }, "sheet: filaments inside each arc, parallel to its centre line within its half maximum"),
     KeySpec::new("ray_spacing_km", "km", Range::Num(Num::closed(0.1, 1e4)), "sheet: mean spacing of the rays along it (irregular)"),
     KeySpec::new("ray_width_km", "km", Range::Num(Num::closed(0.01, 100.0)), "sheet: width of a ray along it (Gaussian sigma)"),
     KeySpec::new("ray_contrast", "", Range::Num(Num::closed(1.0, 1e3)), "sheet: brightest ray over the faintest (log-uniform between)"),

@@ -16,6 +16,7 @@ use rand_pcg::Pcg64Mcg;
 pub mod tag {
     pub const FOOTPRINT_VELOCITY: u64 = 0x1001;
     pub const FOOTPRINT_BEND: u64 = 0x1002;
+    pub const FOOTPRINT_FILAMENTS: u64 = 0x1003;
     pub const BEAM: u64 = 0x2001;
     pub const BEAM_TOP_NOISE: u64 = 0x2002;
     pub const COLOUR_NOISE: u64 = 0x2003;

@@ -17,7 +17,8 @@ const SEEDS: [u64; 3] = [1, 2, 3];
 /// seed 2014), and its cell length, km.
 fn profile(model: FootprintModel, seed: u64) -> (Vec<f64>, f64) {
     let c = Curtain { seed, ..Curtain::default() };
-    let p = FootprintParams { model, end_fade_km: 0.0, ..FootprintParams::default() };
+    // The sheet drawn thin, with its rays and glow: the structure along it.
+    let p = FootprintParams { model, end_fade_km: 0.0, sheet_thickness_km: 0.5, glow: 0.2, ..FootprintParams::default() };
     let f = simulate(&c, &p, 2014);
     let prof = (0..f.nx).map(|i| (0..f.ny).map(|j| f.cell(i, j) as f64).sum()).collect();
     (prof, f.length / f.nx as f64)

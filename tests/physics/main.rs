@@ -12,6 +12,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod arcs;
 mod budget;
 mod chemistry;
 mod corona;
@@ -19,6 +20,7 @@ mod earth;
 mod energy;
 mod footprint;
 mod globe;
+mod ibc;
 mod lines;
 mod path;
 mod pipeline;

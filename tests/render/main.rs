@@ -14,6 +14,7 @@ mod common;
 mod airglow;
 mod blender;
 mod closed_forms;
+mod contrast;
 mod emission_only;
 mod extinction;
 mod film;

@@ -178,6 +178,8 @@ fn band_thickness_is_the_band_area_over_the_length() {
         length: 8.0,
         width: 4.0,
         path: None,
+        flux_scale: 1.0,
+        filament_share: None,
     };
     for j in 7..10 {
         for i in 0..32 {

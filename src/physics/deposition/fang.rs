@@ -41,6 +41,7 @@
 //! coefficient: docs/physics.md, "Fang's fits in detail".
 
 use crate::physics::atmosphere::Atmosphere;
+use crate::physics::deposition::spectrum::Spectrum;
 
 /// Energy lost per ion pair produced in air, keV (35 eV).
 pub const KEV_PER_ION_PAIR: f64 = 0.035;
@@ -242,22 +243,24 @@ impl MonoDeposition {
     }
 }
 
-/// One Maxwellian component of a spectrum: its share of the energy flux and
-/// its characteristic energy, keV.
+/// One component of a curtain's spectrum: its share of the energy flux
+/// and its shape (`crate::physics::deposition::spectrum`).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Maxwellian {
+pub struct Component {
     pub share: f64,
-    pub e0_kev: f64,
+    pub spectrum: Spectrum,
+}
+
+/// A Maxwellian component: `share` of the energy flux at characteristic
+/// energy `e0_kev`.
+pub fn maxwellian(share: f64, e0_kev: f64) -> Component {
+    Component { share, spectrum: Spectrum::Maxwellian { e0_kev } }
 }
 
 /// Grid of ln m (g cm^-2) for [`SpectrumDeposition`]: 1e-10 is above any
 /// beam's start (column at 700 km ~ 1e-10), 10 below the 50 km floor (~1).
 const LN_M: (f64, f64) = (-23.0, 2.5);
 const D_LN_M: f64 = 0.02;
-/// Quadrature over x = E / E0: trapezoid on [0, X_MAX] (Gamma(3) mass beyond
-/// 45 is e^-45 45^2/2 ~ 3e-17).
-const X_MAX: f64 = 45.0;
-const N_X: usize = 450;
 
 /// Most curtain spectra [`SpectrumDeposition::curtain`] keeps.
 pub const SPECTRUM_CACHE: usize = 64;
@@ -274,39 +277,22 @@ pub struct SpectrumDeposition {
 impl SpectrumDeposition {
     /// Tabulates `G` for `components` (shares summing to 1) over the
     /// beams' table ([`MonoDeposition::get`]).
-    pub fn new(components: &[Maxwellian]) -> Self {
+    pub fn new(components: &[Component]) -> Self {
         Self::with_table(components, MonoDeposition::get())
     }
 
     /// Tabulates `G` for `components` over the monoenergetic table `mono`.
-    pub fn with_table(components: &[Maxwellian], mono: &MonoDeposition) -> Self {
+    pub fn with_table(components: &[Component], mono: &MonoDeposition) -> Self {
         let n = ((LN_M.1 - LN_M.0) / D_LN_M).round() as usize + 1;
-        // Trapezoid weights of w(x) = x^2 e^-x / 2, normalised to sum to 1 so
-        // the spectrum's total is exact whatever the quadrature error.
-        let dx = X_MAX / N_X as f64;
-        let mut nodes: Vec<(f64, f64)> = (1..=N_X)
-            .map(|i| {
-                let x = i as f64 * dx;
-                let w = 0.5 * x * x * (-x).exp() * if i == N_X { 0.5 } else { 1.0 };
-                (x, w)
-            })
-            .collect();
-        let sum: f64 = nodes.iter().map(|n| n.1).sum();
-        nodes.iter_mut().for_each(|n| n.1 /= sum);
-        // Each component's energies E = x E0 looked up once (`None` where
-        // E <= 0: no deposit), each column mass's power once per mass: the
-        // same terms as `mono.fraction_above(x E0, m)`, in the same order.
+        // Each component's energies (its quadrature nodes, weights summing
+        // to 1: `Spectrum::energy_nodes`) looked up once (`None` where E <= 0:
+        // no deposit), each column mass's power once per mass: the same
+        // terms as `mono.fraction_above(E, m)`, in the same order.
         let parts: Vec<ComponentNodes> = components
             .iter()
             .filter(|c| c.share > 0.0)
             .map(|c| {
-                let nodes = nodes
-                    .iter()
-                    .map(|&(x, w)| {
-                        let e = x * c.e0_kev;
-                        (w, (e > 0.0).then(|| mono.energy_node(e)))
-                    })
-                    .collect();
+                let nodes = c.spectrum.energy_nodes().into_iter().map(|(e, w)| (w, (e > 0.0).then(|| mono.energy_node(e)))).collect();
                 (c.share, nodes)
             })
             .collect();
@@ -331,30 +317,37 @@ impl SpectrumDeposition {
         Self { g }
     }
 
-    /// A curtain's spectrum: the hard Maxwellian with 1 - `soft_fraction`
-    /// of the energy flux and the soft one with the rest. Tabulating `G`
-    /// costs ~10^6 evaluations of Fang's monoenergetic fraction (about 0.1
-    /// s on one core), and the memory budget, every trace call and every
+    /// A spectrum of components, tabulated once: tabulating `G` costs
+    /// ~10^6 evaluations of Fang's monoenergetic fraction (about 0.1 s on
+    /// one core), and the memory budget, every trace call and every
     /// preview edit ask for the same few spectra, so the tables are kept:
-    /// keyed by the three parameters' bits (the same parameters give the
-    /// same table bit for bit), at most [`SPECTRUM_CACHE`] of them (a new
-    /// one beyond that empties the cache: a watching preview editing
-    /// energies would otherwise grow it without bound).
-    pub fn curtain(char_energy_kev: f64, soft_fraction: f64, soft_energy_kev: f64) -> std::sync::Arc<Self> {
+    /// keyed by the components' bits (the same components give the same
+    /// table bit for bit), at most [`SPECTRUM_CACHE`] of them (a new one
+    /// beyond that empties the cache: a watching preview editing energies
+    /// would otherwise grow it without bound). A curtain's components:
+    /// `crate::physics::deposition::curtain_spectrum`.
+    pub fn cached(components: &[Component]) -> std::sync::Arc<Self> {
         use std::collections::HashMap;
         use std::sync::{Arc, Mutex, OnceLock};
-        static CACHE: OnceLock<Mutex<HashMap<[u64; 3], Arc<SpectrumDeposition>>>> = OnceLock::new();
-        let key = [char_energy_kev.to_bits(), soft_fraction.to_bits(), soft_energy_kev.to_bits()];
+        static CACHE: OnceLock<Mutex<HashMap<Vec<u64>, Arc<SpectrumDeposition>>>> = OnceLock::new();
+        let key: Vec<u64> = components
+            .iter()
+            .flat_map(|c| {
+                let (tag, a, b) = match c.spectrum {
+                    Spectrum::Maxwellian { e0_kev } => (0, e0_kev, 0.0),
+                    Spectrum::Monoenergetic { e_kev } => (1, e_kev, 0.0),
+                    Spectrum::Accelerated { e0_kev, potential_kv } => (2, e0_kev, potential_kv),
+                };
+                [c.share.to_bits(), tag, a.to_bits(), b.to_bits()]
+            })
+            .collect();
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         if let Some(g) = cache.lock().unwrap_or_else(|e| e.into_inner()).get(&key) {
             return Arc::clone(g);
         }
         // Built outside the lock (two threads may both build it; they get
         // equal tables).
-        let g = Arc::new(Self::new(&[
-            Maxwellian { share: 1.0 - soft_fraction, e0_kev: char_energy_kev },
-            Maxwellian { share: soft_fraction, e0_kev: soft_energy_kev },
-        ]));
+        let g = Arc::new(Self::new(components));
         let mut map = cache.lock().unwrap_or_else(|e| e.into_inner());
         if map.len() >= SPECTRUM_CACHE {
             map.clear();
@@ -505,7 +498,7 @@ mod tests {
         // error ~ 0.01^2/6 of d^3G, < 0.1 %). Allow 1 % of the profile's peak.
         let rows = reference();
         for e0 in [1.0, 3.0, 10.0, 30.0] {
-            let sd = SpectrumDeposition::with_table(&[Maxwellian { share: 1.0, e0_kev: e0 }], MonoDeposition::published());
+            let sd = SpectrumDeposition::with_table(&[maxwellian(1.0, e0)], MonoDeposition::published());
             let pts: Vec<_> = rows.iter().filter(|r| r.0 == "fang2010_maxw" && r.1 == e0).collect();
             assert!(pts.len() >= 20, "{e0}: {} rows", pts.len());
             let peak = pts.iter().map(|r| r.4 * r.3).fold(0.0, f64::max);
@@ -559,7 +552,7 @@ mod tests {
         // lookup: every node equals the quadrature of `fraction_above`
         // calls written out.
         let mono = MonoDeposition::get();
-        let comps = [Maxwellian { share: 0.7, e0_kev: 2.5 }, Maxwellian { share: 0.3, e0_kev: 0.2 }];
+        let comps = [maxwellian(0.7, 2.5), maxwellian(0.3, 0.2)];
         let g = SpectrumDeposition::with_table(&comps, mono);
         let dx = X_MAX / N_X as f64;
         let mut nodes: Vec<(f64, f64)> = (1..=N_X)

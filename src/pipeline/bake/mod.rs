@@ -281,10 +281,9 @@ mod tests {
             let sum = c.deposited_power_w + c.backscattered_power_w + c.above_top_power_w + c.undeposited_power_w;
             assert!((sum / c.electron_power_w - 1.0).abs() < 1e-9, "{c:?}");
             assert_eq!(c.undeposited_power_w, 0.0);
-            let g = crate::physics::deposition::fang::SpectrumDeposition::curtain(
-                s.curtains[0].char_energy_kev,
-                s.curtains[0].soft_fraction,
-                s.curtains[0].soft_energy_kev,
+            let g = crate::physics::deposition::curtain_spectrum::deposition(
+                &s.curtains[0],
+                crate::physics::deposition::curtain_spectrum::Population::Body,
             );
             assert!((c.backscattered_power_w / c.electron_power_w - (1.0 - g.total())).abs() < 1e-9, "{c:?}");
             let expect = c.electron_power_w - c.backscattered_power_w - c.above_top_power_w;

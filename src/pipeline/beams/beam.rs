@@ -59,6 +59,9 @@ pub struct BeamStart {
     /// [`IonizationProfile`] it gives the local ionization rate at every
     /// deposit, which the chemistry's colours need.
     pub flux_kev_cm2_s: f64,
+    /// The curtain's electrons the beam carries: the arc's body or its
+    /// filaments (`crate::physics::deposition::curtain_spectrum`).
+    pub population: crate::physics::deposition::curtain_spectrum::Population,
 }
 
 /// The result of tracing one beam.

@@ -39,6 +39,7 @@ pub mod walk;
 
 use crate::geometry::earth::Earth;
 use crate::physics::atmosphere::Atmosphere;
+use crate::physics::deposition::curtain_spectrum::{self, Population};
 use crate::physics::deposition::fang::{MonoDeposition, SpectrumDeposition};
 use crate::physics::emission::line_colour::ColourTable;
 use crate::physics::emission::line_table::LineTable;
@@ -460,7 +461,7 @@ fn local_beams(range: &Range<usize>, curtain_first: usize, n: usize) -> Range<us
 /// footprint's integral above `threshold` (module doc).
 fn curtain_power_w(curtain: &Curtain, fp: &Footprint, threshold: f64) -> f64 {
     // P_c = F [mW/m^2] * 1e-3 [W/mW] * A [km^2] * 1e6 [m^2/km^2].
-    curtain.energy_flux * 1e-3 * fp.integral_above(threshold) * 1e6
+    curtain.energy_flux * fp.flux_scale * 1e-3 * fp.integral_above(threshold) * 1e6
 }
 
 /// Adds curtain `ci`'s beams to the stage's counts and power (W), and
@@ -577,23 +578,29 @@ impl<'a> Tracer<'a> {
         };
         let power_w = curtain_power_w(curtain, fp, p.threshold);
         let starts = CurtainStarts::new(p, curtain, fp, map, power_w * KEV_PER_J / n as f64);
-        let spectrum = || SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+        // Each population's spectrum (`crate::physics::deposition::curtain_spectrum`):
+        // the body's, and the filaments' where the footprint has them.
+        let spectrum = |pop: Population| curtain_spectrum::deposition(curtain, pop);
         // The chemistry's colours need the local ionization rate: the
-        // curtain spectrum's ionization per unit flux (whatever the
+        // population spectrum's ionization per unit flux (whatever the
         // deposition model: q is the mean over the spectrum's electrons).
-        let ionization = self.colour.needs_q().then(|| spectrum().ionization_profile(self.atmosphere));
-        let expected;
-        let model = match p.beams.deposition {
-            Deposition::Expected => {
-                expected = spectrum();
-                DepositModel::Expected(&expected)
-            }
-            Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
-            Deposition::Csda => DepositModel::Csda,
+        let ionization = |pop: Population| self.colour.needs_q().then(|| spectrum(pop).ionization_profile(self.atmosphere));
+        let has_filaments = fp.filament_share.is_some();
+        let (ion_body, ion_fil) = (ionization(Population::Body), if has_filaments { ionization(Population::Filaments) } else { None });
+        let (expected_body, expected_fil) = match p.beams.deposition {
+            Deposition::Expected => (Some(spectrum(Population::Body)), has_filaments.then(|| spectrum(Population::Filaments))),
+            _ => (None, None),
         };
+        fn model<'m>(d: Deposition, expected: &'m Option<std::sync::Arc<SpectrumDeposition>>) -> DepositModel<'m> {
+            match d {
+                Deposition::Expected => DepositModel::Expected(expected.as_deref().expect("an expected spectrum")),
+                Deposition::Sampled => DepositModel::Sampled(MonoDeposition::get()),
+                Deposition::Csda => DepositModel::Csda,
+            }
+        }
         let ctx = BeamContext {
             atmosphere: self.atmosphere,
-            model,
+            model: model(p.beams.deposition, &expected_body),
             colour: self.colour,
             field: self.field,
             params: p.beams,
@@ -603,16 +610,23 @@ impl<'a> Tracer<'a> {
             lines: p.lines,
             line_outputs: p.line_outputs,
             trail: p.lines.and(p.trail),
-            ionization: ionization.as_ref(),
+            ionization: ion_body.as_ref(),
             earth: p.earth,
         };
+        let ctx_fil = if has_filaments {
+            let m = if p.beams.deposition == Deposition::Expected { model(p.beams.deposition, &expected_fil) } else { ctx.model };
+            BeamContext { model: m, ionization: ion_fil.as_ref(), ..ctx }
+        } else {
+            BeamContext { ..ctx }
+        };
+        let ctxs = [ctx, ctx_fil];
         let chunks: Vec<Range<usize>> = local.clone().step_by(CHUNK_BEAMS).map(|a| a..(a + CHUNK_BEAMS).min(local.end)).collect();
         let traces = chunks
             .into_par_iter()
             .map(|c| {
                 let mut out = ChunkOut { beams: Vec::with_capacity(c.len()), ..ChunkOut::default() };
                 for i in c {
-                    self.beam(&ctx, &starts, self.stream_offset + i as u64, &mut out);
+                    self.beam(&ctxs, &starts, self.stream_offset + i as u64, &mut out);
                 }
                 out
             })
@@ -623,9 +637,10 @@ impl<'a> Tracer<'a> {
     /// The beam of stream `index`: its start and its walk, on its own random
     /// stream, appended to `out` (its deposits only while it is summed,
     /// unless they are recorded).
-    fn beam(&self, ctx: &BeamContext, starts: &CurtainStarts, index: u64, out: &mut ChunkOut) {
+    fn beam(&self, ctxs: &[BeamContext; 2], starts: &CurtainStarts, index: u64, out: &mut ChunkOut) {
         let mut r = beam_rng(self.params, starts.curtain, index);
         let start = starts.start(index, &mut r);
+        let ctx = &ctxs[start.population as usize];
         let bufs = std::mem::take(&mut out.bufs);
         let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
         let field = beam_field(&self.params.earth, self.params.magnetic_pole, ctx.field, [start.position.x, start.position.y]);
@@ -680,7 +695,7 @@ impl<'a> CurtainStarts<'a> {
             flux_per_density: {
                 let peak = footprint.data.iter().cloned().fold(0.0f32, f32::max) as f64;
                 if peak > 0.0 {
-                    curtain.energy_flux * crate::physics::deposition::fang::KEV_PER_ERG / peak
+                    curtain.energy_flux * footprint.flux_scale * crate::physics::deposition::fang::KEV_PER_ERG / peak
                 } else {
                     0.0
                 }
@@ -710,11 +725,23 @@ impl<'a> CurtainStarts<'a> {
         let flux_kev_cm2_s = self.flux_per_density * self.footprint.cell_value_world(x, y) * pulsation;
         let wave = p.lines.and_then(|_| crate::pipeline::motion::pulsation_wave(p.animation, p.seed, x, y));
         // Drawn in every model, so a beam's path is the same in all.
-        let c = self.curtain;
-        let e0 = if r.random::<f64>() < c.soft_fraction { c.soft_energy_kev } else { c.char_energy_kev };
+        // Which population the beam carries: in proportion to each one's
+        // flux in its cell (one more draw, only where there are filaments).
+        let population = match &self.footprint.filament_share {
+            Some(share) => {
+                let (ci, cj) = self.footprint.cell_index(u, v);
+                if r.random::<f64>() < share[cj * self.footprint.nx + ci] as f64 {
+                    Population::Filaments
+                } else {
+                    Population::Body
+                }
+            }
+            None => Population::Body,
+        };
         BeamStart {
             position: DVec3::new(x, y, z),
-            energy_kev: sample_gamma3(e0, r),
+            energy_kev: curtain_spectrum::sample_energy(self.curtain, population, r),
+            population,
             power_kev_s,
             base_power_kev_s: self.power_kev_s,
             wave,

@@ -362,6 +362,8 @@ mod tests {
             length: 4.0,
             width: 2.0,
             path: None,
+            flux_scale: 1.0,
+            filament_share: None,
         };
         let m = StartMap::new(&fp, 0.1);
         // The map's domain is [0, 1)^2 (what r2 returns).

@@ -166,12 +166,12 @@ fn trace_fang(
 /// field line above the start following the deposition's own shape (Fang
 /// 2010 over the spectrum): the spans of [`above_start_spans`] up to the
 /// altitude where at most [`ABOVE_START_TOL`] of the total lies higher
-/// ([`above_start_column_top`]; that last share goes into the top span).
+/// ([`above_start_column_top`]; that last share is reported, not laid:
+/// `above_top_kev_s`).
 /// Each span holds the difference of the fraction above its ends, spread
 /// evenly along it. Returns the fraction the walk below starts from: `done`,
 /// or 0 where no column lies above the start (the share above it, under
-/// [`ABOVE_START_TOL`], then goes into the first step). `above_top_kev_s`
-/// is zero.
+/// [`ABOVE_START_TOL`], then goes into the first step).
 fn deposit_above_start(
     ctx: &BeamContext,
     start: &BeamStart,
@@ -188,8 +188,13 @@ fn deposit_above_start(
         return 0.0;
     }
     let along = |z: f64| column_point(ctx, p, z);
-    // Top down: the top span starts from nothing deposited above it.
-    let mut f_hi = 0.0;
+    // Top down: what lies above the top (at most ABOVE_START_TOL of the
+    // total, high in the thin air) is not laid anywhere, so the top span
+    // holds only its own share: the deposit ends with the topside's own
+    // shape instead of a lid of everything above it in one span.
+    let top = spans[spans.len() - 1];
+    let mut f_hi = frac(ctx.atmosphere.column_mass(top)).min(done);
+    out.above_top_kev_s = pw * f_hi;
     for k in (0..spans.len() - 1).rev() {
         let (z_lo, z_hi) = (spans[k], spans[k + 1]);
         let f_lo = if k == 0 { done } else { frac(ctx.atmosphere.column_mass(z_lo)).min(done) };
@@ -274,7 +279,7 @@ pub fn max_above_start_spans(column_km: f64) -> usize {
 /// A Fang beam lays what its spectrum leaves above its start along the
 /// field line above it, up to the altitude where at most this share of the
 /// spectrum's total deposition lies higher ([`above_start_top`]); that
-/// share goes into the top span. 0.2 %: 1e-4 would carry a soft
+/// share is not laid (reported as above the top). 0.2 %: 1e-4 would carry a soft
 /// spectrum's column to the atmosphere's 700 km top, and along a shallow
 /// field (dip 12-25 degrees) its grid alone outgrows an 8 GiB machine.
 pub const ABOVE_START_TOL: f64 = 2e-3;

@@ -85,6 +85,12 @@ pub struct Footprint {
     /// Along a path instead of the straight frame of `center` and
     /// `rotation_rad` (which then give the path's middle and its direction).
     pub path: Option<Arc<PlacedPath>>,
+    /// The energy flux at density 1, in units of the curtain's
+    /// `energy_flux`: 1, or with filaments the peak of body and filaments
+    /// summed by their fluxes.
+    pub flux_scale: f64,
+    /// With filaments: each cell's share of its flux carried by them.
+    pub filament_share: Option<Arc<Vec<f32>>>,
 }
 
 /// A footprint's map from world (x, y) to its curtain frame (u, v)
@@ -169,6 +175,14 @@ impl Footprint {
     fn cell_coords(&self, u: f64, v: f64) -> (f64, f64) {
         let (du, dv) = self.cell_size();
         ((u + 0.5 * self.length) / du, (v + 0.5 * self.width) / dv)
+    }
+
+    /// The cell (i, j) holding (u, v) in the curtain frame, clamped to
+    /// the grid.
+    #[inline]
+    pub fn cell_index(&self, u: f64, v: f64) -> (usize, usize) {
+        let (gx, gy) = self.cell_coords(u, v);
+        ((gx.max(0.0) as usize).min(self.nx - 1), (gy.max(0.0) as usize).min(self.ny - 1))
     }
 
     /// Density of cell (i, j).
@@ -297,13 +311,54 @@ pub fn simulate_at(
     }
     // Patterns along u are set per resolution[0] cells (module documentation).
     let along = nx as f64 / params.resolution[0] as f64;
+    let filaments = crate::physics::deposition::curtain_spectrum::has_filaments(curtain) && params.model == FootprintModel::Sheet;
+    if filaments {
+        // An arc with filaments: both layers bent and faded alike, summed
+        // by their peak fluxes, normalised to a peak of 1; the filaments'
+        // share of each cell's flux kept for the beams.
+        let (body, fil) = sheet::arc_layers(cells, params, anim, [seed, curtain.seed], t);
+        let body = bent_and_faded(curtain, params, anim, seed, t, cells, along, &body);
+        let fil = bent_and_faded(curtain, params, anim, seed, t, cells, along, &fil);
+        let ratio = (curtain.filament_energy_flux / curtain.energy_flux) as f32;
+        let sum: Vec<f32> = body.iter().zip(&fil).map(|(b, f)| b + ratio * f).collect();
+        let share: Vec<f32> =
+            body.iter().zip(&fil).zip(&sum).map(|((_, f), s)| if *s > 0.0 { (ratio * f / s).min(1.0) } else { 0.0 }).collect();
+        let peak = sum.iter().cloned().fold(0.0f32, f32::max);
+        let data: Vec<f32> = if peak > 0.0 { sum.iter().map(|v| v / peak).collect() } else { sum };
+        let mut fp = place(curtain, anim, t, frame, cells, data);
+        fp.flux_scale = peak.max(f32::MIN_POSITIVE) as f64;
+        fp.filament_share = Some(Arc::new(share));
+        return fp;
+    }
     let sim = match params.model {
         FootprintModel::Fluid2014 => fluid2014(curtain, params, anim, seed, t, cells, along),
         FootprintModel::Sheet => sheet::density(cells, params, anim, [seed, curtain.seed], t),
     };
+    let mut data = bent_and_faded(curtain, params, anim, seed, t, cells, along, &sim);
+    let peak = data.iter().cloned().fold(0.0f32, f32::max);
+    if peak > 0.0 {
+        for d in &mut data {
+            *d /= peak;
+        }
+    }
+    place(curtain, anim, t, frame, cells, data)
+}
 
-    // Remap along the noise curve: out(u, v) = sim(u, v - bend(u)), the
-    // curve travelling and changing shape in time.
+/// A simulated layer remapped along the noise curve, `out(u, v) = sim(u, v -
+/// bend(u))` (the curve travelling and changing shape in time), and faded
+/// over `end_fade_km` at the curtain's ends; not normalised.
+#[allow(clippy::too_many_arguments)]
+fn bent_and_faded(
+    curtain: &Curtain,
+    params: &FootprintParams,
+    anim: &AnimationParams,
+    seed: u64,
+    t: f64,
+    cells: Cells,
+    along: f64,
+    sim: &[f64],
+) -> Vec<f32> {
+    let Cells { nx, ny, length, .. } = cells;
     let noise = rng::perlin(&[seed, curtain.seed, rng::tag::FOOTPRINT_BEND]);
     let dv_km = curtain.width / ny as f64;
     let wavelength = params.bend_wavelength * length / along;
@@ -318,7 +373,7 @@ pub fn simulate_at(
         let bend_cells = curtain.bend_km * n / dv_km;
         for j in 0..ny {
             let y = j as f64 + 0.5 - bend_cells;
-            let v = if y < 0.5 || y > ny as f64 - 0.5 { 0.0 } else { bilinear(&sim, nx, ny, 0.5, 0.5, i as f64 + 0.5, y) };
+            let v = if y < 0.5 || y > ny as f64 - 0.5 { 0.0 } else { bilinear(sim, nx, ny, 0.5, 0.5, i as f64 + 0.5, y) };
             data[j * nx + i] = v as f32;
         }
     }
@@ -330,13 +385,7 @@ pub fn simulate_at(
             }
         }
     }
-    let peak = data.iter().cloned().fold(0.0f32, f32::max);
-    if peak > 0.0 {
-        for d in &mut data {
-            *d /= peak;
-        }
-    }
-    place(curtain, anim, t, frame, cells, data)
+    data
 }
 
 /// The 2014 report's footprint before the bend: the band folded by the
@@ -425,10 +474,32 @@ fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFr
         let mid = path.frame.to_world(0.0, drift);
         let ahead = path.frame.to_world(1e-3, drift);
         let rotation_rad = (ahead.1 - mid.1).atan2(ahead.0 - mid.0);
-        return Footprint { nx, ny, data, center: [mid.0, mid.1], rotation_rad, length, width: curtain.width, path: Some(Arc::new(path)) };
+        return Footprint {
+            nx,
+            ny,
+            data,
+            center: [mid.0, mid.1],
+            rotation_rad,
+            length,
+            width: curtain.width,
+            path: Some(Arc::new(path)),
+            flux_scale: 1.0,
+            filament_share: None,
+        };
     }
     let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
-    Footprint { nx, ny, data, center, rotation_rad: rot, length: curtain.length, width: curtain.width, path: None }
+    Footprint {
+        nx,
+        ny,
+        data,
+        center,
+        rotation_rad: rot,
+        length: curtain.length,
+        width: curtain.width,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    }
 }
 
 /// The 2014 fluid on a small grid, no end fade: a broad folded band of

@@ -318,12 +318,18 @@ fn blur(data: &[f64], nx: usize, ny: usize, du: f64, dv: f64, sigma_km: f64) -> 
 }
 
 /// The sheet footprint at time `t` on an nx x ny grid over a box of
-/// `length` x `width` km (before the bend), peak 1.
+/// `length` x `width` km (before the bend), peak 1: the sheet with its
+/// rays and glow.
 pub fn density(cells: Cells, params: &FootprintParams, anim: &AnimationParams, seeds: [u64; 2], t: f64) -> Vec<f64> {
+    let (x, y) = roll_up(cells.length, params, anim, seeds, t);
+    drawn(&x, &y, cells, params, anim, seeds, t)
+}
+
+/// The sheet of markers `(x, y)` drawn with its rays and glow, peak 1.
+fn drawn(x: &[f64], y: &[f64], cells: Cells, params: &FootprintParams, anim: &AnimationParams, seeds: [u64; 2], t: f64) -> Vec<f64> {
     let Cells { nx, ny, length, width } = cells;
-    let (x, y) = roll_up(length, params, anim, seeds, t);
     let b = ray_brightness(x.len(), length, params, seeds, anim.ray_speed_kms * t);
-    let sharp = rasterise(&x, &y, &b, cells, params.sheet_thickness_km);
+    let sharp = rasterise(x, y, &b, cells, params.sheet_thickness_km);
     let peak = |d: &[f64]| d.iter().cloned().fold(0.0f64, f64::max);
     let ps = peak(&sharp);
     if ps <= 0.0 {
@@ -337,9 +343,55 @@ pub fn density(cells: Cells, params: &FootprintParams, anim: &AnimationParams, s
             *o = *o / ps + params.glow * gi / pg;
         }
     }
-    let p = peak(&out);
-    out.iter_mut().for_each(|d| *d /= p);
-    out
+    normalised(out)
+}
+
+fn normalised(mut d: Vec<f64>) -> Vec<f64> {
+    let p = d.iter().cloned().fold(0.0f64, f64::max);
+    if p > 0.0 {
+        d.iter_mut().for_each(|v| *v /= p);
+    }
+    d
+}
+
+/// An arc with filaments at time `t`: its body (the sheet of FWHM
+/// `sheet_thickness_km`, no rays: a smooth glow that folds and curls with
+/// the sheet) and its filaments, both of peak 1. The filaments are
+/// `filament_count` copies of the sheet's centre line moved along its
+/// normal to offsets spread evenly within +-0.3 of the body's FWHM (a
+/// seeded jitter of 0.1 of it), each of FWHM `filament_width_km` with rays
+/// of its own along it (Maggs & Davis 1968: thin sheets inside an arc, rays
+/// along them).
+pub fn arc_layers(cells: Cells, params: &FootprintParams, anim: &AnimationParams, seeds: [u64; 2], t: f64) -> (Vec<f64>, Vec<f64>) {
+    let (x, y) = roll_up(cells.length, params, anim, seeds, t);
+    let n = x.len();
+    let even = vec![1.0; n];
+    let body = normalised(rasterise(&x, &y, &even, cells, params.sheet_thickness_km));
+    let period = cells.length;
+    // Unit normals by central differences (periodic along the sheet).
+    let normals: Vec<(f64, f64)> = (0..n)
+        .map(|j| {
+            let (a, b) = ((j + n - 1) % n, (j + 1) % n);
+            let dx = x[b] - x[a] + if b < a { period } else { 0.0 };
+            let dy = y[b] - y[a];
+            let l = dx.hypot(dy).max(1e-12);
+            (-dy / l, dx / l)
+        })
+        .collect();
+    let k = params.filament_count.max(1);
+    let mut r = rng::rng(&[seeds[0], seeds[1], rng::tag::FOOTPRINT_FILAMENTS]);
+    let mut fil = vec![0.0; cells.nx * cells.ny];
+    for f in 0..k {
+        let spread = if k > 1 { f as f64 / (k - 1) as f64 - 0.5 } else { 0.0 };
+        let offset = params.sheet_thickness_km * (0.6 * spread + 0.1 * (r.random::<f64>() - 0.5));
+        let xs: Vec<f64> = (0..n).map(|j| x[j] + offset * normals[j].0).collect();
+        let ys: Vec<f64> = (0..n).map(|j| y[j] + offset * normals[j].1).collect();
+        let rays = ray_brightness(n, period, params, [seeds[0], seeds[1] ^ (0x9E37_79B9 * (f as u64 + 1))], anim.ray_speed_kms * t);
+        for (o, v) in fil.iter_mut().zip(rasterise(&xs, &ys, &rays, cells, params.filament_width_km)) {
+            *o += v;
+        }
+    }
+    (body, normalised(fil))
 }
 
 #[cfg(test)]

@@ -7,12 +7,21 @@
 //! gives the models: Wald's identity for the steps, the random walk's
 //! four standard deviations for the spread).
 
+use crate::physics::deposition::curtain_spectrum::{self, Population};
 use crate::physics::deposition::fang::SpectrumDeposition;
 use crate::pipeline::beams::dip::min_dip_deg;
 use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, max_above_start_spans, COMPLETE_TOL, FANG_MAX_STEPS};
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
 use crate::pipeline::plan::BakePlan;
 use crate::scene::{Curtain, Deposition};
+use std::sync::Arc;
+
+/// The spectrum that reaches highest of a curtain's populations: the
+/// body's (the filaments' are its source accelerated further, without the
+/// soft part; [`stop_km`] takes the lowest stop of both).
+fn body_spectrum(curtain: &Curtain) -> Arc<SpectrumDeposition> {
+    curtain_spectrum::deposition(curtain, Population::Body)
+}
 
 /// The highest altitude a deposit of `curtain` can lie at, km: the beams'
 /// highest start, or above it for Fang's depositions, which lay what the
@@ -29,7 +38,7 @@ pub fn deposit_top_km(plan: &BakePlan, curtain: &Curtain) -> f64 {
         Deposition::Csda => start_top,
         Deposition::Sampled => start_top.max(atm.top_km()),
         Deposition::Expected => {
-            let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+            let g = body_spectrum(curtain);
             above_start_column_top(atm, &|m| g.fraction_above(m), g.total(), start_top)
         }
     }
@@ -51,7 +60,7 @@ pub fn column_spans(plan: &BakePlan, curtain: &Curtain) -> f64 {
         Deposition::Sampled => max_above_start_spans(column) as f64,
         Deposition::Expected => {
             let atm = &plan.atmosphere;
-            let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+            let g = body_spectrum(curtain);
             let lowest = plan.scene.beams.top_km - plan.scene.beams.top_noise_km;
             let n = above_start_spans(atm, &|m| g.fraction_above(m), g.total(), lowest).len();
             if n < 2 {
@@ -164,7 +173,16 @@ pub fn stop_km(plan: &BakePlan, curtain: &Curtain) -> f64 {
     if plan.scene.beams.deposition != Deposition::Expected {
         return atm.bottom_km();
     }
-    let g = SpectrumDeposition::curtain(curtain.char_energy_kev, curtain.soft_fraction, curtain.soft_energy_kev);
+    let mut pops = vec![Population::Body];
+    if curtain_spectrum::has_filaments(curtain) {
+        pops.push(Population::Filaments);
+    }
+    pops.into_iter().map(|pop| spectrum_stop_km(plan, &curtain_spectrum::deposition(curtain, pop))).fold(f64::INFINITY, f64::min)
+}
+
+/// Where a beam of spectrum `g` has deposited all but [`COMPLETE_TOL`].
+fn spectrum_stop_km(plan: &BakePlan, g: &SpectrumDeposition) -> f64 {
+    let atm = &plan.atmosphere;
     let done = |z: f64| g.fraction_above(atm.column_mass(z)) >= (1.0 - COMPLETE_TOL) * g.total();
     let (mut lo, mut hi) = (atm.bottom_km(), plan.scene.beams.top_km + plan.scene.beams.top_noise_km);
     if !done(lo) {

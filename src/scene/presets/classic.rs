@@ -13,30 +13,41 @@ impl Default for Scene {
     }
 }
 
-/// Three sheets one behind the other, seen from the ground to the south:
+/// Three arcs one behind the other, seen from the ground to the south:
 /// 300, 380 and 460 km long at 65, 100 and 140 km from the camera (whose
 /// view is about 107 degrees wide), so each runs out past the sides of the
 /// frame at its lower border, fading over `footprint.end_fade_km` at its
 /// ends (about the frame's edges) instead of ending in straight sides.
-/// An active display: the brightest rays carry 48, 32 and 24 erg cm^-2
-/// s^-1 (IBC III; the sheets' mean along their length is about 0.4 of
-/// that), so seen face-on through a sheet a few hundred metres thick they
-/// stand well above the airglow, as in photographs (the 99th percentile of
-/// the curtains' pixels is 5.1x the sky's median), at an exposure of -3
+/// An active display, IBC III (`crate::pipeline::columns`: the brightest
+/// 557.7 nm column along B is about 100 kR): each arc a body 8 km wide at
+/// half maximum (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20
+/// km) of Maxwellian electrons (E0 4, 2.5 and 1.5 keV, 50, 30 and 20
+/// mW/m^2 at its peak: about 0.4, 0.25 and 0.17 MW per km of arc), folded
+/// and curled by the vortex sheet, with three filaments 0.1 km wide inside
+/// it (Maggs & Davis 1968; Dahlgren et al. 2012) of the same electrons
+/// accelerated through 4, 3 and 2 kV more (Evans 1974), 80, 50 and 35
+/// mW/m^2: their lower borders are sharper and lower. The beams follow the
+/// field (a 5 keV electron's gyroradius is metres), at an exposure of -3
 /// stops.
 pub fn default_scene() -> Scene {
-    let sheet = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, seed: u64| Curtain {
+    let arc = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
         center: [cx, cy],
         length: [300.0, 380.0, 460.0][seed as usize - 1],
         rotation_deg: rot,
         energy_flux: flux,
         char_energy_kev: e0,
+        filament_energy_flux: filament.0,
+        filament_potential_kv: filament.1,
         seed,
         ..Curtain::default()
     };
     Scene {
         seed: 2014,
-        curtains: vec![sheet(-20.0, -25.0, 4.0, 48.0, 4.0, 1), sheet(25.0, 10.0, -6.0, 32.0, 2.5, 2), sheet(-5.0, 50.0, 2.0, 24.0, 1.5, 3)],
+        curtains: vec![
+            arc(-20.0, -25.0, 4.0, 50.0, 4.0, (80.0, 4.0), 1),
+            arc(25.0, 10.0, -6.0, 30.0, 2.5, (50.0, 3.0), 2),
+            arc(-5.0, 50.0, 2.0, 20.0, 1.5, (35.0, 2.0), 3),
+        ],
         footprint: FootprintParams::default(),
         beams: BeamParams::default(),
         colour: ColourParams::default(),
@@ -70,6 +81,8 @@ pub fn seed2014() -> Scene {
         c.length = 160.0;
         c.center[1] = y;
         c.energy_flux = flux;
+        c.filament_energy_flux = 0.0;
+        c.filament_potential_kv = 0.0;
     }
     s.footprint.model = FootprintModel::Fluid2014;
     s.footprint.end_fade_km = 0.0;
@@ -132,8 +145,10 @@ pub fn oval() -> Scene {
         curtains: vec![Curtain {
             path: Some(path),
             width: 40.0,
-            energy_flux: 24.0,
+            energy_flux: 60.0,
             char_energy_kev: 4.0,
+            filament_energy_flux: 100.0,
+            filament_potential_kv: 4.0,
             bend_km: 8.0,
             seed: 1,
             ..Curtain::default()

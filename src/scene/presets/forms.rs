@@ -5,27 +5,31 @@
 //! reach, and so which lines dominate), the footprint's shape (how thin,
 //! how folded, how broken into rays) and where it is seen from:
 //!
-//! | preset | E0 (keV) | energy flux (mW/m^2) | footprint | seen from |
-//! |---|---|---|---|---|
-//! | `quiet_arc` | 3 | 20 | one thin band, 1000 km long, hardly folded | the ground, 300 km south |
-//! | `rayed_band` | 5 | 40 | folded band, start heights broken into rays | the ground, 150 km south |
-//! | `corona` | 4-6 | 15-30 | seven rayed sheets filling the sky | the ground beneath, looking up the field |
-//! | `pulsating_patches` | 10 | 2 | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
-//! | `type_a_red` | 0.15 | 10 | a band high up, soft spectrum | the ground, 240 km south |
-//! | `type_b_pink` | 25 | 80 | a folded band, hard spectrum | the ground, 220 km south |
-//! | `surge` | 6 | 50 | an arc curling into a spiral at its western end | 700 km up, to the south |
+//! | preset | E0 (keV) | energy flux (mW/m^2) | IBC | footprint | seen from |
+//! |---|---|---|---|---|---|
+//! | `quiet_arc` | 3 | 7 | II | one 8 km band, 1000 km long, hardly folded | the ground, 300 km south |
+//! | `rayed_band` | 5 | 40 | III | folded band, start heights broken into rays | the ground, 150 km south |
+//! | `corona` | 4-6 | 40-75 | III | seven rayed sheets filling the sky | the ground beneath, looking up the field |
+//! | `pulsating_patches` | 10 | 1 | I | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
+//! | `type_a_red` | 0.15 | 10 | II | a band high up, soft spectrum | the ground, 240 km south |
+//! | `type_b_pink` | 25 | 100 | III | a folded band, hard spectrum | the ground, 220 km south |
+//! | `surge` | 6 | 65 | III | an arc curling into a spiral at its western end | 700 km up, to the south |
+//!
+//! The IBC column is the class each preset's brightest 557.7 nm column
+//! along B reaches (`crate::pipeline::columns`; I-IV: 1, 10, 100, 1000 kR,
+//! within 1.5x: `tests/physics/ibc.rs`); the arcs' bodies are the
+//! default `footprint.sheet_thickness_km`, 8 km at half maximum.
 //!
 //! Energies and fluxes: a few eV to 1 keV lights the red above 200 km, about
 //! 1 keV the yellow-green, above 10 keV electrons reach below 100 km
 //! (Physics Today 61(7):68, 2008); 1 mW/m^2 of 3 keV electrons gives about
 //! 1 kR of 557.7 nm (weak aurora), bright displays tens of kR. The fluxes
-//! are those of the displays people photograph (IBC II-IV): seen face-on,
-//! a sheet a few km thick at a few mW/m^2 is no brighter than the airglow
-//! at the horizon (`[airglow]`), and each preset's exposure puts its
-//! brightest curtain just under the view transform's shoulder. Arcs are
-//! 100 m to 10 km thick and can be over 1000 km long (Borovsky 1993,
-//! J. Geophys. Res. 98(A4), 6101: the compilation of measured arc
-//! thicknesses). The field's dip is the default 78 degrees (northern
+//! are those of the displays people photograph (IBC I-III), and each
+//! preset's exposure puts its brightest curtain just under the view
+//! transform's shoulder. Arcs are 5-20 km wide (Knudsen et al. 2001), with
+//! filaments of 0.05-0.2 km inside them (Borovsky 1993, J. Geophys. Res.
+//! 98(A4), 6101: the compilation of measured arc thicknesses), and can be
+//! over 1000 km long. The field's dip is the default 78 degrees (northern
 //! Scandinavia), so the magnetic zenith lies 12 degrees south of the zenith.
 //!
 //! Every preset bakes in under a minute at its own size on two cores
@@ -57,20 +61,17 @@ pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 k
 
 /// A quiet homogeneous arc. Quiet arcs are the aurora of the evening before
 /// a substorm: long (here a 1000 km path with a 1600 km radius of
-/// curvature, east-west), thin (a band of 0.12 x 24 km = 3 km, within
-/// Borovsky 1993's 0.1-10 km), structureless (folds and the start-height
-/// noise all but off: `velocity_amplitude` 0.3, `top_noise_km` 1) and of
-/// a brightness photographers seek (20 mW/m^2 of E0 = 3 keV electrons:
-/// IBC III, some 25 kR of 557.7 nm in the vertical column; seen face-on
-/// from 300 km a thinner or weaker arc hardly stands above the airglow
-/// low over the horizon), the lower
-/// border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
+/// curvature, east-west), 8 km wide at half maximum (Knudsen et al.
+/// 2001: 5-20 km), structureless (folds and the start-height noise all
+/// but off: `sheet_rollup_km` 6, `top_noise_km` 1) and IBC II (7 mW/m^2
+/// of E0 = 3 keV electrons: its brightest 557.7 nm column along B about
+/// 10 kR, about 60 kW per km of arc; the lower border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
 /// drift. Seen from 300 km south, its lower border 20 degrees up.
 pub fn quiet_arc() -> Scene {
     let arc = Curtain {
         path: Some(vec![[-500.0, 0.0], [-250.0, 60.0], [0.0, 80.0], [250.0, 60.0], [500.0, 0.0]]),
         width: 24.0,
-        energy_flux: 20.0,
+        energy_flux: 7.0,
         char_energy_kev: 3.0,
         soft_fraction: 0.02,
         bend_km: 2.0,
@@ -104,9 +105,10 @@ pub const RAYED_BAND: &str = "a rayed band: a folded active band broken into fie
 /// A rayed band: an active arc broken into rays, each a bundle of field
 /// lines lit from its own start height. The start heights vary by 30 km
 /// over about 1.4 km along the band (`top_noise_km` 30 at 0.7 / km), the
-/// beams are hardly deflected (alpha_D 2 degrees), so each ray stays a
+/// beams follow the field (no deflection, as the default), so each ray stays a
 /// thin streak along the field; the band folds (`velocity_amplitude` 3,
-/// 8 waves) and is bright (40 mW/m^2 of E0 = 5 keV: tens of kR). Rays run
+/// 8 waves) and is bright (40 mW/m^2 of E0 = 5 keV: IBC III, about 100
+/// kR along B where a fold stacks the sheet). Rays run
 /// along the band at 15 km/s (observed up to about 25 km/s).
 pub fn rayed_band() -> Scene {
     let band = Curtain {
@@ -124,8 +126,6 @@ pub fn rayed_band() -> Scene {
     s.beams.count = 12_000;
     s.beams.top_noise_km = 30.0;
     s.beams.top_noise_freq = 0.7;
-    s.beams.alpha_d_deg = 2.0;
-    s.beams.delta_alpha_deg = 1.0;
     s.photons.radius_km = 0.4;
     s.grid.voxel_size = VoxelSize::Km(0.4);
     s.camera = camera([0.0, -150.0, 0.5], [0.0, 40.0, 100.0], 60.0);
@@ -139,7 +139,8 @@ pub const CORONA: &str = "a corona: rayed sheets filling the sky, seen from bene
 /// A corona: rays are field lines, and parallel lines seen in perspective
 /// meet at their vanishing point, the magnetic zenith (the direction -B,
 /// here 12 degrees south of the zenith; `tests/physics/corona.rs` finds it in the
-/// image). Seven rayed sheets (as [`rayed_band`], 15-30 mW/m^2 of 4-6 keV),
+/// image). Seven rayed sheets (as [`rayed_band`], 40-75 mW/m^2 of 4-6
+/// keV: IBC III where they overlap along the field),
 /// 420 km long and 60 km apart, lie across the sky from 180 km south to
 /// 180 km north of the observer: their lower borders (110 km) reach down
 /// to about 30 degrees elevation all round, the ends fading outside. The
@@ -153,7 +154,7 @@ pub fn corona() -> Scene {
         Curtain {
             path: Some(vec![[-210.0, y - wobble], [-70.0, y + wobble], [70.0, y - 0.5 * wobble], [210.0, y + wobble]]),
             width: 30.0,
-            energy_flux: [15.0, 20.0, 30.0, 25.0, 30.0, 20.0, 15.0][k as usize],
+            energy_flux: [40.0, 50.0, 75.0, 60.0, 75.0, 50.0, 40.0][k as usize],
             char_energy_kev: [4.0, 5.0, 6.0, 5.0, 6.0, 5.0, 4.0][k as usize],
             bend_km: 5.0,
             seed: k + 1,
@@ -168,8 +169,6 @@ pub fn corona() -> Scene {
     s.beams.count = 20_000;
     s.beams.top_noise_km = 40.0;
     s.beams.top_noise_freq = 0.6;
-    s.beams.alpha_d_deg = 2.0;
-    s.beams.delta_alpha_deg = 1.0;
     // Spread over 420 x 360 km of sky: 0.8 km voxels, about a pixel of the
     // 512-pixel fisheye at 30 degrees elevation (1.3 km there, 0.6 km overhead).
     s.photons.radius_km = 0.8;
@@ -201,7 +200,8 @@ pub const PULSATING_PATCHES: &str = "pulsating patches: diffuse hard aurora over
 /// Their electrons are hard (10-100 keV: Johnstone 1978) and the energy
 /// flux small (a few mW/m^2), so the patches are faint and low (lower
 /// border near 95 km). Here: a broad diffuse band (200 km wide, 60 % of it
-/// lit, barely folded), 2 mW/m^2 of E0 = 10 keV, `animation.pulsation` 0.9
+/// lit, barely folded), 1 mW/m^2 of E0 = 10 keV (IBC I: about 1 kR of
+/// 557.7 nm along B), `animation.pulsation` 0.9
 /// on 40 km patches with periods drawn in 4-12 s; seen from beneath,
 /// looking up through a 100-degree view.
 pub fn pulsating_patches() -> Scene {
@@ -209,7 +209,7 @@ pub fn pulsating_patches() -> Scene {
         center: [0.0, 60.0],
         length: 300.0,
         width: 200.0,
-        energy_flux: 2.0,
+        energy_flux: 1.0,
         char_energy_kev: 10.0,
         soft_fraction: 0.05,
         bend_km: 10.0,
@@ -244,7 +244,8 @@ pub const TYPE_A_RED: &str = "a red type-A aurora: a soft spectrum (E0 0.15 keV)
 /// electrons, 0.1-0.5 keV, stop above 200 km, where O(1D) lives long
 /// enough (110-130 s) to radiate 630.0 / 636.4 nm before a collision
 /// quenches it; the display is red, high (250-450 km) and tall. Here:
-/// 10 mW/m^2, half of it at E0 = 0.05 keV and half at 0.15 keV, beams
+/// 10 mW/m^2 (IBC II in 557.7 nm, with more 630.0 nm above it), half of
+/// it at E0 = 0.05 keV and half at 0.15 keV, beams
 /// starting at 500 km (above where the softest deposit), seen from 240 km
 /// south.
 pub fn type_a_red() -> Scene {
@@ -280,14 +281,15 @@ pub const TYPE_B_PINK: &str = "a hard type-B aurora: E0 25 keV electrons reach 8
 /// O(1S) is quenched by O2 before it emits 557.7 nm and what is left is
 /// the N2 first positive bands (red) and the N2+ first negative (violet):
 /// a pink or magenta lower border under the green, in bright active
-/// displays. Here: 80 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV), a
+/// displays. Here: 100 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV;
+/// IBC III), a
 /// folded band seen nearly edge-on from 220 km south, so the lower border
 /// shows as a line under the green.
 pub fn type_b_pink() -> Scene {
     let band = Curtain {
         path: Some(vec![[-150.0, 40.0], [-50.0, 60.0], [50.0, 50.0], [150.0, 70.0]]),
         width: 40.0,
-        energy_flux: 80.0,
+        energy_flux: 100.0,
         char_energy_kev: 25.0,
         soft_fraction: 0.03,
         bend_km: 6.0,
@@ -314,7 +316,8 @@ pub const SURGE: &str = "a westward travelling surge: a bright arc curling into 
 /// the surge is the western edge of the substorm's bulge). Here: one arc
 /// from 400 km east to a hook 190 km west that curls poleward and back
 /// east (radius of curvature about 40 km, above the width's half, 15 km),
-/// 50 mW/m^2 of E0 = 6 keV (the inverted-V electrons of a substorm arc),
+/// 65 mW/m^2 of E0 = 6 keV (the inverted-V electrons of a substorm arc;
+/// IBC III),
 /// folds running westward along it at 2 km/s; seen as an imager in orbit
 /// sees it, from 700 km up and 700 km south.
 pub fn surge() -> Scene {
@@ -330,7 +333,7 @@ pub fn surge() -> Scene {
             [-50.0, 130.0],
         ]),
         width: 30.0,
-        energy_flux: 50.0,
+        energy_flux: 65.0,
         char_energy_kev: 6.0,
         bend_km: 4.0,
         ..Curtain::default()

@@ -21,24 +21,39 @@ pub struct Preset {
     /// One line for `aurora scene --list`: what the scene shows.
     pub description: &'static str,
     pub build: fn() -> Scene,
+    /// The International Brightness Coefficient class its brightest 557.7
+    /// nm column along B reaches (I-IV: 1, 10, 100, 1000 kR;
+    /// `crate::pipeline::columns`); `None` for a colour map's scene.
+    pub ibc_class: Option<u32>,
 }
 
 /// Every preset, in the order `aurora scene --list` prints them.
 pub const PRESETS: &[Preset] = &[
-    Preset { name: "default", description: "three curtains seen from the ground, mountains lit by the aurora", build: default_scene },
-    Preset { name: "seed2014", description: "the 2014 report's final scene: 500,000 beams, CSDA, its colour map", build: seed2014 },
+    Preset {
+        name: "default",
+        description: "three curtains seen from the ground, mountains lit by the aurora",
+        build: default_scene,
+        ibc_class: Some(3),
+    },
+    Preset {
+        name: "seed2014",
+        description: "the 2014 report's final scene: 500,000 beams, CSDA, its colour map",
+        build: seed2014,
+        ibc_class: None,
+    },
     Preset {
         name: "oval",
         description: "a 2500 km arc along a circle of magnetic latitude about a dipole pole, overhead, seen as a dome master",
         build: oval,
+        ibc_class: Some(3),
     },
-    Preset { name: "quiet_arc", description: forms::QUIET_ARC, build: forms::quiet_arc },
-    Preset { name: "rayed_band", description: forms::RAYED_BAND, build: forms::rayed_band },
-    Preset { name: "corona", description: forms::CORONA, build: forms::corona },
-    Preset { name: "pulsating_patches", description: forms::PULSATING_PATCHES, build: forms::pulsating_patches },
-    Preset { name: "type_a_red", description: forms::TYPE_A_RED, build: forms::type_a_red },
-    Preset { name: "type_b_pink", description: forms::TYPE_B_PINK, build: forms::type_b_pink },
-    Preset { name: "surge", description: forms::SURGE, build: forms::surge },
+    Preset { name: "quiet_arc", description: forms::QUIET_ARC, build: forms::quiet_arc, ibc_class: Some(2) },
+    Preset { name: "rayed_band", description: forms::RAYED_BAND, build: forms::rayed_band, ibc_class: Some(3) },
+    Preset { name: "corona", description: forms::CORONA, build: forms::corona, ibc_class: Some(3) },
+    Preset { name: "pulsating_patches", description: forms::PULSATING_PATCHES, build: forms::pulsating_patches, ibc_class: Some(1) },
+    Preset { name: "type_a_red", description: forms::TYPE_A_RED, build: forms::type_a_red, ibc_class: Some(2) },
+    Preset { name: "type_b_pink", description: forms::TYPE_B_PINK, build: forms::type_b_pink, ibc_class: Some(3) },
+    Preset { name: "surge", description: forms::SURGE, build: forms::surge, ibc_class: Some(3) },
 ];
 
 /// The presets' names, in [`PRESETS`] order.

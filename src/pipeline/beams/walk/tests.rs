@@ -45,11 +45,28 @@ impl Setup {
 
 /// A footprint that is 1 everywhere in a huge box: beams never leave it.
 fn flat_footprint(size: f64) -> Footprint {
-    Footprint { nx: 4, ny: 4, data: vec![1.0; 16], center: [0.0, 0.0], rotation_rad: 0.0, length: size, width: size, path: None }
+    Footprint {
+        nx: 4,
+        ny: 4,
+        data: vec![1.0; 16],
+        center: [0.0, 0.0],
+        rotation_rad: 0.0,
+        length: size,
+        width: size,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    }
 }
 
 fn params() -> BeamParams {
     BeamParams { length_km: 400.0, dt: 0.0025, ..BeamParams::default() }
+}
+
+/// A curtain's spectrum table of a hard Maxwellian and a soft part.
+fn curtain_g(e0: f64, soft: f64, e_soft: f64) -> std::sync::Arc<SpectrumDeposition> {
+    use crate::physics::deposition::fang::maxwellian;
+    SpectrumDeposition::cached(&[maxwellian(1.0 - soft, e0), maxwellian(soft, e_soft)])
 }
 
 fn start(e: f64) -> BeamStart {
@@ -158,7 +175,7 @@ fn expected_beam_deposits_the_spectrum_total_below_its_start_and_accounts_for_th
     let s = Setup::flat(nrlmsis21());
     let atm = &s.atm;
     for (e0, soft) in [(1.0, 0.0), (3.0, 0.1), (30.0, 0.0)] {
-        let g = SpectrumDeposition::curtain(e0, soft, 0.2);
+        let g = curtain_g(e0, soft, 0.2);
         let ctx = s.ctx(DepositModel::Expected(&g));
         let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[7]));
         assert_eq!(t.end, EndReason::EnergySpent, "{e0} keV");
@@ -193,9 +210,20 @@ fn fang_beams_keep_going_when_their_foot_leaves_the_footprint() {
     // below) in the middle of an 18 km box.
     let mut data = vec![0.0; 9];
     data[4] = 1.0;
-    let fp = Footprint { nx: 1, ny: 9, data, center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 18.0, path: None };
+    let fp = Footprint {
+        nx: 1,
+        ny: 9,
+        data,
+        center: [0.0, 0.0],
+        rotation_rad: 0.0,
+        length: 1e4,
+        width: 18.0,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    };
     let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
-    let g = SpectrumDeposition::curtain(30.0, 0.0, 0.2);
+    let g = curtain_g(30.0, 0.0, 0.2);
     let ctx = context(&atm, &colour, &fp, &p, DepositModel::Expected(&g));
     let mut r = rng::rng(&[6]);
     let mut outside = 0;
@@ -219,8 +247,19 @@ fn fang_beams_keep_going_when_their_foot_leaves_the_footprint() {
 #[test]
 fn runaway_fang_steps_end_at_the_bottom_or_the_enlarged_box() {
     let (atm, colour) = nrlmsis21();
-    let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 10.0, width: 4.0, path: None };
-    let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+    let fp = Footprint {
+        nx: 1,
+        ny: 1,
+        data: vec![1.0],
+        center: [0.0, 0.0],
+        rotation_rad: 0.0,
+        length: 10.0,
+        width: 4.0,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    };
+    let g = curtain_g(3.0, 0.0, 0.2);
     // Straight down in steps of up to 2.5e6 km: the first step is cut at
     // the atmosphere's bottom (where a 3 keV spectrum is complete).
     let p = BeamParams { length_km: 1e9, alpha_d_deg: 0.0, delta_alpha_deg: 0.0, b_inclination_deg: 90.0, ..params() };
@@ -258,7 +297,7 @@ fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
     // 5 sigma has probability ~ 80 x 6e-7).
     let s = Setup::flat(nrlmsis21());
     let (e0, soft, e_soft) = (3.0, 0.2, 0.3);
-    let g = SpectrumDeposition::curtain(e0, soft, e_soft);
+    let g = curtain_g(e0, soft, e_soft);
     let (ce, cs) = (s.ctx(DepositModel::Expected(&g)), s.ctx(DepositModel::Sampled(MonoDeposition::get())));
     let n = 4000;
     let nb = 80;
@@ -302,7 +341,18 @@ fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
 fn beams_leave_when_their_foot_leaves_the_footprint() {
     let (atm, colour) = us1976();
     // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
-    let fp = Footprint { nx: 1, ny: 1, data: vec![1.0], center: [0.0, 0.0], rotation_rad: 0.0, length: 1e4, width: 2.0, path: None };
+    let fp = Footprint {
+        nx: 1,
+        ny: 1,
+        data: vec![1.0],
+        center: [0.0, 0.0],
+        rotation_rad: 0.0,
+        length: 1e4,
+        width: 2.0,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    };
     let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
     let ctx = context(&atm, &colour, &fp, &p, DepositModel::Csda);
     let mut r = rng::rng(&[6]);
@@ -364,7 +414,7 @@ fn the_deposit_above_the_start_follows_fang_without_a_lump() {
     let atm = &s.atm;
     let mut checked = 0;
     for e0 in [0.1, 0.3, 1.0, 3.0, 5.0, 10.0, 30.0] {
-        let g = SpectrumDeposition::curtain(e0, 0.0, 0.2);
+        let g = curtain_g(e0, 0.0, 0.2);
         let ctx = s.ctx(DepositModel::Expected(&g));
         let t = trace_beam(&ctx, &BeamStart { power_kev_s: 1.0, ..start(e0) }, &mut rng::rng(&[11]));
         let share = g.fraction_above(atm.column_mass(260.0));
