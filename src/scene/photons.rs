@@ -37,9 +37,9 @@ pub struct PhotonParams {
 impl Default for PhotonParams {
     fn default() -> Self {
         Self {
-            radius_km: 0.5,
+            radius_km: 0.35,
             cutoff: 2.5,
-            radius_noise: 0.3,
+            radius_noise: 0.25,
             radius_noise_freq: 0.05,
             gather: GatherMethod::Splat,
             kernel: KernelShape::Segment,

@@ -99,6 +99,7 @@ pub fn seed2014() -> Scene {
     // needs the straight-line model and its stopping rules.
     s.beams.deposition = Deposition::Csda;
     s.photons.radius_km = 0.2;
+    s.photons.radius_noise = 0.3;
     s.grid.voxel_size = VoxelSize::Km(0.2);
     s.grid.density_a = 0.9;
     s.grid.density_b = 0.02;
