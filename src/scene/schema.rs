@@ -114,7 +114,7 @@ mod tests {
         for (key, values) in schema::enum_values() {
             let (t, k) = key.split_once('.').unwrap();
             for v in values.as_array().unwrap() {
-                let text = format!("[{t}]\n{k} = {v}\n");
+                let text = if t == "curtain" { format!("[[{t}]]\n{k} = {v}\n") } else { format!("[{t}]\n{k} = {v}\n") };
                 assert!(Scene::from_toml_str(&text, "e.toml").is_ok() || t == "colour" || t == "terrain", "{text}");
             }
         }

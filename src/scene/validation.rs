@@ -134,15 +134,6 @@ impl Scene {
                     format!("must be less than curtain[{i}].width / 2 = {} (raise width or lower bend_km)", c.width / 2.0),
                 );
             }
-            if c.filament_energy_flux > 0.0 && self.footprint.model != super::FootprintModel::Sheet {
-                v.push(
-                    t,
-                    "filament_energy_flux",
-                    c.filament_energy_flux.to_string(),
-                    "must be 0 with footprint.model = \"fluid2014\" (filaments follow the vortex sheet: set footprint.model = \"sheet\")"
-                        .into(),
-                );
-            }
         }
         if self.curtains.iter().all(|c| c.beam_weight <= 0.0) && !self.curtains.is_empty() {
             v.push(Some(("curtain", 0)), "beam_weight", "0".into(), "at least one curtain needs beam_weight > 0".into());

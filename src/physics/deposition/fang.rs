@@ -432,6 +432,19 @@ impl SpectrumDeposition {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::physics::deposition::spectrum::{N_X, X_MAX};
+
+    /// A curtain's table: a hard Maxwellian and a soft one.
+    fn curtain(e0: f64, soft: f64, e_soft: f64) -> std::sync::Arc<SpectrumDeposition> {
+        SpectrumDeposition::cached(&[maxwellian(1.0 - soft, e0), maxwellian(soft, e_soft)])
+    }
+
+    fn e0(c: &Component) -> f64 {
+        match c.spectrum {
+            Spectrum::Maxwellian { e0_kev } => e0_kev,
+            _ => unreachable!("Maxwellians only"),
+        }
+    }
 
     #[test]
     fn ionization_profile_integrates_to_the_deposit_over_35_ev() {
@@ -441,7 +454,7 @@ mod tests {
         // spectrum's deposit between 50 and 700 km over 35 eV: the cells
         // are differences of G across each half step.
         let atm = Atmosphere::nrlmsis21();
-        let g = SpectrumDeposition::curtain(3.0, 0.0, 0.2);
+        let g = curtain(3.0, 0.0, 0.2);
         let p = g.ionization_profile(&atm);
         let dz = IONIZATION_DH_KM * crate::physics::atmosphere::CM_PER_KM;
         let sum: f64 = p.v.iter().map(|v| v * dz).sum::<f64>() * KEV_PER_ION_PAIR;
@@ -566,14 +579,14 @@ mod tests {
         for i in (0..g.g.len()).step_by(7) {
             let m = (LN_M.0 + i as f64 * D_LN_M).exp();
             let want: f64 =
-                comps.iter().map(|c| c.share * nodes.iter().map(|&(x, w)| w * mono.fraction_above(x * c.e0_kev, m)).sum::<f64>()).sum();
+                comps.iter().map(|c| c.share * nodes.iter().map(|&(x, w)| w * mono.fraction_above(x * e0(c), m)).sum::<f64>()).sum();
             assert_eq!(g.g[i].to_bits(), want.to_bits(), "node {i}");
         }
     }
 
     #[test]
     fn spectrum_is_monotone_and_stops_where_its_floor_says() {
-        let sd = SpectrumDeposition::curtain(3.0, 0.1, 0.2);
+        let sd = curtain(3.0, 0.1, 0.2);
         let mut prev = 0.0;
         for i in 0..2000 {
             let g = sd.fraction_above((-22.0 + i as f64 * 0.012).exp());
@@ -581,12 +594,12 @@ mod tests {
             prev = g;
         }
         // Mixture: total = 0.9 G_3keV + 0.1 G_0.2keV.
-        let (a, b) = (SpectrumDeposition::curtain(3.0, 0.0, 0.2), SpectrumDeposition::curtain(0.2, 0.0, 0.2));
+        let (a, b) = (curtain(3.0, 0.0, 0.2), curtain(0.2, 0.0, 0.2));
         assert!((sd.total() - (0.9 * a.total() + 0.1 * b.total())).abs() < 1e-12);
         assert!(sd.total() > 0.9 && sd.total() < 1.0, "{}", sd.total());
         let m = sd.floor_column(1e-4);
         assert!(sd.total() - sd.fraction_above(m) <= 1e-4 * sd.total() + 1e-12);
         // A harder spectrum finishes deeper.
-        assert!(SpectrumDeposition::curtain(30.0, 0.0, 0.2).floor_column(1e-4) > 10.0 * a.floor_column(1e-4));
+        assert!(curtain(30.0, 0.0, 0.2).floor_column(1e-4) > 10.0 * a.floor_column(1e-4));
     }
 }

@@ -289,8 +289,9 @@ mod tests {
         // The linear regime and saturation.
         assert!((knight_number_flux(n, kt, 0.1, 1e6) / (n0 * 1.1) - 1.0).abs() < 1e-4);
         assert!((knight_number_flux(n, kt, 1e4, 10.0) / (n0 * 10.0) - 1.0).abs() < 1e-6);
-        // 1 cm^-3 at 1 keV: N0 = 6.7e8 cm^-2 s^-1, 1.07 uA/m^2.
-        assert!((n0 / 6.70e8 - 1.0).abs() < 0.01, "{n0:e}");
-        assert!((knight_current_ua_m2(n, kt, 0.0, 10.0) - 1.073).abs() < 0.01);
+        // 1 cm^-3 at 1 keV: N0 = sqrt(1.602e-16 J / (2 pi 9.109e-31 kg))
+        // = 5.29e6 m/s times 1 cm^-3, 5.29e8 cm^-2 s^-1: 0.848 uA/m^2.
+        assert!((n0 / 5.29e8 - 1.0).abs() < 0.01, "{n0:e}");
+        assert!((knight_current_ua_m2(n, kt, 0.0, 10.0) - 0.848).abs() < 0.01);
     }
 }

@@ -156,6 +156,7 @@ mod tests {
     /// path for an absent one.
     const STRINGS: &[&str] = &[
         "fluid2014",
+        "accelerated",
         "sampled",
         "csda",
         "random",

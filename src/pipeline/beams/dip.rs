@@ -142,7 +142,7 @@ mod tests {
 
     #[test]
     fn a_field_within_the_deflection_cone_is_refused_naming_the_curtain_and_the_dip() {
-        let b = BeamParams::default();
+        let b = BeamParams { alpha_d_deg: 5.0, delta_alpha_deg: 3.0, ..BeamParams::default() };
         let c = vec![Curtain::default(), Curtain { center: [0.0, 0.0], ..Curtain::default() }];
         check_field(&c, &b, &earth(Some([0.0, 2000.0]))).unwrap();
         // At the dipole's equator: refused.

@@ -508,11 +508,12 @@ mod tests {
     fn default_scene_bound_is_above_what_it_uses_and_near_it() {
         let s = Scene::default();
         let e = est(&s);
-        // Measured: 0.66 GiB peak resident for the default bake with its
-        // VDB write (`benchmarks/memory/budget.sh`, 2026-12-05); the bound
-        // is above it and below 2 GiB (the bounding boxes' bound gave 7.1
-        // GiB: it counted every leaf of boxes the thin curtains cross).
-        assert!(e.total() > 0.66 * GIB && e.total() < 2.0 * GIB, "{} GiB", e.total() / GIB);
+        // Measured: 1.5 GiB peak resident for the default bake of arcs 8
+        // km wide with its VDB write (/usr/bin/time, 2026-12-07; 0.66 GiB
+        // for the thin sheets before); the bound is above it and below
+        // twice it (the bounding boxes' bound gave 7.1 GiB for the thin
+        // sheets: it counted every leaf of boxes the curtains cross).
+        assert!(e.total() > 1.5 * GIB && e.total() < 3.0 * GIB, "{} GiB", e.total() / GIB);
     }
 
     #[test]

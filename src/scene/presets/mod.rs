@@ -91,6 +91,10 @@ pub(crate) fn small_test_scene() -> Scene {
     s.footprint.end_fade_km = 0.0;
     s.beams.count = 300;
     s.photons.radius_km = 1.0;
+    // The 2014 walk and the kernel's noise its figures were measured with.
+    s.photons.radius_noise = 0.3;
+    s.beams.alpha_d_deg = 5.0;
+    s.beams.delta_alpha_deg = 3.0;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     s
 }
