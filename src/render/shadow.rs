@@ -95,8 +95,14 @@ impl EmissionSampler {
         let per_block = crate::grid::LEAF_NUM_VALUES * f.channels;
         let leaves = f.block_origins.iter().enumerate().map(|(b, &origin)| {
             let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
-            let voxels = block.chunks_exact(f.channels).map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]]);
-            (origin, voxels.enumerate())
+            // All-zero voxels (most of a block's inactive ones) weigh 0 and
+            // are passed over before their luminance is taken.
+            let voxels = block
+                .chunks_exact(f.channels)
+                .map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]])
+                .enumerate()
+                .filter(|(_, v)| v.iter().any(|x| x.to_bits() != 0));
+            (origin, voxels)
         });
         EmissionSampler::from_leaves(f.transform, leaves, f.live_blocks(), medium.emission_scale)
     }
