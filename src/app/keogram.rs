@@ -197,7 +197,12 @@ pub fn trace_frame(scene: &Scene, vdb: &Path, grid: &str, rows: &[MeridianRow]) 
     };
     let emission = crate::render::grids::grey(g);
     let volume = Volume { density: file.float("density"), emission: Some(&emission) };
-    let prepared = Prepared::new(&settings_for(scene, grid), &volume)?;
+    // The medium alone, the emission sampler left to be built when a shadow
+    // ray needs it (`Prepared::sampler`): a keogram traces none.
+    let settings = settings_for(scene, grid);
+    let (ds, es) = (settings.volume.density_scale, settings.volume.emission_scale);
+    let medium = crate::render::medium::Medium::new(volume.density, volume.emission, ds, es)?;
+    let prepared = Prepared::with_medium(&settings, medium, None)?;
     let origin = DVec3::from_array(scene.camera.position);
     Ok(rows
         .iter()

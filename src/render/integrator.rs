@@ -65,7 +65,6 @@ impl Prepared {
     pub(super) fn trace_samples(&self, px: usize, py: usize, st: &mut PixelState, until: usize, n: &mut Counters) {
         let s = &self.settings;
         let spp = s.render.spp;
-        let shadow = self.shadow_scene();
         let albedo = s.terrain.albedo;
         let background = s.background.radiance;
         for i in st.n..until {
@@ -105,6 +104,9 @@ impl Prepared {
             let behind = match hit {
                 Some(h) => {
                     n.hits += 1;
+                    // The first hit of the render builds the emission sampler
+                    // (`Prepared::sampler`), outside the shadow rays' time.
+                    let shadow = self.shadow_scene();
                     let start = Instant::now();
                     let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.shadow_samples, &mut st.rng);
                     n.shadow_nanos += start.elapsed().as_nanos() as u64;

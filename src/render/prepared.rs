@@ -2,7 +2,9 @@
 //! traced ([`Prepared`]): the camera model, the medium (`medium/`), the
 //! terrain, the terrain's emission sampler (`shadow.rs`), the sky and the
 //! air between the volume and the camera (`crate::physics::air_extinction`), with the
-//! settings they were built for. Every way to make or change one
+//! settings they were built for. The emission sampler taken from the
+//! medium is built when a shadow ray first needs one ([`Prepared::sampler`]):
+//! a picture that never sees lit terrain, and a keogram, never pay for it. Every way to make or change one
 //! ([`Prepared::new`], [`Prepared::with_medium`], [`Prepared::reuse`],
 //! [`Prepared::set_volume_scales`], [`Prepared::set_image`]) runs the same
 //! checks, so the pixel loop (`integrator.rs`) never sees a setting out of
@@ -18,13 +20,16 @@ use crate::geometry::camera::CameraModel;
 use crate::grid::Grid;
 use crate::physics::air_extinction::{Air, Extinction};
 use glam::DVec3;
+use std::sync::OnceLock;
 
 /// A scene ready to render: camera, medium, terrain and emission sampler.
 pub struct Prepared {
     pub(super) camera: CameraModel,
     pub(super) medium: Medium,
     pub(super) terrain: TerrainModel,
-    pub(super) sampler: Option<EmissionSampler>,
+    /// Set when built from an emission grid; else empty until the first
+    /// call of [`Prepared::sampler`], which builds it from the medium.
+    sampler: OnceLock<Option<EmissionSampler>>,
     pub(super) sky: Sky,
     /// The air's transmittance (`[sky] extinction`), None without it.
     pub(super) air: Option<Extinction>,
@@ -54,7 +59,8 @@ impl Prepared {
     /// from a file, `crate::app::vdb_for_render::read_render_medium`), its scales set
     /// to the settings'. `emission` is the emission grid for the terrain's
     /// emission sampler if the caller has it; without it the sampler is
-    /// built from the medium (the same sampler).
+    /// built from the medium (the same sampler) when first needed
+    /// ([`Prepared::sampler`]).
     pub fn with_medium(settings: &RenderSettings, mut medium: Medium, emission: Option<&Grid<[f32; 3]>>) -> Result<Prepared, RenderError> {
         let camera = Self::check(settings)?;
         medium.set_scales(settings.volume.density_scale, settings.volume.emission_scale)?;
@@ -141,14 +147,17 @@ impl Prepared {
         self.medium.set_scales(density_scale, emission_scale)?;
         self.settings.volume.density_scale = density_scale;
         self.settings.volume.emission_scale = emission_scale;
-        match (self.sampler.as_mut(), self.medium.emission) {
+        // A sampler not built yet is built from the medium, at its new
+        // scale, when it is first needed.
+        let Some(built) = self.sampler.get_mut() else { return Ok(()) };
+        match (built.as_mut(), self.medium.emission) {
             (Some(s), Some(_)) => {
                 if !s.set_scale(emission_scale) {
-                    self.sampler = None;
+                    *built = None;
                 }
             }
-            (Some(_), None) => self.sampler = None,
-            (None, Some(_)) if !self.terrain.is_none() => self.sampler = EmissionSampler::from_medium(&self.medium),
+            (Some(_), None) => *built = None,
+            (None, Some(_)) if !self.terrain.is_none() => self.sampler = OnceLock::new(),
             (None, _) => {}
         }
         Ok(())
@@ -185,9 +194,17 @@ impl Prepared {
         &self.terrain
     }
 
-    /// The terrain's emission sampler (none without a terrain or emission).
+    /// The terrain's emission sampler (none without a terrain or emission),
+    /// built from the medium on the first call when it was not built with
+    /// the rest: the same sampler whenever, and on whichever thread, that
+    /// call comes (the medium does not change under it).
     pub fn sampler(&self) -> Option<&EmissionSampler> {
-        self.sampler.as_ref()
+        self.sampler
+            .get_or_init(|| match (&self.terrain, self.medium.emission) {
+                (TerrainModel::None, _) | (_, None) => None,
+                _ => EmissionSampler::from_medium(&self.medium),
+            })
+            .as_ref()
     }
 
     /// The settings' checks; the camera.
@@ -239,7 +256,7 @@ impl Prepared {
         ShadowScene {
             medium: &self.medium,
             terrain: &self.terrain,
-            sampler: self.sampler.as_ref(),
+            sampler: self.sampler(),
             integration: self.settings.integration,
             air: self.air.as_ref(),
         }
@@ -266,18 +283,19 @@ fn observer_airglow(s: &RenderSettings) -> Option<Airglow> {
 }
 
 /// The terrain's emission sampler: none without a terrain or emission;
-/// from the emission grid if the caller has it, else from the medium (the
-/// same sampler).
+/// from the emission grid if the caller has it (built now: the grid is not
+/// kept), else left to [`Prepared::sampler`] to build from the medium when
+/// first needed (the same sampler).
 fn emission_sampler(
     terrain: &TerrainModel,
     emission: Option<&Grid<[f32; 3]>>,
     medium: &Medium,
     emission_scale: f64,
-) -> Option<EmissionSampler> {
+) -> OnceLock<Option<EmissionSampler>> {
     match (terrain, emission, medium.emission) {
-        (TerrainModel::None, _, _) | (_, _, None) => None,
-        (_, Some(g), Some(_)) => EmissionSampler::new(g, emission_scale),
-        (_, None, Some(_)) => EmissionSampler::from_medium(medium),
+        (TerrainModel::None, _, _) | (_, _, None) => OnceLock::from(None),
+        (_, Some(g), Some(_)) => OnceLock::from(EmissionSampler::new(g, emission_scale)),
+        (_, None, Some(_)) => OnceLock::new(),
     }
 }
 
@@ -341,13 +359,13 @@ mod tests {
                 let fresh = Prepared::new(&settings, &volume).unwrap();
                 p.set_volume_scales(ds, es).unwrap();
                 assert!(p.medium == fresh.medium, "{terrain:?} {ds} {es}");
-                assert_eq!(p.sampler.as_ref().map(|s| s.power), fresh.sampler.as_ref().map(|s| s.power));
+                assert_eq!(p.sampler().map(|s| s.power), fresh.sampler().map(|s| s.power));
                 let want = bits(&fresh);
                 assert!(want.iter().any(|&b| b != 0), "the camera sees the volume");
                 assert_eq!(bits(&p), want, "{terrain:?} {ds} {es}");
             }
             if terrain == TerrainKind::Plane {
-                assert!(p.sampler.is_some(), "the terrain's sampler is exercised");
+                assert!(p.sampler().is_some(), "the terrain's sampler is exercised");
             }
         }
     }
@@ -388,7 +406,7 @@ mod tests {
             p = Prepared::reuse(Some(p), new_grids, &s, volume).unwrap();
             let fresh = Prepared::new(&s, volume).unwrap();
             assert!(p.medium == fresh.medium, "{name}");
-            assert_eq!(p.sampler.as_ref().map(|s| s.power), fresh.sampler.as_ref().map(|s| s.power), "{name}");
+            assert_eq!(p.sampler().map(|s| s.power), fresh.sampler().map(|s| s.power), "{name}");
             let want = bits(&fresh);
             assert!(want.iter().any(|&b| b != 0), "{name}: the camera sees the volume");
             assert_eq!(bits(&p), want, "{name}");

@@ -79,7 +79,7 @@ impl EmissionSampler {
             let voxels = (0..crate::grid::LEAF_NUM_VALUES).filter(|&n| leaf.is_active(n)).map(|n| (n, leaf.values[n]));
             (leaf.origin, voxels)
         });
-        EmissionSampler::from_leaves(emission.transform, leaves, emission_scale)
+        EmissionSampler::from_leaves(emission.transform, leaves, emission.leaves().len(), emission_scale)
     }
 
     /// [`EmissionSampler::new`] from the medium's emission channels instead
@@ -95,29 +95,41 @@ impl EmissionSampler {
         let per_block = crate::grid::LEAF_NUM_VALUES * f.channels;
         let leaves = f.block_origins.iter().enumerate().map(|(b, &origin)| {
             let block = &f.values[(b + 1) * per_block..(b + 2) * per_block];
-            let voxels = block.chunks_exact(f.channels).map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]]);
-            (origin, voxels.enumerate())
+            // All-zero voxels (most of a block's inactive ones) weigh 0 and
+            // are passed over before their luminance is taken.
+            let voxels = block
+                .chunks_exact(f.channels)
+                .map(|v| [v[c.channel], v[c.channel + 1], v[c.channel + 2]])
+                .enumerate()
+                .filter(|(_, v)| v.iter().any(|x| x.to_bits() != 0));
+            (origin, voxels)
         });
-        EmissionSampler::from_leaves(f.transform, leaves, medium.emission_scale)
+        EmissionSampler::from_leaves(f.transform, leaves, f.live_blocks(), medium.emission_scale)
     }
 
     /// The sampler over `leaves` (each its origin and its voxels' offsets
     /// and unscaled emission, in offset order), with `emission_scale`:
-    /// every voxel of positive luminance, weighted by it.
+    /// every voxel of positive luminance, weighted by it. At most
+    /// `max_leaves` leaves hold such a voxel: the lists are reserved for
+    /// that many at once (address space; only what is written takes
+    /// memory), so they never grow by copying.
     fn from_leaves<V: Iterator<Item = (usize, [f32; 3])>>(
         transform: Transform,
         leaves: impl Iterator<Item = (IVec3, V)>,
+        max_leaves: usize,
         emission_scale: f64,
     ) -> Option<EmissionSampler> {
+        let max_voxels = max_leaves * crate::grid::LEAF_NUM_VALUES;
         let mut s = EmissionSampler {
             transform,
-            leaf_origins: Vec::new(),
-            leaf_cdf: Vec::new(),
-            leaf_start: vec![0],
-            voxel_offset: Vec::new(),
-            voxel_cdf: Vec::new(),
+            leaf_origins: Vec::with_capacity(max_leaves),
+            leaf_cdf: Vec::with_capacity(max_leaves),
+            leaf_start: Vec::with_capacity(max_leaves + 1),
+            voxel_offset: Vec::with_capacity(max_voxels),
+            voxel_cdf: Vec::with_capacity(max_voxels),
             power: 0.0,
         };
+        s.leaf_start.push(0);
         let mut total = 0.0;
         for (origin, voxels) in leaves {
             let before = s.voxel_offset.len();

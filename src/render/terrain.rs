@@ -58,6 +58,7 @@ use glam::DVec3;
 use noise::Perlin;
 use std::io::Write;
 use std::path::Path;
+use std::sync::{Arc, Mutex};
 
 /// Samples per `mountain_scale` of the procedural heightfield.
 pub const SAMPLES_PER_FEATURE: f64 = 8.0;
@@ -85,7 +86,9 @@ pub enum TerrainModel {
     Plane {
         height: f64,
     },
-    Heightfield(Heightfield),
+    /// Shared: a procedural heightfield is built once per process for its
+    /// scene keys ([`TerrainModel::on_earth`]).
+    Heightfield(Arc<Heightfield>),
     /// The sphere of `radius` km about `centre`: the plane on a round Earth.
     Sphere {
         centre: DVec3,
@@ -96,18 +99,56 @@ pub enum TerrainModel {
 impl TerrainModel {
     /// [`TerrainModel::from_terrain`] on the Earth of radius `earth_radius_km`
     /// (module doc; 0: the flat ground, the same model).
+    ///
+    /// A procedural heightfield (no `heightmap`: a function of the scene
+    /// keys alone) is kept for the process, the last one built, keyed by
+    /// those keys and the radius, so the render's checks, the render itself
+    /// and each frame of a sequence share one build; a heightmap is read
+    /// anew each time (its file may change under a watching preview).
     pub fn on_earth(t: &Terrain, base_dir: Option<&Path>, earth_radius_km: f64) -> Result<TerrainModel, RenderError> {
-        let m = Self::from_terrain(t, base_dir)?;
-        if earth_radius_km == 0.0 {
-            return Ok(m);
+        if t.kind == TerrainKind::Heightfield && t.heightmap.is_none() {
+            return Self::procedural_shared(t, earth_radius_km);
         }
-        Ok(match m {
-            TerrainModel::Plane { height } => {
-                TerrainModel::Sphere { centre: DVec3::new(0.0, 0.0, -earth_radius_km), radius: earth_radius_km + height }
+        Self::on_earth_built(t, base_dir, earth_radius_km)
+    }
+
+    /// [`TerrainModel::on_earth`] without the shared heightfield.
+    fn on_earth_built(t: &Terrain, base_dir: Option<&Path>, earth_radius_km: f64) -> Result<TerrainModel, RenderError> {
+        if earth_radius_km == 0.0 || t.kind != TerrainKind::Heightfield {
+            let m = Self::from_terrain(t, base_dir)?;
+            if earth_radius_km == 0.0 {
+                return Ok(m);
             }
-            TerrainModel::Heightfield(h) => TerrainModel::Heightfield(h.on_sphere(earth_radius_km)?),
-            other => other,
-        })
+            return Ok(match m {
+                TerrainModel::Plane { height } => {
+                    TerrainModel::Sphere { centre: DVec3::new(0.0, 0.0, -earth_radius_km), radius: earth_radius_km + height }
+                }
+                other => other,
+            });
+        }
+        // The flat samples without their normals: only the sphere's are used.
+        let flat = Heightfield::from_terrain_unshaded(t, base_dir)?;
+        Ok(TerrainModel::Heightfield(Arc::new(flat.on_sphere(earth_radius_km)?)))
+    }
+
+    /// The procedural heightfield of `t` on the Earth of `earth_radius_km`,
+    /// shared with the last call for the same keys (the albedo aside: it is
+    /// read per hit, not built in).
+    fn procedural_shared(t: &Terrain, earth_radius_km: f64) -> Result<TerrainModel, RenderError> {
+        static LAST: Mutex<Option<(String, Arc<Heightfield>)>> = Mutex::new(None);
+        // Debug prints every float exactly (-0.0 apart from 0.0), so equal
+        // keys are equal inputs.
+        let key = format!("{:?} {:?}", Terrain { albedo: [0.0; 3], ..t.clone() }, earth_radius_km.to_bits());
+        if let Some((k, h)) = LAST.lock().unwrap_or_else(|e| e.into_inner()).as_ref() {
+            if *k == key {
+                return Ok(TerrainModel::Heightfield(Arc::clone(h)));
+            }
+        }
+        let m = Self::on_earth_built(t, None, earth_radius_km)?;
+        if let TerrainModel::Heightfield(h) = &m {
+            *LAST.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, Arc::clone(h)));
+        }
+        Ok(m)
     }
 
     /// Builds the terrain of a scene; a heightmap path is resolved against
@@ -121,7 +162,7 @@ impl TerrainModel {
                 }
                 TerrainModel::Plane { height: t.height }
             }
-            TerrainKind::Heightfield => TerrainModel::Heightfield(Heightfield::from_terrain(t, base_dir)?),
+            TerrainKind::Heightfield => TerrainModel::Heightfield(Arc::new(Heightfield::from_terrain(t, base_dir)?)),
         })
     }
 
@@ -252,6 +293,13 @@ fn axis(a: f64, b: f64, n: usize, what: &str) -> Result<Vec<f64>, RenderError> {
 impl Heightfield {
     /// A heightfield from explicit samples (heights rounded to f32).
     pub fn from_samples(xs: Vec<f64>, ys: Vec<f64>, z: Vec<f64>) -> Result<Heightfield, RenderError> {
+        Self::unshaded(xs, ys, z).map(Heightfield::shaded)
+    }
+
+    /// [`Heightfield::from_samples`] without the vertex normals (empty):
+    /// the same checks and samples, for a field that is only a step to
+    /// another ([`Heightfield::on_sphere`] reads the samples alone).
+    fn unshaded(xs: Vec<f64>, ys: Vec<f64>, z: Vec<f64>) -> Result<Heightfield, RenderError> {
         let (nx, ny) = (xs.len(), ys.len());
         if nx < 2 || ny < 2 || z.len() != nx * ny {
             return Err(RenderError::Settings(format!(
@@ -270,9 +318,7 @@ impl Heightfield {
         }
         let zmin = z.iter().copied().fold(f64::INFINITY, f64::min);
         let zmax = z.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let mut hf = Heightfield { xs, ys, z, zmin, zmax, normals: Vec::new() };
-        hf.normals = vertex_normals(&hf);
-        Ok(hf)
+        Ok(Heightfield { xs, ys, z, zmin, zmax, normals: Vec::new() })
     }
 
     /// The heightfield laid on the sphere of radius `r` km about `(0, 0, -r)`
@@ -294,6 +340,12 @@ impl Heightfield {
 
     /// The heightfield of a scene's `[terrain]` (kind must be "heightfield").
     pub fn from_terrain(t: &Terrain, base_dir: Option<&Path>) -> Result<Heightfield, RenderError> {
+        Self::from_terrain_unshaded(t, base_dir).map(Heightfield::shaded)
+    }
+
+    /// [`Heightfield::from_terrain`] without the vertex normals
+    /// ([`Heightfield::unshaded`]).
+    fn from_terrain_unshaded(t: &Terrain, base_dir: Option<&Path>) -> Result<Heightfield, RenderError> {
         let [x0, y0, x1, y1] = t.extent;
         if !(x1 > x0 && y1 > y0 && t.extent.iter().all(|v| v.is_finite())) {
             return Err(RenderError::Settings(format!("terrain.extent {:?} must be [x0, y0, x1, y1] with x1 > x0, y1 > y0", t.extent)));
@@ -302,13 +354,23 @@ impl Heightfield {
             return Err(RenderError::Settings("terrain.height and mountain_height must be finite, mountain_height >= 0".into()));
         }
         match &t.heightmap {
-            Some(p) => Self::from_heightmap(&super::settings::input_path(base_dir, p), t),
-            None => Self::procedural(t),
+            Some(p) => Self::heightmap_unshaded(&super::settings::input_path(base_dir, p), t),
+            None => Self::procedural_unshaded(t),
         }
     }
 
     /// Procedural fBm mountains (see the module doc).
     pub fn procedural(t: &Terrain) -> Result<Heightfield, RenderError> {
+        Self::procedural_unshaded(t).map(Heightfield::shaded)
+    }
+
+    /// The field with its vertex normals.
+    fn shaded(mut self) -> Heightfield {
+        self.normals = vertex_normals(&self);
+        self
+    }
+
+    fn procedural_unshaded(t: &Terrain) -> Result<Heightfield, RenderError> {
         if !(t.mountain_scale > 0.0 && t.mountain_scale.is_finite()) {
             return Err(RenderError::Settings(format!("terrain.mountain_scale = {} must be finite and > 0", t.mountain_scale)));
         }
@@ -324,11 +386,15 @@ impl Heightfield {
                 z.push(t.height + t.mountain_height * mountain(&perlin, x / t.mountain_scale, y / t.mountain_scale));
             }
         }
-        Self::from_samples(xs, ys, z)
+        Self::unshaded(xs, ys, z)
     }
 
     /// Heights from an 8- or 16-bit greyscale PNG (see the module doc).
     pub fn from_heightmap(path: &Path, t: &Terrain) -> Result<Heightfield, RenderError> {
+        Self::heightmap_unshaded(path, t).map(Heightfield::shaded)
+    }
+
+    fn heightmap_unshaded(path: &Path, t: &Terrain) -> Result<Heightfield, RenderError> {
         let err = |message: String| RenderError::Heightmap { path: path.to_path_buf(), message };
         let file = crate::util::input_file::open(path).map_err(|source| RenderError::Input { key: "terrain.heightmap", source })?;
         let mut dec = png::Decoder::new(std::io::BufReader::new(file));
@@ -366,7 +432,7 @@ impl Heightfield {
                 z[j * w + i] = t.height + t.mountain_height * v / max;
             }
         }
-        Self::from_samples(xs, ys, z)
+        Self::unshaded(xs, ys, z)
     }
 
     pub fn nx(&self) -> usize {
@@ -657,7 +723,7 @@ mod tests {
             assert!((hit.p.z - z).abs() < 1e-9, "({x}, {y}): {z} vs {}", hit.p.z);
         }
         assert_eq!(h.height_at(-20.1, 0.0), None);
-        let model = TerrainModel::Heightfield(h);
+        let model = TerrainModel::Heightfield(Arc::new(h));
         let c = model.clearance(DVec3::new(-10.0, 4.0, -1.0)).unwrap();
         assert!(c.is_below() && c.point_km == -1.0);
         // On a round Earth the plane is the sphere: altitudes above it.

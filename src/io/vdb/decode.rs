@@ -4,14 +4,20 @@
 //! Every length is checked against the bytes that remain before anything is
 //! allocated, and a record is either decoded into its slots (the inactive
 //! ones rebuilt from the metadata byte, as OpenVDB does) or validated and
-//! skipped; ZIP through zlib, Blosc through c-blosc.
+//! skipped; ZIP through libdeflate (the writer's library: a whole chunk at
+//! once, its size known, its Adler-32 checked), Blosc through c-blosc.
 
 use super::codec::negative;
 use super::cursor::{Cursor, ParseError};
 use super::layout::{self, meta, COMPRESS_ACTIVE_MASK, COMPRESS_BLOSC, COMPRESS_ZIP};
 use crate::grid::VoxelValue;
-use flate2::{Decompress, FlushDecompress, Status};
 use half::f16;
+use std::cell::RefCell;
+
+thread_local! {
+    /// One inflater per thread, reused for every chunk it reads.
+    static INFLATER: RefCell<libdeflater::Decompressor> = RefCell::new(libdeflater::Decompressor::new());
+}
 
 /// How a grid's records are decoded.
 #[derive(Clone, Copy, Debug)]
@@ -261,14 +267,13 @@ where
     scratch.resize(nbytes, 0);
     match codec {
         Codec::Blosc => blosc_decompress(cur, at, stream, scratch)?,
-        Codec::Zip => {
-            let mut z = Decompress::new(true);
-            match z.decompress(stream, scratch, FlushDecompress::Finish) {
-                Ok(Status::StreamEnd) if z.total_out() == nbytes as u64 => {}
-                Ok(_) => return Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes"))),
-                Err(e) => return Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
+        Codec::Zip => match INFLATER.with(|z| z.borrow_mut().zlib_decompress(stream, scratch)) {
+            Ok(got) if got == nbytes => {}
+            Ok(_) | Err(libdeflater::DecompressionError::InsufficientSpace) => {
+                return Err(cur.err_at(at, format!("zip chunk does not decompress to exactly {nbytes} bytes")))
             }
-        }
+            Err(e) => return Err(cur.err_at(at, format!("corrupt zip chunk: {e}"))),
+        },
     }
     Ok(decode.then_some(&scratch[..]))
 }
@@ -375,13 +380,27 @@ pub fn read_stored_f32(
         cur.bytes(nbytes)?
     };
     if fmt.half {
-        for (o, b) in out.iter_mut().zip(raw.chunks_exact(2)) {
-            *o = f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
-        }
+        halves_to_f32(raw, out);
     } else {
         le_floats(raw, out);
     }
     Ok(slots)
+}
+
+/// Little-endian half floats from `raw` into `out` (as many as fit both),
+/// in bulk (the `half` crate's slice conversion: F16C where the CPU has
+/// it) when the bytes are aligned halves, else one at a time; both exact.
+fn halves_to_f32(raw: &[u8], out: &mut [f32]) {
+    use half::slice::HalfFloatSliceExt;
+    let n = out.len().min(raw.len() / 2);
+    match bytemuck::try_cast_slice::<u8, f16>(&raw[..2 * n]) {
+        Ok(h) if cfg!(target_endian = "little") => h.convert_to_f32_slice(&mut out[..n]),
+        _ => {
+            for (o, b) in out.iter_mut().zip(raw.chunks_exact(2)) {
+                *o = f16::from_bits(u16::from_le_bytes([b[0], b[1]])).to_f32();
+            }
+        }
+    }
 }
 
 /// Little-endian f32s from `raw` into `out` (as many as fit both).

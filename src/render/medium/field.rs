@@ -123,6 +123,11 @@ impl Field {
         self.keys.len()
     }
 
+    /// Blocks holding a non-zero voxel (the others are all zeros).
+    pub fn live_blocks(&self) -> usize {
+        self.live_blocks
+    }
+
     /// Bytes held by the structure (for reports).
     pub fn memory_bytes(&self) -> usize {
         (self.live_blocks + 1) * LEAF_NUM_VALUES * self.channels * 4

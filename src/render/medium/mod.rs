@@ -149,10 +149,14 @@ impl Medium {
         // memory limit before it is allocated ([`Field::from_sources`]).
         let limit = crate::util::memory::available();
         let mut reserved = 0.0;
-        // Sources sharing a transform share a field.
-        let groups: Vec<Vec<usize>> = match srcs {
+        // Sources sharing a transform share a field. A source without
+        // leaves (a bake's density with `density_a` 0) has no non-zero
+        // voxel: it feeds no field, and is left out before the pass rather
+        // than found out after it (which would build the field twice).
+        let fed: [Option<&dyn LeafSource>; 2] = srcs.map(|s| s.filter(|s| s.leaf_count() > 0));
+        let groups: Vec<Vec<usize>> = match fed {
             [Some(d), Some(e)] if d.transform() == e.transform() => vec![vec![0, 1]],
-            _ => (0..2).filter(|&k| srcs[k].is_some()).map(|k| vec![k]).collect(),
+            _ => (0..2).filter(|&k| fed[k].is_some()).map(|k| vec![k]).collect(),
         };
         let mut medium = Medium { fields: Vec::new(), sigma_t: None, emission: None, stored: [None, None], density_scale, emission_scale };
         for group in groups {
