@@ -5,7 +5,7 @@
 //! horizon. The aurora is the render less the same render with
 //! `volume.emission_scale = 0`, in linear luminance (docs/testing.md,
 //! "Aurora over the sky"). Photographs of active displays show 20-200
-//! (`night-sky` figures in docs/physics.md, "Arcs").
+//! (docs/physics.md, "Arcs: a body and filaments").
 
 use aurora::geometry::camera::CameraModel;
 use aurora::pipeline::bake::bake;
