@@ -16,5 +16,5 @@ echo "# build $(git rev-parse --short HEAD)$(git diff --quiet HEAD -- src || ech
 cargo test --release --locked --test fuzz_readers --no-run >&2
 start=$(date +%s)
 AURORA_FUZZ_MUTATIONS=$N AURORA_FUZZ_SEED=$SEED cargo test --release --locked --test fuzz_readers -- --nocapture --test-threads 1 2>&1 \
-  | grep -E '^(vdb|exr|png): |test result'
+  | grep -oE "(vdb|exr|png): [0-9]+ mutations.*|test result.*"
 echo "# total $(($(date +%s) - start)) s"
