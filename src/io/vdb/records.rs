@@ -138,7 +138,7 @@ mod tests {
     fn a_file_truncated_after_it_was_opened_keeps_its_bytes() {
         let d = folder("records", "truncated");
         let p = d.join("a.vdb");
-        let content: Vec<u8> = (0..300_000u32).map(|i| (i * 2654435761u32 >> 24) as u8).collect();
+        let content: Vec<u8> = (0..300_000u32).map(|i| (i.wrapping_mul(2654435761u32) >> 24) as u8).collect();
         std::fs::write(&p, &content).unwrap();
         let bytes = FileBytes::open(&p).unwrap();
         std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(0).unwrap();
