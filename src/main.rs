@@ -9,6 +9,8 @@ mod cli;
 
 fn main() {
     cli::out::reopen_closed_descriptors();
+    cli::out::ignore_file_size_signal();
+    cli::out::on_interrupt_remove_locks();
     aurora::util::memory::tune_allocator();
     let args = cli::args::parse();
     let json = args.json_errors();

@@ -24,7 +24,7 @@ use crate::grid::leaf_source::LeafSource;
 use crate::grid::Transform;
 use crate::io::vdb::parse::RawMeta;
 use crate::io::vdb::parse::{self, AnyTree, ParseError, ValueKind};
-use crate::io::vdb::read::{check_tile_voxels, VdbFile, VdbReadError};
+use crate::io::vdb::read::{check_file_tile_voxels, check_tile_voxels, VdbFile, VdbReadError};
 use crate::io::vdb::records::{FileBytes, FileLeaves};
 use crate::physics::emission::line_table::{grid_name, LINE_KEYS};
 use crate::render::grids::{check_types, choose, ChosenGrids, GridType, Listed, RenderGridsError};
@@ -268,13 +268,16 @@ fn render_medium_named(
     // every grid, and the records of the grids the medium does not use
     // checked as decoding them would (`parse::check_located`); the builder
     // checks the used grids' records as it decodes them.
+    let (mut tile_voxels, mut trees) = (0u128, 0usize);
     for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
         let Some(tree) = &g.tree else { continue };
         check_tile_voxels(tree.tile_voxels(), name, &file)?;
+        (tile_voxels, trees) = (tile_voxels + tree.tile_voxels(), trees + 1);
         if !used.contains(&Some(i)) {
             tree.check_located(bytes, &g.header.unique_name).map_err(invalid)?;
         }
     }
+    check_file_tile_voxels(tile_voxels, trees, &file)?;
     let open_seconds = start.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
     let medium = Medium::from_sources(

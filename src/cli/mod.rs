@@ -22,7 +22,7 @@ mod render_checks;
 mod scene;
 mod sky;
 
-use anyhow::{Context, Result};
+use anyhow::Result;
 use args::{Cli, Command};
 use aurora::scene::Scene;
 use std::path::{Path, PathBuf};
@@ -71,11 +71,39 @@ where
 {
     let mut b = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
-        // 1..=MAX_THREADS, checked by clap.
+        // 1..=MAX_THREADS, checked by clap; their stacks within the limit here.
+        threads_within_memory(n, &aurora::util::memory::available())?;
         b = b.num_threads(n as usize);
     }
-    let pool = b.build().context("cannot start the thread pool")?;
+    let pool = b.build().map_err(|e| match threads {
+        Some(n) => anyhow::Error::from(exit::InputError(format!("--threads {n}: cannot start {n} threads: {e}; use fewer"))),
+        None => anyhow::Error::from(e).context("cannot start the thread pool"),
+    })?;
     pool.install(f)
+}
+
+/// Bytes of address space a worker thread reserves for its stack (Rust's
+/// default, which rayon keeps) and its guard page, rounded up.
+const THREAD_STACK_BYTES: f64 = (2u64 << 20) as f64 + 65536.0;
+
+/// The share of the process's memory limit the workers' stacks may take.
+const THREAD_STACKS_FRACTION: f64 = 0.25;
+
+/// Refuses (exit status 2) `--threads n` when the threads' stacks would
+/// take more than [`THREAD_STACKS_FRACTION`] of `limit`: under an
+/// address-space cap the stacks count in full, and starting a thread beyond
+/// it fails; the message names the count, the limit and the most that fit.
+fn threads_within_memory(n: u64, limit: &aurora::util::memory::MemoryLimit) -> Result<()> {
+    let room = limit.bytes * THREAD_STACKS_FRACTION;
+    if n as f64 * THREAD_STACK_BYTES <= room {
+        return Ok(());
+    }
+    let most = ((room / THREAD_STACK_BYTES).floor() as u64).max(1);
+    Err(exit::InputError(format!(
+        "--threads {n}: {n} threads' stacks would take about {} of the {limit} this process may use; use --threads {most} or fewer",
+        aurora::util::memory::gib(n as f64 * THREAD_STACK_BYTES)
+    ))
+    .into())
 }
 
 /// Bake warnings (under-resolved kernel or curtains) on stderr, even with --quiet.

@@ -35,6 +35,44 @@ pub fn stderr(args: std::fmt::Arguments) {
     let _ = err.write_fmt(args).and_then(|_| err.flush());
 }
 
+/// Ignores SIGXFSZ, the signal a write past `RLIMIT_FSIZE` (`ulimit -f`)
+/// raises, whose default action kills the process and leaves its
+/// temporaries behind. Ignored, the write fails with `EFBIG` instead: an I/O
+/// error like a full disk (exit status 1), whose staged files are removed
+/// as any failed write's are (`aurora::util::atomic_write`).
+pub fn ignore_file_size_signal() {
+    // SAFETY: setting a signal's disposition to SIG_IGN installs no handler;
+    // it is done first in `main`, before any thread is started.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
+}
+
+/// On SIGINT (Ctrl-C) or SIGTERM: the held locks' files are removed
+/// (`aurora::util::atomic_write::remove_held_locks`), stderr says the run
+/// was interrupted, and the signal is raised again with its default action,
+/// so the process ends as interrupted processes do (a shell sees the
+/// signal). Temporaries are left to the next run into the folder, which
+/// removes them.
+pub fn on_interrupt_remove_locks() {
+    extern "C" fn handler(sig: libc::c_int) {
+        aurora::util::atomic_write::remove_held_locks();
+        let msg = b"\naurora: interrupted before finishing\n";
+        // SAFETY: write(2), signal(2) and raise(3) are async-signal-safe.
+        unsafe {
+            libc::write(2, msg.as_ptr().cast(), msg.len());
+            libc::signal(sig, libc::SIG_DFL);
+            libc::raise(sig);
+        }
+    }
+    for sig in [libc::SIGINT, libc::SIGTERM] {
+        // SAFETY: the handler makes only async-signal-safe calls.
+        unsafe {
+            libc::signal(sig, handler as extern "C" fn(libc::c_int) as libc::sighandler_t);
+        }
+    }
+}
+
 /// Opens /dev/null on each of descriptors 0, 1 and 2 that is closed.
 pub fn reopen_closed_descriptors() {
     for fd in 0..=2 {

@@ -93,6 +93,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     let format = image_format("--out", &out)?;
     super::render_checks::inputs_and_outputs(vdb.as_deref(), frame.as_deref(), &[Some(&out), png.as_deref()])?;
     super::render_checks::camera_above_terrain(&scene, &dir)?;
+    super::render_checks::image_within_memory(&scene, adaptive)?;
     if grid.is_none() {
         super::render_checks::observer_inputs(vdb.as_deref(), frame.as_deref(), &scene.colour)?;
     }

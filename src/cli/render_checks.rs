@@ -15,6 +15,10 @@
 //!   system, is found here rather than after the render);
 //! - every VDB can be shown through the scene's observer ([`observer_inputs`]):
 //!   baked for it, or holding the line grids to re-colour it;
+//! - the image's pixels fit in the memory this process may use
+//!   ([`image_within_memory`]): a picture too large for the limit is
+//!   refused naming its size and the limit, never ended by a failed
+//!   allocation;
 //! - the camera is above the terrain ([`camera_above_terrain`]): a camera
 //!   inside the ground would give a black picture, so `render` and
 //!   `preview` refuse it naming both heights; `bake` never reads the
@@ -124,6 +128,29 @@ fn output_folder(out: &Path) -> Result<(), AtomicError> {
         }
         Err(e) => Err(refuse(format!("not writable: {e}"))),
     }
+}
+
+/// Refuses (exit status 2) a `render.width` x `render.height` picture
+/// whose pixels (`aurora::render::image::image_memory_bytes`, `adaptive` or
+/// not) would need more than the memory this process may use
+/// (`aurora::util::memory::available`), naming both and the largest square
+/// picture that fits.
+pub fn image_within_memory(scene: &Scene, adaptive: bool) -> Result<()> {
+    let (w, h) = (scene.render.width, scene.render.height);
+    let needed = aurora::render::image::image_memory_bytes(w, h, adaptive) as f64;
+    let limit = aurora::util::memory::available();
+    if needed <= limit.bytes {
+        return Ok(());
+    }
+    let per_pixel = aurora::render::image::image_memory_bytes(1, 1, adaptive) as f64;
+    let side = (limit.bytes / per_pixel).sqrt().floor() as u64;
+    Err(InputError(format!(
+        "render.width = {w}, render.height = {h}: the picture's {} pixels would need about {} to render, but this process may use {limit}; \
+         render a smaller picture (at most about {side} x {side}, --size or --set render.width=... render.height=...)",
+        w as u128 * h as u128,
+        aurora::util::memory::gib(needed)
+    ))
+    .into())
 }
 
 /// The refusal's words when the scene's camera is below its terrain (the

@@ -42,6 +42,9 @@ impl FrameError {
 /// `1-9999999999`: a 10-minute show at 60 fps is 36,000 frames).
 pub const MAX_FRAMES: usize = 10_000_000;
 
+/// Most shards a farm's variables may name: as many as the most frames.
+pub const MAX_SHARDS: u64 = MAX_FRAMES as u64;
+
 fn range_err(text: &str, why: impl Into<String>) -> FrameError {
     FrameError::Range { text: text.to_string(), why: why.into() }
 }
@@ -257,15 +260,25 @@ impl Shard {
                     }
                 }
                 let (id, min, count) = (var("SLURM_ARRAY_TASK_ID")?, var("SLURM_ARRAY_TASK_MIN")?, var("SLURM_ARRAY_TASK_COUNT")?);
-                if count < 1 || id < min || id - min >= count {
+                // In i128: ID - MIN of two 64-bit values cannot overflow.
+                let index = id as i128 - min as i128;
+                if count < 1 || index < 0 || index >= count as i128 {
                     return Err(err(format!(
                         "SLURM_ARRAY_TASK_ID = {id}, SLURM_ARRAY_TASK_MIN = {min}, SLURM_ARRAY_TASK_COUNT = {count} do not give 0 <= ID - MIN < COUNT (a list like --array=1,5,9 is not contiguous)"
                     )));
                 }
-                Ok(((id - min) as u64, count as u64))
+                if count as u64 > MAX_SHARDS {
+                    return Err(err(format!(
+                        "SLURM_ARRAY_TASK_COUNT = {count}: more shards than {MAX_SHARDS}, the most frames one range may hold; not an array aurora can use"
+                    )));
+                }
+                Ok((index as u64, count as u64))
             }
             Shard::Indexed { count } => {
                 let i = var("JOB_COMPLETION_INDEX")?;
+                if *count > MAX_SHARDS {
+                    return Err(err(format!("N = {count}: more shards than {MAX_SHARDS}, the most frames one range may hold")));
+                }
                 if i < 0 || i as u64 >= *count {
                     return Err(err(format!("JOB_COMPLETION_INDEX = {i} is not below N = {count}")));
                 }
@@ -418,6 +431,25 @@ mod tests {
         ]);
         assert!(Shard::Slurm.resolve(stepped).unwrap_err().to_string().contains("stepped"));
         assert!(Shard::Slurm.resolve(env(&[])).unwrap_err().to_string().contains("SLURM_ARRAY_TASK_ID is not set"));
+        // Variables at the ends of a 64-bit integer are refused, never
+        // taken as a shard that bakes nothing.
+        let (max, min) = (i64::MAX.to_string(), i64::MIN.to_string());
+        let (max, min) = (max.as_str(), min.as_str());
+        for (id, lo, count) in [(max, min, "4"), (min, max, "4"), (max, "0", max), ("0", "0", max), ("5", min, max)] {
+            let vars = [
+                ("SLURM_ARRAY_TASK_ID", id.to_string()),
+                ("SLURM_ARRAY_TASK_MIN", lo.to_string()),
+                ("SLURM_ARRAY_TASK_COUNT", count.to_string()),
+            ];
+            let r = Shard::Slurm.resolve(|k: &str| vars.iter().find(|(n, _)| *n == k).map(|(_, v)| v.clone()));
+            let e = r.unwrap_err().to_string();
+            assert!(e.starts_with("--shard `auto`: SLURM_ARRAY_TASK_"), "{id} {lo} {count}: {e}");
+        }
+        assert!(Shard::Slurm
+            .resolve(env(&[("SLURM_ARRAY_TASK_ID", "99999999999999999999")]))
+            .unwrap_err()
+            .to_string()
+            .contains("not a whole number"));
         let k8s = env(&[("JOB_COMPLETION_INDEX", "2")]);
         assert_eq!(Shard::Indexed { count: 3 }.resolve(k8s).unwrap(), (2, 3));
         assert!(Shard::Indexed { count: 2 }.resolve(env(&[("JOB_COMPLETION_INDEX", "2")])).is_err());

@@ -43,12 +43,19 @@ pub enum OutputError {
     Write { path: PathBuf, message: String },
     #[error(transparent)]
     Output(#[from] AtomicError),
+    /// A file with one of the bake's names that aurora did not write.
+    #[error("{}: {why}; a bake replaces only its own files: move it away or bake into another folder", path.display())]
+    NotOurs { path: PathBuf, why: String },
 }
 
 impl OutputError {
     /// True when the user's choice of output is at fault (exit status 2).
     pub fn is_input(&self) -> bool {
-        matches!(self, OutputError::Output(e) if e.is_input())
+        match self {
+            OutputError::Output(e) => e.is_input(),
+            OutputError::NotOurs { .. } => true,
+            OutputError::Write { .. } => false,
+        }
     }
 }
 
@@ -66,7 +73,44 @@ pub fn prepare(out: &Path, on_wait: impl FnOnce()) -> Result<BakeFolder, OutputE
     for name in [VDB_NAME, USDA_NAME, JSON_NAME] {
         crate::util::atomic_write::check_replaceable(&out.join(name))?;
     }
+    check_ours(out)?;
     Ok(folder)
+}
+
+/// Refuses a folder whose bake files were not written by aurora, before
+/// anything is baked (the add-on refuses such a folder too): a `bake.json`
+/// that is not one of our reports (a JSON object naming `bake_identity` or
+/// `aurora_version`), or, with no report, an `aurora.vdb` whose grids do
+/// not carry our metadata (`aurora_scene_hash`, [`vdb_metadata`]). A VDB
+/// without a report is ours when a bake was stopped between its renames,
+/// and is replaced.
+pub fn check_ours(out: &Path) -> Result<(), OutputError> {
+    let not_ours = |path: PathBuf, why: &str| OutputError::NotOurs { path, why: why.to_string() };
+    let json = out.join(JSON_NAME);
+    match std::fs::read(&json) {
+        Ok(bytes) => {
+            let ours = serde_json::from_slice::<serde_json::Value>(&bytes)
+                .ok()
+                .is_some_and(|v| v.get("bake_identity").is_some() || v.get("aurora_version").is_some());
+            return if ours { Ok(()) } else { Err(not_ours(json, "is not the report of an aurora bake")) };
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return Err(OutputError::Write { path: json, message: e.to_string() }),
+    }
+    let vdb = out.join(VDB_NAME);
+    let bytes = match crate::io::vdb::records::FileBytes::open(&vdb) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(OutputError::Write { path: vdb, message: e.to_string() }),
+    };
+    let ours = crate::io::vdb::parse::list_grids(bytes.bytes())
+        .ok()
+        .is_some_and(|grids| grids.iter().any(|g| g.metadata.iter().any(|(k, _)| k == "aurora_scene_hash")));
+    if ours {
+        Ok(())
+    } else {
+        Err(not_ours(vdb, "has no bake.json beside it and is not a VDB aurora wrote (its grids carry no aurora_scene_hash)"))
+    }
 }
 
 /// A bake's output folder, locked (see [`prepare`]).

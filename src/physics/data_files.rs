@@ -144,6 +144,9 @@ pub fn identity(params: &AtmosphereParams) -> String {
 /// the header starts with a letter), each with at least `columns` values.
 /// Errors name the line (1-based) and what is wrong.
 pub fn rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, (usize, String)> {
+    // A byte-order mark (a spreadsheet's UTF-8 export) is not part of the
+    // first line's text.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut out: Vec<Vec<f64>> = Vec::new();
     for (i, l) in text.lines().enumerate() {
         if l.starts_with('#') || l.starts_with(|c: char| c.is_ascii_alphabetic()) || l.trim().is_empty() {
@@ -151,7 +154,7 @@ pub fn rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, (usize, String)
         }
         let r: Vec<f64> = l
             .split(',')
-            .map(|x| x.trim().parse::<f64>().map_err(|_| (i + 1, format!("'{}' is not a number", x.trim()))))
+            .map(|x| x.trim().parse::<f64>().map_err(|_| (i + 1, format!("'{}' is not a number", excerpt(x.trim())))))
             .collect::<Result<_, _>>()?;
         if r.len() < columns {
             return Err((i + 1, format!("{} columns, expected at least {columns}", r.len())));
@@ -160,7 +163,7 @@ pub fn rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, (usize, String)
             return Err((i + 1, "a value is not finite".into()));
         }
         if out.last().is_some_and(|p| p[0] >= r[0]) {
-            return Err((i + 1, format!("altitude {} km does not ascend", r[0])));
+            return Err((i + 1, format!("altitude {} km does not ascend", figure(r[0]))));
         }
         out.push(r);
     }
@@ -168,6 +171,25 @@ pub fn rows(text: &str, columns: usize) -> Result<Vec<Vec<f64>>, (usize, String)
         return Err((text.lines().count(), "fewer than 2 rows".into()));
     }
     Ok(out)
+}
+
+/// A value as a message quotes it: in full when short, else in scientific
+/// notation (1e300, not its 301 digits).
+fn figure(x: f64) -> String {
+    let plain = format!("{x}");
+    if plain.len() <= 12 {
+        plain
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// At most 40 characters of a field, for a message.
+fn excerpt(field: &str) -> String {
+    match field.char_indices().nth(40) {
+        None => field.to_string(),
+        Some((at, _)) => format!("{}... ({} bytes)", &field[..at], field.len()),
+    }
 }
 
 /// [`rows`] of a file read from `path`, as a [`DataError`], with columns 1
@@ -187,7 +209,7 @@ pub fn file_rows(path: &Path, text: &str, columns: usize, falling: Option<usize>
     };
     for (i, r) in out.iter().enumerate() {
         if let Some(k) = (1..columns).find(|&k| r[k] <= 0.0) {
-            return Err(bad(line_of(i), format!("column {} is {}, must be positive", k + 1, r[k])));
+            return Err(bad(line_of(i), format!("column {} is {}, must be positive", k + 1, figure(r[k]))));
         }
         if let Some(k) = falling.filter(|_| i > 0) {
             if r[k] >= out[i - 1][k] {
@@ -201,6 +223,23 @@ pub fn file_rows(path: &Path, text: &str, columns: usize, falling: Option<usize>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A table saved with a byte-order mark reads as without it; absurd
+    /// values and long fields are quoted in a few characters.
+    #[test]
+    fn a_byte_order_mark_is_read_and_absurd_values_are_quoted_short() {
+        let table = "alt_km,n_cm3,t_k\n100,5,200\n110,4,210\n";
+        let want = rows(table, 3).unwrap();
+        assert_eq!(rows(&format!("\u{feff}{table}"), 3).unwrap(), want);
+        assert_eq!(rows("\u{feff}100,5,200\n110,4,210\n", 3).unwrap(), want);
+        let p = Path::new("t.csv");
+        let e = file_rows(p, "alt_km,n,t\n100,-1e300,200\n110,4,210\n", 3, None).unwrap_err().to_string();
+        assert!(e.contains("column 2 is -1e300, must be positive") && e.len() < 200, "{e}");
+        let (_, m) = rows(&format!("100,5,200\n1e300,4,210\n50,{},1\n", "9".repeat(5000)), 3).unwrap_err();
+        assert!(m.len() < 120, "{m}");
+        let (_, m) = rows(&format!("100,5,200\n110,{}x,1\n", "9".repeat(5000)), 3).unwrap_err();
+        assert!(m.starts_with("'9999") && m.contains("(5001 bytes)' is not a number") && m.len() < 120, "{m}");
+    }
 
     #[test]
     fn the_folder_is_the_scene_key_then_the_build_tree() {

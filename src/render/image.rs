@@ -1,5 +1,24 @@
 //! The renderer's result: a linear image ([`Image`]) and the work and time
-//! that made it ([`RenderStats`]).
+//! that made it ([`RenderStats`]), and the memory an image of a given size
+//! takes ([`image_memory_bytes`]).
+
+/// Bytes a render holds per pixel: the image (`[f32; 4]`), the bands the
+/// threads fill before it is assembled (as much again), the 16-bit PNG's
+/// samples and the EXR writer's copy.
+pub const RENDER_BYTES_PER_PIXEL: u64 = 48;
+
+/// Bytes an adaptive render holds per pixel: each pixel's state (its
+/// random stream, sums and pair statistics, about 104 bytes), its
+/// statistics and weights for the second pass, and the image as above.
+pub const ADAPTIVE_BYTES_PER_PIXEL: u64 = 192;
+
+/// The memory a `width` x `height` render holds for its pixels (adaptive or
+/// not), in bytes: what the render checks against the process's limit
+/// before any pixel is allocated.
+pub fn image_memory_bytes(width: usize, height: usize, adaptive: bool) -> u128 {
+    let per_pixel = if adaptive { ADAPTIVE_BYTES_PER_PIXEL } else { RENDER_BYTES_PER_PIXEL };
+    width as u128 * height as u128 * per_pixel as u128
+}
 
 /// Work and time of one render. Counts are exact and deterministic; times are
 /// measured (wall clock, and per-thread time summed over threads).

@@ -24,6 +24,11 @@
 //!   `tEXt` chunks.
 //!
 //! All are written to a temporary file in the destination folder and renamed.
+//!
+//! An EXR is read ([`read_exr`], the sky's background image) only once the
+//! sizes its headers declare are checked against the file's length and the
+//! process's memory ([`check_exr_size`]): a damaged size is refused (exit
+//! status 2), never allocated.
 
 use super::image::{Image, RenderStats};
 use super::settings::RenderError;
@@ -127,6 +132,7 @@ pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>),
     use exr::prelude::ReadSpecificChannel;
     let path = path.as_ref();
     let file = crate::util::input_file::open(path).map_err(|e| RenderError::Exr { path: path.to_path_buf(), message: e.reason() })?;
+    check_exr_size(&file, path, 4)?;
     let channels = read().no_deep_data().largest_resolution_level().specific_channels().required("Y").collect_pixels(
         |res: Vec2<usize>, _| (res.0, vec![0.0f32; res.0 * res.1]),
         |(w, px): &mut (usize, Vec<f32>), pos: Vec2<usize>, (y,): (f32,)| px[pos.1 * *w + pos.0] = y,
@@ -134,6 +140,62 @@ pub fn read_exr_grey(path: impl AsRef<Path>) -> Result<(usize, usize, Vec<f32>),
     let layer = first_valid_layer(channels, file, path)?;
     let (_, values) = layer.channel_data.pixels;
     Ok((layer.size.0, layer.size.1, values))
+}
+
+/// Bytes a reader may hold per pixel of an image it reads, for each byte
+/// of the pixels it returns: the decoded blocks beside the returned image,
+/// and the caller's own copy (the sky's map of the background).
+const EXR_READ_COPIES: u64 = 3;
+
+/// Most bytes of samples an EXR's file may hold per byte of file: above
+/// the highest ratio of any of OpenEXR's compressions (ZIP's deflate
+/// reaches about 1032, PXR24's a third more, RLE 64).
+const MAX_EXR_RATIO: u128 = 2048;
+
+/// Checks the sizes an EXR's headers declare before any pixel is allocated
+/// : the offset table of every layer (eight bytes per block of
+/// pixels, all in the file) fits in the file's length, and the largest
+/// layer's samples fit in [`MAX_EXR_RATIO`] times the file's length, and
+/// its pixels at `bytes_per_pixel` (the image the reader returns),
+/// [`EXR_READ_COPIES`] times, fit in the memory this process may use
+/// ([`crate::util::memory::available`]). A header that declares 100000 x
+/// 100000 pixels in a file of a few hundred bytes is refused here, naming
+/// both, instead of ending the process in a failed allocation. The file is
+/// left at its start for the reader.
+pub fn check_exr_size(file: &std::fs::File, path: &Path, bytes_per_pixel: u64) -> Result<(), RenderError> {
+    use std::io::{Seek, SeekFrom};
+    let exr_err = |message: String| RenderError::Exr { path: path.to_path_buf(), message };
+    let refuse = |message: String| RenderError::ImageSize { path: path.to_path_buf(), message };
+    let file_len = file.metadata().map_err(|e| exr_err(e.to_string()))?.len();
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), false).map_err(|e| exr_err(e.to_string()))?;
+    let blocks: u128 = meta.headers.iter().map(|h| h.chunk_count as u128).sum();
+    if blocks * 8 > file_len as u128 {
+        return Err(refuse(format!(
+            "its headers declare {blocks} blocks of pixels, whose offsets alone (8 bytes each) would not fit in the file's {file_len} bytes: \
+             the file is damaged or truncated"
+        )));
+    }
+    let limit = crate::util::memory::available();
+    for h in meta.headers.iter() {
+        let (w, hgt) = (h.layer_size.0 as u128, h.layer_size.1 as u128);
+        let stored = w * hgt * h.channels.bytes_per_pixel as u128;
+        if stored > file_len as u128 * MAX_EXR_RATIO {
+            return Err(refuse(format!(
+                "its image of {w} x {hgt} pixels holds {stored} bytes of samples, more than {MAX_EXR_RATIO} times the file's {file_len} bytes, \
+                 beyond what any of OpenEXR's compressions reaches: the file is damaged or truncated"
+            )));
+        }
+        let needed = w * hgt * bytes_per_pixel as u128 * EXR_READ_COPIES as u128;
+        if needed as f64 > limit.bytes {
+            return Err(refuse(format!(
+                "its image of {w} x {hgt} pixels would need about {} to read, but this process may use {limit}",
+                crate::util::memory::gib(needed as f64)
+            )));
+        }
+    }
+    let mut f = file;
+    f.seek(SeekFrom::Start(0)).map_err(|e| exr_err(e.to_string()))?;
+    Ok(())
 }
 
 /// The first valid layer of the EXR `file` (named `path` in errors) as
@@ -200,6 +262,7 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, RenderError> {
 /// [`read_exr`] of a file already opened (through `crate::util::input_file`);
 /// `path` names it in errors.
 pub fn read_exr_file(file: std::fs::File, path: &Path) -> Result<Image, RenderError> {
+    check_exr_size(&file, path, std::mem::size_of::<[f32; 4]>() as u64)?;
     let channels = read().no_deep_data().largest_resolution_level().rgba_channels(
         |res: Vec2<usize>, _| (res.0, vec![[0.0f32; 4]; res.0 * res.1]),
         |(w, px): &mut (usize, Vec<[f32; 4]>), pos: Vec2<usize>, (r, g, b, a): (f32, f32, f32, f32)| {
@@ -255,4 +318,35 @@ pub fn write_png_bits(path: impl AsRef<Path>, image: &Image, exposure: f64, view
     })();
     r?;
     tmp.commit().map_err(output_err)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::scratch::folder;
+
+    /// A small EXR whose header is changed to declare 100000 x 100000
+    /// pixels is refused by its sizes (an input error naming the file and
+    /// the counts), before any pixel is allocated; the file as written
+    /// still reads.
+    #[test]
+    fn an_exr_declaring_more_pixels_than_its_file_holds_is_refused() {
+        let d = folder("image-file", "declared");
+        let p = d.join("sky.exr");
+        let pixels = (0..16).map(|i| [i as f32, 0.5, 0.25, 1.0]).collect();
+        write_exr(&p, &Image { width: 4, height: 4, pixels, stats: RenderStats::default() }).unwrap();
+        assert_eq!(read_exr(&p).unwrap().pixels.len(), 16);
+        let mut bytes = std::fs::read(&p).unwrap();
+        let key = b"dataWindow\0box2i\0";
+        let at = bytes.windows(key.len()).position(|w| w == key).unwrap() + key.len() + 4;
+        for (i, v) in [0i32, 0, 99_999, 99_999].into_iter().enumerate() {
+            bytes[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+        }
+        std::fs::write(&p, &bytes).unwrap();
+        let e = read_exr(&p).unwrap_err();
+        assert!(matches!(e, RenderError::ImageSize { .. }) && e.is_input(), "{e:?}");
+        let m = e.to_string();
+        assert!(m.starts_with(&p.display().to_string()) && m.contains(&format!("the file's {} bytes", bytes.len())), "{m}");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
 }

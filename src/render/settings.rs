@@ -142,6 +142,11 @@ pub enum RenderError {
     Io { path: PathBuf, source: std::io::Error },
     #[error("{}: EXR: {message}", path.display())]
     Exr { path: PathBuf, message: String },
+    /// An image file whose declared size does not fit in the file or in
+    /// the memory this process may use: refused before its pixels are
+    /// allocated (`crate::render::image_file::check_exr_size`).
+    #[error("{}: {message}", path.display())]
+    ImageSize { path: PathBuf, message: String },
     #[error("{}: PNG: {message}", path.display())]
     Png { path: PathBuf, message: String },
     /// The output is not ours to replace, or could not be staged or renamed.
@@ -154,7 +159,7 @@ impl RenderError {
     pub fn is_input(&self) -> bool {
         use RenderError::*;
         match self {
-            Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | Heightmap { .. } | Input { .. } => true,
+            Settings(_) | Grid { .. } | Source { .. } | Memory { .. } | ImageSize { .. } | Heightmap { .. } | Input { .. } => true,
             Output(a) => a.is_input(),
             Io { .. } | Exr { .. } | Png { .. } => false,
         }

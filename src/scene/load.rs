@@ -93,7 +93,10 @@ fn parse_error(file: &str, text: &str, e: &toml::de::Error) -> SceneError {
         Some(i) => format!("{}{plain}{}", &full[..i], &full[i + e.message().len()..]),
         None => full,
     };
-    SceneError::Parse { file: file.to_string(), message }
+    // The snippet and the message quote at most a long line's worth of each
+    // line (the parser's message lists a key's words in full).
+    let message: Vec<String> = message.lines().map(|l| super::validation::quoted_within(l, 400)).collect();
+    SceneError::Parse { file: file.to_string(), message: message.join("\n") }
 }
 
 #[cfg(test)]
@@ -102,6 +105,29 @@ mod tests {
 
     fn set(text: &str) -> Override {
         Override::parse(text, "--set").unwrap()
+    }
+
+    /// A scene with a 10 MB string or a million bad entries is refused in
+    /// linear time with a message of a few lines' worth.
+    #[test]
+    fn large_bad_inputs_are_refused_quickly_with_short_messages() {
+        let t = std::time::Instant::now();
+        let huge = format!("[camera]\nprojection = \"{}\"\n", "x".repeat(10_000_000));
+        let m = Scene::from_toml_str(&huge, "f.toml").unwrap_err().to_string();
+        assert!(m.len() < 2_000 && m.contains("bytes in all)"), "{}", &m[..m.len().min(3000)]);
+        let points = vec!["[1.0]"; 200_000].join(", ");
+        let m = Scene::from_toml_str(&format!("[[curtain]]\npath = [{points}]\n"), "f.toml").unwrap_err().to_string();
+        assert!(
+            m.len() < 20_000 && m.contains("point 0: [1.0]") && m.contains("and more errors after these"),
+            "{}",
+            &m[..m.len().min(3000)]
+        );
+        assert!(!m.contains("point 20: "), "{}", &m[..m.len().min(3000)]);
+        let m =
+            Scene::from_toml_str(&format!("[camera]\nup = [{}]\n", vec!["1.0"; 1_000_000].join(", ")), "f.toml").unwrap_err().to_string();
+        assert!(m.len() < 2_000 && m.contains("must have exactly 3 values, not 1000000"), "{}", &m[..m.len().min(3000)]);
+        // Generous on a loaded machine: the quadratic search took minutes.
+        assert!(t.elapsed() < std::time::Duration::from_secs(60), "{:?}", t.elapsed());
     }
 
     /// The file's errors keep their lines; an override's error names the

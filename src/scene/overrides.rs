@@ -50,8 +50,16 @@ impl Override {
     /// (`colour.mode=colormap`). The key's spelling is checked here, the
     /// key's existence and the value when applied.
     pub fn parse(text: &str, flag: &str) -> Result<Override, SceneError> {
-        let source = format!("{flag} {text}");
+        let source = format!("{flag} {}", excerpt(text));
         let bad = |message: String| SceneError::Override { given: source.clone(), message };
+        // One value on one line: the rest of a second line would be read
+        // as another key of the value's own table and dropped unseen.
+        if let Some(at) = text.find(['\n', '\r']) {
+            return Err(bad(format!(
+                "takes one KEY=VALUE on one line; a line break follows `{}`: give each key its own {flag}",
+                excerpt(&text[..at])
+            )));
+        }
         let Some((key, value)) = text.split_once('=') else {
             return Err(bad(format!("expected KEY=VALUE, e.g. {flag} render.width=64 or {flag} 'camera.up=[0, 1, 0]'")));
         };
@@ -59,7 +67,8 @@ impl Override {
         parse_key(key).map_err(bad)?;
         let value = value.trim();
         let value = match format!("v = {value}").parse::<Table>() {
-            Ok(mut t) => t.remove("v").expect("the key parsed"),
+            Ok(mut t) if t.len() == 1 => t.remove("v").expect("the key parsed"),
+            Ok(_) => return Err(bad("takes one value; give each key its own KEY=VALUE".into())),
             Err(_) => Value::String(value.to_string()),
         };
         Ok(Override { key: key.to_string(), value, source })
@@ -79,6 +88,18 @@ impl Override {
 
 /// The steps of `key`: names of letters, digits and `_`, each with an
 /// optional `[index]`, joined by dots.
+/// At most [`EXCERPT_CHARS`] characters of `text`, for a message: a longer
+/// text is cut there and its length in bytes said.
+fn excerpt(text: &str) -> String {
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        None => text.to_string(),
+        Some((at, _)) => format!("{}... ({} bytes)", &text[..at], text.len()),
+    }
+}
+
+/// The most characters of a given text a message quotes: a line's worth.
+const EXCERPT_CHARS: usize = 80;
+
 fn parse_key(key: &str) -> Result<Vec<Step>, String> {
     let bad = || format!("`{key}` is not a key: write it as the errors do, e.g. render.width, curtain[1].energy_flux or seed");
     if key.is_empty() {
@@ -283,6 +304,22 @@ mod tests {
             let e = Override::parse(bad, "--set").unwrap_err().to_string();
             assert!(e.starts_with(&format!("--set {bad}: ")), "{e}");
         }
+    }
+
+    /// A value with a line break (a second key hidden on the next line)
+    /// is refused, not taken with the second line dropped; a long value is
+    /// quoted by its first line's worth.
+    #[test]
+    fn one_value_on_one_line() {
+        for text in ["render.width=64\nspp = 3", "render.width=64\r\nrender.spp=3", "render.width=\n64"] {
+            let e = Override::parse(text, "--set").unwrap_err().to_string();
+            assert!(e.contains("takes one KEY=VALUE on one line"), "{e}");
+            assert!(e.contains("a line break follows `render.width="), "{e}");
+        }
+        let long = format!("colour.mode={}", "x".repeat(10_000_000));
+        let e = Override::parse(&format!("{long}\n"), "--set").unwrap_err().to_string();
+        assert!(e.len() < 400 && e.contains("(10000012 bytes)"), "{}", &e[..e.len().min(400)]);
+        assert_eq!(set("render.width=64 # a comment").value, Value::Integer(64));
     }
 
     #[test]

@@ -78,7 +78,7 @@ impl fmt::Display for RangeError {
             // A rule between keys, not one value's range.
             return write!(f, "{}: {}", self.key, self.allowed);
         }
-        write!(f, "{} = {} is out of range: {}", self.key, self.value, self.allowed)
+        write!(f, "{} = {} is out of range: {}", self.key, quoted(&self.value), self.allowed)
     }
 }
 
@@ -132,6 +132,19 @@ impl Scene {
                     "bend_km",
                     c.bend_km.to_string(),
                     format!("must be less than curtain[{i}].width / 2 = {} (raise width or lower bend_km)", c.width / 2.0),
+                );
+            }
+        }
+        if let crate::scene::VoxelSize::Km(vs) = self.grid.voxel_size {
+            if !(MIN_VOXEL_KM..=MAX_VOXEL_KM).contains(&vs) {
+                v.push(
+                    Some(("grid", 0)),
+                    "voxel_size",
+                    vs.to_string(),
+                    format!(
+                        "must be in [{MIN_VOXEL_KM}, {MAX_VOXEL_KM}] km: a finer voxel puts a scene's few thousand km beyond the grid's \
+                         32-bit indices, a coarser one holds the whole aurora in one voxel (or \"auto\")"
+                    ),
                 );
             }
         }
@@ -304,8 +317,51 @@ struct Validator<'a> {
     errors: Vec<RangeError>,
 }
 
+/// The finest voxel a bake takes, km (10 cm): 2^30 voxels of it span
+/// 107,000 km, more than any scene's extent, so every index fits the
+/// grid's 32 bits.
+pub const MIN_VOXEL_KM: f64 = 1e-4;
+
+/// The coarsest voxel a bake takes, km: beyond it the whole aurora is a
+/// voxel or two.
+pub const MAX_VOXEL_KM: f64 = 1e5;
+
+/// Most errors one check reports: a file with a million bad entries is
+/// refused with its first ones named, in time linear in its size (each
+/// error's line is found by a scan of the text).
+pub const MAX_REPORTED_ERRORS: usize = 20;
+
+/// Said after the last error reported when there were more.
+const MORE_ERRORS: &str = " (and more errors after these; the first ones are named)";
+
+/// Most characters of a value an error quotes: a line's worth.
+pub const MAX_QUOTED_CHARS: usize = 120;
+
+/// `text` as an error quotes it: whole, or its first
+/// [`MAX_QUOTED_CHARS`] characters and its length.
+pub fn quoted(text: &str) -> String {
+    quoted_within(text, MAX_QUOTED_CHARS)
+}
+
+/// `text` as an error quotes it: whole, or its first `chars` characters
+/// and its length.
+pub fn quoted_within(text: &str, chars: usize) -> String {
+    match text.char_indices().nth(chars) {
+        None => text.to_string(),
+        Some((at, _)) => format!("{}... ({} bytes in all)", &text[..at], text.len()),
+    }
+}
+
 impl Validator<'_> {
     fn push(&mut self, table: Option<(&str, usize)>, key: &str, value: String, allowed: String) {
+        if self.errors.len() >= MAX_REPORTED_ERRORS {
+            if let Some(last) = self.errors.last_mut() {
+                if !last.allowed.ends_with(MORE_ERRORS) {
+                    last.allowed.push_str(MORE_ERRORS);
+                }
+            }
+            return;
+        }
         let line = self.text.and_then(|t| find_key_line(t, table, key));
         let key = match table {
             Some(("curtain", i)) => format!("curtain[{i}].{key}"),
@@ -453,6 +509,20 @@ mod tests {
         assert!(m.contains("m.toml") && m.contains("msis00") && m.contains("nrlmsis21") && m.contains("us1976"), "{m}");
         let m = Scene::from_toml_str("[beams]\ndeposition = \"mean\"\n", "m.toml").unwrap_err().to_string();
         assert!(m.contains("mean") && m.contains("expected") && m.contains("sampled") && m.contains("csda"), "{m}");
+    }
+
+    /// Voxel sizes the grid's indices cannot hold (5e-324 once hung the
+    /// bake) or that hold the aurora in one voxel are refused naming the
+    /// range.
+    #[test]
+    fn voxel_sizes_at_the_ends_of_the_arithmetic_are_refused() {
+        for vs in ["5e-324", "1e-9", "1e100", "1e300"] {
+            let e = Scene::from_toml_str(&format!("[grid]\nvoxel_size = {vs}\n"), "f.toml").unwrap_err().to_string();
+            assert!(e.contains("grid.voxel_size = ") && e.contains("must be in [0.0001, 100000] km"), "{vs}: {e}");
+        }
+        for vs in ["1e-4", "0.5", "1e4"] {
+            Scene::from_toml_str(&format!("[grid]\nvoxel_size = {vs}\n"), "f.toml").unwrap();
+        }
     }
 
     #[test]

@@ -10,7 +10,8 @@
 //!    a device node does not write through it but replaces its directory entry:
 //!    as root, `--out /dev/full` would replace the system's `/dev/full`.)
 //! 2. **A file appears whole or not at all.** Bytes go to a temporary name in
-//!    the destination's folder, `.<name>.tmp<pid>-<n>.<host>`, created with
+//!    the destination's folder, `.<name>.tmp<pid>-<n>.<host>` (the name cut so
+//!    that it fits the file system's 255 bytes), created with
 //!    `O_EXCL` (so nothing planted at that name is written through), and are
 //!    renamed over the destination at the end. On any error, or when a
 //!    [`TempFile`] is dropped uncommitted, the temporary is removed.
@@ -49,6 +50,9 @@ pub enum AtomicError {
     /// The output folder exists and is not a folder, or cannot be created or written.
     #[error("output folder {}: {message}", path.display())]
     Folder { path: PathBuf, message: String },
+    /// The destination's name is longer than the file system takes.
+    #[error("{}: a name of {bytes} bytes, longer than the {NAME_MAX} bytes a file name may have: give a shorter name", path.display())]
+    NameTooLong { path: PathBuf, bytes: usize },
     /// An I/O error while writing or renaming.
     #[error("cannot write {}: {source}", path.display())]
     Io { path: PathBuf, source: std::io::Error },
@@ -58,7 +62,7 @@ impl AtomicError {
     /// True when the error is the user's choice of output (exit status 2):
     /// a destination that is not ours to replace, or a folder that is not one.
     pub fn is_input(&self) -> bool {
-        matches!(self, AtomicError::NotRegular { .. } | AtomicError::Folder { .. })
+        matches!(self, AtomicError::NotRegular { .. } | AtomicError::Folder { .. } | AtomicError::NameTooLong { .. })
     }
 }
 
@@ -89,6 +93,9 @@ fn kind_at(path: &Path) -> std::io::Result<Option<&'static str>> {
 
 /// Ok when `path` may be replaced: nothing is there, or a regular file.
 pub fn check_replaceable(path: &Path) -> Result<(), AtomicError> {
+    if let Some(n) = path.file_name().filter(|n| n.len() > NAME_MAX) {
+        return Err(AtomicError::NameTooLong { path: path.to_path_buf(), bytes: n.len() });
+    }
     match kind_at(path).map_err(io_err(path))? {
         None | Some("regular") => Ok(()),
         Some(kind) => Err(AtomicError::NotRegular { path: path.to_path_buf(), kind }),
@@ -149,14 +156,41 @@ fn file_name(path: &Path) -> Result<String, AtomicError> {
         .ok_or_else(|| AtomicError::Io { path: path.to_path_buf(), source: std::io::Error::other("the path has no file name") })
 }
 
-/// The prefix of every temporary of `name`: `.<name>.tmp`.
+/// The longest file name most file systems take (`NAME_MAX`), bytes.
+const NAME_MAX: usize = 255;
+
+/// The most bytes a temporary's name adds after its stem: `.tmp` and the
+/// unique part (a 32-bit pid, `-`, a 64-bit serial, the host tag of at most
+/// 65 bytes).
+const TEMP_SUFFIX_MAX: usize = 4 + 10 + 1 + 20 + 65;
+
+/// `name` as it appears in its temporaries' names: whole, or cut (at a
+/// character's boundary) so that `.<stem>.tmp<unique>` fits in
+/// [`NAME_MAX`] bytes. An output whose own name fits is never lost to its
+/// temporary's (names of up to 255 bytes); two names sharing a long start
+/// share a stem, which costs nothing: a sweep removes only the temporaries
+/// no live writer holds locked.
+fn temp_stem(name: &str) -> &str {
+    let room = NAME_MAX - 1 - TEMP_SUFFIX_MAX;
+    if name.len() <= room {
+        return name;
+    }
+    let mut end = room;
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    &name[..end]
+}
+
+/// The prefix of every temporary of `name`: `.<name>.tmp` (the name cut by
+/// [`temp_stem`]).
 fn temp_prefix(name: &str) -> String {
-    format!(".{name}.tmp")
+    format!(".{}.tmp", temp_stem(name))
 }
 
 /// The prefix of a temporary in the instant between its creation and its lock.
 fn fresh_prefix(name: &str) -> String {
-    format!(".{name}.new")
+    format!(".{}.new", temp_stem(name))
 }
 
 /// A `.new` file older than this was left by a writer that died between
@@ -290,6 +324,44 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), AtomicError> {
 pub struct UnitLock {
     path: PathBuf,
     file: Option<File>,
+    /// Its slot in [`HELD`], if one was free.
+    slot: Option<usize>,
+}
+
+/// How many held locks [`remove_held_locks`] knows at once (a bake holds
+/// one; a sequence one per frame it commits, one at a time).
+const HELD_SLOTS: usize = 16;
+
+/// The paths of the locks this process holds, as C strings, for
+/// [`remove_held_locks`], which a signal handler calls: only atomic loads
+/// there. A path is never freed (a few bytes per lock taken), so a handler
+/// running beside a release never reads freed memory.
+static HELD: [std::sync::atomic::AtomicPtr<libc::c_char>; HELD_SLOTS] =
+    [const { std::sync::atomic::AtomicPtr::new(std::ptr::null_mut()) }; HELD_SLOTS];
+
+fn hold(path: &Path) -> Option<usize> {
+    use std::os::unix::ffi::OsStrExt;
+    let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?.into_raw();
+    let slot = HELD.iter().position(|s| s.compare_exchange(std::ptr::null_mut(), c, Ordering::SeqCst, Ordering::SeqCst).is_ok());
+    if slot.is_none() {
+        // SAFETY: `c` came from `into_raw` above and was not shared.
+        drop(unsafe { std::ffi::CString::from_raw(c) });
+    }
+    slot
+}
+
+/// Removes the lock files this process holds: for a handler of SIGINT or
+/// SIGTERM, so that an interrupted bake leaves no `.aurora.lock` behind
+/// (the kernel drops the locks themselves when the process ends). Only
+/// async-signal-safe calls: atomic loads and `unlink`.
+pub fn remove_held_locks() {
+    for s in &HELD {
+        let p = s.load(Ordering::SeqCst);
+        if !p.is_null() {
+            // SAFETY: `p` is a NUL-terminated path that is never freed.
+            unsafe { libc::unlink(p) };
+        }
+    }
 }
 
 impl UnitLock {
@@ -315,7 +387,8 @@ impl UnitLock {
             let held = file.metadata().map_err(io_err(&path))?;
             match std::fs::symlink_metadata(&path) {
                 Ok(now) if now.dev() == held.dev() && now.ino() == held.ino() => {
-                    return Ok(Self { path, file: Some(file) });
+                    let slot = hold(&path);
+                    return Ok(Self { path, file: Some(file), slot });
                 }
                 // The previous holder removed it: lock the new one.
                 _ => continue,
@@ -327,6 +400,10 @@ impl UnitLock {
 impl Drop for UnitLock {
     fn drop(&mut self) {
         if let Some(f) = self.file.take() {
+            if let Some(i) = self.slot.take() {
+                // The path is left allocated (see `HELD`).
+                HELD[i].store(std::ptr::null_mut(), Ordering::SeqCst);
+            }
             let _ = std::fs::remove_file(&self.path);
             drop(f);
         }
@@ -420,6 +497,24 @@ mod tests {
         // No temporaries left behind by the refusals.
         let names: Vec<_> = std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().file_name()).collect();
         assert_eq!(names.len(), 4, "{names:?}");
+    }
+
+    /// Outputs with names of up to 255 bytes (ASCII and multi-byte) are
+    /// written: their temporaries' names fit the file system's limit.
+    #[test]
+    fn names_up_to_the_file_systems_limit_are_written() {
+        let d = crate::util::scratch::folder("atomic", "long-names");
+        for name in ["a".repeat(255), format!("{}.exr", "b".repeat(251)), format!("{}.png", "é".repeat(125)), "c".repeat(150)] {
+            assert!(name.len() <= 255);
+            let dest = d.join(&name);
+            let mut t = TempFile::create(&dest).unwrap_or_else(|e| panic!("{} bytes: {e}", name.len()));
+            assert!(t.temp_path().file_name().unwrap().len() <= 255);
+            t.file().write_all(b"x").unwrap();
+            t.commit().unwrap();
+            assert_eq!(std::fs::read(&dest).unwrap(), b"x");
+        }
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 4, "no temporaries left");
+        std::fs::remove_dir_all(&d).unwrap();
     }
 
     #[test]

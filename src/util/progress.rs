@@ -10,9 +10,11 @@
 //! `{"warning": M, "seconds": X}` and `{"error": M, "status": N,
 //! "seconds": X}` for warnings and the error that ends the run (N its exit
 //! status). A stage reports when it starts (`done` 0), each time it crosses
-//! another percent of `total` (at most 101 lines a stage, so a host is never
-//! flooded), every [`JsonProgress::HEARTBEAT`] at most while `total` is
-//! unknown, and when it finishes (`done` = `total`).
+//! another percent of `total` (at most 101 such lines a stage, so a host is
+//! never flooded), every [`JsonProgress::BETWEEN_PERCENTS`] at most between
+//! them (a stage whose percent takes minutes still says where it is), every
+//! [`JsonProgress::HEARTBEAT`] at most while `total` is unknown, and when it
+//! finishes (`done` = `total`).
 
 use serde_json::json;
 use std::io::Write;
@@ -59,6 +61,10 @@ struct Writer<W> {
 impl<W: Write + Send> JsonProgress<W> {
     /// Seconds between lines of a stage whose total is unknown.
     pub const HEARTBEAT: Duration = Duration::from_millis(250);
+    /// Seconds after which a stage whose next percent has not come yet
+    /// reports where it is (within 2 s of its start, however long a
+    /// percent takes).
+    pub const BETWEEN_PERCENTS: Duration = Duration::from_secs(1);
 
     pub fn new(w: W) -> Self {
         let now = Instant::now();
@@ -133,6 +139,12 @@ impl<W: Write + Send> Progress for JsonProgress<W> {
                 if let Ok(mut w) = self.out.lock() {
                     self.report(&mut w);
                 }
+            } else if let Ok(mut w) = self.out.try_lock() {
+                // A stage whose percent takes long (a bake of 10^8 beams)
+                // still says where it is.
+                if w.last.elapsed() >= Self::BETWEEN_PERCENTS {
+                    self.report(&mut w);
+                }
             }
         } else if let Ok(mut w) = self.out.try_lock() {
             if w.last.elapsed() >= Self::HEARTBEAT {
@@ -201,6 +213,28 @@ mod tests {
         assert!(l.len() <= 102, "{} lines", l.len());
         assert!(l.iter().all(|v| v["done"].as_u64().unwrap() <= 5000));
         assert_eq!(l.last().unwrap()["done"], 5000);
+    }
+
+    /// A stage whose first percent takes long (10^12 units) reports where it
+    /// is within 2 s of its start, not only at the percent.
+    #[test]
+    fn a_slow_percent_still_reports_within_two_seconds() {
+        let p = JsonProgress::new(Vec::new());
+        p.start("beams", 1_000_000_000_000);
+        let t = Instant::now();
+        // Work goes on (one beam an inc) until the stage has said more
+        // than its start: the wait is on that line, bounded.
+        let mut n = 0u64;
+        while p.out.lock().unwrap().w.iter().filter(|&&b| b == b'\n').count() < 2 && t.elapsed() < Duration::from_secs(10) {
+            p.inc(1);
+            n += 1;
+        }
+        let seen = t.elapsed();
+        assert!(seen < Duration::from_secs(2), "{seen:?}");
+        assert!(n < 10_000_000_000, "the percent was not reached: {n} beams");
+        let l = lines(p);
+        assert_eq!(l.len(), 2);
+        assert!(l[1]["done"].as_u64().unwrap() > 0 && l[1]["total"] == 1_000_000_000_000u64);
     }
 
     #[test]

@@ -7,7 +7,8 @@
 //! - `frames`, `resume`, `plan`: sequences, shards, reruns and their
 //!   estimate;
 //! - `inputs`, `outputs`: inputs and outputs that are not regular files,
-//!   killed and concurrent bakes;
+//!   killed and concurrent bakes; `foreign_files`: a bake's names held by
+//!   files it did not write;
 //! - `preview`, `watch`: `aurora preview` and its watch under real editors'
 //!   saves;
 //! - `profile`, `bench`: `aurora profile`'s CSV and `aurora bench --quick`;
@@ -21,6 +22,9 @@
 //! - `globe`: scenes anywhere on the globe, the field's dip refused or
 //!   warned about.
 //! - `sky`: `aurora sky`'s airglow and stars map, and its refusals.
+//! - `limits`: the process's limits (memory, file size) and inputs that
+//!   say more than they show (`--set` over two lines, shard variables at
+//!   the ends of a 64-bit integer).
 //! - `recolour`: a bake re-coloured at render time for another observer
 //!   from its line grids, and refused without them.
 
@@ -31,10 +35,12 @@ mod bench;
 mod data;
 mod dome;
 mod end_to_end;
+mod foreign_files;
 mod frames;
 mod globe;
 mod inputs;
 mod keogram;
+mod limits;
 mod messages;
 mod observer;
 mod outputs;

@@ -68,6 +68,10 @@ pub enum VdbReadError {
     /// Tiles would densify into too many voxels.
     #[error("`{file}`: grid `{grid}`: active tiles cover {voxels} voxels, more than the {limit} this reader densifies into leaves")]
     TooManyTileVoxels { file: String, grid: String, voxels: u128, limit: u128 },
+    /// Tiles would densify into too many voxels in the file's grids
+    /// together, each grid's under the limit.
+    #[error("`{file}`: the active tiles of its {grids} grids cover {voxels} voxels together, more than the {limit} this reader densifies into leaves")]
+    TooManyFileTileVoxels { file: String, grids: usize, voxels: u128, limit: u128 },
 }
 
 impl VdbReadError {
@@ -238,7 +242,12 @@ fn read_vdb_named(bytes: &[u8], file: &str, external: Option<&ExternalFloatDecod
             .into_iter(),
         _ => Vec::new().into_iter(),
     };
-    // 3. Assemble in file order.
+    // 3. Assemble in file order, the tiles' voxels of all grids within the
+    // limit together first (each grid's is checked as it is assembled).
+    let tiled: Vec<u128> = parsed.grids.iter().filter_map(|g| g.tree.as_ref()).map(|t| t.tile_voxels()).collect();
+    if tiled.iter().all(|&v| v <= MAX_TILE_VOXELS) {
+        check_file_tile_voxels(tiled.iter().sum(), tiled.len(), file)?;
+    }
     let ParsedFile { header, grids: parsed_grids } = parsed;
     let mut out = VdbFile {
         float_grids: Vec::new(),
@@ -339,6 +348,17 @@ fn assemble<T: VoxelValue>(tree: Tree<T>, name: &str, transform: Transform, file
     }
     g.sort_leaves();
     Ok(g)
+}
+
+/// Refuses a file whose grids' active tiles (`voxels`, over `grids` grids)
+/// would densify into more than [`MAX_TILE_VOXELS`] voxels together: the
+/// limit holds for the file as for each grid, so that many grids each just
+/// under it cannot add up to more memory than one grid may take.
+pub(crate) fn check_file_tile_voxels(voxels: u128, grids: usize, file: &str) -> Result<(), VdbReadError> {
+    if voxels > MAX_TILE_VOXELS {
+        return Err(VdbReadError::TooManyFileTileVoxels { file: file.into(), grids, voxels, limit: MAX_TILE_VOXELS });
+    }
+    Ok(())
 }
 
 /// Refuses a tree whose active tiles would densify into more than

@@ -1,5 +1,5 @@
 //! A VDB file's leaf records, read where they lie: the file's bytes
-//! ([`FileBytes`], mapped where the system allows) and one grid's located
+//! ([`FileBytes`], read into memory) and one grid's located
 //! records as a [`LeafSource`] ([`FileLeaves`]), each decoded when a
 //! consumer asks for it (the renderer's medium builder, through the adapter
 //! above this layer). The records are located by a
@@ -72,64 +72,100 @@ macro_rules! file_leaves {
 file_leaves!(f32);
 file_leaves!([f32; 3]);
 
-/// A file's bytes: mapped into memory where the system allows (the pages
-/// come straight from the page cache: no copy of a 190 MB file, a fault
-/// per 64 KiB instead of per 4 KiB), else read.
+/// A file's bytes, read into memory in full when the file is opened.
 ///
-/// The map is private and read-only. If another process truncates the
-/// file while it is mapped, reading the lost pages raises SIGBUS, as with
-/// any mapped file (OpenVDB maps its files the same way, with
-/// `boost::interprocess`); aurora never writes a file in place (its
-/// outputs are staged and renamed, `crate::util::atomic_write`), so its own writes
-/// cannot do this to a file being read.
-pub enum FileBytes {
-    #[cfg(unix)]
-    Mapped {
-        ptr: *mut libc::c_void,
-        len: usize,
-    },
-    Read(Vec<u8>),
-}
+/// Not mapped: a mapped file that another process truncates or rewrites in
+/// place (`cp` over it) while it is read raises SIGBUS at the first lost
+/// page, which no error path can catch. Read, the file is ours from then
+/// on: a later truncation or rewrite changes nothing, and one during the
+/// read is found by the length check ([`FileBytes::open`]) and refused as
+/// an I/O error. The cost is memory: the file's size, held while the
+/// medium is built (its records are decoded from these bytes), and one
+/// copy from the page cache (about 0.05 s for a 190 MB file); the medium's
+/// budget (`crate::render::medium::build::MEDIUM_MEMORY_FRACTION`) leaves
+/// the rest of the process's limit for it.
+pub struct FileBytes(Vec<u8>);
 
 impl FileBytes {
     /// The bytes of the regular file at `path`.
     pub fn open(path: &Path) -> std::io::Result<FileBytes> {
-        // Only a regular file is mapped or read (`crate::util::input_file`).
+        // Only a regular file is read (`crate::util::input_file`).
         let file = crate::util::input_file::open(path)?;
         let len = file.metadata()?.len();
-        #[cfg(unix)]
-        if len > 0 && len <= isize::MAX as u64 {
-            use std::os::fd::AsRawFd;
-            let len = len as usize;
-            // SAFETY: a fresh private read-only mapping of `len` bytes of an
-            // open file; the result is checked against MAP_FAILED.
-            let ptr = unsafe { libc::mmap(std::ptr::null_mut(), len, libc::PROT_READ, libc::MAP_PRIVATE, file.as_raw_fd(), 0) };
-            if ptr != libc::MAP_FAILED {
-                return Ok(FileBytes::Mapped { ptr, len });
-            }
-        }
-        let mut bytes = Vec::with_capacity(len as usize);
-        std::io::Read::read_to_end(&mut &file, &mut bytes)?;
-        Ok(FileBytes::Read(bytes))
+        read_exactly(&file, len).map(FileBytes)
     }
 
     /// The file's bytes.
     pub fn bytes(&self) -> &[u8] {
-        match self {
-            // SAFETY: the mapping is `len` readable bytes, alive until drop.
-            #[cfg(unix)]
-            FileBytes::Mapped { ptr, len } => unsafe { std::slice::from_raw_parts(ptr.cast::<u8>(), *len) },
-            FileBytes::Read(b) => b,
-        }
+        &self.0
     }
 }
 
-impl Drop for FileBytes {
-    fn drop(&mut self) {
-        #[cfg(unix)]
-        if let FileBytes::Mapped { ptr, len } = self {
-            // SAFETY: unmaps exactly the mapping made in `open`, once.
-            unsafe { libc::munmap(*ptr, *len) };
-        }
+/// The `len` bytes of `file` (its size when opened): the buffer is reserved
+/// without aborting when memory is short (an error of kind `OutOfMemory`),
+/// and a file that is not `len` bytes long by the end of the read (it was
+/// truncated or grew meanwhile) is an error of kind `InvalidData`.
+pub fn read_exactly(file: &std::fs::File, len: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let want = usize::try_from(len)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("{len} bytes do not fit in memory")))?;
+    let mut bytes = Vec::new();
+    bytes
+        .try_reserve_exact(want)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("cannot hold the file's {len} bytes in memory")))?;
+    // One byte more than expected: a file that grew is found too.
+    file.take(len.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 != len {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "the file changed size while it was read ({len} bytes when opened, {} read): another process is writing it",
+                bytes.len()
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::util::scratch::folder;
+
+    /// A file truncated (`ftruncate`) after it was opened keeps its bytes
+    /// for the reader: no signal, the same bytes as before.
+    #[test]
+    fn a_file_truncated_after_it_was_opened_keeps_its_bytes() {
+        let d = folder("records", "truncated");
+        let p = d.join("a.vdb");
+        let content: Vec<u8> = (0..300_000u32).map(|i| (i.wrapping_mul(2654435761u32) >> 24) as u8).collect();
+        std::fs::write(&p, &content).unwrap();
+        let bytes = FileBytes::open(&p).unwrap();
+        std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(0).unwrap();
+        assert_eq!(std::fs::metadata(&p).unwrap().len(), 0);
+        // Every page read after the truncation (a mapping would fault here).
+        assert_eq!(bytes.bytes(), content.as_slice());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    /// A file that is not the length it had when opened (truncated during
+    /// the read, or grown) is an error, not a short or a long buffer.
+    #[test]
+    fn a_file_whose_length_changed_during_the_read_is_an_error() {
+        let d = folder("records", "changed");
+        let p = d.join("a.vdb");
+        std::fs::write(&p, vec![7u8; 10_000]).unwrap();
+        let f = crate::util::input_file::open(&p).unwrap();
+        let len = f.metadata().unwrap().len();
+        std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(4096).unwrap();
+        let e = read_exactly(&f, len).unwrap_err();
+        assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
+        assert!(e.to_string().contains("10000 bytes when opened, 4096 read"), "{e}");
+        let f = crate::util::input_file::open(&p).unwrap();
+        let e = read_exactly(&f, 100).unwrap_err();
+        assert!(e.to_string().contains("100 bytes when opened, 101 read"), "{e}");
+        let f = crate::util::input_file::open(&p).unwrap();
+        assert_eq!(read_exactly(&f, 4096).unwrap(), vec![7u8; 4096]);
+        std::fs::remove_dir_all(&d).unwrap();
     }
 }

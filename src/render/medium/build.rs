@@ -24,7 +24,7 @@ use glam::IVec3;
 use rayon::prelude::*;
 
 /// The share of this process's memory limit ([`crate::util::memory::available`])
-/// the medium's values may take; the rest is the mapped file, the image,
+/// the medium's values may take; the rest is the file's bytes, the image,
 /// the threads' stacks and heaps.
 pub const MEDIUM_MEMORY_FRACTION: f64 = 0.75;
 
