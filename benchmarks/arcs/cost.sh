@@ -28,7 +28,8 @@ measure() {
     rm -rf "$T/out"
     /usr/bin/time -f '%U %S %M' -o "$T/time" "$bin" bake -q --threads 2 --out "$T/out" "$@" >/dev/null 2>"$T/err" || {
       cat "$T/err" >&2
-      return 1
+      echo refused
+      return 0
     }
     c=$(awk '{print $1 + $2}' "$T/time")
     best=$(awk -v a="$best" -v b="$c" 'BEGIN {print (b < a) ? b : a}')
@@ -42,6 +43,10 @@ row() {
   local name=$1 bin=$2
   shift 2
   read -r cpu bytes rss <<<"$(measure "$bin" "$@")"
+  if [ "$cpu" = refused ]; then
+    printf '%-34s %s  %s\n' "$name" "refused by the memory budget (its message on stderr)" "$*"
+    return
+  fi
   [ -z "$DEF" ] && DEF=$cpu
   printf '%-34s %8.2f %10.1f %9.0f %9.2f  %s\n' "$name" "$cpu" "$(awk -v b="$bytes" 'BEGIN {print b / 1e6}')" "$rss" "$(awk -v a="$cpu" -v b="$DEF" 'BEGIN {print a / b}')" "$*"
 }
@@ -52,6 +57,7 @@ fi
 row "body 4 km" "$BIN" --set footprint.sheet_thickness_km=4
 row "body 16 km" "$BIN" --set footprint.sheet_thickness_km=16
 row "no filaments" "$BIN" --set 'curtain[0].filament_energy_flux=0' --set 'curtain[1].filament_energy_flux=0' --set 'curtain[2].filament_energy_flux=0'
+row "voxel 0.4 km" "$BIN" --set grid.voxel_size=0.4
 row "voxel 0.35 km" "$BIN" --set grid.voxel_size=0.35
 row "voxel 0.7 km" "$BIN" --set grid.voxel_size=0.7
 row "kernel 0.25 km" "$BIN" --set photons.radius_km=0.25
