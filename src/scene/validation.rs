@@ -135,7 +135,7 @@ impl Scene {
                 );
             }
         }
-        if let crate::scene::VoxelSize::Km(vs) = self.grid.voxel_size {
+        if let super::grid::VoxelSize::Km(vs) = self.grid.voxel_size {
             if !(MIN_VOXEL_KM..=MAX_VOXEL_KM).contains(&vs) {
                 v.push(
                     Some(("grid", 0)),

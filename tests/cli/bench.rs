@@ -130,7 +130,7 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
     }
 
     // --- the expected trends
-    strictly_decreasing("photon count", &curve(&rows, "photon count", "splat, r = 0.5 km"));
+    strictly_decreasing("photon count", &curve(&rows, "photon count", "splat, r = 0.35 km"));
     for m in ["kd-tree (kiddo)", "splat"] {
         strictly_decreasing(&format!("gather method / {m}"), &curve(&rows, "gather method", m));
         strictly_increasing(&format!("voxel size / {m}"), &curve(&rows, "voxel size", m));
@@ -156,13 +156,16 @@ fn quick_bench_writes_consistent_csv_json_and_charts() {
         strictly_decreasing(m, &curve(&rows, "shadow rays", m));
     }
     // Radius: noise at the small end, blur at the large end, both worse than
-    // the scene's radius in between.
+    // the best radius in between (with the quick bench's few beams that
+    // lies above the scene's 0.35 km, where the noise is smaller).
     let radius: Vec<&Row> = rows.iter().filter(|r| r["study"] == "gather radius").collect();
     let at = |want: f64| num(radius.iter().find(|r| (num(r, "param") - want).abs() < 1e-9).unwrap(), "error");
     let scene_r = num(radius.iter().find(|r| r["scene_setting"] == "1").unwrap(), "param");
     let rs: Vec<f64> = radius.iter().map(|r| num(r, "param")).collect();
     let (rmin, rmax) = (rs.iter().cloned().fold(f64::MAX, f64::min), rs.iter().cloned().fold(f64::MIN, f64::max));
-    assert!(at(rmin) > at(scene_r) && at(rmax) > at(scene_r), "radius curve has no interior minimum: {radius:?}");
+    let best = radius.iter().map(|r| num(r, "error")).fold(f64::MAX, f64::min);
+    assert!(scene_r > rmin && scene_r < rmax, "the scene's radius lies inside the sweep: {radius:?}");
+    assert!(at(rmin) > best && at(rmax) > best, "radius curve has no interior minimum: {radius:?}");
 
     // One gather setting, one time: the scene's own gather (N beams,
     // r, v) appears in three gather-timed studies with the same seconds.

@@ -14,8 +14,13 @@ use std::path::Path;
 use std::time::Duration;
 
 /// The small scene with its dipole pole `north_km` north of the origin.
+/// The small scene with a dipole pole `north_km` north, and the 2014
+/// walk's deflection (alpha_D 5 degrees, delta 3): the cone a field must dip
+/// out of, and the walk that carries beams off a shallow field's footprint.
 fn scene_with_pole(north_km: f64) -> String {
-    format!("{}[earth]\nmagnetic_pole = [0.0, {north_km}]\n", small_bake_toml!())
+    let walk = small_bake_toml!().replace("[beams]\n", "[beams]\nalpha_d_deg = 5.0\ndelta_alpha_deg = 3.0\n");
+    assert!(walk.contains("alpha_d_deg = 5.0"));
+    format!("{walk}[earth]\nmagnetic_pole = [0.0, {north_km}]\n")
 }
 
 /// Address-space cap for a bake that must be refused before it allocates:

@@ -201,6 +201,11 @@ fn the_grid_term_counts_the_leaves_of_the_bands_near_what_a_bake_holds() {
     for deposition in [Deposition::Expected, Deposition::Csda] {
         let mut s = small_scene();
         s.beams.deposition = deposition;
+        // The thin sheets and the 2014 walk these figures were measured on
+        // (an arc's 8 km body fills most of a 14 km box: its bands are
+        // near the box, as they should be).
+        (s.footprint.sheet_thickness_km, s.footprint.glow) = (0.5, 0.2);
+        (s.beams.alpha_d_deg, s.beams.delta_alpha_deg) = (5.0, 3.0);
         let b = bake::bake(&s, &NoProgress).unwrap();
         let plan = BakePlan::new(&s, &NoProgress);
         let reach = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);

@@ -60,6 +60,8 @@ fn rayed_scene() -> Scene {
     s.beams.b_inclination_deg = 75.0;
     s.beams.b_declination_deg = 20.0;
     s.footprint.resolution = [256, 64];
+    // Thin rayed sheets (the 2014 look), each ray a sharp streak.
+    (s.footprint.sheet_thickness_km, s.footprint.glow) = (0.5, 0.2);
     s.photons.radius_km = 0.4;
     s.photons.radius_noise = 0.0;
     s.grid.voxel_size = VoxelSize::Km(0.4);

@@ -131,18 +131,18 @@ fn under_resolved_kernels_and_curtains_are_warned_on_stderr() {
         // --quiet hides progress and the summary, never warnings.
         (aurora(&["bake", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "-q"]), out)
     };
-    // Resolved: r = 1 km (0.7 with the default radius noise) on 1 km voxels,
+    // Resolved: r = 1 km (0.75 with the default radius noise) on 1 km voxels,
     // the fluid spreads the band over more than a km.
     let (o, out) = run("resolved", scene_text("count = 20", "radius_km = 1.0", "voxel_size = 1.0", "steps = 4", ""));
     assert!(o.status.success() && !stderr(&o).contains("warning"), "{}", stderr(&o));
     assert!(out.join("aurora.vdb").exists());
 
-    // Kernel: r_min = 0.2 * 0.7 = 0.14 km < half of 0.5 km.
+    // Kernel: r_min = 0.2 * 0.75 = 0.15 km < half of 0.5 km.
     let (o, out) = run("kernel", scene_text("count = 20", "radius_km = 0.2", "voxel_size = 0.5", "steps = 4", ""));
     let e = stderr(&o);
     assert!(o.status.success(), "a warning is not an error: {e}");
     assert!(e.contains("aurora: warning: under-resolved kernel") && e.contains("photons.radius_km = 0.2"), "{e}");
-    assert!(e.contains("grid.voxel_size <= 0.28"), "the remedy: {e}");
+    assert!(e.contains("grid.voxel_size <= 0.3"), "the remedy: {e}");
     assert!(out.join("aurora.vdb").exists());
     let json = std::fs::read_to_string(out.join("bake.json")).unwrap();
     assert!(json.contains("under-resolved kernel"), "warnings are kept in bake.json");

@@ -283,11 +283,11 @@ pub fn max_above_start_spans(column_km: f64) -> usize {
 /// A Fang beam lays what its spectrum leaves above its start along the
 /// field line above it, up to the altitude where at most this share of the
 /// spectrum's total deposition lies higher ([`above_start_top`]); that
-/// share is not laid (reported as above the top). 2e-5: the column ends
+/// share is not laid (reported as above the top). 1e-4: the column ends
 /// with the topside's own shape where it holds no visible light (at 2e-3 the
 /// cut lay where 630.0 nm was still 15-20 % of its peak, and laying the
 /// rest in the top span made a red lid).
-pub const ABOVE_START_TOL: f64 = 2e-5;
+pub const ABOVE_START_TOL: f64 = 1e-4;
 
 /// Most a span of that deposit lowers the fraction deposited above it, in
 /// ln: 0.15, so a span's deposit spread evenly is within about 8 % of the
