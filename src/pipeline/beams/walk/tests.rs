@@ -44,6 +44,22 @@ impl Setup {
 }
 
 /// A footprint that is 1 everywhere in a huge box: beams never leave it.
+/// One cell of density 1, `length` x `width` km, about the origin.
+fn one_cell(length: f64, width: f64) -> Footprint {
+    Footprint {
+        nx: 1,
+        ny: 1,
+        data: vec![1.0],
+        center: [0.0, 0.0],
+        rotation_rad: 0.0,
+        length,
+        width,
+        path: None,
+        flux_scale: 1.0,
+        filament_share: None,
+    }
+}
+
 fn flat_footprint(size: f64) -> Footprint {
     Footprint {
         nx: 4,
@@ -249,18 +265,7 @@ fn fang_beams_keep_going_when_their_foot_leaves_the_footprint() {
 #[test]
 fn runaway_fang_steps_end_at_the_bottom_or_the_enlarged_box() {
     let (atm, colour) = nrlmsis21();
-    let fp = Footprint {
-        nx: 1,
-        ny: 1,
-        data: vec![1.0],
-        center: [0.0, 0.0],
-        rotation_rad: 0.0,
-        length: 10.0,
-        width: 4.0,
-        path: None,
-        flux_scale: 1.0,
-        filament_share: None,
-    };
+    let fp = one_cell(10.0, 4.0);
     let g = curtain_g(3.0, 0.0, 0.2);
     // Straight down in steps of up to 2.5e6 km: the first step is cut at
     // the atmosphere's bottom (where a 3 keV spectrum is complete).
@@ -343,18 +348,7 @@ fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
 fn beams_leave_when_their_foot_leaves_the_footprint() {
     let (atm, colour) = us1976();
     // A 2 km wide strip: a random walk of 10-20 degree steps leaves it.
-    let fp = Footprint {
-        nx: 1,
-        ny: 1,
-        data: vec![1.0],
-        center: [0.0, 0.0],
-        rotation_rad: 0.0,
-        length: 1e4,
-        width: 2.0,
-        path: None,
-        flux_scale: 1.0,
-        filament_share: None,
-    };
+    let fp = one_cell(1e4, 2.0);
     let p = BeamParams { alpha_d_deg: 20.0, delta_alpha_deg: 10.0, ..params() };
     let ctx = context(&atm, &colour, &fp, &p, DepositModel::Csda);
     let mut r = rng::rng(&[6]);
