@@ -62,14 +62,6 @@ use walk::trace_beam_into;
 /// keV per joule.
 pub const KEV_PER_J: f64 = 1.0 / 1.602_176_634e-16;
 
-/// Draws an energy from Gamma(3, e0), the energy-flux distribution of a
-/// Maxwellian of characteristic energy e0: the sum of three exponentials.
-pub fn sample_gamma3(e0: f64, r: &mut impl Rng) -> f64 {
-    // 1 - U lies in (0, 1], so the logarithm is finite.
-    let p = (1.0 - r.random::<f64>()) * (1.0 - r.random::<f64>()) * (1.0 - r.random::<f64>());
-    -e0 * p.ln()
-}
-
 /// Splits `count` beams between curtains in proportion to their weights
 /// (largest remainder, so the total is exactly `count`; ties go to the
 /// earlier curtain).

@@ -93,7 +93,8 @@ fn gamma3_has_the_right_mean_and_variance() {
     // sigma = sqrt(3) E0 / sqrt(N); allow 5 sigma.
     let mut r = rng::rng(&[5]);
     let n = 100_000;
-    let xs: Vec<f64> = (0..n).map(|_| sample_gamma3(2.0, &mut r)).collect();
+    let maxwellian = crate::physics::deposition::spectrum::Spectrum::Maxwellian { e0_kev: 2.0 };
+    let xs: Vec<f64> = (0..n).map(|_| maxwellian.sample_energy(&mut r)).collect();
     let mean = xs.iter().sum::<f64>() / n as f64;
     assert!((mean - 6.0).abs() < 5.0 * 3f64.sqrt() * 2.0 / (n as f64).sqrt(), "{mean}");
     // Sample variance: relative sigma sqrt((kurtosis - 1) / N) with

@@ -3,7 +3,6 @@ use crate::geometry::earth::Earth;
 use crate::physics::deposition::fang::{MonoDeposition, SpectrumDeposition};
 use crate::physics::emission::line_colour::{ColourTable, EmissionModel};
 use crate::physics::geomagnetic_field::MagneticField;
-use crate::pipeline::beams::sample_gamma3;
 use crate::pipeline::deposit::pos;
 use crate::pipeline::footprint::Footprint;
 use crate::scene::BeamParams;
@@ -313,7 +312,10 @@ fn sampled_deposition_converges_to_the_expected_one_step_by_step() {
     for i in 0..n {
         let mut r = rng::rng(&[8, i as u64]);
         let e0_i = if r.random::<f64>() < soft { e_soft } else { e0 };
-        let st = BeamStart { energy_kev: sample_gamma3(e0_i, &mut r), ..start(0.0) };
+        let st = BeamStart {
+            energy_kev: crate::physics::deposition::spectrum::Spectrum::Maxwellian { e0_kev: e0_i }.sample_energy(&mut r),
+            ..start(0.0)
+        };
         let mut r2 = r.clone();
         let (te, ts) = (trace_beam(&ce, &st, &mut r), trace_beam(&cs, &st, &mut r2));
         let mut per = vec![0.0; nb];
