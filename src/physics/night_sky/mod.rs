@@ -7,3 +7,5 @@
 //! unit the renderer's stars use.
 
 pub mod catalogue;
+pub mod moonlight;
+pub mod star_colour;
