@@ -11,10 +11,11 @@
 //! catalogue's epoch J1991.25 ([`CATALOGUE_EPOCH_JYEAR`]), parallax, and the
 //! catalogue's B-V. The catalogue measures Hp, not V: `V = Hp + (V - Hp)(B-V)`
 //! from Bessell (2000), PASP 112, 961, Table 2; the 74 stars without a B-V
-//! take the median B-V, 0.561; Sirius and Canopus, whose Hp saturated, take
-//! the Bright Star Catalogue's V (Hoffleit & Warren 1991, CDS V/50). So V is
-//! good to about 0.05 mag for a constant star (Bessell's table against the
-//! standards), and a variable's is its mean Hp's.
+//! take the median B-V, 0.561; Sirius and Canopus, whose V from Hp comes
+//! out 0.36 and 0.11 mag fainter than the ground-based, take the Bright Star
+//! Catalogue's V (Hoffleit & Warren 1991, CDS V/50). V so comes within a
+//! few hundredths of the ground-based V of a constant star (Vega 0.045), and
+//! a variable's is that of its mean Hp.
 //!
 //! **Format** (little-endian): a 56-byte header, magic `AURHIP2\0`, version
 //! u32, count u32, record size u32, limit V i32 (mmag), the source file's
