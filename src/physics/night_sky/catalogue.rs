@@ -27,7 +27,15 @@
 //! standard errors. It is decoded once, on first use ([`catalogue`]);
 //! [`decode`] refuses a table whose header or length is wrong, or whose
 //! stars are out of order.
+//!
+//! **Another epoch** ([`direction_at`]): the star moves along the sky at its
+//! proper motion, in a straight line in the tangent plane at the catalogue
+//! position, `p + t (mu_a* e_a + mu_d e_d)` normalised. The place is the
+//! barycentric one: the annual parallax is left out (under 0.8 arcsec for
+//! every star here), and so is the radial velocity's perspective
+//! acceleration (under 1 arcsec in a century even for alpha Centauri).
 
+use glam::DVec3;
 use std::sync::OnceLock;
 
 /// The epoch of the catalogue's positions (Julian year).
@@ -176,6 +184,27 @@ pub fn catalogue() -> &'static [CatalogueStar] {
     STARS.get_or_init(|| decode(TABLE).expect("the compiled-in star table is checked by this module's tests"))
 }
 
+/// Milliarcseconds in a radian.
+const MAS_PER_RAD: f64 = 180.0 * 3600.0 * 1000.0 / std::f64::consts::PI;
+
+/// The unit vector (ICRS: x to RA 0, z to the north pole) towards `star` at
+/// the Julian year `jyear`, its proper motion applied from the catalogue's epoch.
+pub fn direction_at(star: &CatalogueStar, jyear: f64) -> DVec3 {
+    let (sa, ca) = star.ra_deg.to_radians().sin_cos();
+    let (sd, cd) = star.dec_deg.to_radians().sin_cos();
+    let p = DVec3::new(cd * ca, cd * sa, sd);
+    let east = DVec3::new(-sa, ca, 0.0);
+    let north = DVec3::new(-sd * ca, -sd * sa, cd);
+    let t = jyear - CATALOGUE_EPOCH_JYEAR;
+    (p + (east * star.pm_ra_cosdec_mas_yr + north * star.pm_dec_mas_yr) * (t / MAS_PER_RAD)).normalize()
+}
+
+/// Right ascension in [0, 360) and declination (degrees) of `star` at `jyear`.
+pub fn position_at(star: &CatalogueStar, jyear: f64) -> (f64, f64) {
+    let d = direction_at(star, jyear);
+    (d.y.atan2(d.x).to_degrees().rem_euclid(360.0), d.z.clamp(-1.0, 1.0).asin().to_degrees())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -248,6 +277,22 @@ mod tests {
         let acen = star(71683);
         assert!((acen.parallax_mas - 754.81).abs() <= PARALLAX_UNIT_MAS / 2.0);
         assert!((acen.dec_deg - (-1.0617735850f64).to_degrees()).abs() < 1e-7);
+    }
+
+    #[test]
+    fn sirius_moves_to_its_j2000_place() {
+        // The Bright Star Catalogue's J2000 place of Sirius (HR 2491):
+        // 06h45m08.9s, -16d42'58", to its 0.1 s and 1 arcsec; J1991.25 is
+        // 11 arcsec away, so the test needs the motion.
+        let s = catalogue()[0];
+        let (ra, dec) = position_at(&s, 2000.0);
+        let (ra_bsc, dec_bsc) = ((6.0 + 45.0 / 60.0 + 8.9 / 3600.0) * 15.0, -(16.0 + 42.0 / 60.0 + 58.0 / 3600.0));
+        let arcsec = |d: f64| d * 3600.0;
+        assert!(arcsec((ra - ra_bsc) * dec.to_radians().cos()).abs() < 1.5, "{ra}");
+        assert!(arcsec(dec - dec_bsc).abs() < 1.0, "{dec}");
+        let (ra0, dec0) = position_at(&s, CATALOGUE_EPOCH_JYEAR);
+        assert!(arcsec(ra0 - s.ra_deg).abs() < 1e-6 && arcsec(dec0 - s.dec_deg).abs() < 1e-6);
+        assert!(arcsec(dec0 - dec_bsc).abs() > 10.0);
     }
 
     #[test]
