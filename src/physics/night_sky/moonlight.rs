@@ -7,8 +7,8 @@
 //! `m = -12.73 + 0.026 |alpha| + 4e-9 alpha^4`, and its illuminance outside
 //! the air, in foot-candles, `I* = 10^(-0.4 (m + 16.57))`, times the
 //! opposition surge near full Moon: 35 % brighter at full, fading linearly
-//! to nothing at 7 degrees (`1.35 - 0.05 |alpha|`, as the paper notes it on
-//! p. 1035).
+//! to nothing at 7 degrees (`1.35 - 0.05 |alpha|`: the paper mentions the
+//! surge on p. 1035; the linear fade is Thorstensen's skycalc's reading).
 //!
 //! **The sky.** Scattered moonlight at angular distance `rho` from the Moon,
 //! zenith distance `Z`, the Moon at `Z_m`, for a V extinction `k` (mag per
