@@ -34,9 +34,11 @@ PRESSURE_HPA = 1010.0
 MIN_ELEVATION_DEG = 10.0
 STARS_PER_SITE = 30
 
+# Hours of dark sky (the Sun below -12 degrees) with the Moon up at every
+# site, at three phases.
 SITES = [
-    ("tromso", 69.65, 18.96, 0.1, "2026-12-07T22:00:00Z"),
-    ("poker_flat", 65.13, -147.47, 0.5, "2027-03-10T10:30:00Z"),
+    ("tromso", 69.65, 18.96, 0.1, "2026-12-02T04:00:00Z"),
+    ("poker_flat", 65.13, -147.47, 0.5, "2027-03-14T06:00:00Z"),
     ("dunedin", -45.87, 170.5, 0.0, "2027-06-20T12:00:00Z"),
 ]
 

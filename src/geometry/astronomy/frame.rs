@@ -24,8 +24,8 @@
 //! site's speed about the axis, 0.32" at most) and the Sun's light
 //! deflection (under 0.01" more than 20 degrees from the Sun) are
 //! neglected. With skyfield (IAU 2006/2000A, measured UT1, deflection,
-//! diurnal aberration) as the oracle, stars agree to the sum of the above,
-//! about 15" (`tests/sky`).
+//! diurnal aberration) as the oracle, the above sum to 15" at most, most
+//! of it UT1; 1.4" is measured (`tests/sky`).
 
 use super::earth_orbit::earth_position_velocity;
 use super::nutation::{nutation, Nutation};
