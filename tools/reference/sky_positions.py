@@ -95,8 +95,8 @@ def main():
     out.write(f"# catalogue hip2.dat (CDS I/311, epoch J1991.25, ICRS) sha256 {sha}\n")
     out.write(f"# air: temperature {TEMPERATURE_C} C, pressure {PRESSURE_HPA} hPa (skyfield refraction)\n")
     out.write(
-        "# star rows: apparent topocentric az/el, el refracted; moon and sun rows: topocentric apparent, "
-        "distance_km topocentric, illuminated_fraction geocentric (almanac.fraction_illuminated)\n"
+        "# star rows: apparent topocentric az/el, el refracted; moon and sun rows: topocentric apparent, distance_km "
+        "from the site with light time (astrometric), illuminated_fraction geocentric (almanac.fraction_illuminated)\n"
     )
     out.write(
         "kind,site,utc,latitude_deg,longitude_deg,height_km,id,ra_deg,dec_deg,"

@@ -47,7 +47,8 @@ pub struct MoonPlace {
 pub struct MoonView {
     /// Topocentric apparent direction, ENU unit vector, unrefracted.
     pub enu: DVec3,
-    /// Topocentric distance, km.
+    /// Topocentric distance, km (geometric: the Moon now, not 1.3 s of
+    /// light time ago).
     pub distance_km: f64,
     /// The fraction of the disc that is lit, 0 (new) to 1 (full).
     pub illuminated_fraction: f64,
