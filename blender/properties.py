@@ -57,6 +57,12 @@ FROM_BLENDER = {("render", "width"), ("render", "height"), ("animation", "fps")}
 TABLES_FROM_BLENDER = {"camera"}
 #: Blender's IntProperty is 32-bit signed.
 _INT_MAX = 2**31 - 1
+#: Tables a scene may leave out whole (`[site]`): the panel writes one only
+#: when its `enabled` switch is on, then with every key shown. Their required
+#: keys have no default, so the panel starts from the schema's
+#: `default_in_table` (an example: the `tromso` preset's site); a key with
+#: neither (`site.pressure_hpa`, standard when omitted) is left to scene files.
+OPTIONAL_TABLES = {"site"}
 
 
 def panel_tables() -> list[str]:
@@ -66,7 +72,20 @@ def panel_tables() -> list[str]:
 
 
 def panel_keys(table: str) -> list[str]:
-    return [k for k in SCHEMA[table] if (table, k) not in FROM_BLENDER]
+    keys = [k for k in SCHEMA[table] if (table, k) not in FROM_BLENDER]
+    if table in OPTIONAL_TABLES:
+        keys = [k for k in keys if _panel_default(table, k) is not None]
+    return keys
+
+
+def _panel_default(table: str, key: str):
+    """A key's default in the panel: the schema's, or in an optional table
+    its `default_in_table` example when it has none."""
+    entry = SCHEMA[table][key]
+    d = entry["default"]
+    if d is None and table in OPTIONAL_TABLES:
+        d = entry.get("default_in_table")
+    return d
 
 
 def _bound(x):
@@ -110,8 +129,10 @@ def _limits(entry: dict, integer: bool) -> dict:
 def make_property(table: str, key: str):
     """The bpy property of one schema key (see the module doc)."""
     entry = SCHEMA[table][key]
-    d = entry["default"]
+    d = _panel_default(table, key)
     name, desc = _label(table, key)
+    if table in OPTIONAL_TABLES and isinstance(d, str) and "values" not in entry:
+        return StringProperty(name=name, description=desc, default=d)
     if isinstance(d, bool):
         return BoolProperty(name=name, description=desc, default=d)
     if isinstance(d, int):
@@ -171,8 +192,16 @@ def _group(name: str, annotations: dict):
     return type(name, (PropertyGroup,), {"__annotations__": annotations})
 
 
+def _table_annotations(table: str) -> dict:
+    ann = _annotations(table, panel_keys(table))
+    if table in OPTIONAL_TABLES:
+        ann["enabled"] = BoolProperty(name=f"Use [{table}]", default=False,
+                                      description=f"Write the [{table}] table (off: the scene has none)")
+    return ann
+
+
 AuroraCurtain = _group("AuroraCurtain", _curtain_annotations())
-TABLE_GROUPS = {t: _group(f"Aurora{t.capitalize()}Settings", _annotations(t, panel_keys(t))) for t in panel_tables()}
+TABLE_GROUPS = {t: _group(f"Aurora{t.capitalize()}Settings", _table_annotations(t)) for t in panel_tables()}
 
 
 def _settings_annotations() -> dict:
@@ -252,6 +281,9 @@ def read_key(group, table: str, key: str):
 
 
 def table_values(group, table: str, keys) -> dict:
+    if table in OPTIONAL_TABLES:
+        # Written whole when enabled (module doc), never otherwise.
+        return {k: _plain(getattr(group, k)) for k in keys} if group.enabled else {}
     out = {}
     for key in keys:
         v = read_key(group, table, key)
@@ -263,7 +295,7 @@ def table_values(group, table: str, keys) -> dict:
 def write_key(group, table: str, key: str, value) -> None:
     """Set one property from a scene-file value (a preset's)."""
     entry = SCHEMA[table][key]
-    d = entry["default"]
+    d = _panel_default(table, key)
     if allows_auto(table, key):
         setattr(group, f"{key}_auto", value == "auto")
         if value == "auto":
@@ -284,7 +316,9 @@ def reset(settings) -> None:
     for t in TABLE_GROUPS:
         g = getattr(settings, t)
         for key in panel_keys(t):
-            write_key(g, t, key, SCHEMA[t][key]["default"])
+            write_key(g, t, key, _panel_default(t, key))
+        if t in OPTIONAL_TABLES:
+            g.enabled = False
     settings.curtains.clear()
 
 
@@ -307,8 +341,10 @@ def load_document(settings, doc: dict) -> None:
             write_key(settings, "", key, v)
     for t in TABLE_GROUPS:
         g = getattr(settings, t)
+        if t in OPTIONAL_TABLES:
+            g.enabled = t in doc
         for key, v in doc.get(t, {}).items():
-            if key in SCHEMA[t] and (t, key) not in FROM_BLENDER:
+            if key in panel_keys(t):
                 write_key(g, t, key, v)
     for ct in doc.get("curtain", []):
         c = add_curtain(settings)

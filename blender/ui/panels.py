@@ -64,6 +64,10 @@ def _table_panel(table: str):
     def draw(self, context):
         g = getattr(context.scene.aurora, table)
         col = self.layout.column()
+        if table in P.OPTIONAL_TABLES:
+            col.prop(g, "enabled")
+            col = col.column()
+            col.enabled = g.enabled
         for key in P.panel_keys(table):
             if P.allows_auto(table, key):
                 row = col.row(align=True)

@@ -50,6 +50,10 @@ fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
     // A table the scene names that is not compiled in is read now (and kept):
     // a missing or damaged one is refused before any work (exit status 2).
     aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
+    if let Some(site) = &scene.site {
+        let hour = aurora::render::site_sky::SiteHour::of(site, scene.animation.time_s).map_err(exit::InputError)?;
+        print_warnings(hour.twilight_warning().as_slice());
+    }
     Ok(scene)
 }
 

@@ -62,6 +62,8 @@ struct Files<'a> {
     vdb: Option<&'a Path>,
     out: &'a Path,
     png: Option<&'a Path>,
+    /// The sequence's frame (its time for the sky of a `[site]`), or none.
+    frame: Option<i64>,
 }
 
 pub fn run(a: RenderArgs) -> Result<()> {
@@ -104,7 +106,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
             let seq = vdb.expect("clap requires --vdb with --frame");
             with_threads(common.threads, || render_frames(&job, &seq, &frames, &out, png.as_deref()))
         }
-        None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref() })),
+        None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref(), frame: None })),
     }
 }
 
@@ -161,7 +163,7 @@ fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<
         let (vdb_path, _) = aurora::farm::frame_files::frame_paths(seq, f);
         let exr = frame_name(out, f);
         let pngf = png.map(|p| frame_name(p, f));
-        render_one(job, &Files { vdb: Some(&vdb_path), out: &exr, png: pngf.as_deref() })?;
+        render_one(job, &Files { vdb: Some(&vdb_path), out: &exr, png: pngf.as_deref(), frame: Some(f) })?;
     }
     Ok(())
 }
@@ -174,6 +176,9 @@ fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
     let mut settings = aurora::render::RenderSettings::from_scene(&job.scene);
     settings.base_dir = Some(job.dir.clone());
     settings.shadow_samples = job.shadow_samples;
+    if let Some(f) = files.frame {
+        settings.time_s = aurora::pipeline::motion::frame_time(&job.scene.animation, f);
+    }
     if job.grid.is_some() {
         // A filter image holds the grid's light alone: no sky, no stars, no airglow.
         settings.background.radiance = [0.0; 3];
@@ -348,7 +353,7 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
 
 /// Writes a render's image (and PNG) and prints its statistics.
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
-    let Files { vdb, out, png } = *files;
+    let Files { vdb, out, png, .. } = *files;
     let (exposure, view) = (job.scene.render.exposure, job.scene.render.view_transform);
     let bits = if job.scene.render.png_bits == 16 { PngBits::Sixteen } else { PngBits::Eight };
     if job.grid.is_some() {

@@ -112,7 +112,8 @@ impl Prepared {
                     n.shadow_nanos += start.elapsed().as_nanos() as u64;
                     n.shadow_samples += s.shadow_samples as u64;
                     n.shadow_rays += rays;
-                    let l = [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * e[c]);
+                    let m = self.moonlight_on(h.p, h.n);
+                    let l = [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * (e[c] + m[c]));
                     match &self.air {
                         // The terrain's light crosses the air to the camera.
                         Some(a) => {
@@ -270,28 +271,60 @@ impl Prepared {
             stats.shadow_thread_seconds += n.shadow_nanos as f64 * 1e-9;
         }
         self.add_stars(&mut pixels);
+        self.add_moon(&mut pixels);
         Image { width: self.camera.width, height: self.camera.height, pixels, stats }
     }
 }
 
 impl Prepared {
+    /// The Moon's irradiance on the terrain at `p` of normal `n`
+    /// (`moon.rs`): through the air toward the Moon, none where the terrain
+    /// hides it; the volume's transmittance toward the Moon is taken as 1
+    /// (an aurora's optical depth is below 1e-3).
+    fn moonlight_on(&self, p: glam::DVec3, n: glam::DVec3) -> [f64; 3] {
+        let Some(m) = &self.sky.moon else { return [0.0; 3] };
+        if n.dot(m.dir) <= 0.0 || self.terrain.intersect(p + n * 1e-6, m.dir, 0.0, f64::INFINITY).is_some() {
+            return [0.0; 3];
+        }
+        let e = m.irradiance_on(n);
+        match &self.air {
+            Some(a) => {
+                let t = a.towards(m.dir);
+                [0, 1, 2].map(|c| e[c] * t[c])
+            }
+            None => e,
+        }
+    }
+
+    /// The Moon's disc (`moon.rs`), seen as a star is.
+    fn add_moon(&self, pixels: &mut [[f32; 4]]) {
+        if let Some(m) = &self.sky.moon {
+            m.draw(pixels, &self.camera, |dir| self.star_transmittance(dir));
+        }
+    }
+
     /// The star field's points (`sky.rs`), seen through the volume's
     /// transmittance and the air's, hidden by the terrain and by the solid
     /// Earth (a ray that goes below the ground: below the horizontal on a
     /// flat ground, below the horizon's dip on a round one), as the airglow is.
     fn add_stars(&self, pixels: &mut [[f32; 4]]) {
+        self.sky.add_stars(pixels, &self.camera, |dir| self.star_transmittance(dir));
+    }
+
+    /// The transmittance toward a point of the sky at infinity from the
+    /// camera: the volume's times the air's per channel; None where the
+    /// terrain or the solid Earth hides it.
+    fn star_transmittance(&self, dir: glam::DVec3) -> Option<[f64; 3]> {
         let s = &self.settings;
         let o = self.camera.position;
         let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
-        self.sky.add_stars(pixels, &self.camera, |dir| {
-            if earth.lowest_altitude(o, dir) < 0.0 || self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
-                return None;
-            }
-            let t = optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance();
-            Some(match &self.air {
-                Some(a) => a.towards(dir).map(|ta| t * ta),
-                None => [t; 3],
-            })
-        });
+        if earth.lowest_altitude(o, dir) < 0.0 || self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
+            return None;
+        }
+        let t = optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance();
+        Some(match &self.air {
+            Some(a) => a.towards(dir).map(|ta| t * ta),
+            None => [t; 3],
+        })
     }
 }

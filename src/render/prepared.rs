@@ -115,11 +115,13 @@ impl Prepared {
         } else {
             emission_sampler(&terrain, volume.emission, &medium, s.volume.emission_scale)
         };
-        let sky = if o.background == s.background && o.seed == s.seed && o.base_dir == s.base_dir {
-            old.sky
-        } else {
-            Sky::new(&s.background, s.seed, s.base_dir.as_deref())?
-        };
+        // With a site the sky also follows the hour, the observer and the air.
+        let same_sky = o.background == s.background
+            && o.seed == s.seed
+            && o.base_dir == s.base_dir
+            && o.site == s.site
+            && (s.site.is_none() || (o.time_s == s.time_s && o.observer == s.observer && o.sky == s.sky && o.camera.position == s.camera.position));
+        let sky = if same_sky { old.sky } else { Sky::of_settings(s)? };
         let camera = if o.camera == s.camera && (old.camera.width, old.camera.height) == (s.render.width, s.render.height) {
             old.camera
         } else {
@@ -246,7 +248,7 @@ impl Prepared {
     ) -> Result<Prepared, RenderError> {
         let terrain = TerrainModel::on_earth(&settings.terrain, settings.base_dir.as_deref(), settings.earth_radius_km)?;
         let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
-        let sky = Sky::new(&settings.background, settings.seed, settings.base_dir.as_deref())?;
+        let sky = Sky::of_settings(settings)?;
         let air = observer_air(settings);
         let airglow = observer_airglow(settings);
         Ok(Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: settings.clone(), velocity: None })

@@ -58,6 +58,11 @@ pub struct RenderSettings {
     /// Folder against which a relative `terrain.heightmap` is resolved (the
     /// scene file's folder); None = the working directory.
     pub base_dir: Option<PathBuf>,
+    /// Where and when (`[site]`): the real stars, the Moon (`site_sky.rs`);
+    /// none: the statistical star field.
+    pub site: Option<crate::scene::SiteParams>,
+    /// The scene's time, seconds after `site.utc` (`animation.time_s`).
+    pub time_s: f64,
 }
 
 impl RenderSettings {
@@ -79,6 +84,8 @@ impl RenderSettings {
             integration: Integration::Exact,
             shadow_samples: 1,
             base_dir: None,
+            site: scene.site.clone(),
+            time_s: scene.animation.time_s,
         }
     }
     /// The files the render reads, each with its scene key: a

@@ -46,10 +46,13 @@
 //! thread count.
 
 use super::image::Image;
-use super::settings::RenderError;
+use super::moon::MoonSky;
+use super::settings::{RenderError, RenderSettings};
+use super::site_sky::{site_moon, site_stars, SiteHour};
 use crate::geometry::camera::CameraModel;
 use crate::scene::Background;
 use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
+use crate::util::observer::Observer;
 use glam::DVec3;
 use rand::Rng;
 use std::f64::consts::PI;
@@ -148,6 +151,42 @@ pub fn blackbody_rgb(t_k: f64) -> [f64; 3] {
     rgb.map(|c| c / y)
 }
 
+/// Planck's law up to a constant: the spectral radiance of a blackbody at
+/// `t_k` kelvin at `lambda_nm`, per nm, in arbitrary units.
+pub fn planck(lambda_nm: f64, t_k: f64) -> f64 {
+    const HC_K: f64 = 1.438_777e7; // nm K
+    lambda_nm.powi(-5) / ((HC_K / (lambda_nm * t_k)).exp() - 1.0)
+}
+
+/// Linear Rec.709 colour of the spectrum `s` (per nm, 380-780 nm by 5 nm)
+/// as `observer` records it, brought into its gamut
+/// (`Observer::in_gamut`), luminance 1.
+pub fn spectrum_rgb(observer: Observer, s: impl Fn(f64) -> f64) -> [f64; 3] {
+    let mut rgb = [0.0f64; 3];
+    let mut l: f64 = 380.0;
+    while l <= 780.0 {
+        let b = s(l);
+        let c = observer.rgb(l);
+        for k in 0..3 {
+            rgb[k] += b * c[k];
+        }
+        l += 5.0;
+    }
+    let rgb = observer.in_gamut(rgb);
+    let y = luminance(rgb);
+    rgb.map(|c| c / y)
+}
+
+/// The air's V-band extinction coefficient at the camera, magnitudes per
+/// air mass: `2.5 log10(e)` times the zenith depth at 550 nm above it (0
+/// without air).
+pub fn v_extinction_coefficient(s: &RenderSettings) -> f64 {
+    let Some(air) = crate::physics::air_extinction::Air::from_sky(&s.sky) else { return 0.0 };
+    let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
+    let z = earth.altitude(DVec3::from_array(s.camera.position));
+    2.5 * std::f64::consts::LOG10_E * air.column_above(&air.depths(550.0), z)
+}
+
 /// The star field of `seed` down to `limiting_magnitude` (module
 /// documentation), `brightness` times the physical irradiance.
 pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64) -> Vec<Star> {
@@ -182,9 +221,26 @@ pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64) -> Vec<St
 pub struct Sky {
     pub image: Option<EnvMap>,
     pub stars: Vec<Star>,
+    /// The Moon, with a site when any of it is up (`moon.rs`).
+    pub moon: Option<MoonSky>,
 }
 
 impl Sky {
+    /// The sky of `s`: without a site, [`Sky::new`]; with one, its image,
+    /// the catalogue's stars at the site and hour and the Moon
+    /// (`site_sky.rs`).
+    pub fn of_settings(s: &RenderSettings) -> Result<Sky, RenderError> {
+        let Some(p) = &s.site else { return Sky::new(&s.background, s.seed, s.base_dir.as_deref()) };
+        let hour = SiteHour::of(p, s.time_s).map_err(RenderError::Settings)?;
+        let bg = &s.background;
+        let mut sky = Sky::new(&Background { stars: false, ..bg.clone() }, s.seed, s.base_dir.as_deref())?;
+        if bg.stars {
+            sky.stars = site_stars(&hour, bg.limiting_magnitude, bg.star_brightness, s.observer, s.seed);
+        }
+        sky.moon = site_moon(&hour, v_extinction_coefficient(s), s.observer);
+        Ok(sky)
+    }
+
     /// Loads `background.image` (relative to `base_dir`) and draws the
     /// stars of `seed`.
     pub fn new(bg: &Background, seed: u64, base_dir: Option<&Path>) -> Result<Sky, RenderError> {
@@ -198,12 +254,20 @@ impl Sky {
             }
         };
         let stars = if bg.stars { star_field(seed, bg.limiting_magnitude, bg.star_brightness) } else { Vec::new() };
-        Ok(Sky { image, stars })
+        Ok(Sky { image, stars, moon: None })
     }
 
-    /// The sky's radiance along `dir` (the image's; stars are added apart).
+    /// The sky's radiance along `dir`: the image's and the moonlit sky's
+    /// (stars and the Moon's disc are added apart).
     pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
-        self.image.as_ref().map_or([0.0; 3], |m| m.radiance(dir))
+        let i = self.image.as_ref().map_or([0.0; 3], |m| m.radiance(dir));
+        match &self.moon {
+            Some(m) => {
+                let l = m.sky_radiance(dir);
+                [i[0] + l[0], i[1] + l[1], i[2] + l[2]]
+            }
+            None => i,
+        }
     }
 
     /// Adds every star's footprint (module doc): `E T w_q / Omega_q` to
@@ -298,6 +362,7 @@ mod tests {
         let sky = Sky {
             image: None,
             stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0] }],
+            moon: None,
         };
         for (p, w, h) in [
             (Projection::Fisheye, 64, 64),

@@ -16,6 +16,7 @@ use super::grid::{GridParams, VoxelSize};
 use super::keys::{KeySpec, Range};
 use super::photons::PhotonParams;
 use super::render::RenderParams;
+use super::site::SiteParams;
 use super::sky::SkyParams;
 use super::terrain::Terrain;
 use super::volume::VolumeParams;
@@ -44,6 +45,10 @@ pub struct Scene {
     pub animation: AnimationParams,
     pub atmosphere: AtmosphereParams,
     pub earth: EarthParams,
+    /// Where and when the scene is (`[site]`, `super::site`): none is the
+    /// local frame with no place or hour (and writes no table).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub site: Option<SiteParams>,
     /// The overrides applied to the file, in order, as `KEY=VALUE`
     /// (`crate::scene::overrides`; recorded in bake.json). Not part of the
     /// TOML: the values above already hold them, so the hash and the bake

@@ -45,7 +45,8 @@ pub fn enum_values() -> Vec<(String, Value)> {
 /// `[[curtain]]` entry (defaults of `Curtain::default()`), top-level keys
 /// sit under `""`. Where a key inside a table that is present defaults
 /// differently from a missing table (`terrain.kind`), `default_in_table`
-/// says so.
+/// says so; for `[site]`, whose required keys have no default, it is the
+/// `tromso` preset's site, the example the add-on's panel starts from.
 pub fn schema() -> Value {
     let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
     let in_table: Value = json!({
@@ -54,6 +55,9 @@ pub fn schema() -> Value {
         "render": RenderParams::default(), "volume": VolumeParams::default(), "background": Background::default(), "sky": SkyParams::default(), "airglow": super::airglow::AirglowParams::default(),
         "terrain": Terrain::default(), "atmosphere": AtmosphereParams::default(), "animation": AnimationParams::default(),
         "earth": EarthParams::default(),
+        // `[site]` has no default (its required keys have none): the example
+        // the add-on's panel starts from.
+        "site": super::presets::sites::tromso_site(),
     });
     let curtain = serde_json::to_value(Curtain::default()).expect("serialises");
     let mut out = Map::new();

@@ -59,6 +59,11 @@ pub const TABLES: &[Table] = &[
         about: "The ground's shape: a sphere (curtain positions and paths are ground distances from the origin, azimuthal equidistant) or a flat plane.",
     },
     Table {
+        name: "site",
+        keys: super::site::SITE_KEYS,
+        about: "Where on the Earth and when: the real stars of the Hipparcos-2 catalogue, the Moon with its phase and its light, and the Sun's elevation over the site at the hour. Optional: without it the scene has no place or hour, a statistical star field and no Moon. With it the scene's frame is the site's (x east, y north, z along the WGS 84 ellipsoid's normal).",
+    },
+    Table {
         name: "colour",
         keys: super::colour::COLOUR_KEYS,
         about: "How deposited energy becomes colour.",
@@ -138,6 +143,12 @@ mod tests {
                         serde_json::to_value(Curtain::default()).unwrap().as_object().unwrap().keys().cloned().collect();
                     f.push("path".into());
                     f.retain(|k| k != "curtain");
+                    f
+                }
+                // No site by default: the preset's, with the key it omits.
+                "site" => {
+                    let mut f: Vec<String> = serde_json::to_value(presets::sites::tromso_site()).unwrap().as_object().unwrap().keys().cloned().collect();
+                    f.push("pressure_hpa".into());
                     f
                 }
                 name => defaults[name].as_object().unwrap().keys().cloned().collect(),

@@ -174,6 +174,17 @@ impl Scene {
             }
         }
 
+        if let Some(site) = &self.site {
+            if let Err(e) = crate::geometry::astronomy::time::Utc::parse_rfc3339(&site.utc) {
+                v.push(
+                    Some(("site", 0)),
+                    "utc",
+                    format!("\"{}\"", quoted(&site.utc)),
+                    format!("must be an RFC 3339 time between 1900 and 2100, such as \"2026-12-07T22:00:00Z\" ({e})"),
+                );
+            }
+        }
+
         let c = &self.colour;
         let t = Some(("colour", 0));
         if c.mode == ColourMode::Colormap {

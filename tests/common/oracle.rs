@@ -65,6 +65,8 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         integration: Integration::Exact,
         shadow_samples: 1,
         base_dir: None,
+        site: None,
+        time_s: 0.0,
     }
 }
 

@@ -132,12 +132,16 @@ def test_an_untouched_panel_bakes_the_clis_default_scene(sc, panel, tmp_path):
 def test_every_schema_key_is_a_property_with_its_default_range_and_unit(sc, panel):
     P = sub(panel, "properties")
     s = sc.aurora
-    n = 0
+    n = left_to_files = 0
     for table, keys in P.SCHEMA.items():
         if table in P.TABLES_FROM_BLENDER:
             continue
         for key, entry in keys.items():
             if (table, key) in P.FROM_BLENDER:
+                continue
+            if table in P.OPTIONAL_TABLES and key not in P.panel_keys(table):
+                # No default and no example (site.pressure_hpa): scene files only.
+                left_to_files += 1
                 continue
             group = s if table == "" else (s.curtains.add() if table == "curtain" else getattr(s, table))
             prop = group.bl_rna.properties[key]
@@ -150,9 +154,35 @@ def test_every_schema_key_is_a_property_with_its_default_range_and_unit(sc, pane
             if unit:
                 assert f"({unit})" in prop.name, f"{table}.{key}: unit {unit} not in {prop.name!r}"
             assert P.KEYS[table][key]["description"].replace("`", "")[:20] in prop.description
-            assert P.read_key(group, table, key) is None, f"{table}.{key} differs from its default"
+            if table not in P.OPTIONAL_TABLES:
+                assert P.read_key(group, table, key) is None, f"{table}.{key} differs from its default"
+    # An optional table is written only when switched on.
+    for table in P.OPTIONAL_TABLES:
+        assert not getattr(s, table).enabled and P.table_values(getattr(s, table), table, P.panel_keys(table)) == {}
     every = sum(len(k) for k in P.SCHEMA.values())
-    assert n == every - len(P.SCHEMA["camera"]) - len(P.FROM_BLENDER) and n > 80
+    assert n == every - len(P.SCHEMA["camera"]) - len(P.FROM_BLENDER) - left_to_files and n > 80
+    assert left_to_files == 1
+
+
+def test_the_site_and_hour_load_from_a_preset_and_write_back_only_when_on(sc, panel, tmp_path, bpy):
+    """`[site]` in the panel: the `tromso` preset switches it on with its
+    values, the scene file the panel writes holds the same site (and the
+    binary takes it), and switched off the file has no `[site]`."""
+    P, sw = sub(panel, "properties"), sub(panel, "scene_write")
+    assert bpy.ops.aurora.load_preset(name="tromso") == {"FINISHED"}
+    preset = tomllib.loads(subprocess.run([aurora_bin(), "scene", "tromso"], capture_output=True, text=True, check=True).stdout)
+    assert sc.aurora.site.enabled
+    doc = sw.scene_document(sc)
+    for key, v in preset["site"].items():
+        assert doc["site"][key] == pytest.approx(v) if isinstance(v, float) else doc["site"][key] == v, key
+    f = tmp_path / "s.toml"
+    f.write_text(sw.to_toml(doc))
+    mine = tomllib.loads(subprocess.run([aurora_bin(), "scene", f], capture_output=True, text=True, check=True).stdout)
+    assert mine["site"] == preset["site"]
+    sc.aurora.site.enabled = False
+    assert "site" not in sw.scene_document(sc)
+    assert bpy.ops.aurora.load_preset(name="default") == {"FINISHED"}
+    assert not sc.aurora.site.enabled
 
 
 def test_a_preset_loads_into_the_panel_and_writes_back_the_same_bake(sc, panel, tmp_path, bpy):

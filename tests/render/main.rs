@@ -20,5 +20,6 @@ mod extinction;
 mod film;
 mod integrator;
 mod motion_blur;
+mod site_sky;
 mod terrain;
 mod zenith;

@@ -35,6 +35,7 @@
 //! every star here), and so is the radial velocity's perspective
 //! acceleration (under 1 arcsec in a century even for alpha Centauri).
 
+use crate::geometry::astronomy::star::StarPlace;
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -184,19 +185,28 @@ pub fn catalogue() -> &'static [CatalogueStar] {
     STARS.get_or_init(|| decode(TABLE).expect("the compiled-in star table is checked by this module's tests"))
 }
 
-/// Milliarcseconds in a radian.
-const MAS_PER_RAD: f64 = 180.0 * 3600.0 * 1000.0 / std::f64::consts::PI;
+impl CatalogueStar {
+    /// The star as `crate::geometry::astronomy` places it: its position
+    /// at [`CATALOGUE_EPOCH_JYEAR`], its proper motion and parallax.
+    pub fn place(&self) -> StarPlace {
+        StarPlace {
+            ra_deg: self.ra_deg,
+            dec_deg: self.dec_deg,
+            pm_ra_cosdec_mas_yr: self.pm_ra_cosdec_mas_yr,
+            pm_dec_mas_yr: self.pm_dec_mas_yr,
+            parallax_mas: self.parallax_mas,
+            epoch_jyear: CATALOGUE_EPOCH_JYEAR,
+        }
+    }
+}
 
-/// The unit vector (ICRS: x to RA 0, z to the north pole) towards `star` at
-/// the Julian year `jyear`, its proper motion applied from the catalogue's epoch.
+/// The unit vector (ICRS: x to RA 0, z to the north pole) from the
+/// barycentre towards `star` at the Julian year `jyear` (TT), its space
+/// motion applied from the catalogue's epoch (`StarPlace`, the one home of
+/// the motion).
 pub fn direction_at(star: &CatalogueStar, jyear: f64) -> DVec3 {
-    let (sa, ca) = star.ra_deg.to_radians().sin_cos();
-    let (sd, cd) = star.dec_deg.to_radians().sin_cos();
-    let p = DVec3::new(cd * ca, cd * sa, sd);
-    let east = DVec3::new(-sa, ca, 0.0);
-    let north = DVec3::new(-sd * ca, -sd * sa, cd);
-    let t = jyear - CATALOGUE_EPOCH_JYEAR;
-    (p + (east * star.pm_ra_cosdec_mas_yr + north * star.pm_dec_mas_yr) * (t / MAS_PER_RAD)).normalize()
+    let jd_tt = crate::geometry::astronomy::time::JD_J2000 + (jyear - 2000.0) * 365.25;
+    star.place().direction_from(jd_tt, DVec3::ZERO)
 }
 
 /// Right ascension in [0, 360) and declination (degrees) of `star` at `jyear`.

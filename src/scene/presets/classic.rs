@@ -61,6 +61,7 @@ pub fn default_scene() -> Scene {
         animation: AnimationParams::default(),
         atmosphere: AtmosphereParams::default(),
         earth: EarthParams::default(),
+        site: None,
         sky: SkyParams::default(),
         airglow: crate::scene::airglow::AirglowParams::default(),
         overrides: Vec::new(),

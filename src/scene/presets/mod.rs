@@ -11,6 +11,7 @@ use crate::scene::root::Scene;
 
 pub mod classic;
 pub mod forms;
+pub mod sites;
 
 pub use classic::{default_scene, oval, seed2014, OVAL_LENGTH_KM, OVAL_POLE_DISTANCE_KM};
 
@@ -23,7 +24,8 @@ pub struct Preset {
     pub build: fn() -> Scene,
     /// The International Brightness Coefficient class its brightest 557.7
     /// nm column along B reaches (I-IV: 1, 10, 100, 1000 kR;
-    /// `crate::pipeline::columns`); `None` for a colour map's scene.
+    /// `crate::pipeline::columns`); `None` for a colour map's scene and for
+    /// one that shows another preset's arcs (`tromso`: the default's).
     pub ibc_class: Option<u32>,
 }
 
@@ -54,6 +56,8 @@ pub const PRESETS: &[Preset] = &[
     Preset { name: "type_a_red", description: forms::TYPE_A_RED, build: forms::type_a_red, ibc_class: Some(2) },
     Preset { name: "type_b_pink", description: forms::TYPE_B_PINK, build: forms::type_b_pink, ibc_class: Some(3) },
     Preset { name: "surge", description: forms::SURGE, build: forms::surge, ibc_class: Some(3) },
+    Preset { name: "tromso", description: sites::TROMSO, build: sites::tromso, ibc_class: None },
+    Preset { name: "tromso_dome", description: sites::TROMSO_DOME, build: sites::tromso_dome, ibc_class: None },
 ];
 
 /// The presets' names, in [`PRESETS`] order.

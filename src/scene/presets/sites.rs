@@ -1,0 +1,40 @@
+//! Scenes over a real place at a real hour (`[site]`): the catalogue's
+//! stars where they were, the Moon with its phase and its light.
+//!
+//! Tromso (69.65 N, 18.96 E) on 2026-12-18 at 18:00 UTC, an hour after
+//! dark in the polar night (the Sun 29 degrees down): the Moon, two-thirds
+//! lit, stands 29 degrees up in the south (azimuth 185), behind a camera
+//! that looks north at the default's arcs, and lights the ground; the Big
+//! Dipper is low in the north-east, Cassiopeia high in the north-west.
+//! Positions from skyfield 1.55 with de421, as `tests/data/sky_positions.csv`'s
+//! tool computes them.
+
+use super::classic::{default_scene, oval};
+use crate::scene::{root::Scene, SiteParams};
+
+/// The site and hour of both scenes.
+pub fn tromso_site() -> SiteParams {
+    SiteParams {
+        latitude_deg: 69.65,
+        longitude_deg: 18.96,
+        height_km: 0.0,
+        utc: "2026-12-18T18:00:00Z".into(),
+        temperature_c: -10.0,
+        pressure_hpa: None,
+    }
+}
+
+/// What `aurora scene --list` says of [`tromso`].
+pub const TROMSO: &str = "the default's arcs over Tromso on 2026-12-18 at 18:00 UTC: the real stars, the Moon behind the camera lighting the ground";
+/// What `aurora scene --list` says of [`tromso_dome`].
+pub const TROMSO_DOME: &str = "the oval's arc over Tromso at the same hour as a dome master: the real constellations and the Moon";
+
+/// The default's three arcs over Tromso (module doc).
+pub fn tromso() -> Scene {
+    Scene { site: Some(tromso_site()), ..default_scene() }
+}
+
+/// The oval's arc over Tromso as a dome master (module doc).
+pub fn tromso_dome() -> Scene {
+    Scene { site: Some(tromso_site()), ..oval() }
+}
