@@ -47,6 +47,18 @@ pub fn enum_values() -> Vec<(String, Value)> {
 /// differently from a missing table (`terrain.kind`), `default_in_table`
 /// says so; for `[site]`, whose required keys have no default, it is the
 /// `tromso` preset's site, the example the add-on's panel starts from.
+/// The defaults of a `[site]` table that gives only its required keys
+/// (serde's, the one source), the required keys themselves left out.
+fn site_defaults() -> Value {
+    const REQUIRED: [&str; 3] = ["latitude_deg", "longitude_deg", "utc"];
+    let minimal: super::site::SiteParams = toml::from_str("latitude_deg = 0\nlongitude_deg = 0\nutc = \"\"").expect("the required keys alone");
+    let mut v = serde_json::to_value(minimal).expect("serialises");
+    for k in REQUIRED {
+        v.as_object_mut().expect("a table").remove(k);
+    }
+    v
+}
+
 pub fn schema() -> Value {
     let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
     let in_table: Value = json!({
@@ -60,11 +72,13 @@ pub fn schema() -> Value {
         "site": super::presets::sites::tromso_site(),
     });
     let curtain = serde_json::to_value(Curtain::default()).expect("serialises");
+    let site = site_defaults();
     let mut out = Map::new();
     for table in TABLES {
         let fields = match table.name {
             "" => &defaults,
             "curtain" => &curtain,
+            "site" => &site,
             name => &defaults[name],
         };
         let mut keys = Map::new();

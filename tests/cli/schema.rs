@@ -51,6 +51,9 @@ fn stated_type(section: &str, key: &str) -> Option<&'static str> {
         ("grid", "lines") => "list of words",
         ("curtain", "path") => "rows of 2 numbers",
         ("earth", "magnetic_pole") => "2 numbers",
+        // `[site]` has no default; its required keys and the optional pressure.
+        ("site", "latitude_deg" | "longitude_deg" | "pressure_hpa") => "number",
+        ("site", "utc") => "string (RFC 3339)",
         _ => return None,
     })
 }
@@ -151,6 +154,10 @@ fn toml_value(v: &Value) -> String {
 }
 
 fn default_of(section: &str, entry: &Map<String, Value>) -> String {
+    // A key with no default but an example (`[site]`'s required keys).
+    if let (Value::Null, Some(t)) = (&entry["default"], entry.get("default_in_table")) {
+        return format!("required in `[{section}]` (for example `{}`)", toml_value(t));
+    }
     let mut s = format!("`{}`", toml_value(&entry["default"]));
     if let Some(t) = entry.get("default_in_table") {
         let _ = write!(s, " (`{}` in a written `[{section}]` table)", toml_value(t));

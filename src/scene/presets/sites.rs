@@ -29,12 +29,22 @@ pub const TROMSO: &str = "the default's arcs over Tromso on 2026-12-18 at 18:00 
 /// What `aurora scene --list` says of [`tromso_dome`].
 pub const TROMSO_DOME: &str = "the oval's arc over Tromso at the same hour as a dome master: the real constellations and the Moon";
 
-/// The default's three arcs over Tromso (module doc).
+/// The default's three arcs over Tromso (module doc), 1.5 stops darker
+/// than the default: the moonlit snow (albedo 0.8 at 0.03 lux, about 0.008
+/// cd/m^2) is brighter than the arcs' sides, and a photographer shortens
+/// the exposure under a bright Moon.
 pub fn tromso() -> Scene {
-    Scene { site: Some(tromso_site()), ..default_scene() }
+    let mut s = Scene { site: Some(tromso_site()), ..default_scene() };
+    s.render.exposure -= 1.5;
+    s
 }
 
-/// The oval's arc over Tromso as a dome master (module doc).
+/// The oval's arc over Tromso as a dome master (module doc), 2.5 stops
+/// darker than `oval`: the moonlit sky is 2.7 kR at the zenith and 20 kR
+/// low in the south under the Moon (V 20.6 and 18.4 mag/arcsec^2), against
+/// the dark sky's 0.3 of airglow.
 pub fn tromso_dome() -> Scene {
-    Scene { site: Some(tromso_site()), ..oval() }
+    let mut s = Scene { site: Some(tromso_site()), ..oval() };
+    s.render.exposure -= 2.5;
+    s
 }
