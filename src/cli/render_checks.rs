@@ -80,13 +80,7 @@ pub fn observer_inputs(vdb: Option<&Path>, frame: Option<&str>, colour: &aurora:
         (None, _) => Vec::new(),
     };
     for path in &paths {
-        aurora::app::vdb_for_render::emission_source_of(path, colour).map_err(|e| -> anyhow::Error {
-            if e.is_input() {
-                InputError(e.to_string()).into()
-            } else {
-                e.into()
-            }
-        })?;
+        aurora::app::vdb_for_render::emission_source_of(path, colour).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
     }
     Ok(())
 }
