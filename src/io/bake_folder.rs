@@ -97,11 +97,20 @@ pub fn check_ours(out: &Path) -> Result<(), OutputError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
         Err(e) => return Err(OutputError::Write { path: json, message: e.to_string() }),
     }
-    let vdb = out.join(VDB_NAME);
-    let bytes = match crate::io::vdb::records::FileBytes::open(&vdb) {
+    check_vdb_ours(&out.join(VDB_NAME), JSON_NAME)
+}
+
+/// Refuses a VDB without its report (`report`, the name it would have
+/// beside it) that aurora did not write: one whose grids carry no
+/// `aurora_scene_hash` ([`vdb_metadata`]), or that is not a VDB at all.
+/// The one rule for a single bake's `aurora.vdb` ([`check_ours`]) and a
+/// sequence's `aurora.NNNN.vdb` (`crate::farm::sequence_folder`). A missing
+/// file is fine; one that cannot be read is an I/O error (exit status 1).
+pub fn check_vdb_ours(vdb: &Path, report: &str) -> Result<(), OutputError> {
+    let bytes = match crate::io::vdb::records::FileBytes::open(vdb) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(OutputError::Write { path: vdb, message: e.to_string() }),
+        Err(e) => return Err(OutputError::Write { path: vdb.to_path_buf(), message: e.to_string() }),
     };
     let ours = crate::io::vdb::parse::list_grids(bytes.bytes())
         .ok()
@@ -109,7 +118,10 @@ pub fn check_ours(out: &Path) -> Result<(), OutputError> {
     if ours {
         Ok(())
     } else {
-        Err(not_ours(vdb, "has no bake.json beside it and is not a VDB aurora wrote (its grids carry no aurora_scene_hash)"))
+        Err(OutputError::NotOurs {
+            path: vdb.to_path_buf(),
+            why: format!("has no {report} beside it and is not a VDB aurora wrote (its grids carry no aurora_scene_hash)"),
+        })
     }
 }
 
