@@ -34,8 +34,10 @@
 //!   and the stage is written;
 //! - a frame VDB without a report that aurora did not write (its grids
 //!   carry none of our metadata: `crate::io::bake_folder::check_vdb_ours`,
-//!   the single bake's rule) is refused (exit 2) naming it, `--rebake` or
-//!   not: a bake replaces or deletes only its own files;
+//!   the single bake's rule), or a frame report without its VDB that is not
+//!   one of ours (`crate::io::bake_folder::check_report_ours`), is refused
+//!   (exit 2) naming it, `--rebake` or not: a bake replaces or deletes only
+//!   its own files;
 //! - the record is this bake's: the stage is written (this run's range);
 //! - no record and no other bake's frame: nothing is written yet. The folder
 //!   is claimed by the first frame committed ([`Sequence::write_frame`]),
@@ -164,6 +166,12 @@ impl Sequence {
         for (vdb, report) in seq.orphan_vdbs()? {
             let report = report.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
             crate::io::bake_folder::check_vdb_ours(&vdb, &report)?;
+        }
+        // So is a frame report without its VDB that is not a report of ours.
+        for (vdb, report) in seq.frames_named("json")?.into_iter().map(|f| crate::farm::frame_files::frame_paths(dir, f)) {
+            if std::fs::symlink_metadata(&vdb).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound) {
+                crate::io::bake_folder::check_report_ours(&report)?;
+            }
         }
         if rebake {
             for (frame, report, _) in &others {
