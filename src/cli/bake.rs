@@ -20,25 +20,40 @@ use aurora::farm::frame_files::FrameState;
 use aurora::scene::Scene;
 use aurora::util::progress::{JsonProgress, Progress};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Where the bake's progress and messages go.
 enum Report {
     Text { bars: Bars, quiet: bool },
-    Json(JsonProgress<std::io::Stderr>),
+    Json(Arc<JsonProgress<std::io::Stderr>>),
 }
 
 impl Report {
     fn new(format: ProgressFormat, quiet: bool) -> Self {
         match format {
             ProgressFormat::Bars => Report::Text { bars: Bars::new(quiet), quiet },
-            ProgressFormat::Json => Report::Json(JsonProgress::new(std::io::stderr())),
+            ProgressFormat::Json => {
+                // A ticker: a stage whose work comes seconds apart still
+                // reports every second (`JsonProgress::tick`); it ends with
+                // the report.
+                let j = Arc::new(JsonProgress::new(std::io::stderr()));
+                let weak = Arc::downgrade(&j);
+                std::thread::spawn(move || loop {
+                    std::thread::sleep(JsonProgress::<std::io::Stderr>::HEARTBEAT);
+                    match weak.upgrade() {
+                        Some(j) => j.tick(),
+                        None => break,
+                    }
+                });
+                Report::Json(j)
+            }
         }
     }
 
     fn progress(&self) -> &dyn Progress {
         match self {
             Report::Text { bars, .. } => bars.progress(),
-            Report::Json(j) => j,
+            Report::Json(j) => j.as_ref(),
         }
     }
 

@@ -3,7 +3,8 @@
 //! status 0; a stderr that is closed or broken never stops a bake nor
 //! leaks its text into the files; descriptors 0-2 closed at start are
 //! reopened on /dev/null before any file is opened; on a terminal the
-//! progress bars are redrawn at least every 2 s.
+//! progress bars are redrawn at least every 2 s, and the JSON progress
+//! reports a stage at least every 2 s.
 
 use crate::common::child::Aurora;
 use crate::common::{scratch, small::bake_command, write};
@@ -118,4 +119,56 @@ fn on_a_terminal_every_stage_of_a_long_bake_shows_progress_every_two_seconds() {
     assert!(text.contains("footprints ["), "{text:?}");
     let (worst, at) = gaps.iter().max_by_key(|g| g.0).cloned().unwrap();
     assert!(worst < Duration::from_secs(2), "{worst:?} without a redraw, before {at:?}");
+}
+
+/// `--progress json` of the same long bake: every stage line follows the
+/// one before it within 2 s by its own `seconds`, the beams stage's chunks
+/// (seconds of tracing and gathering between reports) included; read line
+/// by line as they come, over the footprints, the budget and 6 s of beams.
+#[test]
+fn json_progress_of_a_long_bake_reports_every_stage_every_two_seconds() {
+    use std::io::BufRead;
+    use std::time::Duration;
+    let dir = scratch("streams", "json");
+    let mut c = std::process::Command::new(crate::common::child::AURORA_BIN);
+    c.arg("bake").arg("--out").arg(dir.join("out")).args(["--set", "beams.count=100000000", "--threads", "1", "--progress", "json"]);
+    c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped());
+    for v in crate::common::child::FARM_VARS {
+        c.env_remove(v);
+    }
+    let mut child = c.spawn().unwrap();
+    let err = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(err).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    let mut lines: Vec<serde_json::Value> = Vec::new();
+    let mut beams_from = None;
+    while let Ok(line) = rx.recv_timeout(Duration::from_secs(30)) {
+        let v: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("{e}: {line}"));
+        let t = v["seconds"].as_f64().unwrap();
+        if v["stage"] == "beams" && beams_from.is_none() {
+            beams_from = Some(t);
+        }
+        lines.push(v);
+        if beams_from.is_some_and(|b| t - b >= 6.0) {
+            break;
+        }
+    }
+    let _ = child.kill();
+    let _ = child.wait();
+    assert!(beams_from.is_some_and(|b| lines.last().unwrap()["seconds"].as_f64().unwrap() - b >= 6.0), "{lines:?}");
+    assert!(lines[0]["stage"] == "footprints" && lines[0]["seconds"].as_f64().unwrap() < 2.0, "{:?}", lines[0]);
+    for w in lines.windows(2) {
+        let gap = w[1]["seconds"].as_f64().unwrap() - w[0]["seconds"].as_f64().unwrap();
+        // Within a stage (a stage's last line to the next one's start is
+        // the bake between stages, the budget's check).
+        if w[0]["stage"] == w[1]["stage"] {
+            assert!(gap < 2.0, "{gap} s between {} and {}", w[0], w[1]);
+        }
+    }
 }
