@@ -20,25 +20,64 @@ use aurora::farm::frame_files::FrameState;
 use aurora::scene::Scene;
 use aurora::util::progress::{JsonProgress, Progress};
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 /// Where the bake's progress and messages go.
 enum Report {
     Text { bars: Bars, quiet: bool },
-    Json(JsonProgress<std::io::Stderr>),
+    Json { progress: Arc<JsonProgress<std::io::Stderr>>, _ticker: Ticker },
+}
+
+/// A thread that lets the JSON progress report a stage whose work comes
+/// seconds apart every second (`JsonProgress::tick`), every
+/// `JsonProgress::HEARTBEAT`; stopped and joined when dropped, so no line
+/// follows the run's last (the error line is written after).
+struct Ticker {
+    stop: Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+impl Ticker {
+    fn new(progress: Arc<JsonProgress<std::io::Stderr>>) -> Ticker {
+        let stop = Arc::new(AtomicBool::new(false));
+        let stopped = stop.clone();
+        let thread = std::thread::spawn(move || loop {
+            std::thread::park_timeout(JsonProgress::<std::io::Stderr>::HEARTBEAT);
+            if stopped.load(Ordering::Relaxed) {
+                break;
+            }
+            progress.tick();
+        });
+        Ticker { stop, thread: Some(thread) }
+    }
+}
+
+impl Drop for Ticker {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            t.thread().unpark();
+            let _ = t.join();
+        }
+    }
 }
 
 impl Report {
     fn new(format: ProgressFormat, quiet: bool) -> Self {
         match format {
             ProgressFormat::Bars => Report::Text { bars: Bars::new(quiet), quiet },
-            ProgressFormat::Json => Report::Json(JsonProgress::new(std::io::stderr())),
+            ProgressFormat::Json => {
+                let progress = Arc::new(JsonProgress::new(std::io::stderr()));
+                Report::Json { _ticker: Ticker::new(progress.clone()), progress }
+            }
         }
     }
 
     fn progress(&self) -> &dyn Progress {
         match self {
             Report::Text { bars, .. } => bars.progress(),
-            Report::Json(j) => j,
+            Report::Json { progress, .. } => progress.as_ref(),
         }
     }
 
@@ -46,7 +85,7 @@ impl Report {
     fn warnings(&self, warnings: &[String]) {
         match self {
             Report::Text { .. } => print_warnings(warnings),
-            Report::Json(j) => warnings.iter().for_each(|w| j.warning(w)),
+            Report::Json { progress, .. } => warnings.iter().for_each(|w| progress.warning(w)),
         }
     }
 
@@ -59,8 +98,8 @@ impl Report {
 
     /// `done` of `total` frames of a sequence are complete.
     fn frames(&self, done: usize, total: usize) {
-        if let Report::Json(j) = self {
-            j.step("frame", done as u64, total as u64);
+        if let Report::Json { progress, .. } = self {
+            progress.step("frame", done as u64, total as u64);
         }
     }
 }

@@ -1,9 +1,19 @@
 //! Progress on stderr: an indicatif bar per stage, behind the library's
 //! [`Progress`] trait (or none with --quiet).
+//!
+//! A bar is drawn when its stage starts and then redrawn every [`TICK`]
+//! by indicatif's ticker, not only when work is reported: a stage whose
+//! units come seconds apart (a chunk of beams traced, then gathered) or
+//! never (a spinner) still shows its elapsed time move, as the JSON lines
+//! report every second.
 
 use aurora::util::progress::{NoProgress, Progress};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::sync::Mutex;
+use std::time::Duration;
+
+/// How often a bar is redrawn whether or not work was reported.
+pub const TICK: Duration = Duration::from_millis(500);
 
 /// indicatif progress bars on stderr, one per stage.
 pub struct Bars {
@@ -41,6 +51,7 @@ impl Progress for Bars {
             ProgressBar::new_spinner()
         };
         pb.set_prefix(stage.to_string());
+        pb.enable_steady_tick(TICK);
         if let Some(old) = self.bar.lock().expect("progress lock").replace(pb) {
             old.finish_and_clear();
         }

@@ -26,6 +26,17 @@ impl InputError {
     }
 }
 
+/// A library error reported by its message alone (no repeated causes), as
+/// its own `is_input()` (`input`) classed it: an [`InputError`] (exit status
+/// 2), or else a failure (exit status 1).
+pub fn by_message(message: String, input: bool) -> anyhow::Error {
+    if input {
+        InputError(message).into()
+    } else {
+        anyhow::anyhow!(message)
+    }
+}
+
 /// The exit status of a command's result; an error is printed on stderr
 /// (with its causes) first, as a line of text or, with `json`, as the
 /// object `{"error", "status", "seconds"}` (`--progress json`).

@@ -27,6 +27,7 @@ pub fn run(a: KeogramArgs) -> Result<()> {
         .into());
     }
     let (frames, _) = frame_selection(&frame, None)?;
+    super::render_checks::keogram_within_memory(&frame, frames.len(), aurora::app::keogram::meridian(&scene).len())?;
     let (png, csv) = (out.with_extension("png"), out.with_extension("csv"));
     for p in [&out, &png, &csv] {
         check_replaceable(p)?;

@@ -21,6 +21,7 @@ pub fn run(a: PreviewArgs) -> Result<()> {
         ImageFormat::Png => Ok(()),
         ImageFormat::Exr => Err(InputError(format!("--out {}: the preview writes PNG", out.display())).into()),
     })?;
+    super::render_checks::preview_within_memory(size)?;
     let dir = scene_dir(&scene_arg);
     with_threads(common.threads, || {
         let mut preview = Preview::new(&out, size, Some(dir.to_path_buf()));

@@ -219,13 +219,8 @@ fn prepare(
     // The motion blur reads the velocity grid `v` beside the medium: from grids.
     let blur = scene.render.shutter_s > 0.0;
     if let (Some(path), false) = (vdb, blur) {
-        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path, &scene.colour).map_err(|e| {
-            if e.is_input() {
-                InputError(e.to_string()).into()
-            } else {
-                anyhow::Error::new(e)
-            }
-        });
+        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path, &scene.colour)
+            .map_err(|e| super::exit::by_message(e.to_string(), e.is_input()));
     }
     let no_velocity = |source: String| {
         InputError(format!(
@@ -237,7 +232,8 @@ fn prepare(
     let open = std::time::Instant::now();
     let (density, emission) = match vdb {
         Some(path) => {
-            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            let file =
+                aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
             if blur {
                 let v = file.vec3_grids.iter().find(|g| g.name == aurora::pipeline::bake::velocity::GRID_NAME).cloned();
                 velocity = Some(v.ok_or_else(|| no_velocity(path.display().to_string()))?);
@@ -279,7 +275,8 @@ fn prepare_grid(
     let open = std::time::Instant::now();
     let (density, floats, source) = match vdb {
         Some(path) => {
-            let file = aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| InputError(e.to_string()))?;
+            let file =
+                aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
             let density = file.float("density").cloned();
             (density, file.float_grids, path.display().to_string())
         }

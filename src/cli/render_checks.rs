@@ -16,9 +16,10 @@
 //! - every VDB can be shown through the scene's observer ([`observer_inputs`]):
 //!   baked for it, or holding the line grids to re-colour it;
 //! - the image's pixels fit in the memory this process may use
-//!   ([`image_within_memory`]): a picture too large for the limit is
-//!   refused naming its size and the limit, never ended by a failed
-//!   allocation;
+//!   ([`image_within_memory`]; the same rule, [`pixels_within_memory`],
+//!   for `preview`'s, `sky`'s and `keogram`'s pictures): a picture too
+//!   large for the limit is refused naming its size and the limit, never
+//!   ended by a failed allocation;
 //! - the camera is above the terrain ([`camera_above_terrain`]): a camera
 //!   inside the ground would give a black picture, so `render` and
 //!   `preview` refuse it naming both heights; `bake` never reads the
@@ -80,13 +81,7 @@ pub fn observer_inputs(vdb: Option<&Path>, frame: Option<&str>, colour: &aurora:
         (None, _) => Vec::new(),
     };
     for path in &paths {
-        aurora::app::vdb_for_render::emission_source_of(path, colour).map_err(|e| -> anyhow::Error {
-            if e.is_input() {
-                InputError(e.to_string()).into()
-            } else {
-                e.into()
-            }
-        })?;
+        aurora::app::vdb_for_render::emission_source_of(path, colour).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
     }
     Ok(())
 }
@@ -130,27 +125,67 @@ fn output_folder(out: &Path) -> Result<(), AtomicError> {
     }
 }
 
-/// Refuses (exit status 2) a `render.width` x `render.height` picture
+/// The one rule for the pixels a command allocates (`render`, `preview`,
+/// `sky`, `keogram`): refuses (exit status 2) a `width` x `height` picture
 /// whose pixels (`aurora::render::image::image_memory_bytes`, `adaptive` or
 /// not) would need more than the memory this process may use
-/// (`aurora::util::memory::available`), naming both and the largest square
-/// picture that fits.
-pub fn image_within_memory(scene: &Scene, adaptive: bool) -> Result<()> {
-    let (w, h) = (scene.render.width, scene.render.height);
-    let needed = aurora::render::image::image_memory_bytes(w, h, adaptive) as f64;
+/// (`aurora::util::memory::available`), before any is allocated, naming
+/// `what` (the keys and values that ask for it), the limit, and the allowed
+/// range `fits` words from the most pixels that fit.
+pub fn pixels_within_memory(what: &str, width: usize, height: usize, adaptive: bool, fits: impl FnOnce(f64) -> String) -> Result<()> {
+    let needed = aurora::render::image::image_memory_bytes(width, height, adaptive) as f64;
     let limit = aurora::util::memory::available();
     if needed <= limit.bytes {
         return Ok(());
     }
-    let per_pixel = aurora::render::image::image_memory_bytes(1, 1, adaptive) as f64;
-    let side = (limit.bytes / per_pixel).sqrt().floor() as u64;
+    let most = limit.bytes / aurora::render::image::image_memory_bytes(1, 1, adaptive) as f64;
     Err(InputError(format!(
-        "render.width = {w}, render.height = {h}: the picture's {} pixels would need about {} to render, but this process may use {limit}; \
-         render a smaller picture (at most about {side} x {side}, --size or --set render.width=... render.height=...)",
-        w as u128 * h as u128,
-        aurora::util::memory::gib(needed)
+        "{what}: the picture's {} pixels would need about {} to render, but this process may use {limit}; {}",
+        width as u128 * height as u128,
+        aurora::util::memory::gib(needed),
+        fits(most)
     ))
     .into())
+}
+
+/// The square side of at most `pixels` pixels.
+fn square_side(pixels: f64) -> u64 {
+    pixels.sqrt().floor() as u64
+}
+
+/// `render`'s picture, `render.width` x `render.height`
+/// ([`pixels_within_memory`]), and the largest square picture that fits.
+pub fn image_within_memory(scene: &Scene, adaptive: bool) -> Result<()> {
+    let (w, h) = (scene.render.width, scene.render.height);
+    pixels_within_memory(&format!("render.width = {w}, render.height = {h}"), w, h, adaptive, |most| {
+        let side = square_side(most);
+        format!("render a smaller picture (at most about {side} x {side}, --size or --set render.width=... render.height=...)")
+    })
+}
+
+/// `preview --size WxH` ([`pixels_within_memory`]).
+pub fn preview_within_memory([w, h]: [usize; 2]) -> Result<()> {
+    pixels_within_memory(&format!("--size {w}x{h}"), w, h, false, |most| {
+        let side = square_side(most);
+        format!("give a smaller --size (at most about {} pixels, {side}x{side} say)", most.floor() as u64)
+    })
+}
+
+/// `sky --width W`, a W x W/2 map ([`pixels_within_memory`]): the allowed
+/// widths are the even ones from 8 to the widest that fits.
+pub fn sky_within_memory(width: usize) -> Result<()> {
+    pixels_within_memory(&format!("--width {width} (a {width} x {} map)", width / 2), width, width / 2, false, |most| {
+        let widest = (square_side(2.0 * most) as usize).min(aurora::render::sky_map::MAX_SKY_WIDTH) & !1;
+        format!("give a smaller --width (an even number in [8, {widest}])")
+    })
+}
+
+/// `keogram --frame SPEC`: `frames` columns of `rows` rows
+/// ([`pixels_within_memory`]), and the most frames that fit.
+pub fn keogram_within_memory(spec: &str, frames: usize, rows: usize) -> Result<()> {
+    pixels_within_memory(&format!("--frame {spec}: {frames} frames x {rows} rows"), frames, rows, false, |most| {
+        format!("select fewer frames (at most about {} in one keogram)", (most / rows.max(1) as f64).floor() as u64)
+    })
 }
 
 /// The refusal's words when the scene's camera is below its terrain (the

@@ -19,6 +19,7 @@ pub fn run(a: SkyArgs) -> Result<()> {
     if image_format("--out", &out)? != ImageFormat::Exr {
         return Err(InputError(format!("--out {}: the sky map is a linear OpenEXR; give a name ending in .exr", out.display())).into());
     }
+    super::render_checks::sky_within_memory(width)?;
     let scene = load_scene(&scene_arg, &overrides)?;
     super::render_checks::inputs_and_outputs(None, None, &[Some(&out)])?;
     let mut settings = aurora::render::RenderSettings::from_scene(&scene);

@@ -283,7 +283,7 @@ mod tests {
             }
         });
         let text = std::fs::read_to_string(dir.join(USDA_NAME)).unwrap();
-        assert!(text.ends_with("}\n") && text.contains("500: @./aurora.0500.vdb@"));
+        assert!(text.ends_with("}\n") && text.contains("500: @aurora.0500.vdb@"));
         assert_eq!(crate::util::scratch::file_names(&dir), [USDA_NAME]);
         std::fs::remove_dir_all(&dir).unwrap();
     }

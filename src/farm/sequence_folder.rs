@@ -32,6 +32,12 @@
 //!   files are removed), and so is every frame VDB without a report (an
 //!   interrupted frame, of no known bake); the record becomes this bake's
 //!   and the stage is written;
+//! - a frame VDB without a report that aurora did not write (its grids
+//!   carry none of our metadata: `crate::io::bake_folder::check_vdb_ours`,
+//!   the single bake's rule), or a frame report without its VDB that is not
+//!   one of ours (`crate::io::bake_folder::check_report_ours`), is refused
+//!   (exit 2) naming it, `--rebake` or not: a bake replaces or deletes only
+//!   its own files;
 //! - the record is this bake's: the stage is written (this run's range);
 //! - no record and no other bake's frame: nothing is written yet. The folder
 //!   is claimed by the first frame committed ([`Sequence::write_frame`]),
@@ -153,13 +159,27 @@ impl Sequence {
         let owner = seq.owner()?;
         crate::util::atomic_write::check_replaceable(&dir.join(USDA_NAME))?;
         let others = seq.other_frames()?;
+        // A frame VDB without its report is an interrupted frame of ours,
+        // baked again (or removed by --rebake), or a file aurora did not
+        // write: refused, with or without --rebake, as a single bake
+        // refuses a foreign `aurora.vdb`.
+        for (vdb, report) in seq.orphan_vdbs()? {
+            let report = report.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            crate::io::bake_folder::check_vdb_ours(&vdb, &report)?;
+        }
+        // So is a frame report without its VDB that is not a report of ours.
+        for (vdb, report) in seq.frames_named("json")?.into_iter().map(|f| crate::farm::frame_files::frame_paths(dir, f)) {
+            if std::fs::symlink_metadata(&vdb).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound) {
+                crate::io::bake_folder::check_report_ours(&report)?;
+            }
+        }
         if rebake {
             for (frame, report, _) in &others {
                 let (vdb, _) = crate::farm::frame_files::frame_paths(dir, *frame);
                 remove_regular(report)?;
                 remove_regular(&vdb)?;
             }
-            for vdb in seq.orphan_vdbs()? {
+            for (vdb, _) in seq.orphan_vdbs()? {
                 remove_regular(&vdb)?;
             }
             seq.claim()?;
@@ -316,17 +336,17 @@ impl Sequence {
         Ok(frames)
     }
 
-    /// Frame VDBs without a report: frames interrupted between their two
-    /// renames (or left so by hand), of no known bake; `--rebake` removes
-    /// them with the other bake's frames (in the range they would be baked
-    /// again anyway).
-    fn orphan_vdbs(&self) -> Result<Vec<PathBuf>, SequenceError> {
+    /// Frame VDBs without a report (with the report's path): frames
+    /// interrupted between their two renames, of no known bake, or files
+    /// aurora did not write ([`Self::open`] refuses those); `--rebake`
+    /// removes ours with the other bake's frames (in the range they would
+    /// be baked again anyway).
+    fn orphan_vdbs(&self) -> Result<Vec<(PathBuf, PathBuf)>, SequenceError> {
         Ok(self
             .frames_named("vdb")?
             .into_iter()
             .map(|f| crate::farm::frame_files::frame_paths(&self.dir, f))
             .filter(|(_, report)| std::fs::symlink_metadata(report).is_err_and(|e| e.kind() == std::io::ErrorKind::NotFound))
-            .map(|(vdb, _)| vdb)
             .collect())
     }
 

@@ -85,23 +85,53 @@ pub fn prepare(out: &Path, on_wait: impl FnOnce()) -> Result<BakeFolder, OutputE
 /// without a report is ours when a bake was stopped between its renames,
 /// and is replaced.
 pub fn check_ours(out: &Path) -> Result<(), OutputError> {
-    let not_ours = |path: PathBuf, why: &str| OutputError::NotOurs { path, why: why.to_string() };
-    let json = out.join(JSON_NAME);
-    match std::fs::read(&json) {
+    if check_report_ours(&out.join(JSON_NAME))? {
+        return Ok(());
+    }
+    check_vdb_ours(&out.join(VDB_NAME), JSON_NAME)
+}
+
+/// Refuses a report (`bake.json`, a sequence's `aurora.NNNN.json`) that
+/// aurora did not write: one that is not a JSON object naming
+/// `bake_identity` or `aurora_version`. The one rule for both; Ok(false)
+/// when there is none (or the name is not a regular file, which is never
+/// read here: the writers refuse to replace it), Ok(true) when it is ours;
+/// one that cannot be read is an I/O error (exit status 1).
+pub fn check_report_ours(json: &Path) -> Result<bool, OutputError> {
+    use crate::util::input_file::InputFileError;
+    match crate::util::input_file::read(json) {
+        Err(InputFileError::NotRegular { .. }) => Ok(false),
+        Err(InputFileError::Io { source, .. }) if source.kind() == std::io::ErrorKind::NotFound => Ok(false),
+        Err(e) => Err(OutputError::Write { path: json.to_path_buf(), message: e.reason() }),
         Ok(bytes) => {
             let ours = serde_json::from_slice::<serde_json::Value>(&bytes)
                 .ok()
                 .is_some_and(|v| v.get("bake_identity").is_some() || v.get("aurora_version").is_some());
-            return if ours { Ok(()) } else { Err(not_ours(json, "is not the report of an aurora bake")) };
+            if ours {
+                Ok(true)
+            } else {
+                Err(OutputError::NotOurs { path: json.to_path_buf(), why: "is not the report of an aurora bake".into() })
+            }
         }
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-        Err(e) => return Err(OutputError::Write { path: json, message: e.to_string() }),
     }
-    let vdb = out.join(VDB_NAME);
-    let bytes = match crate::io::vdb::records::FileBytes::open(&vdb) {
+}
+
+/// Refuses a VDB without its report (`report`, the name it would have
+/// beside it) that aurora did not write: one whose grids carry no
+/// `aurora_scene_hash` ([`vdb_metadata`]), or that is not a VDB at all.
+/// The one rule for a single bake's `aurora.vdb` ([`check_ours`]) and a
+/// sequence's `aurora.NNNN.vdb` (`crate::farm::sequence_folder`). A missing
+/// file is fine, and so is a name that is not a regular file (never read
+/// here: the writers refuse to replace it); one that cannot be read is an
+/// I/O error (exit status 1).
+pub fn check_vdb_ours(vdb: &Path, report: &str) -> Result<(), OutputError> {
+    if std::fs::metadata(vdb).is_ok_and(|m| !m.is_file()) {
+        return Ok(());
+    }
+    let bytes = match crate::io::vdb::records::FileBytes::open(vdb) {
         Ok(b) => b,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(OutputError::Write { path: vdb, message: e.to_string() }),
+        Err(e) => return Err(OutputError::Write { path: vdb.to_path_buf(), message: e.to_string() }),
     };
     let ours = crate::io::vdb::parse::list_grids(bytes.bytes())
         .ok()
@@ -109,7 +139,10 @@ pub fn check_ours(out: &Path) -> Result<(), OutputError> {
     if ours {
         Ok(())
     } else {
-        Err(not_ours(vdb, "has no bake.json beside it and is not a VDB aurora wrote (its grids carry no aurora_scene_hash)"))
+        Err(OutputError::NotOurs {
+            path: vdb.to_path_buf(),
+            why: format!("has no {report} beside it and is not a VDB aurora wrote (its grids carry no aurora_scene_hash)"),
+        })
     }
 }
 

@@ -14,7 +14,8 @@
 //! Schema facts (usd-core's `usdVol/generatedSchema.usda`): `fieldClass` is a
 //! token among `levelSet`, `fogVolume`, `staggered`, `unknown`;
 //! `fieldDataType` a token such as `float` or `float3`; `filePath` an asset
-//! path, written `./name` so it resolves against the stage's own folder; the
+//! path, written as the file's bare name, which resolves against the
+//! stage's own folder whatever that folder is called ([`asset`]); the
 //! Volume links each field through a `field:<name>` relationship. The text is
 //! what usd-core's `ExportToString` writes for the same stage.
 //!
@@ -41,10 +42,13 @@ fn invalid(msg: String) -> std::io::Error {
 }
 
 /// Checks what goes into the text: prim names must be USD identifiers, the
-/// asset path must not contain `@` or line breaks, data types must be known.
+/// asset path a file name beside the stage ([`asset`]) without `@`, a
+/// backslash or a line break, data types must be known.
 fn check(vdb_file_name: &str, fields: &[(&str, &str)], meters_per_unit: f64) -> Result<(), std::io::Error> {
-    if vdb_file_name.is_empty() || vdb_file_name.contains(['@', '\n', '\r']) || Path::new(vdb_file_name).is_absolute() {
-        return Err(invalid(format!("VDB file name `{vdb_file_name}` must be a non-empty relative path without `@`")));
+    if vdb_file_name.is_empty() || vdb_file_name.contains(['@', '\n', '\r', '/', '\\']) || matches!(vdb_file_name, "." | "..") {
+        return Err(invalid(format!(
+            "VDB file name `{vdb_file_name}` must be a file name beside the stage (no folder, `@`, backslash or line break)"
+        )));
     }
     for (i, (name, ty)) in fields.iter().enumerate() {
         if !is_identifier(name) || fields[..i].iter().any(|(n, _)| n == name) {
@@ -81,14 +85,16 @@ pub struct Sequence<'a> {
     pub fps: f64,
 }
 
-/// `./name` unless the name already starts at `.` or `..`, so the path
-/// resolves against the stage's own folder.
-fn asset(name: &str) -> String {
-    if name.starts_with("./") || name.starts_with("../") {
-        name.to_string()
-    } else {
-        format!("./{name}")
-    }
+/// The asset path of the file `name` beside the stage: the bare name,
+/// which USD's resolver anchors to the stage's own folder. Not `./name`:
+/// the resolver normalises an anchored `./` or `../` path with the stage's
+/// folder, and a backslash anywhere in that folder's path (a legal
+/// character in a POSIX name) is taken for a separator there, so the path
+/// no longer resolves; the bare name resolves in any folder (`@`, spaces,
+/// quotes, colons and backslashes in its path included: tested with
+/// usd-core). The folder's path is never written into the stage.
+fn asset(name: &str) -> &str {
+    name
 }
 
 /// The one writer of stage text (single bake and sequence), line by line
@@ -140,9 +146,7 @@ fn write_stage(w: &mut dyn Write, samples: Samples<'_>, fields: &[(&str, &str)],
             Samples::Sequence(Sequence { frames, name, .. }) => {
                 writeln!(w, "        asset filePath.timeSamples = {{")?;
                 for &f in frames {
-                    let file = name(f);
-                    let dot = if file.starts_with("./") || file.starts_with("../") { "" } else { "./" };
-                    writeln!(w, "            {f}: @{dot}{file}@,")?;
+                    writeln!(w, "            {f}: @{}@,", asset(&name(f)))?;
                 }
                 writeln!(w, "        }}")?;
             }
@@ -270,7 +274,7 @@ mod tests {
         token fieldClass = "fogVolume"
         token fieldDataType = "float"
         token fieldName = "density"
-        asset filePath = @./aurora.vdb@
+        asset filePath = @aurora.vdb@
     }
 
     def OpenVDBAsset "emission"
@@ -278,7 +282,7 @@ mod tests {
         token fieldClass = "fogVolume"
         token fieldDataType = "float3"
         token fieldName = "emission"
-        asset filePath = @./aurora.vdb@
+        asset filePath = @aurora.vdb@
     }
 }
 "#;
@@ -301,7 +305,7 @@ mod tests {
         let frames = [1, 2, 3];
         let t = usda_sequence_text(seq(&frames, &name, 24.0), &[("density", "float")], 1000.0);
         assert!(t.contains("    endTimeCode = 3\n    framesPerSecond = 24\n    metersPerUnit = 1000\n    startTimeCode = 1\n    timeCodesPerSecond = 24\n"), "{t}");
-        assert!(t.contains("        asset filePath.timeSamples = {\n            1: @./aurora.0001.vdb@,\n            2: @./aurora.0002.vdb@,\n            3: @./aurora.0003.vdb@,\n        }\n"), "{t}");
+        assert!(t.contains("        asset filePath.timeSamples = {\n            1: @aurora.0001.vdb@,\n            2: @aurora.0002.vdb@,\n            3: @aurora.0003.vdb@,\n        }\n"), "{t}");
         let p = std::env::temp_dir().join("aurora-usd-seq-never-written.usda");
         let fields = [("density", "float")];
         assert!(write_usda_sequence(&p, seq(&[], &name, 24.0), &fields, 1000.0).is_err());
@@ -320,6 +324,8 @@ mod tests {
         let p = std::env::temp_dir().join("aurora-usd-test-never-written.usda");
         assert!(write_usda(&p, "a@b.vdb", &[("density", "float")], 1000.0).is_err());
         assert!(write_usda(&p, "/abs/a.vdb", &[("density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "./a.vdb", &[("density", "float")], 1000.0).is_err());
+        assert!(write_usda(&p, "a\\b.vdb", &[("density", "float")], 1000.0).is_err());
         assert!(write_usda(&p, "a.vdb", &[("1density", "float")], 1000.0).is_err());
         assert!(write_usda(&p, "a.vdb", &[("density", "float"), ("density", "float")], 1000.0).is_err());
         assert!(write_usda(&p, "a.vdb", &[("density", "vec3")], 1000.0).is_err());

@@ -42,9 +42,13 @@ pub enum InputFileError {
 }
 
 impl InputFileError {
-    /// Always the user's input: the file the scene names (exit status 2).
+    /// The user's input (exit status 2) but for a file that changed size
+    /// while it was read ([`is_input_io`]).
     pub fn is_input(&self) -> bool {
-        true
+        match self {
+            InputFileError::NotRegular { .. } => true,
+            InputFileError::Io { source, .. } => is_input_io(source),
+        }
     }
 }
 
@@ -125,6 +129,46 @@ fn open_descriptor_checked(path: &Path) -> Result<File, InputFileError> {
         return Err(io(std::io::Error::last_os_error()));
     }
     Ok(file)
+}
+
+/// A file that was not the length it had when opened by the end of its
+/// read: another process truncated, rewrote or extended it meanwhile. An
+/// I/O failure (exit status 1), not the user's input: the same command
+/// run again on the file, once written, reads it ([`is_input_io`]).
+#[derive(Debug, thiserror::Error)]
+#[error("the file changed size while it was read ({opened} bytes when opened, {read} read): another process is writing it")]
+pub struct ChangedSize {
+    pub opened: u64,
+    pub read: u64,
+}
+
+/// Whether an I/O error met reading a file the user named is the user's
+/// input (exit status 2: the file is missing, unreadable, not a regular
+/// file) rather than a failure of the machine or of another process
+/// (exit status 1: the file changed size while it was read, [`ChangedSize`]).
+pub fn is_input_io(e: &std::io::Error) -> bool {
+    !e.get_ref().is_some_and(|x| x.is::<ChangedSize>())
+}
+
+/// The `len` bytes of `file` (its size when opened, the length check): the
+/// buffer is reserved without aborting when memory is short (an error of
+/// kind `OutOfMemory`), and a file that is not `len` bytes long by the end
+/// of the read (it was truncated or grew meanwhile) is an error of kind
+/// `InvalidData` holding a [`ChangedSize`].
+pub fn read_exactly(file: &File, len: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let want = usize::try_from(len)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("{len} bytes do not fit in memory")))?;
+    let mut bytes = Vec::new();
+    bytes
+        .try_reserve_exact(want)
+        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("cannot hold the file's {len} bytes in memory")))?;
+    // One byte more than expected: a file that grew is found too.
+    file.take(len.saturating_add(1)).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 != len {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, ChangedSize { opened: len, read: bytes.len() as u64 }));
+    }
+    Ok(bytes)
 }
 
 /// The whole of a regular file's bytes.

@@ -12,7 +12,8 @@
 //! status). A stage reports when it starts (`done` 0), each time it crosses
 //! another percent of `total` (at most 101 such lines a stage, so a host is
 //! never flooded), every [`JsonProgress::BETWEEN_PERCENTS`] at most between
-//! them (a stage whose percent takes minutes still says where it is), every
+//! them (a stage whose percent takes minutes still says where it is, also
+//! when no work is reported meanwhile: [`JsonProgress::tick`]), every
 //! [`JsonProgress::HEARTBEAT`] at most while `total` is unknown, and when it
 //! finishes (`done` = `total`).
 
@@ -56,6 +57,8 @@ struct Writer<W> {
     w: W,
     stage: String,
     last: Instant,
+    /// A stage has started and not finished ([`JsonProgress::tick`]).
+    active: bool,
 }
 
 impl<W: Write + Send> JsonProgress<W> {
@@ -69,7 +72,7 @@ impl<W: Write + Send> JsonProgress<W> {
     pub fn new(w: W) -> Self {
         let now = Instant::now();
         Self {
-            out: Mutex::new(Writer { w, stage: String::new(), last: now }),
+            out: Mutex::new(Writer { w, stage: String::new(), last: now, active: false }),
             t0: now,
             done: AtomicU64::new(0),
             total: AtomicU64::new(0),
@@ -112,6 +115,20 @@ impl<W: Write + Send> JsonProgress<W> {
         Self::line(&mut w, json!({"stage": stage, "done": done, "total": total, "seconds": self.seconds()}));
     }
 
+    /// Reports where the running stage is if it has said nothing for
+    /// [`Self::BETWEEN_PERCENTS`] ([`Self::HEARTBEAT`] while its total is
+    /// unknown): for a ticker thread to call, so that a stage whose work
+    /// comes in chunks seconds apart (no `inc` meanwhile) still reports
+    /// every second. Nothing between stages.
+    pub fn tick(&self) {
+        let every = if self.total.load(Ordering::Relaxed) > 0 { Self::BETWEEN_PERCENTS } else { Self::HEARTBEAT };
+        if let Ok(mut w) = self.out.try_lock() {
+            if w.active && w.last.elapsed() >= every {
+                self.report(&mut w);
+            }
+        }
+    }
+
     /// The writer back (tests read what was written).
     pub fn into_inner(self) -> W {
         self.out.into_inner().expect("progress lock").w
@@ -122,6 +139,7 @@ impl<W: Write + Send> Progress for JsonProgress<W> {
     fn start(&self, stage: &str, total: u64) {
         let mut w = self.out.lock().expect("progress lock");
         w.stage = stage.to_string();
+        w.active = true;
         self.done.store(0, Ordering::Relaxed);
         self.total.store(total, Ordering::Relaxed);
         self.reported.store(0, Ordering::Relaxed);
@@ -155,6 +173,7 @@ impl<W: Write + Send> Progress for JsonProgress<W> {
 
     fn finish(&self) {
         let mut w = self.out.lock().expect("progress lock");
+        w.active = false;
         let total = self.total.load(Ordering::Relaxed);
         if total > 0 {
             self.done.store(total, Ordering::Relaxed);
@@ -235,6 +254,22 @@ mod tests {
         let l = lines(p);
         assert_eq!(l.len(), 2);
         assert!(l[1]["done"].as_u64().unwrap() > 0 && l[1]["total"] == 1_000_000_000_000u64);
+    }
+
+    /// A stage that reports no work says where it is on a tick once a
+    /// second has passed, not before, and nothing once it has finished.
+    #[test]
+    fn a_tick_reports_a_silent_stage_after_a_second_and_nothing_between_stages() {
+        let p = JsonProgress::new(Vec::new());
+        p.start("beams", 100);
+        p.tick();
+        p.out.lock().unwrap().last -= JsonProgress::<Vec<u8>>::BETWEEN_PERCENTS;
+        p.tick();
+        p.finish();
+        p.out.lock().unwrap().last -= JsonProgress::<Vec<u8>>::BETWEEN_PERCENTS;
+        p.tick();
+        let l = lines(p);
+        assert_eq!(l.iter().map(|v| v["done"].as_u64().unwrap()).collect::<Vec<_>>(), [0, 0, 100], "{l:?}");
     }
 
     #[test]

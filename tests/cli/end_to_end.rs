@@ -73,7 +73,7 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     assert!((peak as f64 - stats["peak_emission"][1].as_f64().unwrap()).abs() <= bound * peak as f64);
 
     let usda = std::fs::read_to_string(out.join("aurora.usda")).unwrap();
-    assert!(usda.contains("@./aurora.vdb@") && usda.contains("metersPerUnit = 1000"), "{usda}");
+    assert!(usda.contains("@aurora.vdb@") && usda.contains("metersPerUnit = 1000"), "{usda}");
     // No temporary files are left behind.
     let names: Vec<String> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     assert_eq!(names.len(), 3, "{names:?}");

@@ -1,7 +1,9 @@
 //! A bake never replaces a file it did not write: a folder holding a
 //! hand-made `bake.json` (not one of our reports) or, without a report, an
 //! `aurora.vdb` that is not ours, is refused before anything is baked
-//! (exit status 2, naming the file), and the file is left as it was.
+//! (exit status 2, naming the file), and the file is left as it was; so is
+//! a sequence's folder holding a frame VDB without its report that is not
+//! ours, or a frame report without its VDB that is not one of ours.
 
 use crate::common::small::bake_command;
 use crate::common::{file_names, ok, refused, scratch, write};
@@ -46,6 +48,43 @@ fn a_bake_refuses_a_folder_holding_files_it_did_not_write() {
     std::fs::remove_file(out.join("bake.json")).unwrap();
     ok(&bake_command(&scene, &out).arg("-q").output());
     assert_eq!(file_names(&out), vec!["aurora.usda", "aurora.vdb", "bake.json"]);
+}
+
+/// A sequence bake's frame names under the same rule: a hand-made
+/// `aurora.0001.vdb` without its report, or a frame report without its VDB
+/// that is not one of ours, is refused before anything is baked, with or
+/// without `--rebake`, naming the file; an interrupted frame of ours (its
+/// report gone) is baked again.
+#[test]
+fn a_sequence_bake_refuses_a_frame_vdb_it_did_not_write() {
+    let dir = scratch("foreign", "frames");
+    let scene = write(&dir, "scene.toml", SMALL);
+    let vdb_why = "has no aurora.0001.json beside it and is not a VDB aurora wrote";
+    let json_why = "is not the report of an aurora bake";
+    let cases: [(&str, Vec<u8>, &[&str], &str); 5] = [
+        ("aurora.0001.vdb", foreign_vdb(), &[], vdb_why),
+        ("aurora.0001.vdb", b"not a volume".to_vec(), &[], vdb_why),
+        ("aurora.0001.vdb", foreign_vdb(), &["--rebake"], vdb_why),
+        ("aurora.0001.json", b"{\"mine\": true}\n".to_vec(), &[], json_why),
+        ("aurora.0002.json", b"my notes\n".to_vec(), &["--rebake"], json_why),
+    ];
+    for (i, (name, bytes, flags, why)) in cases.iter().enumerate() {
+        let out = dir.join(format!("seq{i}"));
+        std::fs::create_dir_all(&out).unwrap();
+        let p = write(&out, name, bytes);
+        let o = bake_command(&scene, &out).args(["--frames", "1-2", "-q"]).args(*flags).output();
+        let e = refused(&o);
+        assert!(e.contains(&format!("{}: {why}", p.display())) && e.contains("a bake replaces only its own files"), "{e}");
+        assert_eq!(std::fs::read(&p).unwrap(), *bytes, "left as it was");
+        assert_eq!(file_names(&out), vec![name.to_string()], "nothing written beside it");
+    }
+    // A frame of ours whose report is gone (a bake stopped between the
+    // frame's renames) is baked again.
+    let out = dir.join("ours");
+    ok(&bake_command(&scene, &out).args(["--frames", "1-2", "-q"]).output());
+    std::fs::remove_file(out.join("aurora.0001.json")).unwrap();
+    ok(&bake_command(&scene, &out).args(["--frames", "1-2", "-q"]).output());
+    assert!(out.join("aurora.0001.json").is_file());
 }
 
 /// Ctrl-C (SIGINT) during a bake: stderr says it was interrupted, the

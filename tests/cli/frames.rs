@@ -100,9 +100,10 @@ fn rerun_skips_complete_frames_and_ignores_temporaries() {
     let f1 = out.join("aurora.0001.vdb");
     let mtime = std::fs::metadata(&f1).unwrap().modified().unwrap();
     let good2 = read(&out, 2);
-    // Frame 2 interrupted: its report is gone, a temporary lies about.
+    // Frame 2 interrupted between its renames: its VDB (of another frame,
+    // ours) is there, its report is not.
     std::fs::remove_file(out.join("aurora.0002.json")).unwrap();
-    std::fs::write(out.join("aurora.0002.vdb"), b"half").unwrap();
+    std::fs::copy(&f1, out.join("aurora.0002.vdb")).unwrap();
     // Frame 3: only a temporary (as a killed writer leaves it).
     std::fs::write(out.join(".aurora.0003.vdb.tmp999999"), b"half").unwrap();
     let msg = ok(&bake_command(&scene, &out).args(["--frames", "1-3"]).output());

@@ -1,6 +1,7 @@
 //! `aurora keogram`: a drifting arc tracked along the magnetic meridian
 //! frame by frame, the files it writes, and bad input refused with exit
-//! status 2 before anything is written.
+//! status 2 before anything is written; a frame that changes size while
+//! it is read exits 1, an I/O failure.
 
 use crate::common::{aurora, file_names, ok, refused, scratch, write};
 use crate::green_line_grid_toml;
@@ -127,4 +128,26 @@ fn keogram_refuses_bad_frames_grids_and_outputs() {
     let err = refused(&keogram(&scene, &dir.join("nowhere"), "1", "line_5577", &out));
     assert!(err.contains("nowhere"), "{err}");
     assert_eq!(file_names(&dir), ["s.toml", "seq"]);
+}
+
+/// A frame that is not the length it had when opened by the end of its
+/// read (as a file another process truncates or extends meanwhile: here,
+/// deterministically, `/proc/self/status`, which says it is 0 bytes long
+/// and holds more) is an I/O failure, exit status 1 naming the file and
+/// both lengths, not bad input; nothing is written.
+#[test]
+fn a_frame_that_changes_size_while_it_is_read_is_an_io_failure() {
+    let dir = scratch("keogram", "changed");
+    let scene = write(&dir, "s.toml", SCENE);
+    let seq = dir.join("seq");
+    std::fs::create_dir_all(&seq).unwrap();
+    let frame = seq.join("aurora.0001.vdb");
+    std::os::unix::fs::symlink("/proc/self/status", &frame).unwrap();
+    let out = dir.join("k.exr");
+    let o = keogram(&scene, &seq, "1", "line_5577", &out);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    let want = format!("{}`: the file changed size while it was read (0 bytes when opened, 1 read)", frame.display());
+    assert!(e.contains(&want), "{e}");
+    assert_eq!(file_names(&dir), ["s.toml", "seq"], "nothing written");
 }

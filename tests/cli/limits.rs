@@ -1,5 +1,6 @@
 //! The process's limits and inputs that say more than they show: a thread
-//! count or a picture too large for the memory limit, a write beyond the
+//! count or a picture (render's, preview's, sky's, keogram's) too large for
+//! the memory limit, a write beyond the
 //! file-size limit (`ulimit -f`), a `--set` value with a second line, and
 //! a farm's shard variables at the ends of a 64-bit integer. Each is
 //! refused with its exit status and words, never a signal or an exit 0
@@ -56,6 +57,49 @@ fn a_picture_too_large_for_the_memory_limit_is_refused_before_work() {
         assert!(e.contains("render a smaller picture (at most about "), "{e}");
         assert!(!dir.join("a.exr").exists());
     }
+}
+
+/// `preview`'s, `sky`'s and `keogram`'s pictures under the same rule as
+/// `render`'s: too large for a 1 GiB address-space cap, each is refused
+/// before any work (exit status 2), naming the key, its value, the limit
+/// and the sizes allowed, and writes nothing.
+#[test]
+fn preview_sky_and_keogram_pictures_too_large_for_the_memory_limit_are_refused_before_work() {
+    let (dir, scene) = small_scene("pictures");
+    let seq = dir.join("seq");
+    std::fs::create_dir_all(&seq).unwrap();
+    let (png, sky, keo) = (dir.join("p.png"), dir.join("sky.exr"), dir.join("k.exr"));
+    let cases: [(Vec<&std::ffi::OsStr>, &[&str]); 3] = [
+        (
+            vec!["preview".as_ref(), scene.as_os_str(), "--out".as_ref(), png.as_os_str(), "--size".as_ref(), "16384x16384".as_ref()],
+            &["--size 16384x16384: the picture's 268435456 pixels", "give a smaller --size (at most about "],
+        ),
+        (
+            vec!["sky".as_ref(), scene.as_os_str(), "--out".as_ref(), sky.as_os_str(), "--width".as_ref(), "16384".as_ref()],
+            &["--width 16384 (a 16384 x 8192 map): the picture's", "give a smaller --width (an even number in [8, "],
+        ),
+        (
+            vec![
+                "keogram".as_ref(),
+                scene.as_os_str(),
+                "--vdb".as_ref(),
+                seq.as_os_str(),
+                "--frame".as_ref(),
+                "1-100000".as_ref(),
+                "--out".as_ref(),
+                keo.as_os_str(),
+            ],
+            &["--frame 1-100000: 100000 frames x 361 rows: the picture's", "select fewer frames (at most about "],
+        ),
+    ];
+    for (args, words) in cases {
+        let t = std::time::Instant::now();
+        let e = refused(&Aurora::new().args(&args).arg("-q").capped(1 << 20).output());
+        assert!(t.elapsed() < std::time::Duration::from_secs(5), "{args:?}: {:?}", t.elapsed());
+        assert!(words.iter().all(|w| e.contains(w)) && e.contains("this process may use") && e.contains("RLIMIT_AS"), "{e}");
+    }
+    assert_eq!(file_names(&dir), vec!["scene.toml", "seq"], "nothing written");
+    assert!(file_names(&seq).is_empty());
 }
 
 /// Under `ulimit -f` a write past the limit fails with EFBIG (SIGXFSZ is

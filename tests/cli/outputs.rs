@@ -2,7 +2,8 @@
 //! device nodes, FIFOs and symlinks given as outputs survive; a killed bake's
 //! temporaries are gone once the next bake has run; two bakes into one folder
 //! never leave one's VDB beside the other's report; the output folder is
-//! checked before the bake starts. Device nodes and FIFOs are made in a
+//! checked before the bake starts; the USD stage resolves its VDB in a
+//! folder of any name. Device nodes and FIFOs are made in a
 //! temporary folder, never the system's.
 
 use crate::common::{aurora, file_names as names, mkfifo, ok, scratch, stderr, write, Aurora};
@@ -243,4 +244,37 @@ fn render_into_a_folder_it_cannot_write_fails_before_rendering_and_writes_nothin
     }
     assert_eq!(names(&d), ["file.txt", "small1.toml"]);
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "a regular file");
+}
+
+/// The stage's asset paths resolve whatever the output folder is called:
+/// usd-core opens `aurora.usda` baked into folders named with a backslash,
+/// `@`, `@@@`, a space and a colon, and resolves every field to the VDB
+/// beside it; a sequence's stage in a folder named with a backslash
+/// resolves every frame's time sample to that frame's VDB.
+#[test]
+fn the_stage_resolves_its_vdb_in_folders_named_with_characters_usd_treats_specially() {
+    let d = dir("usd-names");
+    let scene = write(&d, "scene.toml", crate::small_bake_toml!());
+    let py = crate::common::venv_python();
+    let same = |a: &str, b: &Path| !a.is_empty() && std::fs::canonicalize(a).ok() == std::fs::canonicalize(b).ok();
+    for name in ["a\\b", "c@d", "e@@@f", "g h:i"] {
+        let out = d.join(name);
+        ok(&crate::common::small::bake_command(&scene, &out).arg("-q").output());
+        let u = crate::common::run_json(&py, "usd_probe.py", &[out.join("aurora.usda").to_str().unwrap()]);
+        for f in ["density", "emission"] {
+            let r = u["volumes"][0]["fields"][f]["resolved_path"].as_str().unwrap_or("");
+            assert!(same(r, &out.join("aurora.vdb")), "{name}: {f} resolves to `{r}`: {u}");
+        }
+    }
+    let out = d.join("s\\q");
+    ok(&crate::common::small::bake_command(&scene, &out).args(["--frames", "1-2", "-q"]).output());
+    let script =
+        "import sys\nfrom pxr import Usd\ns = Usd.Stage.Open(sys.argv[1])\na = s.GetPrimAtPath('/aurora/density').GetAttribute('filePath')\n\
+                  print('\\n'.join(a.Get(t).resolvedPath for t in a.GetTimeSamples()))";
+    let got = crate::common::python(&py, &["-c", script, out.join("aurora.usda").to_str().unwrap()]);
+    let got: Vec<&str> = got.lines().collect();
+    assert_eq!(got.len(), 2, "{got:?}");
+    for (r, f) in got.iter().zip(["aurora.0001.vdb", "aurora.0002.vdb"]) {
+        assert!(same(r, &out.join(f)), "{f} resolves to `{r}`");
+    }
 }

@@ -177,8 +177,8 @@ fn rebake_replaces_every_frame_of_the_other_bake_and_keeps_its_own() {
     let (d, a, b) = two_scenes("rebake", |b| b);
     let reference = alone(&b, &d, "b-alone", "1-2");
     let out = alone(&a, &d, "shot", "1-3");
-    // A frame VDB without its report (interrupted between the renames).
-    std::fs::write(out.join("aurora.0009.vdb"), b"half").unwrap();
+    // A frame VDB of ours without its report (interrupted between the renames).
+    std::fs::copy(out.join("aurora.0001.vdb"), out.join("aurora.0009.vdb")).unwrap();
     // Frames 1 and 2 rebaked, frame 3 (out of the range) and the lone VDB deleted.
     let e = ok(&bake(&b, &out, &["--frames", "1-2", "--rebake"]));
     assert!(e.contains("2 frames baked, 0 already complete"), "{e}");

@@ -62,7 +62,7 @@ fn a_streamed_stage_is_the_same_text_in_a_sink_and_in_its_file() {
     let mut bytes = Vec::new();
     write_usda_sequence_into(&mut bytes, seq, &FIELDS, 1000.0).unwrap();
     assert!(bytes == text.as_bytes());
-    assert!(text.contains("            7: @./aurora.0007.vdb@,\n") && text.contains("150004: @./aurora.150004.vdb@,\n"));
+    assert!(text.contains("            7: @aurora.0007.vdb@,\n") && text.contains("150004: @aurora.150004.vdb@,\n"));
     let dir = scratch("stage", "file");
     let path = dir.join("aurora.usda");
     write_usda_sequence(&path, seq, &FIELDS, 1000.0).unwrap();

@@ -127,7 +127,7 @@ fn blender_loads_our_vdb_and_imports_our_usd_stage() {
     for (name, ty) in [("density", "float"), ("emission", "float3")] {
         let f = &v["fields"][name];
         assert_eq!(f["is_openvdb_asset"], json!(true), "{name}");
-        assert_eq!(f["file_path"], json!("./aurora.vdb"), "{name}");
+        assert_eq!(f["file_path"], json!("aurora.vdb"), "{name}");
         let resolved = std::fs::canonicalize(f["resolved_path"].as_str().unwrap_or("")).unwrap();
         assert_eq!(resolved, std::fs::canonicalize(&vdb).unwrap(), "{name}");
         assert_eq!(f["field_name"], json!(name));

@@ -75,9 +75,14 @@ pub enum VdbReadError {
 }
 
 impl VdbReadError {
-    /// Always the user's input: the file given to read (exit status 2).
+    /// The user's input: the file given to read (exit status 2), but for
+    /// one that changed size while it was read, an I/O failure (exit status
+    /// 1: `crate::util::input_file::is_input_io`).
     pub fn is_input(&self) -> bool {
-        true
+        match self {
+            VdbReadError::Io { source, .. } => crate::util::input_file::is_input_io(source),
+            _ => true,
+        }
     }
 }
 
@@ -152,8 +157,8 @@ pub const MAX_TILE_VOXELS: u128 = 1 << 25;
 
 /// Reads a VDB file.
 pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
-    let bytes = crate::util::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
-    read_vdb_named(&bytes, &path.display().to_string(), None, false)
+    let bytes = super::records::FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    read_vdb_named(bytes.bytes(), &path.display().to_string(), None, false)
 }
 
 /// [`read_vdb`] for the renderer: leaves whose active voxels are all 0 are
@@ -163,8 +168,8 @@ pub fn read_vdb(path: &Path) -> Result<VdbFile, VdbReadError> {
 /// the same; the default bake's shell of zero voxels for Cycles (a third of
 /// its leaves) then costs no memory.
 pub fn read_vdb_for_render(path: &Path) -> Result<VdbFile, VdbReadError> {
-    let bytes = crate::util::input_file::read(path).map_err(|e| VdbReadError::Io { path: path.to_path_buf(), source: e.into() })?;
-    read_vdb_named(&bytes, &path.display().to_string(), None, true)
+    let bytes = super::records::FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    read_vdb_named(bytes.bytes(), &path.display().to_string(), None, true)
 }
 
 /// Reads a VDB file held in memory.

@@ -92,39 +92,13 @@ impl FileBytes {
         // Only a regular file is read (`crate::util::input_file`).
         let file = crate::util::input_file::open(path)?;
         let len = file.metadata()?.len();
-        read_exactly(&file, len).map(FileBytes)
+        crate::util::input_file::read_exactly(&file, len).map(FileBytes)
     }
 
     /// The file's bytes.
     pub fn bytes(&self) -> &[u8] {
         &self.0
     }
-}
-
-/// The `len` bytes of `file` (its size when opened): the buffer is reserved
-/// without aborting when memory is short (an error of kind `OutOfMemory`),
-/// and a file that is not `len` bytes long by the end of the read (it was
-/// truncated or grew meanwhile) is an error of kind `InvalidData`.
-pub fn read_exactly(file: &std::fs::File, len: u64) -> std::io::Result<Vec<u8>> {
-    use std::io::Read;
-    let want = usize::try_from(len)
-        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("{len} bytes do not fit in memory")))?;
-    let mut bytes = Vec::new();
-    bytes
-        .try_reserve_exact(want)
-        .map_err(|_| std::io::Error::new(std::io::ErrorKind::OutOfMemory, format!("cannot hold the file's {len} bytes in memory")))?;
-    // One byte more than expected: a file that grew is found too.
-    file.take(len.saturating_add(1)).read_to_end(&mut bytes)?;
-    if bytes.len() as u64 != len {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!(
-                "the file changed size while it was read ({len} bytes when opened, {} read): another process is writing it",
-                bytes.len()
-            ),
-        ));
-    }
-    Ok(bytes)
 }
 
 #[cfg(test)]
@@ -148,10 +122,14 @@ mod tests {
         std::fs::remove_dir_all(&d).unwrap();
     }
 
-    /// A file that is not the length it had when opened (truncated during
-    /// the read, or grown) is an error, not a short or a long buffer.
+    /// A file that is not the length it had when opened (truncated with
+    /// `ftruncate` between the length check and the read, or grown) is an
+    /// error, not a short or a long buffer; and the readers' error for it
+    /// is an I/O failure (exit status 1), not the user's input.
     #[test]
-    fn a_file_whose_length_changed_during_the_read_is_an_error() {
+    fn a_file_whose_length_changed_during_the_read_is_an_io_failure() {
+        use crate::io::vdb::read::VdbReadError;
+        use crate::util::input_file::read_exactly;
         let d = folder("records", "changed");
         let p = d.join("a.vdb");
         std::fs::write(&p, vec![7u8; 10_000]).unwrap();
@@ -161,11 +139,20 @@ mod tests {
         let e = read_exactly(&f, len).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::InvalidData);
         assert!(e.to_string().contains("10000 bytes when opened, 4096 read"), "{e}");
+        let e = VdbReadError::Io { path: p.clone(), source: e };
+        assert!(!e.is_input(), "{e}");
+        assert!(e.to_string().contains("a.vdb`: the file changed size while it was read"), "{e}");
         let f = crate::util::input_file::open(&p).unwrap();
         let e = read_exactly(&f, 100).unwrap_err();
         assert!(e.to_string().contains("100 bytes when opened, 101 read"), "{e}");
+        assert!(!crate::util::input_file::is_input_io(&e));
         let f = crate::util::input_file::open(&p).unwrap();
         assert_eq!(read_exactly(&f, 4096).unwrap(), vec![7u8; 4096]);
+        // A file that is missing, or not a regular file, stays the user's input.
+        let missing = FileBytes::open(&d.join("missing.vdb")).err().unwrap();
+        assert!(VdbReadError::Io { path: d.join("missing.vdb"), source: missing }.is_input());
+        let dir = FileBytes::open(&d).err().unwrap();
+        assert!(VdbReadError::Io { path: d.clone(), source: dir }.is_input());
         std::fs::remove_dir_all(&d).unwrap();
     }
 }
