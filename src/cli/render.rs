@@ -106,7 +106,9 @@ pub fn run(a: RenderArgs) -> Result<()> {
             let seq = vdb.expect("clap requires --vdb with --frame");
             with_threads(common.threads, || render_frames(&job, &seq, &frames, &out, png.as_deref()))
         }
-        None => with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref(), frame: None })),
+        None => {
+            with_threads(common.threads, || render_one(&job, &Files { vdb: vdb.as_deref(), out: &out, png: png.as_deref(), frame: None }))
+        }
     }
 }
 

@@ -139,9 +139,22 @@ fn probe(steps: &[Step], value: &Value, target: Option<&Vec<Value>>) -> Table {
         v = Value::Table(t);
     }
     match v {
-        Value::Table(t) => t,
+        Value::Table(t) => with_required_keys(t),
         _ => unreachable!("a path has at least one step"),
     }
+}
+
+/// A probe with the keys a table requires filled in where it omits them
+/// (`[site]`'s, from the `tromso` preset's site), so that it tests only the
+/// key it sets: `--set site.utc=...` alone is no incomplete `[site]`.
+fn with_required_keys(mut probe: Table) -> Table {
+    if let Some(Value::Table(site)) = probe.get_mut("site") {
+        let example = Table::try_from(super::presets::sites::tromso_site()).expect("a site serialises to a table");
+        for (k, v) in example {
+            site.entry(k).or_insert(v);
+        }
+    }
+    probe
 }
 
 /// Parses a probe as a scene (shapes and types, no ranges): the message

@@ -183,6 +183,15 @@ pub fn plain(message: &str, at: At<'_>, source: Option<&str>) -> String {
             return format!("{key}expected {expected}, found {}{range}", plain_found(found));
         }
     }
+    if let Some(rest) = m.strip_prefix("missing field `") {
+        let word = rest.split('`').next().unwrap_or(rest);
+        // The reader points at the table's header, not into it: the only
+        // required keys are `[site]`'s.
+        let in_table = at.table.or(["latitude_deg", "longitude_deg", "utc"].contains(&word).then_some("site"));
+        let table = in_table.map(|t| format!("[{t}]")).unwrap_or_else(|| "this table".into());
+        let required = if in_table == Some("site") { " (a [site] gives latitude_deg, longitude_deg and utc; docs/scene.md)" } else { "" };
+        return format!("{table} needs the key `{word}`{required}");
+    }
     if m == "duplicate key" {
         return match at.dotted() {
             Some(k) => format!("{k} is given twice; give each key once"),

@@ -6,7 +6,8 @@
 //! camera against Blender's (`blender`), the air between the aurora
 //! and the eye (`extinction`), narrow-band images in rayleigh at the
 //! zenith (`zenith`), and the airglow and the stars behind the volume
-//! (`airglow`).
+//! (`airglow`), and the sky over a site: the catalogue's stars where
+//! skyfield puts them, the Moon lighting the ground (`site_sky`).
 
 #[path = "../common/mod.rs"]
 mod common;

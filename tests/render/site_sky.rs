@@ -80,8 +80,10 @@ fn a_renders_brightest_stars_lie_within_a_pixel_of_skyfields_places() {
     }
     peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
     assert!(peaks.len() >= 10, "{} stars in the picture", peaks.len());
-    let oracle: Vec<(String, f64, f64)> =
-        oracle_stars("tromso").into_iter().filter_map(|(id, az, el)| cam.project(cam.position + enu(az, el)).map(|(x, y)| (id, x, y))).collect();
+    let oracle: Vec<(String, f64, f64)> = oracle_stars("tromso")
+        .into_iter()
+        .filter_map(|(id, az, el)| cam.project(cam.position + enu(az, el)).map(|(x, y)| (id, x, y)))
+        .collect();
     let mut worst = 0.0f64;
     for &(_, x, y) in &peaks[..10] {
         let (id, d) = oracle
@@ -93,4 +95,32 @@ fn a_renders_brightest_stars_lie_within_a_pixel_of_skyfields_places() {
         worst = worst.max(d);
     }
     eprintln!("the 10 brightest stars: at most {worst:.3} px from skyfield's places");
+}
+
+/// The Moon lights the ground: a plane seen from above under the `tromso`
+/// hour's Moon (elevation 29 degrees), no air, no volume, is the Lambertian
+/// `albedo / pi E_moon sin(elevation)` per channel, within f32 rounding,
+/// `E_moon` the Moon's irradiance the renderer's sky holds (Krisciunas &
+/// Schaefer's V magnitude at its phase and distance); with the Moon below
+/// the horizon (at 06:00 UTC that day, 14 degrees down by skyfield) the
+/// plane is black.
+#[test]
+fn the_moon_lights_the_ground_as_a_lambertian_plane() {
+    let mut s = settings(persp([0.0, 0.0, 1.0], [0.0, 0.001, 0.0], [0.0, 1.0, 0.0], 10.0), 4, 4, 1);
+    s.terrain = aurora::scene::Terrain { kind: aurora::scene::TerrainKind::Plane, albedo: [0.8, 0.7, 0.6], ..Default::default() };
+    s.site = Some(aurora::scene::presets::sites::tromso_site());
+    let sky = aurora::render::sky::Sky::of_settings(&s).unwrap();
+    let moon = sky.moon.expect("the Moon is up at the tromso hour");
+    assert!((moon.dir.z.asin().to_degrees() - 29.1).abs() < 0.2, "{}", moon.dir.z.asin().to_degrees());
+    let img = render(&s, &Volume::default(), &NoProgress).unwrap();
+    for p in &img.pixels {
+        for c in 0..3 {
+            let want = s.terrain.albedo[c] / std::f64::consts::PI * moon.irradiance[c] * moon.dir.z;
+            assert!((p[c] as f64 / want - 1.0).abs() < 1e-5, "channel {c}: {} vs {want}", p[c]);
+        }
+    }
+    s.time_s = -12.0 * 3600.0;
+    assert!(aurora::render::sky::Sky::of_settings(&s).unwrap().moon.is_none());
+    let img = render(&s, &Volume::default(), &NoProgress).unwrap();
+    assert!(img.pixels.iter().all(|p| p[..3] == [0.0; 3]));
 }
