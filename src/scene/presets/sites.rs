@@ -31,8 +31,8 @@ pub const TROMSO: &str =
 pub const TROMSO_DOME: &str = "the oval's arc over Tromso at the same hour as a dome master: the real constellations and the Moon";
 
 /// The default's three arcs over Tromso (module doc), 1.5 stops darker
-/// than the default: the moonlit snow (albedo 0.8 at 0.03 lux, about 0.008
-/// cd/m^2) is brighter than the arcs' sides, and a photographer shortens
+/// than the default: the moonlit snow (albedo 0.85 at 0.02 lux, about 0.006
+/// cd/m^2, 29 in the volume's unit) is brighter than the arcs' sides, and a photographer shortens
 /// the exposure under a bright Moon.
 pub fn tromso() -> Scene {
     let mut s = Scene { site: Some(tromso_site()), ..default_scene() };
@@ -41,8 +41,8 @@ pub fn tromso() -> Scene {
 }
 
 /// The oval's arc over Tromso as a dome master (module doc), 2.5 stops
-/// darker than `oval`: the moonlit sky is 2.7 kR at the zenith and 20 kR
-/// low in the south under the Moon (V 20.6 and 18.4 mag/arcsec^2), against
+/// darker than `oval`: the moonlit sky is 2.0 kR at the zenith and 17 kR
+/// low in the south under the Moon (V 20.9 and 18.6 mag/arcsec^2), against
 /// the dark sky's 0.3 of airglow.
 pub fn tromso_dome() -> Scene {
     let mut s = Scene { site: Some(tromso_site()), ..oval() };
