@@ -340,6 +340,22 @@ fn soak_200_random_valid_scenes() {
                 };
                 tt.insert(key.clone(), v);
             }
+            // A table whose required keys have no default (`[site]`): their
+            // examples, and the table in half the scenes.
+            let required: Vec<(&String, &serde_json::Value)> =
+                keys.as_object().unwrap().iter().filter(|(_, k)| k["default"].is_null() && k.get("default_in_table").is_some()).collect();
+            if !required.is_empty() {
+                if r.random::<f64>() < 0.5 {
+                    continue;
+                }
+                for (key, k) in required {
+                    let v = &k["default_in_table"];
+                    tt.insert(
+                        key.clone(),
+                        v.as_str().map(|s| toml::Value::String(s.into())).unwrap_or_else(|| toml::Value::Float(v.as_f64().unwrap())),
+                    );
+                }
+            }
             if table == "curtain" {
                 t.insert("curtain".into(), toml::Value::Array(vec![toml::Value::Table(tt)]));
             } else {

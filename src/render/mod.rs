@@ -72,6 +72,7 @@ pub mod shadow;
 pub mod site_sky;
 pub mod sky;
 pub mod sky_map;
+pub mod stars;
 pub mod terrain;
 pub mod view_transform;
 

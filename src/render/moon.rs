@@ -37,7 +37,7 @@
 //! that colour weighted by Rayleigh's `lambda^-4`, bluer. Each has
 //! luminance 1 and is scaled by the V-band value.
 
-use super::sky::spectrum_rgb;
+use super::stars::spectrum_rgb;
 use crate::geometry::camera::CameraModel;
 use glam::DVec3;
 
@@ -84,8 +84,8 @@ impl MoonSky {
     ) -> MoonSky {
         use crate::physics::night_sky::{moonlight, star_colour};
         let t = star_colour::temperature_k(MOON_B_MINUS_V);
-        let colour = spectrum_rgb(observer, |l| super::sky::planck(l, t));
-        let sky_colour = spectrum_rgb(observer, |l| super::sky::planck(l, t) * (550.0 / l).powi(4));
+        let colour = spectrum_rgb(observer, |l| super::stars::planck(l, t));
+        let sky_colour = spectrum_rgb(observer, |l| super::stars::planck(l, t) * (550.0 / l).powi(4));
         // K&S's irradiance is at the mean distance: the inverse square law.
         let e = moonlight::moon_irradiance_kr_sr(phase_angle_deg) * (moonlight::MOON_MEAN_DISTANCE_KM / distance_km).powi(2);
         MoonSky {

@@ -23,7 +23,7 @@
 //! no twilight yet.
 
 use super::moon::MoonSky;
-use super::sky::{spectrum_rgb, Star, MAG0_KR_SR};
+use super::stars::{spectrum_rgb, Star, MAG0_KR_SR};
 use crate::geometry::astronomy::{frame::SkyFrame, moon::moon_view, refraction, site::Site, sun::sun_enu, time::Utc};
 use crate::physics::night_sky::{catalogue, star_colour};
 use crate::scene::SiteParams;
@@ -93,7 +93,7 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
             let key = (s.b_minus_v * 100.0).round() as i64;
             let colour = *colours.entry(key).or_insert_with(|| {
                 let t = star_colour::temperature_k(key as f64 / 100.0);
-                spectrum_rgb(observer, |l| super::sky::planck(l, t))
+                spectrum_rgb(observer, |l| super::stars::planck(l, t))
             });
             let e = brightness * MAG0_KR_SR * 10f64.powf(-0.4 * s.v_mag);
             Star { dir, magnitude: s.v_mag, irradiance: colour.map(|c| c * e) }
@@ -101,7 +101,9 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
         .collect();
     if limiting_magnitude > catalogue::CATALOGUE_LIMIT_V {
         stars.extend(
-            super::sky::star_field(seed, limiting_magnitude, brightness).into_iter().filter(|s| s.magnitude > catalogue::CATALOGUE_LIMIT_V),
+            super::stars::star_field(seed, limiting_magnitude, brightness)
+                .into_iter()
+                .filter(|s| s.magnitude > catalogue::CATALOGUE_LIMIT_V),
         );
     }
     stars

@@ -10,7 +10,7 @@
 //! tool computes them.
 
 use super::classic::{default_scene, oval};
-use crate::scene::{root::Scene, SiteParams};
+use crate::scene::{root::Scene, site::SiteParams};
 
 /// The site and hour of both scenes.
 pub fn tromso_site() -> SiteParams {
