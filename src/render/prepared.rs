@@ -120,7 +120,8 @@ impl Prepared {
             && o.seed == s.seed
             && o.base_dir == s.base_dir
             && o.site == s.site
-            && (s.site.is_none() || (o.time_s == s.time_s && o.observer == s.observer && o.sky == s.sky && o.camera.position == s.camera.position));
+            && (s.site.is_none()
+                || (o.time_s == s.time_s && o.observer == s.observer && o.sky == s.sky && o.camera.position == s.camera.position));
         let sky = if same_sky { old.sky } else { Sky::of_settings(s)? };
         let camera = if o.camera == s.camera && (old.camera.width, old.camera.height) == (s.render.width, s.render.height) {
             old.camera

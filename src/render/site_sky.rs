@@ -100,7 +100,9 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
         })
         .collect();
     if limiting_magnitude > catalogue::CATALOGUE_LIMIT_V {
-        stars.extend(super::sky::star_field(seed, limiting_magnitude, brightness).into_iter().filter(|s| s.magnitude > catalogue::CATALOGUE_LIMIT_V));
+        stars.extend(
+            super::sky::star_field(seed, limiting_magnitude, brightness).into_iter().filter(|s| s.magnitude > catalogue::CATALOGUE_LIMIT_V),
+        );
     }
     stars
 }
@@ -116,7 +118,6 @@ pub fn site_moon(hour: &SiteHour, k_v: f64, observer: Observer) -> Option<MoonSk
     }
     Some(MoonSky::new(dir, m.bright_limb_enu, r, m.phase_angle_deg, m.illuminated_fraction, m.distance_km, k_v, observer))
 }
-
 
 #[cfg(test)]
 mod tests {

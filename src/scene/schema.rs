@@ -51,7 +51,8 @@ pub fn enum_values() -> Vec<(String, Value)> {
 /// (serde's, the one source), the required keys themselves left out.
 fn site_defaults() -> Value {
     const REQUIRED: [&str; 3] = ["latitude_deg", "longitude_deg", "utc"];
-    let minimal: super::site::SiteParams = toml::from_str("latitude_deg = 0\nlongitude_deg = 0\nutc = \"\"").expect("the required keys alone");
+    let minimal: super::site::SiteParams =
+        toml::from_str("latitude_deg = 0\nlongitude_deg = 0\nutc = \"\"").expect("the required keys alone");
     let mut v = serde_json::to_value(minimal).expect("serialises");
     for k in REQUIRED {
         v.as_object_mut().expect("a table").remove(k);

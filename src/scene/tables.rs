@@ -147,7 +147,8 @@ mod tests {
                 }
                 // No site by default: the preset's, with the key it omits.
                 "site" => {
-                    let mut f: Vec<String> = serde_json::to_value(presets::sites::tromso_site()).unwrap().as_object().unwrap().keys().cloned().collect();
+                    let mut f: Vec<String> =
+                        serde_json::to_value(presets::sites::tromso_site()).unwrap().as_object().unwrap().keys().cloned().collect();
                     f.push("pressure_hpa".into());
                     f
                 }

@@ -80,8 +80,10 @@ fn a_renders_brightest_stars_lie_within_a_pixel_of_skyfields_places() {
     }
     peaks.sort_by(|a, b| b.0.total_cmp(&a.0));
     assert!(peaks.len() >= 10, "{} stars in the picture", peaks.len());
-    let oracle: Vec<(String, f64, f64)> =
-        oracle_stars("tromso").into_iter().filter_map(|(id, az, el)| cam.project(cam.position + enu(az, el)).map(|(x, y)| (id, x, y))).collect();
+    let oracle: Vec<(String, f64, f64)> = oracle_stars("tromso")
+        .into_iter()
+        .filter_map(|(id, az, el)| cam.project(cam.position + enu(az, el)).map(|(x, y)| (id, x, y)))
+        .collect();
     let mut worst = 0.0f64;
     for &(_, x, y) in &peaks[..10] {
         let (id, d) = oracle

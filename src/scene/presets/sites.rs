@@ -25,7 +25,8 @@ pub fn tromso_site() -> SiteParams {
 }
 
 /// What `aurora scene --list` says of [`tromso`].
-pub const TROMSO: &str = "the default's arcs over Tromso on 2026-12-18 at 18:00 UTC: the real stars, the Moon behind the camera lighting the ground";
+pub const TROMSO: &str =
+    "the default's arcs over Tromso on 2026-12-18 at 18:00 UTC: the real stars, the Moon behind the camera lighting the ground";
 /// What `aurora scene --list` says of [`tromso_dome`].
 pub const TROMSO_DOME: &str = "the oval's arc over Tromso at the same hour as a dome master: the real constellations and the Moon";
 
