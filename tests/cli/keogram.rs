@@ -181,6 +181,6 @@ fn the_readmes_keogram_example_bakes_the_grid_it_needs() {
     assert!(err.contains("--set 'grid.lines=[\"5577\"]'") && err.contains("--rebake"), "{err}");
     ok(&sh(&bake));
     ok(&sh(&keo));
-    let (w, h, _) = aurora::render::image_file::read_exr_grey(&dir.join("k.exr")).unwrap();
+    let (w, h, _) = aurora::render::image_file::read_exr_grey(dir.join("k.exr")).unwrap();
     assert_eq!((w, h), (2, 361));
 }
