@@ -536,3 +536,11 @@ fn the_readme_lists_every_command() {
         assert!(section.contains(&format!("\naurora {c} ")), "README.md's command list has no `aurora {c}` line");
     }
 }
+
+#[test]
+fn no_help_says_a_command_writes_a_report_it_does_not() {
+    for c in commands() {
+        let help = aurora_stdout(&[&c, "--help"]).split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(!help.contains("Recorded in bake.json"), "aurora {c} --help says --set is recorded in a bake.json it does not write");
+    }
+}
