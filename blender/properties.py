@@ -210,8 +210,12 @@ def _settings_annotations() -> dict:
         ann[t] = PointerProperty(type=cls)
     ann["curtains"] = CollectionProperty(type=AuroraCurtain, name="Curtains")
     ann["active_curtain"] = IntProperty(name="Active curtain", default=0, min=0)
+    # "//" is resolved by the bake (operators/bake.py: output_dir); Blender
+    # 4.5+ is told so, or it warns on every "//" path. 4.2-4.4 know no such option.
+    relative = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
+    relative.add("ANIMATABLE")  # the default options, kept
     ann["output_dir"] = StringProperty(
-        name="Output folder", subtype="DIR_PATH", default="//aurora_bake",
+        name="Output folder", subtype="DIR_PATH", default="//aurora_bake", options=relative,
         description="Where the bake goes (aurora.vdb, or aurora.NNNN.vdb for frames); replaced whole when a bake "
                     "completes, untouched when it fails or is cancelled",
     )

@@ -18,6 +18,8 @@
 //! picture records, in its PNG text chunks, the SHA-256 of the VDB it was
 //! rendered from: the pinned default bake's (`benchmarks/pins/current.txt`),
 //! or the picture is older than the bake and `tools/readme_pictures` remakes it.
+//! The default bake's size and voxel count in README.md and docs/benchmarks.md
+//! are the pinned bake's, and the README's command list names every command.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -477,4 +479,68 @@ fn the_readme_picture_of_the_default_scene_shows_the_pinned_default_bake() {
         "docs/images/default.png was rendered from a VDB with SHA-256 {recorded}, but the default bake is now {pinned} \
          (benchmarks/pins/current.txt): the picture is older than the bake; {remake}"
     );
+}
+
+/// `n` with a comma between each three digits (12,573,748).
+fn thousands(n: u64) -> String {
+    let d = n.to_string();
+    let mut out = String::new();
+    for (i, c) in d.chars().enumerate() {
+        if i > 0 && (d.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+#[test]
+fn thousands_are_grouped_by_three() {
+    assert_eq!(thousands(7), "7");
+    assert_eq!(thousands(1_000), "1,000");
+    assert_eq!(thousands(115_694_053), "115,694,053");
+}
+
+/// The default bake's bytes and active voxels in README.md and
+/// docs/benchmarks.md are those of a bake made now, and that bake is the
+/// pinned one (`benchmarks/pins/current.txt`): the figures follow the pins.
+#[test]
+fn the_default_bakes_size_in_the_documents_is_the_pinned_bakes() {
+    let dir = std::env::temp_dir().join(format!("aurora-docs-figures-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    child::ok(&child::aurora(&["bake", "default", "-q", "--threads", "2", "--out", dir.to_str().unwrap()]));
+    let vdb = dir.join("aurora.vdb");
+    let sum = std::process::Command::new("sha256sum").arg(&vdb).output().expect("sha256sum runs");
+    let sum = String::from_utf8_lossy(&sum.stdout).split_whitespace().next().unwrap_or("").to_string();
+    let pins = std::fs::read_to_string(root().join("benchmarks/pins/current.txt")).unwrap();
+    let pinned = pins.lines().find_map(|l| l.strip_suffix("  bake/aurora.vdb")).expect("the pins hold bake/aurora.vdb");
+    assert_eq!(sum, pinned, "the default bake is not the pinned one: rerun benchmarks/pins/pin.sh");
+    let bytes = std::fs::metadata(&vdb).unwrap().len();
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("bake.json")).unwrap()).unwrap();
+    let voxels = report["stats"]["active_voxels"].as_u64().expect("bake.json has stats.active_voxels");
+    std::fs::remove_dir_all(&dir).unwrap();
+    let mb = format!("{:.1} MB", bytes as f64 / 1e6);
+    for doc in ["README.md", "docs/benchmarks.md"] {
+        let text = std::fs::read_to_string(root().join(doc)).unwrap();
+        for want in [&mb, &thousands(bytes), &thousands(voxels)] {
+            assert!(text.contains(want.as_str()), "{doc} does not give the default bake's {want} ({bytes} bytes, {voxels} active voxels)");
+        }
+    }
+}
+
+#[test]
+fn the_readme_lists_every_command() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = readme.split("\n## The commands\n").nth(1).expect("README.md has \"## The commands\"");
+    for c in commands() {
+        assert!(section.contains(&format!("\naurora {c} ")), "README.md's command list has no `aurora {c}` line");
+    }
+}
+
+#[test]
+fn no_help_says_a_command_writes_a_report_it_does_not() {
+    for c in commands() {
+        let help = aurora_stdout(&[&c, "--help"]).split_whitespace().collect::<Vec<_>>().join(" ");
+        assert!(!help.contains("Recorded in bake.json"), "aurora {c} --help says --set is recorded in a bake.json it does not write");
+    }
 }

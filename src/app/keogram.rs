@@ -56,12 +56,23 @@ pub enum KeogramError {
     #[error("frame {frame}: {} is missing (bake the frames first: aurora bake SCENE --frames SPEC --out DIR)", path.display())]
     MissingFrame { frame: i64, path: PathBuf },
     /// The frame's file holds no float grid of that name.
-    #[error("--grid {name}: {} has no float grid of that name (float grids: {there}; a line's grid needs grid.lines in the bake)", path.display())]
+    #[error("--grid {name}: {} has no float grid of that name (float grids: {there}){}", path.display(), rebake_hint(name))]
     NoGrid { name: String, path: PathBuf, there: String },
     #[error(transparent)]
     Read(#[from] VdbReadError),
     #[error(transparent)]
     Render(#[from] RenderError),
+}
+
+/// What to add to the bake for a line's grid `line_NAME`: the exact
+/// `--set`, and `--rebake` to bake over frames already there.
+pub fn rebake_hint(grid: &str) -> String {
+    match grid.strip_prefix("line_").filter(|l| crate::scene::validation::LINE_KEYS.contains(l)) {
+        Some(line) => format!(
+            "; a line's grid is baked when asked for: bake again with --set 'grid.lines=[\"{line}\"]' (and --rebake to replace frames already baked)"
+        ),
+        None => String::new(),
+    }
 }
 
 impl KeogramError {

@@ -37,8 +37,8 @@ pub struct SceneOverrides {
     /// --set colour.mode=colormap: a bare word is text, --set 'curtain[1].energy_flux=3').
     /// Repeatable. Applied to the scene file's TOML before it is checked, so the file's rules
     /// apply (ranges, unknown keys). Every flag that sets a key (--set, --seed, and render's
-    /// --spp, --size and --exposure) applies in command-line order, the later winning. Recorded
-    /// in bake.json (`overrides`).
+    /// --spp, --size and --exposure) applies in command-line order, the later winning. A bake
+    /// records them in its bake.json (`overrides`).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
     pub set: Vec<aurora::scene::Override>,
     /// Every override of the command line, in its order.

@@ -47,6 +47,7 @@ pub fn run(cli: Cli) -> Result<()> {
 /// applied in command-line order, validated.
 fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
     let scene = Scene::load_with(arg, overrides.in_order())?;
+    print_warnings(Scene::shadowed_preset(arg).as_slice());
     // A table the scene names that is not compiled in is read now (and kept):
     // a missing or damaged one is refused before any work (exit status 2).
     aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;

@@ -40,6 +40,9 @@ pub fn stderr(args: std::fmt::Arguments) {
 /// temporaries behind. Ignored, the write fails with `EFBIG` instead: an I/O
 /// error like a full disk (exit status 1), whose staged files are removed
 /// as any failed write's are (`aurora::util::atomic_write`).
+///
+/// Windows has no such signal (nor `ulimit -f`): nothing to do there.
+#[cfg(unix)]
 pub fn ignore_file_size_signal() {
     // SAFETY: setting a signal's disposition to SIG_IGN installs no handler;
     // it is done first in `main`, before any thread is started.
@@ -54,6 +57,11 @@ pub fn ignore_file_size_signal() {
 /// so the process ends as interrupted processes do (a shell sees the
 /// signal). Temporaries are left to the next run into the folder, which
 /// removes them.
+///
+/// Windows: not installed. Ctrl-C ends the process at once; the lock
+/// files stay, and the next run into the folder takes them (a lock is the
+/// file's lock, which the system drops with the process, not the file).
+#[cfg(unix)]
 pub fn on_interrupt_remove_locks() {
     extern "C" fn handler(sig: libc::c_int) {
         aurora::util::atomic_write::remove_held_locks();
@@ -74,6 +82,9 @@ pub fn on_interrupt_remove_locks() {
 }
 
 /// Opens /dev/null on each of descriptors 0, 1 and 2 that is closed.
+/// Windows: nothing to do; a process without a standard handle reads and
+/// writes it as an empty source and a sink (Rust's standard library).
+#[cfg(unix)]
 pub fn reopen_closed_descriptors() {
     for fd in 0..=2 {
         // SAFETY: fcntl(F_GETFD) only queries the descriptor table.
@@ -93,6 +104,18 @@ pub fn reopen_closed_descriptors() {
         }
     }
 }
+
+/// See the Unix version: Windows has no SIGXFSZ.
+#[cfg(not(unix))]
+pub fn ignore_file_size_signal() {}
+
+/// See the Unix version: not installed on Windows.
+#[cfg(not(unix))]
+pub fn on_interrupt_remove_locks() {}
+
+/// See the Unix version: nothing to do on Windows.
+#[cfg(not(unix))]
+pub fn reopen_closed_descriptors() {}
 
 macro_rules! print {
     ($($t:tt)*) => { $crate::cli::out::stdout(format_args!($($t)*)) };

@@ -80,6 +80,15 @@ pub fn run(a: RenderArgs) -> Result<()> {
         }
     }
     let scene = load_scene(&scene_arg, &overrides)?;
+    let min = aurora::render::adaptive::ADAPTIVE_MIN_SPP;
+    if adaptive && scene.render.spp < min {
+        return Err(InputError(format!(
+            "--adaptive with render.spp = {}: adaptive sampling needs at least {min} samples a pixel (half go to every pixel, \
+             the rest where the spread is largest); give --spp {min} or more, or leave --adaptive out",
+            scene.render.spp
+        ))
+        .into());
+    }
     let dir = scene_dir(&scene_arg);
     // Refuse a bad output before rendering, not after.
     if let Some(p) = &png {
@@ -173,7 +182,7 @@ fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<
 /// Renders one image: the volume prepared from its source, traced (with
 /// adaptive sampling if asked), written.
 fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
-    let bars = Bars::new(job.quiet);
+    let bars = Bars::with_log_lines(job.quiet);
     let progress = bars.progress();
     let mut settings = aurora::render::RenderSettings::from_scene(&job.scene);
     settings.base_dir = Some(job.dir.clone());

@@ -197,12 +197,19 @@ pub fn camera_below_terrain(scene: &Scene, dir: &Path) -> Option<String> {
     let p = scene.camera.position;
     let c = terrain.clearance(glam::DVec3::from_array(p)).filter(|c| c.is_below())?;
     let kind = toml::Value::try_from(scene.terrain.kind).map(|v| v.to_string()).unwrap_or_default();
-    let what = if scene.earth.radius_km > 0.0 { "altitude" } else { "height" };
+    let what = if scene.earth.radius_km > 0.0 { "altitude (above the sphere)" } else { "z" };
     Some(format!(
-        "camera.position = [{}, {}, {}]: the camera is at {what} {:.4} km, below the terrain's {:.4} km there \
-         (terrain.kind = {kind}): the picture would be the inside of the ground. Raise the camera above \
-         {:.4} km, move it, or set terrain.kind = \"none\"",
-        p[0], p[1], p[2], c.point_km, c.ground_km, c.ground_km
+        "camera.position = [{}, {}, {}]: the camera's height above the ground is {:.4} km, {:.4} km under the surface \
+         (its {what} {:.4} km, below the terrain's {:.4} km there; terrain.kind = {kind}): the picture would be the \
+         inside of the ground. Raise the camera above {:.4} km, move it, or set terrain.kind = \"none\"",
+        p[0],
+        p[1],
+        p[2],
+        c.point_km - c.ground_km,
+        c.ground_km - c.point_km,
+        c.point_km,
+        c.ground_km,
+        c.ground_km
     ))
 }
 

@@ -209,6 +209,7 @@ pub fn sample_frames(frames: &[i64], n: usize) -> Vec<i64> {
 }
 
 /// This process's user + system CPU seconds and peak resident set (bytes).
+#[cfg(unix)]
 pub fn usage() -> (f64, f64) {
     // SAFETY: getrusage writes one plain struct we own.
     let mut u: libc::rusage = unsafe { std::mem::zeroed() };
@@ -219,6 +220,38 @@ pub fn usage() -> (f64, f64) {
     let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
     // ru_maxrss is in KiB on Linux.
     (secs(u.ru_utime) + secs(u.ru_stime), u.ru_maxrss as f64 * 1024.0)
+}
+
+/// This process's user + kernel CPU seconds and peak working set (bytes):
+/// Windows' `GetProcessTimes` and `K32GetProcessMemoryInfo` (kernel32).
+#[cfg(windows)]
+pub fn usage() -> (f64, f64) {
+    /// PROCESS_MEMORY_COUNTERS.
+    #[repr(C)]
+    #[derive(Default)]
+    struct Counters {
+        cb: u32,
+        page_faults: u32,
+        peak_working_set: usize,
+        rest: [usize; 7],
+    }
+    #[link(name = "kernel32")]
+    extern "system" {
+        fn GetCurrentProcess() -> isize;
+        fn GetProcessTimes(process: isize, creation: *mut u64, exit: *mut u64, kernel: *mut u64, user: *mut u64) -> i32;
+        fn K32GetProcessMemoryInfo(process: isize, counters: *mut Counters, cb: u32) -> i32;
+    }
+    let (mut creation, mut exit, mut kernel, mut user) = (0u64, 0u64, 0u64, 0u64);
+    let mut c = Counters { cb: std::mem::size_of::<Counters>() as u32, ..Default::default() };
+    // SAFETY: the pseudo-handle of this process, and plain out-structs we own
+    // (a FILETIME is two u32s, which a u64 holds at a stricter alignment).
+    let (times, memory) = unsafe {
+        let me = GetCurrentProcess();
+        (GetProcessTimes(me, &mut creation, &mut exit, &mut kernel, &mut user) != 0, K32GetProcessMemoryInfo(me, &mut c, c.cb) != 0)
+    };
+    // FILETIME durations are in 100 ns.
+    let cpu = if times { (kernel + user) as f64 * 1e-7 } else { 0.0 };
+    (cpu, if memory { c.peak_working_set as f64 } else { 0.0 })
 }
 
 /// Removes the scratch folder however the plan ends.

@@ -71,7 +71,9 @@ pub struct MoonSky {
 impl MoonSky {
     /// Builds it from where the Moon is (`dir` refracted, `bright_limb`,
     /// `radius_rad`, `phase_angle_deg`, `fraction`, its topocentric
-    /// `distance_km`), the air's `k_v` and the observer.
+    /// `distance_km`), the air's `k_v` and the observer: the ephemeris's
+    /// quantities each by name, as the struct's fields are.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         dir: DVec3,
         bright_limb: DVec3,

@@ -38,11 +38,21 @@ impl Scene {
         Self::load_with(path_or_preset, &[])
     }
 
+    /// The note for a preset name that is also a folder here (an output
+    /// folder named after the preset): the preset is read, and `./NAME`
+    /// names the folder. None when `arg` is no such name.
+    pub fn shadowed_preset(arg: &str) -> Option<String> {
+        (presets::by_name(arg).is_some() && Path::new(arg).is_dir())
+            .then(|| format!("{arg}: the preset `{arg}`, not the folder of that name here (pass ./{arg} to mean the folder)"))
+    }
+
     /// [`load`](Self::load) with `overrides` applied, in order, after the
     /// file or preset and before validation.
     pub fn load_with(path_or_preset: &str, overrides: &[Override]) -> Result<Scene, SceneError> {
         if let Some(s) = presets::by_name(path_or_preset) {
-            if !Path::new(path_or_preset).exists() {
+            // A folder is never a scene file: a bare preset name means the
+            // preset even where a folder has that name ([`shadowed_preset`]).
+            if !Path::new(path_or_preset).exists() || Path::new(path_or_preset).is_dir() {
                 if overrides.is_empty() {
                     return Ok(s);
                 }

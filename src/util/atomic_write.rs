@@ -126,7 +126,10 @@ pub fn prepare_folder(dir: &Path) -> Result<(), AtomicError> {
 fn host_tag() -> String {
     static TAG: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     TAG.get_or_init(|| {
-        let h = std::fs::read_to_string("/proc/sys/kernel/hostname").or_else(|_| std::env::var("HOSTNAME")).unwrap_or_default();
+        let h = std::fs::read_to_string("/proc/sys/kernel/hostname")
+            .or_else(|_| std::env::var("HOSTNAME"))
+            .or_else(|_| std::env::var("COMPUTERNAME"))
+            .unwrap_or_default();
         let h: String = h.trim().chars().filter(|c| c.is_ascii_alphanumeric() || *c == '-').take(64).collect();
         if h.is_empty() {
             String::new()
@@ -336,9 +339,17 @@ const HELD_SLOTS: usize = 16;
 /// [`remove_held_locks`], which a signal handler calls: only atomic loads
 /// there. A path is never freed (a few bytes per lock taken), so a handler
 /// running beside a release never reads freed memory.
-static HELD: [std::sync::atomic::AtomicPtr<libc::c_char>; HELD_SLOTS] =
+static HELD: [std::sync::atomic::AtomicPtr<std::ffi::c_char>; HELD_SLOTS] =
     [const { std::sync::atomic::AtomicPtr::new(std::ptr::null_mut()) }; HELD_SLOTS];
 
+/// Windows: no signal handler removes locks there (`cli::out`), so none is
+/// recorded.
+#[cfg(not(unix))]
+fn hold(_path: &Path) -> Option<usize> {
+    None
+}
+
+#[cfg(unix)]
 fn hold(path: &Path) -> Option<usize> {
     use std::os::unix::ffi::OsStrExt;
     let c = std::ffi::CString::new(path.as_os_str().as_bytes()).ok()?.into_raw();
@@ -355,6 +366,7 @@ fn hold(path: &Path) -> Option<usize> {
 /// (the kernel drops the locks themselves when the process ends). Only
 /// async-signal-safe calls: atomic loads and `unlink`.
 pub fn remove_held_locks() {
+    #[cfg(unix)]
     for s in &HELD {
         let p = s.load(Ordering::SeqCst);
         if !p.is_null() {
@@ -364,11 +376,25 @@ pub fn remove_held_locks() {
     }
 }
 
+/// Whether two metadata are of one file: device and inode on Unix. On
+/// Windows stable Rust's std gives neither, and the lock's path still
+/// being there is taken as the same file: a lock removed and made anew by
+/// another writer between the two looks is not told apart there.
+#[cfg(unix)]
+fn same_file(a: &std::fs::Metadata, b: &std::fs::Metadata) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    a.dev() == b.dev() && a.ino() == b.ino()
+}
+
+#[cfg(not(unix))]
+fn same_file(_: &std::fs::Metadata, _: &std::fs::Metadata) -> bool {
+    true
+}
+
 impl UnitLock {
     /// Takes the lock, waiting while another writer holds it; `on_wait` is
     /// called once if it has to wait (to tell the user).
     pub fn acquire(dir: &Path, stem: &str, on_wait: impl FnOnce()) -> Result<Self, AtomicError> {
-        use std::os::unix::fs::MetadataExt;
         let path = dir.join(format!(".{stem}.lock"));
         let mut on_wait = Some(on_wait);
         loop {
@@ -386,7 +412,7 @@ impl UnitLock {
             }
             let held = file.metadata().map_err(io_err(&path))?;
             match std::fs::symlink_metadata(&path) {
-                Ok(now) if now.dev() == held.dev() && now.ino() == held.ino() => {
+                Ok(now) if same_file(&now, &held) => {
                     let slot = hold(&path);
                     return Ok(Self { path, file: Some(file), slot });
                 }

@@ -157,9 +157,13 @@ impl Seen {
 /// non-blocking and checked with `fstat` before any read.
 fn observe(path: &Path) -> Seen {
     use std::io::Read;
-    use std::os::unix::fs::OpenOptionsExt;
     let io = |source| Seen::Failed(WatchError::Io { path: path.to_path_buf(), source });
-    let mut f = match std::fs::OpenOptions::new().read(true).custom_flags(libc::O_NONBLOCK).open(path) {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    // Windows: an open of a file never waits on a writer (input_file's docs).
+    #[cfg(unix)]
+    std::os::unix::fs::OpenOptionsExt::custom_flags(&mut options, libc::O_NONBLOCK);
+    let mut f = match options.open(path) {
         Ok(f) => f,
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Seen::Missing,
         Err(e) => return io(e),

@@ -77,15 +77,21 @@ impl From<InputFileError> for std::io::Error {
 
 /// What a file type is, as the messages of this module and of
 /// [`crate::util::atomic_write`] say it: "regular", "a FIFO", "a directory", ...
+/// (Windows knows the first three.)
 pub fn kind_name(t: FileType) -> &'static str {
+    #[cfg(unix)]
     use std::os::unix::fs::FileTypeExt;
     let kinds = [
         (FileType::is_file as fn(&FileType) -> bool, "regular"),
         (FileType::is_symlink, "a symbolic link"),
         (FileType::is_dir, "a directory"),
+        #[cfg(unix)]
         (FileType::is_char_device, "a character device"),
+        #[cfg(unix)]
         (FileType::is_block_device, "a block device"),
+        #[cfg(unix)]
         (FileType::is_fifo, "a FIFO"),
+        #[cfg(unix)]
         (FileType::is_socket, "a socket"),
     ];
     kinds.iter().find(|(is, _)| is(&t)).map_or("not a regular file", |(_, name)| name)
@@ -112,6 +118,7 @@ pub fn open(path: &Path) -> Result<File, InputFileError> {
 
 /// Step 2 of the module docs: open without blocking, `fstat` the
 /// descriptor, refuse anything but a regular file, clear `O_NONBLOCK`.
+#[cfg(unix)]
 fn open_descriptor_checked(path: &Path) -> Result<File, InputFileError> {
     use std::os::fd::AsRawFd;
     use std::os::unix::fs::OpenOptionsExt;
@@ -127,6 +134,20 @@ fn open_descriptor_checked(path: &Path) -> Result<File, InputFileError> {
     let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
     if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK) } < 0 {
         return Err(io(std::io::Error::last_os_error()));
+    }
+    Ok(file)
+}
+
+/// Step 2 on Windows: an open of a file does not wait on a writer there
+/// (a named pipe is not a path of the file system), so the file is opened
+/// as usual and refused unless its handle's metadata says regular.
+#[cfg(not(unix))]
+fn open_descriptor_checked(path: &Path) -> Result<File, InputFileError> {
+    let io = |source| InputFileError::Io { path: path.to_path_buf(), source };
+    let file = File::open(path).map_err(io)?;
+    let t = file.metadata().map_err(io)?.file_type();
+    if !t.is_file() {
+        return Err(InputFileError::NotRegular { path: path.to_path_buf(), kind: kind_name(t) });
     }
     Ok(file)
 }

@@ -50,7 +50,31 @@ pub fn available() -> MemoryLimit {
     consider(mem_available(), "MemAvailable", &mut first);
     consider(cgroup_limit(), "cgroup memory limit", &mut first);
     consider(rlimit_as(), "RLIMIT_AS", &mut first);
+    #[cfg(windows)]
+    consider(windows_available(), "available physical memory", &mut first);
     best
+}
+
+/// Windows' available physical memory (`GlobalMemoryStatusEx`, kernel32),
+/// in bytes: what `MemAvailable` is on Linux. Job-object limits are not read.
+#[cfg(windows)]
+fn windows_available() -> Option<f64> {
+    /// MEMORYSTATUSEX.
+    #[repr(C)]
+    struct Status {
+        length: u32,
+        load: u32,
+        total_phys: u64,
+        avail_phys: u64,
+        rest: [u64; 5],
+    }
+    #[link(name = "kernel32")]
+    extern "system" {
+        fn GlobalMemoryStatusEx(status: *mut Status) -> i32;
+    }
+    let mut s = Status { length: std::mem::size_of::<Status>() as u32, load: 0, total_phys: 0, avail_phys: 0, rest: [0; 5] };
+    // SAFETY: a plain out-struct we own, its length set as the call asks.
+    (unsafe { GlobalMemoryStatusEx(&mut s) } != 0).then_some(s.avail_phys as f64)
 }
 
 fn read(path: impl AsRef<Path>) -> Option<String> {

@@ -3,7 +3,7 @@
 //! status 2 before anything is written; a frame that changes size while
 //! it is read exits 1, an I/O failure.
 
-use crate::common::{aurora, file_names, ok, refused, scratch, write};
+use crate::common::{aurora, file_names, ok, refused, repo_root, scratch, write};
 use crate::green_line_grid_toml;
 use std::path::{Path, PathBuf};
 
@@ -150,4 +150,37 @@ fn a_frame_that_changes_size_while_it_is_read_is_an_io_failure() {
     let want = format!("{}`: the file changed size while it was read (0 bytes when opened, 1 read)", frame.display());
     assert!(e.contains(&want), "{e}");
     assert_eq!(file_names(&dir), ["s.toml", "seq"], "nothing written");
+}
+
+/// The README's keogram lines as written (its sequence bake with the line's
+/// grid, then the keogram), on this small scene without `grid.lines` and
+/// over frames 1-2 instead of 1-48; and a keogram of a plain sequence bake
+/// is refused with the exact `--set` to add to the bake.
+#[test]
+fn the_readmes_keogram_example_bakes_the_grid_it_needs() {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).unwrap();
+    let commands = readme.split("\n## The commands\n").nth(1).unwrap();
+    let line = |start: &str| -> String {
+        let l = commands.lines().find(|l| l.starts_with(start)).unwrap_or_else(|| panic!("README.md has no `{start}` line"));
+        l.split(" #").next().unwrap().trim().replace("1-48", "1-2")
+    };
+    let (bake, keo) = (line("aurora bake my.toml --frames"), line("aurora keogram my.toml"));
+    assert!(bake.contains("--out shot/") && keo.contains("--vdb shot/"), "{bake}\n{keo}");
+    let dir = scratch("keogram", "readme");
+    let plain = SCENE.replace("lines = [\"5577\"]\n", "").replace("count = 4000", "count = 300");
+    assert!(!plain.contains("lines ="));
+    write(&dir, "my.toml", &plain);
+    let sh = |line: &str| {
+        let bin = std::path::Path::new(crate::common::child::AURORA_BIN).parent().unwrap().to_path_buf();
+        let path = std::env::join_paths(std::iter::once(bin).chain(std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())));
+        std::process::Command::new("sh").arg("-c").arg(format!("{line} -q")).current_dir(&dir).env("PATH", path.unwrap()).output().unwrap()
+    };
+    // A plain sequence bake: the keogram names the --set that gives it its grid.
+    ok(&aurora(&["bake", dir.join("my.toml").to_str().unwrap(), "--frames", "1-2", "--out", dir.join("plain").to_str().unwrap(), "-q"]));
+    let err = refused(&sh(&keo.replace("shot/", "plain/")));
+    assert!(err.contains("--set 'grid.lines=[\"5577\"]'") && err.contains("--rebake"), "{err}");
+    ok(&sh(&bake));
+    ok(&sh(&keo));
+    let (w, h, _) = aurora::render::image_file::read_exr_grey(dir.join("k.exr")).unwrap();
+    assert_eq!((w, h), (2, 361));
 }

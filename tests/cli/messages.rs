@@ -81,3 +81,39 @@ fn a_camera_looking_straight_up_is_told_which_up_to_set() {
     let e = refusal("along", "[camera]\nposition = [0, -100, 1]\nlook_at = [0, 0, 1]\nup = [0, 1, 0]\n");
     says(&e, &["set camera.up = [0, 0, 1]"]);
 }
+
+#[test]
+fn a_folder_named_after_a_preset_does_not_hide_it() {
+    // As after `aurora bake oval --out oval/`: `oval` is still the preset.
+    let d = scratch("messages", "shadow");
+    std::fs::create_dir_all(d.join("oval")).unwrap();
+    let o = Aurora::new().args(["scene", "oval"]).current_dir(&d).output();
+    let e = crate::common::ok(&o);
+    assert!(e.contains("aurora: warning: oval: the preset `oval`") && e.contains("pass ./oval to mean the folder"), "{e}");
+    assert!(String::from_utf8_lossy(&o.stdout).contains("[[curtain]]"));
+    let e = refused(&Aurora::new().args(["scene", "./oval"]).current_dir(&d).output());
+    assert!(e.contains("./oval: cannot read"), "{e}");
+}
+
+#[test]
+fn adaptive_sampling_below_its_least_spp_is_refused() {
+    let d = scratch("messages", "adaptive");
+    let out = d.join("a.png");
+    let e = refused(&Aurora::new().args(["render", "--adaptive", "--spp", "4", "--png"]).arg(&out).output());
+    says(&e, &["--adaptive with render.spp = 4", "at least 8 samples", "--spp 8"]);
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_render_without_a_terminal_says_when_it_starts_and_how_long_it_has_left() {
+    // stderr is a pipe here: indicatif draws nothing, the plain lines stand in.
+    let d = scratch("messages", "log_lines");
+    let png = d.join("r.png");
+    let o = Aurora::new()
+        .args(["render", "--set", "beams.count=300", "--set", "grid.voxel_size=2.0", "--size", "32x18", "--spp", "1", "--png"])
+        .arg(&png)
+        .output();
+    let e = crate::common::ok(&o);
+    assert!(e.contains("aurora: render: started, 18 steps (a line every 30 s with the time left)"), "{e}");
+    assert!(png.is_file());
+}

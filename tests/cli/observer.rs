@@ -69,7 +69,10 @@ fn a_camera_inside_the_terrain_is_refused_by_render_and_preview_and_bake_warns()
     let inside = "camera.position=[-10, 40, 0.5]";
     let want = |e: &str| {
         assert!(
-            e.contains("camera.position = [-10, 40, 0.5]") && e.contains("0.5000 km") && e.contains("below the terrain's 1.5828 km"),
+            e.contains("camera.position = [-10, 40, 0.5]")
+                && e.contains("height above the ground is -1.0828 km")
+                && e.contains("0.5000 km")
+                && e.contains("below the terrain's 1.5828 km"),
             "{e}"
         );
     };
