@@ -16,3 +16,4 @@ pub mod emission;
 pub mod geomagnetic_field;
 pub mod igrf;
 pub mod night_sky;
+pub mod site_field;
