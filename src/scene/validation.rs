@@ -182,7 +182,7 @@ impl Scene {
                     format!("\"{}\"", quoted(&site.utc)),
                     format!("must be an RFC 3339 time between 1900 and 2100, such as \"2026-12-07T22:00:00Z\" ({e})"),
                 );
-            } else if site.field == super::SiteField::Igrf {
+            } else if site.field == super::site::SiteField::Igrf {
                 // IGRF-14's span (`crate::physics::igrf`, whose table starts
                 // in 1900 and ends in 2030).
                 use crate::geometry::astronomy::time::Utc;
