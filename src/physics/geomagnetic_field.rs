@@ -37,7 +37,9 @@
 //! so there `b` is -B, dipping `|I|` toward the pole's antipode (the other
 //! pole). Where `|I|` is no more than the beams' deflection `alpha_D` a
 //! step may go up or sideways for ever; such a curtain is refused
-//! (`crate::pipeline::beams::dip`).
+//! (`crate::pipeline::beams::dip`). **With a site** the field is the
+//! Earth's, IGRF-14 (`crate::physics::site_field`), read into the same
+//! two angles.
 
 use crate::geometry::earth::Earth;
 use glam::DVec3;

@@ -14,4 +14,6 @@ pub mod data_files;
 pub mod deposition;
 pub mod emission;
 pub mod geomagnetic_field;
+pub mod igrf;
 pub mod night_sky;
+pub mod site_field;

@@ -20,8 +20,9 @@
 //!   average is a ratio, not a sum);
 //! - **the field a beam follows** ([`BakePlan::field_at`], from
 //!   [`crate::pipeline::beams::beam_field`], which the trace calls too): the
-//!   dipole's at its start on a round Earth with `[earth] magnetic_pole`,
-//!   else the uniform field;
+//!   IGRF-14's at its start with a `[site]` (unless its `field` is
+//!   `scene`), else the dipole's on a round Earth with `[earth]
+//!   magnetic_pole`, else the uniform field;
 //! - **the pilots' sizes** ([`DEPOSIT_PILOT_BEAMS`], [`PILOT_HALF_BEAMS`]).
 //!
 //! [`BakePlan::reusing`] keeps a previous plan's footprints, atmosphere and
@@ -39,7 +40,8 @@ use crate::physics::atmosphere::Atmosphere;
 use crate::physics::emission::line_colour::{ColourTable, EmissionModel};
 use crate::physics::emission::line_table::{line_index, LineTable};
 use crate::physics::geomagnetic_field::MagneticField;
-use crate::pipeline::beams::{beam_field, TraceParams};
+use crate::physics::site_field::SiteField;
+use crate::pipeline::beams::{beam_field, site_field, TraceParams};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::curtain_path::Lift;
 use crate::pipeline::footprint::{self, Footprint};
@@ -153,6 +155,9 @@ pub struct BakePlan {
     pub colour_table: ColourTable,
     /// The uniform field (`beams.b_inclination_deg`, `b_declination_deg`).
     pub field: MagneticField,
+    /// IGRF over the site, when `[site] field = "igrf"`
+    /// (`crate::pipeline::beams::site_field`).
+    pub site_field: Option<SiteField>,
     pub kernel: KernelRadius,
     pub radius: RadiusField,
     /// The lines one at a time ([`line_table_for`]): with a physical colour
@@ -260,6 +265,7 @@ impl BakePlan {
             atmosphere,
             colour_table,
             field,
+            site_field: site_field(scene),
             kernel,
             radius,
             line_table,
@@ -273,10 +279,11 @@ impl BakePlan {
         Earth::new(self.scene.earth.radius_km)
     }
 
-    /// The field a beam starting at ground point `at` follows
-    /// ([`crate::pipeline::beams::beam_field`]).
+    /// The field a beam starting at ground point `at`, at the beams' top
+    /// (`beams.top_km`), follows ([`crate::pipeline::beams::beam_field`]).
     pub fn field_at(&self, at: [f64; 2]) -> MagneticField {
-        beam_field(&self.earth(), self.scene.earth.magnetic_pole, self.field, at)
+        let p = DVec3::new(at[0], at[1], self.scene.beams.top_km);
+        beam_field(&self.earth(), self.scene.earth.magnetic_pole, self.site_field.as_ref(), self.field, p)
     }
 
     /// The tracing parameters, borrowed from the plan.
@@ -296,6 +303,7 @@ impl BakePlan {
             trail: None,
             earth: self.earth(),
             magnetic_pole: s.earth.magnetic_pole,
+            site_field: self.site_field.as_ref(),
             footprints: &self.footprints,
             atmosphere: &self.atmosphere,
             colour: &self.colour_table,

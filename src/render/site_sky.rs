@@ -134,6 +134,7 @@ mod tests {
             utc: utc.into(),
             temperature_c: -10.0,
             pressure_hpa: Some(pressure_hpa),
+            field: Default::default(),
         };
         SiteHour::of(&p, time_s).unwrap()
     }

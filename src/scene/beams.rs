@@ -95,8 +95,8 @@ pub const BEAMS_KEYS: &[KeySpec] = &[
     KeySpec::new("delta_alpha_deg", "deg", Range::Rule("in [0, beams.alpha_d_deg]"), "width of the deflection range: alpha is uniform in [alpha_D - delta, alpha_D]"),
     KeySpec::new("length_km", "km", Range::Num(Num::POSITIVE), "beam length L: a step is s = L dt u along B (u uniform)"),
     KeySpec::new("dt", "", Range::Num(Num::closed(1e-6, 1.0)), "step parameter: at most 1/dt deflections per beam (`csda` only: Fang beams go on until their deposition is complete)"),
-    KeySpec::new("b_inclination_deg", "deg", Range::Num(Num::closed(10.0, 90.0)), "the geomagnetic field's dip below the horizon (90 = vertical)"),
-    KeySpec::new("b_declination_deg", "deg", Range::Num(Num::FINITE), "azimuth of the field's horizontal part, from +y towards +x"),
+    KeySpec::new("b_inclination_deg", "deg", Range::Num(Num::closed(10.0, 90.0)), "the geomagnetic field's dip below the horizon (90 = vertical); a `[site]` with `field = \"igrf\"` (its default) replaces it with IGRF-14"),
+    KeySpec::new("b_declination_deg", "deg", Range::Num(Num::FINITE), "azimuth of the field's horizontal part, from +y towards +x; a `[site]` with `field = \"igrf\"` (its default) replaces it with IGRF-14"),
     KeySpec::new("deposition", "", Range::Word(&["expected", "sampled", "csda"]), "how a beam deposits its energy: `expected` (the curtain's whole spectrum on every beam, Fang et al. 2010 integrated over it), `sampled` (one energy per beam, Fang 2010 monoenergetic: the same mean, more noise) or `csda` (one energy per beam, straight-line continuous slowing down, for comparison; the `seed2014` preset uses it)"),
     KeySpec::new("starts", "", Range::Word(&["stratified", "random"]), "beam starts over the footprint, in proportion to its flux: `stratified` (beam i takes point i of a seeded R2 low-discrepancy sequence, whatever the count or thread count) or `random` (independent points, for comparison)"),
 ];

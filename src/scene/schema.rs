@@ -18,9 +18,14 @@ use serde_json::{json, Map, Value};
 pub fn enum_values() -> Vec<(String, Value)> {
     let defaults = serde_json::to_value(Scene::default()).expect("a scene serialises");
     let mut out = Vec::new();
-    let Value::Object(top) = defaults else { return out };
+    let Value::Object(mut top) = defaults else { return out };
+    // No site by default: the preset's, for its words.
+    top.insert("site".into(), serde_json::to_value(super::presets::sites::tromso_site()).expect("serialises"));
     for (table, fields) in top {
-        let fields = if table == "curtain" { serde_json::to_value(Curtain::default()).expect("serialises") } else { fields };
+        let fields = match table.as_str() {
+            "curtain" => serde_json::to_value(Curtain::default()).expect("serialises"),
+            _ => fields,
+        };
         let Value::Object(fields) = fields else { continue };
         for (key, d) in fields {
             if !d.is_string() {
@@ -134,7 +139,7 @@ mod tests {
             let (t, k) = key.split_once('.').unwrap();
             for v in values.as_array().unwrap() {
                 let text = if t == "curtain" { format!("[[{t}]]\n{k} = {v}\n") } else { format!("[{t}]\n{k} = {v}\n") };
-                assert!(Scene::from_toml_str(&text, "e.toml").is_ok() || t == "colour" || t == "terrain", "{text}");
+                assert!(Scene::from_toml_str(&text, "e.toml").is_ok() || t == "colour" || t == "terrain" || t == "site", "{text}");
             }
         }
     }

@@ -10,6 +10,12 @@
 //! Earth of `[earth]` is the sphere tangent to it at the origin). The hour
 //! of a picture is `utc + animation.time_s`: frame N of a sequence is at
 //! `utc + time_s + (N - 1) / fps`, so the sky turns with the frames.
+//!
+//! **The field.** With a site the beams follow the Earth's field, IGRF-14
+//! at the hour (`field = "igrf"`, the default:
+//! `crate::physics::site_field`), which replaces `beams.b_inclination_deg`,
+//! `b_declination_deg` and `earth.magnetic_pole`; `field = "scene"` keeps
+//! those keys' field under the site's sky.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};
@@ -34,6 +40,21 @@ pub struct SiteParams {
     /// standard pressure at the site's height, `1010 exp(-height / 9.1 km)`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_hpa: Option<f64>,
+    /// The field the beams follow (module documentation).
+    #[serde(default)]
+    pub field: SiteField,
+}
+
+/// Which field the beams of a scene with a site follow.
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SiteField {
+    /// IGRF-14 at the site and the hour.
+    #[default]
+    Igrf,
+    /// The scene's own: `beams.b_inclination_deg` and `b_declination_deg`,
+    /// or the dipole of `earth.magnetic_pole`.
+    Scene,
 }
 
 fn default_temperature_c() -> f64 {
@@ -61,4 +82,10 @@ pub const SITE_KEYS: &[KeySpec] = &[
     ),
     KeySpec::new("temperature_c", "C", Range::Num(Num::closed(-90.0, 60.0)), "the air's temperature at the site, for the refraction of the stars, the Moon and the Sun (Bennett 1982)"),
     KeySpec::new("pressure_hpa", "hPa", Range::Num(Num::closed(0.0, 1100.0)), "the air's pressure at the site, for refraction; omitted: the standard pressure at `height_km`, 1010 exp(-height_km / 9.1) hPa"),
+    KeySpec::new(
+        "field",
+        "",
+        Range::Word(&["igrf", "scene"]),
+        "the field the beams follow: `igrf` (the Earth's, IGRF-14 at the site and `utc`, 1900-2030; it replaces `beams.b_inclination_deg`, `b_declination_deg` and `earth.magnetic_pole`) or `scene` (those keys' field, as without a site)",
+    ),
 ];

@@ -182,6 +182,22 @@ impl Scene {
                     format!("\"{}\"", quoted(&site.utc)),
                     format!("must be an RFC 3339 time between 1900 and 2100, such as \"2026-12-07T22:00:00Z\" ({e})"),
                 );
+            } else if site.field == super::site::SiteField::Igrf {
+                // IGRF-14's span (`crate::physics::igrf`, whose table starts
+                // in 1900 and ends in 2030).
+                use crate::geometry::astronomy::time::Utc;
+                let (first, last) = (Utc::parse_rfc3339("1900-01-01T00:00:00Z"), Utc::parse_rfc3339("2030-01-01T00:00:00Z"));
+                let t = Utc::parse_rfc3339(&site.utc).map(|t| t.plus_seconds(self.animation.time_s));
+                if let (Ok(t), Ok(first), Ok(last)) = (t, first, last) {
+                    if !(first..=last).contains(&t) {
+                        v.push(
+                            Some(("site", 0)),
+                            "utc",
+                            format!("\"{}\"", quoted(&site.utc)),
+                            "with field = \"igrf\" must be between 1900-01-01 and 2030-01-01, IGRF-14's years; set field = \"scene\" for another".into(),
+                        );
+                    }
+                }
             }
         }
 

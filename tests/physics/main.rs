@@ -6,8 +6,8 @@
 //! (`pipeline`), the footprint's structure and the vortex sheet's growth
 //! (`footprint`), curtains along paths (`path`), the round Earth (`earth`),
 //! the lines one at a time and their red trail (`lines`, `trail`), the
-//! corona's vanishing point (`corona`) and the presets' colours
-//! (`presets`).
+//! corona's vanishing point (`corona`), the magnetic zenith of IGRF-14 over
+//! a site (`magnetic_zenith`) and the presets' colours (`presets`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -22,6 +22,7 @@ mod footprint;
 mod globe;
 mod ibc;
 mod lines;
+mod magnetic_zenith;
 mod path;
 mod pipeline;
 mod presets;

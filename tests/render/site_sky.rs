@@ -52,6 +52,7 @@ fn a_renders_brightest_stars_lie_within_a_pixel_of_skyfields_places() {
         utc: "2026-12-02T04:00:00Z".into(),
         temperature_c: 10.0,
         pressure_hpa: Some(1010.0),
+        field: Default::default(),
     });
     let img = render(&s, &Volume::default(), &NoProgress).unwrap();
     let cam = CameraModel::new(&s.camera, w, h).unwrap();

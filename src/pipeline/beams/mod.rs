@@ -37,6 +37,8 @@ pub mod running;
 pub mod starts;
 pub mod walk;
 
+use crate::geometry::astronomy::site::Site;
+use crate::geometry::astronomy::time::Utc;
 use crate::geometry::earth::Earth;
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::curtain_spectrum::{self, Population};
@@ -44,11 +46,13 @@ use crate::physics::deposition::fang::{MonoDeposition, SpectrumDeposition};
 use crate::physics::emission::line_colour::ColourTable;
 use crate::physics::emission::line_table::LineTable;
 use crate::physics::geomagnetic_field::MagneticField;
+use crate::physics::igrf::Igrf;
+use crate::physics::site_field::SiteField;
 use crate::pipeline::beams::starts::{StartMap, UnitPoints};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::deposit::StepDeposit;
 use crate::pipeline::footprint::Footprint;
-use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene};
+use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene, SiteField as SiteFieldChoice};
 use crate::util::progress::Progress;
 use crate::util::rng;
 use beam::{BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
@@ -211,6 +215,9 @@ pub struct TraceParams<'a> {
     /// `earth.magnetic_pole`: the dipole's field at each beam's start
     /// instead of `beams`' angles.
     pub magnetic_pole: Option<[f64; 2]>,
+    /// IGRF over the site (`[site] field = "igrf"`, [`site_field`]): it
+    /// wins over `magnetic_pole` and `beams`' angles.
+    pub site_field: Option<&'a SiteField>,
     /// One footprint per curtain, at the trace's time: where beams start.
     pub footprints: &'a [Footprint],
     /// The neutral atmosphere the beams deposit in, and the colour table
@@ -221,7 +228,15 @@ pub struct TraceParams<'a> {
 
 impl<'a> TraceParams<'a> {
     /// The scene's parameters, with its footprints, atmosphere and colour table.
-    pub fn of(scene: &'a Scene, footprints: &'a [Footprint], atmosphere: &'a Atmosphere, colour: &'a ColourTable) -> Self {
+    /// The scene's parameters, with its footprints, atmosphere, colour
+    /// table and site field ([`site_field`] of the scene).
+    pub fn of(
+        scene: &'a Scene,
+        footprints: &'a [Footprint],
+        atmosphere: &'a Atmosphere,
+        colour: &'a ColourTable,
+        site_field: Option<&'a SiteField>,
+    ) -> Self {
         TraceParams {
             seed: scene.seed,
             curtains: &scene.curtains,
@@ -236,6 +251,7 @@ impl<'a> TraceParams<'a> {
             trail: None,
             earth: Earth::new(scene.earth.radius_km),
             magnetic_pole: scene.earth.magnetic_pole,
+            site_field,
             footprints,
             atmosphere,
             colour,
@@ -269,7 +285,8 @@ pub fn trace_all_from(
     progress: &dyn Progress,
 ) -> Result<(Vec<Photon>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, first_beam, 0..n, false, progress)?;
+    let site = site_field(scene);
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour, site.as_ref()), n, first_beam, 0..n, false, progress)?;
     Ok((t.photons, t.stats))
 }
 
@@ -283,7 +300,8 @@ pub fn trace_deposits(
     progress: &dyn Progress,
 ) -> Result<(Vec<Vec<StepDeposit>>, BeamStats), BeamError> {
     let n = scene.beams.count;
-    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour), n, 0, 0..n, true, progress)?;
+    let site = site_field(scene);
+    let t = trace_range(&TraceParams::of(scene, footprints, atmosphere, colour, site.as_ref()), n, 0, 0..n, true, progress)?;
     Ok((t.deposits, t.stats))
 }
 
@@ -374,18 +392,36 @@ pub fn trace_range(
     Ok(Traced { photons, stats, deposits: all_deposits, line_power, beam_photons })
 }
 
-/// The field a beam starting at ground point `at` (km, in the curved
-/// frame) follows: with a dipole pole (`[earth] magnetic_pole`, which
-/// needs a round Earth) the dipole's field there, held along the beam (over
-/// a beam's path, some 50 km across the field at I = 78 deg from 260 to
-/// 100 km, its direction turns by about 50 / R rad = 0.5 degrees);
-/// otherwise the uniform field `uniform`. The trace and the memory budget
-/// (through `crate::pipeline::plan::BakePlan::field_at`) both ask here.
-pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, uniform: MagneticField, at: [f64; 2]) -> MagneticField {
-    match pole {
-        Some(pole) => MagneticField::dipole(earth, pole, at),
-        None => uniform,
+/// The field a beam starting at the curved frame's point `at` (ground
+/// coordinates and altitude, km) follows, held along the beam (over a
+/// beam's path, some 50 km across the field at I = 78 deg from 260 to 100
+/// km, its direction turns by about 50 / R rad = 0.5 degrees):
+/// - with a site whose `field` is `igrf` (`site`, [`site_field`]), IGRF-14
+///   at the point and the hour (`crate::physics::site_field`);
+/// - else with a dipole pole (`[earth] magnetic_pole`, which needs a round
+///   Earth) the dipole's field there;
+/// - otherwise the uniform field `uniform`.
+///
+/// The trace and the memory budget (through
+/// `crate::pipeline::plan::BakePlan::field_at`) both ask here.
+pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, site: Option<&SiteField>, uniform: MagneticField, at: DVec3) -> MagneticField {
+    match (site, pole) {
+        (Some(site), _) => site.field([at.x, at.y], at.z),
+        (None, Some(pole)) => MagneticField::dipole(earth, pole, [at.x, at.y]),
+        (None, None) => uniform,
     }
+}
+
+/// IGRF-14 over the scene's site at its hour (`utc + animation.time_s`),
+/// when the scene has a `[site]` whose `field` is `igrf`; `None` for the
+/// scene's own field. The scene is a validated one (its `utc` parses and
+/// lies in IGRF-14's years).
+pub fn site_field(scene: &Scene) -> Option<SiteField> {
+    let p = scene.site.as_ref().filter(|p| p.field == SiteFieldChoice::Igrf)?;
+    let t = Utc::parse_rfc3339(&p.utc).ok()?.plus_seconds(scene.animation.time_s);
+    let igrf = Igrf::at(t).ok()?;
+    let site = Site::new(p.latitude_deg, p.longitude_deg, p.height_km).ok()?;
+    Some(SiteField::new(igrf, &site, Earth::new(scene.earth.radius_km)))
 }
 
 /// Where the beams of a bake of `count` beams start, per curtain: the
@@ -635,7 +671,7 @@ impl<'a> Tracer<'a> {
         let ctx = &ctxs[start.population as usize];
         let bufs = std::mem::take(&mut out.bufs);
         let (first_photon, first_deposit) = (bufs.photons.len(), bufs.deposits.len());
-        let field = beam_field(&self.params.earth, self.params.magnetic_pole, ctx.field, [start.position.x, start.position.y]);
+        let field = beam_field(&self.params.earth, self.params.magnetic_pole, self.params.site_field, ctx.field, start.position);
         let t = trace_beam_into(&BeamContext { field, ..*ctx }, &start, &mut r, bufs);
         self.progress.inc(1);
         let mut bufs = BeamBuffers { photons: t.photons, line_power: t.line_power, deposits: t.deposits };

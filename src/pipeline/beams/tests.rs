@@ -50,7 +50,7 @@ fn the_drawn_starts_are_where_the_traced_beams_begin() {
     let fps = crate::pipeline::plan::footprints(&s);
     let atm = Atmosphere::us1976();
     let colour = crate::pipeline::plan::colour_table(&s, &atm);
-    let params = TraceParams::of(&s, &fps, &atm, &colour);
+    let params = TraceParams::of(&s, &fps, &atm, &colour, None);
     let t = trace_range(&params, 300, 0, 0..300, false, &crate::util::progress::NoProgress).unwrap();
     let starts: Vec<DVec3> = start_positions(&params, 300).concat();
     assert_eq!(starts.len(), t.beam_photons.len());

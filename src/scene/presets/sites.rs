@@ -21,6 +21,7 @@ pub fn tromso_site() -> SiteParams {
         utc: "2026-12-18T18:00:00Z".into(),
         temperature_c: -10.0,
         pressure_hpa: None,
+        field: Default::default(),
     }
 }
 
