@@ -88,7 +88,7 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
         .iter()
         .take_while(|s| s.v_mag <= limiting_magnitude)
         .map(|s| {
-            let dir = refraction::refract(frame.apparent_enu(s.place().icrs_direction_at(hour.utc)), &hour.air);
+            let dir = refraction::refract(frame.star_enu(&s.place()), &hour.air);
             // Colours by B-V to 0.01 mag, each computed once.
             let key = (s.b_minus_v * 100.0).round() as i64;
             let colour = *colours.entry(key).or_insert_with(|| {

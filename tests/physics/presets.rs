@@ -37,7 +37,7 @@ fn reduced(name: &str) -> Scene {
     s
 }
 
-/// Bakes `s` and renders it; with `aurora_only`, without terrain, stars and airglow,
+/// Bakes `s` and renders it; with `aurora_only`, without terrain, stars, airglow and Moon,
 /// so that every pixel's light is the aurora's.
 fn bake_and_render(s: &Scene, aurora_only: bool) -> (Image, Vec<String>) {
     let b = bake(s, &NoProgress).unwrap_or_else(|e| panic!("bake: {e}"));
@@ -51,7 +51,12 @@ fn render_of(s: &Scene, b: &Bake, aurora_only: bool) -> Image {
         s.background.stars = false;
         s.airglow.on = false;
     }
-    render(&RenderSettings::from_scene(&s), &Volume { density: Some(&b.density), emission: Some(&b.emission) }, &NoProgress)
+    let mut settings = RenderSettings::from_scene(&s);
+    if aurora_only {
+        // No Moon and no moonlit sky over a `[site]` (the bake keeps its field).
+        settings.site = None;
+    }
+    render(&settings, &Volume { density: Some(&b.density), emission: Some(&b.emission) }, &NoProgress)
         .unwrap_or_else(|e| panic!("render: {e}"))
 }
 

@@ -133,6 +133,14 @@ impl SkyFrame {
         self.earth_position_au
     }
 
+    /// A catalogue star's apparent direction in the site's frame
+    /// (unrefracted): its place at the instant seen from the Earth's
+    /// centre (`StarPlace::icrs_direction_at` with the Earth computed once
+    /// for the frame), then [`Self::apparent_enu`].
+    pub fn star_enu(&self, star: &super::star::StarPlace) -> DVec3 {
+        self.apparent_enu(star.direction_from(self.jd_tt, self.earth_position_au))
+    }
+
     /// The Earth's heliocentric velocity over c, ICRS axes.
     pub fn earth_velocity_c(&self) -> DVec3 {
         self.earth_velocity_c
