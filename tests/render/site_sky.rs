@@ -5,6 +5,9 @@
 //! topocentric places refracted at 10 C and 1010 hPa); the render places
 //! the same stars from the compiled-in table with its own astronomy.
 
+// Channel loops index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
 use crate::common::oracle::{persp, settings};
 use aurora::geometry::camera::CameraModel;
 use aurora::render::{render, Volume};
