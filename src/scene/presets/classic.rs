@@ -13,11 +13,14 @@ impl Default for Scene {
     }
 }
 
-/// Three arcs one behind the other, seen from the ground to the south:
-/// 300, 380 and 460 km long at 65, 100 and 140 km from the camera (whose
-/// view is about 107 degrees wide), so each runs out past the sides of the
-/// frame at its lower border, fading over `footprint.end_fade_km` at its
-/// ends (about the frame's edges) instead of ending in straight sides.
+/// Three arcs one behind the other, seen from the ground to the north
+/// with a photographer's wide lens (75 x 107 degrees, tilted 25 degrees up
+/// so the horizon sits in the lower quarter): 400, 620 and 880 km long at
+/// 70, 130 and 220 km from the camera, each along a circle about a point
+/// [`DEFAULT_ARC_CENTRE_KM`] north of the camera (a stretch of the auroral
+/// oval, whose arcs follow circles of magnetic latitude), so every arc runs
+/// off both sides of the frame and its lower border bows down toward the
+/// horizon at both ends, as photographs show arcs.
 /// An active display, IBC III (`crate::pipeline::columns`: the brightest
 /// 557.7 nm column along B is about 100 kR): each arc a body 8 km wide at
 /// half maximum (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20
@@ -27,13 +30,12 @@ impl Default for Scene {
 /// it (Maggs & Davis 1968; Dahlgren et al. 2012) of the same electrons
 /// accelerated through 4, 3 and 2 kV more (Evans 1974), 80, 50 and 35
 /// mW/m^2: their lower borders are sharper and lower. The beams follow the
-/// field (a 5 keV electron's gyroradius is metres), at an exposure of -3
-/// stops.
+/// field (a 5 keV electron's gyroradius is metres). Exposed as for a
+/// bright display: -5.5 stops keeps the arcs' cores out of the view
+/// transform's shoulder and leaves the sky dark, as photographers expose.
 pub fn default_scene() -> Scene {
-    let arc = |cx: f64, cy: f64, rot: f64, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
-        center: [cx, cy],
-        length: [300.0, 380.0, 460.0][seed as usize - 1],
-        rotation_deg: rot,
+    let arc = |distance_km: f64, length_km: f64, shift_km: f64, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
+        path: Some(arc_about(DEFAULT_CAMERA_XY, DEFAULT_ARC_CENTRE_KM, distance_km, length_km, shift_km)),
         energy_flux: flux,
         char_energy_kev: e0,
         filament_energy_flux: filament.0,
@@ -44,17 +46,22 @@ pub fn default_scene() -> Scene {
     Scene {
         seed: 2014,
         curtains: vec![
-            arc(-20.0, -25.0, 4.0, 50.0, 4.0, (80.0, 4.0), 1),
-            arc(25.0, 10.0, -6.0, 30.0, 2.5, (50.0, 3.0), 2),
-            arc(-5.0, 50.0, 2.0, 20.0, 1.5, (35.0, 2.0), 3),
+            arc(70.0, 400.0, -20.0, 50.0, 4.0, (80.0, 4.0), 1),
+            arc(130.0, 620.0, 25.0, 30.0, 2.5, (50.0, 3.0), 2),
+            arc(220.0, 880.0, -5.0, 20.0, 1.5, (35.0, 2.0), 3),
         ],
         footprint: FootprintParams::default(),
         beams: BeamParams::default(),
         colour: ColourParams::default(),
         photons: PhotonParams::default(),
         grid: GridParams::default(),
-        camera: Camera::default(),
-        render: RenderParams { exposure: -3.0, ..RenderParams::default() },
+        camera: Camera {
+            position: [DEFAULT_CAMERA_XY[0], DEFAULT_CAMERA_XY[1], 1.0],
+            // 25 degrees up: 110 km ahead, 51.3 km higher.
+            look_at: [DEFAULT_CAMERA_XY[0], DEFAULT_CAMERA_XY[1] + 110.0, 52.3],
+            ..Camera::default()
+        },
+        render: RenderParams { exposure: -5.5, ..RenderParams::default() },
         volume: VolumeParams::default(),
         background: Background::default(),
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
@@ -68,6 +75,31 @@ pub fn default_scene() -> Scene {
     }
 }
 
+/// Where the default's camera stands on the ground, km.
+pub const DEFAULT_CAMERA_XY: [f64; 2] = [0.0, -90.0];
+/// The default's arcs follow circles about a point this far north of its
+/// camera, km: about the distance from a station under the oval's night
+/// side to the magnetic pole's (the `oval` preset's arc is 2200 km from
+/// its pole).
+pub const DEFAULT_ARC_CENTRE_KM: f64 = 1800.0;
+
+/// A curtain's path, 17 points along the circle about the point
+/// `centre_km` north of `camera`, passing `distance_km` north of it, `length_km`
+/// long, its middle moved `shift_km` east along the circle; rounded to
+/// metres so the scene file stays readable.
+pub fn arc_about(camera: [f64; 2], centre_km: f64, distance_km: f64, length_km: f64, shift_km: f64) -> Vec<[f64; 2]> {
+    let rho = centre_km - distance_km;
+    let (half, mid) = (length_km / 2.0 / rho, shift_km / rho);
+    let n = 17;
+    (0..n)
+        .map(|k| {
+            let phi = mid - half + 2.0 * half * k as f64 / (n - 1) as f64;
+            let (x, y) = (camera[0] + rho * phi.sin(), camera[1] + centre_km - rho * phi.cos());
+            [(x * 1e3).round() / 1e3, (y * 1e3).round() / 1e3]
+        })
+        .collect()
+}
+
 /// The 2014 report's final scene: 500,000 beams, alpha_D = 25 deg,
 /// delta alpha = 12 deg, beam length 70, dt = 0.004 (at most 250
 /// deflections), photon radius 0.2, air density 0.9 exp(-0.02 h), three
@@ -78,13 +110,18 @@ pub fn seed2014() -> Scene {
     // straight ends where the default's stood before they spanned the sky.
     // Its fluxes, 6, 4 and 3 erg cm^-2 s^-1, under its dense air at an
     // exposure of +3 stops.
-    for ((c, y), flux) in s.curtains.iter_mut().zip([0.0, 45.0, 95.0]).zip([6.0, 4.0, 3.0]) {
+    // Straight sheets where the default stood before its arcs followed the
+    // oval, seen from its camera of then.
+    for ((c, [x, y, rot]), flux) in s.curtains.iter_mut().zip([[-20.0, 0.0, 4.0], [25.0, 45.0, -6.0], [-5.0, 95.0, 2.0]]).zip([6.0, 4.0, 3.0]) {
+        c.path = None;
         c.length = 160.0;
-        c.center[1] = y;
+        c.center = [x, y];
+        c.rotation_deg = rot;
         c.energy_flux = flux;
         c.filament_energy_flux = 0.0;
         c.filament_potential_kv = 0.0;
     }
+    s.camera = Camera::default();
     s.footprint.model = FootprintModel::Fluid2014;
     s.footprint.end_fade_km = 0.0;
     s.beams.count = 500_000;
