@@ -62,14 +62,17 @@ pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 k
 /// A quiet homogeneous arc. Quiet arcs are the aurora of the evening before
 /// a substorm: long (here a 1000 km path with a 1600 km radius of
 /// curvature, east-west), 8 km wide at half maximum (Knudsen et al.
-/// 2001: 5-20 km), structureless (folds and the start-height noise all
+/// 2001: 5-20 km), structureless and unrayed (folds, rays and the start-height noise all
 /// but off: `sheet_rollup_km` 6, `top_noise_km` 1) and IBC II (7 mW/m^2
 /// of E0 = 3 keV electrons: its brightest 557.7 nm column along B about
 /// 10 kR, about 60 kW per km of arc; the lower border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
 /// drift. Seen from 300 km south, its lower border 20 degrees up.
 pub fn quiet_arc() -> Scene {
     let arc = Curtain {
-        path: Some(vec![[-500.0, 0.0], [-250.0, 60.0], [0.0, 80.0], [250.0, 60.0], [500.0, 0.0]]),
+        // Along a circle of 1600 km radius about a point to the north (a
+        // circle of magnetic latitude): the arc's middle is nearest the
+        // camera and its ends bow down toward the horizon.
+        path: Some(vec![[-500.0, 80.0], [-250.0, 20.0], [0.0, 0.0], [250.0, 20.0], [500.0, 80.0]]),
         width: 24.0,
         energy_flux: 7.0,
         char_energy_kev: 3.0,
@@ -82,7 +85,13 @@ pub fn quiet_arc() -> Scene {
     // A sheet barely rolled up, rays hardly brighter than the rest.
     s.footprint.sheet_rollup_km = 6.0;
     s.footprint.sheet_amplitude = 0.02;
-    s.footprint.ray_contrast = 2.0;
+    // Unrayed: rays 0.3 km apart, 0.6 km wide and within 1.2x of each
+    // other merge into a smooth band (the footprint varies along the arc
+    // by a coefficient of variation of about 0.1, against 0.4 with the
+    // default's rays).
+    s.footprint.ray_spacing_km = 0.3;
+    s.footprint.ray_width_km = 0.6;
+    s.footprint.ray_contrast = 1.2;
     s.footprint.band_fraction = 0.12;
     s.footprint.velocity_amplitude = 0.3;
     s.footprint.velocity_waves = 2.0;
