@@ -9,10 +9,10 @@
 //! |---|---|---|---|---|---|
 //! | `quiet_arc` | 3 | 7 | II | one 8 km band, 1000 km long, hardly folded | the ground, 300 km south |
 //! | `rayed_band` | 5 | 40 | III | folded band, start heights broken into rays | the ground, 150 km south |
-//! | `corona` | 4-6 | 40-75 | III | seven rayed sheets filling the sky | the ground beneath, looking up the field |
+//! | `corona` | 4-5 | 50-60 | III | a folded hook and a crossing curtain, rayed, overhead | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 1 | I | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
 //! | `type_a_red` | 0.15 | 10 | II | a band high up, soft spectrum | the ground, 240 km south |
-//! | `type_b_pink` | 25 | 100 | III | a folded band, hard spectrum | the ground, 220 km south |
+//! | `type_b_pink` | 25 | 100 | III | a folded band 900 km long, hard spectrum | the ground, 210 km south |
 //! | `surge` | 6 | 65 | III | an arc curling into a spiral at its western end | 700 km up, to the south |
 //!
 //! The IBC column is the class each preset's brightest 557.7 nm column
@@ -37,7 +37,7 @@
 //! per curtain, voxels of 0.4-1 km); the numbers each form takes are in its
 //! function's documentation.
 
-use super::classic::default_scene;
+use super::classic::{arc_about, default_scene, DEFAULT_ARC_CENTRE_KM};
 use crate::scene::{background::*, camera::*, curtain::*, footprint::*, grid::*, root::Scene, terrain::*};
 
 /// A perspective camera at `position` looking at `look_at`, z up.
@@ -148,29 +148,30 @@ pub const CORONA: &str = "a corona: rayed sheets filling the sky, seen from bene
 /// A corona: rays are field lines, and parallel lines seen in perspective
 /// meet at their vanishing point, the magnetic zenith (the direction -B,
 /// here 12 degrees south of the zenith; `tests/physics/corona.rs` finds it in the
-/// image). Seven rayed sheets (as [`rayed_band`], 40-75 mW/m^2 of 4-6
-/// keV: IBC III where they overlap along the field),
-/// 420 km long and 60 km apart, lie across the sky from 180 km south to
-/// 180 km north of the observer: their lower borders (110 km) reach down
-/// to about 30 degrees elevation all round, the ends fading outside. The
-/// observer looks up the field line through a 180-degree fisheye (north at
-/// the top of the image): the rays fan out from one point over the whole
-/// dome, as at the height of a substorm's breakup.
+/// image). Two rayed curtains over the observer, as at the height of a
+/// substorm's breakup: one folded into a hook 300 km across that curls
+/// round the magnetic zenith from the south-west through the east to the
+/// north, the other crossing the sky from north-west to south-east just
+/// east of the observer (60 and 50 mW/m^2 of E0 5 and 4 keV, with filaments
+/// accelerated through 4 and 3 kV more: IBC III). Seen from beneath up
+/// the field line through a 180-degree fisheye (north at the top of the
+/// image) their rays fan out from one point, their lower borders (110 km)
+/// coming down to 20-40 degrees elevation on most sides.
 pub fn corona() -> Scene {
-    let band = |k: u64| {
-        let y = -180.0 + 60.0 * k as f64;
-        let wobble = if k.is_multiple_of(2) { 8.0 } else { -8.0 };
-        Curtain {
-            path: Some(vec![[-210.0, y - wobble], [-70.0, y + wobble], [70.0, y - 0.5 * wobble], [210.0, y + wobble]]),
-            width: 30.0,
-            energy_flux: [40.0, 50.0, 75.0, 60.0, 75.0, 50.0, 40.0][k as usize],
-            char_energy_kev: [4.0, 5.0, 6.0, 5.0, 6.0, 5.0, 4.0][k as usize],
-            bend_km: 5.0,
-            seed: k + 1,
-            ..Curtain::default()
-        }
+    let curtain = |path: Vec<[f64; 2]>, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
+        path: Some(path),
+        width: 30.0,
+        energy_flux: flux,
+        char_energy_kev: e0,
+        filament_energy_flux: filament.0,
+        filament_potential_kv: filament.1,
+        bend_km: 5.0,
+        seed,
+        ..Curtain::default()
     };
-    let mut s = base(3, (0..7).map(band).collect());
+    let hook = vec![[-330.0, -300.0], [-220.0, -160.0], [-60.0, -80.0], [110.0, -20.0], [150.0, 90.0], [60.0, 170.0], [-80.0, 150.0], [-140.0, 60.0]];
+    let crossing = vec![[-420.0, 220.0], [-180.0, 110.0], [0.0, 20.0], [150.0, -100.0], [330.0, -300.0]];
+    let mut s = base(3, vec![curtain(hook, 60.0, 5.0, (80.0, 4.0), 3), curtain(crossing, 50.0, 4.0, (60.0, 3.0), 5)]);
     s.footprint.resolution = [512, 96];
     s.footprint.velocity_amplitude = 3.0;
     s.footprint.velocity_waves = 8.0;
@@ -178,7 +179,7 @@ pub fn corona() -> Scene {
     s.beams.count = 20_000;
     s.beams.top_noise_km = 40.0;
     s.beams.top_noise_freq = 0.6;
-    // Spread over 420 x 360 km of sky: 0.8 km voxels, about a pixel of the
+    // Spread over 650 x 500 km of sky: 0.8 km voxels, about a pixel of the
     // 512-pixel fisheye at 30 degrees elevation (1.3 km there, 0.6 km overhead).
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.8);
@@ -194,7 +195,7 @@ pub fn corona() -> Scene {
     };
     s.render.width = 512;
     s.render.height = 512;
-    s.render.exposure = -2.0;
+    s.render.exposure = -3.5;
     s.terrain.kind = TerrainKind::None;
     s.animation.ray_speed_kms = 15.0;
     s
@@ -292,11 +293,14 @@ pub const TYPE_B_PINK: &str = "a hard type-B aurora: E0 25 keV electrons reach 8
 /// a pink or magenta lower border under the green, in bright active
 /// displays. Here: 100 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV;
 /// IBC III), a
-/// folded band seen nearly edge-on from 220 km south, so the lower border
-/// shows as a line under the green.
+/// folded band 900 km long seen nearly edge-on from 210 km south, so the
+/// lower border shows as a continuous line under the green across the frame.
 pub fn type_b_pink() -> Scene {
     let band = Curtain {
-        path: Some(vec![[-150.0, 40.0], [-50.0, 60.0], [50.0, 50.0], [150.0, 70.0]]),
+        // 900 km along a circle of magnetic latitude (as the default's
+        // arcs), 210 km north of the camera: it runs off both sides of the
+        // frame, a continuous ribbon bowing toward the horizon.
+        path: Some(arc_about([0.0, -160.0], DEFAULT_ARC_CENTRE_KM, 210.0, 900.0, 0.0)),
         width: 40.0,
         energy_flux: 100.0,
         char_energy_kev: 25.0,
@@ -310,10 +314,10 @@ pub fn type_b_pink() -> Scene {
     s.beams.count = 12_000;
     s.beams.top_noise_km = 12.0;
     s.beams.top_noise_freq = 0.5;
-    s.photons.radius_km = 0.4;
-    s.grid.voxel_size = VoxelSize::Km(0.4);
+    s.photons.radius_km = 0.5;
+    s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -160.0, 0.5], [0.0, 60.0, 95.0], 60.0);
-    s.render.exposure = -2.2;
+    s.render.exposure = -4.0;
     s
 }
 
