@@ -5,8 +5,8 @@
 //! the charge density its vorticity, so the arc is a vortex sheet and rolls
 //! up by the Kelvin-Helmholtz instability into curls (2-10 km), folds
 //! (20-50 km) and surges (100+ km) (Hallinan & Davis 1970, Planet. Space
-//! Sci. 18, 1735). Arcs are 0.1-1 km thick and more (Partamies et al.
-//! 2010, Ann. Geophys. 28, 711).
+//! Sci. 18, 1735). Arcs are 5-20 km wide (Knudsen et al. 2001), with
+//! filaments 0.05-0.2 km wide inside them (Borovsky 1993).
 //!
 //! Model (Krasny 1986, J. Comput. Phys. 65, 292, the desingularised
 //! periodic vortex sheet): N markers at spacing h along a sheet of period P
