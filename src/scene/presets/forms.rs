@@ -12,7 +12,7 @@
 //! | `corona` | 4-5 | 50-60 | III | a folded hook and a crossing curtain, rayed, overhead | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 1 | I | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
 //! | `type_a_red` | 0.15 | 10 | II | a band high up, soft spectrum | the ground, 240 km south |
-//! | `type_b_pink` | 25 | 100 | III | a folded band 900 km long, hard spectrum | the ground, 210 km south |
+//! | `type_b_pink` | 25 | 150 | III | a folded band 900 km long, hard spectrum | the ground, 210 km south |
 //! | `surge` | 6 | 65 | III | an arc curling into a spiral at its western end | 700 km up, to the south |
 //!
 //! The IBC column is the class each preset's brightest 557.7 nm column
@@ -291,7 +291,7 @@ pub const TYPE_B_PINK: &str = "a hard type-B aurora: E0 25 keV electrons reach 8
 /// O(1S) is quenched by O2 before it emits 557.7 nm and what is left is
 /// the N2 first positive bands (red) and the N2+ first negative (violet):
 /// a pink or magenta lower border under the green, in bright active
-/// displays. Here: 100 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV;
+/// displays. Here: 150 mW/m^2 of E0 = 25 keV (a mean energy of 50 keV;
 /// IBC III), a
 /// folded band 900 km long seen nearly edge-on from 210 km south, so the
 /// lower border shows as a continuous line under the green across the frame.
@@ -302,7 +302,7 @@ pub fn type_b_pink() -> Scene {
         // frame, a continuous ribbon bowing toward the horizon.
         path: Some(arc_about([0.0, -160.0], DEFAULT_ARC_CENTRE_KM, 210.0, 900.0, 0.0)),
         width: 40.0,
-        energy_flux: 100.0,
+        energy_flux: 150.0,
         char_energy_kev: 25.0,
         soft_fraction: 0.03,
         bend_km: 6.0,
