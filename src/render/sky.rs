@@ -216,7 +216,12 @@ mod tests {
     fn a_star_keeps_its_flux_at_any_resolution() {
         let sky = Sky {
             image: None,
-            stars: vec![Star { dir: DVec3::new(0.3, 0.4, 1.0).normalize(), magnitude: 0.0, irradiance: [1.0, 2.0, 3.0], temperature_k: 5800.0 }],
+            stars: vec![Star {
+                dir: DVec3::new(0.3, 0.4, 1.0).normalize(),
+                magnitude: 0.0,
+                irradiance: [1.0, 2.0, 3.0],
+                temperature_k: 5800.0,
+            }],
             moon: None,
         };
         for (p, w, h) in [
@@ -265,7 +270,11 @@ mod tests {
     /// before) is 4 times narrower in angle at the finest and fails.
     #[test]
     fn a_star_is_as_wide_in_angle_at_any_resolution_above_the_pixel_scale() {
-        let star = |dir: DVec3| Sky { image: None, stars: vec![Star { dir, magnitude: 0.0, irradiance: [1.0; 3], temperature_k: 5800.0 }], moon: None };
+        let star = |dir: DVec3| Sky {
+            image: None,
+            stars: vec![Star { dir, magnitude: 0.0, irradiance: [1.0; 3], temperature_k: 5800.0 }],
+            moon: None,
+        };
         let mut widths = Vec::new();
         for n in [301usize, 601, 1201] {
             let m = CameraModel::new(&camera(Projection::Perspective, [0.0, 0.0, 1.0], 5.0), n, n).unwrap();
@@ -304,7 +313,10 @@ mod tests {
             let (fx, fy) = m.project(m.position + dir).unwrap();
             let omega = |x: usize, y: usize| m.pixel_solid_angle(m.ray(x as f64 + 0.5, y as f64 + 0.5).dir).unwrap();
             let (cx, cy) = (fx.floor() as usize, fy.floor() as usize);
-            let near: f64 = (cy - 1..=cy + 1).flat_map(|y| (cx - 1..=cx + 1).map(move |x| (x, y))).map(|(x, y)| img[y * w + x][1] as f64 * omega(x, y)).sum();
+            let near: f64 = (cy - 1..=cy + 1)
+                .flat_map(|y| (cx - 1..=cx + 1).map(move |x| (x, y)))
+                .map(|(x, y)| img[y * w + x][1] as f64 * omega(x, y))
+                .sum();
             assert!(near > 0.9, "({fx}, {fy}): {near} of the flux in 3 x 3 pixels");
         }
     }

@@ -103,14 +103,12 @@ mod tests {
     /// A Sun-like star (5800 K) through the camera low in the sky: each
     /// channel's loss `-ln T_c` is the cumulant series of the depths across
     /// the channel (weights `S r_c`, signed: the Rec.709 matrix leaves the
-    /// camera's responses small negative lobes), `<tau> X - Var(tau) X^2 / 2
-    /// + ...`: it lies between the first and the second partial sums
+    /// camera's responses small negative lobes), `<tau> X - Var(tau) X^2 / 2`
+    /// and so on: it lies between the first and the second partial sums
     /// (within 0.005), to 5 degrees (X = 10); so the horizon's stars are
     /// dimmer and redder: at 2 degrees (X = 19) blue loses over twice the
     /// magnitudes red does (6.1 against 2.6). Grey extinction (every
-    /// wavelength at 550 nm's depth) keeps the colour and fails; so does
-    /// the aurora's line mix, whose blue is 427.8 nm's, deeper than a
-    /// star's blue.
+    /// wavelength at 550 nm's depth) keeps the colour and fails.
     #[test]
     fn stars_low_in_the_sky_are_dimmer_and_redder_as_the_air_model_says() {
         let a = StarAir::new(&air(), 0.0, Observer::Camera);
