@@ -3,7 +3,9 @@
 Each one is a measured fact (docs/guide.md, "How Cycles reads the VDB") or
 from this add-on's tests:
 - film: Standard view transform, no look, exposure 0, gamma 1 (the EXR is
-  linear anyway); film_transparent so alpha = 1 - T (the background then goes
+  linear anyway), then the scene file's `render.view_transform` with its
+  look when a scene file sets the scene up (`set_view`: what the viewport
+  and a PNG show); film_transparent so alpha = 1 - T (the background then goes
   to the Environment pass, which is switched on: add it back to RGB);
 - pixel filter: BOX averages over the pixel square (spp > 1); GAUSSIAN of
   width 0.01 point-samples pixel centres (spp = 1), as `aurora render` does;
@@ -125,6 +127,28 @@ def configure_cycles(scene: bpy.types.Scene, width: int, height: int, s: CyclesS
         # With a transparent film the background radiance (times T) lands
         # here instead of in Combined; cycles_render adds it back.
         layer.use_pass_environment = True
+
+
+def blender_view(view_transform: str) -> tuple[str, str]:
+    """Blender's view transform and look for a `render.view_transform` word:
+    "standard" is Standard, "agx" AgX with no look, "agx_<look>" AgX with
+    Blender 5.0's look "AgX - <Look>" (agx_punchy: "AgX - Punchy",
+    agx_very_high_contrast: "AgX - Very High Contrast")."""
+    if view_transform == "standard":
+        return "Standard", "None"
+    if view_transform == "agx":
+        return "AgX", "None"
+    if view_transform.startswith("agx_"):
+        return "AgX", "AgX - " + view_transform[4:].replace("_", " ").title()
+    raise ValueError(f"render.view_transform = {view_transform!r} is not a view aurora knows")
+
+
+def set_view(scene: bpy.types.Scene, view_transform: str) -> None:
+    """The scene's colour management shows what `aurora render`'s PNG shows:
+    the view transform and look of `render.view_transform` (the EXR stays
+    linear whatever they are)."""
+    v = scene.view_settings
+    v.view_transform, v.look = blender_view(view_transform)
 
 
 def set_scene_units(scene: bpy.types.Scene) -> None:

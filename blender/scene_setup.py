@@ -26,7 +26,7 @@ import bpy
 from .air import line_depths, weights
 from .camera import build_camera
 from .emission_lights import build_emission_lights, emission_clusters
-from .render_settings import CyclesSettings, configure_cycles, set_scene_units
+from .render_settings import CyclesSettings, configure_cycles, set_scene_units, set_view
 from .scene_toml import SCHEMA, SceneSpec, load_scene
 from .terrain import heightfield_terrain, plane_terrain
 from .volume_import import import_aurora
@@ -134,6 +134,7 @@ def setup_scene_from_toml(
     settings = replace(settings or CyclesSettings(), point_sample=spec.render.spp == 1)
     set_scene_units(scene)
     configure_cycles(scene, spec.render.width, spec.render.height, settings)
+    set_view(scene, spec.render.view_transform)
     cam = build_camera(scene, spec.camera) if camera else None
     wld = None
     if world:

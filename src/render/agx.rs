@@ -53,7 +53,7 @@ use crate::util::colour::{apply, inverse, mul, rgb_to_xyz, srgb_oetf, M3, REC202
 use std::sync::OnceLock;
 
 /// FilmLight E-Gamut primaries, D65 white.
-const E_GAMUT: [[f64; 2]; 4] = [[0.8, 0.3177], [0.18, 0.9], [0.065, -0.0805], [0.3127, 0.3290]];
+pub const E_GAMUT: [[f64; 2]; 4] = [[0.8, 0.3177], [0.18, 0.9], [0.065, -0.0805], [0.3127, 0.3290]];
 
 /// Inset matrix, Rec.2020 to Rec.2020 (SB2383 with rotate [3, -1, -2],
 /// inset [0.4, 0.22, 0.13]; AgX_LUT_Gen's `inset_matrix`).
@@ -92,8 +92,8 @@ const HUE_MIX: f64 = 0.4;
 /// The LUT: nodes per side, and its log2 input range in E-Gamut (-10 to
 /// +15 stops around middle grey).
 const LUT_SIZE: usize = 57;
-const LUT_LOG2_MIN: f64 = -12.47393;
-const LUT_LOG2_MAX: f64 = 12.5260688117;
+pub const LUT_LOG2_MIN: f64 = -12.47393;
+pub const LUT_LOG2_MAX: f64 = 12.5260688117;
 
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -212,6 +212,36 @@ fn formed(c2020: [f64; 3], to709: &M3, to2020_from_709: &M3, outset: &M3) -> [f6
     guard_rail_709(c, to2020_from_709).map(|v| if v > 0.0 { v.powf(1.0 / GAMMA).min(1.0) } else { 0.0 })
 }
 
+/// Tetrahedral interpolation (OpenColorIO's `interpolation: tetrahedral`)
+/// of the `size`^3 LUT `lut` (red slowest, blue fastest) at `p`, each
+/// component clamped to [0, 1].
+pub fn tetrahedral(lut: &[[f32; 3]], size: usize, p: [f64; 3]) -> [f64; 3] {
+    let last = (size - 1) as f64;
+    let q = p.map(|v| v.clamp(0.0, 1.0) * last);
+    let i = q.map(|v| (v.floor() as usize).min(size - 2));
+    let [fr, fg, fb] = [q[0] - i[0] as f64, q[1] - i[1] as f64, q[2] - i[2] as f64];
+    let c = |a: usize, b: usize, d: usize| lut[((i[0] + a) * size + i[1] + b) * size + i[2] + d].map(f64::from);
+    // The tetrahedron containing (fr, fg, fb): weights along the path
+    // from corner 000 to 111 through the two corners it passes.
+    let (w, k1, k2) = if fr > fg {
+        if fg > fb {
+            ([1.0 - fr, fr - fg, fg - fb, fb], c(1, 0, 0), c(1, 1, 0))
+        } else if fr > fb {
+            ([1.0 - fr, fr - fb, fb - fg, fg], c(1, 0, 0), c(1, 0, 1))
+        } else {
+            ([1.0 - fb, fb - fr, fr - fg, fg], c(0, 0, 1), c(1, 0, 1))
+        }
+    } else if fb > fg {
+        ([1.0 - fb, fb - fg, fg - fr, fr], c(0, 0, 1), c(0, 1, 1))
+    } else if fb > fr {
+        ([1.0 - fg, fg - fb, fb - fr, fr], c(0, 1, 0), c(0, 1, 1))
+    } else {
+        ([1.0 - fg, fg - fr, fr - fb, fb], c(0, 1, 0), c(1, 1, 0))
+    };
+    let (c0, c3) = (c(0, 0, 0), c(1, 1, 1));
+    std::array::from_fn(|j| w[0] * c0[j] + w[1] * k1[j] + w[2] * k2[j] + w[3] * c3[j])
+}
+
 /// The AgX view transform for an sRGB display.
 pub struct Agx {
     /// Rec.709 to FilmLight E-Gamut.
@@ -249,46 +279,13 @@ impl Agx {
         Agx { to_e_gamut: mul(&inverse(&xyz_e), &xyz709), lut }
     }
 
-    fn node(&self, r: usize, g: usize, b: usize) -> [f64; 3] {
-        self.lut[(r * LUT_SIZE + g) * LUT_SIZE + b].map(f64::from)
-    }
-
-    /// Tetrahedral interpolation of the LUT at `p` in [0, 1]^3 (OpenColorIO's
-    /// `interpolation: tetrahedral`).
-    fn lookup(&self, p: [f64; 3]) -> [f64; 3] {
-        let last = (LUT_SIZE - 1) as f64;
-        let q = p.map(|v| v.clamp(0.0, 1.0) * last);
-        let i = q.map(|v| (v.floor() as usize).min(LUT_SIZE - 2));
-        let [fr, fg, fb] = [q[0] - i[0] as f64, q[1] - i[1] as f64, q[2] - i[2] as f64];
-        let c = |a: usize, b: usize, d: usize| self.node(i[0] + a, i[1] + b, i[2] + d);
-        // The tetrahedron containing (fr, fg, fb): weights along the path
-        // from corner 000 to 111 through the two corners it passes.
-        let (w, k1, k2) = if fr > fg {
-            if fg > fb {
-                ([1.0 - fr, fr - fg, fg - fb, fb], c(1, 0, 0), c(1, 1, 0))
-            } else if fr > fb {
-                ([1.0 - fr, fr - fb, fb - fg, fg], c(1, 0, 0), c(1, 0, 1))
-            } else {
-                ([1.0 - fb, fb - fr, fr - fg, fg], c(0, 0, 1), c(1, 0, 1))
-            }
-        } else if fb > fg {
-            ([1.0 - fb, fb - fg, fg - fr, fr], c(0, 0, 1), c(0, 1, 1))
-        } else if fb > fr {
-            ([1.0 - fg, fg - fb, fb - fr, fr], c(0, 1, 0), c(0, 1, 1))
-        } else {
-            ([1.0 - fg, fg - fr, fr - fb, fb], c(0, 1, 0), c(1, 1, 0))
-        };
-        let (c0, c3) = (c(0, 0, 0), c(1, 1, 1));
-        std::array::from_fn(|j| w[0] * c0[j] + w[1] * k1[j] + w[2] * k2[j] + w[3] * c3[j])
-    }
-
     /// Scene-linear Rec.709 to sRGB display code values in [0, 1].
     pub fn display(&self, linear: [f64; 3]) -> [f64; 3] {
         let e = apply(&self.to_e_gamut, linear);
         let span = LUT_LOG2_MAX - LUT_LOG2_MIN;
         // Non-positive components sit at the LUT's floor (log2 of 0 is -inf).
         let p = e.map(|v| if v > 0.0 { (v.log2() - LUT_LOG2_MIN) / span } else { 0.0 });
-        self.lookup(p).map(|v| srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
+        tetrahedral(&self.lut, LUT_SIZE, p).map(|v| srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
     }
 }
 

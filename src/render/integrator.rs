@@ -15,6 +15,8 @@ use super::sampler::{pixel_position, pixel_rng};
 use super::settings::Integration;
 use super::settings::{RenderError, RenderSettings, Volume};
 use super::shadow::estimate_irradiance;
+use super::stars::planck;
+use crate::physics::night_sky::star_extinction::StarAir;
 use crate::util::progress::Progress;
 use rand::Rng;
 use rand_pcg::Pcg32;
@@ -304,24 +306,39 @@ impl Prepared {
     }
 
     /// The star field's points (`sky.rs`), seen through the volume's
-    /// transmittance and the air's, hidden by the terrain and by the solid
-    /// Earth (a ray that goes below the ground: below the horizontal on a
-    /// flat ground, below the horizon's dip on a round one), as the airglow is.
+    /// transmittance and the air's for each star's own spectrum
+    /// (`crate::physics::night_sky::star_extinction`), hidden by the terrain
+    /// and by the solid Earth (a ray that goes below the ground: below the
+    /// horizontal on a flat ground, below the horizon's dip on a round one),
+    /// as the airglow is.
     fn add_stars(&self, pixels: &mut [[f32; 4]]) {
-        self.sky.add_stars(pixels, &self.camera, |dir| self.star_transmittance(dir));
+        let air = self.air.as_ref().map(|a| (StarAir::new(&a.air, a.observer_km, self.settings.observer), a));
+        self.sky.add_stars(pixels, &self.camera, |star| {
+            let t = self.volume_transmittance_to_sky(star.dir)?;
+            Some(match &air {
+                Some((sa, ext)) => sa.transmittance(|l| planck(l, star.temperature_k), ext.elevation_deg(star.dir)).map(|ta| t * ta),
+                None => [t; 3],
+            })
+        });
     }
 
-    /// The transmittance toward a point of the sky at infinity from the
-    /// camera: the volume's times the air's per channel; None where the
-    /// terrain or the solid Earth hides it.
-    fn star_transmittance(&self, dir: glam::DVec3) -> Option<[f64; 3]> {
+    /// The volume's transmittance toward a point of the sky at infinity
+    /// from the camera; None where the terrain or the solid Earth hides it.
+    fn volume_transmittance_to_sky(&self, dir: glam::DVec3) -> Option<f64> {
         let s = &self.settings;
         let o = self.camera.position;
         let earth = crate::geometry::earth::Earth::new(s.earth_radius_km);
         if earth.lowest_altitude(o, dir) < 0.0 || self.terrain.intersect(o, dir, 0.0, f64::INFINITY).is_some() {
             return None;
         }
-        let t = optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance();
+        Some(optical_depth_along_ray(&self.medium, o, dir, f64::INFINITY, s.integration, 0.5).transmittance())
+    }
+
+    /// The transmittance toward a point of the sky at infinity from the
+    /// camera: the volume's times the air's per channel (the aurora's line
+    /// mix, for the Moon); None where the terrain or the solid Earth hides it.
+    fn star_transmittance(&self, dir: glam::DVec3) -> Option<[f64; 3]> {
+        let t = self.volume_transmittance_to_sky(dir)?;
         Some(match &self.air {
             Some(a) => a.towards(dir).map(|ta| t * ta),
             None => [t; 3],

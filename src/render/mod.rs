@@ -7,14 +7,15 @@
 //! sampled as Cycles samples the same VDB: voxel (i,j,k) centred at index point
 //! (i,j,k), trilinear, inactive voxels 0 (docs/guide.md, "How Cycles reads the VDB").
 //! `L_behind` is the background radiance plus the sky (`sky.rs`: image and
-//! stars) and the airglow (`airglow.rs`, dimmed by the air), or, where the ray hits the terrain,
+//! stars, drawn as a reference lens draws them by `star_psf.rs`) and the airglow (`airglow.rs`, dimmed by the air), or, where the ray hits the terrain,
 //! `albedo / pi * E` with `E` the irradiance the volume's emission delivers
 //! through the volume's transmittance, estimated with emissive shadow rays
 //! (`shadow.rs`; the 2014 report's `L = T * Li + Lvi`). **Background
 //! radiance does not light the terrain**: it is only what camera rays see
 //! behind everything. **The air** (`[sky] extinction`,
-//! `crate::physics::air_extinction`) dims `L` and the stars per channel by
-//! its transmittance towards the ray's direction, and the terrain's light by
+//! `crate::physics::air_extinction`) dims `L` per channel by its
+//! transmittance towards the ray's direction, each star by that of its own
+//! spectrum (`crate::physics::night_sky::star_extinction`), and the terrain's light by
 //! that of its path to the camera; the background radiance and the sky image
 //! are the sky as seen, not dimmed.
 //!
@@ -43,7 +44,8 @@
 //! without extinction `emission_only.rs` (the plain line integral) ->
 //! `march.rs` (one walker for primary and shadow rays) -> `shadow.rs`
 //! (terrain irradiance) -> `image.rs` ([`Image`]) -> `image_file.rs` (EXR,
-//! PNG) through `view_transform.rs` (standard or `agx.rs`). `grids.rs`
+//! PNG) through `view_transform.rs` (standard, `agx.rs`, or AgX after a
+//! look of `agx_look.rs`). `grids.rs`
 //! picks a file's grids, `recolour.rs` rebuilds the emission from the line
 //! grids for another observer; `sky_map.rs` renders the sky alone as a map for
 //! Blender's world.
@@ -53,6 +55,7 @@
 
 pub mod adaptive;
 pub mod agx;
+pub mod agx_look;
 pub mod airglow;
 pub mod dda;
 pub mod emission_only;
@@ -72,6 +75,7 @@ pub mod shadow;
 pub mod site_sky;
 pub mod sky;
 pub mod sky_map;
+pub mod star_psf;
 pub mod stars;
 pub mod terrain;
 pub mod view_transform;

@@ -91,17 +91,17 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
             let dir = refraction::refract(frame.star_enu(&s.place()), &hour.air);
             // Colours by B-V to 0.01 mag, each computed once.
             let key = (s.b_minus_v * 100.0).round() as i64;
-            let colour = *colours.entry(key).or_insert_with(|| {
+            let (colour, t) = *colours.entry(key).or_insert_with(|| {
                 let t = star_colour::temperature_k(key as f64 / 100.0);
-                spectrum_rgb(observer, |l| super::stars::planck(l, t))
+                (spectrum_rgb(observer, |l| super::stars::planck(l, t)), t)
             });
             let e = brightness * MAG0_KR_SR * 10f64.powf(-0.4 * s.v_mag);
-            Star { dir, magnitude: s.v_mag, irradiance: colour.map(|c| c * e) }
+            Star { dir, magnitude: s.v_mag, irradiance: colour.map(|c| c * e), temperature_k: t }
         })
         .collect();
     if limiting_magnitude > catalogue::CATALOGUE_LIMIT_V {
         stars.extend(
-            super::stars::star_field(seed, limiting_magnitude, brightness)
+            super::stars::star_field(seed, limiting_magnitude, brightness, observer)
                 .into_iter()
                 .filter(|s| s.magnitude > catalogue::CATALOGUE_LIMIT_V),
         );

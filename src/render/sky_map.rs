@@ -10,8 +10,10 @@
 //! read: one sample at each pixel centre, no volume, no terrain (the other
 //! renderer has its own), and without `background.radiance` and
 //! `background.image`, which the other renderer adds itself. Stars keep
-//! their flux over the map's pixels, a Gaussian of one map pixel; an
-//! orthographic scene camera's map has none, as its render has none.
+//! their flux over the map's pixels, drawn as the render draws them (the
+//! reference lens's PSF, the same size in angle, integrated over the map's
+//! pixels: `star_psf.rs`); an orthographic scene camera's map has none, as
+//! its render has none.
 
 use super::image::Image;
 use super::integrator::render_prepared;

@@ -6,13 +6,17 @@
 //!   `v = clamp(sRGB_OETF(x), 0, 1)`, with the sRGB OETF of IEC 61966-2-1
 //!   ([`crate::util::colour::srgb_oetf`]).
 //! * `agx` (the default), Blender's AgX view for an sRGB display
-//!   ([`Agx`]).
+//!   ([`Agx`]);
+//! * `agx_punchy`, `agx_high_contrast`, ...: AgX after one of the looks
+//!   Blender 5.0 ships for it ([`crate::render::agx_look`]), applied to
+//!   the exposed linear value.
 //!
 //! Either is quantised as `round(255 v)` (`round(65535 v)` for a 16-bit
 //! PNG, a dome master's delivery depth), no dither; a NaN (and with AgX an
 //! infinite) channel is black. Alpha is not encoded.
 
 use super::agx::Agx;
+use super::agx_look::{graded, Grade};
 use crate::scene::ViewTransform;
 use crate::util::colour::srgb_oetf;
 
@@ -45,10 +49,13 @@ fn display_unit(p: [f32; 4], exposure: f64, view: ViewTransform) -> [f64; 3] {
     let k = exposure.exp2();
     match view {
         ViewTransform::Standard => [0, 1, 2].map(|c| srgb_oetf(p[c] as f64 * k)),
-        ViewTransform::Agx => {
+        agx => {
             // A NaN or infinite pixel is black, as in the standard transform.
             let c = [0, 1, 2].map(|i| if p[i].is_finite() { p[i] as f64 * k } else { 0.0 });
-            Agx::get().display(c)
+            match Grade::of(agx) {
+                Some(g) => Agx::get().display(graded(g, c)),
+                None => Agx::get().display(c),
+            }
         }
     }
 }

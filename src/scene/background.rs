@@ -32,7 +32,7 @@ impl Default for Background {
 pub const BACKGROUND_KEYS: &[KeySpec] = &[
     KeySpec::new("radiance", "linear Rec.709", Range::Each { min: 0.0, max: 1e9, what: "components", suffix: "" }, "constant radiance seen behind the volume where no terrain is hit (it does not light the terrain)"),
     KeySpec::new("image", "", Range::Any, "an equirectangular linear EXR of sky radiance added to `radiance` (relative to the scene file; mapped as Blender's Environment Texture: centre towards +x, top row the zenith); the add-on sets it as the World"),
-    KeySpec::new("stars", "", Range::Any, "a procedural star field (`aurora render` only): counts log10 N(<m) ~ 0.45 m, V-band flux, blackbody colours; each star is a Gaussian of one pixel's sigma that keeps its flux; none in orthographic views; Cycles gets them through `aurora sky`"),
+    KeySpec::new("stars", "", Range::Any, "a procedural star field (`aurora render` only): the real sky's counts per magnitude (Hipparcos), V-band flux, colours by temperature from the catalogue's B-V; each star drawn as a reference 14 mm f/2.8 lens draws it (a 2.5 arcminute core and a faint halo, sized in angle) keeping its flux; none in orthographic views; Cycles gets them through `aurora sky`"),
     KeySpec::new("limiting_magnitude", "mag", Range::Num(Num::closed(-1.5, 8.0)), "faintest star drawn (6: the naked eye's limit)"),
     KeySpec::new("star_brightness", "", Range::Num(Num::closed(0.0, 1e6)), "scale on the stars' physical irradiance"),
 ];

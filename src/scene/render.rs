@@ -31,15 +31,62 @@ impl Default for RenderParams {
     }
 }
 
-/// How a linear image becomes PNG code values (`crate::render::view_transform`).
+/// How a linear image becomes PNG code values (`crate::render::view_transform`):
+/// Standard, AgX, or AgX with one of the looks Blender 5.0 ships for it
+/// (`crate::render::agx_look`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "lowercase")]
+#[serde(rename_all = "snake_case")]
 pub enum ViewTransform {
     /// The sRGB OETF of the linear value, clipped (Blender's "Standard").
     Standard,
     /// AgX, Blender's default view (`crate::render::agx`).
     #[default]
     Agx,
+    AgxPunchy,
+    AgxGreyscale,
+    AgxVeryHighContrast,
+    AgxHighContrast,
+    AgxMediumHighContrast,
+    AgxBaseContrast,
+    AgxMediumLowContrast,
+    AgxLowContrast,
+    AgxVeryLowContrast,
+}
+
+/// Every `render.view_transform` word, as the key's range lists them.
+pub const VIEW_TRANSFORM_WORDS: &[&str] = &[
+    "standard",
+    "agx",
+    "agx_punchy",
+    "agx_greyscale",
+    "agx_very_high_contrast",
+    "agx_high_contrast",
+    "agx_medium_high_contrast",
+    "agx_base_contrast",
+    "agx_medium_low_contrast",
+    "agx_low_contrast",
+    "agx_very_low_contrast",
+];
+
+impl ViewTransform {
+    /// Blender's view transform and look of the same picture
+    /// (`scene.view_settings.view_transform`, `.look`).
+    pub fn blender(self) -> (&'static str, &'static str) {
+        let look = match self {
+            ViewTransform::Standard => return ("Standard", "None"),
+            ViewTransform::Agx => "None",
+            ViewTransform::AgxPunchy => "AgX - Punchy",
+            ViewTransform::AgxGreyscale => "AgX - Greyscale",
+            ViewTransform::AgxVeryHighContrast => "AgX - Very High Contrast",
+            ViewTransform::AgxHighContrast => "AgX - High Contrast",
+            ViewTransform::AgxMediumHighContrast => "AgX - Medium High Contrast",
+            ViewTransform::AgxBaseContrast => "AgX - Base Contrast",
+            ViewTransform::AgxMediumLowContrast => "AgX - Medium Low Contrast",
+            ViewTransform::AgxLowContrast => "AgX - Low Contrast",
+            ViewTransform::AgxVeryLowContrast => "AgX - Very Low Contrast",
+        };
+        ("AgX", look)
+    }
 }
 
 /// Largest `render.width` and `render.height` (the one image-size limit:
@@ -60,6 +107,6 @@ pub const RENDER_KEYS: &[KeySpec] = &[
     KeySpec::new("spp", "", Range::Int { min: 1, max: MAX_SPP as i64 }, "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
     KeySpec::new("exposure", "stops", Range::Num(Num::closed(-50.0, 50.0)), "PNG only: the view transform of 2^exposure x the linear image"),
     KeySpec::new("png_bits", "bits", Range::Of(&[8, 16]), "PNG only: bits per channel, 8 or 16 (16 for delivery: dome masters, whose faint sky gradients band at 8)"),
-    KeySpec::new("view_transform", "", Range::Word(&["standard", "agx"]), "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction) or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),
+    KeySpec::new("view_transform", "", Range::Word(VIEW_TRANSFORM_WORDS), "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction), `agx_` and a look Blender 5.0 ships for AgX (`agx_punchy`: AgX - Punchy, `agx_high_contrast`: AgX - High Contrast, ...; graded as its colour management grades them), or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),
     KeySpec::new("shutter_s", "s", Range::Num(Num::closed(0.0, MAX_SHUTTER_S)), "motion blur of `aurora render`: each camera sample reads the fields at `p - v(p) tau`, tau uniform over the shutter centred on the frame, as Cycles does; needs the bake's `v` (`grid.velocity = true`); 0 is sharp"),
 ];

@@ -218,7 +218,7 @@ fn the_terrain_and_sky_readers_refuse_without_blocking() {
         assert!(matches!(e, RenderError::Input { key: "terrain.heightmap", .. }), "{e}");
         assert!(e.to_string().contains(kind), "{e}");
         let bg = Background { image: Some(path.display().to_string()), ..Background::default() };
-        let e = Sky::new(&bg, 1, None).expect_err("refused");
+        let e = Sky::new(&bg, 1, None, Default::default()).expect_err("refused");
         assert!(matches!(e, RenderError::Input { key: "background.image", .. }), "{e}");
         assert!(t.elapsed() < DEADLINE, "{}: {:?}", path.display(), t.elapsed());
     }

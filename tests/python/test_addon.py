@@ -386,7 +386,8 @@ def test_setup_scene_from_toml_perspective(addon, fresh, bpy, tmp_path, aurora_v
     assert not sc.cycles.use_denoising and not sc.cycles.use_adaptive_sampling
     assert sc.cycles.sample_clamp_direct == 0 and sc.cycles.sample_clamp_indirect == 0
     assert sc.cycles.volume_biased and sc.cycles.volume_step_rate == pytest.approx(0.1)
-    assert (sc.view_settings.view_transform, sc.view_settings.look, sc.view_settings.exposure) == ("Standard", "None", 0)
+    # The scene file's view (the default AgX, no look); the EXR is linear whatever it is.
+    assert (sc.view_settings.view_transform, sc.view_settings.look, sc.view_settings.exposure) == ("AgX", "None", 0)
     assert sc.unit_settings.scale_length == 1000.0
     # Background only for camera rays, not a light.
     w = sc.world

@@ -14,6 +14,7 @@ view transform's gamut handling shows.
 
 from __future__ import annotations
 
+import json
 import os
 import subprocess
 import sys
@@ -41,14 +42,15 @@ def read_png_rgb8(path: Path) -> np.ndarray:
     return px[..., :3]
 
 
-def blender_agx_png(bpy, exr: Path, png: Path, exposure: float) -> np.ndarray:
-    """`exr` through Blender's AgX view for an sRGB display, as 8-bit PNG."""
+def blender_agx_png(bpy, exr: Path, png: Path, exposure: float, look: str = "None") -> np.ndarray:
+    """`exr` through Blender's AgX view for an sRGB display with `look`, as 8-bit PNG."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     img = bpy.data.images.load(str(exr))
     sc = bpy.context.scene
     sc.display_settings.display_device = "sRGB"
     vs = sc.view_settings
-    vs.view_transform, vs.look, vs.exposure, vs.gamma = "AgX", "None", exposure, 1.0
+    vs.view_transform, vs.look, vs.exposure, vs.gamma = "AgX", look, exposure, 1.0
+    assert vs.look == look, (vs.look, look)
     sc.render.dither_intensity = 0.0
     s = sc.render.image_settings
     s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"
@@ -93,10 +95,9 @@ def test_agx_png_matches_blender_on_an_aurora_render(bpy, compare, tmp_path):
     assert d.max() <= 8
 
 
-def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
-    # Eight bars of colour, each an emission ramp over 16 stops (bottom to
-    # top), seen orthographically through a 2 km thick slab.
-    colours = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1), (1, 0, 1), (0.06, 1.0, 0.03), (1.0, 0.02, 0.05)]
+def lines_chart(tmp_path: Path, colours) -> tuple[Path, Path]:
+    """Bars of colour, each an emission ramp over 16 stops (bottom to top),
+    seen orthographically through a 2 km thick slab: the scene and its VDB."""
     h, nz, bar, ny = 0.5, 64, 6, 4
     em = np.zeros((len(colours) * bar, ny, nz, 3), np.float32)
     level = 0.18 * 2.0 ** np.linspace(-10.0, 6.0, nz) / (ny * h)
@@ -106,7 +107,15 @@ def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
     cx, cz = (em.shape[0] - 1) * h / 2, (nz - 1) * h / 2
     cam = {"position": [cx, -50.0, cz], "look_at": [cx, 0.0, cz], "up": [0, 0, 1], "projection": "orthographic",
            "ortho_height": nz * h}
-    scene = synth.write_scene(tmp_path / "lines.toml", cam, 96, 128, spp=4)
+    return synth.write_scene(tmp_path / "lines.toml", cam, 96 if len(colours) == 8 else 12 * len(colours), 128, spp=4), vdb
+
+
+#: Pure primaries and secondaries, the aurora's green and red.
+SATURATED = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1), (1, 0, 1), (0.06, 1.0, 0.03), (1.0, 0.02, 0.05)]
+
+
+def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
+    scene, vdb = lines_chart(tmp_path, SATURATED)
     exr, png = tmp_path / "l.exr", tmp_path / "l.png"
     r = subprocess.run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", exr, "--png", png, "--quiet"],
                        capture_output=True, text=True)
@@ -115,6 +124,48 @@ def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
     ours = read_png_rgb8(png)
     theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 0.0)
     compare_png(ours, theirs, "saturated lines")
+
+
+#: Every `render.view_transform` with a look (the scene schema's words).
+LOOKS = [w for w in json.loads((ROOT / "blender" / "scene_schema.json").read_text())["render"]["view_transform"]["values"]
+         if w.startswith("agx_")]
+
+
+def test_every_look_blender_ships_for_agx_is_a_view_transform(bpy, addon):
+    """The looks Blender's colour management configuration defines for AgX
+    ("AgX - ..." in its config.ocio) are exactly the `agx_` words, each
+    named as the add-on names it, and Blender takes each name."""
+    config = Path(bpy.utils.system_resource("DATAFILES")) / "colormanagement" / "config.ocio"
+    assert config.is_file(), config
+    theirs = {line.split("name:", 1)[1].strip() for line in config.read_text().splitlines()
+              if line.strip().startswith("name: AgX - ")}
+    ours = {addon.render_settings.blender_view(w)[1] for w in LOOKS}
+    assert len(LOOKS) == 9 and ours == theirs, (sorted(ours), sorted(theirs))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    vs = bpy.context.scene.view_settings
+    vs.view_transform = "AgX"
+    for name in sorted(ours):
+        vs.look = name
+        assert vs.look == name
+
+
+@pytest.mark.parametrize("view", LOOKS)
+def test_agx_looks_match_blender(bpy, addon, compare, tmp_path, view):
+    """`render.view_transform = "agx_<look>"` against Blender's AgX view with
+    that look, on the saturated chart plus a grey bar over 16 stops, within
+    AgX's own tolerance (3/255 on 99 % of the pixels)."""
+    scene, vdb = lines_chart(tmp_path, SATURATED + [(1.0, 1.0, 1.0)])
+    exr, png = tmp_path / "l.exr", tmp_path / "l.png"
+    r = subprocess.run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", exr, "--png", png, "--quiet",
+                        "--set", f'render.view_transform="{view}"'], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    ours = read_png_rgb8(png)
+    look = addon.render_settings.blender_view(view)[1]
+    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 0.0, look)
+    plain = blender_agx_png(bpy, exr, tmp_path / "plain.png", 0.0)
+    compare_png(ours, theirs, view)
+    # The look changes the picture: a test of a look that did nothing would pass on plain AgX.
+    assert np.abs(theirs.astype(int) - plain.astype(int)).max() > 10, view
 
 
 def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):

@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """A linear EXR through Blender's own AgX view for an sRGB display, as an 8-bit PNG.
 
-    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS]
+    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS] [--look LOOK]
 
-Blender's colour management (display sRGB, view AgX, look None, no dither),
-the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
+Blender's colour management (display sRGB, view AgX, look None or LOOK such
+as "AgX - Punchy", no dither), the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
 a Cycles render and an `aurora render` PNG of the same scene are shown alike.
 The PNG is written to a temporary name in the output folder and renamed, so
 a reader never sees a half-written picture.
@@ -26,6 +26,7 @@ def main(argv=None) -> int:
     p.add_argument("exr", help="linear OpenEXR (RGB or RGBA)")
     p.add_argument("png", help="output PNG")
     p.add_argument("--exposure", type=float, default=0.0, help="stops, as [render] exposure (default 0)")
+    p.add_argument("--look", default="None", help='Blender\'s look, as render.view_transform "agx_punchy" is "AgX - Punchy" (default None)')
     a = p.parse_args(argv)
     if not Path(a.exr).is_file():
         print(f"agx_png: error: {a.exr}: no such file", file=sys.stderr)
@@ -37,7 +38,12 @@ def main(argv=None) -> int:
     sc = bpy.context.scene
     sc.display_settings.display_device = "sRGB"
     vs = sc.view_settings
-    vs.view_transform, vs.look, vs.exposure, vs.gamma = "AgX", "None", a.exposure, 1.0
+    vs.view_transform, vs.exposure, vs.gamma = "AgX", a.exposure, 1.0
+    try:
+        vs.look = a.look
+    except TypeError:
+        print(f"agx_png: error: --look {a.look!r} is not one of Blender's looks for AgX", file=sys.stderr)
+        return 2
     sc.render.dither_intensity = 0.0
     s = sc.render.image_settings
     s.file_format, s.color_mode, s.color_depth = "PNG", "RGB", "8"

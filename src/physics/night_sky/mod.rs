@@ -1,7 +1,8 @@
 //! The night sky's lights besides the aurora and the airglow, as plain
 //! functions on plain data: the stars of the Hipparcos catalogue to V = 8.5
 //! ([`catalogue`]), a star's temperature and irradiance from its B-V and V
-//! ([`star_colour`]), and the Moon's light and the sky it brightens
+//! ([`star_colour`]), a star's light through the air per channel
+//! ([`star_extinction`]), and the Moon's light and the sky it brightens
 //! ([`moonlight`]). Brightnesses are in the V band and, converted, in the
 //! volume's radiance unit (kR; kR sr for a point source's irradiance), the
 //! unit the renderer's stars use.
@@ -9,3 +10,4 @@
 pub mod catalogue;
 pub mod moonlight;
 pub mod star_colour;
+pub mod star_extinction;
