@@ -55,6 +55,7 @@ pub mod adaptive;
 pub mod agx;
 pub mod airglow;
 pub mod dda;
+pub mod develop;
 pub mod emission_only;
 pub mod grids;
 pub mod image;
