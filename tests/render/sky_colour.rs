@@ -119,3 +119,28 @@ fn auto_exposure_prints_and_records_the_ev_it_metered() {
     let worst = a.iter().zip(&b).flat_map(|(p, q)| (0..3).map(move |k| (p[k] - q[k]).abs())).fold(0.0, f64::max);
     assert!(worst <= 1.5 / 255.0, "{worst}");
 }
+
+/// The add-on's copy of the camera observer (`blender/camera_observer.json`:
+/// the table's matrix and its Rec.709 per nm, from which `blender/display.py`
+/// computes the same white balance) is the binary's, number for number;
+/// `AURORA_UPDATE_DOCS=1` rewrites it.
+#[test]
+fn the_add_ons_camera_table_is_the_binarys() {
+    use aurora::util::observer::{camera_matrix, Observer, CAMERA_RANGE_NM};
+    let (a, b) = (CAMERA_RANGE_NM.0 as u32, CAMERA_RANGE_NM.1 as u32);
+    let rgb: Vec<[f64; 3]> = (a..=b).map(|l| Observer::Camera.rgb(l as f64)).collect();
+    let doc = serde_json::json!({
+        "about": "The camera observer of aurora (src/util/observer.rs, data/observer_camera.csv): its 3x3 matrix (rows) and its linear Rec.709 per nm; blender/display.py computes the white balance from it. Written by tests/render/sky_colour.rs.",
+        "first_nm": a,
+        "matrix": camera_matrix(),
+        "rgb": rgb,
+        "white_balance_3200": aurora::util::white_balance::camera_white_balance(3200.0),
+    });
+    let text = serde_json::to_string_pretty(&doc).unwrap() + "\n";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("blender/camera_observer.json");
+    if std::env::var_os("AURORA_UPDATE_DOCS").is_some() {
+        std::fs::write(&path, &text).unwrap();
+    }
+    let committed = std::fs::read_to_string(&path).unwrap_or_default();
+    assert!(committed == text, "{} is stale: AURORA_UPDATE_DOCS=1 cargo test --release --test render sky_colour::", path.display());
+}
