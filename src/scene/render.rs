@@ -44,11 +44,40 @@ impl Default for RenderParams {
 }
 
 /// `render.exposure` as the file writes it: stops, or the word "auto".
-#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Serialize, PartialEq)]
 #[serde(untagged)]
 pub enum ExposureKey {
     Stops(f64),
     Word(AutoWord),
+}
+
+impl<'de> Deserialize<'de> for ExposureKey {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = ExposureKey;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number of stops or \"auto\"")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<ExposureKey, E> {
+                Ok(ExposureKey::Stops(x))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<ExposureKey, E> {
+                Ok(ExposureKey::Stops(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<ExposureKey, E> {
+                Ok(ExposureKey::Stops(x as f64))
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<ExposureKey, E> {
+                if s == "auto" {
+                    Ok(ExposureKey::Word(AutoWord::Auto))
+                } else {
+                    Err(E::invalid_value(serde::de::Unexpected::Str(s), &self))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 /// The one word `render.exposure` takes.
