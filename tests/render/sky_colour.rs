@@ -44,7 +44,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// Looking straight up from the default camera (20 degrees wide, stars
 /// off), the zenith's sky, above 2 % of white, has a hue in 190-250.
 /// Measured: 163 and 195 at 3200 K; at daylight white balance (5500 K)
-/// the sky is brown-yellow, hue about 40, and the test fails.
+/// the sky is brown-yellow, hue 46, and the test fails; so is a sky of
+/// the airglow's lines alone (no broadband light: hue 74).
 #[test]
 fn the_default_sky_is_blue_and_its_aurora_green_at_the_default_white_balance() {
     let d = scratch("sky_colour", "default");
