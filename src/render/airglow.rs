@@ -177,11 +177,20 @@ impl Airglow {
 mod tests {
     use super::*;
 
-    /// Without air, looking up from the ground, the green layer alone reads
-    /// its key in kR times its colour; looking down, nothing.
+    /// Without air, looking up from the ground, the green layer alone (no
+    /// other line, no broadband light) reads its key in kR times its colour;
+    /// looking down, nothing.
     #[test]
     fn zenith_reads_the_key_and_the_ground_hides_it() {
-        let p = AirglowParams { red_r: 0.0, sodium_r: 0.0, hydroxyl_r: 0.0, ..AirglowParams::default() };
+        let p = AirglowParams {
+            red_r: 0.0,
+            sodium_r: 0.0,
+            hydroxyl_r: 0.0,
+            continuum_r_per_nm: 0.0,
+            zodiacal_light: 0.0,
+            starlight: 0.0,
+            ..AirglowParams::default()
+        };
         let sky = SkyParams { extinction: false, ..SkyParams::default() };
         let a = Airglow::new(&p, &sky, DVec3::ZERO, 6371.0, Observer::Camera).unwrap();
         let l = a.radiance(DVec3::Z);
