@@ -43,7 +43,7 @@ bl_info = {
 import bpy  # noqa: E402
 from bpy.props import PointerProperty  # noqa: E402
 
-from . import operators, preferences, properties, ui  # noqa: E402
+from . import display, operators, preferences, properties, ui  # noqa: E402
 from .material import terrain_material, volume_material  # noqa: E402
 from .render_settings import CyclesSettings, configure_cycles, set_scene_units  # noqa: E402
 from .scene_setup import AuroraScene, setup_scene_from_toml  # noqa: E402

@@ -6,7 +6,8 @@ volume material with the file's density/emission scales and the sky's air
 (air.py: the emission dimmed towards each camera ray), background seen only
 by camera rays, the airglow and the stars as the world's background (the
 map `aurora sky` writes, see sky_map), terrain (plane or heightfield OBJ),
-and the Cycles settings of render_settings.py. The pixel footprint follows the scene's `render.spp`
+the Cycles settings of render_settings.py, and the picture developed as
+`aurora render` develops its PNG (display.py: white balance, exposure). The pixel footprint follows the scene's `render.spp`
 (1: pixel centres; more: the pixel square); the number of Cycles samples is
 separate (Cycles needs many more than the reference raymarcher).
 """
@@ -25,6 +26,8 @@ import bpy
 
 from .air import line_depths, weights
 from .camera import build_camera
+from .display import develop as develop_display
+from .display import metered_ev
 from .emission_lights import build_emission_lights, emission_clusters
 from .render_settings import CyclesSettings, configure_cycles, set_scene_units, set_view
 from .scene_toml import SCHEMA, SceneSpec, load_scene
@@ -116,6 +119,7 @@ def setup_scene_from_toml(
     volume_alpha: bool = True,
     pad_dir=None,
     sky_exr=None,
+    develop: bool = True,
 ) -> AuroraScene:
     """Set up `scene` (default: the context scene) from the scene file `path`.
 
@@ -128,6 +132,10 @@ def setup_scene_from_toml(
     sky_exr: the airglow and stars map (`aurora sky`) for the world; None
     makes it with the aurora binary when the scene has airglow or stars
     (sky_map; packed into the .blend); False: none.
+    develop: the picture developed as `aurora render`'s PNG (display.py: the
+    camera's white balance in the compositor, the view's exposure; for
+    `render.exposure = "auto"` the EV the binary meters on `vdb`). The render
+    passes stay linear either way.
     """
     spec = load_scene(path)
     scene = scene or bpy.context.scene
@@ -184,4 +192,11 @@ def setup_scene_from_toml(
             # meeting the volume would count it twice. Shadow rays still
             # cross the volume and are attenuated by it.
             obj.visible_diffuse = False
+    if develop:
+        ev = None
+        if spec.render.exposure == "auto":
+            if vdb is None:
+                raise ValueError(f"{path}: render.exposure = \"auto\" is metered on the bake: give its VDB")
+            ev = metered_ev(path, vdb)
+        develop_display(scene, spec, ev)
     return AuroraScene(spec, cam, vols, ter, wld, settings, lights)

@@ -100,6 +100,8 @@ class SceneSpec:
     #: `[colour] observer`: whose colours the bake wrote ("camera" or "eye");
     #: the air's channel weights follow it (air.py).
     observer: str = _default("colour", "observer")
+    #: `[colour] white_balance_k`: the camera's white balance, K (display.py).
+    white_balance_k: float = _default("colour", "white_balance_k")
 
 
 _TABLES = {
@@ -131,6 +133,21 @@ def _checked(src: str, table: str, key: str, t: dict) -> float:
     k = SCHEMA[table][key]
     return _number(f"{src}: {table}.{key}", t.get(key, k["default"]), _bound(k["min"]), _bound(k["max"]),
                    lo_open=not k["min_inclusive"], hi_open=not k["max_inclusive"])
+
+
+#: `render.exposure`'s stops (its schema states them as a rule beside "auto").
+EXPOSURE_STOPS = (-50.0, 50.0)
+
+
+def _exposure(src: str, r: dict):
+    """`render.exposure`: stops in EXPOSURE_STOPS, or "auto" (metered)."""
+    value = r.get("exposure", SCHEMA["render"]["exposure"]["default"])
+    if value == "auto":
+        return "auto"
+    if isinstance(value, str):
+        raise SceneFileError(f"{src}: render.exposure = {value!r} must be a number of stops in "
+                             f"[{EXPOSURE_STOPS[0]:g}, {EXPOSURE_STOPS[1]:g}], or \"auto\"")
+    return _number(f"{src}: render.exposure", value, *EXPOSURE_STOPS)
 
 
 def _number(where: str, value, lo: float, hi: float, lo_open: bool = False, hi_open: bool = False) -> float:
@@ -190,7 +207,7 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         width=int(_checked(src, "render", "width", r)),
         height=int(_checked(src, "render", "height", r)),
         spp=int(_checked(src, "render", "spp", r)),
-        exposure=_checked(src, "render", "exposure", r),
+        exposure=_exposure(src, r),
         view_transform=r.get("view_transform", Render().view_transform),
         shutter_s=_checked(src, "render", "shutter_s", r),
         png_bits=r.get("png_bits", Render().png_bits),
@@ -251,8 +268,8 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     # aurora checks it; here a number >= 0 is enough.
     earth = Earth(_number(f"{src}: earth.radius_km", e.get("radius_km", Earth().radius_km), 0.0, math.inf))
 
-    # [colour] shapes the bake; only its observer matters here (the rest of
-    # the table is aurora's to check).
+    # [colour] shapes the bake; only its observer and white balance matter
+    # here (the rest of the table is aurora's to check).
     colour = doc.get("colour", {})
     if not isinstance(colour, dict):
         raise SceneFileError(f"{src}: [colour] must be a table")
@@ -261,7 +278,8 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     if observer not in observers:
         raise SceneFileError(f"{src}: colour.observer = {observer!r} must be one of {', '.join(observers)}")
 
-    return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path, observer)
+    white = _checked(src, "colour", "white_balance_k", colour)
+    return SceneSpec(cam, ren, vol, bg, ter, sky, earth, path, observer, white)
 
 
 def load_scene(path: str | Path) -> SceneSpec:

@@ -362,8 +362,14 @@ fn write_grey(job: &Job, path: &Path, png_only: bool, image: &aurora::render::Im
 /// Writes a render's image (and PNG) and prints its statistics.
 fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seconds: f64) -> Result<()> {
     let Files { vdb, out, png, .. } = *files;
-    let (exposure, view) = (job.scene.render.exposure, job.scene.render.view_transform);
+    let view = job.scene.render.view_transform;
     let bits = if job.scene.render.png_bits == 16 { PngBits::Sixteen } else { PngBits::Eight };
+    // The PNG shows the white-balanced image at the scene's or the metered EV.
+    let (shown, developed) = aurora::render::develop::develop(image, &job.scene.colour, &job.scene.render);
+    let (exposure, meta) = (developed.exposure_ev, developed.metadata());
+    if developed.metered && !job.quiet && job.grid.is_none() {
+        eprintln!("exposure: auto, metered {exposure:+.2} EV (centre-weighted highlight meter)");
+    }
     if job.grid.is_some() {
         write_grey(job, out, job.format == ImageFormat::Png, image)?;
         if let Some(p) = png {
@@ -371,12 +377,12 @@ fn finish(job: &Job, files: &Files<'_>, image: &aurora::render::Image, open_seco
         }
     } else {
         match job.format {
-            ImageFormat::Exr => aurora::render::image_file::write_exr(out, image),
-            ImageFormat::Png => aurora::render::image_file::write_png_bits(out, image, exposure, view, bits),
+            ImageFormat::Exr => aurora::render::image_file::write_exr_with(out, image, &meta),
+            ImageFormat::Png => aurora::render::image_file::write_png_with(out, &shown, exposure, view, bits, &meta),
         }
         .with_context(|| format!("cannot write {}", out.display()))?;
         if let Some(p) = png {
-            aurora::render::image_file::write_png_bits(p, image, exposure, view, bits)
+            aurora::render::image_file::write_png_with(p, &shown, exposure, view, bits, &meta)
                 .with_context(|| format!("cannot write {}", p.display()))?;
         }
     }

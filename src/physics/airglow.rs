@@ -20,15 +20,37 @@
 //! | `green_r` | OI 557.7 | 250 | 97 | 4 |
 //! | `red_r` | OI 630.0, 636.4 (630.0 / 2.997) | 60 | 250 | 30 |
 //! | `sodium_r` | Na D 589.0/589.6 (as 589.3) | 50 | 92 | 4 |
-//! | `hydroxyl_r` | OH 6-1, 7-2, 8-3 (650, 686, 727), 1/3 each | 450 | 87 | 3.4 |
+//! | `hydroxyl_r` | OH Meinel bands 558-727 nm, [`OH_BANDS`] | 450 | 87 | 3.4 |
+//! | (continuum) | NO2 continuum, `crate::physics::night_sky::broadband` | `continuum_r_per_nm` | 90 | 6 |
+//!
+//! **OH.** `hydroxyl_r` is the zenith column of the OH Meinel bands from
+//! 550 to 740 nm together (as before, when it held (6-1), (7-2) and (8-3)
+//! in thirds): (7-1) near 558, (8-2) 588, (5-0) 615, (9-3) 625, (6-1)
+//! 650, (7-2) 686 and (8-3) 727 nm, each a line at its band's centre with
+//! the share of [`OH_BANDS`] (photons; approximate shares after the band
+//! intensities of Krassovsky, Shefov & Yarin 1962 as Roach & Gordon 1973
+//! tabulate them: the Delta v = 5 bands (6-1), (7-2), (8-3) the strongest,
+//! the Delta v = 6 bands (7-1), (8-2), (9-3) and (5-0) weaker). The
+//! camera records the bands from 558 to 650 nm; (8-3) at 727 nm it barely
+//! sees (a red response under 1 % of 630 nm's), and the bands past 740 nm,
+//! most of OH's light, are left out. (7-2) at 686 nm lies in the O2 B band
+//! and reaches the ground weakened (Johnston & Broadfoot 1993, JGR 98,
+//! 21593): [`o2_b_depth`].
+//!
+//! **The O2 B band** ([`o2_b_depth`]): oxygen's b-X (1,0) band absorbs
+//! from 686.7 to 695 nm; over a band of emission lines spread
+//! through it its mean zenith optical depth from sea level is taken as 0.5
+//! (three fifths of the light through), scaling with the pressure above the
+//! observer and the air mass like the air's other depths. It dims the (7-2)
+//! band and the continua alike.
 //!
 //! Sources: brightness and heights, Roach & Gordon (1973), "The Light of
 //! the Night Sky", and Leinert et al. (1998), A&AS 127, 1, sect. 9
 //! (airglow); Na layer at 92 km, Mende et al. (1993), JGR 98, 19117; OH
 //! at 87 km, 8 km full width, Baker & Stair (1988), Phys. Scr. 37, 611
 //! (as used by Dunker 2018); the 630.0 / 636.4 ratio 2.997, Storey &
-//! Zeippen (2000), MNRAS 312, 813. The continuum and the O2 bands (blue,
-//! faint) are left out. docs/physics.md, "Airglow", has the table.
+//! Zeippen (2000), MNRAS 312, 813. The O2 emission bands (Herzberg, blue
+//! and faint) are left out. docs/physics.md, "Airglow", has the table.
 
 use crate::scene::AirglowParams;
 
@@ -61,14 +83,36 @@ pub const LAYERS: [LayerShape; 4] = [
         lines: &[(630.0, 1.0), (636.4, 1.0 / OI_6300_PER_6364)],
     },
     LayerShape { key: "sodium_r", name: "Na D 589 nm", peak_km: 92.0, sigma_km: 4.0, lines: &[(589.3, 1.0)] },
-    LayerShape {
-        key: "hydroxyl_r",
-        name: "OH Meinel 650-727 nm",
-        peak_km: 87.0,
-        sigma_km: 3.4,
-        lines: &[(650.0, 1.0 / 3.0), (686.3, 1.0 / 3.0), (727.0, 1.0 / 3.0)],
-    },
+    LayerShape { key: "hydroxyl_r", name: "OH Meinel 558-727 nm", peak_km: 87.0, sigma_km: 3.4, lines: &OH_BANDS },
 ];
+
+/// The OH Meinel bands of `hydroxyl_r`: (band centre nm, share of the
+/// key's photons), (7-1), (8-2), (5-0), (9-3), (6-1), (7-2), (8-3) (module doc).
+pub const OH_BANDS: [(f64, f64); 7] =
+    [(558.0, 0.04), (588.0, 0.07), (615.0, 0.03), (625.0, 0.08), (650.0, 0.22), (686.0, 0.26), (727.0, 0.30)];
+
+/// The airglow continuum's layer (`crate::physics::night_sky::broadband`):
+/// its shape only; its brightness is a spectrum, not lines.
+pub const CONTINUUM_LAYER: LayerShape =
+    LayerShape { key: "continuum_r_per_nm", name: "NO2 continuum", peak_km: 90.0, sigma_km: 6.0, lines: &[] };
+
+/// The O2 B band (module doc): first and last wavelength, nm, and the mean
+/// zenith optical depth from sea level across it.
+pub const O2_B_BAND: (f64, f64, f64) = (686.7, 695.0, 0.5);
+
+/// The O2 B band's zenith optical depth at `lambda_nm` seen from sea
+/// level (module doc); the observer's share is this times the pressure
+/// ratio above it.
+pub fn o2_b_depth(lambda_nm: f64) -> f64 {
+    let (lo, hi, tau) = O2_B_BAND;
+    // The 686 nm band line sits at the band head: the band's rotational
+    // lines spread over 686-693 nm, so its centre is counted in.
+    if (lo - 1.0..=hi).contains(&lambda_nm) {
+        tau
+    } else {
+        0.0
+    }
+}
 
 /// One line of a layer as a scene sets it: its zenith column seen from the
 /// ground, R.
@@ -85,6 +129,7 @@ pub fn key_r(p: &AirglowParams, shape: &LayerShape) -> f64 {
         "green_r" => p.green_r,
         "red_r" => p.red_r,
         "sodium_r" => p.sodium_r,
+        "continuum_r_per_nm" => p.continuum_r_per_nm,
         _ => p.hydroxyl_r,
     };
     r * p.scale

@@ -27,9 +27,10 @@
 //! pixels of any camera wider than 32 degrees at 640 pixels.
 
 use crate::geometry::earth::{Earth, MEAN_RADIUS_KM};
-use crate::physics::air_extinction::{air_mass, Air};
-use crate::physics::airglow::{key_r, slant_factor, LAYERS};
-use crate::physics::emission::line_colour::line_rgb;
+use crate::physics::air_extinction::{air_mass, pressure_ratio, Air};
+use crate::physics::airglow::{key_r, o2_b_depth, slant_factor, CONTINUUM_LAYER, LAYERS};
+use crate::physics::emission::line_colour::{line_rgb, photon_rgb_unclipped};
+use crate::physics::night_sky::broadband::{continuum_r_per_nm, starlight_r_per_nm, zodiacal_r_per_nm};
 use crate::scene::{AirglowParams, SkyParams};
 use crate::util::observer::Observer;
 use glam::DVec3;
@@ -56,6 +57,54 @@ struct SeenLine {
     layer: usize,
 }
 
+/// The broadband light per nm (`crate::physics::night_sky::broadband`):
+/// its colour per photon, the air's zenith depth, and the spectra from
+/// outside the air and of the continuum's layer, R/nm.
+struct Broadband {
+    observer: Observer,
+    /// (camera-raw colour of one photon of the nm, zenith depth, outside
+    /// R/nm, continuum's zenith R/nm), one per nm of [`BROADBAND_NM`].
+    nm: Vec<([f64; 3], f64, f64, f64)>,
+}
+
+/// The wavelengths the broadband light is summed over, nm (1 nm apart):
+/// the camera table's range, which holds the eye's visible light too.
+pub const BROADBAND_NM: (u32, u32) = (380, 780);
+
+impl Broadband {
+    /// None when every broadband key (times `scale`) is 0.
+    fn new(p: &AirglowParams, observer: Observer, tau_of: &dyn Fn(f64) -> f64) -> Option<Broadband> {
+        let (zl, isl) = (p.zodiacal_light * p.scale, p.starlight * p.scale);
+        let cont = key_r(p, &CONTINUUM_LAYER);
+        if zl <= 0.0 && isl <= 0.0 && cont <= 0.0 {
+            return None;
+        }
+        let nm = (BROADBAND_NM.0..=BROADBAND_NM.1)
+            .map(|l| {
+                let l = l as f64;
+                let colour = photon_rgb_unclipped(l, observer);
+                let outside = zodiacal_r_per_nm(zl, l) + starlight_r_per_nm(isl, l);
+                (colour, tau_of(l), outside, continuum_r_per_nm(cont, l))
+            })
+            .collect();
+        Some(Broadband { observer, nm })
+    }
+
+    /// Radiance (the volume's unit) at air mass `x`, with `space` (1, or 0
+    /// behind the Earth) of the outside light and the continuum's slant
+    /// factor `layer`: the sum over the nm, into the observer's gamut once.
+    fn radiance(&self, space: f64, layer: f64, x: f64) -> [f64; 3] {
+        let mut rgb = [0.0; 3];
+        for &(c, tau, outside, cont) in &self.nm {
+            let w = (space * outside + layer * cont) * (-tau * x).exp() * KR_PER_R;
+            for k in 0..3 {
+                rgb[k] += w * c[k];
+            }
+        }
+        self.observer.in_gamut(rgb)
+    }
+}
+
 impl Airglow {
     /// The airglow of `p` seen from `position` (scene frame, km), or None
     /// when `[airglow] on = false` or every layer is 0; each line in
@@ -65,20 +114,25 @@ impl Airglow {
         let (altitude, up) = (earth.altitude(position), earth.local_up(position));
         let shells_km = if earth.is_flat() { MEAN_RADIUS_KM } else { earth_radius_km };
         let air = Air::from_sky(sky);
+        // The zenith optical depth above the camera at a wavelength: the air's
+        // and the O2 B band's (none without air).
+        let tau_of =
+            |lambda: f64| air.map_or(0.0, |a| a.column_above(&a.depths(lambda), altitude) + o2_b_depth(lambda) * pressure_ratio(altitude));
         let mut lines = Vec::new();
         for (k, layer) in LAYERS.iter().enumerate() {
             for &(lambda, w) in layer.lines {
                 let r = if p.on { w * key_r(p, layer) } else { 0.0 };
                 if r > 0.0 {
-                    let tau = air.map_or(0.0, |a| a.column_above(&a.depths(lambda), altitude));
-                    lines.push(SeenLine { rgb_kr: line_rgb(lambda, observer).map(|c| c * r * KR_PER_R), tau, layer: k });
+                    lines.push(SeenLine { rgb_kr: line_rgb(lambda, observer).map(|c| c * r * KR_PER_R), tau: tau_of(lambda), layer: k });
                 }
             }
         }
-        if lines.is_empty() {
+        let broad = if p.on { Broadband::new(p, observer, &tau_of) } else { None };
+        if lines.is_empty() && broad.is_none() {
             return None;
         }
         let n = (180.0 / STEP_DEG).round() as usize + 1;
+        let r0 = shells_km + altitude;
         let table = (0..n)
             .map(|i| {
                 let e = -90.0 + i as f64 * STEP_DEG;
@@ -90,6 +144,16 @@ impl Airglow {
                     let t = f[l.layer] * (-l.tau * x).exp();
                     for c in 0..3 {
                         rgb[c] += l.rgb_kr[c] * t;
+                    }
+                }
+                if let Some(b) = &broad {
+                    // Light from outside the air reaches the camera unless the
+                    // solid Earth is in the way.
+                    let space = !(mu < 0.0 && r0 * r0 * (1.0 - mu * mu) < shells_km * shells_km && r0 >= shells_km);
+                    let layer = slant_factor(&CONTINUUM_LAYER, shells_km, altitude, mu);
+                    let c = b.radiance(if space { 1.0 } else { 0.0 }, layer, x);
+                    for k in 0..3 {
+                        rgb[k] += c[k];
                     }
                 }
                 rgb
@@ -113,11 +177,20 @@ impl Airglow {
 mod tests {
     use super::*;
 
-    /// Without air, looking up from the ground, the green layer alone reads
-    /// its key in kR times its colour; looking down, nothing.
+    /// Without air, looking up from the ground, the green layer alone (no
+    /// other line, no broadband light) reads its key in kR times its colour;
+    /// looking down, nothing.
     #[test]
     fn zenith_reads_the_key_and_the_ground_hides_it() {
-        let p = AirglowParams { red_r: 0.0, sodium_r: 0.0, hydroxyl_r: 0.0, ..AirglowParams::default() };
+        let p = AirglowParams {
+            red_r: 0.0,
+            sodium_r: 0.0,
+            hydroxyl_r: 0.0,
+            continuum_r_per_nm: 0.0,
+            zodiacal_light: 0.0,
+            starlight: 0.0,
+            ..AirglowParams::default()
+        };
         let sky = SkyParams { extinction: false, ..SkyParams::default() };
         let a = Airglow::new(&p, &sky, DVec3::ZERO, 6371.0, Observer::Camera).unwrap();
         let l = a.radiance(DVec3::Z);

@@ -60,6 +60,12 @@ where
 
 /// Writes `image` as a linear Rec.709 RGBA f32 OpenEXR.
 pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderError> {
+    write_exr_with(path, image, &[])
+}
+
+/// [`write_exr`] with `meta`'s (key, text) pairs among the image's string
+/// attributes (how its PNG was developed: `crate::render::develop`).
+pub fn write_exr_with(path: impl AsRef<Path>, image: &Image, meta: &[(String, String)]) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -76,6 +82,10 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), RenderErro
         blue: Vec2(0.15, 0.06),
         white: Vec2(0.3127, 0.3290),
     });
+    for (k, v) in meta {
+        use exr::meta::attribute::{AttributeValue, Text};
+        exr_image.attributes.other.insert(Text::from(k.as_str()), AttributeValue::Text(Text::from(v.as_str())));
+    }
     write_exr_image(path, &mut exr_image)
 }
 
@@ -290,6 +300,19 @@ pub enum PngBits {
 /// Writes an sRGB PNG of `bits` per channel through the view transform
 /// (module doc); 16-bit samples big-endian, as PNG stores them.
 pub fn write_png_bits(path: impl AsRef<Path>, image: &Image, exposure: f64, view: ViewTransform, bits: PngBits) -> Result<(), RenderError> {
+    write_png_with(path, image, exposure, view, bits, &[])
+}
+
+/// [`write_png_bits`] with `meta`'s (key, text) pairs in text chunks (how
+/// it was developed: `crate::render::develop`).
+pub fn write_png_with(
+    path: impl AsRef<Path>,
+    image: &Image,
+    exposure: f64,
+    view: ViewTransform,
+    bits: PngBits,
+    meta: &[(String, String)],
+) -> Result<(), RenderError> {
     let path = path.as_ref();
     let (w, h) = (image.width, image.height);
     if image.pixels.len() != w * h || w == 0 || h == 0 {
@@ -312,6 +335,9 @@ pub fn write_png_bits(path: impl AsRef<Path>, image: &Image, exposure: f64, view
             PngBits::Sixteen => png::BitDepth::Sixteen,
         });
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        for (k, v) in meta {
+            enc.add_text_chunk(k.clone(), v.clone()).map_err(|e| png_err(e.to_string()))?;
+        }
         let mut writer = enc.write_header().map_err(|e| png_err(e.to_string()))?;
         writer.write_image_data(&data).map_err(|e| png_err(e.to_string()))?;
         writer.finish().map_err(|e| png_err(e.to_string()))

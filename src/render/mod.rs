@@ -58,6 +58,7 @@ pub mod agx;
 pub mod agx_look;
 pub mod airglow;
 pub mod dda;
+pub mod develop;
 pub mod emission_only;
 pub mod grids;
 pub mod image;

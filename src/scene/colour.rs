@@ -39,6 +39,10 @@ pub struct ColourParams {
     /// observer). The bake writes that observer's RGB; the renderer's air
     /// weighs its channels for it (`crate::util::observer`).
     pub observer: Observer,
+    /// The camera observer's white balance, K (`crate::util::white_balance`):
+    /// the PNG shows the linear image through it, as exposure; the EXR
+    /// stays at the camera table's daylight balance. The eye has none.
+    pub white_balance_k: f64,
     /// Amplitude of the low-frequency 1D noise on the altitude used for colour, km.
     pub noise_km: f64,
     /// Spatial frequency of that noise, cycles per km (along the curtain).
@@ -54,12 +58,17 @@ impl Default for ColourParams {
             mode: ColourMode::Physical,
             lines: LineModel::Chemistry,
             observer: Observer::Camera,
+            white_balance_k: DEFAULT_WHITE_BALANCE_K,
             noise_km: 8.0,
             noise_freq: 0.02,
             colormap: report_colormap(),
         }
     }
 }
+
+/// The default white balance, K: within the 3200-4000 K aurora
+/// photographers set (docs/colour.md).
+pub const DEFAULT_WHITE_BALANCE_K: f64 = 3200.0;
 
 /// The report's hand-tuned look as an artist colour map: green low,
 /// fading through yellow to red and violet high up (altitude in km).
@@ -78,6 +87,7 @@ pub fn report_colormap() -> Vec<[f64; 4]> {
 pub const COLOUR_KEYS: &[KeySpec] = &[
     KeySpec::new("mode", "", Range::Word(&["physical", "colormap"]), "`physical` (the emission lines through the observer's colour response, `observer`) or `colormap` (the `colormap` table)"),
     KeySpec::new("observer", "", Range::Word(&["camera", "eye"]), "whose colours the lines get: `camera` (a digital camera, the Nikon D5100 measured by Darrodi et al. 2015, at daylight white balance with a ColorChecker-fitted matrix: 557.7 nm a saturated green, as photographs show it) or `eye` (the CIE 1931 observer: 557.7 nm yellow-green); the bake writes its RGB and the air's channels are weighed for it (docs/colour.md)"),
+    KeySpec::new("white_balance_k", "K", Range::Num(Num::closed(1500.0, 20000.0)), "the camera's white balance: a grey lit by a Planckian at this temperature comes out grey (von Kries on the camera's raw response, then its matrix; docs/colour.md); the PNG shows the linear image through it, the EXR stays at daylight balance; the `eye` observer has none. 3200 K: a camera's Tungsten preset, the low end of the 3200-4000 K aurora photographers set"),
     KeySpec::new("lines", "", Range::Word(&["chemistry", "simple"]), "the line model of `mode = \"physical\"`: `chemistry` (steady-state ion and excited-state chemistry driven by the local ionization rate, after NCAR GLOW's; docs/physics.md) or `simple` (yields in proportion to mole fractions, one quencher per state: the older rule of thumb)"),
     KeySpec::new("noise_km", "km", Range::Num(Num::closed(0.0, 200.0)), "amplitude of the low-frequency noise on the altitude used for colour (not intensity)"),
     KeySpec::new("noise_freq", "1/km", Range::Num(Num::closed(0.0, 1e3)), "spatial frequency of that noise along the curtain"),

@@ -2,7 +2,8 @@
 //! reporting, memory limits, reading input files, atomic writes, watching
 //! files for changes; and the colour science the bake and the renderer
 //! share (`colour.rs`) and the observers whose colours they use
-//! (`observer.rs`: the eye, a camera).
+//! (`observer.rs`: the eye, a camera) with the camera's white balance
+//! (`white_balance.rs`).
 
 pub mod atomic_write;
 pub mod colour;
@@ -14,3 +15,4 @@ pub mod progress;
 pub mod rng;
 #[cfg(test)]
 pub mod scratch;
+pub mod white_balance;

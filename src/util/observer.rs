@@ -72,6 +72,20 @@ fn parse_camera(text: &str) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// The camera's 3x3 matrix from its white-balanced raw RGB to linear
+/// Rec.709, rows, as the table's header records it (`# matrix ...: 9
+/// numbers`): the matrix the table's rows went through.
+pub fn camera_matrix() -> [[f64; 3]; 3] {
+    static M: OnceLock<[[f64; 3]; 3]> = OnceLock::new();
+    *M.get_or_init(|| {
+        let line = CAMERA_CSV.lines().find(|l| l.starts_with("# matrix")).expect("camera table: a matrix line");
+        let v: Vec<f64> =
+            line.rsplit(':').next().unwrap_or_default().split_whitespace().map(|x| x.parse().expect("camera table: a number")).collect();
+        assert_eq!(v.len(), 9, "camera table: a 3x3 matrix");
+        [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]]
+    })
+}
+
 impl Observer {
     /// Every observer, in the order the scene lists them.
     pub const ALL: [Observer; 2] = [Observer::Camera, Observer::Eye];

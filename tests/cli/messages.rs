@@ -28,7 +28,11 @@ fn says(e: &str, want: &[&str]) {
 fn types_are_named_in_plain_words() {
     let cases: [(&str, &str, &[&str]); 6] = [
         ("width", "[render]\nwidth = 1.5\n", &["render.width: expected a whole number, found the number 1.5", "[1, 16384]"]),
-        ("exposure", "[render]\nexposure = \"bright\"\n", &["render.exposure: expected a number, found the text \"bright\""]),
+        (
+            "exposure",
+            "[render]\nexposure = \"bright\"\n",
+            &["render.exposure: expected a number of stops or \"auto\", found the text \"bright\"", "[-50, 50]"],
+        ),
         ("shell", "[grid]\ncycles_shell = 1\n", &["grid.cycles_shell: expected true or false, found the whole number 1"]),
         ("lines", "[grid]\nlines = \"5577\"\n", &["grid.lines: expected a list, found the text \"5577\""]),
         ("view", "[render]\nview_transform = 3\n", &["render.view_transform: expected text, found 3", "\"standard\", \"agx\""]),

@@ -1,7 +1,9 @@
 """`aurora render`'s AgX PNGs against Blender's own AgX view of the same EXR.
 
-The linear EXR `aurora render` writes is shown through Blender's colour
-management with bpy (display sRGB, view AgX, look None, exposure the
+The linear EXR `aurora render` writes, developed as its PNG is (the
+camera's white balance, src/render/develop.rs: the add-on's matrix,
+blender/display.py, applied to the EXR's pixels), is shown through
+Blender's colour management with bpy (display sRGB, view AgX, look None, exposure the
 scene's, gamma 1, dither 0) and saved as an 8-bit PNG; `aurora render`'s
 PNG of the same render (`render.view_transform = "agx"`, the default) must
 agree within 3/255 per channel on 99% of the pixels (8-bit quantisation
@@ -42,6 +44,20 @@ def read_png_rgb8(path: Path) -> np.ndarray:
     return px[..., :3]
 
 
+def developed(addon, exr: Path, white_balance_k: float = 3200.0) -> Path:
+    """`exr`'s pixels through the camera's white balance at
+    `white_balance_k` (the default), as `aurora render` develops its PNG:
+    the add-on's matrix (blender/display.py), written beside it."""
+    from aurora_tools.exr_io import read_rgba, write_rgba_exr
+
+    rgba = read_rgba(exr)
+    w = np.asarray(addon.display.white_balance_matrix(white_balance_k))
+    rgba[..., :3] = rgba[..., :3] @ w.T
+    out = exr.with_name(exr.stem + "-developed.exr")
+    write_rgba_exr(out, rgba.astype(np.float32))
+    return out
+
+
 def blender_agx_png(bpy, exr: Path, png: Path, exposure: float, look: str = "None") -> np.ndarray:
     """`exr` through Blender's AgX view for an sRGB display with `look`, as 8-bit PNG."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
@@ -75,7 +91,7 @@ def saturated_share(exr: Path, compare_mod) -> float:
     return float((bright & (chroma > 0.9)).mean())
 
 
-def test_agx_png_matches_blender_on_an_aurora_render(bpy, compare, tmp_path):
+def test_agx_png_matches_blender_on_an_aurora_render(bpy, addon, compare, tmp_path):
     scene = tmp_path / "aurora.toml"
     scene.write_text(synth.toml_dumps({
         "beams": {"count": 3000},
@@ -88,7 +104,7 @@ def test_agx_png_matches_blender_on_an_aurora_render(bpy, compare, tmp_path):
     r = subprocess.run([aurora_bin(), "render", scene, "--out", exr, "--png", png, "--quiet"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     ours = read_png_rgb8(png)
-    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 4.0)
+    theirs = blender_agx_png(bpy, developed(addon, exr), tmp_path / "blender.png", 4.0)
     d = compare_png(ours, theirs, "aurora render")
     # The picture is not black: the comparison covers lit pixels.
     assert (ours.max(-1) > 30).mean() > 0.05
@@ -114,7 +130,7 @@ def lines_chart(tmp_path: Path, colours) -> tuple[Path, Path]:
 SATURATED = [(1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 1, 0), (0, 1, 1), (1, 0, 1), (0.06, 1.0, 0.03), (1.0, 0.02, 0.05)]
 
 
-def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
+def test_agx_png_matches_blender_on_saturated_lines(bpy, addon, compare, tmp_path):
     scene, vdb = lines_chart(tmp_path, SATURATED)
     exr, png = tmp_path / "l.exr", tmp_path / "l.png"
     r = subprocess.run([aurora_bin(), "render", scene, "--vdb", vdb, "--out", exr, "--png", png, "--quiet"],
@@ -122,7 +138,7 @@ def test_agx_png_matches_blender_on_saturated_lines(bpy, compare, tmp_path):
     assert r.returncode == 0, r.stderr
     assert saturated_share(exr, compare) > 0.3  # the chart is mostly saturated colour
     ours = read_png_rgb8(png)
-    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 0.0)
+    theirs = blender_agx_png(bpy, developed(addon, exr), tmp_path / "blender.png", 0.0)
     compare_png(ours, theirs, "saturated lines")
 
 
@@ -161,14 +177,14 @@ def test_agx_looks_match_blender(bpy, addon, compare, tmp_path, view):
     assert r.returncode == 0, r.stderr
     ours = read_png_rgb8(png)
     look = addon.render_settings.blender_view(view)[1]
-    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 0.0, look)
-    plain = blender_agx_png(bpy, exr, tmp_path / "plain.png", 0.0)
+    theirs = blender_agx_png(bpy, developed(addon, exr), tmp_path / "blender.png", 0.0, look)
+    plain = blender_agx_png(bpy, developed(addon, exr), tmp_path / "plain.png", 0.0)
     compare_png(ours, theirs, view)
     # The look changes the picture: a test of a look that did nothing would pass on plain AgX.
     assert np.abs(theirs.astype(int) - plain.astype(int)).max() > 10, view
 
 
-def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):
+def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, addon, compare, tmp_path):
     """`view_transform = "standard"` keeps the old preview: Blender's
     Standard view of the same EXR."""
     scene = tmp_path / "s.toml"
@@ -181,7 +197,7 @@ def test_standard_view_is_the_clipped_srgb_of_the_exr(bpy, compare, tmp_path):
     r = subprocess.run([aurora_bin(), "render", scene, "--out", exr, "--png", png, "--quiet"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    img = bpy.data.images.load(str(exr))
+    img = bpy.data.images.load(str(developed(addon, exr)))
     sc = bpy.context.scene
     sc.display_settings.display_device = "sRGB"
     sc.view_settings.view_transform, sc.view_settings.look, sc.view_settings.exposure = "Standard", "None", 5.0
@@ -211,5 +227,5 @@ def test_agx_png_tool_writes_through_a_temporary_and_renames(bpy, compare, tmp_p
     r = subprocess.run([sys.executable, tool, exr, png, "--exposure", "5"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == ["t.png"]
-    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 5.0)
+    theirs = blender_agx_png(bpy, developed(addon, exr), tmp_path / "blender.png", 5.0)
     assert np.array_equal(read_png_rgb8(png), theirs)

@@ -3,7 +3,9 @@
 //! spherical shell against van Rhijn's factor and its thick-layer
 //! correction, the zenith's radiance per line against the keys, the
 //! terrain hiding it, the sky map's layout, the stars and airglow
-//! independent of the thread count, and no star below the ground.
+//! independent of the thread count, and no star below the ground; the
+//! broadband light's geometry, and the zenith's total and share of it
+//! against a dark site's measured sky.
 
 // Channel loops index several arrays at once.
 #![allow(clippy::needless_range_loop)]
@@ -30,8 +32,16 @@ fn only(k: usize) -> AirglowParams {
         red_r: keep(1, d.red_r),
         sodium_r: keep(2, d.sodium_r),
         hydroxyl_r: keep(3, d.hydroxyl_r),
+        continuum_r_per_nm: 0.0,
+        zodiacal_light: 0.0,
+        starlight: 0.0,
         ..d
     }
+}
+
+/// No line, only the broadband keys given.
+fn broadband(zodiacal_light: f64, starlight: f64, continuum_r_per_nm: f64) -> AirglowParams {
+    AirglowParams { continuum_r_per_nm, zodiacal_light, starlight, ..only(99) }
 }
 
 /// One pixel at the centre of a 1 x 1 perspective image looking along
@@ -240,4 +250,75 @@ fn no_star_shines_from_below_the_ground() {
         assert_eq!(lit(-20.0), 0, "radius {radius}");
         assert!(lit(20.0) > 10, "radius {radius}: {} pixels", lit(20.0));
     }
+}
+
+/// Each broadband component brightens toward the horizon by its own
+/// geometry. Without air: the zodiacal light and the starlight, outside
+/// the atmosphere, are the same from every direction above the horizon
+/// (to 1e-6); the continuum, a layer at 90 km, by its slant factor (to
+/// 1e-4, the table's interpolation), 1.9-2.0 at 60 degrees from the
+/// zenith. With the air, the outside light is dimmed toward the horizon
+/// between the transmittances of 650 and 450 nm at that air mass.
+#[test]
+fn the_broadband_light_brightens_by_its_own_geometry() {
+    use aurora::physics::air_extinction::{air_mass, Air};
+    use aurora::physics::airglow::CONTINUUM_LAYER;
+    let clear = SkyParams { extinction: false, ..SkyParams::default() };
+    let outside = Airglow::new(&broadband(90.0, 50.0, 0.0), &clear, DVec3::ZERO, R_EARTH, Default::default()).unwrap();
+    let layer = Airglow::new(&broadband(0.0, 0.0, 1.0), &clear, DVec3::ZERO, R_EARTH, Default::default()).unwrap();
+    let dir = |e: f64| DVec3::new(0.0, e.to_radians().cos(), e.to_radians().sin());
+    let (z_out, z_layer) = (outside.radiance(DVec3::Z), layer.radiance(DVec3::Z));
+    assert!(z_out[1] > 0.0 && z_layer[1] > 0.0);
+    for e in [60.0, 30.0, 10.0, 2.0] {
+        let (o, l) = (outside.radiance(dir(e)), layer.radiance(dir(e)));
+        let f = slant_factor(&CONTINUUM_LAYER, R_EARTH, 0.0, e.to_radians().sin());
+        for c in 0..3 {
+            assert!((o[c] / z_out[c] - 1.0).abs() < 1e-6, "outside at {e}: {o:?} vs {z_out:?}");
+            assert!((l[c] / (z_layer[c] * f) - 1.0).abs() < 1e-4, "continuum at {e}: {l:?} vs {z_layer:?} x {f}");
+        }
+        if e == 30.0 {
+            assert!((1.9..2.0).contains(&f), "{f}");
+        }
+    }
+    let sky = SkyParams::default();
+    let dim = Airglow::new(&broadband(90.0, 50.0, 0.0), &sky, DVec3::ZERO, R_EARTH, Default::default()).unwrap();
+    let air = Air::from_sky(&sky).unwrap();
+    let tau = |l: f64| air.column_above(&air.depths(l), 0.0);
+    let (z, low) = (dim.radiance(DVec3::Z), dim.radiance(dir(10.0)));
+    let extra = air_mass(10.0) - 1.0;
+    let got = low[1] / z[1];
+    assert!(got < (-tau(650.0) * extra).exp() && got > (-tau(450.0) * extra).exp(), "{got}");
+}
+
+/// The default sky at the zenith from the ground, through the eye (CIE
+/// 1931 luminance), with the air: as dark as a dark site's moonless sky,
+/// V 21.6-22.0 mag arcsec^-2 (Benn & Ellison 1998, La Palma, 21.9 at
+/// solar minimum; Patat 2003, A&A 400, 1183, Paranal 21.6-21.9; Falchi et
+/// al. 2016, the natural sky 22.0), allowed 21.5-22.2 for the
+/// photopic-against-V difference; and about half of it broadband (Leinert
+/// et al. 1998, Benn & Ellison 1998): 0.4-0.75. The volume's unit of
+/// radiance is 1 kR of 557.7 nm per 4 pi sr: 1.926e-4 cd m^-2
+/// (7.958e11 photons m^-2 s^-1 sr^-1 x 3.562e-19 J x 683 lm/W x
+/// ybar(557.7) = 0.995), and `m = 12.58 - 2.5 log10(L / cd m^-2)`
+/// (Garstang 1986's 10.8e4 cd m^-2 at m = 0). Through the camera at its
+/// default white balance the zenith's hue is printed; the photographs'
+/// blue is asserted on rendered pictures (`tests/render/sky_colour.rs`).
+#[test]
+fn the_zenith_sky_is_a_dark_sites_and_half_of_it_broadband() {
+    use aurora::util::colour::luminance;
+    use aurora::util::observer::Observer;
+    let sky = SkyParams::default();
+    let zenith = |p: &AirglowParams, o: Observer| Airglow::new(p, &sky, DVec3::ZERO, R_EARTH, o).unwrap().radiance(DVec3::Z);
+    let all = zenith(&AirglowParams::default(), Observer::Eye);
+    let broad = zenith(&broadband(90.0, 50.0, 1.0), Observer::Eye);
+    let (y_all, y_broad) = (luminance(all), luminance(broad));
+    let cd = y_all * 1.926e-4;
+    let mag = 12.58 - 2.5 * cd.log10();
+    let share = y_broad / y_all;
+    let cam = zenith(&AirglowParams::default(), Observer::Camera);
+    println!(
+        "zenith: {y_all:.3} units, {cd:.3e} cd/m^2, V {mag:.2} mag/arcsec^2, broadband {share:.2}; eye {all:?}, camera (daylight) {cam:?}"
+    );
+    assert!((21.5..22.2).contains(&mag), "V {mag}");
+    assert!((0.4..0.75).contains(&share), "broadband share {share}");
 }

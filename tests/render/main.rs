@@ -7,7 +7,9 @@
 //! and the eye (`extinction`), narrow-band images in rayleigh at the
 //! zenith (`zenith`), and the airglow and the stars behind the volume
 //! (`airglow`), and the sky over a site: the catalogue's stars where
-//! skyfield puts them, the Moon lighting the ground (`site_sky`).
+//! skyfield puts them, the Moon lighting the ground (`site_sky`), and the
+//! default picture's colours at its white balance and auto exposure
+//! (`sky_colour`).
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -22,5 +24,6 @@ mod film;
 mod integrator;
 mod motion_blur;
 mod site_sky;
+mod sky_colour;
 mod terrain;
 mod zenith;

@@ -66,8 +66,10 @@ def render(scene_toml, vdb, out, samples: int = DEFAULT_SAMPLES, terrain_obj=Non
     with tempfile.TemporaryDirectory(prefix="cycles_render.") as tmp:
         t0 = time.perf_counter()
         bpy.ops.wm.read_factory_settings(use_empty=True)
+        # The linear passes are compared: the picture's development
+        # (white balance in the compositor, exposure) stays off.
         built = addon.setup_scene_from_toml(scene_toml, vdb=vdb, terrain_obj=terrain_obj, settings=settings,
-                                            pad_dir=tmp if pad else None)
+                                            pad_dir=tmp if pad else None, develop=False)
         scene = bpy.context.scene
         if shutter_s is None:
             shutter_s = built.spec.render.shutter_s

@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """A linear EXR through Blender's own AgX view for an sRGB display, as an 8-bit PNG.
 
-    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS] [--look LOOK]
+    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS] [--white-balance-k K] [--look LOOK]
 
 Blender's colour management (display sRGB, view AgX, look None or LOOK such
 as "AgX - Punchy", no dither), the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
 a Cycles render and an `aurora render` PNG of the same scene are shown alike.
+With --white-balance-k the EXR is first developed as `aurora render`
+develops its PNG for the camera observer (the camera's white balance, the
+add-on's matrix: blender/display.py, docs/colour.md).
 The PNG is written to a temporary name in the output folder and renamed, so
 a reader never sees a half-written picture.
 """
@@ -27,14 +30,29 @@ def main(argv=None) -> int:
     p.add_argument("png", help="output PNG")
     p.add_argument("--exposure", type=float, default=0.0, help="stops, as [render] exposure (default 0)")
     p.add_argument("--look", default="None", help='Blender\'s look, as render.view_transform "agx_punchy" is "AgX - Punchy" (default None)')
+    p.add_argument("--white-balance-k", type=float, default=None,
+                   help="the camera's white balance, K, as [colour] white_balance_k (default: the EXR as it is)")
     a = p.parse_args(argv)
     if not Path(a.exr).is_file():
         print(f"agx_png: error: {a.exr}: no such file", file=sys.stderr)
         return 2
     import bpy
 
+    import tempfile
+
+    tmp_dir = tempfile.TemporaryDirectory(prefix="agx_png.")
+    exr = Path(a.exr).resolve()
+    if a.white_balance_k is not None:
+        import numpy as np
+        from aurora_tools.addon import load_addon
+        from aurora_tools.exr_io import read_rgba, write_rgba_exr
+
+        rgba = read_rgba(exr)
+        rgba[..., :3] = rgba[..., :3] @ np.asarray(load_addon().display.white_balance_matrix(a.white_balance_k)).T
+        exr = Path(tmp_dir.name) / "developed.exr"
+        write_rgba_exr(exr, rgba.astype(np.float32))
     bpy.ops.wm.read_factory_settings(use_empty=True)
-    img = bpy.data.images.load(str(Path(a.exr).resolve()))
+    img = bpy.data.images.load(str(exr))
     sc = bpy.context.scene
     sc.display_settings.display_device = "sRGB"
     vs = sc.view_settings

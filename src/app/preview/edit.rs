@@ -19,7 +19,7 @@
 //! ([`crate::pipeline::plan::BakePlan::reusing`]).
 
 use crate::pipeline::footprint::curtain_path::Lift;
-use crate::scene::Scene;
+use crate::scene::{ColourParams, Scene};
 
 /// The earliest stage an edit invalidates (later stages rerun too).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -57,13 +57,16 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
         new.curtains.iter().any(|c| c.path.is_some()) && Lift::of(&old.beams, &old.earth) != Lift::of(&new.beams, &new.earth),
         Stage::Footprints,
     );
-    at(old.beams != new.beams || old.colour != new.colour || old.atmosphere != new.atmosphere || old.earth != new.earth, Stage::Trace);
+    // The white balance is the PNG's, as the exposure (`crate::render::develop`).
+    let colour = ColourParams { white_balance_k: new.colour.white_balance_k, ..old.colour.clone() };
+    at(old.beams != new.beams || colour != new.colour || old.atmosphere != new.atmosphere || old.earth != new.earth, Stage::Trace);
     at(old.photons.kernel != new.photons.kernel, Stage::Trace);
     at(old.photons != new.photons || old.grid.voxel_size != new.grid.voxel_size, Stage::Gather);
     at(old.grid != new.grid, Stage::Finish);
     at(old.camera != new.camera || (old.render.width, old.render.height) != (new.render.width, new.render.height), Stage::Camera);
     let mut render = old.render.clone();
     render.exposure = new.render.exposure;
+    render.auto_exposure = new.render.auto_exposure;
     render.view_transform = new.render.view_transform;
     at(
         render != new.render
@@ -73,7 +76,13 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
             || old.terrain != new.terrain,
         Stage::Render,
     );
-    at(old.render.exposure != new.render.exposure || old.render.view_transform != new.render.view_transform, Stage::Exposure);
+    at(
+        old.render.exposure != new.render.exposure
+            || old.render.auto_exposure != new.render.auto_exposure
+            || old.render.view_transform != new.render.view_transform
+            || old.colour.white_balance_k != new.colour.white_balance_k,
+        Stage::Exposure,
+    );
     s
 }
 

@@ -176,10 +176,20 @@ impl Preview {
         s
     }
 
-    /// Writes `img` at `exposure` through `view` to the output PNG; returns its seconds.
-    fn write(&self, img: &Image, exposure: f64, view: crate::scene::ViewTransform) -> Result<f64, RenderError> {
+    /// Writes `img` developed for `scene` (white balance, exposure:
+    /// `crate::render::develop`) through its view to the output PNG;
+    /// returns its seconds.
+    fn write(&self, img: &Image, scene: &Scene) -> Result<f64, RenderError> {
         let t = Instant::now();
-        render::image_file::write_png(&self.out, img, exposure, view)?;
+        let (shown, d) = render::develop::develop(img, &scene.colour, &scene.render);
+        render::image_file::write_png_with(
+            &self.out,
+            &shown,
+            d.exposure_ev,
+            scene.render.view_transform,
+            render::image_file::PngBits::Eight,
+            &d.metadata(),
+        )?;
         Ok(t.elapsed().as_secs_f64())
     }
 
@@ -200,7 +210,7 @@ impl Preview {
         let p = Prepared::reuse(prev.take(), true, &s, &volume)?;
         let img = render::render_prepared(&p, &NoProgress)?;
         *prev = Some(p);
-        self.write(&img, scene.render.exposure, scene.render.view_transform)
+        self.write(&img, scene)
     }
 
     /// The coarse picture is on disk: its time since `t0`, and
@@ -238,7 +248,7 @@ impl Preview {
         if stage == Stage::Exposure {
             if let Some(look) = &self.look {
                 // A tone map of the last linear image: nothing is traced.
-                u.png = self.write(&look.image, scene.render.exposure, scene.render.view_transform)?;
+                u.png = self.write(&look.image, scene)?;
                 u.spp = look.prepared.settings().render.spp;
                 u.to_picture = t0.elapsed().as_secs_f64();
                 if let Some(c) = self.cache.as_mut() {
@@ -303,7 +313,6 @@ impl Preview {
     ) -> Result<Look, PreviewError> {
         let nothing = &NoProgress;
         let cache = self.cache.as_ref().expect("the cache is set before the pictures");
-        let (exposure, view) = (scene.render.exposure, scene.render.view_transform);
         let volume = Volume { density: Some(&cache.bake.density), emission: Some(&cache.bake.emission) };
         let [w, h] = self.size;
         let spp = self.spp.clamp(1, scene.render.spp.max(1));
@@ -327,7 +336,7 @@ impl Preview {
             prepared.set_image(cw, ch, 1)?;
             let img = render::render_prepared(&prepared, nothing);
             prepared.set_image(w, h, spp)?;
-            u.png += self.write(&img?, exposure, view)?;
+            u.png += self.write(&img?, scene)?;
             u.coarse_render = t.elapsed().as_secs_f64();
             self.coarse_written(u, t0, on_picture);
         }
@@ -336,7 +345,7 @@ impl Preview {
         u.render_pixels = t.elapsed().as_secs_f64();
         u.render = u.render_build + u.render_pixels;
         u.spp = spp;
-        u.png += self.write(&img, exposure, view)?;
+        u.png += self.write(&img, scene)?;
         u.to_picture = t0.elapsed().as_secs_f64();
         let mut look = Look { prepared, image: img };
         if scene.render.spp > spp && on_picture(&format!("picture ({w}x{h}, {spp} spp)"), u.to_picture) {
@@ -348,7 +357,7 @@ impl Preview {
             let img = render::render_prepared(&look.prepared, nothing)?;
             u.full_render = t.elapsed().as_secs_f64();
             u.full_spp = scene.render.spp;
-            u.png += self.write(&img, exposure, view)?;
+            u.png += self.write(&img, scene)?;
             u.to_full = t0.elapsed().as_secs_f64();
             look.image = img;
         }
@@ -477,7 +486,16 @@ mod tests {
         let after = std::fs::read(&out).unwrap();
         assert_ne!(after, before, "the picture follows the exposure");
         let want = out.with_file_name("want.png");
-        render::image_file::write_png(&want, &image, scene.render.exposure, scene.render.view_transform).unwrap();
+        let (shown, d) = render::develop::develop(&image, &scene.colour, &scene.render);
+        render::image_file::write_png_with(
+            &want,
+            &shown,
+            d.exposure_ev,
+            scene.render.view_transform,
+            render::image_file::PngBits::Eight,
+            &d.metadata(),
+        )
+        .unwrap();
         assert_eq!(after, std::fs::read(&want).unwrap());
         // The next render edit is diffed against the new exposure.
         scene.render.exposure += 0.5;

@@ -56,6 +56,14 @@ pub fn line_rgb(lambda_nm: f64, observer: Observer) -> [f64; 3] {
     c.map(|x| x * w)
 }
 
+/// Linear Rec.709 colour of one photon per second at `lambda_nm` seen by
+/// `observer` in the units of [`line_rgb`], not yet brought into the
+/// gamut: the term of a spectrum's sum, whose total is brought in once.
+pub fn photon_rgb_unclipped(lambda_nm: f64, observer: Observer) -> [f64; 3] {
+    let w = OI_5577.lambda_nm / lambda_nm / y_ref(observer);
+    observer.rgb(lambda_nm).map(|x| x * w)
+}
+
 /// Luminance of one 557.7 nm photon's gamut-mapped colour for `observer`:
 /// the unit of photon power.
 fn y_ref(observer: Observer) -> f64 {

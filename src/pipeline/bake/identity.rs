@@ -42,6 +42,7 @@ pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.exposure", "the PNG preview's exposure, a tone map of the rendered image"),
     ("render.shutter_s", "the reference renderer's motion blur, read from the velocity grid at lookup"),
     ("render.view_transform", "the PNG preview's view transform, a tone map of the rendered image"),
+    ("colour.white_balance_k", "the camera's white balance, applied to the rendered image before the PNG's exposure"),
     ("render.png_bits", "the PNG's bits per channel, an encoding of the rendered image"),
     ("volume", "density_scale and emission_scale are applied by the renderer at lookup; the files hold the unscaled grids"),
     ("background", "radiance, image and stars are seen by camera rays only; the bake never reads the image"),
