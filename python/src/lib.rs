@@ -30,7 +30,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
-pyo3::create_exception!(_aurora, InputError, PyValueError, "The input is at fault: a scene key, value or file (the command line's exit status 2).");
+pyo3::create_exception!(aurora, InputError, PyValueError, "The input is at fault: a scene key, value or file (the command line's exit status 2).");
 
 /// How often the waiting thread checks for signals and reports progress.
 const POLL: Duration = Duration::from_millis(50);
