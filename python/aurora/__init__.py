@@ -100,10 +100,16 @@ def profile(scene: Scene, progress: Progress = None) -> Profile:
     return Profile(columns, dict(zip(header, d["units"])), bright, np.array(d["area_km2"]), d["power_w"])
 
 
-def bake(scene: Scene, out, progress: Progress = None) -> str:
+def bake(scene: Scene, out, frames=None, progress: Progress = None) -> str:
     """Bakes the scene into the folder ``out`` (aurora.vdb, aurora.usda,
-    bake.json, replaced as a unit when the bake ends); returns its summary."""
-    summary, warnings = _aurora.bake(scene, Path(out), progress)
+    bake.json, replaced as a unit when the bake ends); with ``frames`` (a
+    list of frame numbers or a range such as ``"1-10"``) a sequence folder,
+    as ``aurora bake --frames``: frames already complete are kept. Returns
+    its summary."""
+    if isinstance(frames, str):
+        frames = frame_range(frames)
+    frames = None if frames is None else [int(f) for f in frames]
+    summary, warnings = _aurora.bake(scene, Path(out), frames, progress)
     _warn(warnings)
     return summary
 

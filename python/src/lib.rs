@@ -313,22 +313,60 @@ impl<const N: usize> IntoDict for [(&str, f64); N] {
     }
 }
 
+/// The Python side of a sequence's report: progress to the waiting
+/// thread, warnings kept.
+struct SequenceSay<'a> {
+    shared: &'a Shared,
+    warnings: Mutex<Vec<String>>,
+}
+
+impl aurora::app::bake_sequence::SequenceReport for SequenceSay<'_> {
+    fn progress(&self) -> &dyn Progress {
+        self.shared
+    }
+    fn say(&self, _line: &dyn Fn() -> String) {}
+    fn warnings(&self, warnings: &[String]) {
+        self.warnings.lock().expect("warnings lock").extend_from_slice(warnings);
+    }
+    fn frames(&self, _done: usize, _total: usize) {}
+}
+
+fn is_cancelled(e: &aurora::pipeline::bake::BakeError) -> bool {
+    matches!(e, aurora::pipeline::bake::BakeError::Beams(aurora::pipeline::beams::BeamError::Cancelled))
+}
+
 /// `aurora bake SCENE --out DIR`: aurora.vdb, aurora.usda and bake.json in
-/// `out`, replaced as a unit only when the bake has finished; returns the
-/// bake's summary and its warnings.
+/// `out`, replaced as a unit only when the bake has finished; with
+/// `frames`, `aurora bake --frames` (a sequence folder, frames already
+/// complete kept). Returns the summary and the warnings.
 #[pyfunction]
-#[pyo3(signature = (scene, out, progress=None))]
-fn bake(py: Python<'_>, scene: &PyScene, out: PathBuf, progress: Option<&Bound<'_, PyAny>>) -> PyResult<(String, Vec<String>)> {
+#[pyo3(signature = (scene, out, frames=None, progress=None))]
+fn bake(
+    py: Python<'_>,
+    scene: &PyScene,
+    out: PathBuf,
+    frames: Option<Vec<i64>>,
+    progress: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(String, Vec<String>)> {
     let s = scene.scene.clone();
     let out2 = out.clone();
-    let r = run(py, progress, move |pr| -> Result<(String, Vec<String>), (String, bool, bool)> {
+    // (message, input, cancelled)
+    type Failed = (String, bool, bool);
+    let r = run(py, progress, move |pr| -> Result<(String, Vec<String>), Failed> {
         let err = |m: String, input: bool| (m, input, false);
+        if let Some(frames) = frames {
+            let say = SequenceSay { shared: pr, warnings: Mutex::new(Vec::new()) };
+            let n = aurora::app::bake_sequence::bake_frames(&s, &out2, &frames, &frames, false, &say).map_err(|e| match e {
+                aurora::app::bake_sequence::SequenceBakeError::Bake(b) if is_cancelled(&b) => (String::new(), false, true),
+                e => err(e.to_string(), e.is_input()),
+            })?;
+            let summary = format!("{} frames baked, {} already complete, into {}", n.baked, n.skipped, out2.display());
+            return Ok((summary, say.warnings.into_inner().expect("warnings lock")));
+        }
         let _lock = aurora::io::bake_folder::prepare(&out2, || {}).map_err(|e| err(e.to_string(), e.is_input()))?;
         let b = match aurora::pipeline::bake::bake(&s, pr) {
             Ok(b) => b,
-            Err(aurora::pipeline::bake::BakeError::Beams(aurora::pipeline::beams::BeamError::Cancelled)) => {
-                return Err((String::new(), false, true));
-            }
+            Err(e) if is_cancelled(&e) => return Err((String::new(), false, true)),
             Err(e) => return Err(err(e.to_string(), e.is_input())),
         };
         let report = aurora::io::bake_folder::write_outputs_locked(&s, &b, &out2).map_err(|e| err(e.to_string(), e.is_input()))?;
@@ -363,7 +401,7 @@ fn render<'py>(
         aurora::app::render_image::render(&req, pr)
     })?;
     let r = r.map_err(|e| match e {
-        RenderImageError::Bake(aurora::pipeline::bake::BakeError::Beams(aurora::pipeline::beams::BeamError::Cancelled)) => cancelled(),
+        RenderImageError::Bake(b) if is_cancelled(&b) => cancelled(),
         e => py_err(e.to_string(), e.is_input()),
     })?;
     let img = &r.image;

@@ -4,8 +4,10 @@
 //! keograms of a baked sequence along the magnetic meridian ([`keogram`]),
 //! the render's cost for the farm plan ([`render_cost`]), and what the
 //! command line and the Python module share: a scene taken from a file or a
-//! preset ([`scene_input`]) and one image of it ([`render_image`]).
+//! preset ([`scene_input`]), one image of it ([`render_image`]) and a frame
+//! sequence's bake ([`bake_sequence`]).
 
+pub mod bake_sequence;
 pub mod bench;
 pub mod keogram;
 pub mod preview;

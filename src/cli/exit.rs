@@ -82,6 +82,7 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::app::keogram::KeogramError,
         aurora::app::scene_input::SceneInputError,
         aurora::app::render_image::RenderImageError,
+        aurora::app::bake_sequence::SequenceBakeError,
         aurora::app::bench::harness::SweepError,
         aurora::app::bench::report::ReportError,
     );
