@@ -117,8 +117,9 @@ def main(argv=None) -> int:
     fig, axes = plt.subplots(1, 2, figsize=(9, 5), sharey=True)
     for name, pr in profiles.items():
         p = pr.curtain(0)
-        axes[0].semilogx(np.maximum(p["ionization"], 1e-30), p["altitude_km"], label=name)
-        axes[1].semilogx(np.maximum(p["oi_5577_ver_cm3_s"], 1e-30), p["altitude_km"], label=name)
+        for ax, col in zip(axes, ("ionization", "oi_5577_ver_cm3_s")):
+            peak = p[col].max()
+            ax.plot(p[col] / peak, p["altitude_km"], label=f"{name} (peak {peak:.3g} {pr.units[col]})")
         summary[name] = {
             "ionization_peak_km": peak_km(p, "ionization"),
             "oi_5577_peak_km": peak_km(p, "oi_5577_ver_cm3_s"),
@@ -128,12 +129,12 @@ def main(argv=None) -> int:
         print(f"{name}: ionization peak {summary[name]['ionization_peak_km']:.2f} km, 557.7 nm peak "
               f"{summary[name]['oi_5577_peak_km']:.2f} km, columns 557.7 nm {summary[name]['oi_5577_r']:.0f} R, "
               f"630.0 nm {summary[name]['oi_6300_r']:.0f} R")
-    axes[0].set_xlabel(f"ionization ({pr.units['ionization']})")
-    axes[1].set_xlabel(f"557.7 nm ({pr.units['oi_5577_ver_cm3_s']})")
+    axes[0].set_xlabel("ionization rate, over its peak")
+    axes[1].set_xlabel("557.7 nm volume emission rate, over its peak")
     axes[0].set_ylabel("altitude (km)")
     for ax in axes:
-        ax.set_ylim(80, 250)
-        ax.legend(fontsize=8)
+        ax.set_ylim(80, 200)
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / "profiles.png", dpi=80)
 

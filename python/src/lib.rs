@@ -30,7 +30,12 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Condvar, Mutex};
 use std::time::Duration;
 
-pyo3::create_exception!(aurora, InputError, PyValueError, "The input is at fault: a scene key, value or file (the command line's exit status 2).");
+pyo3::create_exception!(
+    aurora,
+    InputError,
+    PyValueError,
+    "The input is at fault: a scene key, value or file (the command line's exit status 2)."
+);
 
 /// How often the waiting thread checks for signals and reports progress.
 const POLL: Duration = Duration::from_millis(50);
@@ -471,7 +476,8 @@ fn skymap<'py>(py: Python<'py>, scene: &PyScene, altitude_km: f64, origin: Optio
     };
     let cam = aurora::geometry::camera::CameraModel::new(&s.camera, s.render.width, s.render.height)
         .map_err(|e| py_err(e.to_string(), e.is_input()))?;
-    let m = aurora::geometry::imager_skymap::skymap(&cam, s.earth.radius_km, origin, altitude_km).map_err(|e| InputError::new_err(e.to_string()))?;
+    let m = aurora::geometry::imager_skymap::skymap(&cam, s.earth.radius_km, origin, altitude_km)
+        .map_err(|e| InputError::new_err(e.to_string()))?;
     let bytes = |v: &[f64]| PyBytes::new(py, &v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>());
     let d = PyDict::new(py);
     d.set_item("az", bytes(&m.azimuth_deg))?;

@@ -127,7 +127,12 @@ fn vdb_error(message: String, input: bool) -> RenderImageError {
 }
 
 /// The renderer prepared from the image's source (module doc).
-pub fn prepare(scene: &Scene, settings: &RenderSettings, vdb: Option<&Path>, progress: &dyn Progress) -> Result<PreparedSource, RenderImageError> {
+pub fn prepare(
+    scene: &Scene,
+    settings: &RenderSettings,
+    vdb: Option<&Path>,
+    progress: &dyn Progress,
+) -> Result<PreparedSource, RenderImageError> {
     // The motion blur reads the velocity grid `v` beside the medium: from grids.
     let blur = scene.render.shutter_s > 0.0;
     if let (Some(path), false) = (vdb, blur) {
