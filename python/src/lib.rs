@@ -91,7 +91,7 @@ fn run<T: Send>(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>, work: impl 
     let mut raised: Option<PyErr> = None;
     let out = std::thread::scope(|s| {
         let (shared, slot) = (&shared, &slot);
-        s.spawn(move || {
+        let worker = s.spawn(move || {
             let v = work(shared);
             *slot.0.lock().expect("result lock") = Some(v);
             slot.1.notify_all();
@@ -99,12 +99,15 @@ fn run<T: Send>(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>, work: impl 
         let mut seen = 0u64;
         loop {
             let got = py.detach(|| {
-                let guard = slot.0.lock().expect("result lock");
-                let (mut guard, _) = slot.1.wait_timeout_while(guard, POLL, |v| v.is_none()).expect("result lock");
+                let guard = slot.0.lock().unwrap_or_else(|e| e.into_inner());
+                let (mut guard, _) = slot.1.wait_timeout_while(guard, POLL, |v| v.is_none()).unwrap_or_else(|e| e.into_inner());
                 guard.take()
             });
             if let Some(v) = got {
                 return Some(v);
+            }
+            if worker.is_finished() {
+                break;
             }
             if raised.is_some() {
                 continue;
@@ -126,11 +129,17 @@ fn run<T: Send>(py: Python<'_>, callback: Option<&Bound<'_, PyAny>>, work: impl 
                 }
             }
         }
+        // The worker has ended: with its result (stored after the last
+        // wait), or having panicked (joined here, so the panic becomes the
+        // RuntimeError below rather than the scope's).
+        let _ = worker.join();
+        let v = slot.0.lock().unwrap_or_else(|e| e.into_inner()).take();
+        v
     });
     match (raised, out) {
         (Some(e), _) => Err(e),
         (None, Some(v)) => Ok(v),
-        (None, None) => Err(PyRuntimeError::new_err("the work's thread ended without a result")),
+        (None, None) => Err(PyRuntimeError::new_err("the work's thread ended without a result (a panic: see stderr)")),
     }
 }
 

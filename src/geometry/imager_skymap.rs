@@ -19,8 +19,8 @@
 //! up axes are `E = (-sin l, cos l, 0)`, `N = (-sin f cos l, -sin f sin l,
 //! cos f)`, `U = (cos f cos l, cos f sin l, sin f)` in Earth-centred
 //! coordinates (f, l: the origin's latitude and longitude), so
-//! `w = v_x E + v_y N + v_z U`, latitude `asin(w_z)`, longitude
-//! `atan2(w_y, w_x)`. The ground being a sphere, the site's geodetic
+//! `w = v_x E + v_y N + v_z U`, latitude `asin(w_z)` (computed as
+//! `atan2(w_z, |(w_x, w_y)|)`), longitude `atan2(w_y, w_x)`. The ground being a sphere, the site's geodetic
 //! latitude stands for the sphere's (WGS 84's flattening, a few tenths of a
 //! degree, is left out). Pixels outside a fisheye's image circle are NaN in
 //! every array; latitude and longitude are NaN below the horizon (the
@@ -69,7 +69,7 @@ pub fn lat_lon_deg(v: DVec3, origin: [f64; 2]) -> [f64; 2] {
     let n = DVec3::new(-sf * cl, -sf * sl, cf);
     let u = DVec3::new(cf * cl, cf * sl, sf);
     let w = (e * v.x + n * v.y + u * v.z).normalize();
-    [w.z.clamp(-1.0, 1.0).asin().to_degrees(), w.y.atan2(w.x).to_degrees()]
+    [w.z.atan2(w.x.hypot(w.y)).to_degrees(), w.y.atan2(w.x).to_degrees()]
 }
 
 /// Where a ray from `o` along unit `u` leaves the sphere of altitude
@@ -115,9 +115,12 @@ pub fn skymap(camera: &CameraModel, radius_km: f64, origin: [f64; 2], alt_km: f6
             let Some(ray) = camera.ray_at(px as f64 + 0.5, py as f64 + 0.5) else { continue };
             let d = ray.dir;
             let i = py * w + px;
-            let el = d.dot(up).clamp(-1.0, 1.0).asin().to_degrees();
+            // atan2 of the vertical and horizontal parts: exact near the
+            // zenith, where asin of a dot product loses half its digits.
+            let (e, n) = (d.dot(east), d.dot(north));
+            let el = d.dot(up).atan2(e.hypot(n)).to_degrees();
             m.elevation_deg[i] = el;
-            m.azimuth_deg[i] = d.dot(east).atan2(d.dot(north)).to_degrees().rem_euclid(360.0);
+            m.azimuth_deg[i] = e.atan2(n).to_degrees().rem_euclid(360.0);
             if el >= 0.0 {
                 let p = exit_point(&earth, ray.origin, d, alt_km);
                 let [lat, lon] = lat_lon_deg((p - earth.centre()).normalize(), origin);
