@@ -1,4 +1,4 @@
-"""A physicist's session with the Python module `aurora`, as a notebook
+"""A physicist's walk-through of the Python module `aurora`, as a notebook
 would run it cell by cell (docs/python.md; tests/python/test_python_example.py
 runs it as written):
 

@@ -389,6 +389,10 @@ fn bake(
     r.map_err(|(m, input, stopped)| if stopped { cancelled() } else { py_err(m, input) })
 }
 
+/// A render's answer: RGBA f32 bytes, width, height, a grey image's
+/// units and air (or None), the bake's warnings.
+type RenderOut<'py> = (Bound<'py, PyBytes>, usize, usize, Option<(String, String)>, Vec<String>);
+
 /// One image (`aurora render`): the scene baked in memory or the VDB
 /// `vdb` (with `frame`, the sequence folder's frame), or with `grid` one
 /// float grid alone; returns (RGBA f32 bytes, width, height, the grey
@@ -402,7 +406,7 @@ fn render<'py>(
     grid: Option<String>,
     frame: Option<i64>,
     progress: Option<&Bound<'py, PyAny>>,
-) -> PyResult<(Bound<'py, PyBytes>, usize, usize, Option<(String, String)>, Vec<String>)> {
+) -> PyResult<RenderOut<'py>> {
     let s = scene.scene.clone();
     let dir = aurora::app::scene_input::scene_dir(&scene.source);
     let vdb = match (vdb, frame) {
