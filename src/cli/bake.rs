@@ -1,9 +1,6 @@
 //! `aurora bake`: one bake into a folder ([`bake_one`]), or a frame
-//! sequence ([`bake_frames`]), resumed frame by frame: a frame already
-//! complete for this bake is skipped, one whose VDB is not the file its
-//! report records (size, header UUID: `aurora::farm::frame_files::frame_state`)
-//! is baked again with a warning, one another process is baking is waited
-//! for (`aurora::farm::sequence_folder`, `aurora::farm::frame_files::lock_frame`).
+//! sequence ([`bake_frames`], `aurora::app::bake_sequence`: resumed frame
+//! by frame).
 //!
 //! What it says on stderr goes through one [`Report`]: bars, summaries and
 //! warning lines for a terminal, or with `--progress json` only JSON objects
@@ -16,7 +13,6 @@ use super::exit::InputError;
 use super::frames::{frame_selection, selection};
 use super::{load_scene, print_warnings, with_threads};
 use anyhow::Result;
-use aurora::farm::frame_files::FrameState;
 use aurora::scene::Scene;
 use aurora::util::progress::{JsonProgress, Progress};
 use std::path::Path;
@@ -173,64 +169,35 @@ fn bake_one(scene: &Scene, out: &Path, say: &Report) -> Result<()> {
     Ok(())
 }
 
+impl aurora::app::bake_sequence::SequenceReport for Report {
+    fn progress(&self) -> &dyn Progress {
+        Report::progress(self)
+    }
+    fn say(&self, line: &dyn Fn() -> String) {
+        Report::say(self, line)
+    }
+    fn warnings(&self, warnings: &[String]) {
+        Report::warnings(self, warnings)
+    }
+    fn frames(&self, done: usize, total: usize) {
+        Report::frames(self, done, total)
+    }
+}
+
 /// Bakes this process's share `mine` of the sequence `frames` into `out`
-/// (a folder of one bake: `aurora::farm::sequence_folder`; `rebake` deletes another's).
+/// (`aurora::app::bake_sequence`), and says how it went.
 fn bake_frames(scene: &Scene, out: &Path, frames: &[i64], mine: &[i64], rebake: bool, say: &Report) -> Result<()> {
-    let progress = say.progress();
-    let identity = aurora::pipeline::bake::identity::BakeIdentity::of(scene);
-    let fields = aurora::io::bake_folder::stage_fields(scene);
-    let mut seq = aurora::farm::sequence_folder::Sequence::open(out, identity, frames, scene.animation.fps, fields, rebake, || {
-        say.say(|| format!("aurora: another bake is writing to {}; waiting", out.display()))
-    })?;
-    say.frames(0, mine.len());
     let t0 = std::time::Instant::now();
-    let (mut baked, mut skipped, mut mismatched) = (0usize, 0usize, 0usize);
-    let mut plan: Option<aurora::pipeline::plan::BakePlan> = None;
-    for &f in mine {
-        if seq.frame_state(f)? == FrameState::Complete {
-            skipped += 1;
-            say.frames(baked + skipped, mine.len());
-            continue;
-        }
-        seq.check_still_ours()?;
-        // One writer per frame: a shard that finds another baking it waits,
-        // then finds it complete.
-        let _lock =
-            aurora::farm::frame_files::lock_frame(out, f, || say.say(|| format!("frame {f}: another process is baking it; waiting")))?;
-        match seq.frame_state(f)? {
-            FrameState::Complete => {
-                skipped += 1;
-                say.frames(baked + skipped, mine.len());
-                continue;
-            }
-            FrameState::Mismatch(why) => {
-                mismatched += 1;
-                say.warnings(&[format!("frame {f}: {why}; baking it again")]);
-            }
-            FrameState::Absent => {}
-        }
-        let at = Scene { animation: aurora::pipeline::motion::at_frame(&scene.animation, f), ..scene.clone() };
-        // One plan, carried from frame to frame (only the time changes).
-        let (bake, p) = aurora::pipeline::bake::bake_reusing(&at, plan.as_ref(), progress)?;
-        plan = Some(p);
-        say.warnings(&bake.stats.warnings);
-        let report = seq.write_frame(&at, &bake, f)?;
-        baked += 1;
-        say.say(|| format!("frame {f} (t = {:.4} s): {}", at.animation.time_s, report.vdb.display()));
-        say.frames(baked + skipped, mine.len());
-    }
-    if mismatched > 0 {
-        say.warnings(&[format!(
-            "{mismatched} frames baked again: their VDB was not the file their report records (its size in bytes and header UUID)"
-        )]);
-    }
+    let n = aurora::app::bake_sequence::bake_frames(scene, out, frames, mine, rebake, say)?;
     say.say(|| {
         let secs = t0.elapsed().as_secs_f64();
         format!(
-            "{baked} frames baked, {skipped} already complete, of {} for this shard ({} in the sequence) in {secs:.2} s ({:.3} frames/s); stage {}",
+            "{} frames baked, {} already complete, of {} for this shard ({} in the sequence) in {secs:.2} s ({:.3} frames/s); stage {}",
+            n.baked,
+            n.skipped,
             mine.len(),
             frames.len(),
-            if secs > 0.0 { baked as f64 / secs } else { 0.0 },
+            if secs > 0.0 { n.baked as f64 / secs } else { 0.0 },
             out.join(aurora::io::bake_folder::USDA_NAME).display()
         )
     });

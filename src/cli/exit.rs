@@ -80,6 +80,9 @@ pub fn is_input(e: &anyhow::Error) -> bool {
         aurora::render::RenderError,
         aurora::app::preview::PreviewError,
         aurora::app::keogram::KeogramError,
+        aurora::app::scene_input::SceneInputError,
+        aurora::app::render_image::RenderImageError,
+        aurora::app::bake_sequence::SequenceBakeError,
         aurora::app::bench::harness::SweepError,
         aurora::app::bench::report::ReportError,
     );

@@ -25,7 +25,7 @@ mod sky;
 use anyhow::Result;
 use args::{Cli, Command};
 use aurora::scene::Scene;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Runs one command.
 pub fn run(cli: Cli) -> Result<()> {
@@ -44,29 +44,18 @@ pub fn run(cli: Cli) -> Result<()> {
 }
 
 /// The scene a command names: a scene file or a preset, its overrides
-/// applied in command-line order, validated.
+/// applied in command-line order, validated, what it names outside itself
+/// read (`aurora::app::scene_input`); its warnings on stderr.
 fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
-    let scene = Scene::load_with(arg, overrides.in_order())?;
-    print_warnings(Scene::shadowed_preset(arg).as_slice());
-    // A table the scene names that is not compiled in is read now (and kept):
-    // a missing or damaged one is refused before any work (exit status 2).
-    aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
-    if let Some(site) = &scene.site {
-        let hour = aurora::render::site_sky::SiteHour::of(site, scene.animation.time_s).map_err(exit::InputError)?;
-        print_warnings(hour.twilight_warning().as_slice());
-    }
-    Ok(scene)
+    let input = aurora::app::scene_input::load(arg, overrides.in_order())?;
+    print_warnings(&input.warnings);
+    Ok(input.scene)
 }
 
-/// The folder relative paths in a scene file (a heightmap) are resolved
-/// against: the scene file's own folder, or "." for a preset.
+/// The folder relative paths in a scene file are resolved against
+/// (`aurora::app::scene_input::scene_dir`).
 fn scene_dir(scene_arg: &str) -> PathBuf {
-    let p = Path::new(scene_arg);
-    if p.exists() {
-        p.parent().filter(|d| !d.as_os_str().is_empty()).map(Path::to_path_buf).unwrap_or_else(|| PathBuf::from("."))
-    } else {
-        PathBuf::from(".")
-    }
+    aurora::app::scene_input::scene_dir(scene_arg)
 }
 
 /// Runs `f` on a thread pool of `threads` workers (default: all cores).

@@ -1,10 +1,8 @@
 //! `aurora render`: the outputs checked before anything is traced, then one
-//! image or one per frame of a sequence folder. The volume comes from one of
-//! three sources ([`prepare`]): a VDB's records read straight into the
-//! renderer's medium, a VDB read into grids where that path does not apply,
-//! or a bake in memory. With `--grid NAME` one float grid alone is the
-//! emission (grey) and the image is written with one channel
-//! ([`prepare_grid`], `aurora::render::image_file::write_exr_grey`).
+//! image or one per frame of a sequence folder, each made by
+//! `aurora::app::render_image` (the volume from a VDB or a bake in memory;
+//! with `--grid NAME` one float grid alone as the emission, grey, written
+//! with one channel: `aurora::render::image_file::write_exr_grey`).
 
 use super::args::RenderArgs;
 use super::bars::Bars;
@@ -13,9 +11,7 @@ use super::frames::{frame_name, frame_selection};
 use super::{load_scene, print_warnings, scene_dir, with_threads};
 use anyhow::{Context, Result};
 use aurora::render::image_file::PngBits;
-use aurora::render::Prepared;
 use aurora::scene::Scene;
-use aurora::util::progress::Progress;
 use std::path::{Path, PathBuf};
 
 /// The image formats `aurora render` writes, chosen by the file name's extension.
@@ -179,162 +175,26 @@ fn render_frames(job: &Job, seq: &Path, frames: &[i64], out: &Path, png: Option<
     Ok(())
 }
 
-/// Renders one image: the volume prepared from its source, traced (with
-/// adaptive sampling if asked), written.
+/// Renders one image (`aurora::app::render_image`) and writes it.
 fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
     let bars = Bars::with_log_lines(job.quiet);
-    let progress = bars.progress();
-    let mut settings = aurora::render::RenderSettings::from_scene(&job.scene);
-    settings.base_dir = Some(job.dir.clone());
-    settings.shadow_samples = job.shadow_samples;
-    if let Some(f) = files.frame {
-        settings.time_s = aurora::pipeline::motion::frame_time(&job.scene.animation, f);
-    }
-    if job.grid.is_some() {
-        // A filter image holds the grid's light alone: no sky, no stars, no airglow.
-        settings.background.radiance = [0.0; 3];
-        settings.background.image = None;
-        settings.background.stars = false;
-        settings.airglow.on = false;
-    }
-    // A heightmap or sky image that is missing or not a regular file is
-    // refused before the bake or the medium build, not after.
-    settings.check_input_files()?;
-    let (prepared, open_seconds, build_seconds) = match &job.grid {
-        Some(name) => prepare_grid(&job.scene, &settings, files.vdb, name, progress)?,
-        None => prepare(&job.scene, &settings, files.vdb, progress)?,
+    let req = aurora::app::render_image::ImageRequest {
+        scene: &job.scene,
+        dir: job.dir.clone(),
+        vdb: files.vdb,
+        frame: files.frame,
+        grid: job.grid.as_deref(),
+        shadow_samples: job.shadow_samples,
+        adaptive: job.adaptive,
     };
-    let image = if job.adaptive {
-        aurora::render::render_adaptive_prepared(&prepared, build_seconds, progress)?
-    } else {
-        let mut img = aurora::render::render_prepared(&prepared, progress)?;
-        img.stats.build_seconds = build_seconds;
-        img
-    };
-    finish(job, files, &image, open_seconds)
+    let rendered = aurora::app::render_image::render(&req, bars.progress())?;
+    print_warnings(&rendered.warnings);
+    finish(job, files, &rendered.image, rendered.open_seconds)
 }
 
-/// The renderer prepared from the image's source, with the seconds spent
-/// opening it (reading the file, or baking) and building the medium.
-///
-/// From a VDB, the medium straight from the file's records (no grids; the
-/// terrain's emission sampler is built from the medium); from grids where
-/// that path does not apply (a float emission grid, active tiles) and after
-/// a bake.
-fn prepare(
-    scene: &Scene,
-    settings: &aurora::render::RenderSettings,
-    vdb: Option<&Path>,
-    progress: &dyn Progress,
-) -> Result<(Prepared, f64, f64)> {
-    // The motion blur reads the velocity grid `v` beside the medium: from grids.
-    let blur = scene.render.shutter_s > 0.0;
-    if let (Some(path), false) = (vdb, blur) {
-        return aurora::app::vdb_for_render::prepare_from_vdb(settings, path, &scene.colour)
-            .map_err(|e| super::exit::by_message(e.to_string(), e.is_input()));
-    }
-    let no_velocity = |source: String| {
-        InputError(format!(
-            "render.shutter_s = {} blurs along the velocity grid `v`, which {source} does not hold: bake it with grid.velocity = true (or set render.shutter_s = 0)",
-            scene.render.shutter_s
-        ))
-    };
-    let mut velocity = None;
-    let open = std::time::Instant::now();
-    let (density, emission) = match vdb {
-        Some(path) => {
-            let file =
-                aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
-            if blur {
-                let v = file.vec3_grids.iter().find(|g| g.name == aurora::pipeline::bake::velocity::GRID_NAME).cloned();
-                velocity = Some(v.ok_or_else(|| no_velocity(path.display().to_string()))?);
-            }
-            aurora::app::vdb_for_render::render_grids_as(file, &scene.colour).map_err(|e| InputError(format!("{}: {e}", path.display())))?
-        }
-        None => {
-            if blur && !scene.grid.velocity {
-                return Err(no_velocity("the bake".to_string()).into());
-            }
-            let bake = aurora::pipeline::bake::bake(scene, progress)?;
-            print_warnings(&bake.stats.warnings);
-            velocity = bake.velocity;
-            (Some(bake.density), Some(bake.emission))
-        }
-    };
-    let open_seconds = open.elapsed().as_secs_f64();
-    let build = std::time::Instant::now();
-    let volume = aurora::render::Volume { density: density.as_ref(), emission: emission.as_ref() };
-    let mut prepared = Prepared::new(settings, &volume)?;
-    if let Some(v) = velocity {
-        prepared = prepared.with_velocity(v)?;
-    }
-    Ok((prepared, open_seconds, build.elapsed().as_secs_f64()))
-}
-
-/// The renderer prepared for `--grid NAME`: the float grid `name` as a
-/// grey emission and the `density` grid, from the VDB or from a bake of
-/// the scene (its `grid.lines`), with the seconds spent opening and
-/// building. A missing grid is the user's error, naming the float grids
-/// there are.
-fn prepare_grid(
-    scene: &Scene,
-    settings: &aurora::render::RenderSettings,
-    vdb: Option<&Path>,
-    name: &str,
-    progress: &dyn Progress,
-) -> Result<(Prepared, f64, f64)> {
-    let open = std::time::Instant::now();
-    let (density, floats, source) = match vdb {
-        Some(path) => {
-            let file =
-                aurora::io::vdb::read::read_vdb_for_render(path).map_err(|e| super::exit::by_message(e.to_string(), e.is_input()))?;
-            let density = file.float("density").cloned();
-            (density, file.float_grids, path.display().to_string())
-        }
-        None => {
-            let bake = aurora::pipeline::bake::bake(scene, progress)?;
-            print_warnings(&bake.stats.warnings);
-            (Some(bake.density), bake.lines, "the bake (grid.lines)".to_string())
-        }
-    };
-    let Some(g) = floats.iter().find(|g| g.name == name) else {
-        let there: Vec<&str> = floats.iter().map(|g| g.name.as_str()).filter(|n| *n != "density").collect();
-        let there = if there.is_empty() { "none".to_string() } else { there.join(", ") };
-        return Err(InputError(format!("--grid {name}: {source} has no float grid of that name (float emission grids: {there})")).into());
-    };
-    let emission = aurora::render::grids::grey(g);
-    // A line's own grid sees the air at that line's optical depth.
-    let mut settings = settings.clone();
-    settings.line = name.strip_prefix("line_").and_then(aurora::physics::emission::line_table::line_index);
-    let open_seconds = open.elapsed().as_secs_f64();
-    let build = std::time::Instant::now();
-    let volume = aurora::render::Volume { density: density.as_ref(), emission: Some(&emission) };
-    Ok((Prepared::new(&settings, &volume)?, open_seconds, build.elapsed().as_secs_f64()))
-}
-
-/// What a `--grid NAME` image holds: a `line_*` grid (rayleigh per km)
-/// integrated along the ray is the line's column brightness in rayleigh,
-/// `4 pi I / 1e6` with I the radiance in photons cm^-2 s^-1 sr^-1; any other
-/// grid its units times km. The air's extinction is in it when
-/// `[sky] extinction` is on.
+/// What a `--grid NAME` image holds (`aurora::app::render_image::grey_metadata`).
 pub fn grey_metadata(scene: &Scene, name: &str) -> aurora::render::image_file::GreyMetadata {
-    let mut units = if name.starts_with("line_") {
-        format!(
-            "R (rayleigh): the {name} grid (R/km) integrated along each ray, the line's column brightness 4 pi I / 1e6, \
-I in photons cm^-2 s^-1 sr^-1"
-        )
-    } else {
-        format!("the {name} grid's units times km: the grid integrated along each ray")
-    };
-    if scene.volume.emission_scale != 1.0 {
-        units.push_str(&format!(", times volume.emission_scale = {}", scene.volume.emission_scale));
-    }
-    let air = if scene.sky.extinction {
-        "applied: sky.extinction = true, the line's own optical depth along each ray (the brightness seen below the air)"
-    } else {
-        "not applied: sky.extinction = false (the brightness above the air)"
-    };
-    aurora::render::image_file::GreyMetadata { units, air: air.to_string() }
+    aurora::app::render_image::grey_metadata(scene, name)
 }
 
 /// Writes a one-channel `--grid` image (EXR `Y`, or greyscale PNG at

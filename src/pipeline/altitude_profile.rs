@@ -243,21 +243,50 @@ pub fn profile(scene: &Scene, progress: &dyn Progress) -> Result<Profile, BeamEr
     Ok(Profile { curtains, beam_stats })
 }
 
+/// The profile's rows, one per curtain and bin, in [`HEADER`]'s columns:
+/// the curtain's index, the bin's centre altitude, the bin's values and its
+/// volume emission rates.
+pub fn rows(p: &Profile) -> Vec<Vec<f64>> {
+    let mut out = Vec::with_capacity(p.curtains.iter().map(|c| c.bins.len()).sum());
+    for (ci, c) in p.curtains.iter().enumerate() {
+        for (i, b) in c.bins.iter().enumerate() {
+            let mut row = Vec::with_capacity(2 + COLUMNS + 5);
+            row.extend([ci as f64, c.centre(i)]);
+            row.extend(b.iter().chain(c.ver_cm3_s(i).iter()));
+            out.push(row);
+        }
+    }
+    out
+}
+
+/// The unit of a column of [`HEADER`] (module doc): ion pairs/s, photons/s
+/// and keV/s over the whole curtain, photons cm^-3 s^-1 for the volume
+/// emission rates.
+pub fn unit(column: &str) -> &'static str {
+    match column {
+        "curtain" => "index",
+        "altitude_km" => "km",
+        "ionization" => "ion pairs s^-1",
+        "deposited_kev_s" => "keV s^-1",
+        c if c.ends_with("_ver_cm3_s") => "photons cm^-3 s^-1",
+        _ => "photons s^-1",
+    }
+}
+
 /// The profile as CSV (a `#` line naming the footprint areas, [`HEADER`],
-/// then one row per curtain and bin).
+/// then one row per curtain and bin: [`rows`]).
 pub fn to_csv(p: &Profile) -> String {
-    let mut s = String::with_capacity(64 * p.curtains.iter().map(|c| c.bins.len()).sum::<usize>() + 128);
+    let rows = rows(p);
+    let mut s = String::with_capacity(64 * rows.len() + 128);
     s.push_str(&area_comment(p));
     s.push_str(HEADER);
     s.push('\n');
-    for (ci, c) in p.curtains.iter().enumerate() {
-        for (i, b) in c.bins.iter().enumerate() {
-            s.push_str(&format!("{ci},{:.2}", c.centre(i)));
-            for x in b.iter().chain(c.ver_cm3_s(i).iter()) {
-                s.push_str(&format!(",{x:.6e}"));
-            }
-            s.push('\n');
+    for row in &rows {
+        s.push_str(&format!("{},{:.2}", row[0] as usize, row[1]));
+        for x in &row[2..] {
+            s.push_str(&format!(",{x:.6e}"));
         }
+        s.push('\n');
     }
     s
 }

@@ -32,6 +32,12 @@ pub trait Progress: Sync {
     fn inc(&self, n: u64);
     /// The current stage is done.
     fn finish(&self);
+    /// Whether the caller has asked the work to stop (a host's interrupt):
+    /// the bake asks between chunks of beams and returns
+    /// `BeamError::Cancelled` instead of a result. Never, by default.
+    fn cancelled(&self) -> bool {
+        false
+    }
 }
 
 /// Ignores all progress.

@@ -81,6 +81,9 @@ pub fn bake_plan(plan: &BakePlan, t_all: Instant, progress: &dyn Progress) -> Re
     let mut times = StageTimes { footprints: plan.footprint_seconds, ..StageTimes::default() };
     let (count, noise, warnings) = beam_count(plan, &mut times, progress)?;
     let (emission, gathered) = gather::trace_and_gather(plan, count, noise, warnings, &mut times, progress)?;
+    if progress.cancelled() {
+        return Err(crate::pipeline::beams::BeamError::Cancelled.into());
+    }
     finish::finish(plan, emission, gathered, times, t_all, progress)
 }
 

@@ -50,9 +50,13 @@ pub enum BakeError {
 }
 
 impl BakeError {
-    /// Always the user's input: every variant comes from the scene's parameters and names the keys to change (exit status 2).
+    /// The user's input: every variant comes from the scene's parameters and names the keys to change (exit status 2), except a
+    /// bake the caller cancelled.
     pub fn is_input(&self) -> bool {
-        true
+        match self {
+            BakeError::Beams(e) => e.is_input(),
+            _ => true,
+        }
     }
 }
 

@@ -81,6 +81,9 @@ pub fn for_each_chunk(
         // The stats are the plan's time's, the first sample's.
         let mut other = BeamStats::default();
         for beams in &chunks {
+            if progress.cancelled() {
+                return Err(BeamError::Cancelled);
+            }
             let running = if k == 0 { &mut *stats } else { &mut other };
             let t = Instant::now();
             let traced = trace_range_running(&params, count, 0, beams.clone(), running, progress)?;

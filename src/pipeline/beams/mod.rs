@@ -105,6 +105,10 @@ pub enum BeamError {
     /// (`crate::pipeline::bake::pilot::check_deposition`).
     #[error("curtain[{curtain}]: a pilot of {beams} of its beams deposited only {:.1} % of the power they carried into the atmosphere ({left} left the footprint's box, {bottom} went through the atmosphere's bottom, {capped} took the most steps), under the {:.0} % a bake needs; the field where its beams start dips {dip_deg:.2} degrees below the horizon with beams.alpha_d_deg = {alpha_d_deg}: a steeper field (earth.magnetic_pole nearer the curtain, or beams.b_inclination_deg), a smaller beams.alpha_d_deg or beams.length_km, or a larger curtain keeps the beams over their footprint", 100.0 * fraction, 100.0 * MIN_DEPOSITED_FRACTION)]
     LowDeposit { curtain: usize, beams: usize, fraction: f64, left: usize, bottom: usize, capped: usize, dip_deg: f64, alpha_d_deg: f64 },
+    /// The caller asked the trace to stop (`Progress::cancelled`): nothing
+    /// of it is returned.
+    #[error("cancelled before the beams were traced")]
+    Cancelled,
 }
 
 /// A curtain whose beams deposit less than this share of the power they
@@ -118,9 +122,10 @@ pub const MIN_DEPOSITED_FRACTION: f64 = 0.5;
 pub const WARN_DEPOSITED_FRACTION: f64 = 0.95;
 
 impl BeamError {
-    /// Always the user's input: the scene's parameters (exit status 2).
+    /// The user's input (the scene's parameters, exit status 2), except a
+    /// trace the caller cancelled.
     pub fn is_input(&self) -> bool {
-        true
+        !matches!(self, BeamError::Cancelled)
     }
 }
 
@@ -653,12 +658,18 @@ impl<'a> Tracer<'a> {
             .into_par_iter()
             .map(|c| {
                 let mut out = ChunkOut { beams: Vec::with_capacity(c.len()), ..ChunkOut::default() };
+                if self.progress.cancelled() {
+                    return out;
+                }
                 for i in c {
                     self.beam(&ctxs, &starts, self.stream_offset + i as u64, &mut out);
                 }
                 out
             })
             .collect();
+        if self.progress.cancelled() {
+            return Err(BeamError::Cancelled);
+        }
         Ok((power_w, traces))
     }
 
