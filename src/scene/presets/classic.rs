@@ -112,7 +112,9 @@ pub fn seed2014() -> Scene {
     // exposure of +3 stops.
     // Straight sheets where the default stood before its arcs followed the
     // oval, seen from its camera of then.
-    for ((c, [x, y, rot]), flux) in s.curtains.iter_mut().zip([[-20.0, 0.0, 4.0], [25.0, 45.0, -6.0], [-5.0, 95.0, 2.0]]).zip([6.0, 4.0, 3.0]) {
+    for ((c, [x, y, rot]), flux) in
+        s.curtains.iter_mut().zip([[-20.0, 0.0, 4.0], [25.0, 45.0, -6.0], [-5.0, 95.0, 2.0]]).zip([6.0, 4.0, 3.0])
+    {
         c.path = None;
         c.length = 160.0;
         c.center = [x, y];
