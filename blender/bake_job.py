@@ -38,6 +38,11 @@ from pathlib import Path
 _BAKE_FILES = re.compile(r"^(aurora(\.\d+)?\.(vdb|json|usda)|bake\.json|scene\.toml|\.aurora[\w.-]*)$")
 #: The scene file written into the bake folder (kept with its output).
 SCENE_FILE = "scene.toml"
+#: The file whose creation stops the bake (`aurora bake --cancel-file`), in
+#: the staging folder: a cancel that needs no signal, so it works on Windows.
+CANCEL_FILE = ".aurora-cancel"
+#: Seconds a cancelled bake may take to end before it is terminated.
+CANCEL_WAIT_S = 30
 
 
 class BakeError(RuntimeError):
@@ -156,7 +161,8 @@ class BakeJob:
         self._reader: threading.Thread | None = None
 
     def command(self) -> list[str]:
-        cmd = [self.binary, "bake", str(self.staging / SCENE_FILE), "--out", str(self.staging), "--progress", "json"]
+        cmd = [self.binary, "bake", str(self.staging / SCENE_FILE), "--out", str(self.staging), "--progress", "json",
+               "--cancel-file", str(self.staging / CANCEL_FILE)]
         if self.frames is not None:
             cmd += ["--frames", f"{self.frames[0]}-{self.frames[1]}"]
         if self.threads:
@@ -201,6 +207,11 @@ class BakeJob:
     def running(self) -> bool:
         return self._proc is not None and self._proc.poll() is None
 
+    @property
+    def returncode(self) -> int | None:
+        """The baker's exit status once it ended (130: cancelled), else None."""
+        return None if self._proc is None else self._proc.poll()
+
     def wait(self, on_event=None) -> int:
         """Run to the end (synchronous use), passing each event to `on_event`."""
         assert self._proc is not None, "start() first"
@@ -219,14 +230,23 @@ class BakeJob:
         return self._proc.returncode
 
     def cancel(self) -> None:
-        """Stop the bake and remove its staging folder; `output_dir` is untouched."""
+        """Stop the bake and remove its staging folder; `output_dir` is untouched.
+
+        The stop is asked for by creating the bake's cancel file (no signal:
+        Windows has none to send); the baker sees it within 50 ms and exits
+        as after Ctrl-C. One that has not ended after `CANCEL_WAIT_S` is
+        terminated."""
         if self._proc is not None and self._proc.poll() is None:
-            self._proc.terminate()
             try:
-                self._proc.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                self._proc.kill()
-                self._proc.wait()
+                (self.staging / CANCEL_FILE).touch()
+                self._proc.wait(timeout=CANCEL_WAIT_S)
+            except (OSError, subprocess.TimeoutExpired):
+                self._proc.terminate()
+                try:
+                    self._proc.wait(timeout=CANCEL_WAIT_S)
+                except subprocess.TimeoutExpired:
+                    self._proc.kill()
+                    self._proc.wait()
         if self._reader is not None:
             self._reader.join(timeout=30)
         shutil.rmtree(self.staging, ignore_errors=True)

@@ -154,6 +154,11 @@ pub struct BakeArgs {
     /// progress, warnings and errors; docs/guide.md, "Progress as JSON").
     #[arg(long, value_enum, default_value_t = ProgressFormat::Bars, value_name = "FORMAT")]
     pub progress: ProgressFormat,
+    /// Stop the bake once PATH exists (checked every 50 ms), as Ctrl-C would: exit status 130,
+    /// the folder's previous bake left whole. A host program's cancel that needs no signal
+    /// (the Blender add-on's, on Windows too).
+    #[arg(long, value_name = "PATH")]
+    pub cancel_file: Option<PathBuf>,
     /// Do not bake the range: bake a few of its frames (--plan-samples, spread over it) in a
     /// scratch folder and print the estimated bytes per frame and in total, peak memory per
     /// task and CPU time per frame and in total, then exit 0 (nothing is written to DIR).

@@ -77,6 +77,14 @@ impl Report {
         }
     }
 
+    /// The JSON progress, if that is the format.
+    fn json(&self) -> Option<Arc<JsonProgress<std::io::Stderr>>> {
+        match self {
+            Report::Text { .. } => None,
+            Report::Json { progress, .. } => Some(progress.clone()),
+        }
+    }
+
     /// Warnings: shown even with --quiet.
     fn warnings(&self, warnings: &[String]) {
         match self {
@@ -102,8 +110,25 @@ impl Report {
 
 pub fn run(a: BakeArgs) -> Result<()> {
     // --seed is one of the overrides, applied in command-line order.
-    let BakeArgs { scene: scene_arg, out, seed: _, frames, shard, sequence, rebake, progress, plan, plan_samples, common, overrides } = a;
+    let BakeArgs {
+        scene: scene_arg,
+        out,
+        seed: _,
+        frames,
+        shard,
+        sequence,
+        rebake,
+        progress,
+        cancel_file,
+        plan,
+        plan_samples,
+        common,
+        overrides,
+    } = a;
     let report = Report::new(progress, common.quiet);
+    if let Some(path) = cancel_file {
+        super::cancel::watch(path, report.json());
+    }
     let dir = super::scene_dir(&scene_arg);
     let scene = load_scene(&scene_arg, &overrides)?;
     // The bake never reads the terrain: a camera inside it is only warned of

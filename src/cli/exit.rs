@@ -1,7 +1,8 @@
 //! Exit statuses, in one place: 0 on success, 2 when the user's input is at
 //! fault (the scene file, the arguments, an unreadable VDB or one the renderer
 //! refuses, a scene the bake cannot honour, an output that is not ours to
-//! replace), 1 for anything else.
+//! replace), 1 for anything else, and [`CANCELLED`] when a host program
+//! asked the bake to stop (`aurora bake --cancel-file`).
 //!
 //! One rule decides between 2 and 1: every library error type answers
 //! `is_input()`, and [`is_input`] asks the error that reached `main`. The
@@ -13,6 +14,9 @@ pub const SUCCESS: i32 = 0;
 pub const FAILURE: i32 = 1;
 /// The user's input is at fault.
 pub const BAD_INPUT: i32 = 2;
+/// The bake was asked to stop (`--cancel-file`): 128 + SIGINT's number, the
+/// status a shell reports for a run ended by Ctrl-C, on every platform.
+pub const CANCELLED: i32 = 130;
 
 /// An error that is the user's input: exit status 2.
 #[derive(Debug, thiserror::Error)]

@@ -11,6 +11,7 @@ pub mod args;
 mod bake;
 mod bars;
 mod bench;
+mod cancel;
 pub mod exit;
 mod frames;
 mod help;

@@ -428,6 +428,7 @@ def test_a_bake_reports_progress_often_and_a_cancel_leaves_the_previous_bake_unt
         time.sleep(0.02)
     assert job.running, "the second bake ended before it could be cancelled"
     job.cancel()
+    assert job.returncode == 130  # it stopped at the cancel file (`--cancel-file`), not by a signal
     assert digest(Path(s.output_dir)) == first
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no staging folder left
 
@@ -452,6 +453,7 @@ def test_a_cancelled_sequence_never_mixes_two_scenes_frames(sc, panel, bpy, tmp_
     assert job.running, "the second sequence ended before it could be cancelled"
     assert any(p.name.startswith("aurora.0001") for p in job.staging.iterdir())  # frame 1 of the new scene existed
     job.cancel()
+    assert job.returncode == 130
     assert digest(Path(s.output_dir)) == first
 
 

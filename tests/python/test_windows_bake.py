@@ -3,7 +3,7 @@
 `aurora.exe` (x86_64-pc-windows-gnu, which tools/check builds) bakes
 tests/data/small_bake.toml under Debian's Wine, and so does the Linux
 binary. Wine 8 has no `bcryptprimitives.dll`, whose `ProcessPrng` Rust's
-standard library calls at start on Windows 10 and later; the test builds a
+standard library calls at start on Windows 10 and later; wine.py builds a
 stand-in from three lines of C with mingw (RtlGenRandom) beside the copied
 exe. Nothing of it is shipped.
 
@@ -15,7 +15,6 @@ Linux's, fewer than 1 % of them one step off and almost none two.
 
 from __future__ import annotations
 
-import os
 import shutil
 import subprocess
 from pathlib import Path
@@ -24,23 +23,7 @@ import numpy as np
 import pyopenvdb as vdb
 
 from scenes import aurora_bin
-
-ROOT = Path(__file__).resolve().parent.parent.parent
-EXE = ROOT / "target" / "x86_64-pc-windows-gnu" / "release" / "aurora.exe"
-WINE = Path("/usr/lib/wine/wine64")
-
-PRNG_C = r"""
-#include <windows.h>
-BOOLEAN WINAPI SystemFunction036(PVOID buffer, ULONG length);
-__declspec(dllexport) BOOL WINAPI ProcessPrng(PBYTE data, SIZE_T len) {
-    while (len > 0) {
-        ULONG n = len > 0x40000000 ? 0x40000000 : (ULONG)len;
-        if (!SystemFunction036(data, n)) return FALSE;
-        data += n; len -= n;
-    }
-    return TRUE;
-}
-"""
+from wine import ROOT, WINE, windows_folder, wine_env
 
 
 def grid(path: Path, name: str) -> dict:
@@ -56,16 +39,9 @@ def half_steps(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def test_the_windows_bake_under_wine_matches_linux_within_a_half_float_step(tmp_path):
-    assert EXE.is_file(), f"{EXE}: cargo build --release --target x86_64-pc-windows-gnu (tools/check builds it)"
-    assert WINE.is_file(), "wine64 is missing (tools/setup installs it)"
-    win = tmp_path / "win"
-    win.mkdir()
-    shutil.copy(EXE, win / "aurora.exe")
-    (tmp_path / "prng.c").write_text(PRNG_C)
-    subprocess.run(["x86_64-w64-mingw32-gcc", "-shared", "-O2", "-o", str(win / "bcryptprimitives.dll"), str(tmp_path / "prng.c"),
-                    "-ladvapi32"], check=True)
+    win = windows_folder(tmp_path)
     shutil.copy(ROOT / "tests" / "data" / "small_bake.toml", win / "small.toml")
-    env = dict(os.environ, WINEPREFIX=str(tmp_path / "prefix"), WINEDEBUG="-all")
+    env = wine_env(tmp_path)
     w = subprocess.run([str(WINE), "aurora.exe", "bake", "small.toml", "--out", "wout", "--threads", "2", "-q"], cwd=win, env=env,
                        capture_output=True, text=True, timeout=900)
     assert w.returncode == 0, w.stdout + w.stderr
