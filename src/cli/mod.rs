@@ -43,9 +43,18 @@ pub fn run(cli: Cli) -> Result<()> {
     }
 }
 
+/// The scene a command names (as [`load_scene_as_given`]) with its curtains
+/// in magnetic coordinates placed (`[oval]`, `magnetic_path`:
+/// `aurora::pipeline::footprint::magnetic_placement`); a place the model
+/// cannot make is the input's fault (exit status 2).
+fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
+    let scene = load_scene_as_given(arg, overrides)?;
+    Ok(aurora::pipeline::footprint::magnetic_placement::place(&scene).map_err(|e| exit::InputError(e.to_string()))?)
+}
+
 /// The scene a command names: a scene file or a preset, its overrides
 /// applied in command-line order, validated.
-fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
+fn load_scene_as_given(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
     let scene = Scene::load_with(arg, overrides.in_order())?;
     print_warnings(Scene::shadowed_preset(arg).as_slice());
     // A table the scene names that is not compiled in is read now (and kept):

@@ -33,6 +33,7 @@
 
 pub mod cells;
 pub mod curtain_path;
+pub mod magnetic_placement;
 pub mod fluid;
 pub mod sheet;
 
