@@ -160,7 +160,8 @@ mod tests {
                 }
                 // No oval by default: its defaults, with the keys they omit.
                 "oval" => {
-                    let mut f: Vec<String> = serde_json::to_value(OvalParams::default()).unwrap().as_object().unwrap().keys().cloned().collect();
+                    let mut f: Vec<String> =
+                        serde_json::to_value(OvalParams::default()).unwrap().as_object().unwrap().keys().cloned().collect();
                     f.extend(["al_nt".into(), "mlt_h".into()]);
                     f
                 }

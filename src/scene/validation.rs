@@ -182,7 +182,8 @@ impl Scene {
                 Some(("oval", 0)),
                 "kp",
                 String::new(),
-                "[oval] places the arcs over a place at an hour: add a [site] table (latitude_deg, longitude_deg, utc), or remove [oval]".into(),
+                "[oval] places the arcs over a place at an hour: add a [site] table (latitude_deg, longitude_deg, utc), or remove [oval]"
+                    .into(),
             );
         }
         if let Some(site) = &self.site {
@@ -294,7 +295,12 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
                 if let Some(toml::Value::Array(rows)) = c.get("magnetic_path") {
                     for (k, r) in rows.iter().enumerate() {
                         if !matches!(r, toml::Value::Array(a) if a.len() == 2) {
-                            v.push(Some(("curtain", i)), "magnetic_path", format!("point {k}: {r}"), "every point must be [latitude, mlt] (2 values)".into());
+                            v.push(
+                                Some(("curtain", i)),
+                                "magnetic_path",
+                                format!("point {k}: {r}"),
+                                "every point must be [latitude, mlt] (2 values)".into(),
+                            );
                         }
                     }
                 }
@@ -440,7 +446,12 @@ impl Validator<'_> {
             self.push(t, "magnetic_path", String::new(), "a curtain takes a `path` or a `magnetic_path`, not both: remove one".into());
         }
         if site.is_none() {
-            self.push(t, "magnetic_path", String::new(), "magnetic coordinates need a place and an hour: add a [site] table (latitude_deg, longitude_deg, utc)".into());
+            self.push(
+                t,
+                "magnetic_path",
+                String::new(),
+                "magnetic coordinates need a place and an hour: add a [site] table (latitude_deg, longitude_deg, utc)".into(),
+            );
         }
         if p.len() < 2 {
             self.push(t, "magnetic_path", format!("{} points", p.len()), "needs at least 2 points [latitude, mlt]".into());
@@ -449,7 +460,12 @@ impl Validator<'_> {
         for (k, q) in p.iter().enumerate() {
             let lat = if south { -q[0] } else { q[0] };
             if !(10.0..=85.0).contains(&lat) {
-                self.push(t, "magnetic_path", format!("point {k}: latitude {}", q[0]), "each latitude must be 10 to 85 degrees from the magnetic equator, all in one hemisphere".into());
+                self.push(
+                    t,
+                    "magnetic_path",
+                    format!("point {k}: latitude {}", q[0]),
+                    "each latitude must be 10 to 85 degrees from the magnetic equator, all in one hemisphere".into(),
+                );
             }
             if !(0.0..=24.0).contains(&q[1]) {
                 self.push(t, "magnetic_path", format!("point {k}: mlt {}", q[1]), "each magnetic local time must be in [0, 24] h".into());

@@ -66,7 +66,6 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         shadow_samples: 1,
         base_dir: None,
         site: None,
-        oval: None,
         time_s: 0.0,
     }
 }

@@ -127,10 +127,15 @@ mod tests {
 
     #[test]
     fn the_geodetic_site_of_an_itrs_point_is_the_inverse() {
-        for &(lat, lon, h) in &[(69.65, 18.96, 110.0), (-77.85, 166.67, 0.0), (0.3, -30.0, 800.0), (89.9, 10.0, 2.0), (-45.0, 200.0, 35_000.0)] {
+        for &(lat, lon, h) in
+            &[(69.65, 18.96, 110.0), (-77.85, 166.67, 0.0), (0.3, -30.0, 800.0), (89.9, 10.0, 2.0), (-45.0, 200.0, 35_000.0)]
+        {
             let s = Site::from_itrs_km(Site::new(lat, lon, h).unwrap().itrs_km());
             let lon_back = (s.longitude_deg - lon).rem_euclid(360.0);
-            assert!((s.latitude_deg - lat).abs() < 1e-9 && lon_back.min(360.0 - lon_back) < 1e-9 && (s.height_km - h).abs() < 1e-6, "{s:?}");
+            assert!(
+                (s.latitude_deg - lat).abs() < 1e-9 && lon_back.min(360.0 - lon_back) < 1e-9 && (s.height_km - h).abs() < 1e-6,
+                "{s:?}"
+            );
         }
     }
 

@@ -157,11 +157,8 @@ impl CorrectedGeomagnetic {
         let r0 = p.length();
         let z0 = self.dipole_of(p).z;
         let hemisphere = if z0 >= 0.0 { 1.0 } else { -1.0 };
-        let apex = if z0 == 0.0 {
-            p
-        } else {
-            self.trace(p, -hemisphere, |q| self.dipole_of(q).z * hemisphere > 0.0, |q| q.length() >= r0)?
-        };
+        let apex =
+            if z0 == 0.0 { p } else { self.trace(p, -hemisphere, |q| self.dipole_of(q).z * hemisphere > 0.0, |q| q.length() >= r0)? };
         let l = apex.length() / REFERENCE_RADIUS_KM;
         if apex.length() < r0 {
             return None;

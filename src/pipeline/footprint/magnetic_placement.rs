@@ -77,7 +77,9 @@ pub fn place(scene: &Scene) -> Result<Scene, PlacementError> {
         }
     }
     if let Some(oval) = &scene.oval {
-        let here = cgm.from_geodetic(site.latitude_deg, site.longitude_deg, PATH_ALTITUDE_KM).ok_or(PlacementError::Site(site.latitude_deg, site.longitude_deg))?;
+        let here = cgm
+            .from_geodetic(site.latitude_deg, site.longitude_deg, PATH_ALTITUDE_KM)
+            .ok_or(PlacementError::Site(site.latitude_deg, site.longitude_deg))?;
         let hemisphere = if here.lat_deg < 0.0 { -1.0 } else { 1.0 };
         let middle = oval.mlt_h.unwrap_or_else(|| cgm.mlt_h(here.lon_deg));
         let al = oval.al_nt.unwrap_or_else(|| al_from_kp_nt(oval.kp));

@@ -33,8 +33,8 @@
 
 pub mod cells;
 pub mod curtain_path;
-pub mod magnetic_placement;
 pub mod fluid;
+pub mod magnetic_placement;
 pub mod sheet;
 
 pub use cells::Cells;

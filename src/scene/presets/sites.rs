@@ -10,8 +10,8 @@
 //! tool computes them.
 //!
 //! Tromso at Kp 5 (`tromso_kp5`, `tromso_kp5_dome`): the same night at
-//! 22:15 UTC, magnetic midnight at Tromso (its AACGM-v2 magnetic local
-//! time 0.0 h at 110 km; `crate::physics::magnetic_coordinates`). `[oval]
+//! 22:30 UTC, magnetic midnight at Tromso (its AACGM-v2 magnetic local
+//! time 0.03 h at 110 km, aacgmv2 2.7.1; `crate::physics::magnetic_coordinates`). `[oval]
 //! kp = 5` lays the arcs across Starkov's oval for AL -386.5 nT, which at
 //! midnight spans corrected geomagnetic latitudes 61.9-73.1 degrees
 //! (`crate::physics::auroral_oval`): Tromso, at 67.3 degrees, lies in
@@ -19,7 +19,7 @@
 //! one some 400 km south and the poleward one some 440 km north.
 
 use super::classic::{default_scene, oval};
-use crate::scene::{oval::OvalParams, root::Scene, site::SiteParams, Camera, Projection, VoxelSize};
+use crate::scene::{oval::OvalParams, root::Scene, site::SiteParams, Camera, Projection, Terrain, TerrainKind, VoxelSize};
 
 /// The site and hour of both scenes.
 pub fn tromso_site() -> SiteParams {
@@ -61,7 +61,7 @@ pub fn tromso_dome() -> Scene {
 }
 
 /// The hour of the Kp 5 scenes: magnetic midnight at Tromso (module doc).
-pub const TROMSO_MIDNIGHT_UTC: &str = "2026-12-18T22:15:00Z";
+pub const TROMSO_MIDNIGHT_UTC: &str = "2026-12-18T22:30:00Z";
 
 /// What `aurora scene --list` says of [`tromso_kp5`].
 pub const TROMSO_KP5: &str =
@@ -72,7 +72,11 @@ pub const TROMSO_KP5_DOME: &str = "Tromso at magnetic midnight at Kp 5 as a dome
 /// The Kp 5 night: Tromso at [`TROMSO_MIDNIGHT_UTC`] with `[oval] kp = 5`,
 /// the arcs of `base` left straight so that the oval places them.
 fn kp5(base: Scene, length_km: f64) -> Scene {
-    let mut s = Scene { site: Some(SiteParams { utc: TROMSO_MIDNIGHT_UTC.into(), ..tromso_site() }), oval: Some(OvalParams { kp: 5.0, ..OvalParams::default() }), ..base };
+    let mut s = Scene {
+        site: Some(SiteParams { utc: TROMSO_MIDNIGHT_UTC.into(), ..tromso_site() }),
+        oval: Some(OvalParams { kp: 5.0, ..OvalParams::default() }),
+        ..base
+    };
     for c in &mut s.curtains {
         c.path = None;
         c.length = length_km;
@@ -83,18 +87,26 @@ fn kp5(base: Scene, length_km: f64) -> Scene {
 /// Tromso at Kp 5, as a photographer sees it (module doc): the default's
 /// three arcs (their electrons and filaments), each 1200 km long, placed by
 /// `[oval]`; a 100-degree camera 2 m up at the site looking north, 25
-/// degrees up; 1 km voxels (a voxel at the poleward arc, 440 km away, is
-/// 0.13 degree, about a pixel of the 1280-pixel frame); 60,000 beams.
+/// degrees up, over a snow plain; 1 km voxels (a voxel at the poleward
+/// arc, 440 km away, is 0.13 degree, about a pixel of the 1280-pixel
+/// frame); 60,000 beams.
 pub fn tromso_kp5() -> Scene {
     let mut s = kp5(default_scene(), 1200.0);
     s.beams.count = 60_000;
     s.photons.radius_km = 1.5;
     s.grid.voxel_size = VoxelSize::Km(1.0);
     let up = 25.0_f64.to_radians();
-    s.camera = Camera { position: [0.0, 0.0, 0.002], look_at: [0.0, 100.0 * up.cos(), 0.002 + 100.0 * up.sin()], fov_deg: 100.0, ..Camera::default() };
+    s.camera = Camera {
+        position: [0.0, 0.0, 0.002],
+        look_at: [0.0, 100.0 * up.cos(), 0.002 + 100.0 * up.sin()],
+        fov_deg: 100.0,
+        ..Camera::default()
+    };
     s.render.width = 1280;
     s.render.height = 720;
     s.render.exposure = -3.0;
+    // The snow of the plain around the site (the default's mountains stand over the origin).
+    s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s
 }
 
