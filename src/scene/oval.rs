@@ -12,8 +12,9 @@
 //! the site's magnetic meridian); its `center` and `rotation_deg` are not
 //! used. A curtain with a `path` or a `magnetic_path` keeps it. The
 //! placement happens when a command loads the scene
-//! (`crate::pipeline::footprint::magnetic_placement`); a bake records the
-//! placed paths.
+//! (`crate::pipeline::footprint::magnetic_placement`): `aurora scene`
+//! prints the keys as written, and the bake's scene hash is the placed
+//! scene's.
 
 use super::keys::{KeySpec, Num, Range};
 use serde::{Deserialize, Serialize};

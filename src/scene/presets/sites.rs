@@ -15,8 +15,10 @@
 //! kp = 5` lays the arcs across Starkov's oval for AL -386.5 nT, which at
 //! midnight spans corrected geomagnetic latitudes 61.9-73.1 degrees
 //! (`crate::physics::auroral_oval`): Tromso, at 67.3 degrees, lies in
-//! its middle, so the middle arc passes nearly overhead, the equatorward
-//! one some 400 km south and the poleward one some 440 km north.
+//! its middle, so the middle arc passes 30 km north of the zenith, the
+//! equatorward one 380 km south and the poleward one 430 km north (at
+//! 110 km; aacgmv2 2.7.1's inverse trace puts them 384, 32 and 435 km
+//! from Tromso).
 
 use super::classic::{default_scene, oval};
 use crate::scene::{oval::OvalParams, root::Scene, site::SiteParams, Camera, Projection, Terrain, TerrainKind, VoxelSize};
@@ -86,16 +88,16 @@ fn kp5(base: Scene, length_km: f64) -> Scene {
 
 /// Tromso at Kp 5, as a photographer sees it (module doc): the default's
 /// three arcs (their electrons and filaments), each 1200 km long, placed by
-/// `[oval]`; a 100-degree camera 2 m up at the site looking north, 25
+/// `[oval]`; a 100-degree camera 2 m up at the site looking north, 35
 /// degrees up, over a snow plain; 1 km voxels (a voxel at the poleward
-/// arc, 440 km away, is 0.13 degree, about a pixel of the 1280-pixel
+/// arc, 430 km away, is 0.13 degree, about a pixel of the 1280-pixel
 /// frame); 60,000 beams.
 pub fn tromso_kp5() -> Scene {
     let mut s = kp5(default_scene(), 1200.0);
     s.beams.count = 60_000;
     s.photons.radius_km = 1.5;
     s.grid.voxel_size = VoxelSize::Km(1.0);
-    let up = 25.0_f64.to_radians();
+    let up = 35.0_f64.to_radians();
     s.camera = Camera {
         position: [0.0, 0.0, 0.002],
         look_at: [0.0, 100.0 * up.cos(), 0.002 + 100.0 * up.sin()],
@@ -104,7 +106,8 @@ pub fn tromso_kp5() -> Scene {
     };
     s.render.width = 1280;
     s.render.height = 720;
-    s.render.exposure = -3.0;
+    // 2.5 stops under the default: the Moon, low in the west, lights the sky.
+    s.render.exposure = -5.5;
     // The snow of the plain around the site (the default's mountains stand over the origin).
     s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s
