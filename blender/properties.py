@@ -57,12 +57,14 @@ FROM_BLENDER = {("render", "width"), ("render", "height"), ("animation", "fps")}
 TABLES_FROM_BLENDER = {"camera"}
 #: Blender's IntProperty is 32-bit signed.
 _INT_MAX = 2**31 - 1
-#: Tables a scene may leave out whole (`[site]`): the panel writes one only
-#: when its `enabled` switch is on, then with every key shown. Their required
-#: keys have no default, so the panel starts from the schema's
+#: Tables a scene may leave out whole (`[site]`, `[oval]`): the panel writes
+#: one only when its `enabled` switch is on, then with every key shown. Their
+#: required keys have no default, so the panel starts from the schema's
 #: `default_in_table` (an example: the `tromso` preset's site); a key with
-#: neither (`site.pressure_hpa`, standard when omitted) is left to scene files.
-OPTIONAL_TABLES = {"site"}
+#: neither (`site.pressure_hpa`, standard when omitted; `oval.al_nt` and
+#: `oval.mlt_h`, Kp's AL and the site's hour when omitted) is left to scene
+#: files. The oval's activity is `oval.kp`.
+OPTIONAL_TABLES = {"site", "oval"}
 
 
 def panel_tables() -> list[str]:
@@ -355,6 +357,8 @@ def load_document(settings, doc: dict) -> None:
         for key, v in ct.items():
             if key == "path":
                 c.path_points = json.dumps(v)
+            elif key == "magnetic_path":
+                c.magnetic_path = json.dumps(v)
             elif key in SCHEMA["curtain"]:
                 write_key(c, "curtain", key, v)
 

@@ -35,6 +35,11 @@ def curtain_table(c, depsgraph=None) -> dict:
         for k in STRAIGHT_KEYS:
             t.pop(k, None)
         t["path"] = [[P.short_float(x), P.short_float(y)] for x, y in path]
+    if isinstance(t.get("magnetic_path"), str):
+        # [[latitude, mlt], ...] as JSON: the points in magnetic coordinates.
+        for k in STRAIGHT_KEYS:
+            t.pop(k, None)
+        t["magnetic_path"] = [[float(a), float(b)] for a, b in json.loads(t["magnetic_path"])]
     return t
 
 

@@ -9,7 +9,8 @@
 //! magnetic south horizon, seen from the camera's position. Magnetic north
 //! is the azimuth of the field's horizontal part: `beams.b_declination_deg`,
 //! or with `earth.magnetic_pole` the dipole's pole azimuth at the camera
-//! (`crate::physics::geomagnetic_field`). Row `i` at scan angle `s = i ROW_DEG`
+//! (`crate::physics::geomagnetic_field`), or with a `[site]` (`field =
+//! "igrf"`) IGRF-14's declination at the camera (`crate::physics::site_field`). Row `i` at scan angle `s = i ROW_DEG`
 //! looks at elevation `s` toward magnetic north while `s <= 90`, and at
 //! elevation `180 - s` toward magnetic south after.
 //!
@@ -91,6 +92,10 @@ impl KeogramError {
 /// east (module doc).
 pub fn magnetic_north_deg(scene: &Scene) -> f64 {
     let earth = Earth::new(scene.earth.radius_km);
+    if let Some(site) = crate::physics::site_field::SiteField::of_scene(scene) {
+        let g = earth.to_curved(DVec3::from_array(scene.camera.position));
+        return site.angles_deg([g.x, g.y], g.z).1;
+    }
     match scene.earth.magnetic_pole {
         Some(pole) => {
             let g = earth.to_curved(DVec3::from_array(scene.camera.position));
@@ -252,6 +257,18 @@ pub fn keogram(scene: &Scene, seq: &Path, frames: &[i64], grid: &str, progress: 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn over_a_site_magnetic_north_is_igrfs_declination_at_the_camera() {
+        // Tromso, 2026-12-18: IGRF-14's declination about 11 degrees east
+        // (`crate::physics::site_field`'s test), not the keys' 0.
+        let s = crate::scene::presets::by_name("tromso").unwrap();
+        let north = magnetic_north_deg(&s);
+        assert!((10.0..12.5).contains(&north), "{north}");
+        let mut own = s.clone();
+        own.site.as_mut().unwrap().field = crate::scene::SiteField::Scene;
+        assert_eq!(magnetic_north_deg(&own), s.beams.b_declination_deg);
+    }
 
     #[test]
     fn meridian_runs_from_the_north_horizon_through_the_zenith_to_the_south() {

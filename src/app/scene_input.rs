@@ -4,8 +4,11 @@
 //! names outside itself is read before any work: a table that is not
 //! compiled in (`[atmosphere] data`, refused if missing or damaged) and a
 //! `[site]`'s hour (refused if its `utc` is not RFC 3339; a sky in
-//! daylight or twilight is warned of). The warnings are returned, for the
-//! caller to show.
+//! daylight or twilight is warned of). Then the curtains given in magnetic
+//! coordinates (`[oval]`, `magnetic_path`) are placed over the `[site]`
+//! (`crate::pipeline::footprint::magnetic_placement`), unless the caller
+//! wants the scene as written ([`load_as_given`], what `aurora scene`
+//! prints). The warnings are returned, for the caller to show.
 
 use crate::physics::data_files::DataError;
 use crate::scene::{Override, Scene, SceneError};
@@ -21,6 +24,10 @@ pub enum SceneInputError {
     /// The `[site]`'s hour (its message names `site.utc`).
     #[error("{0}")]
     Site(String),
+    /// A curtain in magnetic coordinates that cannot be placed (its
+    /// message names the key).
+    #[error("{0}")]
+    Placement(String),
 }
 
 impl SceneInputError {
@@ -30,7 +37,7 @@ impl SceneInputError {
         match self {
             SceneInputError::Scene(e) => e.is_input(),
             SceneInputError::Data(e) => e.is_input(),
-            SceneInputError::Site(_) => true,
+            SceneInputError::Site(_) | SceneInputError::Placement(_) => true,
         }
     }
 }
@@ -45,6 +52,13 @@ pub struct SceneInput {
 /// The scene `arg` names (a file or a preset) with `overrides` in order
 /// (module doc).
 pub fn load(arg: &str, overrides: &[Override]) -> Result<SceneInput, SceneInputError> {
+    let input = load_as_given(arg, overrides)?;
+    let scene = crate::pipeline::footprint::magnetic_placement::place(&input.scene).map_err(|e| SceneInputError::Placement(e.to_string()))?;
+    Ok(SceneInput { scene, warnings: input.warnings })
+}
+
+/// As [`load`], with the curtains in magnetic coordinates as written.
+pub fn load_as_given(arg: &str, overrides: &[Override]) -> Result<SceneInput, SceneInputError> {
     let scene = Scene::load_with(arg, overrides)?;
     let mut warnings: Vec<String> = Scene::shadowed_preset(arg).into_iter().collect();
     warnings.extend(checked(&scene)?);

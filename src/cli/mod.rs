@@ -46,9 +46,18 @@ pub fn run(cli: Cli) -> Result<()> {
 
 /// The scene a command names: a scene file or a preset, its overrides
 /// applied in command-line order, validated, what it names outside itself
-/// read (`aurora::app::scene_input`); its warnings on stderr.
+/// read, its curtains in magnetic coordinates placed
+/// (`aurora::app::scene_input`); its warnings on stderr.
 fn load_scene(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
     let input = aurora::app::scene_input::load(arg, overrides.in_order())?;
+    print_warnings(&input.warnings);
+    Ok(input.scene)
+}
+
+/// The scene as [`load_scene`] takes it, but with `[oval]` and
+/// `magnetic_path` as written, not placed (what `aurora scene` prints).
+fn load_scene_as_given(arg: &str, overrides: &args::SceneOverrides) -> Result<Scene> {
+    let input = aurora::app::scene_input::load_as_given(arg, overrides.in_order())?;
     print_warnings(&input.warnings);
     Ok(input.scene)
 }

@@ -137,7 +137,7 @@ impl Session<'_> {
                     scene.atmosphere.base_dir = Some(path.parent().map(Path::to_path_buf).unwrap_or_default());
                     aurora::physics::atmosphere::Atmosphere::of_params(&scene.atmosphere)?;
                     super::render_checks::camera_above_terrain(&scene, &scene_dir(scene_arg))?;
-                    Ok(scene)
+                    Ok(aurora::pipeline::footprint::magnetic_placement::place(&scene).map_err(|e| InputError(e.to_string()))?)
                 })
                 .and_then(|scene| self.update(preview, &scene).map_err(anyhow::Error::from));
             if let Err(e) = result {

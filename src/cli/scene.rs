@@ -4,7 +4,7 @@
 
 use super::args::{FootprintArgs, SceneArgs, TerrainArgs};
 use super::exit::InputError;
-use super::{load_scene, scene_dir};
+use super::{load_scene, load_scene_as_given, scene_dir};
 use anyhow::{Context, Result};
 
 /// `aurora scene`: a preset or file with every default filled in, or
@@ -18,7 +18,8 @@ pub fn print(a: SceneArgs) -> Result<()> {
         print!("{}", aurora::scene::schema::schema_json());
         return Ok(());
     }
-    let s = load_scene(&a.name, &a.overrides)?;
+    // As written: `[oval]` and magnetic paths stay keys, not placed paths.
+    let s = load_scene_as_given(&a.name, &a.overrides)?;
     print!("{}", scene_header(&a.name));
     print!("{}", s.to_toml());
     Ok(())

@@ -9,11 +9,13 @@
 pub mod air_extinction;
 pub mod airglow;
 pub mod atmosphere;
+pub mod auroral_oval;
 pub mod chemistry;
 pub mod data_files;
 pub mod deposition;
 pub mod emission;
 pub mod geomagnetic_field;
 pub mod igrf;
+pub mod magnetic_coordinates;
 pub mod night_sky;
 pub mod site_field;

@@ -28,9 +28,12 @@
 //! where B points down, `-B` where it points up (the southern hemisphere).
 
 use crate::geometry::astronomy::site::Site;
+use crate::geometry::astronomy::time::Utc;
 use crate::geometry::earth::Earth;
 use crate::physics::geomagnetic_field::MagneticField;
 use crate::physics::igrf::Igrf;
+use crate::scene::root::Scene;
+use crate::scene::site::SiteField as SiteFieldChoice;
 use glam::DVec3;
 
 /// IGRF at a site's hour over the scene's frame (module doc).
@@ -46,6 +49,18 @@ impl SiteField {
     /// The field `igrf` over the scene of `site` on `earth`.
     pub fn new(igrf: Igrf, site: &Site, earth: Earth) -> Self {
         SiteField { igrf, earth, origin_itrs: site.itrs_km(), axes: site.basis() }
+    }
+
+    /// IGRF-14 over the scene's site at its hour (`utc + animation.time_s`),
+    /// when the scene has a `[site]` whose `field` is `igrf`; `None` for the
+    /// scene's own field. The scene is a validated one (its `utc` parses and
+    /// lies in IGRF-14's years).
+    pub fn of_scene(scene: &Scene) -> Option<SiteField> {
+        let p = scene.site.as_ref().filter(|p| p.field == SiteFieldChoice::Igrf)?;
+        let t = Utc::parse_rfc3339(&p.utc).ok()?.plus_seconds(scene.animation.time_s);
+        let igrf = Igrf::at(t).ok()?;
+        let site = Site::new(p.latitude_deg, p.longitude_deg, p.height_km).ok()?;
+        Some(SiteField::new(igrf, &site, Earth::new(scene.earth.radius_km)))
     }
 
     /// The ITRS point of the scene point `p` (module doc).

@@ -76,7 +76,7 @@ pub const PILOT_HALF_BEAMS: usize = 500;
 /// One footprint per curtain (in curtain order; simulated in parallel), at
 /// the scene's `animation.time_s`.
 pub fn footprints(scene: &Scene) -> Vec<Footprint> {
-    let lift = Lift::of(&scene.beams, &scene.earth);
+    let lift = Lift::of_scene(scene);
     simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, lift, &NoProgress)
 }
 
@@ -94,7 +94,7 @@ pub fn simulate_footprints(
     let fps = curtains
         .par_iter()
         .map(|c| {
-            let f = footprint::simulate_at(c, params, animation, seed, animation.time_s, lift);
+            let f = footprint::simulate_at(c, params, animation, seed, animation.time_s, &lift);
             progress.inc(1);
             f
         })
@@ -223,14 +223,8 @@ impl BakePlan {
         let (footprints, footprint_seconds) = match same_fp {
             Some(p) => (p.footprints.clone(), 0.0),
             None => {
-                let f = simulate_footprints(
-                    scene.seed,
-                    &scene.curtains,
-                    &scene.footprint,
-                    &scene.animation,
-                    Lift::of(&scene.beams, &scene.earth),
-                    progress,
-                );
+                let f =
+                    simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &scene.animation, Lift::of_scene(scene), progress);
                 (f, t.elapsed().as_secs_f64())
             }
         };

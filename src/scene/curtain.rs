@@ -51,6 +51,11 @@ pub struct Curtain {
     /// centripetal Catmull-Rom curve through these points (`crate::pipeline::footprint::curtain_path`),
     /// instead of `center`, `length` and `rotation_deg`.
     pub path: Option<Vec<[f64; 2]>>,
+    /// The same ground track in magnetic coordinates: points `[corrected
+    /// geomagnetic latitude, deg; magnetic local time, h]` over the scene's
+    /// `[site]` at its hour, placed as a `path` when the scene is loaded
+    /// (`crate::pipeline::footprint::magnetic_placement`).
+    pub magnetic_path: Option<Vec<[f64; 2]>>,
 }
 
 impl Default for Curtain {
@@ -72,6 +77,7 @@ impl Default for Curtain {
             filament_energy_flux: 0.0,
             filament_potential_kv: 0.0,
             path: None,
+            magnetic_path: None,
         }
     }
 }
@@ -99,11 +105,13 @@ pub struct CurtainToml {
     filament_potential_kv: f64,
     #[serde(skip_serializing_if = "Option::is_none")]
     path: Option<Vec<[f64; 2]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    magnetic_path: Option<Vec<[f64; 2]>>,
 }
 
 impl From<Curtain> for CurtainToml {
     fn from(c: Curtain) -> Self {
-        let straight = c.path.is_none();
+        let straight = c.path.is_none() && c.magnetic_path.is_none();
         Self {
             center: straight.then_some(c.center),
             length: straight.then_some(c.length),
@@ -121,6 +129,7 @@ impl From<Curtain> for CurtainToml {
             filament_energy_flux: c.filament_energy_flux,
             filament_potential_kv: c.filament_potential_kv,
             path: c.path,
+            magnetic_path: c.magnetic_path,
         }
     }
 }
@@ -142,10 +151,15 @@ pub enum SpectrumShape {
 pub const PATH_RULE: &str = "at least 2 points [x, y] (km, each coordinate in [-1e4, 1e4]), consecutive points at least 1 m apart, \
      total length at most 1e4 km; replaces center, length and rotation_deg";
 
+/// What `curtain.magnetic_path` accepts.
+pub const MAGNETIC_PATH_RULE: &str = "at least 2 points [latitude, mlt]: corrected geomagnetic latitude in degrees, 10 to 85 \
+     from the equator in the site's hemisphere (negative in the south), magnetic local time in [0, 24] h; needs [site]; replaces center, length and rotation_deg";
+
 /// Every key of `[curtain]`: name, unit, allowed range and description (`super::keys`).
 pub const CURTAIN_KEYS: &[KeySpec] = &[
     KeySpec::new("center", "km", Range::Each { min: -1e4, max: 1e4, what: "each coordinate", suffix: " km" }, "centre of the footprint on the ground plane, `[x, y]`"),
     KeySpec::new("path", "km", Range::Rule(PATH_RULE), "the curtain along a smooth curve (centripetal Catmull-Rom) through these `[x, y]` points: the ground track of its lower border (110 km), lifted up the field to the beams' start; replaces `center`, `length` and `rotation_deg` (giving both is an error)"),
+    KeySpec::new("magnetic_path", "", Range::Rule(MAGNETIC_PATH_RULE), "the curtain along these `[latitude, mlt]` points in magnetic coordinates (corrected geomagnetic latitude AACGM-v2, deg; magnetic local time, h) over the `[site]` at its hour: each is traced down IGRF-14's field line to 110 km and the points joined as a `path` (giving both is an error)"),
     KeySpec::new("length", "km", Range::Num(Num::open_min(0.0, 1e4)), "length of the footprint box along the curtain's axis"),
     KeySpec::new("width", "km", Range::Num(Num::open_min(0.0, 1e4)), "width of the footprint box across the axis (room for folds and bends)"),
     KeySpec::new("rotation_deg", "deg", Range::Num(Num::FINITE), "direction of the curtain's axis, counter-clockwise from +x"),

@@ -14,6 +14,7 @@ use super::earth::EarthParams;
 use super::footprint::FootprintParams;
 use super::grid::{GridParams, VoxelSize};
 use super::keys::{KeySpec, Range};
+use super::oval::OvalParams;
 use super::photons::PhotonParams;
 use super::render::RenderParams;
 use super::site::SiteParams;
@@ -49,6 +50,10 @@ pub struct Scene {
     /// local frame with no place or hour (and writes no table).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub site: Option<SiteParams>,
+    /// The oval's activity (`[oval]`, `super::oval`): none leaves the
+    /// curtains where their keys put them (and writes no table).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub oval: Option<OvalParams>,
     /// The overrides applied to the file, in order, as `KEY=VALUE`
     /// (`crate::scene::overrides`; recorded in bake.json). Not part of the
     /// TOML: the values above already hold them, so the hash and the bake

@@ -76,15 +76,18 @@ pub fn schema() -> Value {
         // `[site]` has no default (its required keys have none): the example
         // the add-on's panel starts from.
         "site": super::presets::sites::tromso_site(),
+        "oval": super::oval::OvalParams::default(),
     });
     let curtain = serde_json::to_value(Curtain::default()).expect("serialises");
     let site = site_defaults();
+    let oval = serde_json::to_value(super::oval::OvalParams::default()).expect("serialises");
     let mut out = Map::new();
     for table in TABLES {
         let fields = match table.name {
             "" => &defaults,
             "curtain" => &curtain,
             "site" => &site,
+            "oval" => &oval,
             name => &defaults[name],
         };
         let mut keys = Map::new();

@@ -64,6 +64,11 @@ pub const TABLES: &[Table] = &[
         about: "Where on the Earth and when: the real stars of the Hipparcos-2 catalogue, the Moon with its phase and its light, and the Sun's elevation over the site at the hour. Optional: without it the scene has no place or hour, a statistical star field and no Moon. With it the scene's frame is the site's (x east, y north, z along the WGS 84 ellipsoid's normal).",
     },
     Table {
+        name: "oval",
+        keys: super::oval::OVAL_KEYS,
+        about: "Where the auroral oval is: with a `[site]`, the oval's equatorward and poleward edges by Starkov (1994) in corrected geomagnetic (AACGM-v2) latitude at the activity (`kp` or `al_nt`), and the scene's straight curtains laid between them along the oval, their middle at the site's magnetic local time. Optional: without it the curtains stay where their keys put them.",
+    },
+    Table {
         name: "colour",
         keys: super::colour::COLOUR_KEYS,
         about: "How deposited energy becomes colour.",
@@ -142,6 +147,7 @@ mod tests {
                     let mut f: Vec<String> =
                         serde_json::to_value(Curtain::default()).unwrap().as_object().unwrap().keys().cloned().collect();
                     f.push("path".into());
+                    f.push("magnetic_path".into());
                     f.retain(|k| k != "curtain");
                     f
                 }
@@ -150,6 +156,13 @@ mod tests {
                     let mut f: Vec<String> =
                         serde_json::to_value(presets::sites::tromso_site()).unwrap().as_object().unwrap().keys().cloned().collect();
                     f.push("pressure_hpa".into());
+                    f
+                }
+                // No oval by default: its defaults, with the keys they omit.
+                "oval" => {
+                    let mut f: Vec<String> =
+                        serde_json::to_value(OvalParams::default()).unwrap().as_object().unwrap().keys().cloned().collect();
+                    f.extend(["al_nt".into(), "mlt_h".into()]);
                     f
                 }
                 name => defaults[name].as_object().unwrap().keys().cloned().collect(),

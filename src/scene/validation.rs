@@ -126,6 +126,9 @@ impl Scene {
             if let Some(p) = &c.path {
                 v.path(t, p);
             }
+            if let Some(p) = &c.magnetic_path {
+                v.magnetic_path(t, p, c.path.is_some(), self.site.as_ref());
+            }
             if c.bend_km * 2.0 >= c.width {
                 v.push(
                     t,
@@ -174,6 +177,15 @@ impl Scene {
             }
         }
 
+        if self.oval.is_some() && self.site.is_none() {
+            v.push(
+                Some(("oval", 0)),
+                "kp",
+                String::new(),
+                "[oval] places the arcs over a place at an hour: add a [site] table (latitude_deg, longitude_deg, utc), or remove [oval]"
+                    .into(),
+            );
+        }
         if let Some(site) = &self.site {
             if let Err(e) = crate::geometry::astronomy::time::Utc::parse_rfc3339(&site.utc) {
                 v.push(
@@ -274,6 +286,25 @@ pub fn check_shapes(text: &str, file: &str) -> Result<(), SceneError> {
     if let Some(toml::Value::Array(curtains)) = user.get("curtain") {
         for (i, c) in curtains.iter().enumerate() {
             let toml::Value::Table(c) = c else { continue };
+            if c.contains_key("magnetic_path") {
+                let both: Vec<&str> = STRAIGHT_KEYS.iter().copied().filter(|k| c.contains_key(*k)).collect();
+                if !both.is_empty() {
+                    let has = both.join(", ");
+                    v.push(Some(("curtain", i)), "magnetic_path", String::new(), format!("a curtain takes either a `center` or a `magnetic_path`, not both; this one has magnetic_path and {has}: remove {has} or the magnetic path"));
+                }
+                if let Some(toml::Value::Array(rows)) = c.get("magnetic_path") {
+                    for (k, r) in rows.iter().enumerate() {
+                        if !matches!(r, toml::Value::Array(a) if a.len() == 2) {
+                            v.push(
+                                Some(("curtain", i)),
+                                "magnetic_path",
+                                format!("point {k}: {r}"),
+                                "every point must be [latitude, mlt] (2 values)".into(),
+                            );
+                        }
+                    }
+                }
+            }
             let Some(path) = c.get("path") else { continue };
             let t = Some(("curtain", i));
             let both: Vec<&str> = STRAIGHT_KEYS.iter().copied().filter(|k| c.contains_key(*k)).collect();
@@ -409,6 +440,39 @@ impl Validator<'_> {
     fn names(&self, key: &str) -> bool {
         self.errors.iter().any(|e| e.key == key)
     }
+    /// The checks of a curtain's `magnetic_path` (`super::curtain::MAGNETIC_PATH_RULE`).
+    fn magnetic_path(&mut self, t: Option<(&str, usize)>, p: &[[f64; 2]], has_path: bool, site: Option<&super::site::SiteParams>) {
+        if has_path {
+            self.push(t, "magnetic_path", String::new(), "a curtain takes a `path` or a `magnetic_path`, not both: remove one".into());
+        }
+        if site.is_none() {
+            self.push(
+                t,
+                "magnetic_path",
+                String::new(),
+                "magnetic coordinates need a place and an hour: add a [site] table (latitude_deg, longitude_deg, utc)".into(),
+            );
+        }
+        if p.len() < 2 {
+            self.push(t, "magnetic_path", format!("{} points", p.len()), "needs at least 2 points [latitude, mlt]".into());
+        }
+        let south = p.first().is_some_and(|q| q[0] < 0.0);
+        for (k, q) in p.iter().enumerate() {
+            let lat = if south { -q[0] } else { q[0] };
+            if !(10.0..=85.0).contains(&lat) {
+                self.push(
+                    t,
+                    "magnetic_path",
+                    format!("point {k}: latitude {}", q[0]),
+                    "each latitude must be 10 to 85 degrees from the magnetic equator, all in one hemisphere".into(),
+                );
+            }
+            if !(0.0..=24.0).contains(&q[1]) {
+                self.push(t, "magnetic_path", format!("point {k}: mlt {}", q[1]), "each magnetic local time must be in [0, 24] h".into());
+            }
+        }
+    }
+
     /// The checks of a curtain's `path` ([`PATH_RULE`]).
     fn path(&mut self, t: Option<(&str, usize)>, p: &[[f64; 2]]) {
         if p.len() < 2 {

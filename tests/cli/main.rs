@@ -22,6 +22,7 @@
 //! - `globe`: scenes anywhere on the globe, the field's dip refused or
 //!   warned about.
 //! - `sky`: `aurora sky`'s airglow and stars map, and its refusals.
+//! - `oval`: `[oval]`'s arcs placed over a site, and its refusals.
 //! - `limits`: the process's limits (memory, file size) and inputs that
 //!   say more than they show (`--set` over two lines, shard variables at
 //!   the ends of a 64-bit integer).
@@ -44,6 +45,7 @@ mod limits;
 mod messages;
 mod observer;
 mod outputs;
+mod oval;
 mod overrides;
 mod plan;
 mod preview;

@@ -50,6 +50,9 @@ fn stated_type(section: &str, key: &str) -> Option<&'static str> {
         ("grid", "voxel_size") => "number or `\"auto\"`",
         ("grid", "lines") => "list of words",
         ("curtain", "path") => "rows of 2 numbers",
+        ("curtain", "magnetic_path") => "rows of 2 numbers",
+        // `[oval]`'s AL and hour: none unless given.
+        ("oval", "al_nt" | "mlt_h") => "number",
         ("earth", "magnetic_pole") => "2 numbers",
         // `[site]` has no default; its required keys and the optional pressure.
         ("site", "latitude_deg" | "longitude_deg" | "pressure_hpa") => "number",

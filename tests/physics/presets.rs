@@ -27,7 +27,9 @@ use aurora::util::progress::NoProgress;
 /// kernel on 1 km voxels, 96 x 54 pixels (64 x 64 for a square picture) at
 /// 1 sample.
 fn reduced(name: &str) -> Scene {
-    let mut s = coarse(presets::by_name(name).unwrap(), [128, 32], 1500);
+    // As a command loads it: `[oval]`'s arcs placed.
+    let placed = aurora::pipeline::footprint::magnetic_placement::place(&presets::by_name(name).unwrap()).unwrap();
+    let mut s = coarse(placed, [128, 32], 1500);
     s.beams.target_noise = 0.0;
     s.photons.radius_noise = 0.0;
     let (w, h) = if s.render.width == s.render.height { (64, 64) } else { (96, 54) };

@@ -140,7 +140,7 @@ def test_every_schema_key_is_a_property_with_its_default_range_and_unit(sc, pane
             if (table, key) in P.FROM_BLENDER:
                 continue
             if table in P.OPTIONAL_TABLES and key not in P.panel_keys(table):
-                # No default and no example (site.pressure_hpa): scene files only.
+                # No default and no example (site.pressure_hpa, oval.al_nt, oval.mlt_h): scene files only.
                 left_to_files += 1
                 continue
             group = s if table == "" else (s.curtains.add() if table == "curtain" else getattr(s, table))
@@ -161,7 +161,8 @@ def test_every_schema_key_is_a_property_with_its_default_range_and_unit(sc, pane
         assert not getattr(s, table).enabled and P.table_values(getattr(s, table), table, P.panel_keys(table)) == {}
     every = sum(len(k) for k in P.SCHEMA.values())
     assert n == every - len(P.SCHEMA["camera"]) - len(P.FROM_BLENDER) - left_to_files and n > 80
-    assert left_to_files == 1
+    # site.pressure_hpa, oval.al_nt and oval.mlt_h.
+    assert left_to_files == 3
 
 
 def test_the_site_and_hour_load_from_a_preset_and_write_back_only_when_on(sc, panel, tmp_path, bpy):
@@ -183,6 +184,26 @@ def test_the_site_and_hour_load_from_a_preset_and_write_back_only_when_on(sc, pa
     assert "site" not in sw.scene_document(sc)
     assert bpy.ops.aurora.load_preset(name="default") == {"FINISHED"}
     assert not sc.aurora.site.enabled
+
+
+def test_the_ovals_activity_loads_from_a_preset_and_writes_back_only_when_on(sc, panel, tmp_path, bpy):
+    """`[oval]` in the panel: `tromso_kp5` switches it on at Kp 5, the file
+    the panel writes holds the same `[oval]` (and the binary takes it), and
+    switched off the file has none."""
+    sw = sub(panel, "scene_write")
+    assert bpy.ops.aurora.load_preset(name="tromso_kp5") == {"FINISHED"}
+    preset = tomllib.loads(subprocess.run([aurora_bin(), "scene", "tromso_kp5"], capture_output=True, text=True, check=True).stdout)
+    assert preset["oval"] == {"kp": 5.0}
+    assert sc.aurora.oval.enabled and sc.aurora.oval.kp == pytest.approx(5.0)
+    sc.aurora.oval.kp = 6.5
+    doc = sw.scene_document(sc)
+    assert doc["oval"] == {"kp": pytest.approx(6.5)}
+    f = tmp_path / "s.toml"
+    f.write_text(sw.to_toml(doc))
+    mine = tomllib.loads(subprocess.run([aurora_bin(), "scene", f], capture_output=True, text=True, check=True).stdout)
+    assert mine["oval"] == {"kp": 6.5} and mine["site"] == preset["site"]
+    sc.aurora.oval.enabled = False
+    assert "oval" not in sw.scene_document(sc)
 
 
 def test_a_preset_loads_into_the_panel_and_writes_back_the_same_bake(sc, panel, tmp_path, bpy):

@@ -53,10 +53,7 @@ pub fn stage_for_edit(old: &Scene, new: &Scene) -> Stage {
     at(old.animation != new.animation, Stage::Footprints);
     // A path is placed up the field line from its altitude: the field and
     // the start altitude move it.
-    at(
-        new.curtains.iter().any(|c| c.path.is_some()) && Lift::of(&old.beams, &old.earth) != Lift::of(&new.beams, &new.earth),
-        Stage::Footprints,
-    );
+    at(new.curtains.iter().any(|c| c.path.is_some()) && Lift::of_scene(old) != Lift::of_scene(new), Stage::Footprints);
     // The white balance is the PNG's, as the exposure (`crate::render::develop`).
     let colour = ColourParams { white_balance_k: new.colour.white_balance_k, ..old.colour.clone() };
     at(old.beams != new.beams || colour != new.colour || old.atmosphere != new.atmosphere || old.earth != new.earth, Stage::Trace);

@@ -83,6 +83,27 @@ impl Site {
         DVec3::new((n + h) * cp * cl, (n + h) * cp * sl, (n * (1.0 - e2) + h) * sp)
     }
 
+    /// The geodetic site of the Earth-fixed point `p`, km: the inverse of
+    /// [`Site::itrs_km`] by fixed-point iteration on the latitude
+    /// (`tan phi = (z + e^2 N sin phi) / rho`; five rounds reach 1e-12 rad
+    /// from the ground to thousands of km up). Not for points within 1 km
+    /// of the Earth's centre.
+    pub fn from_itrs_km(p: DVec3) -> Site {
+        let e2 = WGS84_F * (2.0 - WGS84_F);
+        let rho = p.x.hypot(p.y);
+        let mut phi = p.z.atan2(rho * (1.0 - e2));
+        let mut n = WGS84_A_KM;
+        for _ in 0..6 {
+            let sp = phi.sin();
+            n = WGS84_A_KM / (1.0 - e2 * sp * sp).sqrt();
+            phi = (p.z + e2 * n * sp).atan2(rho);
+        }
+        let (sp, cp) = phi.sin_cos();
+        // The height along the normal, from whichever of rho and z is the better conditioned.
+        let h = if cp.abs() > 0.5 { rho / cp - n } else { p.z / sp - n * (1.0 - e2) };
+        Site { latitude_deg: phi.to_degrees(), longitude_deg: p.y.atan2(p.x).to_degrees(), height_km: h }
+    }
+
     /// East, north and up (the ellipsoid's normal) in the ITRS.
     pub fn basis(&self) -> [DVec3; 3] {
         let (sp, cp) = self.latitude_deg.to_radians().sin_cos();
@@ -103,6 +124,20 @@ impl Site {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_geodetic_site_of_an_itrs_point_is_the_inverse() {
+        for &(lat, lon, h) in
+            &[(69.65, 18.96, 110.0), (-77.85, 166.67, 0.0), (0.3, -30.0, 800.0), (89.9, 10.0, 2.0), (-45.0, 200.0, 35_000.0)]
+        {
+            let s = Site::from_itrs_km(Site::new(lat, lon, h).unwrap().itrs_km());
+            let lon_back = (s.longitude_deg - lon).rem_euclid(360.0);
+            assert!(
+                (s.latitude_deg - lat).abs() < 1e-9 && lon_back.min(360.0 - lon_back) < 1e-9 && (s.height_km - h).abs() < 1e-6,
+                "{s:?}"
+            );
+        }
+    }
 
     #[test]
     fn ecef_of_known_points() {

@@ -137,6 +137,13 @@ impl Igrf {
         self.max_degree
     }
 
+    /// The unit vector, ITRS, from the Earth's centre to the north
+    /// geomagnetic pole: the axis of the degree-1 (centred, tilted dipole)
+    /// term, `-(g_1^1, h_1^1, g_1^0) / |...|`.
+    pub fn dipole_north(&self) -> DVec3 {
+        -DVec3::new(self.g[1][1], self.h[1][1], self.g[1][0]).normalize()
+    }
+
     /// The field at geocentric radius `r_km`, colatitude `theta` and east
     /// longitude `phi` (radians): `(B_r, B_theta, B_phi)`, nT (`B_theta`
     /// points south, `B_phi` east). At the poles `B_phi` is taken a

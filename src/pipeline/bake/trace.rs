@@ -73,7 +73,7 @@ pub fn for_each_chunk(
         let footprints = if sample.is_none_or(|s| s.is_now()) {
             &plan.footprints
         } else {
-            let lift = Lift::of(&scene.beams, &scene.earth);
+            let lift = Lift::of_scene(scene);
             earlier = simulate_footprints(scene.seed, &scene.curtains, &scene.footprint, &animation, lift, &NoProgress);
             &earlier
         };

@@ -57,7 +57,7 @@ pub const GRID_NAME: &str = "v";
 
 /// What [`beam_velocities`] reads of a bake, as plain data: the scene's
 /// seed, curtains and sections, and the footprints of the bake's time.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Motion<'a> {
     pub seed: u64,
     pub curtains: &'a [Curtain],
@@ -65,6 +65,8 @@ pub struct Motion<'a> {
     pub animation: &'a AnimationParams,
     pub beams: &'a BeamParams,
     pub earth: &'a EarthParams,
+    /// How a path is lifted to the start altitude (`Lift::of_scene`).
+    pub lift: Lift,
     /// One footprint per curtain at `animation.time_s`.
     pub now: &'a [Footprint],
 }
@@ -80,6 +82,7 @@ impl<'a> Motion<'a> {
             animation: &s.animation,
             beams: &s.beams,
             earth: &s.earth,
+            lift: Lift::of_scene(s),
             now: &plan.footprints,
         }
     }
@@ -92,7 +95,7 @@ impl<'a> Motion<'a> {
 /// curtain at `t`.
 pub fn beam_velocities(m: &Motion, count: usize) -> Vec<[f32; 3]> {
     let dt = dt_s(m.animation);
-    let lift = Lift::of(m.beams, m.earth);
+    let lift = &m.lift;
     let at = |t: f64| -> Vec<Footprint> {
         let anim = AnimationParams { time_s: t, ..m.animation.clone() };
         m.curtains.par_iter().map(|c| footprint::simulate_at(c, m.footprint, &anim, m.seed, t, lift)).collect()

@@ -37,8 +37,6 @@ pub mod running;
 pub mod starts;
 pub mod walk;
 
-use crate::geometry::astronomy::site::Site;
-use crate::geometry::astronomy::time::Utc;
 use crate::geometry::earth::Earth;
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::curtain_spectrum::{self, Population};
@@ -46,13 +44,12 @@ use crate::physics::deposition::fang::{MonoDeposition, SpectrumDeposition};
 use crate::physics::emission::line_colour::ColourTable;
 use crate::physics::emission::line_table::LineTable;
 use crate::physics::geomagnetic_field::MagneticField;
-use crate::physics::igrf::Igrf;
 use crate::physics::site_field::SiteField;
 use crate::pipeline::beams::starts::{StartMap, UnitPoints};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::deposit::StepDeposit;
 use crate::pipeline::footprint::Footprint;
-use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene, SiteField as SiteFieldChoice};
+use crate::scene::{AnimationParams, BeamParams, Curtain, Deposition, KernelShape, Scene};
 use crate::util::progress::Progress;
 use crate::util::rng;
 use beam::{BeamBuffers, BeamContext, BeamStart, DepositModel, EndReason};
@@ -422,11 +419,7 @@ pub fn beam_field(earth: &Earth, pole: Option<[f64; 2]>, site: Option<&SiteField
 /// scene's own field. The scene is a validated one (its `utc` parses and
 /// lies in IGRF-14's years).
 pub fn site_field(scene: &Scene) -> Option<SiteField> {
-    let p = scene.site.as_ref().filter(|p| p.field == SiteFieldChoice::Igrf)?;
-    let t = Utc::parse_rfc3339(&p.utc).ok()?.plus_seconds(scene.animation.time_s);
-    let igrf = Igrf::at(t).ok()?;
-    let site = Site::new(p.latitude_deg, p.longitude_deg, p.height_km).ok()?;
-    Some(SiteField::new(igrf, &site, Earth::new(scene.earth.radius_km)))
+    SiteField::of_scene(scene)
 }
 
 /// Where the beams of a bake of `count` beams start, per curtain: the

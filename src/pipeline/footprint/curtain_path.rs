@@ -31,12 +31,15 @@
 //! lower border at [`PATH_ALTITUDE_KM`]; the beams start at `beams.top_km`,
 //! up the field line, [`lift_km`] away horizontally; with a dipole pole
 //! (`earth.magnetic_pole`) each point is lifted along the dipole's field
-//! there ([`Lift`]).
+//! there, and with a `[site]` along IGRF-14's ([`Lift`]).
 
 use crate::geometry::earth::Earth;
 use crate::physics::geomagnetic_field::MagneticField;
+use crate::physics::site_field::SiteField;
+use crate::scene::root::Scene;
 use crate::scene::{BeamParams, EarthParams};
 use glam::DVec3;
+use std::sync::Arc;
 
 /// The altitude of a path, km: the lower border of the green curtain, where
 /// its emission peaks (100-120 km; 557.7 nm peaks near 110-115 km).
@@ -60,11 +63,14 @@ pub fn lift_km(beams: &BeamParams) -> [f64; 2] {
 /// How a path's points move from [`PATH_ALTITUDE_KM`] to the beams' start
 /// altitude: one offset ([`lift_km`]) for a uniform field, or, with a
 /// dipole pole, the offset of the dipole's field at each point (on the
-/// scale of an oval the field turns with the arc).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// scale of an oval the field turns with the arc), or with a `[site]`
+/// (`field = "igrf"`) the offset of IGRF-14's field over each point at
+/// [`PATH_ALTITUDE_KM`] (`crate::physics::site_field`), as the beams follow it.
+#[derive(Clone, Debug, PartialEq)]
 pub enum Lift {
     Constant([f64; 2]),
     Dipole { earth: Earth, pole: [f64; 2], top_km: f64 },
+    Site { field: Arc<SiteField>, top_km: f64 },
 }
 
 impl From<[f64; 2]> for Lift {
@@ -73,9 +79,15 @@ impl From<[f64; 2]> for Lift {
     }
 }
 
+impl From<&Lift> for Lift {
+    fn from(l: &Lift) -> Self {
+        l.clone()
+    }
+}
+
 impl Lift {
-    /// The scene's lift: the dipole's with `earth.magnetic_pole`, else
-    /// [`lift_km`].
+    /// The lift of a scene's own field keys: the dipole's with
+    /// `earth.magnetic_pole`, else [`lift_km`].
     pub fn of(beams: &BeamParams, earth: &EarthParams) -> Lift {
         match earth.magnetic_pole {
             Some(pole) if earth.radius_km > 0.0 => Lift::Dipole { earth: Earth::new(earth.radius_km), pole, top_km: beams.top_km },
@@ -83,13 +95,26 @@ impl Lift {
         }
     }
 
+    /// The scene's lift: IGRF-14's over a `[site]` whose field is IGRF
+    /// (the field its beams follow), else [`Lift::of`].
+    pub fn of_scene(scene: &Scene) -> Lift {
+        match SiteField::of_scene(scene) {
+            Some(field) => Lift::Site { field: Arc::new(field), top_km: scene.beams.top_km },
+            None => Lift::of(&scene.beams, &scene.earth),
+        }
+    }
+
     /// The point `q` lifted.
     pub fn apply(&self, q: [f64; 2]) -> [f64; 2] {
-        let d = match *self {
-            Lift::Constant(d) => d,
+        let d = match self {
+            Lift::Constant(d) => *d,
             Lift::Dipole { earth, pole, top_km } => {
-                let f = MagneticField::dipole(&earth, pole, q);
-                let p = f.foot(DVec3::new(0.0, 0.0, PATH_ALTITUDE_KM), top_km);
+                let f = MagneticField::dipole(earth, *pole, q);
+                let p = f.foot(DVec3::new(0.0, 0.0, PATH_ALTITUDE_KM), *top_km);
+                [p.x, p.y]
+            }
+            Lift::Site { field, top_km } => {
+                let p = field.field(q, PATH_ALTITUDE_KM).foot(DVec3::new(0.0, 0.0, PATH_ALTITUDE_KM), *top_km);
                 [p.x, p.y]
             }
         };
@@ -421,6 +446,29 @@ pub fn bend_warnings(curtains: &[crate::scene::Curtain]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn with_a_site_a_path_is_lifted_along_igrfs_field_over_it() {
+        // Tromso's dome: IGRF-14 at 110 km over the site dips 78.6 degrees
+        // toward declination 11 degrees east (`crate::physics::site_field`'s
+        // test): the lift runs cot(I) (top - 110) against the field's
+        // horizontal part, not the scene keys' dipole's.
+        let s = crate::scene::presets::by_name("tromso_dome").unwrap();
+        let lift = Lift::of_scene(&s);
+        let field = SiteField::of_scene(&s).unwrap();
+        let (inc, dec) = field.angles_deg([0.0, 0.0], PATH_ALTITUDE_KM);
+        let d = lift.apply([0.0, 0.0]);
+        let want = (s.beams.top_km - PATH_ALTITUDE_KM) / inc.to_radians().tan();
+        let az = d[0].atan2(d[1]).to_degrees();
+        assert!(matches!(lift, Lift::Site { .. }));
+        assert!((d[0].hypot(d[1]) - want).abs() < 0.5, "{d:?} {want}");
+        assert!(((az - dec - 180.0).rem_euclid(360.0) + 0.5).rem_euclid(360.0) < 1.0, "{az} {dec}");
+        assert_ne!(Lift::of(&s.beams, &s.earth).apply([0.0, 0.0]), d);
+        // `field = "scene"` keeps the scene keys' lift.
+        let mut own = s.clone();
+        own.site.as_mut().unwrap().field = crate::scene::SiteField::Scene;
+        assert_eq!(Lift::of_scene(&own), Lift::of(&s.beams, &s.earth));
+    }
 
     /// Points 30 degrees apart on a circle of radius 20 km (chords of
     /// 10.35 km, so centripetal is uniform Catmull-Rom here).

@@ -34,6 +34,7 @@
 pub mod cells;
 pub mod curtain_path;
 pub mod fluid;
+pub mod magnetic_placement;
 pub mod sheet;
 
 pub use cells::Cells;

@@ -108,7 +108,7 @@ pub fn column_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
 /// vertices (None for a straight curtain).
 pub fn path_curve(plan: &BakePlan, c: &Curtain) -> Option<(f64, Vec<[f64; 2]>)> {
     let p = c.path.as_ref()?;
-    let v = vertices(&Lift::of(&plan.scene.beams, &plan.scene.earth).path(p));
+    let v = vertices(&Lift::of_scene(&plan.scene).path(p));
     Some((polyline_length(&v), v))
 }
 

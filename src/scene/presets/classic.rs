@@ -69,6 +69,7 @@ pub fn default_scene() -> Scene {
         atmosphere: AtmosphereParams::default(),
         earth: EarthParams::default(),
         site: None,
+        oval: None,
         sky: SkyParams::default(),
         airglow: crate::scene::airglow::AirglowParams::default(),
         overrides: Vec::new(),

@@ -58,6 +58,8 @@ pub const PRESETS: &[Preset] = &[
     Preset { name: "surge", description: forms::SURGE, build: forms::surge, ibc_class: Some(3) },
     Preset { name: "tromso", description: sites::TROMSO, build: sites::tromso, ibc_class: None },
     Preset { name: "tromso_dome", description: sites::TROMSO_DOME, build: sites::tromso_dome, ibc_class: None },
+    Preset { name: "tromso_kp5", description: sites::TROMSO_KP5, build: sites::tromso_kp5, ibc_class: None },
+    Preset { name: "tromso_kp5_dome", description: sites::TROMSO_KP5_DOME, build: sites::tromso_kp5_dome, ibc_class: None },
 ];
 
 /// The presets' names, in [`PRESETS`] order.
