@@ -53,7 +53,8 @@ pub struct SceneInput {
 /// (module doc).
 pub fn load(arg: &str, overrides: &[Override]) -> Result<SceneInput, SceneInputError> {
     let input = load_as_given(arg, overrides)?;
-    let scene = crate::pipeline::footprint::magnetic_placement::place(&input.scene).map_err(|e| SceneInputError::Placement(e.to_string()))?;
+    let scene =
+        crate::pipeline::footprint::magnetic_placement::place(&input.scene).map_err(|e| SceneInputError::Placement(e.to_string()))?;
     Ok(SceneInput { scene, warnings: input.warnings })
 }
 

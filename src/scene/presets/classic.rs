@@ -30,8 +30,9 @@ impl Default for Scene {
 /// it (Maggs & Davis 1968; Dahlgren et al. 2012) of the same electrons
 /// accelerated through 4, 3 and 2 kV more (Evans 1974), 80, 50 and 35
 /// mW/m^2: their lower borders are sharper and lower. The beams follow the
-/// field (a 5 keV electron's gyroradius is metres). Exposed as for a
-/// bright display: -5.5 stops keeps the arcs' cores out of the view
+/// field (a 5 keV electron's gyroradius is metres). Exposed as a camera's
+/// highlight meter exposes a bright display (`render.exposure = "auto"`
+/// meters -5.9 EV here): -6 stops keeps the arcs' cores out of the view
 /// transform's shoulder and leaves the sky dark, as photographers expose.
 pub fn default_scene() -> Scene {
     let arc = |distance_km: f64, length_km: f64, shift_km: f64, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
@@ -61,7 +62,7 @@ pub fn default_scene() -> Scene {
             look_at: [DEFAULT_CAMERA_XY[0], DEFAULT_CAMERA_XY[1] + 110.0, 52.3],
             ..Camera::default()
         },
-        render: RenderParams { exposure: -5.5, ..RenderParams::default() },
+        render: RenderParams { exposure: -6.0, ..RenderParams::default() },
         volume: VolumeParams::default(),
         background: Background::default(),
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
@@ -211,9 +212,10 @@ pub fn oval() -> Scene {
     };
     s.render.width = 1024;
     s.render.height = 1024;
-    // A bright arc (24 mW/m^2, IBC III) straight overhead, its core out of
-    // the view transform's shoulder at -2 stops.
-    s.render.exposure = -2.0;
+    // A bright arc (IBC III) straight overhead: -6.5 stops, as the
+    // highlight meter (`render.exposure = "auto"`: -6.4 EV) exposes it; the
+    // sky stays dark.
+    s.render.exposure = -6.5;
     s.background.stars = true;
     s.terrain = Terrain { kind: TerrainKind::Plane, ..Terrain::default() };
     s

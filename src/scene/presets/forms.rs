@@ -25,8 +25,11 @@
 //! (Physics Today 61(7):68, 2008); 1 mW/m^2 of 3 keV electrons gives about
 //! 1 kR of 557.7 nm (weak aurora), bright displays tens of kR. The fluxes
 //! are those of the displays people photograph (IBC I-III), and each
-//! preset's exposure puts its brightest curtain just under the view
-//! transform's shoulder. Arcs are 5-20 km wide (Knudsen et al. 2001), with
+//! preset's exposure is about what a camera's highlight meter gives it
+//! (`render.exposure = "auto"`, `crate::render::develop`): its brightest
+//! curtain just under the view transform's shoulder, the sky dark (the
+//! quiet arc, IBC II low over the horizon, a stop under the meter's -3.1
+//! EV, as photographers keep a faint arc's sky dark). Arcs are 5-20 km wide (Knudsen et al. 2001), with
 //! filaments of 0.05-0.2 km inside them (Borovsky 1993, J. Geophys. Res.
 //! 98(A4), 6101: the compilation of measured arc thicknesses), and can be
 //! over 1000 km long. The field's dip is the default 78 degrees (northern
@@ -102,7 +105,7 @@ pub fn quiet_arc() -> Scene {
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -300.0, 0.5], [0.0, 80.0, 75.0], 45.0);
-    s.render.exposure = -2.5;
+    s.render.exposure = -4.0;
     s.animation.fold_speed_kms = 0.5;
     s.animation.drift_km = 2.0;
     s.animation.ray_speed_kms = 1.0;
@@ -204,7 +207,7 @@ pub fn corona() -> Scene {
     };
     s.render.width = 512;
     s.render.height = 512;
-    s.render.exposure = -3.5;
+    s.render.exposure = -6.0;
     s.terrain.kind = TerrainKind::None;
     s.animation.ray_speed_kms = 15.0;
     s
@@ -326,7 +329,7 @@ pub fn type_b_pink() -> Scene {
     s.photons.radius_km = 0.5;
     s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -160.0, 0.5], [0.0, 60.0, 95.0], 60.0);
-    s.render.exposure = -4.0;
+    s.render.exposure = -5.0;
     s
 }
 

@@ -42,24 +42,22 @@ pub const TROMSO: &str =
 /// What `aurora scene --list` says of [`tromso_dome`].
 pub const TROMSO_DOME: &str = "the oval's arc over Tromso at the same hour as a dome master: the real constellations and the Moon";
 
-/// The default's three arcs over Tromso (module doc), 1.5 stops darker
-/// than the default: the moonlit snow (albedo 0.85 at 0.02 lux, about 0.006
-/// cd/m^2, 29 in the volume's unit) is brighter than the arcs' sides, and a photographer shortens
-/// the exposure under a bright Moon.
+/// The default's three arcs over Tromso (module doc), half a stop darker
+/// than the default, as a camera's highlight meter exposes it (-6.2 EV
+/// metered: the moonlit snow, albedo 0.85 at 0.02 lux, about 0.006 cd/m^2,
+/// brightens the frame's lower part; the arcs still set the exposure).
 pub fn tromso() -> Scene {
     let mut s = Scene { site: Some(tromso_site()), ..default_scene() };
-    s.render.exposure -= 1.5;
+    s.render.exposure -= 0.5;
     s
 }
 
-/// The oval's arc over Tromso as a dome master (module doc), 2.5 stops
-/// darker than `oval`: the moonlit sky is 2.0 kR at the zenith and 17 kR
-/// low in the south under the Moon (V 20.9 and 18.6 mag/arcsec^2), against
-/// the dark sky's 0.3 of airglow.
+/// The oval's arc over Tromso as a dome master (module doc), at `oval`'s
+/// exposure: the arc, not the moonlit sky (2.0 kR at the zenith and 17 kR
+/// low in the south under the Moon, V 20.9 and 18.6 mag/arcsec^2), sets
+/// what the highlight meter gives (-6.45 EV metered, `oval` -6.4).
 pub fn tromso_dome() -> Scene {
-    let mut s = Scene { site: Some(tromso_site()), ..oval() };
-    s.render.exposure -= 2.5;
-    s
+    Scene { site: Some(tromso_site()), ..oval() }
 }
 
 /// The hour of the Kp 5 scenes: magnetic midnight at Tromso (module doc).
