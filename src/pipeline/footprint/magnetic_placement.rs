@@ -189,6 +189,11 @@ mod tests {
     fn the_oval_arcs_lie_between_starkovs_edges_at_their_magnetic_local_time() {
         let mut s = presets::by_name("tromso").unwrap();
         s.oval = Some(crate::scene::oval::OvalParams { kp: 5.0, al_nt: None, mlt_h: Some(0.0) });
+        // `[oval]` places straight curtains (the default's follow paths of their own).
+        for c in &mut s.curtains {
+            c.path = None;
+            c.length = 400.0;
+        }
         let placed = place(&s).unwrap();
         placed.validate("placed", None).unwrap();
         let t = Utc::parse_rfc3339(&s.site.as_ref().unwrap().utc).unwrap();
