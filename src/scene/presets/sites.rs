@@ -52,12 +52,16 @@ pub fn tromso() -> Scene {
     s
 }
 
-/// The oval's arc over Tromso as a dome master (module doc), at `oval`'s
-/// exposure: the arc, not the moonlit sky (2.0 kR at the zenith and 17 kR
-/// low in the south under the Moon, V 20.9 and 18.6 mag/arcsec^2), sets
-/// what the highlight meter gives (-6.45 EV metered, `oval` -6.4).
+/// The oval's arc over Tromso as a dome master (module doc), a stop under
+/// `oval`: the arc sets what the highlight meter gives (-6.45 EV metered,
+/// `oval` -6.4), and a photographer shortens the exposure a stop more
+/// under the moonlit sky (2.0 kR at the zenith and 17 kR low in the south
+/// under the Moon, V 20.9 and 18.6 mag/arcsec^2), which the meter's
+/// highlights do not see.
 pub fn tromso_dome() -> Scene {
-    Scene { site: Some(tromso_site()), ..oval() }
+    let mut s = Scene { site: Some(tromso_site()), ..oval() };
+    s.render.exposure -= 1.0;
+    s
 }
 
 /// The hour of the Kp 5 scenes: magnetic midnight at Tromso (module doc).
