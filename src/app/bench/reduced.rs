@@ -2,8 +2,9 @@
 //! converged references (many more beams, finer voxels) fit in the bench's
 //! time budget, and the two cameras the render studies look through.
 //!
-//! [`reduce`] keeps the **first curtain** only and shortens it to
-//! `length_km` (when longer), keeping everything per unit length and per unit
+//! [`reduce`] keeps the **first curtain** only (one placed by a `path` as
+//! the straight curtain of the path's length through its middle) and
+//! shortens it to `length_km` (when longer), keeping everything per unit length and per unit
 //! area the same, so photon density, kernel and voxel relate as in the full
 //! scene:
 //! - `curtain.length` -> `length_km`; factor `f = length_km / length`;
@@ -31,13 +32,30 @@ pub struct Reduced {
     pub changes: Vec<String>,
 }
 
+/// A curtain placed by a `path` as the straight curtain of the path's
+/// ground length through its middle point, along the chord between the
+/// path's middle neighbours: the bench shortens a curtain by its length,
+/// which a path does not read.
+fn straightened(c: &crate::scene::Curtain, changes: &mut Vec<String>) -> crate::scene::Curtain {
+    let Some(path) = c.path.as_ref().filter(|p| p.len() >= 2) else {
+        return c.clone();
+    };
+    let length: f64 = path.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    let m = path.len() / 2;
+    let (a, b) = (path[m.saturating_sub(1)], path[(m + 1).min(path.len() - 1)]);
+    let mid = if path.len() % 2 == 1 { path[m] } else { [(path[m - 1][0] + path[m][0]) / 2.0, (path[m - 1][1] + path[m][1]) / 2.0] };
+    let rotation_deg = (b[1] - a[1]).atan2(b[0] - a[0]).to_degrees();
+    changes.push(format!("curtain[0].path: a straight curtain of its length {length:.1} km through [{:.1}, {:.1}] at {rotation_deg:.1} degrees", mid[0], mid[1]));
+    crate::scene::Curtain { path: None, center: mid, length, rotation_deg, ..c.clone() }
+}
+
 /// See the module documentation. The scene must have been validated (at
 /// least one curtain). `auto_voxel` is the full scene's resolved voxel size
 /// and how it was chosen, used when `grid.voxel_size = "auto"`.
 pub fn reduce(scene: &Scene, length_km: f64, auto_voxel: Option<(f64, String)>) -> Reduced {
     let mut s = scene.clone();
     let mut changes = Vec::new();
-    let c0 = scene.curtains[0].clone();
+    let c0 = straightened(&scene.curtains[0], &mut changes);
     let total_weight: f64 = scene.curtains.iter().map(|c| c.beam_weight.max(0.0)).sum();
     let share = if total_weight > 0.0 { c0.beam_weight.max(0.0) / total_weight } else { 1.0 };
     if scene.curtains.len() > 1 {

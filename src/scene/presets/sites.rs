@@ -21,7 +21,14 @@
 //! from Tromso).
 
 use super::classic::{default_scene, oval};
-use crate::scene::{oval::OvalParams, root::Scene, site::SiteParams, Camera, Projection, Terrain, TerrainKind, VoxelSize};
+use crate::scene::{
+    camera::{Camera, Projection},
+    grid::VoxelSize,
+    oval::OvalParams,
+    root::Scene,
+    site::SiteParams,
+    terrain::{Terrain, TerrainKind},
+};
 
 /// The site and hour of both scenes.
 pub fn tromso_site() -> SiteParams {
