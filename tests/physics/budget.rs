@@ -148,8 +148,9 @@ fn each_suggested_change_fits_and_none_goes_the_wrong_way() {
     s.photons.radius_km = 30.0;
     scenes.push(("wide kernel", s));
     let mut s = Scene::default();
-    // 160 km curtains: one change alone must be able to bring it under.
+    // 160 km straight curtains: one change alone must be able to bring it under.
     for c in &mut s.curtains {
+        c.path = None;
         c.length = 160.0;
     }
     s.beams.count = 400_000;
