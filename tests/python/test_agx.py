@@ -227,5 +227,5 @@ def test_agx_png_tool_writes_through_a_temporary_and_renames(bpy, compare, tmp_p
     r = subprocess.run([sys.executable, tool, exr, png, "--exposure", "5"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == ["t.png"]
-    theirs = blender_agx_png(bpy, developed(addon, exr), tmp_path / "blender.png", 5.0)
+    theirs = blender_agx_png(bpy, exr, tmp_path / "blender.png", 5.0)
     assert np.array_equal(read_png_rgb8(png), theirs)
