@@ -22,7 +22,7 @@
 
 use super::classic::{default_scene, oval};
 use crate::scene::{
-    camera::{Camera, Projection},
+    camera::Camera,
     grid::VoxelSize,
     oval::OvalParams,
     root::Scene,
@@ -131,15 +131,8 @@ pub fn tromso_kp5_dome() -> Scene {
     base.curtains = default_scene().curtains;
     base.earth.magnetic_pole = None;
     let mut s = kp5(base, 2000.0);
+    // `oval`'s camera: the 180-degree fisheye at the zenith, north up.
     s.beams.count = 60_000;
-    s.camera = Camera {
-        position: [0.0, 0.0, 0.002],
-        look_at: [0.0, 0.0, 1.0],
-        up: [0.0, 1.0, 0.0],
-        projection: Projection::Fisheye,
-        fov_deg: 180.0,
-        ..Camera::default()
-    };
     s.render.exposure = -4.5;
     s
 }
