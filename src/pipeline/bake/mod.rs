@@ -49,7 +49,7 @@ use std::time::Instant;
 /// traced.
 pub fn check_memory(plan: &BakePlan) -> Result<(), BakeError> {
     let s = &plan.scene;
-    crate::pipeline::beams::dip::check_field(&s.curtains, &s.beams, &s.earth)?;
+    crate::pipeline::beams::dip::check_field(&s.curtains, &s.beams, &s.earth, plan.site_field.as_ref())?;
     memory::refusal::check(plan, &crate::util::memory::available())?;
     Ok(())
 }
@@ -65,7 +65,7 @@ pub fn bake(scene: &Scene, progress: &dyn Progress) -> Result<Bake, BakeError> {
 /// colour table); returns the bake and its plan, for the next call.
 pub fn bake_reusing(scene: &Scene, prev: Option<&BakePlan>, progress: &dyn Progress) -> Result<(Bake, BakePlan), BakeError> {
     let t_all = Instant::now();
-    crate::pipeline::beams::dip::check_field(&scene.curtains, &scene.beams, &scene.earth)?;
+    crate::pipeline::beams::dip::check_scene_field(scene)?;
     let plan = match prev {
         Some(p) => BakePlan::reusing(scene, p, progress),
         None => BakePlan::new(scene, progress),

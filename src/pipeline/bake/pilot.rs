@@ -96,7 +96,7 @@ pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
                 left: st.ended_left_footprint,
                 bottom: st.ended_bottom,
                 capped: st.ended_max_steps,
-                dip_deg: curtain_dip(c, &plan.scene.beams, &plan.scene.earth).dip_deg,
+                dip_deg: curtain_dip(c, &plan.scene.beams, &plan.scene.earth, plan.site_field.as_ref()).dip_deg,
                 alpha_d_deg: plan.scene.beams.alpha_d_deg,
             }
             .into());

@@ -157,10 +157,11 @@ pub fn world_bounds(plan: &BakePlan) -> ([f64; 3], [f64; 3]) {
 }
 
 /// The smallest dip of the electrons' field line where any curtain's beams
-/// start, degrees ([`crate::pipeline::beams::dip::min_dip_deg`]), at least
+/// start, degrees ([`crate::pipeline::beams::dip::min_dip_deg`]: IGRF's
+/// over a `[site]` whose beams follow it, the plan's `site_field`), at least
 /// 1e-3 so the bounds stay finite for a scene the bake refuses.
 pub fn dip_deg(plan: &BakePlan) -> f64 {
-    min_dip_deg(&plan.scene.curtains, &plan.scene.beams, &plan.scene.earth).max(1e-3)
+    min_dip_deg(&plan.scene.curtains, &plan.scene.beams, &plan.scene.earth, plan.site_field.as_ref()).max(1e-3)
 }
 
 /// The altitude where a Fang beam of `curtain` has deposited all but
