@@ -66,7 +66,7 @@ pub const TABLES: &[Table] = &[
     Table {
         name: "oval",
         keys: super::oval::OVAL_KEYS,
-        about: "Where the auroral oval is: with a `[site]`, the oval's equatorward and poleward edges by Starkov (1994) in corrected geomagnetic (AACGM-v2) latitude at the activity (`kp` or `al_nt`), and the scene's straight curtains laid between them along the oval, their middle at the site's magnetic local time. Optional: without it the curtains stay where their keys put them.",
+        about: "Where the auroral oval is: with a `[site]`, the oval's equatorward and poleward edges by Starkov (1994) in corrected geomagnetic (AACGM-v2) latitude at the activity (`kp` or `al_nt`), and the scene's straight curtains laid between them along the oval, their middle at the site's magnetic local time. AACGM-v2 is defined by IGRF-14, so with `site.field = \"scene\"` the arcs are placed where they are with IGRF (the same ground tracks at 110 km) and only the beams rising from them follow the scene's own field. Optional: without it the curtains stay where their keys put them.",
     },
     Table {
         name: "colour",

@@ -25,6 +25,13 @@
 //! ground distance of a tenth of an hour at its middle), sampled at most
 //! 25 km apart.
 //!
+//! **Whatever field the beams follow.** AACGM-v2 is defined by IGRF
+//! (Shepherd 2014), so a scene whose beams follow its own field
+//! (`[site] field = "scene"`) has its arcs placed where they are with
+//! IGRF's: the same paths, the ground tracks of the arcs' lower borders,
+//! from which its beams then rise along the scene's field
+//! (`super::curtain_path::Lift::of_scene`).
+//!
 //! A scene with neither `[oval]` nor a `magnetic_path` is returned as it
 //! is, so its bytes do not change.
 
@@ -236,5 +243,21 @@ mod tests {
         // One hour of MLT at 66 degrees is about 680 km at 110 km: the
         // points are filled in every 28 km or less.
         assert!(path.len() > 20, "{}", path.len());
+    }
+
+    #[test]
+    fn the_arcs_are_placed_by_aacgm_whatever_field_the_beams_follow() {
+        use crate::pipeline::footprint::curtain_path::Lift;
+        use crate::scene::site::SiteField;
+        let igrf = presets::by_name("tromso_kp5").unwrap();
+        let mut own = igrf.clone();
+        own.site.as_mut().unwrap().field = SiteField::Scene;
+        let (a, b) = (place(&igrf).unwrap(), place(&own).unwrap());
+        for (x, y) in a.curtains.iter().zip(&b.curtains) {
+            assert!(x.path.is_some() && x.path == y.path);
+        }
+        // The beams rise from the same paths along each scene's own field.
+        assert_eq!(Lift::of_scene(&b), Lift::of(&b.beams, &b.earth));
+        assert!(matches!(Lift::of_scene(&a), Lift::Site { .. }));
     }
 }

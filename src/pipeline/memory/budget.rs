@@ -52,11 +52,14 @@ use super::reach::{
     band_area_leaves, column_km, column_leaves, column_spans, deposit_top_km, dip_deg, path_curve, photons_of_steps, spread_km,
     steps_per_beam, stop_km, world_bounds,
 };
-use crate::pipeline::beams::start_positions;
+use crate::physics::geomagnetic_field::MagneticField;
+use crate::pipeline::beams::{beam_field, start_positions};
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::photons::kernel::KernelF32;
 use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::scene::{Deposition, GatherMethod, KernelRadius, VoxelSize};
+use glam::DVec3;
+use rayon::prelude::*;
 
 /// Bytes per leaf of both grids: emission values, density values, two masks
 /// and bookkeeping.
@@ -170,7 +173,8 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
     // merge by half a voxel's diagonal); the dipole's direction at the
     // merged point differs from the start's by at most some 2 d / R rad
     // (its inclination turns by 1-2 times the arc), over lines of at most
-    // (top - bottom) / sin(I).
+    // (top - bottom) / sin(I). IGRF over a site ([`igrf_turn_rad`]) has no
+    // such closed form: its angles are taken at each start.
     plan.scene
         .curtains
         .iter()
@@ -180,17 +184,21 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
             let (columns, slack) = match &drawn {
                 Some(starts) => {
                     let merge = std::f64::consts::FRAC_1_SQRT_2 * voxel_km;
-                    let carried: Vec<[f64; 2]> = starts[k]
-                        .iter()
+                    // Each start carried, and with IGRF its turn ([`igrf_turn_rad`]).
+                    let (carried, turns): (Vec<[f64; 2]>, Vec<f64>) = starts[k]
+                        .par_iter()
                         .map(|p| {
-                            let q = plan.field_at([p.x, p.y]).foot(*p, b.top_km);
-                            [q.x, q.y]
+                            let carry = plan.field_at([p.x, p.y]);
+                            let q = carry.foot(*p, b.top_km);
+                            let turn = if plan.site_field.is_some() { igrf_turn_rad(plan, *p, &carry, q, voxel_km) } else { 0.0 };
+                            ([q.x, q.y], turn)
                         })
-                        .collect();
-                    let turn = match plan.scene.earth.magnetic_pole {
-                        Some(_) if plan.scene.earth.radius_km > 0.0 => {
+                        .unzip();
+                    let length = (deposit_top_km(plan, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
+                    let turn = match (&plan.site_field, plan.scene.earth.magnetic_pole) {
+                        (Some(_), _) => turns.iter().copied().fold(0.0, f64::max) * length,
+                        (None, Some(_)) if plan.scene.earth.radius_km > 0.0 => {
                             let d = b.top_noise_km / dip.tan() + merge;
-                            let length = (deposit_top_km(plan, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
                             2.0 * d / plan.scene.earth.radius_km * length
                         }
                         _ => 0.0,
@@ -223,12 +231,38 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
         .collect()
 }
 
+/// The cell of a grid of `g` km holding `p`.
+fn cell(p: [f64; 2], g: f64) -> (i64, i64) {
+    ((p[0] / g).floor() as i64, (p[1] / g).floor() as i64)
+}
+
+/// The centre of a grid cell of `g` km.
+fn cell_centre((a, b): (i64, i64), g: f64) -> [f64; 2] {
+    [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]
+}
+
 /// Points merged onto a grid of `g` km: each occupied cell's centre, sorted.
 fn merged_columns(points: &[[f64; 2]], g: f64) -> Vec<[f64; 2]> {
-    let mut cells: Vec<(i64, i64)> = points.iter().map(|p| ((p[0] / g).floor() as i64, (p[1] / g).floor() as i64)).collect();
+    let mut cells: Vec<(i64, i64)> = points.iter().map(|&p| cell(p, g)).collect();
     cells.sort_unstable();
     cells.dedup();
-    cells.into_iter().map(|(a, b)| [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]).collect()
+    cells.into_iter().map(|c| cell_centre(c, g)).collect()
+}
+
+/// With IGRF over a site, the angle, radians, by which the line of the
+/// beam starting at `p` can turn away from its merged column's (module
+/// documentation of `super::leaves`): the angle between the field the beam
+/// follows (`crate::pipeline::beams::beam_field` at `p`, its own altitude)
+/// and the field `carry` it is carried along to `beams.top_km` (at
+/// `top_km` over `p`), which moves the line's crossing of `top_km`, to `q`,
+/// by that angle over at most the line's length; plus the angle between
+/// the beam's field and its merged column's (`BakePlan::field_at` the
+/// centre of `q`'s cell of `g` km), by which the line diverges below and
+/// above. The bands take the largest over a curtain's starts.
+fn igrf_turn_rad(plan: &BakePlan, p: DVec3, carry: &MagneticField, q: DVec3, g: f64) -> f64 {
+    let own = beam_field(&plan.earth(), plan.scene.earth.magnetic_pole, plan.site_field.as_ref(), plan.field, p).b;
+    let column = plan.field_at(cell_centre(cell([q.x, q.y], g), g)).b;
+    own.angle_between(carry.b) + own.angle_between(column)
 }
 
 /// Largest leaf count [`super::leaves::band_leaves`] is

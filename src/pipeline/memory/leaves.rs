@@ -17,7 +17,8 @@
 //! (a voxel for drawn starts, half a leaf for cells). So every voxel the
 //! grids hold lies within
 //! `rho = reach + voxel + spread + merge + spacing / 2` (drawn starts: plus
-//! the dipole's turn between a start and its merged point; cells: plus the
+//! the field's turn, the dipole's or IGRF's over a site, between a start
+//! and its merged point; cells: plus the
 //! cell's half-diagonal and `top_noise cot(I)`)
 //! of a point of a column's field line, sampled every `spacing`
 //! along it (half a leaf, or an eighth of the widest ball where that is
