@@ -263,3 +263,34 @@ fn a_bake_in_chunks_counts_one_chunk_of_photons_and_what_stays_per_beam() {
     let grow = term(&v2, "velocity").unwrap() - term(&v, "velocity").unwrap() - 2.0 * (grids(&v2) - grids(&v));
     assert!((grow - 12.0 * 3010.0).abs() < 1e-3, "{grow}");
 }
+
+#[test]
+fn over_a_site_the_budget_reads_the_field_the_beams_follow() {
+    // The small scene over Tromso, whose own field (20 degrees) IGRF-14
+    // replaces: the budget's dip is IGRF's where the beams start (78.5
+    // degrees at the site, computed here from the model; the curtains lie
+    // within 30 km of it, where it differs by under 0.5 degree), and the
+    // bands, which take IGRF's turn between each start and its column,
+    // hold every leaf the bake makes.
+    let mut s = small_scene();
+    s.site = Some(aurora::scene::presets::sites::tromso_site());
+    s.earth.radius_km = aurora::geometry::earth::MEAN_RADIUS_KM;
+    s.beams.b_inclination_deg = 20.0;
+    (s.footprint.sheet_thickness_km, s.footprint.glow) = (0.5, 0.2);
+    (s.beams.alpha_d_deg, s.beams.delta_alpha_deg) = (5.0, 3.0);
+    let p = s.site.clone().unwrap();
+    let site = aurora::geometry::astronomy::site::Site::new(p.latitude_deg, p.longitude_deg, p.height_km).unwrap();
+    let igrf = aurora::physics::igrf::Igrf::at(aurora::geometry::astronomy::time::Utc::parse_rfc3339(&p.utc).unwrap()).unwrap();
+    let [e, n, u] = site.basis();
+    let bf = igrf.field_itrs(site.itrs_km() + s.beams.top_km * u);
+    let want = (-bf.dot(u)).atan2(bf.dot(e).hypot(bf.dot(n))).to_degrees();
+    let plan = BakePlan::new(&s, &NoProgress);
+    let dip = reach::dip_deg(&plan);
+    assert!((dip - want).abs() < 0.5, "the budget's dip {dip}, IGRF's {want}");
+    let b = bake::bake(&s, &NoProgress).unwrap();
+    let r = KernelRadius::of(&s.photons).max_reach_km(s.photons.cutoff);
+    let bound = budget::grid_leaves(&plan, b.stats.voxel_size_km, r, LeafCount::Bands);
+    let leaves = b.emission.leaf_count() as f64;
+    eprintln!("over a site: dip {dip:.3} (IGRF {want:.3}), {leaves} leaves, bands {bound}");
+    assert!(leaves <= bound && bound <= 4.5 * leaves, "{leaves} leaves, bound {bound}");
+}
