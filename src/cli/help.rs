@@ -48,7 +48,8 @@ pub fn keogram_long_about() -> String {
 the float grid --grid traced along the magnetic meridian through the scene's camera, one column per frame of --frame \
 (time left to right, frame N at [animation] time_s + (N - 1) / fps), one row every {row} degrees of scan angle from the \
 magnetic north horizon (the top row) through the zenith to the magnetic south horizon. Magnetic north is \
-beams.b_declination_deg, or with earth.magnetic_pole the dipole pole's azimuth at the camera. Only these rays are \
+beams.b_declination_deg, or with earth.magnetic_pole the dipole pole's azimuth at the camera, or with a [site] \
+(field = \"igrf\") IGRF-14's declination at the camera. Only these rays are \
 traced, through the frame's density, up to the terrain, with the air's extinction as [sky] extinction says.\n\n\
 Values: a line_* grid (rayleigh per km) gives the line's column brightness in rayleigh (R), 4 pi I / 1e6. Files: \
 K.exr (one channel Y, width the frames, height the rows; units and air in its header attributes aurora_units and \

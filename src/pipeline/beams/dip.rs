@@ -60,10 +60,7 @@ pub fn start_samples(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams,
             Some(f) => Lift::Site { field: Arc::new(f.clone()), top_km: beams.top_km },
             None => Lift::of(beams, earth),
         };
-        return vertices(&lift.path(p))
-            .into_iter()
-            .flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]])
-            .collect();
+        return vertices(&lift.path(p)).into_iter().flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]]).collect();
     }
     let (s, c) = curtain.rotation_deg.to_radians().sin_cos();
     let mut out = Vec::with_capacity(ALONG * ACROSS);
@@ -192,7 +189,9 @@ mod tests {
     fn igrf_dip_deg(p: &crate::scene::site::SiteParams, height_km: f64) -> f64 {
         use crate::geometry::astronomy::{site::Site, time::Utc};
         let site = Site::new(p.latitude_deg, p.longitude_deg, p.height_km).unwrap();
-        let b = crate::physics::igrf::Igrf::at(Utc::parse_rfc3339(&p.utc).unwrap()).unwrap().field_itrs(site.itrs_km() + height_km * site.basis()[2]);
+        let b = crate::physics::igrf::Igrf::at(Utc::parse_rfc3339(&p.utc).unwrap())
+            .unwrap()
+            .field_itrs(site.itrs_km() + height_km * site.basis()[2]);
         let [e, n, u] = site.basis();
         (-b.dot(u)).atan2(b.dot(e).hypot(b.dot(n))).to_degrees()
     }
