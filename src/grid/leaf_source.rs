@@ -23,6 +23,8 @@ pub type LeafError = Box<dyn std::error::Error + Send + Sync>;
 #[derive(Default)]
 pub struct Scratch {
     pub values: Vec<f32>,
+    /// Half floats' bits ([`LeafSource::values_half`]).
+    pub halves: Vec<u16>,
     pub bytes: Vec<u8>,
 }
 
@@ -48,17 +50,31 @@ pub trait LeafSource: Sync {
     /// The values of leaf `i`, components interleaved, borrowed from the
     /// source or decoded into `scratch`.
     fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError>;
+    /// Whether every value [`values`](Self::values) gives is a half float's
+    /// (an `f32` that a half holds exactly): a file's grid stored in half
+    /// mode. A store of half floats then holds the source without loss.
+    fn half(&self) -> bool {
+        false
+    }
+    /// The values of leaf `i` as half floats' bits, for a source whose
+    /// [`half`](Self::half) is true (the bits as stored: no conversion);
+    /// an error for any other.
+    fn values_half<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s, u16>, LeafError> {
+        let _ = (i, scratch);
+        Err(format!("grid `{}` does not store half floats", self.name()).into())
+    }
 }
 
-/// A leaf's values as a [`LeafSource`] gives them.
+/// A leaf's values as a [`LeafSource`] gives them: `f32`s, or half floats'
+/// bits (`u16`, [`LeafSource::values_half`]).
 #[derive(Clone, Copy, Debug)]
-pub enum LeafValues<'s> {
-    /// All 512 slots in index order (`512 * channels` floats; inactive
+pub enum LeafValues<'s, T = f32> {
+    /// All 512 slots in index order (`512 * channels` values; inactive
     /// slots may hold anything).
-    All(&'s [f32]),
+    All(&'s [T]),
     /// The active slots only, in index order (`popcount(mask) * channels`
-    /// floats): what an active-mask VDB record stores.
-    Active(&'s [f32]),
+    /// values): what an active-mask VDB record stores.
+    Active(&'s [T]),
 }
 
 /// A grid in memory as a [`LeafSource`].
