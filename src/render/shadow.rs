@@ -85,31 +85,62 @@ pub struct EmissionSampler {
     pub power: f64,
 }
 
-/// Voxels `range` (offsets) of block `block` of `field`, in order, with
-/// their weights: the luminance of the unscaled emission (the three
-/// channels from `ch`) of each voxel where it is positive; `f` returns true
-/// to stop. All-zero voxels (most of a block's inactive ones) are passed
-/// over before their luminance is taken.
-#[inline]
-fn for_each_weight(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, f: impl FnMut(usize, f64) -> bool) {
+/// The unscaled emission of voxel `at` (its first channel) of `v`, if its
+/// luminance is positive: the voxels the sampler weighs. All-zero voxels
+/// (most of a block's inactive ones) are passed over before their
+/// luminance is taken.
+#[inline(always)]
+fn weight<S: Stored>(v: &[S], at: usize) -> Option<f64> {
+    let e = &v[at..at + 3];
+    if e.iter().all(|x| x.is_zero_bits()) {
+        return None;
+    }
+    let w = luminance([e[0].to_f32() as f64, e[1].to_f32() as f64, e[2].to_f32() as f64]);
+    (w > 0.0).then_some(w)
+}
+
+/// The running total `t` with the weights of voxels `range` (offsets) of
+/// block `block` added in order (the emission's first channel `ch`), and
+/// whether any was.
+fn add_weights(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, t: f64) -> (f64, bool) {
     #[inline(always)]
-    fn scan<S: Stored>(v: &[S], channels: usize, ch: usize, block: usize, range: std::ops::Range<usize>, mut f: impl FnMut(usize, f64) -> bool) {
-        let base = block * LEAF_NUM_VALUES * channels + ch;
+    fn add<S: Stored>(v: &[S], channels: usize, at: usize, range: std::ops::Range<usize>, mut t: f64) -> (f64, bool) {
+        let mut any = false;
         for n in range {
-            let at = base + n * channels;
-            let e = &v[at..at + 3];
-            if e.iter().all(|x| x.is_zero_bits()) {
-                continue;
-            }
-            let w = luminance([e[0].to_f32() as f64, e[1].to_f32() as f64, e[2].to_f32() as f64]);
-            if w > 0.0 && f(n, w) {
-                return;
+            if let Some(w) = weight(v, at + n * channels) {
+                t += w;
+                any = true;
             }
         }
+        (t, any)
     }
+    let at = block * LEAF_NUM_VALUES * field.channels + ch;
     match &field.values {
-        Values::F32(v) => scan(v, field.channels, ch, block, range, f),
-        Values::Half(v) => scan(v, field.channels, ch, block, range, f),
+        Values::F32(v) => add(v, field.channels, at, range, t),
+        Values::Half(v) => add(v, field.channels, at, range, t),
+    }
+}
+
+/// The first voxel of `range` (offsets) of block `block` whose running
+/// total, from `t`, exceeds `x`, else the last voxel with a weight.
+fn first_above(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, t: f64, x: f64) -> Option<usize> {
+    fn find<S: Stored>(v: &[S], channels: usize, at: usize, range: std::ops::Range<usize>, mut t: f64, x: f64) -> Option<usize> {
+        let mut last = None;
+        for n in range {
+            if let Some(w) = weight(v, at + n * channels) {
+                t += w;
+                last = Some(n);
+                if t > x {
+                    break;
+                }
+            }
+        }
+        last
+    }
+    let at = block * LEAF_NUM_VALUES * field.channels + ch;
+    match &field.values {
+        Values::F32(v) => find(v, field.channels, at, range, t, x),
+        Values::Half(v) => find(v, field.channels, at, range, t, x),
     }
 }
 
@@ -162,11 +193,9 @@ impl EmissionSampler {
             let mut any = false;
             let mut ends = [0.0; LEAF_MASK_WORDS];
             for (w, end) in ends.iter_mut().enumerate() {
-                for_each_weight(f, c.channel, block, w * 64..(w + 1) * 64, |_, x| {
-                    total += x;
-                    any = true;
-                    false
-                });
+                let (t, some) = add_weights(f, c.channel, block, w * 64..(w + 1) * 64, total);
+                total = t;
+                any |= some;
                 *end = total;
             }
             if any {
@@ -203,23 +232,12 @@ impl EmissionSampler {
         let ch = self.channel.channel;
         let w = ends.partition_point(|c| *c <= x);
         if w < LEAF_MASK_WORDS {
-            let mut t = if w == 0 { if l == 0 { 0.0 } else { self.leaf_cdf[l - 1] } } else { ends[w - 1] };
-            let mut last = None;
-            for_each_weight(field, ch, block, w * 64..(w + 1) * 64, |n, v| {
-                t += v;
-                last = Some(n);
-                t > x
-            });
-            if let Some(n) = last {
+            let t = if w == 0 { if l == 0 { 0.0 } else { self.leaf_cdf[l - 1] } } else { ends[w - 1] };
+            if let Some(n) = first_above(field, ch, block, w * 64..(w + 1) * 64, t, x) {
                 return n;
             }
         }
-        let mut last = None;
-        for_each_weight(field, ch, block, 0..LEAF_NUM_VALUES, |n, _| {
-            last = Some(n);
-            false
-        });
-        last.expect("an emitting leaf has an emitting voxel")
+        first_above(field, ch, block, 0..LEAF_NUM_VALUES, 0.0, f64::INFINITY).expect("an emitting leaf has an emitting voxel")
     }
 
     /// A point `y` (world space) with density `Y(e(y)) / power`; `medium`
