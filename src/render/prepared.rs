@@ -289,11 +289,7 @@ fn observer_airglow(s: &RenderSettings) -> Option<Airglow> {
 /// from the emission grid if the caller has it (built now: the grid is not
 /// kept), else left to [`Prepared::sampler`] to build from the medium when
 /// first needed (the same sampler).
-fn emission_sampler(
-    terrain: &TerrainModel,
-    emission: Option<&Grid<[f32; 3]>>,
-    medium: &Medium,
-) -> OnceLock<Option<EmissionSampler>> {
+fn emission_sampler(terrain: &TerrainModel, emission: Option<&Grid<[f32; 3]>>, medium: &Medium) -> OnceLock<Option<EmissionSampler>> {
     match (terrain, emission, medium.emission) {
         (TerrainModel::None, _, _) | (_, _, None) => OnceLock::from(None),
         (_, Some(g), Some(_)) => OnceLock::from(EmissionSampler::new(g, medium)),

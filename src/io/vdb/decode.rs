@@ -373,7 +373,13 @@ pub fn read_stored_f32(
 
 /// A stored-values record's header, passed over: which slots it stores and
 /// how many components (`comps` a slot) follow.
-fn stored_header(cur: &mut Cursor, fmt: RecordFormat, n: usize, value_mask: &[u64], comps: usize) -> Result<(StoredSlots, usize), ParseError> {
+fn stored_header(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    comps: usize,
+) -> Result<(StoredSlots, usize), ParseError> {
     let m = cur.u8()?;
     if m > meta::NO_MASK_AND_ALL_VALS {
         return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));

@@ -53,7 +53,13 @@ struct BlockScan {
 /// stores the leaves of one block: `leaves[k]` is source `k`'s leaf at the
 /// block's origin ([`NONE`] if it has none). A block with no non-zero voxel
 /// is never written, so its pages are never touched.
-fn scan_block<S: Stored>(sources: &[&dyn LeafSource], leaves: &[u32; 2], dst: &mut [S], channels: usize, scratch: &mut [Scratch; 2]) -> BlockScan {
+fn scan_block<S: Stored>(
+    sources: &[&dyn LeafSource],
+    leaves: &[u32; 2],
+    dst: &mut [S],
+    channels: usize,
+    scratch: &mut [Scratch; 2],
+) -> BlockScan {
     let mut scan = BlockScan { feeds: 0, masks: ([0; LEAF_MASK_WORDS], [0; LEAF_MASK_WORDS]), peaks: [0.0; 2], fails: [None, None] };
     let mut got: [Option<LeafValues<'_, S>>; 2] = [None, None];
     for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {

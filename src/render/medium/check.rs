@@ -160,7 +160,10 @@ pub(super) fn bad_voxel<S: Stored>(src: &dyn LeafSource, i: usize, n: usize, v: 
     };
     RenderError::Grid {
         grid: src.name().to_string(),
-        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(&at.iter().map(|x| x.to_f32()).collect::<Vec<_>>())),
+        message: format!(
+            "voxel {ijk} holds {}: values must be finite and >= 0",
+            value_text(&at.iter().map(|x| x.to_f32()).collect::<Vec<_>>())
+        ),
     }
 }
 

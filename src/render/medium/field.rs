@@ -18,8 +18,8 @@
 //! occupied leaves, never with the bounding box; the walk (`dda.rs`) costs
 //! a few root steps per 4096 voxels of empty space.
 
-use super::values::Values;
 use super::layout::{block_offset, shr, slot, CellMask, BLOCK_LOG2, BLOCK_SLOTS, CORNER_OFFSETS, NONE, SUPER_LOG2, SUPER_SLOTS};
+use super::values::Values;
 use crate::grid::{Transform, LEAF_DIM, LEAF_LOG2DIM, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
 use std::collections::HashMap;
