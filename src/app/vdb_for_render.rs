@@ -20,7 +20,7 @@
 //! when a line grid is missing; the file's listing alone decides
 //! ([`emission_source_of`]), so the check costs no decoding.
 
-use crate::grid::leaf_source::LeafSource;
+use crate::grid::leaf_source::{GreySource, LeafSource};
 use crate::grid::Transform;
 use crate::io::vdb::parse::RawMeta;
 use crate::io::vdb::parse::{self, AnyTree, ParseError, ValueKind};
@@ -204,12 +204,33 @@ pub fn prepare_from_vdb(settings: &RenderSettings, path: &Path, colour: &ColourP
 pub fn read_render_medium(path: &Path, density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
     let start = std::time::Instant::now();
     let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
-    render_medium_named(bytes.bytes(), &path.display().to_string(), start, density_scale, emission_scale)
+    render_medium_named(bytes.bytes(), &path.display().to_string(), start, density_scale, emission_scale, EmissionGrid::Baked)
 }
 
 /// [`read_render_medium`] of a file held in memory.
 pub fn read_render_medium_bytes(bytes: &[u8], density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
-    render_medium_named(bytes, "<memory>", std::time::Instant::now(), density_scale, emission_scale)
+    render_medium_named(bytes, "<memory>", std::time::Instant::now(), density_scale, emission_scale, EmissionGrid::Baked)
+}
+
+/// [`read_render_medium`] with the float grid `grid` (a line's, `line_5577`)
+/// as a grey emission ([`GreySource`]) beside the density: the medium
+/// `Medium::new(density, grey(grid))` of the grids read whole, which the
+/// keogram traced from grids read whole. `Ok(None)` where that path does
+/// not apply (no such float grid, active tiles, a high column): the caller
+/// reads grids instead.
+pub fn read_line_medium(path: &Path, grid: &str, density_scale: f64, emission_scale: f64) -> Result<Option<RenderMedium>, RenderReadError> {
+    let start = std::time::Instant::now();
+    let bytes = FileBytes::open(path).map_err(|source| VdbReadError::Io { path: path.to_path_buf(), source })?;
+    render_medium_named(bytes.bytes(), &path.display().to_string(), start, density_scale, emission_scale, EmissionGrid::Grey(grid))
+}
+
+/// Which grid the medium's emission comes from.
+#[derive(Clone, Copy)]
+enum EmissionGrid<'a> {
+    /// The vec3 `emission` grid, as baked.
+    Baked,
+    /// This float grid, grey.
+    Grey(&'a str),
 }
 
 fn render_medium_named(
@@ -218,6 +239,7 @@ fn render_medium_named(
     start: std::time::Instant,
     density_scale: f64,
     emission_scale: f64,
+    pick: EmissionGrid<'_>,
 ) -> Result<Option<RenderMedium>, RenderReadError> {
     let file = file.to_string();
     let invalid = |source: ParseError| VdbReadError::Invalid { file: file.clone(), source };
@@ -240,6 +262,7 @@ fn render_medium_named(
     let transform_of = |g: &parse::ParsedGrid| g.header.transform.unwrap_or(Transform::new(1.0, DVec3::ZERO));
     let mut density = None;
     let mut emission = None;
+    let mut grey = None;
     let mut float_emission = false;
     let mut used = [None, None];
     for (i, (g, name)) in parsed.grids.iter().zip(&names).enumerate() {
@@ -248,20 +271,28 @@ fn render_medium_named(
                 used[0] = Some(i);
                 density = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
             }
-            (Some(AnyTree::Vec3(t)), "emission") if emission.is_none() => {
+            (Some(AnyTree::Vec3(t)), "emission") if emission.is_none() && matches!(pick, EmissionGrid::Baked) => {
                 used[1] = Some(i);
                 emission = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
             }
-            (Some(AnyTree::Float(_)), "emission") => float_emission = true,
+            (Some(AnyTree::Float(_)), "emission") if matches!(pick, EmissionGrid::Baked) => float_emission = true,
+            (Some(AnyTree::Float(t)), n) if grey.is_none() && matches!(pick, EmissionGrid::Grey(want) if want == n) => {
+                used[1] = Some(i);
+                grey = Some(FileLeaves { name: name.clone(), transform: transform_of(g), tree: t, data: bytes })
+            }
             _ => {}
         }
     }
-    let tiles =
-        density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0) || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
+    if matches!(pick, EmissionGrid::Grey(_)) && grey.is_none() {
+        return Ok(None);
+    }
+    let tiles = density.as_ref().is_some_and(|d| d.tree.active_tile_count > 0)
+        || emission.as_ref().is_some_and(|e| e.tree.active_tile_count > 0)
+        || grey.as_ref().is_some_and(|e| e.tree.active_tile_count > 0);
     // The high column (`crate::grid::high_column`) is added to its fine grid in memory:
     // the grid path does it.
     let high = names.iter().any(|n| n.ends_with(crate::grid::high_column::HIGH_SUFFIX));
-    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none()) || tiles || high {
+    if (emission.is_none() && float_emission) || (density.is_none() && emission.is_none() && grey.is_none()) || tiles || high {
         return Ok(None);
     }
     // What the grid reader refuses is refused here too: its tile limit on
@@ -280,9 +311,10 @@ fn render_medium_named(
     check_file_tile_voxels(tile_voxels, trees, &file)?;
     let open_seconds = start.elapsed().as_secs_f64();
     let build = std::time::Instant::now();
+    let grey = grey.as_ref().map(|g| GreySource(g));
     let medium = Medium::from_sources(
         density.as_ref().map(|s| s as &dyn LeafSource),
-        emission.as_ref().map(|s| s as &dyn LeafSource),
+        emission.as_ref().map(|s| s as &dyn LeafSource).or(grey.as_ref().map(|s| s as &dyn LeafSource)),
         density_scale,
         emission_scale,
     )
@@ -383,6 +415,59 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A line's grid read from the file's records as a grey emission
+    /// ([`read_line_medium`]) builds the medium the keogram built from the
+    /// grids read whole (`Medium::new(density, grey(line))`), for every
+    /// compression, the line stored in half floats or not, and the thread
+    /// count; a file without that grid takes the grid path (`None`).
+    #[test]
+    fn line_medium_from_file_equals_the_grey_grid_medium() {
+        use crate::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
+        use crate::scene::Compression;
+        let tr = Transform::new(0.5, DVec3::new(1.0, -2.0, 3.0));
+        let (d, e) = medium_grids(tr, tr);
+        let mut line = Grid::new("line_5577", 0.0f32, tr);
+        for leaf in e.leaves() {
+            for n in 0..crate::grid::LEAF_NUM_VALUES {
+                if leaf.is_active(n) {
+                    let ijk = leaf.origin + crate::grid::offset_to_local(n);
+                    line.set(ijk, leaf.values[n][1] * 3.0);
+                }
+            }
+        }
+        let dir = crate::util::scratch::folder("vdb_for_render", "line_medium");
+        for c in [Compression::None, Compression::ZipActiveMask, Compression::BloscActiveMask] {
+            for half in [false, true] {
+                let opts = WriteOptions {
+                    compression: c,
+                    half: if half { vec!["emission".into(), "line_5577".into()] } else { Vec::new() },
+                    ..WriteOptions::default()
+                };
+                let bytes = write_vdb_bytes(&[GridRef::Float(&d), GridRef::Vec3(&e), GridRef::Float(&line)], &opts).unwrap();
+                let path = dir.join("f.vdb");
+                std::fs::write(&path, &bytes).unwrap();
+                let file = read_vdb_bytes(&bytes).unwrap();
+                let grey = crate::render::grids::grey(file.float("line_5577").unwrap());
+                let want = Medium::new(file.float("density"), Some(&grey), 1.5, 2.0).unwrap();
+                for threads in [1, 2] {
+                    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+                    let got = pool.install(|| read_line_medium(&path, "line_5577", 1.5, 2.0)).unwrap().unwrap().medium;
+                    assert!(got == want, "{c:?} half {half} threads {threads}");
+                    assert!(!got.fields[0].values.is_half(), "the density is full floats: one shared 32-bit field");
+                }
+                assert!(read_line_medium(&path, "line_6300", 1.0, 1.0).unwrap().is_none());
+                // Without a density the line alone: kept as half floats
+                // when the file stores them so.
+                std::fs::write(&path, write_vdb_bytes(&[GridRef::Vec3(&e), GridRef::Float(&line)], &opts).unwrap()).unwrap();
+                let alone = Medium::new(None, Some(&grey), 1.5, 2.0).unwrap();
+                let got = read_line_medium(&path, "line_5577", 1.5, 2.0).unwrap().unwrap().medium;
+                assert!(got == alone, "{c:?} half {half} alone");
+                assert_eq!(got.fields[0].values.is_half(), half);
+            }
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// A render of the medium read straight from the file is byte-identical

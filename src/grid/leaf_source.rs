@@ -23,7 +23,12 @@ pub type LeafError = Box<dyn std::error::Error + Send + Sync>;
 #[derive(Default)]
 pub struct Scratch {
     pub values: Vec<f32>,
+    /// Half floats' bits ([`LeafSource::values_half`]).
+    pub halves: Vec<u16>,
     pub bytes: Vec<u8>,
+    /// A [`GreySource`]'s three channels.
+    pub wide: Vec<f32>,
+    pub wide_halves: Vec<u16>,
 }
 
 /// One grid's leaves as the medium's builder reads them: origins and
@@ -48,17 +53,31 @@ pub trait LeafSource: Sync {
     /// The values of leaf `i`, components interleaved, borrowed from the
     /// source or decoded into `scratch`.
     fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError>;
+    /// Whether every value [`values`](Self::values) gives is a half float's
+    /// (an `f32` that a half holds exactly): a file's grid stored in half
+    /// mode. A store of half floats then holds the source without loss.
+    fn half(&self) -> bool {
+        false
+    }
+    /// The values of leaf `i` as half floats' bits, for a source whose
+    /// [`half`](Self::half) is true (the bits as stored: no conversion);
+    /// an error for any other.
+    fn values_half<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s, u16>, LeafError> {
+        let _ = (i, scratch);
+        Err(format!("grid `{}` does not store half floats", self.name()).into())
+    }
 }
 
-/// A leaf's values as a [`LeafSource`] gives them.
+/// A leaf's values as a [`LeafSource`] gives them: `f32`s, or half floats'
+/// bits (`u16`, [`LeafSource::values_half`]).
 #[derive(Clone, Copy, Debug)]
-pub enum LeafValues<'s> {
-    /// All 512 slots in index order (`512 * channels` floats; inactive
+pub enum LeafValues<'s, T = f32> {
+    /// All 512 slots in index order (`512 * channels` values; inactive
     /// slots may hold anything).
-    All(&'s [f32]),
+    All(&'s [T]),
     /// The active slots only, in index order (`popcount(mask) * channels`
-    /// floats): what an active-mask VDB record stores.
-    Active(&'s [f32]),
+    /// values): what an active-mask VDB record stores.
+    Active(&'s [T]),
 }
 
 /// A grid in memory as a [`LeafSource`].
@@ -97,3 +116,60 @@ macro_rules! grid_source {
 }
 grid_source!(f32, |v| v);
 grid_source!([f32; 3], |v| v.as_flattened());
+
+/// A one-channel source seen as a grey three-channel one named `emission`:
+/// each value in all three channels, the same leaves and masks (what
+/// `crate::render::grids::grey` makes of a float grid in memory, leaf for
+/// leaf), so a line's grid read from a file builds the medium the grey grid
+/// would.
+pub struct GreySource<'a>(pub &'a dyn LeafSource);
+
+/// `v`'s values, each repeated three times, into `out`.
+fn widen<T: Copy>(v: LeafValues<'_, T>, out: &mut Vec<T>) -> bool {
+    let (a, all) = match v {
+        LeafValues::All(a) => (a, true),
+        LeafValues::Active(a) => (a, false),
+    };
+    out.clear();
+    out.extend(a.iter().flat_map(|&x| [x, x, x]));
+    all
+}
+
+impl LeafSource for GreySource<'_> {
+    fn name(&self) -> &str {
+        "emission"
+    }
+    fn transform(&self) -> Transform {
+        self.0.transform()
+    }
+    fn channels(&self) -> usize {
+        3
+    }
+    fn background(&self) -> [f32; 3] {
+        [self.0.background()[0]; 3]
+    }
+    fn leaf_count(&self) -> usize {
+        self.0.leaf_count()
+    }
+    fn origin(&self, i: usize) -> IVec3 {
+        self.0.origin(i)
+    }
+    fn mask(&self, i: usize) -> &[u64; LEAF_MASK_WORDS] {
+        self.0.mask(i)
+    }
+    fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
+        let mut wide = std::mem::take(&mut scratch.wide);
+        let all = widen(self.0.values(i, scratch)?, &mut wide);
+        scratch.wide = wide;
+        Ok(if all { LeafValues::All(&scratch.wide) } else { LeafValues::Active(&scratch.wide) })
+    }
+    fn half(&self) -> bool {
+        self.0.half()
+    }
+    fn values_half<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s, u16>, LeafError> {
+        let mut wide = std::mem::take(&mut scratch.wide_halves);
+        let all = widen(self.0.values_half(i, scratch)?, &mut wide);
+        scratch.wide_halves = wide;
+        Ok(if all { LeafValues::All(&scratch.wide_halves) } else { LeafValues::Active(&scratch.wide_halves) })
+    }
+}

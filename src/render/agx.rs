@@ -212,15 +212,38 @@ fn formed(c2020: [f64; 3], to709: &M3, to2020_from_709: &M3, outset: &M3) -> [f6
     guard_rail_709(c, to2020_from_709).map(|v| if v > 0.0 { v.powf(1.0 / GAMMA).min(1.0) } else { 0.0 })
 }
 
+/// A `size`^3 LUT (red slowest, blue fastest) whose nodes are computed
+/// when first read: a small picture reads a few hundred of the 185,193
+/// nodes of the AgX LUT, and building them all cost a 16x9 render a
+/// twentieth of a second. Each node is a pure function of its index, so the
+/// values never depend on which pixel, thread or order read it first.
+pub struct LazyLut {
+    size: usize,
+    nodes: Vec<OnceLock<[f32; 3]>>,
+    node: Box<dyn Fn([usize; 3]) -> [f32; 3] + Send + Sync>,
+}
+
+impl LazyLut {
+    pub fn new(size: usize, node: impl Fn([usize; 3]) -> [f32; 3] + Send + Sync + 'static) -> LazyLut {
+        LazyLut { size, nodes: (0..size * size * size).map(|_| OnceLock::new()).collect(), node: Box::new(node) }
+    }
+
+    /// Node `(r, g, b)`.
+    #[inline]
+    pub fn at(&self, r: usize, g: usize, b: usize) -> [f32; 3] {
+        *self.nodes[(r * self.size + g) * self.size + b].get_or_init(|| (self.node)([r, g, b]))
+    }
+}
+
 /// Tetrahedral interpolation (OpenColorIO's `interpolation: tetrahedral`)
-/// of the `size`^3 LUT `lut` (red slowest, blue fastest) at `p`, each
-/// component clamped to [0, 1].
-pub fn tetrahedral(lut: &[[f32; 3]], size: usize, p: [f64; 3]) -> [f64; 3] {
+/// of the LUT `lut` at `p`, each component clamped to [0, 1].
+pub fn tetrahedral(lut: &LazyLut, p: [f64; 3]) -> [f64; 3] {
+    let size = lut.size;
     let last = (size - 1) as f64;
     let q = p.map(|v| v.clamp(0.0, 1.0) * last);
     let i = q.map(|v| (v.floor() as usize).min(size - 2));
     let [fr, fg, fb] = [q[0] - i[0] as f64, q[1] - i[1] as f64, q[2] - i[2] as f64];
-    let c = |a: usize, b: usize, d: usize| lut[((i[0] + a) * size + i[1] + b) * size + i[2] + d].map(f64::from);
+    let c = |a: usize, b: usize, d: usize| lut.at(i[0] + a, i[1] + b, i[2] + d).map(f64::from);
     // The tetrahedron containing (fr, fg, fb): weights along the path
     // from corner 000 to 111 through the two corners it passes.
     let (w, k1, k2) = if fr > fg {
@@ -246,12 +269,12 @@ pub fn tetrahedral(lut: &[[f32; 3]], size: usize, p: [f64; 3]) -> [f64; 3] {
 pub struct Agx {
     /// Rec.709 to FilmLight E-Gamut.
     to_e_gamut: M3,
-    /// `LUT_SIZE`^3 nodes, red slowest, of 2.4-encoded Rec.709.
-    lut: Vec<[f32; 3]>,
+    /// `LUT_SIZE`^3 nodes of 2.4-encoded Rec.709.
+    lut: LazyLut,
 }
 
 impl Agx {
-    /// The transform (its LUT built once per process, about 0.2 M nodes).
+    /// The transform (its LUT's nodes computed once per process, when first read).
     pub fn get() -> &'static Agx {
         static AGX: OnceLock<Agx> = OnceLock::new();
         AGX.get_or_init(Agx::build)
@@ -266,16 +289,11 @@ impl Agx {
         let e_to2020 = mul(&inverse(&xyz2020), &xyz_e);
         let outset = inverse(&OUTSET_INV);
         let n = LUT_SIZE;
-        let node = |i: usize| (LUT_LOG2_MIN + (LUT_LOG2_MAX - LUT_LOG2_MIN) * i as f64 / (n - 1) as f64).exp2();
-        let mut lut = Vec::with_capacity(n * n * n);
-        for r in 0..n {
-            for g in 0..n {
-                for b in 0..n {
-                    let c = apply(&e_to2020, [node(r), node(g), node(b)]);
-                    lut.push(formed(c, &to709, &to2020_from_709, &outset).map(|v| v as f32));
-                }
-            }
-        }
+        let node = move |i: usize| (LUT_LOG2_MIN + (LUT_LOG2_MAX - LUT_LOG2_MIN) * i as f64 / (n - 1) as f64).exp2();
+        let lut = LazyLut::new(n, move |rgb| {
+            let c = apply(&e_to2020, rgb.map(node));
+            formed(c, &to709, &to2020_from_709, &outset).map(|v| v as f32)
+        });
         Agx { to_e_gamut: mul(&inverse(&xyz_e), &xyz709), lut }
     }
 
@@ -285,7 +303,7 @@ impl Agx {
         let span = LUT_LOG2_MAX - LUT_LOG2_MIN;
         // Non-positive components sit at the LUT's floor (log2 of 0 is -inf).
         let p = e.map(|v| if v > 0.0 { (v.log2() - LUT_LOG2_MIN) / span } else { 0.0 });
-        tetrahedral(&self.lut, LUT_SIZE, p).map(|v| srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
+        tetrahedral(&self.lut, p).map(|v| srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
     }
 }
 

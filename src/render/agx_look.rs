@@ -33,7 +33,7 @@
 //!
 //! Exposure is applied before the look, as in Blender.
 
-use super::agx::{guard_rail_2020, tetrahedral, E_GAMUT, INSET, LUT_LOG2_MAX, LUT_LOG2_MIN};
+use super::agx::{guard_rail_2020, tetrahedral, LazyLut, E_GAMUT, INSET, LUT_LOG2_MAX, LUT_LOG2_MIN};
 use crate::scene::ViewTransform;
 use crate::util::colour::{apply, inverse, mul, rgb_to_xyz, M3, REC2020, REC709};
 use std::sync::OnceLock;
@@ -142,7 +142,7 @@ struct Spaces {
     rec2020_to_709: M3,
     inset_inv: M3,
     /// `COMP_SIZE`^3 nodes, red slowest, of log-encoded E-Gamut.
-    compensation: Vec<[f32; 3]>,
+    compensation: LazyLut,
 }
 
 impl Spaces {
@@ -153,16 +153,11 @@ impl Spaces {
             let e_to_2020 = mul(&inverse(&x2020), &xe);
             let rec2020_to_e = inverse(&e_to_2020);
             let n = COMP_SIZE;
-            let mut compensation = Vec::with_capacity(n * n * n);
-            for r in 0..n {
-                for g in 0..n {
-                    for b in 0..n {
-                        let e = [r, g, b].map(|i| from_log(i as f64 / (n - 1) as f64));
-                        let c = apply(&rec2020_to_e, guard_rail_2020(apply(&e_to_2020, e)));
-                        compensation.push(c.map(|v| to_log(v) as f32));
-                    }
-                }
-            }
+            let compensation = LazyLut::new(n, move |rgb| {
+                let e = rgb.map(|i| from_log(i as f64 / (n - 1) as f64));
+                let c = apply(&rec2020_to_e, guard_rail_2020(apply(&e_to_2020, e)));
+                c.map(|v| to_log(v) as f32)
+            });
             Spaces {
                 rec709_to_e: mul(&inverse(&xe), &x709),
                 e_to_2020,
@@ -179,7 +174,7 @@ impl Spaces {
 pub fn graded(grade: Grade, c: [f64; 3]) -> [f64; 3] {
     let s = Spaces::get();
     let e = apply(&s.rec709_to_e, c).map(to_log);
-    let e = tetrahedral(&s.compensation, COMP_SIZE, e).map(from_log);
+    let e = tetrahedral(&s.compensation, e).map(from_log);
     let x = apply(&INSET, apply(&s.e_to_2020, e)).map(to_log);
     let y = grade.grade(x).map(from_log);
     apply(&s.rec2020_to_709, apply(&s.inset_inv, y))

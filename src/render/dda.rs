@@ -333,7 +333,7 @@ pub enum CellFilter {
 ///
 /// It runs one cell ahead of what it has returned: when it hands out a
 /// cell, it has already found the next non-empty one and asked the CPU to
-/// prefetch that cell's 8 corners ([`prefetch`]). The caller's work on the
+/// prefetch that cell's 8 corners ([`Values::prefetch`](super::medium::values::Values::prefetch)). The caller's work on the
 /// current cell (the cubics, the quadrature) then overlaps the memory
 /// latency of the next one's values, which on a large volume is most of a
 /// cell's cost (the corners of a ray's cells are rarely in cache). The
@@ -370,7 +370,7 @@ impl<'a> CellWalker<'a> {
             if t1 > t0 && mask_has(self.mask, cell_bit(l.x, l.y, l.z)) {
                 let at = self.field.corner_indices(self.leaf, l.x as usize, l.y as usize, l.z as usize);
                 for &i in &at {
-                    prefetch(&self.field.values, i);
+                    self.field.values.prefetch(i);
                 }
                 return Some(CellSeg { t0, t1, at, corner: c });
             }
@@ -387,24 +387,6 @@ impl Iterator for CellWalker<'_> {
         self.ahead = self.find();
         Some(seg)
     }
-}
-
-/// Hints the CPU to load the cache line holding `values[i]` (a no-op off
-/// x86-64 and for an index past the end). It changes no result.
-#[inline(always)]
-pub fn prefetch(values: &[f32], i: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if i < values.len() {
-        // SAFETY: a prefetch never faults and reads nothing into the program;
-        // the pointer is inside `values` anyway.
-        #[allow(unused_unsafe)]
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            _mm_prefetch::<_MM_HINT_T0>(values.as_ptr().add(i) as *const i8);
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (values, i);
 }
 
 /// Every non-empty dual-cell segment of `origin + t dir`, t in `[t0, t1]`, in order.

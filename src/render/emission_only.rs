@@ -46,9 +46,8 @@ pub fn emission_integral(field: &Field, channel: usize, origin: DVec3, dir: DVec
             let w = segment_weights(&ray, &seg);
             let mut s = [0.0f64; 3];
             for (k, &i) in seg.at.iter().enumerate() {
-                let v = &field.values[i + channel..i + channel + 3];
                 for c in 0..3 {
-                    s[c] += w[k] * v[c] as f64;
+                    s[c] += w[k] * field.values.get(i + channel + c) as f64;
                 }
             }
             for c in 0..3 {

@@ -135,7 +135,7 @@ fn walk(medium: &Medium, seg: RaySpan, integration: Integration, offset: f64, wi
 #[inline]
 fn corners(field: &Field, at: &[usize; 8], channel: usize) -> [f64; 8] {
     let scale = field.scale[channel];
-    std::array::from_fn(|k| field.values[at[k] + channel] as f64 * scale)
+    std::array::from_fn(|k| field.values.get(at[k] + channel) as f64 * scale)
 }
 
 #[inline]
@@ -157,8 +157,8 @@ fn fill_piece(piece: &mut Piece, field: &Field, ray: &IndexRay, seg: &CellSeg, s
         let k = field.scale;
         let mut v = [[0.0f64; 4]; 8];
         for (vk, &i) in v.iter_mut().zip(&seg.at) {
-            let c = &field.values[i..i + 4];
-            *vk = [c[0] as f64 * k[0], c[1] as f64 * k[1], c[2] as f64 * k[2], c[3] as f64 * k[3]];
+            let c = |j: usize| field.values.get(i + j) as f64;
+            *vk = [c(0) * k[0], c(1) * k[1], c(2) * k[2], c(3) * k[3]];
         }
         let [s, r, g, b] = line.cubic4(v);
         piece.sigma_t = s;

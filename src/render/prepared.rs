@@ -113,7 +113,7 @@ impl Prepared {
         let sampler = if !grids_changed && had_terrain == !matches!(terrain, TerrainModel::None) {
             old.sampler
         } else {
-            emission_sampler(&terrain, volume.emission, &medium, s.volume.emission_scale)
+            emission_sampler(&terrain, volume.emission, &medium)
         };
         // With a site the sky also follows the hour, the observer and the air.
         let same_sky = o.background == s.background
@@ -248,7 +248,7 @@ impl Prepared {
         emission: Option<&Grid<[f32; 3]>>,
     ) -> Result<Prepared, RenderError> {
         let terrain = TerrainModel::on_earth(&settings.terrain, settings.base_dir.as_deref(), settings.earth_radius_km)?;
-        let sampler = emission_sampler(&terrain, emission, &medium, settings.volume.emission_scale);
+        let sampler = emission_sampler(&terrain, emission, &medium);
         let sky = Sky::of_settings(settings)?;
         let air = observer_air(settings);
         let airglow = observer_airglow(settings);
@@ -289,15 +289,10 @@ fn observer_airglow(s: &RenderSettings) -> Option<Airglow> {
 /// from the emission grid if the caller has it (built now: the grid is not
 /// kept), else left to [`Prepared::sampler`] to build from the medium when
 /// first needed (the same sampler).
-fn emission_sampler(
-    terrain: &TerrainModel,
-    emission: Option<&Grid<[f32; 3]>>,
-    medium: &Medium,
-    emission_scale: f64,
-) -> OnceLock<Option<EmissionSampler>> {
+fn emission_sampler(terrain: &TerrainModel, emission: Option<&Grid<[f32; 3]>>, medium: &Medium) -> OnceLock<Option<EmissionSampler>> {
     match (terrain, emission, medium.emission) {
         (TerrainModel::None, _, _) | (_, _, None) => OnceLock::from(None),
-        (_, Some(g), Some(_)) => OnceLock::from(EmissionSampler::new(g, emission_scale)),
+        (_, Some(g), Some(_)) => OnceLock::from(EmissionSampler::new(g, medium)),
         (_, None, Some(_)) => OnceLock::new(),
     }
 }

@@ -331,26 +331,10 @@ pub fn read_stored_f32(
     out: &mut Vec<f32>,
     scratch: &mut Vec<u8>,
 ) -> Result<StoredSlots, ParseError> {
-    let m = cur.u8()?;
-    if m > meta::NO_MASK_AND_ALL_VALS {
-        return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
-    }
-    let n_inactive = match m {
-        meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL => 1,
-        meta::MASK_AND_TWO_INACTIVE_VALS => 2,
-        _ => 0,
-    };
-    cur.bytes(n_inactive * 4 * comps)?;
-    if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
-        cur.bytes(n / 8)?;
-    }
-    let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
-    let count = if masked { layout::mask_count(value_mask) } else { n };
-    let slots = if count == n { StoredSlots::All } else { StoredSlots::Active };
-    let floats = count * comps;
+    let (slots, floats) = stored_header(cur, fmt, n, value_mask, comps)?;
     out.clear();
     out.resize(floats, 0.0);
-    if fmt.half && count == 0 {
+    if fmt.half && floats == 0 {
         return Ok(slots);
     }
     let nbytes = floats * if fmt.half { 2 } else { 4 };
@@ -383,6 +367,67 @@ pub fn read_stored_f32(
         halves_to_f32(raw, out);
     } else {
         le_floats(raw, out);
+    }
+    Ok(slots)
+}
+
+/// A stored-values record's header, passed over: which slots it stores and
+/// how many components (`comps` a slot) follow.
+fn stored_header(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    comps: usize,
+) -> Result<(StoredSlots, usize), ParseError> {
+    let m = cur.u8()?;
+    if m > meta::NO_MASK_AND_ALL_VALS {
+        return Err(cur.err(format!("invalid value-array metadata byte {m} (expected 0..6)")));
+    }
+    let n_inactive = match m {
+        meta::NO_MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_ONE_INACTIVE_VAL => 1,
+        meta::MASK_AND_TWO_INACTIVE_VALS => 2,
+        _ => 0,
+    };
+    cur.bytes(n_inactive * 4 * comps)?;
+    if matches!(m, meta::MASK_AND_NO_INACTIVE_VALS | meta::MASK_AND_ONE_INACTIVE_VAL | meta::MASK_AND_TWO_INACTIVE_VALS) {
+        cur.bytes(n / 8)?;
+    }
+    let masked = fmt.flags & COMPRESS_ACTIVE_MASK != 0 && m != meta::NO_MASK_AND_ALL_VALS;
+    let count = if masked { layout::mask_count(value_mask) } else { n };
+    let slots = if count == n { StoredSlots::All } else { StoredSlots::Active };
+    Ok((slots, count * comps))
+}
+
+/// [`read_stored_f32`] for a half-float record (`fmt.half`), its values
+/// left as the halves' bits (no conversion): what a store of half floats
+/// copies. The same checks.
+pub fn read_stored_half(
+    cur: &mut Cursor,
+    fmt: RecordFormat,
+    n: usize,
+    value_mask: &[u64],
+    comps: usize,
+    out: &mut Vec<u16>,
+    scratch: &mut Vec<u8>,
+) -> Result<StoredSlots, ParseError> {
+    debug_assert!(fmt.half);
+    let (slots, halves) = stored_header(cur, fmt, n, value_mask, comps)?;
+    out.clear();
+    out.resize(halves, 0);
+    if halves == 0 {
+        return Ok(slots);
+    }
+    let nbytes = halves * 2;
+    let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
+        read_chunk(cur, Codec::Blosc, nbytes, true, true, scratch)?.unwrap_or(&[])
+    } else if fmt.flags & COMPRESS_ZIP != 0 {
+        read_chunk(cur, Codec::Zip, nbytes, true, true, scratch)?.unwrap_or(&[])
+    } else {
+        cur.bytes(nbytes)?
+    };
+    for (o, b) in out.iter_mut().zip(raw.chunks_exact(2)) {
+        *o = u16::from_le_bytes([b[0], b[1]]);
     }
     Ok(slots)
 }

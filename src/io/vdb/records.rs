@@ -48,6 +48,30 @@ macro_rules! file_leaves {
             fn mask(&self, i: usize) -> &[u64; crate::grid::LEAF_MASK_WORDS] {
                 &self.tree.spans[i].mask
             }
+            fn half(&self) -> bool {
+                self.tree.format.half
+            }
+            fn values_half<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s, u16>, LeafError> {
+                if !self.tree.format.half {
+                    return Err(format!("grid `{}` does not store half floats", self.name).into());
+                }
+                let span = &self.tree.spans[i];
+                let mut c = super::cursor::Cursor::new(self.data);
+                c.seek(span.start as u64)?;
+                let slots = super::decode::read_stored_half(
+                    &mut c,
+                    self.tree.format,
+                    crate::grid::LEAF_NUM_VALUES,
+                    &span.mask,
+                    <$t as VoxelValue>::COMPONENTS,
+                    &mut scratch.halves,
+                    &mut scratch.bytes,
+                )?;
+                Ok(match slots {
+                    super::decode::StoredSlots::All => LeafValues::All(&scratch.halves),
+                    super::decode::StoredSlots::Active => LeafValues::Active(&scratch.halves),
+                })
+            }
             fn values<'s>(&'s self, i: usize, scratch: &'s mut Scratch) -> Result<LeafValues<'s>, LeafError> {
                 let span = &self.tree.spans[i];
                 let mut c = super::cursor::Cursor::new(self.data);

@@ -17,6 +17,7 @@ use super::check::{bad_voxel, leaf_peak};
 use super::dual::{cell_masks, feeds_from_nonzero, fill_leaf, push_dual_keys};
 use super::field::{Field, Tree};
 use super::layout::{CellMask, NONE};
+use super::values::{Stored, Values};
 use crate::grid::leaf_source::{LeafSource, LeafValues, Scratch};
 use crate::grid::{LEAF_DIM, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use crate::render::settings::RenderError;
@@ -52,16 +53,22 @@ struct BlockScan {
 /// stores the leaves of one block: `leaves[k]` is source `k`'s leaf at the
 /// block's origin ([`NONE`] if it has none). A block with no non-zero voxel
 /// is never written, so its pages are never touched.
-fn scan_block(sources: &[&dyn LeafSource], leaves: &[u32; 2], dst: &mut [f32], channels: usize, scratch: &mut [Scratch; 2]) -> BlockScan {
+fn scan_block<S: Stored>(
+    sources: &[&dyn LeafSource],
+    leaves: &[u32; 2],
+    dst: &mut [S],
+    channels: usize,
+    scratch: &mut [Scratch; 2],
+) -> BlockScan {
     let mut scan = BlockScan { feeds: 0, masks: ([0; LEAF_MASK_WORDS], [0; LEAF_MASK_WORDS]), peaks: [0.0; 2], fails: [None, None] };
-    let mut got: [Option<LeafValues<'_>>; 2] = [None, None];
+    let mut got: [Option<LeafValues<'_, S>>; 2] = [None, None];
     for ((k, src), scr) in sources.iter().enumerate().zip(scratch.iter_mut()) {
         let li = leaves[k];
         if li == NONE {
             continue;
         }
         let li = li as usize;
-        match src.values(li, scr) {
+        match S::leaf_values(*src, li, scr) {
             Err(source) => scan.fails[k] = Some(Box::new(RenderError::Source { grid: src.name().to_string(), source })),
             Ok(v) => match leaf_peak(v, src.channels(), src.mask(li)) {
                 Err(n) => scan.fails[k] = Some(Box::new(bad_voxel(*src, li, n, v))),
@@ -143,7 +150,9 @@ impl Field {
         }
         drop(all);
         let per_block = LEAF_NUM_VALUES * channels;
-        let needed = reserved + ((origins.len() + 1) * per_block * std::mem::size_of::<f32>()) as f64;
+        // Half floats are kept as such when every source stores them.
+        let half = sources.iter().all(|s| s.half());
+        let needed = reserved + ((origins.len() + 1) * per_block * Values::value_bytes(half)) as f64;
         if needed > MEDIUM_MEMORY_FRACTION * limit.bytes {
             return Err(RenderError::Memory {
                 leaves: origins.len(),
@@ -153,12 +162,18 @@ impl Field {
         }
         // Zeroed by the allocator (fresh pages): blocks not written cost
         // no memory.
-        let mut values = vec![0.0f32; (origins.len() + 1) * per_block];
-        let mut scans: Vec<BlockScan> = values[per_block..]
-            .par_chunks_mut(per_block)
-            .zip(leaf_of.par_iter())
-            .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| scan_block(sources, leaves, dst, channels, scratch))
-            .collect();
+        let mut values = Values::zeros((origins.len() + 1) * per_block, half);
+        fn scan_all<S: Stored>(sources: &[&dyn LeafSource], leaf_of: &[[u32; 2]], blocks: &mut [S], channels: usize) -> Vec<BlockScan> {
+            blocks
+                .par_chunks_mut(LEAF_NUM_VALUES * channels)
+                .zip(leaf_of.par_iter())
+                .map_init(<[Scratch; 2]>::default, |scratch, (dst, leaves)| scan_block(sources, leaves, dst, channels, scratch))
+                .collect()
+        }
+        let mut scans = match &mut values {
+            Values::F32(v) => scan_all(sources, &leaf_of, &mut v[per_block..], channels),
+            Values::Half(v) => scan_all(sources, &leaf_of, &mut v[per_block..], channels),
+        };
         drop(leaf_of);
         let mut reports: Vec<SourceReport> = sources.iter().map(|_| SourceReport { peak: 0.0, fail: None }).collect();
         for s in scans.iter_mut() {

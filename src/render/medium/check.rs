@@ -10,32 +10,26 @@
 //! below +inf's (or is -0), and such bits order as the values, so one pass
 //! gives both the verdict and the leaf's largest value.
 
+use super::values::Stored;
 use crate::grid::leaf_source::{LeafSource, LeafValues};
 use crate::grid::LEAF_MASK_WORDS;
 use crate::render::settings::RenderError;
 
-/// Whether a stored component is acceptable: finite and >= 0 (-0 included),
-/// on its bits: below +inf's bits, or -0's.
-#[inline]
-fn valid_bits(b: u32) -> bool {
-    b < 0x7f80_0000 || b == 0x8000_0000
-}
-
 /// First pass over a source leaf: its largest active component, or the
 /// offset of its first active voxel that is negative, infinite or NaN.
 /// Inactive voxels count as 0 whatever they hold. On a leaf's active values
-/// alone ([`LeafValues::Active`]) the check runs on the floats' bits, in
-/// SIMD lanes: a valid value's bits order as its value.
-pub(super) fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<f32, usize> {
+/// alone ([`LeafValues::Active`]) the check runs on the values' bits, in
+/// SIMD lanes: a valid value's bits order as its value (for `f32`s and
+/// half floats alike: [`Stored`]).
+pub(super) fn leaf_peak<S: Stored>(values: LeafValues<'_, S>, channels: usize, mask: &[u64; LEAF_MASK_WORDS]) -> Result<f32, usize> {
     match values {
         LeafValues::Active(a) => {
-            let (mut peak, mut bad) = (0u32, 0u32);
+            let (mut peak, mut bad) = (0u32, false);
             for &x in a {
-                let b = x.to_bits();
-                bad |= u32::from(!valid_bits(b));
-                peak = peak.max(b & 0x7fff_ffff);
+                bad |= !x.is_valid();
+                peak = peak.max(x.magnitude());
             }
-            if bad != 0 {
+            if bad {
                 // The first active voxel with a bad component.
                 let mut k = 0;
                 for (w, &word) in mask.iter().enumerate() {
@@ -43,14 +37,14 @@ pub(super) fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LE
                     while bits != 0 {
                         let n = w * 64 + bits.trailing_zeros() as usize;
                         bits &= bits - 1;
-                        if a[k * channels..(k + 1) * channels].iter().any(|x| !valid_bits(x.to_bits())) {
+                        if a[k * channels..(k + 1) * channels].iter().any(|x| !x.is_valid()) {
                             return Err(n);
                         }
                         k += 1;
                     }
                 }
             }
-            Ok(f32::from_bits(peak))
+            Ok(S::from_magnitude(peak))
         }
         LeafValues::All(a) => {
             let mut peak = 0u32;
@@ -60,15 +54,14 @@ pub(super) fn leaf_peak(values: LeafValues<'_>, channels: usize, mask: &[u64; LE
                     let n = w * 64 + bits.trailing_zeros() as usize;
                     bits &= bits - 1;
                     for &x in &a[n * channels..(n + 1) * channels] {
-                        let b = x.to_bits();
-                        if !valid_bits(b) {
+                        if !x.is_valid() {
                             return Err(n);
                         }
-                        peak = peak.max(b & 0x7fff_ffff);
+                        peak = peak.max(x.magnitude());
                     }
                 }
             }
-            Ok(f32::from_bits(peak))
+            Ok(S::from_magnitude(peak))
         }
     }
 }
@@ -152,7 +145,7 @@ fn value_text(c: &[f32]) -> String {
 }
 
 /// The error for voxel `n` of leaf `i` of `src` (values `v`).
-pub(super) fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<'_>) -> RenderError {
+pub(super) fn bad_voxel<S: Stored>(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<'_, S>) -> RenderError {
     let ch = src.channels();
     let ijk = src.origin(i) + crate::grid::offset_to_local(n);
     let at = match v {
@@ -167,7 +160,10 @@ pub(super) fn bad_voxel(src: &dyn LeafSource, i: usize, n: usize, v: LeafValues<
     };
     RenderError::Grid {
         grid: src.name().to_string(),
-        message: format!("voxel {ijk} holds {}: values must be finite and >= 0", value_text(at)),
+        message: format!(
+            "voxel {ijk} holds {}: values must be finite and >= 0",
+            value_text(&at.iter().map(|x| x.to_f32()).collect::<Vec<_>>())
+        ),
     }
 }
 

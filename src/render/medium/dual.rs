@@ -16,6 +16,7 @@
 //! brute-force oracle in the tests.
 
 use super::layout::{shr, CellMask, Y0_BITS, Z0_BITS, Z7_BITS};
+use super::values::Stored;
 use crate::grid::leaf_source::LeafValues;
 use crate::grid::{LEAF_LOG2DIM, LEAF_MASK_WORDS};
 use glam::IVec3;
@@ -58,26 +59,26 @@ pub(super) fn feeds_from_nonzero(nz: &CellMask) -> u8 {
 /// its active values into block `dst` (stride `stride`, starting at channel
 /// `first`; `dst` starts at 0, so inactive voxels read 0) and returns its
 /// voxels whose first component (resp. some component) is not 0.
-pub(super) fn fill_leaf(
-    values: LeafValues<'_>,
+pub(super) fn fill_leaf<S: Stored>(
+    values: LeafValues<'_, S>,
     channels: usize,
     mask: &[u64; LEAF_MASK_WORDS],
-    dst: &mut [f32],
+    dst: &mut [S],
     stride: usize,
     first: usize,
 ) -> (CellMask, CellMask) {
     match channels {
-        1 => fill_leaf_n::<1>(values, mask, dst, stride, first),
-        3 => fill_leaf_n::<3>(values, mask, dst, stride, first),
+        1 => fill_leaf_n::<1, S>(values, mask, dst, stride, first),
+        3 => fill_leaf_n::<3, S>(values, mask, dst, stride, first),
         _ => unreachable!("sources have 1 or 3 channels (checked in Medium::from_sources)"),
     }
 }
 
 /// [`fill_leaf`] for `C` channels (copies of a known length: no call).
-fn fill_leaf_n<const C: usize>(
-    values: LeafValues<'_>,
+fn fill_leaf_n<const C: usize, S: Stored>(
+    values: LeafValues<'_, S>,
     mask: &[u64; LEAF_MASK_WORDS],
-    dst: &mut [f32],
+    dst: &mut [S],
     stride: usize,
     first: usize,
 ) -> (CellMask, CellMask) {
@@ -96,12 +97,12 @@ fn fill_leaf_n<const C: usize>(
             let n = w * 64 + b as usize;
             let i = if active { k } else { n };
             k += 1;
-            let v: &[f32; C] = a[i * channels..(i + 1) * channels].try_into().expect("C floats");
+            let v: &[S; C] = a[i * channels..(i + 1) * channels].try_into().expect("C values");
             let at = n * stride + first;
-            let d: &mut [f32; C] = (&mut dst[at..at + channels]).try_into().expect("C floats");
+            let d: &mut [S; C] = (&mut dst[at..at + channels]).try_into().expect("C values");
             *d = *v;
-            nz_first[w] |= u64::from(v[0] != 0.0) << b;
-            nz_any[w] |= u64::from(v.iter().any(|&x| x != 0.0)) << b;
+            nz_first[w] |= u64::from(!v[0].is_zero()) << b;
+            nz_any[w] |= u64::from(v.iter().any(|x| !x.is_zero())) << b;
         }
     }
     (nz_first, nz_any)
@@ -113,7 +114,7 @@ fn fill_leaf_n<const C: usize>(
 fn scan_leaf<T: VoxelValue>(leaf: &crate::grid::Leaf<T>) -> Result<(f32, u8), usize> {
     let flat: Vec<f32> = leaf.values.iter().flat_map(|v| v.components().into_iter().take(T::COMPONENTS)).collect();
     let peak = leaf_peak(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask)?;
-    let mut dst = vec![0.0; flat.len()];
+    let mut dst = vec![0.0f32; flat.len()];
     let (first, nz) = fill_leaf(LeafValues::All(&flat), T::COMPONENTS, &leaf.mask, &mut dst, T::COMPONENTS, 0);
     assert_eq!((first, nz), voxel_masks(&dst, T::COMPONENTS), "the masks of the copied block");
     Ok((peak, feeds_from_nonzero(&nz)))

@@ -19,6 +19,7 @@
 //! a few root steps per 4096 voxels of empty space.
 
 use super::layout::{block_offset, shr, slot, CellMask, BLOCK_LOG2, BLOCK_SLOTS, CORNER_OFFSETS, NONE, SUPER_LOG2, SUPER_SLOTS};
+use super::values::Values;
 use crate::grid::{Transform, LEAF_DIM, LEAF_LOG2DIM, LEAF_NUM_VALUES};
 use glam::{DVec3, IVec3};
 use std::collections::HashMap;
@@ -26,7 +27,8 @@ use std::collections::HashMap;
 /// One or more scalar fields on one grid transform, as blocks and dual leaves.
 ///
 /// Channel `c` of voxel `(x,y,z)` of block `b` is
-/// `scale[c] * values[(b * LEAF_NUM_VALUES + block_offset(x, y, z)) * channels + c]`.
+/// `scale[c] * values.get((b * LEAF_NUM_VALUES + block_offset(x, y, z)) * channels + c)`
+/// (half floats' bits or `f32`s: `values.rs`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Field {
     pub transform: Transform,
@@ -34,7 +36,7 @@ pub struct Field {
     /// Dual-leaf keys (index origin / 8), in ascending (x, y, z) order.
     pub keys: Vec<IVec3>,
     /// Blocks of the stored (unit) values; block 0 is all zeros.
-    pub values: Vec<f32>,
+    pub values: Values,
     /// Per dual leaf `D`: the block of source leaf `D + (dx,dy,dz)` at
     /// `dx << 2 | dy << 1 | dz` (0 where that leaf has no non-zero voxel).
     pub neighbours: Vec<[u32; 8]>,
@@ -130,7 +132,7 @@ impl Field {
 
     /// Bytes held by the structure (for reports).
     pub fn memory_bytes(&self) -> usize {
-        (self.live_blocks + 1) * LEAF_NUM_VALUES * self.channels * 4
+        (self.live_blocks + 1) * LEAF_NUM_VALUES * self.channels * Values::value_bytes(self.values.is_half())
             + self.keys.len() * (12 + 32 + 128)
             + self.blocks.len() * BLOCK_SLOTS * 4
             + self.supers.len() * SUPER_SLOTS * 4
@@ -194,9 +196,8 @@ impl Field {
             f.x * f.y * f.z,
         ];
         for (k, &i) in at.iter().enumerate() {
-            let v = &self.values[i..][..self.channels];
             for ch in 0..self.channels {
-                out[ch] += w[k] * v[ch] as f64;
+                out[ch] += w[k] * self.values.get(i + ch) as f64;
             }
         }
         for ch in 0..self.channels {

@@ -29,6 +29,7 @@
 //!   a scaled peak that cannot overflow the film);
 //! - `build.rs`: the one parallel pass from [`LeafSource`]s to a field,
 //!   with its memory check;
+//! - `values.rs`: the stored values, 32-bit or half floats;
 //! - `velocity.rs`: the velocity grid the motion blur advects lookups along;
 //! - here: the [`Medium`], which channel of which field holds sigma_t and
 //!   emission, and the volume scales applied at lookup.
@@ -40,6 +41,7 @@ pub mod check;
 mod dual;
 pub mod field;
 pub mod layout;
+pub mod values;
 pub mod velocity;
 
 use crate::grid::leaf_source::{GridSource, LeafSource};
@@ -190,7 +192,7 @@ impl Medium {
                 medium.stored[k] = Some(Stored { channel: Channel { field: fi, channel: ch }, peak: peaks[k], grid: src.name().into() });
                 ch += src.channels();
             }
-            reserved += (field.values.len() * std::mem::size_of::<f32>()) as f64;
+            reserved += field.values.bytes() as f64;
             medium.fields.push(field);
         }
         medium.set_scales(density_scale, emission_scale)?;
