@@ -167,6 +167,13 @@ pub const OVAL_LENGTH_KM: f64 = 2500.0;
 /// (`earth.magnetic_pole`), its middle overhead; seen by a 180-degree
 /// fisheye looking at the zenith, north up, with stars. On the round
 /// Earth its ends go down behind the horizon, some 1250 km away.
+///
+/// Under the arc's middle the camera looks up its field lines (dip 79.8
+/// deg at magnetic latitude 70.2 deg, `tan I = 2 tan(lat)`): the gaps
+/// between the footprint's rays within some 20 km of the zenith are seen
+/// nearly edge-on, as dark lanes converging on the magnetic zenith 10 deg
+/// south of it (the corona's perspective, `tests/physics/corona.rs`);
+/// farther along, the sight lines cross the gaps and fill them in.
 pub fn oval() -> Scene {
     let earth = crate::geometry::earth::Earth::new(crate::geometry::earth::MEAN_RADIUS_KM);
     let pole = [0.0, OVAL_POLE_DISTANCE_KM];
