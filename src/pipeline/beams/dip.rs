@@ -21,6 +21,7 @@ use crate::geometry::earth::Earth;
 use crate::physics::geomagnetic_field::dipole_angles_deg;
 use crate::pipeline::footprint::curtain_path::{vertices, Lift};
 use crate::scene::{BeamParams, Curtain, EarthParams};
+use crate::util::fmath;
 
 /// Samples along a straight curtain's length (and across, [`ACROSS`]).
 const ALONG: usize = 17;
@@ -48,7 +49,7 @@ pub fn start_samples(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams)
             .flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]])
             .collect();
     }
-    let (s, c) = curtain.rotation_deg.to_radians().sin_cos();
+    let (s, c) = fmath::sin_cos(curtain.rotation_deg.to_radians());
     let mut out = Vec::with_capacity(ALONG * ACROSS);
     for i in 0..ALONG {
         for j in 0..ACROSS {
@@ -133,7 +134,7 @@ mod tests {
         // farther, magnetic latitude 90 - 3100 / R rad) dips least.
         let d = curtain_dip(&c, &b, &earth(Some([0.0, 3000.0])));
         let lat = 90.0 - (3100.0 / MEAN_RADIUS_KM).to_degrees();
-        let want = (2.0 * lat.to_radians().tan()).atan().to_degrees();
+        let want = fmath::atan(2.0 * fmath::tan(lat.to_radians())).to_degrees();
         assert!((d.dip_deg - want).abs() < 1e-6 && (d.at[1] + 100.0).abs() < 1e-9, "{d:?} vs {want}");
         // Across the dipole's equator: 0.
         let q = std::f64::consts::FRAC_PI_2 * MEAN_RADIUS_KM;
