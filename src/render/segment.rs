@@ -430,13 +430,13 @@ mod tests {
         // int_0^1 s^k ds = 1/(k+1) for k <= 11, to rounding (the printed
         // 16-digit nodes and weights: a few 1e-16).
         for k in 0..=11 {
-            let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(x, k)).sum();
+            let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(*x, k)).sum();
             assert!((q - 1.0 / (k + 1) as f64).abs() < 2e-15, "degree {k}: {q}");
         }
         // Degree 12 is not exact: for s^12 the error is exactly
         // (n!)^4 / ((2n+1) ((2n)!)^3) times 12! (A&S 25.4.30 on [0, 1],
         // f^(12) = 12! everywhere), 9.0e-8.
-        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(x, 12)).sum();
+        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(*x, 12)).sum();
         let c = fmath::powi(720f64, 4) / (13.0 * fmath::powi(479001600f64, 3)) * 479001600.0;
         assert!(((1.0 / 13.0 - q) / c - 1.0).abs() < 1e-6, "{} vs {c}", 1.0 / 13.0 - q);
         // Nodes ascending, symmetric about 1/2; weights symmetric and positive.
