@@ -15,6 +15,8 @@
 //! red tail, and the air's extinction 0.02 exp(-0.02 (h - 90)) per km on the
 //! same voxels. Camera: the default scene's (ground, 260 km south, 50 deg).
 
+use aurora::util::fmath;
+
 mod common;
 
 use aurora::grid::{Grid, Transform};
@@ -34,14 +36,14 @@ fn curtains(sheets: usize, thickness: i32, far_voxel: bool) -> (Grid<f32>, Grid<
     for (k, yc) in centres.iter().take(sheets).enumerate() {
         for x in -400..400 {
             let xk = x as f64 * VS;
-            let y = yc + 12.0 * (2.0 * std::f64::consts::PI * xk / (90.0 + 20.0 * k as f64) + k as f64).sin();
+            let y = yc + 12.0 * fmath::sin(2.0 * std::f64::consts::PI * xk / (90.0 + 20.0 * k as f64) + k as f64);
             let yi = (y / VS).round() as i32;
-            let along = 0.6 + 0.4 * (xk / 37.0 + k as f64).sin().powi(2);
+            let along = 0.6 + 0.4 * fmath::powi(fmath::sin(xk / 37.0 + k as f64), 2);
             for z in 180..400 {
                 let h = z as f64 * VS;
-                let green = (-((h - 110.0) / 12.0).powi(2)).exp();
-                let red = 0.3 * (-((h - 160.0) / 30.0).powi(2)).exp();
-                let sigma = 0.02 * (-0.02 * (h - 90.0)).exp();
+                let green = fmath::exp(-fmath::powi((h - 110.0) / 12.0, 2));
+                let red = 0.3 * fmath::exp(-fmath::powi((h - 160.0) / 30.0, 2));
+                let sigma = 0.02 * fmath::exp(-0.02 * (h - 90.0));
                 for dy in 0..thickness {
                     let p = IVec3::new(x, yi + dy - thickness / 2, z);
                     let w = 1.0 - ((dy - thickness / 2) as f64 / thickness as f64).abs();

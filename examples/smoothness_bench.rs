@@ -27,6 +27,8 @@
 //! With `--out`, writes `smoothness.json`, `smoothness.txt` and the four
 //! pictures (PNG) there.
 
+use aurora::util::fmath;
+
 mod common;
 
 use aurora::app::bench::metrics::image_rel_error;
@@ -77,7 +79,7 @@ fn write_png(path: &std::path::Path, img: &render::Image, scale: f64) {
     // Linear luminance scaled so the reference's peak is 1, sRGB-encoded.
     let enc = |x: f64| {
         let x = (x * scale).clamp(0.0, 1.0);
-        let v = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * x.powf(1.0 / 2.4) - 0.055 };
+        let v = if x <= 0.003_130_8 { 12.92 * x } else { 1.055 * fmath::powf(x, 1.0 / 2.4) - 0.055 };
         (v * 255.0 + 0.5) as u8
     };
     let mut data = Vec::with_capacity(img.pixels.len() * 3);

@@ -22,6 +22,7 @@ use aurora::grid::{Grid, Transform};
 use aurora::io::vdb::read::read_vdb;
 use aurora::io::vdb::write::{GridRef, WriteOptions};
 use aurora::scene::Compression;
+use aurora::util::fmath;
 use glam::{DVec3, IVec3};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -96,15 +97,15 @@ fn synthetic() -> (Grid<f32>, Grid<[f32; 3]>) {
     let mut e = Grid::new("emission", [0.0f32; 3], tr);
     for (c, (y_base, amp)) in [(200.0f64, 60.0f64), (-150.0, 40.0)].into_iter().enumerate() {
         for x in -250..250 {
-            let y0 = (y_base + amp * (x as f64 / (80.0 + 20.0 * c as f64)).sin()).round() as i32;
+            let y0 = (y_base + amp * fmath::sin(x as f64 / (80.0 + 20.0 * c as f64))).round() as i32;
             for dy in -5..5 {
                 for z in 0..100 {
                     let p = IVec3::new(x, y0 + dy, z);
                     let h = z as f32 / 100.0;
                     let across = 1.0 - (dy as f32 + 0.5).abs() / 5.5;
                     let n = 1.0 + 0.05 * (noise(p, 1) - 0.5);
-                    d.set(p, 0.02 * (-3.0 * h).exp() * n);
-                    let green = across * (-((h - 0.3) / 0.2).powi(2)).exp() * n;
+                    d.set(p, 0.02 * fmath::exp(-3.0 * h) * n);
+                    let green = across * fmath::exp(-fmath::powi((h - 0.3) / 0.2, 2)) * n;
                     let red = across * 0.3 * h * h * (1.0 + 0.05 * (noise(p, 2) - 0.5));
                     e.set(p, [red * 1e-3, green * 1e-3, 0.05 * green * 1e-3]);
                 }

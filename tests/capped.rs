@@ -23,6 +23,8 @@
 //! stopped; the cap makes an allocation beyond 8 GiB fail, so "stayed under
 //! the memory cap" is checked too.
 
+use aurora::util::fmath;
+
 mod common;
 
 use aurora::grid::{Grid, Transform};
@@ -327,9 +329,9 @@ fn soak_200_random_valid_scenes() {
                 }
                 // Mostly near the default (a scene someone would write), sometimes anywhere.
                 let x = if def != 0.0 && r.random::<f64>() < 0.7 {
-                    (def * 10f64.powf(r.random::<f64>() - 0.5)).clamp(a, b)
+                    (def * fmath::powf(10f64, r.random::<f64>() - 0.5)).clamp(a, b)
                 } else if a > 0.0 && b / a > 100.0 {
-                    (a.ln() + r.random::<f64>() * (b.ln() - a.ln())).exp()
+                    fmath::exp(fmath::ln(a) + r.random::<f64>() * (fmath::ln(b) - fmath::ln(a)))
                 } else {
                     a + r.random::<f64>() * (b - a)
                 };

@@ -31,6 +31,7 @@ use crate::physics::geomagnetic_field::dipole_angles_deg;
 use crate::render::image::{Image, RenderStats};
 use crate::render::{radiance_along_ray, Integration, Prepared, RenderError, RenderSettings, Volume};
 use crate::scene::Scene;
+use crate::util::fmath;
 use crate::util::progress::Progress;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -118,8 +119,8 @@ pub fn meridian(scene: &Scene) -> Vec<MeridianRow> {
             let scan_deg = i as f64 * ROW_DEG;
             let (elevation_deg, azimuth_deg) = if scan_deg <= 90.0 { (scan_deg, az) } else { (180.0 - scan_deg, az + 180.0) };
             let azimuth_deg = azimuth_deg.rem_euclid(360.0);
-            let (sa, ca) = azimuth_deg.to_radians().sin_cos();
-            let (se, ce) = elevation_deg.to_radians().sin_cos();
+            let (sa, ca) = fmath::sin_cos(azimuth_deg.to_radians());
+            let (se, ce) = fmath::sin_cos(elevation_deg.to_radians());
             let dir = ((east * sa + north * ca) * ce + up * se).normalize();
             MeridianRow { scan_deg, elevation_deg, azimuth_deg, dir }
         })

@@ -52,6 +52,7 @@
 //! All ray math is f64.
 
 use crate::scene::{Camera, Projection, MAX_IMAGE_SIDE};
+use crate::util::fmath;
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -124,7 +125,7 @@ impl CameraModel {
             right,
             up,
             projection: cam.projection,
-            tan_half_fov: (cam.fov_deg.to_radians() / 2.0).tan(),
+            tan_half_fov: fmath::tan(cam.fov_deg.to_radians() / 2.0),
             half_fov: cam.fov_deg.to_radians() / 2.0,
             half_height: cam.ortho_height / 2.0,
             width,
@@ -160,7 +161,7 @@ impl CameraModel {
                 if r > 1.0 {
                     return None;
                 }
-                let (s, c) = (r * self.half_fov).sin_cos();
+                let (s, c) = fmath::sin_cos(r * self.half_fov);
                 if r > 0.0 {
                     (c * self.forward + (s / r) * (sx * self.right + sy * self.up)).normalize()
                 } else {
@@ -168,8 +169,8 @@ impl CameraModel {
                 }
             }
             Projection::Equirectangular => {
-                let (sl, cl) = (PI * sx).sin_cos();
-                let (sb, cb) = (FRAC_PI_2 * sy).sin_cos();
+                let (sl, cl) = fmath::sin_cos(PI * sx);
+                let (sb, cb) = fmath::sin_cos(FRAC_PI_2 * sy);
                 (cb * (cl * self.forward + sl * self.right) + sb * self.up).normalize()
             }
         };
@@ -184,7 +185,7 @@ impl CameraModel {
             let (w, h) = (self.width as f64, self.height as f64);
             let (sx, sy) = (2.0 * fx / w - 1.0, 1.0 - 2.0 * fy / h);
             let r = (sx * sx + sy * sy).sqrt();
-            let (s, c) = self.half_fov.sin_cos();
+            let (s, c) = fmath::sin_cos(self.half_fov);
             Ray { origin: self.position, dir: (c * self.forward + (s / r) * (sx * self.right + sy * self.up)).normalize() }
         })
     }
@@ -206,7 +207,7 @@ impl CameraModel {
             Projection::Orthographic => (x / (self.half_height * w / h), y / self.half_height),
             Projection::Fisheye => {
                 let q = (x * x + y * y).sqrt();
-                let theta = q.atan2(z);
+                let theta = fmath::atan2(q, z);
                 let r = theta / self.half_fov;
                 if r > 1.0 {
                     return None;
@@ -218,8 +219,8 @@ impl CameraModel {
                 }
             }
             Projection::Equirectangular => {
-                let lambda = x.atan2(z);
-                let beta = y.atan2((x * x + z * z).sqrt());
+                let lambda = fmath::atan2(x, z);
+                let beta = fmath::atan2(y, (x * x + z * z).sqrt());
                 (lambda / PI, beta / FRAC_PI_2)
             }
         };
@@ -248,9 +249,9 @@ impl CameraModel {
             }
             Projection::Fisheye => {
                 let theta_max = self.half_fov * (1.0 - 1.0 / self.width.min(self.height) as f64);
-                let theta = cos.clamp(-1.0, 1.0).acos().min(theta_max);
+                let theta = fmath::acos(cos.clamp(-1.0, 1.0)).min(theta_max);
                 if theta > 0.0 {
-                    theta.sin() / theta
+                    fmath::sin(theta) / theta
                 } else {
                     1.0
                 }
@@ -258,7 +259,7 @@ impl CameraModel {
             Projection::Equirectangular => {
                 let sin_beta = dir.dot(self.up).clamp(-1.0, 1.0);
                 let cos_beta = (1.0 - sin_beta * sin_beta).sqrt();
-                cos_beta.max((FRAC_PI_2 / self.height as f64).sin())
+                cos_beta.max(fmath::sin(FRAC_PI_2 / self.height as f64))
             }
         }
     }
@@ -273,8 +274,8 @@ impl CameraModel {
         let (w, h) = (self.width as f64, self.height as f64);
         let omega0 = match self.projection {
             Projection::Orthographic => return None,
-            Projection::Perspective => (2.0 * self.tan_half_fov / h).powi(2),
-            Projection::Fisheye => (2.0 * self.half_fov).powi(2) / (w * h),
+            Projection::Perspective => fmath::powi(2.0 * self.tan_half_fov / h, 2),
+            Projection::Fisheye => fmath::powi(2.0 * self.half_fov, 2) / (w * h),
             Projection::Equirectangular => (2.0 * PI / w) * (PI / h),
         };
         Some(omega0 * self.relative_pixel_solid_angle(dir))
@@ -375,7 +376,7 @@ mod tests {
         assert!(m.ray_at(1.0, 1.0).is_none());
         // Equidistant: half way to the edge is 45 degrees off axis.
         let d = m.ray_at(75.0, 50.0).unwrap().dir;
-        assert!((d.dot(m.forward) - std::f64::consts::FRAC_PI_4.cos()).abs() < 1e-12);
+        assert!((d.dot(m.forward) - fmath::cos(std::f64::consts::FRAC_PI_4)).abs() < 1e-12);
         // 360 degrees: the circle's edge looks backwards.
         let m = CameraModel::new(&cam(Projection::Fisheye, 360.0), 64, 64).unwrap();
         assert!((m.ray_at(64.0, 32.0).unwrap().dir + m.forward).length() < 1e-9);
@@ -399,7 +400,7 @@ mod tests {
         fn tri(a: DVec3, b: DVec3, c: DVec3) -> f64 {
             let num = a.dot(b.cross(c)).abs();
             let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
-            2.0 * num.atan2(den)
+            2.0 * fmath::atan2(num, den)
         }
         let omega = |m: &CameraModel, fx: f64, fy: f64| {
             let e = 1e-3;

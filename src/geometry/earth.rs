@@ -50,6 +50,7 @@
 //! - the drop of the sphere below the origin's tangent plane at ground
 //!   distance d is `R (1 - cos(d / R))`, about `d^2 / 2R` (78 km at 1000 km).
 
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The mean radius of the Earth, km (IUGG: the radius of the sphere of the
@@ -132,7 +133,7 @@ impl Earth {
         if d == 0.0 {
             return DVec3::new(0.0, 0.0, q.z);
         }
-        let (s, c) = (d / r).sin_cos();
+        let (s, c) = fmath::sin_cos(d / r);
         DVec3::new(rh * s * q.x / d, rh * s * q.y / d, rh * c - r)
     }
 
@@ -149,7 +150,7 @@ impl Earth {
         if rho == 0.0 {
             return DVec3::new(0.0, 0.0, h);
         }
-        let d = self.radius_km * rho.atan2(v.z);
+        let d = self.radius_km * fmath::atan2(rho, v.z);
         DVec3::new(d * v.x / rho, d * v.y / rho, h)
     }
 
@@ -183,18 +184,18 @@ impl Earth {
             return f64::INFINITY;
         }
         let r = self.radius_km;
-        r * ((r / (r + h0)).acos() + (r / (r + h)).acos())
+        r * (fmath::acos(r / (r + h0)) + fmath::acos(r / (r + h)))
     }
 
     /// The elevation, degrees, of a point at altitude `h` a ground distance
     /// `d` km from an observer at altitude `h0` (module doc).
     pub fn elevation_deg(&self, h0: f64, h: f64, d: f64) -> f64 {
         if self.is_flat() {
-            return (h - h0).atan2(d).to_degrees();
+            return fmath::atan2(h - h0, d).to_degrees();
         }
         let r = self.radius_km;
-        let (s, c) = (d / r).sin_cos();
-        ((r + h) * c - (r + h0)).atan2((r + h) * s).to_degrees()
+        let (s, c) = fmath::sin_cos(d / r);
+        fmath::atan2((r + h) * c - (r + h0), (r + h) * s).to_degrees()
     }
 
     /// The drop of the ground below the origin's tangent plane at ground
@@ -203,7 +204,7 @@ impl Earth {
         if self.is_flat() {
             0.0
         } else {
-            self.radius_km * (1.0 - (d / self.radius_km).cos())
+            self.radius_km * (1.0 - fmath::cos(d / self.radius_km))
         }
     }
 
@@ -213,14 +214,14 @@ impl Earth {
             return 0.0;
         }
         let (pa, pb) = (self.ground_point(a[0], a[1]) - self.centre(), self.ground_point(b[0], b[1]) - self.centre());
-        pa.cross(pb).length().atan2(pa.dot(pb))
+        fmath::atan2(pa.cross(pb).length(), pa.dot(pb))
     }
 
     /// The great-circle distance between two ground points, km (the plane
     /// distance when flat).
     pub fn ground_distance_km(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
         if self.is_flat() {
-            return (a[0] - b[0]).hypot(a[1] - b[1]);
+            return fmath::hypot(a[0] - b[0], a[1] - b[1]);
         }
         self.radius_km * self.central_angle(a, b)
     }
@@ -230,25 +231,25 @@ impl Earth {
     /// bearing when flat).
     pub fn azimuth_deg(&self, a: [f64; 2], b: [f64; 2]) -> f64 {
         if self.is_flat() {
-            return (b[0] - a[0]).atan2(b[1] - a[1]).to_degrees();
+            return fmath::atan2(b[0] - a[0], b[1] - a[1]).to_degrees();
         }
         let [east, north, up] = self.local_frame(a[0], a[1]);
         let d = self.ground_point(b[0], b[1]) - self.ground_point(a[0], a[1]);
         let t = d - up * d.dot(up);
-        t.dot(east).atan2(t.dot(north)).to_degrees()
+        fmath::atan2(t.dot(east), t.dot(north)).to_degrees()
     }
 
     /// The ground point a great-circle distance `dist` km from `a` at
     /// azimuth `az_deg` (from the local north toward east), in ground
     /// coordinates.
     pub fn destination(&self, a: [f64; 2], az_deg: f64, dist: f64) -> [f64; 2] {
-        let (s, c) = az_deg.to_radians().sin_cos();
+        let (s, c) = fmath::sin_cos(az_deg.to_radians());
         if self.is_flat() {
             return [a[0] + dist * s, a[1] + dist * c];
         }
         let [east, north, up] = self.local_frame(a[0], a[1]);
         let dir = east * s + north * c;
-        let (sa, ca) = (dist / self.radius_km).sin_cos();
+        let (sa, ca) = fmath::sin_cos(dist / self.radius_km);
         let p = self.centre() + (up * ca + dir * sa) * self.radius_km;
         let q = self.to_curved(p);
         [q.x, q.y]
@@ -292,7 +293,7 @@ mod tests {
         // sits R sin(d / R) = 995.9 km east.
         let g = E.ground_point(1000.0, 0.0);
         assert!((-g.z - E.drop_km(1000.0)).abs() < 1e-9 && (E.drop_km(1000.0) - 78.32).abs() < 0.005, "{g}");
-        assert!((g.x - MEAN_RADIUS_KM * (1000.0 / MEAN_RADIUS_KM).sin()).abs() < 1e-9);
+        assert!((g.x - MEAN_RADIUS_KM * fmath::sin(1000.0 / MEAN_RADIUS_KM)).abs() < 1e-9);
         // A point 10 km above the origin: altitude 10 (closed form, exact).
         assert_eq!(E.altitude(DVec3::new(0.0, 0.0, 10.0)), 10.0);
         // Ground distance along a radial line is exact.
@@ -311,7 +312,7 @@ mod tests {
         assert!(E.elevation_deg(0.0, 105.0, d).abs() < 1e-9);
         // The elevation from the mapped points agrees with the closed form.
         let p = E.to_scene(DVec3::new(0.0, 1000.0, 105.0));
-        let el = (p.z / p.y.hypot(p.x)).atan().to_degrees();
+        let el = fmath::atan(p.z / fmath::hypot(p.y, p.x)).to_degrees();
         assert!((el - e).abs() < 1e-9, "{el} vs {e}");
     }
 
@@ -324,8 +325,8 @@ mod tests {
         // A ray from 300 km up, 2 degrees down: closest approach (R + 300)
         // cos(2 deg) - R = 300 - 6671 (1 - cos 2deg) = 295.94 km.
         let o = DVec3::new(0.0, 0.0, 300.0);
-        let u = DVec3::new(0.0, 2f64.to_radians().cos(), -2f64.to_radians().sin());
-        let want = (MEAN_RADIUS_KM + 300.0) * 2f64.to_radians().cos() - MEAN_RADIUS_KM;
+        let u = DVec3::new(0.0, fmath::cos(2f64.to_radians()), -fmath::sin(2f64.to_radians()));
+        let want = (MEAN_RADIUS_KM + 300.0) * fmath::cos(2f64.to_radians()) - MEAN_RADIUS_KM;
         assert!((E.lowest_altitude(o, u) - want).abs() < 1e-9);
         assert!((want - 295.936).abs() < 1e-3);
         // Brute force along the ray.

@@ -28,6 +28,7 @@
 
 use crate::geometry::camera::CameraModel;
 use crate::geometry::earth::Earth;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// A skymap: row-major arrays of `height x width` pixels, row 0 at the top
@@ -63,13 +64,13 @@ pub enum SkymapError {
 /// the Earth's centre `v` (unit), for an origin at `origin` = (latitude,
 /// longitude) degrees (module doc).
 pub fn lat_lon_deg(v: DVec3, origin: [f64; 2]) -> [f64; 2] {
-    let (sf, cf) = origin[0].to_radians().sin_cos();
-    let (sl, cl) = origin[1].to_radians().sin_cos();
+    let (sf, cf) = fmath::sin_cos(origin[0].to_radians());
+    let (sl, cl) = fmath::sin_cos(origin[1].to_radians());
     let e = DVec3::new(-sl, cl, 0.0);
     let n = DVec3::new(-sf * cl, -sf * sl, cf);
     let u = DVec3::new(cf * cl, cf * sl, sf);
     let w = (e * v.x + n * v.y + u * v.z).normalize();
-    [w.z.atan2(w.x.hypot(w.y)).to_degrees(), w.y.atan2(w.x).to_degrees()]
+    [fmath::atan2(w.z, fmath::hypot(w.x, w.y)).to_degrees(), fmath::atan2(w.y, w.x).to_degrees()]
 }
 
 /// Where a ray from `o` along unit `u` leaves the sphere of altitude
@@ -118,9 +119,9 @@ pub fn skymap(camera: &CameraModel, radius_km: f64, origin: [f64; 2], alt_km: f6
             // atan2 of the vertical and horizontal parts: exact near the
             // zenith, where asin of a dot product loses half its digits.
             let (e, n) = (d.dot(east), d.dot(north));
-            let el = d.dot(up).atan2(e.hypot(n)).to_degrees();
+            let el = fmath::atan2(d.dot(up), fmath::hypot(e, n)).to_degrees();
             m.elevation_deg[i] = el;
-            m.azimuth_deg[i] = e.atan2(n).to_degrees().rem_euclid(360.0);
+            m.azimuth_deg[i] = fmath::atan2(e, n).to_degrees().rem_euclid(360.0);
             if el >= 0.0 {
                 let p = exit_point(&earth, ray.origin, d, alt_km);
                 let [lat, lon] = lat_lon_deg((p - earth.centre()).normalize(), origin);
@@ -175,7 +176,7 @@ mod tests {
             assert!((m.elevation_deg[i] - el).abs() < 1e-9, "{k}: {}", m.elevation_deg[i]);
             assert!(m.azimuth_deg[i].abs() < 1e-9 || (m.azimuth_deg[i] - 360.0).abs() < 1e-9);
             let e = el.to_radians();
-            let theta = (r * e.cos() / (r + h)).acos() - e;
+            let theta = fmath::acos(r * fmath::cos(e) / (r + h)) - e;
             assert!((m.latitude_deg[i] - (60.0 + theta.to_degrees())).abs() < 1e-9, "{k}: {}", m.latitude_deg[i]);
             assert!((m.longitude_deg[i] + 100.0).abs() < 1e-9);
         }

@@ -421,6 +421,7 @@ pub fn merge<T: VoxelValue>(fine: &Grid<T>, high: &Grid<T>) -> Result<Grid<T>, M
 mod tests {
     use super::*;
     use crate::grid::Transform;
+    use crate::util::fmath;
 
     /// A box of active voxels holding `field(world position)`.
     fn boxed(f: impl Fn(DVec3) -> f32, lo: IVec3, hi: IVec3, tr: Transform) -> Grid<f32> {
@@ -443,7 +444,7 @@ mod tests {
     /// A Gaussian bump of `sigma` km (a smooth field that is zero, to f32,
     /// at the box's faces) centred at `c`.
     fn bump(c: DVec3, sigma: f64) -> impl Fn(DVec3) -> f32 {
-        move |p: DVec3| (-(p - c).length_squared() / (2.0 * sigma * sigma)).exp() as f32
+        move |p: DVec3| fmath::exp(-(p - c).length_squared() / (2.0 * sigma * sigma)) as f32
     }
 
     #[test]

@@ -45,6 +45,7 @@
 use crate::physics::emission::line_colour::{Observer, LINES, N2_1P, N2_1P_BANDS_NM};
 use crate::physics::emission::line_table::{line_colours, N_LINES};
 use crate::scene::SkyParams;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// Sea-level pressure of the standard atmosphere, Pa.
@@ -96,7 +97,7 @@ pub const REFERENCE_MIX: [f64; N_LINES] = [
 
 /// Rayleigh optical depth at sea level, Bodhaine et al. (1999) eq. (30).
 pub fn rayleigh_tau_sea_level(lambda_nm: f64) -> f64 {
-    let l2 = (lambda_nm * 1e-3).powi(2);
+    let l2 = fmath::powi(lambda_nm * 1e-3, 2);
     0.0021520 * (1.0455996 - 341.29061 / l2 - 0.90230850 * l2) / (1.0 + 0.0027059889 / l2 - 85.968563 * l2)
 }
 
@@ -112,13 +113,13 @@ pub fn us1976(z_km: f64) -> (f64, f64) {
         let top = US1976_LAYERS.get(i + 1).map_or(US1976_TOP_KM, |n| n.0);
         let dh = h.min(top) - hb;
         let t = tb + l * dh;
-        p *= if l == 0.0 { (-GMR_K_PER_KM * dh / tb).exp() } else { (tb / t).powf(GMR_K_PER_KM / l) };
+        p *= if l == 0.0 { fmath::exp(-GMR_K_PER_KM * dh / tb) } else { fmath::powf(tb / t, GMR_K_PER_KM / l) };
         if h <= top {
             return (t, p);
         }
         if i == US1976_LAYERS.len() - 1 {
             // Isothermal above the last layer.
-            return (t, p * (-GMR_K_PER_KM * (h - top) / t).exp());
+            return (t, p * fmath::exp(-GMR_K_PER_KM * (h - top) / t));
         }
     }
     unreachable!("the last layer returns")
@@ -133,7 +134,7 @@ pub fn pressure_ratio(z_km: f64) -> f64 {
 /// times `(dH/dz)^-1 = ((r0 + z) / r0)^2`.
 pub fn pressure_scale_height_km(z_km: f64) -> f64 {
     let z = z_km.max(0.0);
-    us1976(z).0 / GMR_K_PER_KM * ((R0_KM + z) / R0_KM).powi(2)
+    us1976(z).0 / GMR_K_PER_KM * fmath::powi((R0_KM + z) / R0_KM, 2)
 }
 
 /// Ozone cross-section at `lambda_nm`, cm^2: [`O3_SIGMA_CM2`] linear between
@@ -157,9 +158,9 @@ pub fn ozone_fraction_above(z_km: f64) -> f64 {
     if z_km <= a {
         1.0
     } else if z_km <= m {
-        1.0 - (z_km - a).powi(2) / ((b - a) * (m - a))
+        1.0 - fmath::powi(z_km - a, 2) / ((b - a) * (m - a))
     } else if z_km < b {
-        (b - z_km).powi(2) / ((b - a) * (b - m))
+        fmath::powi(b - z_km, 2) / ((b - a) * (b - m))
     } else {
         0.0
     }
@@ -169,7 +170,7 @@ pub fn ozone_fraction_above(z_km: f64) -> f64 {
 /// horizon, the horizon's.
 pub fn air_mass(e_deg: f64) -> f64 {
     let e = e_deg.clamp(0.0, 90.0);
-    1.0 / (e.to_radians().sin() + 0.50572 * (e + 6.07995).powf(-1.6364))
+    1.0 / (fmath::sin(e.to_radians()) + 0.50572 * fmath::powf(e + 6.07995, -1.6364))
 }
 
 /// The atmosphere of `[sky]`: ozone column and aerosol.
@@ -217,7 +218,7 @@ impl Air {
         Depths {
             rayleigh: rayleigh_tau_sea_level(lambda_nm),
             ozone: ozone_cross_section_cm2(lambda_nm) * self.ozone_du * DOBSON_CM2,
-            aerosol: self.aerosol_tau_550 * (lambda_nm / 550.0).powf(-self.angstrom),
+            aerosol: self.aerosol_tau_550 * fmath::powf(lambda_nm / 550.0, -self.angstrom),
         }
     }
 
@@ -248,7 +249,7 @@ impl Air {
         Depths {
             rayleigh: pressure_ratio(z_km),
             ozone: ozone_fraction_above(z_km),
-            aerosol: (-z_km.max(0.0) / self.aerosol_scale_height_km).exp(),
+            aerosol: fmath::exp(-z_km.max(0.0) / self.aerosol_scale_height_km),
         }
     }
 
@@ -271,7 +272,11 @@ impl Air {
             0.0
         };
         let h_a = self.aerosol_scale_height_km;
-        Depths { rayleigh: pressure_ratio(z_km) / pressure_scale_height_km(z_km), ozone: o3, aerosol: (-z_km.max(0.0) / h_a).exp() / h_a }
+        Depths {
+            rayleigh: pressure_ratio(z_km) / pressure_scale_height_km(z_km),
+            ozone: o3,
+            aerosol: fmath::exp(-z_km.max(0.0) / h_a) / h_a,
+        }
     }
 
     /// Optical depth of `d` along a straight path of length `len_km` between
@@ -348,13 +353,13 @@ impl Extinction {
 
     /// Elevation of `dir` above the observer's horizon, degrees.
     pub fn elevation_deg(&self, dir: DVec3) -> f64 {
-        self.up.dot(dir.normalize()).clamp(-1.0, 1.0).asin().to_degrees()
+        fmath::asin(self.up.dot(dir.normalize()).clamp(-1.0, 1.0)).to_degrees()
     }
 
     /// Each channel's transmittance from the lines' optical depths along a
     /// path: `sum_i w_ic exp(-tau_i)`.
     fn mix(&self, tau: [f64; N_LINES]) -> [f64; 3] {
-        let t = tau.map(|x| (-x).exp());
+        let t = tau.map(|x| fmath::exp(-x));
         self.weights.map(|w| w.iter().zip(&t).map(|(w, t)| w * t).sum())
     }
 
@@ -369,8 +374,8 @@ impl Extinction {
     /// `-ln T_c / X` (the first-order `tau_c` of [`Air::channel_depths`] as
     /// `x -> 0`).
     pub fn effective_tau(&self, c: usize, x: f64) -> f64 {
-        let t: f64 = self.weights[c].iter().zip(&self.tau_zenith).map(|(w, t)| w * (-t * x).exp()).sum();
-        -t.ln() / x
+        let t: f64 = self.weights[c].iter().zip(&self.tau_zenith).map(|(w, t)| w * fmath::exp(-t * x)).sum();
+        -fmath::ln(t) / x
     }
 
     /// Transmittance per channel towards `dir` from a point `x` (km) below

@@ -53,6 +53,7 @@
 //! and faint) are left out. docs/physics.md, "Airglow", has the table.
 
 use crate::scene::AirglowParams;
+use crate::util::fmath;
 
 /// Photons of OI 630.0 nm per photon of OI 636.4 nm (Storey & Zeippen 2000).
 pub const OI_6300_PER_6364: f64 = 2.997;
@@ -152,7 +153,7 @@ pub fn profile_per_km(shape: &LayerShape, h_km: f64) -> f64 {
     if x.abs() > CUT_SIGMAS {
         return 0.0;
     }
-    (-0.5 * x * x).exp() / ((2.0 * std::f64::consts::PI).sqrt() * shape.sigma_km)
+    fmath::exp(-0.5 * x * x) / ((2.0 * std::f64::consts::PI).sqrt() * shape.sigma_km)
 }
 
 /// Each line's volume emission rate at `h_km`, R per km (10^6 photons
@@ -223,7 +224,7 @@ pub fn slant_factor(shape: &LayerShape, earth_radius_km: f64, observer_km: f64, 
 /// Van Rhijn's factor of a thin layer at `layer_km`, zenith angle
 /// `zenith_rad`, observer at `observer_km` (below the layer).
 pub fn van_rhijn(earth_radius_km: f64, observer_km: f64, layer_km: f64, zenith_rad: f64) -> f64 {
-    let q = (earth_radius_km + observer_km) / (earth_radius_km + layer_km) * zenith_rad.sin();
+    let q = (earth_radius_km + observer_km) / (earth_radius_km + layer_km) * fmath::sin(zenith_rad);
     1.0 / (1.0 - q * q).sqrt()
 }
 
@@ -233,12 +234,12 @@ pub fn van_rhijn(earth_radius_km: f64, observer_km: f64, layer_km: f64, zenith_r
 /// r_h^2 + 3 p^2) / (r_h^2 - p^2)^(9/2)`, the size of the error.
 pub fn thick_layer_factor(shape: &LayerShape, earth_radius_km: f64, observer_km: f64, zenith_rad: f64) -> (f64, f64) {
     let r = earth_radius_km + shape.peak_km;
-    let p = (earth_radius_km + observer_km) * zenith_rad.sin();
+    let p = (earth_radius_km + observer_km) * fmath::sin(zenith_rad);
     let g = r * r - p * p;
     let s2 = shape.sigma_km * shape.sigma_km;
     let f = r / g.sqrt();
-    let f2 = 3.0 * p * p * r * g.powf(-2.5);
-    let f4 = 15.0 * p * p * r * (4.0 * r * r + 3.0 * p * p) * g.powf(-4.5);
+    let f2 = 3.0 * p * p * r * fmath::powf(g, -2.5);
+    let f4 = 15.0 * p * p * r * (4.0 * r * r + 3.0 * p * p) * fmath::powf(g, -4.5);
     (f + 0.5 * s2 * f2, s2 * s2 / 8.0 * f4)
 }
 

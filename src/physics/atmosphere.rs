@@ -28,6 +28,7 @@
 use crate::physics::chemistry::ambient::AmbientTable;
 use crate::physics::data_files::{self, DataError};
 use crate::scene::{AtmosphereModel, AtmosphereParams, Ionosphere};
+use crate::util::fmath;
 use std::sync::Arc;
 
 /// Centimetres per kilometre.
@@ -171,7 +172,7 @@ impl Atmosphere {
     fn from_rows(rows: &[[f64; 5]], ambient: AmbientTable) -> Self {
         let n = rows.len();
         let h: Vec<f64> = rows.iter().map(|r| r[0]).collect();
-        let ln: Vec<[f64; 4]> = rows.iter().map(|r| [r[1].ln(), r[2].ln(), r[3].ln(), r[4].ln()]).collect();
+        let ln: Vec<[f64; 4]> = rows.iter().map(|r| [fmath::ln(r[1]), fmath::ln(r[2]), fmath::ln(r[3]), fmath::ln(r[4])]).collect();
         let scale: Vec<f64> = (0..n - 1).map(|i| (h[i + 1] - h[i]) / (ln[i][0] - ln[i + 1][0])).collect();
         let mut col = vec![0.0; n];
         // Above the last node the last segment's exponential continues to
@@ -181,7 +182,7 @@ impl Atmosphere {
             // Exact integral of rho_i exp(-(h - h_i)/H_i) over the segment.
             col[i] = col[i + 1] + scale[i] * (rows[i][1] - rows[i + 1][1]) * CM_PER_KM;
         }
-        let rho_node = ln.iter().map(|l| l[0].exp()).collect();
+        let rho_node = ln.iter().map(|l| fmath::exp(l[0])).collect();
         let dh = (h[n - 1] - h[0]) / (n - 1) as f64;
         let even = dh > 0.0 && h.iter().enumerate().all(|(i, &x)| x == h[0] + i as f64 * dh);
         let inv_dh = if even { 1.0 / dh } else { 0.0 };
@@ -219,7 +220,7 @@ impl Atmosphere {
     #[inline]
     fn interp_in(&self, i: usize, h: f64, k: usize) -> f64 {
         let t = (h - self.h[i]) / (self.h[i + 1] - self.h[i]);
-        (self.ln[i][k] + t * (self.ln[i + 1][k] - self.ln[i][k])).exp()
+        fmath::exp(self.ln[i][k] + t * (self.ln[i + 1][k] - self.ln[i][k]))
     }
 
     /// Mass density at altitude `h` km, g cm^-3.
@@ -305,7 +306,7 @@ mod tests {
                 let want = if h >= a.top_km() {
                     a.rho(h) * a.scale[i] * CM_PER_KM
                 } else {
-                    a.col[i + 1] + a.scale[i] * (a.rho(h) - a.ln[i + 1][0].exp()) * CM_PER_KM
+                    a.col[i + 1] + a.scale[i] * (a.rho(h) - fmath::exp(a.ln[i + 1][0])) * CM_PER_KM
                 };
                 assert_eq!(a.column_mass(h).to_bits(), want.to_bits(), "{h}");
             }
@@ -423,7 +424,7 @@ mod tests {
         for h in [60.0, 80.0, 100.0, 110.0, 130.0, 200.0, 300.0] {
             let r = rows.iter().find(|r| r[0] == h).unwrap();
             let m = r[1] / (r[2] + r[3] + r[4]);
-            let g = 980.665 * (6371.0 / (6371.0 + h)).powi(2);
+            let g = 980.665 * fmath::powi(6371.0 / (6371.0 + h), 2);
             let want = r[1] * K_B * r[5] / (m * g);
             let got = a.column_mass(h);
             assert!((got / want - 1.0).abs() < 0.04, "{h} km: {got:e} vs {want:e}");
@@ -449,7 +450,7 @@ mod tests {
         for a in [Atmosphere::us1976(), Atmosphere::nrlmsis21()] {
             for h in [52.3, 82.2, 97.3, 113.1, 161.7, 250.2, 333.3, 480.1, 690.7] {
                 let d = 1e-4;
-                let slope = (a.rho(h + d).ln() - a.rho(h - d).ln()) / (2.0 * d);
+                let slope = (fmath::ln(a.rho(h + d)) - fmath::ln(a.rho(h - d))) / (2.0 * d);
                 let hs = a.scale_height(h);
                 assert!((hs * -slope - 1.0).abs() < 1e-8, "{h} km: H {hs} vs {}", -1.0 / slope);
                 assert!((4.0..120.0).contains(&hs), "{h} km: {hs}");
@@ -522,7 +523,7 @@ mod tests {
         let dh = h1 - h0;
         let hs = a.scale_height(h0);
         assert_eq!(hs, a.scale_height(h1), "one segment");
-        let want = a.rho(h0) * hs * -(-dh / hs).exp_m1() * (len / dh) * CM_PER_KM;
+        let want = a.rho(h0) * hs * -fmath::exp_m1(-dh / hs) * (len / dh) * CM_PER_KM;
         let got = a.slant_column(h0, h1, len);
         assert!((got / want - 1.0).abs() < 1e-10, "{got:e} vs {want:e}: {:e}", got / want - 1.0);
         // Downward the same.

@@ -33,6 +33,8 @@
 //! (`tests/data/starkov_oracle.csv`, made by
 //! `tools/reference/aacgm_oval_table.py`).
 
+use crate::util::fmath;
+
 /// One of Starkov's boundaries.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Boundary {
@@ -86,9 +88,9 @@ pub fn al_from_kp_nt(kp: f64) -> f64 {
 /// local time `mlt_h` and AL index `al_nt` (module doc).
 pub fn colatitude_deg(boundary: Boundary, mlt_h: f64, al_nt: f64) -> f64 {
     let b = &STARKOV[boundary as usize];
-    let x = al_nt.abs().log10();
+    let x = fmath::log10(al_nt.abs());
     let c: Vec<f64> = b.iter().map(|k| k[0] + x * (k[1] + x * (k[2] + x * k[3]))).collect();
-    let cos = |n: f64, a: f64| (15.0 * (n * mlt_h + a)).to_radians().cos();
+    let cos = |n: f64, a: f64| fmath::cos((15.0 * (n * mlt_h + a)).to_radians());
     (c[0] + c[1] * cos(1.0, c[2]) + c[3] * cos(2.0, c[4]) + c[5] * cos(3.0, c[6])).max(0.0)
 }
 

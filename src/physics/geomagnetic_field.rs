@@ -42,6 +42,7 @@
 //! two angles.
 
 use crate::geometry::earth::Earth;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The geomagnetic frame: `b` the unit direction of the field line the way
@@ -59,8 +60,8 @@ impl MagneticField {
     /// B dipping `inclination_deg` below the horizon, its horizontal part
     /// toward azimuth `declination_deg` (degrees from +y, north, toward +x, east).
     pub fn new(inclination_deg: f64, declination_deg: f64) -> Self {
-        let (si, ci) = inclination_deg.to_radians().sin_cos();
-        let (sd, cd) = declination_deg.to_radians().sin_cos();
+        let (si, ci) = fmath::sin_cos(inclination_deg.to_radians());
+        let (sd, cd) = fmath::sin_cos(declination_deg.to_radians());
         let b = DVec3::new(ci * sd, ci * cd, -si).normalize();
         // Any unit vector orthogonal to b; pick the one from the axis least
         // aligned with b.
@@ -88,7 +89,7 @@ impl MagneticField {
     /// The dip of `b` below the horizon, degrees (in [0, 90] for every field
     /// [`MagneticField::new`] and [`MagneticField::dipole`] make).
     pub fn dip_deg(&self) -> f64 {
-        (-self.b.z).clamp(-1.0, 1.0).asin().to_degrees()
+        fmath::asin((-self.b.z).clamp(-1.0, 1.0)).to_degrees()
     }
 
     /// The point where the field line through `p` crosses altitude `z`
@@ -109,7 +110,7 @@ pub fn dipole_angles_deg(earth: &Earth, pole: [f64; 2], at: [f64; 2]) -> (f64, f
         return (90.0, 0.0);
     }
     let lat = std::f64::consts::FRAC_PI_2 - colat;
-    let inc = (2.0 * lat.tan()).atan().to_degrees();
+    let inc = fmath::atan(2.0 * fmath::tan(lat)).to_degrees();
     (inc, earth.azimuth_deg(at, pole))
 }
 
@@ -125,7 +126,7 @@ mod tests {
             assert!(f.b.dot(f.u).abs() < 1e-12 && f.b.dot(f.v).abs() < 1e-12 && f.u.dot(f.v).abs() < 1e-12);
             assert!(f.b.z < 0.0);
             // Dip angle below the horizon.
-            assert!(((-f.b.z).asin().to_degrees() - inc).abs() < 1e-9);
+            assert!((fmath::asin(-f.b.z).to_degrees() - inc).abs() < 1e-9);
         }
         // Declination 0: the horizontal part points north (+y).
         let f = MagneticField::new(78.0, 0.0);
@@ -143,7 +144,7 @@ mod tests {
         // degrees, the horizontal part due north.
         let (i, d) = dipole_angles_deg(&e, [0.0, 2000.0], [0.0, 0.0]);
         let lat = 90.0 - (2000.0 / e.radius_km).to_degrees();
-        assert!((i.to_radians().tan() - 2.0 * lat.to_radians().tan()).abs() < 1e-9, "{i}");
+        assert!((fmath::tan(i.to_radians()) - 2.0 * fmath::tan(lat.to_radians())).abs() < 1e-9, "{i}");
         assert!((i - 80.78).abs() < 0.005 && d.abs() < 1e-9, "{i} {d}");
         // East of the pole's meridian the field points back toward it.
         let (_, d) = dipole_angles_deg(&e, [0.0, 2000.0], [1000.0, 0.0]);

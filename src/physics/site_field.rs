@@ -34,6 +34,7 @@ use crate::physics::geomagnetic_field::MagneticField;
 use crate::physics::igrf::Igrf;
 use crate::scene::root::Scene;
 use crate::scene::site::SiteField as SiteFieldChoice;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// IGRF at a site's hour over the scene's frame (module doc).
@@ -83,8 +84,8 @@ impl SiteField {
         let b = self.b_scene(self.earth.to_scene(DVec3::new(at[0], at[1], altitude_km)));
         let [east, north, up] = self.earth.local_frame(at[0], at[1]);
         let (be, bn, bu) = (b.dot(east), b.dot(north), b.dot(up));
-        let inc = (-bu).atan2(be.hypot(bn)).to_degrees();
-        (inc, be.atan2(bn).to_degrees())
+        let inc = fmath::atan2(-bu, fmath::hypot(be, bn)).to_degrees();
+        (inc, fmath::atan2(be, bn).to_degrees())
     }
 
     /// The beams' field at the curved frame's point `(x, y, h)`: along B
@@ -144,7 +145,7 @@ mod tests {
         let (igrf, site) = tromso();
         let f = SiteField::new(igrf.clone(), &site, Earth::new(MEAN_RADIUS_KM));
         let x = f.itrs_of(Earth::new(MEAN_RADIUS_KM).to_scene(DVec3::new(0.0, 800.0, 0.0)));
-        let lat = x.z.atan2(x.x.hypot(x.y)).to_degrees();
+        let lat = fmath::atan2(x.z, fmath::hypot(x.x, x.y)).to_degrees();
         // 800 km is 7.2 degrees of arc: the point is near 76.8 N geocentric.
         assert!((lat - (69.65 - 0.19 + 7.19)).abs() < 0.1, "{lat}");
         let (inc, _) = f.angles_deg([0.0, 800.0], 0.0);

@@ -14,6 +14,7 @@
 //! voxel's width, the finest the grid holds.
 
 use crate::grid::Grid;
+use crate::util::fmath;
 use glam::DVec3;
 use std::collections::HashMap;
 
@@ -51,7 +52,7 @@ pub fn brightest_column(grid: &Grid<f32>, z_ref: f64, field: impl Fn(f64, f64) -
 /// The IBC class a brightest 557.7 nm column names (Chamberlain 1961):
 /// its column in R, `1e3 * 10^(class - 1)`.
 pub fn ibc_column_r(class: u32) -> f64 {
-    1e3 * 10f64.powi(class as i32 - 1)
+    1e3 * fmath::powi(10f64, class as i32 - 1)
 }
 
 #[cfg(test)]
@@ -66,7 +67,7 @@ mod tests {
         // every column through it runs 20 v / sin(78) km of it.
         let v = 0.5;
         let mut g = Grid::new("line_5577", 0.0f32, Transform::new(v, DVec3::ZERO));
-        let b = DVec3::new(0.0, (78f64).to_radians().cos(), -(78f64).to_radians().sin());
+        let b = DVec3::new(0.0, fmath::cos((78f64).to_radians()), -fmath::sin((78f64).to_radians()));
         for k in 0..20 {
             let shift = (-(k as f64) * b.y / b.z).round() as i32;
             for i in -30..30 {
@@ -77,7 +78,7 @@ mod tests {
         }
         let map = column_map(&g, 100.0, |_, _| b);
         let mid = map.get(&(0, 0)).copied().unwrap_or(0.0);
-        let want = 20.0 * v / (78f64).to_radians().sin();
+        let want = 20.0 * v / fmath::sin((78f64).to_radians());
         assert!((mid / want - 1.0).abs() < 0.05, "{mid} against {want}");
         assert!((brightest_column(&g, 100.0, |_, _| b) / want - 1.0).abs() < 0.08);
         assert_eq!(ibc_column_r(3), 1e5);

@@ -34,6 +34,7 @@
 //! pulsating aurora with periods of a few s to 20 s, most often 6-10 s.
 
 use crate::scene::AnimationParams;
+use crate::util::fmath;
 use crate::util::rng;
 
 /// Seconds from `animation.time_s` to frame `frame` (frame 1 is at time_s).
@@ -70,8 +71,8 @@ pub fn pulsation(anim: &AnimationParams, seed: u64, x: f64, y: f64) -> f64 {
     let (a, b) = (gx.floor(), gy.floor());
     let (fx, fy) = (gx - a, gy - b);
     let (period, phase) = patch_period_phase(anim, seed, a, b);
-    let s = 0.5 * (1.0 + (std::f64::consts::TAU * anim.time_s / period + phase).sin());
-    let w = ((std::f64::consts::PI * fx).sin() * (std::f64::consts::PI * fy).sin()).powi(2);
+    let s = 0.5 * (1.0 + fmath::sin(std::f64::consts::TAU * anim.time_s / period + phase));
+    let w = fmath::powi(fmath::sin(std::f64::consts::PI * fx) * fmath::sin(std::f64::consts::PI * fy), 2);
     1.0 - anim.pulsation * w * (1.0 - s)
 }
 
@@ -116,11 +117,11 @@ pub fn pulsation_wave(anim: &AnimationParams, seed: u64, x: f64, y: f64) -> Opti
     let (a, b) = (gx.floor(), gy.floor());
     let (fx, fy) = (gx - a, gy - b);
     let (period, phase) = patch_period_phase(anim, seed, a, b);
-    let w = ((std::f64::consts::PI * fx).sin() * (std::f64::consts::PI * fy).sin()).powi(2);
+    let w = fmath::powi(fmath::sin(std::f64::consts::PI * fx) * fmath::sin(std::f64::consts::PI * fy), 2);
     let omega = std::f64::consts::TAU / period;
     let half = 0.5 * anim.pulsation * w;
     let theta = omega * anim.time_s + phase;
-    let (sin_theta, cos_theta) = theta.sin_cos();
+    let (sin_theta, cos_theta) = fmath::sin_cos(theta);
     Some(Wave { mean: 1.0 - half, amplitude: half, omega, theta, sin_theta, cos_theta })
 }
 
@@ -183,7 +184,7 @@ mod tests {
             // The closed form without trigonometry is the response law.
             for tau in [0.9, 30.0] {
                 let (g, lag) = crate::physics::emission::lifetime::response(w.omega, tau);
-                assert!((w.at_lifetime(tau) - (w.mean + w.amplitude * g * (w.theta - lag).sin())).abs() < 1e-12);
+                assert!((w.at_lifetime(tau) - (w.mean + w.amplitude * g * fmath::sin(w.theta - lag))).abs() < 1e-12);
             }
             let period = std::f64::consts::TAU / w.omega;
             assert!((6.0..=9.0).contains(&period));

@@ -43,6 +43,7 @@ use crate::geometry::camera::CameraModel;
 use crate::grid::{offset_to_local, Grid, Leaf, Transform, LEAF_DIM, LEAF_NUM_VALUES};
 use crate::scene::Projection;
 use crate::util::colour::luminance;
+use crate::util::fmath;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -142,7 +143,7 @@ impl Weight<'_> {
 /// not depend on the thread count.
 pub fn leaf_contributions(emission: &Grid<[f32; 3]>, camera: &CameraModel) -> Vec<f64> {
     let tr = emission.transform;
-    let v = tr.voxel_size.powi(3);
+    let v = fmath::powi(tr.voxel_size, 3);
     let w = Weight::new(camera, tr.voxel_size);
     emission
         .leaves()
@@ -330,7 +331,7 @@ mod tests {
         // Off screen (behind the camera): the corner's weight at that distance.
         let behind = DVec3::new(-10.0, 0.0, 0.0);
         let corner = 1.0 / (1.0f64 + 1.0 * 2.0).sqrt();
-        assert!((w.at(behind) * 100.0 * corner.powi(3) - 1.0).abs() < 1e-12);
+        assert!((w.at(behind) * 100.0 * fmath::powi(corner, 3) - 1.0).abs() < 1e-12);
     }
 
     #[test]
@@ -343,7 +344,7 @@ mod tests {
         use rand::Rng;
         for case in 0..200 {
             let n = 1 + case % 37;
-            let c: Vec<f64> = (0..n).map(|_| rng.random::<f64>().powi(3)).collect();
+            let c: Vec<f64> = (0..n).map(|_| fmath::powi(rng.random::<f64>(), 3)).collect();
             let origins: Vec<[i32; 3]> = (0..n).map(|i| [8 * i, 0, 0]).collect();
             let budget = rng.random::<f64>() * 0.3;
             let (keep, frac) = select(&c, &origins, budget);

@@ -41,6 +41,7 @@
 
 use crate::physics::emission::lifetime::A_1D;
 use crate::pipeline::motion::Wave;
+use crate::util::fmath;
 
 /// The longest O(1D) lifetime, unquenched (`1 / A`), s: about 129 s.
 pub const TAU_MAX_S: f64 = 1.0 / A_1D;
@@ -66,7 +67,7 @@ pub fn span_s(n: u32) -> f64 {
 /// cut at the midpoints (module doc). `n = 0`: one sample holding all lags.
 pub fn samples(n: u32) -> Vec<TrailSample> {
     let span = span_s(n);
-    let lag = |k: u32| if n == 0 { 0.0 } else { span * (k as f64 / n as f64).powi(2) };
+    let lag = |k: u32| if n == 0 { 0.0 } else { span * fmath::powi(k as f64 / n as f64, 2) };
     (0..=n)
         .map(|k| TrailSample {
             index: k as usize,
@@ -93,15 +94,15 @@ impl TrailSample {
         if tau_s <= 0.0 {
             return if self.is_now() { wave.map_or(1.0, |w| w.at_lifetime(0.0)) } else { 0.0 };
         }
-        let e_a = (-self.from_s / tau_s).exp();
-        let e_b = if self.to_s.is_finite() { (-self.to_s / tau_s).exp() } else { 0.0 };
+        let e_a = fmath::exp(-self.from_s / tau_s);
+        let e_b = if self.to_s.is_finite() { fmath::exp(-self.to_s / tau_s) } else { 0.0 };
         let Some(w) = wave else { return e_a - e_b };
         let x = w.omega * tau_s;
         let part = |e: f64, s: f64| {
             if e == 0.0 {
                 return 0.0;
             }
-            let (sin, cos) = (w.theta + w.omega * (self.lag_s - s)).sin_cos();
+            let (sin, cos) = fmath::sin_cos(w.theta + w.omega * (self.lag_s - s));
             e * (sin - x * cos)
         };
         w.mean * (e_a - e_b) + w.amplitude * (part(e_a, self.from_s) - part(e_b, self.to_s)) / (1.0 + x * x)
@@ -113,7 +114,7 @@ mod tests {
     use super::*;
 
     fn wave_at(theta: f64, omega: f64) -> Wave {
-        let (sin_theta, cos_theta) = theta.sin_cos();
+        let (sin_theta, cos_theta) = fmath::sin_cos(theta);
         Wave { mean: 0.7, amplitude: 0.3, omega, theta, sin_theta, cos_theta }
     }
 
@@ -172,8 +173,8 @@ mod tests {
         let t = 17.0;
         for tau in [1.5, 10.0, 40.0, 100.0] {
             let x = nu * tau;
-            let exact = ((nu * t).cos() + x * (nu * t).sin()) / (1.0 + x * x);
-            let err = |n: u32| (samples(n).iter().map(|s| s.weight(tau, None) * (nu * (t - s.lag_s)).cos()).sum::<f64>() - exact).abs();
+            let exact = (fmath::cos(nu * t) + x * fmath::sin(nu * t)) / (1.0 + x * x);
+            let err = |n: u32| (samples(n).iter().map(|s| s.weight(tau, None) * fmath::cos(nu * (t - s.lag_s))).sum::<f64>() - exact).abs();
             let (e2, e8, e16) = (err(2), err(8), err(16));
             assert!(e16 < e2, "{tau}: {e2} {e8} {e16}");
             assert!(e16 < 0.06, "{tau}: {e16}");

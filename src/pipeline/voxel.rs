@@ -9,6 +9,7 @@ use crate::grid::Transform;
 use crate::pipeline::deposit::Photon;
 use crate::pipeline::footprint::Footprint;
 use crate::scene::{KernelRadius, Scene, VoxelSize};
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The voxel size in km and where it came from. `"auto"` asks the camera:
@@ -98,7 +99,7 @@ pub fn auto_voxel_size_of(kernel: KernelRadius, camera: Option<&CameraModel>, mu
     // warn about its own choice.
     let ceiling = 2.0 * kernel.min_km;
     if raw > ceiling && ceiling >= floor {
-        let p = 10f64.powi(2 - ceiling.abs().log10().floor() as i32);
+        let p = fmath::powi(10f64, 2 - fmath::log10(ceiling.abs()).floor() as i32);
         return ((ceiling * p).floor() / p, format!("{why}, lowered to twice the smallest kernel radius"));
     }
     let v = raw.max(floor);
@@ -110,7 +111,7 @@ fn round_sig(x: f64, digits: i32) -> f64 {
     if x == 0.0 || !x.is_finite() {
         return x;
     }
-    let p = 10f64.powi(digits - 1 - x.abs().log10().floor() as i32);
+    let p = fmath::powi(10f64, digits - 1 - fmath::log10(x.abs()).floor() as i32);
     (x * p).round() / p
 }
 

@@ -9,6 +9,7 @@ use super::image::Image;
 use super::integrator::{render, render_prepared, Counters, PixelState, TILE};
 use super::prepared::Prepared;
 use super::settings::{RenderError, RenderSettings, Volume};
+use crate::util::fmath;
 use crate::util::progress::Progress;
 use rayon::prelude::*;
 use std::time::Instant;
@@ -127,7 +128,7 @@ fn adaptive_pairs(states: &[PixelState], pairs_per_pixel: usize) -> Vec<usize> {
     let stats: Vec<(f64, f64)> = states.iter().map(PixelState::mean_and_pair_sd).collect();
     let peak = stats.iter().fold(0.0f64, |a, s| a.max(s.0));
     let floor = (ADAPTIVE_FLOOR * peak).max(f64::MIN_POSITIVE);
-    let mut weights: Vec<f64> = stats.iter().map(|&(m, sd)| (sd / m.max(floor)).powf(2.0 / 3.0)).collect();
+    let mut weights: Vec<f64> = stats.iter().map(|&(m, sd)| fmath::powf(sd / m.max(floor), 2.0 / 3.0)).collect();
     let mut total: f64 = weights.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
         weights.fill(1.0);

@@ -50,6 +50,7 @@
 //! (0.8, 0.3177), (0.18, 0.9), (0.065, -0.0805), D65.
 
 use crate::util::colour::{apply, inverse, mul, rgb_to_xyz, srgb_oetf, M3, REC2020, REC709};
+use crate::util::fmath;
 use std::sync::OnceLock;
 
 /// FilmLight E-Gamut primaries, D65 white.
@@ -137,7 +138,7 @@ fn guard_rail_709(c: [f64; 3], to2020: &M3) -> [f64; 3] {
         let comp = opponent_brightness(v, y);
         // A negative Y has no 0.08th power: the compensation alone (the
         // generator's NaN weight, taken as weight 0).
-        let w = if yv >= 0.0 { yv.powf(0.08).clamp(0.0, 1.0) } else { 0.0 };
+        let w = if yv >= 0.0 { fmath::powf(yv, 0.08).clamp(0.0, 1.0) } else { 0.0 };
         (1.0 - w) * comp + w * yv
     };
     let before = limited(c);
@@ -183,11 +184,11 @@ fn hsv_to_rgb([h, s, v]: [f64; 3]) -> [f64; 3] {
 /// +6.5 stops), returning the 2.4-power display encoding.
 pub fn sigmoid(x: f64) -> f64 {
     let x_p = STOPS_BELOW / (STOPS_BELOW + STOPS_ABOVE);
-    let y_p = GREY.powf(1.0 / GAMMA);
-    let scale = |dx: f64, dy: f64| SLOPE * dx / ((SLOPE * dx / dy).powf(POWER) - 1.0).powf(1.0 / POWER);
+    let y_p = fmath::powf(GREY, 1.0 / GAMMA);
+    let scale = |dx: f64, dy: f64| SLOPE * dx / fmath::powf(fmath::powf(SLOPE * dx / dy, POWER) - 1.0, 1.0 / POWER);
     let s = if x < x_p { scale(x_p, y_p) } else { scale(1.0 - x_p, 1.0 - y_p) };
     let t = SLOPE * (x - x_p) / s;
-    y_p + s * t / (1.0 + t.abs().powf(POWER)).powf(1.0 / POWER)
+    y_p + s * t / fmath::powf(1.0 + fmath::powf(t.abs(), POWER), 1.0 / POWER)
 }
 
 /// AgX as Blender's LUT holds it: Rec.2020 (any sign) to 2.4-encoded
@@ -196,12 +197,12 @@ fn formed(c2020: [f64; 3], to709: &M3, to2020_from_709: &M3, outset: &M3) -> [f6
     let c = apply(&INSET, guard_rail_2020(c2020));
     let hue_before = rgb_to_hsv(c)[0];
     let y = c.map(|v| {
-        let x = (v.log2() - LOG2_MIN) / (LOG2_MAX - LOG2_MIN);
+        let x = (fmath::log2(v) - LOG2_MIN) / (LOG2_MAX - LOG2_MIN);
         // Below -10 stops (and at 0) the curve has no value: black, as the
         // generator's NaN nodes are written as 0.
         let e = sigmoid(x);
         if x.is_finite() && e > 0.0 {
-            e.powf(GAMMA)
+            fmath::powf(e, GAMMA)
         } else {
             0.0
         }
@@ -209,7 +210,7 @@ fn formed(c2020: [f64; 3], to709: &M3, to2020_from_709: &M3, outset: &M3) -> [f6
     let [hue_after, s, v] = rgb_to_hsv(y);
     let h = (1.0 - HUE_MIX) * hue_before + HUE_MIX * hue_after;
     let c = apply(to709, apply(outset, hsv_to_rgb([h, s, v])));
-    guard_rail_709(c, to2020_from_709).map(|v| if v > 0.0 { v.powf(1.0 / GAMMA).min(1.0) } else { 0.0 })
+    guard_rail_709(c, to2020_from_709).map(|v| if v > 0.0 { fmath::powf(v, 1.0 / GAMMA).min(1.0) } else { 0.0 })
 }
 
 /// A `size`^3 LUT (red slowest, blue fastest) whose nodes are computed
@@ -289,7 +290,7 @@ impl Agx {
         let e_to2020 = mul(&inverse(&xyz2020), &xyz_e);
         let outset = inverse(&OUTSET_INV);
         let n = LUT_SIZE;
-        let node = move |i: usize| (LUT_LOG2_MIN + (LUT_LOG2_MAX - LUT_LOG2_MIN) * i as f64 / (n - 1) as f64).exp2();
+        let node = move |i: usize| fmath::exp2(LUT_LOG2_MIN + (LUT_LOG2_MAX - LUT_LOG2_MIN) * i as f64 / (n - 1) as f64);
         let lut = LazyLut::new(n, move |rgb| {
             let c = apply(&e_to2020, rgb.map(node));
             formed(c, &to709, &to2020_from_709, &outset).map(|v| v as f32)
@@ -302,8 +303,8 @@ impl Agx {
         let e = apply(&self.to_e_gamut, linear);
         let span = LUT_LOG2_MAX - LUT_LOG2_MIN;
         // Non-positive components sit at the LUT's floor (log2 of 0 is -inf).
-        let p = e.map(|v| if v > 0.0 { (v.log2() - LUT_LOG2_MIN) / span } else { 0.0 });
-        tetrahedral(&self.lut, p).map(|v| srgb_oetf(v.max(0.0).powf(GAMMA).min(1.0)))
+        let p = e.map(|v| if v > 0.0 { (fmath::log2(v) - LUT_LOG2_MIN) / span } else { 0.0 });
+        tetrahedral(&self.lut, p).map(|v| srgb_oetf(fmath::powf(v.max(0.0), GAMMA).min(1.0)))
     }
 }
 
@@ -313,8 +314,8 @@ mod tests {
 
     #[test]
     fn the_log_range_is_ten_stops_below_and_six_and_a_half_above_middle_grey() {
-        assert!((LOG2_MIN - (GREY.log2() - 10.0)).abs() < 1e-12);
-        assert!((LOG2_MAX - (GREY.log2() + 6.5)).abs() < 1e-12);
+        assert!((LOG2_MIN - (fmath::log2(GREY) - 10.0)).abs() < 1e-12);
+        assert!((LOG2_MAX - (fmath::log2(GREY) + 6.5)).abs() < 1e-12);
         // Blender's published numbers (to their 7 digits).
         assert!((LOG2_MIN + 12.47393).abs() < 1e-5 && (LOG2_MAX - 4.026069).abs() < 1e-6);
     }
@@ -324,7 +325,7 @@ mod tests {
         let x_p = 10.0 / 16.5;
         assert!(sigmoid(0.0).abs() < 1e-12);
         assert!((sigmoid(1.0) - 1.0).abs() < 1e-12);
-        assert!((sigmoid(x_p) - GREY.powf(1.0 / 2.4)).abs() < 1e-12);
+        assert!((sigmoid(x_p) - fmath::powf(GREY, 1.0 / 2.4)).abs() < 1e-12);
         let h = 1e-6;
         assert!(((sigmoid(x_p + h) - sigmoid(x_p - h)) / (2.0 * h) - 2.4).abs() < 1e-4);
         let mut last = -1.0;
@@ -343,14 +344,14 @@ mod tests {
         let to2020 = inverse(&to709);
         let f = formed([GREY; 3], &to709, &to2020, &inverse(&OUTSET_INV));
         for v in f {
-            assert!((v.powf(2.4) - GREY).abs() < 1e-9, "{f:?}");
+            assert!((fmath::powf(v, 2.4) - GREY).abs() < 1e-9, "{f:?}");
         }
         let d = Agx::get().display([GREY; 3]);
         for v in d {
             assert!((v - srgb_oetf(GREY)).abs() < 2e-3, "{d:?}");
         }
         for stops in [-8.0, -3.0, 0.0, 2.0, 5.0] {
-            let d = Agx::get().display([GREY * f64::exp2(stops); 3]);
+            let d = Agx::get().display([GREY * fmath::exp2(stops); 3]);
             assert!((d[0] - d[1]).abs() < 1e-4 && (d[1] - d[2]).abs() < 1e-4, "{stops}: {d:?}");
         }
     }
@@ -360,7 +361,7 @@ mod tests {
         // Black sits at the LUT's floor node, 2^-12.47 below middle grey's log range: code value 0.
         assert!(Agx::get().display([0.0; 3]).iter().all(|&v| v < 1e-6));
         // +6.5 stops above middle grey is the top of the curve: white.
-        let w = Agx::get().display([GREY * 2f64.powf(6.5); 3]);
+        let w = Agx::get().display([GREY * fmath::powf(2f64, 6.5); 3]);
         assert!(w.iter().all(|&v| v > 0.99), "{w:?}");
         // A very bright pure green goes toward white, keeping green ahead.
         let g = Agx::get().display([0.0, 50.0, 0.0]);

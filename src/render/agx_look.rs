@@ -36,6 +36,7 @@
 use super::agx::{guard_rail_2020, tetrahedral, LazyLut, E_GAMUT, INSET, LUT_LOG2_MAX, LUT_LOG2_MIN};
 use crate::scene::ViewTransform;
 use crate::util::colour::{apply, inverse, mul, rgb_to_xyz, M3, REC2020, REC709};
+use crate::util::fmath;
 use std::sync::OnceLock;
 
 /// Nodes per side of the luminance compensation LUT.
@@ -92,7 +93,7 @@ impl Grade {
                 let y = x.map(|v| shadows(v, per_channel, start, pivot));
                 let y = y.map(|v| shadows(v, master, start, pivot));
                 // CDL without clamping: a power of the positive values.
-                y.map(|v| if v > 0.0 { v.powf(PUNCHY_POWER) } else { v })
+                y.map(|v| if v > 0.0 { fmath::powf(v, PUNCHY_POWER) } else { v })
             }
             Grade::Greyscale => {
                 let lin = x.map(from_log);
@@ -128,11 +129,11 @@ fn shadows(t: f64, val: f64, start: f64, pivot: f64) -> f64 {
 /// The config's `lg2` allocation, `[LUT_LOG2_MIN, LUT_LOG2_MAX]` to [0, 1];
 /// OpenColorIO takes the logarithm of at least the smallest normal float.
 fn to_log(v: f64) -> f64 {
-    (v.max(f32::MIN_POSITIVE as f64).log2() - LUT_LOG2_MIN) / (LUT_LOG2_MAX - LUT_LOG2_MIN)
+    (fmath::log2(v.max(f32::MIN_POSITIVE as f64)) - LUT_LOG2_MIN) / (LUT_LOG2_MAX - LUT_LOG2_MIN)
 }
 
 fn from_log(x: f64) -> f64 {
-    (LUT_LOG2_MIN + x * (LUT_LOG2_MAX - LUT_LOG2_MIN)).exp2()
+    fmath::exp2(LUT_LOG2_MIN + x * (LUT_LOG2_MAX - LUT_LOG2_MIN))
 }
 
 /// The matrices and the luminance compensation LUT the looks share.
@@ -221,7 +222,7 @@ mod tests {
         let m = graded(g, [0.18; 3]);
         assert!(m.iter().all(|v| (v / 0.18 - 1.0).abs() < 1e-3), "{m:?}");
         let b = graded(g, [0.36; 3]);
-        assert!(b.iter().all(|v| ((v / 0.18).log2() - 1.4).abs() < 1e-3), "{b:?}");
+        assert!(b.iter().all(|v| (fmath::log2(v / 0.18) - 1.4).abs() < 1e-3), "{b:?}");
         let grey = graded(Grade::Greyscale, [0.5, 0.1, 0.02]);
         assert!((grey[0] - grey[1]).abs() < 1e-9 * grey[1] && (grey[1] - grey[2]).abs() < 1e-9 * grey[1], "{grey:?}");
     }

@@ -32,6 +32,7 @@ use crate::physics::airglow::{key_r, o2_b_depth, slant_factor, CONTINUUM_LAYER, 
 use crate::physics::emission::line_colour::{line_rgb, photon_rgb_unclipped};
 use crate::physics::night_sky::broadband::{continuum_r_per_nm, starlight_r_per_nm, zodiacal_r_per_nm};
 use crate::scene::{AirglowParams, SkyParams};
+use crate::util::fmath;
 use crate::util::observer::Observer;
 use glam::DVec3;
 
@@ -96,7 +97,7 @@ impl Broadband {
     fn radiance(&self, space: f64, layer: f64, x: f64) -> [f64; 3] {
         let mut rgb = [0.0; 3];
         for &(c, tau, outside, cont) in &self.nm {
-            let w = (space * outside + layer * cont) * (-tau * x).exp() * KR_PER_R;
+            let w = (space * outside + layer * cont) * fmath::exp(-tau * x) * KR_PER_R;
             for k in 0..3 {
                 rgb[k] += w * c[k];
             }
@@ -136,12 +137,12 @@ impl Airglow {
         let table = (0..n)
             .map(|i| {
                 let e = -90.0 + i as f64 * STEP_DEG;
-                let mu = e.to_radians().sin();
+                let mu = fmath::sin(e.to_radians());
                 let x = air_mass(e);
                 let f: Vec<f64> = LAYERS.iter().map(|l| slant_factor(l, shells_km, altitude, mu)).collect();
                 let mut rgb = [0.0; 3];
                 for l in &lines {
-                    let t = f[l.layer] * (-l.tau * x).exp();
+                    let t = f[l.layer] * fmath::exp(-l.tau * x);
                     for c in 0..3 {
                         rgb[c] += l.rgb_kr[c] * t;
                     }
@@ -164,7 +165,7 @@ impl Airglow {
 
     /// Radiance along `dir` (unit), linear between the table's elevations.
     pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
-        let e = self.up.dot(dir).clamp(-1.0, 1.0).asin().to_degrees();
+        let e = fmath::asin(self.up.dot(dir).clamp(-1.0, 1.0)).to_degrees();
         let x = ((e + 90.0) / STEP_DEG).clamp(0.0, (self.table.len() - 1) as f64);
         let i = (x.floor() as usize).min(self.table.len() - 2);
         let f = x - i as f64;

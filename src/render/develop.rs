@@ -28,6 +28,7 @@
 use super::image::Image;
 use crate::scene::{ColourParams, Observer, RenderParams};
 use crate::util::colour::luminance;
+use crate::util::fmath;
 use crate::util::white_balance::{apply, camera_white_balance};
 
 /// The luminance percentile the meter reads (module doc).
@@ -118,7 +119,7 @@ pub fn meter(image: &Image) -> f64 {
     if lp <= 0.0 {
         return 0.0;
     }
-    (METER_TARGET / lp).log2().clamp(-50.0, 50.0)
+    fmath::log2(METER_TARGET / lp).clamp(-50.0, 50.0)
 }
 
 #[cfg(test)]
@@ -140,10 +141,10 @@ mod tests {
             // 1 % of the frame at 4.0 in the centre, the rest 0.01.
             let img = image(w, h, |x, y| if x * 10 / w == 5 && y * 10 / h == 5 { 4.0 } else { 0.01 });
             let ev = meter(&img);
-            assert!((ev - (METER_TARGET / 4.0).log2()).abs() < 1e-9, "{w}x{h}: {ev}");
+            assert!((ev - fmath::log2(METER_TARGET / 4.0)).abs() < 1e-9, "{w}x{h}: {ev}");
         }
         let stars = image(200, 100, |x, y| if (x * 7 + y * 13) % 997 == 0 { 100.0 } else { 0.02 });
-        assert!((meter(&stars) - (METER_TARGET / 0.02).log2()).abs() < 1e-6, "{}", meter(&stars));
+        assert!((meter(&stars) - fmath::log2(METER_TARGET / 0.02)).abs() < 1e-6, "{}", meter(&stars));
         assert_eq!(meter(&image(10, 10, |_, _| 0.0)), 0.0);
     }
 }

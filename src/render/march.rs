@@ -28,6 +28,7 @@ use super::medium::velocity::Velocity;
 use super::medium::{field::Field, Channel, Medium};
 use super::segment::{Accum, Along, Piece, TAU_CUTOFF};
 use super::settings::Integration;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The result of integrating along one ray.
@@ -44,7 +45,7 @@ pub struct RayIntegral {
 impl RayIntegral {
     /// Transmittance `T = exp(-tau)`.
     pub fn transmittance(&self) -> f64 {
-        (-self.tau).exp()
+        fmath::exp(-self.tau)
     }
 }
 
@@ -390,8 +391,8 @@ fn walk_fixed(medium: &Medium, seg: RaySpan, h: f64, offset: f64, with_emission:
 /// then adds sigma dt to the depth. One place for the fixed-step and the
 /// advected march.
 fn emit_step(acc: &mut Accum, sigma: f64, e: [f64; 3], dt: f64) {
-    let t = (-acc.tau).exp();
-    let w = if sigma > 0.0 { (1.0 - (-sigma * dt).exp()) / sigma } else { dt };
+    let t = fmath::exp(-acc.tau);
+    let w = if sigma > 0.0 { (1.0 - fmath::exp(-sigma * dt)) / sigma } else { dt };
     for c in 0..3 {
         acc.l[c] += t * e[c] * w;
     }

@@ -39,6 +39,7 @@
 
 use super::stars::spectrum_rgb;
 use crate::geometry::camera::CameraModel;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// Subsamples per pixel side on the disc's edge.
@@ -87,9 +88,9 @@ impl MoonSky {
         use crate::physics::night_sky::{moonlight, star_colour};
         let t = star_colour::temperature_k(MOON_B_MINUS_V);
         let colour = spectrum_rgb(observer, |l| super::stars::planck(l, t));
-        let sky_colour = spectrum_rgb(observer, |l| super::stars::planck(l, t) * (550.0 / l).powi(4));
+        let sky_colour = spectrum_rgb(observer, |l| super::stars::planck(l, t) * fmath::powi(550.0 / l, 4));
         // K&S's irradiance is at the mean distance: the inverse square law.
-        let e = moonlight::moon_irradiance_kr_sr(phase_angle_deg) * (moonlight::MOON_MEAN_DISTANCE_KM / distance_km).powi(2);
+        let e = moonlight::moon_irradiance_kr_sr(phase_angle_deg) * fmath::powi(moonlight::MOON_MEAN_DISTANCE_KM / distance_km, 2);
         MoonSky {
             dir: dir.normalize(),
             bright_limb: bright_limb.normalize(),
@@ -110,11 +111,11 @@ impl MoonSky {
             return [0.0; 3];
         }
         use crate::physics::night_sky::moonlight::{moon_sky_radiance_kr, MoonSky as Geometry, MIN_SEPARATION_DEG};
-        let rho = d.dot(self.dir).clamp(-1.0, 1.0).acos().to_degrees();
+        let rho = fmath::acos(d.dot(self.dir).clamp(-1.0, 1.0)).to_degrees();
         let sky = Geometry {
             phase_angle_deg: self.phase_angle_deg.clamp(0.0, 180.0),
-            moon_zenith_deg: self.dir.z.clamp(0.0, 1.0).acos().to_degrees(),
-            sky_zenith_deg: d.z.clamp(0.0, 1.0).acos().to_degrees(),
+            moon_zenith_deg: fmath::acos(self.dir.z.clamp(0.0, 1.0)).to_degrees(),
+            sky_zenith_deg: fmath::acos(d.z.clamp(0.0, 1.0)).to_degrees(),
             // The fit holds from 10 degrees out; nearer, its value there.
             separation_deg: rho.max(MIN_SEPARATION_DEG),
             extinction_v_mag: self.k_v,
@@ -132,7 +133,7 @@ impl MoonSky {
 
     /// Whether the point of the sky `d` (unit) is on the Moon's lit part.
     fn lit(&self, d: DVec3) -> bool {
-        let s = self.radius_rad.sin();
+        let s = fmath::sin(self.radius_rad);
         let along = d.dot(self.dir);
         if along <= 0.0 {
             return false;
@@ -146,7 +147,7 @@ impl MoonSky {
             return false;
         }
         let a = self.phase_angle_deg.to_radians();
-        x * a.sin() + (1.0 - r2).sqrt() * a.cos() > 0.0
+        x * fmath::sin(a) + (1.0 - r2).sqrt() * fmath::cos(a) > 0.0
     }
 
     /// The lit part's share of the disc's solid angle (for the radiance of
@@ -164,7 +165,7 @@ impl MoonSky {
                     continue;
                 }
                 all += 1;
-                if x * a.sin() + (1.0 - r2).sqrt() * a.cos() > 0.0 {
+                if x * fmath::sin(a) + (1.0 - r2).sqrt() * fmath::cos(a) > 0.0 {
                     lit += 1;
                 }
             }
@@ -180,7 +181,7 @@ impl MoonSky {
         }
         let Some(t) = transmittance(self.dir) else { return };
         let Some((fx, fy)) = camera.project(camera.position + self.dir) else { return };
-        let disc_sr = 2.0 * std::f64::consts::PI * (1.0 - self.radius_rad.cos());
+        let disc_sr = 2.0 * std::f64::consts::PI * (1.0 - fmath::cos(self.radius_rad));
         let share = self.lit_share();
         if share <= 0.0 {
             return;
@@ -188,9 +189,9 @@ impl MoonSky {
         // Radiance of the lit part: E over the lit solid angle.
         let radiance = self.irradiance.map(|e| e / (disc_sr * share));
         // The disc's reach in pixels: the distance to a point on its rim.
-        let rim = (self.dir * self.radius_rad.cos() + self.bright_limb * self.radius_rad.sin()).normalize();
+        let rim = (self.dir * fmath::cos(self.radius_rad) + self.bright_limb * fmath::sin(self.radius_rad)).normalize();
         let reach = match camera.project(camera.position + rim) {
-            Some((rx, ry)) => ((rx - fx).hypot(ry - fy)).ceil() as i64 + 2,
+            Some((rx, ry)) => (fmath::hypot(rx - fx, ry - fy)).ceil() as i64 + 2,
             None => return,
         };
         let (w, h) = (camera.width as i64, camera.height as i64);
@@ -230,7 +231,16 @@ mod tests {
 
     fn moon(phase: f64, dir: DVec3) -> MoonSky {
         let limb = dir.cross(DVec3::Z).normalize();
-        MoonSky::new(dir, limb, 0.259f64.to_radians(), phase, (1.0 + phase.to_radians().cos()) / 2.0, 384_400.0, 0.15, Observer::Camera)
+        MoonSky::new(
+            dir,
+            limb,
+            0.259f64.to_radians(),
+            phase,
+            (1.0 + fmath::cos(phase.to_radians())) / 2.0,
+            384_400.0,
+            0.15,
+            Observer::Camera,
+        )
     }
 
     /// The drawn disc keeps the Moon's irradiance (the sum of radiance
@@ -243,7 +253,7 @@ mod tests {
         for phase in [0.0, 60.0, 90.0, 130.0] {
             let m = moon(phase, dir);
             let k = m.lit_share();
-            assert!((k - (1.0 + phase.to_radians().cos()) / 2.0).abs() < 0.01, "{phase}: {k}");
+            assert!((k - (1.0 + fmath::cos(phase.to_radians())) / 2.0).abs() < 0.01, "{phase}: {k}");
             for (w, fov) in [(400, 3.0), (1200, 10.0)] {
                 let cam = Camera {
                     position: [0.0; 3],

@@ -35,6 +35,8 @@
 //! the Bernstein bound of sigma_t alone measured 1.8e-10, and 4-point
 //! Gauss-Legendre 1e-6.
 
+use crate::util::fmath;
+
 /// Optical depth above which a ray stops (transmittance `exp(-40) = 4e-18`):
 /// what lies behind contributes less than `4e-18` times its unattenuated radiance.
 pub const TAU_CUTOFF: f64 = 40.0;
@@ -297,7 +299,7 @@ impl Accum {
         if has_e {
             if p.sigma_t.is_zero() {
                 // T is constant on the piece: the integral of the cubic is exact.
-                let t = (-self.tau).exp();
+                let t = fmath::exp(-self.tau);
                 for k in 0..3 {
                     self.l[k] += t * len * p.e[k].integral();
                 }
@@ -324,7 +326,7 @@ impl Accum {
             let pa = big_p(sa);
             // T at the part's start; inside the part T = T_a exp(-K) with
             // K = len (P(s) - P(sa)) in [0, KAPPA_MAX] (module doc): [`exp_neg_small`].
-            let ta = (-(self.tau + len * pa)).exp();
+            let ta = fmath::exp(-(self.tau + len * pa));
             part_scalar(&q, &p.e, [sa, h, len, pa, ta], &mut l);
             self.parts += 1;
             // Everything further along is attenuated below exp(-TAU_CUTOFF).
@@ -398,7 +400,7 @@ pub fn exp_neg_small6(x: [f64; 6]) -> [f64; 6] {
 #[inline]
 pub fn exp_neg_small(x: f64) -> f64 {
     if !(0.0..=0.5).contains(&x) {
-        return (-x).exp();
+        return fmath::exp(-x);
     }
     let y = 0.25 - x;
     let c = &INV_FACTORIAL;
@@ -428,14 +430,14 @@ mod tests {
         // int_0^1 s^k ds = 1/(k+1) for k <= 11, to rounding (the printed
         // 16-digit nodes and weights: a few 1e-16).
         for k in 0..=11 {
-            let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * x.powi(k)).sum();
+            let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(*x, k)).sum();
             assert!((q - 1.0 / (k + 1) as f64).abs() < 2e-15, "degree {k}: {q}");
         }
         // Degree 12 is not exact: for s^12 the error is exactly
         // (n!)^4 / ((2n+1) ((2n)!)^3) times 12! (A&S 25.4.30 on [0, 1],
         // f^(12) = 12! everywhere), 9.0e-8.
-        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * x.powi(12)).sum();
-        let c = (720f64).powi(4) / (13.0 * 479001600f64.powi(3)) * 479001600.0;
+        let q: f64 = GL_NODES.iter().zip(GL_WEIGHTS).map(|(x, w)| w * fmath::powi(*x, 12)).sum();
+        let c = fmath::powi(720f64, 4) / (13.0 * fmath::powi(479001600f64, 3)) * 479001600.0;
         assert!(((1.0 / 13.0 - q) / c - 1.0).abs() < 1e-6, "{} vs {c}", 1.0 / 13.0 - q);
         // Nodes ascending, symmetric about 1/2; weights symmetric and positive.
         for i in 0..6 {
@@ -537,7 +539,7 @@ mod tests {
     /// `exp(-tau0) e (1 - exp(-sigma len)) / sigma` (the formal solution of
     /// the transfer equation, e.g. Chandrasekhar 1960 ch. I).
     fn slab(tau0: f64, sigma: f64, len: f64, e: f64) -> f64 {
-        (-tau0).exp() * e * -(-sigma * len).exp_m1() / sigma
+        fmath::exp(-tau0) * e * -fmath::exp_m1(-sigma * len) / sigma
     }
 
     #[test]
@@ -567,7 +569,7 @@ mod tests {
         let e = Cubic([0.5, 1.0, -0.3, 0.2]);
         let mut a = Accum { tau: 0.8, ..Default::default() };
         a.add(&piece(3.0, Cubic::ZERO, [Cubic::ZERO, e, Cubic::ZERO]), true);
-        let want = (-0.8f64).exp() * 3.0 * (0.5 + 0.5 - 0.1 + 0.05);
+        let want = fmath::exp(-0.8f64) * 3.0 * (0.5 + 0.5 - 0.1 + 0.05);
         assert!((a.l[1] - want).abs() < 1e-14, "{} vs {want}", a.l[1]);
         assert_eq!((a.l[0], a.l[2], a.tau, a.parts), (0.0, 0.0, 0.8, 1));
     }
@@ -602,7 +604,7 @@ mod tests {
     fn simpson(tau0: f64, len: f64, sigma: Cubic, e: Cubic) -> f64 {
         let n = 20000;
         let h = 1.0 / n as f64;
-        let g = |s: f64| (-(tau0 + len * sigma.antiderivative(s))).exp() * e.eval(s);
+        let g = |s: f64| fmath::exp(-(tau0 + len * sigma.antiderivative(s))) * e.eval(s);
         let mut sum = g(0.0) + g(1.0);
         for i in 1..n {
             sum += if i % 2 == 1 { 4.0 } else { 2.0 } * g(i as f64 * h);
@@ -644,12 +646,12 @@ mod tests {
     /// documented 9.9e-15 truncation plus rounding) and equal to libm outside.
     #[test]
     fn exp_neg_small_matches_libm() {
-        assert_eq!(EXP_NEG_QUARTER, (-0.25f64).exp());
+        assert_eq!(EXP_NEG_QUARTER, fmath::exp(-0.25f64));
         let n = 200_000;
         let mut worst = 0.0f64;
         for i in 0..=n {
             let x = 0.5 * i as f64 / n as f64;
-            let r = (exp_neg_small(x) / (-x).exp() - 1.0).abs();
+            let r = (exp_neg_small(x) / fmath::exp(-x) - 1.0).abs();
             worst = worst.max(r);
         }
         assert!(worst < 2e-14, "worst relative error {worst:e}");
@@ -660,7 +662,7 @@ mod tests {
         assert_eq!(exp_neg_small6(mixed), mixed.map(exp_neg_small));
         // Outside [0, 1/2]: libm's value itself.
         for x in [-1e-17, -0.3, 0.5000001, 3.0, 40.0] {
-            assert_eq!(exp_neg_small(x), (-x).exp(), "{x}");
+            assert_eq!(exp_neg_small(x), fmath::exp(-x), "{x}");
         }
     }
 }

@@ -54,6 +54,7 @@ use super::settings::Integration;
 use super::terrain::TerrainModel;
 use crate::grid::{offset_to_local, Grid, Transform, LEAF_DIM, LEAF_MASK_WORDS, LEAF_NUM_VALUES};
 use crate::util::colour::luminance;
+use crate::util::fmath;
 use glam::{DVec3, IVec3};
 use rand::Rng;
 
@@ -396,7 +397,7 @@ pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(medium: &Medium, x: DVec3, 
     let ray = leaves.ray;
     let mut t = 1.0;
     // Distance to the next tentative collision, in occupied length.
-    let mut gap = -(1.0 - rng.random::<f64>()).ln() / mu;
+    let mut gap = -fmath::ln(1.0 - rng.random::<f64>()) / mu;
     for span in leaves {
         let mut pos = span.t0;
         while gap < span.t1 - pos {
@@ -406,7 +407,7 @@ pub fn transmittance_ratio_tracking<R: Rng + ?Sized>(medium: &Medium, x: DVec3, 
             if !(t > 0.0) {
                 return 0.0;
             }
-            gap = -(1.0 - rng.random::<f64>()).ln() / mu;
+            gap = -fmath::ln(1.0 - rng.random::<f64>()) / mu;
         }
         gap -= span.t1 - pos;
     }

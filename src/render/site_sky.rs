@@ -27,6 +27,7 @@ use super::stars::{spectrum_rgb, Star, MAG0_KR_SR};
 use crate::geometry::astronomy::{frame::SkyFrame, moon::moon_view, refraction, site::Site, sun::sun_enu, time::Utc};
 use crate::physics::night_sky::{catalogue, star_colour};
 use crate::scene::SiteParams;
+use crate::util::fmath;
 use crate::util::observer::Observer;
 
 /// The Sun's elevation above which a scene is warned: nautical twilight.
@@ -61,7 +62,7 @@ impl SiteHour {
     pub fn sun_elevation_deg(&self) -> f64 {
         let f = self.frame();
         let d = refraction::refract(sun_enu(&f), &self.air);
-        d.z.clamp(-1.0, 1.0).asin().to_degrees()
+        fmath::asin(d.z.clamp(-1.0, 1.0)).to_degrees()
     }
 
     /// The warning for a Sun above [`TWILIGHT_SUN_DEG`], if any.
@@ -95,7 +96,7 @@ pub fn site_stars(hour: &SiteHour, limiting_magnitude: f64, brightness: f64, obs
                 let t = star_colour::temperature_k(key as f64 / 100.0);
                 (spectrum_rgb(observer, |l| super::stars::planck(l, t)), t)
             });
-            let e = brightness * MAG0_KR_SR * 10f64.powf(-0.4 * s.v_mag);
+            let e = brightness * MAG0_KR_SR * fmath::powf(10f64, -0.4 * s.v_mag);
             Star { dir, magnitude: s.v_mag, irradiance: colour.map(|c| c * e), temperature_k: t }
         })
         .collect();
@@ -115,7 +116,7 @@ pub fn site_moon(hour: &SiteHour, k_v: f64, observer: Observer) -> Option<MoonSk
     let m = moon_view(&hour.frame());
     let dir = refraction::refract(m.enu, &hour.air);
     let r = m.angular_radius_deg.to_radians();
-    if dir.z < -r.sin() {
+    if dir.z < -fmath::sin(r) {
         return None;
     }
     Some(MoonSky::new(dir, m.bright_limb_enu, r, m.phase_angle_deg, m.illuminated_fraction, m.distance_km, k_v, observer))
@@ -151,12 +152,12 @@ mod tests {
         assert_eq!(sa.len(), sb.len());
         assert!(sa.len() > 150, "{}", sa.len());
         let lat = 69.65f64.to_radians();
-        let pole = DVec3::new(0.0, lat.cos(), lat.sin());
+        let pole = DVec3::new(0.0, fmath::cos(lat), fmath::sin(lat));
         let east = DVec3::Z.cross(pole).normalize();
         let north_of_pole = pole.cross(east);
         let angle = |d: DVec3| {
             let p = d - pole * d.dot(pole);
-            p.dot(east).atan2(p.dot(north_of_pole)).to_degrees()
+            fmath::atan2(p.dot(east), p.dot(north_of_pole)).to_degrees()
         };
         for (x, y) in sa.iter().zip(&sb).filter(|(x, _)| x.dir.dot(pole).abs() < 0.9) {
             // Westward: the angle from the pole's meridian grows with the hour.

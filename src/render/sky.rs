@@ -37,6 +37,7 @@ use super::star_psf::StarPsf;
 pub use super::stars::{blackbody_rgb, planck, spectrum_rgb, star_field, Star, BRIGHTEST_MAG, MAG0_KR_SR, STAR_COUNTS};
 use crate::geometry::camera::CameraModel;
 use crate::scene::Background;
+use crate::util::fmath;
 use crate::util::observer::Observer;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -72,7 +73,7 @@ impl EnvMap {
     /// `(u, v)` of a world direction, v from the bottom (module documentation).
     pub fn uv(dir: DVec3) -> (f64, f64) {
         let d = dir.normalize();
-        (0.5 - d.y.atan2(d.x) / (2.0 * PI), 0.5 + d.z.clamp(-1.0, 1.0).asin() / PI)
+        (0.5 - fmath::atan2(d.y, d.x) / (2.0 * PI), 0.5 + fmath::asin(d.z.clamp(-1.0, 1.0)) / PI)
     }
 
     /// Radiance seen along `dir`: bilinear between pixel centres.
@@ -297,7 +298,7 @@ mod tests {
             let core = super::super::star_psf::CORE_FWHM_ARCSEC;
             let sigma = core / 2.354_820_045;
             let p = pixel_arcsec;
-            let want = 2.354_820_045 * (sigma * sigma + (0.35 * p).powi(2) + p * p / 12.0).sqrt();
+            let want = 2.354_820_045 * (sigma * sigma + fmath::powi(0.35 * p, 2) + p * p / 12.0).sqrt();
             eprintln!("{n} px: {fwhm} arcsec ({fwhm_px} px), want {want}");
             assert!((fwhm / want - 1.0).abs() < 0.05, "{n} px: {fwhm} arcsec ({fwhm_px} px), want {want}");
             widths.push(fwhm);
@@ -332,7 +333,7 @@ mod tests {
         let (u, v) = (4.5 / 8.0, 1.0 - 1.5 / 4.0);
         let az = (0.5 - u) * 2.0 * PI;
         let el = (v - 0.5) * PI;
-        let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        let d = DVec3::new(fmath::cos(el) * fmath::cos(az), fmath::cos(el) * fmath::sin(az), fmath::sin(el));
         assert!((m.radiance(d)[0] - 1.0).abs() < 1e-9);
         assert_eq!(EnvMap::uv(DVec3::X), (0.5, 0.5));
         let (_, vz) = EnvMap::uv(DVec3::Z);
@@ -341,7 +342,7 @@ mod tests {
         let (u0, v0) = (0.0, 1.0 - 0.5 / 4.0);
         let az = (0.5 - u0) * 2.0 * PI;
         let el = (v0 - 0.5) * PI;
-        let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        let d = DVec3::new(fmath::cos(el) * fmath::cos(az), fmath::cos(el) * fmath::sin(az), fmath::sin(el));
         assert!((m.radiance(d)[1] - 2.5).abs() < 1e-6, "{:?}", m.radiance(d));
     }
 }

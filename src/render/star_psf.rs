@@ -38,6 +38,8 @@
 //! size above it (at 3840 px, 1.6 arcminutes), and `sky.rs` keeps its flux
 //! `sum L Omega = E T` at any resolution.
 
+use crate::util::fmath;
+
 /// FWHM of the core, arcseconds (module doc).
 pub const CORE_FWHM_ARCSEC: f64 = 149.0;
 /// FWHM of the halo, arcminutes.
@@ -85,7 +87,7 @@ pub struct Footprint {
 impl StarPsf {
     /// The footprint where a pixel spans `pixel_rad` radians.
     pub fn footprint(&self, pixel_rad: f64) -> Footprint {
-        let px = |s: f64| ((s / pixel_rad).powi(2) + MIN_SIGMA_PX * MIN_SIGMA_PX).sqrt();
+        let px = |s: f64| (fmath::powi(s / pixel_rad, 2) + MIN_SIGMA_PX * MIN_SIGMA_PX).sqrt();
         let (core_px, halo_px) = (px(self.core_sigma_rad), px(self.halo_sigma_rad));
         let radius = ((FOOTPRINT_SIGMAS * halo_px.max(core_px)).ceil() as i64).clamp(1, MAX_RADIUS_PX);
         Footprint { core_px, halo_px, halo_fraction: self.halo_fraction, radius }

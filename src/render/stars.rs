@@ -32,6 +32,7 @@
 use crate::physics::night_sky::catalogue::catalogue;
 use crate::physics::night_sky::star_colour::temperature_k;
 use crate::util::colour::{cie1931_xyz, gamut_map, luminance, xyz_to_rec709};
+use crate::util::fmath;
 use crate::util::observer::Observer;
 use glam::DVec3;
 use rand::Rng;
@@ -66,13 +67,13 @@ pub struct Star {
 pub fn log10_count(m: f64) -> f64 {
     let last = STAR_COUNTS.len() - 1;
     let i = ((m - FIRST_COUNT_MAG).floor().max(0.0) as usize).min(last - 1);
-    let (a, b) = (STAR_COUNTS[i].log10(), STAR_COUNTS[i + 1].log10());
+    let (a, b) = (fmath::log10(STAR_COUNTS[i]), fmath::log10(STAR_COUNTS[i + 1]));
     a + (b - a) * (m - FIRST_COUNT_MAG - i as f64)
 }
 
 /// The magnitude `m` with `log10 N(<m) = l`: the inverse of [`log10_count`].
 pub fn magnitude_of_log10_count(l: f64) -> f64 {
-    let logs = STAR_COUNTS.map(f64::log10);
+    let logs = STAR_COUNTS.map(fmath::log10);
     let i = logs.windows(2).position(|w| l < w[1]).unwrap_or(logs.len() - 2);
     FIRST_COUNT_MAG + i as f64 + (l - logs[i]) / (logs[i + 1] - logs[i])
 }
@@ -91,7 +92,7 @@ pub fn blackbody_rgb(t_k: f64) -> [f64; 3] {
     let mut xyz = [0.0f64; 3];
     let mut l: f64 = 380.0;
     while l <= 780.0 {
-        let b = l.powi(-5) / ((HC_K / (l * t_k)).exp() - 1.0);
+        let b = fmath::powi(l, -5) / (fmath::exp(HC_K / (l * t_k)) - 1.0);
         let c = cie1931_xyz(l);
         for k in 0..3 {
             xyz[k] += b * c[k];
@@ -107,7 +108,7 @@ pub fn blackbody_rgb(t_k: f64) -> [f64; 3] {
 /// `t_k` kelvin at `lambda_nm`, per nm, in arbitrary units.
 pub fn planck(lambda_nm: f64, t_k: f64) -> f64 {
     const HC_K: f64 = 1.438_777e7; // nm K
-    lambda_nm.powi(-5) / ((HC_K / (lambda_nm * t_k)).exp() - 1.0)
+    fmath::powi(lambda_nm, -5) / (fmath::exp(HC_K / (lambda_nm * t_k)) - 1.0)
 }
 
 /// Linear Rec.709 colour of the spectrum `s` (per nm, 380-780 nm by 5 nm)
@@ -134,7 +135,7 @@ pub fn spectrum_rgb(observer: Observer, s: impl Fn(f64) -> f64) -> [f64; 3] {
 /// for `observer`.
 pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64, observer: Observer) -> Vec<Star> {
     let l_max = log10_count(limiting_magnitude);
-    let n = 10f64.powf(l_max).round() as usize;
+    let n = fmath::powf(10f64, l_max).round() as usize;
     let sample = colour_sample();
     let mut colours = std::collections::HashMap::new();
     let mut rng = crate::util::rng::rng(&[seed, 0x5354_4152_5300]);
@@ -145,7 +146,7 @@ pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64, observer:
             let phi = rng.random::<f64>() * 2.0 * PI;
             let s = (1.0 - z * z).max(0.0).sqrt();
             let u: f64 = 1.0 - rng.random::<f64>(); // (0, 1]
-            let m = magnitude_of_log10_count(l_max + u.log10()).clamp(BRIGHTEST_MAG, limiting_magnitude);
+            let m = magnitude_of_log10_count(l_max + fmath::log10(u)).clamp(BRIGHTEST_MAG, limiting_magnitude);
             let b_v = sample[((rng.random::<f64>() * sample.len() as f64) as usize).min(sample.len() - 1)];
             // Colours by B-V to 0.01 mag, each computed once.
             let key = (b_v * 100.0).round() as i64;
@@ -153,8 +154,13 @@ pub fn star_field(seed: u64, limiting_magnitude: f64, brightness: f64, observer:
                 let t = temperature_k(key as f64 / 100.0);
                 (spectrum_rgb(observer, |l| planck(l, t)), t)
             });
-            let e = brightness * MAG0_KR_SR * 10f64.powf(-0.4 * m);
-            Star { dir: DVec3::new(s * phi.cos(), s * phi.sin(), z), magnitude: m, irradiance: colour.map(|c| c * e), temperature_k: t }
+            let e = brightness * MAG0_KR_SR * fmath::powf(10f64, -0.4 * m);
+            Star {
+                dir: DVec3::new(s * fmath::cos(phi), s * fmath::sin(phi), z),
+                magnitude: m,
+                irradiance: colour.map(|c| c * e),
+                temperature_k: t,
+            }
         })
         .collect()
 }

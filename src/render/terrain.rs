@@ -54,6 +54,7 @@
 
 use super::settings::RenderError;
 use crate::scene::{Terrain, TerrainKind};
+use crate::util::fmath;
 use glam::DVec3;
 use noise::Perlin;
 use std::io::Write;
@@ -332,7 +333,7 @@ impl Heightfield {
             .enumerate()
             .map(|(k, &h)| {
                 let (x, y) = (self.xs[k % nx], self.ys[k / nx]);
-                (r + h) * (x.hypot(y) / r).cos() - r
+                (r + h) * fmath::cos(fmath::hypot(x, y) / r) - r
             })
             .collect();
         Self::from_samples(self.xs, self.ys, z)
@@ -599,7 +600,7 @@ fn vertex_normals(hf: &Heightfield) -> Vec<DVec3> {
                 let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
                 for k in 0..3 {
                     let (a, b) = ((p[(k + 1) % 3] - p[k]).normalize_or_zero(), (p[(k + 2) % 3] - p[k]).normalize_or_zero());
-                    let angle = a.dot(b).clamp(-1.0, 1.0).acos();
+                    let angle = fmath::acos(a.dot(b).clamp(-1.0, 1.0));
                     let (ci, cj) = corners[k];
                     acc[cj * nx + ci] += n * angle;
                 }
@@ -730,7 +731,10 @@ mod tests {
         let sphere =
             TerrainModel::on_earth(&Terrain { kind: TerrainKind::Plane, height: 0.3, ..Terrain::default() }, None, 6371.0).unwrap();
         let c = sphere.clearance(DVec3::new(100.0, 0.0, 0.5)).unwrap();
-        assert!((c.ground_km - 0.3).abs() < 1e-9 && (c.point_km - ((6371.5f64.powi(2) + 1e4).sqrt() - 6371.0)).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c.ground_km - 0.3).abs() < 1e-9 && (c.point_km - ((fmath::powi(6371.5f64, 2) + 1e4).sqrt() - 6371.0)).abs() < 1e-9,
+            "{c:?}"
+        );
         assert_eq!(TerrainModel::None.clearance(DVec3::ZERO), None);
     }
 
@@ -744,9 +748,9 @@ mod tests {
         // From 2 m up, 1 degree down: the chord to the sphere,
         // t = (R + h) sin(a) - sqrt((R + h)^2 sin(a)^2 - (2 R h + h^2)).
         let (h0, a) = (0.002, 1f64.to_radians());
-        let d = DVec3::new(0.0, a.cos(), -a.sin());
+        let d = DVec3::new(0.0, fmath::cos(a), -fmath::sin(a));
         let hit = intersect_sphere(c, r, DVec3::new(0.0, 0.0, h0), d, 0.0, f64::INFINITY).unwrap();
-        let rs = (r + h0) * a.sin();
+        let rs = (r + h0) * fmath::sin(a);
         let want = rs - (rs * rs - (2.0 * r * h0 + h0 * h0)).sqrt();
         assert!((hit.t - want).abs() < 1e-9 * want.max(1.0), "{} vs {want}", hit.t);
         assert!(((hit.p - c).length() - r).abs() < 1e-9);
@@ -772,10 +776,10 @@ mod tests {
             // f32 heights add under 1e-6 km.
             let p = DVec3::new(x, y, on.z[k]);
             let alt = (p - DVec3::new(0.0, 0.0, -r)).length() - r;
-            let theta = x.hypot(y) / r;
+            let theta = fmath::hypot(x, y) / r;
             assert!((alt - hf.z[k]).abs() <= 1.01 * hf.z[k] * theta * theta + 1e-6, "{k}: {alt} vs {}", hf.z[k]);
         }
         // The corner 111.8 km away drops (R + z) (1 - cos(d / R)) = 0.98 km.
-        assert!((hf.z[3] - on.z[3] - (r + hf.z[3]) * (1.0 - (100f64.hypot(50.0) / r).cos())).abs() < 1e-5);
+        assert!((hf.z[3] - on.z[3] - (r + hf.z[3]) * (1.0 - fmath::cos(fmath::hypot(100f64, 50.0) / r))).abs() < 1e-5);
     }
 }

@@ -19,10 +19,11 @@ use super::agx::Agx;
 use super::agx_look::{graded, Grade};
 use crate::scene::ViewTransform;
 use crate::util::colour::srgb_oetf;
+use crate::util::fmath;
 
 /// The standard display transform of one linear channel value (module doc).
 pub fn display_u8(linear: f32, exposure: f64) -> u8 {
-    to_u8(srgb_oetf(linear as f64 * exposure.exp2()))
+    to_u8(srgb_oetf(linear as f64 * fmath::exp2(exposure)))
 }
 
 fn to_u8(v: f64) -> u8 {
@@ -46,7 +47,7 @@ pub fn display_rgb16(p: [f32; 4], exposure: f64, view: ViewTransform) -> [u16; 3
 /// One pixel's display values in [0, 1] before quantising (NaN possible
 /// with the standard transform; the quantisers make it black).
 fn display_unit(p: [f32; 4], exposure: f64, view: ViewTransform) -> [f64; 3] {
-    let k = exposure.exp2();
+    let k = fmath::exp2(exposure);
     match view {
         ViewTransform::Standard => [0, 1, 2].map(|c| srgb_oetf(p[c] as f64 * k)),
         agx => {

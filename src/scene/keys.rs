@@ -7,6 +7,7 @@
 //! ([`Range::schema_into`]), and docs/scene.md and the add-on's
 //! `blender/scene_keys.json` are made from them (tests/cli/schema.rs).
 
+use crate::util::fmath;
 use serde_json::{json, Map, Value};
 
 /// A number's allowed interval: `[min, max]`, each end open or closed; an
@@ -159,8 +160,8 @@ fn shown_array(a: &[toml::Value]) -> String {
 /// A bound as the per-element messages write it: `1e4` for 10000.
 fn short(x: f64) -> String {
     if x != 0.0 && x.fract() == 0.0 && x.abs() >= 1e4 {
-        let k = x.abs().log10().floor() as i32;
-        let m = x / 10f64.powi(k);
+        let k = fmath::log10(x.abs()).floor() as i32;
+        let m = x / fmath::powi(10f64, k);
         if m.fract() == 0.0 {
             return format!("{}e{k}", m as i64);
         }

@@ -18,6 +18,7 @@
 //! those keys' field under the site's sky.
 
 use super::keys::{KeySpec, Num, Range};
+use crate::util::fmath;
 use serde::{Deserialize, Serialize};
 
 /// The site and the hour (module documentation).
@@ -65,7 +66,7 @@ impl SiteParams {
     /// The pressure refraction is computed with, hPa (`pressure_hpa`, or
     /// the standard pressure at `height_km`: the same rule skyfield applies).
     pub fn pressure_or_standard_hpa(&self) -> f64 {
-        self.pressure_hpa.unwrap_or_else(|| 1010.0 * (-self.height_km / 9.1).exp())
+        self.pressure_hpa.unwrap_or_else(|| 1010.0 * fmath::exp(-self.height_km / 9.1))
     }
 }
 

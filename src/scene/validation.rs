@@ -9,6 +9,7 @@
 use super::keys::KeySpec;
 use super::tables::TABLES;
 use super::{colour::*, curtain::*, root::Scene};
+use crate::util::fmath;
 use std::fmt;
 
 /// The line names `grid.lines` takes, in `crate::physics::emission::line_colour::LINES` order
@@ -484,7 +485,7 @@ impl Validator<'_> {
             return;
         }
         for (k, w) in p.windows(2).enumerate() {
-            if ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt() < 1e-3 {
+            if (fmath::powi(w[1][0] - w[0][0], 2) + fmath::powi(w[1][1] - w[0][1], 2)).sqrt() < 1e-3 {
                 self.push(
                     t,
                     "path",
@@ -493,7 +494,7 @@ impl Validator<'_> {
                 );
             }
         }
-        let length: f64 = p.windows(2).map(|w| ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt()).sum();
+        let length: f64 = p.windows(2).map(|w| (fmath::powi(w[1][0] - w[0][0], 2) + fmath::powi(w[1][1] - w[0][1], 2)).sqrt()).sum();
         if length > 1e4 {
             self.push(t, "path", format!("{length:.1} km long"), "must be at most 1e4 km long".into());
         }

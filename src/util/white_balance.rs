@@ -27,6 +27,7 @@
 //! colorimetric (D65 white) and are left as they are.
 
 use crate::util::colour::luminance;
+use crate::util::fmath;
 use crate::util::observer::{camera_matrix, Observer, CAMERA_RANGE_NM};
 
 /// The second radiation constant, nm K.
@@ -36,7 +37,7 @@ pub const WHITE_BALANCE_RANGE_K: (f64, f64) = (1500.0, 20000.0);
 
 /// Planck's spectral radiance at `t_k` up to a constant (energy per nm).
 pub fn planck(lambda_nm: f64, t_k: f64) -> f64 {
-    lambda_nm.powi(-5) / ((HC_K_NM / (lambda_nm * t_k)).exp() - 1.0)
+    fmath::powi(lambda_nm, -5) / (fmath::exp(HC_K_NM / (lambda_nm * t_k)) - 1.0)
 }
 
 /// The camera's linear Rec.709 of a grey lit by the spectrum `p` (energy

@@ -5,6 +5,7 @@
 
 use crate::common::{aurora as run, ok, refused, scratch, stderr, write};
 use crate::small_bake_toml;
+use aurora::util::fmath;
 
 /// A scene small enough to bake in about a second.
 const SMALL: &str = concat!(
@@ -69,7 +70,7 @@ fn bake_writes_vdb_usda_and_report_that_agree() {
     assert_eq!(report["files"]["mantissa_bits"], 5);
     assert_eq!(report["files"]["compression"], "zip-active-mask");
     let peak = fine.iter_active().map(|(_, v)| v[1]).fold(0.0f32, f32::max);
-    let bound = 2f64.powi(-6) + 2f64.powi(-11);
+    let bound = fmath::powi(2f64, -6) + fmath::powi(2f64, -11);
     assert!((peak as f64 - stats["peak_emission"][1].as_f64().unwrap()).abs() <= bound * peak as f64);
 
     let usda = std::fs::read_to_string(out.join("aurora.usda")).unwrap();

@@ -5,6 +5,7 @@
 
 use crate::common::{aurora, file_names, ok, refused, repo_root, scratch, write};
 use crate::green_line_grid_toml;
+use aurora::util::fmath;
 use std::path::{Path, PathBuf};
 
 /// An arc 80 km long and 4 km wide along x (magnetic east-west: the
@@ -91,8 +92,8 @@ fn keogram_tracks_a_drifting_arc_along_the_meridian() {
     assert!(attrs.iter().any(|(k, v)| k == "aurora_units" && v.starts_with("R (rayleigh)")), "{attrs:?}");
     for (col, frame) in [1i64, 2, 3].into_iter().enumerate() {
         let t = (frame - 1) as f64 / 0.1;
-        let arc_y = 30.0 * (std::f64::consts::TAU * t / 80.0).sin();
-        let want = (peak_km - 0.1).atan2(arc_y + 60.0).to_degrees();
+        let arc_y = 30.0 * fmath::sin(std::f64::consts::TAU * t / 80.0);
+        let want = fmath::atan2(peak_km - 0.1, arc_y + 60.0).to_degrees();
         let brightest = (0..h).max_by(|&a, &b| px[a * w + col].total_cmp(&px[b * w + col])).unwrap();
         // Rows 0..=180 look north at elevation row / 2.
         let got = brightest as f64 * 0.5;

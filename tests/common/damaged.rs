@@ -19,6 +19,7 @@ use aurora::grid::{Grid, Transform};
 use aurora::io::vdb::parse::{parse_file_with, read_meta_map, Cursor, Decode, LeafSpan, ValueKind};
 use aurora::io::vdb::write::{write_vdb_bytes, GridRef, WriteOptions};
 use aurora::scene::Compression;
+use aurora::util::fmath;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
 
@@ -85,7 +86,7 @@ pub fn four_grids(comp: Compression, half: bool) -> Vec<u8> {
     }
     for i in -6..6 {
         for k in 0..12 {
-            let x = (-(k as f32) / 5.0).exp() * (1.0 + 0.05 * i as f32);
+            let x = fmath::exp(-(k as f32) / 5.0) * (1.0 + 0.05 * i as f32);
             let p = IVec3::new(i, 3, 40 + k);
             d.set(p, x);
             t.set(p, 300.0 * x);

@@ -13,6 +13,7 @@ use aurora::grid::{Grid, Transform, VoxelValue};
 use aurora::io::vdb::codec::round_half_value;
 use aurora::io::vdb::write::{write_vdb, GridRef, MetaValue, WriteOptions};
 use aurora::scene::Compression;
+use aurora::util::fmath;
 use glam::{DVec3, IVec3};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -259,7 +260,7 @@ fn test_density() -> Grid<f32> {
     for i in -12..12 {
         for j in -3..3 {
             for k in 0..20 {
-                let v = (-(k as f32) / 6.0).exp() * (1.0 + 0.1 * (i as f32 * 0.7).sin());
+                let v = fmath::exp(-(k as f32) / 6.0) * (1.0 + 0.1 * fmath::sin(i as f32 * 0.7));
                 g.set(IVec3::new(i, j, k + 200), v);
             }
         }

@@ -8,6 +8,7 @@
 use aurora::grid::{Grid, Transform};
 use aurora::render::{Integration, RenderSettings};
 use aurora::scene::{AirglowParams, Background, Camera, Projection, RenderParams, SkyParams, Terrain, TerrainKind, VolumeParams};
+use aurora::util::fmath;
 use glam::{DVec3, IVec3};
 
 /// A float grid with every voxel of the inclusive index box `[lo, hi]` set.
@@ -80,7 +81,7 @@ pub fn camera_ray(cam: &Camera, w: usize, h: usize, fx: f64, fy: f64) -> (DVec3,
     let (wf, hf) = (w as f64, h as f64);
     match cam.projection {
         Projection::Perspective => {
-            let t = (cam.fov_deg.to_radians() / 2.0).tan();
+            let t = fmath::tan(cam.fov_deg.to_radians() / 2.0);
             let x = (2.0 * fx / wf - 1.0) * t * wf / hf;
             let y = (1.0 - 2.0 * fy / hf) * t;
             (pos, (fwd + x * right + y * up).normalize())
@@ -101,18 +102,18 @@ pub fn camera_ray(cam: &Camera, w: usize, h: usize, fx: f64, fy: f64) -> (DVec3,
                 return (pos, DVec3::ZERO);
             }
             let theta = r * cam.fov_deg.to_radians() * 0.5;
-            let mut phi = if r > 0.0 { (u / r).clamp(-1.0, 1.0).acos() } else { 0.0 };
+            let mut phi = if r > 0.0 { fmath::acos((u / r).clamp(-1.0, 1.0)) } else { 0.0 };
             if v < 0.0 {
                 phi = -phi;
             }
-            let l = DVec3::new(theta.cos(), -phi.cos() * theta.sin(), phi.sin() * theta.sin());
+            let l = DVec3::new(fmath::cos(theta), -fmath::cos(phi) * fmath::sin(theta), fmath::sin(phi) * fmath::sin(theta));
             (pos, l.x * fwd - l.y * right + l.z * up)
         }
         Projection::Equirectangular => {
             let (u, v) = (fx / wf, 1.0 - fy / hf);
             let pi = std::f64::consts::PI;
             let (phi, theta) = (-2.0 * pi * u + pi, -pi * v + pi);
-            let l = DVec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+            let l = DVec3::new(fmath::sin(theta) * fmath::cos(phi), fmath::sin(theta) * fmath::sin(phi), fmath::cos(theta));
             (pos, l.x * fwd - l.y * right + l.z * up)
         }
     }
@@ -249,7 +250,7 @@ pub fn oracle(
                 let pa = x + p as f64 * h;
                 for (s, w) in &g8 {
                     let t = pa + h * s;
-                    let tr = (-(tau + tau_over(x, t))).exp();
+                    let tr = fmath::exp(-(tau + tau_over(x, t)));
                     let e = emit(t);
                     for c in 0..3 {
                         l[c] += w * h * tr * e[c];

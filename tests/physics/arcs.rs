@@ -19,6 +19,7 @@ use aurora::pipeline::bake::bake;
 use aurora::pipeline::columns::column_map;
 use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{AtmosphereModel, Curtain, FootprintModel, Scene, SpectrumShape, VoxelSize};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 
 /// One uniform curtain, 20 x 20 km, of `spectrum` at `e_kev` (an
@@ -119,7 +120,7 @@ fn lower_border(s: &Scene) -> (f64, f64) {
     for (ijk, e) in g.iter_active() {
         let p = g.transform.index_to_world(ijk.as_dvec3());
         // The curtain's middle, moved along the field to each altitude.
-        let north = (s.beams.top_km - p.z) / s.beams.b_inclination_deg.to_radians().tan();
+        let north = (s.beams.top_km - p.z) / fmath::tan(s.beams.b_inclination_deg.to_radians());
         if p.x.abs() < 4.0 && (p.y - north).abs() < 4.0 {
             let l = layers.entry(ijk.z).or_insert((0.0, 0));
             l.0 += e as f64;

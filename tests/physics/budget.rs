@@ -11,6 +11,7 @@ use aurora::pipeline::memory::budget::{self, LeafCount};
 use aurora::pipeline::memory::reach;
 use aurora::pipeline::plan::BakePlan;
 use aurora::scene::{Deposition, KernelRadius};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 
 #[test]
@@ -70,7 +71,7 @@ fn a_bake_stays_inside_the_budget_bounds() {
 /// field a dip of `dip_deg` there: magnetic latitude `atan(tan(I) / 2)`,
 /// 90 degrees less the central angle to the pole.
 fn pole_for_dip(dip_deg: f64, radius_km: f64) -> [f64; 2] {
-    let lat = (dip_deg.to_radians().tan() / 2.0).atan();
+    let lat = fmath::atan(fmath::tan(dip_deg.to_radians()) / 2.0);
     [0.0, (std::f64::consts::FRAC_PI_2 - lat) * radius_km]
 }
 
@@ -283,7 +284,7 @@ fn over_a_site_the_budget_reads_the_field_the_beams_follow() {
     let igrf = aurora::physics::igrf::Igrf::at(aurora::geometry::astronomy::time::Utc::parse_rfc3339(&p.utc).unwrap()).unwrap();
     let [e, n, u] = site.basis();
     let bf = igrf.field_itrs(site.itrs_km() + s.beams.top_km * u);
-    let want = (-bf.dot(u)).atan2(bf.dot(e).hypot(bf.dot(n))).to_degrees();
+    let want = fmath::atan2(-bf.dot(u), fmath::hypot(bf.dot(e), bf.dot(n))).to_degrees();
     let plan = BakePlan::new(&s, &NoProgress);
     let dip = reach::dip_deg(&plan);
     assert!((dip - want).abs() < 0.5, "the budget's dip {dip}, IGRF's {want}");

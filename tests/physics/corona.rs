@@ -36,6 +36,7 @@ use aurora::pipeline::bake::{bake, Bake};
 use aurora::render::{render, Integration, RenderSettings, Volume};
 use aurora::scene::presets::sites::tromso_site;
 use aurora::scene::{Camera, Curtain, Projection, Scene, SiteParams, TerrainKind, VoxelSize};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::{DMat3, DVec3};
 
@@ -48,7 +49,7 @@ fn rayed_scene() -> Scene {
         curtains: (0..6)
             .map(|i| {
                 let phi = i as f64 * 60.0;
-                let (sn, cs) = phi.to_radians().sin_cos();
+                let (sn, cs) = fmath::sin_cos(phi.to_radians());
                 Curtain {
                     center: [50.0 * cs, 50.0 * sn],
                     length: 40.0,
@@ -116,7 +117,7 @@ const MIN_DEG: f64 = 8.0;
 /// The vanishing point found from the image (see the module documentation).
 fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
     let (w, h) = (cam.width, cam.height);
-    let l: Vec<f64> = lum.iter().map(|y| (y + 1e-4).ln()).collect();
+    let l: Vec<f64> = lum.iter().map(|y| fmath::ln(y + 1e-4)).collect();
     let at = |x: usize, y: usize| l[y * w + x];
     // Gradient products (central differences), then a Gaussian window.
     let mut jxx = vec![0.0; w * h];
@@ -132,7 +133,7 @@ fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
     }
     let sigma = 1.5f64;
     let r = 4i64;
-    let k: Vec<f64> = (-r..=r).map(|i| (-(i * i) as f64 / (2.0 * sigma * sigma)).exp()).collect();
+    let k: Vec<f64> = (-r..=r).map(|i| fmath::exp(-(i * i) as f64 / (2.0 * sigma * sigma))).collect();
     let blur = |a: &[f64]| {
         let mut t = vec![0.0; w * h];
         let mut o = vec![0.0; w * h];
@@ -159,7 +160,7 @@ fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
             let (a, b, c) = (jxx[i], jxy[i], jyy[i]);
             let tr = a + c;
             let disc = ((a - c) * (a - c) + 4.0 * b * b).sqrt();
-            if !(tr > strong) || (disc / tr).powi(2) < 0.6 {
+            if !(tr > strong) || fmath::powi(disc / tr, 2) < 0.6 {
                 continue;
             }
             // Eigenvector of the smaller eigenvalue (along the streak).
@@ -179,7 +180,7 @@ fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
             if n.length() < 1e-12 {
                 continue;
             }
-            elems.push((n.normalize(), tr * (disc / tr).powi(2), r1.dir));
+            elems.push((n.normalize(), tr * fmath::powi(disc / tr, 2), r1.dir));
         }
     }
     assert!(elems.len() > 200, "only {} streak pixels", elems.len());
@@ -200,7 +201,7 @@ fn vanishing_point(cam: &CameraModel, lum: &[f64]) -> (f64, f64) {
         // Near V the streaks crowd and their ends (the curtains' lower
         // borders) cross them: keep elements over MIN_DEG from V, and of
         // those the 70 % closest to passing through it.
-        let mut keep: Vec<_> = elems.iter().copied().filter(|e| e.2.dot(v) < MIN_DEG.to_radians().cos()).collect();
+        let mut keep: Vec<_> = elems.iter().copied().filter(|e| e.2.dot(v) < fmath::cos(MIN_DEG.to_radians())).collect();
         keep.sort_by(|a, b| a.0.dot(v).abs().total_cmp(&b.0.dot(v).abs()));
         keep.truncate(keep.len() * 7 / 10);
         v = fit(&keep);
@@ -227,7 +228,7 @@ fn vanishing_miss(scene: &Scene, baked: &Bake, zenith: DVec3, side: usize) -> ((
     let cam = CameraModel::new(&scene.camera, side, side).unwrap();
     let (fx, fy) = vanishing_point(&cam, &lum);
     let (zx, zy) = cam.project(cam.position + zenith).unwrap();
-    ((fx, fy), (zx, zy), ((fx - zx).powi(2) + (fy - zy).powi(2)).sqrt())
+    ((fx, fy), (zx, zy), (fmath::powi(fx - zx, 2) + fmath::powi(fy - zy, 2)).sqrt())
 }
 
 #[test]
@@ -253,7 +254,7 @@ fn corona_vanishing_point_is_the_magnetic_zenith() {
         let ((fx, fy), (zx, zy), miss) = vanishing_miss(&scene, &baked, zenith, side);
         println!("{side}x{side}: vanishing point ({fx:.2}, {fy:.2}), magnetic zenith ({zx:.2}, {zy:.2}), {miss:.3} px apart");
         // The zenith is off the image centre, so finding the centre fails.
-        assert!(((zx - side as f64 / 2.0).powi(2) + (zy - side as f64 / 2.0).powi(2)).sqrt() > 10.0 * side as f64 / 128.0);
+        assert!((fmath::powi(zx - side as f64 / 2.0, 2) + fmath::powi(zy - side as f64 / 2.0, 2)).sqrt() > 10.0 * side as f64 / 128.0);
         // Measured (deterministic: same scene and seed, same image): 0.74 px
         // at 192, 0.59 at 384.
         assert!(miss < 1.0, "{side}x{side}: {miss} px");
@@ -313,7 +314,7 @@ fn corona_over_a_site_meets_the_magnetic_zenith_of_igrf() {
     );
     // The magnetic zenith is 12 degrees off the zenith, 13 pixels here:
     // the image's centre is far outside the tolerance.
-    assert!(((zx - side as f64 / 2.0).powi(2) + (zy - side as f64 / 2.0).powi(2)).sqrt() > 10.0);
+    assert!((fmath::powi(zx - side as f64 / 2.0, 2) + fmath::powi(zy - side as f64 / 2.0, 2)).sqrt() > 10.0);
     // Measured (deterministic): 0.68 px.
     assert!(miss < 1.0, "{side}x{side}: {miss} px");
 }

@@ -12,6 +12,7 @@ use aurora::pipeline::beams::trace_all;
 use aurora::render::{render, RenderSettings, Volume};
 use aurora::scene::{Camera, Curtain, Projection, Scene, TerrainKind};
 use aurora::util::colour::luminance;
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::DVec3;
 
@@ -67,7 +68,7 @@ fn lower_border_elevation(s: &Scene) -> (f64, aurora::pipeline::bake::Bake) {
     let rows: Vec<(f64, f64)> = (0..SIDE / 2)
         .map(|r| {
             let p = img.pixel(col, r);
-            let el = cam.ray(col as f64 + 0.5, r as f64 + 0.5).dir.z.asin().to_degrees();
+            let el = fmath::asin(cam.ray(col as f64 + 0.5, r as f64 + 0.5).dir.z).to_degrees();
             (el, luminance([p[0] as f64, p[1] as f64, p[2] as f64]))
         })
         .collect();
@@ -119,7 +120,7 @@ fn an_arcs_lower_border_sits_where_its_altitude_puts_it_on_the_sphere_and_on_the
     let want_flat = Earth::FLAT.elevation_deg(EYE_KM, h, d);
     assert!((e_flat - want_flat).abs() < 0.3, "flat: {e_flat} deg, {h} km at {d} km is at {want_flat} deg");
     // The altitude from the flat render, on the sphere.
-    let h_flat = EYE_KM + d * e_flat.to_radians().tan();
+    let h_flat = EYE_KM + d * fmath::tan(e_flat.to_radians());
     let earth = Earth::new(aurora::geometry::earth::MEAN_RADIUS_KM);
     let want_round = earth.elevation_deg(EYE_KM, h_flat, d);
     let (e_round, _) = lower_border_elevation(&arc_scene(earth.radius_km));
@@ -178,9 +179,9 @@ fn a_long_curtains_beams_stay_along_the_local_field_at_both_ends() {
                 }
                 None => (s.beams.b_inclination_deg, s.beams.b_declination_deg),
             };
-            let angle = seg.normalize().dot(local_b(&earth, mid, inc, dec)).clamp(-1.0, 1.0).acos().to_degrees();
+            let angle = fmath::acos(seg.normalize().dot(local_b(&earth, mid, inc, dec)).clamp(-1.0, 1.0)).to_degrees();
             worst = worst.max(angle);
-            global = global.max(seg.normalize().dot(b0).clamp(-1.0, 1.0).acos().to_degrees());
+            global = global.max(fmath::acos(seg.normalize().dot(b0).clamp(-1.0, 1.0)).to_degrees());
             n += 1;
         }
         eprintln!("{pole:?}: {n} steps at the ends, at most {worst:.3} deg off the local field, {global:.2} deg off the origin's");

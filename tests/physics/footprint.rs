@@ -10,6 +10,7 @@
 use aurora::pipeline::footprint::sheet::{growth_rate, Kernel};
 use aurora::pipeline::footprint::simulate;
 use aurora::scene::{Curtain, FootprintModel, FootprintParams};
+use aurora::util::fmath;
 
 const SEEDS: [u64; 3] = [1, 2, 3];
 
@@ -30,12 +31,12 @@ fn periodogram(p: &[f64], du: f64) -> Vec<(f64, f64)> {
     let n = p.len();
     let mean = p.iter().sum::<f64>() / n as f64;
     let tau = std::f64::consts::TAU;
-    let w: Vec<f64> = (0..n).map(|i| (p[i] - mean) * (0.5 - 0.5 * (tau * i as f64 / n as f64).cos())).collect();
+    let w: Vec<f64> = (0..n).map(|i| (p[i] - mean) * (0.5 - 0.5 * fmath::cos(tau * i as f64 / n as f64))).collect();
     (1..n / 2)
         .map(|m| {
             let (mut re, mut im) = (0.0, 0.0);
             for (i, x) in w.iter().enumerate() {
-                let (s, c) = (tau * (m * i) as f64 / n as f64).sin_cos();
+                let (s, c) = fmath::sin_cos(tau * (m * i) as f64 / n as f64);
                 re += x * c;
                 im -= x * s;
             }
@@ -53,14 +54,14 @@ fn periodogram(p: &[f64], du: f64) -> Vec<(f64, f64)> {
 /// a bin 12x above it is a line in the spectrum (an even comb), not noise.
 fn worst_ratio(spec: &[(f64, f64)], length: f64) -> f64 {
     let band: Vec<(f64, f64)> = spec.iter().cloned().filter(|&(f, p)| f <= 1.0 && f >= 4.0 / length && p > 0.0).collect();
-    let pts: Vec<(f64, f64)> = band.iter().map(|&(f, p)| (f.ln(), p.ln())).collect();
+    let pts: Vec<(f64, f64)> = band.iter().map(|&(f, p)| (fmath::ln(f), fmath::ln(p))).collect();
     let n = pts.len() as f64;
     let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / n, pts.iter().map(|p| p.1).sum::<f64>() / n);
     let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-    let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
+    let sxx: f64 = pts.iter().map(|p| fmath::powi(p.0 - mx, 2)).sum();
     let slope = sxy / sxx;
     let euler = 0.577_215_664_9;
-    pts.iter().map(|&(x, y)| (y - (my + slope * (x - mx) + euler)).exp()).fold(0.0, f64::max)
+    pts.iter().map(|&(x, y)| fmath::exp(y - (my + slope * (x - mx) + euler))).fold(0.0, f64::max)
 }
 
 /// The rays: local maxima of the profile over +-2 cells (+-0.6 km) that
@@ -103,7 +104,7 @@ fn measure(model: FootprintModel, seed: u64) -> Measures {
     let r = rays(&p);
     let gaps: Vec<f64> = r.windows(2).map(|w| (w[1].0 - w[0].0) as f64 * du).collect();
     let mg = gaps.iter().sum::<f64>() / gaps.len() as f64;
-    let sg = (gaps.iter().map(|g| (g - mg).powi(2)).sum::<f64>() / gaps.len() as f64).sqrt();
+    let sg = (gaps.iter().map(|g| fmath::powi(g - mg, 2)).sum::<f64>() / gaps.len() as f64).sqrt();
     let heights: Vec<f64> = r.iter().map(|x| x.1).collect();
     Measures {
         worst: worst_ratio(&spec, length),
@@ -154,18 +155,18 @@ fn small_mode_grows_at_the_linear_rate() {
     for k in [4usize, 10, 25] {
         let kappa = tau * k as f64 / period;
         let sigma = growth_rate(kappa, period, d);
-        let a = 0.5 * (tau / period) * (1.0 - (-kappa * d).exp()) / (tau * d / period).sinh();
+        let a = 0.5 * (tau / period) * (1.0 - fmath::exp(-kappa * d)) / fmath::sinh(tau * d / period);
         let eps = 1e-5 * period / k as f64;
         let alpha: Vec<f64> = (0..n).map(|j| -0.5 * period + (j as f64 + 0.5) * period / n as f64).collect();
-        let mut y: Vec<f64> = alpha.iter().map(|&x| eps * (kappa * x).sin()).collect();
+        let mut y: Vec<f64> = alpha.iter().map(|&x| eps * fmath::sin(kappa * x)).collect();
         let mut x: Vec<f64> = alpha.iter().zip(&y).map(|(&x, &yy)| x - a / sigma * yy).collect();
         let t_end = 3.0 / sigma;
         let steps = ((t_end * sigma / 0.03).ceil() as usize).max(10);
         for _ in 0..steps {
             kernel.rk4(&mut x, &mut y, t_end / steps as f64);
         }
-        let amp = 2.0 / n as f64 * alpha.iter().zip(&y).map(|(&al, &yy)| yy * (kappa * al).sin()).sum::<f64>();
-        let measured = (amp / eps).ln() / t_end;
+        let amp = 2.0 / n as f64 * alpha.iter().zip(&y).map(|(&al, &yy)| yy * fmath::sin(kappa * al)).sum::<f64>();
+        let measured = fmath::ln(amp / eps) / t_end;
         eprintln!("k {k}: sigma {sigma:.5} 1/s, measured {measured:.5}, KH limit {:.5}", 0.5 * kappa);
         assert!((measured / sigma - 1.0).abs() < 0.02, "k {k}: measured {measured}, theory {sigma}");
     }

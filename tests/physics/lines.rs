@@ -10,6 +10,7 @@ use aurora::grid::Grid;
 use aurora::physics::emission::line_table::{line_lifetimes, LINE_KEYS};
 use aurora::pipeline::bake::{self, Bake};
 use aurora::scene::{AnimationParams, Curtain, Scene, TerrainKind};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 
 /// One 40 x 16 km curtain in the middle of a 200 km pulsation patch (its
@@ -79,7 +80,7 @@ fn per_line_grids_sum_to_the_profiles_photons() {
     let b = bake::bake(&s, &NoProgress).unwrap();
     assert_eq!(b.lines.len(), 5);
     let prof = aurora::pipeline::altitude_profile::profile(&s, &NoProgress).unwrap();
-    let voxel_km3 = b.emission.transform.voxel_size.powi(3);
+    let voxel_km3 = fmath::powi(b.emission.transform.voxel_size, 3);
     // Profile columns: ion pairs, then n2p_4278, oi_5577, oi_6300, oi_6364, n2_1p.
     for (key, col) in [("5577", 2), ("6300", 3), ("6364", 4), ("4278", 1), ("n2_1p", 5)] {
         let g = line_grid(&b, key);
@@ -147,15 +148,15 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
             let total: f64 = g.iter_active().map(|(_, x)| x as f64).sum();
             let phase = omega * k as f64 * period / n as f64;
             mean += total / n as f64;
-            re += 2.0 * total * phase.cos() / n as f64;
-            im += 2.0 * total * phase.sin() / n as f64;
+            re += 2.0 * total * fmath::cos(phase) / n as f64;
+            im += 2.0 * total * fmath::sin(phase) / n as f64;
             for (z, e) in layers(g) {
                 *prof.entry(z).or_insert(0.0) += e / n as f64;
             }
         }
         let z0 = frames[0].emission.transform;
         let prof: Vec<(f64, f64)> = prof.into_iter().map(|(k, e)| (z0.index_to_world(glam::DVec3::new(0.0, 0.0, k as f64)).z, e)).collect();
-        (mean, re.hypot(im), prof)
+        (mean, fmath::hypot(re, im), prof)
     };
     let (m_blue, a_blue, _) = harmonic("4278");
     let depth_blue = a_blue / m_blue;
@@ -168,11 +169,11 @@ fn pulsating_patch_lines_keep_the_modulation_their_lifetimes_allow() {
         for (z, e) in &prof {
             let tau = line_lifetimes(&atm, *z)[line];
             let (g, lag) = aurora::physics::emission::lifetime::response(omega, tau);
-            re += e * g * lag.cos();
-            im += e * g * lag.sin();
+            re += e * g * fmath::cos(lag);
+            im += e * g * fmath::sin(lag);
             sum += e;
         }
-        let predicted = re.hypot(im) / sum;
+        let predicted = fmath::hypot(re, im) / sum;
         eprintln!("{key}: kept {measured:.4} of the modulation, the law predicts {predicted:.4}");
         assert!((measured / predicted - 1.0).abs() < 0.1, "{key}: kept {measured:.4} of the modulation, the law predicts {predicted:.4}");
         match key {

@@ -8,6 +8,7 @@ use crate::common::{aurora, refused, scratch, write};
 use aurora::pipeline::bake::bake;
 use aurora::pipeline::footprint::curtain_path::{lift_km, vertices, PATH_ALTITUDE_KM};
 use aurora::scene::{Curtain, Scene, VoxelSize};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 
 /// One curtain, a coarse footprint and few beams on 1 km voxels.
@@ -21,7 +22,7 @@ fn distance(v: &[[f64; 2]], x: f64, y: f64) -> f64 {
         .map(|w| {
             let (dx, dy) = (w[1][0] - w[0][0], w[1][1] - w[0][1]);
             let t = (((x - w[0][0]) * dx + (y - w[0][1]) * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-            ((x - w[0][0] - t * dx).powi(2) + (y - w[0][1] - t * dy).powi(2)).sqrt()
+            (fmath::powi(x - w[0][0] - t * dx, 2) + fmath::powi(y - w[0][1] - t * dy, 2)).sqrt()
         })
         .fold(f64::INFINITY, f64::min)
 }
@@ -58,7 +59,7 @@ fn emission_of_the_lower_border_follows_a_curved_path() {
     let near_end = |q: [f64; 2]| {
         b.emission.iter_active().any(|(ijk, _)| {
             let p = b.emission.transform.index_to_world(ijk.as_dvec3());
-            (95.0..125.0).contains(&p.z) && ((p.x - q[0]).powi(2) + (p.y - q[1]).powi(2)).sqrt() < 20.0
+            (95.0..125.0).contains(&p.z) && (fmath::powi(p.x - q[0], 2) + fmath::powi(p.y - q[1], 2)).sqrt() < 20.0
         })
     };
     assert!(near_end(path[0]) && near_end(path[3]));
@@ -70,7 +71,7 @@ fn a_straight_two_point_path_is_the_straight_curtain() {
     // straight curtain of length 80 km rotated 20 degrees, centred on the
     // path's middle lifted to the start altitude.
     let rot = 20f64.to_radians();
-    let (a, b) = ([-40.0 * rot.cos(), 10.0 - 40.0 * rot.sin()], [40.0 * rot.cos(), 10.0 + 40.0 * rot.sin()]);
+    let (a, b) = ([-40.0 * fmath::cos(rot), 10.0 - 40.0 * fmath::sin(rot)], [40.0 * fmath::cos(rot), 10.0 + 40.0 * fmath::sin(rot)]);
     let lift = lift_km(&Scene::default().beams);
     let straight =
         Curtain { center: [lift[0], 10.0 + lift[1]], length: 80.0, width: 20.0, rotation_deg: 20.0, bend_km: 3.0, ..Curtain::default() };
@@ -125,7 +126,7 @@ fn a_3000_km_path_fits_the_memory_budget() {
     // An arc of 3000 km (a quarter of a circle of radius 1910 km) through 7 points.
     let r = 3000.0 / std::f64::consts::FRAC_PI_2;
     let path: Vec<[f64; 2]> =
-        (0..7).map(|i| std::f64::consts::FRAC_PI_2 * i as f64 / 6.0).map(|a| [r * a.cos(), r * a.sin() - r]).collect();
+        (0..7).map(|i| std::f64::consts::FRAC_PI_2 * i as f64 / 6.0).map(|a| [r * fmath::cos(a), r * fmath::sin(a) - r]).collect();
     let mut s = Scene { curtains: vec![Curtain { path: Some(path), ..Curtain::default() }], ..Scene::default() };
     s.beams.count = 20_000;
     s.grid.voxel_size = VoxelSize::Km(1.0);
@@ -180,7 +181,7 @@ fn the_oval_arc_is_one_piece_overhead() {
     let at = |k: i64| bins[(k + 15) as usize];
     let far: Vec<f64> = (-15..=15).filter(|k: &i64| k.abs() >= 5).map(at).collect();
     let mean = far.iter().sum::<f64>() / far.len() as f64;
-    let scatter = (far.iter().map(|v| (v / mean - 1.0).powi(2)).sum::<f64>() / far.len() as f64).sqrt();
+    let scatter = (far.iter().map(|v| fmath::powi(v / mean - 1.0, 2)).sum::<f64>() / far.len() as f64).sqrt();
     let near: Vec<f64> = (-4..=4).map(|k| at(k) / mean).collect();
     assert!(mean > 0.0 && scatter < 0.03, "the arc 20-60 km from the middle scatters by {scatter:.3}");
     assert!(

@@ -8,6 +8,7 @@ use super::lines::{bake_with_one_and, hold_still, line_grid, patch_scene};
 use aurora::grid::Grid;
 use aurora::pipeline::bake;
 use aurora::scene::{AnimationParams, Scene};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use std::collections::BTreeSet;
 
@@ -131,7 +132,7 @@ fn a_drifting_curtain_leaves_its_red_behind() {
         let e = e as f64;
         e_sum += e;
         tau_sum += e * tau;
-        lag_sum += e * samples.iter().map(|k| k.weight(tau, None) * d * (omega * k.lag_s).sin()).sum::<f64>();
+        lag_sum += e * samples.iter().map(|k| k.weight(tau, None) * d * fmath::sin(omega * k.lag_s)).sum::<f64>();
     }
     let (tau_bar, want) = (tau_sum / e_sum, lag_sum / e_sum);
     eprintln!("red lag {lag:.3} km; the samples' closed form {want:.3} km; v tau_bar {:.3} km (tau_bar {tau_bar:.1} s)", v * tau_bar);

@@ -12,6 +12,7 @@ use aurora::grid::Grid;
 use aurora::pipeline::bake::{self, Bake};
 use aurora::scene::{Curtain, Scene};
 use aurora::util::colour::luminance;
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 
 /// One straight 40 x 16 km curtain along x at the origin, 600 beams, 1 km
@@ -55,7 +56,7 @@ fn share_within(b: &Bake, want: [f64; 3], tol: f64) -> f64 {
     for (ijk, e) in b.emission.iter_active() {
         let y = lum(e);
         let x = v.get(ijk);
-        let d = (0..3).map(|k| (x[k] as f64 - want[k]).powi(2)).sum::<f64>().sqrt();
+        let d = (0..3).map(|k| fmath::powi(x[k] as f64 - want[k], 2)).sum::<f64>().sqrt();
         all += y;
         if d <= tol * speed {
             near += y;
@@ -110,7 +111,7 @@ fn a_drifting_curtain_moves_at_the_derivative_of_its_drift() {
         centroid(&bake::bake(&u, &NoProgress).unwrap().emission)
     };
     let (a, c) = (at(-0.5), at(0.5));
-    let moved = 20.0 * ((std::f64::consts::TAU / 60.0 * 0.5).sin() * 2.0);
+    let moved = 20.0 * (fmath::sin(std::f64::consts::TAU / 60.0 * 0.5) * 2.0);
     assert!(((c[1] - a[1]) - moved).abs() < 0.05 * moved, "{a:?} {c:?} {moved}");
     assert!(((c[1] - a[1]) - m[1]).abs() < 0.05 * moved, "moved {} against v {}", c[1] - a[1], m[1]);
 }

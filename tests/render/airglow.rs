@@ -17,6 +17,7 @@ use aurora::render::airglow::Airglow;
 use aurora::render::sky::EnvMap;
 use aurora::render::{render, RenderSettings, Volume};
 use aurora::scene::{AirglowParams, SkyParams, TerrainKind};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::DVec3;
 use std::f64::consts::PI;
@@ -80,7 +81,7 @@ fn a_layer_through_its_shell_gives_van_rhijns_factor_with_the_thick_layer_correc
         let zenith = pixel(glow_settings(only(k)), [0.0; 3], DVec3::Z);
         for z_deg in [60.0f64, 80.0] {
             let z = z_deg.to_radians();
-            let f = slant_factor(layer, R_EARTH, 0.0, z.cos());
+            let f = slant_factor(layer, R_EARTH, 0.0, fmath::cos(z));
             let v = van_rhijn(R_EARTH, 0.0, layer.peak_km, z);
             let (thick, next) = thick_layer_factor(layer, R_EARTH, 0.0, z);
             let tol = 2.0 * next.abs() + 1e-6 * thick;
@@ -95,7 +96,7 @@ fn a_layer_through_its_shell_gives_van_rhijns_factor_with_the_thick_layer_correc
                 seen_thick = true;
             }
             // Through the renderer: the elevation 90 - z, looking north.
-            let dir = DVec3::new(0.0, z.sin(), z.cos());
+            let dir = DVec3::new(0.0, fmath::sin(z), fmath::cos(z));
             let px = pixel(glow_settings(only(k)), [0.0; 3], dir);
             for c in 0..3 {
                 let want = zenith[c] as f64 * f;
@@ -144,7 +145,7 @@ fn the_zeniths_radiance_of_each_line_is_its_key() {
     let mut s = glow_settings(only(0));
     s.sky = SkyParams::default();
     let air = aurora::physics::air_extinction::Air::from_sky(&s.sky).unwrap();
-    let t = (-air.column_above(&air.depths(557.7), 0.0)).exp();
+    let t = fmath::exp(-air.column_above(&air.depths(557.7), 0.0));
     let dimmed = pixel(s, [0.0; 3], DVec3::Z);
     let clear = pixel(glow_settings(only(0)), [0.0; 3], DVec3::Z);
     assert!((dimmed[1] as f64 / clear[1] as f64 - t).abs() < 1e-4, "{} vs {t}", dimmed[1] / clear[1]);
@@ -158,7 +159,7 @@ fn the_zeniths_radiance_of_each_line_is_its_key() {
 #[test]
 fn the_terrain_and_the_earth_hide_the_airglow() {
     let e = (-0.5f64).to_radians();
-    let dir = DVec3::new(0.0, e.cos(), e.sin());
+    let dir = DVec3::new(0.0, fmath::cos(e), fmath::sin(e));
     let s = glow_settings(AirglowParams::default());
     let open = pixel(s.clone(), [0.0, 0.0, 1.0], dir);
     assert!(open[1] > 1.0, "{open:?}");
@@ -167,7 +168,7 @@ fn the_terrain_and_the_earth_hide_the_airglow() {
     t.terrain.height = 0.9;
     assert_eq!(pixel(t, [0.0, 0.0, 1.0], dir)[..3], [0.0; 3]);
     let down = (-5.0f64).to_radians();
-    assert_eq!(pixel(s, [0.0, 0.0, 1.0], DVec3::new(0.0, down.cos(), down.sin()))[..3], [0.0; 3]);
+    assert_eq!(pixel(s, [0.0, 0.0, 1.0], DVec3::new(0.0, fmath::cos(down), fmath::sin(down)))[..3], [0.0; 3]);
 }
 
 /// `aurora sky`'s map (`sky_map`) holds at pixel (i, j) the airglow of the
@@ -190,7 +191,7 @@ fn the_sky_map_is_laid_out_as_blenders_world_reads_it() {
         for i in 0..w {
             let (u, v) = ((i as f64 + 0.5) / w as f64, 1.0 - (j as f64 + 0.5) / h as f64);
             let (az, el) = ((0.5 - u) * 2.0 * PI, (v - 0.5) * PI);
-            let d = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+            let d = DVec3::new(fmath::cos(el) * fmath::cos(az), fmath::cos(el) * fmath::sin(az), fmath::sin(el));
             let want = glow.radiance(d);
             let got = map.pixels[j * w + i];
             let back = env.radiance(d);
@@ -242,7 +243,7 @@ fn no_star_shines_from_below_the_ground() {
             s.terrain.kind = TerrainKind::None;
             let e = elevation_deg.to_radians();
             let at = [0.0, 0.0, 1.0];
-            s.camera = persp(at, [0.0, 100.0 * e.cos(), 1.0 + 100.0 * e.sin()], [0.0, 0.0, 1.0], 30.0);
+            s.camera = persp(at, [0.0, 100.0 * fmath::cos(e), 1.0 + 100.0 * fmath::sin(e)], [0.0, 0.0, 1.0], 30.0);
             s.render.width = 64;
             s.render.height = 64;
             render(&s, &Volume::default(), &NoProgress).unwrap().pixels.iter().filter(|p| p[1] > 0.0).count()
@@ -266,12 +267,12 @@ fn the_broadband_light_brightens_by_its_own_geometry() {
     let clear = SkyParams { extinction: false, ..SkyParams::default() };
     let outside = Airglow::new(&broadband(90.0, 50.0, 0.0), &clear, DVec3::ZERO, R_EARTH, Default::default()).unwrap();
     let layer = Airglow::new(&broadband(0.0, 0.0, 1.0), &clear, DVec3::ZERO, R_EARTH, Default::default()).unwrap();
-    let dir = |e: f64| DVec3::new(0.0, e.to_radians().cos(), e.to_radians().sin());
+    let dir = |e: f64| DVec3::new(0.0, fmath::cos(e.to_radians()), fmath::sin(e.to_radians()));
     let (z_out, z_layer) = (outside.radiance(DVec3::Z), layer.radiance(DVec3::Z));
     assert!(z_out[1] > 0.0 && z_layer[1] > 0.0);
     for e in [60.0, 30.0, 10.0, 2.0] {
         let (o, l) = (outside.radiance(dir(e)), layer.radiance(dir(e)));
-        let f = slant_factor(&CONTINUUM_LAYER, R_EARTH, 0.0, e.to_radians().sin());
+        let f = slant_factor(&CONTINUUM_LAYER, R_EARTH, 0.0, fmath::sin(e.to_radians()));
         for c in 0..3 {
             assert!((o[c] / z_out[c] - 1.0).abs() < 1e-6, "outside at {e}: {o:?} vs {z_out:?}");
             assert!((l[c] / (z_layer[c] * f) - 1.0).abs() < 1e-4, "continuum at {e}: {l:?} vs {z_layer:?} x {f}");
@@ -287,7 +288,7 @@ fn the_broadband_light_brightens_by_its_own_geometry() {
     let (z, low) = (dim.radiance(DVec3::Z), dim.radiance(dir(10.0)));
     let extra = air_mass(10.0) - 1.0;
     let got = low[1] / z[1];
-    assert!(got < (-tau(650.0) * extra).exp() && got > (-tau(450.0) * extra).exp(), "{got}");
+    assert!(got < fmath::exp(-tau(650.0) * extra) && got > fmath::exp(-tau(450.0) * extra), "{got}");
 }
 
 /// The default sky at the zenith from the ground, through the eye (CIE
@@ -313,7 +314,7 @@ fn the_zenith_sky_is_a_dark_sites_and_half_of_it_broadband() {
     let broad = zenith(&broadband(90.0, 50.0, 1.0), Observer::Eye);
     let (y_all, y_broad) = (luminance(all), luminance(broad));
     let cd = y_all * 1.926e-4;
-    let mag = 12.58 - 2.5 * cd.log10();
+    let mag = 12.58 - 2.5 * fmath::log10(cd);
     let share = y_broad / y_all;
     let cam = zenith(&AirglowParams::default(), Observer::Camera);
     println!(

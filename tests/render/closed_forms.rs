@@ -22,6 +22,7 @@
 use crate::common::oracle::*;
 use aurora::grid::{Grid, Transform};
 use aurora::render::{radiance_along_ray, render, Integration, Medium, RenderSettings, Volume};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 
@@ -93,7 +94,7 @@ fn check(what: &str, got: f32, want: f64, tol: f64) {
 /// plus the f32 rounding of a value near 1 (2^-24).
 fn check_alpha(what: &str, alpha: f32, t: f64) {
     let err = (alpha as f64 - (1.0 - t)).abs();
-    let tol = 1e-4 * t.min(1.0 - t) + 2f64.powi(-24);
+    let tol = 1e-4 * t.min(1.0 - t) + fmath::powi(2f64, -24);
     assert!(err <= tol, "{what}: alpha {alpha}, T {t}: |alpha - (1 - T)| = {err:.2e} > {tol:.2e}");
 }
 
@@ -175,7 +176,7 @@ fn homogeneous_box_transmittance_is_exp_of_optical_depth() {
             &s,
             &vol,
             |path| {
-                let t = (-(SIGMA as f64) * path).exp();
+                let t = fmath::exp(-(SIGMA as f64) * path);
                 ([t; 3], t)
             },
             name,
@@ -212,7 +213,7 @@ fn emission_with_absorption_same_shape_closed_form() {
             &s,
             &vol,
             |path| {
-                let t = (-st * path).exp();
+                let t = fmath::exp(-st * path);
                 (E.map(|e| 2.0 * e as f64 / st * (1.0 - t) + b * t), t)
             },
             name,
@@ -248,8 +249,8 @@ fn linear_density_ramp_along_a_slanted_ray() {
     let tau = 0.1 * g * n * (n - 1.0) / 2.0 / cos;
     let img = render(&s, &Volume { density: Some(&grid), emission: None }, &NoProgress).unwrap();
     for p in &img.pixels {
-        check("ramp T", p[0], (-tau).exp(), 1e-4);
-        check_alpha("ramp", p[3], (-tau).exp());
+        check("ramp T", p[0], fmath::exp(-tau), 1e-4);
+        check_alpha("ramp", p[3], fmath::exp(-tau));
     }
 }
 
@@ -263,20 +264,20 @@ fn exponential_atmosphere_along_a_slanted_ray() {
     // + O(h^4 / Hs^3), so the difference from the closed form
     // int_0^Z rho0 exp(-z/Hs) dz + (rho0 + rho_top) h / 2 is predicted to 1e-3.
     let (h, hs, rho0, n) = (0.1, 1.0, 0.3, 80);
-    let rho = |k: i32| rho0 * (-(k as f64) * h / hs).exp();
+    let rho = |k: i32| rho0 * fmath::exp(-(k as f64) * h / hs);
     let (grid, s, cos) = slab_scene(|k| rho(k) as f32);
     let sum: f64 = (0..n).map(|k| rho(k) as f32 as f64).sum();
     let tau = h * sum / cos;
     let img = render(&s, &Volume { density: Some(&grid), emission: None }, &NoProgress).unwrap();
     for p in &img.pixels {
-        check("atmosphere T", p[0], (-tau).exp(), 1e-4);
-        check_alpha("atmosphere", p[3], (-tau).exp());
+        check("atmosphere T", p[0], fmath::exp(-tau), 1e-4);
+        check_alpha("atmosphere", p[3], fmath::exp(-tau));
     }
     let z = (n - 1) as f64 * h;
     let rho_top = rho(n - 1);
-    let continuous = rho0 * hs * (1.0 - (-z / hs).exp()) + (rho0 + rho_top) * h / 2.0;
+    let continuous = rho0 * hs * (1.0 - fmath::exp(-z / hs)) + (rho0 + rho_top) * h / 2.0;
     let predicted = h * h / (12.0 * hs) * (rho0 - rho_top);
-    let rendered_tau = -(img.pixels[0][0] as f64).ln() * cos;
+    let rendered_tau = -fmath::ln(img.pixels[0][0] as f64) * cos;
     let diff = rendered_tau - continuous;
     assert!((diff - predicted).abs() <= 1e-3 * predicted + 1e-6, "trapezoid error {diff:.3e} vs Euler-Maclaurin {predicted:.3e}");
 }
@@ -307,8 +308,8 @@ fn single_voxel_footprint_is_exactly_one_voxel() {
                 outside += 1;
             } else {
                 let tau = 3.0 * 0.5 * (1.0 - u.x.abs()).max(0.0) * (1.0 - u.y.abs()).max(0.0);
-                check("single voxel", p[0], (-tau).exp(), 1e-4);
-                check_alpha("single voxel", p[3], (-tau).exp());
+                check("single voxel", p[0], fmath::exp(-tau), 1e-4);
+                check_alpha("single voxel", p[3], fmath::exp(-tau));
             }
         }
     }

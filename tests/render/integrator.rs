@@ -13,6 +13,7 @@ use aurora::grid::{Grid, Transform};
 use aurora::render::dda::{segments, CellFilter, LeafWalker};
 use aurora::render::segment::{Accum, Cubic, Piece, TAU_CUTOFF};
 use aurora::render::{optical_depth_along_ray, radiance_along_ray, render, Integration, Medium, Volume};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
@@ -188,7 +189,7 @@ fn blob() -> Grid<f32> {
     box_f32(
         IVec3::ZERO,
         IVec3::splat(24),
-        |p| (4.0 * (-(p.as_dvec3() - c).length_squared() / 36.0).exp()) as f32,
+        |p| (4.0 * fmath::exp(-(p.as_dvec3() - c).length_squared() / 36.0)) as f32,
         Transform::new(0.4, DVec3::ZERO),
     )
 }
@@ -216,12 +217,12 @@ fn fixed_step_error_grows_with_step_size_while_exact_stays_exact() {
             thick += 1;
         }
         let exact = radiance_along_ray(&medium, o, dir, f64::INFINITY, Integration::Exact, 0.5);
-        assert!(rel(exact.transmittance(), (-tau).exp(), 0.0) < 1e-4, "exact T {} vs {}", exact.transmittance(), (-tau).exp());
+        assert!(rel(exact.transmittance(), fmath::exp(-tau), 0.0) < 1e-4, "exact T {} vs {}", exact.transmittance(), fmath::exp(-tau));
         assert!(rel(exact.l[0], l[0], 0.0) < 1e-4, "exact L {} vs {}", exact.l[0], l[0]);
         for (k, &h) in steps.iter().enumerate() {
             let off: f64 = rng.random();
             let f = radiance_along_ray(&medium, o, dir, f64::INFINITY, Integration::FixedStep(h), off);
-            err_t[k] += rel(f.transmittance(), (-tau).exp(), 0.0) / rays as f64;
+            err_t[k] += rel(f.transmittance(), fmath::exp(-tau), 0.0) / rays as f64;
             err_l[k] += rel(f.l[0], l[0], 0.0) / rays as f64;
         }
     }

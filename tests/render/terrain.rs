@@ -7,6 +7,7 @@ use aurora::grid::Transform;
 use aurora::render::terrain::{intersect_triangle, procedural_cells, write_obj, Heightfield};
 use aurora::render::{render, Image, RenderSettings, Volume};
 use aurora::scene::{Terrain, TerrainKind};
+use aurora::util::fmath;
 use aurora::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rand::{Rng, SeedableRng};
@@ -44,7 +45,7 @@ fn slab_settings(spp: usize, shadow: usize) -> RenderSettings {
 /// Signed solid-angle primitive of the rectangle [0,X] x [0,Y] at height z:
 /// atan(XY / (z sqrt(X^2 + Y^2 + z^2))) (odd in X and Y).
 fn f_rect(x: f64, y: f64, z: f64) -> f64 {
-    (x * y / (z * (x * x + y * y + z * z).sqrt())).atan()
+    fmath::atan(x * y / (z * (x * x + y * y + z * z).sqrt()))
 }
 
 /// Solid angle of the rectangle [x0,x1] x [y0,y1] at height z above the origin.
@@ -192,8 +193,8 @@ fn j_absorbing(sigma: f64) -> f64 {
             for k in 0..nphi {
                 for &(b, wb) in &g8 {
                     let phi = (k as f64 + b) / nphi as f64 * PI / 4.0;
-                    let d = depth(DVec3::new(sin * phi.cos(), sin * phi.sin(), mu));
-                    let f = if sigma > 0.0 { (1.0 - (-sigma * d).exp()) / sigma } else { d };
+                    let d = depth(DVec3::new(sin * fmath::cos(phi), sin * fmath::sin(phi), mu));
+                    let f = if sigma > 0.0 { (1.0 - fmath::exp(-sigma * d)) / sigma } else { d };
                     total += wa * wb * mu * f;
                 }
             }
@@ -220,7 +221,7 @@ fn absorbing_slab_shadow_rays_carry_transmittance() {
     let s = slab_settings(16, 16);
     let img = render(&s, &Volume { density: d.as_ref(), emission: Some(&e) }, &NoProgress).unwrap();
     let sg = sigma as f64;
-    let tp = (-sg * NZ as f64).exp();
+    let tp = fmath::exp(-sg * NZ as f64);
     let front = E[1] as f64 / sg * (1.0 - tp);
     let want = ALBEDO / PI * E[1] as f64 * j_absorbing(sg);
     let (m, se) = mean_se(&img, |p| (p[1] as f64 - front) / tp);

@@ -10,6 +10,7 @@ use crate::{dome_master_toml, green_line_grid_toml};
 use aurora::geometry::camera::CameraModel;
 use aurora::physics::air_extinction::{Air, Extinction};
 use aurora::scene::{Scene, SkyParams};
+use aurora::util::fmath;
 use glam::DVec3;
 use std::path::Path;
 
@@ -47,7 +48,7 @@ fn near_zenith(scene: &Scene, values: &[f32], w: usize, cone_deg: f64) -> Vec<(f
     let mut out = Vec::new();
     for (i, v) in values.iter().enumerate() {
         let Some(ray) = cam.ray_at((i % w) as f64 + 0.5, (i / w) as f64 + 0.5) else { continue };
-        if ray.dir.z >= cone_deg.to_radians().cos() {
+        if ray.dir.z >= fmath::cos(cone_deg.to_radians()) {
             out.push((*v as f64, ray.dir.z));
         }
     }
@@ -124,7 +125,7 @@ fn narrow_band_image_reads_the_profile_column_at_the_zenith_in_rayleigh() {
     let (mut sum, mut n) = (0.0, 0);
     for i in 0..off.len() {
         let Some(ray) = cam.ray_at((i % w) as f64 + 0.5, (i / w) as f64 + 0.5) else { continue };
-        if ray.dir.z >= 10f64.to_radians().cos() && off[i] > 0.0 {
+        if ray.dir.z >= fmath::cos(10f64.to_radians()) && off[i] > 0.0 {
             sum += on[i] as f64 / off[i] as f64 / air.towards(ray.dir)[0];
             n += 1;
         }

@@ -21,6 +21,7 @@
 
 use aurora::pipeline::deposit::Photon;
 use aurora::pipeline::photons::{kdtree::PhotonMap, kernel::Kernel};
+use aurora::util::fmath;
 use glam::DVec3;
 use rand::Rng;
 
@@ -28,7 +29,7 @@ use rand::Rng;
 fn normal(r: &mut impl Rng) -> f64 {
     let u1: f64 = 1.0 - r.random::<f64>(); // (0, 1]
     let u2: f64 = r.random();
-    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+    (-2.0 * fmath::ln(u1)).sqrt() * fmath::cos(2.0 * std::f64::consts::PI * u2)
 }
 
 const N: usize = 100_000;
@@ -37,7 +38,7 @@ const S: f64 = 0.5; // km, sd of the sheet across (y)
 const CUTOFF: f64 = 6.0;
 
 fn phi(y: f64, sd: f64) -> f64 {
-    (-0.5 * (y / sd).powi(2)).exp() / (sd * (2.0 * std::f64::consts::PI).sqrt())
+    fmath::exp(-0.5 * fmath::powi(y / sd, 2)) / (sd * (2.0 * std::f64::consts::PI).sqrt())
 }
 
 fn sheet() -> Vec<Photon> {
@@ -77,9 +78,9 @@ fn radius_error_curve_has_noise_and_blur_ends_and_a_minimum_between() {
     let pts = points();
     let density = N as f64 / (L * L); // photons per km^2 of sheet
     let truth = |y: f64| density * phi(y, S);
-    let sum_truth2: f64 = pts.iter().map(|p| truth(p.y).powi(2)).sum();
+    let sum_truth2: f64 = pts.iter().map(|p| fmath::powi(truth(p.y), 2)).sum();
     // Photon spacing at the sheet's middle: (photons per km^3)^(-1/3).
-    let spacing = (density * phi(0.0, S)).powf(-1.0 / 3.0);
+    let spacing = fmath::powf(density * phi(0.0, S), -1.0 / 3.0);
     let thickness = 2.0 * S;
     let radii = [0.02, 0.05, 0.1, 0.2, 0.35, 0.6, 1.0, 1.6, 2.4];
     assert!(radii[0] < 0.25 * spacing && radii[radii.len() - 1] > 2.0 * thickness);
@@ -91,20 +92,20 @@ fn radius_error_curve_has_noise_and_blur_ends_and_a_minimum_between() {
         let mut num = 0.0;
         for p in &pts {
             let e = map.estimate(*p, &k)[0];
-            num += (e - truth(p.y)).powi(2);
+            num += fmath::powi(e - truth(p.y), 2);
         }
         let err = (num / sum_truth2).sqrt();
         // The prediction.
-        let norm_k2 = 1.0 / ((4.0 * std::f64::consts::PI).powf(1.5) * r * r * r);
+        let norm_k2 = 1.0 / (fmath::powf(4.0 * std::f64::consts::PI, 1.5) * r * r * r);
         let mut pred = 0.0;
         for p in &pts {
             let mean = density * phi(p.y, (S * S + r * r).sqrt());
             let var = density * phi(p.y, (S * S + 0.5 * r * r).sqrt()) * norm_k2 - mean * mean / N as f64;
-            pred += (mean - truth(p.y)).powi(2) + var;
+            pred += fmath::powi(mean - truth(p.y), 2) + var;
         }
         let pred = (pred / sum_truth2).sqrt();
         // Photons expected inside one kernel (within r) at the middle.
-        let per_kernel = density * phi(0.0, S) * 4.0 / 3.0 * std::f64::consts::PI * r.powi(3);
+        let per_kernel = density * phi(0.0, S) * 4.0 / 3.0 * std::f64::consts::PI * fmath::powi(r, 3);
         eprintln!("r = {r:5.2} km: error {err:.4} (predicted {pred:.4}), {per_kernel:.2} photons within r");
         measured.push((r, err, pred, per_kernel));
     }

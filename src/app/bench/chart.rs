@@ -8,6 +8,7 @@
 //! which a log axis cannot show: it is drawn as a triangle on the bottom edge.
 
 use super::measurement::{pareto_front, CostUnit, Measurement};
+use crate::util::fmath;
 use plotters::prelude::*;
 use std::path::Path;
 
@@ -207,9 +208,9 @@ fn nice_ticks(lo: f64, hi: f64) -> Vec<f64> {
     if !(lo > 0.0 && hi > lo && hi.is_finite()) {
         return Vec::new();
     }
-    let (k0, k1) = (lo.log10().floor() as i32, hi.log10().ceil() as i32);
+    let (k0, k1) = (fmath::log10(lo).floor() as i32, fmath::log10(hi).ceil() as i32);
     let pick = |ms: &[f64]| -> Vec<f64> {
-        (k0..=k1).flat_map(|k| ms.iter().map(move |m| m * 10f64.powi(k))).filter(|&x| x >= lo && x <= hi).collect()
+        (k0..=k1).flat_map(|k| ms.iter().map(move |m| m * fmath::powi(10f64, k))).filter(|&x| x >= lo && x <= hi).collect()
     };
     let coarse = pick(&[1.0, 2.0, 5.0]);
     if coarse.len() >= 3 {
@@ -224,7 +225,7 @@ fn sig(x: f64) -> String {
     if x == 0.0 {
         return "0".into();
     }
-    let digits = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    let digits = (2 - fmath::log10(x.abs()).floor() as i32).max(0) as usize;
     if x.abs() >= 1e-3 && x.abs() < 1e5 {
         // Trailing zeros dropped: "0.08", "2", "0.125".
         let s = format!("{x:.digits$}");

@@ -1,6 +1,7 @@
 //! Error metrics against a reference, shared by every study.
 
 use crate::grid::{Grid, VoxelValue};
+use crate::util::fmath;
 
 /// Visits the (test, reference) component pairs [`grid_rel_rms`] compares,
 /// with their weights: every reference voxel centre (test sampled there,
@@ -16,7 +17,7 @@ fn visit_pairs<T: VoxelValue>(test: &Grid<T>, reference: &Grid<T>, mut f: impl F
         }
     }
     // Mass the test puts where the reference is empty is error too.
-    let w = (test.transform.voxel_size / reference.transform.voxel_size).powi(3);
+    let w = fmath::powi(test.transform.voxel_size / reference.transform.voxel_size, 3);
     for (ijk, a) in test.iter_active() {
         let p = test.transform.index_to_world(ijk.as_dvec3());
         let b = reference.sample_world(p);
@@ -143,8 +144,8 @@ mod tests {
         let mut b = Grid::new("e", [0.0f32; 3], tr);
         for i in 0..30 {
             let x = i as f32;
-            a.set(IVec3::new(i, 1, 0), [x.sin().abs() + 0.1, 0.3, 0.0]);
-            b.set(IVec3::new(i, 1, 0), [2.0 * x.cos().abs(), 0.5, 0.1]);
+            a.set(IVec3::new(i, 1, 0), [fmath::sin(x).abs() + 0.1, 0.3, 0.0]);
+            b.set(IVec3::new(i, 1, 0), [2.0 * fmath::cos(x).abs(), 0.5, 0.1]);
         }
         a.set(IVec3::new(40, 0, 0), [1.0, 1.0, 1.0]); // only in the test grid
         let (e, s) = grid_rel_rms_best_scale(&a, &b);

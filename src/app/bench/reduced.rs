@@ -24,6 +24,7 @@
 //! scales, terrain) is the scene's own.
 
 use crate::scene::{Camera, Projection, Scene, Terrain, TerrainKind, VoxelSize};
+use crate::util::fmath;
 
 /// The reduced scene and a line per change made, for `bench.json`.
 #[derive(Clone, Debug)]
@@ -40,11 +41,11 @@ fn straightened(c: &crate::scene::Curtain, changes: &mut Vec<String>) -> crate::
     let Some(path) = c.path.as_ref().filter(|p| p.len() >= 2) else {
         return c.clone();
     };
-    let length: f64 = path.windows(2).map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1])).sum();
+    let length: f64 = path.windows(2).map(|w| fmath::hypot(w[1][0] - w[0][0], w[1][1] - w[0][1])).sum();
     let m = path.len() / 2;
     let (a, b) = (path[m.saturating_sub(1)], path[(m + 1).min(path.len() - 1)]);
     let mid = if path.len() % 2 == 1 { path[m] } else { [(path[m - 1][0] + path[m][0]) / 2.0, (path[m - 1][1] + path[m][1]) / 2.0] };
-    let rotation_deg = (b[1] - a[1]).atan2(b[0] - a[0]).to_degrees();
+    let rotation_deg = fmath::atan2(b[1] - a[1], b[0] - a[0]).to_degrees();
     changes.push(format!(
         "curtain[0].path: a straight curtain of its length {length:.1} km through [{:.1}, {:.1}] at {rotation_deg:.1} degrees",
         mid[0], mid[1]
@@ -96,7 +97,7 @@ pub fn reduce(scene: &Scene, length_km: f64, auto_voxel: Option<(f64, String)>) 
 
 /// Unit vectors along the curtain's axis and across it (+v), in the ground plane.
 fn curtain_frame(scene: &Scene) -> ([f64; 2], [f64; 2]) {
-    let (sn, cs) = scene.curtains[0].rotation_deg.to_radians().sin_cos();
+    let (sn, cs) = fmath::sin_cos(scene.curtains[0].rotation_deg.to_radians());
     ([cs, sn], [-sn, cs])
 }
 
@@ -109,10 +110,10 @@ pub fn volume_camera(scene: &Scene) -> Camera {
     let (_, across) = curtain_frame(scene);
     let (d, h) = (120.0, 1.5);
     let pos = [c[0] - across[0] * d, c[1] - across[1] * d, h];
-    let lo = ((85.0 - h) / d).atan();
-    let hi = ((scene.beams.top_km + 10.0 - h) / d).atan();
+    let lo = fmath::atan((85.0 - h) / d);
+    let hi = fmath::atan((scene.beams.top_km + 10.0 - h) / d);
     let el = 0.5 * (lo + hi);
-    let look_at = [c[0], c[1], h + d * el.tan()];
+    let look_at = [c[0], c[1], h + d * fmath::tan(el)];
     Camera {
         position: pos,
         look_at,

@@ -35,6 +35,7 @@
 //! parallax (0.75" at most, alpha Centauri) to its hundredth.
 
 use super::rotation::{equatorial_from_ecliptic, ARCSEC};
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The astronomical unit, km (IAU 2012).
@@ -55,11 +56,11 @@ pub fn sun_place(jd_tt: f64) -> SunPlace {
     let l0 = 280.466_46 + 36_000.769_83 * t + 0.000_303_2 * t * t;
     let m = (357.529_11 + 35_999.050_29 * t - 0.000_153_7 * t * t).to_radians();
     let e = 0.016_708_634 - 0.000_042_037 * t - 0.000_000_126_7 * t * t;
-    let c = (1.914_602 - 0.004_817 * t - 0.000_014 * t * t) * m.sin()
-        + (0.019_993 - 0.000_101 * t) * (2.0 * m).sin()
-        + 0.000_289 * (3.0 * m).sin();
+    let c = (1.914_602 - 0.004_817 * t - 0.000_014 * t * t) * fmath::sin(m)
+        + (0.019_993 - 0.000_101 * t) * fmath::sin(2.0 * m)
+        + 0.000_289 * fmath::sin(3.0 * m);
     let nu = m + c.to_radians();
-    SunPlace { longitude_deg: (l0 + c).rem_euclid(360.0), distance_au: 1.000_001_018 * (1.0 - e * e) / (1.0 + e * nu.cos()) }
+    SunPlace { longitude_deg: (l0 + c).rem_euclid(360.0), distance_au: 1.000_001_018 * (1.0 - e * e) / (1.0 + e * fmath::cos(nu)) }
 }
 
 /// The constant of aberration, radians (the Earth's mean orbital speed
@@ -77,8 +78,8 @@ pub fn earth_position_velocity(jd_tt: f64) -> (DVec3, DVec3) {
     let e = 0.016_708_634 - 0.000_042_037 * t;
     let eps0 = 84_381.448 * ARCSEC;
     let position = -equatorial_from_ecliptic(l, 0.0, eps0) * place.distance_au;
-    let v_ecl = DVec3::new(l.sin() - e * w.sin(), -l.cos() + e * w.cos(), 0.0) * ABERRATION_CONSTANT;
-    let (se, ce) = eps0.sin_cos();
+    let v_ecl = DVec3::new(fmath::sin(l) - e * fmath::sin(w), -fmath::cos(l) + e * fmath::cos(w), 0.0) * ABERRATION_CONSTANT;
+    let (se, ce) = fmath::sin_cos(eps0);
     let velocity = DVec3::new(v_ecl.x, v_ecl.y * ce - v_ecl.z * se, v_ecl.y * se + v_ecl.z * ce);
     (position, velocity)
 }

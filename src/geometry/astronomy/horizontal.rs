@@ -7,27 +7,28 @@
 //! north as navigators and skyfield count it, not Meeus' from south):
 //! for a unit vector `(x, y, z)`, `az = atan2(x, y)`, `el = asin(z)`.
 
+use crate::util::fmath;
 use glam::DVec3;
 
 /// Azimuth (from north through east, `[0, 360)`) and elevation of an ENU
 /// direction, degrees; the vector need not be unit.
 pub fn az_el_deg(enu: DVec3) -> (f64, f64) {
-    let horizontal = enu.x.hypot(enu.y);
-    let az = enu.x.atan2(enu.y).to_degrees().rem_euclid(360.0);
-    (if az >= 360.0 { 0.0 } else { az }, enu.z.atan2(horizontal).to_degrees())
+    let horizontal = fmath::hypot(enu.x, enu.y);
+    let az = fmath::atan2(enu.x, enu.y).to_degrees().rem_euclid(360.0);
+    (if az >= 360.0 { 0.0 } else { az }, fmath::atan2(enu.z, horizontal).to_degrees())
 }
 
 /// The unit ENU vector of an azimuth and elevation, degrees.
 pub fn enu_from_az_el_deg(az_deg: f64, el_deg: f64) -> DVec3 {
-    let (sa, ca) = az_deg.to_radians().sin_cos();
-    let (se, ce) = el_deg.to_radians().sin_cos();
+    let (sa, ca) = fmath::sin_cos(az_deg.to_radians());
+    let (se, ce) = fmath::sin_cos(el_deg.to_radians());
     DVec3::new(ce * sa, ce * ca, se)
 }
 
 /// The angle between two directions, degrees (robust for small angles:
 /// `atan2(|a x b|, a . b)`).
 pub fn separation_deg(a: DVec3, b: DVec3) -> f64 {
-    a.cross(b).length().atan2(a.dot(b)).to_degrees()
+    fmath::atan2(a.cross(b).length(), a.dot(b)).to_degrees()
 }
 
 #[cfg(test)]

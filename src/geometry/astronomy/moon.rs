@@ -25,6 +25,7 @@
 use super::frame::SkyFrame;
 use super::rotation::equatorial_from_ecliptic;
 use super::sun::sun_apparent_tod_km;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The Moon's mean radius, km.
@@ -206,8 +207,8 @@ pub fn moon_place(jd_tt: f64) -> MoonPlace {
     let a2 = 53.09 + 479_264.290 * t;
     let a3 = 313.45 + 481_266.484 * t;
     let e = 1.0 - 0.002_516 * t - 0.000_007_4 * t2;
-    let sin = |deg: f64| deg.rem_euclid(360.0).to_radians().sin();
-    let cos = |deg: f64| deg.rem_euclid(360.0).to_radians().cos();
+    let sin = |deg: f64| fmath::sin(deg.rem_euclid(360.0).to_radians());
+    let cos = |deg: f64| fmath::cos(deg.rem_euclid(360.0).to_radians());
     let factor = |k: i8| match k.abs() {
         1 => e,
         2 => e * e,
@@ -247,7 +248,7 @@ pub fn phase_angle_rad(moon_km: DVec3, sun_km: DVec3) -> f64 {
 
 /// The illuminated fraction of a phase angle, radians (Meeus eq. 48.1).
 pub fn illuminated_fraction(phase_angle_rad: f64) -> f64 {
-    0.5 * (1.0 + phase_angle_rad.cos())
+    0.5 * (1.0 + fmath::cos(phase_angle_rad))
 }
 
 /// The Moon seen from the frame's site at its instant.
@@ -267,7 +268,7 @@ pub fn moon_view(frame: &SkyFrame) -> MoonView {
         illuminated_fraction: illuminated_fraction(i),
         phase_angle_deg: i.to_degrees(),
         bright_limb_enu,
-        angular_radius_deg: (MOON_RADIUS_KM / distance_km).asin().to_degrees(),
+        angular_radius_deg: fmath::asin(MOON_RADIUS_KM / distance_km).to_degrees(),
     }
 }
 

@@ -24,6 +24,7 @@
 
 use super::precession::{centuries_tt, mean_obliquity_rad};
 use super::rotation::{r1, r3, ARCSEC};
+use crate::util::fmath;
 use glam::DMat3;
 
 /// Nutation at an instant, radians.
@@ -92,8 +93,8 @@ pub fn nutation(jd_tt: f64) -> Nutation {
     let (mut dpsi, mut deps) = (0.0, 0.0);
     for (k, s, st, c, ct) in TERMS {
         let arg: f64 = k.iter().zip(args).map(|(&k, a)| k as f64 * a).sum();
-        dpsi += (s + st * t) * arg.sin();
-        deps += (c + ct * t) * arg.cos();
+        dpsi += (s + st * t) * fmath::sin(arg);
+        deps += (c + ct * t) * fmath::cos(arg);
     }
     Nutation { dpsi: dpsi * 1e-4 * ARCSEC, deps: deps * 1e-4 * ARCSEC, mean_obliquity: mean_obliquity_rad(jd_tt) }
 }
@@ -114,7 +115,7 @@ impl Nutation {
     pub fn equation_of_equinoxes(&self, jd_tt: f64) -> f64 {
         let t = centuries_tt(jd_tt);
         let om = (125.044_52 - 1_934.136_261 * t).to_radians();
-        self.dpsi * self.mean_obliquity.cos() + (0.002_64 * om.sin() + 0.000_063 * (2.0 * om).sin()) * ARCSEC
+        self.dpsi * fmath::cos(self.mean_obliquity) + (0.002_64 * fmath::sin(om) + 0.000_063 * fmath::sin(2.0 * om)) * ARCSEC
     }
 }
 
@@ -139,7 +140,7 @@ mod tests {
         let moved = n.matrix() * DVec3::X;
         // The mean equinox seen in the true frame: longitude +dpsi (a
         // fixed direction's apparent longitude is its mean one plus dpsi).
-        let ra = moved.y.atan2(moved.x);
-        assert!((ra - n.dpsi * n.true_obliquity().cos()).abs() < 1e-3 * ARCSEC, "{ra}");
+        let ra = fmath::atan2(moved.y, moved.x);
+        assert!((ra - n.dpsi * fmath::cos(n.true_obliquity())).abs() < 1e-3 * ARCSEC, "{ra}");
     }
 }

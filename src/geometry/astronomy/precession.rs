@@ -20,6 +20,7 @@
 //! 0.001813" t^3`.
 
 use super::rotation::{r1, r2, r3, ARCSEC};
+use crate::util::fmath;
 use glam::DMat3;
 
 /// Julian centuries of TT from J2000.
@@ -36,7 +37,7 @@ pub fn mean_obliquity_rad(jd_tt: f64) -> f64 {
 /// The frame bias from the GCRS to the mean J2000 frame (IAU 2000).
 pub fn frame_bias() -> DMat3 {
     let eps0 = 84_381.448 * ARCSEC;
-    r1(0.006_819_2 * ARCSEC) * r2(-0.041_775 * ARCSEC * eps0.sin()) * r3(-0.0146 * ARCSEC)
+    r1(0.006_819_2 * ARCSEC) * r2(-0.041_775 * ARCSEC * fmath::sin(eps0)) * r3(-0.0146 * ARCSEC)
 }
 
 /// The IAU 1976 precession from the mean J2000 frame to the mean frame of
@@ -69,10 +70,10 @@ mod tests {
         let years = (jde - 2_451_545.0) / 365.25;
         let a = (41.049_941_7 + 0.034_25 * 15.0 * years / 3600.0).to_radians();
         let d = (49.228_466_7 - 0.0895 * years / 3600.0).to_radians();
-        let v = DVec3::new(d.cos() * a.cos(), d.cos() * a.sin(), d.sin());
+        let v = DVec3::new(fmath::cos(d) * fmath::cos(a), fmath::cos(d) * fmath::sin(a), fmath::sin(d));
         let p = precession_1976(jde) * v;
-        let ra = p.y.atan2(p.x).to_degrees();
-        let dec = p.z.asin().to_degrees();
+        let ra = fmath::atan2(p.y, p.x).to_degrees();
+        let dec = fmath::asin(p.z).to_degrees();
         let (ra_want, dec_want) = (41.547_212_5, 49.348_483_3);
         assert!((ra - ra_want).abs() < 1e-5 && (dec - dec_want).abs() < 1e-5, "{ra} {dec}");
     }

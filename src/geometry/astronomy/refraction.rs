@@ -16,6 +16,7 @@
 //! by no more than 3e-5 degrees ([`refraction_deg`]). Bennett's formula is
 //! good to 0.07' above the horizon for the standard air.
 
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The air refraction is computed for.
@@ -41,7 +42,7 @@ pub fn bennett_deg(apparent_elevation_deg: f64, air: &Air) -> f64 {
     if !(-1.0..=89.9).contains(&h) {
         return 0.0;
     }
-    let r = 0.016_667 / (h + 7.31 / (h + 4.4)).to_radians().tan();
+    let r = 0.016_667 / fmath::tan((h + 7.31 / (h + 4.4)).to_radians());
     r * (0.28 * air.pressure_hpa / (air.temperature_c + 273.0))
 }
 
@@ -64,7 +65,7 @@ pub fn refraction_deg(true_elevation_deg: f64, air: &Air) -> f64 {
 /// A true ENU direction raised by refraction: the same azimuth, the
 /// elevation raised by [`refraction_deg`]. Unit in, unit out.
 pub fn refract(enu_dir: DVec3, air: &Air) -> DVec3 {
-    let el = enu_dir.z.clamp(-1.0, 1.0).asin();
+    let el = fmath::asin(enu_dir.z.clamp(-1.0, 1.0));
     let dh = refraction_deg(el.to_degrees(), air).to_radians();
     if dh == 0.0 {
         return enu_dir;
@@ -74,7 +75,7 @@ pub fn refract(enu_dir: DVec3, air: &Air) -> DVec3 {
     if h_len == 0.0 {
         return enu_dir;
     }
-    let (s, c) = (el + dh).sin_cos();
+    let (s, c) = fmath::sin_cos(el + dh);
     horizontal / h_len * c + DVec3::Z * s
 }
 

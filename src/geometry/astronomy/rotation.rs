@@ -7,6 +7,7 @@
 //! Reference Systems...", USNO Circular 179, section 6). Each is the active
 //! rotation by `-a`.
 
+use crate::util::fmath;
 use glam::{DMat3, DVec3};
 
 /// The frame rotation about x by `a` radians.
@@ -30,9 +31,9 @@ pub const ARCSEC: f64 = std::f64::consts::PI / 648_000.0;
 /// The unit vector of an ecliptic longitude and latitude (radians) in the
 /// equatorial frame of an obliquity (radians).
 pub fn equatorial_from_ecliptic(longitude: f64, latitude: f64, obliquity: f64) -> DVec3 {
-    let (sl, cl) = longitude.sin_cos();
-    let (sb, cb) = latitude.sin_cos();
-    let (se, ce) = obliquity.sin_cos();
+    let (sl, cl) = fmath::sin_cos(longitude);
+    let (sb, cb) = fmath::sin_cos(latitude);
+    let (se, ce) = fmath::sin_cos(obliquity);
     let (x, y, z) = (cb * cl, cb * sl, sb);
     DVec3::new(x, y * ce - z * se, y * se + z * ce)
 }

@@ -21,6 +21,7 @@
 //! east`. The ITRS is taken as the frame the Earth's rotation carries
 //! (polar motion, under 0.5 arcsecond, is neglected: `crate::geometry::astronomy::frame`).
 
+use crate::util::fmath;
 use glam::{DMat3, DVec3};
 use thiserror::Error;
 
@@ -75,8 +76,8 @@ impl Site {
 
     /// The Earth-fixed (ITRS, ECEF) position, km.
     pub fn itrs_km(&self) -> DVec3 {
-        let (sp, cp) = self.latitude_deg.to_radians().sin_cos();
-        let (sl, cl) = self.longitude_deg.to_radians().sin_cos();
+        let (sp, cp) = fmath::sin_cos(self.latitude_deg.to_radians());
+        let (sl, cl) = fmath::sin_cos(self.longitude_deg.to_radians());
         let e2 = WGS84_F * (2.0 - WGS84_F);
         let n = WGS84_A_KM / (1.0 - e2 * sp * sp).sqrt();
         let h = self.height_km;
@@ -90,24 +91,24 @@ impl Site {
     /// of the Earth's centre.
     pub fn from_itrs_km(p: DVec3) -> Site {
         let e2 = WGS84_F * (2.0 - WGS84_F);
-        let rho = p.x.hypot(p.y);
-        let mut phi = p.z.atan2(rho * (1.0 - e2));
+        let rho = fmath::hypot(p.x, p.y);
+        let mut phi = fmath::atan2(p.z, rho * (1.0 - e2));
         let mut n = WGS84_A_KM;
         for _ in 0..6 {
-            let sp = phi.sin();
+            let sp = fmath::sin(phi);
             n = WGS84_A_KM / (1.0 - e2 * sp * sp).sqrt();
-            phi = (p.z + e2 * n * sp).atan2(rho);
+            phi = fmath::atan2(p.z + e2 * n * sp, rho);
         }
-        let (sp, cp) = phi.sin_cos();
+        let (sp, cp) = fmath::sin_cos(phi);
         // The height along the normal, from whichever of rho and z is the better conditioned.
         let h = if cp.abs() > 0.5 { rho / cp - n } else { p.z / sp - n * (1.0 - e2) };
-        Site { latitude_deg: phi.to_degrees(), longitude_deg: p.y.atan2(p.x).to_degrees(), height_km: h }
+        Site { latitude_deg: phi.to_degrees(), longitude_deg: fmath::atan2(p.y, p.x).to_degrees(), height_km: h }
     }
 
     /// East, north and up (the ellipsoid's normal) in the ITRS.
     pub fn basis(&self) -> [DVec3; 3] {
-        let (sp, cp) = self.latitude_deg.to_radians().sin_cos();
-        let (sl, cl) = self.longitude_deg.to_radians().sin_cos();
+        let (sp, cp) = fmath::sin_cos(self.latitude_deg.to_radians());
+        let (sl, cl) = fmath::sin_cos(self.longitude_deg.to_radians());
         let east = DVec3::new(-sl, cl, 0.0);
         let up = DVec3::new(cp * cl, cp * sl, sp);
         [east, up.cross(east), up]
@@ -148,7 +149,7 @@ mod tests {
         assert!((pole.z - 6_357.752_314).abs() < 1e-6, "{pole}");
         // 45 N: geocentric latitude 44.8076 degrees (geodetic - 0.1924).
         let p = Site::new(45.0, 10.0, 0.0).unwrap().itrs_km();
-        let geocentric = (p.z / (p.x * p.x + p.y * p.y).sqrt()).atan().to_degrees();
+        let geocentric = fmath::atan(p.z / (p.x * p.x + p.y * p.y).sqrt()).to_degrees();
         assert!((geocentric - 44.807_576).abs() < 1e-5, "{geocentric}");
     }
 
@@ -160,7 +161,7 @@ mod tests {
         // Up is the ellipsoid's normal: the gradient of x^2/a^2 + z^2/b^2.
         let p = Site { height_km: 0.0, ..s }.itrs_km();
         let b = WGS84_A_KM * (1.0 - WGS84_F);
-        let normal = DVec3::new(p.x / WGS84_A_KM.powi(2), p.y / WGS84_A_KM.powi(2), p.z / (b * b)).normalize();
+        let normal = DVec3::new(p.x / fmath::powi(WGS84_A_KM, 2), p.y / fmath::powi(WGS84_A_KM, 2), p.z / (b * b)).normalize();
         assert!((normal - u).length() < 1e-12);
         // Up from the site is 0.1 km above the ellipsoid's point.
         assert!(((s.itrs_km() - p) - 0.1 * u).length() < 1e-9);

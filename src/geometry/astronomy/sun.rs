@@ -13,6 +13,7 @@
 use super::earth_orbit::{sun_place, AU_KM};
 use super::frame::SkyFrame;
 use super::rotation::{equatorial_from_ecliptic, ARCSEC};
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The Sun's apparent geocentric position, km, in the true equator and
@@ -32,7 +33,7 @@ pub fn sun_enu(frame: &SkyFrame) -> DVec3 {
 
 /// The Sun's unrefracted elevation in the site's sky, degrees.
 pub fn sun_elevation_deg(frame: &SkyFrame) -> f64 {
-    sun_enu(frame).z.clamp(-1.0, 1.0).asin().to_degrees()
+    fmath::asin(sun_enu(frame).z.clamp(-1.0, 1.0)).to_degrees()
 }
 
 #[cfg(test)]
@@ -49,10 +50,10 @@ mod tests {
         assert!((p.longitude_deg - 199.909_88).abs() < 1e-5, "{}", p.longitude_deg);
         assert!((p.distance_au - 0.997_66).abs() < 1e-5, "{}", p.distance_au);
         let om = (125.04 - 1934.136 * (jde - 2_451_545.0) / 36_525.0_f64).to_radians();
-        let lambda = (p.longitude_deg - 0.005_69 - 0.004_78 * om.sin()).to_radians();
+        let lambda = (p.longitude_deg - 0.005_69 - 0.004_78 * fmath::sin(om)).to_radians();
         let v = equatorial_from_ecliptic(lambda, 0.0, 23.439_99_f64.to_radians());
-        let ra = v.y.atan2(v.x).to_degrees().rem_euclid(360.0);
-        let dec = v.z.asin().to_degrees();
+        let ra = fmath::atan2(v.y, v.x).to_degrees().rem_euclid(360.0);
+        let dec = fmath::asin(v.z).to_degrees();
         assert!((ra - 198.380_83).abs() < 2e-5 && (dec + 7.785_07).abs() < 2e-5, "{ra} {dec}");
     }
 }

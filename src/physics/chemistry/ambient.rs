@@ -30,6 +30,8 @@
 //! Interpolation: temperatures linearly, densities log-linearly in altitude;
 //! held at the first and last row outside the tables.
 
+use crate::util::fmath;
+
 /// NO's peak altitude, km: the middle of SNOE's 106-110 km (Barth et al. 2003).
 pub const NO_PEAK_KM: f64 = 108.0;
 /// NO at its peak, cm^-3: a round auroral-zone value of SNOE's 110 km
@@ -57,7 +59,7 @@ pub const NE_LAYERS: [(f64, f64, f64); 2] = [(1.5e5, 350.0, 50.0), (3e3, 110.0, 
 
 /// The closed-form NO at `h_km`, cm^-3 (module doc).
 pub fn closed_form_no(h_km: f64) -> f64 {
-    NO_PEAK_CM3 * (-(h_km - NO_PEAK_KM).max(0.0) / NO_SCALE_KM).exp()
+    NO_PEAK_CM3 * fmath::exp(-(h_km - NO_PEAK_KM).max(0.0) / NO_SCALE_KM)
 }
 
 /// The closed-form night-time ne at `h_km`, cm^-3: the sum of the Chapman
@@ -67,7 +69,7 @@ pub fn closed_form_ne(h_km: f64) -> f64 {
         .iter()
         .map(|&(nm, hm, sh)| {
             let y = (h_km - hm) / sh;
-            nm * (0.5 * (1.0 - y - (-y).exp())).exp()
+            nm * fmath::exp(0.5 * (1.0 - y - fmath::exp(-y)))
         })
         .sum()
 }
@@ -79,9 +81,9 @@ pub fn closed_form_ne(h_km: f64) -> f64 {
 /// `exp(-((200 - h) / 35)^2)` below 200 km.
 pub fn closed_form_n4s(h_km: f64, o: f64, tn: f64, o_400: f64, t_400: f64) -> f64 {
     const M: f64 = 14.0 / 16.0;
-    let diffusive = N4S_400_CM3 * (t_400 / tn).powf(1.0 - M) * (o / o_400).powf(M);
+    let diffusive = N4S_400_CM3 * fmath::powf(t_400 / tn, 1.0 - M) * fmath::powf(o / o_400, M);
     let below = (N4S_PEAK_KM - h_km).max(0.0) / N4S_CUT_KM;
-    diffusive * (-below * below).exp()
+    diffusive * fmath::exp(-below * below)
 }
 
 /// The ambient quantities at one altitude.
@@ -137,9 +139,12 @@ impl AmbientTable {
     /// From rows `[h km, Tn K, N(4S) cm^-3]` and `[h km, Te K, Ti K, ne
     /// cm^-3, NO cm^-3]`, each ascending in altitude with positive values.
     pub fn new(neutral: &[[f64; 3]], ions: &[[f64; 5]]) -> Self {
-        let neutral = Profile { h: neutral.iter().map(|r| r[0]).collect(), v: neutral.iter().map(|r| vec![r[1], r[2].ln()]).collect() };
-        let ions =
-            Profile { h: ions.iter().map(|r| r[0]).collect(), v: ions.iter().map(|r| vec![r[1], r[2], r[3].ln(), r[4].ln()]).collect() };
+        let neutral =
+            Profile { h: neutral.iter().map(|r| r[0]).collect(), v: neutral.iter().map(|r| vec![r[1], fmath::ln(r[2])]).collect() };
+        let ions = Profile {
+            h: ions.iter().map(|r| r[0]).collect(),
+            v: ions.iter().map(|r| vec![r[1], r[2], fmath::ln(r[3]), fmath::ln(r[4])]).collect(),
+        };
         AmbientTable { neutral, ions }
     }
 
@@ -153,7 +158,7 @@ impl AmbientTable {
     pub fn at(&self, h_km: f64) -> Ambient {
         let n = self.neutral.at(h_km);
         let i = self.ions.at(h_km);
-        Ambient { tn: n[0], n4s: n[1].exp(), no: i[3].exp(), te: i[0], ti: i[1], ne: i[2].exp() }
+        Ambient { tn: n[0], n4s: fmath::exp(n[1]), no: fmath::exp(i[3]), te: i[0], ti: i[1], ne: fmath::exp(i[2]) }
     }
 }
 
@@ -169,7 +174,7 @@ mod tests {
         let peak = (2000..6000).map(|i| i as f64 * 0.1).max_by(|a, b| closed_form_ne(*a).total_cmp(&closed_form_ne(*b))).unwrap();
         assert!((peak - 350.0).abs() < 0.15, "{peak}");
         // One scale height below the F peak: exp((1 + 1 - e) / 2) = 0.698.
-        assert!((closed_form_ne(300.0) / 1.5e5 - (0.5 * (2.0 - 1f64.exp())).exp()).abs() < 1e-3);
+        assert!((closed_form_ne(300.0) / 1.5e5 - fmath::exp(0.5 * (2.0 - fmath::exp(1f64)))).abs() < 1e-3);
         // The night E layer: 3e3 at 110 km, a few 1e2 to 1e3 from 90 to 200 km.
         assert!((closed_form_ne(110.0) / 3e3 - 1.0).abs() < 1e-6);
         assert!((100.0..3e3).contains(&closed_form_ne(90.0)) && (100.0..3e3).contains(&closed_form_ne(180.0)));
@@ -179,7 +184,7 @@ mod tests {
     fn no_holds_its_peak_below_and_falls_a_scale_height_each_20_km_above() {
         assert_eq!(closed_form_no(80.0), NO_PEAK_CM3);
         assert_eq!(closed_form_no(NO_PEAK_KM), NO_PEAK_CM3);
-        assert!((closed_form_no(NO_PEAK_KM + 20.0) / NO_PEAK_CM3 - (-1f64).exp()).abs() < 1e-12);
+        assert!((closed_form_no(NO_PEAK_KM + 20.0) / NO_PEAK_CM3 - fmath::exp(-1f64)).abs() < 1e-12);
     }
 
     #[test]
@@ -187,10 +192,10 @@ mod tests {
         assert!((closed_form_n4s(400.0, 1e8, 1000.0, 1e8, 1000.0) / N4S_400_CM3 - 1.0).abs() < 1e-12);
         // O ten times denser at the same T: N 10^(7/8) times.
         let r = closed_form_n4s(300.0, 1e9, 1000.0, 1e8, 1000.0) / N4S_400_CM3;
-        assert!((r / 10f64.powf(0.875) - 1.0).abs() < 1e-12, "{r}");
+        assert!((r / fmath::powf(10f64, 0.875) - 1.0).abs() < 1e-12, "{r}");
         // One cut width below 200 km: e^-1 of the diffusive value.
         let r = closed_form_n4s(165.0, 1e8, 1000.0, 1e8, 1000.0) / N4S_400_CM3;
-        assert!((r - (-1f64).exp()).abs() < 1e-12, "{r}");
+        assert!((r - fmath::exp(-1f64)).abs() < 1e-12, "{r}");
     }
 
     #[test]

@@ -44,6 +44,8 @@
 //! (tests/physics/chemistry.rs; `tests/data/glow_chemistry.csv` from
 //! `tools/reference/glow_tables.py`).
 
+use crate::util::fmath;
+
 pub mod ambient;
 pub mod einstein;
 pub mod n2_triplet;
@@ -143,20 +145,20 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     let (q_n2, q_o2, q_o) = (q * w[0] / ws, q * w[1] / ws, q * w[2] / ws);
     let x_o = o / (n2 + o2 + o);
     // Rates.
-    let k3 = 1.4e-10 * t3.powf(0.44);
-    let k39 = 1e-11 * t3.powf(0.23);
-    let k4 = 5e-11 * t3.powf(0.8);
-    let a_n2p = 2.2e-7 * te3.powf(0.39);
+    let k3 = 1.4e-10 * fmath::powf(t3, 0.44);
+    let k39 = 1e-11 * fmath::powf(t3, 0.23);
+    let k4 = 5e-11 * fmath::powf(t3, 0.8);
+    let a_n2p = 2.2e-7 * fmath::powf(te3, 0.39);
     let k25 = 5.5e-10;
     let k32 = 1e-12;
     let k1 = 1.2e-12;
-    let k2 = 1.6e-11 * t3.powf(0.52);
+    let k2 = 1.6e-11 * fmath::powf(t3, 0.52);
     let k40 = 8e-13;
-    let a_o2p = 1.95e-7 * te3.powf(0.7);
+    let a_o2p = 1.95e-7 * fmath::powf(te3, 0.7);
     let k30 = 4.4e-10;
     let k37 = 1.2e-10;
     let k71 = 5e-16;
-    let a_nop = 3.5e-7 * te3.powf(0.69);
+    let a_nop = 3.5e-7 * fmath::powf(te3, 0.69);
     let (kx_n2, kx_o2, kx_o, kx_e) = (8e-10, 7e-10, 5e-12, 6.6e-8 * te3.sqrt());
     // N+ does not depend on ne.
     let p_np = 0.16 * q_n2;
@@ -193,15 +195,15 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     let (k5, k6, k31) = (6e-12, 6.9e-13, 7e-11);
     let n2d = p_n2d / (k5 * o2 + k6 * o + k31 * no + 5.5e-10 * (te / 300.0).sqrt() * ne + 1.07e-5);
     // O(1S).
-    let b1s = (0.12 + 0.02 * (ne / o * te3.powf(0.7)).log10()).max(0.03);
+    let b1s = (0.12 + 0.02 * fmath::log10(ne / o * fmath::powf(te3, 0.7))).max(0.03);
     let g_impact = q * 0.153 * x_o / (1.0 + 1.36 * x_o);
     let g_n2a = n2a.o1s_rate;
     let g_recomb = b1s * a_o2p * o2p * ne;
     let g_n2d = 0.2 * k31 * n2d * no + 0.21 * k37 * o2p * n4s;
-    let l_1s = A_5577 + A_2972 + 4e-12 * (-865.0 / t).exp() * o2 + 2e-14 * o;
+    let l_1s = A_5577 + A_2972 + 4e-12 * fmath::exp(-865.0 / t) * o2 + 2e-14 * o;
     let f_5577 = A_5577 / l_1s;
     // O(1D).
-    let r_impact = q * 2.63 * x_o / (1.0 + 1.18 * x_o) / (1.0 + (amb.ne / (1.1e-4 * o)).powf(0.62));
+    let r_impact = q * 2.63 * x_o / (1.0 + 1.18 * x_o) / (1.0 + fmath::powf(amb.ne / (1.1e-4 * o), 0.62));
     let r_recomb = 1.2 * a_o2p * o2p * ne;
     let r_n2d = 0.1 * (k5 * o2 + k6 * o) * n2d;
     let p_1s = g_impact + g_n2a + g_recomb + g_n2d;
@@ -209,8 +211,8 @@ pub fn solve(q: f64, air: &Air) -> Emission {
     let r_other = 0.3 * k25 * n_p * o2 + 0.4 * q_o2;
     let l_1d = A_6300
         + A_6364
-        + 2.0e-11 * (107.8 / t).exp() * n2
-        + 2.9e-11 * (67.5 / t).exp() * o2
+        + 2.0e-11 * fmath::exp(107.8 / t) * n2
+        + 2.9e-11 * fmath::exp(67.5 / t) * o2
         + 3e-12 * o
         + 8.1e-10 * (te / 300.0).sqrt() * ne;
     let f_6300 = A_6300 / l_1d;

@@ -20,6 +20,7 @@
 
 use super::{solve, Air, Emission};
 use crate::physics::atmosphere::Atmosphere;
+use crate::util::fmath;
 
 /// Altitude range and step, km.
 pub const H_KM: (f64, f64) = (50.0, 700.0);
@@ -79,7 +80,7 @@ impl ChemistryTable {
             .flat_map_iter(|ih| {
                 let h = H_KM.0 + ih as f64 * DH_KM;
                 let air = Air::new(h, atmosphere.composition(h), amb.at(h));
-                (0..nq).map(move |iq| Node::of(&solve(10f64.powf(LOG_Q.0 + iq as f64 * D_LOG_Q), &air)))
+                (0..nq).map(move |iq| Node::of(&solve(fmath::powf(10f64, LOG_Q.0 + iq as f64 * D_LOG_Q), &air)))
             })
             .collect();
         ChemistryTable { nh, nq, nodes }
@@ -109,7 +110,7 @@ impl ChemistryTable {
     #[inline]
     pub fn log_q(q: f64) -> f64 {
         if q > 0.0 {
-            q.log10()
+            fmath::log10(q)
         } else {
             LOG_Q.0
         }

@@ -38,13 +38,14 @@
 //! (`crate::physics::deposition::fang`); it is kept for comparison.
 
 use crate::physics::atmosphere::Atmosphere;
+use crate::util::fmath;
 
 /// Range-energy relation of precipitating electrons in air (Barrett & Hays
 /// 1976 / Rees 1989): the column mass, g cm^-2, that stops an electron of
 /// energy `e_kev` keV.
 #[inline]
 pub fn range_g_cm2(e_kev: f64) -> f64 {
-    4.30e-7 + 5.36e-6 * e_kev.max(0.0).powf(1.67)
+    4.30e-7 + 5.36e-6 * fmath::powf(e_kev.max(0.0), 1.67)
 }
 
 /// Inverse of [`range_g_cm2`]: the energy whose range is `r`; 0 when `r`
@@ -55,7 +56,7 @@ pub fn energy_from_range(r: f64) -> f64 {
     if x <= 0.0 {
         0.0
     } else {
-        (x / 5.36e-6).powf(1.0 / 1.67)
+        fmath::powf(x / 5.36e-6, 1.0 / 1.67)
     }
 }
 

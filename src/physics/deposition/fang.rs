@@ -42,6 +42,7 @@
 
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::spectrum::Spectrum;
+use crate::util::fmath;
 
 /// Energy lost per ion pair produced in air, keV (35 eV).
 pub const KEV_PER_ION_PAIR: f64 = 0.035;
@@ -76,8 +77,8 @@ pub const E_MAX_KEV: f64 = 1000.0;
 
 /// C_i = exp(sum_j P_ij (ln E)^j) (Fang 2010 eq. 5, Fang 2008 eq. 7).
 pub fn coefficients(p: &[[f64; 4]; 8], e_kev: f64) -> [f64; 8] {
-    let x = e_kev.ln();
-    std::array::from_fn(|i| (p[i][0] + x * (p[i][1] + x * (p[i][2] + x * p[i][3]))).exp())
+    let x = fmath::ln(e_kev);
+    std::array::from_fn(|i| fmath::exp(p[i][0] + x * (p[i][1] + x * (p[i][2] + x * p[i][3]))))
 }
 
 /// f(y) = C1 y^C2 exp(-C3 y^C4) + C5 y^C6 exp(-C7 y^C8) (Fang 2010 eq. 4,
@@ -87,8 +88,9 @@ pub fn f_of_y(c: &[f64; 8], y: f64) -> f64 {
     if y <= 0.0 {
         return 0.0;
     }
-    let ly = y.ln();
-    (c[0].ln() + c[1] * ly - c[2] * (c[3] * ly).exp()).exp() + (c[4].ln() + c[5] * ly - c[6] * (c[7] * ly).exp()).exp()
+    let ly = fmath::ln(y);
+    fmath::exp(fmath::ln(c[0]) + c[1] * ly - c[2] * fmath::exp(c[3] * ly))
+        + fmath::exp(fmath::ln(c[4]) + c[5] * ly - c[6] * fmath::exp(c[7] * ly))
 }
 
 /// Fang 2010 eq. 1: y of electrons of energy `e_kev` at column mass `m` g cm^-2.
@@ -100,7 +102,7 @@ pub fn y_2010(e_kev: f64, m: f64) -> f64 {
 /// The column mass's factor of [`y_2010`], `(m / 6e-6)^0.7`.
 #[inline]
 fn mass_power(m: f64) -> f64 {
-    (m / 6e-6).powf(0.7)
+    fmath::powf(m / 6e-6, 0.7)
 }
 
 /// An energy's share of a [`MonoDeposition`] lookup
@@ -121,7 +123,7 @@ type ComponentNodes = (f64, Vec<(f64, Option<EnergyNode>)>);
 /// Fang 2008 eq. 4: y of a Maxwellian of characteristic energy `e0_kev`.
 #[inline]
 pub fn y_2008(e0_kev: f64, m: f64) -> f64 {
-    (m / 4e-6).powf(1.0 / 1.65) / e0_kev
+    fmath::powf(m / 4e-6, 1.0 / 1.65) / e0_kev
 }
 
 /// Fang 2010: energy dissipated per cm at column mass `m` and scale height
@@ -173,7 +175,7 @@ impl MonoDeposition {
 
     fn build(corrected: bool) -> Self {
         use rayon::prelude::*;
-        let n_e = ((E_MAX_KEV / E_MIN_KEV).ln() / D_LN_E).round() as usize + 1;
+        let n_e = (fmath::ln(E_MAX_KEV / E_MIN_KEV) / D_LN_E).round() as usize + 1;
         let n_y = ((LN_Y.1 - LN_Y.0) / D_LN_Y).round() as usize + 1;
         // Trapezoid in ln y on a grid twice finer than the table:
         // D = (1/0.7) int f d(ln y); f is smooth in ln y, error ~ (h/2)^2/12 f''.
@@ -183,15 +185,15 @@ impl MonoDeposition {
         let rows: Vec<Vec<f64>> = (0..n_e)
             .into_par_iter()
             .map(|k| {
-                let e = E_MIN_KEV * (k as f64 * D_LN_E).exp();
+                let e = E_MIN_KEV * fmath::exp(k as f64 * D_LN_E);
                 let c = coefficients(&P_2010, e);
                 let mut row = vec![0.0; n_y];
                 let mut acc = 0.0;
-                let mut prev = f_of_y(&c, LN_Y.0.exp());
+                let mut prev = f_of_y(&c, fmath::exp(LN_Y.0));
                 for (l, d) in row.iter_mut().enumerate().skip(1) {
                     for s in 1..=SUB {
                         let ly = LN_Y.0 + ((l - 1) * SUB + s) as f64 * h;
-                        let cur = f_of_y(&c, ly.exp());
+                        let cur = f_of_y(&c, fmath::exp(ly));
                         acc += 0.5 * (prev + cur) * h;
                         prev = cur;
                     }
@@ -219,7 +221,7 @@ impl MonoDeposition {
     /// What [`MonoDeposition::fraction_above`] takes from the energy alone
     /// (`e_kev > 0`): `2 / E` of [`y_2010`] and the cell and weight in ln E.
     fn energy_node(&self, e_kev: f64) -> EnergyNode {
-        let u = ((e_kev.clamp(E_MIN_KEV, E_MAX_KEV) / E_MIN_KEV).ln() / D_LN_E).clamp(0.0, (self.n_e - 1) as f64);
+        let u = (fmath::ln(e_kev.clamp(E_MIN_KEV, E_MAX_KEV) / E_MIN_KEV) / D_LN_E).clamp(0.0, (self.n_e - 1) as f64);
         let k = (u as usize).min(self.n_e - 2);
         EnergyNode { two_over_e: 2.0 / e_kev, k, a: u - k as f64 }
     }
@@ -229,7 +231,7 @@ impl MonoDeposition {
     /// forms, so the same value bit for bit.
     #[inline]
     fn fraction_above_at(&self, node: &EnergyNode, p: f64) -> f64 {
-        let ly = (node.two_over_e * p).ln();
+        let ly = fmath::ln(node.two_over_e * p);
         let v = ((ly - LN_Y.0) / D_LN_Y).clamp(0.0, (self.n_y - 1) as f64);
         let (k, l) = (node.k, (v as usize).min(self.n_y - 2));
         let (a, b) = (node.a, v - l as f64);
@@ -300,7 +302,7 @@ impl SpectrumDeposition {
         let g = (0..n)
             .into_par_iter()
             .map(|i| {
-                let m = (LN_M.0 + i as f64 * D_LN_M).exp();
+                let m = fmath::exp(LN_M.0 + i as f64 * D_LN_M);
                 let p = mass_power(m);
                 parts
                     .iter()
@@ -361,7 +363,7 @@ impl SpectrumDeposition {
         if !(m > 0.0) {
             return 0.0;
         }
-        let u = ((m.ln() - LN_M.0) / D_LN_M).clamp(0.0, (self.g.len() - 1) as f64);
+        let u = ((fmath::ln(m) - LN_M.0) / D_LN_M).clamp(0.0, (self.g.len() - 1) as f64);
         let i = (u as usize).min(self.g.len() - 2);
         let f = u - i as f64;
         self.g[i] + f * (self.g[i + 1] - self.g[i])
@@ -377,7 +379,7 @@ impl SpectrumDeposition {
     pub fn floor_column(&self, tol: f64) -> f64 {
         let target = self.total() * (1.0 - tol);
         let i = self.g.partition_point(|&g| g < target).min(self.g.len() - 1);
-        (LN_M.0 + i as f64 * D_LN_M).exp()
+        fmath::exp(LN_M.0 + i as f64 * D_LN_M)
     }
 }
 
@@ -518,7 +520,7 @@ mod tests {
             for r in pts {
                 let (m, h, want) = (r.2, r.3, r.4);
                 let d: f64 = 0.02;
-                let dg = (sd.fraction_above(m * d.exp()) - sd.fraction_above(m * (-d).exp())) / (2.0 * d);
+                let dg = (sd.fraction_above(m * fmath::exp(d)) - sd.fraction_above(m * fmath::exp(-d))) / (2.0 * d);
                 let got = dg / h;
                 assert!((got - want).abs() * h < 0.01 * peak, "E0 {e0} m={m:e}: {got:e} vs {want:e}");
             }
@@ -533,9 +535,9 @@ mod tests {
         for e in [0.05f64, 0.3, 1.0, 4.0, 20.0, 300.0] {
             let c = coefficients(&P_2010, e.clamp(E_MIN_KEV, E_MAX_KEV));
             let (m1, m2): (f64, f64) = (1e-7, 1e-3);
-            let steps = ((m2 / m1).ln() / 1e-3) as usize;
-            let h = (m2 / m1).ln() / steps as f64;
-            let direct: f64 = (0..steps).map(|i| f_of_y(&c, y_2010(e, m1 * ((i as f64 + 0.5) * h).exp())) * h).sum();
+            let steps = (fmath::ln(m2 / m1) / 1e-3) as usize;
+            let h = fmath::ln(m2 / m1) / steps as f64;
+            let direct: f64 = (0..steps).map(|i| f_of_y(&c, y_2010(e, m1 * fmath::exp((i as f64 + 0.5) * h))) * h).sum();
             let table = t.fraction_above(e, m2) - t.fraction_above(e, m1);
             assert!((table - direct).abs() < 2e-3 * t.total(e), "{e} keV: {table} vs {direct}");
         }
@@ -552,10 +554,10 @@ mod tests {
         }
         // f is negligible at both ends of the ln y grid for every energy.
         for k in 0..=30 {
-            let e = E_MIN_KEV * (E_MAX_KEV / E_MIN_KEV).powf(k as f64 / 30.0);
+            let e = E_MIN_KEV * fmath::powf(E_MAX_KEV / E_MIN_KEV, k as f64 / 30.0);
             let c = coefficients(&P_2010, e);
-            let peak = (0..1700).map(|i| f_of_y(&c, (LN_Y.0 + i as f64 * 0.01).exp())).fold(0.0, f64::max);
-            assert!(f_of_y(&c, LN_Y.0.exp()) < 1e-6 * peak && f_of_y(&c, LN_Y.1.exp()) < 1e-30 * peak, "{e} keV");
+            let peak = (0..1700).map(|i| f_of_y(&c, fmath::exp(LN_Y.0 + i as f64 * 0.01))).fold(0.0, f64::max);
+            assert!(f_of_y(&c, fmath::exp(LN_Y.0)) < 1e-6 * peak && f_of_y(&c, fmath::exp(LN_Y.1)) < 1e-30 * peak, "{e} keV");
         }
     }
 
@@ -571,13 +573,13 @@ mod tests {
         let mut nodes: Vec<(f64, f64)> = (1..=N_X)
             .map(|i| {
                 let x = i as f64 * dx;
-                (x, 0.5 * x * x * (-x).exp() * if i == N_X { 0.5 } else { 1.0 })
+                (x, 0.5 * x * x * fmath::exp(-x) * if i == N_X { 0.5 } else { 1.0 })
             })
             .collect();
         let sum: f64 = nodes.iter().map(|n| n.1).sum();
         nodes.iter_mut().for_each(|n| n.1 /= sum);
         for i in (0..g.g.len()).step_by(7) {
-            let m = (LN_M.0 + i as f64 * D_LN_M).exp();
+            let m = fmath::exp(LN_M.0 + i as f64 * D_LN_M);
             let want: f64 =
                 comps.iter().map(|c| c.share * nodes.iter().map(|&(x, w)| w * mono.fraction_above(x * e0(c), m)).sum::<f64>()).sum();
             assert_eq!(g.g[i].to_bits(), want.to_bits(), "node {i}");
@@ -589,7 +591,7 @@ mod tests {
         let sd = curtain(3.0, 0.1, 0.2);
         let mut prev = 0.0;
         for i in 0..2000 {
-            let g = sd.fraction_above((-22.0 + i as f64 * 0.012).exp());
+            let g = sd.fraction_above(fmath::exp(-22.0 + i as f64 * 0.012));
             assert!(g >= prev - 1e-15, "G not monotone at step {i}");
             prev = g;
         }

@@ -40,6 +40,8 @@
 //! offsets, the calibration and its limits: docs/physics.md, "The low-energy
 //! correction in detail" and "Against GLOW 4.0.4".
 
+use crate::util::fmath;
+
 /// Mean of the smear in ln y at low energies (`a` at E -> 0).
 pub const SKEW_0: f64 = 0.2;
 /// Energy where the smear is half its low-energy size, keV.
@@ -49,7 +51,7 @@ pub const FADE_POWER: f64 = 2.0;
 
 /// The smear's mean `a` (ln y) at energy `e_kev`.
 pub fn smear(e_kev: f64) -> f64 {
-    SKEW_0 / (1.0 + (e_kev / E_FADE_KEV).powf(FADE_POWER))
+    SKEW_0 / (1.0 + fmath::powf(e_kev / E_FADE_KEV, FADE_POWER))
 }
 
 /// Applies the correction to one row of the cumulative deposit `d` of
@@ -65,7 +67,7 @@ pub fn smear_row(d: &[f64], h: f64, a: f64) -> Vec<f64> {
     if n == 0 || !(a > 1e-12) {
         return d.to_vec();
     }
-    let r = (-h / a).exp();
+    let r = fmath::exp(-h / a);
     let beta = 1.0 - r;
     let gamma = (a / h) * beta - r;
     let mut g = vec![0.0; n];
@@ -101,7 +103,7 @@ mod tests {
         // position in l (int l dD / D(inf)) moves by the kernel's mean a,
         // to the quadrature's accuracy (a cell's midpoint rule: h^2 / 12).
         let h = 0.02;
-        let d: Vec<f64> = (0..1500).map(|i| 1.0 / (1.0 + (15.0 - i as f64 * h).exp())).collect();
+        let d: Vec<f64> = (0..1500).map(|i| 1.0 / (1.0 + fmath::exp(15.0 - i as f64 * h))).collect();
         for a in [0.05, 0.15, 0.4] {
             let c = smear_row(&d, h, a);
             assert_eq!(c[c.len() - 1], d[d.len() - 1]);

@@ -33,6 +33,7 @@
 //! [`Spectrum::sample_energy`] one energy drawn from `w` (the `sampled`
 //! deposition's beams), both in closed forms of the Gamma distribution.
 
+use crate::util::fmath;
 use rand::Rng;
 
 /// Quadrature over `x = (E - e Phi) / E0`: trapezoid on [0, X_MAX] (the
@@ -72,7 +73,7 @@ impl Spectrum {
                 if e_kev < potential_kv {
                     0.0
                 } else {
-                    e_kev * (-(e_kev - potential_kv) / e0_kev).exp() / (e0_kev * e0_kev)
+                    e_kev * fmath::exp(-(e_kev - potential_kv) / e0_kev) / (e0_kev * e0_kev)
                 }
             }
         }
@@ -121,7 +122,7 @@ impl Spectrum {
         let dx = X_MAX / N_X as f64;
         let mut nodes: Vec<(f64, f64)> = Vec::with_capacity(N_X + 1);
         if phi > 0.0 {
-            nodes.push((phi, 0.25 * (phi / e0).powi(2)));
+            nodes.push((phi, 0.25 * fmath::powi(phi / e0, 2)));
         }
         nodes.extend((1..=N_X).map(|i| {
             let x = i as f64 * dx;
@@ -129,7 +130,7 @@ impl Spectrum {
             // w ~ (phi + x E0)^2 e^-x, in units of E0^2; for a Maxwellian
             // x^2 e^-x / 2 (the same nodes and weights, bit for bit, as
             // before the accelerated spectrum existed).
-            let w = if phi > 0.0 { 0.5 * (phi / e0 + x).powi(2) * (-x).exp() } else { 0.5 * x * x * (-x).exp() };
+            let w = if phi > 0.0 { 0.5 * fmath::powi(phi / e0 + x, 2) * fmath::exp(-x) } else { 0.5 * x * x * fmath::exp(-x) };
             (phi + x * e0, w * end)
         }));
         let sum: f64 = nodes.iter().map(|n| n.1).sum();
@@ -160,7 +161,7 @@ impl Spectrum {
                     3
                 };
                 let g = [r.random::<f64>(), r.random::<f64>(), r.random::<f64>()];
-                potential_kv - e0_kev * g[..k].iter().map(|&v| (1.0 - v).ln()).sum::<f64>()
+                potential_kv - e0_kev * g[..k].iter().map(|&v| fmath::ln(1.0 - v)).sum::<f64>()
             }
         }
     }
@@ -170,7 +171,7 @@ impl Spectrum {
 /// in (0, 1], so the logarithm is finite).
 fn gamma(k: usize, scale: f64, r: &mut impl Rng) -> f64 {
     let p: f64 = (0..k).map(|_| 1.0 - r.random::<f64>()).product();
-    -scale * p.ln()
+    -scale * fmath::ln(p)
 }
 
 /// The source's one-way number flux `N0 = n sqrt(kT / 2 pi m)`, electrons
@@ -185,7 +186,7 @@ pub fn one_way_flux(n_cm3: f64, kt_kev: f64) -> f64 {
 /// documentation).
 pub fn knight_number_flux(n_cm3: f64, kt_kev: f64, potential_kv: f64, mirror_ratio: f64) -> f64 {
     let (r, x) = (mirror_ratio, potential_kv / kt_kev);
-    one_way_flux(n_cm3, kt_kev) * (r - (r - 1.0) * (-x / (r - 1.0)).exp())
+    one_way_flux(n_cm3, kt_kev) * (r - (r - 1.0) * fmath::exp(-x / (r - 1.0)))
 }
 
 /// Knight's field-aligned current density, uA/m^2 ([`knight_number_flux`]
@@ -224,7 +225,7 @@ mod tests {
         // A deliberately wrong model (the Maxwellian not shifted, only cut
         // at the drop) misses the closed form by far more than 1 %.
         let (e0, phi) = (1.0, 8.0);
-        let cut = |e: f64| if e < phi { 0.0 } else { e * (-e / e0).exp() / (e0 * e0) };
+        let cut = |e: f64| if e < phi { 0.0 } else { e * fmath::exp(-e / e0) / (e0 * e0) };
         let n_cut = simpson(cut, phi, phi + 60.0, 200_000);
         assert!((n_cut / (1.0 + phi / e0) - 1.0).abs() > 0.5, "{n_cut}");
     }
@@ -281,7 +282,7 @@ mod tests {
         let (n, kt, r) = (1.0, 1.0, 10.0);
         let n0 = one_way_flux(n, kt);
         for phi in [0.5, 3.0, 20.0] {
-            let f = |w: f64| if w <= 0.0 { 0.0 } else { w * (-w / kt).exp() * ((w + phi) / (r * w)).min(1.0) };
+            let f = |w: f64| if w <= 0.0 { 0.0 } else { w * fmath::exp(-w / kt) * ((w + phi) / (r * w)).min(1.0) };
             let brute = r / (kt * kt) * simpson(f, 0.0, 60.0 * kt, 600_000) * n0;
             let closed = knight_number_flux(n, kt, phi, r);
             assert!((brute / closed - 1.0).abs() < 1e-3, "phi {phi}: brute {brute:e}, Knight {closed:e}");

@@ -51,6 +51,7 @@
 //! closed-form motion that has always been running assumes.
 
 use crate::physics::atmosphere::{Atmosphere, Composition};
+use crate::util::fmath;
 
 /// O(1D) radiative rate, 630.0 + 636.4 nm, and O(1S)'s, 557.7 + 297.2
 /// nm, 1/s (`crate::physics::chemistry::einstein`).
@@ -77,15 +78,15 @@ pub struct Lifetimes {
 /// at `h_km` for composition `c`, K (module doc).
 pub fn scale_height_temperature(c: &Composition, h_km: f64, h_scale_km: f64) -> f64 {
     let m = (28.0134 * c.n2 + 31.9988 * c.o2 + 15.9994 * c.o) / c.total() * AMU;
-    let g = G0 * (R_EARTH_KM / (R_EARTH_KM + h_km)).powi(2);
+    let g = G0 * fmath::powi(R_EARTH_KM / (R_EARTH_KM + h_km), 2);
     m * g * h_scale_km * 1e3 / K_B
 }
 
 /// The lifetimes at `h_km` for the densities `c` (cm^-3) and temperature
 /// `t_k`: the module doc's rates.
 pub fn lifetimes_of(c: &Composition, t_k: f64) -> Lifetimes {
-    let q_1d = 2.0e-11 * (107.8 / t_k).exp() * c.n2 + 2.9e-11 * (67.5 / t_k).exp() * c.o2 + 3e-12 * c.o;
-    let q_1s = 4e-12 * (-865.0 / t_k).exp() * c.o2 + 2e-14 * c.o;
+    let q_1d = 2.0e-11 * fmath::exp(107.8 / t_k) * c.n2 + 2.9e-11 * fmath::exp(67.5 / t_k) * c.o2 + 3e-12 * c.o;
+    let q_1s = 4e-12 * fmath::exp(-865.0 / t_k) * c.o2 + 2e-14 * c.o;
     Lifetimes { o1s_s: 1.0 / (A_1S + q_1s), o1d_s: 1.0 / (A_1D + q_1d) }
 }
 
@@ -102,7 +103,7 @@ pub fn lifetimes(atm: &Atmosphere, h_km: f64) -> Lifetimes {
 #[inline]
 pub fn response(omega: f64, tau_s: f64) -> (f64, f64) {
     let x = omega * tau_s;
-    (1.0 / (1.0 + x * x).sqrt(), x.atan())
+    (1.0 / (1.0 + x * x).sqrt(), fmath::atan(x))
 }
 
 #[cfg(test)]
@@ -117,7 +118,7 @@ mod tests {
         for (tau, period) in [(0.9, 8.0), (30.0, 8.0), (5.0, 31.4)] {
             let omega = std::f64::consts::TAU / period;
             let a = 0.6;
-            let p = |t: f64| 1.0 + a * (omega * t).sin();
+            let p = |t: f64| 1.0 + a * fmath::sin(omega * t);
             let f = |t: f64, n: f64| p(t) - n / tau;
             let dt = 1e-3 * tau.min(period);
             let t_end = 40.0 * tau + 3.0 * period;
@@ -132,16 +133,16 @@ mod tests {
                 t += dt;
                 if t > t_end - period {
                     // Fourier coefficients of n / (tau a) over one period.
-                    s += (n / tau - 1.0) / a * (omega * t).sin();
-                    c += (n / tau - 1.0) / a * (omega * t).cos();
+                    s += (n / tau - 1.0) / a * fmath::sin(omega * t);
+                    c += (n / tau - 1.0) / a * fmath::cos(omega * t);
                     k += 1;
                 }
             }
             let (s, c) = (2.0 * s / k as f64, 2.0 * c / k as f64);
             let (gain, lag) = response(omega, tau);
             // n1 sin(wt - phi) = n1 cos(phi) sin(wt) - n1 sin(phi) cos(wt).
-            assert!((s.hypot(c) - gain).abs() < 2e-3, "{tau} {period}: {} vs {gain}", s.hypot(c));
-            assert!(((-c).atan2(s) - lag).abs() < 2e-3, "{tau} {period}: {} vs {lag}", (-c).atan2(s));
+            assert!((fmath::hypot(s, c) - gain).abs() < 2e-3, "{tau} {period}: {} vs {gain}", fmath::hypot(s, c));
+            assert!((fmath::atan2(-c, s) - lag).abs() < 2e-3, "{tau} {period}: {} vs {lag}", fmath::atan2(-c, s));
         }
     }
 
@@ -174,6 +175,6 @@ mod tests {
         assert!((t - 288.15).abs() < 0.05, "{t}");
         // At 300 km gravity is (6371 / 6671)^2 = 0.912 of the surface's.
         let t300 = scale_height_temperature(&c, 300.0, 8.7211);
-        assert!((t300 / t - (6371.0f64 / 6671.0).powi(2)).abs() < 1e-12);
+        assert!((t300 / t - fmath::powi(6371.0f64 / 6671.0, 2)).abs() < 1e-12);
     }
 }

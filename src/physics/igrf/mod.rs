@@ -39,6 +39,7 @@
 //! `tools/reference/igrf_table.py` (source, version and terms: docs/data.md).
 
 use crate::geometry::astronomy::time::{days_from_civil, Utc};
+use crate::util::fmath;
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -149,7 +150,7 @@ impl Igrf {
     /// points south, `B_phi` east). At the poles `B_phi` is taken a
     /// nanoradian away.
     pub fn field_spherical(&self, r_km: f64, theta: f64, phi: f64) -> [f64; 3] {
-        let (st, ct) = theta.sin_cos();
+        let (st, ct) = fmath::sin_cos(theta);
         let st_safe = if st.abs() < 1e-9 { 1e-9_f64.copysign(if st == 0.0 { 1.0 } else { st }) } else { st };
         let nmax = self.max_degree;
         // Gauss-normalised P and dP/dtheta, then Schmidt factors (module doc).
@@ -183,7 +184,7 @@ impl Igrf {
         for n in 1..=nmax {
             rn *= ratio;
             for m in 0..=n {
-                let (sm, cm) = (m as f64 * phi).sin_cos();
+                let (sm, cm) = fmath::sin_cos(m as f64 * phi);
                 let (g, h) = (self.g[n][m], self.h[n][m]);
                 let (pn, dpn) = (s[n][m] * p[n][m], s[n][m] * dp[n][m]);
                 br += (n + 1) as f64 * rn * (g * cm + h * sm) * pn;
@@ -198,11 +199,11 @@ impl Igrf {
     /// vector, nT.
     pub fn field_itrs(&self, p: DVec3) -> DVec3 {
         let r = p.length();
-        let theta = (p.z / r).clamp(-1.0, 1.0).acos();
-        let phi = p.y.atan2(p.x);
+        let theta = fmath::acos((p.z / r).clamp(-1.0, 1.0));
+        let phi = fmath::atan2(p.y, p.x);
         let [br, bt, bp] = self.field_spherical(r, theta, phi);
-        let (st, ct) = theta.sin_cos();
-        let (sp, cp) = phi.sin_cos();
+        let (st, ct) = fmath::sin_cos(theta);
+        let (sp, cp) = fmath::sin_cos(phi);
         let r_hat = DVec3::new(st * cp, st * sp, ct);
         let t_hat = DVec3::new(ct * cp, ct * sp, -st);
         let p_hat = DVec3::new(-sp, cp, 0.0);

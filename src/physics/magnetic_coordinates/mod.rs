@@ -53,6 +53,7 @@ use crate::geometry::astronomy::site::Site;
 use crate::geometry::astronomy::sun::sun_apparent_tod_km;
 use crate::geometry::astronomy::time::Utc;
 use crate::physics::igrf::{Igrf, IgrfError, REFERENCE_RADIUS_KM};
+use crate::util::fmath;
 use glam::DVec3;
 
 /// A tracing step, as a fraction of the geocentric radius (32 km at the
@@ -164,7 +165,10 @@ impl CorrectedGeomagnetic {
             return None;
         }
         let m = self.dipole_of(apex);
-        Some(Cgm { lat_deg: hemisphere * (1.0 / l).sqrt().clamp(0.0, 1.0).acos().to_degrees(), lon_deg: m.y.atan2(m.x).to_degrees() })
+        Some(Cgm {
+            lat_deg: hemisphere * fmath::acos((1.0 / l).sqrt().clamp(0.0, 1.0)).to_degrees(),
+            lon_deg: fmath::atan2(m.y, m.x).to_degrees(),
+        })
     }
 
     /// The corrected geomagnetic coordinates of a geodetic (WGS 84) place.
@@ -180,8 +184,8 @@ impl CorrectedGeomagnetic {
         if !(c.lat_deg.abs() < 89.999) {
             return None;
         }
-        let l = 1.0 / c.lat_deg.to_radians().cos().powi(2);
-        let (s, co) = c.lon_deg.to_radians().sin_cos();
+        let l = 1.0 / fmath::powi(fmath::cos(c.lat_deg.to_radians()), 2);
+        let (s, co) = fmath::sin_cos(c.lon_deg.to_radians());
         let apex = self.itrs_of_dipole(DVec3::new(l * REFERENCE_RADIUS_KM * co, l * REFERENCE_RADIUS_KM * s, 0.0));
         Some((apex, if c.lat_deg >= 0.0 { 1.0 } else { -1.0 }))
     }
@@ -226,7 +230,7 @@ impl CorrectedGeomagnetic {
     fn subsolar_reference_lon_deg(&self, t: Utc) -> f64 {
         let frame = SkyFrame::new(&Site { latitude_deg: 0.0, longitude_deg: 0.0, height_km: 0.0 }, t);
         let sun = (r3(frame.gast_rad()) * sun_apparent_tod_km(&frame)).normalize();
-        let (lat, lon) = (sun.z.asin().to_degrees(), sun.y.atan2(sun.x).to_degrees());
+        let (lat, lon) = (fmath::asin(sun.z).to_degrees(), fmath::atan2(sun.y, sun.x).to_degrees());
         let at = |lat: f64| self.from_geodetic(lat, lon, MLT_REFERENCE_HEIGHT_KM).map(|c| c.lon_deg);
         if let Some(l) = at(lat) {
             return l;
@@ -241,7 +245,7 @@ impl CorrectedGeomagnetic {
             }
             _ => {
                 let m = self.dipole_of(Site { latitude_deg: lat, longitude_deg: lon, height_km: MLT_REFERENCE_HEIGHT_KM }.itrs_km());
-                m.y.atan2(m.x).to_degrees()
+                fmath::atan2(m.y, m.x).to_degrees()
             }
         }
     }

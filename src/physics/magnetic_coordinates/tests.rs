@@ -3,6 +3,7 @@
 //! at 0 to 800 km, the inverse at 4.
 
 use super::*;
+use crate::util::fmath;
 
 const ORACLE: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/aacgm_oracle.csv"));
 
@@ -51,7 +52,7 @@ fn worst(c_of: impl Fn(Igrf, Utc) -> CorrectedGeomagnetic) -> [f64; 5] {
     for r in rows {
         let c = c_of(Igrf::at(r.t).unwrap(), r.t);
         let got = c.from_geodetic(r.lat, r.lon, r.h).unwrap_or_else(|| panic!("{}: undefined", r.name));
-        let cos = got.lat_deg.to_radians().cos();
+        let cos = fmath::cos(got.lat_deg.to_radians());
         let mlt = c.mlt_h(got.lon_deg);
         let dmlt = (mlt - r.v[4]).rem_euclid(24.0);
         let e = [
@@ -101,7 +102,7 @@ fn the_inverse_trace_matches_aacgmv2_and_undoes_the_forward_one() {
         let cgm = Cgm { lat_deg: r.lat, lon_deg: r.lon };
         let p = c.to_itrs(cgm, REFERENCE_RADIUS_KM + r.h).unwrap();
         let geodetic = Site::from_itrs_km(p);
-        let (dlat, dl) = ((geodetic.latitude_deg - r.v[0]).abs(), dlon(geodetic.longitude_deg, r.v[1]) * r.v[0].to_radians().cos());
+        let (dlat, dl) = ((geodetic.latitude_deg - r.v[0]).abs(), dlon(geodetic.longitude_deg, r.v[1]) * fmath::cos(r.v[0].to_radians()));
         eprintln!("{}: {:.4} {:.4} errors {dlat:.4} {dl:.4}", r.name, geodetic.latitude_deg, geodetic.longitude_deg);
         assert!(dlat < 0.02 && dl < 0.02, "{}: {dlat} {dl}", r.name);
         let back = c.from_itrs(p).unwrap();

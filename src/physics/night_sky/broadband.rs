@@ -38,6 +38,8 @@
 //! toward the horizon by its slant factor, as the line layers do
 //! (`crate::physics::airglow::slant_factor`).
 
+use crate::util::fmath;
+
 /// Planck constant times the speed of light, J nm.
 const HC_J_NM: f64 = 1.986_445_857e-16;
 /// The second radiation constant, nm K.
@@ -60,7 +62,7 @@ pub const CONTINUUM_SHAPE: [(f64, f64); 9] =
 
 /// Planck's spectral radiance up to a constant (energy per nm).
 fn planck(lambda_nm: f64, t_k: f64) -> f64 {
-    lambda_nm.powi(-5) / ((HC_K_NM / (lambda_nm * t_k)).exp() - 1.0)
+    fmath::powi(lambda_nm, -5) / (fmath::exp(HC_K_NM / (lambda_nm * t_k)) - 1.0)
 }
 
 /// R/nm of a spectral radiance `b` in 10^-8 W m^-2 sr^-1 um^-1 at

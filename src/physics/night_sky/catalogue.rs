@@ -36,6 +36,7 @@
 //! acceleration (under 1 arcsec in a century even for alpha Centauri).
 
 use crate::geometry::astronomy::star::StarPlace;
+use crate::util::fmath;
 use glam::DVec3;
 use std::sync::OnceLock;
 
@@ -147,8 +148,8 @@ pub fn decode_header(bytes: &[u8]) -> Result<TableHeader, CatalogueError> {
 /// run from the brightest to the limit.
 pub fn decode(bytes: &[u8]) -> Result<Vec<CatalogueStar>, CatalogueError> {
     let header = decode_header(bytes)?;
-    let ra_unit = 360.0 / 2f64.powi(32);
-    let dec_unit = 180.0 / 2f64.powi(32);
+    let ra_unit = 360.0 / fmath::powi(2f64, 32);
+    let dec_unit = 180.0 / fmath::powi(2f64, 32);
     let mut stars = Vec::with_capacity(header.count);
     let mut last_v = i16::MIN;
     for index in 0..header.count {
@@ -212,7 +213,7 @@ pub fn direction_at(star: &CatalogueStar, jyear: f64) -> DVec3 {
 /// Right ascension in [0, 360) and declination (degrees) of `star` at `jyear`.
 pub fn position_at(star: &CatalogueStar, jyear: f64) -> (f64, f64) {
     let d = direction_at(star, jyear);
-    (d.y.atan2(d.x).to_degrees().rem_euclid(360.0), d.z.clamp(-1.0, 1.0).asin().to_degrees())
+    (fmath::atan2(d.y, d.x).to_degrees().rem_euclid(360.0), fmath::asin(d.z.clamp(-1.0, 1.0)).to_degrees())
 }
 
 #[cfg(test)]
@@ -298,7 +299,7 @@ mod tests {
         let (ra, dec) = position_at(&s, 2000.0);
         let (ra_bsc, dec_bsc) = ((6.0 + 45.0 / 60.0 + 8.9 / 3600.0) * 15.0, -(16.0 + 42.0 / 60.0 + 58.0 / 3600.0));
         let arcsec = |d: f64| d * 3600.0;
-        assert!(arcsec((ra - ra_bsc) * dec.to_radians().cos()).abs() < 1.5, "{ra}");
+        assert!(arcsec((ra - ra_bsc) * fmath::cos(dec.to_radians())).abs() < 1.5, "{ra}");
         assert!(arcsec(dec - dec_bsc).abs() < 1.0, "{dec}");
         let (ra0, dec0) = position_at(&s, CATALOGUE_EPOCH_JYEAR);
         assert!(arcsec(ra0 - s.ra_deg).abs() < 1e-6 && arcsec(dec0 - s.dec_deg).abs() < 1e-6);

@@ -21,6 +21,8 @@
 //! star field, `src/render/sky.rs`), and a star of magnitude V
 //! `0.0111 x 10^(-0.4 V)` kR sr.
 
+use crate::util::fmath;
+
 /// The bluest and reddest B-V of the compiled-in catalogue.
 pub const B_V_MIN: f64 = -0.40;
 pub const B_V_MAX: f64 = 5.46;
@@ -37,12 +39,12 @@ pub fn temperature_k(b_minus_v: f64) -> f64 {
 
 /// Irradiance (kR sr) of a star of V magnitude `v_mag`.
 pub fn v_irradiance_kr_sr(v_mag: f64) -> f64 {
-    V0_IRRADIANCE_KR_SR * 10f64.powf(-0.4 * v_mag)
+    V0_IRRADIANCE_KR_SR * fmath::powf(10f64, -0.4 * v_mag)
 }
 
 /// The V magnitude of an irradiance `kr_sr` (kR sr); the inverse of [`v_irradiance_kr_sr`].
 pub fn v_magnitude(kr_sr: f64) -> f64 {
-    -2.5 * (kr_sr / V0_IRRADIANCE_KR_SR).log10()
+    -2.5 * fmath::log10(kr_sr / V0_IRRADIANCE_KR_SR)
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use crate::grid::{Grid, Leaf, Transform};
 use crate::pipeline::photons;
 use crate::scene::GridParams;
 use crate::util::colour::luminance;
+use crate::util::fmath;
 use rayon::prelude::*;
 
 /// `indicator = 1 - exp(-Y / (AURORA_FRACTION * Y_peak))`, about 1 wherever
@@ -92,7 +93,7 @@ fn density_leaf(l: &Leaf<[f32; 3]>, params: &GridParams, inv_scale: f32, earth: 
 /// [`MAX_EXTINCTION_PER_KM`] (and 0, not NaN, when `density_a` is 0).
 pub fn extinction(params: &GridParams, h: f64) -> f64 {
     if params.density_a > 0.0 {
-        (params.density_a * (-params.density_b * (h - params.density_base_km)).exp()).min(MAX_EXTINCTION_PER_KM)
+        (params.density_a * fmath::exp(-params.density_b * (h - params.density_base_km))).min(MAX_EXTINCTION_PER_KM)
     } else {
         0.0
     }
@@ -101,7 +102,7 @@ pub fn extinction(params: &GridParams, h: f64) -> f64 {
 /// A warning when the air extinction reaches [`MAX_EXTINCTION_PER_KM`] at
 /// the lowest altitude `h_min` km of the grid (it decreases with altitude).
 pub fn extinction_warning(params: &GridParams, h_min: f64) -> Option<String> {
-    let raw = params.density_a * (-params.density_b * (h_min - params.density_base_km)).exp();
+    let raw = params.density_a * fmath::exp(-params.density_b * (h_min - params.density_base_km));
     (params.density_a > 0.0 && raw >= MAX_EXTINCTION_PER_KM).then(|| {
         format!(
             "air extinction clamped: grid.density_a exp(-density_b (h - density_base_km)) reaches {raw:.3e} per km at {h_min:.1} km, above the maximum {MAX_EXTINCTION_PER_KM:e} (opaque); density is clamped there"

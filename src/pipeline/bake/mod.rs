@@ -125,6 +125,7 @@ mod tests {
     use super::*;
     use crate::grid::Grid;
     use crate::scene::{ColourMode, GatherMethod, GridParams};
+    use crate::util::fmath;
     use crate::util::progress::NoProgress;
 
     /// A small, fast scene: one short curtain, few beams, coarse voxels.
@@ -157,7 +158,7 @@ mod tests {
         // blue with the default atmosphere): off, the sum is the kernel's.
         s.grid.prune = 0.0;
         let b = bake(&s, &NoProgress).unwrap();
-        let v3 = b.stats.voxel_size_km.powi(3);
+        let v3 = fmath::powi(b.stats.voxel_size_km, 3);
         let mut sum = [0.0f64; 3];
         for (_, v) in b.emission.iter_active() {
             for (t, &c) in sum.iter_mut().zip(&v) {
@@ -264,7 +265,7 @@ mod tests {
         assert_eq!(extinction(&s.grid, 100.0), 0.0);
         // The artistic profile is far below the clamp: no warning, the formula.
         let p = GridParams { density_a: 0.02, ..GridParams::default() };
-        assert_eq!(extinction(&p, 100.0), p.density_a * (-p.density_b * (100.0 - p.density_base_km)).exp());
+        assert_eq!(extinction(&p, 100.0), p.density_a * fmath::exp(-p.density_b * (100.0 - p.density_base_km)));
         assert!(extinction_warning(&p, 60.0).is_none());
     }
 

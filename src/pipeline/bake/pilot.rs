@@ -50,6 +50,7 @@ use super::stats::NoiseEstimate;
 use crate::grid::Grid;
 use crate::pipeline::beams::{self, dip::curtain_dip, BeamError, TraceParams, MIN_DEPOSITED_FRACTION};
 use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
+use crate::util::fmath;
 use crate::util::progress::NoProgress;
 
 /// Beam-stream index where the pilot's second half starts: far beyond any
@@ -110,22 +111,22 @@ pub fn check_deposition(plan: &BakePlan) -> Result<Vec<f64>, BakeError> {
 /// `noise(m2)` (see the module documentation); b >= 0.
 pub fn fit_law(m1: f64, n1: f64, m2: f64, n2: f64) -> (f64, f64) {
     let (v1, v2) = (n1 * n1, n2 * n2);
-    let b = ((m1 * v1 - m2 * v2) / (m1.powf(-0.5) - m2.powf(-0.5))).max(0.0);
-    let a = m2 * v2 - b * m2.powf(-0.5);
+    let b = ((m1 * v1 - m2 * v2) / (fmath::powf(m1, -0.5) - fmath::powf(m2, -0.5))).max(0.0);
+    let a = m2 * v2 - b * fmath::powf(m2, -0.5);
     if a <= 0.0 {
         // The pair falls at least as fast as the starts' share alone (the
         // quarter estimate's sampling error, some 10 % at m / 4 = 125 beams,
         // can make it look faster): the start law alone through the larger
         // pilot, `a = 0`, `b = m_2^3/2 v_2`. (The plain law here asked for
         // twice the beams the target needed in the test below.)
-        return (0.0, m2.powf(1.5) * v2);
+        return (0.0, fmath::powf(m2, 1.5) * v2);
     }
     (a, b)
 }
 
 /// `noise(N)` by the fitted law.
 pub fn law_noise(a: f64, b: f64, n: f64) -> f64 {
-    (a / n + b * n.powf(-1.5)).sqrt()
+    (a / n + b * fmath::powf(n, -1.5)).sqrt()
 }
 
 /// The beam count N with `a / N + b / N^(3/2) = target^2`: bisection for x
@@ -140,7 +141,7 @@ pub fn beams_for_law(a: f64, b: f64, target: f64) -> f64 {
         hi = hi.min((t2 / a).sqrt());
     }
     if b > 0.0 {
-        hi = hi.min((t2 / b).cbrt());
+        hi = hi.min(fmath::cbrt(t2 / b));
     }
     if !hi.is_finite() {
         return 1.0;
@@ -240,7 +241,7 @@ mod tests {
         let mut gauss = || {
             // Box-Muller.
             let (u, v): (f64, f64) = (r.random::<f64>().max(1e-300), r.random());
-            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+            (-2.0 * fmath::ln(u)).sqrt() * fmath::cos(std::f64::consts::TAU * v)
         };
         let tr = Transform::new(1.0, DVec3::ZERO);
         let (mut a, mut b) = (Grid::new("e", [0.0f32; 3], tr), Grid::new("e", [0.0f32; 3], tr));
@@ -319,7 +320,7 @@ mod tests {
         assert_eq!(pb, 0.0);
         assert!((beams_for_law(pa, pb, 0.1) - 500.0 * 4.0).abs() < 1e-9);
         // a = 0: N = (b / t^2)^(2/3).
-        assert!((beams_for_law(0.0, 8.0, 0.5) - 32f64.powf(2.0 / 3.0)).abs() < 1e-9);
+        assert!((beams_for_law(0.0, 8.0, 0.5) - fmath::powf(32f64, 2.0 / 3.0)).abs() < 1e-9);
     }
 
     #[test]

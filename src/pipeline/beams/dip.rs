@@ -32,6 +32,7 @@ use crate::physics::site_field::SiteField;
 use crate::pipeline::footprint::curtain_path::{vertices, Lift};
 use crate::scene::root::Scene;
 use crate::scene::{BeamParams, Curtain, EarthParams};
+use crate::util::fmath;
 use std::sync::Arc;
 
 /// Samples along a straight curtain's length (and across, [`ACROSS`]).
@@ -62,7 +63,7 @@ pub fn start_samples(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams,
         };
         return vertices(&lift.path(p)).into_iter().flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]]).collect();
     }
-    let (s, c) = curtain.rotation_deg.to_radians().sin_cos();
+    let (s, c) = fmath::sin_cos(curtain.rotation_deg.to_radians());
     let mut out = Vec::with_capacity(ALONG * ACROSS);
     for i in 0..ALONG {
         for j in 0..ACROSS {
@@ -160,7 +161,7 @@ mod tests {
         // farther, magnetic latitude 90 - 3100 / R rad) dips least.
         let d = curtain_dip(&c, &b, &earth(Some([0.0, 3000.0])), None);
         let lat = 90.0 - (3100.0 / MEAN_RADIUS_KM).to_degrees();
-        let want = (2.0 * lat.to_radians().tan()).atan().to_degrees();
+        let want = fmath::atan(2.0 * fmath::tan(lat.to_radians())).to_degrees();
         assert!((d.dip_deg - want).abs() < 1e-6 && (d.at[1] + 100.0).abs() < 1e-9, "{d:?} vs {want}");
         // Across the dipole's equator: 0.
         let q = std::f64::consts::FRAC_PI_2 * MEAN_RADIUS_KM;
@@ -193,7 +194,7 @@ mod tests {
             .unwrap()
             .field_itrs(site.itrs_km() + height_km * site.basis()[2]);
         let [e, n, u] = site.basis();
-        (-b.dot(u)).atan2(b.dot(e).hypot(b.dot(n))).to_degrees()
+        fmath::atan2(-b.dot(u), fmath::hypot(b.dot(e), b.dot(n))).to_degrees()
     }
 
     /// A scene over `site` with one small straight curtain over it (2 km

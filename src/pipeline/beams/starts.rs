@@ -232,6 +232,7 @@ impl FootprintCdf {
 mod tests {
     use super::*;
     use crate::scene::{Curtain, FootprintParams};
+    use crate::util::fmath;
 
     /// The 2014 fluid's broad folded band: hundreds of cells above the
     /// tests' thresholds, which the sampling statistics need.
@@ -254,7 +255,7 @@ mod tests {
             let d = d as f64;
             if d > thr {
                 let e = n * d / total;
-                x2 += (hits[c] as f64 - e).powi(2) / e;
+                x2 += fmath::powi(hits[c] as f64 - e, 2) / e;
                 k += 1;
             } else {
                 assert_eq!(hits[c], 0, "a start in a cell at or below threshold");

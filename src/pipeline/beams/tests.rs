@@ -1,4 +1,5 @@
 use super::*;
+use crate::util::fmath;
 
 /// A small scene: one short curtain, few beams.
 fn small_scene(count: usize) -> Scene {
@@ -99,7 +100,7 @@ fn gamma3_has_the_right_mean_and_variance() {
     assert!((mean - 6.0).abs() < 5.0 * 3f64.sqrt() * 2.0 / (n as f64).sqrt(), "{mean}");
     // Sample variance: relative sigma sqrt((kurtosis - 1) / N) with
     // kurtosis 3 + 6/3 = 5 for Gamma(3): 0.0063; 5 sigma = 3.2 %.
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+    let var = xs.iter().map(|x| fmath::powi(x - mean, 2)).sum::<f64>() / n as f64;
     assert!((var / 12.0 - 1.0).abs() < 0.032, "{var}");
 }
 

@@ -39,6 +39,7 @@ use super::beam::{BeamBuffers, BeamContext, BeamStart, BeamTrace, DepositModel, 
 use super::emit::emit;
 use crate::physics::atmosphere::Atmosphere;
 use crate::physics::deposition::csda::{energy_from_range, range_g_cm2, step_column};
+use crate::util::fmath;
 use glam::DVec3;
 use rand::Rng;
 
@@ -86,10 +87,10 @@ fn step(ctx: &BeamContext, p: DVec3, r: &mut impl Rng) -> (DVec3, f64) {
     let s = p_.length_km * p_.dt * r.random::<f64>();
     let alpha = p_.alpha_d_deg.to_radians() - p_.delta_alpha_deg.to_radians() * r.random::<f64>();
     let beta = std::f64::consts::TAU * r.random::<f64>();
-    let t = s * alpha.tan();
-    let (sb, cb) = beta.sin_cos();
+    let t = s * fmath::tan(alpha);
+    let (sb, cb) = fmath::sin_cos(beta);
     let f = ctx.field;
-    (p + f.b * s + (f.u * cb + f.v * sb) * t, s / alpha.cos())
+    (p + f.b * s + (f.u * cb + f.v * sb) * t, s / fmath::cos(alpha))
 }
 
 /// The Fang models: `frac(m)` is the fraction of the beam's power deposited
@@ -221,7 +222,7 @@ fn column_point(ctx: &BeamContext, p: DVec3, z: f64) -> DVec3 {
     let b = ctx.field.b;
     let dz = z - p.z;
     let r = ctx.earth.radius_km;
-    let ground = if r > 0.0 { r * ((r + z) / (r + p.z)).ln() } else { dz };
+    let ground = if r > 0.0 { r * fmath::ln((r + z) / (r + p.z)) } else { dz };
     DVec3::new(p.x + b.x * ground / b.z, p.y + b.y * ground / b.z, z)
 }
 
@@ -259,7 +260,7 @@ pub fn above_start_spans(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f6
         // Where the fraction above falls by e, and where the deposit per
         // km changes by e (near a soft spectrum's peak the first is long).
         let l_f = if q > 0.0 { mid / q } else { f64::INFINITY };
-        let l_q = if q1 > 0.0 && q2 > 0.0 && q1 != q2 { d / (q1 / q2).ln().abs() } else { f64::INFINITY };
+        let l_q = if q1 > 0.0 && q2 > 0.0 && q1 != q2 { d / fmath::ln(q1 / q2).abs() } else { f64::INFINITY };
         let step = (ABOVE_START_DLN * l_f.min(l_q)).clamp(ABOVE_START_MIN_SPAN_KM, ABOVE_START_SPAN_KM);
         z = (z + step).min(top);
         out.push(z);
@@ -277,7 +278,9 @@ pub fn above_start_spans(atm: &Atmosphere, frac: &impl Fn(f64) -> f64, total: f6
 /// step instead) plus one per [`ABOVE_START_SPAN_KM`] of column. Used by
 /// the memory budget.
 pub fn max_above_start_spans(column_km: f64) -> usize {
-    2 * ((1.0 / ABOVE_START_TOL).ln() / ABOVE_START_DLN).ceil() as usize + (column_km.max(0.0) / ABOVE_START_SPAN_KM).ceil() as usize + 2
+    2 * (fmath::ln(1.0 / ABOVE_START_TOL) / ABOVE_START_DLN).ceil() as usize
+        + (column_km.max(0.0) / ABOVE_START_SPAN_KM).ceil() as usize
+        + 2
 }
 
 /// A Fang beam lays what its spectrum leaves above its start along the

@@ -446,6 +446,7 @@ pub fn bend_warnings(curtains: &[crate::scene::Curtain]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::util::fmath;
 
     #[test]
     fn with_a_site_a_path_is_lifted_along_igrfs_field_over_it() {
@@ -458,10 +459,10 @@ mod tests {
         let field = SiteField::of_scene(&s).unwrap();
         let (inc, dec) = field.angles_deg([0.0, 0.0], PATH_ALTITUDE_KM);
         let d = lift.apply([0.0, 0.0]);
-        let want = (s.beams.top_km - PATH_ALTITUDE_KM) / inc.to_radians().tan();
-        let az = d[0].atan2(d[1]).to_degrees();
+        let want = (s.beams.top_km - PATH_ALTITUDE_KM) / fmath::tan(inc.to_radians());
+        let az = fmath::atan2(d[0], d[1]).to_degrees();
         assert!(matches!(lift, Lift::Site { .. }));
-        assert!((d[0].hypot(d[1]) - want).abs() < 0.5, "{d:?} {want}");
+        assert!((fmath::hypot(d[0], d[1]) - want).abs() < 0.5, "{d:?} {want}");
         assert!(((az - dec - 180.0).rem_euclid(360.0) + 0.5).rem_euclid(360.0) < 1.0, "{az} {dec}");
         assert_ne!(Lift::of(&s.beams, &s.earth).apply([0.0, 0.0]), d);
         // `field = "scene"` keeps the scene keys' lift.
@@ -473,13 +474,13 @@ mod tests {
     /// Points 30 degrees apart on a circle of radius 20 km (chords of
     /// 10.35 km, so centripetal is uniform Catmull-Rom here).
     fn circle() -> Vec<[f64; 2]> {
-        (0..10).map(|k| (k as f64 * 30.0).to_radians()).map(|a| [20.0 * a.cos(), 20.0 * a.sin()]).collect()
+        (0..10).map(|k| (k as f64 * 30.0).to_radians()).map(|a| [20.0 * fmath::cos(a), 20.0 * fmath::sin(a)]).collect()
     }
 
     #[test]
     fn tight_bends_find_the_radius_and_the_place() {
         let pts = circle();
-        let chord = 40.0 * 15f64.to_radians().sin();
+        let chord = 40.0 * fmath::sin(15f64.to_radians());
         let length = polyline_length(&vertices(&pts));
         // Inside, the cubic spans stay near the circle (tightest at the
         // points: 17.0 km there): below a 16 km limit only the end spans are
@@ -563,7 +564,7 @@ mod tests {
     fn lift_is_cot_dip_times_the_height() {
         let b = BeamParams::default();
         let l = lift_km(&b);
-        let expect = (b.top_km - PATH_ALTITUDE_KM) / b.b_inclination_deg.to_radians().tan();
+        let expect = (b.top_km - PATH_ALTITUDE_KM) / fmath::tan(b.b_inclination_deg.to_radians());
         // Declination 0: the field points north and down, so its line rises to the south.
         assert!(l[0].abs() < 1e-9 && (l[1] + expect).abs() < 1e-9, "{l:?} {expect}");
         assert!((expect - 31.9).abs() < 0.1);

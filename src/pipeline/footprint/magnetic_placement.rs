@@ -42,6 +42,7 @@ use crate::geometry::earth::Earth;
 use crate::physics::auroral_oval::{al_from_kp_nt, edges};
 use crate::physics::magnetic_coordinates::{Cgm, CorrectedGeomagnetic};
 use crate::scene::root::Scene;
+use crate::util::fmath;
 use glam::DVec3;
 
 /// The longest step of a filled-in magnetic path, degrees of arc.
@@ -130,7 +131,7 @@ fn fill(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
         } else if dm < -12.0 {
             dm += 24.0;
         }
-        let cos = a[0].to_radians().cos().max(b[0].to_radians().cos());
+        let cos = fmath::cos(a[0].to_radians()).max(fmath::cos(b[0].to_radians()));
         let steps = (((b[0] - a[0]).abs().max(dm.abs() * 15.0 * cos) / FILL_STEP_DEG).ceil() as usize).max(1);
         for s in 1..=steps {
             let f = s as f64 / steps as f64;

@@ -31,6 +31,8 @@
 //! are set per `resolution[0]` cells, so a path of one resolution's worth of
 //! cells is simulated exactly as the straight curtain of its length.
 
+use crate::util::fmath;
+
 pub mod cells;
 pub mod curtain_path;
 pub mod fluid;
@@ -157,7 +159,7 @@ impl Footprint {
     /// taken once (the same values, so the same bits).
     #[inline]
     pub fn local_map(&self) -> LocalMap<'_> {
-        let sin_cos = if self.path.is_some() { (0.0, 1.0) } else { self.rotation_rad.sin_cos() };
+        let sin_cos = if self.path.is_some() { (0.0, 1.0) } else { fmath::sin_cos(self.rotation_rad) };
         LocalMap { path: self.path.as_deref(), center: self.center, sin_cos }
     }
 
@@ -167,7 +169,7 @@ impl Footprint {
         if let Some(p) = &self.path {
             return p.frame.to_world(u, v + p.drift_km);
         }
-        let (s, c) = self.rotation_rad.sin_cos();
+        let (s, c) = fmath::sin_cos(self.rotation_rad);
         (self.center[0] + u * c - v * s, self.center[1] + u * s + v * c)
     }
 
@@ -414,7 +416,7 @@ fn fluid2014(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams
         let edge = (half - (y - yc).abs() + 0.5).clamp(0.0, 1.0);
         for i in 0..nx {
             let x = (i as f64 + 0.5 - xd) / nx as f64;
-            let m = 0.55 + 0.45 * (tau * params.density_waves * along * x + phase_d).sin();
+            let m = 0.55 + 0.45 * fmath::sin(tau * params.density_waves * along * x + phase_d);
             fluid.density[j * nx + i] = edge * m;
         }
     }
@@ -426,7 +428,7 @@ fn fluid2014(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams
     // band (Gaussian across it, a few band widths wide) spins small vortices
     // that curl the band locally: their rotation rate A k is the fastest.
     let breathing =
-        if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * (tau * t / anim.fold_breathing_period_s).sin() } else { 1.0 };
+        if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * fmath::sin(tau * t / anim.fold_breathing_period_s) } else { 1.0 };
     let a = params.velocity_amplitude * breathing;
     let k1 = tau * params.velocity_waves * along / nx as f64;
     let k2 = tau * params.velocity_waves * along * 1.73 / nx as f64;
@@ -434,13 +436,13 @@ fn fluid2014(curtain: &Curtain, params: &FootprintParams, anim: &AnimationParams
     let (x1, x2, x3) = (shift(anim.fold_speed_kms), shift(-0.5 * anim.fold_speed_kms), shift(1.6 * anim.fold_speed_kms));
     let sigma3 = (3.0 * half).max(2.0);
     fluid.set_stream_function(|x, y| {
-        let across = (std::f64::consts::PI * y / ny as f64).sin();
+        let across = fmath::sin(std::f64::consts::PI * y / ny as f64);
         let mut psi = 0.0;
         if k1 > 0.0 {
-            psi += a / k1 * (k1 * (x - x1) + phase_v).sin() * across;
-            psi += 0.5 * a / k2 * (k2 * (x - x2) + phase_v2).sin() * across;
-            let g = (-0.5 * ((y - yc) / sigma3).powi(2)).exp();
-            psi += 0.6 * a / k3 * (k3 * (x - x3) + phase_v3).sin() * g * across;
+            psi += a / k1 * fmath::sin(k1 * (x - x1) + phase_v) * across;
+            psi += 0.5 * a / k2 * fmath::sin(k2 * (x - x2) + phase_v2) * across;
+            let g = fmath::exp(-0.5 * fmath::powi((y - yc) / sigma3, 2));
+            psi += 0.6 * a / k3 * fmath::sin(k3 * (x - x3) + phase_v3) * g * across;
         }
         psi
     });
@@ -469,12 +471,12 @@ fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFr
     let Cells { nx, ny, length, .. } = cells;
     let tau = std::f64::consts::TAU;
     let rot = curtain.rotation_deg.to_radians();
-    let drift = if anim.drift_km > 0.0 { anim.drift_km * (tau * t / anim.drift_period_s).sin() } else { 0.0 };
+    let drift = if anim.drift_km > 0.0 { anim.drift_km * fmath::sin(tau * t / anim.drift_period_s) } else { 0.0 };
     if let Some(frame) = frame {
         let path = PlacedPath { frame, drift_km: drift };
         let mid = path.frame.to_world(0.0, drift);
         let ahead = path.frame.to_world(1e-3, drift);
-        let rotation_rad = (ahead.1 - mid.1).atan2(ahead.0 - mid.0);
+        let rotation_rad = fmath::atan2(ahead.1 - mid.1, ahead.0 - mid.0);
         return Footprint {
             nx,
             ny,
@@ -488,7 +490,7 @@ fn place(curtain: &Curtain, anim: &AnimationParams, t: f64, frame: Option<PathFr
             filament_share: None,
         };
     }
-    let center = [curtain.center[0] - drift * rot.sin(), curtain.center[1] + drift * rot.cos()];
+    let center = [curtain.center[0] - drift * fmath::sin(rot), curtain.center[1] + drift * fmath::cos(rot)];
     Footprint {
         nx,
         ny,
@@ -658,7 +660,7 @@ mod tests {
         // The drift is bounded by drift_km, across the axis.
         for k in 0..50 {
             let f = simulate_at(&c, &p, &anim, 7, k as f64 * 17.0, [0.0; 2]);
-            let d = ((f.center[0] - c.center[0]).powi(2) + (f.center[1] - c.center[1]).powi(2)).sqrt();
+            let d = (fmath::powi(f.center[0] - c.center[0], 2) + fmath::powi(f.center[1] - c.center[1], 2)).sqrt();
             assert!(d <= anim.drift_km + 1e-9);
         }
     }

@@ -48,6 +48,7 @@
 
 use super::cells::Cells;
 use crate::scene::{AnimationParams, FootprintParams};
+use crate::util::fmath;
 use crate::util::rng;
 use rand::Rng;
 use rayon::prelude::*;
@@ -81,7 +82,7 @@ impl Kernel {
     /// smoothing length `smoothing_km`.
     pub fn new(period: f64, n: usize, smoothing_km: f64) -> Self {
         let h = period / n as f64;
-        let delta2 = (std::f64::consts::TAU * smoothing_km / period).cosh() - 1.0;
+        let delta2 = fmath::cosh(std::f64::consts::TAU * smoothing_km / period) - 1.0;
         let window = ((WINDOW_KM / h).ceil() as usize).min(n / 2);
         Kernel { period, delta2, circulation: GAMMA * h, window }
     }
@@ -95,8 +96,8 @@ impl Kernel {
             .iter()
             .zip(y)
             .map(|(&xi, &yi)| {
-                let (sx, cx) = (s * xi).sin_cos();
-                let e = (s * yi).exp();
+                let (sx, cx) = fmath::sin_cos(s * xi);
+                let e = fmath::exp(s * yi);
                 [sx, cx, e, 1.0 / e]
             })
             .collect();
@@ -163,8 +164,8 @@ impl Kernel {
 /// velocity jump γ = 1 km/s (module documentation).
 pub fn growth_rate(kappa: f64, period: f64, smoothing_km: f64) -> f64 {
     let a = std::f64::consts::TAU / period;
-    let e = (-kappa * smoothing_km).exp();
-    0.5 * GAMMA * (kappa * e * (1.0 - e) * a / (a * smoothing_km).sinh()).sqrt()
+    let e = fmath::exp(-kappa * smoothing_km);
+    0.5 * GAMMA * (kappa * e * (1.0 - e) * a / fmath::sinh(a * smoothing_km)).sqrt()
 }
 
 /// Markers along a sheet of `period` km for `params`: one per
@@ -181,7 +182,7 @@ pub fn roll_up(period: f64, params: &FootprintParams, anim: &AnimationParams, se
     let tau = std::f64::consts::TAU;
     let mut r = rng::rng(&[seeds[0], seeds[1], rng::tag::FOOTPRINT_VELOCITY, 1]);
     let breathing =
-        if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * (tau * t / anim.fold_breathing_period_s).sin() } else { 1.0 };
+        if anim.fold_breathing > 0.0 { 1.0 + anim.fold_breathing * fmath::sin(tau * t / anim.fold_breathing_period_s) } else { 1.0 };
     // Modes up to the wavelength 2π d (shorter ones hardly grow), at most
     // a quarter of the markers.
     let k_max = ((period / (tau * params.sheet_smoothing_km)).floor() as usize).clamp(1, (n / 4).max(1));
@@ -191,7 +192,7 @@ pub fn roll_up(period: f64, params: &FootprintParams, anim: &AnimationParams, se
         .map(|k| {
             let kappa = k as f64 * dk;
             // E(κ) = ε² min(κ, κ0)^-3 per unit κ: a mode holds E Δκ.
-            let amp = params.sheet_amplitude * (2.0 * dk).sqrt() * kappa.max(k0).powf(-1.5);
+            let amp = params.sheet_amplitude * (2.0 * dk).sqrt() * fmath::powf(kappa.max(k0), -1.5);
             let a = amp * (0.5 + r.random::<f64>());
             let phase = r.random::<f64>() * tau;
             let speed = anim.fold_speed_kms * (-0.5 + 2.1 * r.random::<f64>());
@@ -199,7 +200,7 @@ pub fn roll_up(period: f64, params: &FootprintParams, anim: &AnimationParams, se
         })
         .collect();
     let mut x: Vec<f64> = (0..n).map(|j| -0.5 * period + (j as f64 + 0.5) * h).collect();
-    let mut y: Vec<f64> = x.par_iter().map(|&xj| modes.iter().map(|&(k, a, p)| a * (k * xj + p).sin()).sum()).collect();
+    let mut y: Vec<f64> = x.par_iter().map(|&xj| modes.iter().map(|&(k, a, p)| a * fmath::sin(k * xj + p)).sum()).collect();
     let steps = params.sheet_steps.max(1);
     let dt = params.sheet_rollup_km / GAMMA / steps as f64;
     if params.sheet_rollup_km > 0.0 {
@@ -219,11 +220,11 @@ pub fn ray_brightness(n: usize, period: f64, params: &FootprintParams, seeds: [u
     let mut rays = Vec::new();
     let mut a = r.random::<f64>() * mean;
     while a < period {
-        let b = params.ray_contrast.powf(r.random::<f64>());
+        let b = fmath::powf(params.ray_contrast, r.random::<f64>());
         rays.push((a, b));
         // Gaps 0.15 mean + an exponential of 0.85 mean: CV 0.85 (rays
         // bunch and part), none closer than 0.15 mean.
-        let e = -(1.0 - r.random::<f64>()).ln();
+        let e = -fmath::ln(1.0 - r.random::<f64>());
         a += mean * (0.15 + 0.85 * e);
     }
     let w = params.ray_width_km.max(1e-6);
@@ -238,7 +239,7 @@ pub fn ray_brightness(n: usize, period: f64, params: &FootprintParams, seeds: [u
                     d -= period;
                 }
                 if d.abs() < 4.0 * w {
-                    s += b * (-0.5 * (d / w).powi(2)).exp();
+                    s += b * fmath::exp(-0.5 * fmath::powi(d / w, 2));
                 }
             }
             s
@@ -274,9 +275,9 @@ pub fn rasterise(x: &[f64], y: &[f64], brightness: &[f64], cells: Cells, thickne
             let gj = (py + 0.5 * width) / dv - 0.5;
             let (ci, cj) = (gi.round() as i64, gj.round() as i64);
             for jj in (cj - rv).max(0)..=(cj + rv).min(ny as i64 - 1) {
-                let wv = (-0.5 * ((jj as f64 - gj) * dv / sv).powi(2)).exp();
+                let wv = fmath::exp(-0.5 * fmath::powi((jj as f64 - gj) * dv / sv, 2));
                 for ii in ci - ru..=ci + ru {
-                    let wu = (-0.5 * ((ii as f64 - gi) * du / su).powi(2)).exp();
+                    let wu = fmath::exp(-0.5 * fmath::powi((ii as f64 - gi) * du / su, 2));
                     let i = ii.rem_euclid(nx as i64) as usize;
                     out[jj as usize * nx + i] += q * wu * wv;
                 }
@@ -291,7 +292,7 @@ pub fn rasterise(x: &[f64], y: &[f64], brightness: &[f64], cells: Cells, thickne
 fn blur(data: &[f64], nx: usize, ny: usize, du: f64, dv: f64, sigma_km: f64) -> Vec<f64> {
     let taps = |d: f64| -> Vec<f64> {
         let r = (3.0 * sigma_km / d).ceil() as i64;
-        (-r..=r).map(|o| (-0.5 * (o as f64 * d / sigma_km).powi(2)).exp()).collect()
+        (-r..=r).map(|o| fmath::exp(-0.5 * fmath::powi(o as f64 * d / sigma_km, 2))).collect()
     };
     let (tu, tv) = (taps(du), taps(dv));
     let (ru, rv) = ((tu.len() / 2) as i64, (tv.len() / 2) as i64);
@@ -374,7 +375,7 @@ pub fn arc_layers(cells: Cells, params: &FootprintParams, anim: &AnimationParams
             let (a, b) = ((j + n - 1) % n, (j + 1) % n);
             let dx = x[b] - x[a] + if b < a { period } else { 0.0 };
             let dy = y[b] - y[a];
-            let l = dx.hypot(dy).max(1e-12);
+            let l = fmath::hypot(dx, dy).max(1e-12);
             (-dy / l, dx / l)
         })
         .collect();

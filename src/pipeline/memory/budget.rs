@@ -58,6 +58,7 @@ use crate::pipeline::deposit::Photon;
 use crate::pipeline::photons::kernel::KernelF32;
 use crate::pipeline::plan::{BakePlan, DEPOSIT_PILOT_BEAMS, PILOT_HALF_BEAMS};
 use crate::scene::{Deposition, GatherMethod, KernelRadius, VoxelSize};
+use crate::util::fmath;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -161,8 +162,8 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
     // The walk's spread after descending d km: 4 standard deviations of
     // d / mu steps' deflections ([`spread_km`]), mu = L dt sin(I) / 2 the
     // mean descent of a step; at most the whole beam's.
-    let mu = 0.5 * step * dip.sin();
-    let per_sqrt_km = 4.0 * step * b.alpha_d_deg.to_radians().tan() / (3.0 * mu).sqrt();
+    let mu = 0.5 * step * fmath::sin(dip);
+    let per_sqrt_km = 4.0 * step * fmath::tan(b.alpha_d_deg.to_radians()) / (3.0 * mu).sqrt();
     // CSDA: 1 / dt steps of L dt xi, xi uniform on [0, 1]: a path of at
     // most L dt (n / 2 + 4 sqrt(n / 12)), four standard deviations.
     let n = (1.0 / b.dt).ceil();
@@ -194,11 +195,11 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
                             ([q.x, q.y], turn)
                         })
                         .unzip();
-                    let length = (deposit_top_km(plan, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / dip.sin();
+                    let length = (deposit_top_km(plan, c).max(b.top_km + b.top_noise_km) - atm.bottom_km()) / fmath::sin(dip);
                     let turn = match (&plan.site_field, plan.scene.earth.magnetic_pole) {
                         (Some(_), _) => turns.iter().copied().fold(0.0, f64::max) * length,
                         (None, Some(_)) if plan.scene.earth.radius_km > 0.0 => {
-                            let d = b.top_noise_km / dip.tan() + merge;
+                            let d = b.top_noise_km / fmath::tan(dip) + merge;
                             2.0 * d / plan.scene.earth.radius_km * length
                         }
                         _ => 0.0,
@@ -207,7 +208,7 @@ pub fn bands(plan: &BakePlan, voxel_km: f64, reach: f64) -> Vec<Band> {
                 }
                 None => {
                     let (columns, slack) = start_columns(fp, plan.scene.footprint.threshold, 0.5 * leaf);
-                    (columns, slack + b.top_noise_km / dip.tan())
+                    (columns, slack + b.top_noise_km / fmath::tan(dip))
                 }
             };
             let top = deposit_top_km(plan, c).max(b.top_km + b.top_noise_km);
@@ -280,7 +281,7 @@ pub fn box_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
     let (lo, hi) = world_bounds(plan);
     let box_leaves: f64 = (0..3).map(|i| ((hi[i] - lo[i] + 2.0 * reach) / leaf_km).ceil() + 1.0).product();
     let slabs = ((hi[2] - lo[2] + 2.0 * reach) / leaf_km).ceil() + 1.0;
-    let shift = leaf_km / dip.to_radians().tan();
+    let shift = leaf_km / fmath::tan(dip.to_radians());
     let spread = spread_km(plan);
     let own: f64 = plan
         .scene
@@ -289,7 +290,7 @@ pub fn box_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
         .map(|c| match path_curve(plan, c) {
             Some((length, _)) => band_area_leaves(length, 0.5 * c.width + reach + spread + leaf_km + shift, leaf_km) * slabs,
             None => {
-                let (s, co) = c.rotation_deg.to_radians().sin_cos();
+                let (s, co) = fmath::sin_cos(c.rotation_deg.to_radians());
                 let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * (reach + spread + leaf_km) + shift;
                 let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * (reach + spread + leaf_km) + shift;
                 ((dx / leaf_km).ceil() + 1.0) * ((dy / leaf_km).ceil() + 1.0) * slabs
@@ -385,7 +386,7 @@ pub fn estimate(plan: &BakePlan, count: LeafCount) -> Estimate {
     let leaf_km = 8.0 * voxel;
     let p = &plan.scene.photons;
     let reach = KernelRadius::of(p).max_reach_km(p.cutoff);
-    let per_photon = (2.0 * reach / leaf_km + 2.0).powi(3);
+    let per_photon = fmath::powi(2.0 * reach / leaf_km + 2.0, 3);
     let leaves = grid_leaves(plan, voxel, reach, count);
     // The emission's leaves, and the density's on the same voxels unless
     // the air is physical (`grid.density_a = 0`: no density grid).
@@ -410,10 +411,10 @@ pub fn estimate(plan: &BakePlan, count: LeafCount) -> Estimate {
     // photons x leaves per photon.
     let step = b.length_km * b.dt;
     let cross = ((2.0 * reach + step) / leaf_km).ceil() + 1.0;
-    let per_photon_seg = cross.powi(3);
+    let per_photon_seg = fmath::powi(cross, 3);
     let descent = (dip - b.alpha_d_deg).to_radians();
     let per_beam = if descent > 0.05 {
-        let path = (b.top_km + b.top_noise_km - 50.0).max(0.0) / descent.sin();
+        let path = (b.top_km + b.top_noise_km - 50.0).max(0.0) / fmath::sin(descent);
         (path / leaf_km + 2.0) * cross * cross
     } else {
         f64::INFINITY
@@ -422,7 +423,7 @@ pub fn estimate(plan: &BakePlan, count: LeafCount) -> Estimate {
     // A beam's column segments lie end to end along one field line: their
     // boxes list at most (length / leaf + 2) slices each of cross_c^2
     // leaves, cross_c the kernel's width in leaves.
-    let sin_dip = dip.to_radians().sin().max(0.05);
+    let sin_dip = fmath::sin(dip.to_radians()).max(0.05);
     let cross_c = (2.0 * reach / leaf_km).ceil() + 2.0;
     let column_entries = held_beams * (column / sin_dip / leaf_km + 2.0 * column_segments) * cross_c * cross_c;
     let candidates = (step_entries + column_entries) * 12.0;

@@ -56,6 +56,7 @@ use crate::pipeline::photons::merge::{merge_segments, MERGE_CDF, MERGE_LEN_R, ME
 use crate::pipeline::photons::GatherSums;
 use crate::pipeline::plan::BakePlan;
 use crate::scene::GatherMethod;
+use crate::util::fmath;
 use crate::util::progress::NoProgress;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
@@ -168,8 +169,8 @@ pub fn extrapolate_leaves(s4: f64, s2: f64, s1: f64, n: f64, big: f64) -> f64 {
         return s1;
     }
     let rho = (d2 / d1).clamp(INCREMENT_RATIO.0, INCREMENT_RATIO.1);
-    let c = -rho.log2();
-    s1 + d2 * rho / (1.0 - rho) * (1.0 - (n / big).powf(c))
+    let c = -fmath::log2(rho);
+    s1 + d2 * rho / (1.0 - rho) * (1.0 - fmath::powf(n / big, c))
 }
 
 /// What the sample measured, per beam and in all.
@@ -447,7 +448,7 @@ mod tests {
     fn leaves_follow_a_saturating_power_law() {
         // S(k) = 1000 - 800 k^-0.2: rho = 2^-0.2 = 0.87, inside the clamp,
         // so the fit is exact (to f64 rounding).
-        let s = |k: f64| 1000.0 - 800.0 * k.powf(-0.2);
+        let s = |k: f64| 1000.0 - 800.0 * fmath::powf(k, -0.2);
         let got = extrapolate_leaves(s(256.0), s(512.0), s(1024.0), 1024.0, 50_000.0);
         assert!((got - s(50_000.0)).abs() < 1e-9 * got, "{got} vs {}", s(50_000.0));
         // Nothing beyond the sample, or no growth: the sample's leaves.

@@ -37,6 +37,7 @@
 
 use crate::pipeline::footprint::Footprint;
 use crate::pipeline::plan::BakePlan;
+use crate::util::fmath;
 use glam::{DVec3, IVec3};
 use rayon::prelude::*;
 use std::collections::HashSet;
@@ -92,7 +93,7 @@ pub fn start_columns(fp: &Footprint, threshold: f64, g: f64) -> (Vec<[f64; 2]>, 
     let mut cols: Vec<(i64, i64)> = set.into_iter().collect();
     cols.sort_unstable();
     let pts = cols.into_iter().map(|(a, b)| [(a as f64 + 0.5) * g, (b as f64 + 0.5) * g]).collect();
-    (pts, 0.5 * du.hypot(dv) + std::f64::consts::FRAC_1_SQRT_2 * g)
+    (pts, 0.5 * fmath::hypot(du, dv) + std::f64::consts::FRAC_1_SQRT_2 * g)
 }
 
 /// Largest number of leaves the bit set of [`band_leaves`] spans (its box

@@ -14,6 +14,7 @@ use crate::pipeline::beams::walk::{above_start_column_top, above_start_spans, ma
 use crate::pipeline::footprint::curtain_path::{polyline_length, vertices, Lift};
 use crate::pipeline::plan::BakePlan;
 use crate::scene::{Curtain, Deposition};
+use crate::util::fmath;
 use std::sync::Arc;
 
 /// The spectrum that reaches highest of a curtain's populations: the
@@ -96,7 +97,7 @@ pub fn column_leaves(plan: &BakePlan, leaf_km: f64, reach: f64) -> f64 {
                 let rho = 0.5 * c.width + reach + std::f64::consts::SQRT_2 * leaf_km + leaf_km;
                 return band_area_leaves(length, rho, leaf_km) * slabs;
             }
-            let (s, co) = c.rotation_deg.to_radians().sin_cos();
+            let (s, co) = fmath::sin_cos(c.rotation_deg.to_radians());
             let dx = (c.length * co).abs() + (c.width * s).abs() + 2.0 * reach;
             let dy = (c.length * s).abs() + (c.width * co).abs() + 2.0 * reach;
             (dx / leaf_km + 3.0) * (dy / leaf_km + 3.0) * slabs
@@ -128,7 +129,7 @@ pub fn band_area_leaves(length: f64, rho: f64, leaf: f64) -> f64 {
 pub fn world_bounds(plan: &BakePlan) -> ([f64; 3], [f64; 3]) {
     let z0 = 50.0;
     let z1 = plan.scene.beams.top_km + plan.scene.beams.top_noise_km;
-    let tilt = (90.0 - dip_deg(plan)).to_radians().tan() * (z1 - z0) + spread_km(plan);
+    let tilt = fmath::tan((90.0 - dip_deg(plan)).to_radians()) * (z1 - z0) + spread_km(plan);
     let mut lo = [f64::INFINITY, f64::INFINITY, z0];
     let mut hi = [f64::NEG_INFINITY, f64::NEG_INFINITY, z1];
     for c in &plan.scene.curtains {
@@ -142,7 +143,7 @@ pub fn world_bounds(plan: &BakePlan) -> ([f64; 3], [f64; 3]) {
             }
             continue;
         }
-        let (s, co) = c.rotation_deg.to_radians().sin_cos();
+        let (s, co) = fmath::sin_cos(c.rotation_deg.to_radians());
         for (a, b) in [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)] {
             let (u, w) = (a * c.length, b * c.width);
             let x = c.center[0] + u * co - w * s;
@@ -219,13 +220,13 @@ pub fn steps_per_beam(plan: &BakePlan) -> (f64, f64) {
     }
     let top = b.top_km + b.top_noise_km;
     let h = plan.scene.curtains.iter().map(|c| (top - stop_km(plan, c)).max(0.0)).fold(0.0, f64::max);
-    let (si, ci) = dip.to_radians().sin_cos();
-    let ta = b.alpha_d_deg.to_radians().tan();
+    let (si, ci) = fmath::sin_cos(dip.to_radians());
+    let ta = fmath::tan(b.alpha_d_deg.to_radians());
     let a = b.length_km * b.dt;
     let mu = 0.5 * a * si;
     let mean = ((h + a * (si + ta * ci)) / mu).min(cap);
     let sigma2 = a * a * (si * si / 12.0 + ta * ta * ci * ci / 6.0);
-    (mean, h * sigma2 / mu.powi(3))
+    (mean, h * sigma2 / fmath::powi(mu, 3))
 }
 
 /// The step photons of `beams` beams: `beams` times the expected steps plus
@@ -243,14 +244,14 @@ pub fn photons_of_steps(plan: &BakePlan, beams: f64) -> f64 {
 pub fn spread_km(plan: &BakePlan) -> f64 {
     let b = &plan.scene.beams;
     let (n, _) = steps_per_beam(plan);
-    let walk = 4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * b.alpha_d_deg.to_radians().tan();
+    let walk = 4.0 * (n / 3.0).sqrt() * b.length_km * b.dt * fmath::tan(b.alpha_d_deg.to_radians());
     // However long the steps, a path that descends at least sin(I - alpha_D)
     // per km from the highest start to 50 km goes at most tan(alpha_D) per
     // km along the line across it.
     let descent = (dip_deg(plan) - b.alpha_d_deg).to_radians();
     if descent > 0.0 {
         let h = (b.top_km + b.top_noise_km - 50.0).max(0.0);
-        walk.min(h / descent.sin() * b.alpha_d_deg.to_radians().sin())
+        walk.min(h / fmath::sin(descent) * fmath::sin(b.alpha_d_deg.to_radians()))
     } else {
         walk
     }

@@ -22,6 +22,7 @@
 use super::budget::{estimate, Estimate, LeafCount, LeafMemo, USABLE_FRACTION};
 use crate::pipeline::plan::BakePlan;
 use crate::scene::{Scene, VoxelSize};
+use crate::util::fmath;
 use crate::util::memory::MemoryLimit;
 use crate::util::progress::NoProgress;
 use std::cell::RefCell;
@@ -318,7 +319,7 @@ impl Search<'_> {
             if x <= 0.0 {
                 return x;
             }
-            let p = 10f64.powf(x.log10().floor() - 1.0);
+            let p = fmath::powf(10f64, fmath::log10(x).floor() - 1.0);
             let r = if up { (x / p).ceil() * p } else { (x / p).floor() * p };
             // Clear the binary noise of the product.
             format!("{r:.12e}").parse::<f64>().unwrap_or(r)

@@ -171,6 +171,7 @@ mod tests {
     use crate::pipeline::photons::kernel::estimate_brute_force;
     use crate::pipeline::photons::leaf::PHOTONS_PER_KM2_S_PER_KR;
     use crate::pipeline::photons::test_fixtures::{beam_path, segment_photons, uniform_box};
+    use crate::util::fmath;
     use crate::util::progress::NoProgress;
     use glam::IVec3;
 
@@ -273,7 +274,7 @@ mod tests {
                 // rounded to 2^-24 relative, fast exp 1.2e-7, norm 2^-24: each
                 // term within 1e-6 relative) and sums the n positive terms in
                 // f32 (at most n 2^-24 relative), then rounds to f32.
-                let tol = 1e-6 + (n + 1.0) * 2f64.powi(-24);
+                let tol = 1e-6 + (n + 1.0) * fmath::powi(2f64, -24);
                 assert!((v[k] as f64 - b[k]).abs() <= tol * b[k].abs(), "{ijk}: {v:?} vs {b:?} ({n} terms)");
             }
         }

@@ -24,6 +24,7 @@ use super::kernel::{photon_kernel, Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::{Leaf, LEAF_DIM, LEAF_NUM_VALUES};
 use crate::pipeline::deposit::{end, pos, Photon};
+use crate::util::fmath;
 use glam::{DVec3, IVec3};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use rayon::prelude::*;
@@ -160,7 +161,7 @@ impl LeafGather<'_> {
             for y in lo.y..=hi.y {
                 let wy = off(1, y);
                 let t = if pxy2 > 0.0 { ((wx * px + wy * py) / pxy2).clamp(0.0, 1.0) } else { 0.0 };
-                let e2 = (wx - t * px).powi(2) + (wy - t * py).powi(2);
+                let e2 = fmath::powi(wx - t * px, 2) + fmath::powi(wy - t * py, 2);
                 if e2 >= reach2 {
                     continue;
                 }
@@ -237,10 +238,10 @@ mod tests {
         let photons = uniform_box(n, 0.0, side, 2.0, 7);
         let k = Kernel::new(r, c);
         let map = PhotonMap::new(&photons);
-        let v = side.powi(3);
+        let v = fmath::powi(side, 3);
         let mean = n as f64 * 2.0 / v;
         let mc = gaussian_mass_inside(c);
-        let int_k2 = gaussian_mass_inside(c * 2f64.sqrt()) / (mc * mc * (4.0 * std::f64::consts::PI).powf(1.5) * r.powi(3));
+        let int_k2 = gaussian_mass_inside(c * 2f64.sqrt()) / (mc * mc * fmath::powf(4.0 * std::f64::consts::PI, 1.5) * fmath::powi(r, 3));
         let var = n as f64 * 4.0 / v * int_k2 - n as f64 * 4.0 / (v * v);
         let sigma = var.sqrt();
         let mut r_ = rng::rng(&[8]);

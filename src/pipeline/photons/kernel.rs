@@ -41,6 +41,7 @@
 //! one photon and for a photon list: the estimate the gathers are held to.
 
 use crate::pipeline::deposit::{end, pos, Photon};
+use crate::util::fmath;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -51,7 +52,7 @@ use rayon::prelude::*;
 pub fn gaussian_mass_inside(c: f64) -> f64 {
     let n = 4096;
     let h = c / n as f64;
-    let f = |r: f64| 4.0 * std::f64::consts::PI * r * r * (-0.5 * r * r).exp() / (2.0 * std::f64::consts::PI).powf(1.5);
+    let f = |r: f64| 4.0 * std::f64::consts::PI * r * r * fmath::exp(-0.5 * r * r) / fmath::powf(2.0 * std::f64::consts::PI, 1.5);
     let mut s = f(0.0) + f(c);
     for k in 1..n {
         s += f(k as f64 * h) * if k % 2 == 1 { 4.0 } else { 2.0 };
@@ -62,7 +63,7 @@ pub fn gaussian_mass_inside(c: f64) -> f64 {
 /// Standard normal density.
 #[inline]
 fn phi(u: f64) -> f64 {
-    (-0.5 * u * u).exp() / (2.0 * std::f64::consts::PI).sqrt()
+    fmath::exp(-0.5 * u * u) / (2.0 * std::f64::consts::PI).sqrt()
 }
 
 /// Standard normal CDF (erfc keeps the lower tail's relative accuracy).
@@ -82,7 +83,7 @@ fn along_mass_inside(lambda: f64) -> f64 {
 fn half_ball(c: f64, h: impl Fn(f64) -> f64) -> f64 {
     let n = 128;
     let dh = c / n as f64;
-    let f = |u: f64| h(u) * (1.0 - (-0.5 * (c * c - u * u)).exp());
+    let f = |u: f64| h(u) * (1.0 - fmath::exp(-0.5 * (c * c - u * u)));
     let mut s = f(-c) + f(0.0);
     for k in 1..n {
         s += f(-c + k as f64 * dh) * if k % 2 == 1 { 4.0 } else { 2.0 };
@@ -99,7 +100,7 @@ pub fn segment_mass_inside(c: f64, lambda: f64) -> f64 {
         return gaussian_mass_inside(c);
     }
     let g = |u: f64| (big_phi(u) - big_phi(u - lambda)) / lambda;
-    (1.0 - (-0.5 * c * c).exp()) * along_mass_inside(lambda) + 2.0 * half_ball(c, g)
+    (1.0 - fmath::exp(-0.5 * c * c)) * along_mass_inside(lambda) + 2.0 * half_ball(c, g)
 }
 
 /// [`segment_mass_inside`] for one cutoff, tabulated over lambda in [0, 16]
@@ -148,7 +149,7 @@ impl SegmentMass {
     pub fn mass(&self, lambda: f64) -> f64 {
         if lambda >= Self::LAMBDA_MAX {
             let c = self.cutoff;
-            return (1.0 - (-0.5 * c * c).exp()) * along_mass_inside(lambda) + 2.0 * self.h_inf / lambda;
+            return (1.0 - fmath::exp(-0.5 * c * c)) * along_mass_inside(lambda) + 2.0 * self.h_inf / lambda;
         }
         let x = lambda * Self::STEPS_PER_UNIT;
         let k = x as usize;
@@ -192,7 +193,8 @@ pub fn segment_kernel_with_mass(kernel: &Kernel, m: f64, a: DVec3, b: DVec3, x: 
     }
     let r = kernel.r;
     let k = 1.0 / std::f64::consts::SQRT_2 / r;
-    (-perp2 * kernel.inv_2r2).exp() / (2.0 * std::f64::consts::PI * r * r) * (libm::erf(s * k) - libm::erf((s - len) * k)) / (2.0 * len * m)
+    fmath::exp(-perp2 * kernel.inv_2r2) / (2.0 * std::f64::consts::PI * r * r) * (libm::erf(s * k) - libm::erf((s - len) * k))
+        / (2.0 * len * m)
 }
 
 /// The truncated, renormalised 3D Gaussian kernel of standard deviation `r`.
@@ -212,7 +214,7 @@ impl Kernel {
     /// per voxel costs no integration.
     #[inline]
     pub fn with_mass(r: f64, cutoff: f64, mass: f64) -> Self {
-        let norm = 1.0 / ((2.0 * std::f64::consts::PI).powf(1.5) * r * r * r * mass);
+        let norm = 1.0 / (fmath::powf(2.0 * std::f64::consts::PI, 1.5) * r * r * r * mass);
         Self { r, cutoff, norm, inv_2r2: 0.5 / (r * r), reach2: (cutoff * r) * (cutoff * r) }
     }
 
@@ -229,7 +231,7 @@ impl Kernel {
     #[inline]
     pub fn eval_d2(&self, d2: f64) -> f64 {
         if d2 < self.reach2 {
-            self.norm * (-d2 * self.inv_2r2).exp()
+            self.norm * fmath::exp(-d2 * self.inv_2r2)
         } else {
             0.0
         }
@@ -239,7 +241,7 @@ impl Kernel {
     #[inline]
     pub(super) fn weight_d2(&self, d2: f64) -> f64 {
         if d2 < self.reach2 {
-            (-d2 * self.inv_2r2).exp()
+            fmath::exp(-d2 * self.inv_2r2)
         } else {
             0.0
         }
@@ -318,7 +320,7 @@ mod tests {
     fn truncated_kernel_integrates_to_one() {
         // Closed form of the truncated mass for c = 3: erf(3/sqrt2) - sqrt(2/pi) 3 e^-4.5.
         let m = gaussian_mass_inside(3.0);
-        assert!((m - (0.997_300_203_936_740 - (2.0 / std::f64::consts::PI).sqrt() * 3.0 * (-4.5f64).exp())).abs() < 1e-12, "{m}");
+        assert!((m - (0.997_300_203_936_740 - (2.0 / std::f64::consts::PI).sqrt() * 3.0 * fmath::exp(-4.5f64))).abs() < 1e-12, "{m}");
         for (r, c) in [(0.5, 3.0), (1.3, 1.5), (0.2, 6.0)] {
             let k = Kernel::new(r, c);
             // Midpoint rule on a grid of h = r / 8 over the cube [-c r, c r]^3.
@@ -340,7 +342,7 @@ mod tests {
             }
             s *= h * h * h;
             let jump = k.eval_d2((c * r) * (c * r) * (1.0 - 1e-12));
-            let bound = 4.0 * std::f64::consts::PI * (c * r).powi(2) * 0.5 * h * jump + 1e-6;
+            let bound = 4.0 * std::f64::consts::PI * fmath::powi(c * r, 2) * 0.5 * h * jump + 1e-6;
             assert!(bound < 0.5 * (1.0 - gaussian_mass_inside(c)) || c > 5.0, "test too weak for c = {c}");
             assert!((s - 1.0).abs() < bound, "r {r} c {c}: {s} (bound {bound})");
         }
@@ -367,7 +369,7 @@ mod tests {
             // (module documentation); at lambda = 1e-6 the difference is below 1e-6.
             assert!((segment_mass_inside(c, 1e-6) - m0).abs() < 1e-6, "c {c}");
             // Long segments: the cylinder dominates, M_seg -> 1 - e^{-c^2/2}.
-            assert!((segment_mass_inside(c, 1e6) - (1.0 - (-0.5 * c * c).exp())).abs() < 1e-5);
+            assert!((segment_mass_inside(c, 1e6) - (1.0 - fmath::exp(-0.5 * c * c))).abs() < 1e-5);
             let t = SegmentMass::new(c);
             // Linear interpolation at steps of 1/256 plus f32 storage: below
             // 3e-7 (see SegmentMass); 1e-6 leaves room.
@@ -412,8 +414,8 @@ mod tests {
                 let big_r = c * r * (1.0 - 1e-12);
                 let kern = |s: f64, rho: f64| 2.0 * pi * rho * segment_kernel_with_mass(&k, m, a, b, a + d * s + perp * rho);
                 let cyl = simpson(0.0, len, &|s| simpson(0.0, big_r, &|rho| kern(s, rho)));
-                let cap = |th: f64, s: f64| big_r * th.sin() * simpson(0.0, big_r * th.sin(), &|rho| kern(s, rho));
-                let caps = simpson(0.0, 0.5 * pi, &|th| cap(th, -big_r * th.cos()) + cap(th, len + big_r * th.cos()));
+                let cap = |th: f64, s: f64| big_r * fmath::sin(th) * simpson(0.0, big_r * fmath::sin(th), &|rho| kern(s, rho));
+                let caps = simpson(0.0, 0.5 * pi, &|th| cap(th, -big_r * fmath::cos(th)) + cap(th, len + big_r * fmath::cos(th)));
                 let total = cyl + caps;
                 assert!((total - 1.0).abs() < 1e-7, "r {r} c {c} lambda {lam}: {total}");
                 assert!(1.0 - m > 1e-4, "test too weak: M_seg = {m}");

@@ -36,6 +36,7 @@ use super::kernel::{Kernel, KernelF32, MIDPOINT_LAMBDA};
 use super::leaf::{LeafGather, LeafKernels, LeafSums, PHOTONS_PER_KM2_S_PER_KR};
 use crate::grid::Leaf;
 use crate::pipeline::deposit::{end, pos, Photon};
+use crate::util::fmath;
 use glam::IVec3;
 
 /// How many photons ahead of the one being added [`LeafGather::splat`]
@@ -295,7 +296,7 @@ impl LeafGather<'_> {
                 // root per row and saved less than it cost: the half rows
                 // are those of the leaf's z range `lo.z..=hi.z`.)
                 let tt = ((wx * px + wy * py) * inv_pxy2).clamp(0.0, 1.0);
-                let e2 = (wx - tt * px).powi(2) + (wy - tt * py).powi(2);
+                let e2 = fmath::powi(wx - tt * px, 2) + fmath::powi(wy - tt * py, 2);
                 if e2 >= reach2 {
                     continue;
                 }

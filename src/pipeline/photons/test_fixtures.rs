@@ -2,6 +2,7 @@
 //! segments, and beam-like paths of contiguous steps.
 
 use crate::pipeline::deposit::Photon;
+use crate::util::fmath;
 use crate::util::rng;
 use glam::DVec3;
 use rand::Rng;
@@ -49,8 +50,8 @@ pub fn beam_path(n: usize, seed: u64) -> Vec<Photon> {
             let s = r.random::<f64>();
             let alpha = (2.0 + 3.0 * r.random::<f64>()).to_radians();
             let beta = std::f64::consts::TAU * r.random::<f64>();
-            let q = p + b * s + (u * beta.cos() + v * beta.sin()) * s * alpha.tan();
-            let rate = 1.0 + 0.5 * (0.3 * q.z).sin();
+            let q = p + b * s + (u * fmath::cos(beta) + v * fmath::sin(beta)) * s * fmath::tan(alpha);
+            let rate = 1.0 + 0.5 * fmath::sin(0.3 * q.z);
             let w = (p.z - q.z) * rate * 1e19;
             let ph = Photon::segment(
                 p.as_vec3().to_array(),

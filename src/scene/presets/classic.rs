@@ -6,6 +6,7 @@ use crate::scene::{
     animation::*, atmosphere::*, background::*, beams::*, camera::*, colour::*, curtain::*, earth::*, footprint::*, grid::*, photons::*,
     render::*, root::Scene, sky::*, terrain::*, volume::*,
 };
+use crate::util::fmath;
 
 impl Default for Scene {
     fn default() -> Self {
@@ -96,7 +97,7 @@ pub fn arc_about(camera: [f64; 2], centre_km: f64, distance_km: f64, length_km: 
     (0..n)
         .map(|k| {
             let phi = mid - half + 2.0 * half * k as f64 / (n - 1) as f64;
-            let (x, y) = (camera[0] + rho * phi.sin(), camera[1] + centre_km - rho * phi.cos());
+            let (x, y) = (camera[0] + rho * fmath::sin(phi), camera[1] + centre_km - rho * fmath::cos(phi));
             [(x * 1e3).round() / 1e3, (y * 1e3).round() / 1e3]
         })
         .collect()
@@ -180,7 +181,7 @@ pub fn oval() -> Scene {
     // The small circle's radius in space, R sin(rho / R): its azimuths from
     // the pole span the arc's length; 33 points, 78 km apart.
     let rho = OVAL_POLE_DISTANCE_KM;
-    let span_deg = (OVAL_LENGTH_KM / (earth.radius_km * (rho / earth.radius_km).sin())).to_degrees();
+    let span_deg = (OVAL_LENGTH_KM / (earth.radius_km * fmath::sin(rho / earth.radius_km))).to_degrees();
     let south = earth.azimuth_deg(pole, [0.0, 0.0]);
     let n = 33;
     let path: Vec<[f64; 2]> = (0..n)

@@ -44,6 +44,7 @@
 
 use super::classic::{arc_about, default_scene, DEFAULT_ARC_CENTRE_KM};
 use crate::scene::{background::*, camera::*, curtain::*, footprint::*, grid::*, root::Scene, terrain::*};
+use crate::util::fmath;
 
 /// A perspective camera at `position` looking at `look_at`, z up.
 fn camera(position: [f64; 3], look_at: [f64; 3], fov_deg: f64) -> Camera {
@@ -201,7 +202,7 @@ pub fn corona() -> Scene {
     let dip = s.beams.b_inclination_deg.to_radians();
     s.camera = Camera {
         position: [0.0, 0.0, 0.3],
-        look_at: [0.0, -100.0 * dip.cos(), 0.3 + 100.0 * dip.sin()],
+        look_at: [0.0, -100.0 * fmath::cos(dip), 0.3 + 100.0 * fmath::sin(dip)],
         up: [0.0, 1.0, 0.0],
         projection: Projection::Fisheye,
         fov_deg: 180.0,

@@ -29,6 +29,7 @@ use crate::scene::{
     site::SiteParams,
     terrain::{Terrain, TerrainKind},
 };
+use crate::util::fmath;
 
 /// The site and hour of both scenes.
 pub fn tromso_site() -> SiteParams {
@@ -109,7 +110,7 @@ pub fn tromso_kp5() -> Scene {
     let up = 35.0_f64.to_radians();
     s.camera = Camera {
         position: [0.0, 0.0, 0.002],
-        look_at: [0.0, 100.0 * up.cos(), 0.002 + 100.0 * up.sin()],
+        look_at: [0.0, 100.0 * fmath::cos(up), 0.002 + 100.0 * fmath::sin(up)],
         fov_deg: 100.0,
         ..Camera::default()
     };

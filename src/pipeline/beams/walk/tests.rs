@@ -6,6 +6,7 @@ use crate::physics::geomagnetic_field::MagneticField;
 use crate::pipeline::deposit::pos;
 use crate::pipeline::footprint::Footprint;
 use crate::scene::BeamParams;
+use crate::util::fmath;
 use crate::util::rng;
 
 /// The US Standard Atmosphere 1976 and the default emission model's
@@ -114,7 +115,7 @@ fn deflection_angle_to_b_lies_in_the_sampled_range() {
             if len < 1e-6 {
                 continue; // a step with xi ~ 0 has no direction to measure
             }
-            let angle = (d.dot(ctx.field.b) / len).clamp(-1.0, 1.0).acos();
+            let angle = fmath::acos((d.dot(ctx.field.b) / len).clamp(-1.0, 1.0));
             // acos near small angles loses precision ~ sqrt(eps / len);
             // 1e-6 rad covers it for steps above 1 um.
             assert!(angle >= lo - 1e-6 && angle <= hi + 1e-6, "angle {} deg", angle.to_degrees());
