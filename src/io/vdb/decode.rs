@@ -356,13 +356,7 @@ pub fn read_stored_f32(
         }
         return Ok(slots);
     }
-    let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_chunk(cur, Codec::Blosc, nbytes, true, true, scratch)?.unwrap_or(&[])
-    } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_chunk(cur, Codec::Zip, nbytes, true, true, scratch)?.unwrap_or(&[])
-    } else {
-        cur.bytes(nbytes)?
-    };
+    let raw = stored_bytes(cur, fmt, nbytes, scratch)?;
     if fmt.half {
         halves_to_f32(raw, out);
     } else {
@@ -399,6 +393,22 @@ fn stored_header(
     Ok((slots, count * comps))
 }
 
+/// A stored-values record's `nbytes` of values, decompressed (into
+/// `scratch`) or read where they lie; checked as [`read_values_into`]
+/// checks them.
+fn stored_bytes<'a, 's>(cur: &mut Cursor<'a>, fmt: RecordFormat, nbytes: usize, scratch: &'s mut Vec<u8>) -> Result<&'s [u8], ParseError>
+where
+    'a: 's,
+{
+    Ok(if fmt.flags & COMPRESS_BLOSC != 0 {
+        read_chunk(cur, Codec::Blosc, nbytes, true, true, scratch)?.unwrap_or(&[])
+    } else if fmt.flags & COMPRESS_ZIP != 0 {
+        read_chunk(cur, Codec::Zip, nbytes, true, true, scratch)?.unwrap_or(&[])
+    } else {
+        cur.bytes(nbytes)?
+    })
+}
+
 /// [`read_stored_f32`] for a half-float record (`fmt.half`), its values
 /// left as the halves' bits (no conversion): what a store of half floats
 /// copies. The same checks.
@@ -418,14 +428,7 @@ pub fn read_stored_half(
     if halves == 0 {
         return Ok(slots);
     }
-    let nbytes = halves * 2;
-    let raw: &[u8] = if fmt.flags & COMPRESS_BLOSC != 0 {
-        read_chunk(cur, Codec::Blosc, nbytes, true, true, scratch)?.unwrap_or(&[])
-    } else if fmt.flags & COMPRESS_ZIP != 0 {
-        read_chunk(cur, Codec::Zip, nbytes, true, true, scratch)?.unwrap_or(&[])
-    } else {
-        cur.bytes(nbytes)?
-    };
+    let raw = stored_bytes(cur, fmt, halves * 2, scratch)?;
     for (o, b) in out.iter_mut().zip(raw.chunks_exact(2)) {
         *o = u16::from_le_bytes([b[0], b[1]]);
     }
