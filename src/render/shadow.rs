@@ -100,32 +100,14 @@ fn weight<S: Stored>(v: &[S], at: usize) -> Option<f64> {
     (w > 0.0).then_some(w)
 }
 
-/// The running total `t` with the weights of voxels `range` (offsets) of
-/// block `block` added in order (the emission's first channel `ch`), and
-/// whether any was.
-fn add_weights(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, t: f64) -> (f64, bool) {
+/// Walks voxels `range` (offsets) of block `block` in order (the
+/// emission's first channel `ch`), adding each weight to the running total
+/// `t`, until the total exceeds `x`: the total reached and the last voxel
+/// with a weight (the one that crossed `x`, if one did). With `x` infinite,
+/// the range's total and its last emitting voxel.
+fn walk(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, t: f64, x: f64) -> (f64, Option<usize>) {
     #[inline(always)]
-    fn add<S: Stored>(v: &[S], channels: usize, at: usize, range: std::ops::Range<usize>, mut t: f64) -> (f64, bool) {
-        let mut any = false;
-        for n in range {
-            if let Some(w) = weight(v, at + n * channels) {
-                t += w;
-                any = true;
-            }
-        }
-        (t, any)
-    }
-    let at = block * LEAF_NUM_VALUES * field.channels + ch;
-    match &field.values {
-        Values::F32(v) => add(v, field.channels, at, range, t),
-        Values::Half(v) => add(v, field.channels, at, range, t),
-    }
-}
-
-/// The first voxel of `range` (offsets) of block `block` whose running
-/// total, from `t`, exceeds `x`, else the last voxel with a weight.
-fn first_above(field: &Field, ch: usize, block: usize, range: std::ops::Range<usize>, t: f64, x: f64) -> Option<usize> {
-    fn find<S: Stored>(v: &[S], channels: usize, at: usize, range: std::ops::Range<usize>, mut t: f64, x: f64) -> Option<usize> {
+    fn go<S: Stored>(v: &[S], channels: usize, at: usize, range: std::ops::Range<usize>, mut t: f64, x: f64) -> (f64, Option<usize>) {
         let mut last = None;
         for n in range {
             if let Some(w) = weight(v, at + n * channels) {
@@ -136,12 +118,12 @@ fn first_above(field: &Field, ch: usize, block: usize, range: std::ops::Range<us
                 }
             }
         }
-        last
+        (t, last)
     }
     let at = block * LEAF_NUM_VALUES * field.channels + ch;
     match &field.values {
-        Values::F32(v) => find(v, field.channels, at, range, t, x),
-        Values::Half(v) => find(v, field.channels, at, range, t, x),
+        Values::F32(v) => go(v, field.channels, at, range, t, x),
+        Values::Half(v) => go(v, field.channels, at, range, t, x),
     }
 }
 
@@ -193,17 +175,15 @@ impl EmissionSampler {
         };
         let mut total = 0.0;
         for (origin, block) in order {
-            let before = total;
             let mut any = false;
             let mut ends = [0.0; LEAF_MASK_WORDS];
             for (w, end) in ends.iter_mut().enumerate() {
-                let (t, some) = add_weights(f, c.channel, block, w * 64..(w + 1) * 64, total);
+                let (t, last) = walk(f, c.channel, block, w * 64..(w + 1) * 64, total, f64::INFINITY);
                 total = t;
-                any |= some;
+                any |= last.is_some();
                 *end = total;
             }
             if any {
-                debug_assert!(total >= before);
                 s.leaf_origins.push(origin);
                 s.leaf_block.push(block as u32);
                 s.leaf_cdf.push(total);
@@ -245,11 +225,11 @@ impl EmissionSampler {
             } else {
                 ends[w - 1]
             };
-            if let Some(n) = first_above(field, ch, block, w * 64..(w + 1) * 64, t, x) {
+            if let (_, Some(n)) = walk(field, ch, block, w * 64..(w + 1) * 64, t, x) {
                 return n;
             }
         }
-        first_above(field, ch, block, 0..LEAF_NUM_VALUES, 0.0, f64::INFINITY).expect("an emitting leaf has an emitting voxel")
+        walk(field, ch, block, 0..LEAF_NUM_VALUES, 0.0, f64::INFINITY).1.expect("an emitting leaf has an emitting voxel")
     }
 
     /// A point `y` (world space) with density `Y(e(y)) / power`; `medium`

@@ -33,7 +33,6 @@ use crate::pipeline::footprint::curtain_path::{vertices, Lift};
 use crate::scene::root::Scene;
 use crate::scene::{BeamParams, Curtain, EarthParams};
 use crate::util::fmath;
-use std::sync::Arc;
 
 /// Samples along a straight curtain's length (and across, [`ACROSS`]).
 const ALONG: usize = 17;
@@ -52,16 +51,15 @@ pub struct CurtainDip {
 /// Ground points `[x, y]` km of a curtain's start area: a straight
 /// curtain's rectangle at [`ALONG`] x [`ACROSS`] points (corners, edges,
 /// centre), or a path's vertices lifted to the start altitude (along
-/// `site`'s field when given, as the footprints are: `Lift::of_scene`),
+/// `site`'s field when given, as the footprints are: `Lift::over`),
 /// each with the four points half the width away along the axes.
 pub fn start_samples(curtain: &Curtain, beams: &BeamParams, earth: &EarthParams, site: Option<&SiteField>) -> Vec<[f64; 2]> {
     if let Some(p) = &curtain.path {
         let h = 0.5 * curtain.width;
-        let lift = match site {
-            Some(f) => Lift::Site { field: Arc::new(f.clone()), top_km: beams.top_km },
-            None => Lift::of(beams, earth),
-        };
-        return vertices(&lift.path(p)).into_iter().flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]]).collect();
+        return vertices(&Lift::over(beams, earth, site.cloned()).path(p))
+            .into_iter()
+            .flat_map(|[x, y]| [[x, y], [x - h, y], [x + h, y], [x, y - h], [x, y + h]])
+            .collect();
     }
     let (s, c) = fmath::sin_cos(curtain.rotation_deg.to_radians());
     let mut out = Vec::with_capacity(ALONG * ACROSS);

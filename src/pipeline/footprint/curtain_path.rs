@@ -98,9 +98,15 @@ impl Lift {
     /// The scene's lift: IGRF-14's over a `[site]` whose field is IGRF
     /// (the field its beams follow), else [`Lift::of`].
     pub fn of_scene(scene: &Scene) -> Lift {
-        match SiteField::of_scene(scene) {
-            Some(field) => Lift::Site { field: Arc::new(field), top_km: scene.beams.top_km },
-            None => Lift::of(&scene.beams, &scene.earth),
+        Lift::over(&scene.beams, &scene.earth, SiteField::of_scene(scene))
+    }
+
+    /// IGRF-14's lift when the beams follow `site`'s field, else
+    /// [`Lift::of`].
+    pub fn over(beams: &BeamParams, earth: &EarthParams, site: Option<SiteField>) -> Lift {
+        match site {
+            Some(field) => Lift::Site { field: Arc::new(field), top_km: beams.top_km },
+            None => Lift::of(beams, earth),
         }
     }
 

@@ -8,20 +8,20 @@
 //! It halves the medium's memory and the pages its build touches (328 MB
 //! of 32-bit values on the default bake).
 //!
-//! The conversions are exact for the values they are given and cheap
-//! enough for the march's inner loop (a shift and a multiplication by a
-//! power of two; no table, no branch): a half's exponent and mantissa
-//! fields, shifted into an `f32`'s, are the value times 2^-112 (normal and
-//! subnormal halves alike), so a multiplication by 2^112 gives the value
-//! (van der Zijp 2008, "Fast half float conversions", the "magic"
-//! multiplication); the reverse multiplies by 2^-112. The sign is carried
-//! apart. Infinities and NaN never reach a field (`check.rs` refuses them).
+//! The conversion is exact and cheap enough for the march's inner loop (a
+//! shift and a multiplication by a power of two; no table, no branch): a
+//! half's exponent and mantissa fields, shifted into an `f32`'s, are the
+//! value times 2^-112 (normal and subnormal halves alike), so a
+//! multiplication by 2^112 gives the value (van der Zijp 2008, "Fast half
+//! float conversions", the "magic" multiplication; the tests' inverse
+//! multiplies by 2^-112). The sign is carried apart. Infinities and NaN never reach a field (`check.rs` refuses them).
 
 use crate::grid::leaf_source::{LeafError, LeafSource, LeafValues, Scratch};
 
 /// 2^112: a half's fields shifted into an `f32`'s read as its value / 2^112.
 const MAGIC: f32 = f32::from_bits((127 + 112) << 23);
 /// 2^-112.
+#[cfg(test)]
 const INV_MAGIC: f32 = f32::from_bits((127 - 112) << 23);
 
 /// The `f32` a finite half float's bits hold (exact).
@@ -34,8 +34,9 @@ pub fn half_to_f32(h: u16) -> f32 {
 
 /// The half float bits of `x`, which must be a finite half float's value
 /// (an `f32` a half holds exactly: what [`half_to_f32`] returns); other
-/// values are truncated, never rounded.
-#[inline(always)]
+/// values are truncated, never rounded. The store copies a file's bits and
+/// never converts this way: the tests' inverse of [`half_to_f32`].
+#[cfg(test)]
 pub fn f32_to_half(x: f32) -> u16 {
     let b = x.to_bits();
     let m = (f32::from_bits(b & 0x7fff_ffff) * INV_MAGIC).to_bits() >> 13;
