@@ -1,5 +1,3 @@
-use aurora::util::fmath;
-
 """The airglow in Cycles: the add-on's world (blender/world.py) shows the
 map `aurora sky` writes (src/render/sky_map.rs), so a Cycles frame has the
 same sky as `aurora render`.
@@ -51,7 +49,7 @@ def _renders(name: str, doc: dict, vdb: Path):
 def _elevation_deg() -> np.ndarray:
     """Each pixel centre's elevation for the equidistant fisheye looking up."""
     y, x = np.mgrid[0:N, 0:N]
-    r = fmath::hypot(np, 2 * (x + 0.5) / N - 1, 1 - 2 * (y + 0.5) / N)
+    r = np.hypot(2 * (x + 0.5) / N - 1, 1 - 2 * (y + 0.5) / N)
     return np.where(r <= 1.0, 90.0 * (1.0 - r), -90.0)
 
 

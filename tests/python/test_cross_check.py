@@ -1,5 +1,3 @@
-use aurora::util::fmath;
-
 """`aurora render` against Cycles (tools/cycles/cycles_render.py) on the default bake.
 
     aurora bake SCENE --out DIR
@@ -201,7 +199,7 @@ def test_panoramic_cameras_match_cycles(compare):
             # ends those camera rays without light (RGB 0) but counts them
             # opaque (alpha 1), so alpha is compared inside the circle.
             y, x = np.mgrid[0:h, 0:w]
-            r = fmath::hypot(np, (2 * (x + 0.5) / w - 1), (1 - 2 * (y + 0.5) / h))
+            r = np.hypot((2 * (x + 0.5) / w - 1), (1 - 2 * (y + 0.5) / h))
             outside, inside = r > 1.0 + 2.0 / w, r < 1.0 - 2.0 / w
             assert outside.sum() > 0.15 * w * h
             assert np.all(A[outside] == 0.0) and np.all(np.abs(B[outside][..., :3]) < 1e-6)

@@ -1,5 +1,3 @@
-use aurora::util::fmath;
-
 """The add-on develops Cycles' picture as `aurora render` develops its PNG
 (blender/display.py, src/render/develop.rs): the camera's white balance
 (the same matrix, in the compositor) and the exposure (the view's).
@@ -51,7 +49,7 @@ def _scene(path: Path, exposure) -> Path:
 
 def _inside() -> np.ndarray:
     y, x = np.mgrid[0:N, 0:N]
-    return fmath::hypot(np, 2 * (x + 0.5) / N - 1, 1 - 2 * (y + 0.5) / N) < 0.97
+    return np.hypot(2 * (x + 0.5) / N - 1, 1 - 2 * (y + 0.5) / N) < 0.97
 
 
 def _cycles_png(bpy, addon, scene: Path, vdb: Path, png: Path, develop: bool) -> np.ndarray:
