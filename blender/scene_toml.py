@@ -56,13 +56,14 @@ Camera = _table_class("Camera", "camera", "position look_at up projection fov_de
     fov_deg: the vertical field of view, degrees (perspective); the angle
     across the image circle (fisheye, up to 360). ortho_height: the vertical
     extent of the view in km (orthographic).""")
-Render = _table_class("Render", "render", "width height spp exposure view_transform shutter_s png_bits", """`[render]`.
+Render = _table_class("Render", "render", "width height spp shadow_samples exposure view_transform shutter_s png_bits", """`[render]`.
 
     view_transform: the PNG view transform of `aurora render` ("agx" or
     "standard"; the EXR it writes and Cycles' EXR are linear either way).
     shutter_s: seconds of shutter centred on the frame (0: sharp); Cycles
     blurs along the VDB's velocity grid. png_bits: 8 or 16, for the PNGs
-    `aurora render` writes.""")
+    `aurora render` writes. shadow_samples: `aurora render`'s shadow rays
+    per terrain hit (Cycles lights the terrain by its own sampling).""")
 Volume = _table_class("Volume", "volume", "density_scale emission_scale", """`[volume]`.
 
     Extinction sigma_t = density_scale * density grid (per km); emitted
@@ -207,6 +208,7 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
         width=int(_checked(src, "render", "width", r)),
         height=int(_checked(src, "render", "height", r)),
         spp=int(_checked(src, "render", "spp", r)),
+        shadow_samples=int(_checked(src, "render", "shadow_samples", r)),
         exposure=_exposure(src, r),
         view_transform=r.get("view_transform", Render().view_transform),
         shutter_s=_checked(src, "render", "shutter_s", r),
@@ -217,7 +219,7 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     views = SCHEMA["render"]["view_transform"]["values"]
     if ren.view_transform not in views:
         raise SceneFileError(f"{src}: render.view_transform = {ren.view_transform!r} must be one of {', '.join(views)}")
-    for k in ("width", "height", "spp"):
+    for k in ("width", "height", "spp", "shadow_samples"):
         if k in r and (isinstance(r[k], float) and r[k] != int(r[k])):
             raise SceneFileError(f"{src}: render.{k} must be an integer, got {r[k]!r}")
 

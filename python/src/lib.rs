@@ -415,7 +415,7 @@ fn render<'py>(
     };
     let g = grid.clone();
     let r = run(py, progress, move |pr| {
-        let req = ImageRequest { scene: &s, dir, vdb: vdb.as_deref(), frame, grid: g.as_deref(), shadow_samples: 1, adaptive: false };
+        let req = ImageRequest { scene: &s, dir, vdb: vdb.as_deref(), frame, grid: g.as_deref(), adaptive: false };
         aurora::app::render_image::render(&req, pr)
     })?;
     let r = r.map_err(|e| match e {

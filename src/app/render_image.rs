@@ -36,7 +36,6 @@ pub struct ImageRequest<'a> {
     pub frame: Option<i64>,
     /// One float grid alone as a grey emission (module doc).
     pub grid: Option<&'a str>,
-    pub shadow_samples: usize,
     pub adaptive: bool,
 }
 
@@ -88,7 +87,6 @@ impl RenderImageError {
 pub fn settings_for(req: &ImageRequest<'_>) -> Result<RenderSettings, RenderError> {
     let mut settings = RenderSettings::from_scene(req.scene);
     settings.base_dir = Some(req.dir.clone());
-    settings.shadow_samples = req.shadow_samples;
     if let Some(f) = req.frame {
         settings.time_s = crate::pipeline::motion::frame_time(&req.scene.animation, f);
     }

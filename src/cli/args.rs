@@ -225,11 +225,11 @@ pub struct RenderArgs {
     /// Override [render] exposure, in stops (EV).
     #[arg(long, value_name = "EV", allow_hyphen_values = true)]
     pub exposure: Option<f64>,
-    /// Emissive shadow-ray samples per terrain hit per pixel sample (default 1):
-    /// more makes lit terrain less noisy at less cost than more spp.
-    #[arg(long, value_name = "N", default_value_t = 1,
+    /// Override [render] shadow_samples: emissive shadow rays per terrain hit per pixel
+    /// sample; more makes lit terrain less noisy at less cost than more spp.
+    #[arg(long, value_name = "N",
           value_parser = clap::value_parser!(u64).range(1..=aurora::scene::MAX_SHADOW_SAMPLES))]
-    pub shadow_samples: u64,
+    pub shadow_samples: Option<u64>,
     /// Override the scene's seed.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(..=aurora::scene::MAX_SEED))]
     pub seed: Option<u64>,
@@ -423,8 +423,9 @@ fn parse_set(text: &str) -> std::result::Result<aurora::scene::Override, String>
 
 /// The command line, with every override flag of the command in the order
 /// given ([`SceneOverrides::ordered`]): `--seed N` is `seed=N`, render's
-/// `--spp N`, `--size WxH` and `--exposure EV` set `render.spp`,
-/// `render.width` and `render.height`, `render.exposure`.
+/// `--spp N`, `--shadow-samples N`, `--size WxH` and `--exposure EV` set
+/// `render.spp`, `render.shadow_samples`, `render.width` and
+/// `render.height`, `render.exposure`.
 pub fn parse() -> Cli {
     use clap::{CommandFactory, FromArgMatches};
     let matches = Cli::command().get_matches();
@@ -449,6 +450,9 @@ pub fn parse() -> Cli {
     if name == "render" {
         if let Ok(Some(&spp)) = m.try_get_one::<u64>("spp") {
             add("spp", "render.spp", toml::Value::Integer(spp as i64), spp.to_string());
+        }
+        if let Ok(Some(&k)) = m.try_get_one::<u64>("shadow_samples") {
+            add("shadow_samples", "render.shadow_samples", toml::Value::Integer(k as i64), k.to_string());
         }
         if let Ok(Some(&ev)) = m.try_get_one::<f64>("exposure") {
             add("exposure", "render.exposure", toml::Value::Float(ev), ev.to_string());

@@ -43,7 +43,6 @@ struct Job {
     /// The folder the scene's relative paths are resolved against.
     dir: PathBuf,
     format: ImageFormat,
-    shadow_samples: usize,
     adaptive: bool,
     quiet: bool,
     /// `--grid NAME` and `--grid-max`.
@@ -64,7 +63,7 @@ struct Files<'a> {
 
 pub fn run(a: RenderArgs) -> Result<()> {
     // --seed, --spp, --size and --exposure are overrides, applied in command-line order.
-    let RenderArgs { scene: scene_arg, vdb, frame, out, png, shadow_samples, adaptive, grid, grid_max, common, overrides, .. } = a;
+    let RenderArgs { scene: scene_arg, vdb, frame, out, png, adaptive, grid, grid_max, common, overrides, .. } = a;
     if let Some(m) = grid_max {
         if !(m.is_finite() && m > 0.0) {
             return Err(InputError(format!("--grid-max {m}: must be a finite number > 0")).into());
@@ -104,7 +103,7 @@ pub fn run(a: RenderArgs) -> Result<()> {
     if grid.is_none() {
         super::render_checks::observer_inputs(vdb.as_deref(), frame.as_deref(), &scene.colour)?;
     }
-    let job = Job { scene, dir, format, shadow_samples: shadow_samples as usize, adaptive, quiet: common.quiet, grid, grid_max };
+    let job = Job { scene, dir, format, adaptive, quiet: common.quiet, grid, grid_max };
     match frame {
         Some(spec) => {
             let (frames, _) = frame_selection(&spec, None)?;
@@ -184,7 +183,6 @@ fn render_one(job: &Job, files: &Files<'_>) -> Result<()> {
         vdb: files.vdb,
         frame: files.frame,
         grid: job.grid.as_deref(),
-        shadow_samples: job.shadow_samples,
         adaptive: job.adaptive,
     };
     let rendered = aurora::app::render_image::render(&req, bars.progress())?;

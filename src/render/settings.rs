@@ -67,7 +67,7 @@ pub struct RenderSettings {
 
 impl RenderSettings {
     /// The scene's camera, render, volume, background, sky, airglow and terrain, its seed,
-    /// exact integration and one shadow ray per terrain hit and sample.
+    /// exact integration and `render.shadow_samples` shadow rays per terrain hit and sample.
     pub fn from_scene(scene: &Scene) -> RenderSettings {
         RenderSettings {
             camera: scene.camera.clone(),
@@ -82,7 +82,7 @@ impl RenderSettings {
             observer: scene.colour.observer,
             seed: scene.seed,
             integration: Integration::Exact,
-            shadow_samples: 1,
+            shadow_samples: scene.render.shadow_samples,
             base_dir: None,
             site: scene.site.clone(),
             time_s: scene.animation.time_s,

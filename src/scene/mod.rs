@@ -75,5 +75,5 @@ pub use root::{fnv1a, Scene, OFF_WHEN_ZERO};
 pub use site::{SiteField, SiteParams};
 pub use sky::*;
 pub use terrain::*;
-pub use validation::{check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_SEED, MAX_SHADOW_SAMPLES, MAX_THREADS};
+pub use validation::{check_shapes, find_key_line, RangeError, SceneError, MAX_COLORMAP_VALUE, MAX_SEED, MAX_THREADS};
 pub use volume::*;

@@ -11,6 +11,9 @@ pub struct RenderParams {
     pub height: usize,
     /// Samples per pixel for the stochastic parts (pixel jitter, shadow rays).
     pub spp: usize,
+    /// Emissive shadow rays per terrain hit and pixel sample
+    /// (`crate::render::shadow`).
+    pub shadow_samples: usize,
     /// Exposure of the PNG preview, in stops (unused when `auto_exposure`).
     pub exposure: f64,
     /// `exposure = "auto"`: the PNG's exposure is metered from the image
@@ -34,6 +37,7 @@ impl Default for RenderParams {
             width: 640,
             height: 360,
             spp: 16,
+            shadow_samples: 1,
             exposure: 3.0,
             auto_exposure: false,
             view_transform: ViewTransform::Agx,
@@ -94,6 +98,7 @@ pub struct RenderKeys {
     pub width: usize,
     pub height: usize,
     pub spp: usize,
+    pub shadow_samples: usize,
     pub exposure: ExposureKey,
     pub view_transform: ViewTransform,
     pub png_bits: u32,
@@ -113,6 +118,7 @@ impl From<RenderParams> for RenderKeys {
             width: r.width,
             height: r.height,
             spp: r.spp,
+            shadow_samples: r.shadow_samples,
             exposure,
             view_transform: r.view_transform,
             png_bits: r.png_bits,
@@ -131,6 +137,7 @@ impl From<RenderKeys> for RenderParams {
             width: k.width,
             height: k.height,
             spp: k.spp,
+            shadow_samples: k.shadow_samples,
             exposure,
             auto_exposure,
             view_transform: k.view_transform,
@@ -205,6 +212,9 @@ pub const MAX_IMAGE_SIDE: usize = 16384;
 /// Largest `render.spp` (also the `--spp` flag's).
 pub const MAX_SPP: u64 = 65_536;
 
+/// Largest `render.shadow_samples` (also the `--shadow-samples` flag's).
+pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
+
 /// Largest `render.shutter_s`, s: ten seconds of motion in one picture,
 /// far beyond a frame (the aurora's fastest rays cross 250 km in it).
 pub const MAX_SHUTTER_S: f64 = 10.0;
@@ -214,6 +224,7 @@ pub const RENDER_KEYS: &[KeySpec] = &[
     KeySpec::new("width", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image width"),
     KeySpec::new("height", "px", Range::Int { min: 1, max: MAX_IMAGE_SIDE as i64 }, "image height (row 0 is the top)"),
     KeySpec::new("spp", "", Range::Int { min: 1, max: MAX_SPP as i64 }, "samples per pixel (pixel positions and shadow rays): 1 samples pixel centres; more average the pixel square (box filter) at stratified antithetic positions"),
+    KeySpec::new("shadow_samples", "", Range::Int { min: 1, max: MAX_SHADOW_SAMPLES as i64 }, "emissive shadow rays per terrain hit and pixel sample: the aurora's light on the ground is estimated from `spp` x this many rays a pixel; more makes lit terrain smooth at less cost than more `spp` (a photographer's view: 8)"),
     KeySpec::new("exposure", "stops", Range::NumOrWord(Num::closed(-50.0, 50.0), &["auto"]), "PNG only: the view transform of 2^exposure x the (white-balanced) linear image; `\"auto\"` meters it as a camera's highlight-weighted meter does (docs/colour.md, \"Exposure\"): the EV used is printed and recorded in the PNG and the EXR"),
     KeySpec::new("png_bits", "bits", Range::Of(&[8, 16]), "PNG only: bits per channel, 8 or 16 (16 for delivery: dome masters, whose faint sky gradients band at 8)"),
     KeySpec::new("view_transform", "", Range::Word(VIEW_TRANSFORM_WORDS), "PNG only: `agx` (Blender's default AgX view for an sRGB display, built from its published construction), `agx_` and a look Blender 5.0 ships for AgX (`agx_punchy`: AgX - Punchy, `agx_high_contrast`: AgX - High Contrast, ...; graded as its colour management grades them), or `standard` (the sRGB OETF, clipped: Blender's Standard); the EXR stays linear"),

@@ -20,8 +20,6 @@ pub const LINE_KEYS: [&str; 5] = ["5577", "6300", "6364", "4278", "n2_1p"];
 /// Largest seed: TOML integers are signed 64-bit, so a scene (and the
 /// `--seed` flag, whose bake is written back as TOML) holds at most i64::MAX.
 pub const MAX_SEED: u64 = i64::MAX as u64;
-/// Largest `--shadow-samples` per terrain hit per pixel sample.
-pub const MAX_SHADOW_SAMPLES: u64 = 4_096;
 /// Largest colour-map component (linear RGB per unit deposited power, about
 /// 1 for the report's map): far beyond any look, and small enough that a
 /// voxel's emission stays within single precision.

@@ -142,6 +142,40 @@ fn render_size_exposure_and_spp_are_overrides_and_png_alone_writes_only_the_png(
     assert_eq!(file_names(&d), ["a.png", "b.png", "c.exr", "c.png", "s.toml"]);
 }
 
+/// The shadow rays a render reports ("N shadow samples").
+fn shadow_samples(summary: &str) -> u64 {
+    let line = summary.lines().find(|l| l.contains("shadow samples")).unwrap_or_else(|| panic!("no shadow samples in {summary}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let at = words.iter().position(|w| *w == "shadow").unwrap();
+    words[at - 1].trim_start_matches(',').parse().unwrap_or_else(|_| panic!("{line}"))
+}
+
+#[test]
+fn shadow_samples_is_a_render_key_and_the_flag_overrides_it() {
+    let d = scratch("overrides", "shadow");
+    small_scene(&d);
+    // Looking at the horizon: the lower half of the picture is the lit ground.
+    let render = |args: &[&str]| {
+        ok(&Aurora::new()
+            .current_dir(&d)
+            .args(["render", "s.toml", "--threads", "2", "--set", "camera.look_at=[0, 0, 1]", "--set", "terrain.kind=\"plane\""])
+            .args(args)
+            .output())
+    };
+    let by_key = shadow_samples(&render(&["--shadow-samples", "2", "--set", "render.shadow_samples=5", "--png", "a.png"]));
+    let by_flag = shadow_samples(&render(&["--set", "render.shadow_samples=5", "--shadow-samples", "2", "--png", "b.png"]));
+    let one = shadow_samples(&render(&["--png", "c.png"]));
+    // Every terrain hit draws the key's count per sample: the same hits, 5, 2 and 1 rays each.
+    assert!(one > 0, "the ground is in the picture");
+    assert_eq!((by_key, by_flag), (5 * one, 2 * one));
+    let s = effective(&d.join("s.toml"), &["--set", "render.shadow_samples=7"]);
+    assert_eq!(s.render.shadow_samples, 7);
+    assert_eq!(aurora::scene::presets::by_name("default").unwrap().render.shadow_samples, 8);
+    let e =
+        refused(&Aurora::new().current_dir(&d).args(["render", "s.toml", "--set", "render.shadow_samples=0", "--png", "z.png"]).output());
+    assert!(e.contains("render.shadow_samples") && e.contains('0') && e.contains("4096"), "{e}");
+}
+
 #[test]
 fn a_sequence_folder_without_frame_is_refused_naming_its_frames() {
     let d = scratch("overrides", "sequence");

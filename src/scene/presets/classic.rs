@@ -23,23 +23,33 @@ impl Default for Scene {
 /// off both sides of the frame and its lower border bows down toward the
 /// horizon at both ends, as photographs show arcs.
 /// An active display, IBC III (`crate::pipeline::columns`: the brightest
-/// 557.7 nm column along B is about 100 kR): each arc a body 8 km wide at
-/// half maximum (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20
-/// km) of Maxwellian electrons (E0 4, 2.5 and 1.5 keV, 50, 30 and 20
-/// mW/m^2 at its peak: about 0.4, 0.25 and 0.17 MW per km of arc), folded
-/// and curled by the vortex sheet, with three filaments 0.1 km wide inside
-/// it (Maggs & Davis 1968; Dahlgren et al. 2012) of the same electrons
-/// accelerated through 4, 3 and 2 kV more (Evans 1974), 80, 50 and 35
-/// mW/m^2: their lower borders are sharper and lower. The beams follow the
-/// field (a 5 keV electron's gyroradius is metres). Exposed as a camera's
-/// highlight meter exposes a bright display (`render.exposure = "auto"`
-/// meters -5.9 EV here): -6 stops keeps the arcs' cores out of the view
-/// transform's shoulder and leaves the sky dark, as photographers expose.
+/// 557.7 nm column along B is about 100 kR): each arc an inverted-V
+/// (Evans 1974), a source of 0.8, 0.6 and 0.5 keV electrons accelerated
+/// through 5, 3.5 and 2 kV, so that its lower border is sharp (a
+/// monoenergetic-like spectrum stops within 2-3 km, a Maxwellian needs
+/// 4-9: Fang et al. 2010), in a body 5 km wide at half maximum
+/// (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20 km) of 50,
+/// 30 and 20 mW/m^2 at its peak, with six filaments 0.15 km wide inside it
+/// (Maggs & Davis 1968; Dahlgren et al. 2012: 0.05-0.2 km) of the same
+/// electrons accelerated through 4, 3 and 2 kV more, 300, 200 and 130
+/// mW/m^2: about 0.5, 0.3 and 0.2 MW per km of arc in all. The sheet rolls
+/// up 8 km (`footprint.sheet_rollup_km`): curls and folds along one
+/// unbroken band, rays of brightness within 4x of each other. The beams
+/// follow the field (a 5 keV electron's gyroradius is metres); 30,000 of
+/// them, so that neighbouring columns overlap at the half-kilometre voxel
+/// instead of standing apart as hairs. The aurora's light on the ground is
+/// estimated from 8 shadow rays a sample (`render.shadow_samples`), so the
+/// lit mountains are smooth. Exposed as a camera's highlight meter exposes
+/// a bright display (`render.exposure = "auto"` meters about -6 EV here):
+/// -6 stops keeps the arcs' cores out of the view transform's shoulder and
+/// leaves the sky dark, as photographers expose.
 pub fn default_scene() -> Scene {
-    let arc = |distance_km: f64, length_km: f64, shift_km: f64, flux: f64, e0: f64, filament: (f64, f64), seed: u64| Curtain {
+    let arc = |distance_km: f64, length_km: f64, shift_km: f64, flux: f64, (t, kv): (f64, f64), filament: (f64, f64), seed: u64| Curtain {
         path: Some(arc_about(DEFAULT_CAMERA_XY, DEFAULT_ARC_CENTRE_KM, distance_km, length_km, shift_km)),
         energy_flux: flux,
-        char_energy_kev: e0,
+        char_energy_kev: t,
+        spectrum: SpectrumShape::Accelerated,
+        potential_kv: kv,
         filament_energy_flux: filament.0,
         filament_potential_kv: filament.1,
         seed,
@@ -48,12 +58,19 @@ pub fn default_scene() -> Scene {
     Scene {
         seed: 2014,
         curtains: vec![
-            arc(70.0, 400.0, -20.0, 50.0, 4.0, (80.0, 4.0), 1),
-            arc(130.0, 620.0, 25.0, 30.0, 2.5, (50.0, 3.0), 2),
-            arc(220.0, 880.0, -5.0, 20.0, 1.5, (35.0, 2.0), 3),
+            arc(70.0, 400.0, -20.0, 50.0, (0.8, 5.0), (300.0, 4.0), 1),
+            arc(130.0, 620.0, 25.0, 30.0, (0.6, 3.5), (200.0, 3.0), 2),
+            arc(220.0, 880.0, -5.0, 20.0, (0.5, 2.0), (130.0, 2.0), 3),
         ],
-        footprint: FootprintParams::default(),
-        beams: BeamParams::default(),
+        footprint: FootprintParams {
+            sheet_rollup_km: 8.0,
+            sheet_thickness_km: 5.0,
+            filament_count: 6,
+            filament_width_km: 0.15,
+            ray_contrast: 4.0,
+            ..FootprintParams::default()
+        },
+        beams: BeamParams { count: 30_000, ..BeamParams::default() },
         colour: ColourParams::default(),
         photons: PhotonParams::default(),
         grid: GridParams::default(),
@@ -63,7 +80,7 @@ pub fn default_scene() -> Scene {
             look_at: [DEFAULT_CAMERA_XY[0], DEFAULT_CAMERA_XY[1] + 110.0, 52.3],
             ..Camera::default()
         },
-        render: RenderParams { exposure: -6.0, ..RenderParams::default() },
+        render: RenderParams { exposure: -6.0, shadow_samples: 8, ..RenderParams::default() },
         volume: VolumeParams::default(),
         background: Background::default(),
         terrain: Terrain { kind: TerrainKind::Heightfield, ..Terrain::default() },
@@ -115,9 +132,13 @@ pub fn seed2014() -> Scene {
     // exposure of +3 stops.
     // Straight sheets where the default stood before its arcs followed the
     // oval, seen from its camera of then.
-    for ((c, [x, y, rot]), flux) in
-        s.curtains.iter_mut().zip([[-20.0, 0.0, 4.0], [25.0, 45.0, -6.0], [-5.0, 95.0, 2.0]]).zip([6.0, 4.0, 3.0])
+    // Its electrons: Maxwellians of E0 4, 2.5 and 1.5 keV.
+    for (((c, [x, y, rot]), flux), e0) in
+        s.curtains.iter_mut().zip([[-20.0, 0.0, 4.0], [25.0, 45.0, -6.0], [-5.0, 95.0, 2.0]]).zip([6.0, 4.0, 3.0]).zip([4.0, 2.5, 1.5])
     {
+        c.spectrum = SpectrumShape::Maxwellian;
+        c.char_energy_kev = e0;
+        c.potential_kv = 0.0;
         c.path = None;
         c.length = 160.0;
         c.center = [x, y];
@@ -127,7 +148,7 @@ pub fn seed2014() -> Scene {
         c.filament_potential_kv = 0.0;
     }
     s.camera = Camera::default();
-    s.footprint.model = FootprintModel::Fluid2014;
+    s.footprint = FootprintParams { model: FootprintModel::Fluid2014, ..FootprintParams::default() };
     s.footprint.end_fade_km = 0.0;
     s.beams.count = 500_000;
     s.beams.alpha_d_deg = 25.0;
@@ -151,6 +172,7 @@ pub fn seed2014() -> Scene {
     s.render.width = 640;
     s.render.height = 438;
     s.render.spp = 8;
+    s.render.shadow_samples = 1;
     s.render.exposure = 3.0;
     s
 }

@@ -51,12 +51,14 @@ fn camera(position: [f64; 3], look_at: [f64; 3], fov_deg: f64) -> Camera {
     Camera { position, look_at, up: [0.0, 0.0, 1.0], projection: Projection::Perspective, fov_deg, ortho_height: 10.0 }
 }
 
-/// The scene every form starts from: the default's keys, a star field, a
-/// flat dark ground lit by the aurora, and the given curtains.
+/// The scene every form starts from: the default's keys but its
+/// footprint (each form sets its own from the table's defaults), a star
+/// field, a flat dark ground lit by the aurora, and the given curtains.
 fn base(seed: u64, curtains: Vec<Curtain>) -> Scene {
     Scene {
         seed,
         curtains,
+        footprint: FootprintParams::default(),
         background: Background { stars: true, ..Background::default() },
         terrain: Terrain { kind: TerrainKind::Plane, ..Terrain::default() },
         ..default_scene()
