@@ -162,7 +162,8 @@ def setup_scene_from_toml(
                 made = Path(tempfile.mkdtemp(prefix="aurora-sky-"))
                 sky = sky_map(path, made / "sky.exr", spec, binary)
         try:
-            wld = background_world("AuroraBackground", spec.background.radiance, image, sky or None)
+            lights = spec.sky.extinction and spec.sky.scattering
+            wld = background_world("AuroraBackground", spec.background.radiance, image, sky or None, lights=lights)
         finally:
             if made is not None:
                 shutil.rmtree(made, ignore_errors=True)

@@ -74,8 +74,12 @@ Background = _table_class("Background", "background", "radiance image stars limi
     radiance: seen by camera rays that escape; lights nothing. image: an
     equirectangular linear EXR of sky radiance (relative to the scene file).
     The procedural stars are drawn by `aurora render` only.""")
-Sky = _table_class("Sky", "sky", "extinction ozone_du aerosol_optical_depth angstrom aerosol_scale_height_km",
-                   """`[sky]`: the air between the aurora and the camera (air.py), on by default.""")
+Sky = _table_class("Sky", "sky", "extinction ozone_du aerosol_optical_depth angstrom aerosol_scale_height_km scattering",
+                   """`[sky]`: the air between the aurora and the camera (air.py), on by default.
+
+    scattering: the air scatters the sky's light into the sight lines (in
+    the map `aurora sky` writes) and the sky lights the ground: the world
+    shows that map to every ray, not only the camera's (world.py).""")
 Earth = _table_class("Earth", "earth", "radius_km", """`[earth]`.
 
     radius_km: the sphere the camera stands on, centre (0, 0, -radius_km);
@@ -262,8 +266,11 @@ def scene_from_dict(doc: dict, src: str = "<scene>", path: Path | None = None) -
     ext = k.get("extinction", Sky().extinction)
     if not isinstance(ext, bool):
         raise SceneFileError(f"{src}: sky.extinction must be true or false, got {ext!r}")
+    scattering = k.get("scattering", Sky().scattering)
+    if not isinstance(scattering, bool):
+        raise SceneFileError(f"{src}: sky.scattering must be true or false, got {scattering!r}")
     sky = Sky(ext, *(_checked(src, "sky", key, k) for key in ("ozone_du", "aerosol_optical_depth", "angstrom",
-                                                              "aerosol_scale_height_km")))
+                                                              "aerosol_scale_height_km")), scattering)
 
     e = _table(doc, "earth", src)
     # The schema states this range as a rule (0, or 1000 to 100000 km):

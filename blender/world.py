@@ -1,4 +1,4 @@
-"""The background: constant radiance seen only by camera rays.
+"""The background: constant radiance seen only by camera rays, and the sky.
 
 `aurora render` adds `background.radiance` to camera rays that escape (times
 the volume transmittance T) and never lights the terrain with it. In Cycles
@@ -13,7 +13,10 @@ maps a direction to the image exactly as `aurora render` does
 (`[airglow]`) and the procedural stars (`background.stars`) come the same
 way, as a second Environment Texture: the map `aurora sky` writes
 (src/render/sky_map.rs), the sky `aurora render` draws from the camera's
-position, already dimmed by the air.
+position, already dimmed by the air. With `[sky] scattering` (`lights`)
+`aurora render` lights the terrain with that sky (src/render/airglow.rs,
+`ground_irradiance`), so here the map is added after the camera-ray mix:
+every ray sees it, and the world is sampled as a light.
 """
 
 from __future__ import annotations
@@ -21,10 +24,12 @@ from __future__ import annotations
 import bpy
 
 
-def background_world(name: str, radiance, image=None, sky=None) -> bpy.types.World:
+def background_world(name: str, radiance, image=None, sky=None, lights: bool = False) -> bpy.types.World:
     """radiance: constant RGB; image: path of an equirectangular sky EXR or
     None; sky: path of the airglow and stars map from `aurora sky` or None.
-    Every one given is added to the others."""
+    Every one given is added to the others. lights: the sky map lights the
+    scene (every ray sees it), as `[sky] scattering` has `aurora render`
+    light the terrain with it."""
     r, g, b = (float(x) for x in radiance)
     world = bpy.data.worlds.new(name)
     tree = world.node_tree
@@ -42,6 +47,7 @@ def background_world(name: str, radiance, image=None, sky=None) -> bpy.types.Wor
     # Fac = Is Camera Ray: 0 -> first input (unconnected = no light), 1 -> background.
     tree.links.new(path.outputs["Is Camera Ray"], mix.inputs["Fac"])
     shader = bg.outputs["Background"]
+    lighting = None  # the sky map's shader when it lights every ray
     for k, (key, img) in enumerate((("aurora_background_image", image), ("aurora_sky_map", sky))):
         if img is None:
             continue
@@ -57,14 +63,25 @@ def background_world(name: str, radiance, image=None, sky=None) -> bpy.types.Wor
         emit.location = (-250, y)
         emit.inputs["Strength"].default_value = 1.0
         tree.links.new(env.outputs["Color"], emit.inputs["Color"])
+        world[key] = str(img)
+        if key == "aurora_sky_map" and lights:
+            lighting = emit.outputs["Background"]
+            continue
         add = tree.nodes.new("ShaderNodeAddShader")
         add.location = (0, y + 150)
         tree.links.new(shader, add.inputs[0])
         tree.links.new(emit.outputs["Background"], add.inputs[1])
         shader = add.outputs["Shader"]
-        world[key] = str(img)
     tree.links.new(shader, mix.inputs[2])
-    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
-    world.cycles.sampling_method = "NONE"
+    seen = mix.outputs["Shader"]
+    if lighting is not None:
+        # Camera rays see the background and the sky; every other ray the sky.
+        both = tree.nodes.new("ShaderNodeAddShader")
+        both.location = (350, -150)
+        tree.links.new(seen, both.inputs[0])
+        tree.links.new(lighting, both.inputs[1])
+        seen = both.outputs["Shader"]
+    tree.links.new(seen, out.inputs["Surface"])
+    world.cycles.sampling_method = "AUTOMATIC" if lighting is not None else "NONE"
     world["aurora_background_radiance"] = [r, g, b]
     return world

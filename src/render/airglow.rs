@@ -19,6 +19,25 @@
 //! zenith is 10^6 / (4 pi) photons cm^-2 s^-1 sr^-1 and reads 0.001 in
 //! luminance for 557.7 nm.
 //!
+//! **The air's scattering** (`[sky] scattering`, with the air). The air
+//! near the ground, lit by the whole sky above it and by the ground's
+//! reflection of it, scatters that light into every sight line: once, with
+//! an isotropic phase function and the source function
+//! `J = (Lbar + a E / pi) / 2` taken as constant through the lowest scale
+//! heights (`Lbar` the sky's mean radiance over the upper hemisphere, `E`
+//! its irradiance on level ground, `a` the ground's albedo), a sight line of
+//! zenith depth `tau` at air mass `X` gains `J (1 - exp(-tau X))`
+//! (Garstang 1989, PASP 101, 306: the same first-order treatment of the
+//! natural sky's brightness). Each line and each nm of the broadband light
+//! is scattered at its own depth. Toward the horizon, where the direct
+//! light is dimmed, the scattered light takes its place: the sky brightens
+//! down to the horizon, two to three times the zenith (as measured skies
+//! do, Garstang's Fig. 4), instead of fading. Ozone's absorption is counted
+//! as scattering (its depth is under 0.03) and multiple scattering is left
+//! out (the air's zenith depth is 0.1-0.3 in the visible). The sky's
+//! irradiance on level ground, [`Airglow::ground_irradiance`], lights the
+//! terrain (`super::integrator`).
+//!
 //! **Per ray.** The shells are concentric about the Earth's centre and the
 //! camera sits at one point, so `L` depends only on the ray's elevation
 //! above the camera's horizon: it is computed once per render at every
@@ -48,6 +67,36 @@ pub struct Airglow {
     pub up: DVec3,
     /// Radiance at elevation `-90 + i STEP_DEG` degrees.
     table: Vec<[f64; 3]>,
+    /// The sky's irradiance on level ground (module doc), the volume's
+    /// radiance unit times sr.
+    ground: [f64; 3],
+}
+
+/// Elevation step of the hemisphere integrals, degrees.
+const HEMISPHERE_STEP_DEG: f64 = 0.25;
+
+/// The two hemisphere means of a radiance `g(e)` that depends only on the
+/// elevation `e` (degrees): over the upper hemisphere's solid angle, and
+/// its irradiance on level ground over pi (both 1 for a uniform sky of 1).
+/// Midpoint rule over [`HEMISPHERE_STEP_DEG`].
+pub fn hemisphere_means(g: impl Fn(f64) -> f64) -> (f64, f64) {
+    let n = (90.0 / HEMISPHERE_STEP_DEG).round() as usize;
+    let h = HEMISPHERE_STEP_DEG.to_radians();
+    let (mut mean, mut cos_mean) = (0.0, 0.0);
+    for k in 0..n {
+        let e = (k as f64 + 0.5) * HEMISPHERE_STEP_DEG;
+        let (s, c) = (fmath::sin(e.to_radians()), fmath::cos(e.to_radians()));
+        let v = g(e);
+        mean += v * c * h;
+        cos_mean += 2.0 * v * s * c * h;
+    }
+    (mean, cos_mean)
+}
+
+/// The scattering's source function from the two hemisphere means and the
+/// ground's albedo: `J = (Lbar + a E / pi) / 2` (module doc).
+pub fn source_function(mean: f64, cos_mean: f64, ground_albedo: f64) -> f64 {
+    0.5 * (mean + ground_albedo * cos_mean)
 }
 
 /// One line as the camera sees it: colour times zenith column (kR), the
@@ -93,16 +142,33 @@ impl Broadband {
 
     /// Radiance (the volume's unit) at air mass `x`, with `space` (1, or 0
     /// behind the Earth) of the outside light and the continuum's slant
-    /// factor `layer`: the sum over the nm, into the observer's gamut once.
-    fn radiance(&self, space: f64, layer: f64, x: f64) -> [f64; 3] {
+    /// factor `layer`, plus what the air scatters in at that air mass
+    /// (`source`: each nm's source function, R/nm, or none): the sum over
+    /// the nm, into the observer's gamut once.
+    fn radiance(&self, space: f64, layer: f64, x: f64, source: Option<&[f64]>) -> [f64; 3] {
         let mut rgb = [0.0; 3];
-        for &(c, tau, outside, cont) in &self.nm {
-            let w = (space * outside + layer * cont) * fmath::exp(-tau * x) * KR_PER_R;
+        for (i, &(c, tau, outside, cont)) in self.nm.iter().enumerate() {
+            let t = fmath::exp(-tau * x);
+            let scattered = source.map_or(0.0, |j| j[i] * (1.0 - t));
+            let w = ((space * outside + layer * cont) * t + scattered) * KR_PER_R;
             for k in 0..3 {
                 rgb[k] += w * c[k];
             }
         }
         self.observer.in_gamut(rgb)
+    }
+
+    /// Each nm's source function of the air's scattering (module doc), R/nm:
+    /// the outside light and the continuum's layer (slant factor `layer(e)`)
+    /// seen from the ground through the air.
+    fn sources(&self, layer: &dyn Fn(f64) -> f64, ground_albedo: f64) -> Vec<f64> {
+        self.nm
+            .iter()
+            .map(|&(_, tau, outside, cont)| {
+                let (m, cm) = hemisphere_means(|e| (outside + layer(e) * cont) * fmath::exp(-tau * air_mass(e)));
+                source_function(m, cm, ground_albedo)
+            })
+            .collect()
     }
 }
 
@@ -110,7 +176,16 @@ impl Airglow {
     /// The airglow of `p` seen from `position` (scene frame, km), or None
     /// when `[airglow] on = false` or every layer is 0; each line in
     /// `observer`'s colour, as the volume's.
-    pub fn new(p: &AirglowParams, sky: &SkyParams, position: DVec3, earth_radius_km: f64, observer: Observer) -> Option<Airglow> {
+    /// `ground_albedo`: the ground's reflectance for the air's scattering
+    /// (the terrain's, or the snow's default where there is none).
+    pub fn new(
+        p: &AirglowParams,
+        sky: &SkyParams,
+        position: DVec3,
+        earth_radius_km: f64,
+        observer: Observer,
+        ground_albedo: f64,
+    ) -> Option<Airglow> {
         let earth = Earth::new(earth_radius_km);
         let (altitude, up) = (earth.altitude(position), earth.local_up(position));
         let shells_km = if earth.is_flat() { MEAN_RADIUS_KM } else { earth_radius_km };
@@ -134,15 +209,37 @@ impl Airglow {
         }
         let n = (180.0 / STEP_DEG).round() as usize + 1;
         let r0 = shells_km + altitude;
+        // The air's scattering (module doc): each line's and each nm's source
+        // function, from the sky above the ground seen through the air.
+        let scatters = air.is_some() && sky.scattering;
+        let line_sources: Vec<f64> = lines
+            .iter()
+            .map(|l| {
+                if !scatters {
+                    return 0.0;
+                }
+                let shape = &LAYERS[l.layer];
+                let (m, cm) = hemisphere_means(|e| {
+                    slant_factor(shape, shells_km, altitude, fmath::sin(e.to_radians())) * fmath::exp(-l.tau * air_mass(e))
+                });
+                source_function(m, cm, ground_albedo)
+            })
+            .collect();
+        let continuum_slant = |e: f64| slant_factor(&CONTINUUM_LAYER, shells_km, altitude, fmath::sin(e.to_radians()));
+        let broad_sources = broad.as_ref().filter(|_| scatters).map(|b| b.sources(&continuum_slant, ground_albedo));
         let table = (0..n)
             .map(|i| {
                 let e = -90.0 + i as f64 * STEP_DEG;
                 let mu = fmath::sin(e.to_radians());
                 let x = air_mass(e);
                 let f: Vec<f64> = LAYERS.iter().map(|l| slant_factor(l, shells_km, altitude, mu)).collect();
+                // The scattered light comes from the air along sight lines above
+                // the horizon (below it they end on the ground).
+                let above = e >= 0.0;
                 let mut rgb = [0.0; 3];
-                for l in &lines {
-                    let t = f[l.layer] * fmath::exp(-l.tau * x);
+                for (l, &j) in lines.iter().zip(&line_sources) {
+                    let direct = fmath::exp(-l.tau * x);
+                    let t = f[l.layer] * direct + if above { j * (1.0 - direct) } else { 0.0 };
                     for c in 0..3 {
                         rgb[c] += l.rgb_kr[c] * t;
                     }
@@ -152,7 +249,7 @@ impl Airglow {
                     // solid Earth is in the way.
                     let space = !(mu < 0.0 && r0 * r0 * (1.0 - mu * mu) < shells_km * shells_km && r0 >= shells_km);
                     let layer = slant_factor(&CONTINUUM_LAYER, shells_km, altitude, mu);
-                    let c = b.radiance(if space { 1.0 } else { 0.0 }, layer, x);
+                    let c = b.radiance(if space { 1.0 } else { 0.0 }, layer, x, broad_sources.as_deref().filter(|_| above));
                     for k in 0..3 {
                         rgb[k] += c[k];
                     }
@@ -160,12 +257,33 @@ impl Airglow {
                 rgb
             })
             .collect();
-        Some(Airglow { up, table })
+        let mut glow = Airglow { up, table, ground: [0.0; 3] };
+        if scatters {
+            glow.ground = [0, 1, 2].map(|c| {
+                let (_, cos_mean) = hemisphere_means(|e| glow.at_elevation(e)[c]);
+                std::f64::consts::PI * cos_mean
+            });
+        }
+        Some(glow)
+    }
+
+    /// The sky's irradiance on ground of normal `n` (unit): on level ground
+    /// the table's cosine-weighted integral over the upper hemisphere, on a
+    /// slope the part of it a uniform sky would give, `(1 + n . up) / 2`
+    /// (the terrain's own hiding of the sky is left out). Zero without the
+    /// air's scattering (`[sky] scattering`).
+    pub fn ground_irradiance(&self, n: DVec3) -> [f64; 3] {
+        let f = 0.5 * (1.0 + n.dot(self.up).clamp(-1.0, 1.0));
+        self.ground.map(|c| c * f)
     }
 
     /// Radiance along `dir` (unit), linear between the table's elevations.
     pub fn radiance(&self, dir: DVec3) -> [f64; 3] {
-        let e = fmath::asin(self.up.dot(dir).clamp(-1.0, 1.0)).to_degrees();
+        self.at_elevation(fmath::asin(self.up.dot(dir).clamp(-1.0, 1.0)).to_degrees())
+    }
+
+    /// Radiance at elevation `e` degrees, linear between the table's.
+    fn at_elevation(&self, e: f64) -> [f64; 3] {
         let x = ((e + 90.0) / STEP_DEG).clamp(0.0, (self.table.len() - 1) as f64);
         let i = (x.floor() as usize).min(self.table.len() - 2);
         let f = x - i as f64;
@@ -193,13 +311,13 @@ mod tests {
             ..AirglowParams::default()
         };
         let sky = SkyParams { extinction: false, ..SkyParams::default() };
-        let a = Airglow::new(&p, &sky, DVec3::ZERO, 6371.0, Observer::Camera).unwrap();
+        let a = Airglow::new(&p, &sky, DVec3::ZERO, 6371.0, Observer::Camera, 0.85).unwrap();
         let l = a.radiance(DVec3::Z);
         let want = line_rgb(557.7, Observer::Camera).map(|c| c * 0.25);
         for c in 0..3 {
             assert!((l[c] - want[c]).abs() <= 1e-6 * want[1], "{l:?} {want:?}");
         }
         assert_eq!(a.radiance(-DVec3::Z), [0.0; 3]);
-        assert!(Airglow::new(&AirglowParams { on: false, ..p }, &sky, DVec3::ZERO, 6371.0, Observer::Camera).is_none());
+        assert!(Airglow::new(&AirglowParams { on: false, ..p }, &sky, DVec3::ZERO, 6371.0, Observer::Camera, 0.85).is_none());
     }
 }

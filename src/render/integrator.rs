@@ -115,7 +115,8 @@ impl Prepared {
                     n.shadow_samples += s.shadow_samples as u64;
                     n.shadow_rays += rays;
                     let m = self.moonlight_on(h.p, h.n);
-                    let l = [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * (e[c] + m[c]));
+                    let g = self.airglow.as_ref().map_or([0.0; 3], |a| a.ground_irradiance(h.n));
+                    let l = [0, 1, 2].map(|c| albedo[c] / std::f64::consts::PI * (e[c] + m[c] + g[c]));
                     match &self.air {
                         // The terrain's light crosses the air to the camera.
                         Some(a) => {

@@ -129,8 +129,11 @@ impl Prepared {
             CameraModel::new(&s.camera, s.render.width, s.render.height)?
         };
         let air = observer_air(s);
-        let same_glow =
-            o.airglow == s.airglow && o.sky == s.sky && o.camera.position == s.camera.position && o.earth_radius_km == s.earth_radius_km;
+        let same_glow = o.airglow == s.airglow
+            && o.sky == s.sky
+            && o.camera.position == s.camera.position
+            && o.earth_radius_km == s.earth_radius_km
+            && o.terrain.albedo == s.terrain.albedo;
         let airglow = if same_glow { old.airglow } else { observer_airglow(s) };
         let velocity = if grids_changed { None } else { old.velocity };
         let mut prepared = Prepared { camera, medium, terrain, sampler, sky, air, airglow, settings: s.clone(), velocity };
@@ -282,7 +285,8 @@ fn observer_air(s: &RenderSettings) -> Option<Extinction> {
 
 /// The airglow as the camera sees it (`super::airglow`), None when off.
 fn observer_airglow(s: &RenderSettings) -> Option<Airglow> {
-    Airglow::new(&s.airglow, &s.sky, DVec3::from_array(s.camera.position), s.earth_radius_km, s.observer)
+    let albedo = crate::util::colour::luminance(s.terrain.albedo);
+    Airglow::new(&s.airglow, &s.sky, DVec3::from_array(s.camera.position), s.earth_radius_km, s.observer, albedo)
 }
 
 /// The terrain's emission sampler: none without a terrain or emission;

@@ -19,11 +19,22 @@ pub struct SkyParams {
     pub angstrom: f64,
     /// Scale height of the aerosol's density, km.
     pub aerosol_scale_height_km: f64,
+    /// The air scatters the night sky's own light into every sight line
+    /// and the sky lights the ground (`crate::render::airglow`); false:
+    /// the sky is only dimmed by the air and lights nothing.
+    pub scattering: bool,
 }
 
 impl Default for SkyParams {
     fn default() -> Self {
-        Self { extinction: true, ozone_du: 300.0, aerosol_optical_depth: 0.05, angstrom: 1.3, aerosol_scale_height_km: 1.2 }
+        Self {
+            extinction: true,
+            ozone_du: 300.0,
+            aerosol_optical_depth: 0.05,
+            angstrom: 1.3,
+            aerosol_scale_height_km: 1.2,
+            scattering: true,
+        }
     }
 }
 
@@ -33,5 +44,6 @@ pub const SKY_KEYS: &[KeySpec] = &[
     KeySpec::new("ozone_du", "DU", Range::Num(Num::closed(0.0, 1000.0)), "ozone column (Chappuis band, Serdyuchenko et al. 2014 cross-sections); 300 is the global mean"),
     KeySpec::new("aerosol_optical_depth", "", Range::Num(Num::closed(0.0, 5.0)), "aerosol optical depth at 550 nm at sea level (0.05: clean Arctic winter air)"),
     KeySpec::new("angstrom", "", Range::Num(Num::closed(-1.0, 4.0)), "Angstrom exponent: the aerosol's depth goes as (lambda / 550 nm)^-angstrom"),
+    KeySpec::new("scattering", "", Range::Any, "the night sky's light (airglow, zodiacal light, starlight) scattered once by the air into every sight line, so the sky brightens toward the horizon as photographs show instead of fading with the extinction, and lighting the ground (docs/physics.md, \"The sky's light in the air and on the ground\"); needs `extinction`; `false`: the sky is only dimmed and lights nothing"),
     KeySpec::new("aerosol_scale_height_km", "km", Range::Num(Num::closed(0.1, 20.0)), "scale height of the aerosol's density (the column above the observer falls as exp(-altitude / it))"),
 ];

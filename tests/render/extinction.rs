@@ -286,7 +286,14 @@ fn extinction_off_ignores_the_other_sky_keys() {
     }
     let mut s = settings(scene.camera.clone(), 24, 16, 2);
     let a = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
-    s.sky = SkyParams { extinction: false, ozone_du: 500.0, aerosol_optical_depth: 1.0, angstrom: 0.0, aerosol_scale_height_km: 5.0 };
+    s.sky = SkyParams {
+        extinction: false,
+        ozone_du: 500.0,
+        aerosol_optical_depth: 1.0,
+        angstrom: 0.0,
+        aerosol_scale_height_km: 5.0,
+        scattering: true,
+    };
     let b = render(&s, &Volume { density: None, emission: Some(&e) }, &NoProgress).unwrap();
     assert!(a.pixels.iter().any(|p| p[1] > 0.0));
     assert_eq!(a.pixels, b.pixels);

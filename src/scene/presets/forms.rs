@@ -82,7 +82,7 @@ pub fn quiet_arc() -> Scene {
         // camera and its ends bow down toward the horizon.
         path: Some(vec![[-500.0, 80.0], [-250.0, 20.0], [0.0, 0.0], [250.0, 20.0], [500.0, 80.0]]),
         width: 24.0,
-        energy_flux: 7.0,
+        energy_flux: 10.0,
         char_energy_kev: 3.0,
         soft_fraction: 0.02,
         bend_km: 2.0,
@@ -90,6 +90,8 @@ pub fn quiet_arc() -> Scene {
     };
     let mut s = base(1, vec![arc]);
     s.footprint.resolution = [512, 64];
+    // 12 km wide at half maximum: a broad quiet arc.
+    s.footprint.sheet_thickness_km = 12.0;
     // A sheet barely rolled up, rays hardly brighter than the rest.
     s.footprint.sheet_rollup_km = 6.0;
     s.footprint.sheet_amplitude = 0.02;
@@ -328,7 +330,11 @@ pub fn type_b_pink() -> Scene {
     let mut s = base(6, vec![band]);
     s.footprint.velocity_amplitude = 2.0;
     s.footprint.density_waves = 10.0;
-    s.beams.count = 12_000;
+    // The default's sheet: one unbroken band, curled and folded.
+    s.footprint.sheet_rollup_km = 8.0;
+    s.footprint.sheet_thickness_km = 5.0;
+    s.footprint.ray_contrast = 4.0;
+    s.beams.count = 30_000;
     s.beams.top_noise_km = 12.0;
     s.beams.top_noise_freq = 0.5;
     s.photons.radius_km = 0.5;
