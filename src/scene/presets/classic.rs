@@ -33,8 +33,10 @@ impl Default for Scene {
 /// (Maggs & Davis 1968; Dahlgren et al. 2012: 0.05-0.2 km) of the same
 /// electrons accelerated through 4, 3 and 2 kV more, 300, 200 and 130
 /// mW/m^2: about 0.5, 0.3 and 0.2 MW per km of arc in all. The sheet rolls
-/// up 8 km (`footprint.sheet_rollup_km`): curls and folds along one
-/// unbroken band, rays of brightness within 4x of each other. The beams
+/// up 8 km (`footprint.sheet_rollup_km`): curls along one unbroken band;
+/// each band bends by 18 km over 0.35 of its length, so folds are seen
+/// edge-on here and there as bright slanting streaks; rays 0.9 km wide,
+/// 5 km apart on average (irregularly) and within 8x of each other. The beams
 /// follow the field (a 5 keV electron's gyroradius is metres); 30,000 of
 /// them, so that neighbouring columns overlap at the half-kilometre voxel
 /// instead of standing apart as hairs. The aurora's light on the ground is
@@ -52,6 +54,7 @@ pub fn default_scene() -> Scene {
         potential_kv: kv,
         filament_energy_flux: filament.0,
         filament_potential_kv: filament.1,
+        bend_km: 18.0,
         seed,
         ..Curtain::default()
     };
@@ -67,7 +70,10 @@ pub fn default_scene() -> Scene {
             sheet_thickness_km: 5.0,
             filament_count: 6,
             filament_width_km: 0.15,
-            ray_contrast: 4.0,
+            bend_wavelength: 0.35,
+            ray_spacing_km: 5.0,
+            ray_width_km: 0.9,
+            ray_contrast: 8.0,
             ..FootprintParams::default()
         },
         beams: BeamParams { count: 30_000, ..BeamParams::default() },
@@ -139,6 +145,7 @@ pub fn seed2014() -> Scene {
         c.spectrum = SpectrumShape::Maxwellian;
         c.char_energy_kev = e0;
         c.potential_kv = 0.0;
+        c.bend_km = Curtain::default().bend_km;
         c.path = None;
         c.length = 160.0;
         c.center = [x, y];
