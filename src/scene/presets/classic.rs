@@ -31,10 +31,12 @@ impl Default for Scene {
 /// (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20 km) of 50,
 /// 30 and 20 mW/m^2 at its peak, with six filaments 0.15 km wide inside it
 /// (Maggs & Davis 1968; Dahlgren et al. 2012: 0.05-0.2 km) of the same
-/// electrons accelerated through 4, 3 and 2 kV more, 300, 200 and 130
-/// mW/m^2: about 0.5, 0.3 and 0.2 MW per km of arc in all. The sheet rolls
+/// electrons accelerated through 4, 3 and 2 kV more, 220, 150 and 100
+/// mW/m^2 (peaks: the rays along the sheet vary 8x): 0.21, 0.14 and 0.09
+/// MW per km of arc in all (`bake.json`'s electron power over each arc's
+/// length; IBC III arcs carry 0.2-0.5). The sheet rolls
 /// up 8 km (`footprint.sheet_rollup_km`): curls along one unbroken band;
-/// each band bends by 18 km over 0.35 of its length, so folds are seen
+/// each band bends by 14 km over 0.35 of its length, so folds are seen
 /// edge-on here and there as bright slanting streaks; rays 0.9 km wide,
 /// 5 km apart on average (irregularly) and within 8x of each other. The beams
 /// follow the field (a 5 keV electron's gyroradius is metres); 30,000 of
@@ -54,16 +56,16 @@ pub fn default_scene() -> Scene {
         potential_kv: kv,
         filament_energy_flux: filament.0,
         filament_potential_kv: filament.1,
-        bend_km: 18.0,
+        bend_km: 14.0,
         seed,
         ..Curtain::default()
     };
     Scene {
         seed: 2014,
         curtains: vec![
-            arc(70.0, 400.0, -20.0, 50.0, (0.8, 5.0), (300.0, 4.0), 1),
-            arc(130.0, 620.0, 25.0, 30.0, (0.6, 3.5), (200.0, 3.0), 2),
-            arc(220.0, 880.0, -5.0, 20.0, (0.5, 2.0), (130.0, 2.0), 3),
+            arc(70.0, 400.0, -20.0, 50.0, (0.8, 5.0), (220.0, 4.0), 1),
+            arc(130.0, 620.0, 25.0, 30.0, (0.6, 3.5), (150.0, 3.0), 2),
+            arc(220.0, 880.0, -5.0, 20.0, (0.5, 2.0), (100.0, 2.0), 3),
         ],
         footprint: FootprintParams {
             sheet_rollup_km: 8.0,

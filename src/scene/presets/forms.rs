@@ -7,7 +7,7 @@
 //!
 //! | preset | E0 (keV) | energy flux (mW/m^2) | IBC | footprint | seen from |
 //! |---|---|---|---|---|---|
-//! | `quiet_arc` | 3 | 7 | II | one 8 km band, 1000 km long, hardly folded | the ground, 300 km south |
+//! | `quiet_arc` | 3 | 9 | II | one 12 km band, 1000 km long, hardly folded | the ground, 300 km south |
 //! | `rayed_band` | 5 | 40 | III | folded band, start heights broken into rays | the ground, 150 km south |
 //! | `corona` | 4-5 | 50-60 | III | a folded hook and a crossing curtain, rayed, overhead | the ground beneath, looking up the field |
 //! | `pulsating_patches` | 10 | 1 | I | a broad diffuse band, 40 km patches blinking | the ground beneath, looking up |
@@ -69,11 +69,11 @@ pub const QUIET_ARC: &str = "a quiet homogeneous arc: one thin green band 1000 k
 
 /// A quiet homogeneous arc. Quiet arcs are the aurora of the evening before
 /// a substorm: long (here a 1000 km path with a 1600 km radius of
-/// curvature, east-west), 8 km wide at half maximum (Knudsen et al.
+/// curvature, east-west), 12 km wide at half maximum (Knudsen et al.
 /// 2001: 5-20 km), structureless and unrayed (folds, rays and the start-height noise all
-/// but off: `sheet_rollup_km` 6, `top_noise_km` 1) and IBC II (7 mW/m^2
+/// but off: `sheet_rollup_km` 6, `top_noise_km` 1) and IBC II (9 mW/m^2
 /// of E0 = 3 keV electrons: its brightest 557.7 nm column along B about
-/// 10 kR, about 60 kW per km of arc; the lower border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
+/// 13 kR, about 80 kW per km of arc; the lower border near 105 km). Its motion is slow: folds at 0.5 km/s, a 2 km
 /// drift. Seen from 300 km south, its lower border 20 degrees up.
 pub fn quiet_arc() -> Scene {
     let arc = Curtain {
@@ -82,7 +82,7 @@ pub fn quiet_arc() -> Scene {
         // camera and its ends bow down toward the horizon.
         path: Some(vec![[-500.0, 80.0], [-250.0, 20.0], [0.0, 0.0], [250.0, 20.0], [500.0, 80.0]]),
         width: 24.0,
-        energy_flux: 10.0,
+        energy_flux: 9.0,
         char_energy_kev: 3.0,
         soft_fraction: 0.02,
         bend_km: 2.0,
