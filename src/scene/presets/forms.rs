@@ -29,7 +29,7 @@
 //! (`render.exposure = "auto"`, `crate::render::develop`): its brightest
 //! curtain just under the view transform's shoulder, the sky dark (the
 //! quiet arc, IBC II low over the horizon, two stops under the meter's
-//! -3.1 EV, as photographers keep a faint arc's sky dark: at the meter's
+//! -3.8 EV, as photographers keep a faint arc's sky dark: at the meter's
 //! EV its sky near the horizon, three to four times the zenith's airglow
 //! through the slant, reads as a grey veil). Arcs are 5-20 km wide (Knudsen et al. 2001), with
 //! filaments of 0.05-0.2 km inside them (Borovsky 1993, J. Geophys. Res.
@@ -112,7 +112,7 @@ pub fn quiet_arc() -> Scene {
     s.photons.radius_km = 0.8;
     s.grid.voxel_size = VoxelSize::Km(0.5);
     s.camera = camera([0.0, -300.0, 0.5], [0.0, 80.0, 75.0], 45.0);
-    s.render.exposure = -5.0;
+    s.render.exposure = -5.8;
     s.animation.fold_speed_kms = 0.5;
     s.animation.drift_km = 2.0;
     s.animation.ray_speed_kms = 1.0;
