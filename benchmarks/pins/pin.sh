@@ -42,7 +42,7 @@ sed -e 's/^radius_km = 6371.0$/radius_km = 0.0/' "$T/noair.toml" >"$T/flat.toml"
 grep -q '^radius_km = 0.0$' "$T/flat.toml"
 "$BIN" bake -q --out "$T/flat" "$T/flat.toml" >/dev/null 2>&1
 "$BIN" render -q --vdb "$T/flat/aurora.vdb" --threads 2 --out "$T/render-flat-noair.png" "$T/flat.toml" >/dev/null 2>&1
-"$BIN" scene default | sed -e 's/^count = 8000$/count = 400/' -e 's/^resolution = \[512, 128\]$/resolution = [64, 16]/' \
+"$BIN" scene default | sed -e 's/^count = 30000$/count = 400/' -e 's/^resolution = \[512, 128\]$/resolution = [64, 16]/' \
   >"$T/seq.toml"
 grep -q '^count = 400$' "$T/seq.toml"
 "$BIN" bake -q --out "$T/seq" --frames 1-2 "$T/seq.toml" >/dev/null 2>&1
