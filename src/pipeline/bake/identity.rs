@@ -39,6 +39,7 @@ use serde::{Deserialize, Serialize};
 /// them), nor is any key of `[camera]`.
 pub const RENDER_ONLY: &[(&str, &str)] = &[
     ("render.spp", "samples per pixel of the reference renderer; the bake traces no pixel"),
+    ("render.shadow_samples", "the reference renderer's shadow rays per terrain hit; the bake lights no terrain"),
     ("render.exposure", "the PNG preview's exposure, a tone map of the rendered image"),
     ("render.shutter_s", "the reference renderer's motion blur, read from the velocity grid at lookup"),
     ("render.view_transform", "the PNG preview's view transform, a tone map of the rendered image"),
@@ -158,6 +159,7 @@ mod tests {
     const STRINGS: &[&str] = &[
         "fluid2014",
         "accelerated",
+        "maxwellian",
         "sampled",
         "csda",
         "random",

@@ -570,9 +570,10 @@ mod tests {
         s.colour.mode = crate::scene::ColourMode::Colormap;
         assert_eq!(est(&s).total(), plain);
 
-        // The trail of a bake of one chunk: N more photon sets and
-        // candidate lists.
+        // The trail of a bake of one chunk (8,000 beams): N more photon
+        // sets and candidate lists.
         let mut s = Scene::default();
+        s.beams.count = 8_000;
         s.animation.trail_samples = 8;
         let e = est(&s);
         let t = term(&e, "red trail");

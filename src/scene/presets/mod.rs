@@ -91,7 +91,14 @@ pub use crate::scene::colour::report_colormap;
 #[cfg(test)]
 pub(crate) fn small_test_scene() -> Scene {
     use crate::scene::{Curtain, VoxelSize};
-    let mut s = Scene { curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }], ..Scene::default() };
+    // The tables' own footprint and render keys, not the default preset's
+    // art (its footprint's bends and rays, its shadow samples).
+    let mut s = Scene {
+        curtains: vec![Curtain { length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
+        footprint: crate::scene::FootprintParams::default(),
+        render: crate::scene::RenderParams { exposure: -6.0, ..crate::scene::RenderParams::default() },
+        ..Scene::default()
+    };
     s.footprint.resolution = [128, 48];
     s.footprint.model = crate::scene::FootprintModel::Fluid2014;
     s.footprint.end_fade_km = 0.0;
