@@ -23,7 +23,13 @@ use serde_json::Value;
 /// One 8 km curtain seen from 60 km away, 20 beams, coarse voxels, an
 /// 8 x 6 image with terrain and shadow rays.
 fn base() -> Scene {
-    let s = Scene { seed: 11, curtains: vec![Curtain { length: 8.0, width: 4.0, bend_km: 1.0, ..Curtain::default() }], ..Scene::default() };
+    // The footprint table's own keys, not the default preset's art.
+    let s = Scene {
+        seed: 11,
+        curtains: vec![Curtain { length: 8.0, width: 4.0, bend_km: 1.0, ..Curtain::default() }],
+        footprint: aurora::scene::FootprintParams::default(),
+        ..Scene::default()
+    };
     let mut s = coarse(s, [32, 16], 20);
     s.footprint.steps = 4;
     s.footprint.pressure_iterations = 10;

@@ -23,16 +23,16 @@ impl Default for Scene {
 /// off both sides of the frame and its lower border bows down toward the
 /// horizon at both ends, as photographs show arcs.
 /// An active display, IBC III (`crate::pipeline::columns`: the brightest
-/// 557.7 nm column along B is about 100 kR): each arc an inverted-V
+/// 557.7 nm column along B is 137 kR): each arc an inverted-V
 /// (Evans 1974), a source of 0.8, 0.6 and 0.5 keV electrons accelerated
 /// through 5, 3.5 and 2 kV, so that its lower border is sharp (a
 /// monoenergetic-like spectrum stops within 2-3 km, a Maxwellian needs
 /// 4-9: Fang et al. 2010), in a body 5 km wide at half maximum
-/// (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20 km) of 50,
-/// 30 and 20 mW/m^2 at its peak, with six filaments 0.15 km wide inside it
+/// (`footprint.sheet_thickness_km`; Knudsen et al. 2001: 5-20 km) of 60,
+/// 36 and 24 mW/m^2 at its peak, with six filaments 0.15 km wide inside it
 /// (Maggs & Davis 1968; Dahlgren et al. 2012: 0.05-0.2 km) of the same
-/// electrons accelerated through 4, 3 and 2 kV more, 220, 150 and 100
-/// mW/m^2 (peaks: the rays along the sheet vary 8x): 0.21, 0.14 and 0.09
+/// electrons accelerated through 4, 3 and 2 kV more, 170, 140 and 90
+/// mW/m^2 (peaks: the rays along the sheet vary 8x): 0.25, 0.17 and 0.11
 /// MW per km of arc in all (`bake.json`'s electron power over each arc's
 /// length; IBC III arcs carry 0.2-0.5). The sheet rolls
 /// up 8 km (`footprint.sheet_rollup_km`): curls along one unbroken band;
@@ -63,9 +63,9 @@ pub fn default_scene() -> Scene {
     Scene {
         seed: 2014,
         curtains: vec![
-            arc(70.0, 400.0, -20.0, 50.0, (0.8, 5.0), (220.0, 4.0), 1),
-            arc(130.0, 620.0, 25.0, 30.0, (0.6, 3.5), (150.0, 3.0), 2),
-            arc(220.0, 880.0, -5.0, 20.0, (0.5, 2.0), (100.0, 2.0), 3),
+            arc(70.0, 400.0, -20.0, 60.0, (0.8, 5.0), (170.0, 4.0), 1),
+            arc(130.0, 620.0, 25.0, 36.0, (0.6, 3.5), (140.0, 3.0), 2),
+            arc(220.0, 880.0, -5.0, 24.0, (0.5, 2.0), (90.0, 2.0), 3),
         ],
         footprint: FootprintParams {
             sheet_rollup_km: 8.0,
