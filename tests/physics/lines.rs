@@ -18,6 +18,8 @@ use aurora::util::progress::NoProgress;
 pub fn patch_scene() -> Scene {
     let s = Scene {
         curtains: vec![Curtain { center: [100.0, 100.0], length: 40.0, width: 16.0, bend_km: 3.0, ..Curtain::default() }],
+        // The footprint table's own keys, not the default preset's art.
+        footprint: aurora::scene::FootprintParams::default(),
         ..Scene::default()
     };
     let mut s = coarse(s, [128, 48], 400);
