@@ -162,7 +162,10 @@ def setup_scene_from_toml(
                 made = Path(tempfile.mkdtemp(prefix="aurora-sky-"))
                 sky = sky_map(path, made / "sky.exr", spec, binary)
         try:
-            lights = spec.sky.extinction and spec.sky.scattering
+            # The sky lights the ground only (`aurora render` lights nothing
+            # else with it): without a terrain the world stays a backdrop,
+            # and Cycles samples no light for it.
+            lights = spec.sky.extinction and spec.sky.scattering and terrain and spec.terrain.kind != "none"
             wld = background_world("AuroraBackground", spec.background.radiance, image, sky or None, lights=lights)
         finally:
             if made is not None:

@@ -13,10 +13,10 @@ maps a direction to the image exactly as `aurora render` does
 (`[airglow]`) and the procedural stars (`background.stars`) come the same
 way, as a second Environment Texture: the map `aurora sky` writes
 (src/render/sky_map.rs), the sky `aurora render` draws from the camera's
-position, already dimmed by the air. With `[sky] scattering` (`lights`)
-`aurora render` lights the terrain with that sky (src/render/airglow.rs,
-`ground_irradiance`), so here the map is added after the camera-ray mix:
-every ray sees it, and the world is sampled as a light.
+position, already dimmed by the air. With `[sky] scattering` and a terrain
+(`lights`) `aurora render` lights the terrain with that sky
+(src/render/airglow.rs, `ground_irradiance`), so here the map is added after
+the camera-ray mix: every ray sees it, and the world is sampled as a light.
 """
 
 from __future__ import annotations
