@@ -31,7 +31,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         settings.render.spp = n;
     }
     if let Some(n) = num("--shadow-samples")? {
-        settings.shadow_samples = n;
+        settings.render.shadow_samples = n;
     }
     settings.base_dir = std::path::Path::new(&name).parent().map(|p| p.to_path_buf());
     let repeats = num("--repeats")?.unwrap_or(3);

@@ -110,9 +110,9 @@ impl Prepared {
                     // (`Prepared::sampler`), outside the shadow rays' time.
                     let shadow = self.shadow_scene();
                     let start = Instant::now();
-                    let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.shadow_samples, &mut st.rng);
+                    let (e, rays) = estimate_irradiance(&shadow, h.p, h.n, s.render.shadow_samples, &mut st.rng);
                     n.shadow_nanos += start.elapsed().as_nanos() as u64;
-                    n.shadow_samples += s.shadow_samples as u64;
+                    n.shadow_samples += s.render.shadow_samples as u64;
                     n.shadow_rays += rays;
                     let m = self.moonlight_on(h.p, h.n);
                     let g = self.airglow.as_ref().map_or([0.0; 3], |a| a.ground_irradiance(h.n));

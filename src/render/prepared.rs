@@ -90,7 +90,9 @@ impl Prepared {
         volume: &Volume<'_>,
     ) -> Result<Prepared, RenderError> {
         let s = settings;
-        let Some(old) = old.filter(|o| o.settings.integration == s.integration && o.settings.shadow_samples == s.shadow_samples) else {
+        let Some(old) =
+            old.filter(|o| o.settings.integration == s.integration && o.settings.render.shadow_samples == s.render.shadow_samples)
+        else {
             return Prepared::new(s, volume);
         };
         Self::check_settings(s)?;
@@ -227,7 +229,7 @@ impl Prepared {
         if r.spp == 0 {
             return bad("render.spp must be at least 1".into());
         }
-        if settings.shadow_samples == 0 {
+        if settings.render.shadow_samples == 0 {
             return bad("shadow_samples must be at least 1".into());
         }
         if let Integration::FixedStep(h) = settings.integration {

@@ -52,9 +52,6 @@ pub struct RenderSettings {
     /// Seed of every random stream (with the pixel index).
     pub seed: u64,
     pub integration: Integration,
-    /// Emissive shadow rays per terrain hit per pixel sample (total per pixel:
-    /// `spp * shadow_samples` where the terrain is seen).
-    pub shadow_samples: usize,
     /// Folder against which a relative `terrain.heightmap` is resolved (the
     /// scene file's folder); None = the working directory.
     pub base_dir: Option<PathBuf>,
@@ -67,7 +64,7 @@ pub struct RenderSettings {
 
 impl RenderSettings {
     /// The scene's camera, render, volume, background, sky, airglow and terrain, its seed,
-    /// exact integration and `render.shadow_samples` shadow rays per terrain hit and sample.
+    /// exact integration.
     pub fn from_scene(scene: &Scene) -> RenderSettings {
         RenderSettings {
             camera: scene.camera.clone(),
@@ -82,7 +79,6 @@ impl RenderSettings {
             observer: scene.colour.observer,
             seed: scene.seed,
             integration: Integration::Exact,
-            shadow_samples: scene.render.shadow_samples,
             base_dir: None,
             site: scene.site.clone(),
             time_s: scene.animation.time_s,

@@ -64,7 +64,6 @@ pub fn settings(camera: Camera, width: usize, height: usize, spp: usize) -> Rend
         observer: aurora::util::observer::Observer::default(),
         seed: 7,
         integration: Integration::Exact,
-        shadow_samples: 1,
         base_dir: None,
         site: None,
         time_s: 0.0,

@@ -222,7 +222,7 @@ fn busy_scene() -> (Grid<f32>, Grid<[f32; 3]>, aurora::render::RenderSettings) {
     let e = box_vec3(IVec3::new(-6, -6, 0), IVec3::new(6, 6, 3), |p| [0.3, 0.1 * (p.y + 7) as f32, 0.2], tr);
     let mut s = settings(persp([0.0, -9.0, 1.0], [0.0, 0.0, 0.5], [0.0, 0.0, 1.0], 70.0), 24, 16, 4);
     s.terrain = Terrain { kind: TerrainKind::Plane, height: 0.0, albedo: [0.6, 0.5, 0.4], ..Terrain::default() };
-    s.shadow_samples = 2;
+    s.render.shadow_samples = 2;
     s.background.radiance = [0.01, 0.02, 0.05];
     (d, e, s)
 }
@@ -286,7 +286,7 @@ fn bad_inputs_are_typed_errors() {
     t.integration = Integration::FixedStep(0.0);
     assert!(matches!(err(&t, &vol), RenderError::Settings(_)));
     let mut t = s.clone();
-    t.shadow_samples = 0;
+    t.render.shadow_samples = 0;
     assert!(matches!(err(&t, &vol), RenderError::Settings(_)));
     let mut t = s.clone();
     t.terrain.kind = TerrainKind::Heightfield;

@@ -38,7 +38,7 @@ fn slab_settings(spp: usize, shadow: usize) -> RenderSettings {
     // far below the Monte Carlo error.
     let mut s = settings(ortho([0.0, 0.0, 10.0], [0.0, 0.0, 0.0], [0.0, 1.0, 0.0], 0.25), 16, 16, spp);
     s.terrain = Terrain { kind: TerrainKind::Plane, height: 0.0, albedo: [ALBEDO; 3], ..Terrain::default() };
-    s.shadow_samples = shadow;
+    s.render.shadow_samples = shadow;
     s
 }
 
@@ -275,7 +275,7 @@ fn a_ridge_blocks_the_aurora_light_exactly() {
         ..Terrain::default()
     };
     s.base_dir = map.parent().map(|p| p.to_path_buf());
-    s.shadow_samples = 8;
+    s.render.shadow_samples = 8;
     let vol = Volume { density: None, emission: Some(&e) };
     let img = render(&s, &vol, &NoProgress).unwrap();
     assert_eq!(img.stats.terrain_hits, 4 * 4 * 4);

@@ -167,7 +167,7 @@ fn check(name: &str, scene: &Scene, expect: &Expect) -> Result<(), String> {
         Err(e) => return Err(format!("vdb write: {e}")),
     }
     let mut settings = RenderSettings::from_scene(scene);
-    settings.shadow_samples = 2;
+    settings.render.shadow_samples = 2;
     for integration in [Integration::Exact, Integration::FixedStep(0.7)] {
         settings.integration = integration;
         let vol = Volume { density: Some(&baked.density), emission: Some(&baked.emission) };

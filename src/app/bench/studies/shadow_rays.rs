@@ -46,10 +46,10 @@ impl<'a> Bench<'a> {
             let set = |s: &mut RenderSettings, k: usize| {
                 if per_hit {
                     s.render.spp = 1;
-                    s.shadow_samples = k;
+                    s.render.shadow_samples = k;
                 } else {
                     s.render.spp = k;
-                    s.shadow_samples = 1;
+                    s.render.shadow_samples = 1;
                 }
             };
             set(&mut s, big);
