@@ -188,6 +188,7 @@ fn all_exit_0_or_2(cases: Vec<(String, Vec<String>)>, d: &Path) -> usize {
     let cases = std::sync::Mutex::new(cases.into_iter().enumerate().collect::<Vec<_>>());
     let failures = std::sync::Mutex::new(Vec::new());
     let succeeded = AtomicUsize::new(0);
+    let times = std::sync::Mutex::new(Vec::new());
     let stop = AtomicBool::new(false);
     std::thread::scope(|s| {
         for _ in 0..2 {
@@ -198,7 +199,9 @@ fn all_exit_0_or_2(cases: Vec<(String, Vec<String>)>, d: &Path) -> usize {
                     let work = d.join(format!("case{i}"));
                     std::fs::create_dir_all(&work).unwrap();
                     let a: Vec<&str> = args.iter().map(String::as_str).collect();
+                    let started = std::time::Instant::now();
                     let (code, err) = run_capped(&a, &work);
+                    times.lock().unwrap().push((started.elapsed().as_secs_f64(), label.clone()));
                     if code == Some(0) {
                         succeeded.fetch_add(1, Ordering::Relaxed);
                     }
@@ -215,6 +218,15 @@ fn all_exit_0_or_2(cases: Vec<(String, Vec<String>)>, d: &Path) -> usize {
             });
         }
     });
+    // The slowest cases, for whoever wonders where the minutes go
+    // (`cargo test --release --test capped -- --nocapture`).
+    let mut times = times.into_inner().unwrap();
+    times.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let total: f64 = times.iter().map(|t| t.0).sum();
+    eprintln!("{n} cases, {total:.0} s of children; slowest:");
+    for (t, label) in times.iter().take(8) {
+        eprintln!("  {t:6.1} s  {label}");
+    }
     let failures = failures.into_inner().unwrap();
     assert!(failures.is_empty(), "{} of {n} cases failed:\n{}", failures.len(), failures.join("\n"));
     succeeded.into_inner()

@@ -214,7 +214,12 @@ mod tests {
         assert_eq!(m, MemoryLimit { bytes: gib(8.0), source: "cgroup memory limit" });
         // Unreadable, zero, negative and non-finite readings are no limits;
         // a limit above the assumed 24 GiB still wins when it is the only one.
-        let m = smallest(&[(None, "MemAvailable"), (Some(0.0), "cgroup memory limit"), (Some(f64::INFINITY), "RLIMIT_AS"), (Some(gib(64.0)), "x")]);
+        let m = smallest(&[
+            (None, "MemAvailable"),
+            (Some(0.0), "cgroup memory limit"),
+            (Some(f64::INFINITY), "RLIMIT_AS"),
+            (Some(gib(64.0)), "x"),
+        ]);
         assert_eq!(m, MemoryLimit { bytes: gib(64.0), source: "x" });
         assert_eq!(smallest(&[(None, "MemAvailable"), (Some(-1.0), "RLIMIT_AS")]), MemoryLimit { bytes: gib(24.0), source: "assumed" });
     }
