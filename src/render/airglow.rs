@@ -75,18 +75,37 @@ pub struct Airglow {
 /// Elevation step of the hemisphere integrals, degrees.
 const HEMISPHERE_STEP_DEG: f64 = 0.25;
 
+/// Midpoints of the hemisphere integrals: [`HEMISPHERE_STEP_DEG`] apart.
+const HEMISPHERE_SAMPLES: usize = (90.0 / HEMISPHERE_STEP_DEG) as usize;
+
+/// The elevation of the hemisphere integrals' `k`-th midpoint, degrees.
+fn hemisphere_elevation(k: usize) -> f64 {
+    (k as f64 + 0.5) * HEMISPHERE_STEP_DEG
+}
+
+/// `f` at each of the hemisphere integrals' midpoints: a table that the
+/// integrands of many lines and wavelengths share.
+fn hemisphere_table(f: impl Fn(f64) -> f64) -> Vec<f64> {
+    (0..HEMISPHERE_SAMPLES).map(|k| f(hemisphere_elevation(k))).collect()
+}
+
 /// The two hemisphere means of a radiance `g(e)` that depends only on the
 /// elevation `e` (degrees): over the upper hemisphere's solid angle, and
 /// its irradiance on level ground over pi (both 1 for a uniform sky of 1).
 /// Midpoint rule over [`HEMISPHERE_STEP_DEG`].
 pub fn hemisphere_means(g: impl Fn(f64) -> f64) -> (f64, f64) {
-    let n = (90.0 / HEMISPHERE_STEP_DEG).round() as usize;
+    hemisphere_means_at(|k| g(hemisphere_elevation(k)))
+}
+
+/// [`hemisphere_means`] of `g(k)`, the radiance at the `k`-th midpoint
+/// ([`hemisphere_elevation`]).
+fn hemisphere_means_at(g: impl Fn(usize) -> f64) -> (f64, f64) {
     let h = HEMISPHERE_STEP_DEG.to_radians();
     let (mut mean, mut cos_mean) = (0.0, 0.0);
-    for k in 0..n {
-        let e = (k as f64 + 0.5) * HEMISPHERE_STEP_DEG;
+    for k in 0..HEMISPHERE_SAMPLES {
+        let e = hemisphere_elevation(k);
         let (s, c) = (fmath::sin(e.to_radians()), fmath::cos(e.to_radians()));
-        let v = g(e);
+        let v = g(k);
         mean += v * c * h;
         cos_mean += 2.0 * v * s * c * h;
     }
@@ -159,13 +178,14 @@ impl Broadband {
     }
 
     /// Each nm's source function of the air's scattering (module doc), R/nm:
-    /// the outside light and the continuum's layer (slant factor `layer(e)`)
-    /// seen from the ground through the air.
-    fn sources(&self, layer: &dyn Fn(f64) -> f64, ground_albedo: f64) -> Vec<f64> {
+    /// the outside light and the continuum's layer seen from the ground
+    /// through the air; `layer` and `mass` are the continuum's slant factor
+    /// and the air mass at the hemisphere's midpoints ([`hemisphere_table`]).
+    fn sources(&self, layer: &[f64], mass: &[f64], ground_albedo: f64) -> Vec<f64> {
         self.nm
             .iter()
             .map(|&(_, tau, outside, cont)| {
-                let (m, cm) = hemisphere_means(|e| (outside + layer(e) * cont) * fmath::exp(-tau * air_mass(e)));
+                let (m, cm) = hemisphere_means_at(|k| (outside + layer[k] * cont) * fmath::exp(-tau * mass[k]));
                 source_function(m, cm, ground_albedo)
             })
             .collect()
@@ -212,21 +232,26 @@ impl Airglow {
         // The air's scattering (module doc): each line's and each nm's source
         // function, from the sky above the ground seen through the air.
         let scatters = air.is_some() && sky.scattering;
+        // Each layer's slant factor and the air mass over the hemisphere,
+        // once: every line of a layer and every nm read them.
+        let slant_table = |shape| hemisphere_table(|e| slant_factor(shape, shells_km, altitude, fmath::sin(e.to_radians())));
+        let (mass, layer_slants, continuum_slants) = if scatters {
+            (hemisphere_table(air_mass), LAYERS.iter().map(slant_table).collect(), slant_table(&CONTINUUM_LAYER))
+        } else {
+            (Vec::new(), Vec::new(), Vec::new())
+        };
         let line_sources: Vec<f64> = lines
             .iter()
             .map(|l| {
                 if !scatters {
                     return 0.0;
                 }
-                let shape = &LAYERS[l.layer];
-                let (m, cm) = hemisphere_means(|e| {
-                    slant_factor(shape, shells_km, altitude, fmath::sin(e.to_radians())) * fmath::exp(-l.tau * air_mass(e))
-                });
+                let slants: &Vec<f64> = &layer_slants[l.layer];
+                let (m, cm) = hemisphere_means_at(|k| slants[k] * fmath::exp(-l.tau * mass[k]));
                 source_function(m, cm, ground_albedo)
             })
             .collect();
-        let continuum_slant = |e: f64| slant_factor(&CONTINUUM_LAYER, shells_km, altitude, fmath::sin(e.to_radians()));
-        let broad_sources = broad.as_ref().filter(|_| scatters).map(|b| b.sources(&continuum_slant, ground_albedo));
+        let broad_sources = broad.as_ref().filter(|_| scatters).map(|b| b.sources(&continuum_slants, &mass, ground_albedo));
         let table = (0..n)
             .map(|i| {
                 let e = -90.0 + i as f64 * STEP_DEG;
