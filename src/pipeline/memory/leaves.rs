@@ -299,7 +299,8 @@ mod tests {
         for x in l0.x..=l1.x {
             for y in l0.y..=l1.y {
                 for z in l0.z..=l1.z {
-                    let rest = rho * rho - gap(p.x, x).powi(2) - gap(p.y, y).powi(2);
+                    let (gx, gy) = (gap(p.x, x), gap(p.y, y));
+                    let rest = rho * rho - gx * gx - gy * gy;
                     // A voxel centre of the leaf's column within the rest, up or down.
                     let near = rest >= 0.0 && (8 * z..8 * z + 8).any(|v| (v as f64 * vs - p.z).abs() <= rest.sqrt());
                     let d = IVec3::new(x, y, z) - bits.lo;
