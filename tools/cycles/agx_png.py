@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """A linear EXR through Blender's own AgX view for an sRGB display, as an 8-bit PNG.
 
-    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS] [--white-balance-k K] [--look LOOK]
+    .venv/bin/python tools/cycles/agx_png.py IMAGE.exr IMAGE.png [--exposure STOPS] [--white-balance-k K] [--look LOOK | --view WORD]
 
 Blender's colour management (display sRGB, view AgX, look None or LOOK such
 as "AgX - Punchy", no dither), the view `aurora render` builds for its PNGs (docs/guide.md, "Rendering"), so
 a Cycles render and an `aurora render` PNG of the same scene are shown alike.
+--view takes a scene's `render.view_transform` word instead ("agx_punchy",
+"standard", ...), shown through the view and look the add-on sets for it
+(blender/render_settings.py, `blender_view`).
 With --white-balance-k the EXR is first developed as `aurora render`
 develops its PNG for the camera observer (the camera's white balance, the
 add-on's matrix: blender/display.py, docs/colour.md).
@@ -29,7 +32,9 @@ def main(argv=None) -> int:
     p.add_argument("exr", help="linear OpenEXR (RGB or RGBA)")
     p.add_argument("png", help="output PNG")
     p.add_argument("--exposure", type=float, default=0.0, help="stops, as [render] exposure (default 0)")
-    p.add_argument("--look", default="None", help='Blender\'s look, as render.view_transform "agx_punchy" is "AgX - Punchy" (default None)')
+    shown = p.add_mutually_exclusive_group()
+    shown.add_argument("--look", default="None", help='Blender\'s look for AgX, as render.view_transform "agx_punchy" is "AgX - Punchy" (default None)')
+    shown.add_argument("--view", default=None, help='a render.view_transform word ("agx", "agx_punchy", "standard", ...): the view and look the add-on sets for it')
     p.add_argument("--white-balance-k", type=float, default=None,
                    help="the camera's white balance, K, as [colour] white_balance_k (default: the EXR as it is)")
     a = p.parse_args(argv)
@@ -56,11 +61,20 @@ def main(argv=None) -> int:
     sc = bpy.context.scene
     sc.display_settings.display_device = "sRGB"
     vs = sc.view_settings
-    vs.view_transform, vs.exposure, vs.gamma = "AgX", a.exposure, 1.0
+    view, look = "AgX", a.look
+    if a.view is not None:
+        from aurora_tools.addon import load_addon
+
+        try:
+            view, look = load_addon().render_settings.blender_view(a.view)
+        except ValueError as e:
+            print(f"agx_png: error: --view: {e}", file=sys.stderr)
+            return 2
+    vs.view_transform, vs.exposure, vs.gamma = view, a.exposure, 1.0
     try:
-        vs.look = a.look
+        vs.look = look
     except TypeError:
-        print(f"agx_png: error: --look {a.look!r} is not one of Blender's looks for AgX", file=sys.stderr)
+        print(f"agx_png: error: --look {look!r} is not one of Blender's looks for {view}", file=sys.stderr)
         return 2
     sc.render.dither_intensity = 0.0
     s = sc.render.image_settings
